@@ -1,0 +1,400 @@
+"""Collision geometry: FCL objects for the static scene and the robot, batched validity
+and clearance, certified straight motions, and vectorised robot-vs-mover distances.
+
+The world is planar: every 2-D shape becomes a tall prism (FCL cylinder, box or convex
+prism) so that a 3-D collision query answers the 2-D question.
+
+A *certified* motion is checked with a Lipschitz argument instead of sampling: along a
+straight motion in the contract's metric (euclidean xy + |heading change| * circumradius),
+no point of the robot moves farther than the metric length, so the clearance changes at
+most that fast; an interval whose end clearances add up to at least its length is free.
+"""
+
+from __future__ import annotations
+
+import math
+
+import fcl
+import numpy as np
+
+from .scene import Box, Disc, Polygon, Robot, Scene
+from .typing import FloatArray
+
+__all__ = [
+    "StaticGeometry",
+    "metric_distance",
+    "interpolate_poses",
+    "wrap_angle",
+    "mover_distance",
+]
+
+_HEIGHT = 10.0  # prism height: any value > 0 works, all shapes share z = 0
+_EPS_CERT = 1e-6  # metric length below which an uncertified interval counts as blocked
+
+
+def wrap_angle(a):
+    """Wrap angles to [-pi, pi)."""
+    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
+
+
+def metric_distance(a: FloatArray, b: FloatArray, circumradius: float) -> FloatArray:
+    """Contract metric between poses: xy distance + |shorter heading change| * r.
+
+    Parameters
+    ----------
+    a, b : (..., 2) or (..., 3) float
+    circumradius : float
+
+    Returns
+    -------
+    (...,) float
+    """
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float)
+    d = np.hypot(b[..., 0] - a[..., 0], b[..., 1] - a[..., 1])
+    if a.shape[-1] == 3:
+        d = d + np.abs(wrap_angle(b[..., 2] - a[..., 2])) * circumradius
+    return d
+
+
+def interpolate_poses(a: FloatArray, b: FloatArray, f: FloatArray) -> FloatArray:
+    """Poses at fractions ``f`` of the straight motion a -> b (heading along the shorter arc).
+
+    Parameters
+    ----------
+    a, b : (d,) float
+    f : (k,) float in [0, 1]
+
+    Returns
+    -------
+    (k, d) float
+    """
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float)
+    f = np.asarray(f, dtype=float)[:, None]
+    delta = b - a
+    if a.shape[-1] == 3:
+        delta[2] = wrap_angle(delta[2])
+    out = a + f * delta
+    if a.shape[-1] == 3:
+        out[:, 2] = wrap_angle(out[:, 2])
+    return out
+
+
+def _yaw_transform(x: float, y: float, yaw: float = 0.0) -> fcl.Transform:
+    q = np.array([math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])
+    return fcl.Transform(q, np.array([x, y, 0.0]))
+
+
+def _prism(tri: FloatArray) -> fcl.Convex:
+    """A solid triangular prism (FCL convex) over a counter-clockwise triangle."""
+    h = _HEIGHT
+    verts = np.vstack([np.c_[tri, np.full(3, -h)], np.c_[tri, np.full(3, h)]])
+    faces = np.array([3, 0, 2, 1, 3, 3, 4, 5, 4, 0, 1, 4, 3, 4, 1, 2, 5, 4, 4, 2, 0, 3, 5])
+    return fcl.Convex(verts, 5, faces)
+
+
+def _triangulate(poly: Polygon) -> list[FloatArray]:
+    import shapely
+
+    shape = shapely.Polygon(poly.points, [h for h in poly.holes])
+    tris = shapely.constrained_delaunay_triangles(shape)
+    out = []
+    for t in shapely.get_parts(tris):
+        pts = np.asarray(t.exterior.coords)[:3]
+        area2 = (pts[1, 0] - pts[0, 0]) * (pts[2, 1] - pts[0, 1]) - (pts[2, 0] - pts[0, 0]) * (
+            pts[1, 1] - pts[0, 1]
+        )
+        if abs(area2) < 1e-14:
+            continue
+        out.append(pts if area2 > 0 else pts[::-1])
+    return out
+
+
+def static_objects(scene: Scene) -> list[fcl.CollisionObject]:
+    """FCL collision objects for every static obstacle of ``scene``."""
+    objs = []
+    for ob in scene.obstacles:
+        if isinstance(ob, Disc):
+            objs.append(fcl.CollisionObject(fcl.Cylinder(ob.radius, 2 * _HEIGHT), _yaw_transform(*ob.center)))
+        elif isinstance(ob, Box):
+            geom = fcl.Box(ob.size[0], ob.size[1], 2 * _HEIGHT)
+            objs.append(fcl.CollisionObject(geom, _yaw_transform(ob.center[0], ob.center[1], ob.angle)))
+        else:
+            for tri in _triangulate(ob):
+                objs.append(fcl.CollisionObject(_prism(tri), fcl.Transform()))
+    return objs
+
+
+def robot_geometry(robot: Robot):
+    """The FCL geometry of the robot (about its reference point)."""
+    if robot.shape == "disc":
+        return fcl.Cylinder(robot.radius, 2 * _HEIGHT)
+    return fcl.Box(robot.size[0], robot.size[1], 2 * _HEIGHT)
+
+
+class StaticGeometry:
+    """FCL-backed collision queries against the static scene and the bounds.
+
+    Parameters
+    ----------
+    scene : Scene
+
+    Attributes
+    ----------
+    calls : int
+        Number of FCL queries made so far (validity + distance), for benchmarks.
+    """
+
+    def __init__(self, scene: Scene):
+        self.scene = scene
+        self.robot = scene.robot
+        self.r = scene.robot.circumradius
+        self._objects = static_objects(scene)
+        self._manager = fcl.DynamicAABBTreeCollisionManager()
+        if self._objects:
+            self._manager.registerObjects(self._objects)
+        self._manager.setup()
+        self._robot_obj = fcl.CollisionObject(robot_geometry(scene.robot), fcl.Transform())
+        self._creq = fcl.CollisionRequest()
+        self._dreq = fcl.DistanceRequest()
+        self.calls = 0
+
+    # ---- bounds (analytic)
+    def bounds_clearance(self, poses: FloatArray) -> FloatArray:
+        """Distance from the robot body to the outside of the bounds (negative: outside).
+
+        Parameters
+        ----------
+        poses : (n, d) float
+
+        Returns
+        -------
+        (n,) float
+        """
+        poses = np.atleast_2d(np.asarray(poses, dtype=float))
+        xmin, ymin, xmax, ymax = self.scene.bounds
+        if self.robot.shape == "disc":
+            x, y, r = poses[:, 0], poses[:, 1], self.robot.radius
+            return np.min(np.stack([x - r - xmin, xmax - x - r, y - r - ymin, ymax - y - r]), axis=0)
+        c = self.robot.corners(poses)
+        return np.minimum.reduce(
+            [
+                c[..., 0].min(-1) - xmin,
+                xmax - c[..., 0].max(-1),
+                c[..., 1].min(-1) - ymin,
+                ymax - c[..., 1].max(-1),
+            ]
+        )
+
+    def _place(self, pose) -> None:
+        if len(pose) == 3:
+            yaw = float(pose[2])
+            self._robot_obj.setTransform(
+                fcl.Transform(
+                    np.array([math.cos(0.5 * yaw), 0.0, 0.0, math.sin(0.5 * yaw)]),
+                    np.array([pose[0], pose[1], 0.0]),
+                )
+            )
+        else:
+            self._robot_obj.setTranslation(np.array([pose[0], pose[1], 0.0]))
+
+    def _bounds_clearance1(self, pose) -> float:
+        """Scalar fast path of :meth:`bounds_clearance` for one pose."""
+        xmin, ymin, xmax, ymax = self.scene.bounds
+        x, y = pose[0], pose[1]
+        if len(pose) == 2:
+            ex = ey = self.robot.radius
+        else:
+            c, s = abs(math.cos(pose[2])), abs(math.sin(pose[2]))
+            hl, hw = 0.5 * self.robot.size[0], 0.5 * self.robot.size[1]
+            ex, ey = c * hl + s * hw, s * hl + c * hw
+        return min(x - ex - xmin, xmax - x - ex, y - ey - ymin, ymax - y - ey)
+
+    def _inside_bounds(self, pose) -> bool:
+        return self._bounds_clearance1(pose) >= 0
+
+    def clearance1(self, pose) -> float:
+        """Clearance of one pose from static obstacles and bounds (see :meth:`clearance`)."""
+        c = self._bounds_clearance1(pose)
+        if c > 0:
+            c = min(c, self.obstacle_clearance(pose))
+        return c
+
+    # ---- single pose (OMPL callback path)
+    def is_valid(self, pose) -> bool:
+        """True when the robot at ``pose`` is inside bounds and touches no obstacle's interior."""
+        if not self._inside_bounds(pose):
+            return False
+        if not self._objects:
+            return True
+        self._place(pose)
+        data = fcl.CollisionData(request=self._creq)
+        self._manager.collide(self._robot_obj, data, fcl.defaultCollisionCallback)
+        self.calls += 1
+        return not data.result.is_collision
+
+    def obstacle_clearance(self, pose) -> float:
+        """Distance from the robot at ``pose`` to the nearest static obstacle (<= 0 when touching)."""
+        if not self._objects:
+            return math.inf
+        self._place(pose)
+        data = fcl.DistanceData(request=self._dreq)
+        self._manager.distance(self._robot_obj, data, fcl.defaultDistanceCallback)
+        self.calls += 1
+        d = data.result.min_distance
+        if d <= 0:
+            return -1.0 if self._collides() else 0.0
+        return d
+
+    def _collides(self) -> bool:
+        data = fcl.CollisionData(request=self._creq)
+        self._manager.collide(self._robot_obj, data, fcl.defaultCollisionCallback)
+        self.calls += 1
+        return data.result.is_collision
+
+    # ---- batches
+    def valid(self, poses: FloatArray) -> np.ndarray:
+        """Validity of many poses.
+
+        Parameters
+        ----------
+        poses : (n, d) float
+
+        Returns
+        -------
+        (n,) bool
+        """
+        poses = np.atleast_2d(np.asarray(poses, dtype=float))
+        ok = self.bounds_clearance(poses) >= 0
+        for i in np.nonzero(ok)[0]:
+            ok[i] = self.is_valid(poses[i])
+        return ok
+
+    def clearance(self, poses: FloatArray) -> FloatArray:
+        """Clearance of the robot body from static obstacles and the bounds.
+
+        Parameters
+        ----------
+        poses : (n, d) float
+
+        Returns
+        -------
+        (n,) float
+            Positive: free by that margin; 0 touching; negative: colliding or outside.
+        """
+        poses = np.atleast_2d(np.asarray(poses, dtype=float))
+        return np.array([self.clearance1(p) for p in poses], dtype=float)
+
+    def motion_free(self, a, b, max_splits: int = 100_000) -> bool:
+        """Certify the straight motion a -> b (heading along the shorter arc) as free.
+
+        Uses the Lipschitz bound: the interval [fa, fb] is free if
+        clearance(fa) + clearance(fb) >= metric length of the interval; otherwise
+        it is split in two. Touching (clearance 0) counts as free, as in the contract.
+
+        Returns
+        -------
+        bool
+            True only when every pose of the motion was shown free.
+        """
+        a = np.asarray(a, dtype=float)
+        b = np.asarray(b, dtype=float)
+        total = float(metric_distance(a, b, self.r))
+        ca, cb = self.clearance1(a), self.clearance1(b)
+        if ca < 0 or cb < 0:
+            return False
+        stack = [(0.0, 1.0, ca, cb)]
+        splits = 0
+        while stack:
+            f0, f1, c0, c1 = stack.pop()
+            length = (f1 - f0) * total
+            if c0 + c1 >= length:
+                continue
+            if length < _EPS_CERT or splits >= max_splits:
+                return False
+            fm = 0.5 * (f0 + f1)
+            cm = self.clearance1(interpolate_poses(a, b, np.array([fm]))[0])
+            splits += 1
+            if cm < 0:
+                return False
+            stack.append((f0, fm, c0, cm))
+            stack.append((fm, f1, cm, c1))
+        return True
+
+
+# --------------------------------------------------------------------------- movers
+
+
+def _point_box_distance(p: FloatArray, half: FloatArray) -> FloatArray:
+    """Signed distance from points to a centered axis-aligned box. p (..., 2), half (..., 2)."""
+    q = np.abs(p) - half
+    outside = np.hypot(np.maximum(q[..., 0], 0), np.maximum(q[..., 1], 0))
+    inside = np.minimum(np.maximum(q[..., 0], q[..., 1]), 0)
+    return outside + inside
+
+
+def _segment_point_distance(p, a, b):
+    ab = b - a
+    t = np.clip(np.sum((p - a) * ab, -1) / np.maximum(np.sum(ab * ab, -1), 1e-300), 0, 1)
+    return np.linalg.norm(a + t[..., None] * ab - p, axis=-1)
+
+
+def _quad_distance(A: FloatArray, B: FloatArray) -> FloatArray:
+    """Distance between convex quads (negative when they overlap). A, B (..., 4, 2) ccw."""
+    # separating-axis test on the four edge normals
+    gaps = []
+    for P, Q in ((A, B), (B, A)):
+        for k in range(2):
+            e = P[..., k + 1, :] - P[..., k, :]
+            n = np.stack([-e[..., 1], e[..., 0]], -1)
+            n = n / np.linalg.norm(n, axis=-1, keepdims=True)
+            pp = np.einsum("...kj,...j->...k", P, n)
+            qq = np.einsum("...kj,...j->...k", Q, n)
+            gaps.append(np.maximum(qq.min(-1) - pp.max(-1), pp.min(-1) - qq.max(-1)))
+    sep = np.max(np.stack(gaps), axis=0)
+    d = np.full(sep.shape, np.inf)
+    for P, Q in ((A, B), (B, A)):
+        for i in range(4):
+            for j in range(4):
+                d = np.minimum(d, _segment_point_distance(P[..., i, :], Q[..., j, :], Q[..., (j + 1) % 4, :]))
+    return np.where(sep > 0, d, sep)
+
+
+def mover_distance(robot: Robot, poses: FloatArray, shape: str, radius: float, size, xy: FloatArray) -> FloatArray:
+    """Distance between the robot at ``poses`` and a mover at ``xy`` (negative: overlap).
+
+    Parameters
+    ----------
+    robot : Robot
+    poses : (..., d) float
+        Broadcastable against ``xy``.
+    shape : {"disc", "box"}
+        The mover's shape; ``radius`` for a disc, ``size`` (w, h) for an axis-aligned box.
+    xy : (..., 2) float
+
+    Returns
+    -------
+    (...,) float
+        Exact for discs and boxes; where shapes overlap the value is <= 0.
+    """
+    poses = np.asarray(poses, dtype=float)
+    xy = np.asarray(xy, dtype=float)
+    if robot.shape == "disc":
+        rel = xy - poses[..., :2]
+        if shape == "disc":
+            return np.hypot(rel[..., 0], rel[..., 1]) - robot.radius - radius
+        return _point_box_distance(rel, 0.5 * np.asarray(size)) - robot.radius
+    # box robot
+    c, s = np.cos(poses[..., 2]), np.sin(poses[..., 2])
+    rel = xy - poses[..., :2]
+    local = np.stack([c * rel[..., 0] + s * rel[..., 1], -s * rel[..., 0] + c * rel[..., 1]], -1)
+    half_robot = 0.5 * np.asarray(robot.size)
+    if shape == "disc":
+        return _point_box_distance(local, half_robot) - radius
+    shp = np.broadcast_shapes(poses.shape[:-1], xy.shape[:-1])
+    A = robot.corners(np.broadcast_to(poses, shp + (3,)).reshape(-1, 3)).reshape(shp + (4, 2))
+    hw, hh = 0.5 * size[0], 0.5 * size[1]
+    offs = np.array([[hw, hh], [-hw, hh], [-hw, -hh], [hw, -hh]])
+    B = np.broadcast_to(xy, shp + (2,))[..., None, :] + offs
+    return _quad_distance(A, B)

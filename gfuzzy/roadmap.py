@@ -1,0 +1,408 @@
+"""Static roadmaps: OMPL's PRM over R^2 (disc robot) or SE(2) (box robot), FCL validity.
+
+The roadmap is grown to a vertex count, never to a time budget, so that a seed gives the
+same roadmap in every process (OMPL's RNG is process-wide; see
+``shared/notes/ompl-2-python.md``). Every edge OMPL proposes is then *certified* with
+:meth:`gfuzzy.geometry.StaticGeometry.motion_free`, which proves the whole straight
+motion free rather than sampling it; uncertifiable edges are dropped.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+import os
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+from importlib import metadata
+from pathlib import Path
+
+import numpy as np
+
+from .errors import SceneError
+from .geometry import StaticGeometry, metric_distance
+from .scene import Scene
+from .typing import FloatArray, IntArray
+
+__all__ = ["RoadmapOptions", "Roadmap", "build_roadmap", "load_roadmap", "default_roadmap_path"]
+
+log = logging.getLogger(__name__)
+
+FORMAT = "gfuzzy-roadmap"
+FORMAT_VERSION = 1
+
+
+@dataclass(frozen=True)
+class RoadmapOptions:
+    """Settings of the PRM build.
+
+    Attributes
+    ----------
+    vertices : int
+        Number of milestones to grow the roadmap to.
+    seed : int
+        OMPL seed (OMPL refuses 0, so ``seed + 1`` is handed to it).
+    neighbors : int
+        PRM's ``maxNearestNeighbors`` (k of the k-nearest connection strategy).
+    resolution : float
+        OMPL's validity-checking resolution (a fraction of the space's extent) used while
+        PRM decides which neighbours to connect; edges are certified exactly afterwards.
+    """
+
+    vertices: int = 200
+    seed: int = 1
+    neighbors: int = 10
+    resolution: float = 0.02
+
+
+@dataclass
+class Roadmap:
+    """A roadmap of the static scene.
+
+    Attributes
+    ----------
+    vertices : (V, d) float
+        Poses ``[x, y]`` or ``[x, y, heading]``.
+    edges : (E, 2) int
+        Undirected, ``edges[:, 0] < edges[:, 1]``.
+    lengths : (E,) float
+        Contract metric: xy distance + |heading change| * circumradius.
+    scene_name, scene_hash : str
+        The scene it was built for (``Scene.static_hash``).
+    options : RoadmapOptions
+    info : dict
+        Build statistics: seconds, validity calls, edges dropped, OMPL version.
+    """
+
+    vertices: FloatArray
+    edges: IntArray
+    lengths: FloatArray
+    scene_name: str
+    scene_hash: str
+    circumradius: float
+    options: RoadmapOptions = field(default_factory=RoadmapOptions)
+    info: dict = field(default_factory=dict)
+
+    @property
+    def dof(self) -> int:
+        return int(self.vertices.shape[1])
+
+    def __len__(self) -> int:
+        return len(self.vertices)
+
+    def graph(self):
+        """A ``networkx.Graph`` with vertex attribute ``pose`` and edge attribute ``weight``."""
+        import networkx as nx
+
+        g = nx.Graph()
+        for i, v in enumerate(self.vertices):
+            g.add_node(i, pose=v)
+        g.add_weighted_edges_from(
+            (int(a), int(b), float(w)) for (a, b), w in zip(self.edges, self.lengths, strict=True)
+        )
+        return g
+
+    def adjacency(self) -> tuple[IntArray, IntArray, FloatArray]:
+        """CSR adjacency ``(indptr (V+1,), neighbours (2E,), lengths (2E,))``."""
+        n = len(self.vertices)
+        src = np.concatenate([self.edges[:, 0], self.edges[:, 1]])
+        dst = np.concatenate([self.edges[:, 1], self.edges[:, 0]])
+        w = np.concatenate([self.lengths, self.lengths])
+        order = np.lexsort((dst, src))
+        indptr = np.zeros(n + 1, dtype=np.int64)
+        np.add.at(indptr, src + 1, 1)
+        return np.cumsum(indptr), dst[order], w[order]
+
+    def check_scene(self, scene: Scene, file: str = "<roadmap>") -> None:
+        """Raise SceneError if this roadmap was not built for ``scene``'s static part."""
+        if self.scene_hash != scene.static_hash:
+            raise SceneError(
+                file,
+                "scene_hash",
+                f"roadmap was built for scene {self.scene_name!r} with other static content "
+                f"(hash {self.scene_hash[:12]}), not for {scene.source} (hash {scene.static_hash[:12]}); "
+                "rebuild it with `gfuzzy roadmap`",
+            )
+
+    def to_dict(self) -> dict:
+        return {
+            "format": FORMAT,
+            "version": FORMAT_VERSION,
+            "scene": self.scene_name,
+            "scene_hash": self.scene_hash,
+            "circumradius": self.circumradius,
+            "options": asdict(self.options),
+            "info": self.info,
+            "vertices": self.vertices.tolist(),
+            "edges": self.edges.tolist(),
+            "lengths": self.lengths.tolist(),
+        }
+
+    def save(self, path: str | os.PathLike) -> None:
+        """Write the roadmap as JSON, atomically (a temporary file, then a rename)."""
+        write_atomic(path, json.dumps(self.to_dict(), separators=(",", ":")))
+
+
+def write_atomic(path: str | os.PathLike, text: str) -> None:
+    """Write ``text`` to ``path`` via a temporary file in the same folder and a rename."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+
+
+def load_roadmap(path: str | os.PathLike, scene: Scene | None = None) -> Roadmap:
+    """Read a roadmap file; with ``scene``, also check it was built for that scene.
+
+    Raises
+    ------
+    SceneError
+        Unreadable or malformed file, or a roadmap of another scene.
+    """
+    file = str(path)
+    try:
+        doc = json.loads(Path(path).read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise SceneError(file, "", f"cannot read: {exc.strerror or exc}") from None
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise SceneError(file, "", f"not a roadmap file (invalid JSON: {exc})") from None
+    if not isinstance(doc, dict) or doc.get("format") != FORMAT:
+        raise SceneError(file, "format", "not a gfuzzy roadmap file")
+    if doc.get("version") != FORMAT_VERSION:
+        raise SceneError(file, "version", f"unsupported roadmap version {doc.get('version')!r}")
+    try:
+        vertices = np.asarray(doc["vertices"], dtype=float)
+        edges = np.asarray(doc["edges"], dtype=np.int64).reshape(-1, 2)
+        lengths = np.asarray(doc["lengths"], dtype=float)
+        opts = RoadmapOptions(**doc["options"])
+        rm = Roadmap(
+            vertices,
+            edges,
+            lengths,
+            str(doc["scene"]),
+            str(doc["scene_hash"]),
+            float(doc["circumradius"]),
+            opts,
+            dict(doc.get("info", {})),
+        )
+    except (KeyError, TypeError, ValueError) as exc:
+        raise SceneError(file, "", f"malformed roadmap: {exc}") from None
+    if (
+        vertices.ndim != 2
+        or vertices.shape[1] not in (2, 3)
+        or len(lengths) != len(edges)
+        or (edges.size and (edges.min() < 0 or edges.max() >= len(vertices)))
+        or not np.all(np.isfinite(vertices))
+    ):
+        raise SceneError(file, "", "malformed roadmap: inconsistent vertices, edges or lengths")
+    if scene is not None:
+        rm.check_scene(scene, file)
+        if rm.dof != scene.robot.dof:
+            raise SceneError(file, "vertices", "roadmap poses do not match the robot kind")
+    return rm
+
+
+def default_roadmap_path(scene: Scene, folder: str | os.PathLike = "roadmaps") -> Path:
+    """Where ``gfuzzy roadmap`` writes by default: ``roadmaps/<scene name>.json``."""
+    return Path(folder) / f"{scene.name}.json"
+
+
+# --------------------------------------------------------------------------- building
+
+
+def _ompl_version() -> str:
+    try:
+        return metadata.version("ompl")
+    except metadata.PackageNotFoundError:  # pragma: no cover
+        return "unknown"
+
+
+def _seed_ompl(seed: int) -> None:
+    from ompl import util as ou
+
+    level = ou.getLogLevel()
+    ou.setLogLevel(ou.LogLevel.LOG_NONE)
+    try:
+        ou.RNG.setSeed(int(seed) % 2_147_483_646 + 1)
+    finally:
+        ou.setLogLevel(level)
+
+
+class _Builder:
+    """Holds the OMPL objects of one build; they die with it (no nanobind leak warnings)."""
+
+    def __init__(self, scene: Scene, options: RoadmapOptions, geometry: StaticGeometry):
+        from ompl import base as ob
+        from ompl import geometric as og
+        from ompl import util as ou
+
+        ou.setLogLevel(ou.LogLevel.LOG_WARN)
+        self.geometry = geometry
+        xmin, ymin, xmax, ymax = scene.bounds
+        bounds = ob.RealVectorBounds(2)
+        bounds.setLow(0, xmin)
+        bounds.setHigh(0, xmax)
+        bounds.setLow(1, ymin)
+        bounds.setHigh(1, ymax)
+        self.box = scene.robot.shape == "box"
+        if self.box:
+            space = ob.SE2StateSpace()
+            space.setBounds(bounds)
+            space.setSubspaceWeight(1, scene.robot.circumradius)  # the contract's metric
+        else:
+            space = ob.RealVectorStateSpace(2)
+            space.setBounds(bounds)
+        self.space = space
+        si = ob.SpaceInformation(space)
+        valid = geometry.is_valid
+        if self.box:
+            si.setStateValidityChecker(lambda s: valid((s.getX(), s.getY(), s.getYaw())))
+        else:
+            si.setStateValidityChecker(lambda s: valid((s[0], s[1])))
+        si.setStateValidityCheckingResolution(options.resolution)
+        si.setup()
+        self.si = si
+        prm = og.PRM(si)
+        prm.setMaxNearestNeighbors(options.neighbors)
+        prm.setProblemDefinition(ob.ProblemDefinition(si))
+        prm.setup()
+        self.prm = prm
+
+    def grow(self, n: int, progress: Callable[[int, int], None] | None) -> None:
+        from ompl import base as ob
+
+        prm = self.prm
+        last = [-1]
+
+        def done() -> bool:
+            count = prm.milestoneCount()
+            if progress is not None and count != last[0] and count % 50 == 0:
+                last[0] = count
+                progress(count, n)
+            return count >= n
+
+        prm.growRoadmapPtc(ob.PlannerTerminationCondition(done))
+
+    def export(self) -> tuple[FloatArray, IntArray]:
+        from ompl import base as ob
+
+        pd = ob.PlannerData(self.si)
+        self.prm.getPlannerData(pd)
+        nv = pd.numVertices()
+        verts = []
+        for i in range(nv):
+            s = pd.getVertex(i).getState()
+            verts.append((s.getX(), s.getY(), s.getYaw()) if self.box else (s[0], s[1]))
+        edges = set()
+        for i in range(nv):
+            for j in pd.getEdges(i):
+                a, b = (i, int(j)) if i < j else (int(j), i)
+                if a != b:
+                    edges.add((a, b))
+        e = np.array(sorted(edges), dtype=np.int64).reshape(-1, 2)
+        return np.array(verts, dtype=float).reshape(nv, 3 if self.box else 2), e
+
+
+def build_roadmap(
+    scene: Scene,
+    options: RoadmapOptions | None = None,
+    progress: Callable[[int, int], None] | None = None,
+    geometry: StaticGeometry | None = None,
+) -> Roadmap:
+    """Build a roadmap of the static scene with OMPL's PRM.
+
+    Parameters
+    ----------
+    scene : Scene
+    options : RoadmapOptions, optional
+    progress : callable(count, total), optional
+        Called as milestones are added (every 50) and as edges are certified.
+    geometry : StaticGeometry, optional
+        Reuse an existing collision model of ``scene``.
+
+    Returns
+    -------
+    Roadmap
+        Seeded and reproducible: the same scene, options and seed give the same roadmap
+        in any process.
+    """
+    options = options or RoadmapOptions()
+    if options.vertices < 1:
+        raise ValueError("a roadmap needs at least 1 vertex")
+    geometry = geometry or StaticGeometry(scene)
+    calls0 = geometry.calls
+    t_start = time.perf_counter()
+    _seed_ompl(options.seed)
+    builder = _Builder(scene, options, geometry)
+    builder.grow(options.vertices, progress)
+    vertices, edges = builder.export()
+    del builder
+    t_grow = time.perf_counter() - t_start
+    calls_grow = geometry.calls - calls0
+
+    keep = np.ones(len(edges), dtype=bool)
+    for k, (a, b) in enumerate(edges):
+        keep[k] = geometry.motion_free(vertices[a], vertices[b])
+        if progress is not None and k % 2000 == 1999:
+            progress(k + 1, len(edges))
+    dropped = int((~keep).sum())
+    edges = edges[keep]
+    lengths = metric_distance(vertices[edges[:, 0]], vertices[edges[:, 1]], scene.robot.circumradius)
+    seconds = time.perf_counter() - t_start
+    if dropped:
+        log.info("dropped %d of %d PRM edges that could not be certified free", dropped, len(keep))
+    info = {
+        "ompl_version": _ompl_version(),
+        "seconds": round(seconds, 4),
+        "grow_seconds": round(t_grow, 4),
+        "validity_calls": int(calls_grow),
+        "certify_calls": int(geometry.calls - calls0 - calls_grow),
+        "edges_dropped": dropped,
+        "components": _components(len(vertices), edges),
+    }
+    return Roadmap(
+        vertices,
+        edges,
+        np.asarray(lengths, dtype=float),
+        scene.name,
+        scene.static_hash,
+        scene.robot.circumradius,
+        options,
+        info,
+    )
+
+
+def _components(n: int, edges: IntArray) -> int:
+    parent = np.arange(n)
+
+    def find(i):
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for a, b in edges:
+        ra, rb = find(a), find(b)
+        if ra != rb:
+            parent[ra] = rb
+    return len({find(i) for i in range(n)})
+
+
+def roadmap_digest(rm: Roadmap) -> str:
+    """SHA-256 over vertices and edges: equal digests mean identical roadmaps."""
+    h = hashlib.sha256()
+    h.update(np.ascontiguousarray(rm.vertices).tobytes())
+    h.update(np.ascontiguousarray(rm.edges).tobytes())
+    return h.hexdigest()

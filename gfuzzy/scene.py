@@ -1,0 +1,790 @@
+"""Scene files: bounds, robot, static obstacles, movers and queries (CONTRACT.md section 1).
+
+:func:`load_scene` reads a YAML file with ``yaml.safe_load`` semantics, validates every
+field and returns an immutable :class:`Scene`. Anything wrong raises
+:class:`~gfuzzy.errors.SceneError` naming the file and the place in it, e.g.
+``movers[2].path[1]``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+from .errors import SceneError
+from .typing import FloatArray
+
+__all__ = [
+    "Robot",
+    "Disc",
+    "Box",
+    "Polygon",
+    "Mover",
+    "Query",
+    "Expect",
+    "Scene",
+    "load_scene",
+    "parse_scene",
+]
+
+NAME_RE = re.compile(r"^[A-Za-z0-9_.-]+$")
+MODES = ("loop", "bounce", "once")
+STATUSES = ("solved", "no_path", "invalid_query", "timeout")
+#: Largest number of YAML nodes a scene may expand to (aliases counted each time used).
+MAX_NODES = 2_000_000
+
+
+# --------------------------------------------------------------------------- shapes
+
+
+@dataclass(frozen=True)
+class Robot:
+    """The robot: a disc (poses ``[x, y]``) or a box (poses ``[x, y, heading]``).
+
+    Attributes
+    ----------
+    shape : {"disc", "box"}
+    radius : float
+        Disc radius (0 for a box).
+    size : (2,) tuple
+        Box ``(length, width)``, length along the heading ((0, 0) for a disc).
+    vmax : float
+        Bound on configuration speed (euclidean xy speed + |heading rate| * circumradius).
+    amax : float or None
+        Optional acceleration bound, used by the speed layer.
+    """
+
+    shape: str
+    radius: float
+    size: tuple[float, float]
+    vmax: float
+    amax: float | None = None
+
+    @property
+    def circumradius(self) -> float:
+        """Radius of the smallest disc about the reference point holding the whole robot."""
+        if self.shape == "disc":
+            return self.radius
+        return 0.5 * math.hypot(*self.size)
+
+    @property
+    def inradius(self) -> float:
+        """Radius of the largest disc about the reference point inside the robot."""
+        return self.radius if self.shape == "disc" else 0.5 * min(self.size)
+
+    @property
+    def dof(self) -> int:
+        """Length of a pose: 2 for a disc, 3 for a box."""
+        return 2 if self.shape == "disc" else 3
+
+    def corners(self, poses: FloatArray) -> FloatArray:
+        """Corners of a box robot, counter-clockwise.
+
+        Parameters
+        ----------
+        poses : (n, 3) float
+
+        Returns
+        -------
+        (n, 4, 2) float
+        """
+        poses = np.asarray(poses, dtype=float).reshape(-1, 3)
+        hl, hw = 0.5 * self.size[0], 0.5 * self.size[1]
+        local = np.array([[hl, hw], [-hl, hw], [-hl, -hw], [hl, -hw]])
+        c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
+        rot = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)  # (n, 2, 2)
+        return poses[:, None, :2] + np.einsum("nij,kj->nki", rot, local)
+
+
+@dataclass(frozen=True)
+class Disc:
+    """A static disc obstacle."""
+
+    center: tuple[float, float]
+    radius: float
+
+
+@dataclass(frozen=True)
+class Box:
+    """A static box obstacle rotated by ``angle`` radians about its center."""
+
+    center: tuple[float, float]
+    size: tuple[float, float]
+    angle: float = 0.0
+
+    def vertices(self) -> FloatArray:
+        """(4, 2) float: corners, counter-clockwise."""
+        hx, hy = 0.5 * self.size[0], 0.5 * self.size[1]
+        c, s = math.cos(self.angle), math.sin(self.angle)
+        local = np.array([[hx, hy], [-hx, hy], [-hx, -hy], [hx, -hy]])
+        return local @ np.array([[c, s], [-s, c]]) + np.asarray(self.center)
+
+
+@dataclass(frozen=True)
+class Polygon:
+    """A static simple polygon; ``holes`` only arise from mesh footprints.
+
+    Attributes
+    ----------
+    points : (n, 2) float, counter-clockwise
+    holes : tuple of (k, 2) float
+    source : str
+        ``"polygon"`` for a scene polygon, or the mesh file it came from.
+    """
+
+    points: FloatArray = field(compare=False)
+    holes: tuple = field(default=(), compare=False)
+    source: str = "polygon"
+
+
+@dataclass(frozen=True)
+class Mover:
+    """A moving obstacle: a disc, or an axis-aligned box that does not rotate.
+
+    Either ``path`` (constant ``speed`` along a polyline, ``mode`` loop / bounce / once,
+    ``offset`` arc length travelled at t = 0) or ``trajectory`` (``[t, x, y]`` rows,
+    linear between rows, present only from the first to the last t).
+    """
+
+    name: str
+    shape: str  # "disc" | "box"
+    radius: float  # disc radius, 0 for a box
+    size: tuple[float, float]  # box (w, h), (0, 0) for a disc
+    path: FloatArray | None = field(default=None, compare=False)
+    speed: float = 0.0
+    mode: str = "loop"
+    offset: float = 0.0
+    trajectory: FloatArray | None = field(default=None, compare=False)
+
+    @property
+    def extent(self) -> float:
+        """Circumradius of the mover's shape about its reference point."""
+        return self.radius if self.shape == "disc" else 0.5 * math.hypot(*self.size)
+
+    @property
+    def time_range(self) -> tuple[float, float]:
+        """Times between which the mover exists (infinite for a path mover)."""
+        if self.trajectory is None:
+            return (-math.inf, math.inf)
+        return (float(self.trajectory[0, 0]), float(self.trajectory[-1, 0]))
+
+    @property
+    def max_speed(self) -> float:
+        """Largest speed the mover ever has."""
+        if self.trajectory is None:
+            return self.speed
+        tr = self.trajectory
+        if len(tr) < 2:
+            return 0.0
+        d = np.hypot(*np.diff(tr[:, 1:], axis=0).T)
+        return float(np.max(d / np.diff(tr[:, 0])))
+
+    @property
+    def period(self) -> float:
+        """Period of the motion (inf when it is not periodic or stands still)."""
+        if self.trajectory is not None or self.mode == "once" or self.speed == 0:
+            return math.inf
+        length = float(self._cumlen[-1])
+        return (length if self.mode == "loop" else 2 * length) / self.speed
+
+    @property
+    def _polyline(self) -> FloatArray:
+        pts = self.path
+        if self.mode == "loop" and np.any(pts[0] != pts[-1]):
+            pts = np.vstack([pts, pts[:1]])
+        return pts
+
+    @property
+    def _cumlen(self) -> FloatArray:
+        pts = self._polyline
+        return np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(pts, axis=0).T))])
+
+    def bbox(self) -> tuple[float, float, float, float]:
+        """Box swept by the mover's reference point over all time (without its shape)."""
+        pts = self.path if self.trajectory is None else self.trajectory[:, 1:]
+        lo, hi = pts.min(axis=0), pts.max(axis=0)
+        return (float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1]))
+
+    def arc_position(self, times: FloatArray) -> FloatArray:
+        """Arc length along the (closed, for loop) polyline at ``times``; path movers only."""
+        cum = self._cumlen
+        length = cum[-1]
+        s = self.offset + self.speed * np.asarray(times, dtype=float)
+        if self.mode == "loop":
+            return np.mod(s, length)
+        if self.mode == "bounce":
+            s = np.mod(s, 2 * length)
+            return np.where(s > length, 2 * length - s, s)
+        return np.clip(s, 0.0, length)
+
+    def state(self, times: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Positions and presence at ``times``.
+
+        Parameters
+        ----------
+        times : (n,) float
+
+        Returns
+        -------
+        xy : (n, 2) float
+            Reference point; for a trajectory mover outside its time range, the
+            position clamped to its first or last row.
+        present : (n,) bool
+        """
+        times = np.atleast_1d(np.asarray(times, dtype=float))
+        if self.trajectory is not None:
+            tr = self.trajectory
+            x = np.interp(times, tr[:, 0], tr[:, 1])
+            y = np.interp(times, tr[:, 0], tr[:, 2])
+            present = (times >= tr[0, 0]) & (times <= tr[-1, 0])
+            return np.stack([x, y], axis=-1), present
+        pts, cum = self._polyline, self._cumlen
+        s = self.arc_position(times)
+        x = np.interp(s, cum, pts[:, 0])
+        y = np.interp(s, cum, pts[:, 1])
+        return np.stack([x, y], axis=-1), np.ones(times.shape, dtype=bool)
+
+
+@dataclass(frozen=True)
+class Expect:
+    """Expectations of a regression run; every field optional."""
+
+    status: str | None = None
+    max_duration: float | None = None
+    max_delay_factor: float | None = None
+
+
+@dataclass(frozen=True)
+class Query:
+    """A planning query; ``start``/``goal`` have the robot's pose length."""
+
+    name: str
+    start: tuple[float, ...]
+    goal: tuple[float, ...]
+    t0: float = 0.0
+    expect: Expect | None = None
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A validated scene.
+
+    Attributes
+    ----------
+    name : str
+    bounds : (4,) tuple
+        ``(xmin, ymin, xmax, ymax)``.
+    robot : Robot
+    obstacles : tuple of Disc, Box, Polygon
+    movers : tuple of Mover
+    queries : tuple of Query
+    source : str
+        The file it was read from (``"<string>"`` when parsed from text).
+    static_hash : str
+        SHA-256 of everything a roadmap depends on (bounds, robot shape, obstacles,
+        mesh contents); editing movers or queries keeps it.
+    raw : dict
+        The validated document, for round trips.
+    """
+
+    name: str
+    bounds: tuple[float, float, float, float]
+    robot: Robot
+    obstacles: tuple
+    movers: tuple
+    queries: tuple
+    source: str = "<string>"
+    static_hash: str = ""
+    raw: dict = field(default_factory=dict, compare=False, repr=False)
+
+    def query(self, name: str) -> Query:
+        """The query called ``name``; raises KeyError listing the names there are."""
+        for q in self.queries:
+            if q.name == name:
+                return q
+        names = ", ".join(q.name for q in self.queries) or "none"
+        raise KeyError(f"no query {name!r} in {self.source} (queries: {names})")
+
+    def mover_states(self, times: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """All movers' positions and presence at ``times``.
+
+        Parameters
+        ----------
+        times : (n,) float
+
+        Returns
+        -------
+        xy : (m, n, 2) float
+        present : (m, n) bool
+        """
+        times = np.atleast_1d(np.asarray(times, dtype=float))
+        m = len(self.movers)
+        xy = np.empty((m, times.size, 2))
+        present = np.empty((m, times.size), dtype=bool)
+        for i, mover in enumerate(self.movers):
+            xy[i], present[i] = mover.state(times)
+        return xy, present
+
+    def to_dict(self) -> dict:
+        """The scene as a plain document that :func:`parse_scene` reads back."""
+        return json.loads(json.dumps(self.raw))
+
+
+# --------------------------------------------------------------------------- YAML
+
+
+class _Loader(yaml.SafeLoader):
+    """safe_load, plus: duplicate keys are errors and alias expansion is bounded."""
+
+
+def _construct_mapping(loader: _Loader, node: yaml.MappingNode, deep: bool = False) -> dict:
+    seen = set()
+    for key_node, _ in node.value:
+        key = loader.construct_object(key_node, deep=True)
+        try:
+            hashable = key in seen
+        except TypeError as exc:
+            raise yaml.constructor.ConstructorError(
+                None, None, "unhashable mapping key", key_node.start_mark
+            ) from exc
+        if hashable:
+            raise yaml.constructor.ConstructorError(
+                None, None, f"duplicate key {key!r}", key_node.start_mark
+            )
+        seen.add(key)
+    return loader.construct_mapping(node, deep=deep)
+
+
+_Loader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
+
+
+def _expanded_size(node: yaml.Node, memo: dict) -> int:
+    key = id(node)
+    if key in memo:
+        if memo[key] < 0:
+            raise ValueError("recursive YAML alias")
+        return memo[key]
+    memo[key] = -1
+    if isinstance(node, yaml.SequenceNode):
+        size = 1 + sum(_expanded_size(n, memo) for n in node.value)
+    elif isinstance(node, yaml.MappingNode):
+        size = 1 + sum(_expanded_size(k, memo) + _expanded_size(v, memo) for k, v in node.value)
+    else:
+        size = 1
+    memo[key] = size
+    return size
+
+
+def _load_yaml(text: str, file: str) -> Any:
+    loader = _Loader(text)
+    try:
+        node = loader.get_single_node()
+        if node is None:
+            raise SceneError(file, "", "the file is empty")
+        size = _expanded_size(node, {})
+        if size > MAX_NODES:
+            raise SceneError(
+                file, "", f"YAML expands to {size} nodes (aliases), more than {MAX_NODES}"
+            )
+        return loader.construct_document(node)
+    except SceneError:
+        raise
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark or exc.context_mark
+        where = f"line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        what = exc.problem or exc.context or "invalid YAML"
+        raise SceneError(file, where, f"invalid YAML: {what}") from None
+    except (yaml.YAMLError, ValueError, RecursionError) as exc:
+        raise SceneError(file, "", f"invalid YAML: {exc}") from None
+    finally:
+        loader.dispose()
+
+
+# --------------------------------------------------------------------------- validation
+
+
+class _V:
+    """Validation helpers bound to one file."""
+
+    def __init__(self, file: str):
+        self.file = file
+
+    def fail(self, place: str, message: str):
+        raise SceneError(self.file, place, message)
+
+    def mapping(self, value, place, required=(), optional=()):
+        if not isinstance(value, dict):
+            self.fail(place or "top level", f"expected a mapping, got {_kind(value)}")
+        for key in value:
+            if not isinstance(key, str):
+                self.fail(place or "top level", f"key {key!r} is not a string")
+            if key not in required and key not in optional:
+                allowed = ", ".join(list(required) + list(optional))
+                self.fail(_join(place, key), f"unknown key (allowed: {allowed})")
+        for key in required:
+            if key not in value:
+                self.fail(_join(place, key), "missing required key")
+        return value
+
+    def number(self, value, place, positive=False, nonneg=False):
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            self.fail(place, f"expected a number, got {_kind(value)}")
+        value = float(value)
+        if not math.isfinite(value):
+            self.fail(place, f"expected a finite number, got {value}")
+        if positive and value <= 0:
+            self.fail(place, f"must be positive, got {value:g}")
+        if nonneg and value < 0:
+            self.fail(place, f"must not be negative, got {value:g}")
+        return value
+
+    def vector(self, value, place, length, positive=False):
+        if not isinstance(value, list):
+            self.fail(place, f"expected a list of {length} numbers, got {_kind(value)}")
+        if len(value) != length:
+            self.fail(place, f"expected {length} numbers, got {len(value)}")
+        return tuple(
+            self.number(v, f"{place}[{i}]", positive=positive) for i, v in enumerate(value)
+        )
+
+    def points(self, value, place, width=2, min_rows=1):
+        if not isinstance(value, list):
+            self.fail(place, f"expected a list of points, got {_kind(value)}")
+        if len(value) < min_rows:
+            self.fail(place, f"expected at least {min_rows} rows, got {len(value)}")
+        rows = [self.vector(v, f"{place}[{i}]", width) for i, v in enumerate(value)]
+        return np.array(rows, dtype=float).reshape(-1, width)
+
+    def name(self, value, place, pattern=None):
+        if not isinstance(value, str) or not value.strip():
+            self.fail(place, f"expected a non-empty string, got {_kind(value)}")
+        if pattern is not None and not pattern.match(value):
+            self.fail(place, f"{value!r} must match [a-zA-Z0-9_.-]+")
+        if any(ord(c) < 32 for c in value):
+            self.fail(place, "control characters are not allowed")
+        return value
+
+
+def _kind(value) -> str:
+    if value is None:
+        return "nothing"
+    if isinstance(value, bool):
+        return f"a boolean ({value})"
+    if isinstance(value, (int, float)):
+        return f"a number ({value})"
+    if isinstance(value, str):
+        return f"a string ({value[:30]!r})"
+    if isinstance(value, list):
+        return "a list"
+    if isinstance(value, dict):
+        return "a mapping"
+    return type(value).__name__
+
+
+def _join(place: str, key) -> str:
+    if isinstance(key, int):
+        return f"{place}[{key}]"
+    return f"{place}.{key}" if place else str(key)
+
+
+def _one_key(v: _V, item, place, keys):
+    if not isinstance(item, dict):
+        v.fail(place, f"expected a mapping with one of {', '.join(keys)}, got {_kind(item)}")
+    if len(item) != 1:
+        v.fail(place, f"expected exactly one of {', '.join(keys)}, got {len(item)} keys")
+    key = next(iter(item))
+    if key not in keys:
+        v.fail(_join(place, key), f"unknown obstacle kind (allowed: {', '.join(keys)})")
+    return key, item[key]
+
+
+def _check_polygon(v: _V, pts: FloatArray, place: str) -> FloatArray:
+    import shapely
+
+    if len(pts) < 3:
+        v.fail(place, f"a polygon needs at least 3 points, got {len(pts)}")
+    if np.allclose(pts[0], pts[-1]) and len(pts) > 3:
+        pts = pts[:-1]
+    ring = shapely.LinearRing(pts)
+    if not ring.is_simple:
+        v.fail(place, "polygon is self-intersecting")
+    poly = shapely.Polygon(pts)
+    if not poly.is_valid or poly.area <= 1e-12:
+        v.fail(place, "polygon is degenerate (zero area)")
+    x, y = pts[:, 0], pts[:, 1]
+    signed = 0.5 * np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y)
+    return pts if signed > 0 else pts[::-1].copy()
+
+
+def _mesh_footprint(v: _V, spec, place: str, folder: Path) -> tuple[list, bytes]:
+    import shapely
+    import trimesh
+
+    spec = v.mapping(spec, place, required=("file",))
+    rel = spec["file"]
+    fplace = _join(place, "file")
+    if not isinstance(rel, str) or not rel:
+        v.fail(fplace, f"expected a file name, got {_kind(rel)}")
+    if os.path.isabs(rel) or rel.startswith("~"):
+        v.fail(fplace, f"mesh path {rel!r} must be relative to the scene file")
+    full = (folder / rel).resolve()
+    try:
+        full.relative_to(folder.resolve())
+    except ValueError:
+        v.fail(fplace, f"mesh path {rel!r} leaves the scene file's folder")
+    try:
+        data = full.read_bytes()
+    except OSError as exc:
+        v.fail(fplace, f"cannot read mesh {rel!r}: {exc.strerror or exc}")
+    try:
+        mesh = trimesh.load(full, force="mesh")
+        tris = np.asarray(mesh.triangles, dtype=float)
+    except Exception as exc:  # trimesh raises many kinds on a bad file
+        v.fail(fplace, f"cannot read mesh {rel!r}: {' '.join(str(exc).split()) or type(exc).__name__}")
+    if tris.size == 0 or not np.all(np.isfinite(tris)):
+        v.fail(fplace, f"mesh {rel!r} has no usable triangles")
+    tri2 = tris[:, :, :2]
+    area = 0.5 * np.abs(
+        (tri2[:, 1, 0] - tri2[:, 0, 0]) * (tri2[:, 2, 1] - tri2[:, 0, 1])
+        - (tri2[:, 2, 0] - tri2[:, 0, 0]) * (tri2[:, 1, 1] - tri2[:, 0, 1])
+    )
+    tri2 = tri2[area > 1e-12]
+    if len(tri2) == 0:
+        v.fail(fplace, f"mesh {rel!r} has an empty xy footprint")
+    union = shapely.union_all(shapely.polygons(tri2)).buffer(0)
+    polys = [union] if union.geom_type == "Polygon" else list(getattr(union, "geoms", []))
+    polys = [p for p in polys if p.geom_type == "Polygon" and p.area > 1e-12]
+    if not polys:
+        v.fail(fplace, f"mesh {rel!r} has an empty xy footprint")
+    return polys, data
+
+
+def parse_scene(doc: Any, file: str = "<string>", folder: str | os.PathLike | None = None) -> Scene:
+    """Validate a scene document (as from YAML) and build a :class:`Scene`.
+
+    Parameters
+    ----------
+    doc : dict
+        The parsed YAML document.
+    file : str
+        Name used in error messages.
+    folder : path-like, optional
+        Folder that mesh paths are relative to (default: the current directory).
+
+    Raises
+    ------
+    SceneError
+        On any bad input, naming ``file`` and the place in it.
+    """
+    v = _V(file)
+    folder = Path(folder) if folder is not None else Path.cwd()
+    v.mapping(
+        doc,
+        "",
+        required=("version", "name", "bounds", "robot"),
+        optional=("obstacles", "movers", "queries"),
+    )
+    if doc["version"] != 1 or isinstance(doc["version"], bool):
+        v.fail("version", f"unsupported version {doc['version']!r} (this reads version 1)")
+    name = v.name(doc["name"], "name", NAME_RE)
+    bounds = v.vector(doc["bounds"], "bounds", 4)
+    if not (bounds[0] < bounds[2] and bounds[1] < bounds[3]):
+        v.fail("bounds", f"inverted or empty bounds {list(bounds)} (need xmin < xmax, ymin < ymax)")
+
+    # robot
+    rd = v.mapping(doc["robot"], "robot", required=("vmax",), optional=("disc", "box", "amax"))
+    if ("disc" in rd) == ("box" in rd):
+        v.fail("robot", "give exactly one of disc or box")
+    if "disc" in rd:
+        robot_shape, radius, size = "disc", v.number(rd["disc"], "robot.disc", positive=True), (0.0, 0.0)
+    else:
+        robot_shape, radius = "box", 0.0
+        size = v.vector(rd["box"], "robot.box", 2, positive=True)
+    vmax = v.number(rd["vmax"], "robot.vmax", positive=True)
+    amax = v.number(rd["amax"], "robot.amax", positive=True) if "amax" in rd else None
+    robot = Robot(robot_shape, radius, size, vmax, amax)
+
+    # obstacles
+    obstacles: list = []
+    hasher = hashlib.sha256()
+    obs_doc = doc.get("obstacles") or []
+    if "obstacles" in doc and doc["obstacles"] is not None and not isinstance(doc["obstacles"], list):
+        v.fail("obstacles", f"expected a list, got {_kind(doc['obstacles'])}")
+    for i, item in enumerate(obs_doc):
+        place = f"obstacles[{i}]"
+        kind, spec = _one_key(v, item, place, ("box", "disc", "polygon", "mesh"))
+        kplace = _join(place, kind)
+        if kind == "box":
+            spec = v.mapping(spec, kplace, required=("center", "size"), optional=("angle",))
+            obstacles.append(
+                Box(
+                    v.vector(spec["center"], _join(kplace, "center"), 2),
+                    v.vector(spec["size"], _join(kplace, "size"), 2, positive=True),
+                    v.number(spec.get("angle", 0.0), _join(kplace, "angle")),
+                )
+            )
+        elif kind == "disc":
+            spec = v.mapping(spec, kplace, required=("center", "radius"))
+            obstacles.append(
+                Disc(
+                    v.vector(spec["center"], _join(kplace, "center"), 2),
+                    v.number(spec["radius"], _join(kplace, "radius"), positive=True),
+                )
+            )
+        elif kind == "polygon":
+            pts = _check_polygon(v, v.points(spec, kplace, 2, min_rows=3), kplace)
+            obstacles.append(Polygon(pts))
+        else:
+            polys, data = _mesh_footprint(v, spec, kplace, folder)
+            hasher.update(hashlib.sha256(data).digest())
+            for p in polys:
+                ext = np.asarray(p.exterior.coords)[:-1]
+                holes = tuple(np.asarray(r.coords)[:-1] for r in p.interiors)
+                obstacles.append(Polygon(ext, holes, source=spec["file"]))
+
+    # movers
+    movers: list = []
+    mov_doc = doc.get("movers") or []
+    if doc.get("movers") is not None and not isinstance(doc["movers"], list):
+        v.fail("movers", f"expected a list, got {_kind(doc['movers'])}")
+    names: set = set()
+    for i, md in enumerate(mov_doc):
+        place = f"movers[{i}]"
+        if not isinstance(md, dict):
+            v.fail(place, f"expected a mapping, got {_kind(md)}")
+        timed = "trajectory" in md
+        v.mapping(
+            md,
+            place,
+            required=("name",) + (("trajectory",) if timed else ("speed", "path", "mode")),
+            optional=("disc", "box") + (() if timed else ("offset",)),
+        )
+        mname = v.name(md["name"], _join(place, "name"))
+        if mname in names:
+            v.fail(_join(place, "name"), f"duplicate mover name {mname!r}")
+        names.add(mname)
+        if ("disc" in md) == ("box" in md):
+            v.fail(place, "give exactly one of disc or box")
+        if "disc" in md:
+            mshape, mrad, msize = "disc", v.number(md["disc"], _join(place, "disc"), positive=True), (0.0, 0.0)
+        else:
+            mshape, mrad = "box", 0.0
+            msize = v.vector(md["box"], _join(place, "box"), 2, positive=True)
+        if timed:
+            tr = v.points(md["trajectory"], _join(place, "trajectory"), 3, min_rows=1)
+            bad = np.nonzero(np.diff(tr[:, 0]) <= 0)[0]
+            if bad.size:
+                j = int(bad[0]) + 1
+                v.fail(
+                    f"{place}.trajectory[{j}][0]",
+                    f"time {tr[j, 0]:g} does not increase (previous row has {tr[j - 1, 0]:g})",
+                )
+            movers.append(Mover(mname, mshape, mrad, msize, trajectory=tr))
+        else:
+            path = v.points(md["path"], _join(place, "path"), 2, min_rows=2)
+            if np.sum(np.hypot(*np.diff(path, axis=0).T)) <= 0:
+                v.fail(_join(place, "path"), "path has zero length")
+            speed = v.number(md["speed"], _join(place, "speed"), nonneg=True)
+            mode = md["mode"]
+            if mode not in MODES:
+                v.fail(_join(place, "mode"), f"unknown mode {mode!r} (allowed: {', '.join(MODES)})")
+            offset = v.number(md.get("offset", 0.0), _join(place, "offset"))
+            movers.append(Mover(mname, mshape, mrad, msize, path=path, speed=speed, mode=mode, offset=offset))
+
+    # queries
+    queries: list = []
+    q_doc = doc.get("queries") or []
+    if doc.get("queries") is not None and not isinstance(doc["queries"], list):
+        v.fail("queries", f"expected a list, got {_kind(doc['queries'])}")
+    qnames: set = set()
+    for i, qd in enumerate(q_doc):
+        place = f"queries[{i}]"
+        v.mapping(qd, place, required=("name", "start", "goal"), optional=("t0", "expect"))
+        qname = v.name(qd["name"], _join(place, "name"))
+        if qname in qnames:
+            v.fail(_join(place, "name"), f"duplicate query name {qname!r}")
+        qnames.add(qname)
+        start = v.vector(qd["start"], _join(place, "start"), robot.dof)
+        goal = v.vector(qd["goal"], _join(place, "goal"), robot.dof)
+        t0 = v.number(qd.get("t0", 0.0), _join(place, "t0"))
+        expect = None
+        if "expect" in qd:
+            eplace = _join(place, "expect")
+            ed = v.mapping(qd["expect"], eplace, optional=("status", "max_duration", "max_delay_factor"))
+            status = ed.get("status")
+            if status is not None and status not in STATUSES:
+                v.fail(_join(eplace, "status"), f"unknown status {status!r} (allowed: {', '.join(STATUSES)})")
+            md_ = ed.get("max_duration")
+            mdf = ed.get("max_delay_factor")
+            expect = Expect(
+                status,
+                None if md_ is None else v.number(md_, _join(eplace, "max_duration"), nonneg=True),
+                None if mdf is None else v.number(mdf, _join(eplace, "max_delay_factor"), positive=True),
+            )
+        queries.append(Query(qname, start, goal, t0, expect))
+
+    static = {
+        "bounds": list(bounds),
+        "robot": {"shape": robot_shape, "radius": radius, "size": list(size)},
+        "obstacles": [_static_repr(o) for o in obstacles],
+    }
+    hasher.update(json.dumps(static, sort_keys=True).encode())
+    return Scene(
+        name=name,
+        bounds=bounds,
+        robot=robot,
+        obstacles=tuple(obstacles),
+        movers=tuple(movers),
+        queries=tuple(queries),
+        source=file,
+        static_hash=hasher.hexdigest(),
+        raw=doc,
+    )
+
+
+def _static_repr(o) -> dict:
+    if isinstance(o, Disc):
+        return {"disc": [list(o.center), o.radius]}
+    if isinstance(o, Box):
+        return {"box": [list(o.center), list(o.size), o.angle]}
+    return {"polygon": np.round(o.points, 12).tolist(), "holes": [np.round(h, 12).tolist() for h in o.holes]}
+
+
+def load_scene(path: str | os.PathLike) -> Scene:
+    """Read and validate a scene file.
+
+    Parameters
+    ----------
+    path : path-like
+        A YAML scene file (CONTRACT.md section 1).
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    SceneError
+        If the file cannot be read or anything in it is wrong; the message names the
+        file and the place, e.g. ``scene.yaml: movers[2].path[1]: expected 2 numbers, got 3``.
+    """
+    file = str(path)
+    try:
+        raw = Path(path).read_bytes()
+    except OSError as exc:
+        raise SceneError(file, "", f"cannot read: {exc.strerror or exc}") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise SceneError(file, "", f"not UTF-8 text (byte {exc.start})") from None
+    doc = _load_yaml(text, file)
+    return parse_scene(doc, file=file, folder=Path(path).resolve().parent)
