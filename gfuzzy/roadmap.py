@@ -12,6 +12,7 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
+import math
 import os
 import tempfile
 import time
@@ -50,12 +51,32 @@ class RoadmapOptions:
     resolution : float
         OMPL's validity-checking resolution (a fraction of the space's extent) used while
         PRM decides which neighbours to connect; edges are certified exactly afterwards.
+    sampler : {"passage", "uniform"}
+        ``"uniform"``: OMPL's uniform valid-state sampler. ``"passage"`` (default): a mix
+        of uniform samples and bridge-test samples (Hsu et al., ICRA 2003) that find
+        narrow passages; for a box robot the bridge sample is turned across the bridge
+        (along the passage) and followed by samples shifted along its heading, so that
+        a chain of aligned milestones crosses a door the robot fits through only turned.
+    bridge_ratio : float
+        Share of bridge-test samples in the ``"passage"`` sampler.
     """
 
     vertices: int = 200
     seed: int = 1
     neighbors: int = 10
     resolution: float = 0.02
+    sampler: str = "passage"
+    bridge_ratio: float = 0.5
+
+    def __post_init__(self):
+        if self.vertices < 1:
+            raise ValueError(f"a roadmap needs at least 1 vertex, got {self.vertices}")
+        if self.neighbors < 1:
+            raise ValueError(f"neighbors must be >= 1, got {self.neighbors}")
+        if not 0 < self.resolution <= 0.5:
+            raise ValueError(f"resolution must be in (0, 0.5], got {self.resolution}")
+        if self.sampler not in ("uniform", "passage"):
+            raise ValueError(f"sampler must be 'uniform' or 'passage', got {self.sampler!r}")
 
 
 @dataclass
@@ -240,6 +261,120 @@ def _seed_ompl(seed: int) -> None:
         ou.setLogLevel(level)
 
 
+def _blocked_points(scene: Scene):
+    """A vectorised test: which xy points lie inside a static obstacle or outside bounds."""
+    import shapely
+
+    from .scene import Box, Disc
+
+    shapes = []
+    for ob_ in scene.obstacles:
+        if isinstance(ob_, Disc):
+            shapes.append(shapely.Point(ob_.center).buffer(ob_.radius, 32))
+        elif isinstance(ob_, Box):
+            shapes.append(shapely.Polygon(ob_.vertices()))
+        else:
+            shapes.append(shapely.Polygon(ob_.points, list(ob_.holes)))
+    union = shapely.union_all(shapes) if shapes else shapely.Polygon()
+    shapely.prepare(union)
+    xmin, ymin, xmax, ymax = scene.bounds
+
+    def blocked(xy: FloatArray) -> np.ndarray:
+        x, y = xy[:, 0], xy[:, 1]
+        out = (x <= xmin) | (x >= xmax) | (y <= ymin) | (y >= ymax)
+        if shapes:
+            out |= shapely.contains_xy(union, x, y)
+        return out
+
+    return blocked
+
+
+def _make_passage_sampler(ob, si, geometry: StaticGeometry, rng: np.random.Generator, ratio: float):
+    """A Python ``ValidStateSampler``: uniform + bridge-test samples (see RoadmapOptions)."""
+    scene = geometry.scene
+    xmin, ymin, xmax, ymax = scene.bounds
+    box = scene.robot.shape == "box"
+    sigma = max(scene.robot.circumradius, 1e-3)
+    valid = geometry.is_valid
+    blocked = _blocked_points(scene)
+    span = 2.0 * scene.robot.circumradius
+
+    class PassageSampler(ob.ValidStateSampler):
+        def __init__(self):
+            super().__init__(si)
+            self.queue: list = []
+            self.bridges: list = []
+
+        def _uniform(self):
+            q = [rng.uniform(xmin, xmax), rng.uniform(ymin, ymax)]
+            if box:
+                q.append(rng.uniform(-math.pi, math.pi))
+            return np.array(q)
+
+        def _refill(self):
+            # bridge test on points: both ends inside obstacles, the middle free
+            n = 4096
+            a = np.column_stack([rng.uniform(xmin, xmax, n), rng.uniform(ymin, ymax, n)])
+            b = a + rng.normal(0.0, sigma, (n, 2))
+            ok = blocked(a) & blocked(b)
+            mid = 0.5 * (a[ok] + b[ok])
+            free = ~blocked(mid)
+            a, b, mid = a[ok][free], b[ok][free], mid[free]
+            head = np.arctan2(b[:, 1] - a[:, 1], b[:, 0] - a[:, 0]) + 0.5 * math.pi
+            head = head + rng.normal(0.0, 0.1, len(head))
+            self.bridges = list(np.column_stack([mid, head]))
+
+        def _bridge(self):
+            for _ in range(64):
+                if not self.bridges:
+                    self._refill()
+                    if not self.bridges:
+                        continue
+                m = self.bridges.pop()
+                q = m if box else m[:2]
+                if box:
+                    q[2] = (q[2] + math.pi) % (2 * math.pi) - math.pi
+                if not valid(q):
+                    continue
+                if box:
+                    d = np.array([math.cos(q[2]), math.sin(q[2]), 0.0])
+                    for shift in (0.35, -0.35, 0.7, -0.7, 1.05, -1.05):
+                        qq = q + shift * span * d
+                        if valid(qq):
+                            self.queue.append(qq)
+                return q
+            return None
+
+        def _draw(self):
+            for _ in range(1000):
+                if rng.random() < ratio:
+                    q = self._bridge()
+                    if q is not None:
+                        return q
+                q = self._uniform()
+                if valid(q):
+                    return q
+            return None
+
+        def sample(self, state):
+            q = self.queue.pop() if self.queue else self._draw()
+            if q is None:
+                return False
+            if box:
+                state.setX(float(q[0]))
+                state.setY(float(q[1]))
+                state.setYaw(float(q[2]))
+            else:
+                state[0] = float(q[0])
+                state[1] = float(q[1])
+            return True
+
+        def sampleNear(self, state, near, distance):
+            return False
+
+    return PassageSampler()
+
+
 class _Builder:
     """Holds the OMPL objects of one build; they die with it (no nanobind leak warnings)."""
 
@@ -272,6 +407,16 @@ class _Builder:
         else:
             si.setStateValidityChecker(lambda s: valid((s[0], s[1])))
         si.setStateValidityCheckingResolution(options.resolution)
+        self._samplers: list = []  # keep Python samplers alive as long as OMPL uses them
+        if options.sampler == "passage":
+            rng = np.random.default_rng(options.seed)
+
+            def alloc(si_):
+                smp = _make_passage_sampler(ob, si_, geometry, rng, options.bridge_ratio)
+                self._samplers.append(smp)
+                return smp
+
+            si.setValidStateSamplerAllocator(alloc)
         si.setup()
         self.si = si
         prm = og.PRM(si)
@@ -339,8 +484,6 @@ def build_roadmap(
         in any process.
     """
     options = options or RoadmapOptions()
-    if options.vertices < 1:
-        raise ValueError("a roadmap needs at least 1 vertex")
     geometry = geometry or StaticGeometry(scene)
     calls0 = geometry.calls
     t_start = time.perf_counter()

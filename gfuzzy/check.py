@@ -1,0 +1,302 @@
+"""Independent verification of a trajectory against CONTRACT.md section 3.
+
+This module shares no collision code with the planner: it measures with shapely (static
+obstacles, box shapes) and closed-form disc distances, and it checks *every instant*, not
+samples. Between two evaluated times the clearance d(t) changes no faster than the speed
+of the robot's fastest point plus the fastest mover, L; an interval ``[a, b]`` with
+``d(a) + d(b) >= L (b - a)`` therefore holds no collision, and any other interval is
+bisected. Times at which a mover appears or vanishes are evaluated exactly. An interval
+still undecided below ``min_interval`` seconds is a touching contact, which the contract
+allows.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+
+from .scene import Box, Disc, Query, Scene
+from .typing import FloatArray
+
+__all__ = ["CheckReport", "check_trajectory"]
+
+
+@dataclass(frozen=True)
+class CheckReport:
+    """Result of :func:`check_trajectory`.
+
+    Attributes
+    ----------
+    valid : bool
+    reason : str
+        Why not, naming the time and what was hit; empty when valid.
+    min_clearance : float
+        Smallest clearance evaluated (to bounds, static obstacles and movers).
+    max_speed : float
+        Largest configuration speed between rows.
+    evaluations : int
+        Number of times the clearance was evaluated.
+    """
+
+    valid: bool
+    reason: str = ""
+    min_clearance: float = math.inf
+    max_speed: float = 0.0
+    evaluations: int = 0
+
+
+def _wrap(a):
+    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
+
+
+class _World:
+    """Shapely / closed-form model of the scene, evaluated at arrays of poses and times."""
+
+    def __init__(self, scene: Scene):
+        self.scene = scene
+        self.robot = scene.robot
+        polys = []
+        self.discs = []
+        for ob in scene.obstacles:
+            if isinstance(ob, Disc):
+                self.discs.append((np.array(ob.center, float), ob.radius))
+            elif isinstance(ob, Box):
+                polys.append(shapely.Polygon(ob.vertices()))
+            else:
+                polys.append(shapely.Polygon(ob.points, [h for h in ob.holes]))
+        self.static = shapely.union_all(polys) if polys else None
+        if self.static is not None:
+            shapely.prepare(self.static)
+
+    def robot_geoms(self, poses: FloatArray):
+        if self.robot.shape == "disc":
+            return shapely.points(poses[:, 0], poses[:, 1])
+        c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
+        hl, hw = 0.5 * self.robot.size[0], 0.5 * self.robot.size[1]
+        local = np.array([[hl, hw], [-hl, hw], [-hl, -hw], [hl, -hw]])
+        xs = poses[:, None, 0] + c[:, None] * local[:, 0] - s[:, None] * local[:, 1]
+        ys = poses[:, None, 1] + s[:, None] * local[:, 0] + c[:, None] * local[:, 1]
+        return shapely.polygons(np.stack([xs, ys], -1))
+
+    def _shape_distance(self, geoms, other, area_of_overlap: bool):
+        """Signed-ish distance between robot geometries and a shapely geometry."""
+        d = shapely.distance(geoms, other)
+        if self.robot.shape == "disc":
+            inside = shapely.contains_xy(other, shapely.get_x(geoms), shapely.get_y(geoms))
+            d = np.where(inside, -1.0, d) - self.robot.radius
+            return d
+        if area_of_overlap:
+            zero = d <= 0
+            if np.any(zero):
+                area = shapely.area(shapely.intersection(geoms[zero], other))
+                d = d.copy()
+                d[zero] = np.where(area > 1e-12, -area, 0.0)
+        return d
+
+    def bounds_clearance(self, poses):
+        xmin, ymin, xmax, ymax = self.scene.bounds
+        if self.robot.shape == "disc":
+            r = self.robot.radius
+            x, y = poses[:, 0], poses[:, 1]
+            return np.min([x - r - xmin, xmax - x - r, y - r - ymin, ymax - y - r], axis=0)
+        c, s = np.abs(np.cos(poses[:, 2])), np.abs(np.sin(poses[:, 2]))
+        hl, hw = 0.5 * self.robot.size[0], 0.5 * self.robot.size[1]
+        ex, ey = c * hl + s * hw, s * hl + c * hw
+        x, y = poses[:, 0], poses[:, 1]
+        return np.min([x - ex - xmin, xmax - x - ex, y - ey - ymin, ymax - y - ey], axis=0)
+
+    def clearance(self, poses: FloatArray, times: FloatArray) -> tuple[FloatArray, list]:
+        """Clearance at each (pose, time) and, for each, the name of the nearest thing."""
+        geoms = self.robot_geoms(poses)
+        parts = [self.bounds_clearance(poses)]
+        names = ["the bounds"]
+        if self.static is not None:
+            parts.append(self._shape_distance(geoms, self.static, True))
+            names.append("a static obstacle")
+        for center, radius in self.discs:
+            parts.append(self._shape_distance(geoms, shapely.Point(center), False) - radius)
+            names.append(f"the static disc at {center.tolist()}")
+        for mv in self.scene.movers:
+            xy, present = mv.state(times)
+            if mv.shape == "disc":
+                if self.robot.shape == "disc":
+                    d = np.hypot(*(xy - poses[:, :2]).T) - self.robot.radius - mv.radius
+                else:
+                    d = shapely.distance(geoms, shapely.points(xy[:, 0], xy[:, 1]))
+                    inside = shapely.contains_xy(geoms, xy[:, 0], xy[:, 1])
+                    d = np.where(inside, -1.0, d) - mv.radius
+            else:
+                w, h = mv.size
+                boxes = shapely.box(xy[:, 0] - w / 2, xy[:, 1] - h / 2, xy[:, 0] + w / 2, xy[:, 1] + h / 2)
+                if self.robot.shape == "disc":
+                    d = shapely.distance(geoms, boxes)
+                    inside = shapely.contains_xy(boxes, poses[:, 0], poses[:, 1])
+                    d = np.where(inside, -1.0, d) - self.robot.radius
+                else:
+                    d = shapely.distance(geoms, boxes)
+                    zero = d <= 0
+                    if np.any(zero):
+                        area = shapely.area(shapely.intersection(geoms[zero], boxes[zero]))
+                        d[zero] = np.where(area > 1e-12, -area, 0.0)
+            parts.append(np.where(present, d, np.inf))
+            names.append(f"mover {mv.name!r}")
+        stack = np.vstack(parts)
+        which = np.argmin(stack, axis=0)
+        return stack[which, np.arange(stack.shape[1])], [names[i] for i in which]
+
+
+def _pose_equal(a, b, tol=1e-6) -> bool:
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    if a.shape != b.shape:
+        return False
+    diff = b - a
+    if a.size == 3:
+        diff[2] = _wrap(diff[2])
+    return bool(np.all(np.abs(diff) <= tol))
+
+
+def check_trajectory(
+    scene: Scene,
+    waypoints: FloatArray,
+    query: Query | None = None,
+    tol: float = 1e-9,
+    min_interval: float = 1e-7,
+    max_evaluations: int = 5_000_000,
+) -> CheckReport:
+    """Check a trajectory against CONTRACT.md section 3 (and ``query``'s start and goal).
+
+    Parameters
+    ----------
+    scene : Scene
+    waypoints : (n, 3) or (n, 4) float
+        Rows ``[t, x, y(, heading)]``.
+    query : Query, optional
+        When given, the first row must be its start at its t0 and the last row its goal.
+    tol : float
+        Penetration depth (metres) and relative speed excess tolerated as rounding.
+    min_interval : float
+        Undecided intervals shorter than this (seconds) count as touching.
+
+    Returns
+    -------
+    CheckReport
+    """
+    robot = scene.robot
+    w = np.asarray(waypoints, dtype=float)
+    if w.ndim != 2 or w.shape[1] != robot.dof + 1 or len(w) == 0:
+        width = "[t, x, y]" if robot.dof == 2 else "[t, x, y, heading]"
+        return CheckReport(False, f"waypoints must be rows of {width} for this robot")
+    if not np.all(np.isfinite(w)):
+        return CheckReport(False, "waypoints contain a non-finite number")
+    t = w[:, 0]
+    dt = np.diff(t)
+    if np.any(dt <= 0):
+        i = int(np.nonzero(dt <= 0)[0][0]) + 1
+        return CheckReport(False, f"t does not increase strictly at row {i} (t={float(t[i])!r})")
+    if query is not None:
+        if abs(t[0] - query.t0) > 1e-6:
+            return CheckReport(False, f"first row is at t={float(t[0])!r}, the query departs at t0={query.t0!r}")
+        if not _pose_equal(w[0, 1:], query.start):
+            return CheckReport(False, f"first row {w[0, 1:].tolist()} is not the start {list(query.start)}")
+        if not _pose_equal(w[-1, 1:], query.goal):
+            return CheckReport(False, f"last row {w[-1, 1:].tolist()} is not the goal {list(query.goal)}")
+
+    # speed
+    p = w[:, 1:]
+    seg = np.hypot(*np.diff(p[:, :2], axis=0).T)
+    if robot.dof == 3:
+        seg = seg + np.abs(_wrap(np.diff(p[:, 2]))) * robot.circumradius
+    speed = seg / dt if len(dt) else np.zeros(0)
+    vmax_seen = float(speed.max(initial=0.0))
+    if np.any(speed > robot.vmax * (1 + tol)):
+        i = int(np.argmax(speed))
+        return CheckReport(
+            False,
+            f"speed {speed[i]:.9g} exceeds vmax {robot.vmax:g} between t={float(t[i])!r} and t={float(t[i + 1])!r}",
+            max_speed=vmax_seen,
+        )
+
+    world = _World(scene)
+
+    def pose_at(times, seg_idx):
+        f = (times - t[seg_idx]) / dt[seg_idx] if len(dt) else np.zeros_like(times)
+        a = p[seg_idx] if len(dt) else np.repeat(p[:1], len(times), 0)
+        if len(dt):
+            delta = p[seg_idx + 1] - p[seg_idx]
+            if robot.dof == 3:
+                delta[:, 2] = _wrap(delta[:, 2])
+            return a + f[:, None] * delta
+        return a
+
+    if len(dt) == 0:
+        d, names = world.clearance(p[:1], t[:1])
+        if d[0] < -tol:
+            return CheckReport(False, f"collides with {names[0]} at t={float(t[0])!r}", float(d[0]), 0.0, 1)
+        return CheckReport(True, "", float(d[0]), 0.0, 1)
+
+    # initial samples: every row and every time a mover appears or vanishes
+    events = [t]
+    for mv in scene.movers:
+        ta, tb = mv.time_range
+        for te in (ta, tb):
+            if t[0] < te < t[-1]:
+                events.append(np.array([te]))
+    times = np.unique(np.concatenate(events))
+    seg_of = np.clip(np.searchsorted(t, times, side="right") - 1, 0, len(dt) - 1)
+    vm = max((mv.max_speed for mv in scene.movers), default=0.0)
+    lip = speed + vm  # per segment
+
+    d, names = world.clearance(pose_at(times, seg_of), times)
+    evaluations = len(times)
+    min_clear = float(d.min())
+
+    def fail(k):
+        return CheckReport(
+            False,
+            f"collides with {names[k]} at t={float(times[k])!r} (penetration {-d[k]:.3g})",
+            min_clear,
+            vmax_seen,
+            evaluations,
+        )
+
+    bad = np.nonzero(d < -tol)[0]
+    if bad.size:
+        return fail(int(bad[0]))
+    # intervals between consecutive samples; each lies within one segment
+    a_t, b_t = times[:-1], times[1:]
+    a_d, b_d = d[:-1], d[1:]
+    a_s = seg_of[:-1]
+    while a_t.size:
+        need = a_d + b_d < lip[a_s] * (b_t - a_t)
+        a_t, b_t, a_d, b_d, a_s = a_t[need], b_t[need], a_d[need], b_d[need], a_s[need]
+        if a_t.size == 0:
+            break
+        short = (b_t - a_t) < min_interval
+        a_t, b_t, a_d, b_d, a_s = a_t[~short], b_t[~short], a_d[~short], b_d[~short], a_s[~short]
+        if a_t.size == 0:
+            break
+        if evaluations > max_evaluations:
+            return CheckReport(
+                False, "could not decide: too many evaluations (near-grazing contact)", min_clear, vmax_seen, evaluations
+            )
+        m_t = 0.5 * (a_t + b_t)
+        m_d, m_names = world.clearance(pose_at(m_t, a_s), m_t)
+        evaluations += len(m_t)
+        min_clear = min(min_clear, float(m_d.min()))
+        bad = np.nonzero(m_d < -tol)[0]
+        if bad.size:
+            k = int(bad[0])
+            return CheckReport(
+                False,
+                f"collides with {m_names[k]} at t={float(m_t[k])!r} (penetration {-m_d[k]:.3g})",
+                min_clear,
+                vmax_seen,
+                evaluations,
+            )
+        a_t, b_t = np.concatenate([a_t, m_t]), np.concatenate([m_t, b_t])
+        a_d, b_d = np.concatenate([a_d, m_d]), np.concatenate([m_d, b_d])
+        a_s = np.concatenate([a_s, a_s])
+    return CheckReport(True, "", min_clear, vmax_seen, evaluations)

@@ -1,0 +1,385 @@
+"""The query API: scene + roadmap + (start, goal, t0) -> a timed trajectory.
+
+The pipeline runs one way: time-space search on the roadmap
+(:mod:`gfuzzy.timespace`), then optionally GA refinement of the corridor
+(:mod:`gfuzzy.ga`) and the fuzzy speed layer (:mod:`gfuzzy.fuzzy`), each re-timed among
+the movers by a path-velocity search (:mod:`gfuzzy.retime`). A later stage that cannot
+produce a safe answer leaves the earlier answer in place.
+"""
+
+from __future__ import annotations
+
+import enum
+import logging
+import math
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from .geometry import StaticGeometry, metric_distance
+from .roadmap import Roadmap
+from .scene import Scene
+from .timespace import MoverField, SpaceTimeGraph, sipp
+from .trajectory import Trajectory, TrajectoryFile
+from .typing import FloatArray
+
+__all__ = ["Status", "PlanOptions", "PlanResult", "Planner", "plan"]
+
+log = logging.getLogger(__name__)
+
+#: Planning speed is vmax shrunk by this factor, so rounding never lifts a step above vmax.
+SPEED_SAFETY = 1.0 - 1e-9
+
+
+class Status(str, enum.Enum):
+    """Outcome of a query (CONTRACT.md section 2)."""
+
+    SOLVED = "solved"
+    NO_PATH = "no_path"
+    INVALID_QUERY = "invalid_query"
+    TIMEOUT = "timeout"
+
+    def __str__(self) -> str:
+        return self.value
+
+
+@dataclass(frozen=True)
+class PlanOptions:
+    """Settings of a query.
+
+    Attributes
+    ----------
+    dt : float
+        Time step of the search (the paper's 0.07).
+    horizon : float or None
+        Longest trajectory considered, in seconds after t0; None picks
+        ``60 + 10 * roadmap distance / vmax``.
+    time_limit : float
+        Planning-time budget in seconds; past it the answer is ``timeout``.
+    connect_k : int
+        How many nearest roadmap vertices start and goal try to connect to.
+    refine : bool
+        Apply the GA refinement (:mod:`gfuzzy.ga`).
+    speed_layer : bool
+        Apply the fuzzy speed layer (:mod:`gfuzzy.fuzzy`).
+    seed : int
+        Seed of the random steps after the search (GA, rule learning).
+    ga : object or None
+        ``gfuzzy.ga.GAOptions`` for the refinement (None: defaults).
+    """
+
+    dt: float = 0.07
+    horizon: float | None = None
+    time_limit: float = 60.0
+    connect_k: int = 10
+    refine: bool = False
+    speed_layer: bool = False
+    seed: int = 0
+    ga: object | None = None
+
+    def __post_init__(self):
+        if not (self.dt > 0 and math.isfinite(self.dt)):
+            raise ValueError(f"dt must be a positive number, got {self.dt}")
+        if self.horizon is not None and not self.horizon > 0:
+            raise ValueError(f"horizon must be positive, got {self.horizon}")
+        if not self.time_limit > 0:
+            raise ValueError(f"time_limit must be positive, got {self.time_limit}")
+
+
+@dataclass(frozen=True)
+class PlanResult:
+    """Answer to a query.
+
+    Attributes
+    ----------
+    status : Status
+    trajectory : Trajectory or None
+        Only for ``Status.SOLVED``.
+    message : str
+        Why, when not solved.
+    roadmap_distance : float
+        Shortest start-to-goal distance on the roadmap (inf when not connected).
+    planning_seconds : float
+    stats : dict
+        Expansions, states, graph size, and the stages' before/after figures.
+    """
+
+    status: Status
+    trajectory: Trajectory | None
+    message: str = ""
+    roadmap_distance: float = math.inf
+    planning_seconds: float = 0.0
+    vmax: float = 1.0
+    stats: dict = field(default_factory=dict)
+
+    @property
+    def solved(self) -> bool:
+        return self.status is Status.SOLVED
+
+    @property
+    def duration(self) -> float | None:
+        return None if self.trajectory is None else self.trajectory.duration
+
+    @property
+    def delay_factor(self) -> float | None:
+        if self.trajectory is None:
+            return None
+        return self.trajectory.delay_factor(self.vmax, self.roadmap_distance)
+
+    def to_file(self, scene: str, query: str) -> TrajectoryFile:
+        """The contract's trajectory file for this answer."""
+        rd = self.roadmap_distance if math.isfinite(self.roadmap_distance) else None
+        return TrajectoryFile(
+            scene=scene,
+            query=query,
+            status=self.status.value,
+            message=self.message,
+            duration=self.duration,
+            roadmap_distance=rd,
+            delay_factor=self.delay_factor,
+            planning_seconds=round(self.planning_seconds, 6),
+            waypoints=None if self.trajectory is None else self.trajectory.waypoints,
+            extra={"stats": _jsonable(self.stats)},
+        )
+
+
+def _jsonable(obj):
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, (np.floating, float)):
+        return float(obj)
+    if isinstance(obj, (np.integer, int)) and not isinstance(obj, bool):
+        return int(obj)
+    return obj
+
+
+class Planner:
+    """Answers queries on one scene and roadmap, sharing the collision model.
+
+    Parameters
+    ----------
+    scene : Scene
+    roadmap : Roadmap
+        Built for ``scene`` (see :meth:`Roadmap.check_scene`).
+    """
+
+    def __init__(self, scene: Scene, roadmap: Roadmap):
+        roadmap.check_scene(scene)
+        self.scene = scene
+        self.roadmap = roadmap
+        self.geometry = StaticGeometry(scene)
+        self.robot = scene.robot
+
+    # ---------------------------------------------------------------- graph
+    def _connect(self, pose: FloatArray, k: int) -> list[tuple[int, float]]:
+        """Certified straight connections from ``pose`` to its nearest roadmap vertices."""
+        V = self.roadmap.vertices
+        if len(V) == 0:
+            return []
+        d = metric_distance(V, pose[None, :], self.robot.circumradius)
+        order = np.argsort(d, kind="stable")
+        out = []
+        tried = 0
+        for i in order:
+            if tried >= max(k, 1) and out:
+                break
+            if tried >= 4 * max(k, 1):
+                break
+            tried += 1
+            if self.geometry.motion_free(pose, V[i]):
+                out.append((int(i), float(d[i])))
+        return out
+
+    def _graph(self, start, goal, dt, vmax):
+        """Roadmap + start + goal, every edge split into one-step pieces; static distances."""
+        rm = self.roadmap
+        nv = len(rm.vertices)
+        s_id, g_id = nv, nv + 1
+        extra_e, extra_w = [], []
+        for pose, node in ((start, s_id), (goal, g_id)):
+            for v, w in self._connect(pose, self._k):
+                extra_e.append((node, v))
+                extra_w.append(w)
+        direct = float(metric_distance(start, goal, self.robot.circumradius))
+        if self.geometry.motion_free(start, goal):
+            extra_e.append((s_id, g_id))
+            extra_w.append(direct)
+        edges = np.vstack([rm.edges, np.array(extra_e, dtype=np.int64).reshape(-1, 2)])
+        lengths = np.concatenate([rm.lengths, np.array(extra_w, dtype=float)])
+        verts = np.vstack([rm.vertices, start[None], goal[None]])
+        n = len(verts)
+
+        # static shortest distances to the goal (Dijkstra on the roadmap)
+        from scipy.sparse import coo_matrix
+        from scipy.sparse.csgraph import dijkstra
+
+        w = np.maximum(lengths, 1e-300)  # csgraph drops explicit zeros
+        mat = coo_matrix((np.r_[w, w], (np.r_[edges[:, 0], edges[:, 1]], np.r_[edges[:, 1], edges[:, 0]])), shape=(n, n)).tocsr()
+        both = dijkstra(mat, directed=True, indices=[g_id, s_id])
+        both = np.where(both < 1e-200, 0.0, both)
+        dist, dist_s = both[0], both[1]
+
+        # split edges into steps of at most vmax * dt; interior points of edge e get the
+        # ids n + offs[e] .. n + offs[e+1] - 1
+        step_len = vmax * dt
+        k = np.maximum(1, np.ceil(lengths / step_len)).astype(np.int64)
+        k = np.where(lengths / k > step_len, k + 1, k)
+        n_int = k - 1
+        offs = np.concatenate([[0], np.cumsum(n_int)])
+        total = n + int(offs[-1])
+        e_of = np.repeat(np.arange(len(edges)), n_int)
+        j = np.arange(offs[-1]) - np.repeat(offs[:-1], n_int) + 1  # 1 .. k-1 along the edge
+        f = j / k[e_of]
+        a, b = edges[e_of, 0], edges[e_of, 1]
+        delta = verts[b] - verts[a]
+        if verts.shape[1] == 3:
+            delta[:, 2] = (delta[:, 2] + np.pi) % (2 * np.pi) - np.pi
+        poses = np.empty((total, verts.shape[1]))
+        poses[:n] = verts
+        inner = verts[a] + f[:, None] * delta
+        if verts.shape[1] == 3:
+            inner[:, 2] = (inner[:, 2] + np.pi) % (2 * np.pi) - np.pi
+        poses[n:] = inner
+        heur = np.empty(total)
+        heur[:n] = dist / step_len
+        le = lengths[e_of]
+        heur[n:] = np.minimum(dist[a] + f * le, dist[b] + (1 - f) * le) / step_len
+        from_start = np.empty(total)
+        from_start[:n] = dist_s / step_len
+        from_start[n:] = np.minimum(dist_s[a] + f * le, dist_s[b] + (1 - f) * le) / step_len
+        # one-step moves: along each edge's chain a -> interior... -> b, both ways
+        ids = np.arange(n, total)
+        first = np.zeros(offs[-1], dtype=bool)
+        first[offs[:-1][n_int > 0]] = True
+        last = np.zeros(offs[-1], dtype=bool)
+        last[(offs[1:] - 1)[n_int > 0]] = True
+        prev = np.where(first, a, ids - 1)
+        src = np.concatenate([prev, ids[last], edges[n_int == 0, 0]])
+        dst = np.concatenate([ids, b[last], edges[n_int == 0, 1]])
+        s2 = np.concatenate([src, dst])
+        d2 = np.concatenate([dst, src])
+        order = np.lexsort((d2, s2))
+        indptr = np.zeros(total + 1, dtype=np.int64)
+        np.add.at(indptr, s2 + 1, 1)
+        graph = SpaceTimeGraph(
+            poses, np.cumsum(indptr), d2[order], heur, groups=n + offs, from_start=from_start
+        )
+        return graph, s_id, g_id, float(dist[s_id])
+
+    # ---------------------------------------------------------------- query
+    def plan(self, start, goal, t0: float = 0.0, options: PlanOptions | None = None) -> PlanResult:
+        """Answer one query.
+
+        Parameters
+        ----------
+        start, goal : (d,) float
+            Poses ``[x, y]`` (disc robot) or ``[x, y, heading]`` (box robot).
+        t0 : float
+            Departure time.
+        options : PlanOptions, optional
+
+        Returns
+        -------
+        PlanResult
+            ``invalid_query`` when start or goal collide with a static obstacle, lie out
+            of bounds, or the start overlaps a mover at t0; ``no_path`` when no safe
+            trajectory exists on the roadmap within the horizon; ``timeout`` when the
+            planning budget ran out.
+        """
+        opts = options or PlanOptions()
+        t_begin = time.perf_counter()
+        deadline = t_begin + opts.time_limit
+        robot = self.robot
+        vmax = robot.vmax
+        start = np.asarray(start, dtype=float).reshape(-1)
+        goal = np.asarray(goal, dtype=float).reshape(-1)
+
+        def answer(status, message="", traj=None, rd=math.inf, **stats):
+            return PlanResult(
+                Status(status), traj, message, rd, time.perf_counter() - t_begin, vmax, stats
+            )
+
+        for label, pose in (("start", start), ("goal", goal)):
+            if pose.shape != (robot.dof,) or not np.all(np.isfinite(pose)):
+                return answer("invalid_query", f"{label} must be {robot.dof} finite numbers")
+            if robot.dof == 3:
+                pose[2] = (pose[2] + math.pi) % (2 * math.pi) - math.pi
+            if self.geometry.bounds_clearance(pose[None])[0] < 0:
+                return answer("invalid_query", f"{label} {pose.tolist()} is out of bounds")
+            if self.geometry.clearance1(pose) < 0:
+                return answer("invalid_query", f"{label} {pose.tolist()} collides with a static obstacle")
+        self._k = opts.connect_k
+        vplan = vmax * SPEED_SAFETY
+        graph, s_id, g_id, rd = self._graph(start, goal, opts.dt, vplan)
+        if not math.isfinite(rd):
+            return answer(
+                "no_path",
+                "start and goal are not connected on the roadmap (sealed off, or the roadmap is too sparse)",
+                nodes=len(graph.poses),
+            )
+        max_horizon = opts.horizon if opts.horizon is not None else 60.0 + 10.0 * rd / vmax
+        # grow the horizon by doubling: most answers arrive well before the longest one
+        horizon = min(max_horizon, 10.0 + 1.5 * rd / vmax)
+        expansions = evaluations = 0
+        while True:
+            steps = int(math.ceil(horizon / opts.dt))
+            field_ = MoverField(self.scene, t0, opts.dt, steps, vmax)
+            hit = field_.collides_at(start, 0)
+            if hit is not None:
+                return answer("invalid_query", f"start collides with mover {hit!r} at t0={t0:g}", rd=rd)
+            res = sipp(graph, field_, s_id, g_id, deadline=deadline)
+            expansions += res.expansions
+            evaluations += field_.evaluations
+            if res.status != "no_path" or not res.horizon_hit or horizon >= max_horizon:
+                break
+            horizon = min(max_horizon, 2.0 * horizon)
+        stats = {
+            "expansions": expansions,
+            "states": res.states,
+            "graph_nodes": len(graph.poses),
+            "roadmap_vertices": len(self.roadmap.vertices),
+            "mover_evaluations": evaluations,
+            "horizon": horizon,
+        }
+        if res.status == "no_path" and res.horizon_hit:
+            res.message = f"no safe trajectory within the planning horizon of {horizon:g} s"
+        if res.status != "solved":
+            return answer(res.status, res.message, rd=rd, **stats)
+        traj = _to_trajectory(graph.poses, res.nodes, res.steps, t0, opts.dt, robot.circumradius)
+        stats["search_seconds"] = time.perf_counter() - t_begin
+        result = answer("solved", "", traj, rd, **stats)
+        if opts.refine or opts.speed_layer:
+            from .stages import apply_stages
+
+            result = apply_stages(self, result, start, goal, t0, opts, field_, t_begin)
+        return result
+
+
+def _to_trajectory(poses, nodes, steps, t0, dt, r) -> Trajectory:
+    rows = [(steps[0], poses[nodes[0]])]
+    for k in range(1, len(nodes)):
+        if steps[k] - 1 > steps[k - 1]:
+            rows.append((steps[k] - 1, poses[nodes[k - 1]]))
+        rows.append((steps[k], poses[nodes[k]]))
+    wps = np.array([[t0 + n * dt, *p] for n, p in rows], dtype=float)
+    return Trajectory(wps, r)
+
+
+def plan(
+    scene: Scene,
+    roadmap: Roadmap,
+    start,
+    goal,
+    t0: float = 0.0,
+    options: PlanOptions | None = None,
+) -> PlanResult:
+    """Answer one query (see :meth:`Planner.plan`); builds a :class:`Planner` each call."""
+    return Planner(scene, roadmap).plan(start, goal, t0, options)
+
+
+def with_options(options: PlanOptions | None, **changes) -> PlanOptions:
+    """``options`` with some fields changed."""
+    return replace(options or PlanOptions(), **changes)

@@ -1,0 +1,235 @@
+"""Timed trajectories and their files (CONTRACT.md section 2).
+
+A :class:`Trajectory` is a table of rows ``[t, x, y]`` (disc robot) or
+``[t, x, y, heading]`` (box robot), t strictly increasing; between rows the robot moves
+linearly in x and y and in heading along the shorter arc.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .errors import SceneError
+from .geometry import metric_distance, wrap_angle
+from .roadmap import write_atomic
+from .typing import FloatArray
+
+__all__ = ["Trajectory", "load_trajectory", "TrajectoryFile"]
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """A timed trajectory.
+
+    Attributes
+    ----------
+    waypoints : (n, 3) or (n, 4) float
+        Rows ``[t, x, y(, heading)]``.
+    circumradius : float
+        The robot's circumscribed radius (weights heading change in the metric).
+    """
+
+    waypoints: FloatArray = field(compare=False)
+    circumradius: float = 0.0
+
+    @property
+    def times(self) -> FloatArray:
+        return self.waypoints[:, 0]
+
+    @property
+    def poses(self) -> FloatArray:
+        return self.waypoints[:, 1:]
+
+    @property
+    def t0(self) -> float:
+        return float(self.waypoints[0, 0])
+
+    @property
+    def t_end(self) -> float:
+        return float(self.waypoints[-1, 0])
+
+    @property
+    def duration(self) -> float:
+        """Last t minus first t."""
+        return self.t_end - self.t0
+
+    def segment_lengths(self) -> FloatArray:
+        """(n-1,) float: contract-metric length of each row-to-row motion."""
+        p = self.poses
+        return metric_distance(p[:-1], p[1:], self.circumradius)
+
+    @property
+    def length(self) -> float:
+        """Path length in the contract metric."""
+        return float(np.sum(self.segment_lengths()))
+
+    @property
+    def xy_length(self) -> float:
+        """Euclidean length of the xy path."""
+        return float(np.sum(np.hypot(*np.diff(self.poses[:, :2], axis=0).T)))
+
+    def speeds(self) -> FloatArray:
+        """(n-1,) float: configuration speed of each row-to-row motion."""
+        return self.segment_lengths() / np.diff(self.times)
+
+    def delay_factor(self, vmax: float, roadmap_distance: float) -> float:
+        """duration * vmax / roadmap_distance (1.0 when the start is the goal)."""
+        if roadmap_distance <= 0:
+            return 1.0
+        return self.duration * vmax / roadmap_distance
+
+    def at(self, t) -> FloatArray:
+        """Pose(s) at time(s) ``t`` (clamped to the trajectory's time range).
+
+        Parameters
+        ----------
+        t : float or (k,) float
+
+        Returns
+        -------
+        (d,) or (k, d) float
+        """
+        scalar = np.ndim(t) == 0
+        tt = np.clip(np.atleast_1d(np.asarray(t, dtype=float)), self.t0, self.t_end)
+        times, poses = self.times, self.poses
+        if len(times) == 1:
+            out = np.repeat(poses[:1], len(tt), axis=0)
+            return out[0] if scalar else out
+        i = np.clip(np.searchsorted(times, tt, side="right") - 1, 0, len(times) - 2)
+        f = (tt - times[i]) / (times[i + 1] - times[i])
+        a, b = poses[i], poses[i + 1]
+        delta = b - a
+        if poses.shape[1] == 3:
+            delta[:, 2] = wrap_angle(delta[:, 2])
+        out = a + f[:, None] * delta
+        if poses.shape[1] == 3:
+            out[:, 2] = wrap_angle(out[:, 2])
+        return out[0] if scalar else out
+
+    def to_csv(self) -> str:
+        """CSV text with header ``t,x,y`` or ``t,x,y,heading``."""
+        buf = io.StringIO()
+        w = csv.writer(buf, lineterminator="\n")
+        w.writerow(["t", "x", "y"] + (["heading"] if self.waypoints.shape[1] == 4 else []))
+        for row in self.waypoints:
+            w.writerow([repr(float(v)) for v in row])
+        return buf.getvalue()
+
+
+@dataclass(frozen=True)
+class TrajectoryFile:
+    """The contents of a trajectory JSON file (any status)."""
+
+    scene: str
+    query: str
+    status: str
+    message: str
+    duration: float | None
+    roadmap_distance: float | None
+    delay_factor: float | None
+    planning_seconds: float
+    waypoints: FloatArray | None = field(default=None, compare=False)
+    extra: dict = field(default_factory=dict, compare=False)
+
+    def to_dict(self) -> dict:
+        doc = {
+            "version": 1,
+            "scene": self.scene,
+            "query": self.query,
+            "status": self.status,
+            "message": self.message,
+            "duration": self.duration,
+            "roadmap_distance": self.roadmap_distance,
+            "delay_factor": self.delay_factor,
+            "planning_seconds": self.planning_seconds,
+        }
+        if self.waypoints is not None:
+            doc["waypoints"] = [[float(v) for v in row] for row in self.waypoints]
+        doc.update(self.extra)
+        return doc
+
+    def save(self, path: str | os.PathLike) -> None:
+        """Write JSON (``.json``) or CSV (``.csv``: solved answers only), atomically."""
+        path = Path(path)
+        if path.suffix.lower() == ".csv":
+            if self.waypoints is None:
+                raise ValueError(f"{path}: a {self.status} answer has no waypoints to write as CSV")
+            write_atomic(path, Trajectory(self.waypoints).to_csv())
+        else:
+            write_atomic(path, json.dumps(_finite(self.to_dict()), indent=1) + "\n")
+
+
+def _finite(obj):
+    """JSON has no NaN or inf: write them as null."""
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    if isinstance(obj, dict):
+        return {k: _finite(v) for k, v in obj.items()}
+    if isinstance(obj, list):
+        return [_finite(v) for v in obj]
+    return obj
+
+
+def load_trajectory(path: str | os.PathLike) -> TrajectoryFile:
+    """Read a trajectory JSON file (CONTRACT.md section 2).
+
+    Raises
+    ------
+    SceneError
+        Unreadable, not JSON, or not of the contract's form (naming the place).
+    """
+    file = str(path)
+    try:
+        doc = json.loads(Path(path).read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise SceneError(file, "", f"cannot read: {exc.strerror or exc}") from None
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise SceneError(file, "", f"invalid JSON: {exc}") from None
+    if not isinstance(doc, dict):
+        raise SceneError(file, "", "expected a JSON object")
+    for key in ("version", "status"):
+        if key not in doc:
+            raise SceneError(file, key, "missing required key")
+    if doc["version"] != 1:
+        raise SceneError(file, "version", f"unsupported version {doc['version']!r}")
+    if doc["status"] not in ("solved", "no_path", "invalid_query", "timeout"):
+        raise SceneError(file, "status", f"unknown status {doc['status']!r}")
+    wps = None
+    if doc["status"] == "solved":
+        rows = doc.get("waypoints")
+        if not isinstance(rows, list) or not rows:
+            raise SceneError(file, "waypoints", "a solved trajectory needs a non-empty list of rows")
+        width = len(rows[0]) if isinstance(rows[0], list) else -1
+        if width not in (3, 4):
+            raise SceneError(file, "waypoints[0]", "rows must be [t, x, y] or [t, x, y, heading]")
+        for i, row in enumerate(rows):
+            if not isinstance(row, list) or len(row) != width:
+                raise SceneError(file, f"waypoints[{i}]", f"expected {width} numbers")
+            for j, v in enumerate(row):
+                if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                    raise SceneError(file, f"waypoints[{i}][{j}]", f"expected a finite number, got {v!r}")
+        wps = np.asarray(rows, dtype=float)
+
+    def num(key):
+        v = doc.get(key)
+        return float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else None
+
+    return TrajectoryFile(
+        scene=str(doc.get("scene", "")),
+        query=str(doc.get("query", "")),
+        status=doc["status"],
+        message=str(doc.get("message", "")),
+        duration=num("duration"),
+        roadmap_distance=num("roadmap_distance"),
+        delay_factor=num("delay_factor"),
+        planning_seconds=num("planning_seconds") or 0.0,
+        waypoints=wps,
+    )
