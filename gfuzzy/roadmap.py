@@ -425,6 +425,17 @@ class _Builder:
         prm.setup()
         self.prm = prm
 
+    def close(self) -> None:
+        """Break the Python <-> OMPL reference cycle of the sampler allocator."""
+        import gc
+
+        if self._samplers:
+            self.si.clearValidStateSamplerAllocator()
+            self._samplers.clear()
+        self.prm.clear()
+        self.prm = self.si = self.space = None
+        gc.collect()
+
     def grow(self, n: int, progress: Callable[[int, int], None] | None) -> None:
         from ompl import base as ob
 
@@ -491,6 +502,7 @@ def build_roadmap(
     builder = _Builder(scene, options, geometry)
     builder.grow(options.vertices, progress)
     vertices, edges = builder.export()
+    builder.close()
     del builder
     t_grow = time.perf_counter() - t_start
     calls_grow = geometry.calls - calls0

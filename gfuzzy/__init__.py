@@ -1,0 +1,40 @@
+"""gfuzzy: roadmap-time-space motion planning among moving obstacles.
+
+Pipeline (one module per stage): :mod:`~gfuzzy.scene` -> :mod:`~gfuzzy.roadmap` ->
+:mod:`~gfuzzy.timespace` -> :mod:`~gfuzzy.ga` -> :mod:`~gfuzzy.fuzzy` ->
+:mod:`~gfuzzy.trajectory`; :mod:`~gfuzzy.planner` runs it, :mod:`~gfuzzy.check` verifies
+the answer independently.
+"""
+
+import logging
+
+from .check import CheckReport, check_trajectory
+from .errors import GfuzzyError, SceneError
+from .planner import Planner, PlanOptions, PlanResult, Status, plan
+from .roadmap import Roadmap, RoadmapOptions, build_roadmap, load_roadmap
+from .scene import Scene, load_scene
+from .trajectory import Trajectory, load_trajectory
+
+logging.getLogger(__name__).addHandler(logging.NullHandler())
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "CheckReport",
+    "GfuzzyError",
+    "PlanOptions",
+    "PlanResult",
+    "Planner",
+    "Roadmap",
+    "RoadmapOptions",
+    "Scene",
+    "SceneError",
+    "Status",
+    "Trajectory",
+    "build_roadmap",
+    "check_trajectory",
+    "load_roadmap",
+    "load_scene",
+    "load_trajectory",
+    "plan",
+]

@@ -1,0 +1,360 @@
+"""The ``gfuzzy`` command line (CONTRACT.md section 4).
+
+Exit statuses: 0 success, 1 a valid request with a negative answer (no path, invalid
+trajectory, missed expectation), 2 bad input. Bad input prints exactly one line on stderr
+naming the file and the place in it, and writes nothing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+
+from .errors import SceneError
+
+__all__ = ["main"]
+
+EXIT_OK, EXIT_NO, EXIT_BAD = 0, 1, 2
+
+
+class BadInput(Exception):
+    """A bad command line or file; its message is the one line printed."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line, exit 2 (argparse prints usage + error)
+        raise BadInput(f"{self.prog}: {message} (see {self.prog} --help)")
+
+
+def _say(msg: str, stream=None) -> None:
+    stream = stream or sys.stderr
+    stream.write(msg + "\n")
+    stream.flush()
+
+
+def _progress(label: str):
+    """A progress callback that draws on stderr only when it is a terminal."""
+    if not sys.stderr.isatty():
+        return None
+
+    def cb(count: int, total: int) -> None:
+        sys.stderr.write(f"\r{label}: {count}/{total}")
+        sys.stderr.flush()
+        if count >= total:
+            sys.stderr.write("\n")
+
+    return cb
+
+
+# ------------------------------------------------------------------ shared steps
+
+
+def _load_scene(path):
+    from .scene import load_scene
+
+    return load_scene(path)
+
+
+def _roadmap_for(scene, args, quiet=False):
+    """The roadmap a plan/regress run uses: --roadmap, -n/--seed, or the default file."""
+    from .roadmap import RoadmapOptions, build_roadmap, default_roadmap_path, load_roadmap
+
+    if getattr(args, "roadmap", None):
+        return load_roadmap(args.roadmap, scene)
+    if args.vertices is not None or args.seed is not None:
+        opts = RoadmapOptions(
+            vertices=args.vertices if args.vertices is not None else RoadmapOptions.vertices,
+            seed=args.seed if args.seed is not None else RoadmapOptions.seed,
+        )
+        return build_roadmap(scene, opts, progress=_progress("roadmap"))
+    candidates = [default_roadmap_path(scene)]
+    scene_dir = Path(scene.source).resolve().parent
+    candidates.append(default_roadmap_path(scene, scene_dir.parent / "roadmaps"))
+    for path in candidates:
+        if path.is_file():
+            try:
+                return load_roadmap(path, scene)
+            except SceneError as exc:
+                if not quiet:
+                    _say(f"note: not using {path}: {exc.message}")
+    if not quiet:
+        _say(
+            f"note: no roadmap file for {scene.name!r}; building one with "
+            f"{RoadmapOptions.vertices} vertices (save one with `gfuzzy roadmap`)"
+        )
+    return build_roadmap(scene, RoadmapOptions(), progress=_progress("roadmap"))
+
+
+def _plan_options(args):
+    from .planner import PlanOptions
+
+    try:
+        return PlanOptions(
+            dt=args.dt,
+            refine=args.refine,
+            speed_layer=args.speed_layer,
+            time_limit=args.time_limit,
+            horizon=args.horizon,
+        )
+    except ValueError as exc:
+        raise BadInput(f"gfuzzy plan: {exc}") from None
+
+
+def _pose(values, dof, flag):
+    if values is None:
+        return None
+    want = "x y" if dof == 2 else "x y heading"
+    if len(values) != dof:
+        raise BadInput(f"{flag}: expected {dof} numbers ({want}) for this robot, got {len(values)}")
+    try:
+        out = [float(v) for v in values]
+    except ValueError:
+        raise BadInput(f"{flag}: expected numbers ({want}), got {' '.join(values)}") from None
+    if not all(math.isfinite(v) for v in out):
+        raise BadInput(f"{flag}: numbers must be finite")
+    return out
+
+
+def _out_path(path, allowed):
+    suffix = Path(path).suffix.lower()
+    if suffix not in allowed:
+        raise BadInput(f"{path}: output must end in {' or '.join(allowed)}")
+    parent = Path(path).resolve().parent
+    if not parent.is_dir():
+        raise BadInput(f"{path}: folder {parent} does not exist")
+    return Path(path)
+
+
+# ------------------------------------------------------------------ commands
+
+
+def cmd_roadmap(args) -> int:
+    from .roadmap import RoadmapOptions, build_roadmap, default_roadmap_path
+
+    scene = _load_scene(args.scene)
+    out = _out_path(args.output, (".json",)) if args.output else default_roadmap_path(scene)
+    try:
+        opts = RoadmapOptions(vertices=args.vertices, seed=args.seed, neighbors=args.neighbors)
+    except ValueError as exc:
+        raise BadInput(f"gfuzzy roadmap: {exc}") from None
+    rm = build_roadmap(scene, opts, progress=_progress("roadmap"))
+    rm.save(out)
+    info = rm.info
+    _say(
+        f"{out}: {len(rm.vertices)} vertices, {len(rm.edges)} edges, "
+        f"{info['components']} component(s), {info['seconds']:.2f} s, "
+        f"{info['validity_calls'] + info['certify_calls']} collision checks",
+        sys.stdout,
+    )
+    return EXIT_OK
+
+
+def _query_from_args(scene, args):
+    from .scene import Query
+
+    dof = scene.robot.dof
+    start = _pose(args.start, dof, "--start")
+    goal = _pose(args.goal, dof, "--goal")
+    if args.query and (start or goal):
+        raise BadInput("gfuzzy plan: give either --query or --start/--goal, not both")
+    if start is not None or goal is not None:
+        if start is None or goal is None:
+            raise BadInput("gfuzzy plan: --start and --goal go together")
+        t0 = args.t0 if args.t0 is not None else 0.0
+        if not math.isfinite(t0):
+            raise BadInput("--t0: must be finite")
+        return Query("cli", tuple(start), tuple(goal), t0)
+    if args.t0 is not None:
+        raise BadInput("gfuzzy plan: --t0 goes with --start/--goal (a scene query has its own t0)")
+    if args.query:
+        try:
+            return scene.query(args.query)
+        except KeyError as exc:
+            raise BadInput(f"{scene.source}: queries: {exc.args[0]}") from None
+    if not scene.queries:
+        raise BadInput(f"{scene.source}: queries: the scene has no queries; give --start and --goal")
+    return scene.queries[0]
+
+
+def cmd_plan(args) -> int:
+    from .planner import Planner
+
+    scene = _load_scene(args.scene)
+    query = _query_from_args(scene, args)
+    out = _out_path(args.output, (".json", ".csv")) if args.output else None
+    options = _plan_options(args)
+    roadmap = _roadmap_for(scene, args)
+    result = Planner(scene, roadmap).plan(query.start, query.goal, query.t0, options)
+    tf = result.to_file(scene.name, query.name)
+    if out is not None:
+        json_path = out.with_suffix(".json")
+        if out.suffix.lower() == ".csv" and tf.waypoints is not None:
+            tf.save(out)
+        tf.save(json_path)
+    line = f"{scene.name} {query.name}: {result.status.value}"
+    if result.solved:
+        line += (
+            f" duration {result.duration:.2f} s, roadmap distance {result.roadmap_distance:.2f},"
+            f" delay factor {result.delay_factor:.3f}, planned in {result.planning_seconds * 1000:.0f} ms"
+        )
+    else:
+        line += f" ({result.message})"
+    _say(line, sys.stdout)
+    return EXIT_OK if result.solved else EXIT_NO
+
+
+def cmd_check(args) -> int:
+    from .check import check_trajectory
+    from .trajectory import load_trajectory
+
+    scene = _load_scene(args.scene)
+    tf = load_trajectory(args.trajectory)
+    if tf.status != "solved":
+        _say(f"{args.trajectory}: status is {tf.status}: there is no trajectory to check")
+        return EXIT_NO
+    query = None
+    if tf.query:
+        try:
+            query = scene.query(tf.query)
+        except KeyError:
+            query = None
+    if tf.scene and tf.scene != scene.name:
+        _say(f"note: {args.trajectory} was planned for scene {tf.scene!r}, checking against {scene.name!r}")
+    rep = check_trajectory(scene, tf.waypoints, query)
+    if rep.valid and tf.duration is not None:
+        actual = float(tf.waypoints[-1, 0] - tf.waypoints[0, 0])
+        if abs(actual - tf.duration) > 1e-6:
+            _say(f"{args.trajectory}: duration is {tf.duration!r} but the rows span {actual!r}")
+            return EXIT_NO
+    if not rep.valid:
+        _say(f"{args.trajectory}: invalid: {rep.reason}")
+        return EXIT_NO
+    _say(
+        f"{args.trajectory}: valid (min clearance {rep.min_clearance:.4f}, "
+        f"max speed {rep.max_speed:.4f}, {rep.evaluations} evaluations)",
+        sys.stdout,
+    )
+    return EXIT_OK
+
+
+def cmd_render(args) -> int:
+    from .render import render
+    from .roadmap import load_roadmap
+    from .trajectory import load_trajectory
+
+    scene = _load_scene(args.scene)
+    out = _out_path(args.output, (".png", ".gif"))
+    traj = None
+    if args.trajectory:
+        tf = load_trajectory(args.trajectory)
+        if tf.waypoints is not None:
+            traj = tf.waypoints
+        else:
+            _say(f"note: {args.trajectory} has status {tf.status}: drawing the scene only")
+    roadmap = load_roadmap(args.roadmap, scene) if args.roadmap else None
+    options = {}
+    if out.suffix.lower() == ".png" and traj is not None and args.speed:
+        options["speed"] = True
+    if out.suffix.lower() == ".gif" and roadmap is not None:
+        raise BadInput("--roadmap: only drawn in a .png picture")
+    try:
+        render(scene, out, trajectory=traj, roadmap=roadmap, **options)
+    except ValueError as exc:
+        raise BadInput(f"{args.trajectory or out}: {exc}") from None
+    _say(f"wrote {out}", sys.stdout)
+    return EXIT_OK
+
+
+def cmd_regress(args) -> int:
+    from .regress import run_regression
+
+    scenes = [_load_scene(p) for p in args.scenes]  # all bad input first, before any work
+    options = _plan_options(args)
+    ok = run_regression(scenes, lambda sc: _roadmap_for(sc, args, quiet=True), options, sys.stdout)
+    return EXIT_OK if ok else EXIT_NO
+
+
+# ------------------------------------------------------------------ parser
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = _Parser(
+        prog="gfuzzy",
+        description="Roadmap-time-space motion planning among moving obstacles (OMPL + FCL).",
+    )
+    sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+
+    r = sub.add_parser("roadmap", help="build the static roadmap of a scene with OMPL's PRM")
+    r.add_argument("scene", metavar="SCENE", help="scene file (YAML)")
+    r.add_argument("-n", "--vertices", type=int, default=200, help="roadmap vertices (default 200)")
+    r.add_argument("--seed", type=int, default=1, help="random seed (default 1)")
+    r.add_argument("-k", "--neighbors", type=int, default=10, help="PRM nearest neighbours (default 10)")
+    r.add_argument("-o", "--output", help="roadmap file (default roadmaps/<scene name>.json)")
+    r.set_defaults(func=cmd_roadmap)
+
+    def plan_flags(q, single=True):
+        q.add_argument("-n", "--vertices", type=int, help="build a roadmap of this many vertices")
+        q.add_argument("--seed", type=int, help="roadmap seed when building (default 1)")
+        q.add_argument("--dt", type=float, default=0.07, help="time step of the search (default 0.07)")
+        q.add_argument("--refine", action="store_true", help="apply the GA refinement")
+        q.add_argument("--speed-layer", action="store_true", help="apply the fuzzy speed layer")
+        q.add_argument("--time-limit", type=float, default=60.0, help="planning budget in seconds (default 60)")
+        q.add_argument("--horizon", type=float, help="longest trajectory considered, seconds (default: automatic)")
+
+    q = sub.add_parser("plan", help="answer one query")
+    q.add_argument("scene", metavar="SCENE")
+    q.add_argument("--roadmap", metavar="FILE", help="roadmap file (default roadmaps/<scene name>.json)")
+    plan_flags(q)
+    q.add_argument("--query", metavar="NAME", help="a query of the scene (default: its first)")
+    q.add_argument("--start", nargs="+", metavar="X", help="start pose: X Y (disc) or X Y H (box)")
+    q.add_argument("--goal", nargs="+", metavar="X", help="goal pose")
+    q.add_argument("--t0", type=float, help="departure time with --start/--goal (default 0)")
+    q.add_argument("-o", "--output", metavar="OUT", help="trajectory file: OUT.json, or OUT.csv (+ OUT.json)")
+    q.set_defaults(func=cmd_plan)
+
+    c = sub.add_parser("check", help="check a trajectory against the contract's guarantees")
+    c.add_argument("scene", metavar="SCENE")
+    c.add_argument("trajectory", metavar="TRAJ.json")
+    c.set_defaults(func=cmd_check)
+
+    d = sub.add_parser("render", help="draw a scene (and a trajectory): PNG picture or GIF animation")
+    d.add_argument("scene", metavar="SCENE")
+    d.add_argument("trajectory", metavar="TRAJ.json", nargs="?")
+    d.add_argument("-o", "--output", required=True, metavar="OUT", help="OUT.png or OUT.gif")
+    d.add_argument("--roadmap", metavar="FILE", help="also draw this roadmap (PNG)")
+    d.add_argument("--speed", action="store_true", help="colour the path by speed (PNG)")
+    d.set_defaults(func=cmd_render)
+
+    g = sub.add_parser("regress", help="answer and check every query of every scene")
+    g.add_argument("scenes", metavar="SCENE", nargs="+")
+    plan_flags(g)
+    g.set_defaults(func=cmd_regress, roadmap=None)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the command line; returns the exit status."""
+    import logging
+
+    logging.basicConfig(level=logging.WARNING, format="%(levelname)s: %(message)s")
+    parser = _parser()
+    try:
+        args = parser.parse_args(argv)
+        if not getattr(args, "command", None):
+            parser.print_help(sys.stderr)
+            return EXIT_BAD
+        return args.func(args)
+    except BadInput as exc:
+        _say(" ".join(str(exc).split()))
+        return EXIT_BAD
+    except SceneError as exc:
+        _say(" ".join(str(exc).split()))
+        return EXIT_BAD
+    except KeyboardInterrupt:
+        _say("interrupted")
+        return 130
+    except BrokenPipeError:
+        return EXIT_OK
+
