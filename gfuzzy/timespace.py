@@ -333,6 +333,6 @@ def sipp(
     msg = (
         "no safe trajectory within the planning horizon"
         if horizon_hit
-        else "the reachable space-time is exhausted: no safe trajectory exists on this roadmap"
+        else "the reachable space-time is exhausted: no safe trajectory exists on this graph"
     )
     return SearchResult("no_path", message=msg, expansions=expansions, states=len(best), horizon_hit=horizon_hit)

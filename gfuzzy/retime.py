@@ -1,0 +1,192 @@
+"""Path-velocity search: time a fixed geometric path among the movers.
+
+The path is cut into points one time step apart at the allowed speed, and the same
+safe-interval search as the roadmap-time search (:func:`gfuzzy.timespace.sipp`) runs on
+that chain, forward only, with waiting where it is allowed. The result keeps every
+guarantee of CONTRACT.md section 3 for the same reason the roadmap search does.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+
+from .geometry import metric_distance, wrap_angle
+from .scene import Scene
+from .timespace import MoverField, SpaceTimeGraph, sipp
+from .trajectory import Trajectory
+from .typing import FloatArray
+
+__all__ = ["chain_points", "retime_path", "RetimeResult"]
+
+#: Nodes per group of the chain whose safety is computed together.
+GROUP = 16
+
+
+def _arc_length(path: FloatArray, r: float) -> FloatArray:
+    return np.concatenate([[0.0], np.cumsum(metric_distance(path[:-1], path[1:], r))])
+
+
+def _pose_at_s(path: FloatArray, s_path: FloatArray, s: FloatArray) -> FloatArray:
+    i = np.clip(np.searchsorted(s_path, s, side="right") - 1, 0, len(path) - 2)
+    seg = s_path[i + 1] - s_path[i]
+    f = np.where(seg > 0, (s - s_path[i]) / np.where(seg > 0, seg, 1.0), 0.0)
+    delta = path[i + 1] - path[i]
+    if path.shape[1] == 3:
+        delta[:, 2] = wrap_angle(delta[:, 2])
+    out = path[i] + f[:, None] * delta
+    if path.shape[1] == 3:
+        out[:, 2] = wrap_angle(out[:, 2])
+    return out
+
+
+def chain_points(
+    path: FloatArray,
+    circumradius: float,
+    step: float,
+    speed_limit: Callable[[FloatArray], FloatArray] | None = None,
+    dt: float = 1.0,
+) -> tuple[FloatArray, FloatArray]:
+    """Cut a path into points one time step apart.
+
+    Parameters
+    ----------
+    path : (n, d) float
+        Poses joined by straight motions.
+    circumradius : float
+    step : float
+        Largest metric distance per step (vmax * dt).
+    speed_limit : callable, optional
+        ``v(s)`` for arc lengths ``s`` (k,) -> (k,); a step from s moves at most
+        ``dt * min(v(s), v(s + that step))``, never more than ``step``.
+    dt : float
+
+    Returns
+    -------
+    poses : (m, d) float
+        Includes every corner of the path, so the chain never cuts a corner.
+    s : (m,) float
+        Their arc lengths.
+    """
+    path = np.asarray(path, dtype=float)
+    s_path = _arc_length(path, circumradius)
+    total = s_path[-1]
+    if speed_limit is None:
+        pieces = [np.array([0.0])]
+        for a, b in zip(s_path[:-1], s_path[1:], strict=True):
+            seg = b - a
+            if seg <= 0:
+                continue
+            k = max(1, int(math.ceil(seg / step)))
+            if seg / k > step:
+                k += 1
+            pieces.append(a + seg * np.arange(1, k + 1) / k)
+        s = np.concatenate(pieces)
+        s[-1] = total
+    else:
+        corners = set(s_path.tolist())
+        s_list = [0.0]
+        cur = 0.0
+        floor = 1e-3 * step
+        while cur < total - 1e-12:
+            v = float(speed_limit(np.array([cur]))[0])
+            ds = min(step, max(floor, v * dt))
+            v2 = float(speed_limit(np.array([min(total, cur + ds)]))[0])
+            ds = min(ds, max(floor, v2 * dt))
+            nxt = min(total, cur + ds)
+            # do not step over a corner of the path
+            over = [c for c in corners if cur + 1e-12 < c < nxt - 1e-12]
+            if over:
+                nxt = min(over)
+            s_list.append(nxt)
+            cur = nxt
+        s = np.array(s_list)
+    # drop zero-length repeats (zero-length segments of the input)
+    keep = np.concatenate([[True], np.diff(s) > 0])
+    s = s[keep]
+    return _pose_at_s(path, s_path, s), s
+
+
+class RetimeResult:
+    """Outcome of :func:`retime_path`: ``status`` and, when solved, the trajectory."""
+
+    def __init__(self, status: str, trajectory: Trajectory | None, message: str = "", waits: list | None = None):
+        self.status = status
+        self.trajectory = trajectory
+        self.message = message
+        self.waits = waits or []
+
+
+def retime_path(
+    scene: Scene,
+    path: FloatArray,
+    t0: float,
+    dt: float,
+    horizon: float,
+    speed_limit: Callable[[FloatArray], FloatArray] | None = None,
+    wait_at: FloatArray | None = None,
+    deadline: float = math.inf,
+) -> RetimeResult:
+    """Earliest safe timing of ``path`` departing at ``t0``.
+
+    Parameters
+    ----------
+    scene : Scene
+    path : (n, d) float
+        Statically free path (the caller certifies it), start to goal.
+    t0, dt : float
+    horizon : float
+        Longest duration considered, seconds.
+    speed_limit : callable v(s), optional
+        Upper bound on speed along the path (default vmax).
+    wait_at : (k,) float, optional
+        Arc lengths where the robot may stop and wait; None: anywhere. The start is
+        always allowed.
+    deadline : float
+        ``time.perf_counter()`` value past which the answer is ``timeout``.
+
+    Returns
+    -------
+    RetimeResult
+        ``waits`` lists the arc lengths of the points where the answer waits.
+    """
+    from .planner import SPEED_SAFETY
+
+    robot = scene.robot
+    step = robot.vmax * SPEED_SAFETY * dt
+    poses, s = chain_points(path, robot.circumradius, step, speed_limit, dt)
+    m = len(poses)
+    if m == 1:
+        return RetimeResult("solved", Trajectory(np.array([[t0, *poses[0]]]), robot.circumradius))
+    indptr = np.arange(m + 1, dtype=np.int64)
+    indptr[-1] = m - 1
+    nbrs = np.arange(1, m, dtype=np.int64)
+    heur = (m - 1 - np.arange(m)).astype(float)
+    can_wait = None
+    if wait_at is not None:
+        can_wait = np.zeros(m, dtype=bool)
+        can_wait[0] = True
+        for w in np.atleast_1d(wait_at):
+            can_wait[int(np.argmin(np.abs(s - w)))] = True
+    groups = np.arange(0, m + GROUP, GROUP)
+    groups[-1] = m
+    groups = np.unique(groups)
+    graph = SpaceTimeGraph(
+        poses, indptr, nbrs, heur, can_wait=can_wait, groups=groups, from_start=np.arange(m, dtype=float)
+    )
+    steps = int(math.ceil(horizon / dt))
+    field_ = MoverField(scene, t0, dt, steps, robot.vmax)
+    res = sipp(graph, field_, 0, m - 1, deadline=deadline)
+    if res.status != "solved":
+        return RetimeResult(res.status, None, res.message)
+    rows = [(res.steps[0], poses[res.nodes[0]])]
+    waits = []
+    for k in range(1, len(res.nodes)):
+        if res.steps[k] - 1 > res.steps[k - 1]:
+            rows.append((res.steps[k] - 1, poses[res.nodes[k - 1]]))
+            waits.append(float(s[res.nodes[k - 1]]))
+        rows.append((res.steps[k], poses[res.nodes[k]]))
+    wps = np.array([[t0 + n * dt, *p] for n, p in rows], dtype=float)
+    return RetimeResult("solved", Trajectory(wps, robot.circumradius), waits=waits)
