@@ -304,6 +304,7 @@ def _make_passage_sampler(ob, si, geometry: StaticGeometry, rng: np.random.Gener
             super().__init__(si)
             self.queue: list = []
             self.bridges: list = []
+            self.dry = 0  # refills in a row that found no bridge
 
         def _uniform(self):
             q = [rng.uniform(xmin, xmax), rng.uniform(ymin, ymax)]
@@ -327,9 +328,13 @@ def _make_passage_sampler(ob, si, geometry: StaticGeometry, rng: np.random.Gener
         def _bridge(self):
             for _ in range(64):
                 if not self.bridges:
+                    if self.dry >= 3:  # no narrow passages to find: sample uniformly
+                        return None
                     self._refill()
                     if not self.bridges:
+                        self.dry += 1
                         continue
+                    self.dry = 0
                 m = self.bridges.pop()
                 q = m if box else m[:2]
                 if box:

@@ -1,0 +1,293 @@
+"""The roadmap-time search and the query API, on small scenes with real OMPL and FCL."""
+
+from __future__ import annotations
+
+import json
+import math
+from collections import deque
+
+import numpy as np
+import pytest
+from conftest import run_cli_process
+
+from gfuzzy.check import check_trajectory
+from gfuzzy.planner import Planner, PlanOptions, Status, plan
+from gfuzzy.roadmap import RoadmapOptions, build_roadmap
+from gfuzzy.scene import load_scene
+from gfuzzy.timespace import MoverField
+
+CORRIDOR = """
+version: 1
+name: corridor
+bounds: [0, 0, 10, 3]
+robot: {disc: 0.2, vmax: 1.0}
+obstacles:
+  - box: {center: [5, 2.25], size: [10, 1.5]}
+  - box: {center: [3.0, 0.3], size: [2.0, 0.6]}
+  - box: {center: [7.0, 0.3], size: [2.0, 0.6]}
+movers:
+  - {name: cart, disc: 0.3, speed: 1.0, path: [[5, 0.2], [5, 1.3]], mode: bounce}
+queries:
+  - {name: across, start: [0.5, 1.0], goal: [9.5, 1.0]}
+"""
+
+OPEN = """
+version: 1
+name: open
+bounds: [0, 0, 5, 5]
+robot: {disc: 0.2, vmax: 1.0}
+obstacles:
+  - disc: {center: [2.5, 2.5], radius: 0.6}
+movers:
+  - {name: m1, disc: 0.3, speed: 0.8, path: [[1, 4], [4, 1]], mode: bounce}
+  - {name: m2, box: [0.4, 0.3], speed: 0.6, path: [[0.5, 2.5], [4.5, 2.5]], mode: loop}
+queries:
+  - {name: diag, start: [0.5, 0.5], goal: [4.5, 4.5]}
+"""
+
+
+@pytest.fixture(scope="module")
+def corridor(tmp_path_factory):
+    p = tmp_path_factory.mktemp("corr") / "corridor.yaml"
+    p.write_text(CORRIDOR)
+    scene = load_scene(p)
+    return scene, build_roadmap(scene, RoadmapOptions(vertices=60, seed=3))
+
+
+@pytest.fixture(scope="module")
+def open_scene(tmp_path_factory):
+    p = tmp_path_factory.mktemp("open") / "open.yaml"
+    p.write_text(OPEN)
+    scene = load_scene(p)
+    return scene, build_roadmap(scene, RoadmapOptions(vertices=40, seed=5))
+
+
+def _brute_force_steps(planner: Planner, start, goal, t0, dt, horizon_steps):
+    """Breadth-first search over every (node, step): the time-expanded graph, no intervals."""
+    from gfuzzy.planner import SPEED_SAFETY
+
+    vplan = planner.robot.vmax * SPEED_SAFETY
+    planner._k = PlanOptions().connect_k
+    graph, s_id, g_id, rd = planner._graph(np.asarray(start, float), np.asarray(goal, float), dt, vplan)
+    field = MoverField(planner.scene, t0, dt, horizon_steps, planner.robot.vmax)
+    unsafe = field.unsafe(graph.poses)  # every node at every step: fine on tiny graphs
+    if unsafe[s_id, 0]:
+        return None
+    seen = np.zeros_like(unsafe)
+    seen[s_id, 0] = True
+    frontier = deque([(s_id, 0)])
+    while frontier:
+        u, n = frontier.popleft()
+        if u == g_id:
+            return n
+        if n == horizon_steps:
+            continue
+        succ = list(graph.neighbors[graph.indptr[u] : graph.indptr[u + 1]]) + [u]  # move or wait
+        for v in succ:
+            if not unsafe[v, n + 1] and not seen[v, n + 1]:
+                seen[v, n + 1] = True
+                frontier.append((v, n + 1))
+    return None
+
+
+@pytest.mark.parametrize("fixture", ["corridor", "open_scene"])
+@pytest.mark.parametrize("t0", [0.0, 1.3, 4.2])
+def test_search_matches_brute_force(fixture, t0, request):
+    scene, rm = request.getfixturevalue(fixture)
+    q = scene.queries[0]
+    planner = Planner(scene, rm)
+    dt = 0.1
+    res = planner.plan(q.start, q.goal, t0, PlanOptions(dt=dt, horizon=40.0))
+    steps = _brute_force_steps(planner, q.start, q.goal, t0, dt, int(math.ceil(40.0 / dt)))
+    if steps is None:
+        assert res.status is Status.NO_PATH
+    else:
+        assert res.status is Status.SOLVED
+        assert abs(res.duration - steps * dt) <= dt + 1e-9
+
+
+def test_solution_invariants(open_scene):
+    scene, rm = open_scene
+    q = scene.queries[0]
+    res = plan(scene, rm, q.start, q.goal, q.t0)
+    assert res.solved
+    w = res.trajectory.waypoints
+    assert np.allclose(w[0, 1:], q.start) and w[0, 0] == q.t0
+    assert np.allclose(w[-1, 1:], q.goal)
+    assert np.all(np.diff(w[:, 0]) > 0)
+    assert res.trajectory.speeds().max() <= scene.robot.vmax
+    rep = check_trajectory(scene, w, q)
+    assert rep.valid, rep.reason
+    assert res.delay_factor >= 1.0 - 1e-9
+    assert res.duration == pytest.approx(w[-1, 0] - w[0, 0])
+
+
+def test_waits_for_the_cart(corridor):
+    """The cart crosses the corridor: the straight run at full speed would hit it."""
+    scene, rm = corridor
+    q = scene.queries[0]
+    res = plan(scene, rm, q.start, q.goal, 0.0)
+    assert res.solved
+    w = res.trajectory.waypoints
+    assert check_trajectory(scene, w, q).valid
+    # timing the same path at full speed without waiting must collide, so the planner waited
+    from gfuzzy.retime import retime_path
+
+    free = retime_path(scene, res.trajectory.poses, 0.0, 0.07, 60.0, wait_at=[])
+    same_pose = np.all(np.abs(np.diff(w[:, 1:], axis=0)) < 1e-12, axis=1)
+    assert same_pose.any() or free.status != "solved" or free.trajectory.duration > res.duration - 1e-9
+    assert res.delay_factor > 1.0
+
+
+def test_start_on_mover_is_invalid_query(corridor):
+    scene, rm = corridor
+    res = plan(scene, rm, [5.0, 0.4], [9.5, 1.0], 0.0)  # the cart starts at (5, 0.2)
+    xy, _ = scene.movers[0].state(np.array([0.0]))
+    assert np.hypot(*(xy[0] - [5.0, 0.4])) < 0.5
+    assert res.status is Status.INVALID_QUERY
+    assert "cart" in res.message
+
+
+@pytest.mark.parametrize(
+    "start, goal, word",
+    [([3.0, 0.3], [9.5, 1.0], "static"), ([-1.0, 1.0], [9.5, 1.0], "out of bounds"), ([0.5, 1.0], [9.9, 1.0], "out of bounds")],
+)
+def test_invalid_queries(corridor, start, goal, word):
+    scene, rm = corridor
+    res = plan(scene, rm, start, goal, 0.0)
+    assert res.status is Status.INVALID_QUERY
+    assert word in res.message
+    assert res.trajectory is None
+
+
+def test_sealed_goal_is_no_path_quickly(tmp_path):
+    p = tmp_path / "sealed.yaml"
+    p.write_text(
+        """
+version: 1
+name: sealed
+bounds: [0, 0, 6, 4]
+robot: {disc: 0.2, vmax: 1.0}
+obstacles:
+  - box: {center: [4.5, 0.55], size: [2.1, 0.1]}
+  - box: {center: [4.5, 3.45], size: [2.1, 0.1]}
+  - box: {center: [3.5, 2.0], size: [0.1, 3.0]}
+  - polygon: [[5.45, 0.5], [5.55, 0.5], [5.55, 3.5], [5.45, 3.5]]
+queries:
+  - {name: in, start: [1, 2], goal: [4.5, 2]}
+"""
+    )
+    scene = load_scene(p)
+    rm = build_roadmap(scene, RoadmapOptions(vertices=80, seed=2))
+    res = plan(scene, rm, [1, 2], [4.5, 2], 0.0)
+    assert res.status is Status.NO_PATH
+    assert res.planning_seconds < 5.0  # generous: it must not search space-time at all
+    assert res.stats.get("expansions", 0) == 0
+
+
+def test_mover_parks_in_doorway_no_path(tmp_path):
+    """A mover that stops forever in the only door: the search exhausts space-time."""
+    p = tmp_path / "park.yaml"
+    p.write_text(
+        """
+version: 1
+name: park
+bounds: [0, 0, 6, 3]
+robot: {disc: 0.2, vmax: 1.0}
+obstacles:
+  - box: {center: [3, 0.75], size: [0.2, 1.5]}
+  - box: {center: [3, 2.55], size: [0.2, 0.9]}
+movers:
+  - {name: door, disc: 0.3, speed: 1.0, path: [[3, 2.9], [3, 1.8]], mode: once}
+queries:
+  - {name: q, start: [1, 1.5], goal: [5, 1.5]}
+"""
+    )
+    scene = load_scene(p)
+    rm = build_roadmap(scene, RoadmapOptions(vertices=80, seed=4))
+    res = plan(scene, rm, [1, 1.5], [5, 1.5], 0.0, PlanOptions(horizon=30.0))
+    assert res.status is Status.NO_PATH
+    early = plan(scene, rm, [2.6, 1.8], [5, 1.5], 0.0, PlanOptions(horizon=30.0))
+    # the door closes at t = 1.1 (arc 1.1 at speed 1): from right beside it there is time
+    assert early.status in (Status.SOLVED, Status.NO_PATH)
+    if early.solved:
+        assert check_trajectory(scene, early.trajectory.waypoints).valid
+
+
+def test_timeout(open_scene):
+    scene, rm = open_scene
+    q = scene.queries[0]
+    res = plan(scene, rm, q.start, q.goal, 0.0, PlanOptions(time_limit=1e-9))
+    assert res.status in (Status.TIMEOUT, Status.SOLVED)  # a tiny search may finish first
+    if res.status is Status.TIMEOUT:
+        assert res.trajectory is None
+
+
+def test_trajectory_file_formats(open_scene, tmp_path):
+    scene, rm = open_scene
+    q = scene.queries[0]
+    res = plan(scene, rm, q.start, q.goal, q.t0)
+    tf = res.to_file(scene.name, q.name)
+    tf.save(tmp_path / "a.json")
+    tf.save(tmp_path / "a.csv")
+    doc = json.loads((tmp_path / "a.json").read_text())
+    for key in ("version", "scene", "query", "status", "message", "duration", "roadmap_distance", "delay_factor", "planning_seconds", "waypoints"):
+        assert key in doc
+    assert doc["version"] == 1 and doc["status"] == "solved"
+    assert doc["delay_factor"] == pytest.approx(doc["duration"] * scene.robot.vmax / doc["roadmap_distance"])
+    assert doc["duration"] == pytest.approx(doc["waypoints"][-1][0] - doc["waypoints"][0][0])
+    lines = (tmp_path / "a.csv").read_text().splitlines()
+    assert lines[0] == "t,x,y"
+    rows = np.array([[float(v) for v in ln.split(",")] for ln in lines[1:]])
+    assert np.array_equal(rows, np.asarray(doc["waypoints"]))
+    assert not list(tmp_path.glob(".*tmp"))
+    # at(): interpolation and clamping
+    traj = res.trajectory
+    mid = 0.5 * (traj.times[0] + traj.times[1])
+    assert np.allclose(traj.at(mid), 0.5 * (traj.poses[0] + traj.poses[1]))
+    assert np.allclose(traj.at(traj.t_end + 5), traj.poses[-1])
+
+
+def test_api_and_cli_agree(open_scene, tmp_path):
+    scene, rm = open_scene
+    rm_path = tmp_path / "rm.json"
+    rm.save(rm_path)
+    out = tmp_path / "out.json"
+    proc = run_cli_process("plan", scene.source, "--roadmap", rm_path, "-o", out)
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(out.read_text())
+    q = scene.queries[0]
+    res = plan(scene, rm, q.start, q.goal, q.t0)
+    assert doc["status"] == res.status.value
+    assert np.allclose(np.asarray(doc["waypoints"]), res.trajectory.waypoints)
+    chk = run_cli_process("check", scene.source, out)
+    assert chk.returncode == 0, chk.stderr
+
+
+def test_box_robot_heading_and_metric(tmp_path):
+    p = tmp_path / "box.yaml"
+    p.write_text(
+        """
+version: 1
+name: boxrobot
+bounds: [0, 0, 6, 4]
+robot: {box: [0.8, 0.3], vmax: 1.0}
+obstacles:
+  - box: {center: [3, 0.9], size: [0.2, 1.8]}
+  - box: {center: [3, 3.3], size: [0.2, 1.4]}
+movers:
+  - {name: m, box: [0.3, 0.3], speed: 0.5, path: [[4.5, 0.5], [4.5, 3.5]], mode: bounce}
+queries:
+  - {name: q, start: [1, 2, 1.57], goal: [5, 2, -1.57]}
+"""
+    )
+    scene = load_scene(p)
+    rm = build_roadmap(scene, RoadmapOptions(vertices=150, seed=1))
+    q = scene.queries[0]
+    res = plan(scene, rm, q.start, q.goal, 0.0)
+    assert res.solved, res.message
+    w = res.trajectory.waypoints
+    assert w.shape[1] == 4
+    rep = check_trajectory(scene, w, q)
+    assert rep.valid, rep.reason
+    assert rep.max_speed <= 1.0
