@@ -370,7 +370,8 @@ def mover_distance(robot: Robot, poses: FloatArray, shape: str, radius: float, s
     poses : (..., d) float
         Broadcastable against ``xy``.
     shape : {"disc", "box"}
-        The mover's shape; ``radius`` for a disc, ``size`` (w, h) for an axis-aligned box.
+        The mover's shape; ``radius`` (scalar or broadcastable array) for a disc,
+        ``size`` ((2,) or (..., 2): w, h) for an axis-aligned box.
     xy : (..., 2) float
 
     Returns
@@ -380,11 +381,13 @@ def mover_distance(robot: Robot, poses: FloatArray, shape: str, radius: float, s
     """
     poses = np.asarray(poses, dtype=float)
     xy = np.asarray(xy, dtype=float)
+    radius = np.asarray(radius, dtype=float)
+    size = np.asarray(size, dtype=float)
     if robot.shape == "disc":
         rel = xy - poses[..., :2]
         if shape == "disc":
             return np.hypot(rel[..., 0], rel[..., 1]) - robot.radius - radius
-        return _point_box_distance(rel, 0.5 * np.asarray(size)) - robot.radius
+        return _point_box_distance(rel, 0.5 * size) - robot.radius
     # box robot
     c, s = np.cos(poses[..., 2]), np.sin(poses[..., 2])
     rel = xy - poses[..., :2]
@@ -394,7 +397,7 @@ def mover_distance(robot: Robot, poses: FloatArray, shape: str, radius: float, s
         return _point_box_distance(local, half_robot) - radius
     shp = np.broadcast_shapes(poses.shape[:-1], xy.shape[:-1])
     A = robot.corners(np.broadcast_to(poses, shp + (3,)).reshape(-1, 3)).reshape(shp + (4, 2))
-    hw, hh = 0.5 * size[0], 0.5 * size[1]
-    offs = np.array([[hw, hh], [-hw, hh], [-hw, -hh], [hw, -hh]])
-    B = np.broadcast_to(xy, shp + (2,))[..., None, :] + offs
+    half = np.broadcast_to(0.5 * size, shp + (2,))
+    signs = np.array([[1.0, 1.0], [-1.0, 1.0], [-1.0, -1.0], [1.0, -1.0]])
+    B = np.broadcast_to(xy, shp + (2,))[..., None, :] + half[..., None, :] * signs
     return _quad_distance(A, B)

@@ -212,21 +212,30 @@ class Planner:
         verts = np.vstack([rm.vertices, start[None], goal[None]])
         n = len(verts)
 
-        # static shortest distances to the goal (Dijkstra on the roadmap)
-        from scipy.sparse import coo_matrix
-        from scipy.sparse.csgraph import dijkstra
-
-        w = np.maximum(lengths, 1e-300)  # csgraph drops explicit zeros
-        mat = coo_matrix((np.r_[w, w], (np.r_[edges[:, 0], edges[:, 1]], np.r_[edges[:, 1], edges[:, 0]])), shape=(n, n)).tocsr()
-        both = dijkstra(mat, directed=True, indices=[g_id, s_id])
-        both = np.where(both < 1e-200, 0.0, both)
-        dist, dist_s = both[0], both[1]
-
         # split edges into steps of at most vmax * dt; interior points of edge e get the
         # ids n + offs[e] .. n + offs[e+1] - 1
         step_len = vmax * dt
         k = np.maximum(1, np.ceil(lengths / step_len)).astype(np.int64)
         k = np.where(lengths / k > step_len, k + 1, k)
+
+        # static shortest distances (Dijkstra on the roadmap): in metres for the roadmap
+        # distance, in steps (edge e costs k[e]) for the heuristic, which is exact for the
+        # static graph and so the tightest admissible one
+        from scipy.sparse import coo_matrix
+        from scipy.sparse.csgraph import dijkstra
+
+        def sp(weights):
+            w = np.maximum(weights, 1e-300)  # csgraph drops explicit zeros
+            rows = np.r_[edges[:, 0], edges[:, 1]]
+            cols = np.r_[edges[:, 1], edges[:, 0]]
+            mat = coo_matrix((np.r_[w, w], (rows, cols)), shape=(n, n)).tocsr()
+            out = dijkstra(mat, directed=True, indices=[g_id, s_id])
+            return np.where(out < 1e-200, 0.0, out)
+
+        dist = sp(lengths)[0]
+        hops = sp(k.astype(float))
+        hop_g, hop_s = np.rint(hops[0]), np.rint(hops[1])
+
         n_int = k - 1
         offs = np.concatenate([[0], np.cumsum(n_int)])
         total = n + int(offs[-1])
@@ -243,13 +252,13 @@ class Planner:
         if verts.shape[1] == 3:
             inner[:, 2] = (inner[:, 2] + np.pi) % (2 * np.pi) - np.pi
         poses[n:] = inner
+        ke = k[e_of]
         heur = np.empty(total)
-        heur[:n] = dist / step_len
-        le = lengths[e_of]
-        heur[n:] = np.minimum(dist[a] + f * le, dist[b] + (1 - f) * le) / step_len
+        heur[:n] = hop_g
+        heur[n:] = np.minimum(hop_g[a] + j, hop_g[b] + ke - j)
         from_start = np.empty(total)
-        from_start[:n] = dist_s / step_len
-        from_start[n:] = np.minimum(dist_s[a] + f * le, dist_s[b] + (1 - f) * le) / step_len
+        from_start[:n] = hop_s
+        from_start[n:] = np.minimum(hop_s[a] + j, hop_s[b] + ke - j)
         # one-step moves: along each edge's chain a -> interior... -> b, both ways
         ids = np.arange(n, total)
         first = np.zeros(offs[-1], dtype=bool)
@@ -321,11 +330,16 @@ class Planner:
                 nodes=len(graph.poses),
             )
         max_horizon = opts.horizon if opts.horizon is not None else 60.0 + 10.0 * rd / vmax
-        # grow the horizon by doubling: most answers arrive well before the longest one
-        horizon = min(max_horizon, 10.0 + 1.5 * rd / vmax)
+        # Grow the horizon by doubling the slack above the static lower bound: safety is
+        # only computed for times a node can still matter at (from_start .. horizon - h),
+        # so a horizon close to the answer keeps that window, and the work, small.
+        h0 = float(graph.heuristic[s_id])
+        max_steps = int(math.ceil(max_horizon / opts.dt))
+        slack = max(48.0, 0.2 * h0)
         expansions = evaluations = 0
         while True:
-            steps = int(math.ceil(horizon / opts.dt))
+            steps = min(max_steps, int(math.ceil(h0 + slack)))
+            horizon = steps * opts.dt
             field_ = MoverField(self.scene, t0, opts.dt, steps, vmax)
             hit = field_.collides_at(start, 0)
             if hit is not None:
@@ -333,9 +347,9 @@ class Planner:
             res = sipp(graph, field_, s_id, g_id, deadline=deadline)
             expansions += res.expansions
             evaluations += field_.evaluations
-            if res.status != "no_path" or not res.horizon_hit or horizon >= max_horizon:
+            if res.status != "no_path" or not res.horizon_hit or steps >= max_steps:
                 break
-            horizon = min(max_horizon, 2.0 * horizon)
+            slack *= 2.0
         stats = {
             "expansions": expansions,
             "states": res.states,

@@ -40,6 +40,9 @@ log = logging.getLogger(__name__)
 
 #: Steps per chunk of the movers' broad phase.
 CHUNK = 8
+#: Safety is computed for every group whose static lower bound on f lies within this many
+#: steps of the group the search asks for: the A* order will want them soon.
+BAND = 6
 
 
 class MoverField:
@@ -100,14 +103,17 @@ class MoverField:
         )  # (m, nc, 4); empty (inf/-inf) where absent
         self.nc = nc
         self.evaluations = 0
+        self._extent = np.array([mv.extent for mv in self.movers])
+        self._is_disc = np.array([mv.shape == "disc" for mv in self.movers], dtype=bool)
+        self._radius = np.array([mv.radius for mv in self.movers])
+        self._size = np.array([mv.size for mv in self.movers], dtype=float).reshape(-1, 2)
 
     def unsafe(self, poses: FloatArray, lo: int = 0, hi: int | None = None) -> BoolArray:
-        """Steps at which the robot at each of ``poses`` is not safe.
+        """Steps at which the robot at each of ``poses`` is not safe (one group).
 
         Parameters
         ----------
         poses : (k, d) float
-            Usually the points of one roadmap edge: they share the broad phase.
         lo, hi : int
             Only steps ``lo..hi`` are examined; the others are reported unsafe.
 
@@ -116,39 +122,112 @@ class MoverField:
         (k, steps + 1) bool
         """
         poses = np.atleast_2d(np.asarray(poses, dtype=float))
-        hi = self.steps if hi is None else min(hi, self.steps)
-        out = np.ones((len(poses), self.steps + 1), dtype=bool)
-        if lo > hi:
+        hi = self.steps if hi is None else hi
+        return self.unsafe_groups(poses, np.array([0, len(poses)]), np.array([lo]), np.array([hi]))
+
+    def unsafe_groups(self, poses: FloatArray, ptr: IntArray, lo: IntArray, hi: IntArray) -> BoolArray:
+        """Unsafe steps of many groups of poses at once (one numpy pass, no Python loop).
+
+        Parameters
+        ----------
+        poses : (k, d) float
+            Group j is ``poses[ptr[j]:ptr[j+1]]``, typically the points of one roadmap
+            edge, which lie close to the segment between its first and last point.
+        ptr : (g+1,) int
+        lo, hi : (g,) int
+            Steps examined per group; the others are reported unsafe.
+
+        Returns
+        -------
+        (k, steps + 1) bool
+
+        Notes
+        -----
+        Three phases: each group's box against each mover's box per chunk of steps; then
+        each candidate (group, mover, step) by the distance of the mover to the group's
+        segment; then the exact robot-mover distance for each point of the surviving groups.
+        """
+        poses = np.asarray(poses, dtype=float)
+        ptr = np.asarray(ptr, dtype=np.int64)
+        G, K, T = len(ptr) - 1, len(poses), self.steps + 1
+        lo = np.clip(np.asarray(lo, dtype=np.int64), 0, None)
+        hi = np.minimum(np.asarray(hi, dtype=np.int64), self.steps)
+        sizes = np.diff(ptr)
+        gid = np.repeat(np.arange(G), sizes)
+        tgrid = np.arange(T)
+        out = (tgrid < lo[gid, None]) | (tgrid > hi[gid, None])
+        if not self.movers or K == 0:
             return out
-        out[:, lo : hi + 1] = False
-        if not self.movers:
+        xy = poses[:, :2]
+        starts = ptr[:-1]
+        gmin = np.minimum.reduceat(xy, starts, axis=0)
+        gmax = np.maximum.reduceat(xy, starts, axis=0)
+        p0, p1 = xy[starts], xy[ptr[1:] - 1]
+        seg = p1 - p0
+        seg2 = np.einsum("ij,ij->i", seg, seg)
+        inv = np.where(seg2 > 0, 1.0 / np.where(seg2 > 0, seg2, 1.0), 0.0)
+        tt = np.clip(np.einsum("ij,ij->i", xy - p0[gid], seg[gid]) * inv[gid], 0.0, 1.0)
+        dev = np.maximum.reduceat(np.hypot(*(p0[gid] + tt[:, None] * seg[gid] - xy).T), starts)
+        body = self.robot.circumradius + dev
+
+        # 1. broad phase: (group, mover, chunk) boxes
+        bb = self.bbox  # (M, NC, 4)
+        near = (
+            (bb[None, :, :, 0] <= gmax[:, None, None, 0])
+            & (gmin[:, None, None, 0] <= bb[None, :, :, 2])
+            & (bb[None, :, :, 1] <= gmax[:, None, None, 1])
+            & (gmin[:, None, None, 1] <= bb[None, :, :, 3])
+        )
+        chunk = np.arange(self.nc)
+        near &= (chunk[None, :] >= (lo // CHUNK)[:, None])[:, None, :]
+        near &= (chunk[None, :] <= (hi // CHUNK)[:, None])[:, None, :]
+        g3, m3, c3 = np.nonzero(near)
+        if g3.size == 0:
             return out
-        pmin = poses[:, :2].min(axis=0)
-        pmax = poses[:, :2].max(axis=0)
-        bb = self.bbox
-        c0, c1 = lo // CHUNK, hi // CHUNK + 1
-        bb = bb[:, c0:c1]
-        near = (bb[..., 0] <= pmax[0]) & (pmin[0] <= bb[..., 2]) & (bb[..., 1] <= pmax[1]) & (pmin[1] <= bb[..., 3])
-        ms, cs = np.nonzero(near)
-        cs = cs + c0
-        if ms.size == 0:
+        # 2. mid phase: every step of those chunks, mover against the group's segment
+        st = (c3[:, None] * CHUNK + np.arange(CHUNK)).ravel()
+        g3 = np.repeat(g3, CHUNK)
+        m3 = np.repeat(m3, CHUNK)
+        keep = (st >= lo[g3]) & (st <= hi[g3])
+        g3, m3, st = g3[keep], m3[keep], st[keep]
+        keep = self.present[m3, st]
+        g3, m3, st = g3[keep], m3[keep], st[keep]
+        q = self.xy[m3, st]
+        tq = np.clip(np.einsum("ij,ij->i", q - p0[g3], seg[g3]) * inv[g3], 0.0, 1.0)
+        dq = np.hypot(*(p0[g3] + tq[:, None] * seg[g3] - q).T)
+        margin = self.margin[m3, st]
+        keep = dq - body[g3] - self._extent[m3] < margin
+        g3, m3, st, margin = g3[keep], m3[keep], st[keep], margin[keep]
+        if g3.size == 0:
             return out
-        grid = np.arange(CHUNK)
-        for m in np.unique(ms):
-            chunks = cs[ms == m]
-            steps = (chunks[:, None] * CHUNK + grid).ravel()
-            steps = steps[(steps >= lo) & (steps <= hi)]
-            steps = steps[self.present[m, steps]]
-            if steps.size == 0:
-                continue
-            mv = self.movers[m]
-            d = mover_distance(
-                self.robot, poses[:, None, :], mv.shape, mv.radius, mv.size, self.xy[m, steps][None]
-            )
-            self.evaluations += d.size
-            bad = d < self.margin[m, steps]
-            out[:, steps] |= bad
+        # 3. exact distance for every point of each surviving group
+        cnt = sizes[g3]
+        node = np.repeat(ptr[g3], cnt) + (np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt))
+        m4 = np.repeat(m3, cnt)
+        st4 = np.repeat(st, cnt)
+        margin = np.repeat(margin, cnt)
+        q = self.xy[m4, st4]
+        # centre distance bounds the body distance from below: most points drop here
+        keep = np.hypot(*(q - xy[node]).T) - self.robot.circumradius - self._extent[m4] < margin
+        node, m4, st4, q, margin = node[keep], m4[keep], st4[keep], q[keep], margin[keep]
+        d = self._distance(poses[node], m4, q)
+        self.evaluations += d.size
+        bad = d < margin
+        out[node[bad], st4[bad]] = True
         return out
+
+    def _distance(self, poses: FloatArray, movers: IntArray, xy: FloatArray) -> FloatArray:
+        """Robot-mover distance for aligned arrays of poses, mover indices and positions."""
+        d = np.empty(len(poses))
+        disc = self._is_disc[movers]
+        for mask, shape in ((disc, "disc"), (~disc, "box")):
+            if not mask.any():
+                continue
+            mm = movers[mask]
+            d[mask] = mover_distance(
+                self.robot, poses[mask], shape, self._radius[mm], self._size[mm], xy[mask]
+            )
+        return d
 
     def collides_at(self, pose: FloatArray, step: int) -> str | None:
         """Name of a mover overlapping the robot at ``pose`` exactly at step ``step``, if any."""
@@ -241,36 +320,71 @@ def sipp(
     intervals: dict[int, tuple[list, list]] = {}
     H = field_.steps
     h = graph.heuristic
-    groups = graph.groups
-    first = int(groups[0]) if groups is not None else len(graph.poses)
+    n_nodes = len(graph.poses)
+    # groups whose safety is computed together: each edge's points, every other node alone
+    first = int(graph.groups[0]) if graph.groups is not None else n_nodes
+    ptr = np.arange(first + 1, dtype=np.int64)
+    if graph.groups is not None:
+        ptr = np.unique(np.concatenate([ptr, np.asarray(graph.groups, dtype=np.int64)]))
+    ptr = ptr[ptr <= n_nodes]
+    if ptr[-1] != n_nodes:
+        ptr = np.append(ptr, n_nodes)
+    fs = graph.from_start if graph.from_start is not None else np.zeros(n_nodes)
+    fs = np.where(np.isfinite(fs), fs, 0.0)
+    g_lo = np.maximum(0, np.floor(np.minimum.reduceat(fs, ptr[:-1]) + 1e-9)).astype(np.int64)
+    g_hmin = np.minimum.reduceat(h, ptr[:-1])
+    finite = np.isfinite(g_hmin)
+    g_hi = np.where(finite, H - np.floor(np.where(finite, g_hmin, 0) + 1e-9), -1).astype(np.int64)
+    f_lb = np.minimum.reduceat(fs + h, ptr[:-1])
+    done = np.zeros(len(ptr) - 1, dtype=bool)
+    node_batch = np.full(n_nodes, -1, dtype=np.int64)
+    node_local = np.zeros(n_nodes, dtype=np.int64)
+    node_cap = np.full(n_nodes, H, dtype=np.int64)  # last step examined (the time window)
+    batches: list = []
+    budget = max(1, 8_000_000 // (H + 1))  # points per batch (memory: points x steps bools)
+
+    def compute(g: int) -> None:
+        pending = np.nonzero(~done & (f_lb <= f_lb[g] + BAND))[0]
+        pending = pending[np.argsort(f_lb[pending], kind="stable")]
+        sizes = ptr[pending + 1] - ptr[pending]
+        pending = pending[np.cumsum(sizes) <= budget]
+        if g not in set(pending.tolist()):
+            pending = np.append(pending, g)
+        done[pending] = True
+        sizes = ptr[pending + 1] - ptr[pending]
+        sub_ptr = np.concatenate([[0], np.cumsum(sizes)])
+        nodes = np.repeat(ptr[pending], sizes) + (np.arange(sub_ptr[-1]) - np.repeat(sub_ptr[:-1], sizes))
+        unsafe = field_.unsafe_groups(graph.poses[nodes], sub_ptr, g_lo[pending], g_hi[pending])
+        pad = np.ones((len(nodes), 1), dtype=bool)
+        d = np.diff(np.concatenate([pad, unsafe, pad], axis=1).view(np.int8), axis=1)
+        rs, cs = np.nonzero(d == -1)  # unsafe -> safe: an interval starts
+        re, ce = np.nonzero(d == 1)  # safe -> unsafe: it ended one step before
+        rows = np.arange(len(nodes) + 1)
+        batches.append(
+            (
+                cs.tolist(),
+                np.searchsorted(rs, rows).tolist(),
+                (ce - 1).tolist(),
+                np.searchsorted(re, rows).tolist(),
+            )
+        )
+        node_batch[nodes] = len(batches) - 1
+        node_local[nodes] = np.arange(len(nodes))
+        node_cap[nodes] = np.repeat(g_hi[pending], sizes)
 
     def ivals(node: int):
         iv = intervals.get(node)
         if iv is not None:
             return iv
-        if node < first:
-            ids = np.array([node])
-        else:
-            j = int(np.searchsorted(groups, node, side="right")) - 1
-            ids = np.arange(groups[j], groups[j + 1])
-        if graph.from_start is not None:
-            lo = max(0, int(math.floor(graph.from_start[ids].min() + 1e-9)))
-            hi = H - int(math.floor(h[ids].min() + 1e-9))
-        else:
-            lo, hi = 0, H
-        safe = ~field_.unsafe(graph.poses[ids], lo, hi)
-        pad = np.zeros((len(ids), 1), dtype=np.int8)
-        d = np.diff(np.concatenate([pad, safe.view(np.int8), pad], axis=1), axis=1)
-        rs, cs = np.nonzero(d == 1)
-        re, ce = np.nonzero(d == -1)
-        bounds_s = np.searchsorted(rs, np.arange(len(ids) + 1))
-        bounds_e = np.searchsorted(re, np.arange(len(ids) + 1))
-        for k, nid in enumerate(ids.tolist()):
-            intervals[nid] = (
-                cs[bounds_s[k] : bounds_s[k + 1]].tolist(),
-                (ce[bounds_e[k] : bounds_e[k + 1]] - 1).tolist(),
-            )
-        return intervals[node]
+        b = node_batch[node]
+        if b < 0:
+            compute(int(np.searchsorted(ptr, node, side="right")) - 1)
+            b = node_batch[node]
+        cs, sp, ce, ep = batches[b]
+        k = int(node_local[node])
+        iv = (cs[sp[k] : sp[k + 1]], ce[ep[k] : ep[k + 1]])
+        intervals[node] = iv
+        return iv
 
     indptr, nbrs = graph.indptr, graph.neighbors
     can_wait = graph.can_wait
@@ -307,10 +421,11 @@ def sipp(
                 "timeout", message="planning time budget exhausted", expansions=expansions, states=len(best)
             )
         end_u = intervals[u][1][ju]
+        if end_u >= node_cap[u]:  # the interval was cut by the horizon, not by a mover
+            horizon_hit = True
         lo = g + 1
         hi = end_u + 1 if (can_wait is None or can_wait[u]) else lo
         if hi > H:
-            horizon_hit = True
             hi = H
         if lo > hi:
             continue
