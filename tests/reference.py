@@ -1,0 +1,217 @@
+"""An independent shapely reference for the geometry, used to cross-check FCL.
+
+Everything here is built from the *scene document* (the plain dict written to YAML), never
+from gfuzzy's parsed objects, so that a parsing or triangulation mistake in gfuzzy cannot
+hide itself. Discs are handled analytically (the distance to the centre minus the radius),
+never as buffered polygons, so the reference is exact up to floating point.
+
+The classification is three-way with a tolerance ``eps``: a pose is *robustly free* when its
+clearance exceeds ``eps``, *robustly colliding* when the robot shrunk by ``eps`` still
+overlaps an obstacle (or the robot leaves the bounds by more than ``eps``), and otherwise
+within ``eps`` of touching, where the two implementations may disagree.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import shapely
+from shapely import affinity
+
+__all__ = [
+    "Reference",
+    "box_polygon",
+    "robot_corners",
+    "interpolate",
+    "mover_reference_distance",
+    "prism_mesh",
+]
+
+
+def box_polygon(center, size, angle=0.0) -> shapely.Polygon:
+    """A rectangle of ``size`` (along x, along y before rotation) rotated by ``angle`` rad."""
+    hx, hy = 0.5 * size[0], 0.5 * size[1]
+    poly = shapely.box(-hx, -hy, hx, hy)
+    poly = affinity.rotate(poly, angle, origin=(0.0, 0.0), use_radians=True)
+    return affinity.translate(poly, center[0], center[1])
+
+
+def robot_corners(size, poses, shrink: float = 0.0) -> np.ndarray:
+    """Corners (n, 4, 2) of a box robot of ``size`` (length, width) at ``poses`` (n, 3).
+
+    ``shrink`` erodes the rectangle by that distance on every side.
+    """
+    poses = np.atleast_2d(np.asarray(poses, dtype=float))
+    hl, hw = 0.5 * size[0] - shrink, 0.5 * size[1] - shrink
+    local = np.array([[hl, hw], [-hl, hw], [-hl, -hw], [hl, -hw]])
+    c, s = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
+    x = poses[:, 0:1] + c * local[:, 0] - s * local[:, 1]
+    y = poses[:, 1:2] + s * local[:, 0] + c * local[:, 1]
+    return np.stack([x, y], axis=-1)
+
+
+def interpolate(a, b, f) -> np.ndarray:
+    """Poses at fractions ``f`` along a -> b; heading along the shorter arc (written afresh)."""
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float)
+    f = np.asarray(f, dtype=float)[:, None]
+    d = b - a
+    if a.size == 3:
+        dh = math.remainder(float(d[2]), 2 * math.pi)  # in [-pi, pi]
+        d = np.array([d[0], d[1], dh])
+    return a + f * d
+
+
+class Reference:
+    """Shapely model of a scene's static part.
+
+    Parameters
+    ----------
+    doc : dict
+        The scene document (as written to YAML).
+    mesh_footprints : dict, optional
+        ``{file: shapely geometry}``: the xy footprint each mesh file was made from.
+    """
+
+    def __init__(self, doc: dict, mesh_footprints: dict | None = None):
+        mesh_footprints = mesh_footprints or {}
+        self.bounds = tuple(float(v) for v in doc["bounds"])
+        robot = doc["robot"]
+        if "disc" in robot:
+            self.robot_kind, self.radius, self.size = "disc", float(robot["disc"]), None
+        else:
+            self.robot_kind, self.radius, self.size = "box", 0.0, tuple(map(float, robot["box"]))
+        polys, discs = [], []
+        for item in doc.get("obstacles") or []:
+            (kind, spec), = item.items()
+            if kind == "disc":
+                discs.append((tuple(spec["center"]), float(spec["radius"])))
+            elif kind == "box":
+                polys.append(box_polygon(spec["center"], spec["size"], spec.get("angle", 0.0)))
+            elif kind == "polygon":
+                polys.append(shapely.Polygon(spec))
+            else:
+                polys.append(mesh_footprints[spec["file"]])
+        self.polys = shapely.union_all(polys) if polys else None
+        if self.polys is not None:
+            shapely.prepare(self.polys)
+        self.discs = discs
+
+    # ------------------------------------------------------------------ pieces
+    def _bounds_margin(self, poses) -> np.ndarray:
+        xmin, ymin, xmax, ymax = self.bounds
+        if self.robot_kind == "disc":
+            x, y, r = poses[:, 0], poses[:, 1], self.radius
+            return np.min([x - r - xmin, xmax - x - r, y - r - ymin, ymax - y - r], axis=0)
+        c = robot_corners(self.size, poses)
+        return np.min(
+            [
+                c[..., 0].min(-1) - xmin,
+                xmax - c[..., 0].max(-1),
+                c[..., 1].min(-1) - ymin,
+                ymax - c[..., 1].max(-1),
+            ],
+            axis=0,
+        )
+
+    def _bodies(self, poses, shrink=0.0):
+        """Robot bodies as shapely geometry, plus the radius still to subtract."""
+        if self.robot_kind == "disc":
+            return shapely.points(poses[:, :2]), self.radius - shrink
+        return shapely.polygons(robot_corners(self.size, poses, shrink)), 0.0
+
+    def distances_by_kind(self, poses) -> tuple[np.ndarray, np.ndarray]:
+        """Distances (n,) from the robot body to the polygonal obstacles and to the discs.
+
+        Each is 0 where they meet and inf when there is no obstacle of that kind.
+        """
+        poses = np.atleast_2d(np.asarray(poses, dtype=float))
+        body, r = self._bodies(poses)
+        d_poly = np.full(len(poses), np.inf)
+        d_disc = np.full(len(poses), np.inf)
+        if self.polys is not None:
+            d_poly = shapely.distance(body, self.polys) - r
+        for center, dr in self.discs:
+            d_disc = np.minimum(d_disc, shapely.distance(body, shapely.Point(center)) - r - dr)
+        return np.maximum(d_poly, 0.0), np.maximum(d_disc, 0.0)
+
+    def obstacle_distance(self, poses) -> np.ndarray:
+        """Distance (n,) from the robot body to the nearest obstacle, 0 when they meet."""
+        return np.minimum(*self.distances_by_kind(poses))
+
+    def bounds_margin(self, poses) -> np.ndarray:
+        """How far (n,) the robot body is inside the bounds (negative: outside)."""
+        return self._bounds_margin(np.atleast_2d(np.asarray(poses, dtype=float)))
+
+    def clearance(self, poses) -> np.ndarray:
+        """min(bounds margin, obstacle distance): > 0 free by that much (n,)."""
+        poses = np.atleast_2d(np.asarray(poses, dtype=float))
+        return np.minimum(self._bounds_margin(poses), self.obstacle_distance(poses))
+
+    def robustly_colliding(self, poses, eps=1e-6) -> np.ndarray:
+        """True where the robot overlaps an obstacle or leaves the bounds by more than eps."""
+        poses = np.atleast_2d(np.asarray(poses, dtype=float))
+        out = self._bounds_margin(poses) < -eps
+        body, r = self._bodies(poses, shrink=eps)
+        if self.polys is not None:
+            if self.robot_kind == "disc":
+                out |= shapely.distance(body, self.polys) < r
+            else:
+                out |= shapely.intersects(body, self.polys)
+        for center, dr in self.discs:
+            out |= shapely.distance(body, shapely.Point(center)) < r + dr
+        return out
+
+    def robustly_free(self, poses, eps=1e-6) -> np.ndarray:
+        return self.clearance(poses) > eps
+
+
+def mover_reference_distance(robot: dict, pose, mover_shape: str, mover_param, xy) -> tuple[float, bool]:
+    """Distance between one robot pose and one mover, and whether they overlap.
+
+    ``robot`` is the scene's robot mapping; ``mover_param`` the radius or the (w, h) size.
+    Returns ``(distance >= 0, overlap)``; ``overlap`` is the shapely verdict (interiors meet).
+    """
+    if "disc" in robot:
+        body, r = shapely.Point(pose[0], pose[1]), float(robot["disc"])
+    else:
+        body, r = shapely.polygons(robot_corners(robot["box"], [pose]))[0], 0.0
+    if mover_shape == "disc":
+        other, r2 = shapely.Point(xy[0], xy[1]), float(mover_param)
+    else:
+        w, h = mover_param
+        other, r2 = shapely.box(xy[0] - w / 2, xy[1] - h / 2, xy[0] + w / 2, xy[1] + h / 2), 0.0
+    d = shapely.distance(body, other) - r - r2
+    if r == 0 and r2 == 0:
+        overlap = shapely.intersection(body, other).area > 0
+    else:
+        overlap = d < 0
+    return max(d, 0.0), overlap
+
+
+def prism_mesh(footprint: shapely.Polygon, height: float = 1.0):
+    """A closed trimesh prism over a simple polygon (no triangulation engine needed)."""
+    import trimesh
+
+    footprint = shapely.geometry.polygon.orient(footprint, 1.0)
+    tris = [
+        np.asarray(t.exterior.coords)[:3]
+        for t in shapely.get_parts(shapely.constrained_delaunay_triangles(footprint))
+    ]
+    verts, faces = [], []
+    for tri in tris:
+        area2 = (tri[1, 0] - tri[0, 0]) * (tri[2, 1] - tri[0, 1]) - (tri[2, 0] - tri[0, 0]) * (
+            tri[1, 1] - tri[0, 1]
+        )
+        if area2 < 0:
+            tri = tri[::-1]
+        k = len(verts)
+        verts += [[*p, height] for p in tri] + [[*p, 0.0] for p in tri[::-1]]
+        faces += [[k, k + 1, k + 2], [k + 3, k + 4, k + 5]]
+    ring = np.asarray(footprint.exterior.coords)
+    for p, q in zip(ring[:-1], ring[1:], strict=True):
+        k = len(verts)
+        verts += [[*p, 0.0], [*q, 0.0], [*q, height], [*p, height]]
+        faces += [[k, k + 1, k + 2], [k, k + 2, k + 3]]
+    return trimesh.Trimesh(np.array(verts), np.array(faces), process=True)

@@ -1,0 +1,334 @@
+"""FCL geometry against an independent shapely reference (tests/reference.py).
+
+Poses are drawn uniformly and, to exercise the hard cases, close to touching. Agreement is
+required everywhere except within ``EPS`` of touching.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import shapely
+from reference import Reference, interpolate, mover_reference_distance, prism_mesh
+
+from gfuzzy.geometry import (
+    StaticGeometry,
+    interpolate_poses,
+    metric_distance,
+    mover_distance,
+    wrap_angle,
+)
+from gfuzzy.scene import parse_scene
+
+EPS = 1e-6
+
+U_SHAPE = [[3.0, 0.5], [4.5, 0.5], [4.5, 2.0], [4.1, 2.0], [4.1, 0.9], [3.4, 0.9], [3.4, 2.0], [3.0, 2.0]]
+L_SHAPE = shapely.Polygon([(0.5, 2.5), (2.0, 2.5), (2.0, 2.9), (0.9, 2.9), (0.9, 3.6), (0.5, 3.6)])
+ROBOTS = {"disc": {"disc": 0.3, "vmax": 1.0}, "box": {"box": [0.8, 0.4], "vmax": 1.0}}
+
+
+@pytest.fixture(scope="module")
+def mesh_folder(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("geometry")
+    prism_mesh(L_SHAPE, 1.0).export(folder / "ell.stl")
+    return folder
+
+
+class World:
+    """A scene with every obstacle kind, its FCL geometry and its shapely reference."""
+
+    def __init__(self, kind: str, folder):
+        self.kind = kind
+        self.doc = {
+            "version": 1,
+            "name": f"geometry-{kind}",
+            "bounds": [0.0, 0.0, 6.0, 4.0],
+            "robot": ROBOTS[kind],
+            "obstacles": [
+                {"box": {"center": [1.5, 1.2], "size": [0.8, 0.5], "angle": 0.6}},
+                {"disc": {"center": [5.0, 3.0], "radius": 0.5}},
+                {"polygon": U_SHAPE},  # concave
+                {"mesh": {"file": "ell.stl"}},  # concave too
+            ],
+        }
+        self.scene = parse_scene(self.doc, file="geometry.yaml", folder=folder)
+        self.geometry = StaticGeometry(self.scene)
+        self.ref = Reference(self.doc, {"ell.stl": L_SHAPE})
+        self.dof = 2 if kind == "disc" else 3
+
+    def uniform(self, rng, n):
+        poses = np.c_[rng.uniform(-0.5, 6.5, n), rng.uniform(-0.5, 4.5, n)]
+        if self.dof == 3:
+            poses = np.c_[poses, rng.uniform(-math.pi, math.pi, n)]
+        return poses
+
+    def near_contact(self, rng, n, band=0.02):
+        """Poses within ``band`` of touching an obstacle or the bounds, on either side."""
+        pool = self.uniform(rng, 40 * n)
+        gap = self.ref.clearance(pool)
+        shallow = ~self.ref.robustly_colliding(pool, band)
+        keep = (gap < band) & shallow
+        return pool[keep][:n]
+
+
+@pytest.fixture(scope="module", params=["disc", "box"])
+def world(request, mesh_folder):
+    return World(request.param, mesh_folder)
+
+
+# --------------------------------------------------------------------------- validity
+
+
+def test_validity_agrees_with_shapely(world):
+    rng = np.random.default_rng(11)
+    poses = np.vstack([world.uniform(rng, 2500), world.near_contact(rng, 1500)])
+    valid = world.geometry.valid(poses)
+    free = world.ref.robustly_free(poses, EPS)
+    colliding = world.ref.robustly_colliding(poses, EPS)
+    assert free.sum() > 500 and colliding.sum() > 500  # both sides well represented
+    bad_free = poses[free & ~valid]
+    bad_coll = poses[colliding & valid]
+    assert len(bad_free) == 0, f"free poses called invalid: {bad_free[:5]}"
+    assert len(bad_coll) == 0, f"colliding poses called valid: {bad_coll[:5]}"
+    single = np.array([world.geometry.is_valid(p) for p in poses[:300]])
+    np.testing.assert_array_equal(single, valid[:300])
+
+
+def test_clearance_agrees_with_shapely(world):
+    """Exact (1e-6) where only flat shapes meet; within 2e-3 where a round one is involved
+    (FCL's GJK distance for cylinders is iterative; see the xfail tests below)."""
+    rng = np.random.default_rng(12)
+    poses = np.vstack([world.uniform(rng, 2000), world.near_contact(rng, 1000)])
+    got = world.geometry.clearance(poses)
+    want = world.ref.clearance(poses)
+    free = world.ref.robustly_free(poses, EPS)
+    colliding = world.ref.robustly_colliding(poses, EPS)
+    d_poly, d_disc = world.ref.distances_by_kind(poses)
+    margin = world.ref.bounds_margin(poses)
+    flat = (world.kind == "box") & (np.minimum(d_poly, margin) < d_disc - 1e-3)
+    err = np.abs(got - want)
+    assert np.all(err[free & flat] <= 1e-6), np.max(err[free & flat])
+    assert np.all(err[free] <= 2e-3), np.max(err[free])
+    assert np.all(got[colliding & ~world.ref.robustly_colliding(poses, 1e-3)] <= 1e-4)
+    deep = world.ref.robustly_colliding(poses, 1e-3)
+    assert np.all(got[deep] < 0)
+    # bounds are analytic
+    np.testing.assert_allclose(world.geometry.bounds_clearance(poses), margin, atol=1e-12)
+
+
+def test_no_obstacles_means_bounds_only():
+    doc = {"version": 1, "name": "empty", "bounds": [0, 0, 2, 0.7], "robot": ROBOTS["box"]}
+    geo = StaticGeometry(parse_scene(doc))
+    assert geo.is_valid([1.0, 0.35, 0.0])
+    assert not geo.is_valid([1.0, 0.35, math.pi / 2])  # 0.8 long in a 0.7 high room
+    assert geo.clearance([[1.0, 0.35, 0.0]])[0] == pytest.approx(0.15)
+    assert geo.clearance([[1.0, 0.35, math.pi / 2]])[0] == pytest.approx(-0.05)
+    assert geo.motion_free([0.5, 0.35, 0.0], [1.5, 0.35, 0.0])
+    assert not geo.motion_free([0.5, 0.35, 0.0], [1.5, 0.35, math.pi / 2])
+
+
+def _ring(center, distance, n, phase=0.0):
+    a = phase + np.linspace(0.0, 2 * math.pi, n, endpoint=False)
+    return np.c_[center[0] + distance * np.cos(a), center[1] + distance * np.sin(a)]
+
+
+def _disc_world():
+    doc = {
+        "version": 1,
+        "name": "ring",
+        "bounds": [0, 0, 10, 6],
+        "robot": ROBOTS["disc"],
+        "obstacles": [{"disc": {"center": [5.0, 3.0], "radius": 0.5}}],
+    }
+    return StaticGeometry(parse_scene(doc))
+
+
+def test_touching_discs_are_valid_and_overlapping_ones_are_not():
+    geo = _disc_world()
+    for gap, ok in ((1e-3, True), (1e-4, True), (-1e-4, False), (-1e-3, False)):
+        poses = _ring((5.0, 3.0), 0.8 + gap, 64, phase=0.1)
+        assert np.all(geo.valid(poses) == ok), gap
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="BUG geometry.py obstacle_clearance: FCL's GJK distance between cylinders "
+    "overestimates small gaps (true 1e-3 reported up to ~1.9e-3), so clearance is not a "
+    "lower bound and motion_free's Lipschitz certificate is not strictly sound",
+)
+def test_clearance_never_overestimates_near_a_disc():
+    geo = _disc_world()
+    for gap in (1e-1, 1e-2, 1e-3, 1e-4):
+        got = geo.clearance(_ring((5.0, 3.0), 0.8 + gap, 400, phase=0.3))
+        assert np.all(got <= gap + 1e-6), (gap, float(np.max(got - gap)))
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="BUG geometry.py obstacle_clearance: for a disc robot overlapping a disc obstacle "
+    "by 1e-5..1e-4, FCL's distance is > 0 (1e-16..4e-5), so clearance() reports free "
+    "while is_valid() reports a collision",
+)
+def test_clearance_is_negative_wherever_is_valid_is_false():
+    geo = _disc_world()
+    for gap in (-1e-5, -3e-5, -1e-4):
+        poses = _ring((5.0, 3.0), 0.8 + gap, 400, phase=0.7)
+        assert not geo.valid(poses).any()
+        got = geo.clearance(poses)
+        assert np.all(got < 0), (gap, int(np.sum(got >= 0)), float(np.max(got)))
+
+
+# --------------------------------------------------------------------------- certified motions
+
+
+def _random_motions(world, rng, n):
+    starts = world.uniform(rng, 20 * n)
+    starts = starts[world.geometry.valid(starts)][:n]
+    step = rng.normal(size=(len(starts), 2))
+    step *= (rng.uniform(0.05, 1.5, len(starts)) / np.hypot(*step.T))[:, None]
+    ends = starts.copy()
+    ends[:, :2] += step
+    if world.dof == 3:
+        ends[:, 2] = wrap_angle(starts[:, 2] + rng.uniform(-math.pi, math.pi, len(starts)))
+    return starts, ends
+
+
+def _grazing_motions(world):
+    """Straight motions that pass an obstacle at gaps from -1e-3 to +1e-3."""
+    motions = []
+    for gap in (-1e-3, -1e-4, -2e-5, 2e-5, 1e-4, 1e-3):
+        if world.kind == "disc":
+            d = 0.8 + gap  # past the disc at (5, 3), radius 0.5, robot 0.3
+            motions.append(([4.9, 3.0 - d], [5.6, 3.0 - d]))
+            # along the U's left outer wall x = 3.0
+            motions.append(([3.0 - 0.3 - gap, 0.6], [3.0 - 0.3 - gap, 1.9]))
+        else:
+            # box robot level under the rotated-free U floor y = 0.5, half width 0.2
+            motions.append(([3.2, 0.5 - 0.2 - gap, 0.0], [4.3, 0.5 - 0.2 - gap, 0.0]))
+            # past the disc, half width 0.2 below the disc's lowest point
+            motions.append(([4.4, 2.5 - 0.2 - gap, 0.0], [5.5, 2.5 - 0.2 - gap, 0.0]))
+    return [(np.array(a), np.array(b)) for a, b in motions]
+
+
+def test_motion_free_never_certifies_a_colliding_motion(world):
+    rng = np.random.default_rng(13)
+    starts, ends = _random_motions(world, rng, 100)
+    motions = list(zip(starts, ends, strict=True)) + _grazing_motions(world)
+    fractions = np.linspace(0.0, 1.0, 2000)
+    certified = rejected = live = 0
+    for a, b in motions:
+        samples = interpolate(a, b, fractions)
+        colliding = world.ref.robustly_colliding(samples, EPS)
+        if world.geometry.motion_free(a, b):
+            certified += 1
+            assert not colliding.any(), f"certified {a} -> {b} collides at {samples[colliding][0]}"
+        else:
+            rejected += 1
+            if world.ref.clearance(samples).min() > 0.02:
+                live += 1
+    assert certified > 20 and rejected > 20
+    assert live == 0, f"{live} motions with clearance > 0.02 everywhere were not certified"
+
+
+def test_motion_free_rejects_invalid_ends(world):
+    bad = np.array([-1.0, -1.0, 0.0])[: world.dof]
+    good = world.uniform(np.random.default_rng(3), 200)
+    good = good[world.geometry.valid(good)][0]
+    assert not world.geometry.motion_free(bad, good)
+    assert not world.geometry.motion_free(good, bad)
+    assert world.geometry.motion_free(good, good)
+
+
+# --------------------------------------------------------------------------- movers
+
+PAIRS = [("disc", "disc"), ("disc", "box"), ("box", "disc"), ("box", "box")]
+
+
+@pytest.mark.parametrize("robot_kind,mover_shape", PAIRS)
+def test_mover_distance_agrees_with_shapely(robot_kind, mover_shape):
+    rng = np.random.default_rng(hash((robot_kind, mover_shape)) % 2**32)
+    scene = parse_scene(
+        {"version": 1, "name": "m", "bounds": [-10, -10, 10, 10], "robot": ROBOTS[robot_kind]}
+    )
+    robot_doc = ROBOTS[robot_kind]
+    n = 600
+    poses = rng.uniform(-3, 3, (n, 2))
+    if robot_kind == "box":
+        poses = np.c_[poses, rng.uniform(-math.pi, math.pi, n)]
+    xy = poses[:, :2] + rng.uniform(-1.5, 1.5, (n, 2))
+    overlaps = 0
+    for k in range(n):
+        if mover_shape == "disc":
+            param = float(rng.uniform(0.05, 0.8))
+            got = mover_distance(scene.robot, poses[k], "disc", param, (0.0, 0.0), xy[k])
+        else:
+            param = tuple(rng.uniform(0.05, 1.2, 2))
+            got = mover_distance(scene.robot, poses[k], "box", 0.0, param, xy[k])
+        want, overlap = mover_reference_distance(robot_doc, poses[k], mover_shape, param, xy[k])
+        if overlap:
+            overlaps += 1
+            assert got <= 1e-12, (poses[k], xy[k], param, got)
+        elif want > 1e-9:
+            assert got == pytest.approx(want, abs=1e-9), (poses[k], xy[k], param)
+    assert 50 < overlaps < n - 50
+
+
+@pytest.mark.parametrize("robot_kind,mover_shape", PAIRS)
+def test_mover_distance_broadcasts(robot_kind, mover_shape):
+    rng = np.random.default_rng(5)
+    robot = parse_scene(
+        {"version": 1, "name": "m", "bounds": [-10, -10, 10, 10], "robot": ROBOTS[robot_kind]}
+    ).robot
+    dof = 2 if robot_kind == "disc" else 3
+    poses = rng.uniform(-2, 2, (7, dof))
+    xy = rng.uniform(-2, 2, (5, 2))
+    args = ("disc", 0.3, (0.0, 0.0)) if mover_shape == "disc" else ("box", 0.0, (0.6, 0.4))
+    grid = mover_distance(robot, poses[:, None, :], *args[:1], args[1], args[2], xy[None, :, :])
+    assert grid.shape == (7, 5)
+    for i in range(7):
+        for j in range(5):
+            assert grid[i, j] == pytest.approx(
+                float(mover_distance(robot, poses[i], args[0], args[1], args[2], xy[j])), abs=1e-12
+            )
+
+
+def test_mover_distance_hand_values():
+    disc = parse_scene({"version": 1, "name": "d", "bounds": [-9, -9, 9, 9], "robot": {"disc": 0.5, "vmax": 1}}).robot
+    box = parse_scene({"version": 1, "name": "b", "bounds": [-9, -9, 9, 9], "robot": {"box": [2.0, 1.0], "vmax": 1}}).robot
+    assert mover_distance(disc, [0, 0], "disc", 0.25, (0, 0), [2, 0]) == pytest.approx(1.25)
+    assert mover_distance(disc, [0, 0], "box", 0.0, (1, 1), [2, 2]) == pytest.approx(math.hypot(1.5, 1.5) - 0.5)
+    assert mover_distance(box, [0, 0, 0], "disc", 0.5, (0, 0), [3, 0]) == pytest.approx(1.5)
+    assert mover_distance(box, [0, 0, math.pi / 2], "box", 0.0, (1, 1), [0, 2]) == pytest.approx(0.5)
+    assert mover_distance(box, [0, 0, math.pi / 4], "box", 0.0, (1, 1), [3, 0]) == pytest.approx(
+        3 - 0.5 - 1.5 / math.sqrt(2)
+    )
+    assert mover_distance(box, [0, 0, 0], "box", 0.0, (1, 1), [0, 0]) < 0
+
+
+# --------------------------------------------------------------------------- metric and interpolation
+
+
+def test_metric_distance_hand_values():
+    assert metric_distance([0, 0], [3, 4], 7.0) == pytest.approx(5.0)
+    assert metric_distance([0, 0, 3.0], [3, 4, -3.0], 2.0) == pytest.approx(5 + 2 * (2 * math.pi - 6))
+    assert metric_distance([1, 1, 0.5], [1, 1, 0.5 + math.pi / 2], 0.5) == pytest.approx(math.pi / 4)
+    many = metric_distance(np.zeros((4, 3)), np.c_[np.ones(4), np.zeros(4), np.full(4, 0.1)], 1.0)
+    np.testing.assert_allclose(many, 1.1)
+
+
+def test_interpolate_poses_takes_the_shorter_arc():
+    a, b = np.array([0.0, 0.0, 3.0]), np.array([2.0, -2.0, -3.0])
+    f = np.linspace(0, 1, 101)
+    got = interpolate_poses(a, b, f)
+    want = interpolate(a, b, f)
+    np.testing.assert_allclose(got[:, :2], want[:, :2], atol=1e-12)
+    np.testing.assert_allclose(np.cos(got[:, 2] - want[:, 2]), 1.0, atol=1e-12)
+    assert np.all((got[:, 2] >= -math.pi) & (got[:, 2] < math.pi))
+    np.testing.assert_allclose(got[0], a, atol=1e-12)
+    assert math.cos(got[-1, 2] - b[2]) == pytest.approx(1.0)
+    # the heading moves by 2*pi - 6 in total, never through 0
+    assert np.all(np.abs(got[:, 2]) >= 3.0 - 1e-12)
+    two = interpolate_poses([0.0, 0.0], [1.0, 2.0], np.array([0.25]))
+    np.testing.assert_allclose(two, [[0.25, 0.5]])
