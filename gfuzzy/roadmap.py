@@ -28,7 +28,14 @@ from .geometry import StaticGeometry, metric_distance
 from .scene import Scene
 from .typing import FloatArray, IntArray
 
-__all__ = ["RoadmapOptions", "Roadmap", "build_roadmap", "load_roadmap", "default_roadmap_path"]
+__all__ = [
+    "RoadmapOptions",
+    "Roadmap",
+    "build_roadmap",
+    "grow_roadmaps",
+    "load_roadmap",
+    "default_roadmap_path",
+]
 
 log = logging.getLogger(__name__)
 
@@ -197,41 +204,58 @@ def load_roadmap(path: str | os.PathLike, scene: Scene | None = None) -> Roadmap
         doc = json.loads(Path(path).read_text(encoding="utf-8"))
     except OSError as exc:
         raise SceneError(file, "", f"cannot read: {exc.strerror or exc}") from None
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise SceneError(file, "", f"not a roadmap file (invalid JSON: {exc})") from None
+    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+        raise SceneError(file, "", f"not a roadmap file (invalid JSON: {' '.join(str(exc).split())[:80]})") from None
     if not isinstance(doc, dict) or doc.get("format") != FORMAT:
         raise SceneError(file, "format", "not a gfuzzy roadmap file")
     if doc.get("version") != FORMAT_VERSION:
         raise SceneError(file, "version", f"unsupported roadmap version {doc.get('version')!r}")
+    for key in ("vertices", "edges", "lengths", "options", "scene", "scene_hash", "circumradius"):
+        if key not in doc:
+            raise SceneError(file, key, "missing required key")
     try:
         vertices = np.asarray(doc["vertices"], dtype=float)
-        edges = np.asarray(doc["edges"], dtype=np.int64).reshape(-1, 2)
+        raw_edges = np.asarray(doc["edges"])
         lengths = np.asarray(doc["lengths"], dtype=float)
         opts = RoadmapOptions(**doc["options"])
-        rm = Roadmap(
-            vertices,
-            edges,
-            lengths,
-            str(doc["scene"]),
-            str(doc["scene_hash"]),
-            float(doc["circumradius"]),
-            opts,
-            dict(doc.get("info", {})),
-        )
-    except (KeyError, TypeError, ValueError) as exc:
-        raise SceneError(file, "", f"malformed roadmap: {exc}") from None
-    if (
-        vertices.ndim != 2
-        or vertices.shape[1] not in (2, 3)
-        or len(lengths) != len(edges)
-        or (edges.size and (edges.min() < 0 or edges.max() >= len(vertices)))
-        or not np.all(np.isfinite(vertices))
-    ):
-        raise SceneError(file, "", "malformed roadmap: inconsistent vertices, edges or lengths")
+        circumradius = float(doc["circumradius"])
+    except (KeyError, TypeError, ValueError, OverflowError) as exc:
+        raise SceneError(file, "", f"malformed roadmap: {' '.join(str(exc).split())[:80]}") from None
+    if vertices.ndim != 2 or vertices.shape[1] not in (2, 3) or not np.all(np.isfinite(vertices)):
+        raise SceneError(file, "vertices", "expected rows of 2 or 3 finite numbers")
+    if raw_edges.size == 0:
+        raw_edges = np.zeros((0, 2), dtype=np.int64)
+    if raw_edges.ndim != 2 or raw_edges.shape[1] != 2 or raw_edges.dtype.kind not in "iu":
+        raise SceneError(file, "edges", "expected pairs of whole vertex indices")
+    edges = raw_edges.astype(np.int64)
+    if edges.size and (edges.min() < 0 or edges.max() >= len(vertices)):
+        raise SceneError(file, "edges", "a vertex index is out of range")
+    if np.any(edges[:, 0] >= edges[:, 1]):
+        k = int(np.nonzero(edges[:, 0] >= edges[:, 1])[0][0])
+        raise SceneError(file, f"edges[{k}]", "edges must list the smaller vertex index first (no self-loops)")
+    if lengths.shape != (len(edges),) or not np.all(np.isfinite(lengths)) or np.any(lengths < 0):
+        raise SceneError(file, "lengths", "expected one finite, non-negative length per edge")
+    if edges.size:
+        want = metric_distance(vertices[edges[:, 0]], vertices[edges[:, 1]], circumradius)
+        bad = np.nonzero(np.abs(want - lengths) > 1e-9 * (1 + want))[0]
+        if bad.size:
+            raise SceneError(file, f"lengths[{int(bad[0])}]", "does not match the distance between its vertices")
+    rm = Roadmap(
+        vertices,
+        edges,
+        lengths,
+        str(doc["scene"]),
+        str(doc["scene_hash"]),
+        circumradius,
+        opts,
+        dict(doc.get("info", {})) if isinstance(doc.get("info", {}), dict) else {},
+    )
     if scene is not None:
         rm.check_scene(scene, file)
         if rm.dof != scene.robot.dof:
             raise SceneError(file, "vertices", "roadmap poses do not match the robot kind")
+        if abs(circumradius - scene.robot.circumradius) > 1e-12:
+            raise SceneError(file, "circumradius", "does not match the scene's robot")
     return rm
 
 
@@ -289,8 +313,14 @@ def _blocked_points(scene: Scene):
     return blocked
 
 
-def _make_passage_sampler(ob, si, geometry: StaticGeometry, rng: np.random.Generator, ratio: float):
-    """A Python ``ValidStateSampler``: uniform + bridge-test samples (see RoadmapOptions)."""
+def _make_passage_sampler(
+    ob, si, geometry: StaticGeometry, rng: np.random.Generator, ratio: float, record: list
+):
+    """A Python ``ValidStateSampler``: uniform + bridge-test samples (see RoadmapOptions).
+
+    Every state it hands out becomes a PRM milestone; they are appended to ``record`` so
+    that milestones PRM leaves without an edge (and out of its planner data) are kept.
+    """
     scene = geometry.scene
     xmin, ymin, xmax, ymax = scene.bounds
     box = scene.robot.shape == "box"
@@ -365,6 +395,7 @@ def _make_passage_sampler(ob, si, geometry: StaticGeometry, rng: np.random.Gener
             q = self.queue.pop() if self.queue else self._draw()
             if q is None:
                 return False
+            record.append(tuple(float(v) for v in q))
             if box:
                 state.setX(float(q[0]))
                 state.setY(float(q[1]))
@@ -413,11 +444,12 @@ class _Builder:
             si.setStateValidityChecker(lambda s: valid((s[0], s[1])))
         si.setStateValidityCheckingResolution(options.resolution)
         self._samplers: list = []  # keep Python samplers alive as long as OMPL uses them
+        self.sampled: list = []  # milestones in the order PRM added them (passage sampler)
         if options.sampler == "passage":
             rng = np.random.default_rng(options.seed)
 
             def alloc(si_):
-                smp = _make_passage_sampler(ob, si_, geometry, rng, options.bridge_ratio)
+                smp = _make_passage_sampler(ob, si_, geometry, rng, options.bridge_ratio, self.sampled)
                 self._samplers.append(smp)
                 return smp
 
@@ -473,7 +505,18 @@ class _Builder:
                 if a != b:
                     edges.add((a, b))
         e = np.array(sorted(edges), dtype=np.int64).reshape(-1, 2)
-        return np.array(verts, dtype=float).reshape(nv, 3 if self.box else 2), e
+        if self.sampled:
+            # PRM's planner data leaves out milestones without an edge: add them back
+            dim = 3 if self.box else 2
+            have = {np.asarray(v, dtype=float).tobytes() for v in verts}
+            for q in self.sampled:
+                arr = np.asarray(q, dtype=float)
+                if dim == 3:  # OMPL stores the yaw it was given; match its float exactly
+                    arr[2] = float(arr[2])
+                if arr.tobytes() not in have:
+                    have.add(arr.tobytes())
+                    verts.append(tuple(arr.tolist()))
+        return np.array(verts, dtype=float).reshape(len(verts), 3 if self.box else 2), e
 
 
 def build_roadmap(
@@ -500,48 +543,79 @@ def build_roadmap(
         in any process.
     """
     options = options or RoadmapOptions()
+    return grow_roadmaps(scene, [options.vertices], options, progress, geometry)[0]
+
+
+def grow_roadmaps(
+    scene: Scene,
+    sizes: list[int],
+    options: RoadmapOptions | None = None,
+    progress: Callable[[int, int], None] | None = None,
+    geometry: StaticGeometry | None = None,
+) -> list[Roadmap]:
+    """Grow one PRM through increasing vertex counts, exporting a roadmap at each.
+
+    Each roadmap extends the previous one (the paper's Table 1: 100, 200, ... 1000).
+    ``options.vertices`` is ignored; each result records its own count.
+    """
+    options = options or RoadmapOptions()
+    sizes = sorted(int(n) for n in sizes)
+    if not sizes or sizes[0] < 1:
+        raise ValueError("sizes must be positive vertex counts")
     geometry = geometry or StaticGeometry(scene)
     calls0 = geometry.calls
     t_start = time.perf_counter()
     _seed_ompl(options.seed)
     builder = _Builder(scene, options, geometry)
-    builder.grow(options.vertices, progress)
-    vertices, edges = builder.export()
-    builder.close()
-    del builder
-    t_grow = time.perf_counter() - t_start
-    calls_grow = geometry.calls - calls0
-
-    keep = np.ones(len(edges), dtype=bool)
-    for k, (a, b) in enumerate(edges):
-        keep[k] = geometry.motion_free(vertices[a], vertices[b])
-        if progress is not None and k % 2000 == 1999:
-            progress(k + 1, len(edges))
-    dropped = int((~keep).sum())
-    edges = edges[keep]
-    lengths = metric_distance(vertices[edges[:, 0]], vertices[edges[:, 1]], scene.robot.circumradius)
-    seconds = time.perf_counter() - t_start
-    if dropped:
-        log.info("dropped %d of %d PRM edges that could not be certified free", dropped, len(keep))
-    info = {
-        "ompl_version": _ompl_version(),
-        "seconds": round(seconds, 4),
-        "grow_seconds": round(t_grow, 4),
-        "validity_calls": int(calls_grow),
-        "certify_calls": int(geometry.calls - calls0 - calls_grow),
-        "edges_dropped": dropped,
-        "components": _components(len(vertices), edges),
-    }
-    return Roadmap(
-        vertices,
-        edges,
-        np.asarray(lengths, dtype=float),
-        scene.name,
-        scene.static_hash,
-        scene.robot.circumradius,
-        options,
-        info,
-    )
+    certified: dict = {}  # (pose a, pose b) bytes -> free: later sizes reuse the answers
+    out = []
+    try:
+        for n in sizes:
+            builder.grow(n, progress)
+            vertices, edges = builder.export()
+            t_grow = time.perf_counter() - t_start
+            calls_grow = geometry.calls - calls0
+            keep = np.ones(len(edges), dtype=bool)
+            for k, (a, b) in enumerate(edges):
+                key = (vertices[a].tobytes(), vertices[b].tobytes())
+                free = certified.get(key)
+                if free is None:
+                    free = certified[key] = geometry.motion_free(vertices[a], vertices[b])
+                keep[k] = free
+                if progress is not None and k % 2000 == 1999:
+                    progress(k + 1, len(edges))
+            dropped = int((~keep).sum())
+            edges = edges[keep]
+            lengths = metric_distance(
+                vertices[edges[:, 0]], vertices[edges[:, 1]], scene.robot.circumradius
+            )
+            if dropped:
+                log.info("dropped %d of %d PRM edges that could not be certified free", dropped, len(keep))
+            info = {
+                "ompl_version": _ompl_version(),
+                "seconds": round(time.perf_counter() - t_start, 4),
+                "grow_seconds": round(t_grow, 4),
+                "validity_calls": int(calls_grow),
+                "certify_calls": int(geometry.calls - calls0 - calls_grow),
+                "edges_dropped": dropped,
+                "components": _components(len(vertices), edges),
+            }
+            opts = RoadmapOptions(**{**asdict(options), "vertices": n})
+            out.append(
+                Roadmap(
+                    vertices,
+                    edges,
+                    np.asarray(lengths, dtype=float),
+                    scene.name,
+                    scene.static_hash,
+                    scene.robot.circumradius,
+                    opts,
+                    info,
+                )
+            )
+    finally:
+        builder.close()
+    return out
 
 
 def _components(n: int, edges: IntArray) -> int:

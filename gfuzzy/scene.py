@@ -8,6 +8,7 @@ field and returns an immutable :class:`Scene`. Anything wrong raises
 
 from __future__ import annotations
 
+import copy
 import hashlib
 import json
 import math
@@ -41,6 +42,8 @@ MODES = ("loop", "bounce", "once")
 STATUSES = ("solved", "no_path", "invalid_query", "timeout")
 #: Largest number of YAML nodes a scene may expand to (aliases counted each time used).
 MAX_NODES = 2_000_000
+#: Largest magnitude of any number in a scene: beyond it lengths and times overflow.
+MAX_MAGNITUDE = 1e9
 
 
 # --------------------------------------------------------------------------- shapes
@@ -349,6 +352,8 @@ class _Loader(yaml.SafeLoader):
 def _construct_mapping(loader: _Loader, node: yaml.MappingNode, deep: bool = False) -> dict:
     seen = set()
     for key_node, _ in node.value:
+        if key_node.tag == "tag:yaml.org,2002:merge":
+            continue  # `<<` merges: explicit keys may override merged ones
         key = loader.construct_object(key_node, deep=True)
         try:
             hashable = key in seen
@@ -385,8 +390,9 @@ def _expanded_size(node: yaml.Node, memo: dict) -> int:
 
 
 def _load_yaml(text: str, file: str) -> Any:
-    loader = _Loader(text)
+    loader = None
     try:
+        loader = _Loader(text)
         node = loader.get_single_node()
         if node is None:
             raise SceneError(file, "", "the file is empty")
@@ -406,7 +412,8 @@ def _load_yaml(text: str, file: str) -> Any:
     except (yaml.YAMLError, ValueError, RecursionError) as exc:
         raise SceneError(file, "", f"invalid YAML: {exc}") from None
     finally:
-        loader.dispose()
+        if loader is not None:
+            loader.dispose()
 
 
 # --------------------------------------------------------------------------- validation
@@ -438,9 +445,14 @@ class _V:
     def number(self, value, place, positive=False, nonneg=False):
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             self.fail(place, f"expected a number, got {_kind(value)}")
-        value = float(value)
+        try:
+            value = float(value)
+        except OverflowError:
+            self.fail(place, "number too large")
         if not math.isfinite(value):
             self.fail(place, f"expected a finite number, got {value}")
+        if abs(value) > MAX_MAGNITUDE:
+            self.fail(place, f"number too large ({value:g}; at most {MAX_MAGNITUDE:g} in magnitude)")
         if positive and value <= 0:
             self.fail(place, f"must be positive, got {value:g}")
         if nonneg and value < 0:
@@ -534,6 +546,8 @@ def _mesh_footprint(v: _V, spec, place: str, folder: Path) -> tuple[list, bytes]
     fplace = _join(place, "file")
     if not isinstance(rel, str) or not rel:
         v.fail(fplace, f"expected a file name, got {_kind(rel)}")
+    if "\0" in rel:
+        v.fail(fplace, "file name contains a NUL character")
     if os.path.isabs(rel) or rel.startswith("~"):
         v.fail(fplace, f"mesh path {rel!r} must be relative to the scene file")
     full = (folder / rel).resolve()
@@ -549,7 +563,10 @@ def _mesh_footprint(v: _V, spec, place: str, folder: Path) -> tuple[list, bytes]
         mesh = trimesh.load(full, force="mesh")
         tris = np.asarray(mesh.triangles, dtype=float)
     except Exception as exc:  # trimesh raises many kinds on a bad file
-        v.fail(fplace, f"cannot read mesh {rel!r}: {' '.join(str(exc).split()) or type(exc).__name__}")
+        why = " ".join(str(exc).split()) or type(exc).__name__
+        if isinstance(exc, ImportError):  # trimesh guessing at an unknown format
+            why = "not a mesh format trimesh reads"
+        v.fail(fplace, f"cannot read mesh {rel!r}: {why}")
     if tris.size == 0 or not np.all(np.isfinite(tris)):
         v.fail(fplace, f"mesh {rel!r} has no usable triangles")
     tri2 = tris[:, :, :2]
@@ -747,7 +764,7 @@ def parse_scene(doc: Any, file: str = "<string>", folder: str | os.PathLike | No
         queries=tuple(queries),
         source=file,
         static_hash=hasher.hexdigest(),
-        raw=doc,
+        raw=copy.deepcopy(doc),
     )
 
 

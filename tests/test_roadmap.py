@@ -113,11 +113,6 @@ def test_different_seed_different_roadmap(small):
     assert roadmap_digest(other) != roadmap_digest(rm)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG roadmap.py _Builder.export: PRM::getPlannerData only emits milestones that "
-    "have an edge, so isolated milestones are lost and len(roadmap) < options.vertices",
-)
 def test_vertex_count_is_exact(small):
     _, scene, _ = small["disc"]
     counts = {
@@ -318,7 +313,6 @@ def _corrupt(text: str, how: str) -> bytes:
         doc["scene_hash"] = "0" * 64
     elif how == "wrong-dof":
         doc["vertices"] = [v + [0.0] for v in doc["vertices"]]
-    # known bugs below
     elif how == "deep-nesting":
         return b"[" * 100_000 + b"]" * 100_000
     elif how == "huge-integer":
@@ -336,10 +330,6 @@ def _corrupt(text: str, how: str) -> bytes:
     else:
         raise AssertionError(how)
     return json.dumps(doc).encode()
-
-
-def _known_bug(how, why):
-    return pytest.param(how, marks=pytest.mark.xfail(strict=True, reason=f"BUG roadmap.py load_roadmap: {why}"))
 
 
 @pytest.mark.parametrize(
@@ -361,13 +351,13 @@ def _known_bug(how, why):
         "bad-options",
         "hash-changed",
         "wrong-dof",
-        _known_bug("deep-nesting", "json.loads raises RecursionError, not SceneError"),
-        _known_bug("huge-integer", "np.asarray(..., float) raises OverflowError, not SceneError"),
-        _known_bug("nan-lengths", "non-finite edge lengths are accepted"),
-        _known_bug("negative-lengths", "negative edge lengths are accepted"),
-        _known_bug("lengths-2d", "lengths of shape (E, 1) are accepted"),
-        _known_bug("self-loop", "an edge (0, 0) breaks the documented edges[:, 0] < edges[:, 1]"),
-        _known_bug("fractional-index", "a vertex index 3.5 is silently truncated to 3"),
+        "deep-nesting",
+        "huge-integer",
+        "nan-lengths",
+        "negative-lengths",
+        "lengths-2d",
+        "self-loop",
+        "fractional-index",
     ],
 )
 def test_corrupted_roadmap_is_bad_input(small, tmp_path, how):

@@ -174,13 +174,9 @@ def test_cli_bad_scene_in_process(tmp_path, capsys, path):
     _check_cli_answer(rc, captured.err, path, out, expected_place(path))
 
 
-# --------------------------------------------------------------------------- known bugs
+# --------------------------------------------------------------------------- regressions (bugs found and fixed)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG scene.py _V.number: float(10**400) raises OverflowError, not SceneError",
-)
 def test_huge_integer_is_bad_input(tmp_scene):
     path = tmp_scene(
         "version: 1\nname: big\nbounds: [0, 0, 4, 3]\nrobot: {disc: 0.2, vmax: " + "9" * 400 + "}\n"
@@ -190,11 +186,6 @@ def test_huge_integer_is_bad_input(tmp_scene):
     assert "robot.vmax" in str(info.value)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG scene.py _mesh_footprint: a NUL in the mesh path raises a bare ValueError "
-    "(embedded null byte) from Path.resolve, not SceneError",
-)
 def test_nul_in_mesh_path_is_bad_input(tmp_scene):
     path = tmp_scene(
         'version: 1\nname: nul\nbounds: [0, 0, 4, 3]\nrobot: {disc: 0.2, vmax: 1}\n'
@@ -206,11 +197,6 @@ def test_nul_in_mesh_path_is_bad_input(tmp_scene):
     assert "obstacles[0].mesh.file" in str(info.value)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG scene.py _construct_mapping: YAML merge keys (<<), which yaml.safe_load "
-    "accepts, are rejected as 'could not determine a constructor for the tag ...merge'",
-)
 def test_yaml_merge_key_reads_as_safe_load_does(tmp_scene):
     text = """\
     version: 1
@@ -228,11 +214,6 @@ def test_yaml_merge_key_reads_as_safe_load_does(tmp_scene):
     assert scene.queries[1].goal == (3.0, 2.0)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG scene.py _load_yaml: _Loader(text) is built outside the try, so the "
-    "yaml.reader.ReaderError for a control character (NUL, ESC, DEL...) escapes",
-)
 @pytest.mark.parametrize("char", ["\x00", "\x1b", "\x7f", "\ufffe"])
 def test_control_character_in_file_is_bad_input(tmp_scene, char):
     path = tmp_scene(f"version: 1\nname: a{char}b\nbounds: [0, 0, 4, 3]\n")
@@ -241,11 +222,6 @@ def test_control_character_in_file_is_bad_input(tmp_scene, char):
     assert str(info.value).startswith(str(path))
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG scene.py parse_scene: finite path points whose length overflows (1e308) "
-    "load, and the mover's positions are NaN",
-)
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")
 def test_path_of_overflowing_length_is_bad_input_or_finite():
     doc = dict(
@@ -262,11 +238,6 @@ def test_path_of_overflowing_length_is_bad_input_or_finite():
 
 
 @needs_cli
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG scene.py (see the three tests above): the OverflowError, ValueError and "
-    "ReaderError escape load_scene, so the CLI prints a traceback and exits 1",
-)
 @pytest.mark.parametrize(
     "text",
     [
