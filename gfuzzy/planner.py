@@ -67,6 +67,10 @@ class PlanOptions:
         Seed of the random steps after the search (GA, rule learning).
     ga : object or None
         ``gfuzzy.ga.GAOptions`` for the refinement (None: defaults).
+    weight : float
+        Heuristic weight of the search: 1 finds the earliest arrival the roadmap and the
+        time step allow; w > 1 (weighted A*) expands far fewer states and arrives at most
+        w times later than that.
     """
 
     dt: float = 0.07
@@ -77,6 +81,7 @@ class PlanOptions:
     speed_layer: bool = False
     seed: int = 0
     ga: object | None = None
+    weight: float = 1.0
 
     def __post_init__(self):
         if not (self.dt > 0 and math.isfinite(self.dt)):
@@ -85,6 +90,8 @@ class PlanOptions:
             raise ValueError(f"horizon must be positive, got {self.horizon}")
         if not self.time_limit > 0:
             raise ValueError(f"time_limit must be positive, got {self.time_limit}")
+        if not (self.weight >= 1.0 and math.isfinite(self.weight)):
+            raise ValueError(f"weight must be a number >= 1, got {self.weight}")
 
 
 @dataclass(frozen=True)
@@ -335,7 +342,7 @@ class Planner:
         # so a horizon close to the answer keeps that window, and the work, small.
         h0 = float(graph.heuristic[s_id])
         max_steps = int(math.ceil(max_horizon / opts.dt))
-        slack = max(48.0, 0.2 * h0)
+        slack = max(64.0, 0.35 * h0)
         expansions = evaluations = 0
         while True:
             steps = min(max_steps, int(math.ceil(h0 + slack)))
@@ -344,7 +351,7 @@ class Planner:
             hit = field_.collides_at(start, 0)
             if hit is not None:
                 return answer("invalid_query", f"start collides with mover {hit!r} at t0={t0:g}", rd=rd)
-            res = sipp(graph, field_, s_id, g_id, deadline=deadline)
+            res = sipp(graph, field_, s_id, g_id, deadline=deadline, weight=opts.weight)
             expansions += res.expansions
             evaluations += field_.evaluations
             if res.status != "no_path" or not res.horizon_hit or steps >= max_steps:

@@ -1,0 +1,240 @@
+"""Query benchmark: the paper's Table 1 on building-floor, and a large crowd scene.
+
+    python tools/bench_plan.py                 # Table 1 + baseline + large scene
+    python tools/bench_plan.py --skip-large    # Table 1 only
+
+Table 1 (after van den Berg & Overmars): roadmaps grown from 100 to 1000 vertices, each
+extending the previous by 100; per roadmap the edges, the roadmap distance, the duration
+and delay factor of the answer, and the query time (median of --repeat runs of
+``gfuzzy.plan``, collision model and graph included), beside the paper's figures where
+its text gives them.
+
+Baseline, measured in the same run: a plain time-expanded breadth-first search over every
+(point, step) of the same graph, with the same safety test but no safe intervals, no
+heuristic and no time windows. The ratio says what the safe-interval A* search buys.
+
+Large scene: a 40 m x 30 m hall with 24 pillars and 200 movers (people and carts on
+loops, back-and-forth paths and one-way runs), a 10,000-vertex roadmap; the query runs in
+a child process so that its peak memory (ru_maxrss) is its own.
+
+Targets (issue 3, on the project's 2-core machine): ~200-vertex query <= 20 ms median,
+1000-vertex <= 100 ms, 10,000 vertices with 200 movers <= 2 s and <= 1 GB peak memory.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from collections import deque
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from gfuzzy.planner import SPEED_SAFETY, Planner, PlanOptions, plan  # noqa: E402
+from gfuzzy.roadmap import RoadmapOptions, build_roadmap, grow_roadmaps, load_roadmap  # noqa: E402
+from gfuzzy.scene import load_scene  # noqa: E402
+from gfuzzy.timespace import MoverField  # noqa: E402
+
+PAPER = {100: "0.33 s", 198: "0.46 s, 35.14 / 15.82 = 2.22", 200: "(198: 0.46 s, df 2.22)", 1000: "3.90 s"}
+
+
+def time_query(scene, rm, q, repeat):
+    times = []
+    res = None
+    for _ in range(repeat):
+        t = time.perf_counter()
+        res = plan(scene, rm, q.start, q.goal, q.t0)
+        times.append(time.perf_counter() - t)
+    return res, statistics.median(times)
+
+
+def baseline_seconds(scene, rm, q, dt, horizon_steps):
+    """Plain time-expanded BFS (no intervals, no heuristic, no windows)."""
+    t = time.perf_counter()
+    planner = Planner(scene, rm)
+    planner._k = PlanOptions().connect_k
+    start, goal = np.asarray(q.start, float), np.asarray(q.goal, float)
+    graph, s_id, g_id, _ = planner._graph(start, goal, dt, scene.robot.vmax * SPEED_SAFETY)
+    field = MoverField(scene, q.t0, dt, horizon_steps, scene.robot.vmax)
+    unsafe = field.unsafe(graph.poses)
+    seen = np.zeros_like(unsafe)
+    seen[s_id, 0] = True
+    frontier = deque([(s_id, 0)])
+    found = None
+    while frontier:
+        u, n = frontier.popleft()
+        if u == g_id:
+            found = n
+            break
+        if n == horizon_steps:
+            continue
+        for v in list(graph.neighbors[graph.indptr[u] : graph.indptr[u + 1]]) + [u]:
+            if not unsafe[v, n + 1] and not seen[v, n + 1]:
+                seen[v, n + 1] = True
+                frontier.append((v, n + 1))
+    return time.perf_counter() - t, found
+
+
+def table1(repeat: int, seed: int) -> None:
+    scene = load_scene(ROOT / "scenes" / "building-floor.yaml")
+    q = scene.queries[0]
+    sizes = list(range(100, 1001, 100))
+    t = time.perf_counter()
+    roadmaps = grow_roadmaps(scene, sizes, RoadmapOptions(seed=seed))
+    print(f"building-floor, seed {seed}: grew {sizes[-1]} vertices in {time.perf_counter() - t:.2f} s")
+    print(
+        f"{'vertices':>8} {'edges':>6} {'road dist':>9} {'duration':>8} {'delay':>6} {'query ms':>9} "
+        f"{'expansions':>10}  paper"
+    )
+    results = {}
+    for rm in roadmaps:
+        res, sec = time_query(scene, rm, q, repeat)
+        n = len(rm.vertices)
+        results[n] = (rm, res, sec)
+        dur = f"{res.duration:8.2f}" if res.solved else f"{res.status.value:>8}"
+        df = f"{res.delay_factor:6.3f}" if res.solved else "     -"
+        print(
+            f"{n:>8} {len(rm.edges):>6} {res.roadmap_distance:>9.2f} {dur} {df} {sec * 1000:>9.1f} "
+            f"{res.stats.get('expansions', 0):>10}  {PAPER.get(n, '')}"
+        )
+    rm, res, sec = results[200]
+    if res.solved:
+        steps = int(math.ceil(res.duration / 0.07)) + 20
+        base, found = baseline_seconds(scene, rm, q, 0.07, steps)
+        print(
+            f"\nbaseline (200 vertices, time-expanded BFS to {steps} steps): {base * 1000:.0f} ms, "
+            f"arrives at step {found}; safe-interval A*: {sec * 1000:.1f} ms; ratio {base / sec:.1f}x"
+        )
+
+
+def hall_scene(path: Path, movers: int = 200, seed: int = 7) -> Path:
+    rng = np.random.default_rng(seed)
+    W, H = 40.0, 30.0
+    obstacles = []
+    for i in range(6):
+        for j in range(4):
+            cx, cy = 4 + i * 6.4, 4 + j * 7.3
+            obstacles.append({"box": {"center": [cx, cy], "size": [1.2, 2.0], "angle": float(rng.uniform(0, 1))}})
+    mv = []
+    for k in range(movers):
+        pts = rng.uniform([1.5, 1.5], [W - 1.5, H - 1.5], size=(int(rng.integers(2, 5)), 2)).round(3).tolist()
+        mode = ["loop", "bounce", "once"][k % 3]
+        if k % 10 == 9:
+            mv.append({"name": f"cart-{k}", "box": [0.8, 0.6], "speed": 0.8, "path": pts, "mode": mode})
+        else:
+            mv.append(
+                {"name": f"person-{k}", "disc": round(float(rng.uniform(0.2, 0.3)), 3),
+                 "speed": round(float(rng.uniform(0.5, 1.4)), 3), "path": pts, "mode": mode,
+                 "offset": round(float(rng.uniform(0, 5)), 3)}
+            )  # fmt: skip
+    doc = {
+        "version": 1,
+        "name": "hall-200",
+        "bounds": [0.0, 0.0, W, H],
+        "robot": {"disc": 0.3, "vmax": 1.5},
+        "obstacles": obstacles,
+        "movers": mv,
+        "queries": [{"name": "corner", "start": [1.0, 1.0], "goal": [39.0, 29.0]}],
+    }
+    path.write_text(yaml.safe_dump(doc, sort_keys=False))
+    return path
+
+
+def large(vertices: int, seed: int) -> None:
+    with tempfile.TemporaryDirectory() as tmp:
+        scene_path = hall_scene(Path(tmp) / "hall.yaml")
+        scene = load_scene(scene_path)
+        t = time.perf_counter()
+        rm = build_roadmap(scene, RoadmapOptions(vertices=vertices, seed=seed))
+        print(
+            f"\nhall-200: {len(scene.movers)} movers, roadmap {len(rm.vertices)} vertices / "
+            f"{len(rm.edges)} edges built in {time.perf_counter() - t:.1f} s"
+        )
+        rm_path = Path(tmp) / "hall.json"
+        rm.save(rm_path)
+        out = subprocess.run(
+            [sys.executable, __file__, "--child", str(scene_path), str(rm_path)],
+            capture_output=True,
+            text=True,
+            check=True,
+        )
+        doc = json.loads(out.stdout.strip().splitlines()[-1])
+        print(
+            f"query: {doc['status']}, duration {doc['duration']}, delay factor {doc['delay_factor']}, "
+            f"{doc['seconds'] * 1000:.0f} ms (median of {doc['repeat']}), {doc['expansions']} expansions, "
+            f"{doc['graph_nodes']} graph points"
+        )
+        print(
+            f"memory: process peak {doc['peak_mb']:.0f} MB, of which {doc['loaded_mb']:.0f} MB before "
+            f"the query (interpreter, libraries, roadmap): the query adds {doc['peak_mb'] - doc['loaded_mb']:.0f} MB"
+        )
+
+
+def peak_mb() -> float:
+    """This process's peak resident memory (VmHWM; ru_maxrss would include the parent's
+    high-water mark, which Linux carries across fork and exec)."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) / 1024
+    except OSError:
+        pass
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
+def child(scene_path: str, rm_path: str, repeat: int = 3) -> None:
+    scene = load_scene(scene_path)
+    rm = load_roadmap(rm_path, scene)
+    q = scene.queries[0]
+    loaded = peak_mb()
+    times = []
+    for _ in range(repeat):
+        t = time.perf_counter()
+        res = plan(scene, rm, q.start, q.goal, q.t0)
+        times.append(time.perf_counter() - t)
+    peak = peak_mb()
+    print(
+        json.dumps(
+            {
+                "status": res.status.value,
+                "duration": None if res.duration is None else round(res.duration, 3),
+                "delay_factor": None if res.delay_factor is None else round(res.delay_factor, 3),
+                "seconds": statistics.median(times),
+                "repeat": repeat,
+                "expansions": res.stats.get("expansions"),
+                "graph_nodes": res.stats.get("graph_nodes"),
+                "loaded_mb": loaded,
+                "peak_mb": peak,
+            }
+        )
+    )
+
+
+def main() -> None:
+    if len(sys.argv) > 1 and sys.argv[1] == "--child":
+        child(sys.argv[2], sys.argv[3])
+        return
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--skip-large", action="store_true")
+    ap.add_argument("--large-vertices", type=int, default=10_000)
+    args = ap.parse_args()
+    table1(args.repeat, args.seed)
+    if not args.skip_large:
+        large(args.large_vertices, args.seed)
+
+
+if __name__ == "__main__":
+    main()
