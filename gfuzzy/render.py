@@ -1,0 +1,886 @@
+"""Pictures and animations of scenes, roadmaps and trajectories.
+
+:func:`render_scene` draws a still picture (PNG): the bounds, the static obstacles, an
+optional roadmap, the movers' paths, the queries and, when given, the robot's trajectory
+with footprints, time stamps, waits and, optionally, its speed as a colour.
+:func:`render_animation` animates the robot and the movers over the trajectory's time
+span (GIF). :func:`render` picks one of them from the output's suffix.
+
+Matplotlib is used through :class:`matplotlib.figure.Figure` and the Agg canvas only, never
+through ``pyplot``, so rendering selects no global backend and leaves no figures open.
+Every output is written atomically: to a temporary file in the same folder, then renamed.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from matplotlib import colormaps
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.collections import LineCollection
+from matplotlib.colors import Normalize
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Circle, PathPatch, Rectangle
+from matplotlib.patches import Polygon as PolygonPatch
+from matplotlib.path import Path as MplPath
+
+from .scene import Box, Disc, Mover, Polygon, Scene
+from .typing import FloatArray
+
+__all__ = [
+    "render",
+    "render_scene",
+    "render_animation",
+    "as_waypoints",
+    "interpolate_poses",
+    "segment_speeds",
+    "wait_intervals",
+]
+
+log = logging.getLogger(__name__)
+log.addHandler(logging.NullHandler())
+
+#: Suffixes each renderer writes (lower case).
+PICTURE_SUFFIXES = (".png", ".gif")
+ANIMATION_SUFFIXES = (".gif",)
+
+OBSTACLE_FACE = "#8c8c8c"
+OBSTACLE_EDGE = "#4d4d4d"
+ROADMAP_COLOR = "#9ecae1"
+ROBOT_COLOR = "#1f3b73"
+START_COLOR = "#2bb24c"
+GOAL_COLOR = "#ffcc00"
+WAIT_COLOR = "#d62728"
+#: Mover colours: tab10 without its blue (the robot's hue), grey (the obstacles') and red
+#: (the waits').
+MOVER_COLORS = ("#ff7f0e", "#2ca02c", "#9467bd", "#8c564b", "#e377c2", "#bcbd22", "#17becf")
+SPEED_CMAP = "RdYlGn"
+#: Movers beyond this count are grouped into one legend entry per kind.
+MAX_LEGEND_MOVERS = 8
+#: Pose tolerance under which two consecutive rows count as a wait.
+WAIT_TOL = 1e-9
+
+
+# --------------------------------------------------------------------------- trajectories
+
+
+def as_waypoints(trajectory: Any, scene: Scene | None = None) -> FloatArray:
+    """The waypoint array of a trajectory.
+
+    Parameters
+    ----------
+    trajectory : array-like, object with ``.waypoints``, or mapping with ``"waypoints"``
+        Rows ``[t, x, y]`` (disc robot) or ``[t, x, y, heading]`` (box robot),
+        t strictly increasing (CONTRACT.md section 2).
+    scene : Scene, optional
+        When given, the row length must match its robot.
+
+    Returns
+    -------
+    (n, 3) or (n, 4) float
+
+    Raises
+    ------
+    ValueError
+        Not a list of rows of 3 or 4 finite numbers, no rows, t not strictly increasing,
+        or a row length that does not fit the scene's robot.
+    """
+    if isinstance(trajectory, dict):
+        if "waypoints" not in trajectory:
+            raise ValueError("trajectory has no 'waypoints'")
+        trajectory = trajectory["waypoints"]
+    elif hasattr(trajectory, "waypoints"):
+        trajectory = trajectory.waypoints
+    try:
+        wp = np.asarray(trajectory, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"trajectory waypoints are not a table of numbers ({exc})") from None
+    if wp.ndim != 2 or wp.shape[1] not in (3, 4):
+        raise ValueError(
+            f"trajectory waypoints must be rows [t, x, y] or [t, x, y, heading], got shape {wp.shape}"
+        )
+    if len(wp) == 0:
+        raise ValueError("trajectory has no waypoints (only a solved trajectory can be drawn)")
+    if not np.all(np.isfinite(wp)):
+        raise ValueError("trajectory waypoints contain a non-finite number")
+    bad = np.nonzero(np.diff(wp[:, 0]) <= 0)[0]
+    if bad.size:
+        j = int(bad[0]) + 1
+        raise ValueError(f"trajectory waypoints[{j}]: t={wp[j, 0]:g} does not increase")
+    if scene is not None and wp.shape[1] != scene.robot.dof + 1:
+        want = "[t, x, y]" if scene.robot.shape == "disc" else "[t, x, y, heading]"
+        raise ValueError(
+            f"trajectory rows have {wp.shape[1]} numbers but scene {scene.name!r} has a "
+            f"{scene.robot.shape} robot: expected {want}"
+        )
+    return wp
+
+
+def _wrap(angle: FloatArray) -> FloatArray:
+    """Angles mapped to [-pi, pi)."""
+    return np.mod(np.asarray(angle) + np.pi, 2 * np.pi) - np.pi
+
+
+def interpolate_poses(waypoints: FloatArray, times: FloatArray) -> FloatArray:
+    """Robot poses at ``times``: linear in x and y, heading along the shorter arc.
+
+    Parameters
+    ----------
+    waypoints : (n, 3) or (n, 4) float
+        ``[t, x, y(, heading)]`` rows, t increasing.
+    times : (k,) float
+        Clamped to ``[waypoints[0, 0], waypoints[-1, 0]]``.
+
+    Returns
+    -------
+    (k, 2) or (k, 3) float
+        ``[x, y]`` or ``[x, y, heading]``; headings are not wrapped.
+    """
+    wp = np.asarray(waypoints, dtype=float)
+    times = np.atleast_1d(np.asarray(times, dtype=float))
+    if len(wp) == 1:
+        return np.repeat(wp[:, 1:], times.size, axis=0)
+    t = wp[:, 0]
+    i = np.clip(np.searchsorted(t, times, side="right") - 1, 0, len(wp) - 2)
+    s = np.clip((times - t[i]) / (t[i + 1] - t[i]), 0.0, 1.0)[:, None]
+    a, b = wp[i, 1:], wp[i + 1, 1:]
+    delta = b - a
+    if wp.shape[1] == 4:
+        delta[:, 2] = _wrap(delta[:, 2])
+    return a + s * delta
+
+
+def segment_speeds(waypoints: FloatArray, circumradius: float = 0.0) -> FloatArray:
+    """Configuration speed of every segment (CONTRACT.md section 3).
+
+    Parameters
+    ----------
+    waypoints : (n, 3) or (n, 4) float
+    circumradius : float
+        Robot's circumscribed radius, weighting heading change.
+
+    Returns
+    -------
+    (n - 1,) float
+        ``(|dxy| + |dheading| * circumradius) / dt``.
+    """
+    wp = np.asarray(waypoints, dtype=float)
+    d = np.diff(wp, axis=0)
+    dist = np.hypot(d[:, 1], d[:, 2])
+    if wp.shape[1] == 4:
+        dist = dist + np.abs(_wrap(d[:, 3])) * circumradius
+    return dist / d[:, 0]
+
+
+def wait_intervals(
+    waypoints: FloatArray, tol: float = WAIT_TOL
+) -> list[tuple[float, float, FloatArray]]:
+    """Where the robot waits: runs of consecutive rows with the same pose.
+
+    Returns
+    -------
+    list of (t_begin, t_end, pose)
+        ``pose`` is ``[x, y(, heading)]``.
+    """
+    wp = np.asarray(waypoints, dtype=float)
+    if len(wp) < 2:
+        return []
+    d = np.abs(np.diff(wp[:, 1:], axis=0))
+    if wp.shape[1] == 4:
+        d[:, 2] = np.abs(_wrap(d[:, 2]))
+    still = np.all(d <= tol, axis=1)
+    out = []
+    i = 0
+    while i < len(still):
+        if still[i]:
+            j = i
+            while j + 1 < len(still) and still[j + 1]:
+                j += 1
+            out.append((float(wp[i, 0]), float(wp[j + 1, 0]), wp[i, 1:].copy()))
+            i = j + 1
+        else:
+            i += 1
+    return out
+
+
+# --------------------------------------------------------------------------- output files
+
+
+def _suffix(out_path: str | os.PathLike, allowed: tuple[str, ...], what: str) -> str:
+    suffix = Path(out_path).suffix.lower()
+    if suffix not in allowed:
+        raise ValueError(
+            f"{out_path}: cannot write {what} as {suffix or 'a file without suffix'!r}; "
+            f"use {' or '.join(allowed)}"
+        )
+    return suffix
+
+
+def _write_atomic(out_path: str | os.PathLike, write: Callable[[str], None]) -> None:
+    """Call ``write(tmp)`` on a temporary file beside ``out_path``, then rename it."""
+    path = Path(out_path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
+    os.close(fd)
+    try:
+        write(tmp)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+
+
+# --------------------------------------------------------------------------- drawing
+
+
+def _figure(scene: Scene, width: float, colorbar: bool, legend_rows: int) -> tuple[Figure, Any]:
+    """A figure whose axes fit the scene's aspect, with room for labels and a legend."""
+    xmin, ymin, xmax, ymax = scene.bounds
+    aspect = (ymax - ymin) / (xmax - xmin)
+    ax_w = width - 0.9 - (1.1 if colorbar else 0.0)
+    ax_h = ax_w * aspect
+    if ax_h > 1.4 * width:  # a tall scene: cap the height, narrow the axes
+        ax_h = 1.4 * width
+    fig_h = max(ax_h, 1.5) + 1.0 + 0.3 * legend_rows
+    fig = Figure(figsize=(width, fig_h), layout="constrained")
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    # "datalim": the axes fill the space the layout gives them and the view widens in one
+    # direction instead, so an estimate of the margins above never clips the title or legend.
+    ax.set_aspect("equal", adjustable="datalim")
+    # No fixed limits (they would fight "datalim"): the view autoscales to the bounds
+    # rectangle, which _draw_obstacles adds first, and to anything drawn beyond it.
+    ax.margins(0.03)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    return fig, ax
+
+
+def _ring(points: FloatArray, ccw: bool) -> FloatArray:
+    pts = np.asarray(points, dtype=float)
+    area = 0.5 * np.sum(pts[:, 0] * np.roll(pts[:, 1], -1) - np.roll(pts[:, 0], -1) * pts[:, 1])
+    return pts if (area > 0) == ccw else pts[::-1]
+
+
+def _polygon_patch(poly: Polygon, **kw) -> PathPatch:
+    """A patch of a polygon with holes (holes wound against the exterior)."""
+    verts, codes = [], []
+    for ring in [_ring(poly.points, True)] + [_ring(h, False) for h in poly.holes]:
+        verts.extend(ring.tolist() + [ring[0].tolist()])
+        codes.extend([MplPath.MOVETO] + [MplPath.LINETO] * (len(ring) - 1) + [MplPath.CLOSEPOLY])
+    return PathPatch(MplPath(verts, codes), **kw)
+
+
+def _draw_obstacles(ax, scene: Scene) -> None:
+    xmin, ymin, xmax, ymax = scene.bounds
+    ax.add_patch(
+        Rectangle((xmin, ymin), xmax - xmin, ymax - ymin, fill=False, ec="black", lw=1.5, zorder=1)
+    )
+    style = dict(fc=OBSTACLE_FACE, ec=OBSTACLE_EDGE, lw=0.8, zorder=2)
+    for k, ob in enumerate(scene.obstacles):
+        label = "static obstacle" if k == 0 else None
+        if isinstance(ob, Disc):
+            ax.add_patch(Circle(ob.center, ob.radius, label=label, **style))
+        elif isinstance(ob, Box):
+            ax.add_patch(PolygonPatch(ob.vertices(), closed=True, label=label, **style))
+        elif isinstance(ob, Polygon):
+            ax.add_patch(_polygon_patch(ob, label=label, **style))
+
+
+def _draw_roadmap(ax, roadmap) -> None:
+    v = np.asarray(roadmap.vertices, dtype=float)[:, :2]
+    e = np.asarray(roadmap.edges, dtype=np.int64).reshape(-1, 2)
+    if len(e):
+        ax.add_collection(
+            LineCollection(v[e], colors=ROADMAP_COLOR, linewidths=0.5, alpha=0.8, zorder=1.5)
+        )
+    ax.scatter(
+        v[:, 0],
+        v[:, 1],
+        s=3,
+        color=ROADMAP_COLOR,
+        edgecolors="none",
+        zorder=1.6,
+        label=f"roadmap ({len(v)} vertices, {len(e)} edges)",
+    )
+
+
+def _mover_patch(mover: Mover, xy, color: str, **kw):
+    if mover.shape == "disc":
+        return Circle(xy, mover.radius, fc=color, ec=color, **kw)
+    w, h = mover.size
+    return Rectangle((xy[0] - w / 2, xy[1] - h / 2), w, h, fc=color, ec=color, **kw)
+
+
+def _move_patch(patch, mover: Mover, xy) -> None:
+    if mover.shape == "disc":
+        patch.set_center(xy)
+    else:
+        patch.set_xy((xy[0] - mover.size[0] / 2, xy[1] - mover.size[1] / 2))
+
+
+def _mover_color(i: int) -> str:
+    return MOVER_COLORS[i % len(MOVER_COLORS)]
+
+
+def _draw_movers(ax, scene: Scene, marker: bool = True) -> None:
+    """Movers' paths, direction arrows and their shape at t = 0 (or first row)."""
+    many = len(scene.movers) > MAX_LEGEND_MOVERS
+    n_path = sum(m.trajectory is None for m in scene.movers)
+    n_timed = len(scene.movers) - n_path
+    first_path = first_timed = True
+    for i, m in enumerate(scene.movers):
+        color = _mover_color(i)
+        if m.trajectory is None:
+            label = f"mover {m.name} ({m.mode}, {m.speed:g} m/s)"
+            if many:
+                label = f"path movers ({n_path})" if first_path else None
+                first_path = False
+            pts = m._polyline
+            ax.plot(pts[:, 0], pts[:, 1], ls="--", lw=1.2, color=color, zorder=3, label=label)
+            _draw_arrows(ax, pts, color, both=m.mode == "bounce")
+            xy0 = m.state([0.0])[0][0]
+        else:
+            label = f"mover {m.name} (t {m.time_range[0]:g} to {m.time_range[1]:g} s)"
+            if many:
+                label = f"timed movers ({n_timed})" if first_timed else None
+                first_timed = False
+            tr = m.trajectory
+            ax.plot(
+                tr[:, 1], tr[:, 2], ls="-", lw=0.7, color=color, alpha=0.8, zorder=3, label=label
+            )
+            if len(tr) >= 2:
+                _draw_arrows(ax, tr[:, 1:], color, both=False, max_arrows=1)
+            xy0 = tr[0, 1:]
+        if marker:
+            ax.add_patch(_mover_patch(m, xy0, color, alpha=0.35, lw=1.0, zorder=3.1))
+            ax.plot(*xy0, marker="o", ms=3, color=color, zorder=3.2)
+
+
+def _draw_arrows(ax, pts: FloatArray, color: str, both: bool, max_arrows: int = 6) -> None:
+    """Arrows at the middle of the longest segments, pointing along the polyline."""
+    seg = np.diff(pts, axis=0)
+    length = np.hypot(seg[:, 0], seg[:, 1])
+    if not np.any(length > 0):
+        return
+    order = np.argsort(-length, kind="stable")[:max_arrows]
+    for k in sorted(order):
+        if length[k] <= 0:
+            continue
+        mid = pts[k] + 0.5 * seg[k]
+        u = seg[k] / length[k] * min(0.2 * length[k], 0.15)
+        ax.annotate(
+            "",
+            xy=mid + u,
+            xytext=mid - u,
+            zorder=3.2,
+            arrowprops=dict(
+                arrowstyle="<|-|>" if both else "-|>",
+                color=color,
+                lw=1.2,
+                mutation_scale=10,
+                shrinkA=0,
+                shrinkB=0,
+            ),
+        )
+
+
+def _footprint(scene: Scene, pose, **kw):
+    """A patch of the robot at ``pose`` (a box robot rotated by its heading)."""
+    if scene.robot.shape == "disc":
+        return Circle(pose[:2], scene.robot.radius, **kw)
+    return PolygonPatch(scene.robot.corners(np.asarray(pose)[None, :3])[0], closed=True, **kw)
+
+
+def _heading_tick(scene: Scene, pose) -> FloatArray:
+    """(2, 2): centre to front of a box robot."""
+    half = 0.5 * scene.robot.size[0]
+    front = [pose[0] + half * math.cos(pose[2]), pose[1] + half * math.sin(pose[2])]
+    return np.array([pose[:2], front])
+
+
+def _draw_queries(ax, scene: Scene) -> None:
+    for k, q in enumerate(scene.queries):
+        for pose, color, mk, what in (
+            (q.start, START_COLOR, "o", "start"),
+            (q.goal, GOAL_COLOR, "*", "goal"),
+        ):
+            ax.add_patch(_footprint(scene, pose, fill=False, ec=color, lw=1.0, ls=":", zorder=4))
+            if scene.robot.shape == "box":
+                tick = _heading_tick(scene, pose)
+                ax.plot(tick[:, 0], tick[:, 1], color=color, lw=1.0, zorder=4)
+            ax.plot(
+                pose[0],
+                pose[1],
+                marker=mk,
+                ms=11 if mk == "*" else 8,
+                mfc=color,
+                mec="black",
+                mew=0.8,
+                ls="none",
+                zorder=6,
+                label=what if k == 0 else None,
+            )
+        if len(scene.queries) > 1:
+            ax.annotate(
+                q.name, q.start[:2], xytext=(4, 4), textcoords="offset points", fontsize=7, zorder=6
+            )
+
+
+def _nice_step(duration: float, target: int = 8) -> float:
+    """A round time step giving about ``target`` stamps over ``duration``."""
+    if duration <= 0:
+        return 1.0
+    raw = duration / target
+    mag = 10 ** math.floor(math.log10(raw))
+    for f in (1, 2, 2.5, 5, 10):
+        if f * mag >= raw:
+            return f * mag
+    return 10 * mag
+
+
+def _fmt_time(t: float) -> str:
+    return f"{t:.2f}".rstrip("0").rstrip(".")
+
+
+def _speed_values(speed, wp: FloatArray, scene: Scene) -> FloatArray:
+    """Per-segment speeds from ``speed``: True, (n - 1,) per segment or (n,) per waypoint."""
+    n = len(wp)
+    if speed is True:
+        return segment_speeds(wp, scene.robot.circumradius)
+    v = np.asarray(speed, dtype=float).ravel()
+    if v.size == n - 1:
+        return v
+    if v.size == n:
+        return 0.5 * (v[:-1] + v[1:])
+    raise ValueError(
+        f"speed has {v.size} values; the trajectory has {n} waypoints ({n - 1} segments)"
+    )
+
+
+def _draw_trajectory(ax, fig, scene: Scene, wp: FloatArray, speed, footprints: int) -> None:
+    t0, t1 = float(wp[0, 0]), float(wp[-1, 0])
+    xy = wp[:, 1:3]
+    label = f"robot path ({_fmt_time(t1 - t0)} s)"
+    if speed is not None and speed is not False and len(wp) >= 2:
+        v = _speed_values(speed, wp, scene)
+        vmax = max(scene.robot.vmax, float(np.max(v)) if v.size else 0.0)
+        segs = np.stack([xy[:-1], xy[1:]], axis=1)
+        ax.add_collection(LineCollection(segs, colors="black", linewidths=3.6, zorder=4.9))
+        lc = LineCollection(
+            segs,
+            cmap=colormaps[SPEED_CMAP],
+            norm=Normalize(0.0, vmax),
+            linewidths=2.4,
+            zorder=5,
+            capstyle="round",
+        )
+        lc.set_array(v)
+        ax.add_collection(lc)
+        fig.colorbar(lc, ax=ax, shrink=0.8, pad=0.02, label="robot speed [m/s]")
+        ax.plot(
+            [], [], color=colormaps[SPEED_CMAP](0.85), lw=2.4, label=label + ", coloured by speed"
+        )
+    else:
+        ax.plot(xy[:, 0], xy[:, 1], color=ROBOT_COLOR, lw=2.0, zorder=5, label=label)
+
+    # footprints, evenly spaced in time, start and end included
+    times = np.linspace(t0, t1, max(2, footprints)) if t1 > t0 else np.array([t0])
+    poses = interpolate_poses(wp, times)
+    for k, pose in enumerate(poses):
+        ax.add_patch(
+            _footprint(
+                scene,
+                pose,
+                fc=ROBOT_COLOR,
+                ec=ROBOT_COLOR,
+                alpha=0.18,
+                lw=1.0,
+                zorder=4.5,
+                label="robot footprint" if k == 0 else None,
+            )
+        )
+        if scene.robot.shape == "box":
+            tick = _heading_tick(scene, pose)
+            ax.plot(tick[:, 0], tick[:, 1], color=ROBOT_COLOR, lw=1.0, zorder=4.6)
+
+    # time stamps every `step` seconds
+    step = _nice_step(t1 - t0)
+    stamps = np.arange(math.ceil(t0 / step - 1e-9) * step, t1 + 1e-9, step)
+    if t1 > t0 and (not stamps.size or t1 - stamps[-1] > 0.3 * step):
+        stamps = np.append(stamps, t1)
+    waits = wait_intervals(wp)
+    for ta, tb, _ in waits:  # the wait's own label gives its times; stamps there would pile up
+        stamps = stamps[(stamps <= ta) | (stamps > tb)]
+    spos = interpolate_poses(wp, stamps)
+    ax.plot(
+        spos[:, 0],
+        spos[:, 1],
+        ls="none",
+        marker="o",
+        ms=3.5,
+        mfc="white",
+        mec="black",
+        mew=0.7,
+        zorder=6,
+    )
+    for t, p in zip(stamps, spos, strict=True):
+        ax.annotate(
+            f"t={_fmt_time(t)}",
+            p[:2],
+            xytext=(4, -10),
+            textcoords="offset points",
+            fontsize=7,
+            zorder=7,
+            bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.75),
+        )
+
+    # waits
+    for k, (ta, tb, pose) in enumerate(waits):
+        ax.plot(
+            pose[0],
+            pose[1],
+            marker="H",
+            ms=12,
+            mfc="none",
+            mec=WAIT_COLOR,
+            mew=1.8,
+            ls="none",
+            zorder=6.5,
+            label="wait" if k == 0 else None,
+        )
+        ax.annotate(
+            f"wait {_fmt_time(tb - ta)} s (t={_fmt_time(ta)} to {_fmt_time(tb)})",
+            pose[:2],
+            xytext=(-8, 6),  # up-left: the time stamps sit down-right
+            textcoords="offset points",
+            ha="right",
+            fontsize=7,
+            color=WAIT_COLOR,
+            zorder=7,
+            bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.75),
+        )
+
+
+def _legend(fig, ax) -> None:
+    """One legend below the axes; the constrained layout makes room for it."""
+    handles, labels = ax.get_legend_handles_labels()
+    if handles:
+        fig.legend(handles, labels, loc="outside lower center", ncol=3, fontsize=7, frameon=False)
+
+
+def _legend_rows(scene: Scene, roadmap, wp) -> int:
+    movers = len(scene.movers) if len(scene.movers) <= MAX_LEGEND_MOVERS else 2
+    n = 1 + movers + (1 if roadmap is not None else 0) + (2 if scene.queries else 0)
+    n += 3 if wp is not None else 0
+    return math.ceil(n / 3)
+
+
+# --------------------------------------------------------------------------- public API
+
+
+def render_scene(
+    scene: Scene,
+    out_path: str | os.PathLike,
+    roadmap=None,
+    trajectory=None,
+    speed=None,
+    title: str | None = None,
+    dpi: int = 120,
+    footprints: int = 6,
+) -> None:
+    """Draw the scene, and optionally a roadmap and a trajectory, as a still picture.
+
+    Parameters
+    ----------
+    scene : Scene
+    out_path : path-like
+        ``.png`` (or ``.gif`` for a one-frame GIF); written atomically.
+    roadmap : Roadmap, optional
+        Anything with ``vertices`` (V, d) and ``edges`` (E, 2).
+    trajectory : (n, 3) or (n, 4) array, or object with ``.waypoints``, optional
+        The robot's trajectory (CONTRACT.md section 2).
+    speed : True, (n - 1,) or (n,) float, optional
+        Colour the robot's path by speed: ``True`` derives each segment's configuration
+        speed from the trajectory; an array gives a speed per segment (n - 1) or per
+        waypoint (n, each segment takes the mean of its ends).
+    title : str, optional
+        Default: the scene's name, and the trajectory's duration.
+    dpi : int
+        Picture resolution; the picture is about ``8 * dpi`` pixels wide.
+    footprints : int
+        Number of robot footprints drawn along the trajectory, start and end included.
+
+    Raises
+    ------
+    ValueError
+        An unsupported suffix (nothing is written), a malformed trajectory, or a speed
+        array of the wrong length.
+    """
+    suffix = _suffix(out_path, PICTURE_SUFFIXES, "a picture")
+    wp = None if trajectory is None else as_waypoints(trajectory, scene)
+    with_speed = wp is not None and speed is not None and speed is not False
+    fig, ax = _figure(scene, 8.0, with_speed, _legend_rows(scene, roadmap, wp))
+    _draw_obstacles(ax, scene)
+    if roadmap is not None:
+        _draw_roadmap(ax, roadmap)
+    _draw_movers(ax, scene)
+    _draw_queries(ax, scene)
+    if wp is not None:
+        _draw_trajectory(ax, fig, scene, wp, speed if with_speed else None, footprints)
+    if title is None:
+        title = scene.name
+        if wp is not None:
+            title += f": trajectory of {_fmt_time(wp[-1, 0] - wp[0, 0])} s"
+    ax.set_title(title)
+    _legend(fig, ax)
+
+    def write(tmp: str) -> None:
+        if suffix == ".png":
+            fig.savefig(tmp, dpi=dpi, format="png")
+        else:
+            _save_gif([_to_image(fig, dpi)], tmp, [1000])
+
+    _write_atomic(out_path, write)
+    log.info("wrote %s", out_path)
+
+
+def _to_image(fig: Figure, dpi: float | None = None):
+    from PIL import Image
+
+    if dpi is not None:
+        fig.set_dpi(dpi)
+    fig.canvas.draw()
+    return Image.fromarray(np.asarray(fig.canvas.buffer_rgba())[..., :3].copy())
+
+
+def _save_gif(frames, path: str, durations_ms) -> None:
+    """Save RGB frames as a looping GIF with one shared palette (fast, no flicker).
+
+    The palette is learnt from a few frames spread over the animation, so that a mover
+    that appears late still finds its colour, plus exact white and black (a quantiser
+    averages the background to an off-white otherwise).
+    """
+    from PIL import Image
+
+    picks = np.unique(np.linspace(0, len(frames) - 1, min(len(frames), 8)).round().astype(int))
+    sample = Image.fromarray(np.vstack([np.asarray(frames[i]) for i in picks]))
+    learnt = sample.quantize(colors=254, method=Image.Quantize.FASTOCTREE).getpalette()
+    learnt = np.asarray(learnt[: 3 * 254], dtype=np.uint8).reshape(-1, 3)
+    # Pillow maps pixels through a coarse colour cache: near-whites would shadow white
+    learnt = learnt[np.any(learnt < 244, axis=1) & np.any(learnt > 10, axis=1)]
+    colors = np.vstack([[[255, 255, 255], [0, 0, 0]], learnt])
+    palette = Image.new("P", (1, 1))
+    palette.putpalette(colors.ravel().tolist())
+    pal = [f.quantize(palette=palette, dither=Image.Dither.NONE) for f in frames]
+    pal[0].save(
+        path,
+        format="GIF",
+        save_all=True,
+        append_images=pal[1:],
+        duration=list(durations_ms),
+        loop=0,
+        disposal=1,
+        optimize=False,
+    )
+
+
+def render_animation(
+    scene: Scene,
+    trajectory,
+    out_path: str | os.PathLike,
+    fps: float = 15.0,
+    max_frames: int = 300,
+    dpi: int = 80,
+    duration: float | None = None,
+    title: str | None = None,
+) -> int:
+    """Animate the robot and the movers over the trajectory's time span, as a GIF.
+
+    Each frame shows the static scene, the movers present at that time, the robot, its
+    trail so far (and its remaining path, faint) and a clock. Playback runs in real time:
+    when ``duration * fps`` exceeds ``max_frames`` the frames are spread evenly over the
+    span and each is shown longer.
+
+    Parameters
+    ----------
+    scene : Scene
+    trajectory : (n, 3) or (n, 4) array, object with ``.waypoints``, or None
+        None animates only the movers, over ``[0, duration]``.
+    out_path : path-like
+        ``.gif``; written atomically.
+    fps : float
+        Frames per second of playback.
+    max_frames : int
+        Upper bound on the number of frames.
+    dpi : int
+        Frame resolution; frames are about ``6.5 * dpi`` pixels wide.
+    duration : float, optional
+        Span to animate without a trajectory (default: the movers' longest period or
+        last time, between 1 and 60 s; 10 s when they are all endless and aperiodic).
+    title : str, optional
+
+    Returns
+    -------
+    int
+        Number of frames written.
+
+    Raises
+    ------
+    ValueError
+        An unsupported suffix (nothing is written), a malformed trajectory, or
+        ``fps`` / ``max_frames`` / ``duration`` not positive.
+    """
+    _suffix(out_path, ANIMATION_SUFFIXES, "an animation")
+    if not (fps > 0 and math.isfinite(fps)):
+        raise ValueError(f"fps must be positive, got {fps}")
+    if int(max_frames) < 1:
+        raise ValueError(f"max_frames must be at least 1, got {max_frames}")
+    if duration is not None and not (duration > 0 and math.isfinite(duration)):
+        raise ValueError(f"duration must be positive, got {duration}")
+    wp = None if trajectory is None else as_waypoints(trajectory, scene)
+    if wp is not None:
+        t0, t1 = float(wp[0, 0]), float(wp[-1, 0])
+    else:
+        t0, t1 = 0.0, _default_span(scene) if duration is None else float(duration)
+    n = max(1, min(int(max_frames), math.floor((t1 - t0) * fps + 1e-9) + 1))
+    if t1 > t0:
+        n = max(n, 2)
+    times = np.linspace(t0, t1, n)
+    frame_ms = 1000.0 * (t1 - t0) / (n - 1) if n > 1 else 1000.0
+
+    fig, ax = _figure(scene, 6.5, False, 0)
+    fig.set_dpi(dpi)
+    _draw_obstacles(ax, scene)
+    _draw_movers(ax, scene, marker=False)
+    if title is None:
+        title = scene.name
+    ax.set_title(title, fontsize=10)
+
+    dynamic = []
+    mover_xy, present = scene.mover_states(times)
+    mover_patches = []
+    for i, m in enumerate(scene.movers):
+        p = _mover_patch(m, mover_xy[i, 0], _mover_color(i), alpha=0.75, lw=1.0, zorder=4)
+        p.set_animated(True)
+        ax.add_patch(p)
+        mover_patches.append(p)
+        dynamic.append(p)
+    if wp is not None:
+        ax.plot(wp[:, 1], wp[:, 2], color=ROBOT_COLOR, lw=1.0, alpha=0.25, zorder=4.5)
+        ax.plot(*wp[-1, 1:3], marker="*", ms=11, mfc=GOAL_COLOR, mec="black", mew=0.8, zorder=4.6)
+        poses = interpolate_poses(wp, times)
+        trail = Line2D([], [], color=ROBOT_COLOR, lw=2.0, zorder=5, animated=True)
+        ax.add_line(trail)
+        robot = _footprint(
+            scene, poses[0], fc=ROBOT_COLOR, ec="black", alpha=0.85, lw=1.0, zorder=6
+        )
+        robot.set_animated(True)
+        ax.add_patch(robot)
+        dynamic += [trail, robot]
+        if scene.robot.shape == "box":
+            tick = Line2D([], [], color="white", lw=1.5, zorder=6.1, animated=True)
+            ax.add_line(tick)
+            dynamic.append(tick)
+    clock = ax.text(
+        0.02,
+        0.97,
+        "",
+        transform=ax.transAxes,
+        ha="left",
+        va="top",
+        fontsize=10,
+        zorder=8,
+        family="monospace",
+        animated=True,
+        bbox=dict(boxstyle="round,pad=0.25", fc="white", ec="0.5", alpha=0.85),
+    )
+    dynamic.append(clock)
+
+    canvas = fig.canvas
+    canvas.draw()
+    background = canvas.copy_from_bbox(fig.bbox)
+    from PIL import Image
+
+    frames = []
+    for k, t in enumerate(times):
+        canvas.restore_region(background)
+        for i, p in enumerate(mover_patches):
+            _move_patch(p, scene.movers[i], mover_xy[i, k])
+            p.set_visible(bool(present[i, k]))
+        if wp is not None:
+            pose = poses[k]
+            done = wp[wp[:, 0] < t]
+            trail.set_data(np.append(done[:, 1], pose[0]), np.append(done[:, 2], pose[1]))
+            if scene.robot.shape == "disc":
+                robot.set_center(pose[:2])
+            else:
+                robot.set_xy(scene.robot.corners(pose[None, :3])[0])
+                tick.set_data(*_heading_tick(scene, pose).T)
+        clock.set_text(f"t = {t:6.2f} s")
+        for artist in dynamic:
+            ax.draw_artist(artist)
+        frames.append(Image.fromarray(np.asarray(canvas.buffer_rgba())[..., :3].copy()))
+
+    # GIF delays are whole centiseconds: round the running clock, not each frame, so that
+    # playback keeps real time.
+    ticks = np.round(np.arange(len(frames) + 1) * frame_ms / 10.0).astype(int)
+    durations = (10 * np.maximum(np.diff(ticks), 1)).tolist()
+
+    def write(tmp: str) -> None:
+        _save_gif(frames, tmp, durations)
+
+    _write_atomic(out_path, write)
+    log.info("wrote %s (%d frames over %.2f s)", out_path, len(frames), t1 - t0)
+    return len(frames)
+
+
+def _default_span(scene: Scene) -> float:
+    spans = []
+    for m in scene.movers:
+        if m.trajectory is not None:
+            spans.append(m.time_range[1])
+        elif math.isfinite(m.period):
+            spans.append(m.period)
+    if not spans:
+        return 10.0
+    return float(min(60.0, max(1.0, max(spans))))
+
+
+def render(
+    scene: Scene,
+    out_path: str | os.PathLike,
+    trajectory=None,
+    roadmap=None,
+    **options,
+) -> None:
+    """Picture or animation, chosen from ``out_path``'s suffix.
+
+    ``.png`` calls :func:`render_scene`, ``.gif`` :func:`render_animation` (which also
+    animates the movers alone when ``trajectory`` is None); ``options`` go to the one
+    called.
+
+    Raises
+    ------
+    ValueError
+        Any other suffix (nothing is written), or what the renderer raises.
+    """
+    suffix = _suffix(out_path, (".png", ".gif"), "a picture or an animation")
+    if suffix == ".png":
+        render_scene(scene, out_path, roadmap=roadmap, trajectory=trajectory, **options)
+    else:
+        render_animation(scene, trajectory, out_path, **options)
