@@ -67,6 +67,11 @@ class PlanOptions:
         Seed of the random steps after the search (GA, rule learning).
     ga : object or None
         ``gfuzzy.ga.GAOptions`` for the refinement (None: defaults).
+    rules : object or None
+        ``gfuzzy.fuzzy.RuleBase`` of the speed layer (None: the expert rules).
+    refine_max_slowdown : float
+        The refined answer is kept only if its duration is at most this fraction longer
+        than the unrefined one (it is shorter and smoother, but may have to wait more).
     weight : float
         Heuristic weight of the search: 1 finds the earliest arrival the roadmap and the
         time step allow; w > 1 (weighted A*) expands far fewer states and arrives at most
@@ -81,6 +86,8 @@ class PlanOptions:
     speed_layer: bool = False
     seed: int = 0
     ga: object | None = None
+    rules: object | None = None
+    refine_max_slowdown: float = 0.1
     weight: float = 1.0
 
     def __post_init__(self):

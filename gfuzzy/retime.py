@@ -19,10 +19,12 @@ from .timespace import MoverField, SpaceTimeGraph, sipp
 from .trajectory import Trajectory
 from .typing import FloatArray
 
-__all__ = ["chain_points", "retime_path", "RetimeResult"]
+__all__ = ["chain_points", "retime_path", "retime_profile", "RetimeResult"]
 
 #: Nodes per group of the chain whose safety is computed together.
 GROUP = 16
+#: Stops of the speed-layer timing closer than this (metres of path) are merged.
+STOP_MERGE = 0.05
 
 
 def _arc_length(path: FloatArray, r: float) -> FloatArray:
@@ -157,6 +159,123 @@ def retime_path(
     robot = scene.robot
     step = robot.vmax * SPEED_SAFETY * dt
     poses, s = chain_points(path, robot.circumradius, step, speed_limit, dt)
+    return _search_chain(scene, poses, s, t0, dt, horizon, wait_at, deadline)
+
+
+def _metric_profile(path, circumradius, s_xy, v_xy, vmax, amax, ds=0.02):
+    """The fuzzy bound (given along the xy arc length) as a profile along the contract
+    metric's arc length, scaled so that the configuration speed stays within vmax, and
+    made feasible for ``amax`` again."""
+    from .fuzzy import limit_acceleration
+
+    seg_xy = np.hypot(*np.diff(path[:, :2], axis=0).T)
+    seg_m = metric_distance(path[:-1], path[1:], circumradius)
+    cum_xy = np.concatenate([[0.0], np.cumsum(seg_xy)])
+    cum_m = np.concatenate([[0.0], np.cumsum(seg_m)])
+    total = cum_m[-1]
+    n = max(2, int(math.ceil(total / ds)) + 1)
+    s_m = np.unique(np.concatenate([np.linspace(0.0, total, n), cum_m]))
+    # metric arc length -> xy arc length (piecewise linear; flat where the robot turns in place)
+    i = np.clip(np.searchsorted(cum_m, s_m, side="right") - 1, 0, len(seg_m) - 1)
+    f = np.where(seg_m[i] > 0, (s_m - cum_m[i]) / np.where(seg_m[i] > 0, seg_m[i], 1.0), 0.0)
+    sx = cum_xy[i] + f * seg_xy[i]
+    frac = np.sqrt(np.interp(sx, s_xy, np.asarray(v_xy) ** 2)) / vmax
+    inner = (s_m > 0) & (s_m < total)
+    frac = np.where(inner, np.maximum(frac, 1e-3), frac)  # the fuzzy bound is > 0 inside
+    return s_m, limit_acceleration(s_m, np.minimum(frac, 1.0) * vmax, amax), cum_m
+
+
+def _chain_from_profile(path, cum_m, s_m, v_m, dt, stop_nodes=()):
+    """Points of the path at the times t = n dt of driving profile (s_m, v_m) at its limit."""
+    from .fuzzy import profile_times
+
+    t = profile_times(s_m, v_m)
+    n = int(math.ceil(t[-1] / dt - 1e-9))
+    grid = np.minimum(np.arange(n + 1) * dt, t[-1])
+    s = np.interp(grid, t, s_m)
+    s[-1] = s_m[-1]
+    keep = np.concatenate([[True], np.diff(s) > 1e-12])
+    s = s[keep]
+    return _pose_at_s(path, cum_m, s), s
+
+
+class ProfileRetime(RetimeResult):
+    def __init__(self, status, trajectory, message="", waits=None, profile_duration=math.nan):
+        super().__init__(status, trajectory, message, waits)
+        self.profile_duration = profile_duration
+
+
+def retime_profile(
+    scene: Scene,
+    path: FloatArray,
+    s_xy: FloatArray,
+    v_xy: FloatArray,
+    t0: float,
+    dt: float,
+    amax: float,
+    horizon: float,
+    deadline: float = math.inf,
+    max_rounds: int = 3,
+) -> ProfileRetime:
+    """Time a path under a speed profile and an acceleration bound, among the movers.
+
+    Round 1 drives the profile with no stop but a wait at the start. If the movers block
+    it, a search that may wait anywhere finds where to stop; the profile is computed again
+    with the robot at rest at those points (so it brakes and accelerates within ``amax``),
+    and the search runs once more, waiting only there. Up to ``max_rounds`` rounds.
+
+    Parameters
+    ----------
+    path : (n, d) float
+        Statically free path.
+    s_xy, v_xy : (k,) float
+        Speed bound along the xy arc length (from :func:`gfuzzy.fuzzy.speed_limit`).
+    """
+    from .fuzzy import limit_acceleration
+    from .planner import SPEED_SAFETY
+
+    robot = scene.robot
+    vmax = robot.vmax * SPEED_SAFETY
+    path = np.asarray(path, dtype=float)
+    s_m, v_m, cum_m = _metric_profile(path, robot.circumradius, s_xy, v_xy, vmax, amax)
+    from .fuzzy import profile_times
+
+    duration = float(profile_times(s_m, v_m)[-1])
+    stops: list[float] = []
+    message = ""
+    for _ in range(max_rounds):
+        prof_s, prof_v = s_m, v_m
+        if stops:
+            prof_s = np.unique(np.concatenate([s_m, stops]))
+            cap = np.interp(prof_s, s_m, v_m)
+            cap[np.isin(prof_s, stops)] = 0.0
+            prof_v = limit_acceleration(prof_s, cap, amax)
+        poses, s = _chain_from_profile(path, cum_m, prof_s, prof_v, dt)
+        wait_at = np.array([0.0] + stops)
+        res = _search_chain(scene, poses, s, t0, dt, horizon, wait_at, deadline)
+        if res.status == "solved":
+            return ProfileRetime("solved", res.trajectory, waits=stops, profile_duration=duration)
+        message = res.message
+        if res.status == "timeout":
+            break
+        # where would the robot need to stop? search again allowing waits anywhere
+        free = _search_chain(scene, poses, s, t0, dt, horizon, None, deadline)
+        if free.status != "solved" or not free.waits:
+            message = free.message or message
+            break
+        merged = list(stops)
+        for w in free.waits:  # one stop per place: waits a few centimetres apart are one
+            if w > 1e-9 and all(abs(w - x) > STOP_MERGE for x in merged):
+                merged.append(w)
+        if len(merged) == len(stops):
+            break
+        stops = sorted(merged)
+    return ProfileRetime("no_path", None, message or "no safe timing found", profile_duration=duration)
+
+
+def _search_chain(scene, poses, s, t0, dt, horizon, wait_at, deadline) -> RetimeResult:
+    """The safe-interval search on a chain of points one step apart."""
+    robot = scene.robot
     m = len(poses)
     if m == 1:
         return RetimeResult("solved", Trajectory(np.array([[t0, *poses[0]]]), robot.circumradius))
@@ -170,9 +289,7 @@ def retime_path(
         can_wait[0] = True
         for w in np.atleast_1d(wait_at):
             can_wait[int(np.argmin(np.abs(s - w)))] = True
-    groups = np.arange(0, m + GROUP, GROUP)
-    groups[-1] = m
-    groups = np.unique(groups)
+    groups = np.unique(np.append(np.arange(0, m, GROUP), m))
     graph = SpaceTimeGraph(
         poses, indptr, nbrs, heur, can_wait=can_wait, groups=groups, from_start=np.arange(m, dtype=float)
     )
