@@ -84,15 +84,20 @@ def _clearance_functions(planner, corridor: FloatArray):
     def static_clearance(xy: FloatArray) -> FloatArray:
         return geometry.clearance(poses_of(xy))
 
+    # The GA evaluates the mover clearance at every sample of every candidate, so the robot
+    # is taken as its circumscribed disc there: cheap for any shape, and a lower bound.
+    # The re-timing afterwards decides safety with the exact shapes.
+    disc = replace(robot, shape="disc", radius=robot.circumradius, size=(0.0, 0.0))
+
     def mover_clearance(xy: FloatArray, t: FloatArray) -> FloatArray:
-        poses = poses_of(xy)
+        xy = np.atleast_2d(np.asarray(xy, dtype=float))
         t = np.asarray(t, dtype=float)
-        out = np.full(len(poses), np.inf)
+        out = np.full(len(xy), np.inf)
         for mv in scene.movers:
             pos, present = mv.state(t)
             if not present.any():
                 continue
-            d = mover_distance(robot, poses, mv.shape, mv.radius, mv.size, pos)
+            d = mover_distance(disc, xy, mv.shape, mv.radius, mv.size, pos)
             out = np.minimum(out, np.where(present, d, np.inf))
         return out
 

@@ -225,7 +225,7 @@ class MoverField:
                 continue
             mm = movers[mask]
             d[mask] = mover_distance(
-                self.robot, poses[mask], shape, self._radius[mm], self._size[mm], xy[mask]
+                self.robot, poses[mask], shape, self._radius[mm], self._size[mm], xy[mask], exact=False
             )
         return d
 
