@@ -23,8 +23,8 @@ __all__ = ["chain_points", "retime_path", "retime_profile", "RetimeResult"]
 
 #: Nodes per group of the chain whose safety is computed together.
 GROUP = 16
-#: Stops of the speed-layer timing closer than this (metres of path) are merged.
-STOP_MERGE = 0.05
+#: Stops of the speed-layer timing closer than this (metres of path) are one stop.
+STOP_MERGE = 0.3
 
 
 def _arc_length(path: FloatArray, r: float) -> FloatArray:
@@ -215,14 +215,15 @@ def retime_profile(
     amax: float,
     horizon: float,
     deadline: float = math.inf,
-    max_rounds: int = 3,
+    max_rounds: int = 5,
 ) -> ProfileRetime:
     """Time a path under a speed profile and an acceleration bound, among the movers.
 
     Round 1 drives the profile with no stop but a wait at the start. If the movers block
     it, a search that may wait anywhere finds where to stop; the profile is computed again
     with the robot at rest at those points (so it brakes and accelerates within ``amax``),
-    and the search runs once more, waiting only there. Up to ``max_rounds`` rounds.
+    and the search runs once more, waiting only there (a wait found near a stop moves it).
+    Up to ``max_rounds`` rounds.
 
     Parameters
     ----------
@@ -250,7 +251,11 @@ def retime_profile(
             cap = np.interp(prof_s, s_m, v_m)
             cap[np.isin(prof_s, stops)] = 0.0
             prof_v = limit_acceleration(prof_s, cap, amax)
-        poses, s = _chain_from_profile(path, cum_m, prof_s, prof_v, dt)
+        try:
+            poses, s = _chain_from_profile(path, cum_m, prof_s, prof_v, dt)
+        except ValueError as exc:  # a stretch the profile never crosses
+            message = str(exc)
+            break
         wait_at = np.array([0.0] + stops)
         res = _search_chain(scene, poses, s, t0, dt, horizon, wait_at, deadline)
         if res.status == "solved":
@@ -264,12 +269,18 @@ def retime_profile(
             message = free.message or message
             break
         merged = list(stops)
-        for w in free.waits:  # one stop per place: waits a few centimetres apart are one
-            if w > 1e-9 and all(abs(w - x) > STOP_MERGE for x in merged):
+        for w in free.waits:  # one stop per place: a wait near a stop moves that stop there
+            if w <= 1e-9:
+                continue
+            near = [i for i, x in enumerate(merged) if abs(w - x) <= STOP_MERGE]
+            if near:
+                merged[near[0]] = max(merged[near[0]], w)
+            else:
                 merged.append(w)
-        if len(merged) == len(stops):
+        merged = sorted(merged)
+        if merged == stops:
             break
-        stops = sorted(merged)
+        stops = merged
     return ProfileRetime("no_path", None, message or "no safe timing found", profile_duration=duration)
 
 
