@@ -16,8 +16,6 @@ from __future__ import annotations
 import logging
 import math
 import os
-import tempfile
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -32,6 +30,7 @@ from matplotlib.patches import Circle, PathPatch, Rectangle
 from matplotlib.patches import Polygon as PolygonPatch
 from matplotlib.path import Path as MplPath
 
+from .atomic import write_atomic_with
 from .scene import Box, Disc, Mover, Polygon, Scene
 from .typing import FloatArray
 
@@ -222,26 +221,6 @@ def _suffix(out_path: str | os.PathLike, allowed: tuple[str, ...], what: str) ->
             f"use {' or '.join(allowed)}"
         )
     return suffix
-
-
-def _write_atomic(out_path: str | os.PathLike, write: Callable[[str], None]) -> None:
-    """Call ``write(tmp)`` on a temporary file beside ``out_path``, then rename it."""
-    path = Path(out_path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
-    os.close(fd)
-    try:
-        write(tmp)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
 
 
 # --------------------------------------------------------------------------- drawing
@@ -655,7 +634,7 @@ def render_scene(
         else:
             _save_gif([_to_image(fig, dpi)], tmp, [1000])
 
-    _write_atomic(out_path, write)
+    write_atomic_with(out_path, write)
     log.info("wrote %s", out_path)
 
 
@@ -844,7 +823,7 @@ def render_animation(
     def write(tmp: str) -> None:
         _save_gif(frames, tmp, durations)
 
-    _write_atomic(out_path, write)
+    write_atomic_with(out_path, write)
     log.info("wrote %s (%d frames over %.2f s)", out_path, len(frames), t1 - t0)
     return len(frames)
 

@@ -185,18 +185,47 @@ def _metric_profile(path, circumradius, s_xy, v_xy, vmax, amax, ds=0.02):
     return s_m, limit_acceleration(s_m, np.minimum(frac, 1.0) * vmax, amax), cum_m
 
 
-def _chain_from_profile(path, cum_m, s_m, v_m, dt, stop_nodes=()):
-    """Points of the path at the times t = n dt of driving profile (s_m, v_m) at its limit."""
+def _chain_from_profile(path, cum_m, s_m, v_m, dt):
+    """Points of the path at the times t = n dt of driving profile (s_m, v_m) at its limit.
+
+    Returns
+    -------
+    poses : (m, d) float
+    s : (m,) float
+        Their arc lengths.
+    corners : (c, 2) float
+        ``[s, t]`` of each corner of the path strictly inside: where the chain's straight
+        steps would cut it, the trajectory gets an extra row at the corner's time.
+    times : (m,) float
+        Profile times of the chain's points.
+    """
     from .fuzzy import profile_times
 
     t = profile_times(s_m, v_m)
     n = int(math.ceil(t[-1] / dt - 1e-9))
     grid = np.minimum(np.arange(n + 1) * dt, t[-1])
-    s = np.interp(grid, t, s_m)
+    # constant acceleration within each interval of the profile (v^2 linear in s), so the
+    # speed changes between steps stay within the acceleration bound
+    i = np.clip(np.searchsorted(t, grid, side="right") - 1, 0, len(t) - 2)
+    ds = s_m[i + 1] - s_m[i]
+    acc = np.divide(v_m[i + 1] ** 2 - v_m[i] ** 2, 2 * ds, out=np.zeros_like(ds), where=ds > 0)
+    tau = grid - t[i]
+    s = np.minimum(s_m[i] + v_m[i] * tau + 0.5 * acc * tau**2, s_m[i + 1])
     s[-1] = s_m[-1]
     keep = np.concatenate([[True], np.diff(s) > 1e-12])
-    s = s[keep]
-    return _pose_at_s(path, cum_m, s), s
+    s, grid = s[keep], grid[keep]
+    # the corners' times: invert s(t) on their profile intervals
+    cs = cum_m[1:-1]
+    j = np.clip(np.searchsorted(s_m, cs, side="right") - 1, 0, len(s_m) - 2)
+    dsj = s_m[j + 1] - s_m[j]
+    aj = np.divide(v_m[j + 1] ** 2 - v_m[j] ** 2, 2 * dsj, out=np.zeros_like(dsj), where=dsj > 0)
+    x = cs - s_m[j]
+    root = np.sqrt(np.maximum(v_m[j] ** 2 + 2 * aj * x, 0.0))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        tc = np.where(np.abs(aj) > 1e-12, (root - v_m[j]) / np.where(aj != 0, aj, 1.0), x / v_m[j])
+    tc = t[j] + np.clip(np.nan_to_num(tc), 0.0, t[j + 1] - t[j])
+    corners = np.column_stack([cs, tc])
+    return _pose_at_s(path, cum_m, s), s, corners, grid
 
 
 class ProfileRetime(RetimeResult):
@@ -252,19 +281,19 @@ def retime_profile(
             cap[np.isin(prof_s, stops)] = 0.0
             prof_v = limit_acceleration(prof_s, cap, amax)
         try:
-            poses, s = _chain_from_profile(path, cum_m, prof_s, prof_v, dt)
+            poses, s, corners, times = _chain_from_profile(path, cum_m, prof_s, prof_v, dt)
         except ValueError as exc:  # a stretch the profile never crosses
             message = str(exc)
             break
         wait_at = np.array([0.0] + stops)
-        res = _search_chain(scene, poses, s, t0, dt, horizon, wait_at, deadline)
+        res = _search_chain(scene, poses, s, t0, dt, horizon, wait_at, deadline, (path, cum_m, corners, times))
         if res.status == "solved":
             return ProfileRetime("solved", res.trajectory, waits=stops, profile_duration=duration)
         message = res.message
         if res.status == "timeout":
             break
         # where would the robot need to stop? search again allowing waits anywhere
-        free = _search_chain(scene, poses, s, t0, dt, horizon, None, deadline)
+        free = _search_chain(scene, poses, s, t0, dt, horizon, None, deadline, (path, cum_m, corners, times))
         if free.status != "solved" or not free.waits:
             message = free.message or message
             break
@@ -284,8 +313,12 @@ def retime_profile(
     return ProfileRetime("no_path", None, message or "no safe timing found", profile_duration=duration)
 
 
-def _search_chain(scene, poses, s, t0, dt, horizon, wait_at, deadline) -> RetimeResult:
-    """The safe-interval search on a chain of points one step apart."""
+def _search_chain(scene, poses, s, t0, dt, horizon, wait_at, deadline, corners=None) -> RetimeResult:
+    """The safe-interval search on a chain of points one step apart.
+
+    ``corners`` = (path, cum_m, [[s, t]...], node times): rows are added at the path's
+    corners that a step would otherwise cut (see :func:`_chain_from_profile`).
+    """
     robot = scene.robot
     m = len(poses)
     if m == 1:
@@ -309,12 +342,21 @@ def _search_chain(scene, poses, s, t0, dt, horizon, wait_at, deadline) -> Retime
     res = sipp(graph, field_, 0, m - 1, deadline=deadline)
     if res.status != "solved":
         return RetimeResult(res.status, None, res.message)
-    rows = [(res.steps[0], poses[res.nodes[0]])]
+    rows = [(t0 + res.steps[0] * dt, poses[res.nodes[0]])]
     waits = []
     for k in range(1, len(res.nodes)):
-        if res.steps[k] - 1 > res.steps[k - 1]:
-            rows.append((res.steps[k] - 1, poses[res.nodes[k - 1]]))
-            waits.append(float(s[res.nodes[k - 1]]))
-        rows.append((res.steps[k], poses[res.nodes[k]]))
-    wps = np.array([[t0 + n * dt, *p] for n, p in rows], dtype=float)
+        a, b = res.nodes[k - 1], res.nodes[k]
+        depart = res.steps[k] - 1
+        if depart > res.steps[k - 1]:
+            rows.append((t0 + depart * dt, poses[a]))
+            waits.append(float(s[a]))
+        if corners is not None:
+            path, cum_m, cs, times = corners
+            inside = (cs[:, 0] > s[a] + 1e-12) & (cs[:, 0] < s[b] - 1e-12)
+            for sc, tc in cs[inside]:
+                frac = (tc - times[a]) / (times[b] - times[a])
+                if 0.0 < frac < 1.0:
+                    rows.append((t0 + (depart + frac) * dt, _pose_at_s(path, cum_m, np.array([sc]))[0]))
+        rows.append((t0 + res.steps[k] * dt, poses[b]))
+    wps = np.array([[t, *p] for t, p in rows], dtype=float)
     return RetimeResult("solved", Trajectory(wps, robot.circumradius), waits=waits)

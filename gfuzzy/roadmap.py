@@ -14,7 +14,6 @@ import json
 import logging
 import math
 import os
-import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
@@ -23,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .atomic import write_atomic
 from .errors import SceneError
 from .geometry import StaticGeometry, metric_distance
 from .scene import Scene
@@ -172,23 +172,6 @@ class Roadmap:
     def save(self, path: str | os.PathLike) -> None:
         """Write the roadmap as JSON, atomically (a temporary file, then a rename)."""
         write_atomic(path, json.dumps(self.to_dict(), separators=(",", ":")))
-
-
-def write_atomic(path: str | os.PathLike, text: str) -> None:
-    """Write ``text`` to ``path`` via a temporary file in the same folder and a rename."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
 
 
 def load_roadmap(path: str | os.PathLike, scene: Scene | None = None) -> Roadmap:

@@ -17,9 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
+from .atomic import write_atomic
 from .errors import SceneError
 from .geometry import metric_distance, wrap_angle
-from .roadmap import write_atomic
 from .typing import FloatArray
 
 __all__ = ["Trajectory", "load_trajectory", "TrajectoryFile"]

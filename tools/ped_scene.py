@@ -38,10 +38,11 @@ import os
 import re
 import shlex
 import sys
-import tempfile
 from collections import defaultdict
 from dataclasses import dataclass
 from itertools import pairwise
+
+from gfuzzy.atomic import write_atomic
 
 ANNOTATION_PERIOD = 0.4  # seconds between consecutive annotated frames (ETH/UCY convention)
 NAME_RE = re.compile(r"^[a-zA-Z0-9_.-]+$")
@@ -300,27 +301,13 @@ def render_scene(args, source: str, spf: float, region, movers: list[Mover]) -> 
         f"    goal: {_row(args.goal)}",
         "    t0: 0.0",
     ]
-    if args.expect:
-        out += ["    expect:", f"      status: {args.expect}"]
+    if args.expect or args.max_duration is not None:
+        out += ["    expect:"]
+        if args.expect:
+            out += [f"      status: {args.expect}"]
+        if args.max_duration is not None:
+            out += [f"      max_duration: {args.max_duration:g}"]
     return "\n".join(out) + "\n"
-
-
-def write_atomic(path: str, text: str) -> None:
-    folder = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", suffix=".tmp", dir=folder)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates 0600; give the usual permissions
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
 
 
 # ---------------------------------------------------------------------------------- main
@@ -359,6 +346,7 @@ def parse_args(argv):
         choices=["solved", "no_path", "invalid_query"],
         help="add `expect: {status: ...}` to the query",
     )
+    p.add_argument("--max-duration", type=float, help="add `max_duration` to the query's expect")
     args = p.parse_args(argv)
     args.argv = list(argv)
     floats = [
