@@ -126,7 +126,20 @@ class MoverField:
         return self.unsafe_groups(poses, np.array([0, len(poses)]), np.array([lo]), np.array([hi]))
 
     def unsafe_groups(self, poses: FloatArray, ptr: IntArray, lo: IntArray, hi: IntArray) -> BoolArray:
-        """Unsafe steps of many groups of poses at once (one numpy pass, no Python loop).
+        """Dense form of :meth:`unsafe_pairs`: (k, steps + 1) bool, True where unsafe or
+        outside the group's window."""
+        ptr = np.asarray(ptr, dtype=np.int64)
+        gid = np.repeat(np.arange(len(ptr) - 1), np.diff(ptr))
+        lo = np.asarray(lo, dtype=np.int64)
+        hi = np.asarray(hi, dtype=np.int64)
+        tgrid = np.arange(self.steps + 1)
+        out = (tgrid < lo[gid, None]) | (tgrid > hi[gid, None])
+        node, step = self.unsafe_pairs(poses, ptr, lo, hi)
+        out[node, step] = True
+        return out
+
+    def unsafe_pairs(self, poses: FloatArray, ptr: IntArray, lo: IntArray, hi: IntArray):
+        """Unsafe (point, step) pairs of many groups of poses at once (no Python loop).
 
         Parameters
         ----------
@@ -139,7 +152,8 @@ class MoverField:
 
         Returns
         -------
-        (k, steps + 1) bool
+        node, step : (p,) int
+            The unsafe pairs inside the groups' windows (possibly repeated).
 
         Notes
         -----
@@ -149,15 +163,14 @@ class MoverField:
         """
         poses = np.asarray(poses, dtype=float)
         ptr = np.asarray(ptr, dtype=np.int64)
-        G, K, T = len(ptr) - 1, len(poses), self.steps + 1
+        G, K = len(ptr) - 1, len(poses)
         lo = np.clip(np.asarray(lo, dtype=np.int64), 0, None)
         hi = np.minimum(np.asarray(hi, dtype=np.int64), self.steps)
         sizes = np.diff(ptr)
         gid = np.repeat(np.arange(G), sizes)
-        tgrid = np.arange(T)
-        out = (tgrid < lo[gid, None]) | (tgrid > hi[gid, None])
+        none = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64))
         if not self.movers or K == 0:
-            return out
+            return none
         xy = poses[:, :2]
         starts = ptr[:-1]
         gmin = np.minimum.reduceat(xy, starts, axis=0)
@@ -183,7 +196,7 @@ class MoverField:
         near &= (chunk[None, :] <= (hi // CHUNK)[:, None])[:, None, :]
         g3, m3, c3 = np.nonzero(near)
         if g3.size == 0:
-            return out
+            return none
         # 2. mid phase: every step of those chunks, mover against the group's segment
         st = (c3[:, None] * CHUNK + np.arange(CHUNK)).ravel()
         g3 = np.repeat(g3, CHUNK)
@@ -199,7 +212,7 @@ class MoverField:
         keep = dq - body[g3] - self._extent[m3] < margin
         g3, m3, st, margin = g3[keep], m3[keep], st[keep], margin[keep]
         if g3.size == 0:
-            return out
+            return none
         # 3. exact distance for every point of each surviving group
         cnt = sizes[g3]
         node = np.repeat(ptr[g3], cnt) + (np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt))
@@ -213,8 +226,7 @@ class MoverField:
         d = self._distance(poses[node], m4, q)
         self.evaluations += d.size
         bad = d < margin
-        out[node[bad], st4[bad]] = True
-        return out
+        return node[bad], st4[bad]
 
     def _distance(self, poses: FloatArray, movers: IntArray, xy: FloatArray) -> FloatArray:
         """Robot-mover distance for aligned arrays of poses, mover indices and positions."""
@@ -321,7 +333,7 @@ def sipp(
     Returns the arrival-optimal sequence of (node, arrival step) on the time grid: the
     robot waits at a node from its arrival until one step before the next arrival.
     """
-    intervals: dict[int, tuple[list, list]] = {}
+    intervals: dict[int, tuple[list, list, int]] = {}
     H = field_.steps
     h = graph.heuristic
     n_nodes = len(graph.poses)
@@ -358,25 +370,28 @@ def sipp(
         sizes = ptr[pending + 1] - ptr[pending]
         sub_ptr = np.concatenate([[0], np.cumsum(sizes)])
         nodes = np.repeat(ptr[pending], sizes) + (np.arange(sub_ptr[-1]) - np.repeat(sub_ptr[:-1], sizes))
-        unsafe = field_.unsafe_groups(graph.poses[nodes], sub_ptr, g_lo[pending], g_hi[pending])
-        pad = np.ones((len(nodes), 1), dtype=bool)
-        d = np.diff(np.concatenate([pad, unsafe, pad], axis=1).view(np.int8), axis=1)
-        rs, cs = np.nonzero(d == -1)  # unsafe -> safe: an interval starts
-        re, ce = np.nonzero(d == 1)  # safe -> unsafe: it ended one step before
-        rows = np.arange(len(nodes) + 1)
-        batches.append(
-            (
-                cs.tolist(),
-                np.searchsorted(rs, rows).tolist(),
-                (ce - 1).tolist(),
-                np.searchsorted(re, rows).tolist(),
-            )
-        )
+        lo_n = np.repeat(g_lo[pending], sizes)
+        hi_n = np.repeat(g_hi[pending], sizes)
+        un, us = field_.unsafe_pairs(graph.poses[nodes], sub_ptr, g_lo[pending], g_hi[pending])
+        # safe intervals = the gaps between unsafe steps, with the window's ends as walls
+        k = len(nodes)
+        walls_n = np.concatenate([un, np.arange(k), np.arange(k)])
+        walls_s = np.concatenate([us, lo_n - 1, hi_n + 1])
+        order = np.lexsort((walls_s, walls_n))
+        wn, ws = walls_n[order], walls_s[order]
+        same = wn[1:] == wn[:-1]
+        gs, ge = ws[:-1] + 1, ws[1:] - 1
+        ok = same & (gs <= ge)
+        rn, cs, ce = wn[:-1][ok], gs[ok], ge[ok]
+        rows = np.arange(k + 1)
+        sp = np.searchsorted(rn, rows).tolist()
+        batches.append((cs.tolist(), sp, ce.tolist(), sp))
         node_batch[nodes] = len(batches) - 1
         node_local[nodes] = np.arange(len(nodes))
         node_cap[nodes] = np.repeat(g_hi[pending], sizes)
 
     def ivals(node: int):
+        """(interval starts, interval ends, last step examined) of a node, as lists."""
         iv = intervals.get(node)
         if iv is not None:
             return iv
@@ -386,34 +401,42 @@ def sipp(
             b = node_batch[node]
         cs, sp, ce, ep = batches[b]
         k = int(node_local[node])
-        iv = (cs[sp[k] : sp[k + 1]], ce[ep[k] : ep[k + 1]])
+        iv = (cs[sp[k] : sp[k + 1]], ce[ep[k] : ep[k + 1]], int(node_cap[node]))
         intervals[node] = iv
         return iv
 
-    indptr, nbrs = graph.indptr, graph.neighbors
-    can_wait = graph.can_wait
-    s_starts, s_ends = ivals(start)
+    # plain Python containers in the hot loop: numpy scalar indexing costs ~10x more
+    indptr = graph.indptr.tolist()
+    nbrs = graph.neighbors.tolist()
+    hl = h.tolist()
+    wait_ok = None if graph.can_wait is None else graph.can_wait.tolist()
+    inf = math.inf
+    s_starts, s_ends, _ = ivals(start)
     j0 = bisect_left(s_ends, start_step)
     if j0 >= len(s_starts) or s_starts[j0] > start_step:
         return SearchResult("no_path", message="the start is not safe from the movers at t0")
-    if not math.isfinite(h[start]):
+    if not math.isfinite(hl[start]):
         return SearchResult("no_path", message="the goal is not reachable on the roadmap")
-    best = {(start, j0): start_step}
-    parent: dict = {(start, j0): None}
-    tie = 0
-    openq = [(start_step + weight * h[start], -start_step, tie, start, j0)]
+    # a state (node, interval index) is the integer node * stride + index
+    stride = H + 2
+    key0 = start * stride + j0
+    best = {key0: start_step}
+    parent: dict = {key0: -1}
+    openq = [(start_step + weight * hl[start], -start_step, start, j0)]
+    heappop, heappush = heapq.heappop, heapq.heappush
     expansions = 0
     horizon_hit = False
     while openq:
-        f, neg_g, _, u, ju = heapq.heappop(openq)
+        _, neg_g, u, ju = heappop(openq)
         g = -neg_g
-        if best.get((u, ju), math.inf) < g:
+        ukey = u * stride + ju
+        if best.get(ukey, inf) < g:
             continue
         if u == goal:
             nodes, steps = [], []
-            key = (u, ju)
-            while key is not None:
-                nodes.append(key[0])
+            key = ukey
+            while key >= 0:
+                nodes.append(key // stride)
                 steps.append(best[key])
                 key = parent[key]
             return SearchResult(
@@ -424,30 +447,31 @@ def sipp(
             return SearchResult(
                 "timeout", message="planning time budget exhausted", expansions=expansions, states=len(best)
             )
-        end_u = intervals[u][1][ju]
-        if end_u >= node_cap[u]:  # the interval was cut by the horizon, not by a mover
+        _, u_ends, u_cap = intervals[u]
+        end_u = u_ends[ju]
+        if end_u >= u_cap:  # the interval was cut by the horizon, not by a mover
             horizon_hit = True
         lo = g + 1
-        hi = end_u + 1 if (can_wait is None or can_wait[u]) else lo
+        hi = end_u + 1 if (wait_ok is None or wait_ok[u]) else lo
         if hi > H:
             hi = H
         if lo > hi:
             continue
-        for k in range(indptr[u], indptr[u + 1]):
-            v = int(nbrs[k])
-            hv = h[v]
-            if hv == math.inf:
+        for v in nbrs[indptr[u] : indptr[u + 1]]:
+            hv = hl[v]
+            if hv == inf:
                 continue
-            starts, ends = ivals(v)
+            iv = intervals.get(v)
+            starts, ends, _ = iv if iv is not None else ivals(v)
             j = bisect_left(ends, lo)
-            while j < len(starts) and starts[j] <= hi:
+            n_iv = len(starts)
+            while j < n_iv and starts[j] <= hi:
                 arr = lo if starts[j] < lo else starts[j]
-                key = (v, j)
-                if arr < best.get(key, math.inf):
+                key = v * stride + j
+                if arr < best.get(key, inf):
                     best[key] = arr
-                    parent[key] = (u, ju)
-                    tie += 1
-                    heapq.heappush(openq, (arr + weight * hv, -arr, tie, v, j))
+                    parent[key] = ukey
+                    heappush(openq, (arr + weight * hv, -arr, v, j))
                 j += 1
     msg = (
         "no safe trajectory within the planning horizon"
