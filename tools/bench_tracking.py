@@ -101,7 +101,7 @@ def main() -> None:
         f"limits: vmax {limits.vmax} m/s, omega_max {limits.omega_max} rad/s, "
         f"amax {limits.amax} m/s^2, alpha_max {limits.alpha_max} rad/s^2; dt {tracking.TrackingOptions().dt} s"
     )
-    head = f"{'path':<22}{'profile':<10}{'length':>7}{'time s':>8}{'max err':>9}{'mean err':>9}{'max|w|cmd':>10}{'viol':>6}{'sim ms':>8}"
+    head = f"{'path':<35}{'profile':<10}{'length':>7}{'time s':>8}{'max err':>9}{'mean err':>9}{'max|w|cmd':>10}{'viol':>6}{'sim ms':>8}"
     print(head)
     print("-" * len(head))
     for row in rows:
@@ -109,7 +109,7 @@ def main() -> None:
         length = row["profile_sv"][0][-1]
         flag = "" if r.status is tracking.TrackStatus.REACHED else " (timeout)"
         print(
-            f"{row['path']:<22}{row['profile']:<10}{length:>7.2f}{r.traversal_time:>8.2f}"
+            f"{row['path']:<34} {row['profile']:<10}{length:>7.2f}{r.traversal_time:>8.2f}"
             f"{r.max_lateral_error:>9.3f}{r.mean_lateral_error:>9.3f}{r.max_abs_omega_cmd:>10.2f}"
             f"{r.violations.steps:>6d}{row['ms']:>8.1f}{flag}"
         )
@@ -117,7 +117,7 @@ def main() -> None:
     for label, _ in profiles:
         rs = [row["result"] for row in rows if row["profile"] == label]
         print(
-            f"{'mean':<22}{label:<10}{'':>7}{np.mean([r.traversal_time for r in rs]):>8.2f}"
+            f"{'mean':<35}{label:<10}{'':>7}{np.mean([r.traversal_time for r in rs]):>8.2f}"
             f"{np.mean([r.max_lateral_error for r in rs]):>9.3f}{np.mean([r.mean_lateral_error for r in rs]):>9.3f}"
             f"{np.mean([r.max_abs_omega_cmd for r in rs]):>10.2f}{np.mean([r.violations.steps for r in rs]):>6.1f}"
         )
