@@ -59,7 +59,7 @@ def _load_scene(path):
 
 def _roadmap_for(scene, args, quiet=False):
     """The roadmap a plan/regress run uses: --roadmap, -n/--seed, or the default file."""
-    from .roadmap import RoadmapOptions, build_roadmap, default_roadmap_path, load_roadmap
+    from .roadmap import RoadmapOptions, build_roadmap, load_roadmap
 
     if getattr(args, "roadmap", None):
         return load_roadmap(args.roadmap, scene)
@@ -69,22 +69,31 @@ def _roadmap_for(scene, args, quiet=False):
             seed=args.seed if args.seed is not None else RoadmapOptions.seed,
         )
         return build_roadmap(scene, opts, progress=_progress("roadmap"))
-    candidates = [default_roadmap_path(scene)]
-    scene_dir = Path(scene.source).resolve().parent
-    candidates.append(default_roadmap_path(scene, scene_dir.parent / "roadmaps"))
-    for path in candidates:
-        if path.is_file():
-            try:
-                return load_roadmap(path, scene)
-            except SceneError as exc:
-                if not quiet:
-                    _say(f"note: not using {path}: {exc.message}")
+    found = _default_roadmap(scene, quiet)
+    if found is not None:
+        return found
     if not quiet:
         _say(
             f"note: no roadmap file for {scene.name!r}; building one with "
             f"{RoadmapOptions.vertices} vertices (save one with `gfuzzy roadmap`)"
         )
     return build_roadmap(scene, RoadmapOptions(), progress=_progress("roadmap"))
+
+
+def _default_roadmap(scene, quiet=False):
+    """The roadmap file built for ``scene`` in roadmaps/ (here, or beside the scene's
+    folder), if there is one that matches it."""
+    from .roadmap import default_roadmap_path, load_roadmap
+
+    scene_dir = Path(scene.source).resolve().parent
+    for path in (default_roadmap_path(scene), default_roadmap_path(scene, scene_dir.parent / "roadmaps")):
+        if path.is_file():
+            try:
+                return load_roadmap(path, scene)
+            except SceneError as exc:
+                if not quiet:
+                    _say(f"note: not using {path}: {exc.message}")
+    return None
 
 
 def _plan_options(args):
@@ -253,7 +262,12 @@ def cmd_render(args) -> int:
             traj = tf.waypoints
         else:
             _say(f"note: {args.trajectory} has status {tf.status}: drawing the scene only")
-    roadmap = load_roadmap(args.roadmap, scene) if args.roadmap else None
+    if args.roadmap:
+        roadmap = load_roadmap(args.roadmap, scene)
+    elif out.suffix.lower() == ".png" and not args.no_roadmap:
+        roadmap = _default_roadmap(scene, quiet=True)
+    else:
+        roadmap = None
     options = {}
     if out.suffix.lower() == ".png" and traj is not None and args.speed:
         options["speed"] = True
@@ -323,7 +337,8 @@ def _parser() -> argparse.ArgumentParser:
     d.add_argument("scene", metavar="SCENE")
     d.add_argument("trajectory", metavar="TRAJ.json", nargs="?")
     d.add_argument("-o", "--output", required=True, metavar="OUT", help="OUT.png or OUT.gif")
-    d.add_argument("--roadmap", metavar="FILE", help="also draw this roadmap (PNG)")
+    d.add_argument("--roadmap", metavar="FILE", help="draw this roadmap (PNG; default: the scene's roadmaps/<name>.json if there is one)")
+    d.add_argument("--no-roadmap", action="store_true", help="do not draw a roadmap")
     d.add_argument("--speed", action="store_true", help="colour the path by speed (PNG)")
     d.set_defaults(func=cmd_render)
 

@@ -6,13 +6,19 @@ clearance callables; plus before/after length, turning, minimum clearance and co
 better). The static run is untimed (times=None); the mover runs reuse the input's timing
 (speed 1) and so also keep the refined path nowhere faster than the input.
 
-    python tools/bench_ga.py [--seed S] [--generations G] [--repeat R]
+Then, on the bundled scenes (with their bundled roadmaps): population 50 x 2000
+generations with the early stop off on building-floor's corridor with the real FCL and
+mover clearances (target: <= 2 s), and the before/after figures of `plan(refine=True)`
+for every bundled query.
+
+    python tools/bench_ga.py [--seed S] [--generations G] [--repeat R] [--skip-scenes]
 """
 
 from __future__ import annotations
 
 import argparse
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -88,6 +94,7 @@ def main(argv=None):
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--generations", type=int, default=2000)
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--skip-scenes", action="store_true")
     args = ap.parse_args(argv)
     path, times, mc = scenario(args.seed)
     print(
@@ -118,6 +125,64 @@ def main(argv=None):
             f"{res.fitness_before:5.3f} -> {res.fitness_after:5.3f}"
         )
     print("times: best of --repeat runs with the same seed")
+    if not args.skip_scenes:
+        bundled(args.seed, args.generations)
+
+
+FIGURES = (("length", ".2f"), ("smoothness", ".2f"), ("min_clearance", ".3f"), ("duration", ".2f"))
+
+
+def _pair(before: dict, after: dict, key: str, fmt: str) -> str:
+    if key not in before:
+        return f"{'-':>15}"
+    return f"{format(before[key], fmt):>6} -> {format(after[key], fmt):<6}"
+
+
+def bundled(seed: int, generations: int) -> None:
+    from gfuzzy.planner import Planner, PlanOptions
+    from gfuzzy.roadmap import load_roadmap
+    from gfuzzy.scene import load_scene
+    from gfuzzy.stages import _clearance_functions, _dedupe
+
+    root = Path(__file__).resolve().parent.parent
+    scenes = sorted((root / "scenes").glob("*.yaml"))
+
+    def setup(path):
+        scene = load_scene(path)
+        return scene, Planner(scene, load_roadmap(root / "roadmaps" / f"{scene.name}.json", scene))
+
+    scene, planner = setup(root / "scenes" / "building-floor.yaml")
+    q = scene.queries[0]
+    res = planner.plan(q.start, q.goal, q.t0)
+    _, static, mover = _clearance_functions(planner, _dedupe(res.trajectory.poses))
+    t0 = time.perf_counter()
+    ga = refine_path(
+        res.trajectory.poses[:, :2], res.trajectory.times, scene.robot.circumradius, static, mover,
+        GAOptions(generations=generations, patience=None), seed=seed,
+    )  # fmt: skip
+    print(
+        f"\nbuilding-floor corridor, population 50 x {ga.generations} generations, patience off: "
+        f"{time.perf_counter() - t0:.2f} s (improved: {ga.improved})"
+    )
+    print(
+        f"\n{'scene/query':<36}{'applied':>8}{'ms':>7}  {'length':>15}  {'turning rad':>14}  "
+        f"{'min clear':>15}  {'duration':>15}  note"
+    )
+    for path in scenes:
+        scene, planner = setup(path)
+        for q in scene.queries:
+            t0 = time.perf_counter()
+            res = planner.plan(q.start, q.goal, q.t0, PlanOptions(refine=True, seed=seed))
+            ms = (time.perf_counter() - t0) * 1000
+            if not res.solved:
+                print(f"{scene.name + '/' + q.name:<36}{'-':>8}{ms:7.0f}  ({res.status.value})")
+                continue
+            info = res.stats["refine"]
+            b = info.get("before", {})
+            a = info.get("after", b)
+
+            cols = "  ".join(_pair(b, a, key, fmt) for key, fmt in FIGURES)
+            print(f"{scene.name + '/' + q.name:<36}{str(info['applied']):>8}{ms:7.0f}  {cols}  {info.get('reason', '')}")
 
 
 if __name__ == "__main__":
