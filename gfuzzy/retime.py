@@ -286,7 +286,11 @@ def retime_profile(
             message = str(exc)
             break
         wait_at = np.array([0.0] + stops)
-        res = _search_chain(scene, poses, s, t0, dt, horizon, wait_at, deadline, (path, cum_m, corners, times))
+        # near a stop the robot crawls: waiting at any point within amax dt^2 / 2 of it
+        # (where it moves at most amax dt) keeps the speed changes within amax dt
+        res = _search_chain(
+            scene, poses, s, t0, dt, horizon, wait_at, deadline, (path, cum_m, corners, times), 0.5 * amax * dt**2
+        )
         if res.status == "solved":
             return ProfileRetime("solved", res.trajectory, waits=stops, profile_duration=duration)
         message = res.message
@@ -313,8 +317,13 @@ def retime_profile(
     return ProfileRetime("no_path", None, message or "no safe timing found", profile_duration=duration)
 
 
-def _search_chain(scene, poses, s, t0, dt, horizon, wait_at, deadline, corners=None) -> RetimeResult:
+def _search_chain(
+    scene, poses, s, t0, dt, horizon, wait_at, deadline, corners=None, wait_tol=0.0
+) -> RetimeResult:
     """The safe-interval search on a chain of points one step apart.
+
+    The robot may wait at the point nearest each arc length of ``wait_at`` and at every
+    point within ``wait_tol`` of it (None: anywhere).
 
     ``corners`` = (path, cum_m, [[s, t]...], node times): rows are added at the path's
     corners that a step would otherwise cut (see :func:`_chain_from_profile`).
@@ -333,6 +342,7 @@ def _search_chain(scene, poses, s, t0, dt, horizon, wait_at, deadline, corners=N
         can_wait[0] = True
         for w in np.atleast_1d(wait_at):
             can_wait[int(np.argmin(np.abs(s - w)))] = True
+            can_wait |= np.abs(s - w) <= wait_tol
     groups = np.unique(np.append(np.arange(0, m, GROUP), m))
     graph = SpaceTimeGraph(
         poses, indptr, nbrs, heur, can_wait=can_wait, groups=groups, from_start=np.arange(m, dtype=float)
