@@ -211,7 +211,25 @@ def cmd_plan(args) -> int:
     else:
         line += f" ({result.message})"
     _say(line, sys.stdout)
+    for key, label in (("refine", "GA refinement"), ("speed_layer", "speed layer")):
+        info = result.stats.get(key)
+        if info is not None:
+            _say(f"  {label}: {_stage_summary(info)}", sys.stdout)
     return EXIT_OK if result.solved else EXIT_NO
+
+
+def _stage_summary(info: dict) -> str:
+    if not info.get("applied"):
+        return f"not applied: {info.get('reason', '')}"
+    b, a = info.get("before", {}), info.get("after", {})
+    parts = []
+    for key, unit in (("length", "m"), ("smoothness", "rad turning"), ("min_clearance", "m clearance"),
+                      ("max_speed", "m/s max speed"), ("duration", "s")):  # fmt: skip
+        if key in b and key in a:
+            parts.append(f"{b[key]:.2f} -> {a[key]:.2f} {unit}")
+    if "stops" in info:
+        parts.append(f"{info['stops']} stop(s)")
+    return "applied: " + ", ".join(parts)
 
 
 def cmd_check(args) -> int:
