@@ -183,18 +183,8 @@ class MoverField:
         dev = np.maximum.reduceat(np.hypot(*(p0[gid] + tt[:, None] * seg[gid] - xy).T), starts)
         body = self.robot.circumradius + dev
 
-        # 1. broad phase: (group, mover, chunk) boxes
-        bb = self.bbox  # (M, NC, 4)
-        near = (
-            (bb[None, :, :, 0] <= gmax[:, None, None, 0])
-            & (gmin[:, None, None, 0] <= bb[None, :, :, 2])
-            & (bb[None, :, :, 1] <= gmax[:, None, None, 1])
-            & (gmin[:, None, None, 1] <= bb[None, :, :, 3])
-        )
-        chunk = np.arange(self.nc)
-        near &= (chunk[None, :] >= (lo // CHUNK)[:, None])[:, None, :]
-        near &= (chunk[None, :] <= (hi // CHUNK)[:, None])[:, None, :]
-        g3, m3, c3 = np.nonzero(near)
+        # 1. broad phase: (group, mover, chunk) whose boxes overlap
+        g3, m3, c3 = self._broad_phase(gmin, gmax, lo // CHUNK, hi // CHUNK)
         if g3.size == 0:
             return none
         # 2. mid phase: every step of those chunks, mover against the group's segment
@@ -227,6 +217,77 @@ class MoverField:
         self.evaluations += d.size
         bad = d < margin
         return node[bad], st4[bad]
+
+    def _broad_phase(self, gmin, gmax, c_lo, c_hi):
+        """(group, mover, chunk) triples whose boxes overlap, chunk within the group's range.
+
+        A join on (grid cell, chunk) rather than a dense groups x movers x chunks test, so
+        the work grows with the candidates, not with the product (200 movers, 10,000s of
+        edges).
+        """
+        empty = (np.zeros(0, np.int64),) * 3
+        c_lo = np.maximum(c_lo, 0)
+        c_hi = np.minimum(c_hi, self.nc - 1)
+        ok = c_lo <= c_hi
+        if not ok.any():
+            return empty
+        c0, c1 = int(c_lo[ok].min()), int(c_hi[ok].max())
+        bb = self.bbox[:, c0 : c1 + 1]  # (M, nc', 4)
+        m1, cc = np.nonzero(np.isfinite(bb[..., 0]))
+        if m1.size == 0:
+            return empty
+        boxes = bb[m1, cc]
+        c1_ = cc + c0
+        # grid: cells about the size of a mover's box over one chunk
+        widths = np.maximum(boxes[:, 2] - boxes[:, 0], boxes[:, 3] - boxes[:, 1])
+        x0 = min(boxes[:, 0].min(), gmin[:, 0].min())
+        y0 = min(boxes[:, 1].min(), gmin[:, 1].min())
+        x1 = max(boxes[:, 2].max(), gmax[:, 0].max())
+        y1 = max(boxes[:, 3].max(), gmax[:, 1].max())
+        cell = max(float(np.median(widths)), 1e-3)
+        cell = max(cell, math.sqrt((x1 - x0) * (y1 - y0) / 250_000.0))  # at most ~250k cells
+        nx = int((x1 - x0) / cell) + 1
+        ny = int((y1 - y0) / cell) + 1
+        nct = self.nc
+
+        def cells(b):
+            ix0 = np.clip(((b[:, 0] - x0) / cell).astype(np.int64), 0, nx - 1)
+            ix1 = np.clip(((b[:, 2] - x0) / cell).astype(np.int64), 0, nx - 1)
+            iy0 = np.clip(((b[:, 1] - y0) / cell).astype(np.int64), 0, ny - 1)
+            iy1 = np.clip(((b[:, 3] - y0) / cell).astype(np.int64), 0, ny - 1)
+            wx, wy = ix1 - ix0 + 1, iy1 - iy0 + 1
+            cnt = wx * wy
+            owner = np.repeat(np.arange(len(b)), cnt)
+            k = np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+            return owner, (iy0[owner] + k // wx[owner]) * nx + ix0[owner] + k % wx[owner]
+
+        # movers: (box, cell) keyed by (cell, chunk)
+        own1, cell1 = cells(boxes)
+        key1 = cell1 * nct + c1_[own1]
+        order = np.argsort(key1, kind="stable")
+        key1, own1 = key1[order], own1[order]
+        # groups: (group, cell, chunk) for every chunk of the group's range
+        gidx = np.nonzero(ok)[0]
+        own2, cell2 = cells(np.column_stack([gmin[gidx], gmax[gidx]]))
+        g2 = gidx[own2]
+        nchunk = c_hi[g2] - c_lo[g2] + 1
+        g2r = np.repeat(g2, nchunk)
+        ch = c_lo[g2r] + (np.arange(nchunk.sum()) - np.repeat(np.cumsum(nchunk) - nchunk, nchunk))
+        key2 = np.repeat(cell2, nchunk) * nct + ch
+        a = np.searchsorted(key1, key2, side="left")
+        b = np.searchsorted(key1, key2, side="right")
+        cnt = b - a
+        if cnt.sum() == 0:
+            return empty
+        g3 = np.repeat(g2r, cnt)
+        box3 = own1[np.repeat(a, cnt) + (np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt))]
+        bx = boxes[box3]
+        hit = (bx[:, 0] <= gmax[g3, 0]) & (gmin[g3, 0] <= bx[:, 2]) & (bx[:, 1] <= gmax[g3, 1]) & (gmin[g3, 1] <= bx[:, 3])
+        g3, box3 = g3[hit], box3[hit]
+        # a pair seen in several shared cells counts once
+        key = np.unique(g3 * len(boxes) + box3)
+        g3, box3 = key // len(boxes), key % len(boxes)
+        return g3, m1[box3], c1_[box3]
 
     def _distance(self, poses: FloatArray, movers: IntArray, xy: FloatArray) -> FloatArray:
         """Robot-mover distance for aligned arrays of poses, mover indices and positions."""
