@@ -61,6 +61,10 @@ REMOVED = -1
 
 StaticClearance = Callable[[FloatArray], FloatArray]
 MoverClearance = Callable[[FloatArray, FloatArray], FloatArray]
+#: ``static_segment(a (k, 2), b (k, 2)) -> (bound (k,), clearance (k,))``: a lower bound on
+#: the static clearance along each segment a-b (>= 0: the segment is free) and an estimate
+#: of its smallest clearance.
+StaticSegment = Callable[[FloatArray, FloatArray], "tuple[FloatArray, FloatArray]"]
 
 _EPS = 1e-12
 # The smooth operator's new nodes lie at a random fraction of the corner's two segments,
@@ -520,6 +524,7 @@ class PathEvaluator:
         reference_path: ArrayLike | None = None,
         reference_times: ArrayLike | None = None,
         options: GAOptions | None = None,
+        static_segment: StaticSegment | None = None,
     ):
         if not _pos(robot_radius):
             raise ValueError(f"robot_radius must be a finite number > 0, not {robot_radius!r}")
@@ -530,6 +535,7 @@ class PathEvaluator:
         opts = options or GAOptions()
         self.options = opts
         self.static_clearance = static_clearance
+        self.static_segment = static_segment
         self.mover_clearance = mover_clearance
         self.resolution = opts.resolution or 0.5 * robot_radius
         self.safe = opts.safe_clearance or robot_radius
@@ -667,9 +673,15 @@ class PathEvaluator:
                 cnt = (n + 1)[sel]
                 s_offs = np.zeros(len(sel), dtype=np.int64)
                 np.cumsum(cnt[:-1], out=s_offs[1:])
-            c = _call_static(self.static_clearance, s_xy)
-            lb = np.minimum.reduceat(_lipschitz_bound(c, s_gap, s_offs), s_offs)
-            mn = np.minimum.reduceat(c, s_offs)
+            if self.static_segment is not None:
+                # the caller certifies whole segments (e.g. by sphere tracing)
+                pick = slice(None) if sel is None else sel
+                lb, mn = self.static_segment(a[pick], a[pick] + e[pick])
+                lb, mn = np.asarray(lb, dtype=float), np.asarray(mn, dtype=float)
+            else:
+                c = _call_static(self.static_clearance, s_xy)
+                lb = np.minimum.reduceat(_lipschitz_bound(c, s_gap, s_offs), s_offs)
+                mn = np.minimum.reduceat(c, s_offs)
             if sel is None:
                 seg_lb, seg_min = lb, mn
             else:
@@ -1236,6 +1248,7 @@ def refine_path(
     mover_clearance: MoverClearance | None = None,
     options: GAOptions | None = None,
     seed: int | np.random.Generator | None = None,
+    static_segment: StaticSegment | None = None,
 ) -> GAResult:
     """Straighten and smooth a path's via-points with a genetic algorithm.
 
@@ -1279,6 +1292,11 @@ def refine_path(
         Defaults are the paper's.
     seed : int, numpy.random.Generator or None
         See :func:`gfuzzy.rng.create_rng`.
+    static_segment : callable or None
+        ``static_segment(a (k, 2), b (k, 2)) -> (bound, clearance)``: certifies whole
+        segments instead of sampling ``static_clearance`` along them (the planner passes
+        an exact sphere-tracing check, which also works in passages narrower than the
+        sample spacing allows).
 
     Returns
     -------
@@ -1307,7 +1325,9 @@ def refine_path(
         raise ValueError(f"robot_radius must be a finite number > 0, not {robot_radius!r}")
     rng = create_rng(seed)
 
-    evaluator = PathEvaluator(robot_radius, static_clearance, mover_clearance, path, t_in, opts)
+    evaluator = PathEvaluator(
+        robot_radius, static_clearance, mover_clearance, path, t_in, opts, static_segment
+    )
     chord = float(np.hypot(*(path[-1] - path[0])))
     before = evaluator.fitness(
         evaluator.evaluate(path[None], np.ones((1, len(path)), dtype=bool)), chord

@@ -296,6 +296,10 @@ class StaticGeometry:
         return np.array([self.clearance1(p) for p in poses], dtype=float)
 
     def motion_free(self, a, b, max_steps: int = 100_000) -> bool:
+        """True when the straight motion a -> b is certified free (see :meth:`motion_clearance`)."""
+        return self.motion_clearance(a, b, max_steps) >= 0
+
+    def motion_clearance(self, a, b, max_steps: int = 100_000) -> float:
         """Certify the straight motion a -> b (heading along the shorter arc) as free.
 
         Lipschitz argument: along the motion no point of the robot moves farther than the
@@ -305,9 +309,11 @@ class StaticGeometry:
 
         Returns
         -------
-        bool
-            True only when every pose of the motion was shown free; a motion that grazes
-            an obstacle (clearance below 1e-9 somewhere) is not certified.
+        float
+            -1 when the motion is not certified free (it collides, or grazes an obstacle
+            with clearance below 1e-9 somewhere); otherwise the smallest clearance found
+            at the poses examined (>= 0; an estimate of the motion's clearance, which is
+            exact at the ends).
         """
         a = [float(v) for v in a]
         b = [float(v) for v in b]
@@ -318,14 +324,15 @@ class StaticGeometry:
         total = math.hypot(dx, dy) + abs(dh) * self.r
         ca = self.clearance1(a)
         if ca < 0:
-            return False
+            return -1.0
         if total == 0.0:
-            return True
+            return ca
         cb = self.clearance1(b)
         if cb < 0:
-            return False
+            return -1.0
         lo = ca / total  # [0, lo] is certified
         hi = 1.0 - cb / total  # [hi, 1] is certified
+        low = min(ca, cb)
 
         def pose(f: float):
             p = [a[0] + f * dx, a[1] + f * dy]
@@ -335,18 +342,20 @@ class StaticGeometry:
 
         for _ in range(max_steps):
             if lo >= hi:
-                return True
+                return low
             c = self.clearance1(pose(lo))
             if c < _EPS_CERT_CLEARANCE:
-                return False
+                return -1.0
+            low = min(low, c)
             lo += c / total
             if lo >= hi:
-                return True
+                return low
             c = self.clearance1(pose(hi))
             if c < _EPS_CERT_CLEARANCE:
-                return False
+                return -1.0
+            low = min(low, c)
             hi -= c / total
-        return False
+        return -1.0
 
 
 # --------------------------------------------------------------------------- movers

@@ -84,8 +84,17 @@ def _clearance_functions(planner, corridor: FloatArray):
     def static_clearance(xy: FloatArray) -> FloatArray:
         return geometry.clearance(poses_of(xy))
 
+    def static_segment(a: FloatArray, b: FloatArray):
+        """Certify each segment exactly (sphere tracing), with the poses the final path
+        will have, so narrow passages do not defeat sampling."""
+        pa, pb = poses_of(a), poses_of(b)
+        mn = np.array([geometry.motion_clearance(p, q) for p, q in zip(pa, pb, strict=True)])
+        return np.where(mn >= 0, 0.0, -1.0), mn
+
     # The GA evaluates the mover clearance at every sample of every candidate, so the robot
-    # is taken as its circumscribed disc there: cheap for any shape, and a lower bound.
+    # is first taken as its circumscribed disc (cheap, a lower bound), and a box robot, only
+    # where that bound is negative, as the box at the corridor's heading (the separating-axis
+    # bound).
     # The re-timing afterwards decides safety with the exact shapes.
     disc = replace(robot, shape="disc", radius=robot.circumradius, size=(0.0, 0.0))
 
@@ -98,10 +107,16 @@ def _clearance_functions(planner, corridor: FloatArray):
             if not present.any():
                 continue
             d = mover_distance(disc, xy, mv.shape, mv.radius, mv.size, pos)
+            if heading is not None:  # near a mover, the box at the corridor's heading
+                near = np.nonzero(present & (d < 0.0))[0]
+                if near.size:
+                    poses = np.column_stack([xy[near], heading(xy[near])])
+                    box = mover_distance(robot, poses, mv.shape, mv.radius, mv.size, pos[near], exact=False)
+                    d[near] = np.maximum(d[near], box)
             out = np.minimum(out, np.where(present, d, np.inf))
         return out
 
-    return poses_of, static_clearance, mover_clearance
+    return poses_of, static_clearance, static_segment, mover_clearance
 
 
 def _accept(planner, traj: Trajectory, query_like, before: Trajectory, max_slowdown: float):
@@ -129,18 +144,26 @@ def _refine(planner, traj: Trajectory, query, opts, deadline) -> tuple[Trajector
     if len(corridor) < 3:
         info["reason"] = "the path is a straight segment already"
         return traj, info
-    poses_of, static_clearance, mover_clearance = _clearance_functions(planner, corridor)
+    poses_of, static_clearance, static_segment, mover_clearance = _clearance_functions(planner, corridor)
     t_ga = time.perf_counter()
-    res = refine_path(
-        traj.poses[:, :2],
-        traj.times,
-        robot.circumradius if robot.dof == 3 else robot.radius,
-        static_clearance,
-        mover_clearance if scene.movers else None,
-        opts.ga if opts.ga is not None else GAOptions(),
-        seed=opts.seed,
-    )
+    # The paper's 12 knots first; on a long winding corridor the chords between 12 knots
+    # cut through walls and no individual is feasible, so a default run tries twice as many.
+    tries = [opts.ga] if opts.ga is not None else [GAOptions(), GAOptions(n_knots=24)]
+    for ga_opts in tries:
+        res = refine_path(
+            traj.poses[:, :2],
+            traj.times,
+            robot.circumradius if robot.dof == 3 else robot.radius,
+            static_clearance,
+            mover_clearance if scene.movers else None,
+            ga_opts,
+            seed=opts.seed,
+            static_segment=static_segment,
+        )
+        if res.improved:
+            break
     info.update(
+        knots=ga_opts.n_knots,
         generations=res.generations,
         ga_seconds=time.perf_counter() - t_ga,
         before={

@@ -154,11 +154,11 @@ def bundled(seed: int, generations: int) -> None:
     scene, planner = setup(root / "scenes" / "building-floor.yaml")
     q = scene.queries[0]
     res = planner.plan(q.start, q.goal, q.t0)
-    _, static, mover = _clearance_functions(planner, _dedupe(res.trajectory.poses))
+    _, static, segment, mover = _clearance_functions(planner, _dedupe(res.trajectory.poses))
     t0 = time.perf_counter()
     ga = refine_path(
         res.trajectory.poses[:, :2], res.trajectory.times, scene.robot.circumradius, static, mover,
-        GAOptions(generations=generations, patience=None), seed=seed,
+        GAOptions(generations=generations, patience=None), seed=seed, static_segment=segment,
     )  # fmt: skip
     print(
         f"\nbuilding-floor corridor, population 50 x {ga.generations} generations, patience off: "
