@@ -71,13 +71,17 @@ def test_refined_answers_keep_the_guarantees(path):
             assert np.array_equal(refined.trajectory.waypoints, plain.trajectory.waypoints)
 
 
-def test_refinement_applies_on_the_disc_scenes():
-    applied = 0
+def test_refinement_applies_on_most_queries():
+    applied = solved = boxes = 0
     for path in SCENES:
-        if _setup(path)[0].robot.shape != "disc":
-            continue
-        applied += sum(r.stats["refine"]["applied"] for _, r in _answers(path, True, False) if r.solved)
-    assert applied >= 5
+        scene = _setup(path)[0]
+        for _, r in _answers(path, True, False):
+            if r.solved:
+                solved += 1
+                applied += r.stats["refine"]["applied"]
+                boxes += r.stats["refine"]["applied"] and scene.robot.shape == "box"
+    assert applied >= 0.75 * solved
+    assert boxes >= 1  # box robots too, through 0.6 m doors
 
 
 def test_refinement_is_reproducible():

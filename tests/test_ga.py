@@ -487,3 +487,26 @@ def test_bad_inputs_raise():
         refine_path(ZIGZAG, None, R_ROBOT, lambda xy: np.zeros(3), None, FAST)
     with pytest.raises(TypeError):
         refine_path(ZIGZAG, None, R_ROBOT, static, None, FAST, seed="x")
+
+
+def test_static_segment_hook_decides_static_feasibility():
+    """With a segment certifier, sampling the static clearance is not used for segments:
+    a certifier that refuses everything leaves the input; one that accepts all refines."""
+    path = np.array([[0.0, 0.0], [1.0, 1.0], [2.0, -1.0], [3.0, 1.0], [4.0, 0.0]])
+
+    def free(xy):
+        return np.full(len(xy), 1.0)
+
+    def refuse(a, b):
+        return np.full(len(a), -1.0), np.full(len(a), -1.0)
+
+    def accept(a, b):
+        return np.zeros(len(a)), np.full(len(a), 1.0)
+
+    opts = GAOptions(generations=60, patience=None, population=20)
+    kept = refine_path(path, None, 0.2, free, None, opts, seed=1, static_segment=refuse)
+    assert not kept.improved
+    np.testing.assert_array_equal(kept.path, path)
+    better = refine_path(path, None, 0.2, free, None, opts, seed=1, static_segment=accept)
+    assert better.improved
+    assert better.length_after < better.length_before
