@@ -295,17 +295,21 @@ class StaticGeometry:
         poses = np.atleast_2d(np.asarray(poses, dtype=float))
         return np.array([self.clearance1(p) for p in poses], dtype=float)
 
-    def motion_free(self, a, b, max_steps: int = 100_000) -> bool:
+    def motion_free(self, a, b, max_steps: int = 100_000, ca=None, cb=None) -> bool:
         """True when the straight motion a -> b is certified free (see :meth:`motion_clearance`)."""
-        return self.motion_clearance(a, b, max_steps) >= 0
+        return self.motion_clearance(a, b, max_steps, ca, cb) >= 0
 
-    def motion_clearance(self, a, b, max_steps: int = 100_000) -> float:
+    def motion_clearance(self, a, b, max_steps: int = 100_000, ca=None, cb=None) -> float:
         """Certify the straight motion a -> b (heading along the shorter arc) as free.
 
         Lipschitz argument: along the motion no point of the robot moves farther than the
         contract-metric length travelled, so a pose with clearance c proves every pose
         within metric distance c of it free. The check advances from both ends by the
         clearance found (sphere tracing) until the two certified stretches meet.
+
+        ca, cb : float, optional
+            The clearances of ``a`` and ``b`` when the caller knows them already (a
+            roadmap's vertices are shared by many edges).
 
         Returns
         -------
@@ -322,12 +326,12 @@ class StaticGeometry:
         if len(a) == 3:
             dh = (b[2] - a[2] + math.pi) % (2 * math.pi) - math.pi
         total = math.hypot(dx, dy) + abs(dh) * self.r
-        ca = self.clearance1(a)
+        ca = self.clearance1(a) if ca is None else float(ca)
         if ca < 0:
             return -1.0
         if total == 0.0:
             return ca
-        cb = self.clearance1(b)
+        cb = self.clearance1(b) if cb is None else float(cb)
         if cb < 0:
             return -1.0
         lo = ca / total  # [0, lo] is certified

@@ -71,7 +71,7 @@ class RoadmapOptions:
     vertices: int = 200
     seed: int = 1
     neighbors: int = 10
-    resolution: float = 0.02
+    resolution: float = 0.05
     sampler: str = "passage"
     bridge_ratio: float = 0.5
 
@@ -551,6 +551,7 @@ def grow_roadmaps(
     _seed_ompl(options.seed)
     builder = _Builder(scene, options, geometry)
     certified: dict = {}  # (pose a, pose b) bytes -> free: later sizes reuse the answers
+    vertex_clear: dict = {}  # pose bytes -> clearance
     out = []
     try:
         for n in sizes:
@@ -559,11 +560,19 @@ def grow_roadmaps(
             t_grow = time.perf_counter() - t_start
             calls_grow = geometry.calls - calls0
             keep = np.ones(len(edges), dtype=bool)
-            for k, (a, b) in enumerate(edges):
-                key = (vertices[a].tobytes(), vertices[b].tobytes())
+            vlist = vertices.tolist()
+            vkeys = [v.tobytes() for v in vertices]
+            clear = []
+            for key, pose in zip(vkeys, vlist, strict=True):  # once per vertex, not per edge
+                c = vertex_clear.get(key)
+                if c is None:
+                    c = vertex_clear[key] = geometry.clearance1(pose)
+                clear.append(c)
+            for k, (a, b) in enumerate(edges.tolist()):
+                key = (vkeys[a], vkeys[b])
                 free = certified.get(key)
                 if free is None:
-                    free = certified[key] = geometry.motion_free(vertices[a], vertices[b])
+                    free = certified[key] = geometry.motion_free(vlist[a], vlist[b], ca=clear[a], cb=clear[b])
                 keep[k] = free
                 if progress is not None and k % 2000 == 1999:
                     progress(k + 1, len(edges))
