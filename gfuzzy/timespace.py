@@ -196,16 +196,33 @@ class MoverField:
         keep = self.present[m3, st]
         g3, m3, st = g3[keep], m3[keep], st[keep]
         q = self.xy[m3, st]
-        tq = np.clip(np.einsum("ij,ij->i", q - p0[g3], seg[g3]) * inv[g3], 0.0, 1.0)
+        tu = np.einsum("ij,ij->i", q - p0[g3], seg[g3]) * inv[g3]  # unclipped
+        tq = np.clip(tu, 0.0, 1.0)
         dq = np.hypot(*(p0[g3] + tq[:, None] * seg[g3] - q).T)
         margin = self.margin[m3, st]
         keep = dq - body[g3] - self._extent[m3] < margin
-        g3, m3, st, margin = g3[keep], m3[keep], st[keep], margin[keep]
+        g3, m3, st, margin, tu = g3[keep], m3[keep], st[keep], margin[keep], tu[keep]
         if g3.size == 0:
             return none
-        # 3. exact distance for every point of each surviving group
-        cnt = sizes[g3]
-        node = np.repeat(ptr[g3], cnt) + (np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt))
+        # 3. exact distance for the points of each surviving group that can be in reach: on
+        #    an edge (points evenly spaced on the segment) only those whose position along
+        #    it is within sqrt(reach^2 - distance to the line^2) of the mover's projection
+        n_g = sizes[g3]
+        first = np.zeros(len(g3), dtype=np.int64)
+        last = n_g - 1
+        line = (dev[g3] < 1e-9) & (n_g > 1)
+        if line.any():
+            gl = g3[line]
+            length = np.sqrt(seg2[gl])
+            foot = p0[gl] + tu[line][:, None] * seg[gl]
+            perp2 = ((self.xy[m3[line], st[line]] - foot) ** 2).sum(-1)
+            reach = self.robot.circumradius + self._extent[m3[line]] + margin[line]
+            w = np.sqrt(np.maximum(reach**2 - perp2, 0.0))
+            spacing = length / (n_g[line] - 1)
+            first[line] = np.maximum(0, np.ceil((tu[line] * length - w) / spacing - 1e-9)).astype(np.int64)
+            last[line] = np.minimum(n_g[line] - 1, np.floor((tu[line] * length + w) / spacing + 1e-9)).astype(np.int64)
+        cnt = np.maximum(last - first + 1, 0)
+        node = np.repeat(ptr[g3] + first, cnt) + (np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt))
         m4 = np.repeat(m3, cnt)
         st4 = np.repeat(st, cnt)
         margin = np.repeat(margin, cnt)
