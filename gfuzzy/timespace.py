@@ -431,9 +431,8 @@ def sipp(
     g_hi = np.where(finite, H - np.floor(np.where(finite, g_hmin, 0) + 1e-9), -1).astype(np.int64)
     f_lb = np.minimum.reduceat(fs + h, ptr[:-1])
     done = np.zeros(len(ptr) - 1, dtype=bool)
-    node_batch = np.full(n_nodes, -1, dtype=np.int64)
-    node_local = np.zeros(n_nodes, dtype=np.int64)
-    node_cap = np.full(n_nodes, H, dtype=np.int64)  # last step examined (the time window)
+    # per node: (batch, index in it, last step examined); a Python list, read in the hot loop
+    node_where: list = [None] * n_nodes
     batches: list = []
     budget = max(1, 8_000_000 // (H + 1))  # points per batch (memory: points x steps bools)
 
@@ -464,22 +463,22 @@ def sipp(
         rows = np.arange(k + 1)
         sp = np.searchsorted(rn, rows).tolist()
         batches.append((cs.tolist(), sp, ce.tolist(), sp))
-        node_batch[nodes] = len(batches) - 1
-        node_local[nodes] = np.arange(len(nodes))
-        node_cap[nodes] = np.repeat(g_hi[pending], sizes)
+        b = len(batches) - 1
+        for k, (nid, cap) in enumerate(zip(nodes.tolist(), np.repeat(g_hi[pending], sizes).tolist(), strict=True)):
+            node_where[nid] = (b, k, cap)
 
     def ivals(node: int):
         """(interval starts, interval ends, last step examined) of a node, as lists."""
         iv = intervals.get(node)
         if iv is not None:
             return iv
-        b = node_batch[node]
-        if b < 0:
+        where = node_where[node]
+        if where is None:
             compute(int(np.searchsorted(ptr, node, side="right")) - 1)
-            b = node_batch[node]
+            where = node_where[node]
+        b, k, cap = where
         cs, sp, ce, ep = batches[b]
-        k = int(node_local[node])
-        iv = (cs[sp[k] : sp[k + 1]], ce[ep[k] : ep[k + 1]], int(node_cap[node]))
+        iv = (cs[sp[k] : sp[k + 1]], ce[ep[k] : ep[k + 1]], cap)
         intervals[node] = iv
         return iv
 
