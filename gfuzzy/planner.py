@@ -20,7 +20,7 @@ import numpy as np
 from .geometry import StaticGeometry, metric_distance
 from .roadmap import Roadmap
 from .scene import Scene
-from .timespace import MoverField, SpaceTimeGraph, sipp
+from .timespace import IntervalStore, MoverField, SpaceTimeGraph, sipp
 from .trajectory import Trajectory, TrajectoryFile
 from .typing import FloatArray
 
@@ -349,7 +349,8 @@ class Planner:
         # so a horizon close to the answer keeps that window, and the work, small.
         h0 = float(graph.heuristic[s_id])
         max_steps = int(math.ceil(max_horizon / opts.dt))
-        slack = max(64.0, 0.35 * h0)
+        slack = max(48.0, 0.15 * h0)
+        store = IntervalStore(graph)  # safety computed once, kept as the horizon grows
         expansions = evaluations = 0
         while True:
             steps = min(max_steps, int(math.ceil(h0 + slack)))
@@ -358,7 +359,7 @@ class Planner:
             hit = field_.collides_at(start, 0)
             if hit is not None:
                 return answer("invalid_query", f"start collides with mover {hit!r} at t0={t0:g}", rd=rd)
-            res = sipp(graph, field_, s_id, g_id, deadline=deadline, weight=opts.weight)
+            res = sipp(graph, field_, s_id, g_id, deadline=deadline, weight=opts.weight, store=store)
             expansions += res.expansions
             evaluations += field_.evaluations
             if res.status != "no_path" or not res.horizon_hit or steps >= max_steps:

@@ -25,7 +25,7 @@ import heapq
 import logging
 import math
 import time
-from bisect import bisect_left
+from bisect import bisect_left, bisect_right
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -394,62 +394,93 @@ class SearchResult:
     horizon_hit: bool = False
 
 
-def sipp(
-    graph: SpaceTimeGraph,
-    field_: MoverField,
-    start: int,
-    goal: int,
-    deadline: float = math.inf,
-    start_step: int = 0,
-    weight: float = 1.0,
-) -> SearchResult:
-    """Earliest-arrival search from ``start`` (at ``start_step``) to ``goal``.
+class IntervalStore:
+    """Safe intervals of a graph's points, computed in batches on demand.
 
-    With ``weight`` w > 1 the order is arrival + w * heuristic (weighted A*): far fewer
-    expansions, and the arrival is at most w times the earliest.
+    A point's safety is only computed inside its time window ``[from_start, H - h]`` (see
+    :class:`SpaceTimeGraph`); when the search's horizon H grows, the windows grow and only
+    the new steps are computed, so a search restarted with a longer horizon redoes no
+    safety work.
 
-    Returns the arrival-optimal sequence of (node, arrival step) on the time grid: the
-    robot waits at a node from its arrival until one step before the next arrival.
+    Parameters
+    ----------
+    graph : SpaceTimeGraph
     """
-    intervals: dict[int, tuple[list, list, int]] = {}
-    H = field_.steps
-    h = graph.heuristic
-    n_nodes = len(graph.poses)
-    # groups whose safety is computed together: each edge's points, every other node alone
-    first = int(graph.groups[0]) if graph.groups is not None else n_nodes
-    ptr = np.arange(first + 1, dtype=np.int64)
-    if graph.groups is not None:
-        ptr = np.unique(np.concatenate([ptr, np.asarray(graph.groups, dtype=np.int64)]))
-    ptr = ptr[ptr <= n_nodes]
-    if ptr[-1] != n_nodes:
-        ptr = np.append(ptr, n_nodes)
-    fs = graph.from_start if graph.from_start is not None else np.zeros(n_nodes)
-    fs = np.where(np.isfinite(fs), fs, 0.0)
-    g_lo = np.maximum(0, np.floor(np.minimum.reduceat(fs, ptr[:-1]) + 1e-9)).astype(np.int64)
-    g_hmin = np.minimum.reduceat(h, ptr[:-1])
-    finite = np.isfinite(g_hmin)
-    g_hi = np.where(finite, H - np.floor(np.where(finite, g_hmin, 0) + 1e-9), -1).astype(np.int64)
-    f_lb = np.minimum.reduceat(fs + h, ptr[:-1])
-    done = np.zeros(len(ptr) - 1, dtype=bool)
-    # per node: (batch, index in it, last step examined); a Python list, read in the hot loop
-    node_where: list = [None] * n_nodes
-    batches: list = []
-    budget = max(1, 8_000_000 // (H + 1))  # points per batch (memory: points x steps bools)
 
-    def compute(g: int) -> None:
-        pending = np.nonzero(~done & (f_lb <= f_lb[g] + BAND))[0]
-        pending = pending[np.argsort(f_lb[pending], kind="stable")]
+    def __init__(self, graph: SpaceTimeGraph):
+        self.graph = graph
+        n = len(graph.poses)
+        h = graph.heuristic
+        # groups whose safety is computed together: each edge's points, every other node alone
+        first = int(graph.groups[0]) if graph.groups is not None else n
+        ptr = np.arange(first + 1, dtype=np.int64)
+        if graph.groups is not None:
+            ptr = np.unique(np.concatenate([ptr, np.asarray(graph.groups, dtype=np.int64)]))
+        ptr = ptr[ptr <= n]
+        if ptr[-1] != n:
+            ptr = np.append(ptr, n)
+        self.ptr = ptr
+        self._ptr_l = ptr.tolist()
+        fs = graph.from_start if graph.from_start is not None else np.zeros(n)
+        fs = np.where(np.isfinite(fs), fs, 0.0)
+        self.g_lo = np.maximum(0, np.floor(np.minimum.reduceat(fs, ptr[:-1]) + 1e-9)).astype(np.int64)
+        hmin = np.minimum.reduceat(h, ptr[:-1])
+        self._finite = np.isfinite(hmin)
+        self._hfloor = np.floor(np.where(self._finite, hmin, 0) + 1e-9).astype(np.int64)
+        self.f_lb = np.minimum.reduceat(fs + h, ptr[:-1])
+        self.done_hi = np.full(len(ptr) - 1, -1, dtype=np.int64)  # last step computed
+        self._done_l = self.done_hi.tolist()
+        self._iv: dict = {}  # node -> (starts, ends) up to its group's done_hi
+        self.field = None
+        self.H = -1
+
+    def set_horizon(self, field_: MoverField) -> None:
+        """Serve intervals for ``field_``'s horizon (never shorter than before)."""
+        if field_.steps < self.H:
+            raise ValueError("the horizon of an IntervalStore only grows")
+        self.field = field_
+        self.H = field_.steps
+        self.g_hi = np.where(self._finite, self.H - self._hfloor, -1).astype(np.int64)
+        self._g_hi_l = self.g_hi.tolist()
+        self._served: dict = {}
+
+    def group_of(self, node: int) -> int:
+        return bisect_right(self._ptr_l, node) - 1
+
+    def get(self, node: int) -> tuple[list, list, int]:
+        """(interval starts, interval ends, last step examined) of a node, as lists."""
+        iv = self._served.get(node)
+        if iv is not None:
+            return iv
+        g = self.group_of(node)
+        cap = self._g_hi_l[g]
+        if self._done_l[g] < cap:
+            self._compute(g)
+        starts, ends = self._iv.get(node, ((), ()))
+        iv = (starts, ends, cap)
+        self._served[node] = iv
+        return iv
+
+    def _compute(self, g: int) -> None:
+        ptr, field_ = self.ptr, self.field
+        need = self.done_hi < self.g_hi
+        pending = np.nonzero(need & (self.f_lb <= self.f_lb[g] + BAND))[0]
+        pending = pending[np.argsort(self.f_lb[pending], kind="stable")]
+        budget = max(1, 8_000_000 // (self.H + 1))  # points per batch (points x steps bools)
         sizes = ptr[pending + 1] - ptr[pending]
         pending = pending[np.cumsum(sizes) <= budget]
         if g not in set(pending.tolist()):
             pending = np.append(pending, g)
-        done[pending] = True
+        lo = np.maximum(self.g_lo[pending], self.done_hi[pending] + 1)
+        hi = self.g_hi[pending]
+        self.done_hi[pending] = hi
+        for j, v in zip(pending.tolist(), hi.tolist(), strict=True):
+            self._done_l[j] = v
         sizes = ptr[pending + 1] - ptr[pending]
         sub_ptr = np.concatenate([[0], np.cumsum(sizes)])
         nodes = np.repeat(ptr[pending], sizes) + (np.arange(sub_ptr[-1]) - np.repeat(sub_ptr[:-1], sizes))
-        lo_n = np.repeat(g_lo[pending], sizes)
-        hi_n = np.repeat(g_hi[pending], sizes)
-        un, us = field_.unsafe_pairs(graph.poses[nodes], sub_ptr, g_lo[pending], g_hi[pending])
+        lo_n, hi_n = np.repeat(lo, sizes), np.repeat(hi, sizes)
+        un, us = field_.unsafe_pairs(self.graph.poses[nodes], sub_ptr, lo, hi)
         # safe intervals = the gaps between unsafe steps, with the window's ends as walls
         k = len(nodes)
         walls_n = np.concatenate([un, np.arange(k), np.arange(k)])
@@ -459,28 +490,52 @@ def sipp(
         same = wn[1:] == wn[:-1]
         gs, ge = ws[:-1] + 1, ws[1:] - 1
         ok = same & (gs <= ge)
-        rn, cs, ce = wn[:-1][ok], gs[ok], ge[ok]
-        rows = np.arange(k + 1)
-        sp = np.searchsorted(rn, rows).tolist()
-        batches.append((cs.tolist(), sp, ce.tolist(), sp))
-        b = len(batches) - 1
-        for k, (nid, cap) in enumerate(zip(nodes.tolist(), np.repeat(g_hi[pending], sizes).tolist(), strict=True)):
-            node_where[nid] = (b, k, cap)
+        rn = wn[:-1][ok]
+        cs, ce = gs[ok].tolist(), ge[ok].tolist()
+        sp = np.searchsorted(rn, np.arange(k + 1)).tolist()
+        store = self._iv
+        for i, (nid, first) in enumerate(zip(nodes.tolist(), lo_n.tolist(), strict=True)):
+            a, b = sp[i], sp[i + 1]
+            old = store.get(nid)
+            if old is None or not old[0]:
+                if a < b:
+                    store[nid] = (cs[a:b], ce[a:b])
+                continue
+            starts, ends = list(old[0]), list(old[1])
+            if a < b:
+                if ends[-1] == first - 1 and cs[a] == first:  # the last interval goes on
+                    ends[-1] = ce[a]
+                    a += 1
+                starts.extend(cs[a:b])
+                ends.extend(ce[a:b])
+            store[nid] = (starts, ends)
 
-    def ivals(node: int):
-        """(interval starts, interval ends, last step examined) of a node, as lists."""
-        iv = intervals.get(node)
-        if iv is not None:
-            return iv
-        where = node_where[node]
-        if where is None:
-            compute(int(np.searchsorted(ptr, node, side="right")) - 1)
-            where = node_where[node]
-        b, k, cap = where
-        cs, sp, ce, ep = batches[b]
-        iv = (cs[sp[k] : sp[k + 1]], ce[ep[k] : ep[k + 1]], cap)
-        intervals[node] = iv
-        return iv
+
+def sipp(
+    graph: SpaceTimeGraph,
+    field_: MoverField,
+    start: int,
+    goal: int,
+    deadline: float = math.inf,
+    start_step: int = 0,
+    weight: float = 1.0,
+    store: IntervalStore | None = None,
+) -> SearchResult:
+    """Earliest-arrival search from ``start`` (at ``start_step``) to ``goal``.
+
+    With ``weight`` w > 1 the order is arrival + w * heuristic (weighted A*): far fewer
+    expansions, and the arrival is at most w times the earliest. ``store`` keeps the
+    safety computed by an earlier search on the same graph with a shorter horizon.
+
+    Returns the arrival-optimal sequence of (node, arrival step) on the time grid: the
+    robot waits at a node from its arrival until one step before the next arrival.
+    """
+    H = field_.steps
+    h = graph.heuristic
+    store = store or IntervalStore(graph)
+    store.set_horizon(field_)
+    ivals = store.get
+    intervals = store._served
 
     # plain Python containers in the hot loop: numpy scalar indexing costs ~10x more
     indptr = graph.indptr.tolist()
