@@ -20,7 +20,7 @@ import numpy as np
 from .geometry import StaticGeometry, metric_distance
 from .roadmap import Roadmap
 from .scene import Scene
-from .timespace import IntervalStore, MoverField, SpaceTimeGraph, sipp
+from .timespace import IntervalStore, MoverField, SpaceTimeGraph, sipp, timed_rows
 from .trajectory import Trajectory, TrajectoryFile
 from .typing import FloatArray
 
@@ -377,7 +377,7 @@ class Planner:
             res.message = f"no safe trajectory within the planning horizon of {horizon:g} s"
         if res.status != "solved":
             return answer(res.status, res.message, rd=rd, **stats)
-        traj = _to_trajectory(graph.poses, res.nodes, res.steps, t0, opts.dt, robot.circumradius)
+        traj = Trajectory(timed_rows(res.nodes, res.steps, graph.poses, t0, opts.dt)[0], robot.circumradius)
         stats["search_seconds"] = time.perf_counter() - t_begin
         result = answer("solved", "", traj, rd, **stats)
         if opts.refine or opts.speed_layer:
@@ -385,16 +385,6 @@ class Planner:
 
             result = apply_stages(self, result, start, goal, t0, opts, field_, t_begin)
         return result
-
-
-def _to_trajectory(poses, nodes, steps, t0, dt, r) -> Trajectory:
-    rows = [(steps[0], poses[nodes[0]])]
-    for k in range(1, len(nodes)):
-        if steps[k] - 1 > steps[k - 1]:
-            rows.append((steps[k] - 1, poses[nodes[k - 1]]))
-        rows.append((steps[k], poses[nodes[k]]))
-    wps = np.array([[t0 + n * dt, *p] for n, p in rows], dtype=float)
-    return Trajectory(wps, r)
 
 
 def plan(

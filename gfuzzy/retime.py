@@ -9,13 +9,12 @@ guarantee of CONTRACT.md section 3 for the same reason the roadmap search does.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 
 import numpy as np
 
 from .geometry import metric_distance, wrap_angle
 from .scene import Scene
-from .timespace import MoverField, SpaceTimeGraph, sipp
+from .timespace import MoverField, SpaceTimeGraph, sipp, timed_rows
 from .trajectory import Trajectory
 from .typing import FloatArray
 
@@ -44,14 +43,8 @@ def _pose_at_s(path: FloatArray, s_path: FloatArray, s: FloatArray) -> FloatArra
     return out
 
 
-def chain_points(
-    path: FloatArray,
-    circumradius: float,
-    step: float,
-    speed_limit: Callable[[FloatArray], FloatArray] | None = None,
-    dt: float = 1.0,
-) -> tuple[FloatArray, FloatArray]:
-    """Cut a path into points one time step apart.
+def chain_points(path: FloatArray, circumradius: float, step: float) -> tuple[FloatArray, FloatArray]:
+    """Cut a path into points at most one step (``step`` metres of the metric) apart.
 
     Parameters
     ----------
@@ -60,10 +53,6 @@ def chain_points(
     circumradius : float
     step : float
         Largest metric distance per step (vmax * dt).
-    speed_limit : callable, optional
-        ``v(s)`` for arc lengths ``s`` (k,) -> (k,); a step from s moves at most
-        ``dt * min(v(s), v(s + that step))``, never more than ``step``.
-    dt : float
 
     Returns
     -------
@@ -74,39 +63,18 @@ def chain_points(
     """
     path = np.asarray(path, dtype=float)
     s_path = _arc_length(path, circumradius)
-    total = s_path[-1]
-    if speed_limit is None:
-        pieces = [np.array([0.0])]
-        for a, b in zip(s_path[:-1], s_path[1:], strict=True):
-            seg = b - a
-            if seg <= 0:
-                continue
-            k = max(1, int(math.ceil(seg / step)))
-            if seg / k > step:
-                k += 1
-            pieces.append(a + seg * np.arange(1, k + 1) / k)
-        s = np.concatenate(pieces)
-        s[-1] = total
-    else:
-        corners = set(s_path.tolist())
-        s_list = [0.0]
-        cur = 0.0
-        floor = 1e-3 * step
-        while cur < total - 1e-12:
-            v = float(speed_limit(np.array([cur]))[0])
-            ds = min(step, max(floor, v * dt))
-            v2 = float(speed_limit(np.array([min(total, cur + ds)]))[0])
-            ds = min(ds, max(floor, v2 * dt))
-            nxt = min(total, cur + ds)
-            # do not step over a corner of the path
-            over = [c for c in corners if cur + 1e-12 < c < nxt - 1e-12]
-            if over:
-                nxt = min(over)
-            s_list.append(nxt)
-            cur = nxt
-        s = np.array(s_list)
-    # drop zero-length repeats (zero-length segments of the input)
-    keep = np.concatenate([[True], np.diff(s) > 0])
+    pieces = [np.array([0.0])]
+    for a, b in zip(s_path[:-1], s_path[1:], strict=True):
+        seg = b - a
+        if seg <= 0:
+            continue
+        k = max(1, int(math.ceil(seg / step)))
+        if seg / k > step:
+            k += 1
+        pieces.append(a + seg * np.arange(1, k + 1) / k)
+    s = np.concatenate(pieces)
+    s[-1] = s_path[-1]
+    keep = np.concatenate([[True], np.diff(s) > 0])  # zero-length segments of the input
     s = s[keep]
     return _pose_at_s(path, s_path, s), s
 
@@ -127,7 +95,6 @@ def retime_path(
     t0: float,
     dt: float,
     horizon: float,
-    speed_limit: Callable[[FloatArray], FloatArray] | None = None,
     wait_at: FloatArray | None = None,
     deadline: float = math.inf,
 ) -> RetimeResult:
@@ -141,8 +108,6 @@ def retime_path(
     t0, dt : float
     horizon : float
         Longest duration considered, seconds.
-    speed_limit : callable v(s), optional
-        Upper bound on speed along the path (default vmax).
     wait_at : (k,) float, optional
         Arc lengths where the robot may stop and wait; None: anywhere. The start is
         always allowed.
@@ -158,7 +123,7 @@ def retime_path(
 
     robot = scene.robot
     step = robot.vmax * SPEED_SAFETY * dt
-    poses, s = chain_points(path, robot.circumradius, step, speed_limit, dt)
+    poses, s = chain_points(path, robot.circumradius, step)
     return _search_chain(scene, poses, s, t0, dt, horizon, wait_at, deadline)
 
 
@@ -352,21 +317,18 @@ def _search_chain(
     res = sipp(graph, field_, 0, m - 1, deadline=deadline)
     if res.status != "solved":
         return RetimeResult(res.status, None, res.message)
-    rows = [(t0 + res.steps[0] * dt, poses[res.nodes[0]])]
-    waits = []
-    for k in range(1, len(res.nodes)):
-        a, b = res.nodes[k - 1], res.nodes[k]
-        depart = res.steps[k] - 1
-        if depart > res.steps[k - 1]:
-            rows.append((t0 + depart * dt, poses[a]))
-            waits.append(float(s[a]))
-        if corners is not None:
-            path, cum_m, cs, times = corners
+    between = None
+    if corners is not None:
+        path, cum_m, cs, times = corners
+
+        def between(a: int, b: int):
+            """Rows at the corners a step from a to b would cut: (fraction of the step, pose)."""
             inside = (cs[:, 0] > s[a] + 1e-12) & (cs[:, 0] < s[b] - 1e-12)
             for sc, tc in cs[inside]:
                 frac = (tc - times[a]) / (times[b] - times[a])
                 if 0.0 < frac < 1.0:
-                    rows.append((t0 + (depart + frac) * dt, _pose_at_s(path, cum_m, np.array([sc]))[0]))
-        rows.append((t0 + res.steps[k] * dt, poses[b]))
-    wps = np.array([[t, *p] for t, p in rows], dtype=float)
+                    yield frac, _pose_at_s(path, cum_m, np.array([sc]))[0]
+
+    wps, wait_nodes = timed_rows(res.nodes, res.steps, poses, t0, dt, between)
+    waits = [float(s[a]) for a in wait_nodes]
     return RetimeResult("solved", Trajectory(wps, robot.circumradius), waits=waits)

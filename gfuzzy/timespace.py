@@ -34,7 +34,7 @@ from .geometry import mover_distance
 from .scene import Robot, Scene
 from .typing import BoolArray, FloatArray, IntArray
 
-__all__ = ["MoverField", "SpaceTimeGraph", "SearchResult", "sipp"]
+__all__ = ["MoverField", "SpaceTimeGraph", "SearchResult", "IntervalStore", "sipp", "timed_rows"]
 
 log = logging.getLogger(__name__)
 
@@ -611,3 +611,32 @@ def sipp(
         else "the reachable space-time is exhausted: no safe trajectory exists on this graph"
     )
     return SearchResult("no_path", message=msg, expansions=expansions, states=len(best), horizon_hit=horizon_hit)
+
+
+def timed_rows(nodes, steps, poses, t0: float, dt: float, between=None):
+    """Trajectory rows of a search's answer.
+
+    The robot waits at a node from its arrival until one step before the next arrival,
+    then moves in one step; ``between(a, b)`` may add rows inside the step from a to b as
+    (fraction of the step, pose).
+
+    Returns
+    -------
+    rows : (r, d + 1) float
+        ``[t, pose...]``; t strictly increasing.
+    waits : list of int
+        The nodes where the answer waits.
+    """
+    rows = [(t0 + steps[0] * dt, poses[nodes[0]])]
+    waits = []
+    for k in range(1, len(nodes)):
+        a, b = nodes[k - 1], nodes[k]
+        depart = steps[k] - 1
+        if depart > steps[k - 1]:
+            rows.append((t0 + depart * dt, poses[a]))
+            waits.append(a)
+        if between is not None:
+            for frac, pose in between(a, b):
+                rows.append((t0 + (depart + frac) * dt, pose))
+        rows.append((t0 + steps[k] * dt, poses[b]))
+    return np.array([[t, *p] for t, p in rows], dtype=float), waits
