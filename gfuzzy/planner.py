@@ -349,7 +349,10 @@ class Planner:
         # so a horizon close to the answer keeps that window, and the work, small.
         h0 = float(graph.heuristic[s_id])
         max_steps = int(math.ceil(max_horizon / opts.dt))
-        slack = max(48.0, 0.15 * h0)
+        # First slack: with few movers the search dominates the cost and a second run
+        # would double it, so start generously; with many, the movers' safety dominates,
+        # it grows with the slack, and a rerun reuses it (IntervalStore): start tight.
+        slack = max(48.0, (0.35 if len(self.scene.movers) <= 10 else 0.15) * h0)
         store = IntervalStore(graph)  # safety computed once, kept as the horizon grows
         expansions = evaluations = 0
         while True:
