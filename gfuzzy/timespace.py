@@ -430,7 +430,11 @@ class IntervalStore:
         self.f_lb = np.minimum.reduceat(fs + h, ptr[:-1])
         self.done_hi = np.full(len(ptr) - 1, -1, dtype=np.int64)  # last step computed
         self._done_l = self.done_hi.tolist()
-        self._iv: dict = {}  # node -> (starts, ends) up to its group's done_hi
+        # intervals stay in their batch's lists until a search asks for them
+        self._batches: list = []  # (starts, row pointers, ends, first step examined per row)
+        self._where = np.full(n, -1, dtype=np.int64)  # batch of a node's latest computation
+        self._local = np.zeros(n, dtype=np.int64)  # its row there
+        self._older: dict = {}  # node -> (starts, ends) from computations before the latest
         self.field = None
         self.H = -1
 
@@ -456,10 +460,29 @@ class IntervalStore:
         cap = self._g_hi_l[g]
         if self._done_l[g] < cap:
             self._compute(g)
-        starts, ends = self._iv.get(node, ((), ()))
+        starts, ends = self._intervals(node)
         iv = (starts, ends, cap)
         self._served[node] = iv
         return iv
+
+    def _intervals(self, node: int) -> tuple[list, list]:
+        b = int(self._where[node])
+        if b < 0:
+            return [], []
+        cs, sp, ce, first = self._batches[b]
+        k = int(self._local[node])
+        a, z = sp[k], sp[k + 1]
+        old = self._older.get(node)
+        if old is None or not old[0]:
+            return cs[a:z], ce[a:z]
+        starts, ends = list(old[0]), list(old[1])
+        if a < z:
+            if ends[-1] == first[k] - 1 and cs[a] == first[k]:  # the last interval goes on
+                ends[-1] = ce[a]
+                a += 1
+            starts.extend(cs[a:z])
+            ends.extend(ce[a:z])
+        return starts, ends
 
     def _compute(self, g: int) -> None:
         ptr, field_ = self.ptr, self.field
@@ -491,24 +514,13 @@ class IntervalStore:
         gs, ge = ws[:-1] + 1, ws[1:] - 1
         ok = same & (gs <= ge)
         rn = wn[:-1][ok]
-        cs, ce = gs[ok].tolist(), ge[ok].tolist()
         sp = np.searchsorted(rn, np.arange(k + 1)).tolist()
-        store = self._iv
-        for i, (nid, first) in enumerate(zip(nodes.tolist(), lo_n.tolist(), strict=True)):
-            a, b = sp[i], sp[i + 1]
-            old = store.get(nid)
-            if old is None or not old[0]:
-                if a < b:
-                    store[nid] = (cs[a:b], ce[a:b])
-                continue
-            starts, ends = list(old[0]), list(old[1])
-            if a < b:
-                if ends[-1] == first - 1 and cs[a] == first:  # the last interval goes on
-                    ends[-1] = ce[a]
-                    a += 1
-                starts.extend(cs[a:b])
-                ends.extend(ce[a:b])
-            store[nid] = (starts, ends)
+        again = nodes[self._where[nodes] >= 0]
+        for nid in again.tolist():  # extended windows: keep what was computed before
+            self._older[nid] = self._intervals(nid)
+        self._batches.append((gs[ok].tolist(), sp, ge[ok].tolist(), lo_n.tolist()))
+        self._where[nodes] = len(self._batches) - 1
+        self._local[nodes] = np.arange(k)
 
 
 def sipp(
