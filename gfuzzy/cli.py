@@ -224,7 +224,7 @@ def _stage_summary(info: dict) -> str:
     b, a = info.get("before", {}), info.get("after", {})
     parts = []
     for key, unit in (("length", "m"), ("smoothness", "rad turning"), ("min_clearance", "m clearance"),
-                      ("max_speed", "m/s max speed"), ("duration", "s")):  # fmt: skip
+                      ("mean_speed", "m/s mean speed"), ("duration", "s")):  # fmt: skip
         if key in b and key in a:
             parts.append(f"{b[key]:.2f} -> {a[key]:.2f} {unit}")
     if "stops" in info:

@@ -386,7 +386,7 @@ class Planner:
         if opts.refine or opts.speed_layer:
             from .stages import apply_stages
 
-            result = apply_stages(self, result, start, goal, t0, opts, field_, t_begin)
+            result = apply_stages(self, result, start, goal, t0, opts, t_begin)
         return result
 
 

@@ -19,10 +19,11 @@ import numpy as np
 from .check import check_trajectory
 from .geometry import mover_distance, wrap_angle
 from .retime import retime_path, retime_profile
+from .scene import Query
 from .trajectory import Trajectory
 from .typing import FloatArray
 
-__all__ = ["apply_stages", "path_figures"]
+__all__ = ["apply_stages"]
 
 log = logging.getLogger(__name__)
 
@@ -31,22 +32,6 @@ def _dedupe(poses: FloatArray) -> FloatArray:
     """Drop consecutive repeated poses (waits) from a trajectory's path."""
     keep = np.concatenate([[True], np.any(np.abs(np.diff(poses, axis=0)) > 1e-12, axis=1)])
     return poses[keep]
-
-
-def path_figures(poses: FloatArray, clearance: FloatArray | None = None) -> dict:
-    """Length (xy), smoothness (sum of absolute turning, radians) of a path."""
-    xy = _dedupe(poses)[:, :2]
-    seg = np.diff(xy, axis=0)
-    seg = seg[np.hypot(*seg.T) > 1e-12] if len(seg) else seg
-    length = float(np.sum(np.hypot(*seg.T))) if len(seg) else 0.0
-    turn = 0.0
-    if len(seg) > 1:
-        ang = np.arctan2(seg[:, 1], seg[:, 0])
-        turn = float(np.sum(np.abs(wrap_angle(np.diff(ang)))))
-    out = {"length": length, "smoothness": turn}
-    if clearance is not None:
-        out["min_clearance"] = float(np.min(clearance))
-    return out
 
 
 def _heading_lookup(corridor: FloatArray):
@@ -130,11 +115,6 @@ def _accept(planner, traj: Trajectory, query_like, before: Trajectory, max_slowd
     return True, ""
 
 
-class _Query:
-    def __init__(self, start, goal, t0):
-        self.start, self.goal, self.t0 = tuple(start), tuple(goal), t0
-
-
 def _refine(planner, traj: Trajectory, query, opts, deadline) -> tuple[Trajectory, dict]:
     from .ga import GAOptions, refine_path
 
@@ -214,7 +194,7 @@ def _speed_layer(planner, traj: Trajectory, query, opts, deadline) -> tuple[Traj
     if len(path) < 2:
         info["reason"] = "the start is the goal"
         return traj, info
-    rules = opts.rules if getattr(opts, "rules", None) is not None else expert_rules()
+    rules = opts.rules if opts.rules is not None else expert_rules()
     s_xy, v_xy = speed_limit(path[:, :2], robot.vmax, amax, rules, FuzzyOptions())
     horizon = max(opts.horizon or 0.0, 3.0 * traj.duration + 30.0)
     rt = retime_profile(scene=planner.scene, path=path, s_xy=s_xy, v_xy=v_xy, t0=query.t0,
@@ -230,17 +210,25 @@ def _speed_layer(planner, traj: Trajectory, query, opts, deadline) -> tuple[Traj
     info.update(
         applied=True,
         stops=len(rt.waits),
-        before={"duration": traj.duration, "max_speed": float(traj.speeds().max(initial=0.0))},
-        after={"duration": rt.trajectory.duration, "max_speed": float(rt.trajectory.speeds().max(initial=0.0))},
+        before=_speed_figures(traj),
+        after=_speed_figures(rt.trajectory),
     )
     return rt.trajectory, info
 
 
-def apply_stages(planner, result, start, goal, t0, opts, field_, t_begin):
+def _speed_figures(traj: Trajectory) -> dict:
+    moving = traj.speeds()[traj.speeds() > 0]
+    return {
+        "duration": traj.duration,
+        "max_speed": float(moving.max(initial=0.0)),
+        "mean_speed": float(moving.mean()) if moving.size else 0.0,
+    }
+
+
+def apply_stages(planner, result, start, goal, t0, opts, t_begin):
     """Run the GA refinement and/or the speed layer on a solved result."""
-    del field_  # the stages time their own paths
     deadline = t_begin + opts.time_limit
-    query = _Query(start, goal, t0)
+    query = Query("stage", tuple(start), tuple(goal), t0)
     traj = result.trajectory
     stats = dict(result.stats)
     if opts.refine:
