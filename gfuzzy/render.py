@@ -31,7 +31,9 @@ from matplotlib.patches import Polygon as PolygonPatch
 from matplotlib.path import Path as MplPath
 
 from .atomic import write_atomic_with
+from .geometry import wrap_angle
 from .scene import Box, Disc, Mover, Polygon, Scene
+from .trajectory import Trajectory
 from .typing import FloatArray
 
 __all__ = [
@@ -123,60 +125,19 @@ def as_waypoints(trajectory: Any, scene: Scene | None = None) -> FloatArray:
     return wp
 
 
-def _wrap(angle: FloatArray) -> FloatArray:
-    """Angles mapped to [-pi, pi)."""
-    return np.mod(np.asarray(angle) + np.pi, 2 * np.pi) - np.pi
-
-
 def interpolate_poses(waypoints: FloatArray, times: FloatArray) -> FloatArray:
-    """Robot poses at ``times``: linear in x and y, heading along the shorter arc.
-
-    Parameters
-    ----------
-    waypoints : (n, 3) or (n, 4) float
-        ``[t, x, y(, heading)]`` rows, t increasing.
-    times : (k,) float
-        Clamped to ``[waypoints[0, 0], waypoints[-1, 0]]``.
+    """Robot poses at ``times`` (clamped to the trajectory): :meth:`Trajectory.at`.
 
     Returns
     -------
     (k, 2) or (k, 3) float
-        ``[x, y]`` or ``[x, y, heading]``; headings are not wrapped.
     """
-    wp = np.asarray(waypoints, dtype=float)
-    times = np.atleast_1d(np.asarray(times, dtype=float))
-    if len(wp) == 1:
-        return np.repeat(wp[:, 1:], times.size, axis=0)
-    t = wp[:, 0]
-    i = np.clip(np.searchsorted(t, times, side="right") - 1, 0, len(wp) - 2)
-    s = np.clip((times - t[i]) / (t[i + 1] - t[i]), 0.0, 1.0)[:, None]
-    a, b = wp[i, 1:], wp[i + 1, 1:]
-    delta = b - a
-    if wp.shape[1] == 4:
-        delta[:, 2] = _wrap(delta[:, 2])
-    return a + s * delta
+    return Trajectory(np.asarray(waypoints, dtype=float)).at(np.atleast_1d(np.asarray(times, dtype=float)))
 
 
 def segment_speeds(waypoints: FloatArray, circumradius: float = 0.0) -> FloatArray:
-    """Configuration speed of every segment (CONTRACT.md section 3).
-
-    Parameters
-    ----------
-    waypoints : (n, 3) or (n, 4) float
-    circumradius : float
-        Robot's circumscribed radius, weighting heading change.
-
-    Returns
-    -------
-    (n - 1,) float
-        ``(|dxy| + |dheading| * circumradius) / dt``.
-    """
-    wp = np.asarray(waypoints, dtype=float)
-    d = np.diff(wp, axis=0)
-    dist = np.hypot(d[:, 1], d[:, 2])
-    if wp.shape[1] == 4:
-        dist = dist + np.abs(_wrap(d[:, 3])) * circumradius
-    return dist / d[:, 0]
+    """Configuration speed of every segment (CONTRACT.md section 3): :meth:`Trajectory.speeds`."""
+    return Trajectory(np.asarray(waypoints, dtype=float), circumradius).speeds()
 
 
 def wait_intervals(
@@ -194,7 +155,7 @@ def wait_intervals(
         return []
     d = np.abs(np.diff(wp[:, 1:], axis=0))
     if wp.shape[1] == 4:
-        d[:, 2] = np.abs(_wrap(d[:, 2]))
+        d[:, 2] = np.abs(wrap_angle(d[:, 2]))
     still = np.all(d <= tol, axis=1)
     out = []
     i = 0

@@ -258,8 +258,9 @@ def test_bad_trajectory_raises_and_keeps_old_file(disc_scene, tmp_path, waypoint
 def test_interpolation_takes_the_shorter_arc():
     wp = np.array([[0.0, 0.0, 0.0, 3.0], [2.0, 2.0, 4.0, -3.0]])
     pose = R.interpolate_poses(wp, [1.0, -5.0, 9.0])
-    # from 3 rad to -3 rad the short way passes pi, not 0
-    assert pose[0] == pytest.approx([1.0, 2.0, math.pi])
+    # from 3 rad to -3 rad the short way passes pi, not 0 (pi and -pi are one heading)
+    assert pose[0, :2] == pytest.approx([1.0, 2.0])
+    assert [math.cos(pose[0, 2]), math.sin(pose[0, 2])] == pytest.approx([-1.0, 0.0])
     assert pose[1] == pytest.approx([0.0, 0.0, 3.0])  # clamped to the ends
     assert pose[2, :2] == pytest.approx([2.0, 4.0])
     assert math.cos(pose[2, 2]) == pytest.approx(math.cos(-3.0))
