@@ -291,3 +291,38 @@ queries:
     rep = check_trajectory(scene, w, q)
     assert rep.valid, rep.reason
     assert rep.max_speed <= 1.0
+
+
+def test_flees_into_a_side_room(tmp_path):
+    """A mover sweeps the whole corridor towards the robot: the only escape is the side
+    room, and the robot must be in it when the mover passes."""
+    p = tmp_path / "flee.yaml"
+    p.write_text(
+        """
+version: 1
+name: flee
+bounds: [0, 0, 10, 3]
+robot: {disc: 0.2, vmax: 1.0}
+obstacles:
+  - box: {center: [2, 2], size: [4, 2]}
+  - box: {center: [8, 2], size: [4, 2]}
+movers:
+  - {name: sweeper, disc: 0.3, speed: 1.0, path: [[9.6, 0.5], [0.4, 0.5]], mode: once}
+queries:
+  - {name: q, start: [3.0, 0.5], goal: [9.0, 0.5]}
+"""
+    )
+    scene = load_scene(p)
+    rm = build_roadmap(scene, RoadmapOptions(vertices=150, seed=2))
+    q = scene.queries[0]
+    res = plan(scene, rm, q.start, q.goal, q.t0)
+    assert res.solved, res.message
+    assert check_trajectory(scene, res.trajectory.waypoints, q).valid
+    # when the sweeper passes it, the robot stands (at least partly) in the side room
+    w = res.trajectory
+    times = np.linspace(w.t0, w.t_end, 2000)
+    robot = w.at(times)
+    sweeper, _ = scene.movers[0].state(times)
+    k = int(np.argmin(np.abs(robot[:, 0] - sweeper[:, 0])))
+    assert abs(robot[k, 0] - sweeper[k, 0]) < 0.1
+    assert 4.0 < robot[k, 0] < 6.0 and robot[k, 1] >= 1.0  # corridor centre line is y = 0.5
