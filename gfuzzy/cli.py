@@ -188,14 +188,19 @@ def _query_from_args(scene, args):
 
 
 def cmd_plan(args) -> int:
-    from .planner import Planner
+    from .geometry import StaticGeometry
+    from .planner import Planner, PlanResult, Status, query_problem
 
     scene = _load_scene(args.scene)
     query = _query_from_args(scene, args)
     out = _out_path(args.output, (".json", ".csv")) if args.output else None
     options = _plan_options(args)
-    roadmap = _roadmap_for(scene, args)
-    result = Planner(scene, roadmap).plan(query.start, query.goal, query.t0, options)
+    problem = query_problem(StaticGeometry(scene), query.start, query.goal)
+    if problem:  # answered without a roadmap (the robot may fit nowhere at all)
+        result = PlanResult(Status.INVALID_QUERY, None, problem, vmax=scene.robot.vmax)
+    else:
+        roadmap = _roadmap_for(scene, args)
+        result = Planner(scene, roadmap).plan(query.start, query.goal, query.t0, options)
     tf = result.to_file(scene.name, query.name)
     if out is not None:
         json_path = out.with_suffix(".json")

@@ -150,6 +150,8 @@ class StaticGeometry:
     ----------
     calls : int
         Number of FCL queries made so far (validity + distance), for benchmarks.
+    checks : int
+        Number of validity questions (:meth:`is_valid`), FCL or not.
     """
 
     def __init__(self, scene: Scene):
@@ -165,6 +167,7 @@ class StaticGeometry:
         self._creq = fcl.CollisionRequest()
         self._dreq = fcl.DistanceRequest()
         self.calls = 0
+        self.checks = 0  # every validity question, answered by FCL or by the bounds alone
 
     # ---- bounds (analytic)
     def bounds_clearance(self, poses: FloatArray) -> FloatArray:
@@ -230,6 +233,7 @@ class StaticGeometry:
     # ---- single pose (OMPL callback path)
     def is_valid(self, pose) -> bool:
         """True when the robot at ``pose`` is inside bounds and touches no obstacle's interior."""
+        self.checks += 1
         if not self._inside_bounds(pose):
             return False
         if not self._objects:

@@ -24,7 +24,7 @@ from .timespace import IntervalStore, MoverField, SpaceTimeGraph, sipp, timed_ro
 from .trajectory import Trajectory, TrajectoryFile
 from .typing import FloatArray
 
-__all__ = ["Status", "PlanOptions", "PlanResult", "Planner", "plan"]
+__all__ = ["Status", "PlanOptions", "PlanResult", "Planner", "plan", "query_problem"]
 
 log = logging.getLogger(__name__)
 
@@ -325,15 +325,13 @@ class Planner:
                 Status(status), traj, message, rd, time.perf_counter() - t_begin, vmax, stats
             )
 
-        for label, pose in (("start", start), ("goal", goal)):
-            if pose.shape != (robot.dof,) or not np.all(np.isfinite(pose)):
-                return answer("invalid_query", f"{label} must be {robot.dof} finite numbers")
-            if robot.dof == 3:
-                pose[2] = (pose[2] + math.pi) % (2 * math.pi) - math.pi
-            if self.geometry.bounds_clearance(pose[None])[0] < 0:
-                return answer("invalid_query", f"{label} {pose.tolist()} is out of bounds")
-            if self.geometry.clearance1(pose) < 0:
-                return answer("invalid_query", f"{label} {pose.tolist()} collides with a static obstacle")
+        problem = query_problem(self.geometry, start, goal)
+        if problem:
+            return answer("invalid_query", problem)
+        ends = start.copy(), goal.copy()  # the rows at the ends repeat them exactly
+        if robot.dof == 3:
+            start[2] = (start[2] + math.pi) % (2 * math.pi) - math.pi
+            goal[2] = (goal[2] + math.pi) % (2 * math.pi) - math.pi
         self._k = opts.connect_k
         vplan = vmax * SPEED_SAFETY
         graph, s_id, g_id, rd = self._graph(start, goal, opts.dt, vplan)
@@ -387,7 +385,25 @@ class Planner:
             from .stages import apply_stages
 
             result = apply_stages(self, result, start, goal, t0, opts, t_begin)
-        return result
+        # headings are wrapped inside; the first and last rows give the query's own numbers
+        wps = result.trajectory.waypoints.copy()
+        wps[0, 1:], wps[-1, 1:] = ends
+        return replace(result, trajectory=Trajectory(wps, robot.circumradius))
+
+
+def query_problem(geometry: StaticGeometry, start, goal) -> str:
+    """Why a query is ``invalid_query`` (start or goal malformed, out of bounds or in a
+    static obstacle), or "" when it is not. Needs no roadmap."""
+    dof = geometry.robot.dof
+    for label, pose in (("start", start), ("goal", goal)):
+        pose = np.asarray(pose, dtype=float).reshape(-1)
+        if pose.shape != (dof,) or not np.all(np.isfinite(pose)):
+            return f"{label} must be {dof} finite numbers"
+        if geometry.bounds_clearance(pose[None])[0] < 0:
+            return f"{label} {pose.tolist()} is out of bounds"
+        if geometry.clearance1(pose) < 0:
+            return f"{label} {pose.tolist()} collides with a static obstacle"
+    return ""
 
 
 def plan(

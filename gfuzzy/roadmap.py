@@ -40,6 +40,8 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 FORMAT = "gfuzzy-roadmap"
+#: Validity checks without a new milestone after which the free space counts as empty.
+STALL_CHECKS = 200_000
 FORMAT_VERSION = 1
 
 
@@ -457,19 +459,37 @@ class _Builder:
         gc.collect()
 
     def grow(self, n: int, progress: Callable[[int, int], None] | None) -> None:
+        """Grow to ``n`` milestones; raise SceneError if the free space is (nearly) empty.
+
+        PRM samples until it finds a valid state, for ever if there is none, so growth also
+        stops after ``STALL_CHECKS`` validity checks without a new milestone.
+        """
         from ompl import base as ob
 
-        prm = self.prm
+        prm, geometry = self.prm, self.geometry
         last = [-1]
+        seen = [prm.milestoneCount(), geometry.checks]
 
         def done() -> bool:
             count = prm.milestoneCount()
             if progress is not None and count != last[0] and count % 50 == 0:
                 last[0] = count
                 progress(count, n)
+            if count > seen[0]:
+                seen[0], seen[1] = count, geometry.checks
+            elif geometry.checks - seen[1] > STALL_CHECKS:
+                return True
             return count >= n
 
         prm.growRoadmapPtc(ob.PlannerTerminationCondition(done))
+        count = prm.milestoneCount()
+        if count < n:
+            raise SceneError(
+                geometry.scene.source,
+                "robot",
+                f"the robot fits (almost) nowhere: {count} of {n} roadmap vertices found free "
+                f"after {geometry.checks} collision checks",
+            )
 
     def export(self) -> tuple[FloatArray, IntArray]:
         from ompl import base as ob
