@@ -326,3 +326,47 @@ queries:
     k = int(np.argmin(np.abs(robot[:, 0] - sweeper[:, 0])))
     assert abs(robot[k, 0] - sweeper[k, 0]) < 0.1
     assert 4.0 < robot[k, 0] < 6.0 and robot[k, 1] >= 1.0  # corridor centre line is y = 0.5
+
+
+NOFIT = """
+version: 1
+name: nofit
+bounds: [0, 0, 5, 5]
+robot: {disc: 3.0, vmax: 1.0}
+queries:
+  - {name: q, start: [2.5, 2.5], goal: [2.5, 2.5]}
+"""
+
+
+def test_robot_that_fits_nowhere_is_reported_not_hung(tmp_path):
+    p = tmp_path / "nofit.yaml"
+    p.write_text(NOFIT)
+    out = tmp_path / "rm.json"
+    proc = run_cli_process("roadmap", p, "-o", out, timeout=60)
+    assert proc.returncode == 2
+    assert proc.stderr.count("\n") == 1 and "robot" in proc.stderr and str(p) in proc.stderr
+    assert not out.exists()
+    ans = tmp_path / "a.json"
+    proc = run_cli_process("plan", p, "-o", ans, timeout=60)
+    assert proc.returncode == 1
+    assert json.loads(ans.read_text())["status"] == "invalid_query"
+
+
+def test_end_rows_repeat_the_query_headings(tmp_path):
+    p = tmp_path / "h.yaml"
+    p.write_text(
+        """
+version: 1
+name: h
+bounds: [0, 0, 6, 4]
+robot: {box: [0.8, 0.3], vmax: 1.0}
+"""
+    )
+    scene = load_scene(p)
+    rm = build_roadmap(scene, RoadmapOptions(vertices=60, seed=1))
+    res = plan(scene, rm, [1, 2, 7.0], [5, 2, -4.0])
+    assert res.solved
+    w = res.trajectory.waypoints
+    assert w[0, 1:].tolist() == [1.0, 2.0, 7.0] and w[-1, 1:].tolist() == [5.0, 2.0, -4.0]
+    assert check_trajectory(scene, w).valid
+    assert res.trajectory.speeds().max() <= 1.0
