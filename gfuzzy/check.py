@@ -148,6 +148,120 @@ class _World:
         return stack[which, np.arange(stack.shape[1])], [names[i] for i in which]
 
 
+    def swept_clearance(self, pa, pb, heading, ta, tb):
+        """Exact smallest clearance over intervals in which the robot translates.
+
+        Parameters
+        ----------
+        pa, pb : (k, 2) float
+            Reference point at the interval's ends.
+        heading : (k,) float or None
+            The (constant) heading of a box robot.
+        ta, tb : (k,) float
+
+        Returns
+        -------
+        clearance : (k,) float
+            NaN where a mover does not move in a straight line over the interval (the
+            caller decides those by bisection).
+        names : list of str
+
+        Notes
+        -----
+        Over a translation the robot sweeps the convex hull of its two end footprints (a
+        box) or the segment of its centre widened by its radius (a disc), and the body's
+        distance to anything is the distance of that swept set; a mover moving straight is
+        handled in the robot's frame, where it sweeps likewise.
+        """
+        k = len(pa)
+        out = np.full(k, np.inf)
+        names = ["-"] * k
+        disc = self.robot.shape == "disc"
+        r = self.robot.radius
+        if disc:
+            centre = shapely.linestrings(np.stack([pa, pb], axis=1))
+            body = None
+        else:
+            hl, hw = 0.5 * self.robot.size[0], 0.5 * self.robot.size[1]
+            local = np.array([[hl, hw], [-hl, hw], [-hl, -hw], [hl, -hw]])
+            c, sn = np.cos(heading), np.sin(heading)
+            rot = np.stack([np.stack([c, -sn], -1), np.stack([sn, c], -1)], -2)  # (k, 2, 2)
+            corners = np.einsum("kij,mj->kmi", rot, local)  # (k, 4, 2) about the reference
+            swept = shapely.convex_hull(shapely.multipoints(np.concatenate([corners + pa[:, None], corners + pb[:, None]], 1)))
+            body = shapely.polygons(corners)  # at the origin, for the movers
+
+        def take(d, name):
+            better = d < out
+            out[better] = d[better]
+            for i in np.nonzero(better)[0]:
+                names[i] = name
+
+        # bounds: the clearance is linear along a translation, extreme at the ends
+        take(np.minimum(self.bounds_clearance(self._poses(pa, heading)), self.bounds_clearance(self._poses(pb, heading))), "the bounds")
+        if self.static is not None:
+            if disc:
+                d = shapely.distance(centre, self.static) - r
+            else:
+                d = shapely.distance(swept, self.static)
+                zero = d <= 0
+                if np.any(zero):
+                    area = shapely.area(shapely.intersection(swept[zero], self.static))
+                    d[zero] = np.where(area > 1e-12, -area, 0.0)
+            take(d, "a static obstacle")
+        for center, radius in self.discs:
+            if disc:
+                d = _segment_point_distance(pa, pb, center) - r - radius
+            else:
+                d = shapely.distance(swept, shapely.Point(center)) - radius
+            take(d, f"the static disc at {center.tolist()}")
+        for mv in self.scene.movers:
+            ma, pres_a = mv.state(ta)
+            mb, pres_b = mv.state(tb)
+            mm, pres_m = mv.state(0.5 * (ta + tb))
+            present = pres_a | pres_b | pres_m
+            if not present.any():
+                continue
+            straight = np.hypot(*(mm - 0.5 * (ma + mb)).T) <= 1e-9 * (1.0 + np.hypot(*(mb - ma).T))
+            qa, qb = ma - pa, mb - pb  # the mover relative to the robot's reference point
+            if disc and mv.shape == "disc":
+                d = _segment_point_distance(qa, qb, np.zeros(2)) - r - mv.radius
+            elif disc:
+                w, h = mv.size
+                rel = np.concatenate([qa[:, None] + [[s1 * w / 2, s2 * h / 2] for s1, s2 in ((1, 1), (-1, 1), (-1, -1), (1, -1))],
+                                      qb[:, None] + [[s1 * w / 2, s2 * h / 2] for s1, s2 in ((1, 1), (-1, 1), (-1, -1), (1, -1))]], 1)  # fmt: skip
+                hull = shapely.convex_hull(shapely.multipoints(rel))
+                d = shapely.distance(hull, shapely.Point(0.0, 0.0)) - r
+                inside = shapely.contains_xy(hull, 0.0, 0.0)
+                d = np.where(inside, -1.0, d)
+            elif mv.shape == "disc":
+                d = shapely.distance(shapely.linestrings(np.stack([qa, qb], 1)), body) - mv.radius
+            else:
+                w, h = mv.size
+                box = np.array([[w / 2, h / 2], [-w / 2, h / 2], [-w / 2, -h / 2], [w / 2, -h / 2]])
+                hull = shapely.convex_hull(shapely.multipoints(np.concatenate([qa[:, None] + box, qb[:, None] + box], 1)))
+                d = shapely.distance(hull, body)
+                zero = d <= 0
+                if np.any(zero):
+                    area = shapely.area(shapely.intersection(hull[zero], body[zero]))
+                    d[zero] = np.where(area > 1e-12, -area, 0.0)
+            d = np.where(present, d, np.inf)
+            d = np.where(straight | ~present, d, np.nan)
+            nan = np.isnan(d)
+            take(np.where(nan, np.inf, d), f"mover {mv.name!r}")
+            out[nan] = np.nan
+        return out, names
+
+    def _poses(self, p, heading):
+        return p if heading is None else np.column_stack([p, heading])
+
+
+def _segment_point_distance(a: FloatArray, b: FloatArray, c) -> FloatArray:
+    """Distance from point(s) c to segments a-b. a, b (k, 2)."""
+    ab = b - a
+    t = np.clip(np.einsum("ij,ij->i", c - a, ab) / np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300), 0.0, 1.0)
+    return np.hypot(*(a + t[:, None] * ab - c).T)
+
+
 def _pose_equal(a, b, tol=1e-6) -> bool:
     a, b = np.asarray(a, float), np.asarray(b, float)
     if a.shape != b.shape:
@@ -165,6 +279,7 @@ def check_trajectory(
     tol: float = 1e-9,
     min_interval: float = 1e-7,
     max_evaluations: int = 5_000_000,
+    exact_below: float = 1e-3,
 ) -> CheckReport:
     """Check a trajectory against CONTRACT.md section 3 (and ``query``'s start and goal).
 
@@ -179,6 +294,10 @@ def check_trajectory(
         Penetration depth (metres) and relative speed excess tolerated as rounding.
     min_interval : float
         Undecided intervals shorter than this (seconds) count as touching.
+    exact_below : float
+        Undecided intervals shorter than this (seconds) in which the robot does not turn
+        are decided exactly (the swept footprint's distance), so a long touching contact
+        does not need endless bisection.
 
     Returns
     -------
@@ -248,6 +367,7 @@ def check_trajectory(
     seg_of = np.clip(np.searchsorted(t, times, side="right") - 1, 0, len(dt) - 1)
     vm = max((mv.max_speed for mv in scene.movers), default=0.0)
     lip = speed + vm  # per segment
+    turn = np.abs(_wrap(np.diff(p[:, 2]))) if robot.dof == 3 else np.zeros(len(dt))
 
     d, names = world.clearance(pose_at(times, seg_of), times)
     evaluations = len(times)
@@ -278,6 +398,36 @@ def check_trajectory(
         a_t, b_t, a_d, b_d, a_s = a_t[~short], b_t[~short], a_d[~short], b_d[~short], a_s[~short]
         if a_t.size == 0:
             break
+        # near contact, bisection would go on for ever along a touching stretch: where the
+        # robot only translates, decide the interval exactly instead
+        near = (b_t - a_t) < exact_below
+        if robot.dof == 3:
+            near &= turn[a_s] == 0.0
+        if near.any():
+            idx = np.nonzero(near)[0]
+            pa, pb = pose_at(a_t[idx], a_s[idx]), pose_at(b_t[idx], a_s[idx])
+            head = None if robot.dof == 2 else pa[:, 2]
+            ex, ex_names = world.swept_clearance(pa[:, :2], pb[:, :2], head, a_t[idx], b_t[idx])
+            evaluations += len(idx)
+            decided = ~np.isnan(ex)
+            bad = np.nonzero(decided & (ex < -tol))[0]
+            if bad.size:
+                k = int(bad[0])
+                return CheckReport(
+                    False,
+                    f"collides with {ex_names[k]} between t={float(a_t[idx[k]])!r} and "
+                    f"t={float(b_t[idx[k]])!r} (penetration {-ex[k]:.3g})",
+                    min(min_clear, float(ex[k])),
+                    vmax_seen,
+                    evaluations,
+                )
+            if decided.any():
+                min_clear = min(min_clear, float(np.nanmin(ex)))
+            keep = np.ones(len(a_t), dtype=bool)
+            keep[idx[decided]] = False
+            a_t, b_t, a_d, b_d, a_s = a_t[keep], b_t[keep], a_d[keep], b_d[keep], a_s[keep]
+            if a_t.size == 0:
+                break
         if evaluations > max_evaluations:
             return CheckReport(
                 False, "could not decide: too many evaluations (near-grazing contact)", min_clear, vmax_seen, evaluations

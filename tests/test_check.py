@@ -1,0 +1,84 @@
+"""The independent checker: every instant, touching allowed, overlap refused."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gfuzzy.check import check_trajectory
+from gfuzzy.scene import parse_scene
+
+
+def scene(robot, obstacles=(), movers=()):
+    return parse_scene(
+        {
+            "version": 1,
+            "name": "c",
+            "bounds": [0, 0, 10, 4],
+            "robot": robot,
+            "obstacles": list(obstacles),
+            "movers": list(movers),
+        }
+    )
+
+
+WALL = {"box": {"center": [5, 3], "size": [8, 2]}}  # its lower face is y = 2
+
+
+def slide(y, heading=None, t_end=8.0, n=17):
+    t = np.linspace(0, t_end, n)
+    x = 1.0 + t
+    cols = [t, x, np.full(n, y)]
+    if heading is not None:
+        cols.append(np.full(n, heading))
+    return np.column_stack(cols)
+
+
+@pytest.mark.parametrize(
+    "robot, y, heading",
+    [({"disc": 0.5, "vmax": 1.0}, 1.5, None), ({"box": [0.8, 0.6], "vmax": 1.0}, 1.7, 0.0)],
+)
+def test_long_touching_contact_is_valid_and_decided_fast(robot, y, heading):
+    sc = scene(robot, [WALL])
+    rep = check_trajectory(sc, slide(y, heading))
+    assert rep.valid, rep.reason
+    assert rep.min_clearance == pytest.approx(0.0, abs=1e-9)
+    assert rep.evaluations < 200_000
+
+
+@pytest.mark.parametrize(
+    "robot, y, heading",
+    [({"disc": 0.5, "vmax": 1.0}, 1.5 + 1e-6, None), ({"box": [0.8, 0.6], "vmax": 1.0}, 1.7 + 1e-6, 0.0)],
+)
+def test_a_micrometre_of_overlap_is_a_collision(robot, y, heading):
+    rep = check_trajectory(scene(robot, [WALL]), slide(y, heading))
+    assert not rep.valid
+    assert "static obstacle" in rep.reason
+
+
+def test_riding_alongside_a_mover_at_contact():
+    mover = {"name": "m", "disc": 0.3, "speed": 1.0, "path": [[1.0, 2.5], [9.0, 2.5]], "mode": "once"}
+    sc = scene({"disc": 0.2, "vmax": 1.0}, movers=[mover])
+    ok = check_trajectory(sc, slide(2.0, t_end=8.0))  # centres 0.5 apart = 0.2 + 0.3
+    assert ok.valid, ok.reason
+    bad = check_trajectory(sc, slide(2.0 + 1e-6, t_end=8.0))
+    assert not bad.valid and "mover 'm'" in bad.reason
+
+
+def test_a_mover_crossing_between_two_rows_is_caught():
+    # rows 4 s apart, the robot far from the mover at both; the mover crosses its path between
+    mover = {"name": "fast", "disc": 0.2, "trajectory": [[0.0, 5.0, 0.3], [4.0, 5.0, 3.7]]}
+    sc = scene({"disc": 0.2, "vmax": 1.0}, movers=[mover])
+    w = np.array([[0.0, 3.0, 2.0], [4.0, 7.0, 2.0]])
+    assert np.hypot(*(sc.movers[0].state(np.array([0.0, 4.0]))[0] - w[:, 1:]).T).min() > 1.5
+    rep = check_trajectory(sc, w)
+    assert not rep.valid and "fast" in rep.reason
+
+
+def test_formal_faults():
+    sc = scene({"disc": 0.2, "vmax": 1.0})
+    assert "vmax" in check_trajectory(sc, np.array([[0, 1, 1], [1, 3, 1]])).reason
+    assert "increase" in check_trajectory(sc, np.array([[0, 1, 1], [0, 1, 1]])).reason
+    assert "rows of" in check_trajectory(sc, np.array([[0, 1, 1, 0]])).reason
+    out = check_trajectory(sc, np.array([[0, 0.1, 1], [1, 0.5, 1]]))
+    assert not out.valid and "bounds" in out.reason
