@@ -106,6 +106,8 @@ def _plan_options(args):
             speed_layer=args.speed_layer,
             time_limit=args.time_limit,
             horizon=args.horizon,
+            weight=args.weight,
+            seed=args.ga_seed,
         )
     except ValueError as exc:
         raise BadInput(f"gfuzzy plan: {exc}") from None
@@ -339,6 +341,9 @@ def _parser() -> argparse.ArgumentParser:
         q.add_argument("--speed-layer", action="store_true", help="apply the fuzzy speed layer")
         q.add_argument("--time-limit", type=float, default=60.0, help="planning budget in seconds (default 60)")
         q.add_argument("--horizon", type=float, help="longest trajectory considered, seconds (default: automatic)")
+        q.add_argument("--weight", type=float, default=1.0,
+                       help="heuristic weight: 1 = earliest arrival (default); w > 1 searches less, arrives at most w times later")  # fmt: skip
+        q.add_argument("--ga-seed", type=int, default=0, help="seed of the GA refinement (default 0)")
 
     q = sub.add_parser("plan", help="answer one query")
     q.add_argument("scene", metavar="SCENE")

@@ -14,6 +14,7 @@ import logging
 import math
 import time
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -23,6 +24,10 @@ from .scene import Scene
 from .timespace import IntervalStore, MoverField, SpaceTimeGraph, sipp, timed_rows
 from .trajectory import Trajectory, TrajectoryFile
 from .typing import FloatArray
+
+if TYPE_CHECKING:  # the stages' modules load only when a stage runs
+    from .fuzzy import RuleBase
+    from .ga import GAOptions
 
 __all__ = ["Status", "PlanOptions", "PlanResult", "Planner", "plan", "query_problem"]
 
@@ -85,8 +90,8 @@ class PlanOptions:
     refine: bool = False
     speed_layer: bool = False
     seed: int = 0
-    ga: object | None = None
-    rules: object | None = None
+    ga: GAOptions | None = None
+    rules: RuleBase | None = None
     refine_max_slowdown: float = 0.1
     weight: float = 1.0
 
@@ -207,14 +212,14 @@ class Planner:
                 out.append((int(i), float(d[i])))
         return out
 
-    def _graph(self, start, goal, dt, vmax):
+    def _graph(self, start, goal, dt, vmax, connect_k: int = 10):
         """Roadmap + start + goal, every edge split into one-step pieces; static distances."""
         rm = self.roadmap
         nv = len(rm.vertices)
         s_id, g_id = nv, nv + 1
         extra_e, extra_w = [], []
         for pose, node in ((start, s_id), (goal, g_id)):
-            for v, w in self._connect(pose, self._k):
+            for v, w in self._connect(pose, connect_k):
                 extra_e.append((node, v))
                 extra_w.append(w)
         direct = float(metric_distance(start, goal, self.robot.circumradius))
@@ -332,9 +337,8 @@ class Planner:
         if robot.dof == 3:
             start[2] = (start[2] + math.pi) % (2 * math.pi) - math.pi
             goal[2] = (goal[2] + math.pi) % (2 * math.pi) - math.pi
-        self._k = opts.connect_k
         vplan = vmax * SPEED_SAFETY
-        graph, s_id, g_id, rd = self._graph(start, goal, opts.dt, vplan)
+        graph, s_id, g_id, rd = self._graph(start, goal, opts.dt, vplan, opts.connect_k)
         if not math.isfinite(rd):
             return answer(
                 "no_path",

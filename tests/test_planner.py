@@ -67,7 +67,6 @@ def _brute_force_steps(planner: Planner, start, goal, t0, dt, horizon_steps):
     from gfuzzy.planner import SPEED_SAFETY
 
     vplan = planner.robot.vmax * SPEED_SAFETY
-    planner._k = PlanOptions().connect_k
     graph, s_id, g_id, rd = planner._graph(np.asarray(start, float), np.asarray(goal, float), dt, vplan)
     field = MoverField(planner.scene, t0, dt, horizon_steps, planner.robot.vmax)
     unsafe = field.unsafe(graph.poses)  # every node at every step: fine on tiny graphs

@@ -41,7 +41,7 @@ import yaml
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from gfuzzy.planner import SPEED_SAFETY, Planner, PlanOptions, plan  # noqa: E402
+from gfuzzy.planner import SPEED_SAFETY, Planner, plan  # noqa: E402
 from gfuzzy.roadmap import RoadmapOptions, build_roadmap, grow_roadmaps, load_roadmap  # noqa: E402
 from gfuzzy.scene import load_scene  # noqa: E402
 from gfuzzy.timespace import MoverField  # noqa: E402
@@ -63,7 +63,6 @@ def baseline_seconds(scene, rm, q, dt, horizon_steps):
     """Plain time-expanded BFS (no intervals, no heuristic, no windows)."""
     t = time.perf_counter()
     planner = Planner(scene, rm)
-    planner._k = PlanOptions().connect_k
     start, goal = np.asarray(q.start, float), np.asarray(q.goal, float)
     graph, s_id, g_id, _ = planner._graph(start, goal, dt, scene.robot.vmax * SPEED_SAFETY)
     field = MoverField(scene, q.t0, dt, horizon_steps, scene.robot.vmax)
