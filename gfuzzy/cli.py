@@ -311,7 +311,7 @@ def cmd_regress(args) -> int:
 
     scenes = [_load_scene(p) for p in args.scenes]  # all bad input first, before any work
     options = _plan_options(args)
-    ok = run_regression(scenes, lambda sc: _roadmap_for(sc, args, quiet=True), options, sys.stdout)
+    ok = run_regression(scenes, lambda sc: _roadmap_for(sc, args), options, sys.stdout)
     return EXIT_OK if ok else EXIT_NO
 
 
