@@ -83,12 +83,22 @@ def _clearance_functions(planner, corridor: FloatArray):
     # The re-timing afterwards decides safety with the exact shapes.
     disc = replace(robot, shape="disc", radius=robot.circumradius, size=(0.0, 0.0))
 
+    states: dict = {}  # the GA asks at the same times every generation: movers' states once
+
+    def mover_states(t: FloatArray) -> list:
+        key = t.tobytes()
+        got = states.get(key)
+        if got is None:
+            if len(states) > 64:
+                states.clear()
+            got = states[key] = [mv.state(t) for mv in scene.movers]
+        return got
+
     def mover_clearance(xy: FloatArray, t: FloatArray) -> FloatArray:
         xy = np.atleast_2d(np.asarray(xy, dtype=float))
         t = np.asarray(t, dtype=float)
         out = np.full(len(xy), np.inf)
-        for mv in scene.movers:
-            pos, present = mv.state(t)
+        for mv, (pos, present) in zip(scene.movers, mover_states(t), strict=True):
             if not present.any():
                 continue
             d = mover_distance(disc, xy, mv.shape, mv.radius, mv.size, pos)
