@@ -308,6 +308,11 @@ class MoverField:
 
     def _distance(self, poses: FloatArray, movers: IntArray, xy: FloatArray) -> FloatArray:
         """Robot-mover distance for aligned arrays of poses, mover indices and positions."""
+        if self._is_disc.all() or not self._is_disc.any():  # one shape: no masks to copy through
+            shape = "disc" if self._is_disc.all() else "box"
+            return mover_distance(
+                self.robot, poses, shape, self._radius[movers], self._size[movers], xy, exact=False
+            )
         d = np.empty(len(poses))
         disc = self._is_disc[movers]
         for mask, shape in ((disc, "disc"), (~disc, "box")):
