@@ -511,10 +511,10 @@ class IntervalStore:
         un, us = field_.unsafe_pairs(self.graph.poses[nodes], sub_ptr, lo, hi)
         # safe intervals = the gaps between unsafe steps, with the window's ends as walls
         k = len(nodes)
-        walls_n = np.concatenate([un, np.arange(k), np.arange(k)])
-        walls_s = np.concatenate([us, lo_n - 1, hi_n + 1])
-        order = np.lexsort((walls_s, walls_n))
-        wn, ws = walls_n[order], walls_s[order]
+        span = self.H + 3  # steps -1 .. H + 1 fit in [0, span) once shifted by one
+        rows = np.arange(k) * span
+        keys = np.sort(np.concatenate([un * span + us + 1, rows + lo_n, rows + hi_n + 2]))
+        wn, ws = keys // span, keys % span - 1  # repeated walls leave empty gaps, dropped below
         same = wn[1:] == wn[:-1]
         gs, ge = ws[:-1] + 1, ws[1:] - 1
         ok = same & (gs <= ge)
