@@ -420,8 +420,3 @@ def plan(
 ) -> PlanResult:
     """Answer one query (see :meth:`Planner.plan`); builds a :class:`Planner` each call."""
     return Planner(scene, roadmap).plan(start, goal, t0, options)
-
-
-def with_options(options: PlanOptions | None, **changes) -> PlanOptions:
-    """``options`` with some fields changed."""
-    return replace(options or PlanOptions(), **changes)

@@ -135,17 +135,6 @@ class Roadmap:
         )
         return g
 
-    def adjacency(self) -> tuple[IntArray, IntArray, FloatArray]:
-        """CSR adjacency ``(indptr (V+1,), neighbours (2E,), lengths (2E,))``."""
-        n = len(self.vertices)
-        src = np.concatenate([self.edges[:, 0], self.edges[:, 1]])
-        dst = np.concatenate([self.edges[:, 1], self.edges[:, 0]])
-        w = np.concatenate([self.lengths, self.lengths])
-        order = np.lexsort((dst, src))
-        indptr = np.zeros(n + 1, dtype=np.int64)
-        np.add.at(indptr, src + 1, 1)
-        return np.cumsum(indptr), dst[order], w[order]
-
     def check_scene(self, scene: Scene, file: str = "<roadmap>") -> None:
         """Raise SceneError if this roadmap was not built for ``scene``'s static part."""
         if self.scene_hash != scene.static_hash:

@@ -369,3 +369,19 @@ robot: {box: [0.8, 0.3], vmax: 1.0}
     assert w[0, 1:].tolist() == [1.0, 2.0, 7.0] and w[-1, 1:].tolist() == [5.0, 2.0, -4.0]
     assert check_trajectory(scene, w).valid
     assert res.trajectory.speeds().max() <= 1.0
+
+
+def test_roadmap_distance_agrees_with_networkx(open_scene):
+    """The planner's roadmap distance (scipy Dijkstra on the augmented graph) against
+    networkx on Roadmap.graph() for a query between two roadmap vertices."""
+    import networkx as nx
+
+    scene, rm = open_scene
+    g = rm.graph()
+    a, b = 0, int(np.argmax(np.hypot(*(rm.vertices - rm.vertices[0]).T)))
+    assert nx.has_path(g, a, b)
+    want = nx.shortest_path_length(g, a, b, weight="weight")
+    res = plan(scene, rm, rm.vertices[a], rm.vertices[b], 0.0)
+    # start and goal may also join each other directly: never longer than the roadmap path
+    assert res.roadmap_distance <= want + 1e-9
+    assert res.roadmap_distance >= float(np.hypot(*(rm.vertices[b] - rm.vertices[a]))) - 1e-9
