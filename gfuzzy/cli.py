@@ -202,7 +202,10 @@ def cmd_plan(args) -> int:
         result = PlanResult(Status.INVALID_QUERY, None, problem, vmax=scene.robot.vmax)
     else:
         roadmap = _roadmap_for(scene, args)
-        result = Planner(scene, roadmap).plan(query.start, query.goal, query.t0, options)
+        try:
+            result = Planner(scene, roadmap).plan(query.start, query.goal, query.t0, options)
+        except ValueError as exc:  # a request beyond the memory bounds (dt far too fine)
+            raise BadInput(f"gfuzzy plan: {exc}") from None
     tf = result.to_file(scene.name, query.name)
     if out is not None:
         json_path = out.with_suffix(".json")
@@ -311,7 +314,10 @@ def cmd_regress(args) -> int:
 
     scenes = [_load_scene(p) for p in args.scenes]  # all bad input first, before any work
     options = _plan_options(args)
-    ok = run_regression(scenes, lambda sc: _roadmap_for(sc, args), options, sys.stdout)
+    try:
+        ok = run_regression(scenes, lambda sc: _roadmap_for(sc, args), options, sys.stdout)
+    except ValueError as exc:  # a request beyond the memory bounds (dt far too fine)
+        raise BadInput(f"gfuzzy regress: {exc}") from None
     return EXIT_OK if ok else EXIT_NO
 
 

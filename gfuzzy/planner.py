@@ -35,6 +35,11 @@ log = logging.getLogger(__name__)
 
 #: Planning speed is vmax shrunk by this factor, so rounding never lifts a step above vmax.
 SPEED_SAFETY = 1.0 - 1e-9
+#: Largest number of graph points (edges cut into steps) a query may use (about 1 GB with
+#: the search's Python lists); the 10,000-vertex hall benchmark has 0.7 million.
+MAX_POINTS = 3_000_000
+#: Largest number of mover samples (movers x time steps) a query may use: about 0.7 GB.
+MAX_MOVER_SAMPLES = 20_000_000
 
 
 class Status(str, enum.Enum):
@@ -258,6 +263,11 @@ class Planner:
         n_int = k - 1
         offs = np.concatenate([[0], np.cumsum(n_int)])
         total = n + int(offs[-1])
+        if total > MAX_POINTS:
+            raise ValueError(
+                f"the time step is too fine for this roadmap: its edges would be cut into "
+                f"{total:,} points (at most {MAX_POINTS:,}); use a larger dt"
+            )
         e_of = np.repeat(np.arange(len(edges)), n_int)
         j = np.arange(offs[-1]) - np.repeat(offs[:-1], n_int) + 1  # 1 .. k-1 along the edge
         f = j / k[e_of]
@@ -360,6 +370,11 @@ class Planner:
         while True:
             steps = min(max_steps, int(math.ceil(h0 + slack)))
             horizon = steps * opts.dt
+            if len(self.scene.movers) * (steps + 1) > MAX_MOVER_SAMPLES:
+                raise ValueError(
+                    f"{len(self.scene.movers)} movers over {steps:,} time steps are too many to "
+                    f"sample (at most {MAX_MOVER_SAMPLES:,}); use a larger dt or a shorter horizon"
+                )
             field_ = MoverField(self.scene, t0, opts.dt, steps, vmax)
             hit = field_.collides_at(start, 0)
             if hit is not None:

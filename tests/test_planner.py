@@ -385,3 +385,15 @@ def test_roadmap_distance_agrees_with_networkx(open_scene):
     # start and goal may also join each other directly: never longer than the roadmap path
     assert res.roadmap_distance <= want + 1e-9
     assert res.roadmap_distance >= float(np.hypot(*(rm.vertices[b] - rm.vertices[a]))) - 1e-9
+
+
+def test_a_time_step_far_too_fine_is_refused_not_swallowed(corridor, tmp_path):
+    scene, rm = corridor
+    q = scene.queries[0]
+    with pytest.raises(ValueError, match="larger dt"):
+        plan(scene, rm, q.start, q.goal, 0.0, PlanOptions(dt=1e-5))
+    rm_path = tmp_path / "rm.json"
+    rm.save(rm_path)
+    proc = run_cli_process("plan", scene.source, "--roadmap", rm_path, "--dt", "1e-5", "-o", tmp_path / "a.json")
+    assert proc.returncode == 2 and "larger dt" in proc.stderr and "Traceback" not in proc.stderr
+    assert not (tmp_path / "a.json").exists()
