@@ -64,10 +64,16 @@ def _roadmap_for(scene, args, quiet=False):
     if getattr(args, "roadmap", None):
         return load_roadmap(args.roadmap, scene)
     if args.vertices is not None or args.seed is not None:
-        opts = RoadmapOptions(
-            vertices=args.vertices if args.vertices is not None else RoadmapOptions.vertices,
-            seed=args.seed if args.seed is not None else RoadmapOptions.seed,
-        )
+        try:
+            opts = RoadmapOptions(
+                vertices=args.vertices if args.vertices is not None else RoadmapOptions.vertices,
+                seed=args.seed if args.seed is not None else RoadmapOptions.seed,
+            )
+        except ValueError as exc:
+            raise BadInput(f"-n/--seed: {exc}") from None
+        saved = _default_roadmap(scene, quiet=True)
+        if saved is not None and saved.options == opts:  # the saved file is this very roadmap
+            return saved
         return build_roadmap(scene, opts, progress=_progress("roadmap"))
     found = _default_roadmap(scene, quiet)
     if found is not None:
