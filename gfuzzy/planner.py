@@ -376,9 +376,10 @@ class Planner:
                     f"sample (at most {MAX_MOVER_SAMPLES:,}); use a larger dt or a shorter horizon"
                 )
             field_ = MoverField(self.scene, t0, opts.dt, steps, vmax)
-            hit = field_.collides_at(start, 0)
-            if hit is not None:
-                return answer("invalid_query", f"start collides with mover {hit!r} at t0={t0:g}", rd=rd)
+            if store.H < 0:  # first round: a start on a mover is not a query to search
+                hit = field_.collides_at(start, 0)
+                if hit is not None:
+                    return answer("invalid_query", f"start collides with mover {hit!r} at t0={t0:g}", rd=rd)
             res = sipp(graph, field_, s_id, g_id, deadline=deadline, weight=opts.weight, store=store)
             expansions += res.expansions
             evaluations += field_.evaluations
