@@ -226,15 +226,13 @@ def retime_profile(
     s_xy, v_xy : (k,) float
         Speed bound along the xy arc length (from :func:`gfuzzy.fuzzy.speed_limit`).
     """
-    from .fuzzy import limit_acceleration
+    from .fuzzy import limit_acceleration, profile_times
     from .planner import SPEED_SAFETY
 
     robot = scene.robot
     vmax = robot.vmax * SPEED_SAFETY
     path = np.asarray(path, dtype=float)
     s_m, v_m, cum_m = _metric_profile(path, robot.circumradius, s_xy, v_xy, vmax, amax)
-    from .fuzzy import profile_times
-
     duration = float(profile_times(s_m, v_m)[-1])
     stops: list[float] = []
     message = ""
