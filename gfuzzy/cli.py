@@ -113,6 +113,7 @@ def _plan_options(args):
             time_limit=args.time_limit,
             horizon=args.horizon,
             weight=args.weight,
+            stretch=args.stretch,
             seed=args.ga_seed,
         )
     except ValueError as exc:
@@ -356,6 +357,8 @@ def _parser() -> argparse.ArgumentParser:
         q.add_argument("--weight", type=float, default=1.0,
                        help="heuristic weight: 1 = earliest arrival (default); w > 1 searches less, arrives at most w times later")  # fmt: skip
         q.add_argument("--ga-seed", type=int, default=0, help="seed of the GA refinement (default 0)")
+        q.add_argument("--stretch", type=float, default=1.05,
+                       help="search the roadmap's spanner of this stretch (default 1.05; 1 = the whole roadmap)")  # fmt: skip
 
     q = sub.add_parser("plan", help="answer one query")
     q.add_argument("scene", metavar="SCENE")

@@ -83,9 +83,13 @@ class PlanOptions:
         The refined answer is kept only if its duration is at most this fraction longer
         than the unrefined one (it is shorter and smoother, but may have to wait more).
     weight : float
-        Heuristic weight of the search: 1 finds the earliest arrival the roadmap and the
+        Heuristic weight of the search: 1 finds the earliest arrival the graph and the
         time step allow; w > 1 (weighted A*) expands far fewer states and arrives at most
         w times later than that.
+    stretch : float
+        The search runs on the roadmap's spanner of this stretch (:meth:`Roadmap.spanner`):
+        every static route is at most this much longer than on the whole roadmap, with
+        about half the edges to search. 1 searches the whole roadmap.
     """
 
     dt: float = 0.07
@@ -99,6 +103,7 @@ class PlanOptions:
     rules: RuleBase | None = None
     refine_max_slowdown: float = 0.1
     weight: float = 1.0
+    stretch: float = 1.05
 
     def __post_init__(self):
         if not (self.dt > 0 and math.isfinite(self.dt)):
@@ -109,6 +114,8 @@ class PlanOptions:
             raise ValueError(f"time_limit must be positive, got {self.time_limit}")
         if not (self.weight >= 1.0 and math.isfinite(self.weight)):
             raise ValueError(f"weight must be a number >= 1, got {self.weight}")
+        if not (self.stretch >= 1.0 and math.isfinite(self.stretch)):
+            raise ValueError(f"stretch must be a number >= 1, got {self.stretch}")
 
 
 @dataclass(frozen=True)
@@ -196,6 +203,7 @@ class Planner:
         self.roadmap = roadmap
         self.geometry = StaticGeometry(scene)
         self.robot = scene.robot
+        self._spanners: dict = {}  # stretch -> edges the search keeps
 
     # ---------------------------------------------------------------- graph
     def _connect(self, pose: FloatArray, k: int) -> list[tuple[int, float]]:
@@ -217,8 +225,18 @@ class Planner:
                 out.append((int(i), float(d[i])))
         return out
 
-    def _graph(self, start, goal, dt, vmax, connect_k: int = 10):
-        """Roadmap + start + goal, every edge split into one-step pieces; static distances."""
+    def _spanner(self, stretch: float) -> np.ndarray:
+        keep = self._spanners.get(stretch)
+        if keep is None:
+            keep = self._spanners[stretch] = self.roadmap.spanner(stretch)
+        return keep
+
+    def _graph(self, start, goal, dt, vmax, connect_k: int = 10, stretch: float = 1.0):
+        """Roadmap + start + goal, every edge split into one-step pieces; static distances.
+
+        The search runs on the roadmap's ``stretch`` spanner; the roadmap distance returned
+        (the contract's, for the delay factor) is measured on the whole roadmap.
+        """
         rm = self.roadmap
         nv = len(rm.vertices)
         s_id, g_id = nv, nv + 1
@@ -231,10 +249,15 @@ class Planner:
         if self.geometry.motion_free(start, goal):
             extra_e.append((s_id, g_id))
             extra_w.append(direct)
-        edges = np.vstack([rm.edges, np.array(extra_e, dtype=np.int64).reshape(-1, 2)])
-        lengths = np.concatenate([rm.lengths, np.array(extra_w, dtype=float)])
+        extra_e = np.array(extra_e, dtype=np.int64).reshape(-1, 2)
+        extra_w = np.array(extra_w, dtype=float)
         verts = np.vstack([rm.vertices, start[None], goal[None]])
         n = len(verts)
+        full_edges = np.vstack([rm.edges, extra_e])
+        full_lengths = np.concatenate([rm.lengths, extra_w])
+        keep = self._spanner(stretch)
+        edges = np.vstack([rm.edges[keep], extra_e])
+        lengths = np.concatenate([rm.lengths[keep], extra_w])
 
         # split edges into steps of at most vmax * dt; interior points of edge e get the
         # ids n + offs[e] .. n + offs[e+1] - 1
@@ -248,7 +271,7 @@ class Planner:
         from scipy.sparse import coo_matrix
         from scipy.sparse.csgraph import dijkstra
 
-        def sp(weights):
+        def sp(weights, edges=edges):
             w = np.maximum(weights, 1e-300)  # csgraph drops explicit zeros
             rows = np.r_[edges[:, 0], edges[:, 1]]
             cols = np.r_[edges[:, 1], edges[:, 0]]
@@ -256,7 +279,7 @@ class Planner:
             out = dijkstra(mat, directed=True, indices=[g_id, s_id])
             return np.where(out < 1e-200, 0.0, out)
 
-        dist = sp(lengths)[0]
+        dist = sp(full_lengths, full_edges)[0]
         hops = sp(k.astype(float))
         hop_g, hop_s = np.rint(hops[0]), np.rint(hops[1])
 
@@ -348,7 +371,7 @@ class Planner:
             start[2] = (start[2] + math.pi) % (2 * math.pi) - math.pi
             goal[2] = (goal[2] + math.pi) % (2 * math.pi) - math.pi
         vplan = vmax * SPEED_SAFETY
-        graph, s_id, g_id, rd = self._graph(start, goal, opts.dt, vplan, opts.connect_k)
+        graph, s_id, g_id, rd = self._graph(start, goal, opts.dt, vplan, opts.connect_k, opts.stretch)
         if not math.isfinite(rd):
             return answer(
                 "no_path",

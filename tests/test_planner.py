@@ -96,7 +96,7 @@ def test_search_matches_brute_force(fixture, t0, request):
     q = scene.queries[0]
     planner = Planner(scene, rm)
     dt = 0.1
-    res = planner.plan(q.start, q.goal, t0, PlanOptions(dt=dt, horizon=40.0))
+    res = planner.plan(q.start, q.goal, t0, PlanOptions(dt=dt, horizon=40.0, stretch=1.0))
     steps = _brute_force_steps(planner, q.start, q.goal, t0, dt, int(math.ceil(40.0 / dt)))
     if steps is None:
         assert res.status is Status.NO_PATH
@@ -397,3 +397,38 @@ def test_a_time_step_far_too_fine_is_refused_not_swallowed(corridor, tmp_path):
     proc = run_cli_process("plan", scene.source, "--roadmap", rm_path, "--dt", "1e-5", "-o", tmp_path / "a.json")
     assert proc.returncode == 2 and "larger dt" in proc.stderr and "Traceback" not in proc.stderr
     assert not (tmp_path / "a.json").exists()
+
+
+def test_spanner_keeps_every_route_within_the_stretch(open_scene):
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import dijkstra
+
+    _, rm = open_scene
+    n = len(rm.vertices)
+
+    def apsp(mask):
+        e, w = rm.edges[mask], rm.lengths[mask]
+        m = coo_matrix((np.r_[w, w], (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])), shape=(n, n))
+        return dijkstra(m.tocsr())
+
+    full = apsp(np.ones(len(rm.edges), dtype=bool))
+    for stretch in (1.02, 1.1):
+        keep = rm.spanner(stretch)
+        assert keep.sum() < len(keep)  # something is dropped
+        sub = apsp(keep)
+        ok = np.isfinite(full) & (full > 0)
+        assert np.all(np.isfinite(sub[ok]))
+        assert np.all(sub[ok] <= stretch * full[ok] + 1e-9)
+    assert rm.spanner(1.0).all()
+
+
+def test_search_on_the_spanner_stays_near_the_whole_roadmap(corridor, open_scene):
+    for scene, rm in (corridor, open_scene):
+        q = scene.queries[0]
+        planner = Planner(scene, rm)
+        whole = planner.plan(q.start, q.goal, q.t0, PlanOptions(stretch=1.0))
+        sparse = planner.plan(q.start, q.goal, q.t0)
+        assert whole.solved and sparse.solved
+        assert sparse.roadmap_distance == pytest.approx(whole.roadmap_distance)  # the contract's
+        assert check_trajectory(scene, sparse.trajectory.waypoints, q).valid
+        assert sparse.stats["graph_nodes"] < whole.stats["graph_nodes"]
