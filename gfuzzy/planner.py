@@ -203,7 +203,6 @@ class Planner:
         self.roadmap = roadmap
         self.geometry = StaticGeometry(scene)
         self.robot = scene.robot
-        self._spanners: dict = {}  # stretch -> edges the search keeps
 
     # ---------------------------------------------------------------- graph
     def _connect(self, pose: FloatArray, k: int) -> list[tuple[int, float]]:
@@ -224,12 +223,6 @@ class Planner:
             if self.geometry.motion_free(pose, V[i]):
                 out.append((int(i), float(d[i])))
         return out
-
-    def _spanner(self, stretch: float) -> np.ndarray:
-        keep = self._spanners.get(stretch)
-        if keep is None:
-            keep = self._spanners[stretch] = self.roadmap.spanner(stretch)
-        return keep
 
     def _graph(self, start, goal, dt, vmax, connect_k: int = 10, stretch: float = 1.0):
         """Roadmap + start + goal, every edge split into one-step pieces; static distances.
@@ -255,7 +248,7 @@ class Planner:
         n = len(verts)
         full_edges = np.vstack([rm.edges, extra_e])
         full_lengths = np.concatenate([rm.lengths, extra_w])
-        keep = self._spanner(stretch)
+        keep = self.roadmap.spanner(stretch)
         edges = np.vstack([rm.edges[keep], extra_e])
         lengths = np.concatenate([rm.lengths[keep], extra_w])
 

@@ -115,6 +115,7 @@ class Roadmap:
     circumradius: float
     options: RoadmapOptions = field(default_factory=RoadmapOptions)
     info: dict = field(default_factory=dict)
+    _spanners: dict = field(default_factory=dict, repr=False, compare=False)
 
     @property
     def dof(self) -> int:
@@ -151,7 +152,11 @@ class Roadmap:
         """
         if not stretch >= 1.0:
             raise ValueError(f"stretch must be >= 1, got {stretch}")
+        cached = self._spanners.get(stretch)
+        if cached is not None:  # computed once per roadmap and stretch
+            return cached
         keep = np.ones(len(self.edges), dtype=bool)
+        self._spanners[stretch] = keep
         if stretch == 1.0:
             return keep
         adj: list[dict] = [{} for _ in range(len(self.vertices))]
