@@ -315,7 +315,7 @@ class Planner:
         dst = np.concatenate([ids, b[last], edges[n_int == 0, 1]])
         s2 = np.concatenate([src, dst])
         d2 = np.concatenate([dst, src])
-        order = np.lexsort((d2, s2))
+        order = np.argsort(s2, kind="stable")  # by source; neighbours in any fixed order
         indptr = np.zeros(total + 1, dtype=np.int64)
         np.add.at(indptr, s2 + 1, 1)
         graph = SpaceTimeGraph(

@@ -437,8 +437,8 @@ class IntervalStore:
         self._done_l = self.done_hi.tolist()
         # intervals stay in their batch's lists until a search asks for them
         self._batches: list = []  # (starts, row pointers, ends, first step examined per row)
-        self._where = np.full(n, -1, dtype=np.int64)  # batch of a node's latest computation
-        self._local = np.zeros(n, dtype=np.int64)  # its row there
+        self._where = [-1] * n  # batch of a node's latest computation (lists: read per node)
+        self._local = [0] * n  # its row there
         self._older: dict = {}  # node -> (starts, ends) from computations before the latest
         self.field = None
         self.H = -1
@@ -471,11 +471,11 @@ class IntervalStore:
         return iv
 
     def _intervals(self, node: int) -> tuple[list, list]:
-        b = int(self._where[node])
+        b = self._where[node]
         if b < 0:
             return [], []
         cs, sp, ce, first = self._batches[b]
-        k = int(self._local[node])
+        k = self._local[node]
         a, z = sp[k], sp[k + 1]
         old = self._older.get(node)
         if old is None or not old[0]:
@@ -520,12 +520,16 @@ class IntervalStore:
         ok = same & (gs <= ge)
         rn = wn[:-1][ok]
         sp = np.searchsorted(rn, np.arange(k + 1)).tolist()
-        again = nodes[self._where[nodes] >= 0]
-        for nid in again.tolist():  # extended windows: keep what was computed before
-            self._older[nid] = self._intervals(nid)
+        where, local = self._where, self._local
+        node_list = nodes.tolist()
+        for nid in node_list:  # extended windows: keep what was computed before
+            if where[nid] >= 0:
+                self._older[nid] = self._intervals(nid)
         self._batches.append((gs[ok].tolist(), sp, ge[ok].tolist(), lo_n.tolist()))
-        self._where[nodes] = len(self._batches) - 1
-        self._local[nodes] = np.arange(k)
+        b = len(self._batches) - 1
+        for i, nid in enumerate(node_list):
+            where[nid] = b
+            local[nid] = i
 
 
 def sipp(
