@@ -109,7 +109,8 @@ class MoverField:
         self._size = np.array([mv.size for mv in self.movers], dtype=float).reshape(-1, 2)
 
     def unsafe(self, poses: FloatArray, lo: int = 0, hi: int | None = None) -> BoolArray:
-        """Steps at which the robot at each of ``poses`` is not safe (one group).
+        """Steps at which the robot at each of ``poses`` is not safe (one group; dense, for
+        tests and baselines: the search uses :meth:`unsafe_pairs`).
 
         Parameters
         ----------
@@ -123,18 +124,9 @@ class MoverField:
         """
         poses = np.atleast_2d(np.asarray(poses, dtype=float))
         hi = self.steps if hi is None else hi
-        return self.unsafe_groups(poses, np.array([0, len(poses)]), np.array([lo]), np.array([hi]))
-
-    def unsafe_groups(self, poses: FloatArray, ptr: IntArray, lo: IntArray, hi: IntArray) -> BoolArray:
-        """Dense form of :meth:`unsafe_pairs`: (k, steps + 1) bool, True where unsafe or
-        outside the group's window."""
-        ptr = np.asarray(ptr, dtype=np.int64)
-        gid = np.repeat(np.arange(len(ptr) - 1), np.diff(ptr))
-        lo = np.asarray(lo, dtype=np.int64)
-        hi = np.asarray(hi, dtype=np.int64)
         tgrid = np.arange(self.steps + 1)
-        out = (tgrid < lo[gid, None]) | (tgrid > hi[gid, None])
-        node, step = self.unsafe_pairs(poses, ptr, lo, hi)
+        out = np.broadcast_to((tgrid < lo) | (tgrid > hi), (len(poses), tgrid.size)).copy()
+        node, step = self.unsafe_pairs(poses, np.array([0, len(poses)]), np.array([lo]), np.array([hi]))
         out[node, step] = True
         return out
 
