@@ -13,6 +13,7 @@ from .errors import GfuzzyError, SceneError
 from .planner import Planner, PlanOptions, PlanResult, Status, plan
 from .roadmap import Roadmap, RoadmapOptions, build_roadmap, load_roadmap
 from .scene import Scene, load_scene
+from .tracks import Track, Tracks, TrackScene, TrackSceneOptions, read_tracks, tracks_scene
 from .trajectory import Trajectory, load_trajectory
 
 logging.getLogger(__name__).addHandler(logging.NullHandler())
@@ -30,6 +31,10 @@ __all__ = [
     "Scene",
     "SceneError",
     "Status",
+    "Track",
+    "TrackScene",
+    "TrackSceneOptions",
+    "Tracks",
     "Trajectory",
     "build_roadmap",
     "check_trajectory",
@@ -37,4 +42,6 @@ __all__ = [
     "load_scene",
     "load_trajectory",
     "plan",
+    "read_tracks",
+    "tracks_scene",
 ]

@@ -328,6 +328,72 @@ def cmd_regress(args) -> int:
     return EXIT_OK if ok else EXIT_NO
 
 
+def _tracks_command(args) -> str:
+    """The `gfuzzy tracks` command that makes the same scene (for the scene's header)."""
+    import shlex
+
+    def g(v) -> str:
+        return v if isinstance(v, str) else (str(int(v)) if float(v).is_integer() else repr(float(v)))
+
+    parts = ["gfuzzy", "tracks", args.file]
+    for flag, value in (("--format", None if args.format == "auto" else args.format), ("--fps", args.fps),
+                        ("--t-start", args.t_start), ("--duration", args.duration), ("--region", args.region),
+                        ("--scale", None if args.scale == 1.0 else args.scale),
+                        ("--radius", None if args.radius == 0.25 else args.radius), ("--max-movers", args.max_movers),
+                        ("--static", args.static), ("--name", args.name), ("--robot-radius", args.robot_radius),
+                        ("--vmax", args.vmax), ("--amax", args.amax), ("--start", args.start), ("--goal", args.goal),
+                        ("--query-name", None if args.query_name == "cross" else args.query_name),
+                        ("--expect", args.expect), ("--max-duration", args.max_duration), ("-o", args.output)):  # fmt: skip
+        if value is not None:
+            parts += [flag, *(g(v) for v in (value if isinstance(value, list) else [value]))]
+    return " ".join(shlex.quote(a) for a in parts)
+
+
+def cmd_tracks(args) -> int:
+    from .atomic import write_atomic
+    from .scene import _load_yaml, parse_scene
+    from .tracks import TrackSceneOptions, read_tracks, tracks_scene
+
+    out = _out_path(args.output, (".yaml", ".yml"))
+    static = _load_scene(args.static) if args.static else None
+    try:
+        options = TrackSceneOptions(
+            t_start=args.t_start,
+            duration=args.duration,
+            region=tuple(args.region) if args.region else None,
+            scale=args.scale,
+            radius=args.radius,
+            max_movers=args.max_movers,
+            name=args.name or out.stem,
+            robot_radius=args.robot_radius,
+            vmax=args.vmax,
+            amax=args.amax,
+        )
+        tracks = read_tracks(args.file, args.format, args.fps)
+        dof = static.robot.dof if static is not None and args.robot_radius is None else 2
+        start = _pose(args.start, dof, "--start")
+        goal = _pose(args.goal, dof, "--goal")
+        expect = {}
+        if args.expect:
+            expect["status"] = args.expect
+        if args.max_duration is not None:
+            expect["max_duration"] = args.max_duration
+        made = tracks_scene(
+            tracks, options, static=static, folder=out.resolve().parent,
+            start=start, goal=goal, query_name=args.query_name, expect=expect,
+        )  # fmt: skip
+    except SceneError:  # a bad file: its own message (SceneError is a ValueError too)
+        raise
+    except ValueError as exc:
+        raise BadInput(f"gfuzzy tracks: {exc}") from None
+    text = made.to_yaml(_tracks_command(args))
+    # the file must load as it will be read: check it before it replaces anything
+    parse_scene(_load_yaml(text, str(out)), file=str(out), folder=out.resolve().parent)
+    write_atomic(out, text)
+    _say(f"{out}: {made.movers} movers, bounds {list(made.region)}", sys.stdout)
+    return EXIT_OK
+
+
 # ------------------------------------------------------------------ parser
 
 
@@ -389,6 +455,30 @@ def _parser() -> argparse.ArgumentParser:
     g.add_argument("scenes", metavar="SCENE", nargs="+")
     plan_flags(g)
     g.set_defaults(func=cmd_regress, roadmap=None)
+
+    k = sub.add_parser("tracks", help="make a scene of pedestrian tracks (ETH/UCY text or CSV t,id,x,y)")
+    k.add_argument("file", metavar="FILE", help="tracks: ETH/UCY text (frame id x y [vx vy]) or CSV (t,id,x,y)")
+    k.add_argument("-o", "--output", required=True, metavar="OUT.yaml", help="the scene file to write")
+    k.add_argument("--format", choices=("auto", "eth", "csv"), default="auto", help="input format (default: from the file)")
+    k.add_argument("--fps", type=float, help="eth: frames per second (default: annotated frames 0.4 s apart)")
+    k.add_argument("--t-start", type=float, help="window start, seconds of the recording (default: its first time)")
+    k.add_argument("--duration", type=float, help="window length, seconds (default: to the recording's end)")
+    k.add_argument("--region", type=float, nargs=4, metavar=("XMIN", "YMIN", "XMAX", "YMAX"),
+                   help="scene bounds; tracks are clipped to it (default: --static's bounds, or the people's extent + 0.5 m)")  # fmt: skip
+    k.add_argument("--scale", type=float, default=1.0, help="multiplies every x and y of the file (default 1)")
+    k.add_argument("--radius", "--ped-radius", dest="radius", type=float, default=0.25, help="pedestrians' disc radius (default 0.25)")
+    k.add_argument("--max-movers", type=int, help="keep the N people present longest")
+    k.add_argument("--static", metavar="SCENE", help="take the robot, the static obstacles and the bounds of this scene")
+    k.add_argument("--name", help="scene name (default: the output file's stem)")
+    k.add_argument("--robot-radius", type=float, help="a disc robot of this radius (default 0.2, or --static's robot)")
+    k.add_argument("--vmax", type=float, help="robot speed bound (default 1.5, or --static's)")
+    k.add_argument("--amax", type=float, help="robot acceleration bound (default 3.0, or --static's)")
+    k.add_argument("--start", nargs="+", metavar="X", help="a query from this pose at t0 = 0 (with --goal)")
+    k.add_argument("--goal", nargs="+", metavar="X", help="the query's goal pose")
+    k.add_argument("--query-name", default="cross", help="the query's name (default cross)")
+    k.add_argument("--expect", choices=("solved", "no_path", "invalid_query"), help="the query's expected status")
+    k.add_argument("--max-duration", type=float, help="the query's expected longest duration")
+    k.set_defaults(func=cmd_tracks)
     return p
 
 

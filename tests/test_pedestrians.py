@@ -1,8 +1,8 @@
-"""Planning among real people: scenes made from the ETH/UCY data sets in ../shared.
+"""Planning among real people: scenes made from the ETH/UCY excerpts in data/pedestrians/.
 
-The dense UCY "students" square is the hard case (hundreds of people); each test builds its
-scene with tools/ped_scene.py, plans with real OMPL/FCL, and checks every answer with the
-independent checker. Skipped where the data is not beside the repository.
+The dense UCY "students" square is the hard case (over a hundred people); each test builds
+its scene with `gfuzzy tracks`, plans with real OMPL/FCL, and checks every answer with the
+independent checker. The excerpts are part of the repository: nothing is skipped.
 """
 
 from __future__ import annotations
@@ -11,27 +11,19 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import ROOT, run_python
+from conftest import ROOT, run_cli_process
 
 from gfuzzy.check import check_trajectory
 from gfuzzy.planner import Planner, PlanOptions, Status
 from gfuzzy.roadmap import RoadmapOptions, build_roadmap
 from gfuzzy.scene import load_scene
 
-DATA = ROOT.parent / "shared" / "data" / "pedestrians"
-pytestmark = pytest.mark.skipif(not (DATA / "students001.txt").exists(), reason="no pedestrian data")
+DATA = ROOT / "data" / "pedestrians"
 
 
 def _make(tmp_path: Path, data: str, *args) -> Path:
     out = tmp_path / f"{Path(data).stem}.yaml"
-    proc = run_python(
-        "import runpy, sys; sys.argv = sys.argv[1:]; runpy.run_path(sys.argv[0], run_name='__main__')",
-        str(ROOT / "tools" / "ped_scene.py"),
-        str(DATA / data),
-        *map(str, args),
-        "-o",
-        str(out),
-    )
+    proc = run_cli_process("tracks", DATA / data, *args, "-o", out)
     assert proc.returncode == 0, proc.stderr
     return out
 

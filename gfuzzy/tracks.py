@@ -1,0 +1,825 @@
+"""Pedestrian tracks as movers: read recorded tracks, write them as a scene.
+
+Two input formats (``docs/formats.md``, "Pedestrian tracks"):
+
+* **eth**: the plain-text form in which the ETH (Pellegrini et al., ICCV 2009) and UCY
+  (Lerner et al., 2007) data sets are redistributed: one annotation per line,
+  whitespace-separated ``frame pedestrian_id x y`` and optionally ``vx vy`` (ignored), ``#``
+  comments. A time is ``frame / fps``; by default annotated frames are taken to be 0.4 s
+  apart (the data sets' convention), i.e. ``fps = step / 0.4`` with ``step`` the smallest
+  frame difference between two rows of one pedestrian (6 or 10, depending on the camera).
+* **csv**: a header naming the columns ``t``, ``id``, ``x``, ``y`` (any order, other columns
+  ignored), then one row per observation; ``t`` in seconds, ``id`` any name of letters,
+  digits, ``_ . -``.
+
+Rows of different people may interleave; each person's times must strictly increase in
+file order. :func:`read_tracks` returns :class:`Tracks`; :func:`tracks_scene` clips them to
+a time window and a region and returns a :class:`TrackScene`, whose ``doc`` is a scene
+document (:func:`gfuzzy.scene.parse_scene` reads it) and whose :meth:`TrackScene.to_yaml`
+writes it. ``gfuzzy tracks`` is the command line of both.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import logging
+import math
+import os
+import re
+from dataclasses import dataclass, field
+from itertools import pairwise
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from .errors import SceneError
+from .scene import NAME_RE, STATUSES, Scene
+from .typing import FloatArray
+
+__all__ = [
+    "ANNOTATION_PERIOD",
+    "Track",
+    "Tracks",
+    "TrackSceneOptions",
+    "TrackScene",
+    "read_tracks",
+    "tracks_scene",
+]
+
+log = logging.getLogger(__name__)
+
+#: Seconds between consecutive annotated frames in the ETH/UCY data sets.
+ANNOTATION_PERIOD = 0.4
+FORMATS = ("auto", "eth", "csv")
+#: Margin (m) around the pedestrians' extent when no region is given.
+REGION_MARGIN = 0.5
+_ID_RE = re.compile(r"^[A-Za-z0-9_.-]+$")
+
+
+@dataclass(frozen=True)
+class Track:
+    """One person's recorded track.
+
+    Attributes
+    ----------
+    id : str
+        The person's id in the file (``"17"`` for the ETH/UCY integer 17).
+    rows : (n, 3) float
+        ``[t, x, y]``: seconds of the recording and metres (before any scaling); t strictly
+        increasing.
+    """
+
+    id: str
+    rows: FloatArray = field(compare=False)
+
+    @property
+    def time_range(self) -> tuple[float, float]:
+        """First and last time of the track."""
+        return float(self.rows[0, 0]), float(self.rows[-1, 0])
+
+
+@dataclass(frozen=True)
+class Tracks:
+    """Every track of one file.
+
+    Attributes
+    ----------
+    source : str
+        The file they were read from.
+    format : {"eth", "csv"}
+    fps : float or None
+        Frames per second used to turn frames into seconds (``None`` for csv).
+    frame_step : int or None
+        Smallest frame difference between two rows of one person (eth only; None when no
+        person has two rows).
+    tracks : tuple of Track
+        In order of first appearance in the file.
+    """
+
+    source: str
+    format: str
+    fps: float | None
+    frame_step: int | None
+    tracks: tuple[Track, ...]
+
+    @property
+    def time_range(self) -> tuple[float, float]:
+        """First and last time of any track."""
+        return (
+            min(tr.rows[0, 0] for tr in self.tracks),
+            max(tr.rows[-1, 0] for tr in self.tracks),
+        )
+
+
+# ---------------------------------------------------------------------------------- reading
+
+
+def _whole(value: float) -> int | None:
+    if math.isfinite(value) and value == int(value):
+        return int(value)
+    return None
+
+
+def _id_key(pid: str):
+    """Natural order of ids: integers by value first, then names."""
+    return (0, int(pid), "") if pid.lstrip("-").isdigit() else (1, 0, pid)
+
+
+def _read_text(path: str) -> str:
+    try:
+        data = Path(path).read_bytes()
+    except OSError as exc:
+        raise SceneError(path, "", f"cannot read: {exc.strerror or exc}") from None
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise SceneError(path, "", f"not UTF-8 text (byte {exc.start})") from None
+
+
+def _sniff(path: str, text: str) -> str:
+    if path.lower().endswith(".csv"):
+        return "csv"
+    for line in text.splitlines():
+        line = line.split("#", 1)[0].strip()
+        if line:
+            return "csv" if "," in line else "eth"
+    return "eth"
+
+
+def _add(
+    rows: dict,
+    lines: dict,
+    path: str,
+    lineno: int,
+    pid: str,
+    t: float,
+    x: float,
+    y: float,
+    unit: str,
+):
+    prev = rows.setdefault(pid, [])
+    if prev and t <= prev[-1][0]:
+        raise SceneError(
+            path,
+            f"line {lineno}",
+            f"pedestrian {pid}: {unit} {t:g} does not increase "
+            f"(its previous row, line {lines[pid]}, has {prev[-1][0]:g})",
+        )
+    prev.append((t, x, y))
+    lines[pid] = lineno
+
+
+def _read_eth(path: str, text: str) -> tuple[dict, int | None]:
+    """{id: [(frame, x, y), ...]} of an ETH/UCY text file, and the smallest frame step."""
+    rows: dict = {}
+    lines: dict = {}
+    for lineno, line in enumerate(text.splitlines(), start=1):
+        body = line.split("#", 1)[0].strip()
+        if not body:
+            continue
+        cols = body.split()
+        if len(cols) not in (4, 6):
+            raise SceneError(
+                path,
+                f"line {lineno}",
+                f"expected 4 or 6 columns (frame id x y [vx vy]), got {len(cols)}",
+            )
+        try:
+            nums = [float(c) for c in cols]
+        except ValueError:
+            raise SceneError(path, f"line {lineno}", f"not a number in {body!r}") from None
+        if not all(math.isfinite(v) for v in nums):
+            raise SceneError(path, f"line {lineno}", f"non-finite number in {body!r}")
+        frame, pid = _whole(nums[0]), _whole(nums[1])
+        if frame is None or pid is None:
+            raise SceneError(
+                path, f"line {lineno}", "frame and pedestrian id must be whole numbers"
+            )
+        _add(rows, lines, path, lineno, str(pid), frame, nums[2], nums[3], "frame")
+    steps = [b[0] - a[0] for r in rows.values() for a, b in pairwise(r)]
+    return rows, (min(steps) if steps else None)
+
+
+def _read_csv(path: str, text: str) -> dict:
+    """{id: [(t, x, y), ...]} of a CSV file with a header naming t, id, x, y."""
+    reader = csv.reader(io.StringIO(text))
+    header = None
+    rows: dict = {}
+    lines: dict = {}
+    for cols in reader:
+        lineno = reader.line_num
+        if not cols or not "".join(cols).strip() or cols[0].lstrip().startswith("#"):
+            continue
+        cols = [c.strip() for c in cols]
+        if header is None:
+            names = [c.lower() for c in cols]
+            missing = [k for k in ("t", "id", "x", "y") if k not in names]
+            if missing:
+                raise SceneError(
+                    path,
+                    f"line {lineno}",
+                    f"the header must name the columns t, id, x, y (missing: {', '.join(missing)})",
+                )
+            header = names
+            index = {k: names.index(k) for k in ("t", "id", "x", "y")}
+            continue
+        if len(cols) != len(header):
+            raise SceneError(
+                path, f"line {lineno}", f"expected {len(header)} columns, got {len(cols)}"
+            )
+        pid = cols[index["id"]]
+        if not _ID_RE.match(pid):
+            raise SceneError(path, f"line {lineno}", f"id {pid!r} must be letters, digits, _ . -")
+        try:
+            t, x, y = (float(cols[index[k]]) for k in ("t", "x", "y"))
+        except ValueError:
+            raise SceneError(
+                path, f"line {lineno}", f"not a number in {','.join(cols)!r}"
+            ) from None
+        if not all(math.isfinite(v) for v in (t, x, y)):
+            raise SceneError(path, f"line {lineno}", f"non-finite number in {','.join(cols)!r}")
+        _add(rows, lines, path, lineno, pid, t, x, y, "time")
+    if header is None:
+        raise SceneError(path, "", "no header line (t,id,x,y)")
+    return rows
+
+
+def read_tracks(path: str | os.PathLike, format: str = "auto", fps: float | None = None) -> Tracks:
+    """Read a file of pedestrian tracks.
+
+    Parameters
+    ----------
+    path : path-like
+        An ETH/UCY text file or a CSV file (see the module docstring).
+    format : {"auto", "eth", "csv"}
+        ``auto``: csv for a ``.csv`` name or a first data line with a comma, else eth.
+    fps : float, optional
+        eth only: frames per second of the recording. Default: ``step / 0.4`` (annotated
+        frames 0.4 s apart).
+
+    Returns
+    -------
+    Tracks
+
+    Raises
+    ------
+    SceneError
+        The file cannot be read, a row cannot be parsed (naming its line), a person's time
+        does not increase, or there is no row at all.
+    ValueError
+        ``format`` or ``fps`` is not allowed.
+    """
+    file = str(path)
+    if format not in FORMATS:
+        raise ValueError(f"format must be one of {', '.join(FORMATS)}, got {format!r}")
+    if fps is not None and not (math.isfinite(fps) and fps > 0):
+        raise ValueError(f"fps must be positive and finite, got {fps!r}")
+    text = _read_text(file)
+    fmt = _sniff(file, text) if format == "auto" else format
+    step = None
+    if fmt == "eth":
+        raw, step = _read_eth(file, text)
+        if raw and fps is None and step is None:
+            raise SceneError(
+                file, "", "no pedestrian has two rows: cannot derive the frame rate (give fps)"
+            )
+        if not raw:
+            raise SceneError(file, "", "no data rows")
+        # seconds per frame, multiplied (not divided) so that times are those of earlier tools
+        spf = 1.0 / fps if fps is not None else ANNOTATION_PERIOD / step
+        fps_used = fps if fps is not None else step / ANNOTATION_PERIOD
+        raw = {pid: [(f * spf, x, y) for f, x, y in rows] for pid, rows in raw.items()}
+    else:
+        if fps is not None:
+            raise ValueError("fps applies to the eth format only (csv times are seconds)")
+        raw = _read_csv(file, text)
+        fps_used = None
+    if not raw:
+        raise SceneError(file, "", "no data rows")
+    tracks = tuple(Track(pid, np.array(rows, dtype=float)) for pid, rows in raw.items())
+    return Tracks(file, fmt, fps_used, step, tracks)
+
+
+# ---------------------------------------------------------------------------------- clipping
+
+
+def _lerp(a, b, u: float):
+    return tuple(a[i] + u * (b[i] - a[i]) for i in range(3))
+
+
+def _clip_time(rows, t_lo: float, t_hi: float) -> list:
+    """Rows (t, x, y) restricted to [t_lo, t_hi], with rows interpolated at the boundaries."""
+    out: list = []
+    for a, b in pairwise(rows):
+        if b[0] < t_lo or a[0] > t_hi:
+            continue
+        u0 = max(0.0, (t_lo - a[0]) / (b[0] - a[0]))
+        u1 = min(1.0, (t_hi - a[0]) / (b[0] - a[0]))
+        p, q = _lerp(a, b, u0), _lerp(a, b, u1)
+        if not out or out[-1] != p:
+            out.append(p)
+        if q != p:
+            out.append(q)
+    if not out:  # a track of a single row, or one only touching the window
+        out = [r for r in rows if t_lo <= r[0] <= t_hi]
+    return out
+
+
+def _clip_segment(p, q, region) -> tuple[float, float] | None:
+    """Liang-Barsky: the parameter interval [u0, u1] of the segment p -> q inside the region."""
+    xmin, ymin, xmax, ymax = region
+    dx, dy = q[1] - p[1], q[2] - p[2]
+    u0, u1 = 0.0, 1.0
+    for den, num in ((-dx, p[1] - xmin), (dx, xmax - p[1]), (-dy, p[2] - ymin), (dy, ymax - p[2])):
+        if den == 0:
+            if num < 0:
+                return None
+            continue
+        u = num / den
+        if den < 0:
+            u0 = max(u0, u)
+        else:
+            u1 = min(u1, u)
+    if u0 > u1:
+        return None
+    return u0, u1
+
+
+def _clip_region(rows, region) -> list[list]:
+    """The runs of a track inside the region (rows interpolated where it crosses the border)."""
+    xmin, ymin, xmax, ymax = region
+    if len(rows) == 1:
+        _, x, y = rows[0]
+        return [rows] if xmin <= x <= xmax and ymin <= y <= ymax else []
+    runs: list[list] = []
+    cur: list = []
+    for a, b in pairwise(rows):
+        span = _clip_segment(a, b, region)
+        if span is None:
+            if cur:
+                runs.append(cur)
+                cur = []
+            continue
+        u0, u1 = span
+        p, q = _lerp(a, b, u0), _lerp(a, b, u1)
+        if u0 > 0.0 and cur:
+            runs.append(cur)
+            cur = []
+        if not cur or cur[-1] != p:
+            cur.append(p)
+        if q != p:
+            cur.append(q)
+        if u1 < 1.0:
+            runs.append(cur)
+            cur = []
+    if cur:
+        runs.append(cur)
+    # rounding must not push a row out of the region either
+    return [
+        [(t, min(max(x, xmin), xmax), min(max(y, ymin), ymax)) for t, x, y in run] for run in runs
+    ]
+
+
+def _round_rows(rows) -> list:
+    """Rows rounded to the millimetre and millisecond; a row whose time no longer increases
+    is dropped (scene trajectories need strictly increasing times)."""
+    out: list = []
+    for t, x, y in rows:
+        r = (round(t, 3), round(x, 3), round(y, 3))
+        if out and r[0] <= out[-1][0]:
+            continue
+        out.append(r)
+    return out
+
+
+@dataclass
+class _Mover:
+    name: str
+    pid: str
+    rows: list  # (t, x, y), t relative to the window start
+
+    @property
+    def duration(self) -> float:
+        return self.rows[-1][0] - self.rows[0][0]
+
+    def position_at(self, t: float):
+        rows = self.rows
+        if not rows[0][0] <= t <= rows[-1][0]:
+            return None
+        for a, b in pairwise(rows):
+            if a[0] <= t <= b[0]:
+                u = (t - a[0]) / (b[0] - a[0])
+                return a[1] + u * (b[1] - a[1]), a[2] + u * (b[2] - a[2])
+        return rows[-1][1], rows[-1][2]
+
+
+# ---------------------------------------------------------------------------------- scenes
+
+
+@dataclass(frozen=True)
+class TrackSceneOptions:
+    """How tracks become a scene.
+
+    Attributes
+    ----------
+    t_start : float or None
+        Start of the time window, seconds of the recording (None: the first time in the
+        file). Scene time 0 is this instant.
+    duration : float or None
+        Length of the window in seconds (None: up to the last time in the file).
+    region : (4,) tuple or None
+        ``(xmin, ymin, xmax, ymax)`` after scaling: the scene's bounds; tracks are clipped
+        to it. None: the static scene's bounds, or the people's extent in the window plus
+        :data:`REGION_MARGIN`, rounded out to 0.1 m.
+    scale : float
+        Multiplies every x and y of the file (e.g. 0.01 for centimetres).
+    radius : float
+        Radius of each person's disc mover, metres.
+    max_movers : int or None
+        Keep the movers present longest in the window (ties: smaller id first).
+    name : str
+        The scene's name.
+    robot_radius, vmax, amax : float or None
+        A disc robot; None: the static scene's robot, or 0.2 m, 1.5 m/s, 3.0 m/s².
+    """
+
+    t_start: float | None = None
+    duration: float | None = None
+    region: tuple[float, float, float, float] | None = None
+    scale: float = 1.0
+    radius: float = 0.25
+    max_movers: int | None = None
+    name: str = "pedestrians"
+    robot_radius: float | None = None
+    vmax: float | None = None
+    amax: float | None = None
+
+    def __post_init__(self):
+        for key in ("t_start", "duration", "scale", "radius", "robot_radius", "vmax", "amax"):
+            value = getattr(self, key)
+            if value is not None and not math.isfinite(value):
+                raise ValueError(f"{key} must be finite, got {value!r}")
+        for key in ("duration", "scale", "radius", "robot_radius", "vmax", "amax"):
+            value = getattr(self, key)
+            if value is not None and value <= 0:
+                raise ValueError(f"{key} must be positive, got {value!r}")
+        if self.max_movers is not None and self.max_movers < 0:
+            raise ValueError(f"max_movers must not be negative, got {self.max_movers!r}")
+        if self.region is not None:
+            r = tuple(float(v) for v in self.region)
+            if (
+                len(r) != 4
+                or not all(math.isfinite(v) for v in r)
+                or not (r[0] < r[2] and r[1] < r[3])
+            ):
+                raise ValueError(
+                    f"region must be xmin ymin xmax ymax with xmin < xmax, ymin < ymax, got {self.region!r}"
+                )
+            object.__setattr__(self, "region", r)
+        if not NAME_RE.match(self.name):
+            raise ValueError(f"name must be letters, digits, _ . - (got {self.name!r})")
+
+
+@dataclass(frozen=True)
+class TrackScene:
+    """A scene made from tracks.
+
+    Attributes
+    ----------
+    doc : dict
+        The scene document (``version``, ``name``, ``bounds``, ``robot``, ``obstacles``,
+        ``movers``, ``queries``), as :func:`gfuzzy.scene.parse_scene` reads it.
+    window : (2,) tuple
+        The time window, seconds of the recording.
+    region : (4,) tuple
+        The scene's bounds.
+    source : str
+        The tracks' file.
+    fps, frame_step
+        As in :class:`Tracks`.
+    """
+
+    doc: dict
+    window: tuple[float, float]
+    region: tuple[float, float, float, float]
+    source: str
+    fps: float | None = None
+    frame_step: int | None = None
+
+    @property
+    def movers(self) -> int:
+        """Number of movers."""
+        return len(self.doc["movers"])
+
+    def to_yaml(self, command: str | None = None) -> str:
+        """The scene as YAML text, trajectories wrapped in flow style, with a header comment
+        saying where it came from (``command``: how it was made, written on line 2)."""
+        doc = self.doc
+        t0, t1 = self.window
+        radius = doc["movers"][0]["disc"] if doc["movers"] else None
+        head = [
+            f"# Generated by `gfuzzy tracks` from {os.path.basename(self.source)}; do not edit by hand."
+        ]
+        if command:
+            head.append(f"#   {command}")
+        if self.frame_step is not None and self.fps is not None:
+            head.append(
+                f"# {self.fps:g} frames/s (frame step {self.frame_step} = {self.frame_step / self.fps:g} s);"
+                f" window {t0:g} s .. {t1:g} s of the recording (t = 0 here is {t0:g} s there)."
+            )
+        else:
+            head.append(
+                f"# Window {t0:g} s .. {t1:g} s of the recording (t = 0 here is {t0:g} s there)."
+            )
+        shape = f" of radius {radius:g}" if radius is not None else ""
+        head += [
+            f"# {self.movers} pedestrians as disc movers{shape}, clipped to the window and the region;",
+            "# each exists only between its first and last row.",
+        ]
+        out = head + [
+            "version: 1",
+            f"name: {doc['name']}",
+            f"bounds: {_row(doc['bounds'])}",
+            "robot:",
+        ]
+        for key, value in doc["robot"].items():
+            out.append(f"  {key}: {_value(value)}")
+        if doc["obstacles"]:
+            out.append("obstacles:")
+            out += [f"  - {_flow(item)}" for item in doc["obstacles"]]
+        else:
+            out.append("obstacles: []")
+        if doc["movers"]:
+            out.append("movers:")
+            for m in doc["movers"]:
+                out.append(f"  - name: {m['name']}")
+                out.append(f"    disc: {_num(m['disc'])}")
+                out.append("    trajectory: " + _flow_rows(m["trajectory"], "    "))
+        else:
+            out.append("movers: []")
+        if doc.get("queries"):
+            out.append("queries:")
+            for q in doc["queries"]:
+                out.append(f"  - name: {q['name']}")
+                out += [
+                    f"    start: {_row(q['start'])}",
+                    f"    goal: {_row(q['goal'])}",
+                    f"    t0: {_num(q['t0'])}",
+                ]
+                if q.get("expect"):
+                    out.append("    expect:")
+                    for key, value in q["expect"].items():
+                        out.append(
+                            f"      {key}: {value if isinstance(value, str) else f'{value:g}'}"
+                        )
+        return "\n".join(out) + "\n"
+
+
+def _num(v: float) -> str:
+    v = float(v)
+    return repr(v if v != 0 else 0.0)  # never "-0.0"
+
+
+def _row(r) -> str:
+    return "[" + ", ".join(_num(v) for v in r) + "]"
+
+
+def _value(v) -> str:
+    if isinstance(v, bool) or v is None:
+        return _flow(v)
+    if isinstance(v, (int, float)):
+        return _num(v)
+    if isinstance(v, (list, tuple)) and all(isinstance(x, (int, float)) for x in v):
+        return _row(v)
+    return _flow(v)
+
+
+def _flow(item) -> str:
+    return yaml.safe_dump(item, default_flow_style=True, width=10**9, sort_keys=False).strip()
+
+
+def _flow_rows(rows, indent: str, width: int = 100) -> str:
+    """A YAML flow sequence of rows, wrapped over several lines."""
+    parts = [_row(r) for r in rows]
+    lines, cur = [], "["
+    for i, p in enumerate(parts):
+        piece = p + ("," if i < len(parts) - 1 else "]")
+        if len(cur) + len(piece) + 1 > width - len(indent) and cur != "[":
+            lines.append(cur)
+            cur = indent + "  " + piece
+        else:
+            cur = cur + ("" if cur.endswith("[") else " ") + piece
+    lines.append(cur)
+    return "\n".join(lines)
+
+
+def _static_obstacles(static: Scene, folder: Path) -> list:
+    """The static scene's obstacles, with mesh paths made relative to ``folder``."""
+    src_folder = Path(static.source).resolve().parent
+    out = []
+    for i, item in enumerate(static.raw.get("obstacles") or []):
+        item = dict(item)
+        if "mesh" in item:
+            spec = dict(item["mesh"])
+            target = (src_folder / spec["file"]).resolve()
+            rel = os.path.relpath(target, folder.resolve())
+            if rel.startswith(".."):
+                raise SceneError(
+                    static.source,
+                    f"obstacles[{i}].mesh.file",
+                    f"{target} would lie outside the new scene's folder {folder}; write the scene beside it",
+                )
+            spec["file"] = Path(rel).as_posix()
+            item["mesh"] = spec
+        out.append(item)
+    return out
+
+
+def _default_region(tracks: list, t_lo: float, t_hi: float):
+    xs, ys = [], []
+    for rows in tracks:
+        clipped = _clip_time(rows, t_lo, t_hi)
+        xs += [r[1] for r in clipped]
+        ys += [r[2] for r in clipped]
+    if not xs:
+        return None
+    m = REGION_MARGIN
+    return (
+        math.floor((min(xs) - m) * 10) / 10,
+        math.floor((min(ys) - m) * 10) / 10,
+        math.ceil((max(xs) + m) * 10) / 10,
+        math.ceil((max(ys) + m) * 10) / 10,
+    )
+
+
+def tracks_scene(
+    tracks: Tracks,
+    options: TrackSceneOptions | None = None,
+    *,
+    static: Scene | None = None,
+    folder: str | os.PathLike | None = None,
+    start=None,
+    goal=None,
+    query_name: str = "cross",
+    expect: dict | None = None,
+) -> TrackScene:
+    """Clip tracks to a time window and a region, and make them the movers of a scene.
+
+    Each person becomes a disc mover ``ped-<id>`` with a timed trajectory, times relative
+    to the window's start. A track is cut at the window's ends and at the region's border
+    (rows interpolated there); a person who leaves the region and comes back becomes
+    ``ped-<id>``, ``ped-<id>-2``, ... Rows are rounded to 1 mm and 1 ms (a row whose time no
+    longer increases is dropped) and a mover left with fewer than two rows is dropped.
+
+    Parameters
+    ----------
+    tracks : Tracks
+    options : TrackSceneOptions, optional
+    static : Scene, optional
+        A scene whose robot, static obstacles and bounds (as the default region) are used.
+    folder : path-like, optional
+        The folder the scene will be written to (mesh paths of ``static`` are rewritten
+        relative to it); default the current directory.
+    start, goal : sequence of float, optional
+        A query from ``start`` to ``goal`` at t0 = 0, named ``query_name``; both or neither.
+    expect : dict, optional
+        The query's ``expect`` mapping (``status``, ``max_duration``, ``max_delay_factor``).
+
+    Returns
+    -------
+    TrackScene
+
+    Raises
+    ------
+    SceneError
+        No person in the window (or in the region), or a start/goal outside the region;
+        the message names the tracks' file.
+    ValueError
+        ``start`` without ``goal``, a query name or expectation that is not allowed.
+    """
+    options = options or TrackSceneOptions()
+    src = tracks.source
+    first, last = tracks.time_range
+    t_lo = first if options.t_start is None else options.t_start
+    t_hi = last if options.duration is None else t_lo + options.duration
+    if t_hi <= t_lo:
+        raise SceneError(
+            src,
+            "",
+            f"the window {t_lo:g} s .. {t_hi:g} s is empty (the recording ends at {last:g} s)",
+        )
+    scale = options.scale
+    rel = {
+        tr.id: [(t - t_lo, x * scale, y * scale) for t, x, y in tr.rows.tolist()]
+        for tr in sorted(tracks.tracks, key=lambda tr: _id_key(tr.id))
+    }
+    duration = t_hi - t_lo
+    if not any(len(_clip_time(rows, 0.0, duration)) >= 2 for rows in rel.values()):
+        raise SceneError(
+            src,
+            "",
+            f"no pedestrian in the window {t_lo:g} s .. {t_hi:g} s (the recording spans {first:g} .. {last:g} s)",
+        )
+    region = options.region
+    if region is None and static is not None:
+        region = tuple(static.bounds)
+    if region is None:
+        region = _default_region(list(rel.values()), 0.0, duration)
+    region = tuple(float(v) for v in region)
+
+    # robot
+    if static is not None and options.robot_radius is None:
+        robot = dict(static.raw["robot"])
+        dof = static.robot.dof
+        inradius = static.robot.inradius
+    else:
+        robot = {"disc": options.robot_radius if options.robot_radius is not None else 0.2}
+        dof, inradius = 2, robot["disc"]
+    robot_default = {"vmax": 1.5, "amax": 3.0} if static is None else {}
+    for key in ("vmax", "amax"):
+        value = getattr(options, key)
+        if value is not None:
+            robot[key] = value
+        elif key in robot_default and key not in robot:
+            robot[key] = robot_default[key]
+    robot = {
+        k: float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else v
+        for k, v in robot.items()
+    }
+
+    # query
+    queries = []
+    if (start is None) != (goal is None):
+        raise ValueError("start and goal go together")
+    if start is not None:
+        if not NAME_RE.match(query_name):
+            raise ValueError(f"query name must be letters, digits, _ . - (got {query_name!r})")
+        start, goal = [float(v) for v in start], [float(v) for v in goal]
+        for label, pose in (("start", start), ("goal", goal)):
+            if len(pose) != dof:
+                raise ValueError(f"{label}: expected {dof} numbers for this robot, got {len(pose)}")
+            x, y = pose[:2]
+            if not (
+                region[0] + inradius <= x <= region[2] - inradius
+                and region[1] + inradius <= y <= region[3] - inradius
+            ):
+                raise SceneError(
+                    src,
+                    "",
+                    f"{label} {x:g} {y:g} does not fit in the region {' '.join(f'{v:g}' for v in region)}",
+                )
+        query = {"name": query_name, "start": start, "goal": goal, "t0": 0.0}
+        if expect:
+            unknown = set(expect) - {"status", "max_duration", "max_delay_factor"}
+            if unknown or expect.get("status", "solved") not in STATUSES:
+                raise ValueError(f"expect: not allowed: {expect!r}")
+            query["expect"] = dict(expect)
+        queries.append(query)
+
+    # movers
+    movers: list[_Mover] = []
+    for pid, rows in rel.items():
+        rows = _clip_time(rows, 0.0, duration)
+        if len(rows) < 2:
+            continue
+        for k, run in enumerate(_clip_region(rows, region), start=1):
+            run = _round_rows(run)
+            if len(run) < 2:
+                continue
+            movers.append(_Mover(f"ped-{pid}" if k == 1 else f"ped-{pid}-{k}", pid, run))
+    if not movers:
+        raise SceneError(
+            src,
+            "",
+            f"no pedestrian inside the region {' '.join(f'{v:g}' for v in region)} during the window",
+        )
+    if options.max_movers is not None and len(movers) > options.max_movers:
+        keep = sorted(movers, key=lambda m: (-m.duration, _id_key(m.pid), m.rows[0][0]))[
+            : options.max_movers
+        ]
+        kept = {id(m) for m in keep}
+        movers = [m for m in movers if id(m) in kept]
+    movers.sort(key=lambda m: (m.rows[0][0], _id_key(m.pid), m.name))
+    for q in queries:
+        for label in ("start", "goal"):
+            x, y = q[label][:2]
+            for m in movers:
+                p = m.position_at(0.0)
+                if p and math.hypot(p[0] - x, p[1] - y) < inradius + options.radius:
+                    log.warning("the %s overlaps %s at t0 = 0", label, m.name)
+
+    doc = {
+        "version": 1,
+        "name": options.name,
+        "bounds": list(region),
+        "robot": robot,
+        "obstacles": _static_obstacles(static, Path(folder or ".")) if static is not None else [],
+        "movers": [
+            {"name": m.name, "disc": float(options.radius), "trajectory": [list(r) for r in m.rows]}
+            for m in movers
+        ],
+        "queries": queries,
+    }
+    return TrackScene(doc, (t_lo, t_hi), region, src, tracks.fps, tracks.frame_step)

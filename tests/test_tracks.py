@@ -1,0 +1,336 @@
+"""Pedestrian tracks (`gfuzzy tracks`, gfuzzy.read_tracks / tracks_scene): tiny hand-made
+files with hand-computed answers, round trips to scenes that load and plan, bad files, and
+the bundled pedestrian scenes made again from the excerpts in data/pedestrians/."""
+
+from __future__ import annotations
+
+import shlex
+import shutil
+
+import numpy as np
+import pytest
+from conftest import ROOT, run_cli_process
+
+import gfuzzy
+from gfuzzy.check import check_trajectory
+from gfuzzy.planner import Planner
+from gfuzzy.roadmap import RoadmapOptions, build_roadmap
+from gfuzzy.scene import load_scene, parse_scene
+from gfuzzy.tracks import TrackSceneOptions, read_tracks, tracks_scene
+
+# frame step 10 (so 25 frames/s): person 1 walks +x at 2.5 m/s, person 2 appears later,
+# person 3 has velocity columns; rows of different people interleave as in the data sets
+ETH = """\
+# frame id x y [vx vy]
+0\t1\t0.0\t0.0
+10\t1\t1.0\t0.0
+10\t2\t5.0\t5.0
+20\t1\t2.0\t0.0
+20\t2\t5.0\t6.0
+20\t3\t8.0\t1.0\t0.1\t0.2
+30\t1\t3.0\t0.0
+30\t3\t8.0\t2.0\t0.1\t0.2
+"""
+
+CSV = """\
+id,t,x,y,note
+a,0.0,0,0,first
+b,0.5,1,1,
+a,1.0,2,0,
+b,1.5,1,3,
+a,2.0,4,0,last
+"""
+
+
+@pytest.fixture
+def eth_file(tmp_path):
+    path = tmp_path / "walk.txt"
+    path.write_text(ETH, encoding="utf-8")
+    return path
+
+
+@pytest.fixture
+def csv_file(tmp_path):
+    path = tmp_path / "walk.csv"
+    path.write_text(CSV, encoding="utf-8")
+    return path
+
+
+def _rows(tracks, pid):
+    return next(tr for tr in tracks.tracks if tr.id == pid).rows
+
+
+# ------------------------------------------------------------------------- reading
+
+
+def test_eth_frames_become_seconds_0_4_apart(eth_file):
+    tracks = read_tracks(eth_file)
+    assert tracks.format == "eth" and tracks.frame_step == 10 and tracks.fps == pytest.approx(25.0)
+    assert [tr.id for tr in tracks.tracks] == ["1", "2", "3"]
+    np.testing.assert_allclose(
+        _rows(tracks, "1"), [[0, 0, 0], [0.4, 1, 0], [0.8, 2, 0], [1.2, 3, 0]]
+    )
+    np.testing.assert_allclose(_rows(tracks, "2"), [[0.4, 5, 5], [0.8, 5, 6]])
+    np.testing.assert_allclose(_rows(tracks, "3"), [[0.8, 8, 1], [1.2, 8, 2]])  # vx vy ignored
+    assert tracks.time_range == pytest.approx((0.0, 1.2))
+
+
+def test_eth_with_a_given_frame_rate(eth_file):
+    tracks = read_tracks(eth_file, "eth", fps=10.0)
+    np.testing.assert_allclose(_rows(tracks, "1")[:, 0], [0, 1, 2, 3])
+    assert tracks.fps == 10.0
+
+
+def test_csv_columns_by_header_name(csv_file):
+    tracks = read_tracks(csv_file)
+    assert tracks.format == "csv" and tracks.fps is None
+    np.testing.assert_allclose(_rows(tracks, "a"), [[0, 0, 0], [1, 2, 0], [2, 4, 0]])
+    np.testing.assert_allclose(_rows(tracks, "b"), [[0.5, 1, 1], [1.5, 1, 3]])
+
+
+def test_format_is_sniffed_from_the_content(tmp_path):
+    path = tmp_path / "walk.data"
+    path.write_text(CSV, encoding="utf-8")
+    assert read_tracks(path).format == "csv"
+    path.write_text(ETH, encoding="utf-8")
+    assert read_tracks(path).format == "eth"
+
+
+# ------------------------------------------------------------------------- scenes
+
+
+def _movers(made):
+    return {m["name"]: np.array(m["trajectory"]) for m in made.doc["movers"]}
+
+
+def test_window_clips_and_interpolates_at_its_edges(eth_file):
+    made = tracks_scene(
+        read_tracks(eth_file), TrackSceneOptions(t_start=0.2, duration=0.4, region=(-1, -1, 10, 10))
+    )
+    movers = _movers(made)
+    # person 1: x = 2.5 t; the window 0.2 .. 0.6 s starts mid-row and ends mid-row
+    np.testing.assert_allclose(movers["ped-1"], [[0.0, 0.5, 0], [0.2, 1.0, 0], [0.4, 1.5, 0]])
+    # person 2 enters at 0.4 s (0.2 s into the window), is clipped at 0.6 s (y = 5.5)
+    np.testing.assert_allclose(movers["ped-2"], [[0.2, 5, 5], [0.4, 5, 5.5]])
+    assert "ped-3" not in movers  # arrives at 0.8 s, after the window
+    assert made.window == pytest.approx((0.2, 0.6))
+
+
+def test_people_who_enter_and_leave_exist_only_while_recorded(eth_file):
+    made = tracks_scene(read_tracks(eth_file), TrackSceneOptions(region=(-1, -1, 10, 10)))
+    scene = parse_scene(made.doc)
+    ranges = {m.name: m.time_range for m in scene.movers}
+    assert ranges == {"ped-1": (0.0, 1.2), "ped-2": (0.4, 0.8), "ped-3": (0.8, 1.2)}
+    person = next(m for m in scene.movers if m.name == "ped-2")
+    _, present = person.state(np.array([0.3, 0.5, 0.9]))
+    assert present.tolist() == [False, True, False]
+
+
+def test_region_cuts_tracks_and_a_return_is_a_second_mover(csv_file):
+    # a walks x 0 -> 4 (2 m/s): inside 1 <= x <= 3 from t 0.5 to 1.5; b walks y 1 -> 3
+    made = tracks_scene(read_tracks(csv_file), TrackSceneOptions(region=(1, -1, 3, 2)))
+    movers = _movers(made)
+    np.testing.assert_allclose(movers["ped-a"], [[0.5, 1, 0], [1.0, 2, 0], [1.5, 3, 0]])
+    np.testing.assert_allclose(movers["ped-b"], [[0.5, 1, 1], [1.0, 1, 2]])  # leaves at y = 2
+    assert made.region == (1.0, -1.0, 3.0, 2.0)
+    # c walks x 0 -> 2 -> 0: through 1 <= x <= 1.5 out and back again, two movers
+    tracks = gfuzzy.Tracks(
+        "mem",
+        "csv",
+        None,
+        None,
+        (gfuzzy.Track("c", np.array([[0, 0, 0], [1, 2, 0], [2, 0, 0]], float)),),
+    )
+    movers = _movers(tracks_scene(tracks, TrackSceneOptions(region=(1, -1, 1.5, 1))))
+    np.testing.assert_allclose(movers["ped-c"], [[0.5, 1, 0], [0.75, 1.5, 0]])
+    np.testing.assert_allclose(movers["ped-c-2"], [[1.25, 1.5, 0], [1.5, 1, 0]])
+
+
+def test_scale_and_default_region(csv_file):
+    made = tracks_scene(read_tracks(csv_file), TrackSceneOptions(scale=0.5))
+    np.testing.assert_allclose(_movers(made)["ped-a"], [[0, 0, 0], [1, 1, 0], [2, 2, 0]])
+    # the people's extent (x 0..2, y 0..1.5) plus 0.5 m, rounded out to 0.1 m
+    assert made.region == (-0.5, -0.5, 2.5, 2.0)
+
+
+def test_max_movers_keeps_those_present_longest(eth_file):
+    made = tracks_scene(
+        read_tracks(eth_file), TrackSceneOptions(region=(-1, -1, 10, 10), max_movers=2)
+    )
+    assert sorted(_movers(made)) == ["ped-1", "ped-2"]  # 1.2 s, then the 0.4 s tie broken by id
+
+
+def test_python_api_round_trip_plans(tmp_path, csv_file):
+    made = gfuzzy.tracks_scene(
+        gfuzzy.read_tracks(csv_file),
+        gfuzzy.TrackSceneOptions(region=(-1, -1, 5, 4), name="walk", robot_radius=0.2, vmax=1.0),
+        start=(4.5, 3.5),
+        goal=(-0.5, 3.5),
+    )
+    path = tmp_path / "walk.yaml"
+    path.write_text(made.to_yaml("made by a test"), encoding="utf-8")
+    scene = load_scene(path)
+    assert scene.name == "walk" and len(scene.movers) == 2 and scene.robot.vmax == 1.0
+    assert scene.to_dict()["movers"] == made.doc["movers"]
+    roadmap = build_roadmap(scene, RoadmapOptions(vertices=60, seed=1))
+    q = scene.queries[0]
+    res = Planner(scene, roadmap).plan(q.start, q.goal, q.t0)
+    assert res.solved, res.message
+    assert check_trajectory(scene, res.trajectory.waypoints, q).valid
+
+
+# ------------------------------------------------------------------------- the command
+
+
+def test_command_writes_a_scene_that_loads_and_plans(tmp_path, eth_file):
+    out = tmp_path / "scene.yaml"
+    proc = run_cli_process(
+        "tracks", eth_file, "--region", -1, -1, 10, 10, "--start", 0, 9, "--goal", 9, 9,
+        "--expect", "solved", "-o", out,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    scene = load_scene(out)
+    assert scene.name == "scene" and len(scene.movers) == 3
+    assert scene.queries[0].expect.status == "solved"
+    assert out.read_text().splitlines()[1].startswith("#   gfuzzy tracks ")
+    proc = run_cli_process("regress", out, "-n", 60)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+def test_command_takes_obstacles_and_robot_from_a_static_scene(tmp_path, eth_file):
+    out = tmp_path / "office-people.yaml"
+    static = ROOT / "scenes" / "office-polygons.yaml"
+    proc = run_cli_process("tracks", eth_file, "--static", static, "-o", out)
+    assert proc.returncode == 0, proc.stderr
+    scene, office = load_scene(out), load_scene(static)
+    assert scene.bounds == office.bounds and scene.robot == office.robot
+    assert scene.static_hash == office.static_hash and len(scene.movers) == 3
+    assert scene.queries == ()
+
+
+def test_static_mesh_paths_follow_the_new_file(tmp_path, csv_file):
+    folder = tmp_path / "warehouse"
+    shutil.copytree(ROOT / "scenes" / "meshes", folder / "meshes")
+    shutil.copy(ROOT / "scenes" / "warehouse-mesh.yaml", folder / "warehouse-mesh.yaml")
+    out = tmp_path / "people.yaml"  # one folder up: the mesh is now warehouse/meshes/...
+    proc = run_cli_process(
+        "tracks", csv_file, "--static", folder / "warehouse-mesh.yaml", "--scale", 2,
+        "--start", 0.6, 0.6, 0, "--goal", 11.4, 0.6, 0, "-o", out,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    scene = load_scene(out)
+    assert scene.static_hash == load_scene(folder / "warehouse-mesh.yaml").static_hash
+    assert "file: warehouse/meshes/" in out.read_text()
+    # written into a folder the mesh is not inside: refused, nothing written
+    deeper = folder / "sub" / "people.yaml"
+    deeper.parent.mkdir()
+    proc = run_cli_process(
+        "tracks", csv_file, "--static", folder / "warehouse-mesh.yaml", "-o", deeper
+    )
+    assert proc.returncode == 2 and "obstacles[0].mesh.file" in proc.stderr
+    assert not deeper.exists()
+
+
+@pytest.mark.parametrize(
+    "name, text, where",
+    [
+        ("cols.txt", "0 1 0 0\n10 1 1\n", "cols.txt: line 2: expected 4 or 6 columns"),
+        ("nan.txt", "0 1 0 0\n10 1 x 0\n", "nan.txt: line 2: not a number"),
+        ("inf.txt", "0 1 0 0\n10 1 inf 0\n", "inf.txt: line 2: non-finite"),
+        ("frac.txt", "0 1 0 0\n10.5 1 1 0\n", "frac.txt: line 2: frame and pedestrian id must be whole"),
+        ("back.txt", "0 1 0 0\n10 1 1 0\n# a comment\n5 1 2 0\n", "back.txt: line 4: pedestrian 1: frame 5 does not increase"),
+        ("twice.txt", "0 1 0 0\n0 1 1 0\n", "twice.txt: line 2: pedestrian 1: frame 0 does not increase"),
+        ("empty.txt", "# nothing\n\n", "empty.txt: no data rows"),
+        ("lonely.txt", "0 1 0 0\n10 2 1 0\n", "lonely.txt: no pedestrian has two rows"),
+        ("hdr.csv", "t,x,y\n0,0,0\n", "hdr.csv: line 1: the header must name the columns t, id, x, y (missing: id)"),
+        ("short.csv", "t,id,x,y\n0,a,0,0\n1,a,1\n", "short.csv: line 3: expected 4 columns, got 3"),
+        ("word.csv", "t,id,x,y\n0,a,0,0\n1,a,one,0\n", "word.csv: line 3: not a number"),
+        ("order.csv", "t,id,x,y\n1,a,0,0\n1,b,0,0\n0.5,a,1,0\n", "order.csv: line 4: pedestrian a: time 0.5 does not increase"),
+        ("id.csv", "t,id,x,y\n0,a b,0,0\n", "id.csv: line 2: id 'a b' must be"),
+        ("nohdr.csv", "\n\n", "nohdr.csv: no header line"),
+    ],
+)  # fmt: skip
+def test_bad_files_are_one_line_and_exit_2(tmp_path, name, text, where):
+    path = tmp_path / name
+    path.write_text(text, encoding="utf-8")
+    out = tmp_path / "out.yaml"
+    proc = run_cli_process("tracks", path, "-o", out, cwd=tmp_path)
+    assert proc.returncode == 2
+    assert proc.stderr.count("\n") == 1 and "Traceback" not in proc.stderr
+    assert proc.stderr.startswith(str(path)) and where.split(": ", 1)[1] in proc.stderr, proc.stderr
+    assert not out.exists() and proc.stdout == ""
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--t-start", 50, "--duration", 5], "no pedestrian in the window 50 s .. 55 s"),
+        (["--region", 20, 20, 30, 30], "no pedestrian inside the region 20 20 30 30"),
+        (
+            ["--region", -1, -1, 10, 10, "--start", 20, 0, "--goal", 1, 1],
+            "start 20 0 does not fit in the region",
+        ),
+        (["--duration", -1], "duration must be positive"),
+        (["--region", 3, 0, 1, 1], "region must be"),
+        (["--start", 1, 1], "start and goal go together"),
+        (["--start", 1, 1, 0, "--goal", 2, 2], "--start: expected 2 numbers"),
+        (["--format", "csv"], "the header must name the columns"),
+        (["--fps", 0], "fps must be positive"),
+        (["--static", "nowhere.yaml"], "nowhere.yaml: cannot read"),
+    ],
+)
+def test_bad_requests_are_one_line_and_exit_2(tmp_path, eth_file, args, message):
+    out = tmp_path / "out.yaml"
+    proc = run_cli_process("tracks", eth_file, *args, "-o", out, cwd=tmp_path)
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.count("\n") == 1 and message in proc.stderr, proc.stderr
+    assert not out.exists()
+
+
+def test_unreadable_file_and_bad_output_name(tmp_path, eth_file):
+    proc = run_cli_process("tracks", tmp_path / "missing.txt", "-o", tmp_path / "a.yaml")
+    assert proc.returncode == 2 and "missing.txt: cannot read" in proc.stderr
+    proc = run_cli_process("tracks", eth_file, "-o", tmp_path / "a.json")
+    assert proc.returncode == 2 and "a.json: output must end in .yaml or .yml" in proc.stderr
+
+
+def test_a_failed_run_keeps_the_old_scene(tmp_path, eth_file):
+    out = tmp_path / "scene.yaml"
+    assert run_cli_process("tracks", eth_file, "-o", out).returncode == 0
+    before = out.read_bytes()
+    proc = run_cli_process("tracks", eth_file, "--t-start", 99, "-o", out)
+    assert proc.returncode == 2 and out.read_bytes() == before
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []  # no temporary left
+
+
+# ------------------------------------------------------------------------- bundled data
+
+
+@pytest.mark.parametrize("name", ["eth-crossing", "zara-crowd"])
+def test_bundled_pedestrian_scenes_are_made_again_from_the_excerpts(tmp_path, name):
+    """Line 2 of each pedestrian scene is the command that made it; run it again."""
+    path = ROOT / "scenes" / f"{name}.yaml"
+    text = path.read_text(encoding="utf-8")
+    argv = shlex.split(text.splitlines()[1].lstrip("#"))
+    assert argv[:2] == ["gfuzzy", "tracks"] and argv[2].startswith("data/pedestrians/")
+    out = tmp_path / f"{name}.yaml"
+    i = argv.index("-o")
+    argv[i + 1 : i + 2] = [str(out)]
+    proc = run_cli_process(*argv[1:], cwd=ROOT)
+    assert proc.returncode == 0, proc.stderr
+    again = out.read_text(encoding="utf-8").replace(shlex.quote(str(out)), f"scenes/{name}.yaml")
+    assert again == text
+
+
+def test_excerpts_are_in_the_repository():
+    folder = ROOT / "data" / "pedestrians"
+    sizes = {p.name: p.stat().st_size for p in folder.glob("*.txt")}
+    assert set(sizes) == {"biwi_eth.txt", "biwi_hotel.txt", "crowds_zara01.txt", "students001.txt"}
+    assert sum(sizes.values()) < 1_000_000
+    steps = {name: read_tracks(folder / name).frame_step for name in sizes}
+    assert steps == {
+        "biwi_eth.txt": 6,
+        "biwi_hotel.txt": 10,
+        "crowds_zara01.txt": 10,
+        "students001.txt": 10,
+    }
