@@ -1,4 +1,4 @@
-"""Independent verification of a trajectory against CONTRACT.md section 3.
+"""Independent verification of a trajectory against docs/formats.md section 3.
 
 This module shares no collision code with the planner: it measures with shapely (static
 obstacles, box shapes) and closed-form disc distances, and it checks *every instant*, not
@@ -281,7 +281,7 @@ def check_trajectory(
     max_evaluations: int = 5_000_000,
     exact_below: float = 1e-3,
 ) -> CheckReport:
-    """Check a trajectory against CONTRACT.md section 3 (and ``query``'s start and goal).
+    """Check a trajectory against docs/formats.md section 3 (and ``query``'s start and goal).
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""The ``gfuzzy`` command line (CONTRACT.md section 4).
+"""The ``gfuzzy`` command line (README.md and docs/formats.md).
 
 Exit statuses: 0 success, 1 a valid request with a negative answer (no path, invalid
 trajectory, missed expectation), 2 bad input. Bad input prints exactly one line on stderr

@@ -43,7 +43,7 @@ MAX_MOVER_SAMPLES = 20_000_000
 
 
 class Status(str, enum.Enum):
-    """Outcome of a query (CONTRACT.md section 2)."""
+    """Outcome of a query (docs/formats.md section 2)."""
 
     SOLVED = "solved"
     NO_PATH = "no_path"

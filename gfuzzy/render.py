@@ -80,7 +80,7 @@ def as_waypoints(trajectory: Any, scene: Scene | None = None) -> FloatArray:
     ----------
     trajectory : array-like, object with ``.waypoints``, or mapping with ``"waypoints"``
         Rows ``[t, x, y]`` (disc robot) or ``[t, x, y, heading]`` (box robot),
-        t strictly increasing (CONTRACT.md section 2).
+        t strictly increasing (docs/formats.md section 2).
     scene : Scene, optional
         When given, the row length must match its robot.
 
@@ -136,7 +136,7 @@ def interpolate_poses(waypoints: FloatArray, times: FloatArray) -> FloatArray:
 
 
 def segment_speeds(waypoints: FloatArray, circumradius: float = 0.0) -> FloatArray:
-    """Configuration speed of every segment (CONTRACT.md section 3): :meth:`Trajectory.speeds`."""
+    """Configuration speed of every segment (docs/formats.md section 3): :meth:`Trajectory.speeds`."""
     return Trajectory(np.asarray(waypoints, dtype=float), circumradius).speeds()
 
 
@@ -553,7 +553,7 @@ def render_scene(
     roadmap : Roadmap, optional
         Anything with ``vertices`` (V, d) and ``edges`` (E, 2).
     trajectory : (n, 3) or (n, 4) array, or object with ``.waypoints``, optional
-        The robot's trajectory (CONTRACT.md section 2).
+        The robot's trajectory (docs/formats.md section 2).
     speed : True, (n - 1,) or (n,) float, optional
         Colour the robot's path by speed: ``True`` derives each segment's configuration
         speed from the trajectory; an array gives a speed per segment (n - 1) or per

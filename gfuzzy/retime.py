@@ -3,7 +3,7 @@
 The path is cut into points one time step apart at the allowed speed, and the same
 safe-interval search as the roadmap-time search (:func:`gfuzzy.timespace.sipp`) runs on
 that chain, forward only, with waiting where it is allowed. The result keeps every
-guarantee of CONTRACT.md section 3 for the same reason the roadmap search does.
+guarantee of docs/formats.md section 3 for the same reason the roadmap search does.
 """
 
 from __future__ import annotations

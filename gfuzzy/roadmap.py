@@ -1,8 +1,8 @@
 """Static roadmaps: OMPL's PRM over R^2 (disc robot) or SE(2) (box robot), FCL validity.
 
 The roadmap is grown to a vertex count, never to a time budget, so that a seed gives the
-same roadmap in every process (OMPL's RNG is process-wide; see
-``shared/notes/ompl-2-python.md``). Every edge OMPL proposes is then *certified* with
+same roadmap in every process (OMPL's RNG is process-wide and takes one seed; see
+``docs/planner.md``, section 1). Every edge OMPL proposes is then *certified* with
 :meth:`gfuzzy.geometry.StaticGeometry.motion_free`, which proves the whole straight
 motion free rather than sampling it; uncertifiable edges are dropped.
 """

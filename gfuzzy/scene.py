@@ -1,4 +1,4 @@
-"""Scene files: bounds, robot, static obstacles, movers and queries (CONTRACT.md section 1).
+"""Scene files: bounds, robot, static obstacles, movers and queries (docs/formats.md section 1).
 
 :func:`load_scene` reads a YAML file with ``yaml.safe_load`` semantics, validates every
 field and returns an immutable :class:`Scene`. Anything wrong raises
@@ -782,7 +782,7 @@ def load_scene(path: str | os.PathLike) -> Scene:
     Parameters
     ----------
     path : path-like
-        A YAML scene file (CONTRACT.md section 1).
+        A YAML scene file (docs/formats.md section 1).
 
     Returns
     -------

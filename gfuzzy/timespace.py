@@ -9,7 +9,7 @@ merged into *safe intervals* (Phillips & Likhachev, "SIPP", ICRA 2011), so a lon
 one state, not one per step. States are expanded in A* order of arrival step plus the
 admissible heuristic (static distance to the goal) / (vmax * dt).
 
-Continuous-time safety (CONTRACT.md section 3). A point of the graph is *safe at step n*
+Continuous-time safety (docs/formats.md section 3). A point of the graph is *safe at step n*
 when, for every mover present at some time in ``[t_n - dt/2, t_n + dt/2]``, the distance
 between the robot at that point and the mover at ``clamp(t_n)`` is at least
 ``(vmax + v_mover) * dt / 2``. During the first half of a step the robot stays within

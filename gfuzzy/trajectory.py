@@ -1,4 +1,4 @@
-"""Timed trajectories and their files (CONTRACT.md section 2).
+"""Timed trajectories and their files (docs/formats.md section 2).
 
 A :class:`Trajectory` is a table of rows ``[t, x, y]`` (disc robot) or
 ``[t, x, y, heading]`` (box robot), t strictly increasing; between rows the robot moves
@@ -179,7 +179,7 @@ def _finite(obj):
 
 
 def load_trajectory(path: str | os.PathLike) -> TrajectoryFile:
-    """Read a trajectory JSON file (CONTRACT.md section 2).
+    """Read a trajectory JSON file (docs/formats.md section 2).
 
     Raises
     ------

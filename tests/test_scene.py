@@ -1,5 +1,5 @@
 """Scene files: the bad-input catalogue, round trips of random valid scenes, random bad
-inputs, and hand-computed mover motion (CONTRACT.md sections 1 and 4)."""
+inputs, and hand-computed mover motion (docs/formats.md section 1)."""
 
 from __future__ import annotations
 
