@@ -108,8 +108,8 @@ class Tracks:
     def time_range(self) -> tuple[float, float]:
         """First and last time of any track."""
         return (
-            min(tr.rows[0, 0] for tr in self.tracks),
-            max(tr.rows[-1, 0] for tr in self.tracks),
+            float(min(tr.rows[0, 0] for tr in self.tracks)),
+            float(max(tr.rows[-1, 0] for tr in self.tracks)),
         )
 
 
@@ -729,21 +729,18 @@ def tracks_scene(
         region = _default_region(list(rel.values()), 0.0, duration)
     region = tuple(float(v) for v in region)
 
-    # robot
+    # robot: the static scene's, or a disc (keeping the static robot's speed and clearances)
+    base = dict(static.raw["robot"]) if static is not None else {"vmax": 1.5, "amax": 3.0}
     if static is not None and options.robot_radius is None:
-        robot = dict(static.raw["robot"])
-        dof = static.robot.dof
-        inradius = static.robot.inradius
+        robot = base
+        dof, inradius = static.robot.dof, static.robot.inradius
     else:
         robot = {"disc": options.robot_radius if options.robot_radius is not None else 0.2}
+        robot.update({k: v for k, v in base.items() if k not in ("disc", "box")})
         dof, inradius = 2, robot["disc"]
-    robot_default = {"vmax": 1.5, "amax": 3.0} if static is None else {}
     for key in ("vmax", "amax"):
-        value = getattr(options, key)
-        if value is not None:
-            robot[key] = value
-        elif key in robot_default and key not in robot:
-            robot[key] = robot_default[key]
+        if getattr(options, key) is not None:
+            robot[key] = getattr(options, key)
     robot = {
         k: float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else v
         for k, v in robot.items()

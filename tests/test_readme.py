@@ -11,12 +11,18 @@ from conftest import ROOT, run_cli_process
 def _commands() -> list[list[str]]:
     text = (ROOT / "README.md").read_text(encoding="utf-8")
     block = re.search(r"## The command line\s+```sh\n(.*?)```", text, re.S).group(1)
-    return [shlex.split(line, comments=True) for line in block.splitlines() if line.startswith("gfuzzy ")]
+    return [
+        shlex.split(line, comments=True)
+        for line in block.splitlines()
+        if line.startswith("gfuzzy ")
+    ]
 
 
 def test_readme_plan_check_and_tracks_examples_run(tmp_path):
     commands = _commands()
-    assert any(c[1] == "tracks" for c in commands) and any("office-polygons" in " ".join(c) for c in commands)
+    assert any(c[1] == "tracks" for c in commands) and any(
+        "office-polygons" in " ".join(c) for c in commands
+    )
     ran = 0
     for argv in commands:
         # `roadmap` would overwrite the bundled roadmap, `regress` and `render` have their own tests

@@ -10,6 +10,8 @@ import shutil
 import numpy as np
 import pytest
 from conftest import ROOT, run_cli_process
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import gfuzzy
 from gfuzzy.check import check_trajectory
@@ -206,6 +208,16 @@ def test_command_takes_obstacles_and_robot_from_a_static_scene(tmp_path, eth_fil
     assert scene.bounds == office.bounds and scene.robot == office.robot
     assert scene.static_hash == office.static_hash and len(scene.movers) == 3
     assert scene.queries == ()
+    # a smaller disc robot in the same office keeps the office robot's speed bounds
+    proc = run_cli_process("tracks", eth_file, "--static", static, "--robot-radius", 0.1, "-o", out)
+    assert proc.returncode == 0, proc.stderr
+    robot = load_scene(out).robot
+    assert (robot.shape, robot.radius, robot.vmax, robot.amax) == (
+        "disc",
+        0.1,
+        office.robot.vmax,
+        office.robot.amax,
+    )
 
 
 def test_static_mesh_paths_follow_the_new_file(tmp_path, csv_file):
@@ -334,3 +346,64 @@ def test_excerpts_are_in_the_repository():
         "crowds_zara01.txt": 10,
         "students001.txt": 10,
     }
+
+
+# ------------------------------------------------------------------------- properties
+
+_row_text = st.lists(
+    st.one_of(
+        st.integers(-5, 50).map(str),
+        st.floats(-1e3, 1e3, allow_nan=False).map(lambda v: f"{v:.3f}"),
+        st.sampled_from(["x", "nan", "inf", "", "1e400", "#", "1.5"]),
+    ),
+    min_size=0,
+    max_size=7,
+)
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.lists(_row_text, min_size=0, max_size=8), st.sampled_from(["eth", "csv"]))
+def test_any_text_is_read_or_refused_with_a_line(tmp_path_factory, rows, fmt):
+    sep = "\t" if fmt == "eth" else ","
+    head = [] if fmt == "eth" else ["t,id,x,y"]
+    path = tmp_path_factory.mktemp("prop") / f"f.{fmt}"
+    path.write_text("\n".join(head + [sep.join(r) for r in rows]) + "\n", encoding="utf-8")
+    try:
+        tracks = read_tracks(path, fmt)
+    except gfuzzy.SceneError as exc:
+        assert exc.file == str(path) and "\n" not in str(exc)
+        return
+    for tr in tracks.tracks:
+        assert np.all(np.isfinite(tr.rows)) and np.all(np.diff(tr.rows[:, 0]) > 0)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.dictionaries(
+        st.integers(1, 40),
+        st.lists(st.tuples(st.floats(-20, 20), st.floats(-20, 20)), min_size=1, max_size=6),
+        min_size=1,
+        max_size=5,
+    ),
+    st.integers(0, 30),
+)
+def test_eth_written_tracks_read_back(tmp_path_factory, people, first):
+    # each person walks on consecutive annotated frames (step 6) from a frame of their own
+    lines = []
+    for pid, points in people.items():
+        for k, (x, y) in enumerate(points):
+            lines.append((6 * (first + pid + k), pid, x, y))
+    lines.sort()
+    path = tmp_path_factory.mktemp("prop") / "f.txt"
+    path.write_text("".join(f"{f}\t{p}\t{x!r}\t{y!r}\n" for f, p, x, y in lines), encoding="utf-8")
+    if all(len(points) == 1 for points in people.values()):
+        with pytest.raises(gfuzzy.SceneError, match="no pedestrian has two rows"):
+            read_tracks(path)
+        return
+    tracks = read_tracks(path)
+    assert tracks.frame_step == 6
+    for tr in tracks.tracks:
+        points = people[int(tr.id)]
+        start = first + int(tr.id)
+        want = [[0.4 * (start + k), x, y] for k, (x, y) in enumerate(points)]
+        np.testing.assert_allclose(tr.rows, want, rtol=0, atol=1e-9)
