@@ -16,12 +16,14 @@ from __future__ import annotations
 import logging
 import math
 import os
+import textwrap
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from matplotlib import colormaps
 from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.cm import ScalarMappable
 from matplotlib.collections import LineCollection
 from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
@@ -60,6 +62,8 @@ ROBOT_COLOR = "#1f3b73"
 START_COLOR = "#2bb24c"
 GOAL_COLOR = "#ffcc00"
 WAIT_COLOR = "#d62728"
+#: The first violation of the guarantees of a drawn, invalid trajectory.
+VIOLATION_COLOR = "#ff00ff"
 #: Mover colours: tab10 without its blue (the robot's hue), grey (the obstacles') and red
 #: (the waits').
 MOVER_COLORS = ("#ff7f0e", "#2ca02c", "#9467bd", "#8c564b", "#e377c2", "#bcbd22", "#17becf")
@@ -516,6 +520,35 @@ def _draw_trajectory(ax, fig, scene: Scene, wp: FloatArray, speed, footprints: i
         )
 
 
+def _draw_violation(ax, scene: Scene, wp: FloatArray, t: float, reason: str) -> None:
+    """The robot where a check found the first violation, crossed out."""
+    pose = interpolate_poses(wp, [t])[0]
+    ax.add_patch(_footprint(scene, pose, fc="none", ec=VIOLATION_COLOR, lw=2.0, zorder=8))
+    ax.plot(
+        pose[0],
+        pose[1],
+        marker="X",
+        ms=11,
+        mfc=VIOLATION_COLOR,
+        mec="white",
+        mew=0.8,
+        ls="none",
+        zorder=8.1,
+        label="first violation of the guarantees",
+    )
+    ax.annotate(
+        textwrap.fill(reason, 48),
+        pose[:2],
+        xytext=(10, -10),
+        textcoords="offset points",
+        va="top",
+        fontsize=7,
+        color=VIOLATION_COLOR,
+        zorder=8.2,
+        bbox=dict(boxstyle="round,pad=0.2", fc="white", ec=VIOLATION_COLOR, lw=0.6, alpha=0.9),
+    )
+
+
 def _legend(fig, ax) -> None:
     """One legend below the axes; the constrained layout makes room for it."""
     handles, labels = ax.get_legend_handles_labels()
@@ -542,6 +575,7 @@ def render_scene(
     title: str | None = None,
     dpi: int = 120,
     footprints: int = 6,
+    violation: tuple[float, str] | None = None,
 ) -> None:
     """Draw the scene, and optionally a roadmap and a trajectory, as a still picture.
 
@@ -564,6 +598,10 @@ def render_scene(
         Picture resolution; the picture is about ``8 * dpi`` pixels wide.
     footprints : int
         Number of robot footprints drawn along the trajectory, start and end included.
+    violation : (float, str), optional
+        Time and text of the trajectory's first violation of the guarantees (see
+        :attr:`gfuzzy.check.CheckReport.time`): the robot is drawn there, crossed out in
+        magenta, with the text below the picture.
 
     Raises
     ------
@@ -574,7 +612,7 @@ def render_scene(
     suffix = _suffix(out_path, PICTURE_SUFFIXES, "a picture")
     wp = None if trajectory is None else as_waypoints(trajectory, scene)
     with_speed = wp is not None and speed is not None and speed is not False
-    fig, ax = _figure(scene, 8.0, with_speed, _legend_rows(scene, roadmap, wp))
+    fig, ax = _figure(scene, 8.0, with_speed, _legend_rows(scene, roadmap, wp) + (violation is not None))
     _draw_obstacles(ax, scene)
     if roadmap is not None:
         _draw_roadmap(ax, roadmap)
@@ -582,6 +620,8 @@ def render_scene(
     _draw_queries(ax, scene)
     if wp is not None:
         _draw_trajectory(ax, fig, scene, wp, speed if with_speed else None, footprints)
+        if violation is not None:
+            _draw_violation(ax, scene, wp, *violation)
     if title is None:
         title = scene.name
         if wp is not None:
@@ -648,6 +688,7 @@ def render_animation(
     dpi: int = 80,
     duration: float | None = None,
     title: str | None = None,
+    speed=None,
 ) -> int:
     """Animate the robot and the movers over the trajectory's time span, as a GIF.
 
@@ -673,6 +714,8 @@ def render_animation(
         Span to animate without a trajectory (default: the movers' longest period or
         last time, between 1 and 60 s; 10 s when they are all endless and aperiodic).
     title : str, optional
+    speed : True, (n - 1,) or (n,) float, optional
+        Colour the robot's trail by speed, as :func:`render_scene` does, with a colour bar.
 
     Returns
     -------
@@ -703,7 +746,10 @@ def render_animation(
     times = np.linspace(t0, t1, n)
     frame_ms = 1000.0 * (t1 - t0) / (n - 1) if n > 1 else 1000.0
 
-    fig, ax = _figure(scene, 6.5, False, 0)
+    speeds = None
+    if wp is not None and speed is not None and speed is not False and len(wp) >= 2:
+        speeds = _speed_values(speed, wp, scene)
+    fig, ax = _figure(scene, 6.5, speeds is not None, 0)
     fig.set_dpi(dpi)
     _draw_obstacles(ax, scene)
     _draw_movers(ax, scene, marker=False)
@@ -724,8 +770,19 @@ def render_animation(
         ax.plot(wp[:, 1], wp[:, 2], color=ROBOT_COLOR, lw=1.0, alpha=0.25, zorder=4.5)
         ax.plot(*wp[-1, 1:3], marker="*", ms=11, mfc=GOAL_COLOR, mec="black", mew=0.8, zorder=4.6)
         poses = interpolate_poses(wp, times)
-        trail = Line2D([], [], color=ROBOT_COLOR, lw=2.0, zorder=5, animated=True)
-        ax.add_line(trail)
+        if speeds is None:
+            trail = Line2D([], [], color=ROBOT_COLOR, lw=2.0, zorder=5, animated=True)
+            ax.add_line(trail)
+        else:  # the driven part coloured by speed, over a black edge, as in the picture
+            norm = Normalize(0.0, max(scene.robot.vmax, float(np.max(speeds))))
+            edge = LineCollection([], colors="black", linewidths=3.4, zorder=4.9, animated=True)
+            trail = LineCollection([], cmap=colormaps[SPEED_CMAP], norm=norm, linewidths=2.2, zorder=5,
+                                   capstyle="round", animated=True)  # fmt: skip
+            ax.add_collection(edge)
+            ax.add_collection(trail)
+            dynamic.append(edge)
+            fig.colorbar(ScalarMappable(norm, colormaps[SPEED_CMAP]), ax=ax, shrink=0.8, pad=0.02,
+                         label="robot speed [m/s]")  # fmt: skip
         robot = _footprint(
             scene, poses[0], fc=ROBOT_COLOR, ec="black", alpha=0.85, lw=1.0, zorder=6
         )
@@ -765,7 +822,14 @@ def render_animation(
         if wp is not None:
             pose = poses[k]
             done = wp[wp[:, 0] < t]
-            trail.set_data(np.append(done[:, 1], pose[0]), np.append(done[:, 2], pose[1]))
+            if speeds is None:
+                trail.set_data(np.append(done[:, 1], pose[0]), np.append(done[:, 2], pose[1]))
+            else:  # the segment under way keeps its own speed
+                pts = np.vstack([done[:, 1:3], pose[None, :2]])
+                segs = np.stack([pts[:-1], pts[1:]], axis=1)
+                edge.set_segments(segs)
+                trail.set_segments(segs)
+                trail.set_array(speeds[: len(segs)])
             if scene.robot.shape == "disc":
                 robot.set_center(pose[:2])
             else:
