@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 from matplotlib import colormaps
+from matplotlib.artist import Artist
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.cm import ScalarMappable
 from matplotlib.collections import LineCollection
@@ -493,13 +494,14 @@ def _draw_trajectory(ax, fig, scene: Scene, wp: FloatArray, speed, footprints: i
             bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.75),
         )
 
-    # waits
-    for k, (ta, tb, pose) in enumerate(waits):
+    # waits: a marker each; one label per group of waits close together (the short stops
+    # of a dodge), placed clear of the other texts and markers when the figure is drawn
+    for k, (_, _, pose) in enumerate(waits):
         ax.plot(
             pose[0],
             pose[1],
             marker="H",
-            ms=12,
+            ms=WAIT_MARKER_SIZE,
             mfc="none",
             mec=WAIT_COLOR,
             mew=1.8,
@@ -507,17 +509,121 @@ def _draw_trajectory(ax, fig, scene: Scene, wp: FloatArray, speed, footprints: i
             zorder=6.5,
             label="wait" if k == 0 else None,
         )
-        ax.annotate(
-            f"wait {_fmt_time(tb - ta)} s (t={_fmt_time(ta)} to {_fmt_time(tb)})",
-            pose[:2],
-            xytext=(-8, 6),  # up-left: the time stamps sit down-right
+    xmin, ymin, xmax, ymax = scene.bounds
+    labels = []
+    for group in _wait_groups(waits, WAIT_GROUP_SPAN * max(xmax - xmin, ymax - ymin)):
+        anchor = np.mean([waits[k][2][:2] for k in group], axis=0)
+        label = ax.annotate(
+            "\n".join(
+                f"wait {_fmt_time(waits[k][1] - waits[k][0])} s (t={_fmt_time(waits[k][0])} to {_fmt_time(waits[k][1])})"
+                for k in group
+            ),
+            anchor,
+            xytext=WAIT_LABEL_PLACES[0][:2],  # up-left: the time stamps sit down-right
             textcoords="offset points",
-            ha="right",
+            ha=WAIT_LABEL_PLACES[0][2],
+            va=WAIT_LABEL_PLACES[0][3],
             fontsize=7,
             color=WAIT_COLOR,
             zorder=7,
             bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.75),
+            # a leader line, shown only when the label had to move away from its waits
+            arrowprops=dict(arrowstyle="-", color=WAIT_COLOR, lw=0.6, shrinkA=0, shrinkB=WAIT_MARKER_SIZE / 2),
         )
+        label.arrow_patch.set_visible(False)
+        labels.append(label)
+    if labels:
+        ax.add_artist(_LabelLayout(labels, [w[2][:2] for w in waits]))
+
+
+#: Marker size (points) of a wait.
+WAIT_MARKER_SIZE = 12
+#: Waits closer than this fraction of the scene's larger side share one label.
+WAIT_GROUP_SPAN = 0.04
+#: Places tried for a wait label, in order: (dx, dy) in points from its wait, horizontal and
+#: vertical alignment. Beside the wait first, then further above and below.
+WAIT_LABEL_PLACES = [
+    (dx, sign * (4 + 11 * k), ha, "bottom" if sign > 0 else "top")
+    for k in range(9)
+    for sign in (1, -1)
+    for dx, ha in ((-8, "right"), (8, "left"))
+]
+
+
+def _wait_groups(waits, radius: float) -> list[list[int]]:
+    """Indices of the waits grouped by proximity (single linkage: a wait within ``radius``
+    of any member joins the group), each group in time order, groups by first wait."""
+    parent = list(range(len(waits)))
+
+    def root(i):
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for i in range(len(waits)):
+        for j in range(i):
+            if np.hypot(*(waits[i][2][:2] - waits[j][2][:2])) <= radius:
+                parent[root(i)] = root(j)
+    groups: dict = {}
+    for i in range(len(waits)):
+        groups.setdefault(root(i), []).append(i)
+    return sorted(groups.values(), key=lambda g: g[0])
+
+
+class _LabelLayout(Artist):
+    """Places the wait labels when the figure is drawn, once its layout is final.
+
+    Each label, in time order, takes the first of :data:`WAIT_LABEL_PLACES` that overlaps
+    no other text of the axes (time stamps, labels placed before it) nor a wait's marker,
+    and stays in view; a label moved off its wait gets a leader line.
+    """
+
+    def __init__(self, labels, markers):
+        super().__init__()
+        self.labels = labels
+        self.markers = np.asarray(markers, dtype=float).reshape(-1, 2)
+        self.set_zorder(6.99)  # drawn (laid out) just before the texts, at zorder 7
+
+    def draw(self, renderer) -> None:
+        from matplotlib.text import Text
+        from matplotlib.transforms import Bbox
+
+        ax = self.axes
+        view = ax.bbox
+        half = renderer.points_to_pixels(WAIT_MARKER_SIZE / 2)
+        placed = [
+            Bbox.from_extents(x - half, y - half, x + half, y + half)
+            for x, y in ax.transData.transform(self.markers)
+        ]
+        placed += [
+            Text.get_window_extent(t, renderer).padded(2)
+            for t in ax.texts
+            if t not in self.labels and t.get_visible() and t.get_text()
+        ]
+        for label in self.labels:
+            best = None
+            for rank, place in enumerate(WAIT_LABEL_PLACES):
+                dx, dy, ha, va = place
+                label.xyann = (dx, dy)
+                label.set_ha(ha)
+                label.set_va(va)
+                label.update_positions(renderer)
+                box = Text.get_window_extent(label, renderer)
+                hits = sum(box.overlaps(other) for other in placed)
+                inside = view.x0 <= box.x0 and box.x1 <= view.x1 and view.y0 <= box.y0 and box.y1 <= view.y1
+                score = (hits, not inside, rank)
+                if best is None or score < best[0]:
+                    best = (score, place, box)
+                if hits == 0 and inside:
+                    break
+            _, (dx, dy, ha, va), box = best
+            label.xyann = (dx, dy)
+            label.set_ha(ha)
+            label.set_va(va)
+            label.arrow_patch.set_visible(abs(dy) > 4)
+            placed.append(box.padded(2))
+        self.stale = False
 
 
 def _draw_violation(ax, scene: Scene, wp: FloatArray, t: float, reason: str) -> None:

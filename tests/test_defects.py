@@ -12,6 +12,7 @@ import math
 import numpy as np
 import pytest
 from matplotlib.colors import to_rgb
+from matplotlib.text import Text
 from PIL import Image
 
 from gfuzzy import render as R
@@ -311,7 +312,12 @@ def _label_boxes(scene, wp):
     renderer = fig.canvas.get_renderer()
     waits = [t for t in ax.texts if t.get_text().startswith("wait")]
     stamps = [t for t in ax.texts if t.get_text().startswith("t=")]
-    return [t.get_window_extent(renderer) for t in waits], [t.get_window_extent(renderer) for t in stamps]
+    # the text itself (an annotation's own extent spans its leader line too)
+    return (
+        [Text.get_window_extent(t, renderer) for t in waits],
+        [Text.get_window_extent(t, renderer) for t in stamps],
+        [t.get_text() for t in waits],
+    )
 
 
 def test_wait_labels_do_not_overlap(line_scene):
@@ -326,8 +332,10 @@ def test_wait_labels_do_not_overlap(line_scene):
         ]
     )
     assert len(R.wait_intervals(wp)) == 5
-    waits, stamps = _label_boxes(sc, wp)
-    assert len(waits) == 5
+    waits, stamps, texts = _label_boxes(sc, wp)
+    joined = "\n".join(texts)
+    for ta, tb, _ in R.wait_intervals(wp):  # every wait is labelled, close ones may share a label
+        assert f"(t={R._fmt_time(ta)} to {R._fmt_time(tb)})" in joined
     for i, a in enumerate(waits):
         for b in waits[i + 1 :] + stamps:
             assert not a.overlaps(b), (a, b)
