@@ -266,7 +266,7 @@ def _write_answer(tf, out: Path) -> None:
         _say(f"wrote {out}")
     elif out.is_file() or out.is_symlink():
         out.unlink()
-        _say(f"removed {out}: a {tf.status} answer has no rows, and a CSV has no status to say so")
+        _say(f"removed {out}: the answer is {tf.status}, without rows, and a CSV has no status to say so")
 
 
 def _stage_summary(info: dict) -> str:

@@ -199,7 +199,7 @@ def load_trajectory(path: str | os.PathLike) -> TrajectoryFile:
     except json.JSONDecodeError as exc:
         if Path(path).suffix.lower() == ".csv" or text.lstrip().startswith("t,x,y"):
             # the CSV export is a common mix-up: it has rows but no status
-            beside = Path(path).with_suffix(".json").name
+            beside = Path(path).with_suffix(".json")
             raise SceneError(
                 file, "", f"this is a CSV export; a trajectory file is the JSON that `gfuzzy plan -o` "
                 f"writes beside it ({beside}), which has the status the CSV lacks"

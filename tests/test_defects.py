@@ -344,20 +344,30 @@ def test_wait_labels_do_not_overlap(line_scene):
 # ----------------------------------------------------------------------- amax
 
 
+def _speed_change_rate(traj) -> float:
+    """Largest change of configuration speed between consecutive rows, per second."""
+    v, dt = traj.speeds(), np.diff(traj.times)
+    return float(np.max(np.abs(np.diff(v)) / (0.5 * (dt[:-1] + dt[1:])), initial=0.0))
+
+
 def test_the_answer_says_when_amax_is_not_honoured(line_roadmap):
     scene, rm = line_roadmap
     q = scene.queries[0]
     res = plan(scene, rm, q.start, q.goal, q.t0)
     assert res.solved
     doc = res.to_file(scene.name, q.name).to_dict()
-    assert doc["amax_honoured"] is False
+    assert doc["amax_honoured"] is False and res.amax_honoured is False
     assert "speed layer" in doc["amax_note"]
+    assert _speed_change_rate(res.trajectory) > scene.robot.amax  # the claim is true
     layered = plan(scene, rm, q.start, q.goal, q.t0, PlanOptions(speed_layer=True))
     assert layered.solved
     applied = layered.stats["speed_layer"]["applied"]
     doc = layered.to_file(scene.name, q.name).to_dict()
     assert doc["amax_honoured"] is applied
-    if not applied:
+    if applied:  # and so is this one
+        assert "amax_note" not in doc
+        assert _speed_change_rate(layered.trajectory) <= scene.robot.amax * (1 + 1e-6)
+    else:
         assert layered.stats["speed_layer"]["reason"] in doc["amax_note"]
 
 
