@@ -584,6 +584,7 @@ class _LabelLayout(Artist):
         self.labels = labels
         self.markers = np.asarray(markers, dtype=float).reshape(-1, 2)
         self.set_zorder(6.99)  # drawn (laid out) just before the texts, at zorder 7
+        self.set_in_layout(False)  # it draws nothing itself
 
     def draw(self, renderer) -> None:
         from matplotlib.text import Text
