@@ -39,6 +39,9 @@ class CheckReport:
         Largest configuration speed between rows.
     evaluations : int
         Number of times the clearance was evaluated.
+    time : float or None
+        When the reported violation happens: the earliest one (a collision's onset, to
+        within ``exact_below``); None when valid or when the rows themselves are malformed.
     """
 
     valid: bool
@@ -46,6 +49,7 @@ class CheckReport:
     min_clearance: float = math.inf
     max_speed: float = 0.0
     evaluations: int = 0
+    time: float | None = None
 
 
 def _wrap(a):
@@ -314,28 +318,35 @@ def check_trajectory(
     dt = np.diff(t)
     if np.any(dt <= 0):
         i = int(np.nonzero(dt <= 0)[0][0]) + 1
-        return CheckReport(False, f"t does not increase strictly at row {i} (t={float(t[i])!r})")
+        return CheckReport(False, f"t does not increase strictly at row {i} (t={float(t[i])!r})", time=float(t[i]))
     if query is not None:
         if abs(t[0] - query.t0) > 1e-6:
-            return CheckReport(False, f"first row is at t={float(t[0])!r}, the query departs at t0={query.t0!r}")
+            return CheckReport(False, f"first row is at t={float(t[0])!r}, the query departs at t0={query.t0!r}", time=float(t[0]))
         if not _pose_equal(w[0, 1:], query.start):
-            return CheckReport(False, f"first row {w[0, 1:].tolist()} is not the start {list(query.start)}")
+            return CheckReport(False, f"first row {w[0, 1:].tolist()} is not the start {list(query.start)}", time=float(t[0]))
         if not _pose_equal(w[-1, 1:], query.goal):
-            return CheckReport(False, f"last row {w[-1, 1:].tolist()} is not the goal {list(query.goal)}")
+            return CheckReport(False, f"last row {w[-1, 1:].tolist()} is not the goal {list(query.goal)}", time=float(t[-1]))
 
-    # speed
+    # speed: the first segment over vmax (the report is the first violation in time, so a
+    # collision found before it below takes its place)
     p = w[:, 1:]
     seg = np.hypot(*np.diff(p[:, :2], axis=0).T)
     if robot.dof == 3:
         seg = seg + np.abs(_wrap(np.diff(p[:, 2]))) * robot.circumradius
     speed = seg / dt if len(dt) else np.zeros(0)
     vmax_seen = float(speed.max(initial=0.0))
-    if np.any(speed > robot.vmax * (1 + tol)):
-        i = int(np.argmax(speed))
-        return CheckReport(
-            False,
+    first: list = [math.inf, ""]  # time and reason of the earliest violation found so far
+
+    def found(time: float, reason: str) -> None:
+        if time < first[0]:
+            first[0], first[1] = float(time), reason
+
+    fast = np.nonzero(speed > robot.vmax * (1 + tol))[0]
+    if fast.size:
+        i = int(fast[0])
+        found(
+            t[i],
             f"speed {speed[i]:.9g} exceeds vmax {robot.vmax:g} between t={float(t[i])!r} and t={float(t[i + 1])!r}",
-            max_speed=vmax_seen,
         )
 
     world = _World(scene)
@@ -353,7 +364,7 @@ def check_trajectory(
     if len(dt) == 0:
         d, names = world.clearance(p[:1], t[:1])
         if d[0] < -tol:
-            return CheckReport(False, f"collides with {names[0]} at t={float(t[0])!r}", float(d[0]), 0.0, 1)
+            return CheckReport(False, f"collides with {names[0]} at t={float(t[0])!r}", float(d[0]), 0.0, 1, float(t[0]))
         return CheckReport(True, "", float(d[0]), 0.0, 1)
 
     # initial samples: every row and every time a mover appears or vanishes
@@ -373,24 +384,23 @@ def check_trajectory(
     evaluations = len(times)
     min_clear = float(d.min())
 
-    def fail(k):
-        return CheckReport(
-            False,
-            f"collides with {names[k]} at t={float(times[k])!r} (penetration {-d[k]:.3g})",
-            min_clear,
-            vmax_seen,
-            evaluations,
-        )
+    def report(note: str = "") -> CheckReport:
+        if not first[1]:
+            return CheckReport(True, "", min_clear, vmax_seen, evaluations)
+        return CheckReport(False, first[1] + note, min_clear, vmax_seen, evaluations, first[0])
 
-    bad = np.nonzero(d < -tol)[0]
+    bad = np.nonzero(d < -tol)[0]  # times are sorted: the first is the earliest
     if bad.size:
-        return fail(int(bad[0]))
-    # intervals between consecutive samples; each lies within one segment
+        k = int(bad[0])
+        found(times[k], f"collides with {names[k]} at t={float(times[k])!r} (penetration {-d[k]:.3g})")
+    # Intervals between consecutive samples; each lies within one segment. Every interval
+    # is decided or bisected until none is left that begins before the earliest violation
+    # found so far: the report is the first violation in time, not the first one met.
     a_t, b_t = times[:-1], times[1:]
     a_d, b_d = d[:-1], d[1:]
     a_s = seg_of[:-1]
     while a_t.size:
-        need = a_d + b_d < lip[a_s] * (b_t - a_t)
+        need = (a_d + b_d < lip[a_s] * (b_t - a_t)) & (a_t < first[0])
         a_t, b_t, a_d, b_d, a_s = a_t[need], b_t[need], a_d[need], b_d[need], a_s[need]
         if a_t.size == 0:
             break
@@ -412,14 +422,12 @@ def check_trajectory(
             decided = ~np.isnan(ex)
             bad = np.nonzero(decided & (ex < -tol))[0]
             if bad.size:
-                k = int(bad[0])
-                return CheckReport(
-                    False,
+                k = int(bad[np.argmin(a_t[idx[bad]])])
+                min_clear = min(min_clear, float(ex[k]))
+                found(
+                    a_t[idx[k]],
                     f"collides with {ex_names[k]} between t={float(a_t[idx[k]])!r} and "
                     f"t={float(b_t[idx[k]])!r} (penetration {-ex[k]:.3g})",
-                    min(min_clear, float(ex[k])),
-                    vmax_seen,
-                    evaluations,
                 )
             if decided.any():
                 min_clear = min(min_clear, float(np.nanmin(ex)))
@@ -429,6 +437,8 @@ def check_trajectory(
             if a_t.size == 0:
                 break
         if evaluations > max_evaluations:
+            if first[1]:
+                return report(" (an earlier near-grazing contact could not be decided)")
             return CheckReport(
                 False, "could not decide: too many evaluations (near-grazing contact)", min_clear, vmax_seen, evaluations
             )
@@ -438,15 +448,9 @@ def check_trajectory(
         min_clear = min(min_clear, float(m_d.min()))
         bad = np.nonzero(m_d < -tol)[0]
         if bad.size:
-            k = int(bad[0])
-            return CheckReport(
-                False,
-                f"collides with {m_names[k]} at t={float(m_t[k])!r} (penetration {-m_d[k]:.3g})",
-                min_clear,
-                vmax_seen,
-                evaluations,
-            )
+            k = int(bad[np.argmin(m_t[bad])])
+            found(m_t[k], f"collides with {m_names[k]} at t={float(m_t[k])!r} (penetration {-m_d[k]:.3g})")
         a_t, b_t = np.concatenate([a_t, m_t]), np.concatenate([m_t, b_t])
         a_d, b_d = np.concatenate([a_d, m_d]), np.concatenate([m_d, b_d])
         a_s = np.concatenate([a_s, a_s])
-    return CheckReport(True, "", min_clear, vmax_seen, evaluations)
+    return report()

@@ -86,6 +86,21 @@ def _roadmap_for(scene, args, quiet=False):
     return build_roadmap(scene, RoadmapOptions(), progress=_progress("roadmap"))
 
 
+def _check_roadmap_flags(args) -> None:
+    """Refuse bad -n/--seed values up front, as :func:`_roadmap_for` would later."""
+    from .roadmap import RoadmapOptions
+
+    if args.vertices is None and args.seed is None:
+        return
+    try:
+        RoadmapOptions(
+            vertices=args.vertices if args.vertices is not None else RoadmapOptions.vertices,
+            seed=args.seed if args.seed is not None else RoadmapOptions.seed,
+        )
+    except ValueError as exc:
+        raise BadInput(f"-n/--seed: {exc}") from None
+
+
 def _default_roadmap(scene, quiet=False):
     """The roadmap file built for ``scene`` in roadmaps/ (here, or beside the scene's
     folder), if there is one that matches it."""
@@ -116,8 +131,8 @@ def _plan_options(args):
             stretch=args.stretch,
             seed=args.ga_seed,
         )
-    except ValueError as exc:
-        raise BadInput(f"gfuzzy plan: {exc}") from None
+    except ValueError as exc:  # named after the command run (plan shares these flags with regress)
+        raise BadInput(f"gfuzzy {getattr(args, 'command', None) or 'plan'}: {exc}") from None
 
 
 def _pose(values, dof, flag):
@@ -215,10 +230,7 @@ def cmd_plan(args) -> int:
             raise BadInput(f"gfuzzy plan: {exc}") from None
     tf = result.to_file(scene.name, query.name)
     if out is not None:
-        json_path = out.with_suffix(".json")
-        if out.suffix.lower() == ".csv" and tf.waypoints is not None:
-            tf.save(out)
-        tf.save(json_path)
+        _write_answer(tf, out)
     line = f"{scene.name} {query.name}: {result.status.value}"
     if result.solved:
         line += (
@@ -232,7 +244,29 @@ def cmd_plan(args) -> int:
         info = result.stats.get(key)
         if info is not None:
             _say(f"  {label}: {_stage_summary(info)}", sys.stdout)
+    if result.amax_honoured is False:
+        _say(f"note: {result.stats['amax_note']}")
     return EXIT_OK if result.solved else EXIT_NO
+
+
+def _write_answer(tf, out: Path) -> None:
+    """Write OUT.json, or OUT.csv and OUT.json beside it, and say on stderr what changed.
+
+    The JSON is written whatever the status (it holds the status). The CSV has no status
+    column, so an unsolved answer, which has no rows, removes an older OUT.csv: a
+    controller reading that path must not drive a stale trajectory.
+    """
+    json_path = out.with_suffix(".json")
+    tf.save(json_path)
+    _say(f"wrote {json_path}")
+    if out.suffix.lower() != ".csv":
+        return
+    if tf.waypoints is not None:
+        tf.save(out)
+        _say(f"wrote {out}")
+    elif out.is_file() or out.is_symlink():
+        out.unlink()
+        _say(f"removed {out}: the answer is {tf.status}, without rows, and a CSV has no status to say so")
 
 
 def _stage_summary(info: dict) -> str:
@@ -266,6 +300,7 @@ def cmd_check(args) -> int:
             query = None
     if tf.scene and tf.scene != scene.name:
         _say(f"note: {args.trajectory} was planned for scene {tf.scene!r}, checking against {scene.name!r}")
+    _rows_fit(scene, tf, args.trajectory)
     rep = check_trajectory(scene, tf.waypoints, query)
     if rep.valid and tf.duration is not None:
         actual = float(tf.waypoints[-1, 0] - tf.waypoints[0, 0])
@@ -283,6 +318,35 @@ def cmd_check(args) -> int:
     return EXIT_OK
 
 
+def _rows_fit(scene, tf, path) -> None:
+    """Rows of the wrong width for the scene's robot are bad input (for check as for
+    render): a trajectory planned for another robot, not an invalid one."""
+    if tf.waypoints is not None and tf.waypoints.shape[1] != scene.robot.dof + 1:
+        want = "[t, x, y]" if scene.robot.dof == 2 else "[t, x, y, heading]"
+        raise BadInput(
+            f"{path}: waypoints: rows of {tf.waypoints.shape[1]} numbers, but scene "
+            f"{scene.name!r} has a {scene.robot.shape} robot: expected {want}"
+        )
+
+
+def _violation(scene, tf, path):
+    """(time, reason) of a drawn trajectory's first violation of the guarantees, told on
+    stderr (render draws it anyway, `check` exits 1 on it); None when it is valid."""
+    from .check import check_trajectory
+
+    query = None
+    if tf.query:
+        try:
+            query = scene.query(tf.query)
+        except KeyError:
+            query = None
+    rep = check_trajectory(scene, tf.waypoints, query)
+    if rep.valid:
+        return None
+    _say(f"note: {path}: invalid: {rep.reason} (`gfuzzy check` exits 1); drawing it anyway")
+    return None if rep.time is None else (rep.time, rep.reason)
+
+
 def cmd_render(args) -> int:
     from .render import render
     from .roadmap import load_roadmap
@@ -294,6 +358,7 @@ def cmd_render(args) -> int:
     if args.trajectory:
         tf = load_trajectory(args.trajectory)
         if tf.waypoints is not None:
+            _rows_fit(scene, tf, args.trajectory)
             traj = tf.waypoints
         else:
             _say(f"note: {args.trajectory} has status {tf.status}: drawing the scene only")
@@ -304,10 +369,16 @@ def cmd_render(args) -> int:
     else:
         roadmap = None
     options = {}
-    if out.suffix.lower() == ".png" and traj is not None and args.speed:
+    if traj is not None and args.speed:  # the picture and the animation both colour by speed
         options["speed"] = True
+    elif args.speed:
+        _say("note: --speed colours a trajectory's path, and there is none to draw")
     if out.suffix.lower() == ".gif" and roadmap is not None:
         raise BadInput("--roadmap: only drawn in a .png picture")
+    if traj is not None:
+        bad = _violation(scene, tf, args.trajectory)
+        if bad is not None and out.suffix.lower() == ".png":
+            options["violation"] = bad
     try:
         render(scene, out, trajectory=traj, roadmap=roadmap, **options)
     except ValueError as exc:
@@ -321,6 +392,7 @@ def cmd_regress(args) -> int:
 
     scenes = [_load_scene(p) for p in args.scenes]  # all bad input first, before any work
     options = _plan_options(args)
+    _check_roadmap_flags(args)  # before the table's header: bad input prints nothing else
     try:
         ok = run_regression(scenes, lambda sc: _roadmap_for(sc, args), options, sys.stdout)
     except ValueError as exc:  # a request beyond the memory bounds (dt far too fine)
@@ -434,7 +506,9 @@ def _parser() -> argparse.ArgumentParser:
     q.add_argument("--start", nargs="+", metavar="X", help="start pose: X Y (disc) or X Y H (box)")
     q.add_argument("--goal", nargs="+", metavar="X", help="goal pose")
     q.add_argument("--t0", type=float, help="departure time with --start/--goal (default 0)")
-    q.add_argument("-o", "--output", metavar="OUT", help="trajectory file: OUT.json, or OUT.csv (+ OUT.json)")
+    q.add_argument("-o", "--output", metavar="OUT",
+                   help="trajectory file: OUT.json, or OUT.csv (+ OUT.json); the JSON is written whatever the status, "
+                        "an unsolved answer removes an older OUT.csv; stderr names the files written or removed")  # fmt: skip
     q.set_defaults(func=cmd_plan)
 
     c = sub.add_parser("check", help="check a trajectory against the contract's guarantees")
@@ -448,7 +522,7 @@ def _parser() -> argparse.ArgumentParser:
     d.add_argument("-o", "--output", required=True, metavar="OUT", help="OUT.png or OUT.gif")
     d.add_argument("--roadmap", metavar="FILE", help="draw this roadmap (PNG; default: the scene's roadmaps/<name>.json if there is one)")
     d.add_argument("--no-roadmap", action="store_true", help="do not draw a roadmap")
-    d.add_argument("--speed", action="store_true", help="colour the path by speed (PNG)")
+    d.add_argument("--speed", action="store_true", help="colour the path by speed (PNG and GIF)")
     d.set_defaults(func=cmd_render)
 
     g = sub.add_parser("regress", help="answer and check every query of every scene")

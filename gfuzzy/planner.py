@@ -29,7 +29,7 @@ if TYPE_CHECKING:  # the stages' modules load only when a stage runs
     from .fuzzy import RuleBase
     from .ga import GAOptions
 
-__all__ = ["Status", "PlanOptions", "PlanResult", "Planner", "plan", "query_problem"]
+__all__ = ["Status", "PlanOptions", "PlanResult", "Planner", "plan", "query_problem", "check_pose"]
 
 log = logging.getLogger(__name__)
 
@@ -158,9 +158,22 @@ class PlanResult:
             return None
         return self.trajectory.delay_factor(self.vmax, self.roadmap_distance)
 
+    @property
+    def amax_honoured(self) -> bool | None:
+        """Whether the answer keeps the robot's ``amax`` (only the speed layer does); None
+        when the robot has no ``amax`` or the query is not solved. ``stats["amax_note"]``
+        says why not."""
+        return self.stats.get("amax_honoured")
+
     def to_file(self, scene: str, query: str) -> TrajectoryFile:
-        """The contract's trajectory file for this answer."""
+        """The contract's trajectory file for this answer.
+
+        Beyond the contract's keys it holds ``stats`` and, for a robot with ``amax``,
+        ``amax_honoured`` (and ``amax_note`` saying why not when it is false).
+        """
         rd = self.roadmap_distance if math.isfinite(self.roadmap_distance) else None
+        stats = dict(self.stats)
+        extra = {key: stats.pop(key) for key in ("amax_honoured", "amax_note") if key in stats}
         return TrajectoryFile(
             scene=scene,
             query=query,
@@ -171,8 +184,33 @@ class PlanResult:
             delay_factor=self.delay_factor,
             planning_seconds=round(self.planning_seconds, 6),
             waypoints=None if self.trajectory is None else self.trajectory.waypoints,
-            extra={"stats": _jsonable(self.stats)},
+            extra={"stats": _jsonable(stats), **extra},
         )
+
+
+def _amax_stats(robot, stats: dict) -> dict:
+    """``stats`` plus whether a solved answer honours ``robot.amax`` (when the robot has one).
+
+    Only the speed layer limits acceleration; the search's and the GA's answers start, stop
+    and turn at full speed. A user who set ``amax`` is told when it was not applied, and why.
+    """
+    if robot.amax is None:
+        return stats
+    layer = stats.get("speed_layer")
+    out = dict(stats, amax_honoured=bool(layer is not None and layer.get("applied")))
+    if layer is None:
+        out["amax_note"] = (
+            f"robot.amax {robot.amax:g} is not honoured: only the speed layer bounds "
+            "acceleration, and it is off (PlanOptions.speed_layer, --speed-layer)"
+        )
+    elif not layer.get("applied"):
+        out["amax_note"] = (
+            f"robot.amax {robot.amax:g} is not honoured: the speed layer did not apply "
+            f"({layer.get('reason', 'no reason given')})"
+        )
+    if not out["amax_honoured"]:
+        log.info("%s", out["amax_note"])
+    return out
 
 
 def _jsonable(obj):
@@ -338,18 +376,27 @@ class Planner:
         Returns
         -------
         PlanResult
-            ``invalid_query`` when start or goal collide with a static obstacle, lie out
+            ``invalid_query`` when a well-formed start or goal collide with a static obstacle, lie out
             of bounds, or the start overlaps a mover at t0; ``no_path`` when no safe
             trajectory exists on the roadmap within the horizon; ``timeout`` when the
             planning budget ran out.
+
+        Raises
+        ------
+        ValueError
+            A malformed request (bad input, as the command line's exit status 2): a start
+            or goal that is not ``dof`` finite numbers, or a non-finite ``t0``.
         """
         opts = options or PlanOptions()
         t_begin = time.perf_counter()
         deadline = t_begin + opts.time_limit
         robot = self.robot
         vmax = robot.vmax
-        start = np.asarray(start, dtype=float).reshape(-1)
-        goal = np.asarray(goal, dtype=float).reshape(-1)
+        start = check_pose(start, robot.dof, "start")
+        goal = check_pose(goal, robot.dof, "goal")
+        if isinstance(t0, bool) or not isinstance(t0, (int, float, np.number)) or not math.isfinite(t0):
+            raise ValueError(f"t0: expected a finite number, got {t0!r}")
+        t0 = float(t0)
 
         def answer(status, message="", traj=None, rd=math.inf, **stats):
             return PlanResult(
@@ -424,7 +471,27 @@ class Planner:
         # headings are wrapped inside; the first and last rows give the query's own numbers
         wps = result.trajectory.waypoints.copy()
         wps[0, 1:], wps[-1, 1:] = ends
-        return replace(result, trajectory=Trajectory(wps, robot.circumradius))
+        return replace(result, trajectory=Trajectory(wps, robot.circumradius), stats=_amax_stats(robot, result.stats))
+
+
+def check_pose(pose, dof: int, label: str) -> FloatArray:
+    """``pose`` as a (dof,) float array; ValueError naming ``label`` when it is malformed.
+
+    A pose that is not ``dof`` finite numbers is bad input, like a bad scene file; a
+    well-formed pose that collides or lies out of bounds is a query answered
+    ``invalid_query`` (see :func:`query_problem`).
+    """
+    want = "[x, y] for a disc robot" if dof == 2 else "[x, y, heading] for a box robot"
+    try:
+        arr = np.asarray(pose, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{label}: expected {dof} finite numbers {want}, got {pose!r}") from None
+    if arr.ndim != 1 or arr.shape != (dof,):
+        got = f"{arr.size} numbers" if arr.ndim == 1 else f"shape {arr.shape}"
+        raise ValueError(f"{label}: expected {dof} finite numbers {want}, got {got}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{label}: expected {dof} finite numbers {want}, got {arr.tolist()}")
+    return arr.copy()
 
 
 def query_problem(geometry: StaticGeometry, start, goal) -> str:

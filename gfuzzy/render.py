@@ -16,12 +16,15 @@ from __future__ import annotations
 import logging
 import math
 import os
+import textwrap
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from matplotlib import colormaps
+from matplotlib.artist import Artist
 from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.cm import ScalarMappable
 from matplotlib.collections import LineCollection
 from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
@@ -60,6 +63,8 @@ ROBOT_COLOR = "#1f3b73"
 START_COLOR = "#2bb24c"
 GOAL_COLOR = "#ffcc00"
 WAIT_COLOR = "#d62728"
+#: The first violation of the guarantees of a drawn, invalid trajectory.
+VIOLATION_COLOR = "#ff00ff"
 #: Mover colours: tab10 without its blue (the robot's hue), grey (the obstacles') and red
 #: (the waits').
 MOVER_COLORS = ("#ff7f0e", "#2ca02c", "#9467bd", "#8c564b", "#e377c2", "#bcbd22", "#17becf")
@@ -489,13 +494,14 @@ def _draw_trajectory(ax, fig, scene: Scene, wp: FloatArray, speed, footprints: i
             bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.75),
         )
 
-    # waits
-    for k, (ta, tb, pose) in enumerate(waits):
+    # waits: a marker each; one label per group of waits close together (the short stops
+    # of a dodge), placed clear of the other texts and markers when the figure is drawn
+    for k, (_, _, pose) in enumerate(waits):
         ax.plot(
             pose[0],
             pose[1],
             marker="H",
-            ms=12,
+            ms=WAIT_MARKER_SIZE,
             mfc="none",
             mec=WAIT_COLOR,
             mew=1.8,
@@ -503,17 +509,151 @@ def _draw_trajectory(ax, fig, scene: Scene, wp: FloatArray, speed, footprints: i
             zorder=6.5,
             label="wait" if k == 0 else None,
         )
-        ax.annotate(
-            f"wait {_fmt_time(tb - ta)} s (t={_fmt_time(ta)} to {_fmt_time(tb)})",
-            pose[:2],
-            xytext=(-8, 6),  # up-left: the time stamps sit down-right
+    xmin, ymin, xmax, ymax = scene.bounds
+    labels = []
+    for group in _wait_groups(waits, WAIT_GROUP_SPAN * max(xmax - xmin, ymax - ymin)):
+        anchor = np.mean([waits[k][2][:2] for k in group], axis=0)
+        label = ax.annotate(
+            "\n".join(
+                f"wait {_fmt_time(waits[k][1] - waits[k][0])} s (t={_fmt_time(waits[k][0])} to {_fmt_time(waits[k][1])})"
+                for k in group
+            ),
+            anchor,
+            xytext=WAIT_LABEL_PLACES[0][:2],  # up-left: the time stamps sit down-right
             textcoords="offset points",
-            ha="right",
+            ha=WAIT_LABEL_PLACES[0][2],
+            va=WAIT_LABEL_PLACES[0][3],
             fontsize=7,
             color=WAIT_COLOR,
             zorder=7,
             bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.75),
+            # a leader line, shown only when the label had to move away from its waits
+            arrowprops=dict(arrowstyle="-", color=WAIT_COLOR, lw=0.6, shrinkA=0, shrinkB=WAIT_MARKER_SIZE / 2),
         )
+        label.arrow_patch.set_visible(False)
+        labels.append(label)
+    if labels:
+        ax.add_artist(_LabelLayout(labels, [w[2][:2] for w in waits]))
+
+
+#: Marker size (points) of a wait.
+WAIT_MARKER_SIZE = 12
+#: Waits closer than this fraction of the scene's larger side share one label.
+WAIT_GROUP_SPAN = 0.04
+#: Places tried for a wait label, in order: (dx, dy) in points from its wait, horizontal and
+#: vertical alignment. Beside the wait first, then further above and below.
+WAIT_LABEL_PLACES = [
+    (dx, sign * (4 + 11 * k), ha, "bottom" if sign > 0 else "top")
+    for k in range(9)
+    for sign in (1, -1)
+    for dx, ha in ((-8, "right"), (8, "left"))
+]
+
+
+def _wait_groups(waits, radius: float) -> list[list[int]]:
+    """Indices of the waits grouped by proximity (single linkage: a wait within ``radius``
+    of any member joins the group), each group in time order, groups by first wait."""
+    parent = list(range(len(waits)))
+
+    def root(i):
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for i in range(len(waits)):
+        for j in range(i):
+            if np.hypot(*(waits[i][2][:2] - waits[j][2][:2])) <= radius:
+                parent[root(i)] = root(j)
+    groups: dict = {}
+    for i in range(len(waits)):
+        groups.setdefault(root(i), []).append(i)
+    return sorted(groups.values(), key=lambda g: g[0])
+
+
+class _LabelLayout(Artist):
+    """Places the wait labels when the figure is drawn, once its layout is final.
+
+    Each label, in time order, takes the first of :data:`WAIT_LABEL_PLACES` that overlaps
+    no other text of the axes (time stamps, labels placed before it) nor a wait's marker,
+    and stays in view; a label moved off its wait gets a leader line.
+    """
+
+    def __init__(self, labels, markers):
+        super().__init__()
+        self.labels = labels
+        self.markers = np.asarray(markers, dtype=float).reshape(-1, 2)
+        self.set_zorder(6.99)  # drawn (laid out) just before the texts, at zorder 7
+        self.set_in_layout(False)  # it draws nothing itself
+
+    def draw(self, renderer) -> None:
+        from matplotlib.text import Text
+        from matplotlib.transforms import Bbox
+
+        ax = self.axes
+        view = ax.bbox
+        half = renderer.points_to_pixels(WAIT_MARKER_SIZE / 2)
+        placed = [
+            Bbox.from_extents(x - half, y - half, x + half, y + half)
+            for x, y in ax.transData.transform(self.markers)
+        ]
+        placed += [
+            Text.get_window_extent(t, renderer).padded(2)
+            for t in ax.texts
+            if t not in self.labels and t.get_visible() and t.get_text()
+        ]
+        for label in self.labels:
+            best = None
+            for rank, place in enumerate(WAIT_LABEL_PLACES):
+                dx, dy, ha, va = place
+                label.xyann = (dx, dy)
+                label.set_ha(ha)
+                label.set_va(va)
+                label.update_positions(renderer)
+                box = Text.get_window_extent(label, renderer)
+                hits = sum(box.overlaps(other) for other in placed)
+                inside = view.x0 <= box.x0 and box.x1 <= view.x1 and view.y0 <= box.y0 and box.y1 <= view.y1
+                score = (hits, not inside, rank)
+                if best is None or score < best[0]:
+                    best = (score, place, box)
+                if hits == 0 and inside:
+                    break
+            _, (dx, dy, ha, va), box = best
+            label.xyann = (dx, dy)
+            label.set_ha(ha)
+            label.set_va(va)
+            label.arrow_patch.set_visible(abs(dy) > 4)
+            placed.append(box.padded(2))
+        self.stale = False
+
+
+def _draw_violation(ax, scene: Scene, wp: FloatArray, t: float, reason: str) -> None:
+    """The robot where a check found the first violation, crossed out."""
+    pose = interpolate_poses(wp, [t])[0]
+    ax.add_patch(_footprint(scene, pose, fc="none", ec=VIOLATION_COLOR, lw=2.0, zorder=8))
+    ax.plot(
+        pose[0],
+        pose[1],
+        marker="X",
+        ms=11,
+        mfc=VIOLATION_COLOR,
+        mec="white",
+        mew=0.8,
+        ls="none",
+        zorder=8.1,
+        label="first violation of the guarantees",
+    )
+    ax.annotate(
+        textwrap.fill(reason, 48),
+        pose[:2],
+        xytext=(10, -10),
+        textcoords="offset points",
+        va="top",
+        fontsize=7,
+        color=VIOLATION_COLOR,
+        zorder=8.2,
+        bbox=dict(boxstyle="round,pad=0.2", fc="white", ec=VIOLATION_COLOR, lw=0.6, alpha=0.9),
+    )
 
 
 def _legend(fig, ax) -> None:
@@ -542,6 +682,7 @@ def render_scene(
     title: str | None = None,
     dpi: int = 120,
     footprints: int = 6,
+    violation: tuple[float, str] | None = None,
 ) -> None:
     """Draw the scene, and optionally a roadmap and a trajectory, as a still picture.
 
@@ -564,6 +705,10 @@ def render_scene(
         Picture resolution; the picture is about ``8 * dpi`` pixels wide.
     footprints : int
         Number of robot footprints drawn along the trajectory, start and end included.
+    violation : (float, str), optional
+        Time and text of the trajectory's first violation of the guarantees (see
+        :attr:`gfuzzy.check.CheckReport.time`): the robot is drawn there, crossed out in
+        magenta, with the text below the picture.
 
     Raises
     ------
@@ -574,7 +719,7 @@ def render_scene(
     suffix = _suffix(out_path, PICTURE_SUFFIXES, "a picture")
     wp = None if trajectory is None else as_waypoints(trajectory, scene)
     with_speed = wp is not None and speed is not None and speed is not False
-    fig, ax = _figure(scene, 8.0, with_speed, _legend_rows(scene, roadmap, wp))
+    fig, ax = _figure(scene, 8.0, with_speed, _legend_rows(scene, roadmap, wp) + (violation is not None))
     _draw_obstacles(ax, scene)
     if roadmap is not None:
         _draw_roadmap(ax, roadmap)
@@ -582,6 +727,8 @@ def render_scene(
     _draw_queries(ax, scene)
     if wp is not None:
         _draw_trajectory(ax, fig, scene, wp, speed if with_speed else None, footprints)
+        if violation is not None:
+            _draw_violation(ax, scene, wp, *violation)
     if title is None:
         title = scene.name
         if wp is not None:
@@ -648,6 +795,7 @@ def render_animation(
     dpi: int = 80,
     duration: float | None = None,
     title: str | None = None,
+    speed=None,
 ) -> int:
     """Animate the robot and the movers over the trajectory's time span, as a GIF.
 
@@ -673,6 +821,8 @@ def render_animation(
         Span to animate without a trajectory (default: the movers' longest period or
         last time, between 1 and 60 s; 10 s when they are all endless and aperiodic).
     title : str, optional
+    speed : True, (n - 1,) or (n,) float, optional
+        Colour the robot's trail by speed, as :func:`render_scene` does, with a colour bar.
 
     Returns
     -------
@@ -703,7 +853,10 @@ def render_animation(
     times = np.linspace(t0, t1, n)
     frame_ms = 1000.0 * (t1 - t0) / (n - 1) if n > 1 else 1000.0
 
-    fig, ax = _figure(scene, 6.5, False, 0)
+    speeds = None
+    if wp is not None and speed is not None and speed is not False and len(wp) >= 2:
+        speeds = _speed_values(speed, wp, scene)
+    fig, ax = _figure(scene, 6.5, speeds is not None, 0)
     fig.set_dpi(dpi)
     _draw_obstacles(ax, scene)
     _draw_movers(ax, scene, marker=False)
@@ -724,8 +877,19 @@ def render_animation(
         ax.plot(wp[:, 1], wp[:, 2], color=ROBOT_COLOR, lw=1.0, alpha=0.25, zorder=4.5)
         ax.plot(*wp[-1, 1:3], marker="*", ms=11, mfc=GOAL_COLOR, mec="black", mew=0.8, zorder=4.6)
         poses = interpolate_poses(wp, times)
-        trail = Line2D([], [], color=ROBOT_COLOR, lw=2.0, zorder=5, animated=True)
-        ax.add_line(trail)
+        if speeds is None:
+            trail = Line2D([], [], color=ROBOT_COLOR, lw=2.0, zorder=5, animated=True)
+            ax.add_line(trail)
+        else:  # the driven part coloured by speed, over a black edge, as in the picture
+            norm = Normalize(0.0, max(scene.robot.vmax, float(np.max(speeds))))
+            edge = LineCollection([], colors="black", linewidths=3.4, zorder=4.9, animated=True)
+            trail = LineCollection([], cmap=colormaps[SPEED_CMAP], norm=norm, linewidths=2.2, zorder=5,
+                                   capstyle="round", animated=True)  # fmt: skip
+            ax.add_collection(edge)
+            ax.add_collection(trail)
+            dynamic.append(edge)
+            fig.colorbar(ScalarMappable(norm, colormaps[SPEED_CMAP]), ax=ax, shrink=0.8, pad=0.02,
+                         label="robot speed [m/s]")  # fmt: skip
         robot = _footprint(
             scene, poses[0], fc=ROBOT_COLOR, ec="black", alpha=0.85, lw=1.0, zorder=6
         )
@@ -765,7 +929,14 @@ def render_animation(
         if wp is not None:
             pose = poses[k]
             done = wp[wp[:, 0] < t]
-            trail.set_data(np.append(done[:, 1], pose[0]), np.append(done[:, 2], pose[1]))
+            if speeds is None:
+                trail.set_data(np.append(done[:, 1], pose[0]), np.append(done[:, 2], pose[1]))
+            else:  # the segment under way keeps its own speed
+                pts = np.vstack([done[:, 1:3], pose[None, :2]])
+                segs = np.stack([pts[:-1], pts[1:]], axis=1)
+                edge.set_segments(segs)
+                trail.set_segments(segs)
+                trail.set_array(speeds[: len(segs)])
             if scene.robot.shape == "disc":
                 robot.set_center(pose[:2])
             else:

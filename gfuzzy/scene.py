@@ -679,6 +679,9 @@ def parse_scene(doc: Any, file: str = "<string>", folder: str | os.PathLike | No
         if not isinstance(md, dict):
             v.fail(place, f"expected a mapping, got {_kind(md)}")
         timed = "trajectory" in md
+        mixed = [k for k in ("path", "speed", "mode", "offset") if k in md]
+        if timed and mixed:  # say so, rather than "unknown key" for the first path key
+            v.fail(place, f"give either path (with speed and mode) or trajectory, not both (it has trajectory and {', '.join(mixed)})")
         v.mapping(
             md,
             place,

@@ -184,14 +184,26 @@ def load_trajectory(path: str | os.PathLike) -> TrajectoryFile:
     Raises
     ------
     SceneError
-        Unreadable, not JSON, or not of the contract's form (naming the place).
+        Unreadable, not JSON (a CSV export gets a hint), or not of the contract's form
+        (naming the place), t not strictly increasing included.
     """
     file = str(path)
     try:
-        doc = json.loads(Path(path).read_text(encoding="utf-8"))
+        text = Path(path).read_text(encoding="utf-8")
     except OSError as exc:
         raise SceneError(file, "", f"cannot read: {exc.strerror or exc}") from None
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+    except UnicodeDecodeError as exc:
+        raise SceneError(file, "", f"invalid JSON: {exc}") from None
+    try:
+        doc = json.loads(text)
+    except json.JSONDecodeError as exc:
+        if Path(path).suffix.lower() == ".csv" or text.lstrip().startswith("t,x,y"):
+            # the CSV export is a common mix-up: it has rows but no status
+            beside = Path(path).with_suffix(".json")
+            raise SceneError(
+                file, "", f"this is a CSV export; a trajectory file is the JSON that `gfuzzy plan -o` "
+                f"writes beside it ({beside}), which has the status the CSV lacks"
+            ) from None
         raise SceneError(file, "", f"invalid JSON: {exc}") from None
     if not isinstance(doc, dict):
         raise SceneError(file, "", "expected a JSON object")
@@ -217,6 +229,12 @@ def load_trajectory(path: str | os.PathLike) -> TrajectoryFile:
                 if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
                     raise SceneError(file, f"waypoints[{i}][{j}]", f"expected a finite number, got {v!r}")
         wps = np.asarray(rows, dtype=float)
+        back = np.nonzero(np.diff(wps[:, 0]) <= 0)[0]
+        if back.size:  # section 2: t strictly increasing; without it the rows are no trajectory
+            j = int(back[0]) + 1
+            raise SceneError(
+                file, f"waypoints[{j}][0]", f"t={wps[j, 0]!r} does not increase (the row before has t={wps[j - 1, 0]!r})"
+            )
 
     def num(key):
         v = doc.get(key)
