@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 from .errors import SceneError
@@ -102,6 +103,26 @@ def _default_roadmap(scene, quiet=False):
     return None
 
 
+def _apply_overrides(scene, args):
+    """The scene with the command line's robot overrides (``--clearance``,
+    ``--mover-clearance``) applied; the scene itself when there are none.
+
+    A new static clearance changes the scene's static hash, so a saved roadmap built
+    without it no longer matches and another is built (said on stderr).
+    """
+    clearance = getattr(args, "clearance", None)
+    mover_clearance = getattr(args, "mover_clearance", None)
+    if clearance is None and mover_clearance is None:
+        return scene
+    for flag, value in (("--clearance", clearance), ("--mover-clearance", mover_clearance)):
+        if value is not None and not (math.isfinite(value) and value >= 0):
+            raise BadInput(f"{flag}: must be a non-negative finite number, got {value:g}")
+    try:
+        return scene.with_clearances(clearance, mover_clearance)
+    except ValueError as exc:
+        raise BadInput(f"--clearance/--mover-clearance: {exc}") from None
+
+
 def _plan_options(args):
     from .planner import PlanOptions
 
@@ -183,24 +204,37 @@ def _query_from_args(scene, args):
         t0 = args.t0 if args.t0 is not None else 0.0
         if not math.isfinite(t0):
             raise BadInput("--t0: must be finite")
-        return Query("cli", tuple(start), tuple(goal), t0)
+        return Query("cli", tuple(start), tuple(goal), t0, hold=_hold(args, 0.0))
     if args.t0 is not None:
         raise BadInput("gfuzzy plan: --t0 goes with --start/--goal (a scene query has its own t0)")
     if args.query:
         try:
-            return scene.query(args.query)
+            q = scene.query(args.query)
         except KeyError as exc:
             raise BadInput(f"{scene.source}: queries: {exc.args[0]}") from None
-    if not scene.queries:
+    elif not scene.queries:
         raise BadInput(f"{scene.source}: queries: the scene has no queries; give --start and --goal")
-    return scene.queries[0]
+    else:
+        q = scene.queries[0]
+    hold = _hold(args, q.hold)
+    return q if hold == q.hold else replace(q, hold=hold)
+
+
+def _hold(args, default: float) -> float:
+    """``--hold`` (seconds parked at the goal), or the query's own."""
+    hold = getattr(args, "hold", None)
+    if hold is None:
+        return default
+    if not (math.isfinite(hold) and hold >= 0):
+        raise BadInput(f"--hold: must be a non-negative finite number, got {hold:g}")
+    return float(hold)
 
 
 def cmd_plan(args) -> int:
     from .geometry import StaticGeometry
     from .planner import Planner, PlanResult, Status, query_problem
 
-    scene = _load_scene(args.scene)
+    scene = _apply_overrides(_load_scene(args.scene), args)
     query = _query_from_args(scene, args)
     out = _out_path(args.output, (".json", ".csv")) if args.output else None
     options = _plan_options(args)
@@ -210,7 +244,7 @@ def cmd_plan(args) -> int:
     else:
         roadmap = _roadmap_for(scene, args)
         try:
-            result = Planner(scene, roadmap).plan(query.start, query.goal, query.t0, options)
+            result = Planner(scene, roadmap).plan(query.start, query.goal, query.t0, options, hold=query.hold)
         except ValueError as exc:  # a request beyond the memory bounds (dt far too fine)
             raise BadInput(f"gfuzzy plan: {exc}") from None
     tf = result.to_file(scene.name, query.name)
@@ -319,7 +353,7 @@ def cmd_render(args) -> int:
 def cmd_regress(args) -> int:
     from .regress import run_regression
 
-    scenes = [_load_scene(p) for p in args.scenes]  # all bad input first, before any work
+    scenes = [_apply_overrides(_load_scene(p), args) for p in args.scenes]  # all bad input first
     options = _plan_options(args)
     try:
         ok = run_regression(scenes, lambda sc: _roadmap_for(sc, args), options, sys.stdout)
@@ -359,6 +393,13 @@ def _parser() -> argparse.ArgumentParser:
         q.add_argument("--ga-seed", type=int, default=0, help="seed of the GA refinement (default 0)")
         q.add_argument("--stretch", type=float, default=1.05,
                        help="search the roadmap's spanner of this stretch (default 1.05; 1 = the whole roadmap)")  # fmt: skip
+        clearance_flags(q)
+
+    def clearance_flags(q):
+        q.add_argument("--clearance", type=float, metavar="C",
+                       help="distance kept from static obstacles, m (overrides robot.clearance; another roadmap)")  # fmt: skip
+        q.add_argument("--mover-clearance", type=float, metavar="C",
+                       help="distance kept from every mover, m (overrides robot.mover_clearance)")  # fmt: skip
 
     q = sub.add_parser("plan", help="answer one query")
     q.add_argument("scene", metavar="SCENE")
@@ -368,6 +409,8 @@ def _parser() -> argparse.ArgumentParser:
     q.add_argument("--start", nargs="+", metavar="X", help="start pose: X Y (disc) or X Y H (box)")
     q.add_argument("--goal", nargs="+", metavar="X", help="goal pose")
     q.add_argument("--t0", type=float, help="departure time with --start/--goal (default 0)")
+    q.add_argument("--hold", type=float, metavar="SECONDS",
+                   help="park at the goal this long; it must stay safe (default: the query's hold, or 0)")  # fmt: skip
     q.add_argument("-o", "--output", metavar="OUT", help="trajectory file: OUT.json, or OUT.csv (+ OUT.json)")
     q.set_defaults(func=cmd_plan)
 
