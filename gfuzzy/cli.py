@@ -79,12 +79,38 @@ def _roadmap_for(scene, args, quiet=False):
     found = _default_roadmap(scene, quiet)
     if found is not None:
         return found
+    same_shapes = _roadmap_of_other_clearance(scene)
+    if same_shapes is not None:  # --clearance: the saved roadmap's options, the new clearance
+        if not quiet:
+            _say(
+                f"note: robot.clearance={scene.robot.clearance:g} changes the roadmap; building one "
+                f"like the saved one ({same_shapes.vertices} vertices, seed {same_shapes.seed})"
+            )
+        return build_roadmap(scene, same_shapes, progress=_progress("roadmap"))
     if not quiet:
         _say(
             f"note: no roadmap file for {scene.name!r}; building one with "
             f"{RoadmapOptions.vertices} vertices (save one with `gfuzzy roadmap`)"
         )
     return build_roadmap(scene, RoadmapOptions(), progress=_progress("roadmap"))
+
+
+def _roadmap_of_other_clearance(scene):
+    """The options of a saved roadmap built for the same shapes with another static
+    clearance (a ``--clearance`` override), or None."""
+    from .roadmap import default_roadmap_path, load_roadmap
+
+    if not scene.shape_hash:
+        return None
+    scene_dir = Path(scene.source).resolve().parent
+    for path in (default_roadmap_path(scene), default_roadmap_path(scene, scene_dir.parent / "roadmaps")):
+        try:
+            rm = load_roadmap(path) if path.is_file() else None
+        except SceneError:
+            continue
+        if rm is not None and rm.scene_hash == scene.shape_hash:
+            return rm.options
+    return None
 
 
 def _default_roadmap(scene, quiet=False):
@@ -98,7 +124,7 @@ def _default_roadmap(scene, quiet=False):
             try:
                 return load_roadmap(path, scene)
             except SceneError as exc:
-                if not quiet:
+                if not quiet and not _clearance_only(path, scene):
                     _say(f"note: not using {path}: {exc.message}")
     return None
 
@@ -121,6 +147,17 @@ def _apply_overrides(scene, args):
         return scene.with_clearances(clearance, mover_clearance)
     except ValueError as exc:
         raise BadInput(f"--clearance/--mover-clearance: {exc}") from None
+
+
+def _clearance_only(path, scene) -> bool:
+    """True when the roadmap file at ``path`` differs from ``scene`` only by the static
+    clearance (said once, by :func:`_roadmap_for`)."""
+    from .roadmap import load_roadmap
+
+    try:
+        return bool(scene.shape_hash) and load_roadmap(path).scene_hash == scene.shape_hash
+    except SceneError:
+        return False
 
 
 def _plan_options(args):
@@ -287,7 +324,7 @@ def cmd_check(args) -> int:
     from .check import check_trajectory
     from .trajectory import load_trajectory
 
-    scene = _load_scene(args.scene)
+    scene = _apply_overrides(_load_scene(args.scene), args)
     tf = load_trajectory(args.trajectory)
     if tf.status != "solved":
         _say(f"{args.trajectory}: status is {tf.status}: there is no trajectory to check")
@@ -322,7 +359,7 @@ def cmd_render(args) -> int:
     from .roadmap import load_roadmap
     from .trajectory import load_trajectory
 
-    scene = _load_scene(args.scene)
+    scene = _apply_overrides(_load_scene(args.scene), args)
     out = _out_path(args.output, (".png", ".gif"))
     traj = None
     if args.trajectory:
@@ -417,6 +454,7 @@ def _parser() -> argparse.ArgumentParser:
     c = sub.add_parser("check", help="check a trajectory against the contract's guarantees")
     c.add_argument("scene", metavar="SCENE")
     c.add_argument("trajectory", metavar="TRAJ.json")
+    clearance_flags(c)
     c.set_defaults(func=cmd_check)
 
     d = sub.add_parser("render", help="draw a scene (and a trajectory): PNG picture or GIF animation")
@@ -426,6 +464,7 @@ def _parser() -> argparse.ArgumentParser:
     d.add_argument("--roadmap", metavar="FILE", help="draw this roadmap (PNG; default: the scene's roadmaps/<name>.json if there is one)")
     d.add_argument("--no-roadmap", action="store_true", help="do not draw a roadmap")
     d.add_argument("--speed", action="store_true", help="colour the path by speed (PNG)")
+    clearance_flags(d)
     d.set_defaults(func=cmd_render)
 
     g = sub.add_parser("regress", help="answer and check every query of every scene")
