@@ -408,3 +408,27 @@ def test_every_bundled_query_with_clearances_passes_check(repo_root):
                 assert row.status == q.expect.status, (scene.name, q.name, row.status)
             if row.status == "solved":
                 assert row.valid, (scene.name, q.name, row.problems)
+
+
+def test_cli_overrides_rebuild_the_roadmap_and_check_enforces_them(tmp_path):
+    """--clearance changes the roadmap (said on stderr, built with the saved options);
+    check with the same overrides accepts the answer, with a larger one refuses it."""
+    path = tmp_path / "scenes" / "door.yaml"
+    path.parent.mkdir()
+    path.write_text(DOOR.replace(", clearance: 0.05", ""))
+    r = run_cli_process("roadmap", path, "-n", "80", "--seed", "2", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    out = tmp_path / "a.json"
+    r = run_cli_process("plan", path, "--clearance", "0.05", "--mover-clearance", "0.1", "-o", out, cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert "robot.clearance=0.05" in r.stderr and "80 vertices, seed 2" in r.stderr
+    assert run_cli_process("check", path, out, "--clearance", "0.05", cwd=tmp_path).returncode == 0
+    bad = run_cli_process("check", path, out, "--clearance", "0.25", cwd=tmp_path)
+    assert bad.returncode == 1 and "robot.clearance=0.25" in bad.stderr
+    r = run_cli_process("regress", path, "--clearance", "0.05", cwd=tmp_path)
+    assert r.returncode == 0 and "valid" in r.stdout
+    for cmd in ("plan", "regress", "check"):
+        args = (path, out) if cmd == "check" else (path,)
+        bad = run_cli_process(cmd, *args, "--mover-clearance", "nan", cwd=tmp_path)
+        assert bad.returncode == 2 and "--mover-clearance" in bad.stderr
+        assert len(bad.stderr.strip().splitlines()) == 1
