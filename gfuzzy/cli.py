@@ -337,6 +337,12 @@ def cmd_check(args) -> int:
             query = None
     if tf.scene and tf.scene != scene.name:
         _say(f"note: {args.trajectory} was planned for scene {tf.scene!r}, checking against {scene.name!r}")
+    if args.hold is not None:  # park at the last row (an ad-hoc query has no hold of its own)
+        from .scene import Query
+
+        w = tf.waypoints
+        base = query or Query("adhoc", tuple(w[0, 1:]), tuple(w[-1, 1:]), float(w[0, 0]))
+        query = replace(base, hold=_hold(args, base.hold))
     rep = check_trajectory(scene, tf.waypoints, query)
     if rep.valid and tf.duration is not None:
         actual = float(tf.waypoints[-1, 0] - tf.waypoints[0, 0])
@@ -455,6 +461,8 @@ def _parser() -> argparse.ArgumentParser:
     c.add_argument("scene", metavar="SCENE")
     c.add_argument("trajectory", metavar="TRAJ.json")
     clearance_flags(c)
+    c.add_argument("--hold", type=float, metavar="SECONDS",
+                   help="the goal pose must stay safe this long after the last row (default: the query's hold)")  # fmt: skip
     c.set_defaults(func=cmd_check)
 
     d = sub.add_parser("render", help="draw a scene (and a trajectory): PNG picture or GIF animation")

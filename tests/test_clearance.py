@@ -258,14 +258,21 @@ def test_cli_hold_and_check(tmp_path):
     r = run_cli_process("plan", path, "-n", "60", "--seed", "1", "-o", out, cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     assert run_cli_process("check", path, out, cwd=tmp_path).returncode == 0
-    # the same start and goal as an ad-hoc query without --hold: the cart runs it over,
-    # which check cannot see (an ad-hoc query has no hold); with --hold 2 it waits
+    # the same start and goal as an ad-hoc query with --hold 2: it waits
     r = run_cli_process("plan", path, "-n", "60", "--seed", "1", "--start", "1", "3", "--goal", "4", "3",
                         "--hold", "2", "-o", out, cwd=tmp_path)  # fmt: skip
     assert r.returncode == 0, r.stderr
     wps = np.array(json.loads(out.read_text())["waypoints"])
     scene = load_scene(path)
     assert check_trajectory(scene, wps, scene.queries[0]).valid
+    assert run_cli_process("check", path, out, "--hold", "2", cwd=tmp_path).returncode == 0
+    # without the hold the ad-hoc answer arrives as early as it can, and parks in the cart's way
+    r = run_cli_process("plan", path, "-n", "60", "--seed", "1", "--start", "1", "3", "--goal", "4", "3",
+                        "-o", out, cwd=tmp_path)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert run_cli_process("check", path, out, cwd=tmp_path).returncode == 0
+    bad = run_cli_process("check", path, out, "--hold", "2", cwd=tmp_path)
+    assert bad.returncode == 1 and "cart" in bad.stderr
     bad = run_cli_process("plan", path, "--hold", "-1", cwd=tmp_path)
     assert bad.returncode == 2 and "--hold" in bad.stderr and len(bad.stderr.strip().splitlines()) == 1
 
