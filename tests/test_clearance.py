@@ -7,6 +7,8 @@ with the clearances and the hold.
 from __future__ import annotations
 
 import json
+import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -439,3 +441,50 @@ def test_cli_overrides_rebuild_the_roadmap_and_check_enforces_them(tmp_path):
         bad = run_cli_process(cmd, *args, "--mover-clearance", "nan", cwd=tmp_path)
         assert bad.returncode == 2 and "--mover-clearance" in bad.stderr
         assert len(bad.stderr.strip().splitlines()) == 1
+
+
+def _brute_force(planner: Planner, start, goal, t0, dt, horizon_steps, hold_steps):
+    """Breadth-first search over every (node, step), the goal accepted only where it stays
+    safe ``hold_steps`` more steps: the time-expanded graph, no intervals."""
+    from collections import deque
+
+    from gfuzzy.planner import SPEED_SAFETY
+
+    vplan = planner.robot.vmax * SPEED_SAFETY
+    graph, s_id, g_id, _ = planner._graph(np.asarray(start, float), np.asarray(goal, float), dt, vplan)
+    field_ = MoverField(planner.scene, t0, dt, horizon_steps + hold_steps, planner.robot.vmax)
+    unsafe = field_.unsafe(graph.poses)
+    if unsafe[s_id, 0]:
+        return None
+    seen = np.zeros_like(unsafe)
+    seen[s_id, 0] = True
+    frontier = deque([(s_id, 0)])
+    while frontier:
+        u, n = frontier.popleft()
+        if u == g_id and not unsafe[g_id, n : n + hold_steps + 1].any():
+            return n
+        if n == horizon_steps:
+            continue
+        for v in list(graph.neighbors[graph.indptr[u] : graph.indptr[u + 1]]) + [u]:
+            if not unsafe[v, n + 1] and not seen[v, n + 1]:
+                seen[v, n + 1] = True
+                frontier.append((v, n + 1))
+    return None
+
+
+@pytest.mark.parametrize("hold", [0.0, 2.0, 5.0, 9.5])
+@pytest.mark.parametrize("keep", [0.0, 0.2])
+def test_hold_and_mover_clearance_match_brute_force(loop, hold, keep):
+    scene, rm = loop
+    scene = scene.with_clearances(mover_clearance=keep)
+    q = scene.queries[0]
+    planner = Planner(scene, rm)
+    dt, horizon = 0.1, 30.0
+    res = planner.plan(q.start, q.goal, 0.0, PlanOptions(dt=dt, horizon=horizon, stretch=1.0), hold=hold)
+    steps = _brute_force(planner, q.start, q.goal, 0.0, dt, int(math.ceil(horizon / dt)), int(math.ceil(hold / dt - 1e-9)))
+    if steps is None:
+        assert res.status is Status.NO_PATH
+    else:
+        assert res.status is Status.SOLVED, res.message
+        assert abs(res.duration - steps * dt) <= 1e-6
+        assert check_trajectory(scene, res.trajectory.waypoints, replace(q, hold=hold)).valid
