@@ -479,7 +479,7 @@ def test_hold_and_mover_clearance_match_brute_force(loop, hold, keep):
     scene = scene.with_clearances(mover_clearance=keep)
     q = scene.queries[0]
     planner = Planner(scene, rm)
-    dt, horizon = 0.1, 30.0
+    dt, horizon = 0.1, 15.0
     res = planner.plan(q.start, q.goal, 0.0, PlanOptions(dt=dt, horizon=horizon, stretch=1.0), hold=hold)
     steps = _brute_force(planner, q.start, q.goal, 0.0, dt, int(math.ceil(horizon / dt)), int(math.ceil(hold / dt - 1e-9)))
     if steps is None:
