@@ -551,6 +551,8 @@ def _legend_rows(scene: Scene, roadmap, wp) -> int:
     movers = len(scene.movers) if len(scene.movers) <= MAX_LEGEND_MOVERS else 2
     n = 1 + movers + (1 if roadmap is not None else 0) + (2 if scene.queries else 0)
     n += 3 if wp is not None else 0
+    if wp is not None:  # the clearance outlines
+        n += (scene.robot.clearance > 0) + (scene.robot.mover_clearance > 0)
     return math.ceil(n / 3)
 
 

@@ -488,3 +488,25 @@ def test_hold_and_mover_clearance_match_brute_force(loop, hold, keep):
         assert res.status is Status.SOLVED, res.message
         assert abs(res.duration - steps * dt) <= 1e-6
         assert check_trajectory(scene, res.trajectory.waypoints, replace(q, hold=hold)).valid
+
+
+def test_render_draws_the_clearances(tmp_path):
+    from gfuzzy.render import _clearance_outline, render
+
+    box = _scene(DOOR.replace("disc: 0.2", "box: [0.4, 0.2]").replace("start: [0.5, 1.5], goal: [5.5, 1.5]",
+                                                                       "start: [0.5, 1.5, 0], goal: [5.5, 1.5, 0]"))  # fmt: skip
+    pose = np.array([1.0, 1.0, 0.3])
+    ring = _clearance_outline(box, pose, 0.05)
+    xy = ring.get_xy()
+    local = (xy - pose[:2]) @ np.array([[np.cos(0.3), -np.sin(0.3)], [np.sin(0.3), np.cos(0.3)]])
+    assert np.abs(local[:, 0]).max() == pytest.approx(0.25, abs=1e-6)  # half length + clearance
+    assert np.abs(local[:, 1]).max() == pytest.approx(0.15, abs=1e-6)
+    assert ring.get_linestyle() == "--" and not ring.get_fill()
+    assert _clearance_outline(box, pose, 0.0) is None
+    disc = _scene(DOOR)
+    assert _clearance_outline(disc, pose[:2], 0.05).get_radius() == pytest.approx(0.25)
+    wps = np.array([[0.0, 0.5, 1.5], [5.0, 5.5, 1.5]])
+    a, b = tmp_path / "a.png", tmp_path / "b.png"
+    render(disc, a, trajectory=wps)
+    render(disc.with_clearances(0.0), b, trajectory=wps)
+    assert a.read_bytes() != b.read_bytes()
