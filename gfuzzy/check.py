@@ -8,6 +8,12 @@ of the robot's fastest point plus the fastest mover, L; an interval ``[a, b]`` w
 bisected. Times at which a mover appears or vanishes are evaluated exactly. An interval
 still undecided below ``min_interval`` seconds is a touching contact, which the contract
 allows.
+
+Clearances: the distance to static obstacles is measured against ``robot.clearance`` and
+the distance to movers against ``robot.mover_clearance`` (the bounds without one): every
+clearance below is the distance minus the distance required, so the same argument proves
+that the required distances are kept at every instant. With a query's ``hold`` the goal
+pose is checked from the last row until ``hold`` seconds after it as a wait.
 """
 
 from __future__ import annotations
@@ -34,7 +40,8 @@ class CheckReport:
     reason : str
         Why not, naming the time and what was hit; empty when valid.
     min_clearance : float
-        Smallest clearance evaluated (to bounds, static obstacles and movers).
+        Smallest clearance evaluated (to bounds, static obstacles and movers), above the
+        required distance (``robot.clearance``, ``robot.mover_clearance``) where there is one.
     max_speed : float
         Largest configuration speed between rows.
     evaluations : int
@@ -62,6 +69,8 @@ class _World:
     def __init__(self, scene: Scene):
         self.scene = scene
         self.robot = scene.robot
+        self.keep_static = float(scene.robot.clearance)
+        self.keep_mover = float(scene.robot.mover_clearance)
         polys = []
         self.discs = []
         for ob in scene.obstacles:
@@ -118,10 +127,10 @@ class _World:
         parts = [self.bounds_clearance(poses)]
         names = ["the bounds"]
         if self.static is not None:
-            parts.append(self._shape_distance(geoms, self.static, True))
+            parts.append(self._shape_distance(geoms, self.static, True) - self.keep_static)
             names.append("a static obstacle")
         for center, radius in self.discs:
-            parts.append(self._shape_distance(geoms, shapely.Point(center), False) - radius)
+            parts.append(self._shape_distance(geoms, shapely.Point(center), False) - radius - self.keep_static)
             names.append(f"the static disc at {center.tolist()}")
         for mv in self.scene.movers:
             xy, present = mv.state(times)
@@ -145,7 +154,7 @@ class _World:
                     if np.any(zero):
                         area = shapely.area(shapely.intersection(geoms[zero], boxes[zero]))
                         d[zero] = np.where(area > 1e-12, -area, 0.0)
-            parts.append(np.where(present, d, np.inf))
+            parts.append(np.where(present, d - self.keep_mover, np.inf))
             names.append(f"mover {mv.name!r}")
         stack = np.vstack(parts)
         which = np.argmin(stack, axis=0)
@@ -211,13 +220,13 @@ class _World:
                 if np.any(zero):
                     area = shapely.area(shapely.intersection(swept[zero], self.static))
                     d[zero] = np.where(area > 1e-12, -area, 0.0)
-            take(d, "a static obstacle")
+            take(d - self.keep_static, "a static obstacle")
         for center, radius in self.discs:
             if disc:
                 d = _segment_point_distance(pa, pb, center) - r - radius
             else:
                 d = shapely.distance(swept, shapely.Point(center)) - radius
-            take(d, f"the static disc at {center.tolist()}")
+            take(d - self.keep_static, f"the static disc at {center.tolist()}")
         for mv in self.scene.movers:
             ma, pres_a = mv.state(ta)
             mb, pres_b = mv.state(tb)
@@ -248,7 +257,7 @@ class _World:
                 if np.any(zero):
                     area = shapely.area(shapely.intersection(hull[zero], body[zero]))
                     d[zero] = np.where(area > 1e-12, -area, 0.0)
-            d = np.where(present, d, np.inf)
+            d = np.where(present, d - self.keep_mover, np.inf)
             d = np.where(straight | ~present, d, np.nan)
             nan = np.isnan(d)
             take(np.where(nan, np.inf, d), f"mover {mv.name!r}")
@@ -326,6 +335,11 @@ def check_trajectory(
             return CheckReport(False, f"first row {w[0, 1:].tolist()} is not the start {list(query.start)}", time=float(t[0]))
         if not _pose_equal(w[-1, 1:], query.goal):
             return CheckReport(False, f"last row {w[-1, 1:].tolist()} is not the goal {list(query.goal)}", time=float(t[-1]))
+        hold = float(getattr(query, "hold", 0.0) or 0.0)
+        if hold > 0:  # the robot parks at the goal: the rows end with a wait of `hold`
+            w = np.vstack([w, np.r_[t[-1] + hold, w[-1, 1:]]])
+            t = w[:, 0]
+            dt = np.diff(t)
 
     # speed: the first segment over vmax (the report is the first violation in time, so a
     # collision found before it below takes its place)
@@ -351,6 +365,14 @@ def check_trajectory(
 
     world = _World(scene)
 
+    def hit(name: str, d: float, when: str) -> str:
+        """What a negative clearance means: a collision, or a required distance missed."""
+        keep = 0.0 if name == "the bounds" else world.keep_mover if name.startswith("mover") else world.keep_static
+        if keep > 0 and d + keep >= -tol:
+            which = "robot.mover_clearance" if name.startswith("mover") else "robot.clearance"
+            return f"comes within {d + keep:.3g} m of {name} {when}, closer than {which}={keep:g}"
+        return f"collides with {name} {when} (penetration {-(d + keep):.3g})"
+
     def pose_at(times, seg_idx):
         f = (times - t[seg_idx]) / dt[seg_idx] if len(dt) else np.zeros_like(times)
         a = p[seg_idx] if len(dt) else np.repeat(p[:1], len(times), 0)
@@ -364,7 +386,7 @@ def check_trajectory(
     if len(dt) == 0:
         d, names = world.clearance(p[:1], t[:1])
         if d[0] < -tol:
-            return CheckReport(False, f"collides with {names[0]} at t={float(t[0])!r}", float(d[0]), 0.0, 1, float(t[0]))
+            return CheckReport(False, hit(names[0], float(d[0]), f"at t={float(t[0])!r}"), float(d[0]), 0.0, 1, float(t[0]))
         return CheckReport(True, "", float(d[0]), 0.0, 1)
 
     # initial samples: every row and every time a mover appears or vanishes
@@ -392,7 +414,7 @@ def check_trajectory(
     bad = np.nonzero(d < -tol)[0]  # times are sorted: the first is the earliest
     if bad.size:
         k = int(bad[0])
-        found(times[k], f"collides with {names[k]} at t={float(times[k])!r} (penetration {-d[k]:.3g})")
+        found(times[k], hit(names[k], float(d[k]), f"at t={float(times[k])!r}"))
     # Intervals between consecutive samples; each lies within one segment. Every interval
     # is decided or bisected until none is left that begins before the earliest violation
     # found so far: the report is the first violation in time, not the first one met.
@@ -426,8 +448,7 @@ def check_trajectory(
                 min_clear = min(min_clear, float(ex[k]))
                 found(
                     a_t[idx[k]],
-                    f"collides with {ex_names[k]} between t={float(a_t[idx[k]])!r} and "
-                    f"t={float(b_t[idx[k]])!r} (penetration {-ex[k]:.3g})",
+                    hit(ex_names[k], float(ex[k]), f"between t={float(a_t[idx[k]])!r} and t={float(b_t[idx[k]])!r}"),
                 )
             if decided.any():
                 min_clear = min(min_clear, float(np.nanmin(ex)))
@@ -449,7 +470,7 @@ def check_trajectory(
         bad = np.nonzero(m_d < -tol)[0]
         if bad.size:
             k = int(bad[np.argmin(m_t[bad])])
-            found(m_t[k], f"collides with {m_names[k]} at t={float(m_t[k])!r} (penetration {-m_d[k]:.3g})")
+            found(m_t[k], hit(m_names[k], float(m_d[k]), f"at t={float(m_t[k])!r}"))
         a_t, b_t = np.concatenate([a_t, m_t]), np.concatenate([m_t, b_t])
         a_d, b_d = np.concatenate([a_d, m_d]), np.concatenate([m_d, b_d])
         a_s = np.concatenate([a_s, a_s])

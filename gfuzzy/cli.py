@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 from .errors import SceneError
@@ -78,6 +79,14 @@ def _roadmap_for(scene, args, quiet=False):
     found = _default_roadmap(scene, quiet)
     if found is not None:
         return found
+    same_shapes = _roadmap_of_other_clearance(scene)
+    if same_shapes is not None:  # --clearance: the saved roadmap's options, the new clearance
+        if not quiet:
+            _say(
+                f"note: robot.clearance={scene.robot.clearance:g} changes the roadmap; building one "
+                f"like the saved one ({same_shapes.vertices} vertices, seed {same_shapes.seed})"
+            )
+        return build_roadmap(scene, same_shapes, progress=_progress("roadmap"))
     if not quiet:
         _say(
             f"note: no roadmap file for {scene.name!r}; building one with "
@@ -101,6 +110,24 @@ def _check_roadmap_flags(args) -> None:
         raise BadInput(f"-n/--seed: {exc}") from None
 
 
+def _roadmap_of_other_clearance(scene):
+    """The options of a saved roadmap built for the same shapes with another static
+    clearance (a ``--clearance`` override), or None."""
+    from .roadmap import default_roadmap_path, load_roadmap
+
+    if not scene.shape_hash:
+        return None
+    scene_dir = Path(scene.source).resolve().parent
+    for path in (default_roadmap_path(scene), default_roadmap_path(scene, scene_dir.parent / "roadmaps")):
+        try:
+            rm = load_roadmap(path) if path.is_file() else None
+        except SceneError:
+            continue
+        if rm is not None and rm.scene_hash == scene.shape_hash:
+            return rm.options
+    return None
+
+
 def _default_roadmap(scene, quiet=False):
     """The roadmap file built for ``scene`` in roadmaps/ (here, or beside the scene's
     folder), if there is one that matches it."""
@@ -112,9 +139,40 @@ def _default_roadmap(scene, quiet=False):
             try:
                 return load_roadmap(path, scene)
             except SceneError as exc:
-                if not quiet:
+                if not quiet and not _clearance_only(path, scene):
                     _say(f"note: not using {path}: {exc.message}")
     return None
+
+
+def _apply_overrides(scene, args):
+    """The scene with the command line's robot overrides (``--clearance``,
+    ``--mover-clearance``) applied; the scene itself when there are none.
+
+    A new static clearance changes the scene's static hash, so a saved roadmap built
+    without it no longer matches and another is built (said on stderr).
+    """
+    clearance = getattr(args, "clearance", None)
+    mover_clearance = getattr(args, "mover_clearance", None)
+    if clearance is None and mover_clearance is None:
+        return scene
+    for flag, value in (("--clearance", clearance), ("--mover-clearance", mover_clearance)):
+        if value is not None and not (math.isfinite(value) and value >= 0):
+            raise BadInput(f"{flag}: must be a non-negative finite number, got {value:g}")
+    try:
+        return scene.with_clearances(clearance, mover_clearance)
+    except ValueError as exc:
+        raise BadInput(f"--clearance/--mover-clearance: {exc}") from None
+
+
+def _clearance_only(path, scene) -> bool:
+    """True when the roadmap file at ``path`` differs from ``scene`` only by the static
+    clearance (said once, by :func:`_roadmap_for`)."""
+    from .roadmap import load_roadmap
+
+    try:
+        return bool(scene.shape_hash) and load_roadmap(path).scene_hash == scene.shape_hash
+    except SceneError:
+        return False
 
 
 def _plan_options(args):
@@ -198,24 +256,37 @@ def _query_from_args(scene, args):
         t0 = args.t0 if args.t0 is not None else 0.0
         if not math.isfinite(t0):
             raise BadInput("--t0: must be finite")
-        return Query("cli", tuple(start), tuple(goal), t0)
+        return Query("cli", tuple(start), tuple(goal), t0, hold=_hold(args, 0.0))
     if args.t0 is not None:
         raise BadInput("gfuzzy plan: --t0 goes with --start/--goal (a scene query has its own t0)")
     if args.query:
         try:
-            return scene.query(args.query)
+            q = scene.query(args.query)
         except KeyError as exc:
             raise BadInput(f"{scene.source}: queries: {exc.args[0]}") from None
-    if not scene.queries:
+    elif not scene.queries:
         raise BadInput(f"{scene.source}: queries: the scene has no queries; give --start and --goal")
-    return scene.queries[0]
+    else:
+        q = scene.queries[0]
+    hold = _hold(args, q.hold)
+    return q if hold == q.hold else replace(q, hold=hold)
+
+
+def _hold(args, default: float) -> float:
+    """``--hold`` (seconds parked at the goal), or the query's own."""
+    hold = getattr(args, "hold", None)
+    if hold is None:
+        return default
+    if not (math.isfinite(hold) and hold >= 0):
+        raise BadInput(f"--hold: must be a non-negative finite number, got {hold:g}")
+    return float(hold)
 
 
 def cmd_plan(args) -> int:
     from .geometry import StaticGeometry
     from .planner import Planner, PlanResult, Status, query_problem
 
-    scene = _load_scene(args.scene)
+    scene = _apply_overrides(_load_scene(args.scene), args)
     query = _query_from_args(scene, args)
     out = _out_path(args.output, (".json", ".csv")) if args.output else None
     options = _plan_options(args)
@@ -225,7 +296,7 @@ def cmd_plan(args) -> int:
     else:
         roadmap = _roadmap_for(scene, args)
         try:
-            result = Planner(scene, roadmap).plan(query.start, query.goal, query.t0, options)
+            result = Planner(scene, roadmap).plan(query.start, query.goal, query.t0, options, hold=query.hold)
         except ValueError as exc:  # a request beyond the memory bounds (dt far too fine)
             raise BadInput(f"gfuzzy plan: {exc}") from None
     tf = result.to_file(scene.name, query.name)
@@ -287,7 +358,7 @@ def cmd_check(args) -> int:
     from .check import check_trajectory
     from .trajectory import load_trajectory
 
-    scene = _load_scene(args.scene)
+    scene = _apply_overrides(_load_scene(args.scene), args)
     tf = load_trajectory(args.trajectory)
     if tf.status != "solved":
         _say(f"{args.trajectory}: status is {tf.status}: there is no trajectory to check")
@@ -301,6 +372,12 @@ def cmd_check(args) -> int:
     if tf.scene and tf.scene != scene.name:
         _say(f"note: {args.trajectory} was planned for scene {tf.scene!r}, checking against {scene.name!r}")
     _rows_fit(scene, tf, args.trajectory)
+    if args.hold is not None:  # park at the last row (an ad-hoc query has no hold of its own)
+        from .scene import Query
+
+        w = tf.waypoints
+        base = query or Query("adhoc", tuple(w[0, 1:]), tuple(w[-1, 1:]), float(w[0, 0]))
+        query = replace(base, hold=_hold(args, base.hold))
     rep = check_trajectory(scene, tf.waypoints, query)
     if rep.valid and tf.duration is not None:
         actual = float(tf.waypoints[-1, 0] - tf.waypoints[0, 0])
@@ -352,7 +429,7 @@ def cmd_render(args) -> int:
     from .roadmap import load_roadmap
     from .trajectory import load_trajectory
 
-    scene = _load_scene(args.scene)
+    scene = _apply_overrides(_load_scene(args.scene), args)
     out = _out_path(args.output, (".png", ".gif"))
     traj = None
     if args.trajectory:
@@ -390,7 +467,7 @@ def cmd_render(args) -> int:
 def cmd_regress(args) -> int:
     from .regress import run_regression
 
-    scenes = [_load_scene(p) for p in args.scenes]  # all bad input first, before any work
+    scenes = [_apply_overrides(_load_scene(p), args) for p in args.scenes]  # all bad input first
     options = _plan_options(args)
     _check_roadmap_flags(args)  # before the table's header: bad input prints nothing else
     try:
@@ -497,6 +574,13 @@ def _parser() -> argparse.ArgumentParser:
         q.add_argument("--ga-seed", type=int, default=0, help="seed of the GA refinement (default 0)")
         q.add_argument("--stretch", type=float, default=1.05,
                        help="search the roadmap's spanner of this stretch (default 1.05; 1 = the whole roadmap)")  # fmt: skip
+        clearance_flags(q)
+
+    def clearance_flags(q):
+        q.add_argument("--clearance", type=float, metavar="C",
+                       help="distance kept from static obstacles, m (overrides robot.clearance; another roadmap)")  # fmt: skip
+        q.add_argument("--mover-clearance", type=float, metavar="C",
+                       help="distance kept from every mover, m (overrides robot.mover_clearance)")  # fmt: skip
 
     q = sub.add_parser("plan", help="answer one query")
     q.add_argument("scene", metavar="SCENE")
@@ -506,6 +590,8 @@ def _parser() -> argparse.ArgumentParser:
     q.add_argument("--start", nargs="+", metavar="X", help="start pose: X Y (disc) or X Y H (box)")
     q.add_argument("--goal", nargs="+", metavar="X", help="goal pose")
     q.add_argument("--t0", type=float, help="departure time with --start/--goal (default 0)")
+    q.add_argument("--hold", type=float, metavar="SECONDS",
+                   help="park at the goal this long; it must stay safe (default: the query's hold, or 0)")  # fmt: skip
     q.add_argument("-o", "--output", metavar="OUT",
                    help="trajectory file: OUT.json, or OUT.csv (+ OUT.json); the JSON is written whatever the status, "
                         "an unsolved answer removes an older OUT.csv; stderr names the files written or removed")  # fmt: skip
@@ -514,6 +600,9 @@ def _parser() -> argparse.ArgumentParser:
     c = sub.add_parser("check", help="check a trajectory against the contract's guarantees")
     c.add_argument("scene", metavar="SCENE")
     c.add_argument("trajectory", metavar="TRAJ.json")
+    clearance_flags(c)
+    c.add_argument("--hold", type=float, metavar="SECONDS",
+                   help="the goal pose must stay safe this long after the last row (default: the query's hold)")  # fmt: skip
     c.set_defaults(func=cmd_check)
 
     d = sub.add_parser("render", help="draw a scene (and a trajectory): PNG picture or GIF animation")
@@ -523,6 +612,7 @@ def _parser() -> argparse.ArgumentParser:
     d.add_argument("--roadmap", metavar="FILE", help="draw this roadmap (PNG; default: the scene's roadmaps/<name>.json if there is one)")
     d.add_argument("--no-roadmap", action="store_true", help="do not draw a roadmap")
     d.add_argument("--speed", action="store_true", help="colour the path by speed (PNG and GIF)")
+    clearance_flags(d)
     d.set_defaults(func=cmd_render)
 
     g = sub.add_parser("regress", help="answer and check every query of every scene")

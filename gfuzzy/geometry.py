@@ -145,6 +145,10 @@ class StaticGeometry:
     Parameters
     ----------
     scene : Scene
+        Its ``robot.clearance`` c is kept from static obstacles: every clearance reported
+        here is the distance to the nearest obstacle minus c (the bounds are measured
+        without it), so "valid" means at least c from every obstacle, and certified
+        motions keep that distance at every pose.
 
     Attributes
     ----------
@@ -158,6 +162,7 @@ class StaticGeometry:
         self.scene = scene
         self.robot = scene.robot
         self.r = scene.robot.circumradius
+        self.keep = float(scene.robot.clearance)  # distance kept from static obstacles
         self._objects = static_objects(scene)
         self._manager = fcl.DynamicAABBTreeCollisionManager()
         if self._objects:
@@ -227,7 +232,7 @@ class StaticGeometry:
         """Clearance of one pose from static obstacles and bounds (see :meth:`clearance`)."""
         c = self._bounds_clearance1(pose)
         if c > 0:
-            c = min(c, self.obstacle_clearance(pose))
+            c = min(c, self.obstacle_clearance(pose) - self.keep)
         return c
 
     # ---- single pose (OMPL callback path)
@@ -238,6 +243,8 @@ class StaticGeometry:
             return False
         if not self._objects:
             return True
+        if self.keep > 0:  # a distance, not a collision test, decides the clearance
+            return self.obstacle_clearance(pose) >= self.keep
         self._place(pose)
         data = fcl.CollisionData(request=self._creq)
         self._manager.collide(self._robot_obj, data, fcl.defaultCollisionCallback)
@@ -295,6 +302,7 @@ class StaticGeometry:
         -------
         (n,) float
             Positive: free by that margin; 0 touching; negative: colliding or outside.
+            Obstacles count as grown by the robot's clearance (``robot.clearance``).
         """
         poses = np.atleast_2d(np.asarray(poses, dtype=float))
         return np.array([self.clearance1(p) for p in poses], dtype=float)

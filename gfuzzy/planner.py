@@ -29,7 +29,16 @@ if TYPE_CHECKING:  # the stages' modules load only when a stage runs
     from .fuzzy import RuleBase
     from .ga import GAOptions
 
-__all__ = ["Status", "PlanOptions", "PlanResult", "Planner", "plan", "query_problem", "check_pose"]
+__all__ = [
+    "Status",
+    "PlanOptions",
+    "PlanResult",
+    "Planner",
+    "plan",
+    "query_problem",
+    "check_pose",
+    "settle_time",
+]
 
 log = logging.getLogger(__name__)
 
@@ -63,8 +72,9 @@ class PlanOptions:
     dt : float
         Time step of the search (the paper's 0.07).
     horizon : float or None
-        Longest trajectory considered, in seconds after t0; None picks
-        ``60 + 10 * roadmap distance / vmax``.
+        Longest trajectory considered, in seconds after t0 (a query's ``hold`` comes on
+        top); None picks ``60 + 10 * roadmap distance / vmax``, plus the time until the
+        movers' behaviour stops changing (:func:`settle_time`).
     time_limit : float
         Planning-time budget in seconds; past it the answer is ``timeout``.
     connect_k : int
@@ -362,7 +372,9 @@ class Planner:
         return graph, s_id, g_id, float(dist[s_id])
 
     # ---------------------------------------------------------------- query
-    def plan(self, start, goal, t0: float = 0.0, options: PlanOptions | None = None) -> PlanResult:
+    def plan(
+        self, start, goal, t0: float = 0.0, options: PlanOptions | None = None, hold: float = 0.0
+    ) -> PlanResult:
         """Answer one query.
 
         Parameters
@@ -372,13 +384,19 @@ class Planner:
         t0 : float
             Departure time.
         options : PlanOptions, optional
+        hold : float
+            Seconds the robot then parks at the goal (a query's ``hold``): the goal pose
+            keeps the guarantees from the arrival until ``hold`` after it; the answer
+            arrives later if it must.
 
         Returns
         -------
         PlanResult
-            ``invalid_query`` when a well-formed start or goal collide with a static obstacle, lie out
-            of bounds, or the start overlaps a mover at t0; ``no_path`` when no safe
-            trajectory exists on the roadmap within the horizon; ``timeout`` when the
+            ``invalid_query`` when a well-formed start or goal collide with a static obstacle (or lie
+            closer than ``robot.clearance`` to one), lie out of bounds, or the start is
+            closer than ``robot.mover_clearance`` to a mover at t0 (overlaps it, when 0);
+            ``no_path`` when no safe trajectory exists on the roadmap within the horizon
+            (the message says when the horizon cut the search); ``timeout`` when the
             planning budget ran out.
 
         Raises
@@ -388,6 +406,10 @@ class Planner:
             or goal that is not ``dof`` finite numbers, or a non-finite ``t0``.
         """
         opts = options or PlanOptions()
+        hold = float(hold)
+        if not (math.isfinite(hold) and hold >= 0):
+            raise ValueError(f"hold must be a non-negative number, got {hold!r}")
+        hold_steps = int(math.ceil(hold / opts.dt - 1e-9)) if hold > 0 else 0
         t_begin = time.perf_counter()
         deadline = t_begin + opts.time_limit
         robot = self.robot
@@ -418,12 +440,20 @@ class Planner:
                 "start and goal are not connected on the roadmap (sealed off, or the roadmap is too sparse)",
                 nodes=len(graph.poses),
             )
-        max_horizon = opts.horizon if opts.horizon is not None else 60.0 + 10.0 * rd / vmax
+        auto = opts.horizon is None
+        if auto:
+            max_horizon = 60.0 + 10.0 * rd / vmax + settle_time(self.scene, t0)
+            # never more than the movers can be sampled over (a default must not fail)
+            if self.scene.movers:
+                cap = (MAX_MOVER_SAMPLES // len(self.scene.movers) - 1 - hold_steps) * opts.dt
+                max_horizon = max(min(max_horizon, cap), opts.dt)
+        else:
+            max_horizon = opts.horizon
         # Grow the horizon by doubling the slack above the static lower bound: safety is
         # only computed for times a node can still matter at (from_start .. horizon - h),
         # so a horizon close to the answer keeps that window, and the work, small.
         h0 = float(graph.heuristic[s_id])
-        max_steps = int(math.ceil(max_horizon / opts.dt))
+        max_steps = int(math.ceil(max_horizon / opts.dt)) + hold_steps  # the parking comes on top
         # First slack: with few movers the search dominates the cost and a second run
         # would double it, so start generously; with many, the movers' safety dominates,
         # it grows with the slack, and a rerun reuses it (IntervalStore): start tight.
@@ -431,8 +461,8 @@ class Planner:
         store = IntervalStore(graph)  # safety computed once, kept as the horizon grows
         expansions = evaluations = 0
         while True:
-            steps = min(max_steps, int(math.ceil(h0 + slack)))
-            horizon = steps * opts.dt
+            steps = min(max_steps, int(math.ceil(h0 + slack)) + hold_steps)
+            horizon = (steps - hold_steps) * opts.dt
             if len(self.scene.movers) * (steps + 1) > MAX_MOVER_SAMPLES:
                 raise ValueError(
                     f"{len(self.scene.movers)} movers over {steps:,} time steps are too many to "
@@ -443,7 +473,17 @@ class Planner:
                 hit = field_.collides_at(start, 0)
                 if hit is not None:
                     return answer("invalid_query", f"start collides with mover {hit!r} at t0={t0:g}", rd=rd)
-            res = sipp(graph, field_, s_id, g_id, deadline=deadline, weight=opts.weight, store=store)
+                keep = robot.mover_clearance
+                hit = field_.collides_at(start, 0, keep) if keep > 0 else None
+                if hit is not None:
+                    return answer(
+                        "invalid_query",
+                        f"start is closer than robot.mover_clearance={keep:g} to mover {hit!r} at t0={t0:g}",
+                        rd=rd,
+                    )
+            res = sipp(
+                graph, field_, s_id, g_id, deadline=deadline, weight=opts.weight, store=store, goal_hold=hold_steps
+            )
             expansions += res.expansions
             evaluations += field_.evaluations
             if res.status != "no_path" or not res.horizon_hit or steps >= max_steps:
@@ -457,8 +497,14 @@ class Planner:
             "mover_evaluations": evaluations,
             "horizon": horizon,
         }
+        if hold_steps:
+            stats["hold"] = hold
         if res.status == "no_path" and res.horizon_hit:
-            res.message = f"no safe trajectory within the planning horizon of {horizon:g} s"
+            res.message = (
+                f"no safe trajectory within the planning horizon of {horizon:g} s"
+                + (f" (+ the hold of {hold:g} s)" if hold_steps else "")
+                + "; the horizon cut the search: a longer one (--horizon, PlanOptions.horizon) may find one"
+            )
         if res.status != "solved":
             return answer(res.status, res.message, rd=rd, **stats)
         traj = Trajectory(timed_rows(res.nodes, res.steps, graph.poses, t0, opts.dt)[0], robot.circumradius)
@@ -467,7 +513,7 @@ class Planner:
         if opts.refine or opts.speed_layer:
             from .stages import apply_stages
 
-            result = apply_stages(self, result, start, goal, t0, opts, t_begin)
+            result = apply_stages(self, result, start, goal, t0, opts, t_begin, hold=hold)
         # headings are wrapped inside; the first and last rows give the query's own numbers
         wps = result.trajectory.waypoints.copy()
         wps[0, 1:], wps[-1, 1:] = ends
@@ -504,9 +550,42 @@ def query_problem(geometry: StaticGeometry, start, goal) -> str:
             return f"{label} must be {dof} finite numbers"
         if geometry.bounds_clearance(pose[None])[0] < 0:
             return f"{label} {pose.tolist()} is out of bounds"
+        keep = geometry.robot.clearance
+        if keep > 0 and geometry.clearance1(pose) < 0:
+            if geometry.obstacle_clearance(pose) < 0:
+                return f"{label} {pose.tolist()} collides with a static obstacle"
+            return f"{label} {pose.tolist()} is closer than robot.clearance={keep:g} to a static obstacle"
         if geometry.clearance1(pose) < 0:
             return f"{label} {pose.tolist()} collides with a static obstacle"
     return ""
+
+
+def settle_time(scene: Scene, t0: float = 0.0) -> float:
+    """Seconds after ``t0`` until the movers' behaviour stops changing, plus one period.
+
+    After every ``once`` mover has stopped and every ``trajectory`` mover has left, the
+    world only repeats: loop and bounce movers are periodic. A query whose answer must
+    wait for a door to clear needs a horizon past that time; one more longest period
+    covers a full cycle of each periodic mover after it.
+
+    Returns
+    -------
+    float
+        0 without movers or when nothing changes after ``t0`` but periodic motion with
+        no period (speed 0).
+    """
+    settle = 0.0
+    period = 0.0
+    for mv in scene.movers:
+        if mv.trajectory is not None:
+            settle = max(settle, float(mv.trajectory[-1, 0]) - t0)
+        elif mv.mode == "once":
+            if mv.speed > 0:
+                length = float(mv._cumlen[-1])
+                settle = max(settle, (length - mv.offset) / mv.speed - t0)
+        elif math.isfinite(mv.period):
+            period = max(period, mv.period)
+    return max(settle, 0.0) + period
 
 
 def plan(
@@ -516,6 +595,7 @@ def plan(
     goal,
     t0: float = 0.0,
     options: PlanOptions | None = None,
+    hold: float = 0.0,
 ) -> PlanResult:
     """Answer one query (see :meth:`Planner.plan`); builds a :class:`Planner` each call."""
-    return Planner(scene, roadmap).plan(start, goal, t0, options)
+    return Planner(scene, roadmap).plan(start, goal, t0, options, hold=hold)

@@ -55,7 +55,7 @@ def regress_scene(scene: Scene, roadmap, options: PlanOptions | None = None) -> 
     planner = Planner(scene, roadmap)
     rows = []
     for q in scene.queries:
-        res = planner.plan(q.start, q.goal, q.t0, options)
+        res = planner.plan(q.start, q.goal, q.t0, options, hold=q.hold)
         problems = []
         valid = None
         if res.solved:

@@ -351,6 +351,24 @@ def _footprint(scene: Scene, pose, **kw):
     return PolygonPatch(scene.robot.corners(np.asarray(pose)[None, :3])[0], closed=True, **kw)
 
 
+def _inflated_xy(scene: Scene, pose, margin: float) -> FloatArray:
+    """(k, 2): outline of the robot at ``pose`` grown by ``margin`` (rounded corners)."""
+    import shapely
+
+    corners = scene.robot.corners(np.asarray(pose)[None, :3])[0]
+    return np.asarray(shapely.Polygon(corners).buffer(margin, quad_segs=4).exterior.coords)
+
+
+def _clearance_outline(scene: Scene, pose, margin: float, **kw):
+    """A dashed-outline patch of the robot grown by a clearance (None when it is 0)."""
+    if margin <= 0:
+        return None
+    kw = {"fill": False, "ls": "--", "lw": 0.8, **kw}
+    if scene.robot.shape == "disc":
+        return Circle(pose[:2], scene.robot.radius + margin, **kw)
+    return PolygonPatch(_inflated_xy(scene, pose, margin), closed=True, **kw)
+
+
 def _heading_tick(scene: Scene, pose) -> FloatArray:
     """(2, 2): centre to front of a box robot."""
     half = 0.5 * scene.robot.size[0]
@@ -462,6 +480,12 @@ def _draw_trajectory(ax, fig, scene: Scene, wp: FloatArray, speed, footprints: i
         if scene.robot.shape == "box":
             tick = _heading_tick(scene, pose)
             ax.plot(tick[:, 0], tick[:, 1], color=ROBOT_COLOR, lw=1.0, zorder=4.6)
+        # the clearances kept: from static obstacles (dashed), from movers (dotted)
+        for margin, ls, what in ((scene.robot.clearance, "--", "static"), (scene.robot.mover_clearance, ":", "mover")):
+            ring = _clearance_outline(scene, pose, margin, ec=ROBOT_COLOR, ls=ls, zorder=4.5,
+                                      label=f"{what} clearance {margin:g} m" if k == 0 else None)  # fmt: skip
+            if ring is not None:
+                ax.add_patch(ring)
 
     # time stamps every `step` seconds
     step = _nice_step(t1 - t0)
@@ -667,6 +691,8 @@ def _legend_rows(scene: Scene, roadmap, wp) -> int:
     movers = len(scene.movers) if len(scene.movers) <= MAX_LEGEND_MOVERS else 2
     n = 1 + movers + (1 if roadmap is not None else 0) + (2 if scene.queries else 0)
     n += 3 if wp is not None else 0
+    if wp is not None:  # the clearance outlines
+        n += (scene.robot.clearance > 0) + (scene.robot.mover_clearance > 0)
     return math.ceil(n / 3)
 
 
@@ -896,6 +922,13 @@ def render_animation(
         robot.set_animated(True)
         ax.add_patch(robot)
         dynamic += [trail, robot]
+        # the larger clearance kept, as a dashed outline that moves with the robot
+        keep = max(scene.robot.clearance, scene.robot.mover_clearance)
+        ring = _clearance_outline(scene, poses[0], keep, ec="black", zorder=6)
+        if ring is not None:
+            ring.set_animated(True)
+            ax.add_patch(ring)
+            dynamic.append(ring)
         if scene.robot.shape == "box":
             tick = Line2D([], [], color="white", lw=1.5, zorder=6.1, animated=True)
             ax.add_line(tick)
@@ -942,6 +975,10 @@ def render_animation(
             else:
                 robot.set_xy(scene.robot.corners(pose[None, :3])[0])
                 tick.set_data(*_heading_tick(scene, pose).T)
+            if ring is not None and scene.robot.shape == "disc":
+                ring.set_center(pose[:2])
+            elif ring is not None:
+                ring.set_xy(_inflated_xy(scene, pose, keep))
         clock.set_text(f"t = {t:6.2f} s")
         for artist in dynamic:
             ax.draw_artist(artist)

@@ -97,6 +97,7 @@ def retime_path(
     horizon: float,
     wait_at: FloatArray | None = None,
     deadline: float = math.inf,
+    hold: float = 0.0,
 ) -> RetimeResult:
     """Earliest safe timing of ``path`` departing at ``t0``.
 
@@ -113,6 +114,8 @@ def retime_path(
         always allowed.
     deadline : float
         ``time.perf_counter()`` value past which the answer is ``timeout``.
+    hold : float
+        Seconds the goal pose must stay safe after the arrival (a query's ``hold``).
 
     Returns
     -------
@@ -124,7 +127,7 @@ def retime_path(
     robot = scene.robot
     step = robot.vmax * SPEED_SAFETY * dt
     poses, s = chain_points(path, robot.circumradius, step)
-    return _search_chain(scene, poses, s, t0, dt, horizon, wait_at, deadline)
+    return _search_chain(scene, poses, s, t0, dt, horizon, wait_at, deadline, hold=hold)
 
 
 def _metric_profile(path, circumradius, s_xy, v_xy, vmax, amax, ds=0.02):
@@ -210,6 +213,7 @@ def retime_profile(
     horizon: float,
     deadline: float = math.inf,
     max_rounds: int = 5,
+    hold: float = 0.0,
 ) -> ProfileRetime:
     """Time a path under a speed profile and an acceleration bound, among the movers.
 
@@ -225,6 +229,8 @@ def retime_profile(
         Statically free path.
     s_xy, v_xy : (k,) float
         Speed bound along the xy arc length (from :func:`gfuzzy.fuzzy.speed_limit`).
+    hold : float
+        Seconds the goal pose must stay safe after the arrival.
     """
     from .fuzzy import limit_acceleration, profile_times
     from .planner import SPEED_SAFETY
@@ -252,7 +258,8 @@ def retime_profile(
         # near a stop the robot crawls: waiting at any point within amax dt^2 / 2 of it
         # (where it moves at most amax dt) keeps the speed changes within amax dt
         res = _search_chain(
-            scene, poses, s, t0, dt, horizon, wait_at, deadline, (path, cum_m, corners, times), 0.5 * amax * dt**2
+            scene, poses, s, t0, dt, horizon, wait_at, deadline, (path, cum_m, corners, times), 0.5 * amax * dt**2,
+            hold=hold,
         )
         if res.status == "solved":
             return ProfileRetime("solved", res.trajectory, waits=stops, profile_duration=duration)
@@ -260,7 +267,7 @@ def retime_profile(
         if res.status == "timeout":
             break
         # where would the robot need to stop? search again allowing waits anywhere
-        free = _search_chain(scene, poses, s, t0, dt, horizon, None, deadline, (path, cum_m, corners, times))
+        free = _search_chain(scene, poses, s, t0, dt, horizon, None, deadline, (path, cum_m, corners, times), hold=hold)
         if free.status != "solved" or not free.waits:
             message = free.message or message
             break
@@ -281,7 +288,7 @@ def retime_profile(
 
 
 def _search_chain(
-    scene, poses, s, t0, dt, horizon, wait_at, deadline, corners=None, wait_tol=0.0
+    scene, poses, s, t0, dt, horizon, wait_at, deadline, corners=None, wait_tol=0.0, hold=0.0
 ) -> RetimeResult:
     """The safe-interval search on a chain of points one step apart.
 
@@ -293,7 +300,8 @@ def _search_chain(
     """
     robot = scene.robot
     m = len(poses)
-    if m == 1:
+    hold_steps = int(math.ceil(hold / dt - 1e-9)) if hold > 0 else 0
+    if m == 1 and hold_steps == 0:
         return RetimeResult("solved", Trajectory(np.array([[t0, *poses[0]]]), robot.circumradius))
     indptr = np.arange(m + 1, dtype=np.int64)
     indptr[-1] = m - 1
@@ -310,9 +318,9 @@ def _search_chain(
     graph = SpaceTimeGraph(
         poses, indptr, nbrs, heur, can_wait=can_wait, groups=groups, from_start=np.arange(m, dtype=float)
     )
-    steps = int(math.ceil(horizon / dt))
+    steps = int(math.ceil(horizon / dt)) + hold_steps
     field_ = MoverField(scene, t0, dt, steps, robot.vmax)
-    res = sipp(graph, field_, 0, m - 1, deadline=deadline)
+    res = sipp(graph, field_, 0, m - 1, deadline=deadline, goal_hold=hold_steps)
     if res.status != "solved":
         return RetimeResult(res.status, None, res.message)
     between = None

@@ -14,7 +14,7 @@ import json
 import math
 import os
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -64,6 +64,10 @@ class Robot:
         Bound on configuration speed (euclidean xy speed + |heading rate| * circumradius).
     amax : float or None
         Optional acceleration bound, used by the speed layer.
+    clearance : float
+        Distance every answer keeps from static obstacles (not from the bounds), metres.
+    mover_clearance : float
+        Distance every answer keeps from every present mover, metres.
     """
 
     shape: str
@@ -71,6 +75,8 @@ class Robot:
     size: tuple[float, float]
     vmax: float
     amax: float | None = None
+    clearance: float = 0.0
+    mover_clearance: float = 0.0
 
     @property
     def circumradius(self) -> float:
@@ -268,13 +274,18 @@ class Expect:
 
 @dataclass(frozen=True)
 class Query:
-    """A planning query; ``start``/``goal`` have the robot's pose length."""
+    """A planning query; ``start``/``goal`` have the robot's pose length.
+
+    ``hold`` (seconds): the robot parks at the goal this long after arriving, and the
+    answer keeps the goal pose safe over ``[arrival, arrival + hold]``.
+    """
 
     name: str
     start: tuple[float, ...]
     goal: tuple[float, ...]
     t0: float = 0.0
     expect: Expect | None = None
+    hold: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -293,8 +304,8 @@ class Scene:
     source : str
         The file it was read from (``"<string>"`` when parsed from text).
     static_hash : str
-        SHA-256 of everything a roadmap depends on (bounds, robot shape, obstacles,
-        mesh contents); editing movers or queries keeps it.
+        SHA-256 of everything a roadmap depends on (bounds, robot shape, its static
+        clearance when not 0, obstacles, mesh contents); editing movers or queries keeps it.
     raw : dict
         The validated document, for round trips.
     """
@@ -308,6 +319,7 @@ class Scene:
     source: str = "<string>"
     static_hash: str = ""
     raw: dict = field(default_factory=dict, compare=False, repr=False)
+    shape_hash: str = field(default="", compare=False, repr=False)  # static_hash without the clearance
 
     def query(self, name: str) -> Query:
         """The query called ``name``; raises KeyError listing the names there are."""
@@ -340,6 +352,33 @@ class Scene:
     def to_dict(self) -> dict:
         """The scene as a plain document that :func:`parse_scene` reads back."""
         return json.loads(json.dumps(self.raw))
+
+    def with_clearances(self, clearance: float | None = None, mover_clearance: float | None = None) -> Scene:
+        """This scene with the robot's clearances replaced (None keeps a value).
+
+        A new static clearance changes :attr:`static_hash`: roadmaps built for the other
+        clearance no longer match.
+
+        Raises
+        ------
+        ValueError
+            When a value is negative or not finite.
+        """
+        robot = self.robot
+        new = {}
+        for key, value in (("clearance", clearance), ("mover_clearance", mover_clearance)):
+            if value is None:
+                continue
+            value = float(value)
+            if not (math.isfinite(value) and 0.0 <= value <= MAX_MAGNITUDE):
+                raise ValueError(f"robot.{key} must be a non-negative finite number, got {value!r}")
+            new[key] = value
+        robot = replace(robot, **new)
+        raw = copy.deepcopy(self.raw)
+        if isinstance(raw.get("robot"), dict):
+            raw["robot"].update(new)
+        base = self.shape_hash or self.static_hash
+        return replace(self, robot=robot, raw=raw, static_hash=_static_hash(base, robot.clearance))
 
 
 # --------------------------------------------------------------------------- YAML
@@ -618,7 +657,9 @@ def parse_scene(doc: Any, file: str = "<string>", folder: str | os.PathLike | No
         v.fail("bounds", f"inverted or empty bounds {list(bounds)} (need xmin < xmax, ymin < ymax)")
 
     # robot
-    rd = v.mapping(doc["robot"], "robot", required=("vmax",), optional=("disc", "box", "amax"))
+    rd = v.mapping(
+        doc["robot"], "robot", required=("vmax",), optional=("disc", "box", "amax", "clearance", "mover_clearance")
+    )
     if ("disc" in rd) == ("box" in rd):
         v.fail("robot", "give exactly one of disc or box")
     if "disc" in rd:
@@ -628,7 +669,9 @@ def parse_scene(doc: Any, file: str = "<string>", folder: str | os.PathLike | No
         size = v.vector(rd["box"], "robot.box", 2, positive=True)
     vmax = v.number(rd["vmax"], "robot.vmax", positive=True)
     amax = v.number(rd["amax"], "robot.amax", positive=True) if "amax" in rd else None
-    robot = Robot(robot_shape, radius, size, vmax, amax)
+    clear = v.number(rd.get("clearance", 0.0), "robot.clearance", nonneg=True)
+    mover_clear = v.number(rd.get("mover_clearance", 0.0), "robot.mover_clearance", nonneg=True)
+    robot = Robot(robot_shape, radius, size, vmax, amax, clear, mover_clear)
 
     # obstacles
     obstacles: list = []
@@ -728,7 +771,7 @@ def parse_scene(doc: Any, file: str = "<string>", folder: str | os.PathLike | No
     qnames: set = set()
     for i, qd in enumerate(q_doc):
         place = f"queries[{i}]"
-        v.mapping(qd, place, required=("name", "start", "goal"), optional=("t0", "expect"))
+        v.mapping(qd, place, required=("name", "start", "goal"), optional=("t0", "hold", "expect"))
         qname = v.name(qd["name"], _join(place, "name"))
         if qname in qnames:
             v.fail(_join(place, "name"), f"duplicate query name {qname!r}")
@@ -736,6 +779,7 @@ def parse_scene(doc: Any, file: str = "<string>", folder: str | os.PathLike | No
         start = v.vector(qd["start"], _join(place, "start"), robot.dof)
         goal = v.vector(qd["goal"], _join(place, "goal"), robot.dof)
         t0 = v.number(qd.get("t0", 0.0), _join(place, "t0"))
+        hold = v.number(qd.get("hold", 0.0), _join(place, "hold"), nonneg=True)
         expect = None
         if "expect" in qd:
             eplace = _join(place, "expect")
@@ -750,7 +794,7 @@ def parse_scene(doc: Any, file: str = "<string>", folder: str | os.PathLike | No
                 None if md_ is None else v.number(md_, _join(eplace, "max_duration"), nonneg=True),
                 None if mdf is None else v.number(mdf, _join(eplace, "max_delay_factor"), positive=True),
             )
-        queries.append(Query(qname, start, goal, t0, expect))
+        queries.append(Query(qname, start, goal, t0, expect, hold))
 
     static = {
         "bounds": list(bounds),
@@ -758,6 +802,7 @@ def parse_scene(doc: Any, file: str = "<string>", folder: str | os.PathLike | No
         "obstacles": [_static_repr(o) for o in obstacles],
     }
     hasher.update(json.dumps(static, sort_keys=True).encode())
+    shape_hash = hasher.hexdigest()
     return Scene(
         name=name,
         bounds=bounds,
@@ -766,9 +811,18 @@ def parse_scene(doc: Any, file: str = "<string>", folder: str | os.PathLike | No
         movers=tuple(movers),
         queries=tuple(queries),
         source=file,
-        static_hash=hasher.hexdigest(),
+        static_hash=_static_hash(shape_hash, robot.clearance),
         raw=copy.deepcopy(doc),
+        shape_hash=shape_hash,
     )
+
+
+def _static_hash(shape_hash: str, clearance: float) -> str:
+    """The roadmap's scene hash: the shapes', plus the static clearance when it is not 0
+    (so roadmaps built before clearances existed still match a scene without one)."""
+    if clearance == 0.0:
+        return shape_hash
+    return hashlib.sha256(f"{shape_hash}:clearance={float(clearance)!r}".encode()).hexdigest()
 
 
 def _static_repr(o) -> dict:

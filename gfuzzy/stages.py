@@ -109,7 +109,7 @@ def _clearance_functions(planner, corridor: FloatArray):
                     box = mover_distance(robot, poses, mv.shape, mv.radius, mv.size, pos[near], exact=False)
                     d[near] = np.maximum(d[near], box)
             out = np.minimum(out, np.where(present, d, np.inf))
-        return out
+        return out - robot.mover_clearance  # the GA's clearance is what is left above it
 
     return poses_of, static_clearance, static_segment, mover_clearance
 
@@ -175,7 +175,7 @@ def _refine(planner, traj: Trajectory, query, opts, deadline) -> tuple[Trajector
             info["reason"] = "a refined segment could not be certified free of static obstacles"
             return traj, info
     horizon = max(opts.horizon or 0.0, 2.0 * traj.duration + 30.0)
-    rt = retime_path(scene, path, query.t0, opts.dt, horizon, deadline=deadline)
+    rt = retime_path(scene, path, query.t0, opts.dt, horizon, deadline=deadline, hold=query.hold)
     if rt.status != "solved":
         info["reason"] = f"the refined path could not be timed among the movers ({rt.message})"
         return traj, info
@@ -208,7 +208,7 @@ def _speed_layer(planner, traj: Trajectory, query, opts, deadline) -> tuple[Traj
     s_xy, v_xy = speed_limit(path[:, :2], robot.vmax, amax, rules, FuzzyOptions())
     horizon = max(opts.horizon or 0.0, 3.0 * traj.duration + 30.0)
     rt = retime_profile(scene=planner.scene, path=path, s_xy=s_xy, v_xy=v_xy, t0=query.t0,
-                        dt=opts.dt, amax=amax, horizon=horizon, deadline=deadline)  # fmt: skip
+                        dt=opts.dt, amax=amax, horizon=horizon, deadline=deadline, hold=query.hold)  # fmt: skip
     info["profile_seconds"] = rt.profile_duration
     if rt.status != "solved":
         info["reason"] = f"the speed-limited path could not be timed among the movers ({rt.message})"
@@ -235,10 +235,11 @@ def _speed_figures(traj: Trajectory) -> dict:
     }
 
 
-def apply_stages(planner, result, start, goal, t0, opts, t_begin):
-    """Run the GA refinement and/or the speed layer on a solved result."""
+def apply_stages(planner, result, start, goal, t0, opts, t_begin, hold: float = 0.0):
+    """Run the GA refinement and/or the speed layer on a solved result (the goal pose
+    parked ``hold`` seconds after the arrival, checked as well)."""
     deadline = t_begin + opts.time_limit
-    query = Query("stage", tuple(start), tuple(goal), t0)
+    query = Query("stage", tuple(start), tuple(goal), t0, hold=hold)
     traj = result.trajectory
     stats = dict(result.stats)
     if opts.refine:

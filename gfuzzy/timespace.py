@@ -17,6 +17,25 @@ between the robot at that point and the mover at ``clamp(t_n)`` is at least
 metric), during the second half within that of the point it reaches, and the mover within
 ``v_mover * dt / 2`` of its sampled position; so a sequence of safe (point, step) pairs is
 collision-free at every instant, not only at the steps.
+
+Clearance. With the robot's ``mover_clearance`` c the margin is
+``(vmax + v_mover) * dt / 2 + c``: the distance shrinks by at most the first term within the
+half step, so it stays at least c at every instant. The margin is data
+(:attr:`MoverField.margin`, one value per mover and step), never a special case.
+
+The first step. The margin at the start's step also covers the half step *before* the
+departure, which the robot never lives through, and assumes nothing about where the robot
+goes; near a mover it refuses starts that are clear. When the start is not safe at its
+step, :func:`sipp` decides each first motion (waiting, or one step to a neighbour) exactly
+instead: :meth:`MoverField.motion_safe` bounds the distance over ``[t_s, t_s + dt]`` by the
+same Lipschitz argument as the independent check, bisecting until every sub-interval is
+proven clear. The arrival point is then safe at the next step as usual, so the whole
+answer keeps the guarantee.
+
+Parking. With ``goal_hold`` K the goal is accepted only in a safe interval that lasts at
+least K steps after the arrival: the robot stands still there, each of those steps covers
+half a step on either side, so the goal pose is safe from the arrival until at least
+``K * dt`` after it.
 """
 
 from __future__ import annotations
@@ -30,7 +49,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .geometry import mover_distance
+from .geometry import interpolate_poses, metric_distance, mover_distance
 from .scene import Robot, Scene
 from .typing import BoolArray, FloatArray, IntArray
 
@@ -56,14 +75,26 @@ class MoverField:
         Horizon in steps.
     vrobot : float
         Bound on the speed of any point of the robot (vmax).
+    clearance : float, optional
+        Distance kept from every present mover (default: the scene's
+        ``robot.mover_clearance``); it is added to every entry of :attr:`margin`.
+
+    Attributes
+    ----------
+    margin : (movers, steps + 1) float
+        Smallest robot-mover distance at which a point is safe at a step.
 
     Notes
     -----
     Memory is about ``32 * movers * steps`` bytes.
     """
 
-    def __init__(self, scene: Scene, t0: float, dt: float, steps: int, vrobot: float):
+    def __init__(
+        self, scene: Scene, t0: float, dt: float, steps: int, vrobot: float, clearance: float | None = None
+    ):
         self.robot: Robot = scene.robot
+        self.keep = float(scene.robot.mover_clearance if clearance is None else clearance)
+        self.vrobot = float(vrobot)
         self.movers = scene.movers
         self.t0, self.dt, self.steps = float(t0), float(dt), int(steps)
         n = self.steps + 1
@@ -79,7 +110,7 @@ class MoverField:
             tc = np.clip(times, ta, tb)
             self.xy[i], _ = mv.state(tc)
             self.present[i] = (times + half >= ta) & (times - half <= tb)
-            self.margin[i] = (vrobot + _local_speed(mv, times, half)) * half
+            self.margin[i] = (vrobot + _local_speed(mv, times, half)) * half + self.keep
         # broad phase: per mover and chunk, the box of reference points inflated by reach
         nc = (n + CHUNK - 1) // CHUNK
         pad = nc * CHUNK - n
@@ -316,14 +347,73 @@ class MoverField:
             )
         return d
 
-    def collides_at(self, pose: FloatArray, step: int) -> str | None:
-        """Name of a mover overlapping the robot at ``pose`` exactly at step ``step``, if any."""
+    def collides_at(self, pose: FloatArray, step: int, clearance: float = 0.0) -> str | None:
+        """Name of a mover closer than ``clearance`` to the robot at ``pose`` exactly at
+        step ``step`` (0: overlapping it), if any."""
         t = self.t0 + step * self.dt
         for mv in self.movers:
             xy, present = mv.state(np.array([t]))
-            if present[0] and mover_distance(self.robot, np.asarray(pose, float), mv.shape, mv.radius, mv.size, xy[0]) < 0:
+            if present[0] and mover_distance(self.robot, np.asarray(pose, float), mv.shape, mv.radius, mv.size, xy[0]) < clearance:
                 return mv.name
         return None
+
+    def motion_safe(self, a: FloatArray, b: FloatArray, step: int, min_interval: float = 1e-6) -> bool:
+        """True when the straight motion a -> b over ``[t_step, t_step + dt]`` keeps
+        :attr:`keep` from every mover at every instant (a = b: waiting).
+
+        Lipschitz argument: the robot-mover distance changes no faster than the robot's
+        speed plus the mover's largest speed in the step, L; a sub-interval whose ends'
+        excesses over the clearance add up to at least L times its length is clear, any
+        other is bisected. A mover that appears or vanishes within the step is taken as
+        present over the whole step, at its first or last position (conservative).
+        Undecided sub-intervals shorter than ``min_interval`` seconds count as unsafe.
+
+        Parameters
+        ----------
+        a, b : (d,) float
+            Poses; the metric length of a -> b must be at most ``vrobot * dt``.
+        step : int
+
+        Returns
+        -------
+        bool
+        """
+        a = np.asarray(a, dtype=float)
+        b = np.asarray(b, dtype=float)
+        ta = self.t0 + step * self.dt
+        tb = ta + self.dt
+        vr = float(metric_distance(a, b, self.robot.circumradius)) / self.dt
+        for mv in self.movers:
+            lo, hi = mv.time_range
+            if tb < lo or ta > hi:
+                continue
+            vm = float(_local_speed(mv, np.array([ta + 0.5 * self.dt]), 0.5 * self.dt)[0])
+            lip = vr + vm
+
+            def excess(times, mv=mv):
+                poses = interpolate_poses(a, b, (times - ta) / self.dt)
+                xy, _ = mv.state(times)  # clamped to the first/last row outside its range
+                return mover_distance(self.robot, poses, mv.shape, mv.radius, mv.size, xy) - self.keep
+
+            s_t = np.linspace(ta, tb, 9)
+            g = excess(s_t)
+            if np.any(g < 0):
+                return False
+            lo_t, hi_t, lo_g, hi_g = s_t[:-1], s_t[1:], g[:-1], g[1:]
+            while lo_t.size:
+                need = lo_g + hi_g < lip * (hi_t - lo_t)
+                lo_t, hi_t, lo_g, hi_g = lo_t[need], hi_t[need], lo_g[need], hi_g[need]
+                if lo_t.size == 0:
+                    break
+                if np.any(hi_t - lo_t < min_interval) or lo_t.size > 100_000:
+                    return False
+                mid = 0.5 * (lo_t + hi_t)
+                gm = excess(mid)
+                if np.any(gm < 0):
+                    return False
+                lo_t, hi_t = np.concatenate([lo_t, mid]), np.concatenate([mid, hi_t])
+                lo_g, hi_g = np.concatenate([lo_g, gm]), np.concatenate([gm, hi_g])
+        return True
 
 
 def _local_speed(mv, times: FloatArray, half: float) -> FloatArray:
@@ -533,12 +623,17 @@ def sipp(
     start_step: int = 0,
     weight: float = 1.0,
     store: IntervalStore | None = None,
+    goal_hold: int = 0,
 ) -> SearchResult:
     """Earliest-arrival search from ``start`` (at ``start_step``) to ``goal``.
 
     With ``weight`` w > 1 the order is arrival + w * heuristic (weighted A*): far fewer
     expansions, and the arrival is at most w times the earliest. ``store`` keeps the
     safety computed by an earlier search on the same graph with a shorter horizon.
+    With ``goal_hold`` K > 0 the goal counts as reached only where it stays safe for K
+    steps after the arrival (the robot parks there); the search arrives later if it must.
+    When the start is not safe at ``start_step`` its first motions are decided exactly
+    (:meth:`MoverField.motion_safe`).
 
     Returns the arrival-optimal sequence of (node, arrival step) on the time grid: the
     robot waits at a node from its arrival until one step before the next arrival.
@@ -556,19 +651,48 @@ def sipp(
     hl = h.tolist()
     wait_ok = None if graph.can_wait is None else graph.can_wait.tolist()
     inf = math.inf
-    s_starts, s_ends, _ = ivals(start)
-    j0 = bisect_left(s_ends, start_step)
-    if j0 >= len(s_starts) or s_starts[j0] > start_step:
-        return SearchResult("no_path", message="the start is not safe from the movers at t0")
     if not math.isfinite(hl[start]):
         return SearchResult("no_path", message="the goal is not reachable on the roadmap")
+    s_starts, s_ends, _ = ivals(start)
+    j0 = bisect_left(s_ends, start_step)
     # a state (node, interval index) is the integer node * stride + index
     stride = H + 2
-    key0 = start * stride + j0
-    best = {key0: start_step}
-    parent: dict = {key0: -1}
-    openq = [(start_step + weight * hl[start], -start_step, start, j0)]
     heappop, heappush = heapq.heappop, heapq.heappush
+    if j0 < len(s_starts) and s_starts[j0] <= start_step:
+        key0 = start * stride + j0
+        best = {key0: start_step}
+        parent: dict = {key0: -1}
+        openq = [(start_step + weight * hl[start], -start_step, start, j0)]
+    else:
+        # the margin refuses the start: decide each first motion exactly instead (the
+        # robot only lives from the start's step on, and only along the motion it takes)
+        key0 = start * stride + stride - 1  # an index no interval has (at most H / 2 + 1)
+        best = {key0: start_step}
+        parent = {key0: -1}
+        openq = []
+        first = start_step + 1
+        moves = list(nbrs[indptr[start] : indptr[start + 1]])
+        if wait_ok is None or wait_ok[start]:
+            moves.append(start)
+        for v in moves if first <= H else ():
+            if hl[v] == inf:
+                continue
+            starts, ends, _ = ivals(v)
+            j = bisect_left(ends, first)
+            if j >= len(starts) or starts[j] > first:
+                continue
+            if not field_.motion_safe(graph.poses[start], graph.poses[v], start_step):
+                continue
+            key = v * stride + j
+            if first < best.get(key, inf):
+                best[key] = first
+                parent[key] = key0
+                heappush(openq, (first + weight * hl[v], -first, v, j))
+        if not openq:
+            return SearchResult(
+                "no_path",
+                message="no first motion from the start keeps clear of the movers (the start is too close to a mover at t0)",
+            )
     expansions = 0
     horizon_hit = False
     while openq:
@@ -577,7 +701,13 @@ def sipp(
         ukey = u * stride + ju
         if best.get(ukey, inf) < g:
             continue
-        if u == goal:
+        parked = True
+        if u == goal and goal_hold > 0:
+            _, g_ends, g_cap = intervals[u]
+            parked = g_ends[ju] >= g + goal_hold
+            if not parked and g_ends[ju] >= g_cap:  # cut by the horizon, not by a mover
+                horizon_hit = True
+        if u == goal and parked:
             nodes, steps = [], []
             key = ukey
             while key >= 0:
