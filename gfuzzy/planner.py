@@ -49,6 +49,8 @@ SPEED_SAFETY = 1.0 - 1e-9
 MAX_POINTS = 3_000_000
 #: Largest number of mover samples (movers x time steps) a query may use: about 0.7 GB.
 MAX_MOVER_SAMPLES = 20_000_000
+#: Implementations of the search (PlanOptions.backend).
+BACKENDS = ("compiled", "reference")
 
 
 class Status(str, enum.Enum):
@@ -100,6 +102,10 @@ class PlanOptions:
         The search runs on the roadmap's spanner of this stretch (:meth:`Roadmap.spanner`):
         every static route is at most this much longer than on the whole roadmap, with
         about half the edges to search. 1 searches the whole roadmap.
+    backend : str
+        ``"compiled"`` runs the search loop in machine code (:mod:`gfuzzy.search_kernel`,
+        numba); ``"reference"`` runs the pure-Python definition
+        (:func:`gfuzzy.timespace.sipp`). Both give the same answers.
     """
 
     dt: float = 0.07
@@ -114,6 +120,7 @@ class PlanOptions:
     refine_max_slowdown: float = 0.1
     weight: float = 1.0
     stretch: float = 1.05
+    backend: str = "compiled"
 
     def __post_init__(self):
         if not (self.dt > 0 and math.isfinite(self.dt)):
@@ -126,6 +133,8 @@ class PlanOptions:
             raise ValueError(f"weight must be a number >= 1, got {self.weight}")
         if not (self.stretch >= 1.0 and math.isfinite(self.stretch)):
             raise ValueError(f"stretch must be a number >= 1, got {self.stretch}")
+        if self.backend not in BACKENDS:
+            raise ValueError(f"backend must be one of {', '.join(BACKENDS)}, got {self.backend!r}")
 
 
 @dataclass(frozen=True)
@@ -459,6 +468,7 @@ class Planner:
         # it grows with the slack, and a rerun reuses it (IntervalStore): start tight.
         slack = max(48.0, (0.35 if len(self.scene.movers) <= 10 else 0.15) * h0)
         store = IntervalStore(graph)  # safety computed once, kept as the horizon grows
+        search = _search_function(opts.backend)
         expansions = evaluations = 0
         while True:
             steps = min(max_steps, int(math.ceil(h0 + slack)) + hold_steps)
@@ -481,7 +491,7 @@ class Planner:
                         f"start is closer than robot.mover_clearance={keep:g} to mover {hit!r} at t0={t0:g}",
                         rd=rd,
                     )
-            res = sipp(
+            res = search(
                 graph, field_, s_id, g_id, deadline=deadline, weight=opts.weight, store=store, goal_hold=hold_steps
             )
             expansions += res.expansions
@@ -518,6 +528,15 @@ class Planner:
         wps = result.trajectory.waypoints.copy()
         wps[0, 1:], wps[-1, 1:] = ends
         return replace(result, trajectory=Trajectory(wps, robot.circumradius), stats=_amax_stats(robot, result.stats))
+
+
+def _search_function(backend: str):
+    """The search of ``backend``; numba loads only for the compiled one."""
+    if backend == "reference":
+        return sipp
+    from .search_kernel import sipp_compiled
+
+    return sipp_compiled
 
 
 def check_pose(pose, dof: int, label: str) -> FloatArray:

@@ -1,0 +1,415 @@
+"""The compiled search loop: :func:`gfuzzy.timespace.sipp` in numba.
+
+The reference search (:func:`gfuzzy.timespace.sipp`) stays the definition; this module
+runs the same A* loop over safe intervals in machine code and must give the same answers
+(tests/test_search_kernel.py cross-checks them). What stays in Python:
+
+* the movers' safety (:class:`gfuzzy.timespace.IntervalStore`, vectorised numpy), asked
+  for lazily, node by node, exactly as the reference asks for it;
+* the first motions from a start that the margin refuses (:meth:`MoverField.motion_safe`),
+  decided before the loop starts;
+* the deadline: the loop hands control back every :data:`YIELD_EVERY` expansions.
+
+The loop is a resumable kernel. Before expanding a state it checks that every neighbour's
+safe intervals are loaded; if not, it returns the missing nodes *without popping*, the
+driver loads them from the store and calls it again, and the kernel re-examines the same
+top of the open list. Its state (a binary heap on arrays, an open-addressing table of
+``best`` and ``parent``) lives in arrays that survive between calls.
+
+Same order as the reference. The reference's heap holds tuples ``(f, -g, node, interval)``,
+all distinct (a state is pushed again only with a strictly earlier arrival, which changes
+``-g``... or with the same ``g`` never), so its pop order is the lexicographic order of
+the tuples whatever the heap's layout; this kernel's heap compares the same four keys in
+the same order, so both search in the same order, break ties the same way and return the
+same answer.
+
+numba is imported only when this module is (the reference path and ``import gfuzzy`` do not
+need it); ``cache=True`` keeps the machine code on disk (``make demo``/``make test`` warm it:
+``python -m gfuzzy.search_kernel``). Where the package folder is read-only numba falls back
+to a per-user cache folder; ``NUMBA_CACHE_DIR`` overrides both.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from bisect import bisect_left
+
+import numpy as np
+from numba import njit
+
+__all__ = ["sipp_compiled", "warm"]
+
+#: Expansions between two returns to Python (deadline check).
+YIELD_EVERY = 4096
+
+# return codes of the kernel
+_SOLVED, _EXHAUSTED, _NEED, _YIELD = 0, 1, 2, 3
+# counters (ctr)
+_HSIZE, _TCOUNT, _EXP, _HIT, _NNEED, _RESULT, _SINCE = range(7)
+
+
+@njit(cache=True)
+def _slot(tk, key):
+    """Slot of ``key`` in the open-addressing table (its own, or the empty one to use)."""
+    mask = len(tk) - 1
+    i = ((key * -7046029254386353131) >> 17) & mask
+    while tk[i] != -1 and tk[i] != key:
+        i = (i + 1) & mask
+    return i
+
+
+@njit(cache=True)
+def _grow_table(tk, tb, tp):
+    n = len(tk) * 2
+    nk = np.full(n, -1, np.int64)
+    nb = np.empty(n, np.int64)
+    np_ = np.empty(n, np.int64)
+    for i in range(len(tk)):
+        if tk[i] != -1:
+            s = _slot(nk, tk[i])
+            nk[s] = tk[i]
+            nb[s] = tb[i]
+            np_[s] = tp[i]
+    return nk, nb, np_
+
+
+@njit(cache=True)
+def _less(hf, hq, a, b):
+    if hf[a] != hf[b]:
+        return hf[a] < hf[b]
+    if hq[a, 0] != hq[b, 0]:
+        return hq[a, 0] < hq[b, 0]
+    if hq[a, 1] != hq[b, 1]:
+        return hq[a, 1] < hq[b, 1]
+    return hq[a, 2] < hq[b, 2]
+
+
+@njit(cache=True)
+def _swap(hf, hq, a, b):
+    f = hf[a]
+    hf[a] = hf[b]
+    hf[b] = f
+    for c in range(3):
+        x = hq[a, c]
+        hq[a, c] = hq[b, c]
+        hq[b, c] = x
+
+
+@njit(cache=True)
+def _push(hf, hq, ctr, f, ng, v, j):
+    n = ctr[_HSIZE]
+    if n == len(hf):
+        nf = np.empty(2 * n, np.float64)
+        nq = np.empty((2 * n, 3), np.int64)
+        nf[:n] = hf
+        nq[:n] = hq
+        hf, hq = nf, nq
+    hf[n] = f
+    hq[n, 0] = ng
+    hq[n, 1] = v
+    hq[n, 2] = j
+    ctr[_HSIZE] = n + 1
+    while n > 0:
+        p = (n - 1) >> 1
+        if _less(hf, hq, n, p):
+            _swap(hf, hq, n, p)
+            n = p
+        else:
+            break
+    return hf, hq
+
+
+@njit(cache=True)
+def _pop(hf, hq, ctr):
+    n = ctr[_HSIZE] - 1
+    ctr[_HSIZE] = n
+    if n == 0:
+        return
+    _swap(hf, hq, 0, n)
+    i = 0
+    while True:
+        a = 2 * i + 1
+        if a >= n:
+            break
+        b = a + 1
+        c = b if (b < n and _less(hf, hq, b, a)) else a
+        if _less(hf, hq, c, i):
+            _swap(hf, hq, c, i)
+            i = c
+        else:
+            break
+
+
+@njit(cache=True)
+def _set(tk, tb, tp, ctr, key, best, parent):
+    if 2 * (ctr[_TCOUNT] + 1) > len(tk):
+        tk, tb, tp = _grow_table(tk, tb, tp)
+    s = _slot(tk, key)
+    if tk[s] == -1:
+        tk[s] = key
+        ctr[_TCOUNT] += 1
+    tb[s] = best
+    tp[s] = parent
+    return tk, tb, tp
+
+
+@njit(cache=True)
+def _get(tk, tb, key, default):
+    s = _slot(tk, key)
+    return tb[s] if tk[s] == key else default
+
+
+@njit(cache=True)
+def _run(indptr, nbrs, h, wait_ok, goal, goal_hold, H, weight, stride,
+         iv_off, iv_cnt, iv_cap, pool_s, pool_e, hf, hq, tk, tb, tp, ctr, need):  # fmt: skip
+    """The A* loop of :func:`gfuzzy.timespace.sipp` until it ends or needs something.
+
+    Returns (code, hf, hq, tk, tb, tp): the arrays, reallocated when they grew.
+    """
+    big = np.iinfo(np.int64).max
+    while ctr[_HSIZE] > 0:
+        g = -hq[0, 0]
+        u = hq[0, 1]
+        ju = hq[0, 2]
+        ukey = u * stride + ju
+        if _get(tk, tb, ukey, big) < g:
+            _pop(hf, hq, ctr)
+            continue
+        o = iv_off[u] + ju
+        end_u = pool_e[o]
+        cap_u = iv_cap[u]
+        parked = True
+        if u == goal and goal_hold > 0:
+            parked = end_u >= g + goal_hold
+            if not parked and end_u >= cap_u:
+                ctr[_HIT] = 1
+        if u == goal and parked:
+            ctr[_RESULT] = ukey
+            return _SOLVED, hf, hq, tk, tb, tp
+        lo = g + 1
+        hi = end_u + 1 if wait_ok[u] else lo
+        if hi > H:
+            hi = H
+        if lo <= hi:
+            # every neighbour's intervals must be loaded before the expansion starts
+            nn = 0
+            for e in range(indptr[u], indptr[u + 1]):
+                v = nbrs[e]
+                if math.isinf(h[v]) or iv_cnt[v] >= 0:
+                    continue
+                need[nn] = v
+                nn += 1
+            if nn > 0:
+                ctr[_NNEED] = nn
+                return _NEED, hf, hq, tk, tb, tp
+        if ctr[_SINCE] >= 4096:
+            ctr[_SINCE] = 0
+            return _YIELD, hf, hq, tk, tb, tp
+        _pop(hf, hq, ctr)
+        ctr[_EXP] += 1
+        ctr[_SINCE] += 1
+        if end_u >= cap_u:  # the interval was cut by the horizon, not by a mover
+            ctr[_HIT] = 1
+        if lo > hi:
+            continue
+        for e in range(indptr[u], indptr[u + 1]):
+            v = nbrs[e]
+            hv = h[v]
+            if math.isinf(hv):
+                continue
+            off = iv_off[v]
+            n_iv = iv_cnt[v]
+            # bisect_left(ends, lo)
+            a, b = 0, n_iv
+            while a < b:
+                mid = (a + b) >> 1
+                if pool_e[off + mid] < lo:
+                    a = mid + 1
+                else:
+                    b = mid
+            j = a
+            while j < n_iv and pool_s[off + j] <= hi:
+                s = pool_s[off + j]
+                arr = lo if s < lo else s
+                key = v * stride + j
+                if arr < _get(tk, tb, key, big):
+                    tk, tb, tp = _set(tk, tb, tp, ctr, key, arr, ukey)
+                    hf, hq = _push(hf, hq, ctr, arr + weight * hv, -arr, v, j)
+                j += 1
+    return _EXHAUSTED, hf, hq, tk, tb, tp
+
+
+@njit(cache=True)
+def _path(tk, tb, tp, key, stride):
+    nodes = []
+    steps = []
+    while key >= 0:
+        s = _slot(tk, key)
+        nodes.append(key // stride)
+        steps.append(tb[s])
+        key = tp[s]
+    return np.array(nodes[::-1], dtype=np.int64), np.array(steps[::-1], dtype=np.int64)
+
+
+class _Loaded:
+    """Safe intervals handed to the kernel: per node an offset into one pool."""
+
+    def __init__(self, n: int):
+        self.off = np.zeros(n, np.int64)
+        self.cnt = np.full(n, -1, np.int64)
+        self.cap = np.zeros(n, np.int64)
+        self.s = np.empty(1024, np.int64)
+        self.e = np.empty(1024, np.int64)
+        self.used = 0
+
+    def load(self, node: int, iv) -> None:
+        starts, ends, cap = iv
+        k = len(starts)
+        if self.used + k > len(self.s):
+            size = max(2 * len(self.s), self.used + k)
+            for name in ("s", "e"):
+                grown = np.empty(size, np.int64)
+                grown[: self.used] = getattr(self, name)[: self.used]
+                setattr(self, name, grown)
+        self.s[self.used : self.used + k] = starts
+        self.e[self.used : self.used + k] = ends
+        self.off[node] = self.used
+        self.cnt[node] = k
+        self.cap[node] = cap
+        self.used += k
+
+
+def sipp_compiled(
+    graph,
+    field_,
+    start: int,
+    goal: int,
+    deadline: float = math.inf,
+    start_step: int = 0,
+    weight: float = 1.0,
+    store=None,
+    goal_hold: int = 0,
+):
+    """:func:`gfuzzy.timespace.sipp` with the loop compiled; same arguments, same answer."""
+    from .timespace import IntervalStore, SearchResult
+
+    H = field_.steps
+    store = store or IntervalStore(graph)
+    store.set_horizon(field_)
+    ivals = store.get
+    h = np.ascontiguousarray(graph.heuristic, dtype=np.float64)
+    n = len(h)
+    if not math.isfinite(h[start]):
+        return SearchResult("no_path", message="the goal is not reachable on the roadmap")
+    indptr = np.ascontiguousarray(graph.indptr, dtype=np.int64)
+    nbrs = np.ascontiguousarray(graph.neighbors, dtype=np.int64)
+    wait_ok = np.ones(n, np.bool_) if graph.can_wait is None else np.ascontiguousarray(graph.can_wait, np.bool_)
+    stride = H + 2
+    loaded = _Loaded(n)
+
+    def load(node):
+        if loaded.cnt[node] < 0:
+            loaded.load(node, ivals(node))
+
+    hf = np.empty(1024, np.float64)
+    hq = np.empty((1024, 3), np.int64)
+    tk = np.full(4096, -1, np.int64)
+    tb = np.empty(4096, np.int64)
+    tp = np.empty(4096, np.int64)
+    ctr = np.zeros(7, np.int64)
+    need = np.empty(max(1, int(np.diff(indptr).max(initial=0))), np.int64)
+
+    load(start)
+    s_starts, s_ends, _ = ivals(start)
+    j0 = bisect_left(s_ends, start_step)
+    if j0 < len(s_starts) and s_starts[j0] <= start_step:
+        key0 = start * stride + j0
+        tk, tb, tp = _set(tk, tb, tp, ctr, key0, start_step, -1)
+        hf, hq = _push(hf, hq, ctr, start_step + weight * h[start], -start_step, start, j0)
+    else:
+        # the reference's exact first motions, in Python (rare: a start beside a mover)
+        key0 = start * stride + stride - 1
+        tk, tb, tp = _set(tk, tb, tp, ctr, key0, start_step, -1)
+        first = start_step + 1
+        moves = list(nbrs[indptr[start] : indptr[start + 1]].tolist())
+        if wait_ok[start]:
+            moves.append(start)
+        pushed = False
+        for v in moves if first <= H else ():
+            if math.isinf(h[v]):
+                continue
+            starts, ends, _ = ivals(v)
+            j = bisect_left(ends, first)
+            if j >= len(starts) or starts[j] > first:
+                continue
+            if not field_.motion_safe(graph.poses[start], graph.poses[v], start_step):
+                continue
+            key = v * stride + j
+            if first < _get(tk, tb, key, np.iinfo(np.int64).max):
+                load(v)
+                tk, tb, tp = _set(tk, tb, tp, ctr, key, first, key0)
+                hf, hq = _push(hf, hq, ctr, first + weight * h[v], -first, v, j)
+                pushed = True
+        if not pushed:
+            return SearchResult(
+                "no_path",
+                message="no first motion from the start keeps clear of the movers (the start is too close to a mover at t0)",
+            )
+    while True:
+        code, hf, hq, tk, tb, tp = _run(
+            indptr, nbrs, h, wait_ok, goal, goal_hold, H, float(weight), stride,
+            loaded.off, loaded.cnt, loaded.cap, loaded.s, loaded.e, hf, hq, tk, tb, tp, ctr, need,
+        )  # fmt: skip
+        if code == _NEED:
+            for v in need[: ctr[_NNEED]].tolist():
+                load(v)
+            continue
+        if code == _YIELD:
+            if time.perf_counter() > deadline:
+                return SearchResult(
+                    "timeout",
+                    message="planning time budget exhausted",
+                    expansions=int(ctr[_EXP]),
+                    states=int(ctr[_TCOUNT]),
+                )
+            continue
+        break
+    expansions, states, hit = int(ctr[_EXP]), int(ctr[_TCOUNT]), bool(ctr[_HIT])
+    if code == _SOLVED:
+        nodes, steps = _path(tk, tb, tp, int(ctr[_RESULT]), stride)
+        return SearchResult("solved", nodes.tolist(), steps.tolist(), expansions=expansions, states=states)
+    msg = (
+        "no safe trajectory within the planning horizon"
+        if hit
+        else "the reachable space-time is exhausted: no safe trajectory exists on this graph"
+    )
+    return SearchResult("no_path", message=msg, expansions=expansions, states=states, horizon_hit=hit)
+
+
+def warm() -> None:
+    """Compile (or load from the cache) every kernel on a three-node graph."""
+    from .timespace import SpaceTimeGraph
+
+    class _Field:  # no movers: every node safe over the whole horizon
+        steps = 8
+
+    graph = SpaceTimeGraph(
+        poses=np.zeros((3, 2)),
+        indptr=np.array([0, 1, 3, 4]),
+        neighbors=np.array([1, 0, 2, 1]),
+        heuristic=np.array([2.0, 1.0, 0.0]),
+    )
+
+    class _Store:
+        def set_horizon(self, field_):
+            pass
+
+        def get(self, node):
+            return [0], [8], 8
+
+    sipp_compiled(graph, _Field(), 0, 2, store=_Store())
+
+
+if __name__ == "__main__":
+    warm()
