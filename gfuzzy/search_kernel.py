@@ -263,15 +263,35 @@ class _Loaded:
         self.e = np.empty(1024, np.int64)
         self.used = 0
 
-    def load(self, node: int, iv) -> None:
-        starts, ends, cap = iv
-        k = len(starts)
+    def _room(self, k: int) -> None:
         if self.used + k > len(self.s):
             size = max(2 * len(self.s), self.used + k)
             for name in ("s", "e"):
                 grown = np.empty(size, np.int64)
                 grown[: self.used] = getattr(self, name)[: self.used]
                 setattr(self, name, grown)
+
+    def load_batch(self, store, batch) -> None:
+        """Every node of one of ``store``'s batches at once (its intervals at the store's
+        current horizon, as :meth:`IntervalStore.get` would serve them)."""
+        nodes, gs, ge, sp, extended = batch
+        k = len(gs)
+        self._room(k)
+        self.s[self.used : self.used + k] = gs
+        self.e[self.used : self.used + k] = ge
+        self.off[nodes] = self.used + sp[:-1]
+        self.cnt[nodes] = np.diff(sp)
+        groups = np.searchsorted(store.ptr, nodes, side="right") - 1
+        self.cap[nodes] = store.g_hi[groups]
+        self.used += k
+        for nid in extended:  # windows grown with the horizon: older intervals merged
+            starts, ends = store._intervals(nid)
+            self.load(nid, (starts, ends, int(self.cap[nid])))
+
+    def load(self, node: int, iv) -> None:
+        starts, ends, cap = iv
+        k = len(starts)
+        self._room(k)
         self.s[self.used : self.used + k] = starts
         self.e[self.used : self.used + k] = ends
         self.off[node] = self.used
@@ -308,9 +328,19 @@ def sipp_compiled(
     stride = H + 2
     loaded = _Loaded(n)
 
+    batches = getattr(store, "batch_arrays", [])
+    seen = len(batches)
+
     def load(node):
+        nonlocal seen
+        if loaded.cnt[node] >= 0:
+            return
+        iv = ivals(node)  # may compute a batch of groups: load them all at once
+        while seen < len(batches):
+            loaded.load_batch(store, batches[seen])
+            seen += 1
         if loaded.cnt[node] < 0:
-            loaded.load(node, ivals(node))
+            loaded.load(node, iv)
 
     hf = np.empty(1024, np.float64)
     hq = np.empty((1024, 3), np.int64)

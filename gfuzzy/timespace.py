@@ -522,6 +522,7 @@ class IntervalStore:
         self._where = [-1] * n  # batch of a node's latest computation (lists: read per node)
         self._local = [0] * n  # its row there
         self._older: dict = {}  # node -> (starts, ends) from computations before the latest
+        self.batch_arrays: list = []  # the batches as arrays (see _compute)
         self.field = None
         self.H = -1
 
@@ -604,10 +605,15 @@ class IntervalStore:
         sp = np.searchsorted(rn, np.arange(k + 1)).tolist()
         where, local = self._where, self._local
         node_list = nodes.tolist()
+        extended = []
         for nid in node_list:  # extended windows: keep what was computed before
             if where[nid] >= 0:
                 self._older[nid] = self._intervals(nid)
+                extended.append(nid)
         self._batches.append((gs[ok].tolist(), sp, ge[ok].tolist(), lo_n.tolist()))
+        # the same batch as arrays, for a consumer that loads whole batches at once
+        # (gfuzzy.search_kernel); nodes in `extended` also have older intervals
+        self.batch_arrays.append((nodes, gs[ok], ge[ok], np.asarray(sp, dtype=np.int64), extended))
         b = len(self._batches) - 1
         for i, nid in enumerate(node_list):
             where[nid] = b
