@@ -49,9 +49,9 @@ log = logging.getLogger(__name__)
 #: Environment of the local workers: one BLAS/OpenMP thread each, so K workers use K cores.
 WORKER_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
 #: A task may be on a dying worker this many times before the scheduler gives it up
-#: (Dask's default is 3): a query that kills its worker twice is an error row, and an
-#: innocent query that shared a worker with it once is simply run again.
-ALLOWED_FAILURES = 1
+#: (Dask's default is 3). The local cluster gives up at once: :func:`run_batch` then runs
+#: the query again alone, which tells the culprit from innocent queries queued beside it.
+ALLOWED_FAILURES = 0
 
 
 @dataclass(frozen=True)
@@ -219,7 +219,7 @@ def local_cluster(workers: int, quiet: bool = True) -> Iterator[object]:
     """A ``distributed.Client`` on a new ``LocalCluster`` of ``workers`` processes.
 
     One thread per worker, BLAS/OpenMP pinned to one thread, no dashboard, and a query
-    that kills its worker twice is given up (:data:`ALLOWED_FAILURES`). ``quiet`` keeps
+    that kills its worker is given up at once (:data:`ALLOWED_FAILURES`). ``quiet`` keeps
     Dask's informational logs (cluster start and stop, a worker restarting) out of the
     terminal.
     """
@@ -276,11 +276,18 @@ def run_batch(
 ) -> BatchResult:
     """Answer every query of every scene on a Dask cluster.
 
+    Every query is first run in one concurrent round. A query whose worker died (Dask's
+    ``KilledWorker``: it may be the culprit, or an innocent query that was queued on the
+    same worker) is then run again *alone*; one that kills its worker alone too is an
+    ``error`` row, the others get their real answer.
+
     Parameters
     ----------
     client : distributed.Client
     scenes : sequence of (Scene, Roadmap)
-        Each roadmap built for its scene; it is sent to every worker once.
+        Each roadmap built for its scene. Each pair is one task's result that the workers
+        fetch from one another (once per worker), so a dead worker's copy is rebuilt
+        from the task rather than lost.
     options : BatchOptions, optional
     progress : callable(done, total), optional
         Called in the client after each finished query (and once with 0 at the start).
@@ -293,31 +300,67 @@ def run_batch(
         Rows in job order. Saved trajectories (``options.trajectories``) are written by
         the client as rows arrive; an error row removes a stale file of that query.
     """
-    from distributed import as_completed
-
     options = options or BatchOptions()
     folder = Path(options.trajectories) if options.trajectories else None
     if folder is not None:
         folder.mkdir(parents=True, exist_ok=True)
     jobs = [(si, qi) for si, (scene, _) in enumerate(scenes) for qi in range(len(scene.queries))]
+    bundles = [_Bundle(uuid.uuid4().hex, sc, rm) for sc, rm in scenes]
     total = len(jobs)
     rows: dict[int, BatchRow] = {}
     t0 = time.perf_counter()
+
+    def record(j: int, row: BatchRow, doc: dict | None) -> None:
+        if folder is not None:
+            _save(folder, row, doc)
+        rows[j] = row
+        if progress is not None:
+            progress(len(rows), total)
+
     if progress is not None:
         progress(0, total)
-    futures = []
     interrupted = False
     try:
-        bundles = []
-        for scene, roadmap in scenes:
-            bundle = _Bundle(uuid.uuid4().hex, scene, roadmap)
-            bundles.append(client.scatter(bundle, broadcast=True, hash=False))
-        index = {}
-        for j, (si, qi) in enumerate(jobs):
-            scene = scenes[si][0]
+        suspects = _round(client, bundles, jobs, range(total), options, before, record)
+        for j in suspects:  # alone now: a query that still kills its worker is the culprit
+            if _round(client, bundles, jobs, [j], options, before, record):
+                si, qi = jobs[j]
+                row = BatchRow(
+                    scenes[si][0].name, scenes[si][0].queries[qi].name, "error", error=_KILLED
+                )
+                record(j, row, None)
+    except KeyboardInterrupt:
+        interrupted = True
+        log.warning("interrupted: %d of %d queries finished", len(rows), total)
+    return BatchResult(
+        [rows[j] for j in sorted(rows)], total, interrupted, time.perf_counter() - t0
+    )
+
+
+_KILLED = "the worker died while running this query (a crash in native code, or killed)"
+
+
+def _hold(bundle: _Bundle) -> _Bundle:
+    return bundle
+
+
+def _round(client, bundles, jobs, ids, options, before, record) -> list[int]:
+    """Run the jobs ``ids`` concurrently; record each row; return the ids whose worker died."""
+    from distributed import KilledWorker, as_completed
+
+    futures = {}
+    held = {}
+    killed = []
+    try:
+        for j in ids:
+            si, qi = jobs[j]
+            if si not in held:
+                held[si] = client.submit(
+                    _hold, bundles[si], pure=False, key=f"gfuzzy-scene-{uuid.uuid4().hex}"
+                )
             fut = client.submit(
                 run_query,
-                bundles[si],
+                held[si],
                 qi,
                 options,
                 before,
@@ -325,40 +368,27 @@ def run_batch(
                 retries=0,
                 pure=False,
             )
-            futures.append(fut)
-            index[fut.key] = (j, scene.name, scene.queries[qi].name)
-        for fut in as_completed(futures):
-            j, scene_name, query_name = index[fut.key]
-            row, doc = _collect(fut, scene_name, query_name)
-            if folder is not None:
-                _save(folder, row, doc)
-            rows[j] = row
-            if progress is not None:
-                progress(len(rows), total)
-    except KeyboardInterrupt:
-        interrupted = True
-        log.warning("interrupted: %d of %d queries finished", len(rows), total)
+            futures[fut] = j
+        for fut in as_completed(list(futures)):
+            j = futures[fut]
+            try:
+                row, doc = fut.result()
+            except KilledWorker:
+                killed.append(j)
+                continue
+            except Exception as exc:  # noqa: BLE001 - a lost cluster, a bad pickle: this query's row
+                scene = bundles[jobs[j][0]].scene
+                row, doc = (
+                    BatchRow(
+                        scene.name, scene.queries[jobs[j][1]].name, "error", error=_one_line(exc)
+                    ),
+                    None,
+                )
+            record(j, row, doc)
     finally:
-        if futures:
-            with contextlib.suppress(Exception):
-                client.cancel(futures)
-    return BatchResult(
-        [rows[j] for j in sorted(rows)], total, interrupted, time.perf_counter() - t0
-    )
-
-
-def _collect(fut, scene_name: str, query_name: str) -> tuple[BatchRow, dict | None]:
-    """The row of a finished future: its result, or an error row when the task died."""
-    try:
-        return fut.result()
-    except Exception as exc:  # noqa: BLE001 - KilledWorker, a lost cluster, a bad pickle
-        from distributed import KilledWorker
-
-        if isinstance(exc, KilledWorker):
-            msg = "the worker died while running this query (a crash in native code, or killed)"
-        else:
-            msg = _one_line(exc)
-        return BatchRow(scene_name, query_name, "error", error=msg), None
+        with contextlib.suppress(Exception):
+            client.cancel(list(futures) + list(held.values()))
+    return sorted(killed)
 
 
 def _save(folder: Path, row: BatchRow, doc: dict | None) -> None:
