@@ -16,7 +16,18 @@ import numpy as np
 from gfuzzy.batch import BatchOptions, run_batch, trajectory_path
 from gfuzzy.roadmap import RoadmapOptions, grow_roadmaps
 
-from .common import IMG, PAPER_198, PAPER_SECONDS, Context, bundled, fmt, linear_fit, load_doc, md_table, median
+from .common import (
+    IMG,
+    PAPER_198,
+    PAPER_SECONDS,
+    Context,
+    bundled,
+    fmt,
+    linear_fit,
+    load_doc,
+    md_table,
+    median,
+)
 
 SIZES = list(range(100, 1001, 100))
 REPEAT = 3
