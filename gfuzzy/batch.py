@@ -228,9 +228,13 @@ def local_cluster(workers: int, quiet: bool = True) -> Iterator[object]:
 
     if workers < 1:
         raise ValueError(f"workers must be >= 1, got {workers}")
+    env = dict(WORKER_ENV)
+    if quiet:
+        env["GFUZZY_BATCH_QUIET"] = "1"
     settings = {
-        "distributed.nanny.pre-spawn-environ": dict(WORKER_ENV),
+        "distributed.nanny.pre-spawn-environ": env,
         "distributed.scheduler.allowed-failures": ALLOWED_FAILURES,
+        "distributed.worker.preload": ["gfuzzy.batch"],  # runs dask_setup in each worker
     }
     if quiet:
         settings["logging"] = {"distributed": "error", "tornado": "critical"}
@@ -249,6 +253,24 @@ def local_cluster(workers: int, quiet: bool = True) -> Iterator[object]:
             finally:
                 client.close()
                 cluster.close()
+
+
+def dask_setup(worker) -> None:
+    """Worker preload of :func:`local_cluster` (Dask calls it in each new worker process).
+
+    Ctrl-C in a terminal reaches the whole process group: the workers ignore it, and the
+    client, which owns the batch, stops it and closes them. With ``GFUZZY_BATCH_QUIET`` set,
+    the worker's own Dask log lines (a task cancelled at shutdown) stay out of the terminal.
+    """
+    import os
+    import signal
+    import threading
+
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if os.environ.get("GFUZZY_BATCH_QUIET"):
+        for name in ("distributed", "tornado"):
+            logging.getLogger(name).setLevel(logging.CRITICAL)
 
 
 @contextlib.contextmanager
@@ -331,7 +353,7 @@ def run_batch(
                 record(j, row, None)
     except KeyboardInterrupt:
         interrupted = True
-        log.warning("interrupted: %d of %d queries finished", len(rows), total)
+        log.info("interrupted: %d of %d queries finished", len(rows), total)
     return BatchResult(
         [rows[j] for j in sorted(rows)], total, interrupted, time.perf_counter() - t0
     )

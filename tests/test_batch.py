@@ -68,6 +68,17 @@ def test_workers_run_one_blas_thread(client):
     assert all(v == 1 for v in client.nthreads().values())
 
 
+def _sigint_ignored() -> bool:
+    import signal
+
+    return signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+
+
+def test_workers_leave_ctrl_c_to_the_client(client):
+    # Ctrl-C reaches the whole process group; only the client may act on it
+    assert list(client.run(_sigint_ignored).values()) == [True, True]
+
+
 def test_rows_match_plan_and_saved_answers_check(client, pairs, tmp_path):
     res = run_batch(client, pairs, BatchOptions(trajectories=str(tmp_path / "traj")))
     assert not res.interrupted and res.errors == 0
