@@ -241,3 +241,12 @@ def test_parquet_beside_the_csv(tmp_path):
     assert written == [tmp_path / "rows.csv", tmp_path / "rows.parquet"]
     table = pa.read_table(tmp_path / "rows.parquet").to_pylist()
     assert table[0]["duration"] == 1.5 and table[1]["duration"] is None and table[1]["error"] == "boom"
+
+
+def test_cli_unreachable_scheduler(tmp_path, capsys):
+    code = main(["batch", str(ROOT / "scenes" / "sim-4s1m.yaml"), "--scheduler", "tcp://127.0.0.1:1",
+                 "--connect-timeout", "1", "-o", str(tmp_path / "rows.csv")])  # fmt: skip
+    err = capsys.readouterr().err.strip()
+    assert code == 2
+    assert err.startswith("--scheduler tcp://127.0.0.1:1: cannot connect") and len(err.splitlines()) == 1
+    assert list(tmp_path.iterdir()) == []

@@ -323,7 +323,8 @@ restarts: after each answer it asks again for an arrival 10 % earlier, until its
 {TIME_LIMIT:g} s is spent. Seeds {", ".join(map(str, SEEDS))}; medians over the seeds that
 solved. "first" is the peer's first answer (arrival and the time it took), "after {TIME_LIMIT:g} s"
 its best. Every peer answer is checked with gfuzzy's verifier, which tests every instant rather
-than samples.
+than samples. The budget is wall-clock time, so the peer's figures vary from run to run even
+with its seeds; gfuzzy's answers do not.
 
 {table}
 
