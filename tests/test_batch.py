@@ -250,3 +250,21 @@ def test_cli_unreachable_scheduler(tmp_path, capsys):
     assert code == 2
     assert err.startswith("--scheduler tcp://127.0.0.1:1: cannot connect") and len(err.splitlines()) == 1
     assert list(tmp_path.iterdir()) == []
+
+
+def test_cli_passes_the_plan_options(client, tmp_path):
+    from gfuzzy.planner import PlanOptions
+
+    out = tmp_path / "rows.csv"
+    src = ROOT / "scenes" / "sim-5s2m.yaml"
+    code = main(["batch", str(src), "--scheduler", client.scheduler.address, "-o", str(out),
+                 "--refine", "--ga-seed", "3", "--dt", "0.05"])  # fmt: skip
+    assert code == 0
+    scene = load_scene(src)
+    rm = load_roadmap(ROOT / "roadmaps" / "sim-5s2m.json", scene)
+    opts = PlanOptions(refine=True, seed=3, dt=0.05)
+    for row in read_csv(out):
+        q = scene.query(row["query"])
+        ref = plan(scene, rm, q.start, q.goal, q.t0, opts)
+        assert row["status"] == ref.status.value
+        assert float(row["duration"]) == ref.duration
