@@ -1,13 +1,15 @@
 """Batch runs on Dask: every query of every scene, one row per query.
 
 The client (this process) loads the scenes and builds or loads each scene's roadmap once;
-the scene and its roadmap are then broadcast to every worker, and each query is one task
-that plans, checks its answer (:func:`gfuzzy.check.check_trajectory`) and returns a
-:class:`BatchRow` plus the trajectory file. The client saves the trajectory files, so
-workers on other machines need no shared folder.
+each scene and its roadmap then become one task result that the workers fetch (once per
+worker), and each query is one task that plans, checks its answer
+(:func:`gfuzzy.check.check_trajectory`) and returns a :class:`QueryAnswer`: the row plus
+the trajectory file. The client saves the trajectory files, so workers on other machines
+need no shared folder.
 
 A query whose task raises becomes a row with status ``error`` and the message; so does a
-query whose worker dies under it (the scheduler gives up on it with ``KilledWorker``).
+query that kills its worker (the scheduler gives up on it with ``KilledWorker``; it is run
+again alone first, so that queries merely queued on the same worker are not blamed).
 An interrupt (``KeyboardInterrupt`` in the client) stops the batch and returns the rows
 finished so far, each complete.
 
@@ -38,6 +40,7 @@ __all__ = [
     "BatchRow",
     "BatchResult",
     "COLUMNS",
+    "QueryAnswer",
     "local_cluster",
     "run_batch",
     "trajectory_path",
@@ -136,6 +139,15 @@ class _Bundle:
     roadmap: Roadmap
 
 
+@dataclass(frozen=True)
+class QueryAnswer:
+    """What one query's task returns: its row, and its trajectory file's contents
+    (:meth:`gfuzzy.trajectory.TrajectoryFile.to_dict`; None for an error row)."""
+
+    row: BatchRow
+    trajectory: dict | None = None
+
+
 def trajectory_path(folder: str | Path, scene: str, query: str) -> Path:
     """``folder/<scene>-<query>.json``."""
     return Path(folder) / f"{scene}-{query}.json"
@@ -167,15 +179,10 @@ def run_query(
     query_index: int,
     options: BatchOptions,
     before: Callable[[str, str], None] | None = None,
-) -> tuple[BatchRow, dict | None]:
+) -> QueryAnswer:
     """Plan and check one query; never raises (a failure is an ``error`` row).
 
     ``before(scene_name, query_name)`` runs first: a hook for tests that inject faults.
-
-    Returns
-    -------
-    (BatchRow, dict or None)
-        The row and the trajectory file's contents (None for an error row).
     """
     from .check import check_trajectory
 
@@ -201,9 +208,9 @@ def run_query(
             float(res.planning_seconds),
             verdict,
         )
-        return row, res.to_file(scene.name, q.name).to_dict()
+        return QueryAnswer(row, res.to_file(scene.name, q.name).to_dict())
     except Exception as exc:  # noqa: BLE001 - any failure of one query is its row, not the batch's
-        return BatchRow(scene.name, q.name, "error", error=_one_line(exc)), None
+        return QueryAnswer(BatchRow(scene.name, q.name, "error", error=_one_line(exc)))
 
 
 def _one_line(exc: BaseException) -> str:
@@ -394,7 +401,8 @@ def _round(client, bundles, jobs, ids, options, before, record) -> list[int]:
         for fut in as_completed(list(futures)):
             j = futures[fut]
             try:
-                row, doc = fut.result()
+                ans = fut.result()
+                row, doc = ans.row, ans.trajectory
             except KilledWorker:
                 killed.append(j)
                 continue
