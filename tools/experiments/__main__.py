@@ -1,7 +1,7 @@
 """Run the paper's experiments on Dask and regenerate docs/results.md and its pictures.
 
     python -m tools.experiments                 # everything (make experiments)
-    python -m tools.experiments table1 fig12    # some; docs/results.md is written only for all
+    python -m tools.experiments table1 fig12    # some: out/results-partial.md and out/img/
     python -m tools.experiments --workers 2
 
 Each experiment that is a set of queries runs as a ``gfuzzy.batch`` on one LocalCluster.
@@ -23,7 +23,7 @@ if str(ROOT) not in sys.path:
 from gfuzzy.atomic import write_atomic  # noqa: E402
 from gfuzzy.batch import local_cluster  # noqa: E402
 
-from .common import DOCS, Context  # noqa: E402
+from .common import DOCS, IMG, Context  # noqa: E402
 
 EXPERIMENTS = ["table1", "fig12", "fig14", "ompl_peer", "crowd"]
 
@@ -66,7 +66,8 @@ def main(argv=None) -> int:
     t_all = time.perf_counter()
     sections = []
     with tempfile.TemporaryDirectory() as tmp, local_cluster(args.workers) as client:
-        ctx = Context(client, Path(tmp), args.seed)
+        full = set(names) == set(EXPERIMENTS)  # a partial run leaves docs/ as it is
+        ctx = Context(client, Path(tmp), args.seed, IMG if full else Path("out") / "img")
         client.run(_warm_up)  # imports done before anything is timed
         for name in names:
             mod = importlib.import_module(f"tools.experiments.{name}")
@@ -78,13 +79,13 @@ def main(argv=None) -> int:
             sections.append(text.rstrip() + f"\n\n*({name}: {dt:.0f} s in this run.)*\n")
     minutes = (time.perf_counter() - t_all) / 60
     doc = INTRO.format(workers=args.workers, minutes=minutes) + "\n" + "\n".join(sections)
-    if set(names) == set(EXPERIMENTS):
+    if full:
         write_atomic(args.out, doc)
         print(f"wrote {args.out} ({minutes:.1f} min)")
     else:
         out = Path("out") / "results-partial.md"
         write_atomic(out, doc)
-        print(f"wrote {out} (a partial run; docs/results.md is written by a full run)")
+        print(f"wrote {out} and its pictures in out/img (a partial run; docs/ is written by a full run)")
     return 0
 
 

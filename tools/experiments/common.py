@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import math
 import statistics
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 from gfuzzy.roadmap import load_roadmap
@@ -25,13 +25,13 @@ PAPER_198 = {"vertices": 198, "seconds": 0.46, "duration": 35.14, "roadmap_dista
 
 @dataclass
 class Context:
-    """What every experiment gets: the Dask client, a scratch folder, and the seed."""
+    """What every experiment gets: the Dask client, a scratch folder, the seed, and the
+    folder of its pictures."""
 
     client: object
     scratch: Path
     seed: int = 1
-    quick: bool = False
-    notes: list = field(default_factory=list)
+    img: Path = IMG  # where the pictures go (docs/img for a full run)
 
 
 def bundled(name: str):

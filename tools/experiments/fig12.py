@@ -25,7 +25,7 @@ import yaml
 from gfuzzy.batch import BatchOptions, run_batch
 from gfuzzy.scene import load_scene
 
-from .common import IMG, SCENES, bundled, fmt, linear_fit, md_table
+from .common import SCENES, bundled, fmt, linear_fit, md_table
 
 SPEEDS = [0.25, 0.4, 0.55, 0.7, 0.85, 1.0, 1.2, 1.4, 1.6, 1.8, 2.0]
 BEHAVIOURS = ["loop", "reverse", "bounce", "once", "offset"]
@@ -101,8 +101,8 @@ def run(ctx):
     ax.legend(fontsize=8, loc="upper left")
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    IMG.mkdir(parents=True, exist_ok=True)
-    fig.savefig(IMG / "fig12.png", dpi=110)
+    ctx.img.mkdir(parents=True, exist_ok=True)
+    fig.savefig(ctx.img / "fig12.png", dpi=110)
     plt.close(fig)
 
     per_beh = []

@@ -15,7 +15,7 @@ from gfuzzy.ga import GAOptions
 from gfuzzy.planner import PlanOptions
 from gfuzzy.render import render
 
-from .common import IMG, bundled, fmt, load_doc, md_table
+from .common import bundled, fmt, load_doc, md_table
 
 SCENES = [("sim-4s1m", "4 static + 1 moving"), ("sim-6s1m", "6 static + 1 moving"), ("sim-5s2m", "5 static + 2 moving")]
 
@@ -71,7 +71,7 @@ def run(ctx) -> str:
                 rb.check,
             ])  # fmt: skip
             if qi == 0:
-                out = IMG / f"fig14-{name}.png"
+                out = ctx.img / f"fig14-{name}.png"
                 render(scene, out, trajectory=wb, title=f"{name} ({label}), {q.name}: GA-refined path")
                 pictures.append((name, label, out.name))
     params = (

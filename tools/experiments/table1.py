@@ -17,7 +17,6 @@ from gfuzzy.batch import BatchOptions, run_batch, trajectory_path
 from gfuzzy.roadmap import RoadmapOptions, grow_roadmaps
 
 from .common import (
-    IMG,
     PAPER_198,
     PAPER_SECONDS,
     Context,
@@ -102,8 +101,8 @@ def run(ctx: Context) -> str:
     ax2.grid(alpha=0.3)
     fig.suptitle("Table 1: building-floor, roadmaps grown 100 -> 1000 vertices")
     fig.tight_layout()
-    IMG.mkdir(parents=True, exist_ok=True)
-    fig.savefig(IMG / "table1.png", dpi=110)
+    ctx.img.mkdir(parents=True, exist_ok=True)
+    fig.savefig(ctx.img / "table1.png", dpi=110)
     plt.close(fig)
 
     table = md_table(
