@@ -42,7 +42,8 @@ vertices answered in 0.33 to 3.90 s). The scenes are our reading of the paper's
 are not the paper's experiment, only the same kind of experiment.
 
 Times are wall-clock on a machine shared with other work, with two queries running at once
-(one per worker): they vary by +-30 %.
+(one per worker): between our runs of this page they varied by up to 2x with the
+machine's load. Ratios measured within one run (sizes against sizes) are steadier.
 """
 
 
