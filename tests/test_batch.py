@@ -268,3 +268,38 @@ def test_cli_passes_the_plan_options(client, tmp_path):
         ref = plan(scene, rm, q.start, q.goal, q.t0, opts)
         assert row["status"] == ref.status.value
         assert float(row["duration"]) == ref.duration
+
+
+# the cart passes the goal (4, 3) every 10 s, first just after the earliest arrival
+HOLD_SCENE = """
+version: 1
+name: park
+bounds: [0, 0, 6, 6]
+robot: {disc: 0.25, vmax: 1.0}
+movers:
+  - {name: cart, disc: 0.3, speed: 1.0, path: [[4, 1], [4, 5], [5, 5], [5, 1]], mode: loop, offset: 8.0}
+queries:
+  - {name: park, start: [1, 3], goal: [4, 3], hold: 2.0}
+"""
+
+
+def test_batch_keeps_each_querys_hold(client, tmp_path):
+    import yaml
+
+    from gfuzzy import build_roadmap, check_trajectory
+    from gfuzzy.roadmap import RoadmapOptions
+    from gfuzzy.scene import parse_scene
+
+    scene = parse_scene(yaml.safe_load(HOLD_SCENE))
+    rm = build_roadmap(scene, RoadmapOptions(vertices=60, seed=1))
+    res = run_batch(client, [(scene, rm)], BatchOptions(trajectories=str(tmp_path)))
+    (row,) = res.rows
+    q = scene.queries[0]
+    held = plan(scene, rm, q.start, q.goal, hold=q.hold)
+    assert row.status == "solved" and row.check == "valid"
+    assert row.duration == held.duration
+    assert row.duration > plan(scene, rm, q.start, q.goal).duration  # it waited to park safely
+    from gfuzzy.trajectory import load_trajectory
+
+    saved = load_trajectory(tmp_path / "park-park.json")
+    assert check_trajectory(scene, saved.waypoints, q).valid
