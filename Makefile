@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint clean bench
+.PHONY: demo test lint clean bench experiments
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -27,6 +27,10 @@ lint: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/python tools/bench_roadmap.py
 	$(BIN)/python tools/bench_plan.py
+
+# The paper's experiments on Dask: rewrites docs/results.md and docs/img/{table1,fig12,fig14-*}.png
+experiments: $(STAMP)
+	$(BIN)/python -m tools.experiments
 
 clean:
 	rm -rf $(VENV) out build *.egg-info

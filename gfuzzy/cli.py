@@ -8,6 +8,7 @@ naming the file and the place in it, and writes nothing.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import sys
 from dataclasses import replace
@@ -543,6 +544,89 @@ def cmd_tracks(args) -> int:
     return EXIT_OK
 
 
+def _writable_folder(path: Path, flag: str) -> None:
+    """Bad input unless ``path`` is (or can be made) a writable folder."""
+    import os
+
+    if path.exists():
+        if not path.is_dir():
+            raise BadInput(f"{flag} {path}: not a folder")
+        if not os.access(path, os.W_OK | os.X_OK):
+            raise BadInput(f"{flag} {path}: folder is not writable")
+        return
+    parent = path.resolve().parent
+    if not parent.is_dir():
+        raise BadInput(f"{flag} {path}: folder {parent} does not exist")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise BadInput(f"{flag} {path}: folder {parent} is not writable")
+
+
+def cmd_batch(args) -> int:
+    """Every query of every scene on Dask; exit 0 all ran, 1 any error row, 130 interrupted."""
+    import logging
+    import time
+
+    from .batch import BatchOptions, local_cluster, run_batch, write_table
+
+    if args.workers is not None and args.workers < 1:
+        raise BadInput(f"--workers: must be at least 1, got {args.workers}")
+    out = _out_path(args.output, (".csv",))
+    _writable_folder(out.parent, "-o")
+    if args.trajectories:
+        _writable_folder(Path(args.trajectories), "--trajectories")
+    scenes = [_apply_overrides(_load_scene(p), args) for p in args.scenes]  # all bad input first
+    seen: dict = {}
+    for path, sc in zip(args.scenes, scenes, strict=True):
+        if sc.name in seen:
+            raise BadInput(f"{path}: name: scene name {sc.name!r} repeats that of {seen[sc.name]}")
+        seen[sc.name] = path
+    options = BatchOptions(plan=_plan_options(args), trajectories=args.trajectories)
+    pairs = [(sc, _roadmap_for(sc, args)) for sc in scenes]  # once per scene, in the client
+    quiet = not args.verbose
+    if quiet:  # Dask's own INFO/WARNING lines (a worker restarting) are not ours to show
+        for name in ("distributed", "tornado"):
+            logging.getLogger(name).setLevel(logging.ERROR)
+    t = time.perf_counter()
+    if args.scheduler:
+        from distributed import Client
+
+        try:
+            client = Client(args.scheduler, timeout=args.connect_timeout)
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise BadInput(f"--scheduler {args.scheduler}: cannot connect: {' '.join(str(exc).split())[:120]}") from None
+        where = f"the cluster at {args.scheduler}"
+        ctx = contextlib.closing(client)
+    else:
+        workers = args.workers or 2
+        where = f"{workers} local worker(s)"
+        ctx = local_cluster(workers, quiet=quiet)
+    with ctx as client:
+        result = run_batch(client, pairs, options, progress=_progress("queries"))
+    written = write_table(result.rows, out)
+    counts: dict = {}
+    for r in result.rows:
+        counts[r.status] = counts.get(r.status, 0) + 1
+    summary = ", ".join(f"{n} {s}" for s, n in sorted(counts.items()))
+    invalid = sum(r.check == "invalid" for r in result.rows)
+    if result.interrupted:
+        _say(
+            f"interrupted: wrote the {len(result.rows)} finished of {result.total} queries "
+            f"to {', '.join(map(str, written))}"
+        )
+        return 130
+    _say(
+        f"{result.total} queries on {where} in {time.perf_counter() - t:.1f} s: {summary or 'none'}"
+        f"{f', {invalid} INVALID' if invalid else ''}; wrote {', '.join(map(str, written))}",
+        sys.stdout,
+    )
+    for r in result.rows:
+        if not r.ran:
+            _say(f"{r.scene} {r.query}: error: {r.error}")
+        elif r.check == "invalid":  # a planner defect: reported, but the query did run
+            _say(f"{r.scene} {r.query}: the answer fails the check (see `gfuzzy check`)")
+    return EXIT_NO if result.errors else EXIT_OK
+
+
 # ------------------------------------------------------------------ parser
 
 
@@ -643,6 +727,19 @@ def _parser() -> argparse.ArgumentParser:
     k.add_argument("--expect", choices=("solved", "no_path", "invalid_query"), help="the query's expected status")
     k.add_argument("--max-duration", type=float, metavar="S", help="the query's expected longest duration")
     k.set_defaults(func=cmd_tracks)
+
+    b = sub.add_parser("batch", help="answer every query of every scene on a Dask cluster; one CSV row per query")
+    b.add_argument("scenes", metavar="SCENE", nargs="+")
+    plan_flags(b)
+    where = b.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, metavar="K", help="local worker processes (default 2)")
+    where.add_argument("--scheduler", metavar="ADDRESS", help="an existing Dask scheduler, e.g. tcp://host:8786")
+    b.add_argument("--connect-timeout", type=float, default=10.0, help=argparse.SUPPRESS)
+    b.add_argument("-o", "--output", required=True, metavar="RESULTS.csv",
+                   help="results table (and RESULTS.parquet beside it when pyarrow is installed)")  # fmt: skip
+    b.add_argument("--trajectories", metavar="DIR", help="save each answer as DIR/<scene>-<query>.json")
+    b.add_argument("-v", "--verbose", action="store_true", help="show Dask's logs")
+    b.set_defaults(func=cmd_batch, roadmap=None)
     return p
 
 

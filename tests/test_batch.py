@@ -1,0 +1,305 @@
+"""`gfuzzy batch` and gfuzzy.batch: rows for every query on a real Dask cluster.
+
+One LocalCluster of 2 worker processes serves the whole module; the CLI tests reach it
+with --scheduler, so they also cover connecting to an existing cluster.
+"""
+
+from __future__ import annotations
+
+import csv
+import os
+import sys
+from pathlib import Path
+
+import pytest
+
+from gfuzzy import load_scene, plan
+from gfuzzy.batch import COLUMNS, BatchOptions, local_cluster, run_batch, write_table
+from gfuzzy.cli import main
+from gfuzzy.roadmap import load_roadmap
+
+ROOT = Path(__file__).resolve().parent.parent
+SCENES = ["sim-4s1m", "sim-5s2m", "sealed-room", "wait-corridor"]
+
+cloudpickle = pytest.importorskip("cloudpickle")
+# the fault hooks below travel to the workers by value: they need not import this module
+cloudpickle.register_pickle_by_value(sys.modules[__name__])
+
+
+def raise_on_across(scene: str, query: str) -> None:
+    if query == "across":
+        raise RuntimeError("injected failure")
+
+
+def exit_on_across(scene: str, query: str) -> None:
+    if query == "across":
+        os._exit(3)  # the worker process dies under the task, as on a native crash
+
+
+@pytest.fixture(scope="module")
+def client():
+    with local_cluster(2) as c:
+        yield c
+
+
+@pytest.fixture(scope="module")
+def pairs():
+    out = []
+    for name in SCENES:
+        scene = load_scene(ROOT / "scenes" / f"{name}.yaml")
+        out.append((scene, load_roadmap(ROOT / "roadmaps" / f"{name}.json", scene)))
+    return out
+
+
+def n_queries(pairs) -> int:
+    return sum(len(s.queries) for s, _ in pairs)
+
+
+def read_csv(path: Path) -> list[dict]:
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def test_workers_run_one_blas_thread(client):
+    env = client.run(lambda: {k: os.environ.get(k) for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")})
+    assert len(env) == 2
+    for values in env.values():
+        assert values == {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+    assert all(v == 1 for v in client.nthreads().values())
+
+
+def _sigint_ignored() -> bool:
+    import signal
+
+    return signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+
+
+def test_workers_leave_ctrl_c_to_the_client(client):
+    # Ctrl-C reaches the whole process group; only the client may act on it
+    assert list(client.run(_sigint_ignored).values()) == [True, True]
+
+
+def test_rows_match_plan_and_saved_answers_check(client, pairs, tmp_path):
+    res = run_batch(client, pairs, BatchOptions(trajectories=str(tmp_path / "traj")))
+    assert not res.interrupted and res.errors == 0
+    assert len(res.rows) == res.total == n_queries(pairs)
+    # job order, and the very answers of an in-process plan (planning is deterministic)
+    want = [(s, q) for s, _ in pairs for q in s.queries]
+    assert [(r.scene, r.query) for r in res.rows] == [(s.name, q.name) for s, q in want]
+    rm = {s.name: r for s, r in pairs}
+    statuses = set()
+    for row, (scene, q) in zip(res.rows, want, strict=True):
+        ref = plan(scene, rm[scene.name], q.start, q.goal, q.t0)
+        assert row.status == ref.status.value
+        assert row.duration == ref.duration
+        assert row.delay_factor == ref.delay_factor
+        statuses.add(row.status)
+        path = tmp_path / "traj" / f"{scene.name}-{q.name}.json"
+        assert path.is_file()
+        if row.status == "solved":
+            assert row.check == "valid"
+            src = ROOT / "scenes" / f"{scene.name}.yaml"
+            assert main(["check", str(src), str(path)]) == 0
+        else:
+            assert row.check == ""
+    assert {"solved", "no_path"} <= statuses  # sealed-room has an unreachable goal
+
+
+def test_a_raising_query_is_an_error_row(client, pairs, tmp_path):
+    folder = tmp_path / "traj"
+    folder.mkdir()
+    stale = folder / "sim-4s1m-across.json"
+    stale.write_text("{}")
+    res = run_batch(client, pairs[:2], BatchOptions(trajectories=str(folder)), before=raise_on_across)
+    bad = [r for r in res.rows if r.status == "error"]
+    assert [(r.scene, r.query) for r in bad] == [("sim-4s1m", "across")]
+    assert "RuntimeError: injected failure" in bad[0].error
+    assert len(res.rows) == n_queries(pairs[:2])
+    assert all(r.status == "solved" for r in res.rows if r.query != "across")
+    assert not stale.exists()  # no answer: the previous run's file is gone
+
+
+def test_a_killed_worker_is_an_error_row(client, pairs):
+    res = run_batch(client, pairs[:2], before=exit_on_across)
+    bad = [r for r in res.rows if r.status == "error"]
+    assert [(r.scene, r.query) for r in bad] == [("sim-4s1m", "across")]
+    assert "worker died" in bad[0].error
+    assert len(res.rows) == n_queries(pairs[:2])
+    assert all(r.status == "solved" for r in res.rows if r.query != "across")
+    client.wait_for_workers(2, timeout=60)  # the nannies restart the dead workers
+
+
+def test_interrupt_keeps_the_finished_rows(client, pairs, tmp_path):
+    def progress(done, total):
+        if done == 2:
+            raise KeyboardInterrupt
+
+    res = run_batch(client, pairs, progress=progress)
+    assert res.interrupted
+    assert len(res.rows) == 2 < res.total
+    out = tmp_path / "partial.csv"
+    write_table(res.rows, out, parquet=False)
+    rows = read_csv(out)
+    assert len(rows) == 2 and all(r["status"] in ("solved", "no_path") for r in rows)
+
+
+def test_cli_batch_on_a_scheduler(client, tmp_path):
+    out = tmp_path / "rows.csv"
+    scenes = [ROOT / "scenes" / f"{n}.yaml" for n in SCENES[:3]]
+    code = main(["batch", *map(str, scenes), "--scheduler", client.scheduler.address,
+                 "-o", str(out), "--trajectories", str(tmp_path / "t")])  # fmt: skip
+    assert code == 0
+    rows = read_csv(out)
+    assert list(rows[0]) == list(COLUMNS)
+    assert len(rows) == sum(len(load_scene(p).queries) for p in scenes)
+    for r in rows:
+        path = tmp_path / "t" / f"{r['scene']}-{r['query']}.json"
+        assert path.is_file()
+        if r["status"] == "solved":
+            assert r["check"] == "valid" and float(r["duration"]) > 0
+            assert main(["check", str(ROOT / "scenes" / f"{r['scene']}.yaml"), str(path)]) == 0
+
+
+def test_cli_exit_1_on_an_error_row(client, tmp_path, monkeypatch):
+    import gfuzzy.batch as batch
+
+    real = batch.run_batch
+    monkeypatch.setattr(batch, "run_batch", lambda *a, **k: real(*a, **k, before=raise_on_across))
+    out = tmp_path / "rows.csv"
+    code = main(["batch", str(ROOT / "scenes" / "sim-4s1m.yaml"), "--scheduler",
+                 client.scheduler.address, "-o", str(out)])  # fmt: skip
+    assert code == 1
+    assert {r["query"]: r["status"] for r in read_csv(out)} == {"diagonal": "solved", "across": "error"}
+
+
+def test_cli_interrupt_writes_a_partial_table(client, tmp_path, monkeypatch, capsys):
+    import gfuzzy.cli as cli
+
+    def progress(label):
+        def cb(done, total):
+            if done == 1:
+                raise KeyboardInterrupt
+
+        return cb
+
+    monkeypatch.setattr(cli, "_progress", progress)
+    out = tmp_path / "rows.csv"
+    code = main(["batch", str(ROOT / "scenes" / "sim-4s1m.yaml"), str(ROOT / "scenes" / "sim-5s2m.yaml"),
+                 "--scheduler", client.scheduler.address, "-o", str(out)])  # fmt: skip
+    assert code == 130
+    rows = read_csv(out)
+    assert len(rows) == 1 and rows[0]["status"] == "solved"
+    assert "interrupted" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "extra, message",
+    [
+        (["--workers", "0"], "--workers"),
+        (["--workers", "1", "--scheduler", "tcp://127.0.0.1:1"], "not allowed with"),
+        (["-o", "{tmp}/missing/rows.csv"], "does not exist"),
+        (["-o", "{tmp}/rows.txt"], ".csv"),
+        (["--trajectories", "{tmp}/no/such/dir"], "does not exist"),
+    ],
+)
+def test_cli_bad_arguments(tmp_path, capsys, extra, message):
+    extra = [e.format(tmp=tmp_path) for e in extra]
+    if "-o" not in extra:
+        extra += ["-o", str(tmp_path / "rows.csv")]
+    code = main(["batch", str(ROOT / "scenes" / "sim-4s1m.yaml"), *extra])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert message in err and len(err.strip().splitlines()) == 1
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_cli_bad_scene_names_file_and_place(tmp_path, capsys):
+    bad = ROOT / "tests" / "bad_scenes" / "bad_mode.yaml"
+    out = tmp_path / "rows.csv"
+    code = main(["batch", str(ROOT / "scenes" / "sim-4s1m.yaml"), str(bad), "-o", str(out),
+                 "--trajectories", str(tmp_path / "t")])  # fmt: skip
+    err = capsys.readouterr().err.strip()
+    assert code == 2
+    assert "bad_mode.yaml" in err and "mode" in err and len(err.splitlines()) == 1
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_cli_two_scenes_of_one_name(tmp_path, capsys):
+    scene = ROOT / "scenes" / "sim-4s1m.yaml"
+    code = main(["batch", str(scene), str(scene), "-o", str(tmp_path / "rows.csv")])
+    assert code == 2
+    assert "repeats" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_parquet_beside_the_csv(tmp_path):
+    pa = pytest.importorskip("pyarrow.parquet")
+    from gfuzzy.batch import BatchRow
+
+    rows = [BatchRow("s", "q", "solved", 1.5, 1.0, 1.5, 0.1, "valid"), BatchRow("s", "r", "error", error="boom")]
+    written = write_table(rows, tmp_path / "rows.csv")
+    assert written == [tmp_path / "rows.csv", tmp_path / "rows.parquet"]
+    table = pa.read_table(tmp_path / "rows.parquet").to_pylist()
+    assert table[0]["duration"] == 1.5 and table[1]["duration"] is None and table[1]["error"] == "boom"
+
+
+def test_cli_unreachable_scheduler(tmp_path, capsys):
+    code = main(["batch", str(ROOT / "scenes" / "sim-4s1m.yaml"), "--scheduler", "tcp://127.0.0.1:1",
+                 "--connect-timeout", "1", "-o", str(tmp_path / "rows.csv")])  # fmt: skip
+    err = capsys.readouterr().err.strip()
+    assert code == 2
+    assert err.startswith("--scheduler tcp://127.0.0.1:1: cannot connect") and len(err.splitlines()) == 1
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_cli_passes_the_plan_options(client, tmp_path):
+    from gfuzzy.planner import PlanOptions
+
+    out = tmp_path / "rows.csv"
+    src = ROOT / "scenes" / "sim-5s2m.yaml"
+    code = main(["batch", str(src), "--scheduler", client.scheduler.address, "-o", str(out),
+                 "--refine", "--ga-seed", "3", "--dt", "0.05"])  # fmt: skip
+    assert code == 0
+    scene = load_scene(src)
+    rm = load_roadmap(ROOT / "roadmaps" / "sim-5s2m.json", scene)
+    opts = PlanOptions(refine=True, seed=3, dt=0.05)
+    for row in read_csv(out):
+        q = scene.query(row["query"])
+        ref = plan(scene, rm, q.start, q.goal, q.t0, opts)
+        assert row["status"] == ref.status.value
+        assert float(row["duration"]) == ref.duration
+
+
+# the cart passes the goal (4, 3) every 10 s, first just after the earliest arrival
+HOLD_SCENE = """
+version: 1
+name: park
+bounds: [0, 0, 6, 6]
+robot: {disc: 0.25, vmax: 1.0}
+movers:
+  - {name: cart, disc: 0.3, speed: 1.0, path: [[4, 1], [4, 5], [5, 5], [5, 1]], mode: loop, offset: 8.0}
+queries:
+  - {name: park, start: [1, 3], goal: [4, 3], hold: 2.0}
+"""
+
+
+def test_batch_keeps_each_querys_hold(client, tmp_path):
+    import yaml
+
+    from gfuzzy import build_roadmap, check_trajectory
+    from gfuzzy.roadmap import RoadmapOptions
+    from gfuzzy.scene import parse_scene
+
+    scene = parse_scene(yaml.safe_load(HOLD_SCENE))
+    rm = build_roadmap(scene, RoadmapOptions(vertices=60, seed=1))
+    res = run_batch(client, [(scene, rm)], BatchOptions(trajectories=str(tmp_path)))
+    (row,) = res.rows
+    q = scene.queries[0]
+    held = plan(scene, rm, q.start, q.goal, hold=q.hold)
+    assert row.status == "solved" and row.check == "valid"
+    assert row.duration == held.duration
+    assert row.duration > plan(scene, rm, q.start, q.goal).duration  # it waited to park safely
+    from gfuzzy.trajectory import load_trajectory
+
+    saved = load_trajectory(tmp_path / "park-park.json")
+    assert check_trajectory(scene, saved.waypoints, q).valid
