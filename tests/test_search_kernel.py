@@ -1,0 +1,169 @@
+"""The compiled search (gfuzzy.search_kernel) against the reference (timespace.sipp).
+
+Both must search in the same order and so return the same answer: same status, same
+(node, step) rows, same expansions. Cross-checked on every bundled scene's queries (as
+given, with a hold, with a mover clearance), on seeded random graphs among random movers,
+and against the brute-force time-expanded search of test_planner.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections import deque
+from pathlib import Path
+
+import numpy as np
+import pytest
+from test_planner import _brute_force_steps, corridor, open_scene  # noqa: F401 (fixtures)
+
+from gfuzzy.planner import Planner, PlanOptions, Status
+from gfuzzy.roadmap import load_roadmap
+from gfuzzy.scene import load_scene
+from gfuzzy.search_kernel import sipp_compiled
+from gfuzzy.timespace import IntervalStore, MoverField, SpaceTimeGraph, sipp
+
+ROOT = Path(__file__).resolve().parent.parent
+SCENES = sorted((ROOT / "scenes").glob("*.yaml"))
+
+
+def _same(a, b):
+    assert a.status == b.status
+    assert a.message == b.message
+    assert a.stats.get("expansions") == b.stats.get("expansions")
+    if a.trajectory is None:
+        assert b.trajectory is None
+    else:
+        assert a.duration == b.duration
+        np.testing.assert_array_equal(a.trajectory.waypoints, b.trajectory.waypoints)
+
+
+@pytest.mark.parametrize("path", SCENES, ids=[p.stem for p in SCENES])
+def test_bundled_queries_same_answer(path):
+    scene = load_scene(path)
+    rm = load_roadmap(ROOT / "roadmaps" / f"{scene.name}.json", scene)
+    planner = Planner(scene, rm)
+    for q in scene.queries:
+        for hold in {q.hold, 2.0}:
+            ref = planner.plan(q.start, q.goal, q.t0, PlanOptions(backend="reference"), hold=hold)
+            comp = planner.plan(q.start, q.goal, q.t0, PlanOptions(backend="compiled"), hold=hold)
+            _same(ref, comp)
+
+
+@pytest.mark.parametrize("name", ["sim-5s2m", "zara-crowd", "wait-corridor"])
+def test_bundled_queries_same_answer_with_mover_clearance(name):
+    scene = load_scene(ROOT / "scenes" / f"{name}.yaml")
+    rm = load_roadmap(ROOT / "roadmaps" / f"{name}.json", scene)
+    scene = dataclasses.replace(scene, robot=dataclasses.replace(scene.robot, mover_clearance=0.25))
+    planner = Planner(scene, rm)
+    solved = 0
+    for q in scene.queries:
+        ref = planner.plan(q.start, q.goal, q.t0, PlanOptions(backend="reference"), hold=q.hold)
+        comp = planner.plan(q.start, q.goal, q.t0, PlanOptions(backend="compiled"), hold=q.hold)
+        _same(ref, comp)
+        solved += ref.solved
+    assert solved >= 1  # the comparison covered a search, not only refusals
+
+
+def test_backend_is_validated():
+    with pytest.raises(ValueError, match="backend"):
+        PlanOptions(backend="fortran")
+
+
+SCENE = """
+version: 1
+name: random
+bounds: [0, 0, 6, 6]
+robot: {disc: 0.15, vmax: 1.0}
+obstacles: []
+movers:
+"""
+
+
+def _random_case(rng, tmp_path):
+    """A grid graph with random diagonals among 1-6 random movers (discs and boxes)."""
+    lines = [SCENE]
+    for i in range(int(rng.integers(1, 7))):
+        path = rng.uniform(0.5, 5.5, size=(int(rng.integers(2, 4)), 2)).round(2).tolist()
+        shape = f"disc: {rng.uniform(0.1, 0.5):.2f}" if rng.random() < 0.6 else "box: [0.5, 0.3]"
+        mode = ["loop", "bounce", "once"][int(rng.integers(3))]
+        lines.append(f"  - {{name: m{i}, {shape}, speed: {rng.uniform(0.2, 1.5):.2f}, path: {path}, mode: {mode}}}")
+    p = tmp_path / "random.yaml"
+    p.write_text("\n".join(lines) + "\n")
+    scene = load_scene(p)
+    side = int(rng.integers(5, 10))
+    xs = np.linspace(0.5, 5.5, side)
+    poses = np.array([[x, y] for y in xs for x in xs])
+    n = len(poses)
+    adj = [[] for _ in range(n)]
+    for r in range(side):
+        for c in range(side):
+            i = r * side + c
+            for dr, dc in ((0, 1), (1, 0), (1, 1)):
+                if r + dr < side and c + dc < side and (dr + dc == 1 or rng.random() < 0.3):
+                    j = (r + dr) * side + c + dc
+                    adj[i].append(j)
+                    adj[j].append(i)
+    indptr = np.concatenate([[0], np.cumsum([len(a) for a in adj])])
+    nbrs = np.array([v for a in adj for v in a], dtype=np.int64)
+    start, goal = (int(v) for v in rng.choice(n, 2, replace=False))
+    hops = np.full(n, np.inf)  # exact static steps to the goal: BFS
+    hops[goal] = 0
+    queue = deque([goal])
+    while queue:
+        u = queue.popleft()
+        for v in adj[u]:
+            if hops[v] == np.inf:
+                hops[v] = hops[u] + 1
+                queue.append(v)
+    graph = SpaceTimeGraph(poses, indptr, nbrs, hops)
+    return scene, graph, start, goal
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_random_graphs_same_search(seed, tmp_path):
+    rng = np.random.default_rng(seed)
+    scene, graph, start, goal = _random_case(rng, tmp_path)
+    t0 = float(rng.uniform(0, 5))
+    steps = int(rng.integers(20, 80))
+    hold = int(rng.integers(0, 10)) if rng.random() < 0.4 else 0
+    weight = 1.0 if rng.random() < 0.7 else 1.5
+    answers = []
+    for search in (sipp, sipp_compiled):
+        store = IntervalStore(graph)
+        res = None
+        for horizon in (steps, 2 * steps):  # a regrown horizon reuses the store
+            field = MoverField(scene, t0, 0.2, horizon, scene.robot.vmax)
+            res = search(graph, field, start, goal, weight=weight, store=store, goal_hold=hold)
+            if res.status == "solved":
+                break
+        answers.append(res)
+    ref, comp = answers
+    assert (ref.status, ref.message, ref.nodes, ref.steps) == (comp.status, comp.message, comp.nodes, comp.steps)
+    assert (ref.expansions, ref.states, ref.horizon_hit) == (comp.expansions, comp.states, comp.horizon_hit)
+
+
+def test_random_graphs_cover_both_outcomes(tmp_path):
+    """The random cases above include solved and unsolved searches (else they test little)."""
+    statuses = set()
+    for seed in range(30):
+        rng = np.random.default_rng(seed)
+        scene, graph, start, goal = _random_case(rng, tmp_path)
+        field = MoverField(scene, float(rng.uniform(0, 5)), 0.2, int(rng.integers(20, 80)), 1.0)
+        statuses.add(sipp_compiled(graph, field, start, goal).status)
+    assert statuses == {"solved", "no_path"}
+
+
+@pytest.mark.parametrize("t0", [0.0, 1.3, 4.2])
+def test_compiled_matches_brute_force(open_scene, corridor, t0):  # noqa: F811 (fixtures)
+    for scene, rm in (open_scene, corridor):
+        q = scene.queries[0]
+        planner = Planner(scene, rm)
+        dt = 0.1
+        res = planner.plan(q.start, q.goal, t0, PlanOptions(dt=dt, horizon=40.0, stretch=1.0, backend="compiled"))
+        steps = _brute_force_steps(planner, q.start, q.goal, t0, dt, int(math.ceil(40.0 / dt)))
+        if steps is None:
+            assert res.status is Status.NO_PATH
+        else:
+            assert res.status is Status.SOLVED
+            assert abs(res.duration - steps * dt) <= dt + 1e-9
