@@ -479,6 +479,7 @@ class Planner:
                     f"sample (at most {MAX_MOVER_SAMPLES:,}); use a larger dt or a shorter horizon"
                 )
             field_ = MoverField(self.scene, t0, opts.dt, steps, vmax)
+            field_.compiled = opts.backend == "compiled"
             if store.H < 0:  # first round: a start on a mover is not a query to search
                 hit = field_.collides_at(start, 0)
                 if hit is not None:

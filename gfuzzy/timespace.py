@@ -138,6 +138,8 @@ class MoverField:
         self._is_disc = np.array([mv.shape == "disc" for mv in self.movers], dtype=bool)
         self._radius = np.array([mv.radius for mv in self.movers])
         self._size = np.array([mv.size for mv in self.movers], dtype=float).reshape(-1, 2)
+        #: Phases 2 and 3 of unsafe_pairs compiled (gfuzzy.search_kernel); the same answers.
+        self.compiled = False
 
     def unsafe(self, poses: FloatArray, lo: int = 0, hi: int | None = None) -> BoolArray:
         """Steps at which the robot at each of ``poses`` is not safe (one group; dense, for
@@ -210,6 +212,8 @@ class MoverField:
         g3, m3, c3 = self._broad_phase(gmin, gmax, lo // CHUNK, hi // CHUNK)
         if g3.size == 0:
             return none
+        if self.compiled:
+            return self._narrow_compiled(poses, ptr, g3, m3, c3, lo, hi, p0, seg, inv, seg2, dev, body)
         # 2. mid phase: every step of those chunks, mover against the group's segment
         st = (c3[:, None] * CHUNK + np.arange(CHUNK)).ravel()
         g3 = np.repeat(g3, CHUNK)
@@ -257,6 +261,29 @@ class MoverField:
         self.evaluations += d.size
         bad = d < margin
         return node[bad], st4[bad]
+
+    def _narrow_compiled(self, poses, ptr, g3, m3, c3, lo, hi, p0, seg, inv, seg2, dev, body):
+        """Phases 2 and 3 of :meth:`unsafe_pairs` by :func:`gfuzzy.search_kernel.narrow_phase`
+        (the same tests, compiled); a box robot against box movers keeps the numpy distance."""
+        from .search_kernel import narrow_phase
+
+        robot = self.robot
+        box = robot.shape != "disc"
+        cosp = np.cos(poses[:, 2]) if box else np.zeros(0)
+        sinp = np.sin(poses[:, 2]) if box else np.zeros(0)
+        half = 0.5 * np.asarray(robot.size, dtype=float) if box else np.zeros(2)
+        node, mv, st, margin, d, count = narrow_phase(
+            g3, m3, c3, CHUNK, lo, hi, self.present, self.xy, self.margin, ptr,
+            np.ascontiguousarray(poses[:, :2]), p0, seg, inv, seg2, dev, body, self._extent,
+            float(robot.circumradius), int(box), float(robot.radius), float(half[0]), float(half[1]),
+            cosp, sinp, self._is_disc, self._radius, self._size,
+        )  # fmt: skip
+        todo = np.isnan(d)
+        if todo.any():
+            d[todo] = self._distance(poses[node[todo]], mv[todo], self.xy[mv[todo], st[todo]])
+        self.evaluations += count
+        bad = d < margin
+        return node[bad], st[bad]
 
     def _broad_phase(self, gmin, gmax, c_lo, c_hi):
         """(group, mover, chunk) triples whose boxes overlap, chunk within the group's range.

@@ -74,7 +74,7 @@ SCENE = """
 version: 1
 name: random
 bounds: [0, 0, 6, 6]
-robot: {disc: 0.15, vmax: 1.0}
+robot: ROBOT
 obstacles: []
 movers:
 """
@@ -82,7 +82,8 @@ movers:
 
 def _random_case(rng, tmp_path):
     """A grid graph with random diagonals among 1-6 random movers (discs and boxes)."""
-    lines = [SCENE]
+    box_robot = rng.random() < 0.4
+    lines = [SCENE.replace("ROBOT", "{box: [0.4, 0.25], vmax: 1.0}" if box_robot else "{disc: 0.15, vmax: 1.0}")]
     for i in range(int(rng.integers(1, 7))):
         path = rng.uniform(0.5, 5.5, size=(int(rng.integers(2, 4)), 2)).round(2).tolist()
         shape = f"disc: {rng.uniform(0.1, 0.5):.2f}" if rng.random() < 0.6 else "box: [0.5, 0.3]"
@@ -94,6 +95,8 @@ def _random_case(rng, tmp_path):
     side = int(rng.integers(5, 10))
     xs = np.linspace(0.5, 5.5, side)
     poses = np.array([[x, y] for y in xs for x in xs])
+    if box_robot:
+        poses = np.column_stack([poses, rng.uniform(-math.pi, math.pi, len(poses))])
     n = len(poses)
     adj = [[] for _ in range(n)]
     for r in range(side):
@@ -134,6 +137,7 @@ def test_random_graphs_same_search(seed, tmp_path):
         res = None
         for horizon in (steps, 2 * steps):  # a regrown horizon reuses the store
             field = MoverField(scene, t0, 0.2, horizon, scene.robot.vmax)
+            field.compiled = search is sipp_compiled  # the compiled safety kernel too
             res = search(graph, field, start, goal, weight=weight, store=store, goal_hold=hold)
             if res.status == "solved":
                 break
@@ -141,6 +145,33 @@ def test_random_graphs_same_search(seed, tmp_path):
     ref, comp = answers
     assert (ref.status, ref.message, ref.nodes, ref.steps) == (comp.status, comp.message, comp.nodes, comp.steps)
     assert (ref.expansions, ref.states, ref.horizon_hit) == (comp.expansions, comp.states, comp.horizon_hit)
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_compiled_safety_kernel_same_pairs(seed, tmp_path):
+    """unsafe_pairs: phases 2-3 compiled against numpy, on groups of points along segments
+    (the roadmap's edges) and single points, disc and box robots, disc and box movers."""
+    rng = np.random.default_rng(100 + seed)
+    scene, graph, _, _ = _random_case(rng, tmp_path)
+    n = int(rng.integers(3, 9))
+    a, b = rng.uniform(0.3, 5.7, (2, 40, 2))
+    groups = [a[i] + np.linspace(0, 1, n)[:, None] * (b[i] - a[i]) for i in range(40)]
+    groups += [rng.uniform(0.3, 5.7, (1, 2)) for _ in range(20)]
+    poses = np.vstack(groups)
+    if scene.robot.dof == 3:
+        poses = np.column_stack([poses, rng.uniform(-math.pi, math.pi, len(poses))])
+    ptr = np.concatenate([[0], np.cumsum([len(g) for g in groups])])
+    lo = rng.integers(0, 20, len(groups))
+    hi = lo + rng.integers(0, 60, len(groups))
+    pairs = []
+    t0 = float(rng.uniform(0, 3))
+    for compiled in (False, True):
+        field = MoverField(scene, t0, 0.1, 70, 1.0, clearance=0.1 * seed % 0.3)
+        field.compiled = compiled
+        node, step = field.unsafe_pairs(poses, ptr, lo, hi)
+        pairs.append((set(zip(node.tolist(), step.tolist(), strict=True)), field.evaluations))
+    assert pairs[0] == pairs[1]
+    assert pairs[0][0]  # the movers come near some points: not a vacuous comparison
 
 
 def test_random_graphs_cover_both_outcomes(tmp_path):
