@@ -189,6 +189,7 @@ def _plan_options(args):
             weight=args.weight,
             stretch=args.stretch,
             seed=args.ga_seed,
+            backend=getattr(args, "backend", "compiled"),
         )
     except ValueError as exc:  # named after the command run (plan shares these flags with regress)
         raise BadInput(f"gfuzzy {getattr(args, 'command', None) or 'plan'}: {exc}") from None
@@ -658,6 +659,8 @@ def _parser() -> argparse.ArgumentParser:
         q.add_argument("--ga-seed", type=int, default=0, help="seed of the GA refinement (default 0)")
         q.add_argument("--stretch", type=float, default=1.05,
                        help="search the roadmap's spanner of this stretch (default 1.05; 1 = the whole roadmap)")  # fmt: skip
+        q.add_argument("--backend", choices=("compiled", "reference"), default="compiled",
+                       help="search implementation: compiled (numba, default) or the pure-Python reference; same answers")  # fmt: skip
         clearance_flags(q)
 
     def clearance_flags(q):

@@ -439,10 +439,27 @@ def warm() -> None:
             return [0], [8], 8
 
     sipp_compiled(graph, _Field(), 0, 2, store=_Store())
+    # the safety kernel, through MoverField as the planner calls it: disc and box robots
+    from .scene import parse_scene
+    from .timespace import MoverField
 
-
-if __name__ == "__main__":
-    warm()
+    for robot, poses in (({"disc": 0.2, "vmax": 1.0}, [[0.5, 1.0], [1.5, 1.0]]),
+                         ({"box": [0.4, 0.2], "vmax": 1.0}, [[0.5, 1.0, 0.0], [1.5, 1.0, 0.3]])):  # fmt: skip
+        scene = parse_scene(
+            {
+                "version": 1,
+                "name": "warm",
+                "bounds": [0, 0, 2, 2],
+                "robot": robot,
+                "movers": [
+                    {"name": "a", "disc": 0.2, "speed": 1.0, "path": [[1, 0.2], [1, 1.8]], "mode": "bounce"},
+                    {"name": "b", "box": [0.3, 0.3], "speed": 1.0, "path": [[0.2, 1], [1.8, 1]], "mode": "loop"},
+                ],
+            }
+        )
+        field_ = MoverField(scene, 0.0, 0.1, 20, 1.0)
+        field_.compiled = True
+        field_.unsafe_pairs(np.array(poses), np.array([0, 2]), np.array([0]), np.array([20]))
 
 
 # ----------------------------------------------------------------------- safety kernel
@@ -550,3 +567,7 @@ def narrow_phase(g3, m3, c3, chunk, lo, hi, present, mxy, margin_tab, ptr, xy, p
         np.array(out_d, dtype=np.float64),
         count,
     )
+
+
+if __name__ == "__main__":
+    warm()
