@@ -9,6 +9,7 @@ produce a safe answer leaves the earlier answer in place.
 
 from __future__ import annotations
 
+import copy
 import enum
 import logging
 import math
@@ -381,8 +382,61 @@ class Planner:
         return graph, s_id, g_id, float(dist[s_id])
 
     # ---------------------------------------------------------------- query
+    def prepare(self, goal, options: PlanOptions | None = None):
+        """Keep what replanning to ``goal`` reuses: the split roadmap graph and the static
+        distances to the goal (:mod:`gfuzzy.prepared`).
+
+        Parameters
+        ----------
+        goal : (d,) float
+        options : PlanOptions, optional
+            Fixed for every :meth:`plan_from` on the result (dt, stretch, connect_k, backend...).
+
+        Returns
+        -------
+        gfuzzy.prepared.PreparedGoal
+
+        Raises
+        ------
+        ValueError
+            A malformed goal (as :meth:`plan`).
+        """
+        from .prepared import prepare_goal
+
+        opts = options or PlanOptions()
+        goal = check_pose(goal, self.robot.dof, "goal")
+        return prepare_goal(self, goal, opts)
+
+    def plan_from(self, prepared, start, t0: float = 0.0, movers=None, hold: float = 0.0) -> PlanResult:
+        """Answer a query to a prepared goal from ``start`` at ``t0``: :meth:`plan` without
+        rebuilding the graph (only the start is spliced in, no Dijkstra), same arrival.
+
+        Parameters
+        ----------
+        prepared : gfuzzy.prepared.PreparedGoal
+            From :meth:`prepare` on this planner.
+        start : (d,) float
+            Any free pose (mid-edge poses connect to their nearest vertices).
+        t0 : float
+        movers : sequence of gfuzzy.scene.Mover, optional
+            The movers to avoid this time (e.g. predicted from observations); None: the
+            scene's own.
+        hold : float
+
+        Returns
+        -------
+        PlanResult
+            As :meth:`plan`; durations equal a fresh ``plan(start, goal, t0)``'s.
+        """
+        planner = self
+        if movers is not None:
+            planner = copy.copy(self)
+            planner.scene = replace(self.scene, movers=tuple(movers))
+        return planner.plan(start, prepared.goal_raw, t0, prepared.options, hold=hold, _prepared=prepared)
+
     def plan(
-        self, start, goal, t0: float = 0.0, options: PlanOptions | None = None, hold: float = 0.0
+        self, start, goal, t0: float = 0.0, options: PlanOptions | None = None, hold: float = 0.0,
+        _prepared=None,
     ) -> PlanResult:
         """Answer one query.
 
@@ -442,7 +496,10 @@ class Planner:
             start[2] = (start[2] + math.pi) % (2 * math.pi) - math.pi
             goal[2] = (goal[2] + math.pi) % (2 * math.pi) - math.pi
         vplan = vmax * SPEED_SAFETY
-        graph, s_id, g_id, rd = self._graph(start, goal, opts.dt, vplan, opts.connect_k, opts.stretch)
+        if _prepared is None:
+            graph, s_id, g_id, rd = self._graph(start, goal, opts.dt, vplan, opts.connect_k, opts.stretch)
+        else:  # plan_from: the kept graph with this start spliced in
+            graph, s_id, g_id, rd = _prepared.splice(self, start)
         if not math.isfinite(rd):
             return answer(
                 "no_path",
