@@ -518,8 +518,15 @@ def narrow_phase(g3, m3, c3, chunk, lo, hi, present, mxy, margin_tab, ptr, xy, p
             qy = mxy[m, st, 1]
             tu = ((qx - p0[g, 0]) * seg[g, 0] + (qy - p0[g, 1]) * seg[g, 1]) * inv[g]
             tq = min(max(tu, 0.0), 1.0)
-            dq = math.hypot(p0[g, 0] + tq * seg[g, 0] - qx, p0[g, 1] + tq * seg[g, 1] - qy)
+            ex = p0[g, 0] + tq * seg[g, 0] - qx
+            ey = p0[g, 1] + tq * seg[g, 1] - qy
             mg = margin_tab[m, st]
+            # a cheap superset test first (squares, with slack for rounding), then the
+            # reference's own test on what remains
+            lim = mg + body[g] + extent[m]
+            if lim > 0.0 and ex * ex + ey * ey > lim * lim * (1.0 + 1e-9) + 1e-12:
+                continue  # far outside: the test below fails too
+            dq = math.hypot(ex, ey)
             if not (dq - body[g] - extent[m] < mg):
                 continue
             first = 0
@@ -538,6 +545,9 @@ def narrow_phase(g3, m3, c3, chunk, lo, hi, present, mxy, margin_tab, ptr, xy, p
                 node = a + i
                 rx = qx - xy[node, 0]
                 ry = qy - xy[node, 1]
+                lim = mg + circ + extent[m]
+                if lim > 0.0 and rx * rx + ry * ry > lim * lim * (1.0 + 1e-9) + 1e-12:
+                    continue  # far outside: the test below fails too
                 if not (math.hypot(rx, ry) - circ - extent[m] < mg):
                     continue
                 if robot_kind == 0:
