@@ -198,3 +198,43 @@ def test_compiled_matches_brute_force(open_scene, corridor, t0):  # noqa: F811 (
         else:
             assert res.status is Status.SOLVED
             assert abs(res.duration - steps * dt) <= dt + 1e-9
+
+
+def test_reference_path_never_imports_numba():
+    """`import gfuzzy` and a reference-backend query run without numba (cold start), and
+    the compiled backend loads it."""
+    from conftest import run_python
+
+    code = (
+        "import sys, gfuzzy\n"
+        "from gfuzzy.scene import load_scene\n"
+        "from gfuzzy.roadmap import load_roadmap\n"
+        "s = load_scene('scenes/sim-4s1m.yaml')\n"
+        "p = gfuzzy.Planner(s, load_roadmap('roadmaps/sim-4s1m.json', s))\n"
+        "q = s.queries[0]\n"
+        "r = p.plan(q.start, q.goal, q.t0, gfuzzy.PlanOptions(backend='reference'))\n"
+        "print(r.status, 'numba' in sys.modules)\n"
+        "r = p.plan(q.start, q.goal, q.t0)\n"
+        "print(r.status, 'numba' in sys.modules)\n"
+    )
+    out = run_python(code, cwd=ROOT)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["solved", "False", "solved", "True"]
+
+
+def test_cli_backend_flag(tmp_path):
+    """`gfuzzy plan --backend reference` and the default write the same trajectory."""
+    import json
+
+    from conftest import run_cli_process
+
+    rows = {}
+    for backend in ("compiled", "reference"):
+        out = tmp_path / f"{backend}.json"
+        res = run_cli_process("plan", "scenes/wait-corridor.yaml", "--backend", backend, "-o", out, cwd=ROOT)
+        assert res.returncode == 0, res.stderr
+        doc = json.loads(out.read_text())
+        rows[backend] = (doc["status"], doc["duration"], doc["waypoints"])
+    assert rows["compiled"] == rows["reference"]
+    bad = run_cli_process("plan", "scenes/wait-corridor.yaml", "--backend", "fortran", cwd=ROOT)
+    assert bad.returncode == 2 and "backend" in bad.stderr
