@@ -482,14 +482,17 @@ def _box_dist(px, py, hx, hy):
 
 @njit(cache=True)
 def narrow_phase(g3, m3, c3, chunk, lo, hi, present, mxy, margin_tab, ptr, xy, p0, seg, inv, seg2, dev,
-                 body, extent, circ, robot_kind, robot_r, hx_r, hy_r, cosp, sinp, is_disc, mrad, msize):  # fmt: skip
+                 body, extent, circ, robot_kind, robot_r, hx_r, hy_r, cosp, sinp, is_disc, mrad, msize,
+                 robot_in, inner):  # fmt: skip
     """Phases 2 and 3 of :meth:`gfuzzy.timespace.MoverField.unsafe_pairs` in one loop.
 
     The same tests in the same floating-point operations, per candidate instead of per
     array. ``robot_kind`` 0: disc robot, 1: box robot (``cosp``, ``sinp``: its headings'
     cosines and sines, computed by numpy as the reference does). The exact distance is
     computed here except for a box robot against a box mover (``dist`` NaN: the caller
-    uses the reference's separating-axis code).
+    uses the reference's separating-axis code). ``robot_in`` and ``inner``: the inscribed
+    radii of the robot and the movers; a pair whose inscribed discs are closer than the
+    margin is unsafe without its exact distance (which is at most theirs).
 
     Returns
     -------
@@ -548,9 +551,14 @@ def narrow_phase(g3, m3, c3, chunk, lo, hi, present, mxy, margin_tab, ptr, xy, p
                 lim = mg + circ + extent[m]
                 if lim > 0.0 and rx * rx + ry * ry > lim * lim * (1.0 + 1e-9) + 1e-12:
                     continue  # far outside: the test below fails too
-                if not (math.hypot(rx, ry) - circ - extent[m] < mg):
+                hc = math.hypot(rx, ry)
+                if not (hc - circ - extent[m] < mg):
                     continue
-                if robot_kind == 0:
+                if hc - robot_in - inner[m] < mg - 1e-9:
+                    # the shapes' inscribed discs are closer than the margin, so the exact
+                    # distance (or the separating-axis gap, a lower bound) is too
+                    d = -np.inf
+                elif robot_kind == 0:
                     if is_disc[m]:
                         d = math.hypot(rx, ry) - robot_r - mrad[m]
                     else:

@@ -277,6 +277,7 @@ class MoverField:
             np.ascontiguousarray(poses[:, :2]), p0, seg, inv, seg2, dev, body, self._extent,
             float(robot.circumradius), int(box), float(robot.radius), float(half[0]), float(half[1]),
             cosp, sinp, self._is_disc, self._radius, self._size,
+            float(robot.inradius), np.where(self._is_disc, self._radius, 0.5 * self._size.min(axis=1, initial=np.inf)),
         )  # fmt: skip
         todo = np.isnan(d)
         if todo.any():
@@ -546,8 +547,8 @@ class IntervalStore:
         self._done_l = self.done_hi.tolist()
         # intervals stay in their batch's lists until a search asks for them
         self._batches: list = []  # (starts, row pointers, ends, first step examined per row)
-        self._where = [-1] * n  # batch of a node's latest computation (lists: read per node)
-        self._local = [0] * n  # its row there
+        self._where = np.full(n, -1, dtype=np.int64)  # batch of a node's latest computation
+        self._local = np.zeros(n, dtype=np.int64)  # its row there
         self._older: dict = {}  # node -> (starts, ends) from computations before the latest
         self.batch_arrays: list = []  # the batches as arrays (see _compute)
         self.field = None
@@ -581,11 +582,11 @@ class IntervalStore:
         return iv
 
     def _intervals(self, node: int) -> tuple[list, list]:
-        b = self._where[node]
+        b = int(self._where[node])
         if b < 0:
             return [], []
         cs, sp, ce, first = self._batches[b]
-        k = self._local[node]
+        k = int(self._local[node])
         a, z = sp[k], sp[k + 1]
         old = self._older.get(node)
         if old is None or not old[0]:
@@ -629,22 +630,16 @@ class IntervalStore:
         gs, ge = ws[:-1] + 1, ws[1:] - 1
         ok = same & (gs <= ge)
         rn = wn[:-1][ok]
-        sp = np.searchsorted(rn, np.arange(k + 1)).tolist()
-        where, local = self._where, self._local
-        node_list = nodes.tolist()
-        extended = []
-        for nid in node_list:  # extended windows: keep what was computed before
-            if where[nid] >= 0:
-                self._older[nid] = self._intervals(nid)
-                extended.append(nid)
-        self._batches.append((gs[ok].tolist(), sp, ge[ok].tolist(), lo_n.tolist()))
+        sp_arr = np.searchsorted(rn, np.arange(k + 1))
+        extended = nodes[self._where[nodes] >= 0].tolist()
+        for nid in extended:  # extended windows: keep what was computed before
+            self._older[nid] = self._intervals(nid)
+        self._batches.append((gs[ok].tolist(), sp_arr.tolist(), ge[ok].tolist(), lo_n.tolist()))
         # the same batch as arrays, for a consumer that loads whole batches at once
         # (gfuzzy.search_kernel); nodes in `extended` also have older intervals
-        self.batch_arrays.append((nodes, gs[ok], ge[ok], np.asarray(sp, dtype=np.int64), extended))
-        b = len(self._batches) - 1
-        for i, nid in enumerate(node_list):
-            where[nid] = b
-            local[nid] = i
+        self.batch_arrays.append((nodes, gs[ok], ge[ok], sp_arr, extended))
+        self._where[nodes] = len(self._batches) - 1
+        self._local[nodes] = np.arange(k)
 
 
 def sipp(
