@@ -173,7 +173,7 @@ def simulate(
                     "pose": pose.tolist(),
                     "mode": mode,
                     "predicted": np.round(nav.last.predicted, 4).tolist() if nav.last is not None else [],
-                    "plan": np.round(traj.waypoints[:40], 4).tolist(),
+                    "plan": np.round(_thin(traj.waypoints, 40), 4).tolist(),
                 }
             )
         t_next = min(t + period, t_stop)
@@ -197,6 +197,13 @@ def simulate(
     executed = Trajectory(wps, cr)
     sep = min_separation(scene, wps)
     return NavResult(status, executed, len(seconds), np.array(seconds), modes, sep, kept)
+
+
+def _thin(w: FloatArray, n: int) -> FloatArray:
+    """At most ``n`` rows of ``w``, evenly picked, the first and last kept (for the log)."""
+    if len(w) <= n:
+        return w
+    return w[np.unique(np.linspace(0, len(w) - 1, n).round().astype(int))]
 
 
 def _follow(traj: Trajectory, ta: float, tb: float) -> FloatArray:
