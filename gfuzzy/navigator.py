@@ -69,7 +69,11 @@ class NavOptions:
     prediction_horizon : float
         How long (s) an observed person is predicted to walk on at constant velocity.
     uncertainty_growth : float
-        Growth (m per s of prediction time) of the inflation around a predicted person.
+        Growth (m per s of prediction time) of the inflation around a predicted person
+        walking at ``reference_speed`` or faster; slower people get a proportionally
+        slower growth (someone standing still gets none).
+    reference_speed : float
+        Walking speed (m/s) at which the uncertainty grows at its full rate.
     safety_buffer : float
         Distance (m) kept from every predicted person on top of ``robot.mover_clearance``.
     slice : float
@@ -100,6 +104,7 @@ class NavOptions:
     dt: float = 0.1
     prediction_horizon: float = 3.0
     uncertainty_growth: float = 0.2
+    reference_speed: float = 1.0
     safety_buffer: float = 0.1
     slice: float = 0.5
     stationary_hold: float = 8.0
@@ -113,7 +118,7 @@ class NavOptions:
     goal_tolerance: float = 1e-6
 
     def __post_init__(self):
-        for name in ("dt", "prediction_horizon", "slice", "time_budget", "plan_slack", "evasion_time", "cover"):
+        for name in ("dt", "prediction_horizon", "reference_speed", "slice", "time_budget", "plan_slack", "evasion_time", "cover"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ValueError(f"{name} must be a positive number, got {v!r}")
@@ -316,12 +321,15 @@ class Navigator:
         opts = self.options
         n_slices = int(math.ceil(opts.prediction_horizon / opts.slice - 1e-9))
         tau = np.arange(n_slices) * opts.slice
-        full = self.mover_clearance + opts.safety_buffer + opts.uncertainty_growth * tau  # (S,)
-        gap = self._gap(pose, obs)  # (k,) beyond the people's own radius
         speed = np.hypot(obs[:, 2], obs[:, 3])
+        # uncertainty grows with how far a person may stray from the straight walk: with
+        # their speed (someone standing is where they stand; a full-speed walker may turn)
+        rate = opts.uncertainty_growth * np.minimum(speed / opts.reference_speed, 1.0)
+        full = self.mover_clearance + opts.safety_buffer + rate[:, None] * tau[None, :]  # (k, S)
+        gap = self._gap(pose, obs)  # (k,) beyond the people's own radius
         margin0 = (self.vplan + speed) * opts.dt / 2  # the search's continuous-time margin at step 0
         allowed = np.maximum(gap - margin0 - 1e-6, 0.0)
-        return np.minimum(full[None, :], allowed[:, None] + self.vplan * tau[None, :])
+        return np.minimum(full, allowed[:, None] + self.vplan * tau[None, :])
 
     def _gap(self, pose: FloatArray, obs: FloatArray) -> FloatArray:
         from .geometry import mover_distance
