@@ -107,7 +107,7 @@ class NavOptions:
     reference_speed: float = 1.0
     safety_buffer: float = 0.1
     slice: float = 0.5
-    stationary_hold: float = 8.0
+    stationary_hold: float = 30.0
     time_budget: float = 0.1
     plan_slack: float = 8.0
     connect_k: int = 8
@@ -204,6 +204,7 @@ class Navigator:
         self.replans = 0
         self.last: NavStep | None = None
         self._previous: Trajectory | None = None
+        self._ahead: list = []  # (arrival time, roadmap vertex) of the last plan
         self._build_base()
 
     # ------------------------------------------------------------------ graph
@@ -242,6 +243,13 @@ class Navigator:
             (np.r_[w, w], (np.r_[edges[:, 0], edges[:, 1]], np.r_[edges[:, 1], edges[:, 0]])), shape=(n, n)
         ).tocsr()
         hop_g = np.rint(dijkstra(mat, directed=True, indices=g_id))
+        # metres to the goal on the whole roadmap (the contract's roadmap distance)
+        full = np.vstack([rm.edges, edges[len(rm.edges[keep]) :]])
+        full_w = np.maximum(np.concatenate([rm.lengths, lengths[len(rm.lengths[keep]) :]]), 1e-300)
+        mat = coo_matrix(
+            (np.r_[full_w, full_w], (np.r_[full[:, 0], full[:, 1]], np.r_[full[:, 1], full[:, 0]])), shape=(n, n)
+        ).tocsr()
+        self._metres_v = dijkstra(mat, directed=True, indices=g_id)
         poses, src, dst, heur, groups = _split(verts, edges, k, hop_g)
         order = np.argsort(src, kind="stable")
         indptr = np.zeros(len(poses) + 1, dtype=np.int64)
@@ -256,10 +264,30 @@ class Navigator:
         self._nv = nv
         log.debug("navigator graph: %d points, %d moves", len(poses), len(dst))
 
-    def _splice(self, pose: FloatArray):
+    def roadmap_distance(self, pose) -> float:
+        """Shortest distance from ``pose`` to the goal on the whole roadmap (static
+        obstacles only; inf when not connected)."""
+        pose = np.asarray(pose, dtype=float).reshape(-1)
+        best = math.inf
+        if self.geometry.motion_free(pose, self._goal_wrapped):
+            best = float(metric_distance(pose, self._goal_wrapped, self.robot.circumradius))
+        for v, w in self._connect(pose, self.options.connect_k):
+            best = min(best, w + float(self._metres_v[v]))
+        return best
+
+    def _splice(self, pose: FloatArray, t: float = -math.inf):
         """The base graph with ``pose`` spliced in: (graph, start id), or (None, reason)."""
         opts = self.options
         conns = self._connect(pose, opts.connect_k)
+        # the robot is usually inside an edge of its last plan: connect it to the vertices
+        # that plan was heading for too (the nearest ones may all lie behind it, and going
+        # back to one of them before going on would make it dither)
+        seen = {v for v, _ in conns}
+        ahead = [v for ta, v in self._ahead if ta > t + 1e-9 and v not in seen][:2]
+        for v in ahead:
+            target = self._poses[v]
+            if self.geometry.motion_free(pose, target):
+                conns.append((v, float(metric_distance(pose, target, self.robot.circumradius))))
         if self.geometry.motion_free(pose, self._goal_wrapped):
             conns.append((self._g_id, float(metric_distance(pose, self._goal_wrapped, self.robot.circumradius))))
         conns = [(v, w) for v, w in conns if math.isfinite(self._hop_v[v])]
@@ -421,7 +449,7 @@ class Navigator:
 
     def _search(self, t: float, pose: FloatArray, movers: list, deadline: float):
         opts = self.options
-        graph, s_id = self._splice(pose)
+        graph, s_id = self._splice(pose, t)
         if graph is None:
             return None, s_id
         h0 = float(graph.heuristic[s_id])
@@ -433,6 +461,8 @@ class Navigator:
         for _ in range(2):
             steps = int(math.ceil(h0 + slack))
             field_ = MoverField(scene, t, opts.dt, steps, self.vplan)
+            if time.perf_counter() > deadline:  # no time left to search: the fallback answers
+                return None, "time budget spent before the search"
             res = sipp(graph, field_, s_id, self._g_id, deadline=deadline, store=store)
             if res.status != "no_path" or not res.horizon_hit or time.perf_counter() > deadline:
                 break
@@ -440,6 +470,7 @@ class Navigator:
         if res.status != "solved":
             return None, res.message
         rows, _ = timed_rows(res.nodes, res.steps, graph.poses, t, opts.dt)
+        self._ahead = [(t + st * opts.dt, nd) for nd, st in zip(res.nodes, res.steps, strict=True) if nd <= self._nv]
         rows[0, 1:] = pose
         rows[-1, 1:] = self.goal
         return Trajectory(rows, self.robot.circumradius), ""
