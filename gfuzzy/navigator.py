@@ -102,10 +102,10 @@ class NavOptions:
     """
 
     dt: float = 0.1
-    prediction_horizon: float = 3.0
-    uncertainty_growth: float = 0.2
+    prediction_horizon: float = 5.0
+    uncertainty_growth: float = 0.1
     reference_speed: float = 1.0
-    safety_buffer: float = 0.1
+    safety_buffer: float = 0.05
     slice: float = 0.5
     stationary_hold: float = 30.0
     time_budget: float = 0.1
