@@ -291,10 +291,14 @@ def cmd_render(args) -> int:
     scene = _load_scene(args.scene)
     out = _out_path(args.output, (".png", ".gif"))
     traj = None
+    nav_doc: dict = {}
     if args.trajectory:
         tf = load_trajectory(args.trajectory)
+        nav_doc = _navigate_extras(args.trajectory)
         if tf.waypoints is not None:
             traj = tf.waypoints
+        elif nav_doc.get("executed") is not None:  # a navigate run that did not arrive
+            traj = nav_doc["executed"]
         else:
             _say(f"note: {args.trajectory} has status {tf.status}: drawing the scene only")
     if args.roadmap:
@@ -306,6 +310,8 @@ def cmd_render(args) -> int:
     options = {}
     if out.suffix.lower() == ".png" and traj is not None and args.speed:
         options["speed"] = True
+    if out.suffix.lower() == ".gif" and traj is not None and nav_doc.get("replan_log"):
+        options["predictions"] = nav_doc["replan_log"]
     if out.suffix.lower() == ".gif" and roadmap is not None:
         raise BadInput("--roadmap: only drawn in a .png picture")
     try:
@@ -314,6 +320,29 @@ def cmd_render(args) -> int:
         raise BadInput(f"{args.trajectory or out}: {exc}") from None
     _say(f"wrote {out}", sys.stdout)
     return EXIT_OK
+
+
+def _navigate_extras(path) -> dict:
+    """The ``executed`` rows and ``replan_log`` of a ``gfuzzy navigate`` file (else {})."""
+    import json
+
+    try:
+        doc = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    if not isinstance(doc, dict):
+        return {}
+    out = {}
+    rows = doc.get("executed")
+    if isinstance(rows, list) and rows and all(isinstance(r, list) and len(r) in (3, 4) for r in rows):
+        try:
+            out["executed"] = [[float(v) for v in r] for r in rows]
+        except (TypeError, ValueError):
+            pass
+    log = doc.get("replan_log")
+    if isinstance(log, list):
+        out["replan_log"] = [e for e in log if isinstance(e, dict) and isinstance(e.get("t"), (int, float))]
+    return out
 
 
 def cmd_regress(args) -> int:

@@ -648,6 +648,7 @@ def render_animation(
     dpi: int = 80,
     duration: float | None = None,
     title: str | None = None,
+    predictions: list | None = None,
 ) -> int:
     """Animate the robot and the movers over the trajectory's time span, as a GIF.
 
@@ -673,6 +674,10 @@ def render_animation(
         Span to animate without a trajectory (default: the movers' longest period or
         last time, between 1 and 60 s; 10 s when they are all endless and aperiodic).
     title : str, optional
+    predictions : list of dict, optional
+        A ``gfuzzy navigate`` file's ``replan_log``: each frame also shows what the robot
+        predicted at the latest logged replan (dashed discs walking on at constant
+        velocity, inflated as the navigator saw them) and the plan it made then (dotted).
 
     Returns
     -------
@@ -750,6 +755,9 @@ def render_animation(
         bbox=dict(boxstyle="round,pad=0.25", fc="white", ec="0.5", alpha=0.85),
     )
     dynamic.append(clock)
+    overlay = _PredictionOverlay(ax, predictions) if predictions else None
+    if overlay is not None:
+        dynamic += overlay.artists
 
     canvas = fig.canvas
     canvas.draw()
@@ -772,6 +780,8 @@ def render_animation(
                 robot.set_xy(scene.robot.corners(pose[None, :3])[0])
                 tick.set_data(*_heading_tick(scene, pose).T)
         clock.set_text(f"t = {t:6.2f} s")
+        if overlay is not None:
+            overlay.update(t)
         for artist in dynamic:
             ax.draw_artist(artist)
         frames.append(Image.fromarray(np.asarray(canvas.buffer_rgba())[..., :3].copy()))
@@ -787,6 +797,42 @@ def render_animation(
     write_atomic_with(out_path, write)
     log.info("wrote %s (%d frames over %.2f s)", out_path, len(frames), t1 - t0)
     return len(frames)
+
+
+class _PredictionOverlay:
+    """Dashed predicted discs and the dotted plan of the latest logged replan."""
+
+    def __init__(self, ax, log: list, max_discs: int = 40):
+        self.log = sorted((e for e in log if isinstance(e, dict) and "t" in e), key=lambda e: e["t"])
+        self.times = np.array([float(e["t"]) for e in self.log])
+        self.discs = []
+        for _ in range(max_discs):
+            c = Circle((0.0, 0.0), 0.1, fill=False, ls="--", lw=0.9, ec="0.35", zorder=4.2, animated=True)
+            c.set_visible(False)
+            ax.add_patch(c)
+            self.discs.append(c)
+        self.plan = Line2D([], [], color=ROBOT_COLOR, lw=1.0, ls=":", zorder=4.4, animated=True)
+        ax.add_line(self.plan)
+        self.artists = [*self.discs, self.plan]
+
+    def update(self, t: float) -> None:
+        k = int(np.searchsorted(self.times, t, side="right")) - 1
+        entry = self.log[k] if k >= 0 else None
+        pred = np.asarray(entry.get("predicted", []) if entry else [], dtype=float).reshape(-1, 5)
+        age = t - float(entry["t"]) if entry else 0.0
+        for i, c in enumerate(self.discs):
+            if i < len(pred):
+                x, y, vx, vy, r = pred[i]
+                c.set_center((x + vx * age, y + vy * age))
+                c.set_radius(max(r, 1e-3))
+                c.set_visible(True)
+            else:
+                c.set_visible(False)
+        plan = np.asarray(entry.get("plan", []) if entry else [], dtype=float)
+        if plan.ndim == 2 and len(plan) and plan.shape[1] >= 3:
+            self.plan.set_data(plan[:, 1], plan[:, 2])
+        else:
+            self.plan.set_data([], [])
 
 
 def _default_span(scene: Scene) -> float:
