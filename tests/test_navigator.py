@@ -7,13 +7,12 @@ import math
 
 import numpy as np
 import pytest
+from conftest import ROOT, run_cli_process
 
 import gfuzzy
 from gfuzzy.navigator import Navigator, NavOptions
 from gfuzzy.navsim import min_separation, observe, simulate
 from gfuzzy.scene import parse_scene
-
-from conftest import ROOT, run_cli_process
 
 
 def _scene(movers=(), obstacles=(), bounds=(-5.0, -5.0, 5.0, 5.0), start=(0.0, -4.0), goal=(0.0, 4.0), robot=None):
@@ -130,9 +129,12 @@ def test_evasive_motion_steps_away_from_a_close_person(open_square):
     pose = np.array([0.0, 0.0])
     obs = np.array([[0.65, 0.0, -1.0, 0.0, 0.3]])  # touching distance soon, walking at the robot
     traj = nav._evasive(0.0, pose, obs)
-    end = traj.at(0.5)
-    person = obs[0, :2] + 0.5 * obs[0, 2:4]
-    assert np.hypot(*(end - person)) > np.hypot(*(pose - obs[0, :2]))  # the gap grew
+    ts = np.linspace(0.0, 2.0, 2001)
+    person = obs[0, :2] + ts[:, None] * obs[0, 2:4]
+    gap = np.hypot(*(traj.at(ts) - person).T) - 0.6
+    assert gap.min() > 0.0  # out of the way for the whole look-ahead
+    # standing still would have been hit within 0.05 s
+    assert np.hypot(*(pose - person[ts > 0.06][0])) < 0.6
 
 
 def test_time_budget_falls_back_to_the_previous_plan(open_square):
@@ -203,8 +205,8 @@ def test_observe_reports_true_velocity_and_range():
     np.testing.assert_allclose(obs[0], [1.0, 0.0, 1.0, 0.0, 0.3], atol=1e-6)
     np.testing.assert_allclose(obs[1, 2:4], [0.0, -0.5], atol=1e-6)
     assert obs[1, 4] == pytest.approx(0.5 * math.hypot(0.4, 0.2))
-    near = observe(scene, 1.0, np.array([0.0, -4.0]), sense=3.5)
-    assert len(near) == 1 and near[0, 0] == pytest.approx(1.0)  # b is farther than 3.5 m
+    near = observe(scene, 1.0, np.array([0.0, -4.0]), sense=3.6)
+    assert len(near) == 1 and near[0, 0] == pytest.approx(1.0)  # a is 3.52 m away, b 6.6 m
 
 
 def test_min_separation_exact_matches_sampling():
