@@ -277,3 +277,24 @@ def test_crowd_episodes():
     np.testing.assert_array_equal(a.movers[0].trajectory, b.movers[0].trajectory)
     rows, _ = orca_robot(a, time_limit=5.0)
     assert np.all(np.hypot(*np.diff(rows[:, 1:], axis=0).T) <= 0.25 + 1e-9)
+
+
+def test_render_shows_the_predictions(tmp_path):
+    from PIL import Image
+
+    from gfuzzy.render import render_animation
+
+    scene = gfuzzy.load_scene(ROOT / "scenes" / "zara-crowd.yaml")
+    rm = gfuzzy.load_roadmap(ROOT / "roadmaps" / "zara-crowd.json", scene)
+    q = scene.queries[0]
+    res = simulate(scene, rm, q.start, q.goal, q.t0, 0.25, log_every=2)
+    assert res.log and all(len(e["predicted"]) for e in res.log)
+    plain, overlay = tmp_path / "plain.gif", tmp_path / "nav.gif"
+    render_animation(scene, res.trajectory, plain, max_frames=6)
+    render_animation(scene, res.trajectory, overlay, max_frames=6, predictions=res.log)
+    a, b = Image.open(plain), Image.open(overlay)
+    assert a.n_frames == b.n_frames == 6
+    a.seek(3)
+    b.seek(3)
+    # the dashed predicted discs and the dotted plan change the picture
+    assert np.any(np.asarray(a.convert("RGB")) != np.asarray(b.convert("RGB")))
