@@ -322,6 +322,20 @@ def cmd_render(args) -> int:
     return EXIT_OK
 
 
+def _start_on_mover(scene, query) -> str:
+    """Why the start overlaps a mover present at t0 (as ``plan`` says), or ""."""
+    import numpy as np
+
+    from .geometry import mover_distance
+
+    start = np.asarray(query.start, dtype=float)
+    for mv in scene.movers:
+        xy, present = mv.state(np.array([query.t0]))
+        if present[0] and mover_distance(scene.robot, start, mv.shape, mv.radius, mv.size, xy[0]) < 0:
+            return f"start collides with mover {mv.name!r} at t0={query.t0:g}"
+    return ""
+
+
 def _navigate_extras(path) -> dict:
     """The ``executed`` rows and ``replan_log`` of a ``gfuzzy navigate`` file (else {})."""
     import json
@@ -392,7 +406,7 @@ def cmd_navigate(args) -> int:
         options = NavOptions(dt=args.dt, time_budget=args.time_budget)
     except ValueError as exc:
         raise BadInput(f"gfuzzy navigate: {exc}") from None
-    problem = query_problem(StaticGeometry(scene), query.start, query.goal)
+    problem = query_problem(StaticGeometry(scene), query.start, query.goal) or _start_on_mover(scene, query)
     if problem:
         tf = TrajectoryFile(scene.name, query.name, "invalid_query", problem, None, None, None, 0.0)
         if out is not None:
