@@ -119,6 +119,112 @@ def summarize(K, results, policies):
     return lines
 
 
+SOCIAL_CONFIG = """
+[scene]
+enable_group = false
+agent_radius = 0.3
+step_width = 0.25
+max_speed_multiplier = 1.3
+tau = 0.5
+resolution = 10
+"""
+
+
+def social_episode(K, seed, roadmap, options):
+    """One closed-loop circle-crossing episode in which the humans react to the robot.
+
+    The humans are pysocialforce's extended social force model (Helbing & Molnar 1998,
+    Moussaid et al. 2010) with the robot as one more pedestrian, whose state is overwritten
+    every step with where the robot is and how it moves; starts and goals as in the ORCA
+    protocol. Every 0.25 s the robot observes the humans, replans, and moves; the humans
+    then move with the social force's velocity for 0.25 s, so both move linearly between
+    samples and the collision test is exact.
+    """
+    import logging
+    import tempfile
+
+    import pysocialforce as psf
+
+    logging.getLogger().setLevel(logging.WARNING)  # pysocialforce turns the root logger to DEBUG
+    from gfuzzy.crowd import _starts
+    from gfuzzy.navigator import Navigator
+    from gfuzzy.rng import create_rng
+    from gfuzzy.scene import parse_scene
+
+    c = CROWD
+    dt = c["time_step"]
+    starts, goals = _starts(K, create_rng(seed))
+    d = goals - starts
+    v0 = d / np.hypot(*d.T)[:, None] * c["v_pref"]
+    start, goal = np.array(c["start"]), np.array(c["goal"])
+    state = np.vstack([np.column_stack([starts, v0, goals]), [[*start, 0.0, c["robot_vmax"], *goal]]])
+    with tempfile.NamedTemporaryFile("w", suffix=".toml", delete=False) as fh:
+        fh.write(SOCIAL_CONFIG)
+    sim = psf.Simulator(state, config_file=fh.name)
+    Path(fh.name).unlink()
+    sim.peds.step_width = dt  # the library reads it from the wrong level of its config
+    scene0 = circle_crossing(0, 1)
+    nav = Navigator(scene0, roadmap, goal, options)
+    pose = start.copy()
+    t = 0.0
+    rows = [[0.0, *pose]]
+    track = [sim.peds.pos()[:K].copy()]
+    lat = []
+    reached = False
+    while t < c["time_limit"] - 1e-9:
+        pos, vel = sim.peds.pos()[:K], sim.peds.vel()[:K]
+        obs = np.column_stack([pos, vel, np.full(K, c["human_radius"])])
+        c0 = time.perf_counter()
+        traj = nav.step(t, pose, obs)
+        lat.append(time.perf_counter() - c0)
+        w = traj.waypoints
+        inner = w[(w[:, 0] > t + 1e-9) & (w[:, 0] < t + dt - 1e-9)]
+        rows.extend(inner.tolist())
+        new = traj.at(t + dt)
+        rows.append([t + dt, *new])
+        st = sim.peds.state
+        st[K, 0:2] = pose
+        st[K, 2:4] = (new - pose) / dt
+        sim.step(1)
+        st = sim.peds.state
+        st[K, 0:2] = new  # the robot is where it went, not where the forces pushed it
+        st[K, 4:6] = goal
+        pose = new
+        t += dt
+        track.append(sim.peds.pos()[:K].copy())
+        if np.hypot(*(pose - goal)) <= nav.options.goal_tolerance:
+            reached = True
+            break
+    track = np.array(track)  # (n, K, 2)
+    times = np.arange(len(track)) * dt
+    doc = {
+        "version": 1, "name": "social", "bounds": [-20, -20, 20, 20],
+        "robot": {"disc": c["robot_radius"], "vmax": c["robot_vmax"]}, "obstacles": [],
+        "movers": [
+            {"name": f"h{i}", "disc": c["human_radius"], "trajectory": np.column_stack([times, track[:, i]]).tolist()}
+            for i in range(K)
+        ],
+        "queries": [],
+    }
+    wps = np.array(rows)
+    keep = np.r_[True, np.diff(wps[:, 0]) > 1e-9]
+    sep = min_separation(parse_scene(doc, "<social>"), wps[keep])
+    return {
+        "collision": sep < -1e-9, "reached": reached, "time": t if reached else math.nan, "sep": sep,
+        "latency": np.array(lat), "modes": {},
+    }
+
+
+def social(args, rm, options):
+    print("\nsocial-force crowd (people react to the robot; closed loop, no oracle)")
+    for K in args.humans:
+        t0 = time.perf_counter()
+        results = [{"navigator": social_episode(K, args.seed + 1000 * K + i, rm, options)} for i in range(args.social)]
+        for line in summarize(K, results, ["navigator"]):
+            print(line)
+        print(f"   ({time.perf_counter() - t0:.0f} s)")
+
+
 def replays(paths, options, vertices, seed):
     print("\npedestrian replays through navigate (real tracks, checked with gfuzzy.check_trajectory)")
     print(f"{'scene':<22} {'query':<12} {'status':<8} {'time':>6} {'oracle':>6} {'check':<6} {'sep':>6} {'p95 ms':>7}")
@@ -148,6 +254,7 @@ def main(argv=None) -> int:
     ap.add_argument("--vertices", type=int, default=400)
     ap.add_argument("--roadmap-seed", type=int, default=1)
     ap.add_argument("--policies", nargs="+", default=["navigator", "oracle", "orca"])
+    ap.add_argument("--social", type=int, default=0, help="episodes per K of a social-force crowd (pysocialforce)")
     ap.add_argument("--replays", nargs="*", default=None, help="scenes to replay through navigate")
     ap.add_argument("--opt", nargs="*", default=[], metavar="NAME=VALUE", help="NavOptions settings, e.g. time_budget=0.2")
     args = ap.parse_args(argv)
@@ -176,6 +283,8 @@ def main(argv=None) -> int:
                 print(line)
             print(f"   ({time.perf_counter() - t0:.0f} s)")
             sys.stdout.flush()
+    if args.social > 0:
+        social(args, empty_roadmap(args.vertices, args.roadmap_seed), options)
     if args.replays is not None:
         paths = args.replays or [
             str(p) for p in sorted((Path(__file__).resolve().parents[1] / "scenes").glob("*.yaml"))
