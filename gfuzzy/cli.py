@@ -389,6 +389,8 @@ def cmd_navigate(args) -> int:
     for flag, value in (("--period", args.period), ("--max-time", args.max_time), ("--time-budget", args.time_budget)):
         if not (math.isfinite(value) and value > 0):
             raise BadInput(f"gfuzzy navigate: {flag} must be a positive number, got {value:g}")
+    if args.log_every < 0:
+        raise BadInput(f"gfuzzy navigate: --log-every must be >= 0, got {args.log_every}")
     sense = math.inf if args.sense is None else args.sense
     if not sense > 0:
         raise BadInput(f"gfuzzy navigate: --sense must be a positive number, got {sense:g}")

@@ -298,3 +298,35 @@ def test_render_shows_the_predictions(tmp_path):
     b.seek(3)
     # the dashed predicted discs and the dotted plan change the picture
     assert np.any(np.asarray(a.convert("RGB")) != np.asarray(b.convert("RGB")))
+
+
+def test_navigate_timeout_still_writes_the_executed_motion(tmp_path):
+    out = tmp_path / "sealed.json"
+    p = run_cli_process("navigate", ROOT / "scenes" / "sealed-room.yaml", "--max-time", "3", "-o", out)
+    assert p.returncode == 1, p.stdout + p.stderr
+    doc = json.loads(out.read_text())
+    assert doc["status"] == "timeout" and "waypoints" not in doc
+    rows = np.array(doc["executed"])
+    assert rows[0, 0] == 0.0 and rows[-1, 0] == pytest.approx(3.0)
+    assert doc["replans"] == 12
+
+
+def test_navigate_start_on_a_person_is_an_invalid_query(tmp_path, tmp_scene):
+    scene = tmp_scene(
+        """
+        version: 1
+        name: on-a-person
+        bounds: [0, 0, 6, 4]
+        robot: {disc: 0.3, vmax: 1.0}
+        obstacles: []
+        movers:
+          - {name: p, disc: 0.3, trajectory: [[0, 1.2, 2.0], [5, 5.0, 2.0]]}
+        queries:
+          - {name: q, start: [1.0, 2.0], goal: [5.0, 1.0]}
+        """
+    )
+    out = tmp_path / "o.json"
+    p = run_cli_process("navigate", scene, "-n", "60", "-o", out)
+    assert p.returncode == 1
+    doc = json.loads(out.read_text())
+    assert doc["status"] == "invalid_query" and "'p'" in doc["message"]
