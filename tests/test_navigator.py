@@ -185,9 +185,10 @@ def test_bad_arguments_raise(open_square):
         NavOptions(time_budget=0.0)
 
 
-def test_box_robot_among_loop_movers():
-    scene = gfuzzy.load_scene(ROOT / "scenes" / "sim-5s2m.yaml")
-    rm = gfuzzy.load_roadmap(ROOT / "roadmaps" / "sim-5s2m.json", scene)
+@pytest.mark.parametrize("name", ["sim-5s2m", "building-floor"])  # a disc robot, a box robot
+def test_among_loop_movers(name):
+    scene = gfuzzy.load_scene(ROOT / "scenes" / f"{name}.yaml")
+    rm = gfuzzy.load_roadmap(ROOT / "roadmaps" / f"{name}.json", scene)
     q = scene.queries[0]
     res = simulate(scene, rm, q.start, q.goal, q.t0, 0.25, max_time=60.0)
     report = gfuzzy.check_trajectory(scene, res.trajectory.waypoints, q if res.reached else None)
