@@ -21,9 +21,10 @@ roadmap-time search into a receding-horizon controller:
    certified straight connections to its nearest vertices (and to the goal when it is in
    sight). Safety is evaluated lazily, only near the predicted people.
 3. **Fall back.** When the search finds no plan (the predictions block every way, the
-   robot stands inside an inflated disc) or runs out of ``time_budget``, the previous
-   plan is kept if it is still clear of the new predictions; otherwise the robot takes its
-   *evasive motion*: of straight motions in ``evasion_headings`` directions at two speeds
+   robot stands inside an inflated disc) or runs out of ``time_budget``, it is tried once
+   more without the buffer and the uncertainty ("relaxed"); then a finely checked straight
+   dash to a nearby goal ("direct"); then the previous plan, if it is still clear of the
+   new predictions; otherwise the robot takes its *evasive motion*: of straight motions in ``evasion_headings`` directions at two speeds
    (and standing still), the statically free one that maximises the time to contact with
    the predicted people (un-inflated), ties broken by progress to the goal.
 
