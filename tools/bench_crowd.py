@@ -141,11 +141,17 @@ def social_episode(K, seed, roadmap, options):
     samples and the collision test is exact.
     """
     import logging
+    import os
     import tempfile
 
-    import pysocialforce as psf
-
-    logging.getLogger().setLevel(logging.WARNING)  # pysocialforce turns the root logger to DEBUG
+    here = os.getcwd()
+    with tempfile.TemporaryDirectory() as scratch:
+        os.chdir(scratch)  # pysocialforce writes a file.log into the current folder on import
+        try:
+            import pysocialforce as psf
+        finally:
+            os.chdir(here)
+    logging.getLogger().setLevel(logging.WARNING)  # it also turns the root logger to DEBUG
     from gfuzzy.crowd import _starts
     from gfuzzy.navigator import Navigator
     from gfuzzy.rng import create_rng
