@@ -3,6 +3,8 @@
     python tools/bench_crowd.py                        # K = 5 and 10, 100 episodes each
     python tools/bench_crowd.py --episodes 20 --humans 10 --seed 3
     python tools/bench_crowd.py --replays scenes/eth-crossing.yaml scenes/zara-crowd.yaml
+    python tools/bench_crowd.py --episodes 0 --social 50       # a crowd that reacts (pysocialforce)
+    python tools/bench_crowd.py --opt prediction_horizon=3     # any NavOptions setting
 
 Protocol: CrowdNav's circle crossing (Chen et al., ICRA 2019), as implemented in
 ``gfuzzy/crowd.py``: K ORCA humans (radius 0.3, preferred speed 1) cross a circle of
