@@ -32,7 +32,7 @@ from .rng import create_rng
 from .scene import Scene, parse_scene
 from .typing import FloatArray
 
-__all__ = ["CROWD", "circle_crossing", "simulate_humans", "orca_robot"]
+__all__ = ["CROWD", "circle_crossing", "simulate_humans", "orca_robot", "run_episode", "episodes"]
 
 #: The protocol's constants.
 CROWD = {
@@ -220,3 +220,84 @@ def orca_robot(scene: Scene, time_limit: float | None = None) -> tuple[FloatArra
         t += dt
         rows.append([t, *pos])
     return np.array(rows), bool(np.hypot(*(pos - goal)) < c["robot_radius"])
+
+
+def run_episode(scene: Scene, roadmap, options, policies) -> dict:
+    """One circle-crossing episode under each of ``policies``.
+
+    Parameters
+    ----------
+    scene : Scene
+        From :func:`circle_crossing`: the humans' simulated tracks are its movers.
+    roadmap : Roadmap
+        A roadmap of the (empty) scene.
+    options : NavOptions
+        The navigator's settings.
+    policies : sequence of {"navigator", "oracle", "orca"}
+        ``navigator``: :class:`gfuzzy.Navigator` through :func:`gfuzzy.navsim.simulate`;
+        ``oracle``: :func:`gfuzzy.plan` told the humans' true future (possible because they
+        ignore the robot), a lower bound on the time to the goal on the same roadmap;
+        ``orca``: :func:`orca_robot`.
+
+    Returns
+    -------
+    dict
+        Per policy: ``collision`` (bool, decided exactly), ``reached`` (bool), ``time`` (s,
+        nan unless reached), ``sep`` (smallest distance to a human, m), ``latency`` (replan
+        seconds, array) and, for the navigator, ``modes`` (how each replan answered).
+    """
+    from .navsim import min_separation, simulate
+    from .planner import PlanOptions, plan
+
+    q = scene.queries[0]
+    out = {}
+    limit = CROWD["time_limit"]
+    if "navigator" in policies:
+        res = simulate(scene, roadmap, q.start, q.goal, 0.0, CROWD["time_step"], max_time=limit, options=options)
+        sep = min_separation(scene, res.trajectory.waypoints)
+        out["navigator"] = {
+            "collision": sep < -1e-9,
+            "reached": res.reached,
+            "time": res.duration if res.reached else math.nan,
+            "sep": sep,
+            "latency": res.replan_seconds,
+            "modes": res.modes,
+        }
+    if "oracle" in policies:
+        r = plan(scene, roadmap, q.start, q.goal, 0.0, PlanOptions(horizon=limit))
+        ok = r.solved
+        sep = min_separation(scene, r.trajectory.waypoints) if ok else math.nan
+        out["oracle"] = {
+            "collision": ok and sep < -1e-9,
+            "reached": ok,
+            "time": r.duration if ok else math.nan,
+            "sep": sep,
+            "latency": np.array([r.planning_seconds]),
+        }
+    if "orca" in policies:
+        rows, arrived = orca_robot(scene)
+        sep = min_separation(scene, rows)
+        out["orca"] = {
+            "collision": sep < -1e-9,
+            "reached": arrived,
+            "time": rows[-1, 0] if arrived else math.nan,
+            "sep": sep,
+            "latency": np.zeros(0),
+        }
+    return out
+
+
+def _episode(roadmap, K: int, seed: int, options, policies) -> dict:
+    return run_episode(circle_crossing(K, seed, name=f"crowd-{K}-{seed}"), roadmap, options, policies)
+
+
+def episodes(client, roadmap, K: int, seeds, options, policies) -> list[dict]:
+    """:func:`run_episode` of K humans for each of ``seeds``, in seed order: in this process
+    (``client`` None), or one task each on a ``distributed.Client`` (the roadmap travels to
+    every worker once; latencies are measured in the workers)."""
+    if client is None:
+        return [_episode(roadmap, K, s, options, policies) for s in seeds]
+    rm = client.scatter(roadmap, broadcast=True)
+    n = len(seeds)
+    futures = client.map(_episode, [rm] * n, [K] * n, list(seeds), [options] * n, [policies] * n, pure=False)
+    return client.gather(futures)

@@ -5,6 +5,7 @@
     python tools/bench_crowd.py --replays scenes/eth-crossing.yaml scenes/zara-crowd.yaml
     python tools/bench_crowd.py --episodes 0 --social 50       # a crowd that reacts (pysocialforce)
     python tools/bench_crowd.py --opt prediction_horizon=3     # any NavOptions setting
+    python tools/bench_crowd.py --workers 2                    # episodes on a local Dask cluster
 
 Protocol: CrowdNav's circle crossing (Chen et al., ICRA 2019), as implemented in
 ``gfuzzy/crowd.py``: K ORCA humans (radius 0.3, preferred speed 1) cross a circle of
@@ -29,6 +30,7 @@ Targets (issue 10, benchmark figures): 5 humans success >= 0.99, collision <= 0.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import sys
 import time
@@ -39,7 +41,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import gfuzzy  # noqa: E402
-from gfuzzy.crowd import CROWD, circle_crossing, orca_robot  # noqa: E402
+from gfuzzy.crowd import CROWD, circle_crossing, episodes  # noqa: E402
 from gfuzzy.navigator import NavOptions  # noqa: E402
 from gfuzzy.navsim import min_separation, simulate  # noqa: E402
 
@@ -47,45 +49,6 @@ from gfuzzy.navsim import min_separation, simulate  # noqa: E402
 def empty_roadmap(vertices: int, seed: int):
     scene = circle_crossing(0, 1)
     return gfuzzy.build_roadmap(scene, gfuzzy.RoadmapOptions(vertices=vertices, seed=seed))
-
-
-def run_episode(scene, roadmap, options, policies):
-    q = scene.queries[0]
-    out = {}
-    limit = CROWD["time_limit"]
-    if "navigator" in policies:
-        res = simulate(scene, roadmap, q.start, q.goal, 0.0, CROWD["time_step"], max_time=limit, options=options)
-        sep = min_separation(scene, res.trajectory.waypoints)
-        out["navigator"] = {
-            "collision": sep < -1e-9,
-            "reached": res.reached,
-            "time": res.duration if res.reached else math.nan,
-            "sep": sep,
-            "latency": res.replan_seconds,
-            "modes": res.modes,
-        }
-    if "oracle" in policies:
-        r = gfuzzy.plan(scene, roadmap, q.start, q.goal, 0.0, gfuzzy.PlanOptions(horizon=limit))
-        ok = r.solved
-        sep = min_separation(scene, r.trajectory.waypoints) if ok else math.nan
-        out["oracle"] = {
-            "collision": ok and sep < -1e-9,
-            "reached": ok,
-            "time": r.duration if ok else math.nan,
-            "sep": sep,
-            "latency": np.array([r.planning_seconds]),
-        }
-    if "orca" in policies:
-        rows, arrived = orca_robot(scene)
-        sep = min_separation(scene, rows)
-        out["orca"] = {
-            "collision": sep < -1e-9,
-            "reached": arrived,
-            "time": rows[-1, 0] if arrived else math.nan,
-            "sep": sep,
-            "latency": np.zeros(0),
-        }
-    return out
 
 
 def summarize(K, results, policies):
@@ -265,6 +228,9 @@ def main(argv=None) -> int:
     ap.add_argument("--social", type=int, default=0, help="episodes per K of a social-force crowd (pysocialforce)")
     ap.add_argument("--replays", nargs="*", default=None, help="scenes to replay through navigate")
     ap.add_argument("--opt", nargs="*", default=[], metavar="NAME=VALUE", help="NavOptions settings, e.g. time_budget=0.2")
+    ap.add_argument("--workers", type=int, default=0,
+                    help="run the circle-crossing episodes on a local Dask cluster of this many processes "
+                         "(0: in this process); each episode's replan latencies are measured in its worker")  # fmt: skip
     args = ap.parse_args(argv)
     settings = {}
     for item in args.opt:
@@ -280,17 +246,22 @@ def main(argv=None) -> int:
             f"{'K':>2} {'policy':<10} {'n':>4} {'succ':>6} {'coll':>6} {'tout':>6} {'time':>7} "
             f"{'t/orac':>7} {'sep':>6} {'minsep':>7}  {'p50ms':>6} {'p95ms':>6} {'maxms':>6}"
         )
-        for K in args.humans:
-            t0 = time.perf_counter()
-            results = []
-            for i in range(args.episodes):
-                scene = circle_crossing(K, args.seed + 1000 * K + i, name=f"crowd-{K}-{i}")
-                results.append(run_episode(scene, rm, options, args.policies))
-            print(header)
-            for line in summarize(K, results, args.policies):
-                print(line)
-            print(f"   ({time.perf_counter() - t0:.0f} s)")
-            sys.stdout.flush()
+        with contextlib.ExitStack() as stack:
+            client = None
+            if args.workers > 0:
+                from gfuzzy.batch import local_cluster
+
+                client = stack.enter_context(local_cluster(args.workers))
+                print(f"on {args.workers} Dask worker process(es)")
+            for K in args.humans:
+                t0 = time.perf_counter()
+                seeds = [args.seed + 1000 * K + i for i in range(args.episodes)]
+                results = episodes(client, rm, K, seeds, options, args.policies)
+                print(header)
+                for line in summarize(K, results, args.policies):
+                    print(line)
+                print(f"   ({time.perf_counter() - t0:.0f} s)")
+                sys.stdout.flush()
     if args.social > 0:
         social(args, empty_roadmap(args.vertices, args.roadmap_seed), options)
     if args.replays is not None:
