@@ -10,6 +10,7 @@ import logging
 
 from .check import CheckReport, check_trajectory
 from .errors import GfuzzyError, SceneError
+from .navigator import Navigator, NavOptions, NavStep
 from .planner import Planner, PlanOptions, PlanResult, Status, plan
 from .roadmap import Roadmap, RoadmapOptions, build_roadmap, load_roadmap
 from .scene import Scene, load_scene
@@ -23,6 +24,9 @@ __version__ = "0.1.0"
 __all__ = [
     "CheckReport",
     "GfuzzyError",
+    "NavOptions",
+    "NavStep",
+    "Navigator",
     "PlanOptions",
     "PlanResult",
     "Planner",

@@ -434,11 +434,15 @@ def cmd_render(args) -> int:
     scene = _apply_overrides(_load_scene(args.scene), args)
     out = _out_path(args.output, (".png", ".gif"))
     traj = None
+    nav_doc: dict = {}
     if args.trajectory:
         tf = load_trajectory(args.trajectory)
+        nav_doc = _navigate_extras(args.trajectory)
         if tf.waypoints is not None:
             _rows_fit(scene, tf, args.trajectory)
             traj = tf.waypoints
+        elif nav_doc.get("executed") is not None:  # a navigate run that did not arrive
+            traj = nav_doc["executed"]
         else:
             _say(f"note: {args.trajectory} has status {tf.status}: drawing the scene only")
     if args.roadmap:
@@ -452,9 +456,11 @@ def cmd_render(args) -> int:
         options["speed"] = True
     elif args.speed:
         _say("note: --speed colours a trajectory's path, and there is none to draw")
+    if out.suffix.lower() == ".gif" and traj is not None and nav_doc.get("replan_log"):
+        options["predictions"] = nav_doc["replan_log"]
     if out.suffix.lower() == ".gif" and roadmap is not None:
         raise BadInput("--roadmap: only drawn in a .png picture")
-    if traj is not None:
+    if traj is not None and tf.waypoints is not None:
         bad = _violation(scene, tf, args.trajectory)
         if bad is not None and out.suffix.lower() == ".png":
             options["violation"] = bad
@@ -464,6 +470,43 @@ def cmd_render(args) -> int:
         raise BadInput(f"{args.trajectory or out}: {exc}") from None
     _say(f"wrote {out}", sys.stdout)
     return EXIT_OK
+
+
+def _start_on_mover(scene, query) -> str:
+    """Why the start overlaps a mover present at t0 (as ``plan`` says), or ""."""
+    import numpy as np
+
+    from .geometry import mover_distance
+
+    start = np.asarray(query.start, dtype=float)
+    for mv in scene.movers:
+        xy, present = mv.state(np.array([query.t0]))
+        if present[0] and mover_distance(scene.robot, start, mv.shape, mv.radius, mv.size, xy[0]) < 0:
+            return f"start collides with mover {mv.name!r} at t0={query.t0:g}"
+    return ""
+
+
+def _navigate_extras(path) -> dict:
+    """The ``executed`` rows and ``replan_log`` of a ``gfuzzy navigate`` file (else {})."""
+    import json
+
+    try:
+        doc = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    if not isinstance(doc, dict):
+        return {}
+    out = {}
+    rows = doc.get("executed")
+    if isinstance(rows, list) and rows and all(isinstance(r, list) and len(r) in (3, 4) for r in rows):
+        try:
+            out["executed"] = [[float(v) for v in r] for r in rows]
+        except (TypeError, ValueError):
+            pass
+    log = doc.get("replan_log")
+    if isinstance(log, list):
+        out["replan_log"] = [e for e in log if isinstance(e, dict) and isinstance(e.get("t"), (int, float))]
+    return out
 
 
 def cmd_regress(args) -> int:
@@ -631,6 +674,101 @@ def cmd_batch(args) -> int:
 # ------------------------------------------------------------------ parser
 
 
+def cmd_navigate(args) -> int:
+    """Drive the robot among the scene's movers without knowing their future (section 5)."""
+    import numpy as np
+
+    from .check import check_trajectory
+    from .geometry import StaticGeometry
+    from .navigator import Navigator, NavOptions
+    from .navsim import simulate
+    from .planner import query_problem
+    from .trajectory import TrajectoryFile
+
+    scene = _apply_overrides(_load_scene(args.scene), args)
+    for flag, value in (("--period", args.period), ("--max-time", args.max_time), ("--time-budget", args.time_budget)):
+        if not (math.isfinite(value) and value > 0):
+            raise BadInput(f"gfuzzy navigate: {flag} must be a positive number, got {value:g}")
+    if args.log_every < 0:
+        raise BadInput(f"gfuzzy navigate: --log-every must be >= 0, got {args.log_every}")
+    sense = math.inf if args.sense is None else args.sense
+    if not sense > 0:
+        raise BadInput(f"gfuzzy navigate: --sense must be a positive number, got {sense:g}")
+    if args.query:
+        try:
+            query = scene.query(args.query)
+        except KeyError as exc:
+            raise BadInput(f"{scene.source}: queries: {exc.args[0]}") from None
+    elif scene.queries:
+        query = scene.queries[0]
+    else:
+        raise BadInput(f"{scene.source}: queries: the scene has no queries to navigate")
+    out = _out_path(args.output, (".json",)) if args.output else None
+    try:
+        options = NavOptions(dt=args.dt, time_budget=args.time_budget)
+    except ValueError as exc:
+        raise BadInput(f"gfuzzy navigate: {exc}") from None
+    problem = query_problem(StaticGeometry(scene), query.start, query.goal) or _start_on_mover(scene, query)
+    if problem:
+        tf = TrajectoryFile(scene.name, query.name, "invalid_query", problem, None, None, None, 0.0)
+        if out is not None:
+            tf.save(out)
+        _say(f"{scene.name} {query.name}: invalid_query ({problem})", sys.stdout)
+        return EXIT_NO
+    roadmap = _roadmap_for(scene, args)
+    nav = Navigator(scene, roadmap, query.goal, options)
+    res = simulate(
+        scene, roadmap, query.start, query.goal, query.t0, args.period, sense, args.max_time,
+        navigator=nav, log_every=args.log_every,
+    )
+    wps = res.trajectory.waypoints
+    report = check_trajectory(scene, wps, query if res.reached else None)
+    rd = nav.roadmap_distance(np.asarray(query.start, dtype=float))
+    rd_ok = math.isfinite(rd)
+    solved = res.reached
+    message = "" if solved else f"the goal was not reached within {args.max_time:g} s"
+    if not report.valid:
+        message = (message + "; " if message else "") + f"the executed trajectory is invalid: {report.reason}"
+    extra = {
+        "replans": res.replans,
+        "replan_seconds_p50": round(res.latency(0.5), 6),
+        "replan_seconds_p95": round(res.latency(0.95), 6),
+        "replan_seconds_max": round(float(res.replan_seconds.max(initial=0.0)), 6),
+        "min_separation": res.min_separation if math.isfinite(res.min_separation) else None,
+        "check": {"valid": report.valid, "reason": report.reason},
+        "modes": res.modes,
+        "navigate": {"period": args.period, "sense": None if math.isinf(sense) else sense, "max_time": args.max_time},
+        "replan_log": res.log,
+    }
+    if not solved:  # only a solved file carries waypoints (section 2): the motion goes here
+        extra["executed"] = [[float(v) for v in row] for row in wps]
+    tf = TrajectoryFile(
+        scene=scene.name,
+        query=query.name,
+        status="solved" if solved else "timeout",
+        message=message,
+        duration=res.duration if solved else None,
+        roadmap_distance=rd if rd_ok else None,
+        delay_factor=res.trajectory.delay_factor(scene.robot.vmax, rd) if (solved and rd_ok) else None,
+        planning_seconds=round(float(res.replan_seconds.sum()), 6),
+        waypoints=wps if solved else None,
+        extra=extra,
+    )
+    if out is not None:
+        tf.save(out)
+    sep = "none seen" if not math.isfinite(res.min_separation) else f"{res.min_separation:.3f} m"
+    line = f"{scene.name} {query.name}: {'solved' if solved else 'timeout'}"
+    if solved:
+        line += f" in {res.duration:.2f} s"
+    line += (
+        f", {res.replans} replans (p95 {res.latency(0.95) * 1000:.0f} ms, max "
+        f"{float(res.replan_seconds.max(initial=0.0)) * 1000:.0f} ms), min separation {sep}, "
+        f"check {'valid' if report.valid else 'INVALID: ' + report.reason}"
+    )
+    _say(line, sys.stdout)
+    return EXIT_OK if (solved and report.valid) else EXIT_NO
+
+
 def _parser() -> argparse.ArgumentParser:
     p = _Parser(
         prog="gfuzzy",
@@ -701,6 +839,22 @@ def _parser() -> argparse.ArgumentParser:
     d.add_argument("--speed", action="store_true", help="colour the path by speed (PNG and GIF)")
     clearance_flags(d)
     d.set_defaults(func=cmd_render)
+
+    v = sub.add_parser("navigate", help="drive to the goal among the movers without knowing their future")
+    v.add_argument("scene", metavar="SCENE")
+    v.add_argument("--query", metavar="NAME", help="a query of the scene (default: its first)")
+    v.add_argument("--roadmap", metavar="FILE", help="roadmap file (default roadmaps/<scene name>.json)")
+    v.add_argument("-n", "--vertices", type=int, help="build a roadmap of this many vertices")
+    v.add_argument("--seed", type=int, help="roadmap seed when building (default 1)")
+    v.add_argument("--period", type=float, default=0.25, help="seconds between observations and replans (default 0.25)")
+    v.add_argument("--sense", type=float, help="range in metres within which movers are seen (default: all)")
+    v.add_argument("--max-time", type=float, default=120.0, help="give up this long after t0 (default 120 s)")
+    v.add_argument("--dt", type=float, default=0.1, help="time step of the replanning search (default 0.1)")
+    v.add_argument("--time-budget", type=float, default=0.1, help="seconds one replan may take (default 0.1)")
+    v.add_argument("--log-every", type=int, default=4, help="keep every k-th replan's predictions in the file (default 4)")
+    clearance_flags(v)
+    v.add_argument("-o", "--output", metavar="OUT.json", help="the executed trajectory file")
+    v.set_defaults(func=cmd_navigate)
 
     g = sub.add_parser("regress", help="answer and check every query of every scene")
     g.add_argument("scenes", metavar="SCENE", nargs="+")

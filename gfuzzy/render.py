@@ -822,6 +822,7 @@ def render_animation(
     duration: float | None = None,
     title: str | None = None,
     speed=None,
+    predictions: list | None = None,
 ) -> int:
     """Animate the robot and the movers over the trajectory's time span, as a GIF.
 
@@ -849,6 +850,10 @@ def render_animation(
     title : str, optional
     speed : True, (n - 1,) or (n,) float, optional
         Colour the robot's trail by speed, as :func:`render_scene` does, with a colour bar.
+    predictions : list of dict, optional
+        A ``gfuzzy navigate`` file's ``replan_log``: each frame also shows what the robot
+        predicted at the latest logged replan (dashed discs walking on at constant
+        velocity, inflated as the navigator saw them) and the plan it made then (dotted).
 
     Returns
     -------
@@ -947,6 +952,9 @@ def render_animation(
         bbox=dict(boxstyle="round,pad=0.25", fc="white", ec="0.5", alpha=0.85),
     )
     dynamic.append(clock)
+    overlay = _PredictionOverlay(ax, predictions) if predictions else None
+    if overlay is not None:
+        dynamic += overlay.artists
 
     canvas = fig.canvas
     canvas.draw()
@@ -980,6 +988,8 @@ def render_animation(
             elif ring is not None:
                 ring.set_xy(_inflated_xy(scene, pose, keep))
         clock.set_text(f"t = {t:6.2f} s")
+        if overlay is not None:
+            overlay.update(t)
         for artist in dynamic:
             ax.draw_artist(artist)
         frames.append(Image.fromarray(np.asarray(canvas.buffer_rgba())[..., :3].copy()))
@@ -995,6 +1005,42 @@ def render_animation(
     write_atomic_with(out_path, write)
     log.info("wrote %s (%d frames over %.2f s)", out_path, len(frames), t1 - t0)
     return len(frames)
+
+
+class _PredictionOverlay:
+    """Dashed predicted discs and the dotted plan of the latest logged replan."""
+
+    def __init__(self, ax, log: list, max_discs: int = 40):
+        self.log = sorted((e for e in log if isinstance(e, dict) and "t" in e), key=lambda e: e["t"])
+        self.times = np.array([float(e["t"]) for e in self.log])
+        self.discs = []
+        for _ in range(max_discs):
+            c = Circle((0.0, 0.0), 0.1, fill=False, ls="--", lw=0.9, ec="0.35", zorder=4.2, animated=True)
+            c.set_visible(False)
+            ax.add_patch(c)
+            self.discs.append(c)
+        self.plan = Line2D([], [], color=ROBOT_COLOR, lw=1.0, ls=":", zorder=4.4, animated=True)
+        ax.add_line(self.plan)
+        self.artists = [*self.discs, self.plan]
+
+    def update(self, t: float) -> None:
+        k = int(np.searchsorted(self.times, t, side="right")) - 1
+        entry = self.log[k] if k >= 0 else None
+        pred = np.asarray(entry.get("predicted", []) if entry else [], dtype=float).reshape(-1, 5)
+        age = t - float(entry["t"]) if entry else 0.0
+        for i, c in enumerate(self.discs):
+            if i < len(pred):
+                x, y, vx, vy, r = pred[i]
+                c.set_center((x + vx * age, y + vy * age))
+                c.set_radius(max(r, 1e-3))
+                c.set_visible(True)
+            else:
+                c.set_visible(False)
+        plan = np.asarray(entry.get("plan", []) if entry else [], dtype=float)
+        if plan.ndim == 2 and len(plan) and plan.shape[1] >= 3:
+            self.plan.set_data(plan[:, 1], plan[:, 2])
+        else:
+            self.plan.set_data([], [])
 
 
 def _default_span(scene: Scene) -> float:

@@ -303,3 +303,22 @@ def test_batch_keeps_each_querys_hold(client, tmp_path):
 
     saved = load_trajectory(tmp_path / "park-park.json")
     assert check_trajectory(scene, saved.waypoints, q).valid
+
+
+def test_crowd_episodes_on_the_cluster_match_in_process(client):
+    from gfuzzy import build_roadmap
+    from gfuzzy.crowd import circle_crossing, episodes
+    from gfuzzy.navigator import NavOptions
+    from gfuzzy.roadmap import RoadmapOptions
+
+    rm = build_roadmap(circle_crossing(0, 1), RoadmapOptions(vertices=80, seed=1))
+    policies = ["oracle", "orca"]  # deterministic (the navigator's budget is wall-clock)
+    here = episodes(None, rm, 4, [7, 8], NavOptions(), policies)
+    there = episodes(client, rm, 4, [7, 8], NavOptions(), policies)
+    assert len(there) == 2
+    for a, b in zip(here, there, strict=True):
+        for p in policies:
+            assert a[p]["reached"] == b[p]["reached"] and a[p]["collision"] == b[p]["collision"]
+            assert a[p]["time"] == b[p]["time"] or (a[p]["time"] != a[p]["time"] and b[p]["time"] != b[p]["time"])
+            assert a[p]["sep"] == b[p]["sep"]
+    assert here[0]["oracle"]["time"] != here[1]["oracle"]["time"]  # two different crowds

@@ -1,0 +1,667 @@
+"""Navigation among movers whose future is unknown (CONTRACT.md section 5).
+
+The planner of :mod:`gfuzzy.planner` is told every mover's whole future. A robot among
+people only sees where they are and how fast they walk now. :class:`Navigator` turns the
+roadmap-time search into a receding-horizon controller:
+
+1. **Predict.** Each observed disc ``[x, y, vx, vy, r]`` walks on at constant velocity (the
+   strong baseline on the ETH/UCY pedestrian data) for ``prediction_horizon`` seconds. Its
+   disc is inflated by the robot's ``mover_clearance``, a ``safety_buffer`` and an
+   uncertainty that grows by ``uncertainty_growth`` metres per second of prediction. The
+   prediction is written as a chain of short ``trajectory`` movers (one per ``slice``,
+   each with its own radius), so the search's continuous-time safety
+   (:class:`~gfuzzy.timespace.MoverField`) applies to it unchanged. Beyond the horizon a
+   walking person is dropped (too uncertain to plan around); a person standing still is
+   kept where they stand for ``stationary_hold`` more seconds (someone standing in a
+   doorway is likely to stay a while: the search then prefers another door or waits).
+2. **Plan.** The safe-interval search (:func:`~gfuzzy.timespace.sipp`) runs from the
+   robot's current pose, which is generally not a roadmap vertex. The roadmap's split
+   graph (every edge cut into one-step pieces) and its exact static heuristic to the goal
+   are built once per navigator; each call only splices the current pose in, with
+   certified straight connections to its nearest vertices (and to the goal when it is in
+   sight). Safety is evaluated lazily, only near the predicted people.
+3. **Fall back.** When the search finds no plan (the predictions block every way, the
+   robot stands inside an inflated disc) or runs out of ``time_budget``, it is tried once
+   more without the buffer and the uncertainty ("relaxed"); then a finely checked straight
+   dash to a nearby goal ("direct"); then the previous plan, if it is still clear of the
+   new predictions; otherwise the robot takes its *evasive motion*: of straight motions in ``evasion_headings`` directions at two speeds
+   (and standing still), the statically free one that maximises the time to contact with
+   the predicted people (un-inflated), ties broken by progress to the goal.
+
+``step`` never raises for a hard situation and always returns a trajectory whose first row
+is ``[t, *pose]`` and that meets the speed bound.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from .geometry import StaticGeometry, metric_distance, wrap_angle
+from .roadmap import Roadmap
+from .scene import Mover, Scene
+from .timespace import IntervalStore, MoverField, SpaceTimeGraph, sipp, timed_rows
+from .trajectory import Trajectory
+from .typing import FloatArray
+
+__all__ = ["NavOptions", "NavStep", "Navigator"]
+
+log = logging.getLogger(__name__)
+
+#: Planning speed is vmax shrunk by this factor, so rounding never lifts a step above vmax.
+SPEED_SAFETY = 1.0 - 1e-9
+#: Below this speed (m/s) an observed person counts as standing still.
+STILL_SPEED = 0.1
+
+
+@dataclass(frozen=True)
+class NavOptions:
+    """Settings of the navigator.
+
+    Attributes
+    ----------
+    dt : float
+        Time step of the search (s). Larger than the planner's 0.07: a replan must be fast,
+        and the plan is redone every period anyway.
+    prediction_horizon : float
+        How long (s) an observed person is predicted to walk on at constant velocity.
+    uncertainty_growth : float
+        Growth (m per s of prediction time) of the inflation around a predicted person
+        walking at ``reference_speed`` or faster; slower people get a proportionally
+        slower growth (someone standing still gets none).
+    reference_speed : float
+        Walking speed (m/s) at which the uncertainty grows at its full rate.
+    safety_buffer : float
+        Distance (m) kept from every predicted person on top of ``robot.mover_clearance``.
+    slice : float
+        Length (s) of a piece of prediction with one radius (the inflation grows by steps).
+    stationary_hold : float
+        A person standing still is kept where they stand this long (s) past the prediction
+        horizon; a walking one is dropped there.
+    time_budget : float
+        Wall-clock seconds one :meth:`Navigator.step` may take; the search stops at 75 %
+        of it and the fallback answers.
+    plan_slack : float
+        Seconds beyond the static time to the goal that the search's horizon allows for
+        waiting and detours (doubled once when that is not enough and time remains).
+    connect_k : int
+        How many nearest roadmap vertices the current pose (and the goal) connect to.
+    stretch : float
+        The search runs on the roadmap's spanner of this stretch (see ``PlanOptions``).
+    evasion_headings : int
+        Directions tried by the evasive motion.
+    evasion_time : float
+        Length (s) of the evasive motion returned, and of the look-ahead that scores it.
+    cover : float
+        A fallback trajectory lasts at least this long (s).
+    goal_tolerance : float
+        The goal is reached when the pose is this close to it (contract metric).
+    """
+
+    dt: float = 0.1
+    prediction_horizon: float = 5.0
+    uncertainty_growth: float = 0.1
+    reference_speed: float = 1.0
+    safety_buffer: float = 0.05
+    slice: float = 0.5
+    stationary_hold: float = 30.0
+    time_budget: float = 0.1
+    plan_slack: float = 8.0
+    connect_k: int = 8
+    stretch: float = 1.05
+    evasion_headings: int = 16
+    evasion_time: float = 2.0
+    cover: float = 1.0
+    goal_tolerance: float = 1e-6
+
+    def __post_init__(self):
+        for name in ("dt", "prediction_horizon", "reference_speed", "slice", "time_budget", "plan_slack", "evasion_time", "cover"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise ValueError(f"{name} must be a positive number, got {v!r}")
+        for name in ("uncertainty_growth", "safety_buffer", "stationary_hold", "goal_tolerance"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
+                raise ValueError(f"{name} must be a number >= 0, got {v!r}")
+        if self.connect_k < 1 or self.evasion_headings < 4:
+            raise ValueError("connect_k must be >= 1 and evasion_headings >= 4")
+        if not (self.stretch >= 1.0 and math.isfinite(self.stretch)):
+            raise ValueError(f"stretch must be a number >= 1, got {self.stretch}")
+
+
+@dataclass(frozen=True)
+class NavStep:
+    """What one :meth:`Navigator.step` did (``Navigator.last``).
+
+    Attributes
+    ----------
+    mode : str
+        ``"plan"`` (a fresh search), ``"relaxed"`` (a fresh search without the safety
+        buffer and the uncertainty, when the margins block every way), ``"direct"``
+        (straight to the goal nearby, checked finely), ``"previous"`` (the
+        last plan, still clear),
+        ``"evasive"``, ``"goal"`` (already there).
+    seconds : float
+        Wall-clock time of the call.
+    message : str
+        Why the search did not answer, when it did not.
+    predicted : (k, 5) float
+        The observations used, ``[x, y, vx, vy, inflated radius at t]``.
+    """
+
+    mode: str
+    seconds: float
+    message: str = ""
+    predicted: FloatArray = field(default_factory=lambda: np.zeros((0, 5)), compare=False)
+
+
+class Navigator:
+    """Receding-horizon navigation to a fixed goal among observed moving discs.
+
+    Parameters
+    ----------
+    scene : Scene
+        Its bounds, robot and static obstacles are used; its movers are ignored.
+    roadmap : Roadmap
+        A roadmap of ``scene`` (see :meth:`Roadmap.check_scene`).
+    goal : (d,) float
+        The goal pose.
+    options : NavOptions, optional
+
+    Raises
+    ------
+    ValueError
+        The goal is malformed, out of bounds or in a static obstacle.
+
+    Examples
+    --------
+    >>> nav = Navigator(scene, roadmap, goal)                     # doctest: +SKIP
+    >>> traj = nav.step(0.0, start, np.array([[1, 0, -1, 0, 0.3]]))  # doctest: +SKIP
+    """
+
+    def __init__(self, scene: Scene, roadmap: Roadmap, goal, options: NavOptions | None = None):
+        roadmap.check_scene(scene)
+        self.options = opts = options or NavOptions()
+        self.scene = scene
+        self.roadmap = roadmap
+        self.robot = robot = scene.robot
+        self.geometry = StaticGeometry(scene)
+        goal = np.asarray(goal, dtype=float).reshape(-1)
+        if goal.shape != (robot.dof,) or not np.all(np.isfinite(goal)):
+            raise ValueError(f"goal must be {robot.dof} finite numbers")
+        if self.geometry.bounds_clearance(goal[None])[0] < 0 or self.geometry.clearance1(goal) < 0:
+            raise ValueError(f"goal {goal.tolist()} is out of bounds or collides with a static obstacle")
+        self.goal = goal
+        self._goal_wrapped = goal.copy()
+        if robot.dof == 3:
+            self._goal_wrapped[2] = wrap_angle(goal[2])
+        self.vplan = robot.vmax * SPEED_SAFETY
+        self.step_len = self.vplan * opts.dt
+        self.mover_clearance = float(getattr(robot, "mover_clearance", 0.0) or 0.0)
+        # the predicted world carries the clearance in its radii: the search's robot keeps none
+        self._pred_robot = replace(robot, mover_clearance=0.0) if hasattr(robot, "mover_clearance") else robot
+        self.reached = False
+        self.replans = 0
+        self.last: NavStep | None = None
+        self._previous: Trajectory | None = None
+        self._ahead: list = []  # (arrival time, roadmap vertex) of the last plan
+        self._build_base()
+
+    # ------------------------------------------------------------------ graph
+    def _connect(self, pose: FloatArray, k: int) -> list[tuple[int, float]]:
+        """Certified straight connections from ``pose`` to its nearest roadmap vertices."""
+        V = self.roadmap.vertices
+        if len(V) == 0:
+            return []
+        d = metric_distance(V, pose[None, :], self.robot.circumradius)
+        order = np.argsort(d, kind="stable")[: 4 * k]
+        out = []
+        for i in order.tolist():
+            if len(out) >= k:
+                break
+            if self.geometry.motion_free(pose, V[i]):
+                out.append((int(i), float(d[i])))
+        return out
+
+    def _build_base(self) -> None:
+        """The roadmap + goal, split into one-step points, with the hop heuristic to the goal."""
+        from scipy.sparse import coo_matrix
+        from scipy.sparse.csgraph import dijkstra
+
+        rm, opts = self.roadmap, self.options
+        nv = len(rm.vertices)
+        g_id = nv
+        keep = rm.spanner(opts.stretch)
+        extra = self._connect(self._goal_wrapped, opts.connect_k)
+        edges = np.vstack([rm.edges[keep], np.array([(g_id, v) for v, _ in extra], dtype=np.int64).reshape(-1, 2)])
+        lengths = np.concatenate([rm.lengths[keep], np.array([w for _, w in extra], dtype=float)])
+        verts = np.vstack([rm.vertices, self._goal_wrapped[None]])
+        n = len(verts)
+        k = _steps(lengths, self.step_len)
+        w = np.maximum(k.astype(float), 1e-300)
+        mat = coo_matrix(
+            (np.r_[w, w], (np.r_[edges[:, 0], edges[:, 1]], np.r_[edges[:, 1], edges[:, 0]])), shape=(n, n)
+        ).tocsr()
+        hop_g = np.rint(dijkstra(mat, directed=True, indices=g_id))
+        # metres to the goal on the whole roadmap (the contract's roadmap distance)
+        full = np.vstack([rm.edges, edges[len(rm.edges[keep]) :]])
+        full_w = np.maximum(np.concatenate([rm.lengths, lengths[len(rm.lengths[keep]) :]]), 1e-300)
+        mat = coo_matrix(
+            (np.r_[full_w, full_w], (np.r_[full[:, 0], full[:, 1]], np.r_[full[:, 1], full[:, 0]])), shape=(n, n)
+        ).tocsr()
+        self._metres_v = dijkstra(mat, directed=True, indices=g_id)
+        poses, src, dst, heur, groups = _split(verts, edges, k, hop_g)
+        order = np.argsort(src, kind="stable")
+        indptr = np.zeros(len(poses) + 1, dtype=np.int64)
+        np.add.at(indptr, src + 1, 1)
+        self._poses = poses
+        self._indptr = np.cumsum(indptr)
+        self._nbrs = dst[order]
+        self._heur = heur
+        self._groups = groups
+        self._hop_v = hop_g  # per roadmap vertex (and the goal)
+        self._g_id = g_id
+        self._nv = nv
+        log.debug("navigator graph: %d points, %d moves", len(poses), len(dst))
+
+    def roadmap_distance(self, pose) -> float:
+        """Shortest distance from ``pose`` to the goal on the whole roadmap (static
+        obstacles only; inf when not connected)."""
+        pose = np.asarray(pose, dtype=float).reshape(-1)
+        best = math.inf
+        if self.geometry.motion_free(pose, self._goal_wrapped):
+            best = float(metric_distance(pose, self._goal_wrapped, self.robot.circumradius))
+        for v, w in self._connect(pose, self.options.connect_k):
+            best = min(best, w + float(self._metres_v[v]))
+        return best
+
+    def _splice(self, pose: FloatArray, t: float = -math.inf):
+        """The base graph with ``pose`` spliced in: (graph, start id), or (None, reason)."""
+        opts = self.options
+        conns = self._connect(pose, opts.connect_k)
+        # the robot is usually inside an edge of its last plan: connect it to the vertices
+        # that plan was heading for too (the nearest ones may all lie behind it, and going
+        # back to one of them before going on would make it dither)
+        seen = {v for v, _ in conns}
+        ahead = [v for ta, v in self._ahead if ta > t + 1e-9 and v not in seen][:2]
+        for v in ahead:
+            target = self._poses[v]
+            if self.geometry.motion_free(pose, target):
+                conns.append((v, float(metric_distance(pose, target, self.robot.circumradius))))
+        if self.geometry.motion_free(pose, self._goal_wrapped):
+            conns.append((self._g_id, float(metric_distance(pose, self._goal_wrapped, self.robot.circumradius))))
+        conns = [(v, w) for v, w in conns if math.isfinite(self._hop_v[v])]
+        if not conns:
+            return None, "the robot's pose connects to no roadmap vertex that leads to the goal"
+        N = len(self._poses)
+        s_id = N
+        verts = np.vstack([self._poses[: self._nv + 1], pose[None]])
+        tgt = np.array([v for v, _ in conns], dtype=np.int64)
+        k = _steps(np.array([w for _, w in conns]), self.step_len)
+        new_poses, new_src, new_dst, new_h, new_groups = [pose[None]], [], [], [], []
+        h_s = math.inf
+        nxt = N + 1
+        new_groups.append(nxt)
+        for v, kc in zip(tgt.tolist(), k.tolist(), strict=True):
+            f = np.arange(1, kc)[:, None] / kc
+            a, b = pose, verts[v]
+            delta = b - a
+            if len(pose) == 3:
+                delta[2] = wrap_angle(delta[2])
+            inner = a + f * delta
+            if len(pose) == 3:
+                inner[:, 2] = wrap_angle(inner[:, 2])
+            ids = np.arange(nxt, nxt + kc - 1)
+            chain = np.concatenate([[s_id], ids, [v]])
+            new_src.append(chain[:-1])
+            new_dst.append(chain[1:])
+            new_poses.append(inner)
+            new_h.append(self._hop_v[v] + kc - np.arange(1, kc))
+            h_s = min(h_s, self._hop_v[v] + kc)
+            nxt += kc - 1
+            new_groups.append(nxt)
+        new_src = np.concatenate(new_src)
+        new_dst = np.concatenate(new_dst)
+        poses = np.vstack([self._poses, *new_poses])
+        heur = np.concatenate([self._heur, [h_s], *new_h])
+        order = np.argsort(new_src, kind="stable")
+        deg = np.bincount(new_src - N, minlength=len(poses) - N)
+        indptr = np.concatenate([self._indptr, self._indptr[-1] + np.cumsum(deg)])
+        nbrs = np.concatenate([self._nbrs, new_dst[order]])
+        groups = np.concatenate([self._groups, np.unique(np.array(new_groups, dtype=np.int64))])
+        groups = groups[groups <= len(poses)]
+        # steps from the pose: at least the straight distance over one step's length
+        from_start = np.floor(np.hypot(*(poses[:, :2] - pose[:2]).T) / self.step_len - 1e-9)
+        graph = SpaceTimeGraph(
+            poses, indptr, nbrs, heur, groups=np.unique(groups), from_start=np.maximum(from_start, 0.0)
+        )
+        return graph, s_id
+
+    # ------------------------------------------------------------- prediction
+    def _inflation(self, pose: FloatArray, obs: FloatArray, relaxed: bool = False) -> FloatArray:
+        """(k, S) inflation (m) per person and prediction slice, shrunk near the robot.
+
+        A person already closer than the full inflation (someone walked up to the robot)
+        gets an inflation that starts just inside their present gap and recovers at the
+        robot's speed, so that the robot, which stands where it stands, is not inside its
+        own predictions and the search can move it away.
+        """
+        opts = self.options
+        n_slices = int(math.ceil(opts.prediction_horizon / opts.slice - 1e-9))
+        tau = np.arange(n_slices) * opts.slice
+        speed = np.hypot(obs[:, 2], obs[:, 3])
+        # uncertainty grows with how far a person may stray from the straight walk: with
+        # their speed (someone standing is where they stand; a full-speed walker may turn)
+        rate = opts.uncertainty_growth * np.minimum(speed / opts.reference_speed, 1.0)
+        full = self.mover_clearance + opts.safety_buffer + rate[:, None] * tau[None, :]  # (k, S)
+        if relaxed:  # only what the contract asks: the robot's mover clearance
+            full = np.full_like(full, self.mover_clearance)
+        gap = self._gap(pose, obs)  # (k,) beyond the people's own radius
+        margin0 = (self.vplan + speed) * opts.dt / 2  # the search's continuous-time margin at step 0
+        allowed = np.maximum(gap - margin0 - 1e-6, 0.0)
+        return np.minimum(full, allowed[:, None] + self.vplan * tau[None, :])
+
+    def _gap(self, pose: FloatArray, obs: FloatArray) -> FloatArray:
+        from .geometry import mover_distance
+
+        if len(obs) == 0:
+            return np.zeros(0)
+        return mover_distance(self._pred_robot, pose[None, :], "disc", obs[:, 4], (0.0, 0.0), obs[:, :2])
+
+    def _predict(self, t: float, pose: FloatArray, obs: FloatArray, relaxed: bool = False) -> tuple[list, FloatArray]:
+        """Predicted movers (a chain of trajectory movers per person) and (k, S) inflation."""
+        opts = self.options
+        infl = self._inflation(pose, obs, relaxed)
+        movers = []
+        for i, (x, y, vx, vy, r) in enumerate(obs.tolist()):
+            still = math.hypot(vx, vy) < STILL_SPEED
+            for s in range(infl.shape[1]):
+                ta = s * opts.slice
+                tb = min((s + 1) * opts.slice, opts.prediction_horizon)
+                if still:
+                    vx = vy = 0.0
+                rows = np.array([[t + ta, x + vx * ta, y + vy * ta], [t + tb, x + vx * tb, y + vy * tb]])
+                if s == infl.shape[1] - 1 and still and opts.stationary_hold > 0:
+                    rows[1, 0] = t + tb + opts.stationary_hold
+                movers.append(Mover(f"p{i}s{s}", "disc", float(r + infl[i, s]), (0.0, 0.0), trajectory=rows))
+        return movers, infl
+
+    # ------------------------------------------------------------------- step
+    def step(self, t: float, pose, observations) -> Trajectory:
+        """Replan from ``pose`` at time ``t`` given what is seen now.
+
+        Parameters
+        ----------
+        t : float
+        pose : (d,) float
+            The robot's pose now (need not be a roadmap vertex).
+        observations : (k, 5) float
+            ``[x, y, vx, vy, radius]`` per moving obstacle seen at ``t`` (k may be 0).
+
+        Returns
+        -------
+        Trajectory
+            First row ``[t, *pose]``; meets the speed bound; the robot follows it until the
+            next call. Never raises for a hard situation (no plan: the evasive motion).
+
+        Raises
+        ------
+        ValueError
+            Malformed input (wrong shapes, non-finite numbers): a caller's bug.
+        """
+        t_begin = time.perf_counter()
+        opts = self.options
+        t = float(t)
+        pose = np.asarray(pose, dtype=float).reshape(-1).copy()
+        if pose.shape != (self.robot.dof,) or not np.all(np.isfinite(pose)) or not math.isfinite(t):
+            raise ValueError(f"pose must be {self.robot.dof} finite numbers and t finite")
+        obs = np.asarray(observations, dtype=float).reshape(-1, 5) if np.size(observations) else np.zeros((0, 5))
+        if not np.all(np.isfinite(obs)) or np.any(obs[:, 4] < 0):
+            raise ValueError("observations must be finite rows [x, y, vx, vy, radius >= 0]")
+        self.replans += 1
+        cr = self.robot.circumradius
+        if float(metric_distance(pose, self.goal, cr)) <= opts.goal_tolerance:
+            self.reached = True
+            self.last = NavStep("goal", time.perf_counter() - t_begin)
+            return Trajectory(np.array([[t, *pose], [t + opts.cover, *pose]]), cr)
+        deadline = t_begin + 0.75 * opts.time_budget
+        movers, infl = self._predict(t, pose, obs)
+        predicted = obs.copy()
+        if len(obs):
+            predicted[:, 4] = obs[:, 4] + infl[:, 0]
+        traj, message = None, ""
+        try:
+            traj, message = self._search(t, pose, movers, deadline)
+        except Exception as exc:  # never raise for a hard situation: the fallback answers
+            log.warning("navigator search failed at t=%g: %s", t, exc)
+            traj, message = None, f"search failed: {exc}"
+        mode = "plan"
+        if traj is None and len(obs) and time.perf_counter() < deadline and "budget" not in message:
+            # blocked by the margins (someone standing beside the goal, a narrow gap): try
+            # once more with the people's discs as they are, plus the mover clearance only
+            try:
+                relaxed, _ = self._predict(t, pose, obs, relaxed=True)
+                traj, _ = self._search(t, pose, relaxed, deadline)
+            except Exception as exc:
+                log.warning("navigator relaxed search failed at t=%g: %s", t, exc)
+                traj = None
+            mode = "relaxed"
+        if traj is None:
+            traj = self._direct(t, pose, obs)
+            mode = "direct"
+        if traj is None:
+            traj = self._previous_if_clear(t, pose, obs)
+            mode = "previous"
+            if traj is None:
+                traj = self._evasive(t, pose, obs)
+                mode = "evasive"
+        else:
+            self._previous = traj
+        if mode == "evasive":
+            self._previous = None
+        self.last = NavStep(mode, time.perf_counter() - t_begin, message, predicted)
+        return traj
+
+    def _search(self, t: float, pose: FloatArray, movers: list, deadline: float):
+        opts = self.options
+        graph, s_id = self._splice(pose, t)
+        if graph is None:
+            return None, s_id
+        h0 = float(graph.heuristic[s_id])
+        if not math.isfinite(h0):
+            return None, "the goal is not reachable on the roadmap"
+        scene = replace(self.scene, robot=self._pred_robot, movers=tuple(movers))
+        store = IntervalStore(graph)
+        slack = (opts.plan_slack + opts.prediction_horizon) / opts.dt
+        for _ in range(2):
+            steps = int(math.ceil(h0 + slack))
+            field_ = MoverField(scene, t, opts.dt, steps, self.vplan)
+            if time.perf_counter() > deadline:  # no time left to search: the fallback answers
+                return None, "time budget spent before the search"
+            res = sipp(graph, field_, s_id, self._g_id, deadline=deadline, store=store)
+            if res.status != "no_path" or not res.horizon_hit or time.perf_counter() > deadline:
+                break
+            slack *= 2.0
+        if res.status != "solved":
+            return None, res.message
+        rows, _ = timed_rows(res.nodes, res.steps, graph.poses, t, opts.dt)
+        self._ahead = [(t + st * opts.dt, nd) for nd, st in zip(res.nodes, res.steps, strict=True) if nd <= self._nv]
+        rows[0, 1:] = pose
+        rows[-1, 1:] = self.goal
+        return Trajectory(rows, self.robot.circumradius), ""
+
+    # --------------------------------------------------------------- fallback
+    def _clearance_along(self, pts: FloatArray, times: FloatArray, obs: FloatArray) -> FloatArray:
+        """(..., k) gap between the robot at ``pts`` (..., T, d) and each person walking
+        on at constant velocity at ``times`` (T,), minus the mover clearance."""
+        pos = obs[None, :, :2] + (times - times[0])[:, None, None] * obs[None, :, 2:4]  # (T, k, 2)
+        rel = pos - pts[..., None, :2]
+        if self.robot.shape == "disc":
+            d = np.hypot(rel[..., 0], rel[..., 1]) - self.robot.radius - obs[:, 4]
+        else:
+            from .geometry import mover_distance
+
+            d = mover_distance(self._pred_robot, pts[..., None, :], "disc", obs[:, 4], (0.0, 0.0), pos)
+        return d - self.mover_clearance
+
+    def _direct(self, t: float, pose: FloatArray, obs: FloatArray) -> Trajectory | None:
+        """Straight to the goal at full speed, if it is statically free and keeps clear of
+        everyone seen now walking on at constant velocity (un-inflated) until arrival and
+        for a second after; None otherwise.
+
+        The search's own margin (half a step of motion) can close the last gap to a goal
+        beside a person standing still; this motion is checked every 0.01 s with a margin
+        of 0.02 m, which bounds the gap between the samples (it changes by at most 2 m/s).
+        """
+        if not self.geometry.motion_free(pose, self.goal):
+            return None
+        cr = self.robot.circumradius
+        length = float(metric_distance(pose, self.goal, cr))
+        duration = length / self.vplan
+        if duration > self.options.prediction_horizon:
+            return None
+        rows = np.array([[t, *pose], [t + duration, *self.goal]])
+        traj = Trajectory(rows, cr)
+        if len(obs):
+            times = np.arange(t, t + duration + 1.0 + 0.01, 0.01)
+            speed = float(np.max(np.hypot(obs[:, 2], obs[:, 3]), initial=0.0))
+            if np.min(self._clearance_along(traj.at(times), times, obs)) <= (self.vplan + speed) * 0.005 + 1e-3:
+                return None
+        return traj
+
+    def _previous_if_clear(self, t: float, pose: FloatArray, obs: FloatArray) -> Trajectory | None:
+        """The last plan from ``t`` on, if the robot is on it and it keeps clear of everyone
+        seen now (walking on at constant velocity, un-inflated) over the prediction horizon."""
+        prev = self._previous
+        if prev is None or prev.t_end <= t + 1e-9:
+            return None
+        if float(metric_distance(prev.at(t), pose, self.robot.circumradius)) > 1e-6:
+            return None
+        cut = _cut(prev, t, prev.t_end)
+        cut[0, 1:] = pose
+        if len(obs):
+            times = np.linspace(t, t + self.options.prediction_horizon, 61)
+            pts = Trajectory(cut, self.robot.circumradius).at(times)
+            if np.min(self._clearance_along(pts, times, obs)) <= 0:
+                return None
+        return Trajectory(cut, self.robot.circumradius)
+
+    def _evasive(self, t: float, pose: FloatArray, obs: FloatArray) -> Trajectory:
+        """The statically free straight motion (or standing still) with the latest contact.
+
+        Candidates: ``evasion_headings`` directions at full and half speed, each going on
+        for ``evasion_time`` (or half, or a quarter of it, whichever is free of static
+        obstacles) and then standing, and standing still. Each is scored by its time to
+        contact with the people walking on at constant velocity (un-inflated, sampled every
+        0.05 s over ``evasion_time``), then by the smallest gap, then by progress to the goal.
+        """
+        opts = self.options
+        cr = self.robot.circumradius
+        T = opts.evasion_time
+        ang = np.arange(opts.evasion_headings) * (2 * math.pi / opts.evasion_headings)
+        speeds = np.array([1.0, 0.5]) * self.vplan
+        dirs = np.column_stack([np.cos(ang), np.sin(ang)])
+        vel = np.vstack([np.zeros((1, 2)), (speeds[:, None, None] * dirs[None]).reshape(-1, 2)])  # (C, 2)
+        move_time = np.zeros(len(vel))
+        free = np.zeros(len(vel), dtype=bool)
+        free[0] = True
+        for c in range(1, len(vel)):
+            for frac in (1.0, 0.5, 0.25):
+                end = pose.copy()
+                end[:2] += vel[c] * T * frac
+                if self.geometry.bounds_clearance(end[None])[0] >= 0 and self.geometry.motion_free(pose, end):
+                    free[c] = True
+                    move_time[c] = T * frac
+                    break
+        ends = np.repeat(pose[None], len(vel), axis=0)
+        ends[:, :2] += vel * move_time[:, None]
+        n_t = int(math.ceil(T / 0.05)) + 1
+        times = t + np.linspace(0.0, T, n_t)
+        tau = times - t
+        frac = np.clip(tau[None, :] / np.maximum(move_time[:, None], 1e-12), 0.0, 1.0)  # moves, then stands
+        pts = pose[None, None, :] + frac[:, :, None] * (ends - pose[None])[:, None, :]  # (C, T, d)
+        if len(obs):
+            gap = self._clearance_along(pts, times, obs).min(axis=-1)  # (C, T)
+            hit = gap <= 0
+            ttc = np.where(hit.any(axis=1), tau[np.argmax(hit, axis=1)], math.inf)
+            worst = gap.min(axis=1)
+        else:
+            ttc = np.full(len(vel), math.inf)
+            worst = np.full(len(vel), math.inf)
+        progress = metric_distance(pose, self.goal, cr) - metric_distance(ends, self.goal[None], cr)
+        # the latest contact first (no contact within the horizon beats any), then the widest
+        # gap while close, then progress to the goal
+        score = np.minimum(ttc, T + 1.0) * 100.0 + np.minimum(worst, 0.5) * 10.0 + progress
+        score = np.where(free, score, -math.inf)
+        c = int(np.argmax(score))
+        if c == 0:
+            rows = np.array([[t, *pose], [t + max(T, opts.cover), *pose]])
+        else:
+            rows = np.array([[t, *pose], [t + move_time[c], *ends[c]]])
+            if opts.cover > move_time[c]:
+                rows = np.vstack([rows, [t + opts.cover, *ends[c]]])
+        return Trajectory(rows, cr)
+
+
+def _steps(lengths: FloatArray, step_len: float) -> np.ndarray:
+    """Steps per edge so that no step is longer than ``step_len``."""
+    k = np.maximum(1, np.ceil(lengths / step_len)).astype(np.int64)
+    return np.where(lengths / k > step_len, k + 1, k)
+
+
+def _split(verts: FloatArray, edges, k, hop_g):
+    """Every edge cut into ``k`` one-step pieces (as :meth:`Planner._graph` does).
+
+    Returns
+    -------
+    poses : (N, d) float
+    src, dst : (M,) int
+        One-step moves, both ways along every edge.
+    heur : (N,) float
+        Steps to the goal (exact on the static graph).
+    groups : (E'+1,) int
+        Boundaries of the interior points of each edge (for :class:`IntervalStore`).
+    """
+    n = len(verts)
+    n_int = k - 1
+    offs = np.concatenate([[0], np.cumsum(n_int)])
+    total = n + int(offs[-1])
+    e_of = np.repeat(np.arange(len(edges)), n_int)
+    j = np.arange(offs[-1]) - np.repeat(offs[:-1], n_int) + 1
+    f = j / k[e_of]
+    a, b = edges[e_of, 0], edges[e_of, 1]
+    delta = verts[b] - verts[a]
+    if verts.shape[1] == 3:
+        delta[:, 2] = wrap_angle(delta[:, 2])
+    poses = np.empty((total, verts.shape[1]))
+    poses[:n] = verts
+    inner = verts[a] + f[:, None] * delta
+    if verts.shape[1] == 3:
+        inner[:, 2] = wrap_angle(inner[:, 2])
+    poses[n:] = inner
+    heur = np.empty(total)
+    heur[:n] = hop_g
+    heur[n:] = np.minimum(hop_g[a] + j, hop_g[b] + k[e_of] - j)
+    ids = np.arange(n, total)
+    first = np.zeros(offs[-1], dtype=bool)
+    first[offs[:-1][n_int > 0]] = True
+    last = np.zeros(offs[-1], dtype=bool)
+    last[(offs[1:] - 1)[n_int > 0]] = True
+    prev = np.where(first, a, ids - 1)
+    src = np.concatenate([prev, ids[last], edges[n_int == 0, 0]])
+    dst = np.concatenate([ids, b[last], edges[n_int == 0, 1]])
+    return poses, np.concatenate([src, dst]), np.concatenate([dst, src]), heur, n + offs
+
+
+def _cut(traj: Trajectory, ta: float, tb: float) -> FloatArray:
+    """Rows of ``traj`` between ``ta`` and ``tb`` (both ends interpolated), t strictly increasing."""
+    w = traj.waypoints
+    inner = w[(w[:, 0] > ta + 1e-9) & (w[:, 0] < tb - 1e-9)]
+    rows = [np.array([ta, *traj.at(ta)])[None], inner]
+    if tb > ta + 1e-9:
+        rows.append(np.array([tb, *traj.at(tb)])[None])
+    return np.vstack(rows)

@@ -1,0 +1,347 @@
+"""The navigator among movers whose future it does not know (CONTRACT.md section 5)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from conftest import ROOT, run_cli_process
+
+import gfuzzy
+from gfuzzy.navigator import Navigator, NavOptions
+from gfuzzy.navsim import min_separation, observe, simulate
+from gfuzzy.scene import parse_scene
+
+
+def _scene(movers=(), obstacles=(), bounds=(-5.0, -5.0, 5.0, 5.0), start=(0.0, -4.0), goal=(0.0, 4.0), robot=None):
+    return parse_scene(
+        {
+            "version": 1,
+            "name": "nav-test",
+            "bounds": list(bounds),
+            "robot": robot or {"disc": 0.3, "vmax": 1.0},
+            "obstacles": list(obstacles),
+            "movers": list(movers),
+            "queries": [{"name": "q", "start": list(start), "goal": list(goal)}],
+        }
+    )
+
+
+@pytest.fixture(scope="module")
+def open_square():
+    scene = _scene()
+    return scene, gfuzzy.build_roadmap(scene, gfuzzy.RoadmapOptions(vertices=150, seed=3))
+
+
+@pytest.fixture(scope="module")
+def two_doors():
+    """A wall across y = 0 with a door at x = 0 (on the straight line) and one at x = 3."""
+    obstacles = [
+        {"box": {"center": [-2.75, 0.0], "size": [4.5, 0.2]}},
+        {"box": {"center": [1.5, 0.0], "size": [2.0, 0.2]}},
+        {"box": {"center": [4.5, 0.0], "size": [1.0, 0.2]}},
+    ]
+    scene = _scene(obstacles=obstacles)
+    return scene, gfuzzy.build_roadmap(scene, gfuzzy.RoadmapOptions(vertices=250, seed=2))
+
+
+def _speeds_ok(traj: gfuzzy.Trajectory, vmax: float) -> bool:
+    return bool(np.all(traj.speeds() <= vmax * (1 + 1e-9)))
+
+
+def test_nobody_seen_goes_straight_to_the_goal(open_square):
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (0.0, 4.0))
+    traj = nav.step(0.0, np.array([0.0, -4.0]), np.zeros((0, 5)))
+    assert nav.last.mode == "plan"
+    np.testing.assert_allclose(traj.waypoints[0], [0.0, 0.0, -4.0])
+    np.testing.assert_allclose(traj.waypoints[-1, 1:], [0.0, 4.0])
+    assert _speeds_ok(traj, 1.0)
+    # no one to wait for: the roadmap route at full speed, up to a step per edge
+    rd = nav.roadmap_distance([0.0, -4.0])
+    assert traj.duration <= rd / 1.0 + 0.1 * 12
+    assert gfuzzy.check_trajectory(scene, traj.waypoints, scene.queries[0]).valid
+
+
+def test_mid_edge_start(open_square):
+    scene, rm = open_square
+    e = int(np.argmax(rm.lengths))
+    a, b = rm.vertices[rm.edges[e]]
+    pose = 0.37 * a + 0.63 * b  # strictly inside a roadmap edge, not a vertex
+    nav = Navigator(scene, rm, (0.0, 4.0))
+    traj = nav.step(2.5, pose, np.zeros((0, 5)))
+    assert nav.last.mode == "plan"
+    np.testing.assert_allclose(traj.waypoints[0], [2.5, *pose])
+    np.testing.assert_allclose(traj.waypoints[-1, 1:], [0.0, 4.0])
+    assert _speeds_ok(traj, 1.0)
+    assert gfuzzy.check_trajectory(scene, traj.waypoints).valid
+
+
+def test_person_walking_straight_at_the_robot_is_dodged(open_square):
+    scene0, rm = open_square
+    # a person walks down the robot's straight line at 1 m/s, start to finish
+    person = {"name": "p", "disc": 0.3, "trajectory": [[0.0, 0.0, 4.0], [9.0, 0.0, -5.0]]}
+    scene = _scene(movers=[person])
+    q = scene.queries[0]
+    res = simulate(scene, rm, q.start, q.goal, 0.0, 0.25, max_time=30.0)
+    assert res.reached
+    assert res.min_separation >= 0.0
+    assert gfuzzy.check_trajectory(scene, res.trajectory.waypoints, q).valid
+    xy = res.trajectory.poses
+    assert np.max(np.abs(xy[:, 0])) > 0.3  # stepped aside ...
+    assert res.duration < 8.0 + 4.0  # ... rather than waiting for the person to pass by
+
+
+def test_person_standing_in_a_doorway(two_doors):
+    scene0, rm = two_doors
+    person = {"name": "door", "disc": 0.3, "trajectory": [[0.0, 0.0, 0.0], [200.0, 0.0, 0.0]]}
+    scene = _scene(movers=[person], obstacles=scene0.raw["obstacles"])
+    q = scene.queries[0]
+    res = simulate(scene, rm, q.start, q.goal, 0.0, 0.25, max_time=60.0)
+    assert res.reached
+    assert gfuzzy.check_trajectory(scene, res.trajectory.waypoints, q).valid
+    # it went through the other door
+    at_wall = res.trajectory.at(np.linspace(res.trajectory.t0, res.trajectory.t_end, 400))
+    crossing = at_wall[np.argmin(np.abs(at_wall[:, 1]))]
+    assert crossing[0] > 2.0
+
+
+def test_surrounded_robot_gets_an_evasive_motion(open_square):
+    scene, rm = open_square
+    pose = np.array([0.0, 0.0])
+    ang = np.arange(8) * (2 * math.pi / 8)
+    # eight people 0.05 m from the robot, all walking at it
+    pos = np.column_stack([np.cos(ang), np.sin(ang)]) * 0.65
+    obs = np.column_stack([pos, -np.column_stack([np.cos(ang), np.sin(ang)]), np.full(8, 0.3)])
+    nav = Navigator(scene, rm, (0.0, 4.0))
+    traj = nav.step(1.0, pose, obs)
+    assert nav.last.mode == "evasive"
+    np.testing.assert_allclose(traj.waypoints[0], [1.0, 0.0, 0.0])
+    assert _speeds_ok(traj, 1.0)
+    assert traj.duration >= nav.options.cover - 1e-9
+
+
+def test_evasive_motion_steps_away_from_a_close_person(open_square):
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (0.0, 4.0))
+    pose = np.array([0.0, 0.0])
+    obs = np.array([[0.65, 0.0, -1.0, 0.0, 0.3]])  # touching distance soon, walking at the robot
+    traj = nav._evasive(0.0, pose, obs)
+    ts = np.linspace(0.0, 2.0, 2001)
+    person = obs[0, :2] + ts[:, None] * obs[0, 2:4]
+    gap = np.hypot(*(traj.at(ts) - person).T) - 0.6
+    assert gap.min() > 0.0  # out of the way for the whole look-ahead
+    # standing still would have been hit within 0.05 s
+    assert np.hypot(*(pose - person[ts > 0.06][0])) < 0.6
+
+
+def test_time_budget_falls_back_to_the_previous_plan(open_square):
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (0.0, 4.0))
+    first = nav.step(0.0, np.array([0.0, -4.0]), np.zeros((0, 5)))
+    assert nav.last.mode == "plan"
+    hurried = Navigator(scene, rm, (0.0, 4.0), NavOptions(time_budget=1e-9))
+    hurried._previous = first
+    pose = first.at(0.25)
+    traj = hurried.step(0.25, pose, np.zeros((0, 5)))
+    assert hurried.last.mode == "previous"
+    np.testing.assert_allclose(traj.waypoints[0], [0.25, *pose])
+    np.testing.assert_allclose(traj.at(1.0), first.at(1.0))
+    # nothing to fall back on: the evasive motion, still a valid trajectory
+    alone = Navigator(scene, rm, (0.0, 4.0), NavOptions(time_budget=1e-9))
+    traj = alone.step(0.0, np.array([0.0, -4.0]), np.zeros((0, 5)))
+    assert alone.last.mode == "evasive"
+    assert _speeds_ok(traj, 1.0)
+
+
+def test_start_inside_the_inflated_prediction_still_moves(open_square):
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (0.0, 4.0))
+    pose = np.array([0.0, -2.0])
+    obs = np.array([[0.7, -2.0, 0.0, 0.0, 0.3]])  # 0.1 m away: inside the safety buffer
+    traj = nav.step(0.0, pose, obs)
+    assert nav.last.mode in ("plan", "evasive")
+    assert traj.at(1.0)[1] != pose[1] or traj.at(1.0)[0] != pose[0]
+
+
+def test_goal_reached(open_square):
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (0.0, 4.0))
+    traj = nav.step(3.0, np.array([0.0, 4.0]), np.zeros((0, 5)))
+    assert nav.reached
+    np.testing.assert_allclose(traj.poses, [[0.0, 4.0], [0.0, 4.0]])
+
+
+def test_bad_arguments_raise(open_square):
+    scene, rm = open_square
+    with pytest.raises(ValueError):
+        Navigator(scene, rm, (0.0, 9.0))  # out of bounds
+    nav = Navigator(scene, rm, (0.0, 4.0))
+    with pytest.raises(ValueError):
+        nav.step(0.0, np.array([0.0, math.nan]), np.zeros((0, 5)))
+    with pytest.raises(ValueError):
+        NavOptions(time_budget=0.0)
+
+
+@pytest.mark.parametrize("name", ["sim-5s2m", "building-floor"])  # a disc robot, a box robot
+def test_among_loop_movers(name):
+    scene = gfuzzy.load_scene(ROOT / "scenes" / f"{name}.yaml")
+    rm = gfuzzy.load_roadmap(ROOT / "roadmaps" / f"{name}.json", scene)
+    q = scene.queries[0]
+    res = simulate(scene, rm, q.start, q.goal, q.t0, 0.25, max_time=60.0)
+    report = gfuzzy.check_trajectory(scene, res.trajectory.waypoints, q if res.reached else None)
+    assert report.valid, report.reason
+    assert res.reached
+
+
+def test_observe_reports_true_velocity_and_range():
+    movers = [
+        {"name": "a", "disc": 0.3, "trajectory": [[0.0, 0.0, 0.0], [2.0, 2.0, 0.0]]},
+        {"name": "b", "box": [0.4, 0.2], "speed": 0.5, "path": [[3.0, 3.0], [3.0, -3.0]], "mode": "bounce"},
+    ]
+    scene = _scene(movers=movers)
+    obs = observe(scene, 1.0, np.array([0.0, -4.0]))
+    np.testing.assert_allclose(obs[0], [1.0, 0.0, 1.0, 0.0, 0.3], atol=1e-6)
+    np.testing.assert_allclose(obs[1, 2:4], [0.0, -0.5], atol=1e-6)
+    assert obs[1, 4] == pytest.approx(0.5 * math.hypot(0.4, 0.2))
+    near = observe(scene, 1.0, np.array([0.0, -4.0]), sense=3.6)
+    assert len(near) == 1 and near[0, 0] == pytest.approx(1.0)  # a is 3.52 m away, b 6.6 m
+
+
+def test_min_separation_exact_matches_sampling():
+    rng = np.random.default_rng(5)
+    track = np.column_stack([np.linspace(0, 4, 9), rng.uniform(-2, 2, 9), rng.uniform(-2, 2, 9)])
+    scene = _scene(movers=[{"name": "p", "disc": 0.3, "trajectory": track.tolist()}])
+    robot = np.column_stack([np.linspace(-1, 5, 7), rng.uniform(-2, 2, 7), rng.uniform(-2, 2, 7)])
+    exact = min_separation(scene, robot)
+    ts = np.linspace(0, 4, 40001)
+    r = gfuzzy.Trajectory(robot).at(ts)
+    m = np.column_stack([np.interp(ts, track[:, 0], track[:, 1]), np.interp(ts, track[:, 0], track[:, 2])])
+    sampled = float(np.min(np.hypot(*(r - m).T)) - 0.6)
+    assert exact <= sampled + 1e-9
+    assert exact == pytest.approx(sampled, abs=1e-3)
+
+
+def test_navigate_cli_on_a_pedestrian_replay(tmp_path):
+    out = tmp_path / "eth.json"
+    scene = ROOT / "scenes" / "eth-crossing.yaml"
+    p = run_cli_process("navigate", scene, "-o", out)
+    assert p.returncode == 0, p.stdout + p.stderr
+    doc = json.loads(out.read_text())
+    assert doc["status"] == "solved"
+    for key in ("replans", "replan_seconds_p95", "replan_seconds_max", "min_separation"):
+        assert key in doc
+    assert doc["replans"] >= 1 and doc["min_separation"] >= 0
+    assert doc["waypoints"][0][1:] == [7.0, 0.6] and doc["waypoints"][-1][1:] == [7.0, 9.4]
+    c = run_cli_process("check", scene, out)
+    assert c.returncode == 0, c.stderr
+    # and a checker that shares no code with the navigator agrees
+    s = gfuzzy.load_scene(scene)
+    assert gfuzzy.check_trajectory(s, np.array(doc["waypoints"]), s.queries[0]).valid
+
+
+@pytest.mark.parametrize(
+    "args",
+    [["--period", "0"], ["--period", "-1"], ["--sense", "0"], ["--max-time", "nan"], ["--query", "nope"]],
+)
+def test_navigate_bad_input(tmp_path, args):
+    out = tmp_path / "o.json"
+    p = run_cli_process("navigate", ROOT / "scenes" / "eth-crossing.yaml", *args, "-o", out)
+    assert p.returncode == 2
+    assert len(p.stderr.strip().splitlines()) == 1
+    assert not out.exists()
+
+
+def test_crowd_episodes():
+    pytest.importorskip("pyrvo")
+    from gfuzzy.crowd import CROWD, circle_crossing, orca_robot
+
+    scene0 = circle_crossing(0, 1)
+    rm = gfuzzy.build_roadmap(scene0, gfuzzy.RoadmapOptions(vertices=250, seed=1))
+    for seed in (11, 12, 13):
+        scene = circle_crossing(5, seed, duration=30.0)
+        # the protocol: humans start near the circle and walk to the opposite point
+        for mv in scene.movers:
+            start, end = mv.trajectory[0, 1:], mv.trajectory[-1, 1:]
+            assert 3.2 < np.hypot(*start) < 4.8
+            assert np.hypot(*(end + start)) < 0.5
+        q = scene.queries[0]
+        res = simulate(scene, rm, q.start, q.goal, 0.0, CROWD["time_step"], max_time=CROWD["time_limit"])
+        assert res.reached
+        sep = min_separation(scene, res.trajectory.waypoints)
+        assert sep >= 0.0
+        assert gfuzzy.check_trajectory(scene, res.trajectory.waypoints, q).valid
+    # the same seed, the same humans
+    a, b = circle_crossing(5, 11, duration=5.0), circle_crossing(5, 11, duration=5.0)
+    np.testing.assert_array_equal(a.movers[0].trajectory, b.movers[0].trajectory)
+    rows, _ = orca_robot(a, time_limit=5.0)
+    assert np.all(np.hypot(*np.diff(rows[:, 1:], axis=0).T) <= 0.25 + 1e-9)
+
+
+def test_render_shows_the_predictions(tmp_path):
+    from PIL import Image
+
+    from gfuzzy.render import render_animation
+
+    scene = gfuzzy.load_scene(ROOT / "scenes" / "zara-crowd.yaml")
+    rm = gfuzzy.load_roadmap(ROOT / "roadmaps" / "zara-crowd.json", scene)
+    q = scene.queries[0]
+    res = simulate(scene, rm, q.start, q.goal, q.t0, 0.25, log_every=2)
+    assert res.log and all(len(e["predicted"]) for e in res.log)
+    plain, overlay = tmp_path / "plain.gif", tmp_path / "nav.gif"
+    render_animation(scene, res.trajectory, plain, max_frames=6)
+    render_animation(scene, res.trajectory, overlay, max_frames=6, predictions=res.log)
+    a, b = Image.open(plain), Image.open(overlay)
+    assert a.n_frames == b.n_frames == 6
+    a.seek(3)
+    b.seek(3)
+    # the dashed predicted discs and the dotted plan change the picture
+    assert np.any(np.asarray(a.convert("RGB")) != np.asarray(b.convert("RGB")))
+
+
+def test_navigate_timeout_still_writes_the_executed_motion(tmp_path):
+    out = tmp_path / "sealed.json"
+    p = run_cli_process("navigate", ROOT / "scenes" / "sealed-room.yaml", "--max-time", "3", "-o", out)
+    assert p.returncode == 1, p.stdout + p.stderr
+    doc = json.loads(out.read_text())
+    assert doc["status"] == "timeout" and "waypoints" not in doc
+    rows = np.array(doc["executed"])
+    assert rows[0, 0] == 0.0 and rows[-1, 0] == pytest.approx(3.0)
+    assert doc["replans"] == 12
+
+
+def test_navigate_start_on_a_person_is_an_invalid_query(tmp_path, tmp_scene):
+    scene = tmp_scene(
+        """
+        version: 1
+        name: on-a-person
+        bounds: [0, 0, 6, 4]
+        robot: {disc: 0.3, vmax: 1.0}
+        obstacles: []
+        movers:
+          - {name: p, disc: 0.3, trajectory: [[0, 1.2, 2.0], [5, 5.0, 2.0]]}
+        queries:
+          - {name: q, start: [1.0, 2.0], goal: [5.0, 1.0]}
+        """
+    )
+    out = tmp_path / "o.json"
+    p = run_cli_process("navigate", scene, "-n", "60", "-o", out)
+    assert p.returncode == 1
+    doc = json.loads(out.read_text())
+    assert doc["status"] == "invalid_query" and "'p'" in doc["message"]
+
+
+def test_goal_beside_a_person_standing_still(open_square):
+    scene0, rm = open_square
+    # 0.045 m between the person and the robot parked at the goal: less than the search's
+    # own margin at dt 0.1, so the last metres are a checked straight dash
+    person = {"name": "p", "disc": 0.3, "trajectory": [[0.0, 0.645, 4.0], [60.0, 0.645, 4.0]]}
+    scene = _scene(movers=[person])
+    q = scene.queries[0]
+    res = simulate(scene, rm, q.start, q.goal, 0.0, 0.25, max_time=30.0)
+    assert res.reached
+    assert 0.0 <= res.min_separation < 0.05
+    assert gfuzzy.check_trajectory(scene, res.trajectory.waypoints, q).valid
+    assert res.modes.get("direct", 0) >= 1
