@@ -238,3 +238,26 @@ def test_cli_backend_flag(tmp_path):
     assert rows["compiled"] == rows["reference"]
     bad = run_cli_process("plan", "scenes/wait-corridor.yaml", "--backend", "fortran", cwd=ROOT)
     assert bad.returncode == 2 and "backend" in bad.stderr
+
+
+def test_compiled_search_times_out_like_the_reference():
+    """A deadline already past: both searches stop with `timeout` (the kernel hands control
+    back every few thousand expansions), and without a deadline both solve."""
+    from gfuzzy.scene import parse_scene
+
+    scene = parse_scene(
+        {"version": 1, "name": "empty", "bounds": [0, 0, 90, 90], "robot": {"disc": 0.1, "vmax": 1.0}}
+    )
+    side = 80
+    idx = np.arange(side * side).reshape(side, side)
+    pairs = np.vstack([np.c_[idx[:, :-1].ravel(), idx[:, 1:].ravel()], np.c_[idx[:-1].ravel(), idx[1:].ravel()]])
+    both = np.vstack([pairs, pairs[:, ::-1]])
+    both = both[np.argsort(both[:, 0], kind="stable")]
+    indptr = np.searchsorted(both[:, 0], np.arange(side * side + 1))
+    poses = np.c_[idx.ravel() % side, idx.ravel() // side].astype(float) + 1.0
+    graph = SpaceTimeGraph(poses, indptr, both[:, 1].copy(), np.zeros(side * side))  # h = 0: Dijkstra
+    for search in (sipp, sipp_compiled):
+        field = MoverField(scene, 0.0, 1.0, 400, 1.0)
+        assert search(graph, field, 0, side * side - 1, deadline=0.0).status == "timeout"
+        done = search(graph, MoverField(scene, 0.0, 1.0, 400, 1.0), 0, side * side - 1)
+        assert done.status == "solved" and done.steps[-1] == 2 * (side - 1)
