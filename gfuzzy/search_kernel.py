@@ -17,11 +17,10 @@ top of the open list. Its state (a binary heap on arrays, an open-addressing tab
 ``best`` and ``parent``) lives in arrays that survive between calls.
 
 Same order as the reference. The reference's heap holds tuples ``(f, -g, node, interval)``,
-all distinct (a state is pushed again only with a strictly earlier arrival, which changes
-``-g``... or with the same ``g`` never), so its pop order is the lexicographic order of
-the tuples whatever the heap's layout; this kernel's heap compares the same four keys in
-the same order, so both search in the same order, break ties the same way and return the
-same answer.
+all distinct (a state is pushed again only with a strictly earlier arrival, so never twice
+with the same ``g``), so its pop order is the lexicographic order of the tuples whatever
+the heap's layout; this kernel's heap compares the same four keys in the same order, so
+both search in the same order, break ties the same way and return the same answer.
 
 numba is imported only when this module is (the reference path and ``import gfuzzy`` do not
 need it); ``cache=True`` keeps the machine code on disk (``make demo``/``make test`` warm it:
