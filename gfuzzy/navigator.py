@@ -42,9 +42,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .geometry import StaticGeometry, metric_distance, wrap_angle
+from .planner import BACKENDS, _search_function
 from .roadmap import Roadmap
 from .scene import Mover, Scene
-from .timespace import IntervalStore, MoverField, SpaceTimeGraph, sipp, timed_rows
+from .timespace import IntervalStore, MoverField, SpaceTimeGraph, timed_rows
 from .trajectory import Trajectory
 from .typing import FloatArray
 
@@ -100,6 +101,9 @@ class NavOptions:
         A fallback trajectory lasts at least this long (s).
     goal_tolerance : float
         The goal is reached when the pose is this close to it (contract metric).
+    backend : {"compiled", "reference"}
+        The search's implementation, as :attr:`gfuzzy.PlanOptions.backend`: the same
+        answers, the compiled one faster (so more replans finish inside the budget).
     """
 
     dt: float = 0.1
@@ -117,8 +121,11 @@ class NavOptions:
     evasion_time: float = 2.0
     cover: float = 1.0
     goal_tolerance: float = 1e-6
+    backend: str = "compiled"
 
     def __post_init__(self):
+        if self.backend not in BACKENDS:
+            raise ValueError(f"backend must be one of {', '.join(BACKENDS)}, got {self.backend!r}")
         for name in ("dt", "prediction_horizon", "reference_speed", "slice", "time_budget", "plan_slack", "evasion_time", "cover"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
@@ -210,6 +217,10 @@ class Navigator:
         self._previous: Trajectory | None = None
         self._ahead: list = []  # (arrival time, roadmap vertex) of the last plan
         self._build_base()
+        if opts.backend == "compiled":  # load the compiled kernels now, not inside a step's budget
+            from .search_kernel import warm
+
+            warm()
 
     # ------------------------------------------------------------------ graph
     def _connect(self, pose: FloatArray, k: int) -> list[tuple[int, float]]:
@@ -476,13 +487,15 @@ class Navigator:
             return None, "the goal is not reachable on the roadmap"
         scene = replace(self.scene, robot=self._pred_robot, movers=tuple(movers))
         store = IntervalStore(graph)
+        search = _search_function(opts.backend)
         slack = (opts.plan_slack + opts.prediction_horizon) / opts.dt
         for _ in range(2):
             steps = int(math.ceil(h0 + slack))
             field_ = MoverField(scene, t, opts.dt, steps, self.vplan)
+            field_.compiled = opts.backend == "compiled"
             if time.perf_counter() > deadline:  # no time left to search: the fallback answers
                 return None, "time budget spent before the search"
-            res = sipp(graph, field_, s_id, self._g_id, deadline=deadline, store=store)
+            res = search(graph, field_, s_id, self._g_id, deadline=deadline, store=store)
             if res.status != "no_path" or not res.horizon_hit or time.perf_counter() > deadline:
                 break
             slack *= 2.0
