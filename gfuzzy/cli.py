@@ -14,7 +14,7 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
-from .errors import SceneError
+from .errors import InputError, LimitError, SceneError
 
 __all__ = ["main"]
 
@@ -71,7 +71,7 @@ def _roadmap_for(scene, args, quiet=False):
                 vertices=args.vertices if args.vertices is not None else RoadmapOptions.vertices,
                 seed=args.seed if args.seed is not None else RoadmapOptions.seed,
             )
-        except ValueError as exc:
+        except InputError as exc:
             raise BadInput(f"-n/--seed: {exc}") from None
         saved = _default_roadmap(scene, quiet=True)
         if saved is not None and saved.options == opts:  # the saved file is this very roadmap
@@ -107,7 +107,7 @@ def _check_roadmap_flags(args) -> None:
             vertices=args.vertices if args.vertices is not None else RoadmapOptions.vertices,
             seed=args.seed if args.seed is not None else RoadmapOptions.seed,
         )
-    except ValueError as exc:
+    except InputError as exc:
         raise BadInput(f"-n/--seed: {exc}") from None
 
 
@@ -161,7 +161,7 @@ def _apply_overrides(scene, args):
             raise BadInput(f"{flag}: must be a non-negative finite number, got {value:g}")
     try:
         return scene.with_clearances(clearance, mover_clearance)
-    except ValueError as exc:
+    except InputError as exc:
         raise BadInput(f"--clearance/--mover-clearance: {exc}") from None
 
 
@@ -190,7 +190,7 @@ def _plan_options(args):
             stretch=args.stretch,
             seed=args.ga_seed,
         )
-    except ValueError as exc:  # named after the command run (plan shares these flags with regress)
+    except ValueError as exc:  # PlanOptions' checks (named after the command: plan shares these flags with regress)
         raise BadInput(f"gfuzzy {getattr(args, 'command', None) or 'plan'}: {exc}") from None
 
 
@@ -229,7 +229,7 @@ def cmd_roadmap(args) -> int:
     out = _out_path(args.output, (".json",)) if args.output else default_roadmap_path(scene)
     try:
         opts = RoadmapOptions(vertices=args.vertices, seed=args.seed, neighbors=args.neighbors)
-    except ValueError as exc:
+    except InputError as exc:
         raise BadInput(f"gfuzzy roadmap: {exc}") from None
     rm = build_roadmap(scene, opts, progress=_progress("roadmap"))
     rm.save(out)
@@ -298,7 +298,7 @@ def cmd_plan(args) -> int:
         roadmap = _roadmap_for(scene, args)
         try:
             result = Planner(scene, roadmap).plan(query.start, query.goal, query.t0, options, hold=query.hold)
-        except ValueError as exc:  # a request beyond the memory bounds (dt far too fine)
+        except LimitError as exc:  # a request beyond the memory bounds (dt far too fine)
             raise BadInput(f"gfuzzy plan: {exc}") from None
     tf = result.to_file(scene.name, query.name)
     if out is not None:
@@ -465,7 +465,7 @@ def cmd_render(args) -> int:
             options["violation"] = bad
     try:
         render(scene, out, trajectory=traj, roadmap=roadmap, **options)
-    except ValueError as exc:
+    except InputError as exc:
         raise BadInput(f"{args.trajectory or out}: {exc}") from None
     _say(f"wrote {out}", sys.stdout)
     return EXIT_OK
@@ -516,7 +516,7 @@ def cmd_regress(args) -> int:
     _check_roadmap_flags(args)  # before the table's header: bad input prints nothing else
     try:
         ok = run_regression(scenes, lambda sc: _roadmap_for(sc, args), options, sys.stdout)
-    except ValueError as exc:  # a request beyond the memory bounds (dt far too fine)
+    except LimitError as exc:  # a request beyond the memory bounds (dt far too fine)
         raise BadInput(f"gfuzzy regress: {exc}") from None
     return EXIT_OK if ok else EXIT_NO
 
@@ -575,9 +575,9 @@ def cmd_tracks(args) -> int:
             tracks, options, static=static, folder=out.resolve().parent,
             start=start, goal=goal, query_name=args.query_name, expect=expect,
         )  # fmt: skip
-    except SceneError:  # a bad file: its own message (SceneError is a ValueError too)
+    except SceneError:  # a bad file: its own message (SceneError is an InputError too)
         raise
-    except ValueError as exc:
+    except InputError as exc:
         raise BadInput(f"gfuzzy tracks: {exc}") from None
     text = made.to_yaml(_tracks_command(args))
     # the file must load as it will be read: check it before it replaces anything
@@ -705,7 +705,7 @@ def cmd_navigate(args) -> int:
     out = _out_path(args.output, (".json",)) if args.output else None
     try:
         options = NavOptions(dt=args.dt, time_budget=args.time_budget)
-    except ValueError as exc:
+    except InputError as exc:
         raise BadInput(f"gfuzzy navigate: {exc}") from None
     problem = query_problem(StaticGeometry(scene), query.start, query.goal) or _start_on_mover(scene, query)
     if problem:
@@ -912,7 +912,7 @@ def main(argv: list[str] | None = None) -> int:
     except BadInput as exc:
         _say(" ".join(str(exc).split()))
         return EXIT_BAD
-    except SceneError as exc:
+    except (InputError, LimitError) as exc:  # SceneError included; any other exception is a bug
         _say(" ".join(str(exc).split()))
         return EXIT_BAD
     except KeyboardInterrupt:

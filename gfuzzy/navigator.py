@@ -41,6 +41,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from .errors import InputError
 from .geometry import StaticGeometry, metric_distance, wrap_angle
 from .roadmap import Roadmap
 from .scene import Mover, Scene
@@ -122,15 +123,15 @@ class NavOptions:
         for name in ("dt", "prediction_horizon", "reference_speed", "slice", "time_budget", "plan_slack", "evasion_time", "cover"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise ValueError(f"{name} must be a positive number, got {v!r}")
+                raise InputError(f"{name} must be a positive number, got {v!r}")
         for name in ("uncertainty_growth", "safety_buffer", "stationary_hold", "goal_tolerance"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
-                raise ValueError(f"{name} must be a number >= 0, got {v!r}")
+                raise InputError(f"{name} must be a number >= 0, got {v!r}")
         if self.connect_k < 1 or self.evasion_headings < 4:
-            raise ValueError("connect_k must be >= 1 and evasion_headings >= 4")
+            raise InputError("connect_k must be >= 1 and evasion_headings >= 4")
         if not (self.stretch >= 1.0 and math.isfinite(self.stretch)):
-            raise ValueError(f"stretch must be a number >= 1, got {self.stretch}")
+            raise InputError(f"stretch must be a number >= 1, got {self.stretch}")
 
 
 @dataclass(frozen=True)
@@ -192,9 +193,9 @@ class Navigator:
         self.geometry = StaticGeometry(scene)
         goal = np.asarray(goal, dtype=float).reshape(-1)
         if goal.shape != (robot.dof,) or not np.all(np.isfinite(goal)):
-            raise ValueError(f"goal must be {robot.dof} finite numbers")
+            raise InputError(f"goal must be {robot.dof} finite numbers")
         if self.geometry.bounds_clearance(goal[None])[0] < 0 or self.geometry.clearance1(goal) < 0:
-            raise ValueError(f"goal {goal.tolist()} is out of bounds or collides with a static obstacle")
+            raise InputError(f"goal {goal.tolist()} is out of bounds or collides with a static obstacle")
         self.goal = goal
         self._goal_wrapped = goal.copy()
         if robot.dof == 3:
@@ -418,10 +419,10 @@ class Navigator:
         t = float(t)
         pose = np.asarray(pose, dtype=float).reshape(-1).copy()
         if pose.shape != (self.robot.dof,) or not np.all(np.isfinite(pose)) or not math.isfinite(t):
-            raise ValueError(f"pose must be {self.robot.dof} finite numbers and t finite")
+            raise InputError(f"pose must be {self.robot.dof} finite numbers and t finite")
         obs = np.asarray(observations, dtype=float).reshape(-1, 5) if np.size(observations) else np.zeros((0, 5))
         if not np.all(np.isfinite(obs)) or np.any(obs[:, 4] < 0):
-            raise ValueError("observations must be finite rows [x, y, vx, vy, radius >= 0]")
+            raise InputError("observations must be finite rows [x, y, vx, vy, radius >= 0]")
         self.replans += 1
         cr = self.robot.circumradius
         if float(metric_distance(pose, self.goal, cr)) <= opts.goal_tolerance:

@@ -9,7 +9,6 @@ produce a safe answer leaves the earlier answer in place.
 
 from __future__ import annotations
 
-import enum
 import logging
 import math
 import time
@@ -18,9 +17,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .errors import LimitError
 from .geometry import StaticGeometry, metric_distance
 from .roadmap import Roadmap
 from .scene import Scene
+from .settings import MAX_MOVER_SAMPLES, MAX_POINTS, SPEED_SAFETY
+from .status import Status
 from .timespace import IntervalStore, MoverField, SpaceTimeGraph, sipp, timed_rows
 from .trajectory import Trajectory, TrajectoryFile
 from .typing import FloatArray
@@ -41,27 +43,6 @@ __all__ = [
 ]
 
 log = logging.getLogger(__name__)
-
-#: Planning speed is vmax shrunk by this factor, so rounding never lifts a step above vmax.
-SPEED_SAFETY = 1.0 - 1e-9
-#: Largest number of graph points (edges cut into steps) a query may use (about 1 GB with
-#: the search's Python lists); the 10,000-vertex hall benchmark has 0.7 million.
-MAX_POINTS = 3_000_000
-#: Largest number of mover samples (movers x time steps) a query may use: about 0.7 GB.
-MAX_MOVER_SAMPLES = 20_000_000
-
-
-class Status(str, enum.Enum):
-    """Outcome of a query (docs/formats.md section 2)."""
-
-    SOLVED = "solved"
-    NO_PATH = "no_path"
-    INVALID_QUERY = "invalid_query"
-    TIMEOUT = "timeout"
-
-    def __str__(self) -> str:
-        return self.value
-
 
 @dataclass(frozen=True)
 class PlanOptions:
@@ -328,7 +309,7 @@ class Planner:
         offs = np.concatenate([[0], np.cumsum(n_int)])
         total = n + int(offs[-1])
         if total > MAX_POINTS:
-            raise ValueError(
+            raise LimitError(
                 f"the time step is too fine for this roadmap: its edges would be cut into "
                 f"{total:,} points (at most {MAX_POINTS:,}); use a larger dt"
             )
@@ -464,7 +445,7 @@ class Planner:
             steps = min(max_steps, int(math.ceil(h0 + slack)) + hold_steps)
             horizon = (steps - hold_steps) * opts.dt
             if len(self.scene.movers) * (steps + 1) > MAX_MOVER_SAMPLES:
-                raise ValueError(
+                raise LimitError(
                     f"{len(self.scene.movers)} movers over {steps:,} time steps are too many to "
                     f"sample (at most {MAX_MOVER_SAMPLES:,}); use a larger dt or a shorter horizon"
                 )

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from .atomic import write_atomic
-from .errors import SceneError
+from .errors import InputError, SceneError
 from .geometry import StaticGeometry, metric_distance
 from .scene import Scene
 from .typing import FloatArray, IntArray
@@ -79,13 +79,13 @@ class RoadmapOptions:
 
     def __post_init__(self):
         if self.vertices < 1:
-            raise ValueError(f"a roadmap needs at least 1 vertex, got {self.vertices}")
+            raise InputError(f"a roadmap needs at least 1 vertex, got {self.vertices}")
         if self.neighbors < 1:
-            raise ValueError(f"neighbors must be >= 1, got {self.neighbors}")
+            raise InputError(f"neighbors must be >= 1, got {self.neighbors}")
         if not 0 < self.resolution <= 0.5:
-            raise ValueError(f"resolution must be in (0, 0.5], got {self.resolution}")
+            raise InputError(f"resolution must be in (0, 0.5], got {self.resolution}")
         if self.sampler not in ("uniform", "passage"):
-            raise ValueError(f"sampler must be 'uniform' or 'passage', got {self.sampler!r}")
+            raise InputError(f"sampler must be 'uniform' or 'passage', got {self.sampler!r}")
 
 
 @dataclass
@@ -151,7 +151,7 @@ class Roadmap:
         (E,) bool
         """
         if not stretch >= 1.0:
-            raise ValueError(f"stretch must be >= 1, got {stretch}")
+            raise InputError(f"stretch must be >= 1, got {stretch}")
         cached = self._spanners.get(stretch)
         if cached is not None:  # computed once per roadmap and stretch
             return cached
@@ -593,7 +593,7 @@ def grow_roadmaps(
     options = options or RoadmapOptions()
     sizes = sorted(int(n) for n in sizes)
     if not sizes or sizes[0] < 1:
-        raise ValueError("sizes must be positive vertex counts")
+        raise InputError("sizes must be positive vertex counts")
     geometry = geometry or StaticGeometry(scene)
     calls0 = geometry.calls
     t_start = time.perf_counter()

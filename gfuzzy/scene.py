@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from .errors import SceneError
+from .errors import InputError, SceneError
 from .typing import FloatArray
 
 __all__ = [
@@ -371,7 +371,7 @@ class Scene:
                 continue
             value = float(value)
             if not (math.isfinite(value) and 0.0 <= value <= MAX_MAGNITUDE):
-                raise ValueError(f"robot.{key} must be a non-negative finite number, got {value!r}")
+                raise InputError(f"robot.{key} must be a non-negative finite number, got {value!r}")
             new[key] = value
         robot = replace(robot, **new)
         raw = copy.deepcopy(self.raw)

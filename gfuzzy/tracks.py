@@ -34,7 +34,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from .errors import SceneError
+from .errors import InputError, SceneError
 from .scene import NAME_RE, STATUSES, Scene
 from .typing import FloatArray
 
@@ -273,9 +273,9 @@ def read_tracks(path: str | os.PathLike, format: str = "auto", fps: float | None
     """
     file = str(path)
     if format not in FORMATS:
-        raise ValueError(f"format must be one of {', '.join(FORMATS)}, got {format!r}")
+        raise InputError(f"format must be one of {', '.join(FORMATS)}, got {format!r}")
     if fps is not None and not (math.isfinite(fps) and fps > 0):
-        raise ValueError(f"fps must be positive and finite, got {fps!r}")
+        raise InputError(f"fps must be positive and finite, got {fps!r}")
     text = _read_text(file)
     fmt = _sniff(file, text) if format == "auto" else format
     step = None
@@ -293,7 +293,7 @@ def read_tracks(path: str | os.PathLike, format: str = "auto", fps: float | None
         raw = {pid: [(f * spf, x, y) for f, x, y in rows] for pid, rows in raw.items()}
     else:
         if fps is not None:
-            raise ValueError("fps applies to the eth format only (csv times are seconds)")
+            raise InputError("fps applies to the eth format only (csv times are seconds)")
         raw = _read_csv(file, text)
         fps_used = None
     if not raw:
@@ -460,13 +460,13 @@ class TrackSceneOptions:
         for key in ("t_start", "duration", "scale", "radius", "robot_radius", "vmax", "amax"):
             value = getattr(self, key)
             if value is not None and not math.isfinite(value):
-                raise ValueError(f"{key} must be finite, got {value!r}")
+                raise InputError(f"{key} must be finite, got {value!r}")
         for key in ("duration", "scale", "radius", "robot_radius", "vmax", "amax"):
             value = getattr(self, key)
             if value is not None and value <= 0:
-                raise ValueError(f"{key} must be positive, got {value!r}")
+                raise InputError(f"{key} must be positive, got {value!r}")
         if self.max_movers is not None and self.max_movers < 0:
-            raise ValueError(f"max_movers must not be negative, got {self.max_movers!r}")
+            raise InputError(f"max_movers must not be negative, got {self.max_movers!r}")
         if self.region is not None:
             r = tuple(float(v) for v in self.region)
             if (
@@ -474,12 +474,12 @@ class TrackSceneOptions:
                 or not all(math.isfinite(v) for v in r)
                 or not (r[0] < r[2] and r[1] < r[3])
             ):
-                raise ValueError(
+                raise InputError(
                     f"region must be xmin ymin xmax ymax with xmin < xmax, ymin < ymax, got {self.region!r}"
                 )
             object.__setattr__(self, "region", r)
         if not NAME_RE.match(self.name):
-            raise ValueError(f"name must be letters, digits, _ . - (got {self.name!r})")
+            raise InputError(f"name must be letters, digits, _ . - (got {self.name!r})")
 
 
 @dataclass(frozen=True)
@@ -749,14 +749,14 @@ def tracks_scene(
     # query
     queries = []
     if (start is None) != (goal is None):
-        raise ValueError("start and goal go together")
+        raise InputError("start and goal go together")
     if start is not None:
         if not NAME_RE.match(query_name):
-            raise ValueError(f"query name must be letters, digits, _ . - (got {query_name!r})")
+            raise InputError(f"query name must be letters, digits, _ . - (got {query_name!r})")
         start, goal = [float(v) for v in start], [float(v) for v in goal]
         for label, pose in (("start", start), ("goal", goal)):
             if len(pose) != dof:
-                raise ValueError(f"{label}: expected {dof} numbers for this robot, got {len(pose)}")
+                raise InputError(f"{label}: expected {dof} numbers for this robot, got {len(pose)}")
             x, y = pose[:2]
             if not (
                 region[0] + inradius <= x <= region[2] - inradius
@@ -771,7 +771,7 @@ def tracks_scene(
         if expect:
             unknown = set(expect) - {"status", "max_duration", "max_delay_factor"}
             if unknown or expect.get("status", "solved") not in STATUSES:
-                raise ValueError(f"expect: not allowed: {expect!r}")
+                raise InputError(f"expect: not allowed: {expect!r}")
             query["expect"] = dict(expect)
         queries.append(query)
 
