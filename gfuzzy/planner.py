@@ -30,6 +30,7 @@ from .typing import FloatArray
 if TYPE_CHECKING:  # the stages' modules load only when a stage runs
     from .fuzzy import RuleBase
     from .ga import GAOptions
+    from .stages import RefineReport, SpeedReport
 
 __all__ = [
     "Status",
@@ -124,7 +125,9 @@ class PlanResult:
         Shortest start-to-goal distance on the roadmap (inf when not connected).
     planning_seconds : float
     stats : dict
-        Expansions, states, graph size, and the stages' before/after figures.
+        Expansions, states, graph size, and the stages' reports as dicts (the file's keys).
+    refine_report, speed_report : gfuzzy.stages.RefineReport / SpeedReport or None
+        What each stage did, when it ran.
     """
 
     status: Status
@@ -134,6 +137,8 @@ class PlanResult:
     planning_seconds: float = 0.0
     vmax: float = 1.0
     stats: dict = field(default_factory=dict)
+    refine_report: RefineReport | None = None
+    speed_report: SpeedReport | None = None
 
     @property
     def solved(self) -> bool:
@@ -492,9 +497,9 @@ class Planner:
         stats["search_seconds"] = time.perf_counter() - t_begin
         result = answer("solved", "", traj, rd, **stats)
         if opts.refine or opts.speed_layer:
-            from .stages import apply_stages
+            from .stages import StageContext, apply_stages
 
-            result = apply_stages(self, result, start, goal, t0, opts, t_begin, hold=hold)
+            result = apply_stages(StageContext(self.scene, self.geometry), result, start, goal, t0, opts, t_begin, hold=hold)
         # headings are wrapped inside; the first and last rows give the query's own numbers
         wps = result.trajectory.waypoints.copy()
         wps[0, 1:], wps[-1, 1:] = ends
