@@ -42,9 +42,11 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .errors import InputError
-from .geometry import StaticGeometry, metric_distance, wrap_angle
+from .geometry import StaticGeometry
+from .poses import interpolate_segment, metric_distance, split_counts, wrap_angle
 from .roadmap import Roadmap
 from .scene import Mover, Scene
+from .settings import SPEED_SAFETY
 from .timespace import IntervalStore, MoverField, SpaceTimeGraph, sipp, timed_rows
 from .trajectory import Trajectory
 from .typing import FloatArray
@@ -53,8 +55,6 @@ __all__ = ["NavOptions", "NavStep", "Navigator"]
 
 log = logging.getLogger(__name__)
 
-#: Planning speed is vmax shrunk by this factor, so rounding never lifts a step above vmax.
-SPEED_SAFETY = 1.0 - 1e-9
 #: Below this speed (m/s) an observed person counts as standing still.
 STILL_SPEED = 0.1
 
@@ -308,14 +308,7 @@ class Navigator:
         nxt = N + 1
         new_groups.append(nxt)
         for v, kc in zip(tgt.tolist(), k.tolist(), strict=True):
-            f = np.arange(1, kc)[:, None] / kc
-            a, b = pose, verts[v]
-            delta = b - a
-            if len(pose) == 3:
-                delta[2] = wrap_angle(delta[2])
-            inner = a + f * delta
-            if len(pose) == 3:
-                inner[:, 2] = wrap_angle(inner[:, 2])
+            inner = interpolate_segment(pose, verts[v], np.arange(1, kc) / kc)
             ids = np.arange(nxt, nxt + kc - 1)
             chain = np.concatenate([[s_id], ids, [v]])
             new_src.append(chain[:-1])
@@ -609,9 +602,8 @@ class Navigator:
 
 
 def _steps(lengths: FloatArray, step_len: float) -> np.ndarray:
-    """Steps per edge so that no step is longer than ``step_len``."""
-    k = np.maximum(1, np.ceil(lengths / step_len)).astype(np.int64)
-    return np.where(lengths / k > step_len, k + 1, k)
+    """Steps per edge so that no step is longer than ``step_len``: :func:`gfuzzy.poses.split_counts`."""
+    return split_counts(lengths, step_len)
 
 
 def _split(verts: FloatArray, edges, k, hop_g):
@@ -635,15 +627,9 @@ def _split(verts: FloatArray, edges, k, hop_g):
     j = np.arange(offs[-1]) - np.repeat(offs[:-1], n_int) + 1
     f = j / k[e_of]
     a, b = edges[e_of, 0], edges[e_of, 1]
-    delta = verts[b] - verts[a]
-    if verts.shape[1] == 3:
-        delta[:, 2] = wrap_angle(delta[:, 2])
     poses = np.empty((total, verts.shape[1]))
     poses[:n] = verts
-    inner = verts[a] + f[:, None] * delta
-    if verts.shape[1] == 3:
-        inner[:, 2] = wrap_angle(inner[:, 2])
-    poses[n:] = inner
+    poses[n:] = interpolate_segment(verts[a], verts[b], f)
     heur = np.empty(total)
     heur[:n] = hop_g
     heur[n:] = np.minimum(hop_g[a] + j, hop_g[b] + k[e_of] - j)

@@ -54,11 +54,11 @@ def metric_distance(a: FloatArray, b: FloatArray, circumradius: float) -> FloatA
 
 
 def interpolate_segment(a: FloatArray, b: FloatArray, f: FloatArray) -> FloatArray:
-    """Poses at fractions ``f`` of ONE straight motion a -> b (heading along the shorter arc).
+    """Poses at fractions ``f`` of straight motions a -> b (heading along the shorter arc).
 
     Parameters
     ----------
-    a, b : (d,) float
+    a, b : (d,) float, or (k, d) float (one motion per fraction)
     f : (k,) float in [0, 1]
 
     Returns
@@ -70,7 +70,7 @@ def interpolate_segment(a: FloatArray, b: FloatArray, f: FloatArray) -> FloatArr
     f = np.asarray(f, dtype=float)[:, None]
     delta = b - a
     if a.shape[-1] == 3:
-        delta[2] = wrap_angle(delta[2])
+        delta[..., 2] = wrap_angle(delta[..., 2])
     out = a + f * delta
     if a.shape[-1] == 3:
         out[:, 2] = wrap_angle(out[:, 2])

@@ -35,7 +35,7 @@ from matplotlib.path import Path as MplPath
 
 from .atomic import write_atomic_with
 from .errors import InputError
-from .geometry import wrap_angle
+from .poses import wrap_angle
 from .scene import Box, Disc, Mover, Polygon, Scene
 from .trajectory import Trajectory
 from .typing import FloatArray
@@ -45,7 +45,7 @@ __all__ = [
     "render_scene",
     "render_animation",
     "as_waypoints",
-    "interpolate_poses",
+    "poses_at_times",
     "segment_speeds",
     "wait_intervals",
 ]
@@ -131,7 +131,7 @@ def as_waypoints(trajectory: Any, scene: Scene | None = None) -> FloatArray:
     return wp
 
 
-def interpolate_poses(waypoints: FloatArray, times: FloatArray) -> FloatArray:
+def poses_at_times(waypoints: FloatArray, times: FloatArray) -> FloatArray:
     """Robot poses at ``times`` (clamped to the trajectory): :meth:`Trajectory.at`.
 
     Returns
@@ -464,7 +464,7 @@ def _draw_trajectory(ax, fig, scene: Scene, wp: FloatArray, speed, footprints: i
 
     # footprints, evenly spaced in time, start and end included
     times = np.linspace(t0, t1, max(2, footprints)) if t1 > t0 else np.array([t0])
-    poses = interpolate_poses(wp, times)
+    poses = poses_at_times(wp, times)
     for k, pose in enumerate(poses):
         ax.add_patch(
             _footprint(
@@ -496,7 +496,7 @@ def _draw_trajectory(ax, fig, scene: Scene, wp: FloatArray, speed, footprints: i
     waits = wait_intervals(wp)
     for ta, tb, _ in waits:  # the wait's own label gives its times; stamps there would pile up
         stamps = stamps[(stamps <= ta) | (stamps > tb)]
-    spos = interpolate_poses(wp, stamps)
+    spos = poses_at_times(wp, stamps)
     ax.plot(
         spos[:, 0],
         spos[:, 1],
@@ -654,7 +654,7 @@ class _LabelLayout(Artist):
 
 def _draw_violation(ax, scene: Scene, wp: FloatArray, t: float, reason: str) -> None:
     """The robot where a check found the first violation, crossed out."""
-    pose = interpolate_poses(wp, [t])[0]
+    pose = poses_at_times(wp, [t])[0]
     ax.add_patch(_footprint(scene, pose, fc="none", ec=VIOLATION_COLOR, lw=2.0, zorder=8))
     ax.plot(
         pose[0],
@@ -908,7 +908,7 @@ def render_animation(
     if wp is not None:
         ax.plot(wp[:, 1], wp[:, 2], color=ROBOT_COLOR, lw=1.0, alpha=0.25, zorder=4.5)
         ax.plot(*wp[-1, 1:3], marker="*", ms=11, mfc=GOAL_COLOR, mec="black", mew=0.8, zorder=4.6)
-        poses = interpolate_poses(wp, times)
+        poses = poses_at_times(wp, times)
         if speeds is None:
             trail = Line2D([], [], color=ROBOT_COLOR, lw=2.0, zorder=5, animated=True)
             ax.add_line(trail)
