@@ -36,7 +36,6 @@ PHASE_B = {
 #: starts; listed in docs/architecture.md. Same rule as PHASE_B.
 PHASE_A_REMAINING: dict[str, str] = {
     "gfuzzy.check": "check_trajectory, swept_clearance",
-    "gfuzzy.cli": "923 lines, _parser",
     "gfuzzy.learning.learn": "learn_rules",
     "gfuzzy.learning.tracking": "track",
     "gfuzzy.render": "1081 lines, _draw_trajectory, render_animation",
