@@ -7,7 +7,15 @@ import math
 import numpy as np
 import pytest
 
-from gfuzzy.poses import arc_length, discretise, interpolate_segment, metric_distance, pose_at, split_counts, wrap_angle
+from gfuzzy.poses import (
+    arc_length,
+    discretise,
+    interpolate_segment,
+    metric_distance,
+    pose_at,
+    split_counts,
+    wrap_angle,
+)
 
 
 def test_wrap_angle_range_and_values():
