@@ -115,6 +115,8 @@ class Roadmap:
     circumradius: float
     options: RoadmapOptions = field(default_factory=RoadmapOptions)
     info: dict = field(default_factory=dict)
+    #: Cache of :meth:`spanner` results by stretch (derived data: not saved, not compared).
+    #: A Roadmap is otherwise immutable after building, so the cache never goes stale.
     _spanners: dict = field(default_factory=dict, repr=False, compare=False)
 
     @property
@@ -433,6 +435,8 @@ class _Builder:
         from ompl import geometric as og
         from ompl import util as ou
 
+        # OMPL's log level is process-wide: quieter while we build, restored by close()
+        self._log_level = ou.getLogLevel()
         ou.setLogLevel(ou.LogLevel.LOG_WARN)
         self.geometry = geometry
         xmin, ymin, xmax, ymax = scene.bounds
@@ -477,9 +481,13 @@ class _Builder:
         self.prm = prm
 
     def close(self) -> None:
-        """Break the Python <-> OMPL reference cycle of the sampler allocator."""
+        """Break the Python <-> OMPL reference cycle of the sampler allocator; give OMPL
+        back the log level it had."""
         import gc
 
+        from ompl import util as ou
+
+        ou.setLogLevel(self._log_level)
         if self._samplers:
             self.si.clearValidStateSamplerAllocator()
             self._samplers.clear()
