@@ -327,6 +327,14 @@ def parse_rules(text: str, file: str = "<string>") -> RuleBase:
     SceneError
         On any malformed line, naming the file and ``line N``.
     """
+    parts, rows, last_line = _rule_sections(text, file)
+    curve, distance, speed = parts["curve"], parts["distance"], parts["speed"]
+    body = _rule_rows(rows, last_line, curve, distance, file)
+    return RuleBase(tuple(_rule_genes(body, curve, distance, speed, file)), curve, distance, speed)
+
+
+def _rule_sections(text: str, file: str):
+    """The partitions (``key: value`` lines) and the raw rows after ``rules:``."""
     parts: dict[str, Partition] = {}
     rows: list[tuple[int, list[str]]] = []
     in_rules = False
@@ -361,7 +369,11 @@ def parse_rules(text: str, file: str = "<string>") -> RuleBase:
             raise SceneError(file, "", f"missing '{key}:' partition")
     if not in_rules:
         raise SceneError(file, "", "missing 'rules:' section")
-    curve, distance, speed = parts["curve"], parts["distance"], parts["speed"]
+    return parts, rows, last_line
+
+
+def _rule_rows(rows, last_line: int, curve: Partition, distance: Partition, file: str):
+    """The table's rows after its header, checked against the partitions' sizes."""
     if not rows:
         raise SceneError(file, f"line {last_line}", "empty rule table")
     number, header = rows[0]
@@ -377,6 +389,11 @@ def parse_rules(text: str, file: str = "<string>") -> RuleBase:
         raise SceneError(
             file, where, f"expected {curve.size} rows (one per curve set), got {len(body)}"
         )
+    return body
+
+
+def _rule_genes(body, curve: Partition, distance: Partition, speed: Partition, file: str) -> list[int]:
+    """One allele per table entry (0 for ``-``), row by row."""
     code = {lab: k + 1 for k, lab in enumerate(speed.labels)}
     code["-"] = 0
     genes: list[int] = []
@@ -396,7 +413,7 @@ def parse_rules(text: str, file: str = "<string>") -> RuleBase:
                     f"unknown speed label {word!r} (expected one of {' '.join(speed.labels)} or -)",
                 )
             genes.append(code[word])
-    return RuleBase(tuple(genes), curve, distance, speed)
+    return genes
 
 
 def load_rules(path: PathType) -> RuleBase:
