@@ -38,7 +38,6 @@ PHASE_A_REMAINING: dict[str, str] = {
     "gfuzzy.learning.learn": "learn_rules",
     "gfuzzy.learning.tracking": "track",
     "gfuzzy.render": "1081 lines, _draw_trajectory, render_animation",
-    "gfuzzy.tracks": "822 lines, tracks_scene",
 }
 
 
