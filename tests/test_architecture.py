@@ -35,7 +35,6 @@ PHASE_B = {
 #: Phase A's own leftovers (functions it had no time to split), fixed before phase B
 #: starts; listed in docs/architecture.md. Same rule as PHASE_B.
 PHASE_A_REMAINING: dict[str, str] = {
-    "gfuzzy.learning.learn": "learn_rules",
     "gfuzzy.learning.tracking": "track",
     "gfuzzy.render": "1081 lines, _draw_trajectory, render_animation",
 }

@@ -247,32 +247,55 @@ def learn_rules(
     consistency term is this implementation's addition.
     """
     lopt = LearnOptions() if options is None else options
-    rng = create_rng(seed)
-    mapper = map if map_fn is None else map_fn
     near = _default_set_point_paths() if set_point_paths is None else list(set_point_paths)
     obj_near = _Objective(near, lopt, limits, tracking_options)
     # Stages 2 and 3 keep the set-point paths, so the set-point rules stay earned.
     obj_all = _Objective(list(paths) + near, lopt, limits, tracking_options)
-    nc, nd, k = lopt.curve.size, lopt.distance.size, lopt.speed.size
-    region = np.zeros((nc, nd), dtype=bool)
-    region[np.asarray(lopt.curve.peaks) <= lopt.set_point_curve + 1e-12, :] = True
-    region = region.reshape(-1)
-    if not region.any():
-        region[:nd] = True
-    cache: dict[tuple[int, tuple[int, ...]], float] = {}
-    history: list[tuple[float, ...]] = []
+    run = _Sogarg(lopt, create_rng(seed), map if map_fn is None else map_fn, obj_near, obj_all)
+    g1, g2, g3 = lopt.generations
+    pop = run.evolve(1, run.stage1_population(), g1, run.mutate1)
+    pop = run.evolve(2, run.stage2_population(pop), g2, run.mutate2)
+    # Stage 3: fine tuning of stage 2's population.
+    pop = run.evolve(3, [p.copy() for p in pop], g3, run.mutate3)
+    best = pop[0]
+    rb = RuleBase(tuple(int(x) for x in best), lopt.curve, lopt.distance, lopt.speed)
+    cost = run.cache[(3, tuple(int(x) for x in best))]
+    return LearnResult(rb, cost, tuple(run.history), len(run.cache))
 
-    def score(stage: int, pop: list[np.ndarray]) -> np.ndarray:
+
+class _Sogarg:
+    """The state of one :func:`learn_rules` run: the random generator (one stream, used
+    in a fixed order, so the same seed gives the same rule base), the cost cache, the
+    set-point region of the chromosome, and each stage's operators."""
+
+    def __init__(self, lopt: LearnOptions, rng: np.random.Generator, mapper, obj_near, obj_all):
+        self.lopt, self.rng, self.mapper = lopt, rng, mapper
+        self.obj_near, self.obj_all = obj_near, obj_all
+        nc, nd, k = lopt.curve.size, lopt.distance.size, lopt.speed.size
+        self.nc, self.nd, self.k = nc, nd, k
+        region = np.zeros((nc, nd), dtype=bool)
+        region[np.asarray(lopt.curve.peaks) <= lopt.set_point_curve + 1e-12, :] = True
+        region = region.reshape(-1)
+        if not region.any():
+            region[:nd] = True
+        self.region = region
+        self.grid = np.arange(nc * nd).reshape(nc, nd)
+        self.cache: dict[tuple[int, tuple[int, ...]], float] = {}
+        self.history: list[tuple[float, ...]] = []
+
+    def score(self, stage: int, pop: list[np.ndarray]) -> np.ndarray:
+        cache = self.cache
         keys = [tuple(int(g) for g in ind) for ind in pop]
         new = list(dict.fromkeys(key for key in keys if (stage, key) not in cache))
         if new:
-            fn = _StageCost(stage, obj_near if stage == 1 else obj_all, lopt)
-            for key, cost in zip(new, mapper(fn, new), strict=True):
+            fn = _StageCost(stage, self.obj_near if stage == 1 else self.obj_all, self.lopt)
+            for key, cost in zip(new, self.mapper(fn, new), strict=True):
                 cache[(stage, key)] = float(cost)
         return np.array([cache[(stage, key)] for key in keys])
 
-    def evolve(stage: int, pop: list[np.ndarray], gens: int, mutate) -> list[np.ndarray]:
-        costs = score(stage, pop)
+    def evolve(self, stage: int, pop: list[np.ndarray], gens: int, mutate) -> list[np.ndarray]:
+        lopt, rng = self.lopt, self.rng
+        costs = self.score(stage, pop)
         best = [float(costs.min())]
         for _ in range(gens):
             order = np.argsort(costs, kind="stable")
@@ -290,16 +313,43 @@ def learn_rules(
                     if len(nxt) < lopt.population:
                         nxt.append(mutate(child))
             pop = nxt
-            costs = score(stage, pop)
+            costs = self.score(stage, pop)
             best.append(float(costs.min()))
-        history.append(tuple(best))
+        self.history.append(tuple(best))
         order = np.argsort(costs, kind="stable")
         logger.info("SOGARG stage %d: best cost %.4f", stage, costs[order[0]])
         return [pop[i] for i in order]
 
-    pm = lopt.mutation_rate
+    def stage1_population(self) -> list[np.ndarray]:
+        """Stage 1: the set-point region only; the rest stays "no rule" (min speed)."""
+        nc, nd, k, region, rng = self.nc, self.nd, self.k, self.region, self.rng
+        pop = []
+        for _ in range(self.lopt.population):
+            g = np.zeros(nc * nd, dtype=np.int64)
+            g[region] = rng.integers(1, k + 1, size=int(region.sum()))
+            pop.append(g)
+        return pop
 
-    def mutate1(g: np.ndarray) -> np.ndarray:
+    def stage2_population(self, stage1: list[np.ndarray]) -> list[np.ndarray]:
+        """Stage 2: keep the set-point rules and grow the rest out of them: each new rule
+        takes its lower-curve neighbour's label plus a random step in {-2, -1, 0, +1} (a
+        random walk, not a fixed table)."""
+        nc, nd, k, rng, lopt = self.nc, self.nd, self.k, self.rng, self.lopt
+        seeds = stage1[: max(1, lopt.population // 4)]
+        pop = []
+        rows = self.region.reshape(nc, nd).any(axis=1)
+        for idx in range(lopt.population):
+            g = seeds[idx % len(seeds)].reshape(nc, nd).copy()
+            for r in range(nc):
+                if not rows[r]:
+                    above = g[r - 1] if r > 0 else rng.integers(1, k + 1, size=nd)
+                    g[r] = np.clip(np.maximum(above, 1) + rng.integers(-2, 2, size=nd), 1, k)
+            pop.append(g.reshape(-1))
+        return pop
+
+    def mutate1(self, g: np.ndarray) -> np.ndarray:
+        """Stage 1: reset or step +-1, set-point alleles only, always a rule."""
+        rng, k, region, pm = self.rng, self.k, self.region, self.lopt.mutation_rate
         hit = region & (rng.random(g.size) < pm)
         step = rng.random(g.size) < 0.5
         delta = rng.choice([-1, 1], size=g.size)
@@ -307,7 +357,9 @@ def learn_rules(
         g[hit] = np.where(step[hit], np.clip(g[hit] + delta[hit], 1, k), reset[hit])
         return g
 
-    def mutate2(g: np.ndarray) -> np.ndarray:
+    def mutate2(self, g: np.ndarray) -> np.ndarray:
+        """Stage 2: reset (possibly to no rule) or step +-1, set-point alleles at half rate."""
+        rng, k, region, pm = self.rng, self.k, self.region, self.lopt.mutation_rate
         rate = np.where(region, pm / 2, pm)
         hit = rng.random(g.size) < rate
         step = rng.random(g.size) < 0.5
@@ -316,9 +368,9 @@ def learn_rules(
         g[hit] = np.where(step[hit] & (g[hit] > 0), np.clip(g[hit] + delta[hit], 1, k), reset[hit])
         return g
 
-    grid = np.arange(nc * nd).reshape(nc, nd)
-
-    def mutate3(g: np.ndarray) -> np.ndarray:
+    def mutate3(self, g: np.ndarray) -> np.ndarray:
+        """Stage 3: add (copy a neighbour's label), delete or modify (step +-1) a rule."""
+        rng, k, nc, nd, grid, pm = self.rng, self.k, self.nc, self.nd, self.grid, self.lopt.mutation_rate
         for i in np.flatnonzero(rng.random(g.size) < pm / 2):
             r, c = divmod(int(i), nd)
             if g[i] == 0:  # add: copy a neighbouring rule's label
@@ -333,35 +385,6 @@ def learn_rules(
             else:  # modify
                 g[i] = int(np.clip(g[i] + rng.choice([-1, 1]), 1, k))
         return g
-
-    g1, g2, g3 = lopt.generations
-    # Stage 1: set-point region only; the rest stays "no rule" (min speed).
-    pop = []
-    for _ in range(lopt.population):
-        g = np.zeros(nc * nd, dtype=np.int64)
-        g[region] = rng.integers(1, k + 1, size=int(region.sum()))
-        pop.append(g)
-    pop = evolve(1, pop, g1, mutate1)
-    # Stage 2: keep the set-point rules and grow the rest out of them: each new
-    # rule takes its lower-curve neighbour's label plus a random step in
-    # {-2, -1, 0, +1} (a random walk, not a fixed table).
-    seeds = pop[: max(1, lopt.population // 4)]
-    pop = []
-    rows = region.reshape(nc, nd).any(axis=1)
-    for idx in range(lopt.population):
-        g = seeds[idx % len(seeds)].reshape(nc, nd).copy()
-        for r in range(nc):
-            if not rows[r]:
-                above = g[r - 1] if r > 0 else rng.integers(1, k + 1, size=nd)
-                g[r] = np.clip(np.maximum(above, 1) + rng.integers(-2, 2, size=nd), 1, k)
-        pop.append(g.reshape(-1))
-    pop = evolve(2, pop, g2, mutate2)
-    # Stage 3: fine tuning of stage 2's population.
-    pop = evolve(3, [p.copy() for p in pop], g3, mutate3)
-    best = pop[0]
-    rb = RuleBase(tuple(int(x) for x in best), lopt.curve, lopt.distance, lopt.speed)
-    cost = cache[(3, tuple(int(x) for x in best))]
-    return LearnResult(rb, cost, tuple(history), len(cache))
 
 
 def _tournament(rng: np.random.Generator, costs: np.ndarray, size: int) -> int:
