@@ -12,7 +12,9 @@ Two input formats (``docs/formats.md``, "Pedestrian tracks"):
   ignored), then one row per observation; ``t`` in seconds, ``id`` any name of letters,
   digits, ``_ . -``.
 
-:func:`read_tracks` returns :class:`Tracks`; :mod:`gfuzzy.tracks` turns them into a scene.
+Rows of different people may interleave; each person's times must strictly increase in
+file order. :func:`read_tracks` returns :class:`Tracks`; :mod:`gfuzzy.tracks` turns them
+into a scene.
 """
 
 from __future__ import annotations

@@ -1,16 +1,6 @@
 """Pedestrian tracks as movers: read recorded tracks, write them as a scene.
 
-Two input formats (``docs/formats.md``, "Pedestrian tracks"):
-
-* **eth**: the plain-text form in which the ETH (Pellegrini et al., ICCV 2009) and UCY
-  (Lerner et al., 2007) data sets are redistributed: one annotation per line,
-  whitespace-separated ``frame pedestrian_id x y`` and optionally ``vx vy`` (ignored), ``#``
-  comments. A time is ``frame / fps``; by default annotated frames are taken to be 0.4 s
-  apart (the data sets' convention), i.e. ``fps = step / 0.4`` with ``step`` the smallest
-  frame difference between two rows of one pedestrian (6 or 10, depending on the camera).
-* **csv**: a header naming the columns ``t``, ``id``, ``x``, ``y`` (any order, other columns
-  ignored), then one row per observation; ``t`` in seconds, ``id`` any name of letters,
-  digits, ``_ . -``.
+The two input formats (eth, csv) are read by :mod:`gfuzzy.trackfiles`.
 
 Rows of different people may interleave; each person's times must strictly increase in
 file order. :func:`read_tracks` returns :class:`Tracks`; :func:`tracks_scene` clips them to
