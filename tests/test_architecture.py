@@ -32,6 +32,13 @@ PHASE_B = {
 }
 
 
+#: Import cycles phase B removes, each with where it comes from; nothing else may cycle.
+#: (After issue 11 lands, timespace and search_kernel import each other lazily: the
+#: movers module and SearchResult's move in phase B end it.)
+PHASE_B_CYCLES = [
+    {"gfuzzy.search_kernel", "gfuzzy.timespace"},
+]
+
 #: Phase A's own leftovers (functions it had no time to split), fixed before phase B
 #: starts; listed in docs/architecture.md. Same rule as PHASE_B.
 PHASE_A_REMAINING: dict[str, str] = {
@@ -147,7 +154,7 @@ def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
 def test_the_import_graph_has_no_cycle():
     graph = _graph()
     assert "gfuzzy.planner" in graph and "gfuzzy.stages" in graph["gfuzzy.planner"]  # lazy one seen
-    assert _cycles(graph) == []
+    assert [c for c in _cycles(graph) if set(c) not in PHASE_B_CYCLES] == []
 
 
 def test_the_cycle_finder_finds_a_cycle():
