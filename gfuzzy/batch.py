@@ -31,6 +31,7 @@ from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 
 from .atomic import write_atomic, write_atomic_with
+from .errors import InputError
 from .planner import PlanOptions
 from .roadmap import Roadmap
 from .scene import Scene
@@ -234,7 +235,7 @@ def local_cluster(workers: int, quiet: bool = True) -> Iterator[object]:
     from distributed import Client, LocalCluster
 
     if workers < 1:
-        raise ValueError(f"workers must be >= 1, got {workers}")
+        raise InputError(f"workers must be >= 1, got {workers}")
     env = dict(WORKER_ENV)
     if quiet:
         env["GFUZZY_BATCH_QUIET"] = "1"

@@ -236,27 +236,7 @@ class _World:
                 continue
             straight = np.hypot(*(mm - 0.5 * (ma + mb)).T) <= 1e-9 * (1.0 + np.hypot(*(mb - ma).T))
             qa, qb = ma - pa, mb - pb  # the mover relative to the robot's reference point
-            if disc and mv.shape == "disc":
-                d = _segment_point_distance(qa, qb, np.zeros(2)) - r - mv.radius
-            elif disc:
-                w, h = mv.size
-                rel = np.concatenate([qa[:, None] + [[s1 * w / 2, s2 * h / 2] for s1, s2 in ((1, 1), (-1, 1), (-1, -1), (1, -1))],
-                                      qb[:, None] + [[s1 * w / 2, s2 * h / 2] for s1, s2 in ((1, 1), (-1, 1), (-1, -1), (1, -1))]], 1)  # fmt: skip
-                hull = shapely.convex_hull(shapely.multipoints(rel))
-                d = shapely.distance(hull, shapely.Point(0.0, 0.0)) - r
-                inside = shapely.contains_xy(hull, 0.0, 0.0)
-                d = np.where(inside, -1.0, d)
-            elif mv.shape == "disc":
-                d = shapely.distance(shapely.linestrings(np.stack([qa, qb], 1)), body) - mv.radius
-            else:
-                w, h = mv.size
-                box = np.array([[w / 2, h / 2], [-w / 2, h / 2], [-w / 2, -h / 2], [w / 2, -h / 2]])
-                hull = shapely.convex_hull(shapely.multipoints(np.concatenate([qa[:, None] + box, qb[:, None] + box], 1)))
-                d = shapely.distance(hull, body)
-                zero = d <= 0
-                if np.any(zero):
-                    area = shapely.area(shapely.intersection(hull[zero], body[zero]))
-                    d[zero] = np.where(area > 1e-12, -area, 0.0)
+            d = _relative_swept_distance(mv, qa, qb, disc, r, body)
             d = np.where(present, d - self.keep_mover, np.inf)
             d = np.where(straight | ~present, d, np.nan)
             nan = np.isnan(d)
@@ -266,6 +246,34 @@ class _World:
 
     def _poses(self, p, heading):
         return p if heading is None else np.column_stack([p, heading])
+
+
+def _relative_swept_distance(mv, qa, qb, disc: bool, r: float, body):
+    """Distance between the robot (a disc of radius ``r`` at the origin, or the box
+    ``body`` at the origin) and mover ``mv`` translating from ``qa`` to ``qb`` relative to
+    it: the mover's swept set (k,); negative where they overlap."""
+    if disc and mv.shape == "disc":
+        d = _segment_point_distance(qa, qb, np.zeros(2)) - r - mv.radius
+    elif disc:
+        w, h = mv.size
+        rel = np.concatenate([qa[:, None] + [[s1 * w / 2, s2 * h / 2] for s1, s2 in ((1, 1), (-1, 1), (-1, -1), (1, -1))],
+                              qb[:, None] + [[s1 * w / 2, s2 * h / 2] for s1, s2 in ((1, 1), (-1, 1), (-1, -1), (1, -1))]], 1)  # fmt: skip
+        hull = shapely.convex_hull(shapely.multipoints(rel))
+        d = shapely.distance(hull, shapely.Point(0.0, 0.0)) - r
+        inside = shapely.contains_xy(hull, 0.0, 0.0)
+        d = np.where(inside, -1.0, d)
+    elif mv.shape == "disc":
+        d = shapely.distance(shapely.linestrings(np.stack([qa, qb], 1)), body) - mv.radius
+    else:
+        w, h = mv.size
+        box = np.array([[w / 2, h / 2], [-w / 2, h / 2], [-w / 2, -h / 2], [w / 2, -h / 2]])
+        hull = shapely.convex_hull(shapely.multipoints(np.concatenate([qa[:, None] + box, qb[:, None] + box], 1)))
+        d = shapely.distance(hull, body)
+        zero = d <= 0
+        if np.any(zero):
+            area = shapely.area(shapely.intersection(hull[zero], body[zero]))
+            d[zero] = np.where(area > 1e-12, -area, 0.0)
+    return d
 
 
 def _segment_point_distance(a: FloatArray, b: FloatArray, c) -> FloatArray:
@@ -318,6 +326,18 @@ def check_trajectory(
     """
     robot = scene.robot
     w = np.asarray(waypoints, dtype=float)
+    problem = _rows_problem(robot, w, query)
+    if problem is not None:
+        return problem
+    if query is not None:
+        hold = float(getattr(query, "hold", 0.0) or 0.0)
+        if hold > 0:  # the robot parks at the goal: the rows end with a wait of `hold`
+            w = np.vstack([w, np.r_[w[-1, 0] + hold, w[-1, 1:]]])
+    return _Checker(scene, w, tol, min_interval, exact_below).run(max_evaluations)
+
+
+def _rows_problem(robot, w: FloatArray, query) -> CheckReport | None:
+    """The rows' shape, finiteness, increasing times, and the query's ends (None: fine)."""
     if w.ndim != 2 or w.shape[1] != robot.dof + 1 or len(w) == 0:
         width = "[t, x, y]" if robot.dof == 2 else "[t, x, y, heading]"
         return CheckReport(False, f"waypoints must be rows of {width} for this robot")
@@ -335,143 +355,153 @@ def check_trajectory(
             return CheckReport(False, f"first row {w[0, 1:].tolist()} is not the start {list(query.start)}", time=float(t[0]))
         if not _pose_equal(w[-1, 1:], query.goal):
             return CheckReport(False, f"last row {w[-1, 1:].tolist()} is not the goal {list(query.goal)}", time=float(t[-1]))
-        hold = float(getattr(query, "hold", 0.0) or 0.0)
-        if hold > 0:  # the robot parks at the goal: the rows end with a wait of `hold`
-            w = np.vstack([w, np.r_[t[-1] + hold, w[-1, 1:]]])
-            t = w[:, 0]
-            dt = np.diff(t)
+    return None
 
-    # speed: the first segment over vmax (the report is the first violation in time, so a
-    # collision found before it below takes its place)
-    p = w[:, 1:]
-    seg = np.hypot(*np.diff(p[:, :2], axis=0).T)
-    if robot.dof == 3:
-        seg = seg + np.abs(_wrap(np.diff(p[:, 2]))) * robot.circumradius
-    speed = seg / dt if len(dt) else np.zeros(0)
-    vmax_seen = float(speed.max(initial=0.0))
-    first: list = [math.inf, ""]  # time and reason of the earliest violation found so far
 
-    def found(time: float, reason: str) -> None:
-        if time < first[0]:
-            first[0], first[1] = float(time), reason
+class _Checker:
+    """One check of well-formed rows: the speed bound, then clearance by bisection.
 
-    fast = np.nonzero(speed > robot.vmax * (1 + tol))[0]
-    if fast.size:
-        i = int(fast[0])
-        found(
-            t[i],
-            f"speed {speed[i]:.9g} exceeds vmax {robot.vmax:g} between t={float(t[i])!r} and t={float(t[i + 1])!r}",
-        )
+    Every interval between samples is decided (a Lipschitz bound: the clearance changes at
+    most ``robot speed + fastest mover speed`` per second) or bisected until none is left
+    that begins before the earliest violation found so far: the report is the first
+    violation in time, not the first one met.
+    """
 
-    world = _World(scene)
+    def __init__(self, scene: Scene, w: FloatArray, tol: float, min_interval: float, exact_below: float):
+        self.scene, self.robot = scene, scene.robot
+        self.tol, self.min_interval, self.exact_below = tol, min_interval, exact_below
+        self.t = w[:, 0]
+        self.dt = np.diff(self.t)
+        self.p = w[:, 1:]
+        p, robot = self.p, self.robot
+        seg = np.hypot(*np.diff(p[:, :2], axis=0).T)
+        if robot.dof == 3:
+            seg = seg + np.abs(_wrap(np.diff(p[:, 2]))) * robot.circumradius
+        self.speed = seg / self.dt if len(self.dt) else np.zeros(0)
+        self.vmax_seen = float(self.speed.max(initial=0.0))
+        self.first: list = [math.inf, ""]  # time and reason of the earliest violation found so far
+        self.world = _World(scene)
+        self.evaluations = 0
+        self.min_clear = math.inf
 
-    def hit(name: str, d: float, when: str) -> str:
+    def found(self, time: float, reason: str) -> None:
+        if time < self.first[0]:
+            self.first[0], self.first[1] = float(time), reason
+
+    def hit(self, name: str, d: float, when: str) -> str:
         """What a negative clearance means: a collision, or a required distance missed."""
+        world, tol = self.world, self.tol
         keep = 0.0 if name == "the bounds" else world.keep_mover if name.startswith("mover") else world.keep_static
         if keep > 0 and d + keep >= -tol:
             which = "robot.mover_clearance" if name.startswith("mover") else "robot.clearance"
             return f"comes within {d + keep:.3g} m of {name} {when}, closer than {which}={keep:g}"
         return f"collides with {name} {when} (penetration {-(d + keep):.3g})"
 
-    def pose_at(times, seg_idx):
-        f = (times - t[seg_idx]) / dt[seg_idx] if len(dt) else np.zeros_like(times)
-        a = p[seg_idx] if len(dt) else np.repeat(p[:1], len(times), 0)
-        if len(dt):
-            delta = p[seg_idx + 1] - p[seg_idx]
-            if robot.dof == 3:
-                delta[:, 2] = _wrap(delta[:, 2])
-            return a + f[:, None] * delta
-        return a
+    def pose_at(self, times, seg_idx):
+        t, dt, p = self.t, self.dt, self.p
+        f = (times - t[seg_idx]) / dt[seg_idx]
+        delta = p[seg_idx + 1] - p[seg_idx]
+        if self.robot.dof == 3:
+            delta[:, 2] = _wrap(delta[:, 2])
+        return p[seg_idx] + f[:, None] * delta
 
-    if len(dt) == 0:
-        d, names = world.clearance(p[:1], t[:1])
-        if d[0] < -tol:
-            return CheckReport(False, hit(names[0], float(d[0]), f"at t={float(t[0])!r}"), float(d[0]), 0.0, 1, float(t[0]))
-        return CheckReport(True, "", float(d[0]), 0.0, 1)
+    def report(self, note: str = "") -> CheckReport:
+        if not self.first[1]:
+            return CheckReport(True, "", self.min_clear, self.vmax_seen, self.evaluations)
+        return CheckReport(False, self.first[1] + note, self.min_clear, self.vmax_seen, self.evaluations, self.first[0])
 
-    # initial samples: every row and every time a mover appears or vanishes
-    events = [t]
-    for mv in scene.movers:
-        ta, tb = mv.time_range
-        for te in (ta, tb):
-            if t[0] < te < t[-1]:
-                events.append(np.array([te]))
-    times = np.unique(np.concatenate(events))
-    seg_of = np.clip(np.searchsorted(t, times, side="right") - 1, 0, len(dt) - 1)
-    vm = max((mv.max_speed for mv in scene.movers), default=0.0)
-    lip = speed + vm  # per segment
-    turn = np.abs(_wrap(np.diff(p[:, 2]))) if robot.dof == 3 else np.zeros(len(dt))
-
-    d, names = world.clearance(pose_at(times, seg_of), times)
-    evaluations = len(times)
-    min_clear = float(d.min())
-
-    def report(note: str = "") -> CheckReport:
-        if not first[1]:
-            return CheckReport(True, "", min_clear, vmax_seen, evaluations)
-        return CheckReport(False, first[1] + note, min_clear, vmax_seen, evaluations, first[0])
-
-    bad = np.nonzero(d < -tol)[0]  # times are sorted: the first is the earliest
-    if bad.size:
-        k = int(bad[0])
-        found(times[k], hit(names[k], float(d[k]), f"at t={float(times[k])!r}"))
-    # Intervals between consecutive samples; each lies within one segment. Every interval
-    # is decided or bisected until none is left that begins before the earliest violation
-    # found so far: the report is the first violation in time, not the first one met.
-    a_t, b_t = times[:-1], times[1:]
-    a_d, b_d = d[:-1], d[1:]
-    a_s = seg_of[:-1]
-    while a_t.size:
-        need = (a_d + b_d < lip[a_s] * (b_t - a_t)) & (a_t < first[0])
-        a_t, b_t, a_d, b_d, a_s = a_t[need], b_t[need], a_d[need], b_d[need], a_s[need]
-        if a_t.size == 0:
-            break
-        short = (b_t - a_t) < min_interval
-        a_t, b_t, a_d, b_d, a_s = a_t[~short], b_t[~short], a_d[~short], b_d[~short], a_s[~short]
-        if a_t.size == 0:
-            break
-        # near contact, bisection would go on for ever along a touching stretch: where the
-        # robot only translates, decide the interval exactly instead
-        near = (b_t - a_t) < exact_below
-        if robot.dof == 3:
-            near &= turn[a_s] == 0.0
-        if near.any():
-            idx = np.nonzero(near)[0]
-            pa, pb = pose_at(a_t[idx], a_s[idx]), pose_at(b_t[idx], a_s[idx])
-            head = None if robot.dof == 2 else pa[:, 2]
-            ex, ex_names = world.swept_clearance(pa[:, :2], pb[:, :2], head, a_t[idx], b_t[idx])
-            evaluations += len(idx)
-            decided = ~np.isnan(ex)
-            bad = np.nonzero(decided & (ex < -tol))[0]
-            if bad.size:
-                k = int(bad[np.argmin(a_t[idx[bad]])])
-                min_clear = min(min_clear, float(ex[k]))
-                found(
-                    a_t[idx[k]],
-                    hit(ex_names[k], float(ex[k]), f"between t={float(a_t[idx[k]])!r} and t={float(b_t[idx[k]])!r}"),
-                )
-            if decided.any():
-                min_clear = min(min_clear, float(np.nanmin(ex)))
-            keep = np.ones(len(a_t), dtype=bool)
-            keep[idx[decided]] = False
-            a_t, b_t, a_d, b_d, a_s = a_t[keep], b_t[keep], a_d[keep], b_d[keep], a_s[keep]
+    def run(self, max_evaluations: int) -> CheckReport:
+        t, dt, p, robot, tol = self.t, self.dt, self.p, self.robot, self.tol
+        # speed: the first segment over vmax (the report is the first violation in time, so
+        # a collision found before it below takes its place)
+        fast = np.nonzero(self.speed > robot.vmax * (1 + tol))[0]
+        if fast.size:
+            i = int(fast[0])
+            self.found(
+                t[i],
+                f"speed {self.speed[i]:.9g} exceeds vmax {robot.vmax:g} between t={float(t[i])!r} and t={float(t[i + 1])!r}",
+            )
+        if len(dt) == 0:
+            d, names = self.world.clearance(p[:1], t[:1])
+            if d[0] < -tol:
+                return CheckReport(False, self.hit(names[0], float(d[0]), f"at t={float(t[0])!r}"), float(d[0]), 0.0, 1, float(t[0]))
+            return CheckReport(True, "", float(d[0]), 0.0, 1)
+        a_t, b_t, a_d, b_d, a_s = self._initial_intervals()
+        vm = max((mv.max_speed for mv in self.scene.movers), default=0.0)
+        lip = self.speed + vm  # per segment
+        turn = np.abs(_wrap(np.diff(p[:, 2]))) if robot.dof == 3 else np.zeros(len(dt))
+        while a_t.size:
+            need = (a_d + b_d < lip[a_s] * (b_t - a_t)) & (a_t < self.first[0])
+            need &= (b_t - a_t) >= self.min_interval
+            a_t, b_t, a_d, b_d, a_s = a_t[need], b_t[need], a_d[need], b_d[need], a_s[need]
             if a_t.size == 0:
                 break
-        if evaluations > max_evaluations:
-            if first[1]:
-                return report(" (an earlier near-grazing contact could not be decided)")
-            return CheckReport(
-                False, "could not decide: too many evaluations (near-grazing contact)", min_clear, vmax_seen, evaluations
-            )
-        m_t = 0.5 * (a_t + b_t)
-        m_d, m_names = world.clearance(pose_at(m_t, a_s), m_t)
-        evaluations += len(m_t)
-        min_clear = min(min_clear, float(m_d.min()))
-        bad = np.nonzero(m_d < -tol)[0]
+            # near contact, bisection would go on for ever along a touching stretch: where
+            # the robot only translates, decide the interval exactly instead
+            near = (b_t - a_t) < self.exact_below
+            if robot.dof == 3:
+                near &= turn[a_s] == 0.0
+            if near.any():
+                keep = self._decide_exactly(a_t, b_t, a_s, np.nonzero(near)[0])
+                a_t, b_t, a_d, b_d, a_s = a_t[keep], b_t[keep], a_d[keep], b_d[keep], a_s[keep]
+                if a_t.size == 0:
+                    break
+            if self.evaluations > max_evaluations:
+                if self.first[1]:
+                    return self.report(" (an earlier near-grazing contact could not be decided)")
+                return CheckReport(
+                    False, "could not decide: too many evaluations (near-grazing contact)", self.min_clear,
+                    self.vmax_seen, self.evaluations,
+                )  # fmt: skip
+            m_t = 0.5 * (a_t + b_t)
+            m_d = self._sample(m_t, a_s)
+            a_t, b_t = np.concatenate([a_t, m_t]), np.concatenate([m_t, b_t])
+            a_d, b_d = np.concatenate([a_d, m_d]), np.concatenate([m_d, b_d])
+            a_s = np.concatenate([a_s, a_s])
+        return self.report()
+
+    def _sample(self, times, seg_of) -> FloatArray:
+        """Clearances at ``times`` (sorted or not); the earliest violation among them is noted."""
+        d, names = self.world.clearance(self.pose_at(times, seg_of), times)
+        self.evaluations += len(times)
+        self.min_clear = min(self.min_clear, float(d.min()))
+        bad = np.nonzero(d < -self.tol)[0]
         if bad.size:
-            k = int(bad[np.argmin(m_t[bad])])
-            found(m_t[k], hit(m_names[k], float(m_d[k]), f"at t={float(m_t[k])!r}"))
-        a_t, b_t = np.concatenate([a_t, m_t]), np.concatenate([m_t, b_t])
-        a_d, b_d = np.concatenate([a_d, m_d]), np.concatenate([m_d, b_d])
-        a_s = np.concatenate([a_s, a_s])
-    return report()
+            k = int(bad[np.argmin(times[bad])])
+            self.found(times[k], self.hit(names[k], float(d[k]), f"at t={float(times[k])!r}"))
+        return d
+
+    def _initial_intervals(self):
+        """Samples at every row and every time a mover appears or vanishes; the intervals
+        between consecutive ones (each lies within one segment)."""
+        t = self.t
+        events = [t]
+        for mv in self.scene.movers:
+            ta, tb = mv.time_range
+            for te in (ta, tb):
+                if t[0] < te < t[-1]:
+                    events.append(np.array([te]))
+        times = np.unique(np.concatenate(events))
+        seg_of = np.clip(np.searchsorted(t, times, side="right") - 1, 0, len(self.dt) - 1)
+        d = self._sample(times, seg_of)
+        return times[:-1], times[1:], d[:-1], d[1:], seg_of[:-1]
+
+    def _decide_exactly(self, a_t, b_t, a_s, idx) -> np.ndarray:
+        """Decide intervals ``idx`` by the swept footprint's exact clearance; the mask of
+        the intervals still undecided."""
+        pa, pb = self.pose_at(a_t[idx], a_s[idx]), self.pose_at(b_t[idx], a_s[idx])
+        head = None if self.robot.dof == 2 else pa[:, 2]
+        ex, ex_names = self.world.swept_clearance(pa[:, :2], pb[:, :2], head, a_t[idx], b_t[idx])
+        self.evaluations += len(idx)
+        decided = ~np.isnan(ex)
+        bad = np.nonzero(decided & (ex < -self.tol))[0]
+        if bad.size:
+            k = int(bad[np.argmin(a_t[idx[bad]])])
+            self.min_clear = min(self.min_clear, float(ex[k]))
+            when = f"between t={float(a_t[idx[k]])!r} and t={float(b_t[idx[k]])!r}"
+            self.found(a_t[idx[k]], self.hit(ex_names[k], float(ex[k]), when))
+        if decided.any():
+            self.min_clear = min(self.min_clear, float(np.nanmin(ex)))
+        keep = np.ones(len(a_t), dtype=bool)
+        keep[idx[decided]] = False
+        return keep

@@ -1,8 +1,18 @@
 """Exception families.
 
-Two kinds of failure, two families: *bad input* raises :class:`SceneError` (a
-``ValueError``) naming the file and the place in it; *no solution* is never an
-exception but a status on the result (see :class:`gfuzzy.timespace.Status`).
+Three kinds of failure, kept apart so that a bug is never blamed on the user:
+
+* *bad input* raises :class:`InputError` (bad options, poses, command-line values) or
+  its subclass :class:`SceneError` (a file, naming the file and the place in it);
+* *a request beyond the memory bounds* (a time step far too fine for the scene) raises
+  :class:`LimitError`;
+* *no solution* is never an exception but a status on the result
+  (:class:`gfuzzy.status.Status`).
+
+Both exception families are ``ValueError`` subclasses, so code written against the
+older API (``except ValueError``) still catches them. The command line turns these two
+families, and only these, into one line on stderr and exit status 2; any other exception
+is a bug and shows its traceback.
 """
 
 from __future__ import annotations
@@ -12,7 +22,16 @@ class GfuzzyError(Exception):
     """Base class of every error gfuzzy raises on purpose."""
 
 
-class SceneError(GfuzzyError, ValueError):
+class InputError(GfuzzyError, ValueError):
+    """Bad input that is not a file: an option, a pose, a value on the command line."""
+
+
+class LimitError(GfuzzyError, ValueError):
+    """A request the memory bounds refuse (:mod:`gfuzzy.settings` ``MAX_*``): a time step
+    far too fine or a horizon far too long for the scene. The message says what to change."""
+
+
+class SceneError(InputError):
     """Bad input: a file (scene, roadmap, trajectory, rule base) that cannot be used.
 
     Parameters

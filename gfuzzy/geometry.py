@@ -17,6 +17,7 @@ import math
 import fcl
 import numpy as np
 
+from .poses import interpolate_segment, metric_distance, wrap_angle
 from .scene import Box, Disc, Polygon, Robot, Scene
 from .typing import FloatArray
 
@@ -35,53 +36,9 @@ _DIST_MARGIN = 1e-4  # subtracted from FCL distances (GJK overestimates; see obs
 QUAD_EXACT = 2.0  # box-box distances are exact below this (see _quad_distance)
 
 
-def wrap_angle(a):
-    """Wrap angles to [-pi, pi)."""
-    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
-
-
-def metric_distance(a: FloatArray, b: FloatArray, circumradius: float) -> FloatArray:
-    """Contract metric between poses: xy distance + |shorter heading change| * r.
-
-    Parameters
-    ----------
-    a, b : (..., 2) or (..., 3) float
-    circumradius : float
-
-    Returns
-    -------
-    (...,) float
-    """
-    a = np.asarray(a, dtype=float)
-    b = np.asarray(b, dtype=float)
-    d = np.hypot(b[..., 0] - a[..., 0], b[..., 1] - a[..., 1])
-    if a.shape[-1] == 3:
-        d = d + np.abs(wrap_angle(b[..., 2] - a[..., 2])) * circumradius
-    return d
-
-
-def interpolate_poses(a: FloatArray, b: FloatArray, f: FloatArray) -> FloatArray:
-    """Poses at fractions ``f`` of the straight motion a -> b (heading along the shorter arc).
-
-    Parameters
-    ----------
-    a, b : (d,) float
-    f : (k,) float in [0, 1]
-
-    Returns
-    -------
-    (k, d) float
-    """
-    a = np.asarray(a, dtype=float)
-    b = np.asarray(b, dtype=float)
-    f = np.asarray(f, dtype=float)[:, None]
-    delta = b - a
-    if a.shape[-1] == 3:
-        delta[2] = wrap_angle(delta[2])
-    out = a + f * delta
-    if a.shape[-1] == 3:
-        out[:, 2] = wrap_angle(out[:, 2])
-    return out
+#: The straight motion between two poses at fractions f: the name timespace imports
+#: (phase B switches it to :func:`gfuzzy.poses.interpolate_segment`).
+interpolate_poses = interpolate_segment
 
 
 def _yaw_transform(x: float, y: float, yaw: float = 0.0) -> fcl.Transform:

@@ -41,10 +41,13 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .geometry import StaticGeometry, metric_distance, wrap_angle
+from .errors import InputError
+from .geometry import StaticGeometry
 from .planner import BACKENDS, _search_function
+from .poses import interpolate_segment, metric_distance, split_counts, wrap_angle
 from .roadmap import Roadmap
 from .scene import Mover, Scene
+from .settings import SPEED_SAFETY
 from .timespace import IntervalStore, MoverField, SpaceTimeGraph, timed_rows
 from .trajectory import Trajectory
 from .typing import FloatArray
@@ -53,8 +56,6 @@ __all__ = ["NavOptions", "NavStep", "Navigator"]
 
 log = logging.getLogger(__name__)
 
-#: Planning speed is vmax shrunk by this factor, so rounding never lifts a step above vmax.
-SPEED_SAFETY = 1.0 - 1e-9
 #: Below this speed (m/s) an observed person counts as standing still.
 STILL_SPEED = 0.1
 
@@ -129,15 +130,15 @@ class NavOptions:
         for name in ("dt", "prediction_horizon", "reference_speed", "slice", "time_budget", "plan_slack", "evasion_time", "cover"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise ValueError(f"{name} must be a positive number, got {v!r}")
+                raise InputError(f"{name} must be a positive number, got {v!r}")
         for name in ("uncertainty_growth", "safety_buffer", "stationary_hold", "goal_tolerance"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
-                raise ValueError(f"{name} must be a number >= 0, got {v!r}")
+                raise InputError(f"{name} must be a number >= 0, got {v!r}")
         if self.connect_k < 1 or self.evasion_headings < 4:
-            raise ValueError("connect_k must be >= 1 and evasion_headings >= 4")
+            raise InputError("connect_k must be >= 1 and evasion_headings >= 4")
         if not (self.stretch >= 1.0 and math.isfinite(self.stretch)):
-            raise ValueError(f"stretch must be a number >= 1, got {self.stretch}")
+            raise InputError(f"stretch must be a number >= 1, got {self.stretch}")
 
 
 @dataclass(frozen=True)
@@ -199,9 +200,9 @@ class Navigator:
         self.geometry = StaticGeometry(scene)
         goal = np.asarray(goal, dtype=float).reshape(-1)
         if goal.shape != (robot.dof,) or not np.all(np.isfinite(goal)):
-            raise ValueError(f"goal must be {robot.dof} finite numbers")
+            raise InputError(f"goal must be {robot.dof} finite numbers")
         if self.geometry.bounds_clearance(goal[None])[0] < 0 or self.geometry.clearance1(goal) < 0:
-            raise ValueError(f"goal {goal.tolist()} is out of bounds or collides with a static obstacle")
+            raise InputError(f"goal {goal.tolist()} is out of bounds or collides with a static obstacle")
         self.goal = goal
         self._goal_wrapped = goal.copy()
         if robot.dof == 3:
@@ -318,14 +319,7 @@ class Navigator:
         nxt = N + 1
         new_groups.append(nxt)
         for v, kc in zip(tgt.tolist(), k.tolist(), strict=True):
-            f = np.arange(1, kc)[:, None] / kc
-            a, b = pose, verts[v]
-            delta = b - a
-            if len(pose) == 3:
-                delta[2] = wrap_angle(delta[2])
-            inner = a + f * delta
-            if len(pose) == 3:
-                inner[:, 2] = wrap_angle(inner[:, 2])
+            inner = interpolate_segment(pose, verts[v], np.arange(1, kc) / kc)
             ids = np.arange(nxt, nxt + kc - 1)
             chain = np.concatenate([[s_id], ids, [v]])
             new_src.append(chain[:-1])
@@ -429,10 +423,10 @@ class Navigator:
         t = float(t)
         pose = np.asarray(pose, dtype=float).reshape(-1).copy()
         if pose.shape != (self.robot.dof,) or not np.all(np.isfinite(pose)) or not math.isfinite(t):
-            raise ValueError(f"pose must be {self.robot.dof} finite numbers and t finite")
+            raise InputError(f"pose must be {self.robot.dof} finite numbers and t finite")
         obs = np.asarray(observations, dtype=float).reshape(-1, 5) if np.size(observations) else np.zeros((0, 5))
         if not np.all(np.isfinite(obs)) or np.any(obs[:, 4] < 0):
-            raise ValueError("observations must be finite rows [x, y, vx, vy, radius >= 0]")
+            raise InputError("observations must be finite rows [x, y, vx, vy, radius >= 0]")
         self.replans += 1
         cr = self.robot.circumradius
         if float(metric_distance(pose, self.goal, cr)) <= opts.goal_tolerance:
@@ -621,9 +615,8 @@ class Navigator:
 
 
 def _steps(lengths: FloatArray, step_len: float) -> np.ndarray:
-    """Steps per edge so that no step is longer than ``step_len``."""
-    k = np.maximum(1, np.ceil(lengths / step_len)).astype(np.int64)
-    return np.where(lengths / k > step_len, k + 1, k)
+    """Steps per edge so that no step is longer than ``step_len``: :func:`gfuzzy.poses.split_counts`."""
+    return split_counts(lengths, step_len)
 
 
 def _split(verts: FloatArray, edges, k, hop_g):
@@ -647,15 +640,9 @@ def _split(verts: FloatArray, edges, k, hop_g):
     j = np.arange(offs[-1]) - np.repeat(offs[:-1], n_int) + 1
     f = j / k[e_of]
     a, b = edges[e_of, 0], edges[e_of, 1]
-    delta = verts[b] - verts[a]
-    if verts.shape[1] == 3:
-        delta[:, 2] = wrap_angle(delta[:, 2])
     poses = np.empty((total, verts.shape[1]))
     poses[:n] = verts
-    inner = verts[a] + f[:, None] * delta
-    if verts.shape[1] == 3:
-        inner[:, 2] = wrap_angle(inner[:, 2])
-    poses[n:] = inner
+    poses[n:] = interpolate_segment(verts[a], verts[b], f)
     heur = np.empty(total)
     heur[:n] = hop_g
     heur[n:] = np.minimum(hop_g[a] + j, hop_g[b] + k[e_of] - j)

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .errors import InputError
 from .geometry import metric_distance, mover_distance
 from .navigator import Navigator, NavOptions
 from .roadmap import Roadmap
@@ -139,9 +140,9 @@ def simulate(
     NavResult
     """
     if not (period > 0 and math.isfinite(period)):
-        raise ValueError(f"period must be a positive number, got {period}")
+        raise InputError(f"period must be a positive number, got {period}")
     if not max_time > 0:
-        raise ValueError(f"max_time must be positive, got {max_time}")
+        raise InputError(f"max_time must be positive, got {max_time}")
     robot = scene.robot
     cr = robot.circumradius
     goal = np.asarray(goal, dtype=float).reshape(-1)

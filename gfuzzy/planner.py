@@ -10,7 +10,6 @@ produce a safe answer leaves the earlier answer in place.
 from __future__ import annotations
 
 import copy
-import enum
 import logging
 import math
 import time
@@ -19,9 +18,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .errors import LimitError
 from .geometry import StaticGeometry, metric_distance
 from .roadmap import Roadmap
 from .scene import Scene
+from .settings import MAX_MOVER_SAMPLES, MAX_POINTS, SPEED_SAFETY
+from .status import Status
 from .timespace import IntervalStore, MoverField, SpaceTimeGraph, sipp, timed_rows
 from .trajectory import Trajectory, TrajectoryFile
 from .typing import FloatArray
@@ -29,6 +31,7 @@ from .typing import FloatArray
 if TYPE_CHECKING:  # the stages' modules load only when a stage runs
     from .fuzzy import RuleBase
     from .ga import GAOptions
+    from .stages import RefineReport, SpeedReport
 
 __all__ = [
     "Status",
@@ -43,27 +46,8 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
-#: Planning speed is vmax shrunk by this factor, so rounding never lifts a step above vmax.
-SPEED_SAFETY = 1.0 - 1e-9
-#: Largest number of graph points (edges cut into steps) a query may use (about 1 GB with
-#: the search's Python lists); the 10,000-vertex hall benchmark has 0.7 million.
-MAX_POINTS = 3_000_000
-#: Largest number of mover samples (movers x time steps) a query may use: about 0.7 GB.
-MAX_MOVER_SAMPLES = 20_000_000
 #: Implementations of the search (PlanOptions.backend).
 BACKENDS = ("compiled", "reference")
-
-
-class Status(str, enum.Enum):
-    """Outcome of a query (docs/formats.md section 2)."""
-
-    SOLVED = "solved"
-    NO_PATH = "no_path"
-    INVALID_QUERY = "invalid_query"
-    TIMEOUT = "timeout"
-
-    def __str__(self) -> str:
-        return self.value
 
 
 @dataclass(frozen=True)
@@ -153,7 +137,9 @@ class PlanResult:
         Shortest start-to-goal distance on the roadmap (inf when not connected).
     planning_seconds : float
     stats : dict
-        Expansions, states, graph size, and the stages' before/after figures.
+        Expansions, states, graph size, and the stages' reports as dicts (the file's keys).
+    refine_report, speed_report : gfuzzy.stages.RefineReport / SpeedReport or None
+        What each stage did, when it ran.
     """
 
     status: Status
@@ -163,6 +149,8 @@ class PlanResult:
     planning_seconds: float = 0.0
     vmax: float = 1.0
     stats: dict = field(default_factory=dict)
+    refine_report: RefineReport | None = None
+    speed_report: SpeedReport | None = None
 
     @property
     def solved(self) -> bool:
@@ -338,7 +326,7 @@ class Planner:
         offs = np.concatenate([[0], np.cumsum(n_int)])
         total = n + int(offs[-1])
         if total > MAX_POINTS:
-            raise ValueError(
+            raise LimitError(
                 f"the time step is too fine for this roadmap: its edges would be cut into "
                 f"{total:,} points (at most {MAX_POINTS:,}); use a larger dt"
             )
@@ -531,7 +519,7 @@ class Planner:
             steps = min(max_steps, int(math.ceil(h0 + slack)) + hold_steps)
             horizon = (steps - hold_steps) * opts.dt
             if len(self.scene.movers) * (steps + 1) > MAX_MOVER_SAMPLES:
-                raise ValueError(
+                raise LimitError(
                     f"{len(self.scene.movers)} movers over {steps:,} time steps are too many to "
                     f"sample (at most {MAX_MOVER_SAMPLES:,}); use a larger dt or a shorter horizon"
                 )
@@ -579,9 +567,9 @@ class Planner:
         stats["search_seconds"] = time.perf_counter() - t_begin
         result = answer("solved", "", traj, rd, **stats)
         if opts.refine or opts.speed_layer:
-            from .stages import apply_stages
+            from .stages import StageContext, apply_stages
 
-            result = apply_stages(self, result, start, goal, t0, opts, t_begin, hold=hold)
+            result = apply_stages(StageContext(self.scene, self.geometry), result, start, goal, t0, opts, t_begin, hold=hold)
         # headings are wrapped inside; the first and last rows give the query's own numbers
         wps = result.trajectory.waypoints.copy()
         wps[0, 1:], wps[-1, 1:] = ends

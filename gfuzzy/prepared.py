@@ -32,7 +32,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .errors import LimitError
 from .geometry import metric_distance
+from .settings import MAX_POINTS, SPEED_SAFETY
 from .timespace import SpaceTimeGraph
 from .typing import FloatArray, IntArray
 
@@ -200,7 +202,6 @@ def prepare_goal(planner, goal: FloatArray, options) -> PreparedGoal:
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import dijkstra
 
-    from .planner import MAX_POINTS, SPEED_SAFETY
 
     robot = planner.robot
     rm = planner.roadmap
@@ -222,7 +223,7 @@ def prepare_goal(planner, goal: FloatArray, options) -> PreparedGoal:
     k, offs, inner, a, b, j, src, dst = split_edges(verts, edges, lengths, step_len, n)
     total = n + int(offs[-1])
     if total > MAX_POINTS:
-        raise ValueError(
+        raise LimitError(
             f"the time step is too fine for this roadmap: its edges would be cut into "
             f"{total:,} points (at most {MAX_POINTS:,}); use a larger dt"
         )

@@ -34,7 +34,8 @@ from matplotlib.patches import Polygon as PolygonPatch
 from matplotlib.path import Path as MplPath
 
 from .atomic import write_atomic_with
-from .geometry import wrap_angle
+from .errors import InputError
+from .poses import wrap_angle
 from .scene import Box, Disc, Mover, Polygon, Scene
 from .trajectory import Trajectory
 from .typing import FloatArray
@@ -44,7 +45,7 @@ __all__ = [
     "render_scene",
     "render_animation",
     "as_waypoints",
-    "interpolate_poses",
+    "poses_at_times",
     "segment_speeds",
     "wait_intervals",
 ]
@@ -101,36 +102,36 @@ def as_waypoints(trajectory: Any, scene: Scene | None = None) -> FloatArray:
     """
     if isinstance(trajectory, dict):
         if "waypoints" not in trajectory:
-            raise ValueError("trajectory has no 'waypoints'")
+            raise InputError("trajectory has no 'waypoints'")
         trajectory = trajectory["waypoints"]
     elif hasattr(trajectory, "waypoints"):
         trajectory = trajectory.waypoints
     try:
         wp = np.asarray(trajectory, dtype=float)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"trajectory waypoints are not a table of numbers ({exc})") from None
+        raise InputError(f"trajectory waypoints are not a table of numbers ({exc})") from None
     if wp.ndim != 2 or wp.shape[1] not in (3, 4):
-        raise ValueError(
+        raise InputError(
             f"trajectory waypoints must be rows [t, x, y] or [t, x, y, heading], got shape {wp.shape}"
         )
     if len(wp) == 0:
-        raise ValueError("trajectory has no waypoints (only a solved trajectory can be drawn)")
+        raise InputError("trajectory has no waypoints (only a solved trajectory can be drawn)")
     if not np.all(np.isfinite(wp)):
-        raise ValueError("trajectory waypoints contain a non-finite number")
+        raise InputError("trajectory waypoints contain a non-finite number")
     bad = np.nonzero(np.diff(wp[:, 0]) <= 0)[0]
     if bad.size:
         j = int(bad[0]) + 1
-        raise ValueError(f"trajectory waypoints[{j}]: t={wp[j, 0]:g} does not increase")
+        raise InputError(f"trajectory waypoints[{j}]: t={wp[j, 0]:g} does not increase")
     if scene is not None and wp.shape[1] != scene.robot.dof + 1:
         want = "[t, x, y]" if scene.robot.shape == "disc" else "[t, x, y, heading]"
-        raise ValueError(
+        raise InputError(
             f"trajectory rows have {wp.shape[1]} numbers but scene {scene.name!r} has a "
             f"{scene.robot.shape} robot: expected {want}"
         )
     return wp
 
 
-def interpolate_poses(waypoints: FloatArray, times: FloatArray) -> FloatArray:
+def poses_at_times(waypoints: FloatArray, times: FloatArray) -> FloatArray:
     """Robot poses at ``times`` (clamped to the trajectory): :meth:`Trajectory.at`.
 
     Returns
@@ -182,7 +183,7 @@ def wait_intervals(
 def _suffix(out_path: str | os.PathLike, allowed: tuple[str, ...], what: str) -> str:
     suffix = Path(out_path).suffix.lower()
     if suffix not in allowed:
-        raise ValueError(
+        raise InputError(
             f"{out_path}: cannot write {what} as {suffix or 'a file without suffix'!r}; "
             f"use {' or '.join(allowed)}"
         )
@@ -430,7 +431,7 @@ def _speed_values(speed, wp: FloatArray, scene: Scene) -> FloatArray:
         return v
     if v.size == n:
         return 0.5 * (v[:-1] + v[1:])
-    raise ValueError(
+    raise InputError(
         f"speed has {v.size} values; the trajectory has {n} waypoints ({n - 1} segments)"
     )
 
@@ -463,7 +464,7 @@ def _draw_trajectory(ax, fig, scene: Scene, wp: FloatArray, speed, footprints: i
 
     # footprints, evenly spaced in time, start and end included
     times = np.linspace(t0, t1, max(2, footprints)) if t1 > t0 else np.array([t0])
-    poses = interpolate_poses(wp, times)
+    poses = poses_at_times(wp, times)
     for k, pose in enumerate(poses):
         ax.add_patch(
             _footprint(
@@ -495,7 +496,7 @@ def _draw_trajectory(ax, fig, scene: Scene, wp: FloatArray, speed, footprints: i
     waits = wait_intervals(wp)
     for ta, tb, _ in waits:  # the wait's own label gives its times; stamps there would pile up
         stamps = stamps[(stamps <= ta) | (stamps > tb)]
-    spos = interpolate_poses(wp, stamps)
+    spos = poses_at_times(wp, stamps)
     ax.plot(
         spos[:, 0],
         spos[:, 1],
@@ -653,7 +654,7 @@ class _LabelLayout(Artist):
 
 def _draw_violation(ax, scene: Scene, wp: FloatArray, t: float, reason: str) -> None:
     """The robot where a check found the first violation, crossed out."""
-    pose = interpolate_poses(wp, [t])[0]
+    pose = poses_at_times(wp, [t])[0]
     ax.add_patch(_footprint(scene, pose, fc="none", ec=VIOLATION_COLOR, lw=2.0, zorder=8))
     ax.plot(
         pose[0],
@@ -868,11 +869,11 @@ def render_animation(
     """
     _suffix(out_path, ANIMATION_SUFFIXES, "an animation")
     if not (fps > 0 and math.isfinite(fps)):
-        raise ValueError(f"fps must be positive, got {fps}")
+        raise InputError(f"fps must be positive, got {fps}")
     if int(max_frames) < 1:
-        raise ValueError(f"max_frames must be at least 1, got {max_frames}")
+        raise InputError(f"max_frames must be at least 1, got {max_frames}")
     if duration is not None and not (duration > 0 and math.isfinite(duration)):
-        raise ValueError(f"duration must be positive, got {duration}")
+        raise InputError(f"duration must be positive, got {duration}")
     wp = None if trajectory is None else as_waypoints(trajectory, scene)
     if wp is not None:
         t0, t1 = float(wp[0, 0]), float(wp[-1, 0])
@@ -907,7 +908,7 @@ def render_animation(
     if wp is not None:
         ax.plot(wp[:, 1], wp[:, 2], color=ROBOT_COLOR, lw=1.0, alpha=0.25, zorder=4.5)
         ax.plot(*wp[-1, 1:3], marker="*", ms=11, mfc=GOAL_COLOR, mec="black", mew=0.8, zorder=4.6)
-        poses = interpolate_poses(wp, times)
+        poses = poses_at_times(wp, times)
         if speeds is None:
             trail = Line2D([], [], color=ROBOT_COLOR, lw=2.0, zorder=5, animated=True)
             ax.add_line(trail)

@@ -12,8 +12,11 @@ import math
 
 import numpy as np
 
-from .geometry import metric_distance, wrap_angle
+from .poses import discretise, metric_distance, pose_at
+from .profile import limit_acceleration, profile_times
 from .scene import Scene
+from .settings import SPEED_SAFETY
+from .status import Status
 from .timespace import MoverField, SpaceTimeGraph, sipp, timed_rows
 from .trajectory import Trajectory
 from .typing import FloatArray
@@ -26,64 +29,28 @@ GROUP = 16
 STOP_MERGE = 0.3
 
 
-def _arc_length(path: FloatArray, r: float) -> FloatArray:
-    return np.concatenate([[0.0], np.cumsum(metric_distance(path[:-1], path[1:], r))])
-
-
-def _pose_at_s(path: FloatArray, s_path: FloatArray, s: FloatArray) -> FloatArray:
-    i = np.clip(np.searchsorted(s_path, s, side="right") - 1, 0, len(path) - 2)
-    seg = s_path[i + 1] - s_path[i]
-    f = np.where(seg > 0, (s - s_path[i]) / np.where(seg > 0, seg, 1.0), 0.0)
-    delta = path[i + 1] - path[i]
-    if path.shape[1] == 3:
-        delta[:, 2] = wrap_angle(delta[:, 2])
-    out = path[i] + f[:, None] * delta
-    if path.shape[1] == 3:
-        out[:, 2] = wrap_angle(out[:, 2])
-    return out
-
-
 def chain_points(path: FloatArray, circumradius: float, step: float) -> tuple[FloatArray, FloatArray]:
-    """Cut a path into points at most one step (``step`` metres of the metric) apart.
-
-    Parameters
-    ----------
-    path : (n, d) float
-        Poses joined by straight motions.
-    circumradius : float
-    step : float
-        Largest metric distance per step (vmax * dt).
-
-    Returns
-    -------
-    poses : (m, d) float
-        Includes every corner of the path, so the chain never cuts a corner.
-    s : (m,) float
-        Their arc lengths.
-    """
-    path = np.asarray(path, dtype=float)
-    s_path = _arc_length(path, circumradius)
-    pieces = [np.array([0.0])]
-    for a, b in zip(s_path[:-1], s_path[1:], strict=True):
-        seg = b - a
-        if seg <= 0:
-            continue
-        k = max(1, int(math.ceil(seg / step)))
-        if seg / k > step:
-            k += 1
-        pieces.append(a + seg * np.arange(1, k + 1) / k)
-    s = np.concatenate(pieces)
-    s[-1] = s_path[-1]
-    keep = np.concatenate([[True], np.diff(s) > 0])  # zero-length segments of the input
-    s = s[keep]
-    return _pose_at_s(path, s_path, s), s
+    """Cut a path into points at most one step apart: :func:`gfuzzy.poses.discretise`."""
+    return discretise(path, circumradius, step)
 
 
 class RetimeResult:
-    """Outcome of :func:`retime_path`: ``status`` and, when solved, the trajectory."""
+    """Outcome of :func:`retime_path`: ``status`` and, when solved, the trajectory.
 
-    def __init__(self, status: str, trajectory: Trajectory | None, message: str = "", waits: list | None = None):
-        self.status = status
+    Attributes
+    ----------
+    status : Status
+        SOLVED, NO_PATH or TIMEOUT.
+    trajectory : Trajectory or None
+        Only when solved.
+    message : str
+        Why not, when not solved.
+    waits : list of float
+        Arc lengths of the points where the answer waits.
+    """
+
+    def __init__(self, status, trajectory: Trajectory | None, message: str = "", waits: list | None = None):
+        self.status = Status(status)
         self.trajectory = trajectory
         self.message = message
         self.waits = waits or []
@@ -122,8 +89,6 @@ def retime_path(
     RetimeResult
         ``waits`` lists the arc lengths of the points where the answer waits.
     """
-    from .planner import SPEED_SAFETY
-
     robot = scene.robot
     step = robot.vmax * SPEED_SAFETY * dt
     poses, s = chain_points(path, robot.circumradius, step)
@@ -134,8 +99,6 @@ def _metric_profile(path, circumradius, s_xy, v_xy, vmax, amax, ds=0.02):
     """The fuzzy bound (given along the xy arc length) as a profile along the contract
     metric's arc length, scaled so that the configuration speed stays within vmax, and
     made feasible for ``amax`` again."""
-    from .fuzzy import limit_acceleration
-
     seg_xy = np.hypot(*np.diff(path[:, :2], axis=0).T)
     seg_m = metric_distance(path[:-1], path[1:], circumradius)
     cum_xy = np.concatenate([[0.0], np.cumsum(seg_xy)])
@@ -167,8 +130,6 @@ def _chain_from_profile(path, cum_m, s_m, v_m, dt):
     times : (m,) float
         Profile times of the chain's points.
     """
-    from .fuzzy import profile_times
-
     t = profile_times(s_m, v_m)
     n = int(math.ceil(t[-1] / dt - 1e-9))
     grid = np.minimum(np.arange(n + 1) * dt, t[-1])
@@ -193,7 +154,7 @@ def _chain_from_profile(path, cum_m, s_m, v_m, dt):
         tc = np.where(np.abs(aj) > 1e-12, (root - v_m[j]) / np.where(aj != 0, aj, 1.0), x / v_m[j])
     tc = t[j] + np.clip(np.nan_to_num(tc), 0.0, t[j + 1] - t[j])
     corners = np.column_stack([cs, tc])
-    return _pose_at_s(path, cum_m, s), s, corners, grid
+    return pose_at(cum_m, path, s), s, corners, grid
 
 
 class ProfileRetime(RetimeResult):
@@ -232,9 +193,6 @@ def retime_profile(
     hold : float
         Seconds the goal pose must stay safe after the arrival.
     """
-    from .fuzzy import limit_acceleration, profile_times
-    from .planner import SPEED_SAFETY
-
     robot = scene.robot
     vmax = robot.vmax * SPEED_SAFETY
     path = np.asarray(path, dtype=float)
@@ -261,14 +219,14 @@ def retime_profile(
             scene, poses, s, t0, dt, horizon, wait_at, deadline, (path, cum_m, corners, times), 0.5 * amax * dt**2,
             hold=hold,
         )
-        if res.status == "solved":
-            return ProfileRetime("solved", res.trajectory, waits=stops, profile_duration=duration)
+        if res.status is Status.SOLVED:
+            return ProfileRetime(Status.SOLVED, res.trajectory, waits=stops, profile_duration=duration)
         message = res.message
-        if res.status == "timeout":
+        if res.status is Status.TIMEOUT:
             break
         # where would the robot need to stop? search again allowing waits anywhere
         free = _search_chain(scene, poses, s, t0, dt, horizon, None, deadline, (path, cum_m, corners, times), hold=hold)
-        if free.status != "solved" or not free.waits:
+        if free.status is not Status.SOLVED or not free.waits:
             message = free.message or message
             break
         merged = list(stops)
@@ -284,7 +242,7 @@ def retime_profile(
         if merged == stops:
             break
         stops = merged
-    return ProfileRetime("no_path", None, message or "no safe timing found", profile_duration=duration)
+    return ProfileRetime(Status.NO_PATH, None, message or "no safe timing found", profile_duration=duration)
 
 
 def _search_chain(
@@ -302,7 +260,7 @@ def _search_chain(
     m = len(poses)
     hold_steps = int(math.ceil(hold / dt - 1e-9)) if hold > 0 else 0
     if m == 1 and hold_steps == 0:
-        return RetimeResult("solved", Trajectory(np.array([[t0, *poses[0]]]), robot.circumradius))
+        return RetimeResult(Status.SOLVED, Trajectory(np.array([[t0, *poses[0]]]), robot.circumradius))
     indptr = np.arange(m + 1, dtype=np.int64)
     indptr[-1] = m - 1
     nbrs = np.arange(1, m, dtype=np.int64)
@@ -333,8 +291,8 @@ def _search_chain(
             for sc, tc in cs[inside]:
                 frac = (tc - times[a]) / (times[b] - times[a])
                 if 0.0 < frac < 1.0:
-                    yield frac, _pose_at_s(path, cum_m, np.array([sc]))[0]
+                    yield frac, pose_at(cum_m, path, np.array([sc]))[0]
 
     wps, wait_nodes = timed_rows(res.nodes, res.steps, poses, t0, dt, between)
     waits = [float(s[a]) for a in wait_nodes]
-    return RetimeResult("solved", Trajectory(wps, robot.circumradius), waits=waits)
+    return RetimeResult(Status.SOLVED, Trajectory(wps, robot.circumradius), waits=waits)

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from .atomic import write_atomic
-from .errors import SceneError
+from .errors import InputError, SceneError
 from .geometry import StaticGeometry, metric_distance
 from .scene import Scene
 from .typing import FloatArray, IntArray
@@ -79,13 +79,13 @@ class RoadmapOptions:
 
     def __post_init__(self):
         if self.vertices < 1:
-            raise ValueError(f"a roadmap needs at least 1 vertex, got {self.vertices}")
+            raise InputError(f"a roadmap needs at least 1 vertex, got {self.vertices}")
         if self.neighbors < 1:
-            raise ValueError(f"neighbors must be >= 1, got {self.neighbors}")
+            raise InputError(f"neighbors must be >= 1, got {self.neighbors}")
         if not 0 < self.resolution <= 0.5:
-            raise ValueError(f"resolution must be in (0, 0.5], got {self.resolution}")
+            raise InputError(f"resolution must be in (0, 0.5], got {self.resolution}")
         if self.sampler not in ("uniform", "passage"):
-            raise ValueError(f"sampler must be 'uniform' or 'passage', got {self.sampler!r}")
+            raise InputError(f"sampler must be 'uniform' or 'passage', got {self.sampler!r}")
 
 
 @dataclass
@@ -115,6 +115,8 @@ class Roadmap:
     circumradius: float
     options: RoadmapOptions = field(default_factory=RoadmapOptions)
     info: dict = field(default_factory=dict)
+    #: Cache of :meth:`spanner` results by stretch (derived data: not saved, not compared).
+    #: A Roadmap is otherwise immutable after building, so the cache never goes stale.
     _spanners: dict = field(default_factory=dict, repr=False, compare=False)
 
     @property
@@ -151,7 +153,7 @@ class Roadmap:
         (E,) bool
         """
         if not stretch >= 1.0:
-            raise ValueError(f"stretch must be >= 1, got {stretch}")
+            raise InputError(f"stretch must be >= 1, got {stretch}")
         cached = self._spanners.get(stretch)
         if cached is not None:  # computed once per roadmap and stretch
             return cached
@@ -433,6 +435,8 @@ class _Builder:
         from ompl import geometric as og
         from ompl import util as ou
 
+        # OMPL's log level is process-wide: quieter while we build, restored by close()
+        self._log_level = ou.getLogLevel()
         ou.setLogLevel(ou.LogLevel.LOG_WARN)
         self.geometry = geometry
         xmin, ymin, xmax, ymax = scene.bounds
@@ -477,9 +481,13 @@ class _Builder:
         self.prm = prm
 
     def close(self) -> None:
-        """Break the Python <-> OMPL reference cycle of the sampler allocator."""
+        """Break the Python <-> OMPL reference cycle of the sampler allocator; give OMPL
+        back the log level it had."""
         import gc
 
+        from ompl import util as ou
+
+        ou.setLogLevel(self._log_level)
         if self._samplers:
             self.si.clearValidStateSamplerAllocator()
             self._samplers.clear()
@@ -593,7 +601,7 @@ def grow_roadmaps(
     options = options or RoadmapOptions()
     sizes = sorted(int(n) for n in sizes)
     if not sizes or sizes[0] < 1:
-        raise ValueError("sizes must be positive vertex counts")
+        raise InputError("sizes must be positive vertex counts")
     geometry = geometry or StaticGeometry(scene)
     calls0 = geometry.calls
     t_start = time.perf_counter()

@@ -13,16 +13,15 @@ import hashlib
 import json
 import math
 import os
-import re
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
-from .errors import SceneError
+from .errors import InputError, SceneError
 from .typing import FloatArray
+from .yamldoc import _V, MAX_MAGNITUDE, NAME_RE, _join, _kind, _load_yaml, _one_key
 
 __all__ = [
     "Robot",
@@ -37,13 +36,8 @@ __all__ = [
     "parse_scene",
 ]
 
-NAME_RE = re.compile(r"^[A-Za-z0-9_.-]+$")
 MODES = ("loop", "bounce", "once")
 STATUSES = ("solved", "no_path", "invalid_query", "timeout")
-#: Largest number of YAML nodes a scene may expand to (aliases counted each time used).
-MAX_NODES = 2_000_000
-#: Largest magnitude of any number in a scene: beyond it lengths and times overflow.
-MAX_MAGNITUDE = 1e9
 
 
 # --------------------------------------------------------------------------- shapes
@@ -371,7 +365,7 @@ class Scene:
                 continue
             value = float(value)
             if not (math.isfinite(value) and 0.0 <= value <= MAX_MAGNITUDE):
-                raise ValueError(f"robot.{key} must be a non-negative finite number, got {value!r}")
+                raise InputError(f"robot.{key} must be a non-negative finite number, got {value!r}")
             new[key] = value
         robot = replace(robot, **new)
         raw = copy.deepcopy(self.raw)
@@ -379,183 +373,6 @@ class Scene:
             raw["robot"].update(new)
         base = self.shape_hash or self.static_hash
         return replace(self, robot=robot, raw=raw, static_hash=_static_hash(base, robot.clearance))
-
-
-# --------------------------------------------------------------------------- YAML
-
-
-class _Loader(yaml.SafeLoader):
-    """safe_load, plus: duplicate keys are errors and alias expansion is bounded."""
-
-
-def _construct_mapping(loader: _Loader, node: yaml.MappingNode, deep: bool = False) -> dict:
-    seen = set()
-    for key_node, _ in node.value:
-        if key_node.tag == "tag:yaml.org,2002:merge":
-            continue  # `<<` merges: explicit keys may override merged ones
-        key = loader.construct_object(key_node, deep=True)
-        try:
-            hashable = key in seen
-        except TypeError as exc:
-            raise yaml.constructor.ConstructorError(
-                None, None, "unhashable mapping key", key_node.start_mark
-            ) from exc
-        if hashable:
-            raise yaml.constructor.ConstructorError(
-                None, None, f"duplicate key {key!r}", key_node.start_mark
-            )
-        seen.add(key)
-    return loader.construct_mapping(node, deep=deep)
-
-
-_Loader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
-
-
-def _expanded_size(node: yaml.Node, memo: dict) -> int:
-    key = id(node)
-    if key in memo:
-        if memo[key] < 0:
-            raise ValueError("recursive YAML alias")
-        return memo[key]
-    memo[key] = -1
-    if isinstance(node, yaml.SequenceNode):
-        size = 1 + sum(_expanded_size(n, memo) for n in node.value)
-    elif isinstance(node, yaml.MappingNode):
-        size = 1 + sum(_expanded_size(k, memo) + _expanded_size(v, memo) for k, v in node.value)
-    else:
-        size = 1
-    memo[key] = size
-    return size
-
-
-def _load_yaml(text: str, file: str) -> Any:
-    loader = None
-    try:
-        loader = _Loader(text)
-        node = loader.get_single_node()
-        if node is None:
-            raise SceneError(file, "", "the file is empty")
-        size = _expanded_size(node, {})
-        if size > MAX_NODES:
-            raise SceneError(
-                file, "", f"YAML expands to {size} nodes (aliases), more than {MAX_NODES}"
-            )
-        return loader.construct_document(node)
-    except SceneError:
-        raise
-    except yaml.MarkedYAMLError as exc:
-        mark = exc.problem_mark or exc.context_mark
-        where = f"line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        what = exc.problem or exc.context or "invalid YAML"
-        raise SceneError(file, where, f"invalid YAML: {what}") from None
-    except (yaml.YAMLError, ValueError, RecursionError) as exc:
-        raise SceneError(file, "", f"invalid YAML: {exc}") from None
-    finally:
-        if loader is not None:
-            loader.dispose()
-
-
-# --------------------------------------------------------------------------- validation
-
-
-class _V:
-    """Validation helpers bound to one file."""
-
-    def __init__(self, file: str):
-        self.file = file
-
-    def fail(self, place: str, message: str):
-        raise SceneError(self.file, place, message)
-
-    def mapping(self, value, place, required=(), optional=()):
-        if not isinstance(value, dict):
-            self.fail(place or "top level", f"expected a mapping, got {_kind(value)}")
-        for key in value:
-            if not isinstance(key, str):
-                self.fail(place or "top level", f"key {key!r} is not a string")
-            if key not in required and key not in optional:
-                allowed = ", ".join(list(required) + list(optional))
-                self.fail(_join(place, key), f"unknown key (allowed: {allowed})")
-        for key in required:
-            if key not in value:
-                self.fail(_join(place, key), "missing required key")
-        return value
-
-    def number(self, value, place, positive=False, nonneg=False):
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            self.fail(place, f"expected a number, got {_kind(value)}")
-        try:
-            value = float(value)
-        except OverflowError:
-            self.fail(place, "number too large")
-        if not math.isfinite(value):
-            self.fail(place, f"expected a finite number, got {value}")
-        if abs(value) > MAX_MAGNITUDE:
-            self.fail(place, f"number too large ({value:g}; at most {MAX_MAGNITUDE:g} in magnitude)")
-        if positive and value <= 0:
-            self.fail(place, f"must be positive, got {value:g}")
-        if nonneg and value < 0:
-            self.fail(place, f"must not be negative, got {value:g}")
-        return value
-
-    def vector(self, value, place, length, positive=False):
-        if not isinstance(value, list):
-            self.fail(place, f"expected a list of {length} numbers, got {_kind(value)}")
-        if len(value) != length:
-            self.fail(place, f"expected {length} numbers, got {len(value)}")
-        return tuple(
-            self.number(v, f"{place}[{i}]", positive=positive) for i, v in enumerate(value)
-        )
-
-    def points(self, value, place, width=2, min_rows=1):
-        if not isinstance(value, list):
-            self.fail(place, f"expected a list of points, got {_kind(value)}")
-        if len(value) < min_rows:
-            self.fail(place, f"expected at least {min_rows} rows, got {len(value)}")
-        rows = [self.vector(v, f"{place}[{i}]", width) for i, v in enumerate(value)]
-        return np.array(rows, dtype=float).reshape(-1, width)
-
-    def name(self, value, place, pattern=None):
-        if not isinstance(value, str) or not value.strip():
-            self.fail(place, f"expected a non-empty string, got {_kind(value)}")
-        if pattern is not None and not pattern.match(value):
-            self.fail(place, f"{value!r} must match [a-zA-Z0-9_.-]+")
-        if any(ord(c) < 32 for c in value):
-            self.fail(place, "control characters are not allowed")
-        return value
-
-
-def _kind(value) -> str:
-    if value is None:
-        return "nothing"
-    if isinstance(value, bool):
-        return f"a boolean ({value})"
-    if isinstance(value, (int, float)):
-        return f"a number ({value})"
-    if isinstance(value, str):
-        return f"a string ({value[:30]!r})"
-    if isinstance(value, list):
-        return "a list"
-    if isinstance(value, dict):
-        return "a mapping"
-    return type(value).__name__
-
-
-def _join(place: str, key) -> str:
-    if isinstance(key, int):
-        return f"{place}[{key}]"
-    return f"{place}.{key}" if place else str(key)
-
-
-def _one_key(v: _V, item, place, keys):
-    if not isinstance(item, dict):
-        v.fail(place, f"expected a mapping with one of {', '.join(keys)}, got {_kind(item)}")
-    if len(item) != 1:
-        v.fail(place, f"expected exactly one of {', '.join(keys)}, got {len(item)} keys")
-    key = next(iter(item))
-    if key not in keys:
-        v.fail(_join(place, key), f"unknown obstacle kind (allowed: {', '.join(keys)})")
-    return key, item[key]
 
 
 def _check_polygon(v: _V, pts: FloatArray, place: str) -> FloatArray:
@@ -624,41 +441,10 @@ def _mesh_footprint(v: _V, spec, place: str, folder: Path) -> tuple[list, bytes]
     return polys, data
 
 
-def parse_scene(doc: Any, file: str = "<string>", folder: str | os.PathLike | None = None) -> Scene:
-    """Validate a scene document (as from YAML) and build a :class:`Scene`.
-
-    Parameters
-    ----------
-    doc : dict
-        The parsed YAML document.
-    file : str
-        Name used in error messages.
-    folder : path-like, optional
-        Folder that mesh paths are relative to (default: the current directory).
-
-    Raises
-    ------
-    SceneError
-        On any bad input, naming ``file`` and the place in it.
-    """
-    v = _V(file)
-    folder = Path(folder) if folder is not None else Path.cwd()
-    v.mapping(
-        doc,
-        "",
-        required=("version", "name", "bounds", "robot"),
-        optional=("obstacles", "movers", "queries"),
-    )
-    if doc["version"] != 1 or isinstance(doc["version"], bool):
-        v.fail("version", f"unsupported version {doc['version']!r} (this reads version 1)")
-    name = v.name(doc["name"], "name", NAME_RE)
-    bounds = v.vector(doc["bounds"], "bounds", 4)
-    if not (bounds[0] < bounds[2] and bounds[1] < bounds[3]):
-        v.fail("bounds", f"inverted or empty bounds {list(bounds)} (need xmin < xmax, ymin < ymax)")
-
-    # robot
+def _parse_robot(v: _V, rd) -> tuple[Robot, dict]:
+    """``robot:``: the Robot, and its shape as it enters the static hash."""
     rd = v.mapping(
-        doc["robot"], "robot", required=("vmax",), optional=("disc", "box", "amax", "clearance", "mover_clearance")
+        rd, "robot", required=("vmax",), optional=("disc", "box", "amax", "clearance", "mover_clearance")
     )
     if ("disc" in rd) == ("box" in rd):
         v.fail("robot", "give exactly one of disc or box")
@@ -673,9 +459,12 @@ def parse_scene(doc: Any, file: str = "<string>", folder: str | os.PathLike | No
     mover_clear = v.number(rd.get("mover_clearance", 0.0), "robot.mover_clearance", nonneg=True)
     robot = Robot(robot_shape, radius, size, vmax, amax, clear, mover_clear)
 
-    # obstacles
+    return robot, {"shape": robot_shape, "radius": radius, "size": list(size)}
+
+
+def _parse_obstacles(v: _V, doc: dict, folder: Path, hasher) -> list:
+    """``obstacles:``; mesh files' bytes go into ``hasher`` (the static hash)."""
     obstacles: list = []
-    hasher = hashlib.sha256()
     obs_doc = doc.get("obstacles") or []
     if "obstacles" in doc and doc["obstacles"] is not None and not isinstance(doc["obstacles"], list):
         v.fail("obstacles", f"expected a list, got {_kind(doc['obstacles'])}")
@@ -711,59 +500,70 @@ def parse_scene(doc: Any, file: str = "<string>", folder: str | os.PathLike | No
                 holes = tuple(np.asarray(r.coords)[:-1] for r in p.interiors)
                 obstacles.append(Polygon(ext, holes, source=spec["file"]))
 
-    # movers
+    return obstacles
+
+
+def _parse_movers(v: _V, doc: dict) -> list:
+    """``movers:``, names unique."""
     movers: list = []
     mov_doc = doc.get("movers") or []
     if doc.get("movers") is not None and not isinstance(doc["movers"], list):
         v.fail("movers", f"expected a list, got {_kind(doc['movers'])}")
     names: set = set()
     for i, md in enumerate(mov_doc):
-        place = f"movers[{i}]"
-        if not isinstance(md, dict):
-            v.fail(place, f"expected a mapping, got {_kind(md)}")
-        timed = "trajectory" in md
-        mixed = [k for k in ("path", "speed", "mode", "offset") if k in md]
-        if timed and mixed:  # say so, rather than "unknown key" for the first path key
-            v.fail(place, f"give either path (with speed and mode) or trajectory, not both (it has trajectory and {', '.join(mixed)})")
-        v.mapping(
-            md,
-            place,
-            required=("name",) + (("trajectory",) if timed else ("speed", "path", "mode")),
-            optional=("disc", "box") + (() if timed else ("offset",)),
-        )
-        mname = v.name(md["name"], _join(place, "name"))
-        if mname in names:
-            v.fail(_join(place, "name"), f"duplicate mover name {mname!r}")
-        names.add(mname)
-        if ("disc" in md) == ("box" in md):
-            v.fail(place, "give exactly one of disc or box")
-        if "disc" in md:
-            mshape, mrad, msize = "disc", v.number(md["disc"], _join(place, "disc"), positive=True), (0.0, 0.0)
-        else:
-            mshape, mrad = "box", 0.0
-            msize = v.vector(md["box"], _join(place, "box"), 2, positive=True)
-        if timed:
-            tr = v.points(md["trajectory"], _join(place, "trajectory"), 3, min_rows=1)
-            bad = np.nonzero(np.diff(tr[:, 0]) <= 0)[0]
-            if bad.size:
-                j = int(bad[0]) + 1
-                v.fail(
-                    f"{place}.trajectory[{j}][0]",
-                    f"time {tr[j, 0]:g} does not increase (previous row has {tr[j - 1, 0]:g})",
-                )
-            movers.append(Mover(mname, mshape, mrad, msize, trajectory=tr))
-        else:
-            path = v.points(md["path"], _join(place, "path"), 2, min_rows=2)
-            if np.sum(np.hypot(*np.diff(path, axis=0).T)) <= 0:
-                v.fail(_join(place, "path"), "path has zero length")
-            speed = v.number(md["speed"], _join(place, "speed"), nonneg=True)
-            mode = md["mode"]
-            if mode not in MODES:
-                v.fail(_join(place, "mode"), f"unknown mode {mode!r} (allowed: {', '.join(MODES)})")
-            offset = v.number(md.get("offset", 0.0), _join(place, "offset"))
-            movers.append(Mover(mname, mshape, mrad, msize, path=path, speed=speed, mode=mode, offset=offset))
+        movers.append(_parse_mover(v, md, f"movers[{i}]", names))
+    return movers
 
-    # queries
+
+def _parse_mover(v: _V, md, place: str, names: set) -> Mover:
+    """One mover: a path mover (speed, mode, offset) or a trajectory mover."""
+    if not isinstance(md, dict):
+        v.fail(place, f"expected a mapping, got {_kind(md)}")
+    timed = "trajectory" in md
+    mixed = [k for k in ("path", "speed", "mode", "offset") if k in md]
+    if timed and mixed:  # say so, rather than "unknown key" for the first path key
+        v.fail(place, f"give either path (with speed and mode) or trajectory, not both (it has trajectory and {', '.join(mixed)})")
+    v.mapping(
+        md,
+        place,
+        required=("name",) + (("trajectory",) if timed else ("speed", "path", "mode")),
+        optional=("disc", "box") + (() if timed else ("offset",)),
+    )
+    mname = v.name(md["name"], _join(place, "name"))
+    if mname in names:
+        v.fail(_join(place, "name"), f"duplicate mover name {mname!r}")
+    names.add(mname)
+    if ("disc" in md) == ("box" in md):
+        v.fail(place, "give exactly one of disc or box")
+    if "disc" in md:
+        mshape, mrad, msize = "disc", v.number(md["disc"], _join(place, "disc"), positive=True), (0.0, 0.0)
+    else:
+        mshape, mrad = "box", 0.0
+        msize = v.vector(md["box"], _join(place, "box"), 2, positive=True)
+    if timed:
+        tr = v.points(md["trajectory"], _join(place, "trajectory"), 3, min_rows=1)
+        bad = np.nonzero(np.diff(tr[:, 0]) <= 0)[0]
+        if bad.size:
+            j = int(bad[0]) + 1
+            v.fail(
+                f"{place}.trajectory[{j}][0]",
+                f"time {tr[j, 0]:g} does not increase (previous row has {tr[j - 1, 0]:g})",
+            )
+        return Mover(mname, mshape, mrad, msize, trajectory=tr)
+    else:
+        path = v.points(md["path"], _join(place, "path"), 2, min_rows=2)
+        if np.sum(np.hypot(*np.diff(path, axis=0).T)) <= 0:
+            v.fail(_join(place, "path"), "path has zero length")
+        speed = v.number(md["speed"], _join(place, "speed"), nonneg=True)
+        mode = md["mode"]
+        if mode not in MODES:
+            v.fail(_join(place, "mode"), f"unknown mode {mode!r} (allowed: {', '.join(MODES)})")
+        offset = v.number(md.get("offset", 0.0), _join(place, "offset"))
+        return Mover(mname, mshape, mrad, msize, path=path, speed=speed, mode=mode, offset=offset)
+
+
+def _parse_queries(v: _V, doc: dict, robot: Robot) -> list:
+    """``queries:``, names unique, poses of the robot's dimension."""
     queries: list = []
     q_doc = doc.get("queries") or []
     if doc.get("queries") is not None and not isinstance(doc["queries"], list):
@@ -796,9 +596,50 @@ def parse_scene(doc: Any, file: str = "<string>", folder: str | os.PathLike | No
             )
         queries.append(Query(qname, start, goal, t0, expect, hold))
 
+    return queries
+
+
+def parse_scene(doc: Any, file: str = "<string>", folder: str | os.PathLike | None = None) -> Scene:
+    """Validate a scene document (as from YAML) and build a :class:`Scene`.
+
+    Parameters
+    ----------
+    doc : dict
+        The parsed YAML document.
+    file : str
+        Name used in error messages.
+    folder : path-like, optional
+        Folder that mesh paths are relative to (default: the current directory).
+
+    Raises
+    ------
+    SceneError
+        On any bad input, naming ``file`` and the place in it.
+    """
+    v = _V(file)
+    folder = Path(folder) if folder is not None else Path.cwd()
+    v.mapping(
+        doc,
+        "",
+        required=("version", "name", "bounds", "robot"),
+        optional=("obstacles", "movers", "queries"),
+    )
+    if doc["version"] != 1 or isinstance(doc["version"], bool):
+        v.fail("version", f"unsupported version {doc['version']!r} (this reads version 1)")
+    name = v.name(doc["name"], "name", NAME_RE)
+    bounds = v.vector(doc["bounds"], "bounds", 4)
+    if not (bounds[0] < bounds[2] and bounds[1] < bounds[3]):
+        v.fail("bounds", f"inverted or empty bounds {list(bounds)} (need xmin < xmax, ymin < ymax)")
+
+    robot, robot_repr = _parse_robot(v, doc["robot"])
+    hasher = hashlib.sha256()
+    obstacles = _parse_obstacles(v, doc, folder, hasher)
+    movers = _parse_movers(v, doc)
+    queries = _parse_queries(v, doc, robot)
+
     static = {
         "bounds": list(bounds),
-        "robot": {"shape": robot_shape, "radius": radius, "size": list(size)},
+        "robot": robot_repr,
         "obstacles": [_static_repr(o) for o in obstacles],
     }
     hasher.update(json.dumps(static, sort_keys=True).encode())

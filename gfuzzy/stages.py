@@ -5,27 +5,137 @@ via-points; the speed layer bounds its speed), and times the result again among 
 (:mod:`gfuzzy.retime`). A stage whose result cannot be shown safe, or is slower than the
 answer it would replace by more than ``PlanOptions.refine_max_slowdown``, is dropped and
 the earlier answer stands: the stages never return an invalid trajectory. Each stage
-reports its before/after figures in ``PlanResult.stats``.
+reports what it did in a frozen report (:class:`RefineReport`, :class:`SpeedReport`) kept
+on the :class:`~gfuzzy.planner.PlanResult` (``refine_report``, ``speed_report``); their
+``to_dict()`` forms are ``PlanResult.stats["refine"]`` and ``stats["speed_layer"]``, the
+keys the trajectory file's ``stats`` has always had.
+
+The stages see the scene and its static geometry through a :class:`StageContext`, never
+the planner: data flows one way (docs/architecture.md).
 """
 
 from __future__ import annotations
 
 import logging
 import time
-from dataclasses import replace
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from .check import check_trajectory
-from .geometry import mover_distance, wrap_angle
+from .geometry import StaticGeometry, mover_distance
+from .poses import interpolate_segment
 from .retime import retime_path, retime_profile
-from .scene import Query
+from .scene import Query, Robot, Scene
+from .settings import AMAX_PER_VMAX
+from .status import Status
 from .trajectory import Trajectory
 from .typing import FloatArray
 
-__all__ = ["apply_stages"]
+__all__ = ["StageContext", "RefineReport", "SpeedReport", "apply_stages", "GA_RETRY_KNOTS", "HEADING_STEP"]
 
 log = logging.getLogger(__name__)
+
+#: A default refinement that finds nothing with the paper's 12 knots tries once more with
+#: this many: on a long winding corridor the chords between 12 knots cut through walls and
+#: no individual is feasible. (An explicit ``PlanOptions.ga`` runs once, as given.)
+GA_RETRY_KNOTS = 24
+#: Spacing (metres) of the corridor samples a box robot's headings are looked up in.
+HEADING_STEP = 0.02
+
+
+@dataclass(frozen=True)
+class StageContext:
+    """What the stages need of a query's planner: the scene and its static geometry.
+
+    Attributes
+    ----------
+    scene : Scene
+    geometry : StaticGeometry
+        The scene's static collision model (shared with the search, built once).
+    """
+
+    scene: Scene
+    geometry: StaticGeometry
+
+    @property
+    def robot(self) -> Robot:
+        return self.scene.robot
+
+
+@dataclass(frozen=True)
+class RefineReport:
+    """What the GA refinement did (``PlanResult.refine_report``).
+
+    Attributes
+    ----------
+    applied : bool
+        The refined answer replaced the search's.
+    reason : str
+        Why not, when not applied.
+    knots : int or None
+        Knots of the last GA run (None: the GA did not run).
+    generations : int or None
+    ga_seconds : float or None
+    before, after : mapping or None
+        ``length``, ``smoothness``, ``min_clearance``, ``duration`` of the corridor and of
+        the refined answer (``after`` only when applied).
+    """
+
+    applied: bool
+    reason: str = ""
+    knots: int | None = None
+    generations: int | None = None
+    ga_seconds: float | None = None
+    before: Mapping | None = None
+    after: Mapping | None = None
+
+    def to_dict(self) -> dict:
+        """The ``stats["refine"]`` form (the trajectory file's keys)."""
+        return _present(self, ("applied", "knots", "generations", "ga_seconds", "before", "after", "reason"))
+
+
+@dataclass(frozen=True)
+class SpeedReport:
+    """What the fuzzy speed layer did (``PlanResult.speed_report``).
+
+    Attributes
+    ----------
+    applied : bool
+    amax : float
+        The acceleration bound used (the robot's, or ``AMAX_PER_VMAX * vmax``).
+    reason : str
+        Why not, when not applied.
+    profile_seconds : float or None
+        Duration of the speed profile alone, without the movers.
+    stops : int or None
+        Stops the timing among the movers added (when applied).
+    before, after : mapping or None
+        ``duration``, ``max_speed``, ``mean_speed`` (when applied).
+    """
+
+    applied: bool
+    amax: float
+    reason: str = ""
+    profile_seconds: float | None = None
+    stops: int | None = None
+    before: Mapping | None = None
+    after: Mapping | None = None
+
+    def to_dict(self) -> dict:
+        """The ``stats["speed_layer"]`` form (the trajectory file's keys)."""
+        return _present(self, ("applied", "amax", "profile_seconds", "reason", "stops", "before", "after"))
+
+
+def _present(report, keys) -> dict:
+    out = {}
+    for key in keys:
+        value = getattr(report, key)
+        if value is None or (key == "reason" and not value):
+            continue
+        out[key] = dict(value) if isinstance(value, Mapping) else value
+    return out
 
 
 def _dedupe(poses: FloatArray) -> FloatArray:
@@ -42,11 +152,8 @@ def _heading_lookup(corridor: FloatArray):
     # the corridor densely resampled, so the nearest sample is the nearest corridor point
     dense = [corridor[:1]]
     for a, b in zip(corridor[:-1], corridor[1:], strict=True):
-        k = max(1, int(np.ceil(np.hypot(*(b[:2] - a[:2])) / 0.02)))
-        f = np.arange(1, k + 1)[:, None] / k
-        seg = a + f * np.r_[b[:2] - a[:2], wrap_angle(b[2] - a[2])]
-        seg[:, 2] = wrap_angle(seg[:, 2])
-        dense.append(seg)
+        k = max(1, int(np.ceil(np.hypot(*(b[:2] - a[:2])) / HEADING_STEP)))
+        dense.append(interpolate_segment(a, b, np.arange(1, k + 1) / k))
     dense = np.vstack(dense)
     tree = cKDTree(dense[:, :2])
 
@@ -56,8 +163,10 @@ def _heading_lookup(corridor: FloatArray):
     return heading
 
 
-def _clearance_functions(planner, corridor: FloatArray):
-    scene, robot, geometry = planner.scene, planner.robot, planner.geometry
+def _clearance_functions(ctx: StageContext, corridor: FloatArray):
+    """The GA's clearance functions along ``corridor``: (poses_of, static_clearance,
+    static_segment, mover_clearance)."""
+    scene, robot, geometry = ctx.scene, ctx.robot, ctx.geometry
     heading = _heading_lookup(corridor) if robot.dof == 3 else None
 
     def poses_of(xy: FloatArray) -> FloatArray:
@@ -114,9 +223,9 @@ def _clearance_functions(planner, corridor: FloatArray):
     return poses_of, static_clearance, static_segment, mover_clearance
 
 
-def _accept(planner, traj: Trajectory, query_like, before: Trajectory, max_slowdown: float):
+def _accept(ctx: StageContext, traj: Trajectory, query_like, before: Trajectory, max_slowdown: float):
     """Independent check, and not much slower than the answer it replaces."""
-    rep = check_trajectory(planner.scene, traj.waypoints, query_like)
+    rep = check_trajectory(ctx.scene, traj.waypoints, query_like)
     if not rep.valid:
         return False, f"failed the independent check ({rep.reason})"
     limit = before.duration * (1.0 + max_slowdown) + 1e-9
@@ -125,105 +234,93 @@ def _accept(planner, traj: Trajectory, query_like, before: Trajectory, max_slowd
     return True, ""
 
 
-def _refine(planner, traj: Trajectory, query, opts, deadline) -> tuple[Trajectory, dict]:
+def _run_ga(ctx: StageContext, traj: Trajectory, opts, funcs):
+    """The GA on the corridor: the given options, or the paper's and then
+    ``GA_RETRY_KNOTS`` knots. Returns (GA result, options of the last run, seconds)."""
     from .ga import GAOptions, refine_path
 
-    scene, robot = planner.scene, planner.robot
-    corridor = _dedupe(traj.poses)
-    info: dict = {"applied": False}
-    if len(corridor) < 3:
-        info["reason"] = "the path is a straight segment already"
-        return traj, info
-    poses_of, static_clearance, static_segment, mover_clearance = _clearance_functions(planner, corridor)
+    robot = ctx.robot
+    _, static_clearance, static_segment, mover_clearance = funcs
     t_ga = time.perf_counter()
-    # The paper's 12 knots first; on a long winding corridor the chords between 12 knots
-    # cut through walls and no individual is feasible, so a default run tries twice as many.
-    tries = [opts.ga] if opts.ga is not None else [GAOptions(), GAOptions(n_knots=24)]
+    tries = [opts.ga] if opts.ga is not None else [GAOptions(), GAOptions(n_knots=GA_RETRY_KNOTS)]
     for ga_opts in tries:
         res = refine_path(
             traj.poses[:, :2],
             traj.times,
             robot.circumradius if robot.dof == 3 else robot.radius,
             static_clearance,
-            mover_clearance if scene.movers else None,
+            mover_clearance if ctx.scene.movers else None,
             ga_opts,
             seed=opts.seed,
             static_segment=static_segment,
         )
         if res.improved:
             break
-    info.update(
-        knots=ga_opts.n_knots,
-        generations=res.generations,
-        ga_seconds=time.perf_counter() - t_ga,
-        before={
-            "length": res.length_before,
-            "smoothness": res.smoothness_before,
-            "min_clearance": res.clearance_before,
-            "duration": traj.duration,
-        },
-    )
+    return res, ga_opts, time.perf_counter() - t_ga
+
+
+def _refine(ctx: StageContext, traj: Trajectory, query, opts, deadline) -> tuple[Trajectory, RefineReport]:
+    corridor = _dedupe(traj.poses)
+    if len(corridor) < 3:
+        return traj, RefineReport(False, "the path is a straight segment already")
+    funcs = _clearance_functions(ctx, corridor)
+    res, ga_opts, seconds = _run_ga(ctx, traj, opts, funcs)
+    before = {
+        "length": res.length_before,
+        "smoothness": res.smoothness_before,
+        "min_clearance": res.clearance_before,
+        "duration": traj.duration,
+    }
+    report = RefineReport(False, "", ga_opts.n_knots, res.generations, seconds, before)
     if not res.improved:
-        info["reason"] = "the GA found nothing better than the corridor"
-        return traj, info
-    path = poses_of(res.path)
-    if robot.dof == 3:  # the ends keep their exact poses
+        return traj, replace(report, reason="the GA found nothing better than the corridor")
+    path = funcs[0](res.path)  # poses_of: a box robot takes the corridor's headings
+    if ctx.robot.dof == 3:  # the ends keep their exact poses
         path[0], path[-1] = traj.poses[0], traj.poses[-1]
     path[0, :2], path[-1, :2] = traj.poses[0, :2], traj.poses[-1, :2]
     for a, b in zip(path[:-1], path[1:], strict=True):
-        if not planner.geometry.motion_free(a, b):
-            info["reason"] = "a refined segment could not be certified free of static obstacles"
-            return traj, info
+        if not ctx.geometry.motion_free(a, b):
+            return traj, replace(report, reason="a refined segment could not be certified free of static obstacles")
     horizon = max(opts.horizon or 0.0, 2.0 * traj.duration + 30.0)
-    rt = retime_path(scene, path, query.t0, opts.dt, horizon, deadline=deadline, hold=query.hold)
-    if rt.status != "solved":
-        info["reason"] = f"the refined path could not be timed among the movers ({rt.message})"
-        return traj, info
-    ok, why = _accept(planner, rt.trajectory, query, traj, opts.refine_max_slowdown)
+    rt = retime_path(ctx.scene, path, query.t0, opts.dt, horizon, deadline=deadline, hold=query.hold)
+    if rt.status is not Status.SOLVED:
+        return traj, replace(report, reason=f"the refined path could not be timed among the movers ({rt.message})")
+    ok, why = _accept(ctx, rt.trajectory, query, traj, opts.refine_max_slowdown)
     if not ok:
-        info["reason"] = why
-        return traj, info
-    new = rt.trajectory
-    info["applied"] = True
-    info["after"] = {
+        return traj, replace(report, reason=why)
+    after = {
         "length": res.length_after,
         "smoothness": res.smoothness_after,
         "min_clearance": res.clearance_after,
-        "duration": new.duration,
+        "duration": rt.trajectory.duration,
     }
-    return new, info
+    return rt.trajectory, replace(report, applied=True, after=after)
 
 
-def _speed_layer(planner, traj: Trajectory, query, opts, deadline) -> tuple[Trajectory, dict]:
+def _speed_layer(ctx: StageContext, traj: Trajectory, query, opts, deadline) -> tuple[Trajectory, SpeedReport]:
     from .fuzzy import FuzzyOptions, expert_rules, speed_limit
 
-    robot = planner.robot
-    amax = robot.amax if robot.amax is not None else 2.0 * robot.vmax
+    robot = ctx.robot
+    amax = robot.amax if robot.amax is not None else AMAX_PER_VMAX * robot.vmax
     path = _dedupe(traj.poses)
-    info: dict = {"applied": False, "amax": amax}
     if len(path) < 2:
-        info["reason"] = "the start is the goal"
-        return traj, info
+        return traj, SpeedReport(False, amax, "the start is the goal")
     rules = opts.rules if opts.rules is not None else expert_rules()
     s_xy, v_xy = speed_limit(path[:, :2], robot.vmax, amax, rules, FuzzyOptions())
     horizon = max(opts.horizon or 0.0, 3.0 * traj.duration + 30.0)
-    rt = retime_profile(scene=planner.scene, path=path, s_xy=s_xy, v_xy=v_xy, t0=query.t0,
+    rt = retime_profile(scene=ctx.scene, path=path, s_xy=s_xy, v_xy=v_xy, t0=query.t0,
                         dt=opts.dt, amax=amax, horizon=horizon, deadline=deadline, hold=query.hold)  # fmt: skip
-    info["profile_seconds"] = rt.profile_duration
-    if rt.status != "solved":
-        info["reason"] = f"the speed-limited path could not be timed among the movers ({rt.message})"
-        return traj, info
-    rep = check_trajectory(planner.scene, rt.trajectory.waypoints, query)
+    report = SpeedReport(False, amax, profile_seconds=rt.profile_duration)
+    if rt.status is not Status.SOLVED:
+        why = f"the speed-limited path could not be timed among the movers ({rt.message})"
+        return traj, replace(report, reason=why)
+    rep = check_trajectory(ctx.scene, rt.trajectory.waypoints, query)
     if not rep.valid:
-        info["reason"] = f"failed the independent check ({rep.reason})"
-        return traj, info
-    info.update(
-        applied=True,
-        stops=len(rt.waits),
-        before=_speed_figures(traj),
-        after=_speed_figures(rt.trajectory),
+        return traj, replace(report, reason=f"failed the independent check ({rep.reason})")
+    figures = replace(
+        report, applied=True, stops=len(rt.waits), before=_speed_figures(traj), after=_speed_figures(rt.trajectory)
     )
-    return rt.trajectory, info
+    return rt.trajectory, figures
 
 
 def _speed_figures(traj: Trajectory) -> dict:
@@ -235,23 +332,47 @@ def _speed_figures(traj: Trajectory) -> dict:
     }
 
 
-def apply_stages(planner, result, start, goal, t0, opts, t_begin, hold: float = 0.0):
+def apply_stages(ctx: StageContext, result, start, goal, t0, opts, t_begin, hold: float = 0.0):
     """Run the GA refinement and/or the speed layer on a solved result (the goal pose
-    parked ``hold`` seconds after the arrival, checked as well)."""
+    parked ``hold`` seconds after the arrival, checked as well).
+
+    Parameters
+    ----------
+    ctx : StageContext
+    result : PlanResult
+        Solved.
+    start, goal : (d,) float
+    t0 : float
+    opts : PlanOptions
+        ``refine``, ``speed_layer`` and their settings.
+    t_begin : float
+        ``time.perf_counter()`` when planning began (the time budget counts from there).
+    hold : float
+
+    Returns
+    -------
+    PlanResult
+        With the stages' trajectory, ``refine_report`` / ``speed_report``, and their
+        ``to_dict()`` forms in ``stats``.
+    """
     deadline = t_begin + opts.time_limit
     query = Query("stage", tuple(start), tuple(goal), t0, hold=hold)
     traj = result.trajectory
     stats = dict(result.stats)
+    reports = {}
     if opts.refine:
-        traj, stats["refine"] = _refine(planner, traj, query, opts, deadline)
+        traj, reports["refine_report"] = _refine(ctx, traj, query, opts, deadline)
+        stats["refine"] = reports["refine_report"].to_dict()
     if opts.speed_layer:
-        traj, stats["speed_layer"] = _speed_layer(planner, traj, query, opts, deadline)
-    for key in ("refine", "speed_layer"):
-        if key in stats and not stats[key]["applied"]:
-            log.info("%s not applied: %s", key.replace("_", " "), stats[key].get("reason", ""))
+        traj, reports["speed_report"] = _speed_layer(ctx, traj, query, opts, deadline)
+        stats["speed_layer"] = reports["speed_report"].to_dict()
+    for name, report in reports.items():
+        if not report.applied:
+            log.info("%s not applied: %s", "refine" if name == "refine_report" else "speed layer", report.reason)
     return replace(
         result,
         trajectory=traj,
         planning_seconds=time.perf_counter() - t_begin,
         stats=stats,
+        **reports,
     )

@@ -1,42 +1,29 @@
 """Pedestrian tracks as movers: read recorded tracks, write them as a scene.
 
-Two input formats (``docs/formats.md``, "Pedestrian tracks"):
-
-* **eth**: the plain-text form in which the ETH (Pellegrini et al., ICCV 2009) and UCY
-  (Lerner et al., 2007) data sets are redistributed: one annotation per line,
-  whitespace-separated ``frame pedestrian_id x y`` and optionally ``vx vy`` (ignored), ``#``
-  comments. A time is ``frame / fps``; by default annotated frames are taken to be 0.4 s
-  apart (the data sets' convention), i.e. ``fps = step / 0.4`` with ``step`` the smallest
-  frame difference between two rows of one pedestrian (6 or 10, depending on the camera).
-* **csv**: a header naming the columns ``t``, ``id``, ``x``, ``y`` (any order, other columns
-  ignored), then one row per observation; ``t`` in seconds, ``id`` any name of letters,
-  digits, ``_ . -``.
+The two input formats (eth, csv) are read by :mod:`gfuzzy.trackfiles`.
 
 Rows of different people may interleave; each person's times must strictly increase in
 file order. :func:`read_tracks` returns :class:`Tracks`; :func:`tracks_scene` clips them to
 a time window and a region and returns a :class:`TrackScene`, whose ``doc`` is a scene
 document (:func:`gfuzzy.scene.parse_scene` reads it) and whose :meth:`TrackScene.to_yaml`
-writes it. ``gfuzzy tracks`` is the command line of both.
+writes it. ``gfuzzy tracks`` is the command line of both. Reading lives in
+:mod:`gfuzzy.trackfiles` (its names are re-exported here).
 """
 
 from __future__ import annotations
 
-import csv
-import io
 import logging
 import math
 import os
-import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from itertools import pairwise
 from pathlib import Path
 
-import numpy as np
 import yaml
 
-from .errors import SceneError
+from .errors import InputError, SceneError
 from .scene import NAME_RE, STATUSES, Scene
-from .typing import FloatArray
+from .trackfiles import ANNOTATION_PERIOD, Track, Tracks, _id_key, read_tracks
 
 __all__ = [
     "ANNOTATION_PERIOD",
@@ -50,256 +37,9 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
-#: Seconds between consecutive annotated frames in the ETH/UCY data sets.
-ANNOTATION_PERIOD = 0.4
-FORMATS = ("auto", "eth", "csv")
 #: Margin (m) around the pedestrians' extent when no region is given.
 REGION_MARGIN = 0.5
-_ID_RE = re.compile(r"^[A-Za-z0-9_.-]+$")
 
-
-@dataclass(frozen=True)
-class Track:
-    """One person's recorded track.
-
-    Attributes
-    ----------
-    id : str
-        The person's id in the file (``"17"`` for the ETH/UCY integer 17).
-    rows : (n, 3) float
-        ``[t, x, y]``: seconds of the recording and metres (before any scaling); t strictly
-        increasing.
-    """
-
-    id: str
-    rows: FloatArray = field(compare=False)
-
-    @property
-    def time_range(self) -> tuple[float, float]:
-        """First and last time of the track."""
-        return float(self.rows[0, 0]), float(self.rows[-1, 0])
-
-
-@dataclass(frozen=True)
-class Tracks:
-    """Every track of one file.
-
-    Attributes
-    ----------
-    source : str
-        The file they were read from.
-    format : {"eth", "csv"}
-    fps : float or None
-        Frames per second used to turn frames into seconds (``None`` for csv).
-    frame_step : int or None
-        Smallest frame difference between two rows of one person (eth only; None when no
-        person has two rows).
-    tracks : tuple of Track
-        In order of first appearance in the file.
-    """
-
-    source: str
-    format: str
-    fps: float | None
-    frame_step: int | None
-    tracks: tuple[Track, ...]
-
-    @property
-    def time_range(self) -> tuple[float, float]:
-        """First and last time of any track."""
-        return (
-            float(min(tr.rows[0, 0] for tr in self.tracks)),
-            float(max(tr.rows[-1, 0] for tr in self.tracks)),
-        )
-
-
-# ---------------------------------------------------------------------------------- reading
-
-
-def _whole(value: float) -> int | None:
-    if math.isfinite(value) and value == int(value):
-        return int(value)
-    return None
-
-
-def _id_key(pid: str):
-    """Natural order of ids: integers by value first, then names."""
-    return (0, int(pid), "") if pid.lstrip("-").isdigit() else (1, 0, pid)
-
-
-def _read_text(path: str) -> str:
-    try:
-        data = Path(path).read_bytes()
-    except OSError as exc:
-        raise SceneError(path, "", f"cannot read: {exc.strerror or exc}") from None
-    try:
-        return data.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise SceneError(path, "", f"not UTF-8 text (byte {exc.start})") from None
-
-
-def _sniff(path: str, text: str) -> str:
-    if path.lower().endswith(".csv"):
-        return "csv"
-    for line in text.splitlines():
-        line = line.split("#", 1)[0].strip()
-        if line:
-            return "csv" if "," in line else "eth"
-    return "eth"
-
-
-def _add(
-    rows: dict,
-    lines: dict,
-    path: str,
-    lineno: int,
-    pid: str,
-    t: float,
-    x: float,
-    y: float,
-    unit: str,
-):
-    prev = rows.setdefault(pid, [])
-    if prev and t <= prev[-1][0]:
-        raise SceneError(
-            path,
-            f"line {lineno}",
-            f"pedestrian {pid}: {unit} {t:g} does not increase "
-            f"(its previous row, line {lines[pid]}, has {prev[-1][0]:g})",
-        )
-    prev.append((t, x, y))
-    lines[pid] = lineno
-
-
-def _read_eth(path: str, text: str) -> tuple[dict, int | None]:
-    """{id: [(frame, x, y), ...]} of an ETH/UCY text file, and the smallest frame step."""
-    rows: dict = {}
-    lines: dict = {}
-    for lineno, line in enumerate(text.splitlines(), start=1):
-        body = line.split("#", 1)[0].strip()
-        if not body:
-            continue
-        cols = body.split()
-        if len(cols) not in (4, 6):
-            raise SceneError(
-                path,
-                f"line {lineno}",
-                f"expected 4 or 6 columns (frame id x y [vx vy]), got {len(cols)}",
-            )
-        try:
-            nums = [float(c) for c in cols]
-        except ValueError:
-            raise SceneError(path, f"line {lineno}", f"not a number in {body!r}") from None
-        if not all(math.isfinite(v) for v in nums):
-            raise SceneError(path, f"line {lineno}", f"non-finite number in {body!r}")
-        frame, pid = _whole(nums[0]), _whole(nums[1])
-        if frame is None or pid is None:
-            raise SceneError(
-                path, f"line {lineno}", "frame and pedestrian id must be whole numbers"
-            )
-        _add(rows, lines, path, lineno, str(pid), frame, nums[2], nums[3], "frame")
-    steps = [b[0] - a[0] for r in rows.values() for a, b in pairwise(r)]
-    return rows, (min(steps) if steps else None)
-
-
-def _read_csv(path: str, text: str) -> dict:
-    """{id: [(t, x, y), ...]} of a CSV file with a header naming t, id, x, y."""
-    reader = csv.reader(io.StringIO(text))
-    header = None
-    rows: dict = {}
-    lines: dict = {}
-    for cols in reader:
-        lineno = reader.line_num
-        if not cols or not "".join(cols).strip() or cols[0].lstrip().startswith("#"):
-            continue
-        cols = [c.strip() for c in cols]
-        if header is None:
-            names = [c.lower() for c in cols]
-            missing = [k for k in ("t", "id", "x", "y") if k not in names]
-            if missing:
-                raise SceneError(
-                    path,
-                    f"line {lineno}",
-                    f"the header must name the columns t, id, x, y (missing: {', '.join(missing)})",
-                )
-            header = names
-            index = {k: names.index(k) for k in ("t", "id", "x", "y")}
-            continue
-        if len(cols) != len(header):
-            raise SceneError(
-                path, f"line {lineno}", f"expected {len(header)} columns, got {len(cols)}"
-            )
-        pid = cols[index["id"]]
-        if not _ID_RE.match(pid):
-            raise SceneError(path, f"line {lineno}", f"id {pid!r} must be letters, digits, _ . -")
-        try:
-            t, x, y = (float(cols[index[k]]) for k in ("t", "x", "y"))
-        except ValueError:
-            raise SceneError(
-                path, f"line {lineno}", f"not a number in {','.join(cols)!r}"
-            ) from None
-        if not all(math.isfinite(v) for v in (t, x, y)):
-            raise SceneError(path, f"line {lineno}", f"non-finite number in {','.join(cols)!r}")
-        _add(rows, lines, path, lineno, pid, t, x, y, "time")
-    if header is None:
-        raise SceneError(path, "", "no header line (t,id,x,y)")
-    return rows
-
-
-def read_tracks(path: str | os.PathLike, format: str = "auto", fps: float | None = None) -> Tracks:
-    """Read a file of pedestrian tracks.
-
-    Parameters
-    ----------
-    path : path-like
-        An ETH/UCY text file or a CSV file (see the module docstring).
-    format : {"auto", "eth", "csv"}
-        ``auto``: csv for a ``.csv`` name or a first data line with a comma, else eth.
-    fps : float, optional
-        eth only: frames per second of the recording. Default: ``step / 0.4`` (annotated
-        frames 0.4 s apart).
-
-    Returns
-    -------
-    Tracks
-
-    Raises
-    ------
-    SceneError
-        The file cannot be read, a row cannot be parsed (naming its line), a person's time
-        does not increase, or there is no row at all.
-    ValueError
-        ``format`` or ``fps`` is not allowed.
-    """
-    file = str(path)
-    if format not in FORMATS:
-        raise ValueError(f"format must be one of {', '.join(FORMATS)}, got {format!r}")
-    if fps is not None and not (math.isfinite(fps) and fps > 0):
-        raise ValueError(f"fps must be positive and finite, got {fps!r}")
-    text = _read_text(file)
-    fmt = _sniff(file, text) if format == "auto" else format
-    step = None
-    if fmt == "eth":
-        raw, step = _read_eth(file, text)
-        if raw and fps is None and step is None:
-            raise SceneError(
-                file, "", "no pedestrian has two rows: cannot derive the frame rate (give fps)"
-            )
-        if not raw:
-            raise SceneError(file, "", "no data rows")
-        # seconds per frame, multiplied (not divided) so that times are those of earlier tools
-        spf = 1.0 / fps if fps is not None else ANNOTATION_PERIOD / step
-        fps_used = fps if fps is not None else step / ANNOTATION_PERIOD
-        raw = {pid: [(f * spf, x, y) for f, x, y in rows] for pid, rows in raw.items()}
-    else:
-        if fps is not None:
-            raise ValueError("fps applies to the eth format only (csv times are seconds)")
-        raw = _read_csv(file, text)
-        fps_used = None
-    if not raw:
-        raise SceneError(file, "", "no data rows")
-    tracks = tuple(Track(pid, np.array(rows, dtype=float)) for pid, rows in raw.items())
-    return Tracks(file, fmt, fps_used, step, tracks)
 
 
 # ---------------------------------------------------------------------------------- clipping
@@ -460,13 +200,13 @@ class TrackSceneOptions:
         for key in ("t_start", "duration", "scale", "radius", "robot_radius", "vmax", "amax"):
             value = getattr(self, key)
             if value is not None and not math.isfinite(value):
-                raise ValueError(f"{key} must be finite, got {value!r}")
+                raise InputError(f"{key} must be finite, got {value!r}")
         for key in ("duration", "scale", "radius", "robot_radius", "vmax", "amax"):
             value = getattr(self, key)
             if value is not None and value <= 0:
-                raise ValueError(f"{key} must be positive, got {value!r}")
+                raise InputError(f"{key} must be positive, got {value!r}")
         if self.max_movers is not None and self.max_movers < 0:
-            raise ValueError(f"max_movers must not be negative, got {self.max_movers!r}")
+            raise InputError(f"max_movers must not be negative, got {self.max_movers!r}")
         if self.region is not None:
             r = tuple(float(v) for v in self.region)
             if (
@@ -474,12 +214,12 @@ class TrackSceneOptions:
                 or not all(math.isfinite(v) for v in r)
                 or not (r[0] < r[2] and r[1] < r[3])
             ):
-                raise ValueError(
+                raise InputError(
                     f"region must be xmin ymin xmax ymax with xmin < xmax, ymin < ymax, got {self.region!r}"
                 )
             object.__setattr__(self, "region", r)
         if not NAME_RE.match(self.name):
-            raise ValueError(f"name must be letters, digits, _ . - (got {self.name!r})")
+            raise InputError(f"name must be letters, digits, _ . - (got {self.name!r})")
 
 
 @dataclass(frozen=True)
@@ -654,6 +394,129 @@ def _default_region(tracks: list, t_lo: float, t_hi: float):
     )
 
 
+def _window(tracks: Tracks, options: TrackSceneOptions):
+    """Each person's rows, scaled, with times relative to the window's start; the window."""
+    src = tracks.source
+    first, last = tracks.time_range
+    t_lo = first if options.t_start is None else options.t_start
+    t_hi = last if options.duration is None else t_lo + options.duration
+    if t_hi <= t_lo:
+        raise SceneError(
+            src,
+            "",
+            f"the window {t_lo:g} s .. {t_hi:g} s is empty (the recording ends at {last:g} s)",
+        )
+    scale = options.scale
+    rel = {
+        tr.id: [(t - t_lo, x * scale, y * scale) for t, x, y in tr.rows.tolist()]
+        for tr in sorted(tracks.tracks, key=lambda tr: _id_key(tr.id))
+    }
+    duration = t_hi - t_lo
+    if not any(len(_clip_time(rows, 0.0, duration)) >= 2 for rows in rel.values()):
+        raise SceneError(
+            src,
+            "",
+            f"no pedestrian in the window {t_lo:g} s .. {t_hi:g} s (the recording spans {first:g} .. {last:g} s)",
+        )
+    return rel, t_lo, t_hi
+
+
+def _robot_doc(options: TrackSceneOptions, static: Scene | None):
+    """The ``robot:`` mapping (the static scene's, or a disc keeping its speed and
+    clearances), its pose dimension, and its inradius."""
+    base = dict(static.raw["robot"]) if static is not None else {"vmax": 1.5, "amax": 3.0}
+    if static is not None and options.robot_radius is None:
+        robot = base
+        dof, inradius = static.robot.dof, static.robot.inradius
+    else:
+        robot = {"disc": options.robot_radius if options.robot_radius is not None else 0.2}
+        robot.update({k: v for k, v in base.items() if k not in ("disc", "box")})
+        dof, inradius = 2, robot["disc"]
+    for key in ("vmax", "amax"):
+        if getattr(options, key) is not None:
+            robot[key] = getattr(options, key)
+    robot = {
+        k: float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else v
+        for k, v in robot.items()
+    }
+
+    return robot, dof, inradius
+
+
+def _query_docs(start, goal, query_name, expect, dof, inradius, region, src) -> list:
+    """The ``queries:`` list: one query from ``start`` to ``goal`` at t0 = 0, or none."""
+    queries = []
+    if (start is None) != (goal is None):
+        raise InputError("start and goal go together")
+    if start is not None:
+        if not NAME_RE.match(query_name):
+            raise InputError(f"query name must be letters, digits, _ . - (got {query_name!r})")
+        start, goal = [float(v) for v in start], [float(v) for v in goal]
+        for label, pose in (("start", start), ("goal", goal)):
+            if len(pose) != dof:
+                raise InputError(f"{label}: expected {dof} numbers for this robot, got {len(pose)}")
+            x, y = pose[:2]
+            if not (
+                region[0] + inradius <= x <= region[2] - inradius
+                and region[1] + inradius <= y <= region[3] - inradius
+            ):
+                raise SceneError(
+                    src,
+                    "",
+                    f"{label} {x:g} {y:g} does not fit in the region {' '.join(f'{v:g}' for v in region)}",
+                )
+        query = {"name": query_name, "start": start, "goal": goal, "t0": 0.0}
+        if expect:
+            unknown = set(expect) - {"status", "max_duration", "max_delay_factor"}
+            if unknown or expect.get("status", "solved") not in STATUSES:
+                raise InputError(f"expect: not allowed: {expect!r}")
+            query["expect"] = dict(expect)
+        queries.append(query)
+
+    return queries
+
+
+def _movers(rel: dict, duration: float, region, options: TrackSceneOptions, src) -> list:
+    """Every person's runs inside the window and the region, as movers, in order of
+    appearance (the ``max_movers`` present longest when that is set)."""
+    movers: list[_Mover] = []
+    for pid, rows in rel.items():
+        rows = _clip_time(rows, 0.0, duration)
+        if len(rows) < 2:
+            continue
+        for k, run in enumerate(_clip_region(rows, region), start=1):
+            run = _round_rows(run)
+            if len(run) < 2:
+                continue
+            movers.append(_Mover(f"ped-{pid}" if k == 1 else f"ped-{pid}-{k}", pid, run))
+    if not movers:
+        raise SceneError(
+            src,
+            "",
+            f"no pedestrian inside the region {' '.join(f'{v:g}' for v in region)} during the window",
+        )
+    if options.max_movers is not None and len(movers) > options.max_movers:
+        keep = sorted(movers, key=lambda m: (-m.duration, _id_key(m.pid), m.rows[0][0]))[
+            : options.max_movers
+        ]
+        kept = {id(m) for m in keep}
+        movers = [m for m in movers if id(m) in kept]
+    movers.sort(key=lambda m: (m.rows[0][0], _id_key(m.pid), m.name))
+    return movers
+
+
+def _warn_overlaps(queries: list, movers: list, distance: float) -> None:
+    """Log a start or goal closer than ``distance`` to a person at t0 = 0."""
+    for q in queries:
+        for label in ("start", "goal"):
+            x, y = q[label][:2]
+            for m in movers:
+                p = m.position_at(0.0)
+                if p and math.hypot(p[0] - x, p[1] - y) < distance:
+                    log.warning("the %s overlaps %s at t0 = 0", label, m.name)
+
+
+
 def tracks_scene(
     tracks: Tracks,
     options: TrackSceneOptions | None = None,
@@ -696,117 +559,23 @@ def tracks_scene(
     SceneError
         No person in the window (or in the region), or a start/goal outside the region;
         the message names the tracks' file.
-    ValueError
+    InputError
         ``start`` without ``goal``, a query name or expectation that is not allowed.
     """
     options = options or TrackSceneOptions()
     src = tracks.source
-    first, last = tracks.time_range
-    t_lo = first if options.t_start is None else options.t_start
-    t_hi = last if options.duration is None else t_lo + options.duration
-    if t_hi <= t_lo:
-        raise SceneError(
-            src,
-            "",
-            f"the window {t_lo:g} s .. {t_hi:g} s is empty (the recording ends at {last:g} s)",
-        )
-    scale = options.scale
-    rel = {
-        tr.id: [(t - t_lo, x * scale, y * scale) for t, x, y in tr.rows.tolist()]
-        for tr in sorted(tracks.tracks, key=lambda tr: _id_key(tr.id))
-    }
+    rel, t_lo, t_hi = _window(tracks, options)
     duration = t_hi - t_lo
-    if not any(len(_clip_time(rows, 0.0, duration)) >= 2 for rows in rel.values()):
-        raise SceneError(
-            src,
-            "",
-            f"no pedestrian in the window {t_lo:g} s .. {t_hi:g} s (the recording spans {first:g} .. {last:g} s)",
-        )
     region = options.region
     if region is None and static is not None:
         region = tuple(static.bounds)
     if region is None:
         region = _default_region(list(rel.values()), 0.0, duration)
     region = tuple(float(v) for v in region)
-
-    # robot: the static scene's, or a disc (keeping the static robot's speed and clearances)
-    base = dict(static.raw["robot"]) if static is not None else {"vmax": 1.5, "amax": 3.0}
-    if static is not None and options.robot_radius is None:
-        robot = base
-        dof, inradius = static.robot.dof, static.robot.inradius
-    else:
-        robot = {"disc": options.robot_radius if options.robot_radius is not None else 0.2}
-        robot.update({k: v for k, v in base.items() if k not in ("disc", "box")})
-        dof, inradius = 2, robot["disc"]
-    for key in ("vmax", "amax"):
-        if getattr(options, key) is not None:
-            robot[key] = getattr(options, key)
-    robot = {
-        k: float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else v
-        for k, v in robot.items()
-    }
-
-    # query
-    queries = []
-    if (start is None) != (goal is None):
-        raise ValueError("start and goal go together")
-    if start is not None:
-        if not NAME_RE.match(query_name):
-            raise ValueError(f"query name must be letters, digits, _ . - (got {query_name!r})")
-        start, goal = [float(v) for v in start], [float(v) for v in goal]
-        for label, pose in (("start", start), ("goal", goal)):
-            if len(pose) != dof:
-                raise ValueError(f"{label}: expected {dof} numbers for this robot, got {len(pose)}")
-            x, y = pose[:2]
-            if not (
-                region[0] + inradius <= x <= region[2] - inradius
-                and region[1] + inradius <= y <= region[3] - inradius
-            ):
-                raise SceneError(
-                    src,
-                    "",
-                    f"{label} {x:g} {y:g} does not fit in the region {' '.join(f'{v:g}' for v in region)}",
-                )
-        query = {"name": query_name, "start": start, "goal": goal, "t0": 0.0}
-        if expect:
-            unknown = set(expect) - {"status", "max_duration", "max_delay_factor"}
-            if unknown or expect.get("status", "solved") not in STATUSES:
-                raise ValueError(f"expect: not allowed: {expect!r}")
-            query["expect"] = dict(expect)
-        queries.append(query)
-
-    # movers
-    movers: list[_Mover] = []
-    for pid, rows in rel.items():
-        rows = _clip_time(rows, 0.0, duration)
-        if len(rows) < 2:
-            continue
-        for k, run in enumerate(_clip_region(rows, region), start=1):
-            run = _round_rows(run)
-            if len(run) < 2:
-                continue
-            movers.append(_Mover(f"ped-{pid}" if k == 1 else f"ped-{pid}-{k}", pid, run))
-    if not movers:
-        raise SceneError(
-            src,
-            "",
-            f"no pedestrian inside the region {' '.join(f'{v:g}' for v in region)} during the window",
-        )
-    if options.max_movers is not None and len(movers) > options.max_movers:
-        keep = sorted(movers, key=lambda m: (-m.duration, _id_key(m.pid), m.rows[0][0]))[
-            : options.max_movers
-        ]
-        kept = {id(m) for m in keep}
-        movers = [m for m in movers if id(m) in kept]
-    movers.sort(key=lambda m: (m.rows[0][0], _id_key(m.pid), m.name))
-    for q in queries:
-        for label in ("start", "goal"):
-            x, y = q[label][:2]
-            for m in movers:
-                p = m.position_at(0.0)
-                if p and math.hypot(p[0] - x, p[1] - y) < inradius + options.radius:
-                    log.warning("the %s overlaps %s at t0 = 0", label, m.name)
-
+    robot, dof, inradius = _robot_doc(options, static)
+    queries = _query_docs(start, goal, query_name, expect, dof, inradius, region, src)
+    movers = _movers(rel, duration, region, options, src)
+    _warn_overlaps(queries, movers, inradius + options.radius)
     doc = {
         "version": 1,
         "name": options.name,

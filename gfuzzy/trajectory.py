@@ -19,7 +19,7 @@ import numpy as np
 
 from .atomic import write_atomic
 from .errors import SceneError
-from .geometry import metric_distance, wrap_angle
+from .poses import metric_distance, pose_at
 from .typing import FloatArray
 
 __all__ = ["Trajectory", "load_trajectory", "TrajectoryFile"]
@@ -103,15 +103,7 @@ class Trajectory:
         if len(times) == 1:
             out = np.repeat(poses[:1], len(tt), axis=0)
             return out[0] if scalar else out
-        i = np.clip(np.searchsorted(times, tt, side="right") - 1, 0, len(times) - 2)
-        f = (tt - times[i]) / (times[i + 1] - times[i])
-        a, b = poses[i], poses[i + 1]
-        delta = b - a
-        if poses.shape[1] == 3:
-            delta[:, 2] = wrap_angle(delta[:, 2])
-        out = a + f[:, None] * delta
-        if poses.shape[1] == 3:
-            out[:, 2] = wrap_angle(out[:, 2])
+        out = pose_at(times, poses, tt)
         return out[0] if scalar else out
 
     def to_csv(self) -> str:

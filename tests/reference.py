@@ -26,6 +26,8 @@ __all__ = [
     "interpolate",
     "mover_reference_distance",
     "prism_mesh",
+    "mover_position",
+    "reference_violation",
 ]
 
 
@@ -215,3 +217,72 @@ def prism_mesh(footprint: shapely.Polygon, height: float = 1.0):
         verts += [[*p, 0.0], [*q, 0.0], [*q, height], [*p, height]]
         faces += [[k, k + 1, k + 2], [k, k + 2, k + 3]]
     return trimesh.Trimesh(np.array(verts), np.array(faces), process=True)
+
+
+def mover_position(mover: dict, t: float) -> tuple[np.ndarray, bool]:
+    """Where a scene document's mover is at time ``t``, and whether it is there (written
+    afresh from the format's definition, docs/formats.md: constant speed along the
+    polyline, loop / bounce / once, ``offset`` metres at t = 0; or ``trajectory`` rows)."""
+    if "trajectory" in mover:
+        rows = np.asarray(mover["trajectory"], dtype=float)
+        present = rows[0, 0] <= t <= rows[-1, 0]
+        return np.array([np.interp(t, rows[:, 0], rows[:, 1]), np.interp(t, rows[:, 0], rows[:, 2])]), present
+    pts = np.asarray(mover["path"], dtype=float)
+    mode = mover.get("mode", "loop")
+    if mode == "loop" and np.any(pts[0] != pts[-1]):
+        pts = np.vstack([pts, pts[:1]])
+    cum = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(pts, axis=0).T))])
+    length = cum[-1]
+    s = float(mover.get("offset", 0.0)) + float(mover.get("speed", 0.0)) * t
+    if mode == "loop":
+        s = s % length
+    elif mode == "bounce":
+        s = s % (2 * length)
+        s = 2 * length - s if s > length else s
+    else:
+        s = min(max(s, 0.0), length)
+    return np.array([np.interp(s, cum, pts[:, 0]), np.interp(s, cum, pts[:, 1])]), True
+
+
+def reference_violation(doc: dict, waypoints, hold: float = 0.0, substeps: int = 8) -> str:
+    """Why a trajectory breaks the contract, judged with this module only ("" if it does not).
+
+    Checks the speed bound (the contract metric, written afresh), the static clearance
+    (``robot.clearance``) and the distance to every mover (``robot.mover_clearance``) at
+    ``substeps`` points inside every row-to-row motion and over the ``hold`` after the
+    arrival. An oracle for answers that gfuzzy's own checker has already accepted.
+    """
+    robot = doc["robot"]
+    wp = np.asarray(waypoints, dtype=float)
+    ref = Reference(doc)
+    keep, keep_movers = float(robot.get("clearance", 0.0)), float(robot.get("mover_clearance", 0.0))
+    circum = float(robot["disc"]) if "disc" in robot else 0.5 * math.hypot(*robot["box"])
+    vmax = float(robot["vmax"])
+    times, poses = [wp[0, 0]], [wp[0, 1:]]
+    for a, b in zip(wp[:-1], wp[1:], strict=True):
+        d = b[1:] - a[1:]
+        turn = abs(math.remainder(float(d[2]), 2 * math.pi)) if len(d) == 3 else 0.0
+        if math.hypot(d[0], d[1]) + turn * circum > vmax * (b[0] - a[0]) * (1 + 1e-6) + 1e-9:
+            return f"too fast between t={a[0]:g} and t={b[0]:g}"
+        f = np.arange(1, substeps + 1) / substeps
+        times.extend(a[0] + f * (b[0] - a[0]))
+        poses.extend(interpolate(a[1:], b[1:], f))
+    if hold > 0:
+        extra = wp[-1, 0] + np.linspace(0.0, hold, 4 * substeps + 1)[1:]
+        times.extend(extra)
+        poses.extend([wp[-1, 1:]] * len(extra))
+    poses = np.asarray(poses)
+    bad = np.nonzero(ref.clearance(poses) < keep - 1e-6)[0]
+    if bad.size:
+        return f"static clearance below {keep:g} at t={times[bad[0]]:g}"
+    for mover in doc.get("movers") or []:
+        shape = "disc" if "disc" in mover else "box"
+        param = mover["disc"] if shape == "disc" else mover["box"]
+        for t, pose in zip(times, poses, strict=True):
+            xy, present = mover_position(mover, float(t))
+            if not present:
+                continue
+            dist, overlap = mover_reference_distance(robot, pose, shape, param, xy)
+            if overlap or dist < keep_movers - 1e-6:
+                return f"within {keep_movers:g} of mover {mover['name']!r} at t={t:g}"
+    return ""

@@ -173,7 +173,7 @@ def test_cli_exit_1_on_an_error_row(client, tmp_path, monkeypatch):
 
 
 def test_cli_interrupt_writes_a_partial_table(client, tmp_path, monkeypatch, capsys):
-    import gfuzzy.cli as cli
+    import gfuzzy.cli.experiments as cli  # the module of cmd_batch
 
     def progress(label):
         def cb(done, total):

@@ -12,6 +12,7 @@ from hypothesis import strategies as st
 from gfuzzy import fuzzy
 from gfuzzy.errors import SceneError
 from gfuzzy.fuzzy import FuzzyOptions, Partition, RuleBase
+from gfuzzy.learning import learn
 
 P3 = Partition.uniform(3)
 
@@ -395,7 +396,7 @@ def test_parser_raises_only_scene_errors(text):
 
 
 def _tiny_learning(seed):
-    opts = fuzzy.LearnOptions(
+    opts = learn.LearnOptions(
         population=4,
         generations=(1, 2, 1),
         curve=Partition.uniform(3),
@@ -405,7 +406,7 @@ def _tiny_learning(seed):
     )
     paths = [np.array([[0.0, 0.0], [2.5, 0.0], [2.5, 2.5]])]
     near = [np.array([[0.0, 0.0], [2.0, 0.0], [4.0, 0.3]])]
-    return fuzzy.learn_rules(paths, set_point_paths=near, options=opts, seed=seed)
+    return learn.learn_rules(paths, set_point_paths=near, options=opts, seed=seed)
 
 
 def test_learning_is_reproducible():

@@ -8,7 +8,9 @@ from collections import deque
 
 import numpy as np
 import pytest
+import yaml
 from conftest import run_cli_process
+from reference import reference_violation
 
 from gfuzzy.check import check_trajectory
 from gfuzzy.planner import Planner, PlanOptions, Status, plan
@@ -180,8 +182,7 @@ queries:
     rm = build_roadmap(scene, RoadmapOptions(vertices=80, seed=2))
     res = plan(scene, rm, [1, 2], [4.5, 2], 0.0)
     assert res.status is Status.NO_PATH
-    assert res.planning_seconds < 5.0  # generous: it must not search space-time at all
-    assert res.stats.get("expansions", 0) == 0
+    assert res.stats.get("expansions", 0) == 0  # decided on the static graph: no space-time search
 
 
 def test_mover_parks_in_doorway_no_path(tmp_path):
@@ -206,20 +207,25 @@ queries:
     rm = build_roadmap(scene, RoadmapOptions(vertices=80, seed=4))
     res = plan(scene, rm, [1, 1.5], [5, 1.5], 0.0, PlanOptions(horizon=30.0))
     assert res.status is Status.NO_PATH
-    early = plan(scene, rm, [2.6, 1.8], [5, 1.5], 0.0, PlanOptions(horizon=30.0))
-    # the door closes at t = 1.1 (arc 1.1 at speed 1): from right beside it there is time
-    assert early.status in (Status.SOLVED, Status.NO_PATH)
-    if early.solved:
-        assert check_trajectory(scene, early.trajectory.waypoints).valid
+    early = plan(scene, rm, [2.68, 1.8], [5, 1.5], 0.0, PlanOptions(horizon=30.0))
+    # the door closes at t = 1.1 (arc 1.1 at speed 1): from right beside it (0.02 m from
+    # the wall) there is time to slip through on the straight line to the goal
+    assert early.status is Status.SOLVED
+    assert early.trajectory.at(1.1)[0] > 3.3  # through the door before it closed
+    assert check_trajectory(scene, early.trajectory.waypoints).valid
+    assert reference_violation(yaml.safe_load(p.read_text()), early.trajectory.waypoints) == ""
 
 
 def test_timeout(open_scene):
     scene, rm = open_scene
     q = scene.queries[0]
-    res = plan(scene, rm, q.start, q.goal, 0.0, PlanOptions(time_limit=1e-9))
-    assert res.status in (Status.TIMEOUT, Status.SOLVED)  # a tiny search may finish first
-    if res.status is Status.TIMEOUT:
-        assert res.trajectory is None
+    # the budget is looked at every few hundred (the compiled search: 4096) expansions: a
+    # search long enough that it is looked at
+    full = plan(scene, rm, q.start, q.goal, 0.0, PlanOptions(dt=0.001))
+    assert full.solved and full.stats["expansions"] > 5000
+    res = plan(scene, rm, q.start, q.goal, 0.0, PlanOptions(dt=0.001, time_limit=1e-9))
+    assert res.status is Status.TIMEOUT
+    assert res.trajectory is None and "budget" in res.message
 
 
 def test_trajectory_file_formats(open_scene, tmp_path):

@@ -257,7 +257,7 @@ def test_bad_trajectory_raises_and_keeps_old_file(disc_scene, tmp_path, waypoint
 
 def test_interpolation_takes_the_shorter_arc():
     wp = np.array([[0.0, 0.0, 0.0, 3.0], [2.0, 2.0, 4.0, -3.0]])
-    pose = R.interpolate_poses(wp, [1.0, -5.0, 9.0])
+    pose = R.poses_at_times(wp, [1.0, -5.0, 9.0])
     # from 3 rad to -3 rad the short way passes pi, not 0 (pi and -pi are one heading)
     assert pose[0, :2] == pytest.approx([1.0, 2.0])
     assert [math.cos(pose[0, 2]), math.sin(pose[0, 2])] == pytest.approx([-1.0, 0.0])

@@ -393,3 +393,20 @@ def test_bundled_scene_parses_and_its_roadmap_fits(path):
         pytest.skip(f"no roadmaps/{scene.name}.json yet")
     rm = load_roadmap(roadmap, scene)
     assert rm.dof == scene.robot.dof and len(rm) > 0
+
+
+def test_building_leaves_ompl_log_level_as_it_was():
+    """OMPL's log level is process-wide: a build must not change it for the caller."""
+    from ompl import util as ou
+
+    from gfuzzy.roadmap import RoadmapOptions, build_roadmap
+    from gfuzzy.scene import parse_scene
+
+    scene = parse_scene({"version": 1, "name": "e", "bounds": [0, 0, 2, 2], "robot": {"disc": 0.1, "vmax": 1.0}})
+    before = ou.getLogLevel()
+    ou.setLogLevel(ou.LogLevel.LOG_DEBUG)
+    try:
+        build_roadmap(scene, RoadmapOptions(vertices=10, seed=1))
+        assert ou.getLogLevel() == ou.LogLevel.LOG_DEBUG
+    finally:
+        ou.setLogLevel(before)

@@ -149,7 +149,7 @@ def test_cli_non_utf8_subprocess(tmp_path):
 
 def _cli_main():
     if not cli_present():
-        pytest.skip("gfuzzy/cli.py is not there yet")
+        pytest.skip("gfuzzy/cli/ is not there yet")
     from gfuzzy import cli
 
     main = getattr(cli, "main", None)

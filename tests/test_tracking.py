@@ -5,8 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gfuzzy import fuzzy, tracking
-from gfuzzy.tracking import TrackingOptions, TrackStatus, UnicycleLimits
+from gfuzzy import fuzzy
+from gfuzzy.learning import tracking
+from gfuzzy.learning.tracking import TrackingOptions, UnicycleLimits
+from gfuzzy.status import Status
 
 LIM = UnicycleLimits()
 PATHS = tracking.synthetic_paths()
@@ -24,7 +26,7 @@ def _check_bounds(r, lim: UnicycleLimits, dt: float):
 def test_straight_line_has_no_lateral_error():
     path = PATHS["straight"]
     r = tracking.track(path, limits=LIM)
-    assert r.status is TrackStatus.REACHED
+    assert r.status is Status.SOLVED
     assert r.max_lateral_error < 1e-9
     assert np.all(np.abs(r.xy[:, 1]) < 1e-9)
     assert r.violations.total == 0
@@ -42,7 +44,7 @@ def test_bounds_respected(name, profile):
     path = PATHS[name]
     prof = None if profile == "constant" else fuzzy.speed_limit(path, LIM.vmax, LIM.amax)
     r = tracking.track(path, prof, LIM)
-    assert r.status is TrackStatus.REACHED
+    assert r.status is Status.SOLVED
     _check_bounds(r, LIM, 0.02)
     assert np.linalg.norm(r.xy[-1] - path[-1]) < 0.1
     n = r.t.size
@@ -76,13 +78,13 @@ def test_fuzzy_limiter_helps_at_sharp_corners():
 
 def test_timeout_status():
     r = tracking.track(PATHS["straight"], None, LIM, TrackingOptions(timeout_factor=0.1))
-    assert r.status is TrackStatus.TIMEOUT
+    assert r.status is Status.TIMEOUT
     assert r.traversal_time < 10
 
 
 def test_degenerate_path():
     r = tracking.track([[1.0, 2.0], [1.0, 2.0]])
-    assert r.status is TrackStatus.REACHED and r.t.size == 1
+    assert r.status is Status.SOLVED and r.t.size == 1
     np.testing.assert_allclose(r.xy, [[1.0, 2.0]])
 
 

@@ -23,7 +23,9 @@ from pathlib import Path
 
 import numpy as np
 
-from gfuzzy import fuzzy, tracking
+from gfuzzy import fuzzy
+from gfuzzy.learning import tracking
+from gfuzzy.status import Status
 
 ROOT = Path(__file__).resolve().parent.parent
 SYNTHETIC = ("s_curve", "zigzag", "corner", "hairpin", "arc")
@@ -107,7 +109,7 @@ def main() -> None:
     for row in rows:
         r = row["result"]
         length = row["profile_sv"][0][-1]
-        flag = "" if r.status is tracking.TrackStatus.REACHED else " (timeout)"
+        flag = "" if r.status is Status.SOLVED else " (timeout)"
         print(
             f"{row['path']:<34} {row['profile']:<10}{length:>7.2f}{r.traversal_time:>8.2f}"
             f"{r.max_lateral_error:>9.3f}{r.mean_lateral_error:>9.3f}{r.max_abs_omega_cmd:>10.2f}"

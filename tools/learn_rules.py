@@ -1,6 +1,6 @@
 """Learn the fuzzy speed rule base by the three-stage self-organising GA (SOGARG).
 
-Trains on the synthetic paths of gfuzzy.tracking (S-curve, zig-zag, corner,
+Trains on the synthetic paths of gfuzzy.learning.tracking (S-curve, zig-zag, corner,
 hairpin, arc) plus, when a planner and roadmaps are available, the paths it
 plans on the bundled scenes; writes gfuzzy/data/rules_learned.txt and prints the
 table, the cost per stage, and the training-set figures against the expert rules.
@@ -20,7 +20,9 @@ from pathlib import Path
 import numpy as np
 from bench_tracking import scene_paths  # tools/ is on sys.path when run as a script
 
-from gfuzzy import fuzzy, tracking
+from gfuzzy import fuzzy
+from gfuzzy.learning import learn as sogarg
+from gfuzzy.learning import tracking
 
 ROOT = Path(__file__).resolve().parent.parent
 TRAINING = ("s_curve", "zigzag", "corner", "hairpin", "arc")
@@ -65,14 +67,14 @@ def main() -> None:
             names.append(name)
     print(f"training paths: {', '.join(names)}")
 
-    options = fuzzy.LearnOptions()
+    options = sogarg.LearnOptions()
     if args.quick:
         options = dataclasses.replace(options, population=6, generations=(1, 2, 1))
     limits = tracking.UnicycleLimits()
     sim = tracking.TrackingOptions()
     t0 = time.perf_counter()
     learn = functools.partial(
-        fuzzy.learn_rules,
+        sogarg.learn_rules,
         paths,
         options=options,
         limits=limits,

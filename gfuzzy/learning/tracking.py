@@ -14,7 +14,6 @@ small numpy calls at this size); commands are checked against the bounds
 
 from __future__ import annotations
 
-import enum
 import logging
 import math
 from bisect import bisect_right
@@ -22,8 +21,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gfuzzy.fuzzy import limit_acceleration
-from gfuzzy.typing import ArrayLike, FloatArray
+from ..errors import InputError
+from ..profile import clean_path, limit_acceleration
+from ..status import Status
+from ..typing import ArrayLike, FloatArray
 
 logger = logging.getLogger(__name__)
 logger.addHandler(logging.NullHandler())
@@ -65,7 +66,7 @@ class UnicycleLimits:
         for name in ("vmax", "omega_max", "amax", "alpha_max"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"{name} must be positive and finite, got {value}")
+                raise InputError(f"{name} must be positive and finite, got {value}")
 
 
 @dataclass(frozen=True)
@@ -101,18 +102,16 @@ class TrackingOptions:
 
     def __post_init__(self) -> None:
         if not (self.dt > 0 and self.lookahead_min > 0 and self.lookahead_gain >= 0):
-            raise ValueError("dt and lookahead_min must be positive, lookahead_gain non-negative")
+            raise InputError("dt and lookahead_min must be positive, lookahead_gain non-negative")
         if not (self.goal_tolerance > 0 and 0 < self.creep_fraction <= 1):
-            raise ValueError("goal_tolerance must be positive and creep_fraction in (0, 1]")
+            raise InputError("goal_tolerance must be positive and creep_fraction in (0, 1]")
         if not (self.timeout_factor > 0 and self.violation_tolerance >= 0):
-            raise ValueError("timeout_factor must be positive, violation_tolerance non-negative")
+            raise InputError("timeout_factor must be positive, violation_tolerance non-negative")
 
 
-class TrackStatus(enum.Enum):
-    """How a tracking run ended."""
-
-    REACHED = "reached"
-    TIMEOUT = "timeout"
+#: How a tracking run ends: ``Status.SOLVED`` (the end of the path was reached) or
+#: ``Status.TIMEOUT``. The old name, kept for the learning code's readers.
+TrackStatus = Status
 
 
 @dataclass(frozen=True)
@@ -145,7 +144,7 @@ class TrackingResult:
 
     Attributes
     ----------
-    status : TrackStatus
+    status : Status
     t : (N,) float
         Times, s, every ``dt`` from 0.
     xy : (N, 2) float
@@ -164,7 +163,7 @@ class TrackingResult:
         Distance from the robot to the path, m.
     traversal_time : float
         Time of the last sample, s (the end is reached there if ``status`` is
-        ``REACHED``).
+        ``SOLVED``).
     max_lateral_error, mean_lateral_error : float
         Over the samples, m.
     max_abs_omega : float
@@ -174,7 +173,7 @@ class TrackingResult:
     violations : Violations
     """
 
-    status: TrackStatus
+    status: Status
     t: FloatArray
     xy: FloatArray
     theta: FloatArray
@@ -193,15 +192,7 @@ class TrackingResult:
 
 
 def _polyline(path_xy: ArrayLike) -> tuple[FloatArray, FloatArray]:
-    p = np.asarray(path_xy, dtype=float)
-    if p.ndim != 2 or p.shape[1] != 2 or p.shape[0] < 1:
-        raise ValueError(f"path_xy must have shape (n, 2) with n >= 1, got {p.shape}")
-    if not np.all(np.isfinite(p)):
-        raise ValueError("path_xy must be finite")
-    keep = np.concatenate(([True], np.linalg.norm(np.diff(p, axis=0), axis=1) > 1e-12))
-    p = p[keep]
-    s = np.concatenate(([0.0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))))
-    return p, s
+    return clean_path(path_xy)
 
 
 def constant_profile(
@@ -283,38 +274,13 @@ def track(
     length = float(sp[-1])
     if profile is None:
         profile = constant_profile(p, lim.vmax, lim.amax)
-    ps = np.asarray(profile[0], dtype=float)
-    pv = np.asarray(profile[1], dtype=float)
-    if ps.ndim != 1 or ps.shape != pv.shape or ps.size < 1:
-        raise ValueError("profile must be two 1-D arrays of the same, positive length")
-    if ps.size > 1 and np.any(np.diff(ps) <= 0):
-        raise ValueError("profile arc lengths must be increasing")
-    if not (np.all(np.isfinite(pv)) and np.all(pv >= 0)):
-        raise ValueError("profile speeds must be finite and non-negative")
+    ps, pv = _checked_profile(profile)
 
     dt = opt.dt
     x, y = float(p[0, 0]), float(p[0, 1])
     if p.shape[0] < 2 or length <= opt.goal_tolerance:
         heading = 0.0 if p.shape[0] < 2 else math.atan2(p[1, 1] - p[0, 1], p[1, 0] - p[0, 0])
-        one = np.zeros(1)
-        return TrackingResult(
-            TrackStatus.REACHED,
-            one,
-            np.array([[x, y]]),
-            np.array([heading]),
-            one,
-            one,
-            one,
-            one,
-            one,
-            one,
-            0.0,
-            0.0,
-            0.0,
-            0.0,
-            0.0,
-            Violations(),
-        )
+        return _at_rest(x, y, heading)
 
     px, py = p[:, 0].tolist(), p[:, 1].tolist()
     d = np.diff(p, axis=0)
@@ -340,11 +306,12 @@ def track(
     sc = 0.0
     T, X, Y, TH, V, W, WC, VR, SC, E = ([] for _ in range(10))
     n_v = n_a = n_w = n_al = n_any = 0
-    status = TrackStatus.TIMEOUT
+    status = Status.TIMEOUT
     sin, cos, atan2, hypot, pi = math.sin, math.cos, math.atan2, math.hypot, math.pi
 
     for step in range(n_max):
-        # Closest point, searching forward from the last segment within reach.
+        # Closest point, searching forward from the last segment within reach (inline:
+        # this loop runs every step, and a call per step costs ~5 % of the simulation).
         best = math.inf
         kk = k
         limit_s = sc + reach
@@ -373,7 +340,7 @@ def track(
         if length - sc <= opt.goal_tolerance:
             WC.append(0.0)
             VR.append(0.0)
-            status = TrackStatus.REACHED
+            status = Status.SOLVED
             break
 
         # Speed reference at the mid-step position s + (v + v_cmd) dt / 2, solved
@@ -447,8 +414,34 @@ def track(
         y += ds_step * sin(mid)
         th += dth
 
-    if status is TrackStatus.TIMEOUT:
+    if status is Status.TIMEOUT:
         logger.info("tracking timed out after %.1f s at s = %.2f of %.2f m", T[-1], sc, length)
+    return _result(status, (T, X, Y, TH, V, W, WC, VR, SC, E), Violations(n_v, n_a, n_w, n_al, n_any))
+
+
+def _checked_profile(profile) -> tuple[FloatArray, FloatArray]:
+    ps = np.asarray(profile[0], dtype=float)
+    pv = np.asarray(profile[1], dtype=float)
+    if ps.ndim != 1 or ps.shape != pv.shape or ps.size < 1:
+        raise InputError("profile must be two 1-D arrays of the same, positive length")
+    if ps.size > 1 and np.any(np.diff(ps) <= 0):
+        raise InputError("profile arc lengths must be increasing")
+    if not (np.all(np.isfinite(pv)) and np.all(pv >= 0)):
+        raise InputError("profile speeds must be finite and non-negative")
+    return ps, pv
+
+
+def _at_rest(x: float, y: float, heading: float) -> TrackingResult:
+    """The result of a path too short to move along: there already."""
+    one = np.zeros(1)
+    return TrackingResult(
+        Status.SOLVED, one, np.array([[x, y]]), np.array([heading]), one, one, one, one, one, one,
+        0.0, 0.0, 0.0, 0.0, 0.0, Violations(),
+    )  # fmt: skip
+
+
+def _result(status: Status, series, violations: Violations) -> TrackingResult:
+    T, X, Y, TH, V, W, WC, VR, SC, E = series
     err = np.asarray(E)
     w_arr = np.asarray(W)
     wc_arr = np.asarray(WC)
@@ -468,7 +461,7 @@ def track(
         mean_lateral_error=float(err.mean()),
         max_abs_omega=float(np.abs(w_arr).max()),
         max_abs_omega_cmd=float(np.abs(wc_arr).max()),
-        violations=Violations(n_v, n_a, n_w, n_al, n_any),
+        violations=violations,
     )
 
 

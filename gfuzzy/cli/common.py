@@ -1,0 +1,214 @@
+"""What the commands share: the one-line bad-input error, messages, loading a scene
+and finding its roadmap, the options and poses given on the command line."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+
+from ..errors import InputError, SceneError
+
+EXIT_OK, EXIT_NO, EXIT_BAD = 0, 1, 2
+
+
+class BadInput(Exception):
+    """A bad command line or file; its message is the one line printed."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line, exit 2 (argparse prints usage + error)
+        raise BadInput(f"{self.prog}: {message} (see {self.prog} --help)")
+
+
+def _say(msg: str, stream=None) -> None:
+    stream = stream or sys.stderr
+    stream.write(msg + "\n")
+    stream.flush()
+
+
+def _progress(label: str):
+    """A progress callback that draws on stderr only when it is a terminal."""
+    if not sys.stderr.isatty():
+        return None
+
+    def cb(count: int, total: int) -> None:
+        sys.stderr.write(f"\r{label}: {count}/{total}")
+        sys.stderr.flush()
+        if count >= total:
+            sys.stderr.write("\n")
+
+    return cb
+
+
+# ------------------------------------------------------------------ shared steps
+
+
+def _load_scene(path):
+    from ..scene import load_scene
+
+    return load_scene(path)
+
+
+def _roadmap_for(scene, args, quiet=False):
+    """The roadmap a plan/regress run uses: --roadmap, -n/--seed, or the default file."""
+    from ..roadmap import RoadmapOptions, build_roadmap, load_roadmap
+
+    if getattr(args, "roadmap", None):
+        return load_roadmap(args.roadmap, scene)
+    if args.vertices is not None or args.seed is not None:
+        try:
+            opts = RoadmapOptions(
+                vertices=args.vertices if args.vertices is not None else RoadmapOptions.vertices,
+                seed=args.seed if args.seed is not None else RoadmapOptions.seed,
+            )
+        except InputError as exc:
+            raise BadInput(f"-n/--seed: {exc}") from None
+        saved = _default_roadmap(scene, quiet=True)
+        if saved is not None and saved.options == opts:  # the saved file is this very roadmap
+            return saved
+        return build_roadmap(scene, opts, progress=_progress("roadmap"))
+    found = _default_roadmap(scene, quiet)
+    if found is not None:
+        return found
+    same_shapes = _roadmap_of_other_clearance(scene)
+    if same_shapes is not None:  # --clearance: the saved roadmap's options, the new clearance
+        if not quiet:
+            _say(
+                f"note: robot.clearance={scene.robot.clearance:g} changes the roadmap; building one "
+                f"like the saved one ({same_shapes.vertices} vertices, seed {same_shapes.seed})"
+            )
+        return build_roadmap(scene, same_shapes, progress=_progress("roadmap"))
+    if not quiet:
+        _say(
+            f"note: no roadmap file for {scene.name!r}; building one with "
+            f"{RoadmapOptions.vertices} vertices (save one with `gfuzzy roadmap`)"
+        )
+    return build_roadmap(scene, RoadmapOptions(), progress=_progress("roadmap"))
+
+
+def _check_roadmap_flags(args) -> None:
+    """Refuse bad -n/--seed values up front, as :func:`_roadmap_for` would later."""
+    from ..roadmap import RoadmapOptions
+
+    if args.vertices is None and args.seed is None:
+        return
+    try:
+        RoadmapOptions(
+            vertices=args.vertices if args.vertices is not None else RoadmapOptions.vertices,
+            seed=args.seed if args.seed is not None else RoadmapOptions.seed,
+        )
+    except InputError as exc:
+        raise BadInput(f"-n/--seed: {exc}") from None
+
+
+def _roadmap_of_other_clearance(scene):
+    """The options of a saved roadmap built for the same shapes with another static
+    clearance (a ``--clearance`` override), or None."""
+    from ..roadmap import default_roadmap_path, load_roadmap
+
+    if not scene.shape_hash:
+        return None
+    scene_dir = Path(scene.source).resolve().parent
+    for path in (default_roadmap_path(scene), default_roadmap_path(scene, scene_dir.parent / "roadmaps")):
+        try:
+            rm = load_roadmap(path) if path.is_file() else None
+        except SceneError:
+            continue
+        if rm is not None and rm.scene_hash == scene.shape_hash:
+            return rm.options
+    return None
+
+
+def _default_roadmap(scene, quiet=False):
+    """The roadmap file built for ``scene`` in roadmaps/ (here, or beside the scene's
+    folder), if there is one that matches it."""
+    from ..roadmap import default_roadmap_path, load_roadmap
+
+    scene_dir = Path(scene.source).resolve().parent
+    for path in (default_roadmap_path(scene), default_roadmap_path(scene, scene_dir.parent / "roadmaps")):
+        if path.is_file():
+            try:
+                return load_roadmap(path, scene)
+            except SceneError as exc:
+                if not quiet and not _clearance_only(path, scene):
+                    _say(f"note: not using {path}: {exc.message}")
+    return None
+
+
+def _apply_overrides(scene, args):
+    """The scene with the command line's robot overrides (``--clearance``,
+    ``--mover-clearance``) applied; the scene itself when there are none.
+
+    A new static clearance changes the scene's static hash, so a saved roadmap built
+    without it no longer matches and another is built (said on stderr).
+    """
+    clearance = getattr(args, "clearance", None)
+    mover_clearance = getattr(args, "mover_clearance", None)
+    if clearance is None and mover_clearance is None:
+        return scene
+    for flag, value in (("--clearance", clearance), ("--mover-clearance", mover_clearance)):
+        if value is not None and not (math.isfinite(value) and value >= 0):
+            raise BadInput(f"{flag}: must be a non-negative finite number, got {value:g}")
+    try:
+        return scene.with_clearances(clearance, mover_clearance)
+    except InputError as exc:
+        raise BadInput(f"--clearance/--mover-clearance: {exc}") from None
+
+
+def _clearance_only(path, scene) -> bool:
+    """True when the roadmap file at ``path`` differs from ``scene`` only by the static
+    clearance (said once, by :func:`_roadmap_for`)."""
+    from ..roadmap import load_roadmap
+
+    try:
+        return bool(scene.shape_hash) and load_roadmap(path).scene_hash == scene.shape_hash
+    except SceneError:
+        return False
+
+
+def _plan_options(args):
+    from ..planner import PlanOptions
+
+    try:
+        return PlanOptions(
+            dt=args.dt,
+            refine=args.refine,
+            speed_layer=args.speed_layer,
+            time_limit=args.time_limit,
+            horizon=args.horizon,
+            weight=args.weight,
+            stretch=args.stretch,
+            seed=args.ga_seed,
+            backend=getattr(args, "backend", "compiled"),
+        )
+    except ValueError as exc:  # PlanOptions' checks (named after the command: plan shares these flags with regress)
+        raise BadInput(f"gfuzzy {getattr(args, 'command', None) or 'plan'}: {exc}") from None
+
+
+def _pose(values, dof, flag):
+    if values is None:
+        return None
+    want = "x y" if dof == 2 else "x y heading"
+    if len(values) != dof:
+        raise BadInput(f"{flag}: expected {dof} numbers ({want}) for this robot, got {len(values)}")
+    try:
+        out = [float(v) for v in values]
+    except ValueError:
+        raise BadInput(f"{flag}: expected numbers ({want}), got {' '.join(values)}") from None
+    if not all(math.isfinite(v) for v in out):
+        raise BadInput(f"{flag}: numbers must be finite")
+    return out
+
+
+def _out_path(path, allowed):
+    suffix = Path(path).suffix.lower()
+    if suffix not in allowed:
+        raise BadInput(f"{path}: output must end in {' or '.join(allowed)}")
+    parent = Path(path).resolve().parent
+    if not parent.is_dir():
+        raise BadInput(f"{path}: folder {parent} does not exist")
+    return Path(path)
+
+

@@ -1,0 +1,270 @@
+"""The commands around planning: ``tracks`` (a scene from pedestrian data), ``batch``
+(every query on Dask), ``navigate`` (online, without knowing the movers' future)."""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import sys
+from pathlib import Path
+
+from ..errors import InputError, SceneError
+from .common import (
+    EXIT_NO,
+    EXIT_OK,
+    BadInput,
+    _apply_overrides,
+    _load_scene,
+    _out_path,
+    _plan_options,
+    _pose,
+    _progress,
+    _roadmap_for,
+    _say,
+)
+from .planning import _start_on_mover
+
+
+def _tracks_command(args) -> str:
+    """The `gfuzzy tracks` command that makes the same scene (for the scene's header)."""
+    import shlex
+
+    def g(v) -> str:
+        return v if isinstance(v, str) else (str(int(v)) if float(v).is_integer() else repr(float(v)))
+
+    parts = ["gfuzzy", "tracks", args.file]
+    for flag, value in (("--format", None if args.format == "auto" else args.format), ("--fps", args.fps),
+                        ("--t-start", args.t_start), ("--duration", args.duration), ("--region", args.region),
+                        ("--scale", None if args.scale == 1.0 else args.scale),
+                        ("--radius", None if args.radius == 0.25 else args.radius), ("--max-movers", args.max_movers),
+                        ("--static", args.static), ("--name", args.name), ("--robot-radius", args.robot_radius),
+                        ("--vmax", args.vmax), ("--amax", args.amax), ("--start", args.start), ("--goal", args.goal),
+                        ("--query-name", None if args.query_name == "cross" else args.query_name),
+                        ("--expect", args.expect), ("--max-duration", args.max_duration), ("-o", args.output)):  # fmt: skip
+        if value is not None:
+            parts += [flag, *(g(v) for v in (value if isinstance(value, list) else [value]))]
+    return " ".join(shlex.quote(a) for a in parts)
+
+
+def cmd_tracks(args) -> int:
+    from ..atomic import write_atomic
+    from ..scene import _load_yaml, parse_scene
+    from ..tracks import TrackSceneOptions, read_tracks, tracks_scene
+
+    out = _out_path(args.output, (".yaml", ".yml"))
+    static = _load_scene(args.static) if args.static else None
+    try:
+        options = TrackSceneOptions(
+            t_start=args.t_start,
+            duration=args.duration,
+            region=tuple(args.region) if args.region else None,
+            scale=args.scale,
+            radius=args.radius,
+            max_movers=args.max_movers,
+            name=args.name or out.stem,
+            robot_radius=args.robot_radius,
+            vmax=args.vmax,
+            amax=args.amax,
+        )
+        tracks = read_tracks(args.file, args.format, args.fps)
+        dof = static.robot.dof if static is not None and args.robot_radius is None else 2
+        start = _pose(args.start, dof, "--start")
+        goal = _pose(args.goal, dof, "--goal")
+        expect = {}
+        if args.expect:
+            expect["status"] = args.expect
+        if args.max_duration is not None:
+            expect["max_duration"] = args.max_duration
+        made = tracks_scene(
+            tracks, options, static=static, folder=out.resolve().parent,
+            start=start, goal=goal, query_name=args.query_name, expect=expect,
+        )  # fmt: skip
+    except SceneError:  # a bad file: its own message (SceneError is an InputError too)
+        raise
+    except InputError as exc:
+        raise BadInput(f"gfuzzy tracks: {exc}") from None
+    text = made.to_yaml(_tracks_command(args))
+    # the file must load as it will be read: check it before it replaces anything
+    parse_scene(_load_yaml(text, str(out)), file=str(out), folder=out.resolve().parent)
+    write_atomic(out, text)
+    _say(f"{out}: {made.movers} movers, bounds {list(made.region)}", sys.stdout)
+    return EXIT_OK
+
+
+def _writable_folder(path: Path, flag: str) -> None:
+    """Bad input unless ``path`` is (or can be made) a writable folder."""
+    import os
+
+    if path.exists():
+        if not path.is_dir():
+            raise BadInput(f"{flag} {path}: not a folder")
+        if not os.access(path, os.W_OK | os.X_OK):
+            raise BadInput(f"{flag} {path}: folder is not writable")
+        return
+    parent = path.resolve().parent
+    if not parent.is_dir():
+        raise BadInput(f"{flag} {path}: folder {parent} does not exist")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise BadInput(f"{flag} {path}: folder {parent} is not writable")
+
+
+def cmd_batch(args) -> int:
+    """Every query of every scene on Dask; exit 0 all ran, 1 any error row, 130 interrupted."""
+    import logging
+    import time
+
+    from ..batch import BatchOptions, local_cluster, run_batch, write_table
+
+    if args.workers is not None and args.workers < 1:
+        raise BadInput(f"--workers: must be at least 1, got {args.workers}")
+    out = _out_path(args.output, (".csv",))
+    _writable_folder(out.parent, "-o")
+    if args.trajectories:
+        _writable_folder(Path(args.trajectories), "--trajectories")
+    scenes = [_apply_overrides(_load_scene(p), args) for p in args.scenes]  # all bad input first
+    seen: dict = {}
+    for path, sc in zip(args.scenes, scenes, strict=True):
+        if sc.name in seen:
+            raise BadInput(f"{path}: name: scene name {sc.name!r} repeats that of {seen[sc.name]}")
+        seen[sc.name] = path
+    options = BatchOptions(plan=_plan_options(args), trajectories=args.trajectories)
+    pairs = [(sc, _roadmap_for(sc, args)) for sc in scenes]  # once per scene, in the client
+    quiet = not args.verbose
+    if quiet:  # Dask's own INFO/WARNING lines (a worker restarting) are not ours to show
+        for name in ("distributed", "tornado"):
+            logging.getLogger(name).setLevel(logging.ERROR)
+    t = time.perf_counter()
+    if args.scheduler:
+        from distributed import Client
+
+        try:
+            client = Client(args.scheduler, timeout=args.connect_timeout)
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise BadInput(f"--scheduler {args.scheduler}: cannot connect: {' '.join(str(exc).split())[:120]}") from None
+        where = f"the cluster at {args.scheduler}"
+        ctx = contextlib.closing(client)
+    else:
+        workers = args.workers or 2
+        where = f"{workers} local worker(s)"
+        ctx = local_cluster(workers, quiet=quiet)
+    with ctx as client:
+        result = run_batch(client, pairs, options, progress=_progress("queries"))
+    written = write_table(result.rows, out)
+    counts: dict = {}
+    for r in result.rows:
+        counts[r.status] = counts.get(r.status, 0) + 1
+    summary = ", ".join(f"{n} {s}" for s, n in sorted(counts.items()))
+    invalid = sum(r.check == "invalid" for r in result.rows)
+    if result.interrupted:
+        _say(
+            f"interrupted: wrote the {len(result.rows)} finished of {result.total} queries "
+            f"to {', '.join(map(str, written))}"
+        )
+        return 130
+    _say(
+        f"{result.total} queries on {where} in {time.perf_counter() - t:.1f} s: {summary or 'none'}"
+        f"{f', {invalid} INVALID' if invalid else ''}; wrote {', '.join(map(str, written))}",
+        sys.stdout,
+    )
+    for r in result.rows:
+        if not r.ran:
+            _say(f"{r.scene} {r.query}: error: {r.error}")
+        elif r.check == "invalid":  # a planner defect: reported, but the query did run
+            _say(f"{r.scene} {r.query}: the answer fails the check (see `gfuzzy check`)")
+    return EXIT_NO if result.errors else EXIT_OK
+
+def cmd_navigate(args) -> int:
+    """Drive the robot among the scene's movers without knowing their future (section 5)."""
+    import numpy as np
+
+    from ..check import check_trajectory
+    from ..geometry import StaticGeometry
+    from ..navigator import Navigator, NavOptions
+    from ..navsim import simulate
+    from ..planner import query_problem
+    from ..trajectory import TrajectoryFile
+
+    scene = _apply_overrides(_load_scene(args.scene), args)
+    for flag, value in (("--period", args.period), ("--max-time", args.max_time), ("--time-budget", args.time_budget)):
+        if not (math.isfinite(value) and value > 0):
+            raise BadInput(f"gfuzzy navigate: {flag} must be a positive number, got {value:g}")
+    if args.log_every < 0:
+        raise BadInput(f"gfuzzy navigate: --log-every must be >= 0, got {args.log_every}")
+    sense = math.inf if args.sense is None else args.sense
+    if not sense > 0:
+        raise BadInput(f"gfuzzy navigate: --sense must be a positive number, got {sense:g}")
+    if args.query:
+        try:
+            query = scene.query(args.query)
+        except KeyError as exc:
+            raise BadInput(f"{scene.source}: queries: {exc.args[0]}") from None
+    elif scene.queries:
+        query = scene.queries[0]
+    else:
+        raise BadInput(f"{scene.source}: queries: the scene has no queries to navigate")
+    out = _out_path(args.output, (".json",)) if args.output else None
+    try:
+        options = NavOptions(dt=args.dt, time_budget=args.time_budget)
+    except InputError as exc:
+        raise BadInput(f"gfuzzy navigate: {exc}") from None
+    problem = query_problem(StaticGeometry(scene), query.start, query.goal) or _start_on_mover(scene, query)
+    if problem:
+        tf = TrajectoryFile(scene.name, query.name, "invalid_query", problem, None, None, None, 0.0)
+        if out is not None:
+            tf.save(out)
+        _say(f"{scene.name} {query.name}: invalid_query ({problem})", sys.stdout)
+        return EXIT_NO
+    roadmap = _roadmap_for(scene, args)
+    nav = Navigator(scene, roadmap, query.goal, options)
+    res = simulate(
+        scene, roadmap, query.start, query.goal, query.t0, args.period, sense, args.max_time,
+        navigator=nav, log_every=args.log_every,
+    )
+    wps = res.trajectory.waypoints
+    report = check_trajectory(scene, wps, query if res.reached else None)
+    rd = nav.roadmap_distance(np.asarray(query.start, dtype=float))
+    rd_ok = math.isfinite(rd)
+    solved = res.reached
+    message = "" if solved else f"the goal was not reached within {args.max_time:g} s"
+    if not report.valid:
+        message = (message + "; " if message else "") + f"the executed trajectory is invalid: {report.reason}"
+    extra = {
+        "replans": res.replans,
+        "replan_seconds_p50": round(res.latency(0.5), 6),
+        "replan_seconds_p95": round(res.latency(0.95), 6),
+        "replan_seconds_max": round(float(res.replan_seconds.max(initial=0.0)), 6),
+        "min_separation": res.min_separation if math.isfinite(res.min_separation) else None,
+        "check": {"valid": report.valid, "reason": report.reason},
+        "modes": res.modes,
+        "navigate": {"period": args.period, "sense": None if math.isinf(sense) else sense, "max_time": args.max_time},
+        "replan_log": res.log,
+    }
+    if not solved:  # only a solved file carries waypoints (section 2): the motion goes here
+        extra["executed"] = [[float(v) for v in row] for row in wps]
+    tf = TrajectoryFile(
+        scene=scene.name,
+        query=query.name,
+        status="solved" if solved else "timeout",
+        message=message,
+        duration=res.duration if solved else None,
+        roadmap_distance=rd if rd_ok else None,
+        delay_factor=res.trajectory.delay_factor(scene.robot.vmax, rd) if (solved and rd_ok) else None,
+        planning_seconds=round(float(res.replan_seconds.sum()), 6),
+        waypoints=wps if solved else None,
+        extra=extra,
+    )
+    if out is not None:
+        tf.save(out)
+    sep = "none seen" if not math.isfinite(res.min_separation) else f"{res.min_separation:.3f} m"
+    line = f"{scene.name} {query.name}: {'solved' if solved else 'timeout'}"
+    if solved:
+        line += f" in {res.duration:.2f} s"
+    line += (
+        f", {res.replans} replans (p95 {res.latency(0.95) * 1000:.0f} ms, max "
+        f"{float(res.replan_seconds.max(initial=0.0)) * 1000:.0f} ms), min separation {sep}, "
+        f"check {'valid' if report.valid else 'INVALID: ' + report.reason}"
+    )
+    _say(line, sys.stdout)
+    return EXIT_OK if (solved and report.valid) else EXIT_NO
+
+

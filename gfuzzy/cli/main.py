@@ -1,0 +1,199 @@
+"""The ``gfuzzy`` parser and entry point."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from ..errors import InputError, LimitError
+from .common import EXIT_BAD, EXIT_OK, BadInput, _Parser, _say
+from .experiments import cmd_batch, cmd_navigate, cmd_tracks
+from .planning import cmd_check, cmd_plan, cmd_regress, cmd_render, cmd_roadmap
+
+
+def _plan_flags(q, single=True):
+    """The flags plan, regress and batch share."""
+    q.add_argument("-n", "--vertices", type=int, help="build a roadmap of this many vertices")
+    q.add_argument("--seed", type=int, help="roadmap seed when building (default 1)")
+    q.add_argument("--dt", type=float, default=0.07, help="time step of the search (default 0.07)")
+    q.add_argument("--refine", action="store_true", help="apply the GA refinement")
+    q.add_argument("--speed-layer", action="store_true", help="apply the fuzzy speed layer")
+    q.add_argument("--time-limit", type=float, default=60.0, help="planning budget in seconds (default 60)")
+    q.add_argument("--horizon", type=float, help="longest trajectory considered, seconds (default: automatic)")
+    q.add_argument("--weight", type=float, default=1.0,
+                   help="heuristic weight: 1 = earliest arrival (default); w > 1 searches less, arrives at most w times later")  # fmt: skip
+    q.add_argument("--ga-seed", type=int, default=0, help="seed of the GA refinement (default 0)")
+    q.add_argument("--stretch", type=float, default=1.05,
+                   help="search the roadmap's spanner of this stretch (default 1.05; 1 = the whole roadmap)")  # fmt: skip
+    q.add_argument("--backend", choices=("compiled", "reference"), default="compiled",
+                   help="search implementation: compiled (numba, default) or the pure-Python reference; same answers")  # fmt: skip
+    _clearance_flags(q)
+
+
+def _clearance_flags(q):
+    """The robot overrides every scene-reading command takes."""
+    q.add_argument("--clearance", type=float, metavar="C",
+                   help="distance kept from static obstacles, m (overrides robot.clearance; another roadmap)")  # fmt: skip
+    q.add_argument("--mover-clearance", type=float, metavar="C",
+                   help="distance kept from every mover, m (overrides robot.mover_clearance)")  # fmt: skip
+
+
+def _add_roadmap(sub) -> None:
+    """``gfuzzy roadmap``."""
+    r = sub.add_parser("roadmap", help="build the static roadmap of a scene with OMPL's PRM")
+    r.add_argument("scene", metavar="SCENE", help="scene file (YAML)")
+    r.add_argument("-n", "--vertices", type=int, default=200, help="roadmap vertices (default 200)")
+    r.add_argument("--seed", type=int, default=1, help="random seed (default 1)")
+    r.add_argument("-k", "--neighbors", type=int, default=10, help="PRM nearest neighbours (default 10)")
+    r.add_argument("-o", "--output", help="roadmap file (default roadmaps/<scene name>.json)")
+    r.set_defaults(func=cmd_roadmap)
+
+
+def _add_plan(sub) -> None:
+    """``gfuzzy plan``."""
+    q = sub.add_parser("plan", help="answer one query")
+    q.add_argument("scene", metavar="SCENE")
+    q.add_argument("--roadmap", metavar="FILE", help="roadmap file (default roadmaps/<scene name>.json)")
+    _plan_flags(q)
+    q.add_argument("--query", metavar="NAME", help="a query of the scene (default: its first)")
+    q.add_argument("--start", nargs="+", metavar="X", help="start pose: X Y (disc) or X Y H (box)")
+    q.add_argument("--goal", nargs="+", metavar="X", help="goal pose")
+    q.add_argument("--t0", type=float, help="departure time with --start/--goal (default 0)")
+    q.add_argument("--hold", type=float, metavar="SECONDS",
+                   help="park at the goal this long; it must stay safe (default: the query's hold, or 0)")  # fmt: skip
+    q.add_argument("-o", "--output", metavar="OUT",
+                   help="trajectory file: OUT.json, or OUT.csv (+ OUT.json); the JSON is written whatever the status, "
+                        "an unsolved answer removes an older OUT.csv; stderr names the files written or removed")  # fmt: skip
+    q.set_defaults(func=cmd_plan)
+
+
+def _add_check(sub) -> None:
+    """``gfuzzy check``."""
+    c = sub.add_parser("check", help="check a trajectory against the contract's guarantees")
+    c.add_argument("scene", metavar="SCENE")
+    c.add_argument("trajectory", metavar="TRAJ.json")
+    _clearance_flags(c)
+    c.add_argument("--hold", type=float, metavar="SECONDS",
+                   help="the goal pose must stay safe this long after the last row (default: the query's hold)")  # fmt: skip
+    c.set_defaults(func=cmd_check)
+
+
+def _add_render(sub) -> None:
+    """``gfuzzy render``."""
+    d = sub.add_parser("render", help="draw a scene (and a trajectory): PNG picture or GIF animation")
+    d.add_argument("scene", metavar="SCENE")
+    d.add_argument("trajectory", metavar="TRAJ.json", nargs="?")
+    d.add_argument("-o", "--output", required=True, metavar="OUT", help="OUT.png or OUT.gif")
+    d.add_argument("--roadmap", metavar="FILE", help="draw this roadmap (PNG; default: the scene's roadmaps/<name>.json if there is one)")
+    d.add_argument("--no-roadmap", action="store_true", help="do not draw a roadmap")
+    d.add_argument("--speed", action="store_true", help="colour the path by speed (PNG and GIF)")
+    _clearance_flags(d)
+    d.set_defaults(func=cmd_render)
+
+
+def _add_navigate(sub) -> None:
+    """``gfuzzy navigate``."""
+    v = sub.add_parser("navigate", help="drive to the goal among the movers without knowing their future")
+    v.add_argument("scene", metavar="SCENE")
+    v.add_argument("--query", metavar="NAME", help="a query of the scene (default: its first)")
+    v.add_argument("--roadmap", metavar="FILE", help="roadmap file (default roadmaps/<scene name>.json)")
+    v.add_argument("-n", "--vertices", type=int, help="build a roadmap of this many vertices")
+    v.add_argument("--seed", type=int, help="roadmap seed when building (default 1)")
+    v.add_argument("--period", type=float, default=0.25, help="seconds between observations and replans (default 0.25)")
+    v.add_argument("--sense", type=float, help="range in metres within which movers are seen (default: all)")
+    v.add_argument("--max-time", type=float, default=120.0, help="give up this long after t0 (default 120 s)")
+    v.add_argument("--dt", type=float, default=0.1, help="time step of the replanning search (default 0.1)")
+    v.add_argument("--time-budget", type=float, default=0.1, help="seconds one replan may take (default 0.1)")
+    v.add_argument("--log-every", type=int, default=4, help="keep every k-th replan's predictions in the file (default 4)")
+    _clearance_flags(v)
+    v.add_argument("-o", "--output", metavar="OUT.json", help="the executed trajectory file")
+    v.set_defaults(func=cmd_navigate)
+
+
+def _add_regress(sub) -> None:
+    """``gfuzzy regress``."""
+    g = sub.add_parser("regress", help="answer and check every query of every scene")
+    g.add_argument("scenes", metavar="SCENE", nargs="+")
+    _plan_flags(g)
+    g.set_defaults(func=cmd_regress, roadmap=None)
+
+
+def _add_tracks(sub) -> None:
+    """``gfuzzy tracks``."""
+    k = sub.add_parser("tracks", help="make a scene of pedestrian tracks (ETH/UCY text or CSV t,id,x,y)")
+    k.add_argument("file", metavar="FILE", help="tracks: ETH/UCY text (frame id x y [vx vy]) or CSV (t,id,x,y)")
+    k.add_argument("-o", "--output", required=True, metavar="OUT.yaml", help="the scene file to write")
+    k.add_argument("--format", choices=("auto", "eth", "csv"), default="auto", help="input format (default: from the file)")
+    k.add_argument("--fps", type=float, metavar="FPS", help="eth: frames per second (default: annotated frames 0.4 s apart)")
+    k.add_argument("--t-start", type=float, metavar="T", help="window start, seconds of the recording (default: its first time)")
+    k.add_argument("--duration", type=float, metavar="D", help="window length, seconds (default: to the recording's end)")
+    k.add_argument("--region", type=float, nargs=4, metavar=("XMIN", "YMIN", "XMAX", "YMAX"),
+                   help="scene bounds; tracks are clipped to it (default: --static's bounds, or the people's extent + 0.5 m)")  # fmt: skip
+    k.add_argument("--scale", type=float, metavar="S", default=1.0, help="multiplies every x and y of the file (default 1)")
+    k.add_argument("--radius", "--ped-radius", dest="radius", type=float, metavar="R", default=0.25, help="pedestrians' disc radius (default 0.25)")
+    k.add_argument("--max-movers", type=int, metavar="N", help="keep the N people present longest")
+    k.add_argument("--static", metavar="SCENE", help="take the robot, the static obstacles and the bounds of this scene")
+    k.add_argument("--name", help="scene name (default: the output file's stem)")
+    k.add_argument("--robot-radius", type=float, metavar="R", help="a disc robot of this radius (default 0.2, or --static's robot)")
+    k.add_argument("--vmax", type=float, metavar="V", help="robot speed bound (default 1.5, or --static's)")
+    k.add_argument("--amax", type=float, metavar="A", help="robot acceleration bound (default 3.0, or --static's)")
+    k.add_argument("--start", nargs="+", metavar="X", help="a query from this pose at t0 = 0 (with --goal)")
+    k.add_argument("--goal", nargs="+", metavar="X", help="the query's goal pose")
+    k.add_argument("--query-name", metavar="NAME", default="cross", help="the query's name (default cross)")
+    k.add_argument("--expect", choices=("solved", "no_path", "invalid_query"), help="the query's expected status")
+    k.add_argument("--max-duration", type=float, metavar="S", help="the query's expected longest duration")
+    k.set_defaults(func=cmd_tracks)
+
+
+def _add_batch(sub) -> None:
+    """``gfuzzy batch``."""
+    b = sub.add_parser("batch", help="answer every query of every scene on a Dask cluster; one CSV row per query")
+    b.add_argument("scenes", metavar="SCENE", nargs="+")
+    _plan_flags(b)
+    where = b.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, metavar="K", help="local worker processes (default 2)")
+    where.add_argument("--scheduler", metavar="ADDRESS", help="an existing Dask scheduler, e.g. tcp://host:8786")
+    b.add_argument("--connect-timeout", type=float, default=10.0, help=argparse.SUPPRESS)
+    b.add_argument("-o", "--output", required=True, metavar="RESULTS.csv",
+                   help="results table (and RESULTS.parquet beside it when pyarrow is installed)")  # fmt: skip
+    b.add_argument("--trajectories", metavar="DIR", help="save each answer as DIR/<scene>-<query>.json")
+    b.add_argument("-v", "--verbose", action="store_true", help="show Dask's logs")
+    b.set_defaults(func=cmd_batch, roadmap=None)
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = _Parser(
+        prog="gfuzzy",
+        description="Roadmap-time-space motion planning among moving obstacles (OMPL + FCL).",
+    )
+    sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    for add in (_add_roadmap, _add_plan, _add_check, _add_render, _add_navigate, _add_regress, _add_tracks, _add_batch):
+        add(sub)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the command line; returns the exit status."""
+    import logging
+
+    logging.basicConfig(level=logging.WARNING, format="%(levelname)s: %(message)s")
+    parser = _parser()
+    try:
+        args = parser.parse_args(argv)
+        if not getattr(args, "command", None):
+            parser.print_help(sys.stderr)
+            return EXIT_BAD
+        return args.func(args)
+    except BadInput as exc:
+        _say(" ".join(str(exc).split()))
+        return EXIT_BAD
+    except (InputError, LimitError) as exc:  # SceneError included; any other exception is a bug
+        _say(" ".join(str(exc).split()))
+        return EXIT_BAD
+    except KeyboardInterrupt:
+        _say("interrupted")
+        return 130
+    except BrokenPipeError:
+        return EXIT_OK
+
+

@@ -1,0 +1,326 @@
+"""The planning commands: ``roadmap``, ``plan``, ``check``, ``render``, ``regress``."""
+
+from __future__ import annotations
+
+import math
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+from ..errors import InputError, LimitError
+from .common import (
+    EXIT_NO,
+    EXIT_OK,
+    BadInput,
+    _apply_overrides,
+    _check_roadmap_flags,
+    _default_roadmap,
+    _load_scene,
+    _out_path,
+    _plan_options,
+    _pose,
+    _progress,
+    _roadmap_for,
+    _say,
+)
+
+
+def cmd_roadmap(args) -> int:
+    from ..roadmap import RoadmapOptions, build_roadmap, default_roadmap_path
+
+    scene = _load_scene(args.scene)
+    out = _out_path(args.output, (".json",)) if args.output else default_roadmap_path(scene)
+    try:
+        opts = RoadmapOptions(vertices=args.vertices, seed=args.seed, neighbors=args.neighbors)
+    except InputError as exc:
+        raise BadInput(f"gfuzzy roadmap: {exc}") from None
+    rm = build_roadmap(scene, opts, progress=_progress("roadmap"))
+    rm.save(out)
+    info = rm.info
+    _say(
+        f"{out}: {len(rm.vertices)} vertices, {len(rm.edges)} edges, "
+        f"{info['components']} component(s), {info['seconds']:.2f} s, "
+        f"{info['validity_calls'] + info['certify_calls']} collision checks",
+        sys.stdout,
+    )
+    return EXIT_OK
+
+
+def _query_from_args(scene, args):
+    from ..scene import Query
+
+    dof = scene.robot.dof
+    start = _pose(args.start, dof, "--start")
+    goal = _pose(args.goal, dof, "--goal")
+    if args.query and (start or goal):
+        raise BadInput("gfuzzy plan: give either --query or --start/--goal, not both")
+    if start is not None or goal is not None:
+        if start is None or goal is None:
+            raise BadInput("gfuzzy plan: --start and --goal go together")
+        t0 = args.t0 if args.t0 is not None else 0.0
+        if not math.isfinite(t0):
+            raise BadInput("--t0: must be finite")
+        return Query("cli", tuple(start), tuple(goal), t0, hold=_hold(args, 0.0))
+    if args.t0 is not None:
+        raise BadInput("gfuzzy plan: --t0 goes with --start/--goal (a scene query has its own t0)")
+    if args.query:
+        try:
+            q = scene.query(args.query)
+        except KeyError as exc:
+            raise BadInput(f"{scene.source}: queries: {exc.args[0]}") from None
+    elif not scene.queries:
+        raise BadInput(f"{scene.source}: queries: the scene has no queries; give --start and --goal")
+    else:
+        q = scene.queries[0]
+    hold = _hold(args, q.hold)
+    return q if hold == q.hold else replace(q, hold=hold)
+
+
+def _hold(args, default: float) -> float:
+    """``--hold`` (seconds parked at the goal), or the query's own."""
+    hold = getattr(args, "hold", None)
+    if hold is None:
+        return default
+    if not (math.isfinite(hold) and hold >= 0):
+        raise BadInput(f"--hold: must be a non-negative finite number, got {hold:g}")
+    return float(hold)
+
+
+def cmd_plan(args) -> int:
+    from ..geometry import StaticGeometry
+    from ..planner import Planner, PlanResult, Status, query_problem
+
+    scene = _apply_overrides(_load_scene(args.scene), args)
+    query = _query_from_args(scene, args)
+    out = _out_path(args.output, (".json", ".csv")) if args.output else None
+    options = _plan_options(args)
+    problem = query_problem(StaticGeometry(scene), query.start, query.goal)
+    if problem:  # answered without a roadmap (the robot may fit nowhere at all)
+        result = PlanResult(Status.INVALID_QUERY, None, problem, vmax=scene.robot.vmax)
+    else:
+        roadmap = _roadmap_for(scene, args)
+        try:
+            result = Planner(scene, roadmap).plan(query.start, query.goal, query.t0, options, hold=query.hold)
+        except LimitError as exc:  # a request beyond the memory bounds (dt far too fine)
+            raise BadInput(f"gfuzzy plan: {exc}") from None
+    tf = result.to_file(scene.name, query.name)
+    if out is not None:
+        _write_answer(tf, out)
+    line = f"{scene.name} {query.name}: {result.status.value}"
+    if result.solved:
+        line += (
+            f" duration {result.duration:.2f} s, roadmap distance {result.roadmap_distance:.2f},"
+            f" delay factor {result.delay_factor:.3f}, planned in {result.planning_seconds * 1000:.0f} ms"
+        )
+    else:
+        line += f" ({result.message})"
+    _say(line, sys.stdout)
+    for key, label in (("refine", "GA refinement"), ("speed_layer", "speed layer")):
+        info = result.stats.get(key)
+        if info is not None:
+            _say(f"  {label}: {_stage_summary(info)}", sys.stdout)
+    if result.amax_honoured is False:
+        _say(f"note: {result.stats['amax_note']}")
+    return EXIT_OK if result.solved else EXIT_NO
+
+
+def _write_answer(tf, out: Path) -> None:
+    """Write OUT.json, or OUT.csv and OUT.json beside it, and say on stderr what changed.
+
+    The JSON is written whatever the status (it holds the status). The CSV has no status
+    column, so an unsolved answer, which has no rows, removes an older OUT.csv: a
+    controller reading that path must not drive a stale trajectory.
+    """
+    json_path = out.with_suffix(".json")
+    tf.save(json_path)
+    _say(f"wrote {json_path}")
+    if out.suffix.lower() != ".csv":
+        return
+    if tf.waypoints is not None:
+        tf.save(out)
+        _say(f"wrote {out}")
+    elif out.is_file() or out.is_symlink():
+        out.unlink()
+        _say(f"removed {out}: the answer is {tf.status}, without rows, and a CSV has no status to say so")
+
+
+def _stage_summary(info: dict) -> str:
+    if not info.get("applied"):
+        return f"not applied: {info.get('reason', '')}"
+    b, a = info.get("before", {}), info.get("after", {})
+    parts = []
+    for key, unit in (("length", "m"), ("smoothness", "rad turning"), ("min_clearance", "m clearance"),
+                      ("mean_speed", "m/s mean speed"), ("duration", "s")):  # fmt: skip
+        if key in b and key in a:
+            parts.append(f"{b[key]:.2f} -> {a[key]:.2f} {unit}")
+    if "stops" in info:
+        parts.append(f"{info['stops']} stop(s)")
+    return "applied: " + ", ".join(parts)
+
+
+def cmd_check(args) -> int:
+    from ..check import check_trajectory
+    from ..trajectory import load_trajectory
+
+    scene = _apply_overrides(_load_scene(args.scene), args)
+    tf = load_trajectory(args.trajectory)
+    if tf.status != "solved":
+        _say(f"{args.trajectory}: status is {tf.status}: there is no trajectory to check")
+        return EXIT_NO
+    query = None
+    if tf.query:
+        try:
+            query = scene.query(tf.query)
+        except KeyError:
+            query = None
+    if tf.scene and tf.scene != scene.name:
+        _say(f"note: {args.trajectory} was planned for scene {tf.scene!r}, checking against {scene.name!r}")
+    _rows_fit(scene, tf, args.trajectory)
+    if args.hold is not None:  # park at the last row (an ad-hoc query has no hold of its own)
+        from ..scene import Query
+
+        w = tf.waypoints
+        base = query or Query("adhoc", tuple(w[0, 1:]), tuple(w[-1, 1:]), float(w[0, 0]))
+        query = replace(base, hold=_hold(args, base.hold))
+    rep = check_trajectory(scene, tf.waypoints, query)
+    if rep.valid and tf.duration is not None:
+        actual = float(tf.waypoints[-1, 0] - tf.waypoints[0, 0])
+        if abs(actual - tf.duration) > 1e-6:
+            _say(f"{args.trajectory}: duration is {tf.duration!r} but the rows span {actual!r}")
+            return EXIT_NO
+    if not rep.valid:
+        _say(f"{args.trajectory}: invalid: {rep.reason}")
+        return EXIT_NO
+    _say(
+        f"{args.trajectory}: valid (min clearance {rep.min_clearance:.4f}, "
+        f"max speed {rep.max_speed:.4f}, {rep.evaluations} evaluations)",
+        sys.stdout,
+    )
+    return EXIT_OK
+
+
+def _rows_fit(scene, tf, path) -> None:
+    """Rows of the wrong width for the scene's robot are bad input (for check as for
+    render): a trajectory planned for another robot, not an invalid one."""
+    if tf.waypoints is not None and tf.waypoints.shape[1] != scene.robot.dof + 1:
+        want = "[t, x, y]" if scene.robot.dof == 2 else "[t, x, y, heading]"
+        raise BadInput(
+            f"{path}: waypoints: rows of {tf.waypoints.shape[1]} numbers, but scene "
+            f"{scene.name!r} has a {scene.robot.shape} robot: expected {want}"
+        )
+
+
+def _violation(scene, tf, path):
+    """(time, reason) of a drawn trajectory's first violation of the guarantees, told on
+    stderr (render draws it anyway, `check` exits 1 on it); None when it is valid."""
+    from ..check import check_trajectory
+
+    query = None
+    if tf.query:
+        try:
+            query = scene.query(tf.query)
+        except KeyError:
+            query = None
+    rep = check_trajectory(scene, tf.waypoints, query)
+    if rep.valid:
+        return None
+    _say(f"note: {path}: invalid: {rep.reason} (`gfuzzy check` exits 1); drawing it anyway")
+    return None if rep.time is None else (rep.time, rep.reason)
+
+
+def cmd_render(args) -> int:
+    from ..render import render
+    from ..roadmap import load_roadmap
+    from ..trajectory import load_trajectory
+
+    scene = _apply_overrides(_load_scene(args.scene), args)
+    out = _out_path(args.output, (".png", ".gif"))
+    traj = None
+    nav_doc: dict = {}
+    if args.trajectory:
+        tf = load_trajectory(args.trajectory)
+        nav_doc = _navigate_extras(args.trajectory)
+        if tf.waypoints is not None:
+            _rows_fit(scene, tf, args.trajectory)
+            traj = tf.waypoints
+        elif nav_doc.get("executed") is not None:  # a navigate run that did not arrive
+            traj = nav_doc["executed"]
+        else:
+            _say(f"note: {args.trajectory} has status {tf.status}: drawing the scene only")
+    if args.roadmap:
+        roadmap = load_roadmap(args.roadmap, scene)
+    elif out.suffix.lower() == ".png" and not args.no_roadmap:
+        roadmap = _default_roadmap(scene, quiet=True)
+    else:
+        roadmap = None
+    options = {}
+    if traj is not None and args.speed:  # the picture and the animation both colour by speed
+        options["speed"] = True
+    elif args.speed:
+        _say("note: --speed colours a trajectory's path, and there is none to draw")
+    if out.suffix.lower() == ".gif" and traj is not None and nav_doc.get("replan_log"):
+        options["predictions"] = nav_doc["replan_log"]
+    if out.suffix.lower() == ".gif" and roadmap is not None:
+        raise BadInput("--roadmap: only drawn in a .png picture")
+    if traj is not None and tf.waypoints is not None:
+        bad = _violation(scene, tf, args.trajectory)
+        if bad is not None and out.suffix.lower() == ".png":
+            options["violation"] = bad
+    try:
+        render(scene, out, trajectory=traj, roadmap=roadmap, **options)
+    except InputError as exc:
+        raise BadInput(f"{args.trajectory or out}: {exc}") from None
+    _say(f"wrote {out}", sys.stdout)
+    return EXIT_OK
+
+
+def _start_on_mover(scene, query) -> str:
+    """Why the start overlaps a mover present at t0 (as ``plan`` says), or ""."""
+    import numpy as np
+
+    from ..geometry import mover_distance
+
+    start = np.asarray(query.start, dtype=float)
+    for mv in scene.movers:
+        xy, present = mv.state(np.array([query.t0]))
+        if present[0] and mover_distance(scene.robot, start, mv.shape, mv.radius, mv.size, xy[0]) < 0:
+            return f"start collides with mover {mv.name!r} at t0={query.t0:g}"
+    return ""
+
+
+def _navigate_extras(path) -> dict:
+    """The ``executed`` rows and ``replan_log`` of a ``gfuzzy navigate`` file (else {})."""
+    import json
+
+    try:
+        doc = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    if not isinstance(doc, dict):
+        return {}
+    out = {}
+    rows = doc.get("executed")
+    if isinstance(rows, list) and rows and all(isinstance(r, list) and len(r) in (3, 4) for r in rows):
+        try:
+            out["executed"] = [[float(v) for v in r] for r in rows]
+        except (TypeError, ValueError):
+            pass
+    log = doc.get("replan_log")
+    if isinstance(log, list):
+        out["replan_log"] = [e for e in log if isinstance(e, dict) and isinstance(e.get("t"), (int, float))]
+    return out
+
+
+def cmd_regress(args) -> int:
+    from ..regress import run_regression
+
+    scenes = [_apply_overrides(_load_scene(p), args) for p in args.scenes]  # all bad input first
+    options = _plan_options(args)
+    _check_roadmap_flags(args)  # before the table's header: bad input prints nothing else
+    try:
+        ok = run_regression(scenes, lambda sc: _roadmap_for(sc, args), options, sys.stdout)
+    except LimitError as exc:  # a request beyond the memory bounds (dt far too fine)
+        raise BadInput(f"gfuzzy regress: {exc}") from None
+    return EXIT_OK if ok else EXIT_NO
+
+

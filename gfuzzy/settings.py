@@ -1,0 +1,20 @@
+"""Named constants shared by several stages of the pipeline.
+
+They live here, below every stage, so that a later stage (re-timing, the stages, the
+navigator) can use them without importing the planner that runs it.
+"""
+
+from __future__ import annotations
+
+__all__ = ["SPEED_SAFETY", "MAX_POINTS", "MAX_MOVER_SAMPLES", "AMAX_PER_VMAX"]
+
+#: Planning speed is vmax shrunk by this factor, so rounding never lifts a step above vmax.
+SPEED_SAFETY = 1.0 - 1e-9
+#: Largest number of graph points (edges cut into steps) a query may use (about 1 GB with
+#: the search's Python lists); the 10,000-vertex hall benchmark has 0.7 million.
+MAX_POINTS = 3_000_000
+#: Largest number of mover samples (movers x time steps) a query may use: about 0.7 GB.
+MAX_MOVER_SAMPLES = 20_000_000
+#: The speed layer's acceleration bound for a robot without ``amax``: this many times
+#: vmax per second (full speed reached in half a second).
+AMAX_PER_VMAX = 2.0

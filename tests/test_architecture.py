@@ -1,0 +1,204 @@
+"""The package's shape, checked from its source (issue 12's acceptance checks).
+
+* Imports run one way: no import cycle between gfuzzy's modules, counting the lazy
+  imports inside functions (only ``if TYPE_CHECKING:`` blocks, which never run, are left
+  out).
+* Planning never imports the learning subpackage (rule learning, tracking simulation).
+* No module over ``MAX_MODULE_LINES`` lines and no function over ``MAX_FUNCTION_LINES``,
+  except the files listed in ``PHASE_B``: they are being rewritten on another branch
+  (issue 11) and are split after it lands (docs/architecture.md, "still to do").
+  Phase B empties that list.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parent.parent / "gfuzzy"
+MAX_MODULE_LINES = 800
+MAX_FUNCTION_LINES = 100
+
+#: Modules whose size (module or function) phase B fixes, with why; nothing else may
+#: break the limits. Each entry names what is over today so that the list cannot hide
+#: a new offender in the same file.
+PHASE_B = {
+    "gfuzzy.ga": "1523 lines; refine_path: the GA split into population/operators/refine",
+    "gfuzzy.timespace": "sipp: the search loop (issue 11 compiles it)",
+    "gfuzzy.planner": "Planner.plan: graph building moves into the search module",
+    "gfuzzy.search_kernel": "issue 11's compiled kernel, split with the search",
+}
+
+
+#: Import cycles phase B removes, each with where it comes from; nothing else may cycle.
+#: (After issue 11 lands, timespace and search_kernel import each other lazily: the
+#: movers module and SearchResult's move in phase B end it.)
+PHASE_B_CYCLES = [
+    {"gfuzzy.search_kernel", "gfuzzy.timespace"},
+]
+
+#: Phase A's own leftovers (functions it had no time to split), fixed before phase B
+#: starts; listed in docs/architecture.md. Same rule as PHASE_B.
+PHASE_A_REMAINING: dict[str, str] = {
+    "gfuzzy.learning.tracking": "track (its hot pure-Python loop: a call per step costs ~5 %; "
+    "a small stepper compiled with numba, now a dependency, is the way)",
+    "gfuzzy.render": "1081 lines, _draw_trajectory, render_animation (pictures vs animation "
+    "into two modules)",
+}
+
+
+def _module_name(path: Path) -> str:
+    rel = path.relative_to(PACKAGE.parent).with_suffix("")
+    parts = list(rel.parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def _modules() -> dict[str, Path]:
+    return {_module_name(p): p for p in sorted(PACKAGE.rglob("*.py"))}
+
+
+def _is_type_checking(node: ast.If) -> bool:
+    test = node.test
+    return (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING") or (
+        isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING"
+    )
+
+
+def _imports(name: str, path: Path, known: set[str]) -> set[str]:
+    """Modules of the package that ``name`` imports anywhere (lazy imports included)."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    is_pkg = path.name == "__init__.py"
+    base = name.split(".") if is_pkg else name.split(".")[:-1]
+    found: set[str] = set()
+
+    def add(target: str) -> None:
+        if target in known and target != name:
+            found.add(target)
+
+    def visit(node: ast.AST) -> None:
+        if isinstance(node, ast.If) and _is_type_checking(node):
+            for child in node.orelse:
+                visit(child)
+            return
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                add(alias.name)
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                anchor = base[: len(base) - (node.level - 1)]
+                mod = ".".join(anchor + ([node.module] if node.module else []))
+            else:
+                mod = node.module or ""
+            for alias in node.names:  # `from . import x` / `from .pkg import submodule`
+                if f"{mod}.{alias.name}" in known:
+                    add(f"{mod}.{alias.name}")
+                else:
+                    add(mod)
+        for child in ast.iter_child_nodes(node):
+            visit(child)
+
+    visit(tree)
+    return found
+
+
+def _graph() -> dict[str, set[str]]:
+    mods = _modules()
+    known = set(mods)
+    # importing a submodule runs its packages' __init__ first; a package importing its own
+    # submodules is not a cycle, so edges into a package's own __init__ are not followed
+    graph = {}
+    for name, path in mods.items():
+        graph[name] = {t for t in _imports(name, path, known) if not name.startswith(t + ".")}
+    return graph
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Strongly connected components with more than one module (Tarjan)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on: set[str] = set()
+    out: list[list[str]] = []
+
+    def strong(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on.add(v)
+        for w in sorted(graph[v]):
+            if w not in index:
+                strong(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(sorted(comp))
+
+    for v in sorted(graph):
+        if v not in index:
+            strong(v)
+    return out
+
+
+def test_the_import_graph_has_no_cycle():
+    graph = _graph()
+    assert "gfuzzy.planner" in graph and "gfuzzy.stages" in graph["gfuzzy.planner"]  # lazy one seen
+    assert [c for c in _cycles(graph) if set(c) not in PHASE_B_CYCLES] == []
+
+
+def test_the_cycle_finder_finds_a_cycle():
+    assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+
+
+def test_planning_never_imports_learning():
+    graph = _graph()
+    learning = {m for m in graph if m == "gfuzzy.learning" or m.startswith("gfuzzy.learning.")}
+    assert learning, "the learning subpackage moved?"
+    offenders = {m: sorted(graph[m] & learning) for m in graph if m not in learning and graph[m] & learning}
+    assert offenders == {}
+
+
+def _sizes():
+    """(module, module lines, [(function, lines) over the limit])."""
+    for name, path in _modules().items():
+        text = path.read_text(encoding="utf-8")
+        tree = ast.parse(text)
+        long = []
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                n = node.end_lineno - node.lineno + 1
+                if n > MAX_FUNCTION_LINES:
+                    long.append((node.name, n))
+        yield name, len(text.splitlines()), long
+
+
+def test_no_module_or_function_is_too_long():
+    over = {}
+    for name, lines, long in _sizes():
+        if name in PHASE_B or name in PHASE_A_REMAINING:
+            continue
+        problems = ([f"{lines} lines"] if lines > MAX_MODULE_LINES else []) + [f"{f}(): {n} lines" for f, n in long]
+        if problems:
+            over[name] = problems
+    assert over == {}
+
+
+@pytest.mark.parametrize("name", sorted(PHASE_B) + sorted(PHASE_A_REMAINING))
+def test_the_phase_b_list_names_real_offenders(name):
+    """An entry leaves the list as soon as its module is within the limits."""
+    sizes = {n: (lines, long) for n, lines, long in _sizes()}
+    if name not in sizes:
+        pytest.skip(f"{name} is not in this branch yet")
+    lines, long = sizes[name]
+    assert lines > MAX_MODULE_LINES or long, f"{name} is within the limits: remove it from PHASE_B"

@@ -1,0 +1,74 @@
+"""gfuzzy.poses: the one implementation of pose arithmetic, against hand-computed values."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from gfuzzy.poses import (
+    arc_length,
+    discretise,
+    interpolate_segment,
+    metric_distance,
+    pose_at,
+    split_counts,
+    wrap_angle,
+)
+
+
+def test_wrap_angle_range_and_values():
+    a = np.array([0.0, math.pi, -math.pi, 3 * math.pi / 2, -7.0])
+    w = wrap_angle(a)
+    assert np.all(w >= -math.pi) and np.all(w < math.pi)
+    assert w[1] == pytest.approx(-math.pi) and w[3] == pytest.approx(-math.pi / 2)
+    assert w[4] == pytest.approx(-7.0 + 2 * math.pi)
+
+
+def test_metric_counts_the_shorter_turn():
+    a, b = np.array([0.0, 0.0, 3.0]), np.array([3.0, 4.0, -3.0])
+    # xy 5, turn 2*pi - 6 the short way, weighted by the circumradius 2
+    assert metric_distance(a, b, 2.0) == pytest.approx(5.0 + 2.0 * (2 * math.pi - 6.0))
+
+
+def test_interpolate_segment_rows_and_single_motion_agree():
+    a, b = np.array([0.0, 0.0, 3.0]), np.array([2.0, 0.0, -3.0])
+    f = np.array([0.0, 0.5, 1.0])
+    one = interpolate_segment(a, b, f)
+    many = interpolate_segment(np.tile(a, (3, 1)), np.tile(b, (3, 1)), f)
+    np.testing.assert_array_equal(one, many)
+    assert one[1, 0] == 1.0 and abs(abs(one[1, 2]) - math.pi) < 1e-12  # through pi, not through 0
+
+
+def test_pose_at_by_time_and_by_arc_length():
+    path = np.array([[0.0, 0.0], [3.0, 0.0], [3.0, 4.0]])
+    s = arc_length(path)
+    np.testing.assert_allclose(s, [0.0, 3.0, 7.0])
+    np.testing.assert_allclose(pose_at(s, path, np.array([1.5, 5.0])), [[1.5, 0.0], [3.0, 2.0]])
+    # a repeated pose (zero-length piece) gives its first pose, never a division by zero
+    rep = np.array([[0.0, 0.0], [0.0, 0.0], [1.0, 0.0]])
+    np.testing.assert_allclose(pose_at(arc_length(rep), rep, np.array([0.0, 0.5])), [[0.0, 0.0], [0.5, 0.0]])
+
+
+@pytest.mark.parametrize("length, step, k", [(1.0, 0.25, 4), (1.0, 0.3, 4), (0.1, 1.0, 1), (0.0, 1.0, 1)])
+def test_split_counts_hand_values(length, step, k):
+    assert split_counts(np.array([length]), step)[0] == k
+
+
+def test_split_counts_adds_one_when_rounding_leaves_a_long_piece():
+    # 0.9000000000000001 / 0.1 rounds to exactly 9.0, yet a ninth of it exceeds 0.1
+    length, step = 0.9000000000000001, 0.1
+    assert math.ceil(length / step) == 9 and length / 9 > step
+    k = split_counts(np.array([length]), step)[0]
+    assert k == 10 and length / k <= step
+
+
+def test_discretise_keeps_corners_and_bounds_the_step():
+    path = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, math.pi / 2], [1.0, 1.0, math.pi / 2]])
+    poses, s = discretise(path, 0.5, 0.3)
+    steps = metric_distance(poses[:-1], poses[1:], 0.5)
+    assert np.all(steps <= 0.3 + 1e-12) and np.all(np.diff(s) > 0)
+    for corner in path[:3]:  # every corner is a point of the chain
+        assert np.min(np.abs(poses - corner).sum(axis=1)) < 1e-12
+    np.testing.assert_allclose(poses[-1], path[-1])

@@ -1,0 +1,90 @@
+"""gfuzzy.retime: timing a fixed path among movers, on hand-made scenes."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import yaml
+from reference import reference_violation
+
+from gfuzzy.retime import chain_points, retime_path, retime_profile
+from gfuzzy.scene import parse_scene
+from gfuzzy.status import Status
+
+EMPTY = """
+version: 1
+name: empty
+bounds: [0, 0, 6, 4]
+robot: {disc: 0.2, vmax: 1.0}
+"""
+# a cart crosses the robot's line y = 2 at x = 3 going up, at t = 2
+CART = EMPTY + """
+movers:
+  - {name: cart, disc: 0.3, trajectory: [[0, 3, 0], [4, 3, 4]]}
+"""
+PARKED = EMPTY + """
+movers:
+  - {name: block, disc: 0.5, speed: 0.0, path: [[3, 2], [3, 3]], mode: once}
+"""
+PATH = np.array([[0.5, 2.0], [5.5, 2.0]])
+
+
+def _scene(text):
+    return parse_scene(yaml.safe_load(text))
+
+
+def test_an_empty_scene_is_driven_at_full_speed():
+    res = retime_path(_scene(EMPTY), PATH, 0.0, 0.1, 30.0)
+    assert res.status is Status.SOLVED and res.waits == []
+    assert res.trajectory.duration == pytest.approx(5.0, abs=0.1 + 1e-9)  # 5 m at 1 m/s, whole steps
+    assert np.max(res.trajectory.speeds()) <= 1.0
+    np.testing.assert_allclose(res.trajectory.poses[[0, -1]], PATH)
+
+
+def test_a_crossing_cart_makes_it_wait_and_the_answer_is_safe():
+    doc = yaml.safe_load(CART)
+    res = retime_path(_scene(CART), PATH, 0.0, 0.1, 30.0)
+    assert res.status is Status.SOLVED
+    assert res.trajectory.duration > 5.0 + 1e-9  # it had to give way
+    assert reference_violation(doc, res.trajectory.waypoints) == ""
+
+
+def test_a_parked_mover_on_the_path_is_no_path():
+    res = retime_path(_scene(PARKED), PATH, 0.0, 0.1, 10.0)
+    assert res.status is Status.NO_PATH and res.trajectory is None and res.message
+
+
+def test_hold_keeps_the_goal_safe_after_arrival():
+    # a cart drives up through the goal (5.5, 2) at t = 6; the robot arrives at t = 5
+    text = EMPTY + "movers:\n  - {name: cart, disc: 0.3, trajectory: [[0, 5.5, -4.0], [10, 5.5, 6.0]]}\n"
+    free = retime_path(_scene(text), PATH, 0.0, 0.1, 30.0)
+    assert free.status is Status.SOLVED and free.trajectory.duration == pytest.approx(5.0, abs=0.1 + 1e-9)
+    held = retime_path(_scene(text), PATH, 0.0, 0.1, 30.0, hold=1.0)
+    assert held.status is Status.SOLVED
+    assert held.trajectory.t_end > 6.5  # parks only once the cart has passed the goal
+    assert reference_violation(yaml.safe_load(text), held.trajectory.waypoints, hold=1.0) == ""
+    assert reference_violation(yaml.safe_load(text), free.trajectory.waypoints, hold=1.0) != ""
+
+
+def test_chain_points_is_the_discretisation():
+    poses, s = chain_points(PATH, 0.2, 0.3)
+    assert len(poses) == 1 + math.ceil(5.0 / 0.3)
+    assert np.all(np.diff(s) <= 0.3 + 1e-12)
+
+
+def test_profile_timing_follows_the_profile_and_stops_for_the_cart():
+    scene = _scene(EMPTY)
+    s_xy = np.array([0.0, 5.0])
+    v_xy = np.array([0.5, 0.5])  # half speed all along
+    res = retime_profile(scene, PATH, s_xy, v_xy, 0.0, 0.1, amax=2.0, horizon=60.0)
+    assert res.status is Status.SOLVED
+    # from rest to 0.5 m/s at 2 m/s^2 takes 0.25 s over 0.0625 m, and as long to stop:
+    # (5 - 0.125) / 0.5 + 2 * 0.25 = 10.25 s
+    assert res.profile_duration == pytest.approx(10.25, abs=2e-3)  # the profile is sampled every 2 cm
+    assert res.trajectory.duration == pytest.approx(10.25, abs=0.1 + 1e-9)
+    assert np.max(res.trajectory.speeds()) <= 0.5 + 1e-6
+    crossed = retime_profile(_scene(CART), PATH, s_xy, v_xy, 0.0, 0.1, amax=2.0, horizon=60.0)
+    assert crossed.status is Status.SOLVED
+    assert reference_violation(yaml.safe_load(CART), crossed.trajectory.waypoints) == ""

@@ -1,0 +1,95 @@
+"""gfuzzy.stages: the GA refinement and the speed layer run on a context, not a planner."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+import yaml
+from reference import reference_violation
+
+from gfuzzy.geometry import StaticGeometry
+from gfuzzy.planner import Planner, PlanOptions, PlanResult
+from gfuzzy.roadmap import RoadmapOptions, build_roadmap
+from gfuzzy.scene import parse_scene
+from gfuzzy.stages import RefineReport, SpeedReport, StageContext, apply_stages
+from gfuzzy.status import Status
+from gfuzzy.trajectory import Trajectory
+
+# an L-shaped hall: the search's answer turns a corner, the stages have work to do
+HALL = """
+version: 1
+name: hall
+bounds: [0, 0, 6, 6]
+robot: {disc: 0.2, vmax: 1.0}
+obstacles:
+  - box: {center: [3.5, 3.5], size: [5, 5]}
+movers:
+  - {name: cart, disc: 0.25, trajectory: [[0, 3.0, 0.5], [4, 3.0, 0.5]]}  # stands in the way until t = 4
+queries:
+  - {name: corner, start: [5.5, 0.5], goal: [0.5, 5.5]}
+"""
+
+
+@pytest.fixture(scope="module")
+def hall():
+    doc = yaml.safe_load(HALL)
+    scene = parse_scene(doc)
+    return doc, scene, build_roadmap(scene, RoadmapOptions(vertices=60, seed=3))
+
+
+def _searched(scene, rm, q):
+    res = Planner(scene, rm).plan(q.start, q.goal, q.t0)
+    assert res.solved
+    return res
+
+
+def test_both_stages_report_and_keep_a_safe_answer(hall):
+    doc, scene, rm = hall
+    q = scene.queries[0]
+    base = _searched(scene, rm, q)
+    ctx = StageContext(scene, StaticGeometry(scene))
+    opts = PlanOptions(refine=True, speed_layer=True, seed=2)
+    out = apply_stages(ctx, base, np.array(q.start), np.array(q.goal), q.t0, opts, time.perf_counter())
+    assert isinstance(out.refine_report, RefineReport) and isinstance(out.speed_report, SpeedReport)
+    # the file keeps its keys: stats holds the reports' dict forms
+    assert out.stats["refine"] == out.refine_report.to_dict()
+    assert out.stats["speed_layer"] == out.speed_report.to_dict()
+    assert out.speed_report.amax == 2.0  # AMAX_PER_VMAX * vmax for a robot without amax
+    assert out.speed_report.applied, out.speed_report.reason
+    assert set(out.stats["speed_layer"]) >= {"applied", "amax", "profile_seconds", "stops", "before", "after"}
+    assert reference_violation(doc, out.trajectory.waypoints) == ""
+    r = out.refine_report
+    assert r.applied, r.reason
+    assert r.after["length"] < r.before["length"] and r.knots == 12  # the paper's knots sufficed
+    assert out.speed_report.stops >= 1  # the cart stands in the corridor until t = 4
+
+
+def test_a_straight_answer_is_left_to_the_search(hall):
+    _, scene, rm = hall
+    ctx = StageContext(scene, StaticGeometry(scene))
+    wps = np.array([[0.0, 5.5, 0.5], [1.0, 5.5, 1.5]])
+    res = PlanResult(Status.SOLVED, Trajectory(wps, scene.robot.radius), roadmap_distance=1.0)
+    out = apply_stages(ctx, res, wps[0, 1:], wps[-1, 1:], 0.0, PlanOptions(refine=True), time.perf_counter())
+    assert out.refine_report == RefineReport(False, "the path is a straight segment already")
+    assert out.stats["refine"] == {"applied": False, "reason": "the path is a straight segment already"}
+    np.testing.assert_array_equal(out.trajectory.waypoints, wps)
+
+
+def test_start_is_goal_has_nothing_to_slow():
+    scene = parse_scene(yaml.safe_load(HALL))
+    ctx = StageContext(scene, StaticGeometry(scene))
+    wps = np.array([[0.0, 5.5, 0.5]])
+    res = PlanResult(Status.SOLVED, Trajectory(wps, 0.2), roadmap_distance=0.0)
+    out = apply_stages(ctx, res, wps[0, 1:], wps[0, 1:], 0.0, PlanOptions(speed_layer=True), time.perf_counter())
+    assert out.speed_report == SpeedReport(False, 2.0, "the start is the goal")
+    assert out.stats["speed_layer"] == {"applied": False, "amax": 2.0, "reason": "the start is the goal"}
+
+
+def test_the_planner_hands_the_stages_a_context(hall):
+    _, scene, rm = hall
+    q = scene.queries[0]
+    res = Planner(scene, rm).plan(q.start, q.goal, q.t0, PlanOptions(speed_layer=True))
+    assert res.speed_report is not None and res.refine_report is None
+    assert res.to_file(scene.name, q.name).to_dict()["stats"]["speed_layer"]["applied"] == res.speed_report.applied

@@ -1,0 +1,61 @@
+"""gfuzzy.trajectory: timed trajectories and their files, on hand-made rows."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from gfuzzy.errors import SceneError
+from gfuzzy.trajectory import Trajectory, TrajectoryFile, load_trajectory
+
+ROWS = np.array([[0.0, 0.0, 0.0], [1.0, 1.0, 0.0], [3.0, 1.0, 0.0], [4.0, 1.0, 1.0]])
+
+
+def test_figures_of_a_hand_made_trajectory():
+    tr = Trajectory(ROWS)
+    assert tr.duration == 4.0 and tr.length == 2.0 and tr.xy_length == 2.0
+    np.testing.assert_allclose(tr.speeds(), [1.0, 0.0, 1.0])
+    assert tr.delay_factor(1.0, 2.0) == 2.0 and tr.delay_factor(1.0, 0.0) == 1.0
+
+
+def test_at_interpolates_and_clamps():
+    tr = Trajectory(ROWS)
+    np.testing.assert_allclose(tr.at(0.5), [0.5, 0.0])
+    np.testing.assert_allclose(tr.at([2.0, 3.5, -1.0, 9.0]), [[1.0, 0.0], [1.0, 0.5], [0.0, 0.0], [1.0, 1.0]])
+
+
+def test_heading_turns_the_short_way():
+    rows = np.array([[0.0, 0.0, 0.0, 3.0], [1.0, 0.0, 0.0, -3.0]])
+    tr = Trajectory(rows, circumradius=1.0)
+    assert abs(abs(tr.at(0.5)[2]) - math.pi) < 1e-12
+    assert tr.length == pytest.approx(2 * math.pi - 6.0)
+
+
+def test_json_and_csv_round_trip(tmp_path):
+    tf = TrajectoryFile("s", "q", "solved", "", 4.0, 2.0, 2.0, 0.1, ROWS, extra={"stats": {"x": math.inf}})
+    tf.save(tmp_path / "a.json")
+    doc = json.loads((tmp_path / "a.json").read_text())
+    assert doc["stats"]["x"] is None  # JSON has no inf
+    back = load_trajectory(tmp_path / "a.json")
+    np.testing.assert_array_equal(back.waypoints, ROWS)
+    assert back.status == "solved" and back.duration == 4.0
+    tf.save(tmp_path / "a.csv")
+    assert (tmp_path / "a.csv").read_text().splitlines()[0] == "t,x,y"
+
+
+def test_an_unsolved_answer_has_no_csv(tmp_path):
+    tf = TrajectoryFile("s", "q", "no_path", "blocked", None, None, None, 0.1)
+    with pytest.raises(ValueError, match="no waypoints"):
+        tf.save(tmp_path / "a.csv")
+    assert not (tmp_path / "a.csv").exists()
+
+
+def test_bad_file_names_the_place(tmp_path):
+    p = tmp_path / "bad.json"
+    p.write_text(json.dumps({"version": 1, "status": "solved", "waypoints": [[0, 0, 0], [0, 1, 1]]}))
+    with pytest.raises(SceneError) as exc:
+        load_trajectory(p)
+    assert str(p) in str(exc.value)
