@@ -138,7 +138,7 @@ class PathEvaluator:
         self.ref_length = 0.0
         self._check_speed = False
         self._grid_u = self._grid_t = self._grid_tiled = None
-        self._cache = None
+        self._cache = self._mover_cache = None
         if reference_times is not None:
             if reference_path is None:
                 raise ValueError("reference_times needs reference_path")
@@ -166,6 +166,10 @@ class PathEvaluator:
         if n_nodes * n_nodes <= _MAX_SEGMENT_CACHE:
             self._n_nodes = n_nodes
             self._cache = np.full((2, n_nodes * n_nodes), np.nan)
+            # the mover clearance on the timing grid, too, depends only on the two nodes
+            # (their positions and their knots' arc fractions): its minimum per node pair
+            self._mover_cache = np.full(n_nodes * n_nodes, np.nan)
+            self._start_clearance: dict[bytes, float] = {}
 
     def evaluate(
         self,
@@ -197,7 +201,14 @@ class PathEvaluator:
         """
         g = _Geometry(np.asarray(points, dtype=float), np.asarray(mask, dtype=bool))
         smoothness = _turning(g)
-        seg_lb, seg_min = self._segment_clearance(g, node_ids)
+        M_ = g.M
+        keys = None
+        if self._cache is not None and node_ids is not None:
+            ids = np.asarray(node_ids)
+            keys = ids.take(g.rows * M_ + g.prev.take(g.fs)) * self._n_nodes + ids.take(
+                g.rows * M_ + g.slots + 1
+            )
+        seg_lb, seg_min = self._segment_clearance(g, keys)
         P, M = g.P, g.M
         seg_full = np.full((P, M - 1), np.inf)
         seg_full.reshape(-1)[g.fs] = seg_lb
@@ -212,7 +223,17 @@ class PathEvaluator:
                 # stretch of the input whose time it takes
                 span = (u_end - u_start) * self.ref_length
                 feasible &= ~np.any(g.active & (g.seglen > span * (1 + 1e-9) + 1e-12), axis=1)
-            if timed:
+            if timed and keys is not None and arc is not None and np.ndim(arc) == 1:
+                cs, c0 = self._grid_clearance_cached(g, keys, u_start, u_end)
+                flat = seg_full.reshape(-1)
+                flat[g.fs] = np.minimum(flat.take(g.fs), cs)
+                # the grid points at the input's start (u = 0) belong to slot 0
+                seg_full[:, 0] = np.minimum(seg_full[:, 0], c0)
+                row_min = np.full(P, c0)
+                np.minimum.at(row_min, g.rows, cs)
+                min_clear = np.minimum(min_clear, row_min)
+                feasible &= seg_full.min(axis=1) >= 0
+            elif timed:
                 flat, cg = self._grid_clearance(g.a_pts, g.d, u_start, u_end)
                 np.minimum.at(seg_full.reshape(-1), flat, cg)
                 min_clear = np.minimum(min_clear, cg.reshape(P, -1).min(axis=1))
@@ -220,17 +241,22 @@ class PathEvaluator:
         return Evaluation(g.length, smoothness, min_clear, seg_full, feasible)
 
     def _segment_clearance(
-        self, g: _Geometry, node_ids: IntArray | None
+        self, g: _Geometry, keys: IntArray | None
     ) -> tuple[FloatArray, FloatArray]:
         """Static bound and smallest clearance of every kept segment (and, without input
         timing, the movers sampled along it at unit speed).
+
+        Parameters
+        ----------
+        g : _Geometry
+        keys : (S,) int or None
+            Node-pair keys of the kept segments, to use the segment cache.
 
         Returns
         -------
         seg_lb, seg_min : (S,) float
             Per kept segment, in the order of ``g.rows``.
         """
-        M = g.M
         rows, slots, fs = g.rows, g.slots, g.fs
         a = g.a_pts.reshape(-1, 2).take(fs, axis=0)
         e = g.d.reshape(-1, 2).take(fs, axis=0)
@@ -241,44 +267,21 @@ class PathEvaluator:
         seg_min = np.full(len(rows), np.inf)
 
         need = np.ones(len(rows), dtype=bool)
-        keys = None
-        if self._cache is not None and node_ids is not None:
-            ids = np.asarray(node_ids)
-            keys = ids.take(rows * M + g.prev.take(fs)) * self._n_nodes + ids.take(
-                rows * M + slots + 1
-            )
+        if keys is not None:
             cached_lb = self._cache[0, keys]
             need = np.isnan(cached_lb)
             seg_lb = np.where(need, np.inf, cached_lb)
             seg_min = np.where(need, np.inf, self._cache[1, keys])
 
-        movers_on_segments = self.mover_clearance is not None and self._grid_u is None
-        frac = rep = offs = xy = None
-        if need.any() or movers_on_segments:
-            counts = n + 1
-            offs = np.zeros(len(rows), dtype=np.int64)
-            np.cumsum(counts[:-1], out=offs[1:])
-            rep = np.repeat(np.arange(len(rows)), counts)
-            local = np.arange(len(rep)) - offs[rep]
-            frac = local / n.take(rep)
-            xy = a.take(rep, axis=0) + frac[:, None] * e.take(rep, axis=0)
-            gap = (L / n).take(rep)
         if need.any():
-            if need.all():
-                sel, s_offs, s_xy, s_gap = None, offs, xy, gap
-            else:
-                sel = np.nonzero(need)[0]
-                take = need[rep]
-                s_xy, s_gap = xy[take], gap[take]
-                cnt = (n + 1)[sel]
-                s_offs = np.zeros(len(sel), dtype=np.int64)
-                np.cumsum(cnt[:-1], out=s_offs[1:])
+            sel = None if need.all() else np.nonzero(need)[0]
+            pick = slice(None) if sel is None else sel
             if self.static_segment is not None:
                 # the caller certifies whole segments (e.g. by sphere tracing)
-                pick = slice(None) if sel is None else sel
                 lb, mn = self.static_segment(a[pick], a[pick] + e[pick])
                 lb, mn = np.asarray(lb, dtype=float), np.asarray(mn, dtype=float)
             else:
+                s_offs, _, _, s_xy, s_gap = _samples(a[pick], e[pick], L[pick], n[pick])
                 c = _call_static(self.static_clearance, s_xy)
                 lb = np.minimum.reduceat(_lipschitz_bound(c, s_gap, s_offs), s_offs)
                 mn = np.minimum.reduceat(c, s_offs)
@@ -291,13 +294,72 @@ class PathEvaluator:
                 self._cache[0, kk] = lb
                 self._cache[1, kk] = mn
 
-        if movers_on_segments and len(rows):
+        if self.mover_clearance is not None and self._grid_u is None and len(rows):
             # no input timing: unit speed from t = 0, time = arc length
+            offs, rep, frac, xy, _ = _samples(a, e, L, n)
             sigma = (np.cumsum(g.seglen, axis=1) - g.seglen)[rows, slots][rep] + frac * L[rep]
             cm = _call_mover(self.mover_clearance, xy, sigma)
             seg_min = np.minimum(seg_min, np.minimum.reduceat(cm, offs))
             seg_lb = np.minimum(seg_lb, np.minimum.reduceat(cm, offs))
         return seg_lb, seg_min
+
+    def _grid_clearance_cached(
+        self, g: _Geometry, keys: IntArray, u_start: FloatArray, u_end: FloatArray
+    ) -> tuple[FloatArray, float]:
+        """:meth:`_grid_clearance` through the node-pair cache: the same grid points, the same
+        positions (computed by the same formula from the same operands), so the same values.
+
+        A kept segment from node a to node b covers the grid points with ``u`` in
+        (u_a, u_b] (to the end of the grid for the goal); the points at ``u <= 0`` (the input
+        waiting at its start) are at the start, and belong to slot 0 whatever it holds.
+
+        Returns
+        -------
+        seg : (S,) float
+            Smallest mover clearance on each kept segment's grid points (``inf`` if none).
+        start : float
+            Smallest mover clearance at the start's grid points.
+        """
+        gu, gt = self._grid_u, self._grid_t
+        S = g.M - 1
+        vals = self._mover_cache[keys]
+        todo = np.nonzero(np.isnan(vals))[0]
+        if len(todo):
+            uk, first = np.unique(keys[todo], return_index=True)
+            j = todo[first]  # one kept segment per new node pair
+            fs = g.fs.take(j)
+            u0, u1 = u_start.reshape(-1).take(fs), u_end.reshape(-1).take(fs)
+            lo = np.searchsorted(gu, u0, side="right")
+            hi = np.searchsorted(gu, u1, side="right")
+            hi[g.slots.take(j) == S - 1] = len(gu)
+            cnt = np.maximum(hi - lo, 0)
+            seg = np.repeat(np.arange(len(j)), cnt)
+            offs = np.zeros(len(j), dtype=np.int64)
+            np.cumsum(cnt[:-1], out=offs[1:])
+            gi = lo.take(seg) + (np.arange(len(seg)) - offs.take(seg))
+            width = u1 - u0
+            f = (gu.take(gi) - u0.take(seg)) / np.where(width > 0, width, 1.0).take(seg)
+            np.clip(f, 0.0, 1.0, out=f)
+            xy = g.a_pts.reshape(-1, 2).take(fs.take(seg), axis=0) + f[:, None] * g.d.reshape(
+                -1, 2
+            ).take(fs.take(seg), axis=0)
+            out = np.full(len(j), np.inf)
+            if len(seg):
+                cm = _call_mover(self.mover_clearance, xy, gt.take(gi))
+                nz = cnt > 0
+                out[nz] = np.minimum.reduceat(cm, offs[nz])
+            self._mover_cache[uk] = out
+            vals = self._mover_cache[keys]
+        start = g.a_pts[0, 0]
+        key = start.tobytes()
+        c0 = self._start_clearance.get(key)
+        if c0 is None:
+            n0 = int(np.searchsorted(gu, 0.0, side="right"))
+            xy0 = np.broadcast_to(start, (n0, 2)).copy()
+            c0 = self._start_clearance[key] = float(
+                _call_mover(self.mover_clearance, xy0, gt[:n0]).min(initial=np.inf)
+            )
+        return vals, c0
 
     def _grid_clearance(self, a_pts, d, u_start, u_end) -> tuple[IntArray, FloatArray]:
         """Mover clearance on the timing grid.
@@ -429,6 +491,32 @@ def _arc_fractions(g: _Geometry, arc: FloatArray | None) -> tuple[FloatArray, Fl
     if arc.ndim == 1:
         return arc.take(prev), arc.take(last[:, 1:])
     return arc.take(g.ri * M + prev), arc.take(g.ri * M + last[:, 1:])
+
+
+def _samples(a: FloatArray, e: FloatArray, L: FloatArray, n: IntArray):
+    """Samples along segments a + f e (lengths L, n + 1 samples each, both ends included).
+
+    Returns
+    -------
+    offs : (S,) int
+        Index of each segment's first sample.
+    rep : (N,) int
+        Segment of each sample.
+    frac : (N,) float
+        Fraction f of each sample.
+    xy : (N, 2) float
+    gap : (N,) float
+        Spacing of the samples of each sample's segment.
+    """
+    counts = n + 1
+    offs = np.zeros(len(n), dtype=np.int64)
+    np.cumsum(counts[:-1], out=offs[1:])
+    rep = np.repeat(np.arange(len(n)), counts)
+    local = np.arange(len(rep)) - offs[rep]
+    frac = local / n.take(rep)
+    xy = a.take(rep, axis=0) + frac[:, None] * e.take(rep, axis=0)
+    gap = (L / n).take(rep)
+    return offs, rep, frac, xy, gap
 
 
 def _time_grid(u: FloatArray, t: FloatArray, dt: float, du: float) -> tuple[FloatArray, FloatArray]:
