@@ -177,6 +177,7 @@ class PathEvaluator:
         mask: BoolArray,
         node_ids: IntArray | None = None,
         arc: FloatArray | None = None,
+        exact: BoolArray | None = None,
     ) -> Evaluation:
         """Evaluate padded paths.
 
@@ -194,6 +195,11 @@ class PathEvaluator:
             fraction, and in between it moves as the input did over the same stretch (waits
             included). :attr:`PathCoding.arc` gives the knots' fractions. None: each path's
             own arc-length fraction (the whole path follows the input's timing).
+        exact : (P, M - 1) bool or None
+            None: everything is evaluated. Otherwise the static check of a row already ruled
+            out by the speed rule or the movers is skipped, except on the slots marked here:
+            such a row stays infeasible (cost ``inf``), but its ``min_clearance`` and its
+            ``segment_clearance`` outside the marked slots may be too high.
 
         Returns
         -------
@@ -201,47 +207,74 @@ class PathEvaluator:
         """
         g = _Geometry(np.asarray(points, dtype=float), np.asarray(mask, dtype=bool))
         smoothness = _turning(g)
-        M_ = g.M
         keys = None
         if self._cache is not None and node_ids is not None:
             ids = np.asarray(node_ids)
-            keys = ids.take(g.rows * M_ + g.prev.take(g.fs)) * self._n_nodes + ids.take(
-                g.rows * M_ + g.slots + 1
+            keys = ids.take(g.rows * g.M + g.prev.take(g.fs)) * self._n_nodes + ids.take(
+                g.rows * g.M + g.slots + 1
             )
-        seg_lb, seg_min = self._segment_clearance(g, keys)
         P, M = g.P, g.M
+        # the speed rule and the movers first: a row they rule out needs no static check
+        # (the caller's, e.g. FCL sphere tracing, is the dearest part) unless `exact` asks
+        feasible, seg_mover, mover_min = self._timing_checks(g, keys, arc)
+        skip = None
+        if exact is not None:
+            need = feasible[g.rows] | np.asarray(exact, dtype=bool).reshape(-1).take(g.fs)
+            skip = ~need
+        seg_lb, seg_min = self._segment_clearance(g, keys, skip)
         seg_full = np.full((P, M - 1), np.inf)
         seg_full.reshape(-1)[g.fs] = seg_lb
         min_clear = np.full(P, np.inf)
         np.minimum.at(min_clear, g.rows, seg_min)
-        feasible = seg_full.min(axis=1) >= 0
-        timed = self.mover_clearance is not None and self._grid_u is not None
-        if timed or self._check_speed:
-            u_start, u_end = _arc_fractions(g, arc)
-            if self._check_speed:
-                # nowhere faster than the input: each segment is at most as long as the
-                # stretch of the input whose time it takes
-                span = (u_end - u_start) * self.ref_length
-                feasible &= ~np.any(g.active & (g.seglen > span * (1 + 1e-9) + 1e-12), axis=1)
-            if timed and keys is not None and arc is not None and np.ndim(arc) == 1:
-                cs, c0 = self._grid_clearance_cached(g, keys, u_start, u_end)
-                flat = seg_full.reshape(-1)
-                flat[g.fs] = np.minimum(flat.take(g.fs), cs)
-                # the grid points at the input's start (u = 0) belong to slot 0
-                seg_full[:, 0] = np.minimum(seg_full[:, 0], c0)
-                row_min = np.full(P, c0)
-                np.minimum.at(row_min, g.rows, cs)
-                min_clear = np.minimum(min_clear, row_min)
-                feasible &= seg_full.min(axis=1) >= 0
-            elif timed:
-                flat, cg = self._grid_clearance(g.a_pts, g.d, u_start, u_end)
-                np.minimum.at(seg_full.reshape(-1), flat, cg)
-                min_clear = np.minimum(min_clear, cg.reshape(P, -1).min(axis=1))
-                feasible &= seg_full.min(axis=1) >= 0
+        if seg_mover is not None:
+            np.minimum(seg_full, seg_mover, out=seg_full)
+            min_clear = np.minimum(min_clear, mover_min)
+        feasible &= seg_full.min(axis=1) >= 0
         return Evaluation(g.length, smoothness, min_clear, seg_full, feasible)
 
+    def _timing_checks(self, g: _Geometry, keys: IntArray | None, arc: FloatArray | None):
+        """The speed rule and the movers on the timing grid.
+
+        Returns
+        -------
+        feasible : (P,) bool
+            Not ruled out by the speed rule or the movers.
+        seg_mover : (P, M - 1) float or None
+            Smallest mover clearance on each slot's grid points (None: no timed movers).
+        mover_min : (P,) float or None
+            Smallest mover clearance of each row.
+        """
+        P, M = g.P, g.M
+        feasible = np.ones(P, dtype=bool)
+        seg_mover = mover_min = None
+        timed = self.mover_clearance is not None and self._grid_u is not None
+        if not (timed or self._check_speed):
+            return feasible, seg_mover, mover_min
+        u_start, u_end = _arc_fractions(g, arc)
+        if self._check_speed:
+            # nowhere faster than the input: each segment is at most as long as the
+            # stretch of the input whose time it takes
+            span = (u_end - u_start) * self.ref_length
+            feasible &= ~np.any(g.active & (g.seglen > span * (1 + 1e-9) + 1e-12), axis=1)
+        if not timed:
+            return feasible, seg_mover, mover_min
+        seg_mover = np.full((P, M - 1), np.inf)
+        if keys is not None and arc is not None and np.ndim(arc) == 1:
+            cs, c0 = self._grid_clearance_cached(g, keys, u_start, u_end)
+            seg_mover.reshape(-1)[g.fs] = cs
+            # the grid points at the input's start (u = 0) belong to slot 0
+            seg_mover[:, 0] = np.minimum(seg_mover[:, 0], c0)
+            mover_min = np.full(P, c0)
+            np.minimum.at(mover_min, g.rows, cs)
+        else:
+            flat, cg = self._grid_clearance(g.a_pts, g.d, u_start, u_end)
+            np.minimum.at(seg_mover.reshape(-1), flat, cg)
+            mover_min = cg.reshape(P, -1).min(axis=1)
+        feasible &= seg_mover.min(axis=1) >= 0
+        return feasible, seg_mover, mover_min
+
     def _segment_clearance(
-        self, g: _Geometry, keys: IntArray | None
+        self, g: _Geometry, keys: IntArray | None, skip: BoolArray | None = None
     ) -> tuple[FloatArray, FloatArray]:
         """Static bound and smallest clearance of every kept segment (and, without input
         timing, the movers sampled along it at unit speed).
@@ -251,6 +284,8 @@ class PathEvaluator:
         g : _Geometry
         keys : (S,) int or None
             Node-pair keys of the kept segments, to use the segment cache.
+        skip : (S,) bool or None
+            Kept segments whose static check is not needed (left ``inf`` when not cached).
 
         Returns
         -------
@@ -272,6 +307,8 @@ class PathEvaluator:
             need = np.isnan(cached_lb)
             seg_lb = np.where(need, np.inf, cached_lb)
             seg_min = np.where(need, np.inf, self._cache[1, keys])
+        if skip is not None:
+            need &= ~skip
 
         if need.any():
             sel = None if need.all() else np.nonzero(need)[0]

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..rng import create_rng
-from ..typing import ArrayLike, FloatArray, IntArray
+from ..typing import ArrayLike, BoolArray, FloatArray, IntArray
 from .coding import PathCoding, _dedupe, _derive_steps
 from .fitness import Evaluation, FitnessParts, PathEvaluator
 from .operators import _free, _propose_smooth, crossover, mutate, roulette_select
@@ -233,11 +233,15 @@ class _Costs:
         self.coding, self.evaluator, self.chord = coding, evaluator, chord
         self.cache: dict[bytes, float] = {}
 
-    def evaluate(self, batch: IntArray) -> Evaluation:
-        """Evaluate ``batch`` (P, K) and remember its costs."""
+    def evaluate(self, batch: IntArray, exact: BoolArray | None = None) -> Evaluation:
+        """Evaluate ``batch`` (P, K) and remember its costs; ``exact`` (P, K + 1): the slots
+        whose segment clearance must be exact even in an infeasible row (see
+        :meth:`PathEvaluator.evaluate`); None: none (the costs are exact anyway)."""
         coding = self.coding
         pts, mask = coding.decode(batch)
-        ev = self.evaluator.evaluate(pts, mask, coding.node_ids(batch), coding.arc)
+        if exact is None:
+            exact = np.zeros((len(batch), coding.n_knots + 1), dtype=bool)
+        ev = self.evaluator.evaluate(pts, mask, coding.node_ids(batch), coding.arc, exact)
         self.cache.update(
             zip(
                 (row.tobytes() for row in batch),
@@ -308,7 +312,9 @@ def _evolve(
         rows, cand, new_slots = _propose_smooth(kids, coding, rng, opts.p_smooth)
         todo = kids[costs_of.missing(kids)]
         if len(todo) or len(rows):
-            ev = costs_of.evaluate(np.concatenate([todo, cand]))
+            # the smooth candidates' new segments decide their acceptance: exact
+            exact = np.concatenate([np.zeros((len(todo), K + 1), dtype=bool), new_slots])
+            ev = costs_of.evaluate(np.concatenate([todo, cand]), exact)
             ok = _free(ev.segment_clearance[len(todo) :], new_slots)
             kids[rows[ok]] = cand[ok]
         pop = np.concatenate([best[None], kids])
