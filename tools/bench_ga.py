@@ -126,13 +126,14 @@ def same_result(a, b) -> bool:
     )  # fmt: skip
 
 
-def timed_runs(module, repeat: int, args, patience, seed):
-    """(result, best wall s, best cpu s) of ``repeat`` calls of ``module.refine_path(*args)``."""
+def timed_runs(module, repeat: int, call: tuple, generations: int, patience, seed: int):
+    """(result, best wall s, best cpu s) of ``repeat`` calls of ``module.refine_path(*call)``
+    with the module's own GAOptions."""
     wall = cpu = None
-    opts = module.GAOptions(generations=args[-1], patience=patience)
+    opts = module.GAOptions(generations=generations, patience=patience)
     for _ in range(repeat):
         t0, c0 = time.perf_counter(), time.process_time()
-        res = module.refine_path(*args[:-1], opts, seed=seed)
+        res = module.refine_path(*call, opts, seed=seed)
         w, c = time.perf_counter() - t0, time.process_time() - c0
         wall, cpu = (w, c) if wall is None else (min(wall, w), min(cpu, c))
     return res, wall, cpu
@@ -161,8 +162,8 @@ def main(argv=None):
         ("static + mover, patience 200", times, mc, 200),
     ]
     for name, tt, mover, patience in runs:
-        call = (path, tt, ROBOT, static_clearance, mover, args.generations)
-        res, wall, cpu = timed_runs(current, args.repeat, call, patience, args.seed)
+        call = (path, tt, ROBOT, static_clearance, mover)
+        res, wall, cpu = timed_runs(current, args.repeat, call, args.generations, patience, args.seed)
         print(
             f"{name:<30}{wall:7.2f}{cpu:7.2f}{res.generations:6d}  "
             f"{res.length_before:6.2f} -> {res.length_after:5.2f}  "
@@ -171,7 +172,9 @@ def main(argv=None):
             f"{res.fitness_before:5.3f} -> {res.fitness_after:5.3f}"
         )
         if ref is not None:
-            r_res, r_wall, r_cpu = timed_runs(ref, args.repeat, call, patience, args.seed)
+            r_res, r_wall, r_cpu = timed_runs(
+                ref, args.repeat, call, args.generations, patience, args.seed
+            )
             print(
                 f"{'  reference ' + args.reference:<30}{r_wall:7.2f}{r_cpu:7.2f}"
                 f"{r_res.generations:6d}  same result: {same_result(res, r_res)}"
