@@ -510,3 +510,65 @@ def test_static_segment_hook_decides_static_feasibility():
     better = refine_path(path, None, 0.2, free, None, opts, seed=1, static_segment=accept)
     assert better.improved
     assert better.length_after < better.length_before
+
+
+def _cache_case(seed):
+    """A timed input with a wait at the start, a disc, a crossing mover and a random
+    population of its coding (removed genes included)."""
+    path = np.array([[0.0, 0.0], [0.0, 0.0], [2.0, 1.5], [4.0, 2.5], [6.0, 2.5], [8.0, 1.5], [10.0, 0.0]])
+    times = np.array([0.0, 1.5, 4.0, 6.2, 8.2, 10.7, 13.2])
+
+    def mover(xy, t):
+        t = np.asarray(t, dtype=float)
+        pos = np.column_stack([np.full_like(t, 5.0), -6.0 + 0.8 * t])
+        return np.hypot(*(xy - pos).T) - 0.4 - R_ROBOT
+
+    static = disc_clearance([3.0, 0.5], 0.5)
+    coding = PathCoding.from_path(path, 8, 9, 0.3)
+    rng = np.random.default_rng(seed)
+    pop = rng.integers(2, 7, (60, 8))
+    pop[rng.random(pop.shape) < 0.2] = REMOVED
+    pop[0] = REMOVED  # the straight segment: slot 0 removed, start to goal
+    pop[1] = 4  # the input resampled
+    pts, mask = coding.decode(pop)
+    return path, times, mover, static, coding, pop, pts, mask
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_segment_caches_give_the_uncached_evaluation(seed):
+    # The GA's caches (static bound and mover grid per lattice node pair) must not change
+    # one bit of the evaluation, over two rounds (the second one read from the caches).
+    path, times, mover, static, coding, pop, pts, mask = _cache_case(seed)
+    plain = PathEvaluator(R_ROBOT, static, mover, path, times)
+    cached = PathEvaluator(R_ROBOT, static, mover, path, times)
+    cached._enable_segment_cache(coding.n_knots * coding.levels + 2)
+    want = plain.evaluate(pts, mask, None, coding.arc)
+    assert not want.feasible.all() and want.feasible.any()
+    for _ in range(2):
+        got = cached.evaluate(pts, mask, coding.node_ids(pop), coding.arc)
+        for name in ("length", "smoothness", "min_clearance", "segment_clearance", "feasible"):
+            np.testing.assert_array_equal(getattr(got, name), getattr(want, name), err_msg=name)
+
+
+def test_lazy_static_check_keeps_costs_and_marked_slots():
+    # `exact`: rows ruled out by the movers or the speed rule skip the static check, except
+    # on the marked slots; costs and the marked slots' clearances stay exact.
+    path, times, mover, static, coding, pop, pts, mask = _cache_case(3)
+    calls = []
+
+    def counting(xy):
+        calls.append(len(xy))
+        return static(xy)
+
+    full = PathEvaluator(R_ROBOT, counting, mover, path, times)
+    want = full.evaluate(pts, mask, None, coding.arc)
+    n_full = sum(calls)
+    calls.clear()
+    lazy = PathEvaluator(R_ROBOT, counting, mover, path, times)
+    exact = np.zeros((len(pop), coding.n_knots + 1), dtype=bool)
+    exact[::3, 2:5] = True
+    got = lazy.evaluate(pts, mask, None, coding.arc, exact)
+    assert sum(calls) < n_full  # some rows were ruled out before the static check
+    np.testing.assert_array_equal(got.feasible, want.feasible)
+    np.testing.assert_array_equal(full.fitness(got, 10.0).cost, full.fitness(want, 10.0).cost)
+    np.testing.assert_array_equal(got.segment_clearance[exact], want.segment_clearance[exact])

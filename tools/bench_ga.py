@@ -12,17 +12,27 @@ mover clearances (target: <= 2 s), and the before/after figures of `plan(refine=
 for every bundled query.
 
     python tools/bench_ga.py [--seed S] [--generations G] [--repeat R] [--skip-scenes]
+                             [--reference REV]
+
+``--reference REV`` also runs the GA of git revision REV (its single-file ``gfuzzy/ga.py``,
+e.g. ``1a8460d``, before the GA package and its caches) on the same runs, in the same
+process, and prints its time next to the current one, and whether both results are the
+same (path, chromosome, fitness history, figures).
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib.util
+import subprocess
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-from gfuzzy.ga import GAOptions, fitness_parts, refine_path
+import gfuzzy.ga as current
+from gfuzzy.ga import fitness_parts
 
 ROBOT = 0.25
 BOUNDS = (0.0, 0.0, 20.0, 4.0)
@@ -89,13 +99,55 @@ def scenario(seed):
     raise RuntimeError("no mover phase leaves the input feasible")
 
 
+def load_reference(rev: str):
+    """The module ``gfuzzy/ga.py`` of git revision ``rev``, imported as
+    ``gfuzzy._ga_reference`` (its relative imports resolve in the current package)."""
+    root = Path(__file__).resolve().parent.parent
+    src = subprocess.run(
+        ["git", "show", f"{rev}:gfuzzy/ga.py"], cwd=root, capture_output=True, text=True, check=True
+    ).stdout
+    spec = importlib.util.spec_from_loader("gfuzzy._ga_reference", loader=None)
+    mod = importlib.util.module_from_spec(spec)
+    mod.__package__ = "gfuzzy"
+    sys.modules[mod.__name__] = mod  # dataclasses look their module up there
+    exec(compile(src, f"{rev}:gfuzzy/ga.py", "exec"), mod.__dict__)
+    return mod
+
+
+def same_result(a, b) -> bool:
+    """Both GA results are the same, bit for bit (timings aside)."""
+    arrays = ("path", "chromosome", "fitness_history")
+    scalars = ("generations", "improved", "fitness_before", "fitness_after", "length_before",
+               "length_after", "smoothness_before", "smoothness_after", "clearance_before",
+               "clearance_after")  # fmt: skip
+    return all(np.array_equal(getattr(a, k), getattr(b, k)) for k in arrays) and all(
+        getattr(a, k) == getattr(b, k) or (getattr(a, k) != getattr(a, k) and getattr(b, k) != getattr(b, k))
+        for k in scalars
+    )  # fmt: skip
+
+
+def timed_runs(module, repeat: int, call: tuple, generations: int, patience, seed: int):
+    """(result, best wall s, best cpu s) of ``repeat`` calls of ``module.refine_path(*call)``
+    with the module's own GAOptions."""
+    wall = cpu = None
+    opts = module.GAOptions(generations=generations, patience=patience)
+    for _ in range(repeat):
+        t0, c0 = time.perf_counter(), time.process_time()
+        res = module.refine_path(*call, opts, seed=seed)
+        w, c = time.perf_counter() - t0, time.process_time() - c0
+        wall, cpu = (w, c) if wall is None else (min(wall, w), min(cpu, c))
+    return res, wall, cpu
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--generations", type=int, default=2000)
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--skip-scenes", action="store_true")
+    ap.add_argument("--reference", metavar="REV", help="also time the GA of this git revision")
     args = ap.parse_args(argv)
+    ref = load_reference(args.reference) if args.reference else None
     path, times, mc = scenario(args.seed)
     print(
         f"zig-zag corridor: {len(path)} vertices, robot radius {ROBOT}, 3 discs, 2 boxes, 1 mover"
@@ -110,13 +162,8 @@ def main(argv=None):
         ("static + mover, patience 200", times, mc, 200),
     ]
     for name, tt, mover, patience in runs:
-        opts = GAOptions(generations=args.generations, patience=patience)
-        wall = cpu = None
-        for _ in range(args.repeat):
-            t0, c0 = time.perf_counter(), time.process_time()
-            res = refine_path(path, tt, ROBOT, static_clearance, mover, opts, seed=args.seed)
-            w, c = time.perf_counter() - t0, time.process_time() - c0
-            wall, cpu = (w, c) if wall is None else (min(wall, w), min(cpu, c))
+        call = (path, tt, ROBOT, static_clearance, mover)
+        res, wall, cpu = timed_runs(current, args.repeat, call, args.generations, patience, args.seed)
         print(
             f"{name:<30}{wall:7.2f}{cpu:7.2f}{res.generations:6d}  "
             f"{res.length_before:6.2f} -> {res.length_after:5.2f}  "
@@ -124,9 +171,17 @@ def main(argv=None):
             f"{res.clearance_before:5.3f} -> {res.clearance_after:5.3f}  "
             f"{res.fitness_before:5.3f} -> {res.fitness_after:5.3f}"
         )
+        if ref is not None:
+            r_res, r_wall, r_cpu = timed_runs(
+                ref, args.repeat, call, args.generations, patience, args.seed
+            )
+            print(
+                f"{'  reference ' + args.reference:<30}{r_wall:7.2f}{r_cpu:7.2f}"
+                f"{r_res.generations:6d}  same result: {same_result(res, r_res)}"
+            )
     print("times: best of --repeat runs with the same seed")
     if not args.skip_scenes:
-        bundled(args.seed, args.generations)
+        bundled(args.seed, args.generations, ref, args.reference)
 
 
 FIGURES = (("length", ".2f"), ("smoothness", ".2f"), ("min_clearance", ".3f"), ("duration", ".2f"))
@@ -138,7 +193,7 @@ def _pair(before: dict, after: dict, key: str, fmt: str) -> str:
     return f"{format(before[key], fmt):>6} -> {format(after[key], fmt):<6}"
 
 
-def bundled(seed: int, generations: int) -> None:
+def bundled(seed: int, generations: int, ref=None, rev: str | None = None) -> None:
     from gfuzzy.planner import Planner, PlanOptions
     from gfuzzy.roadmap import load_roadmap
     from gfuzzy.scene import load_scene
@@ -155,15 +210,24 @@ def bundled(seed: int, generations: int) -> None:
     q = scene.queries[0]
     res = planner.plan(q.start, q.goal, q.t0)
     _, static, segment, mover = _clearance_functions(planner, _dedupe(res.trajectory.poses))
+    def corridor(module):
+        return module.refine_path(
+            res.trajectory.poses[:, :2], res.trajectory.times, scene.robot.circumradius, static, mover,
+            module.GAOptions(generations=generations, patience=None), seed=seed, static_segment=segment,
+        )  # fmt: skip
+
     t0 = time.perf_counter()
-    ga = refine_path(
-        res.trajectory.poses[:, :2], res.trajectory.times, scene.robot.circumradius, static, mover,
-        GAOptions(generations=generations, patience=None), seed=seed, static_segment=segment,
-    )  # fmt: skip
+    ga = corridor(current)
     print(
         f"\nbuilding-floor corridor, population 50 x {ga.generations} generations, patience off: "
-        f"{time.perf_counter() - t0:.2f} s (improved: {ga.improved})"
+        f"{time.perf_counter() - t0:.2f} s (improved: {ga.improved}, best cost {ga.fitness_history[-1]:.4g})"
     )
+    if ref is not None:
+        t0 = time.perf_counter()
+        r_ga = corridor(ref)
+        print(
+            f"  reference {rev}: {time.perf_counter() - t0:.2f} s, same result: {same_result(ga, r_ga)}"
+        )
     print(
         f"\n{'scene/query':<36}{'applied':>8}{'ms':>7}  {'length':>15}  {'turning rad':>14}  "
         f"{'min clear':>15}  {'duration':>15}  note"
