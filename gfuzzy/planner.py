@@ -20,11 +20,14 @@ import numpy as np
 
 from .errors import LimitError
 from .geometry import StaticGeometry, metric_distance
+from .movers import MoverField
+from .poses import split_counts
 from .roadmap import Roadmap
 from .scene import Scene
 from .settings import MAX_MOVER_SAMPLES, MAX_POINTS, SPEED_SAFETY
+from .spacetime import IntervalStore, SpaceTimeGraph, split_edges
 from .status import Status
-from .timespace import IntervalStore, MoverField, SpaceTimeGraph, sipp, timed_rows
+from .timespace import sipp, timed_rows
 from .trajectory import Trajectory, TrajectoryFile
 from .typing import FloatArray
 
@@ -299,10 +302,14 @@ class Planner:
         lengths = np.concatenate([rm.lengths[keep], extra_w])
 
         # split edges into steps of at most vmax * dt; interior points of edge e get the
-        # ids n + offs[e] .. n + offs[e+1] - 1
-        step_len = vmax * dt
-        k = np.maximum(1, np.ceil(lengths / step_len)).astype(np.int64)
-        k = np.where(lengths / k > step_len, k + 1, k)
+        # ids n + offs[e] .. n + offs[e+1] - 1 (the size is checked before anything is cut)
+        total = n + int((split_counts(lengths, vmax * dt) - 1).sum())
+        if total > MAX_POINTS:
+            raise LimitError(
+                f"the time step is too fine for this roadmap: its edges would be cut into "
+                f"{total:,} points (at most {MAX_POINTS:,}); use a larger dt"
+            )
+        k, offs, inner, a, b, j, src, dst = split_edges(verts, edges, lengths, vmax * dt, n)
 
         # static shortest distances (Dijkstra on the roadmap): in metres for the roadmap
         # distance, in steps (edge e costs k[e]) for the heuristic, which is exact for the
@@ -322,28 +329,11 @@ class Planner:
         hops = sp(k.astype(float))
         hop_g, hop_s = np.rint(hops[0]), np.rint(hops[1])
 
-        n_int = k - 1
-        offs = np.concatenate([[0], np.cumsum(n_int)])
         total = n + int(offs[-1])
-        if total > MAX_POINTS:
-            raise LimitError(
-                f"the time step is too fine for this roadmap: its edges would be cut into "
-                f"{total:,} points (at most {MAX_POINTS:,}); use a larger dt"
-            )
-        e_of = np.repeat(np.arange(len(edges)), n_int)
-        j = np.arange(offs[-1]) - np.repeat(offs[:-1], n_int) + 1  # 1 .. k-1 along the edge
-        f = j / k[e_of]
-        a, b = edges[e_of, 0], edges[e_of, 1]
-        delta = verts[b] - verts[a]
-        if verts.shape[1] == 3:
-            delta[:, 2] = (delta[:, 2] + np.pi) % (2 * np.pi) - np.pi
         poses = np.empty((total, verts.shape[1]))
         poses[:n] = verts
-        inner = verts[a] + f[:, None] * delta
-        if verts.shape[1] == 3:
-            inner[:, 2] = (inner[:, 2] + np.pi) % (2 * np.pi) - np.pi
         poses[n:] = inner
-        ke = k[e_of]
+        ke = k[np.repeat(np.arange(len(edges)), k - 1)]
         heur = np.empty(total)
         heur[:n] = hop_g
         heur[n:] = np.minimum(hop_g[a] + j, hop_g[b] + ke - j)
@@ -351,14 +341,6 @@ class Planner:
         from_start[:n] = hop_s
         from_start[n:] = np.minimum(hop_s[a] + j, hop_s[b] + ke - j)
         # one-step moves: along each edge's chain a -> interior... -> b, both ways
-        ids = np.arange(n, total)
-        first = np.zeros(offs[-1], dtype=bool)
-        first[offs[:-1][n_int > 0]] = True
-        last = np.zeros(offs[-1], dtype=bool)
-        last[(offs[1:] - 1)[n_int > 0]] = True
-        prev = np.where(first, a, ids - 1)
-        src = np.concatenate([prev, ids[last], edges[n_int == 0, 0]])
-        dst = np.concatenate([ids, b[last], edges[n_int == 0, 1]])
         s2 = np.concatenate([src, dst])
         d2 = np.concatenate([dst, src])
         order = np.argsort(s2, kind="stable")  # by source; neighbours in any fixed order
