@@ -48,6 +48,7 @@ from .poses import interpolate_segment, metric_distance, split_counts, wrap_angl
 from .roadmap import Roadmap
 from .scene import Mover, Scene
 from .settings import SPEED_SAFETY
+from .status import Status
 from .timespace import IntervalStore, MoverField, SpaceTimeGraph, timed_rows
 from .trajectory import Trajectory
 from .typing import FloatArray
@@ -490,10 +491,10 @@ class Navigator:
             if time.perf_counter() > deadline:  # no time left to search: the fallback answers
                 return None, "time budget spent before the search"
             res = search(graph, field_, s_id, self._g_id, deadline=deadline, store=store)
-            if res.status != "no_path" or not res.horizon_hit or time.perf_counter() > deadline:
+            if res.status != Status.NO_PATH or not res.horizon_hit or time.perf_counter() > deadline:
                 break
             slack *= 2.0
-        if res.status != "solved":
+        if res.status != Status.SOLVED:
             return None, res.message
         rows, _ = timed_rows(res.nodes, res.steps, graph.poses, t, opts.dt)
         self._ahead = [(t + st * opts.dt, nd) for nd, st in zip(res.nodes, res.steps, strict=True) if nd <= self._nv]

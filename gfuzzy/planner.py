@@ -460,7 +460,7 @@ class Planner:
 
         problem = query_problem(self.geometry, start, goal)
         if problem:
-            return answer("invalid_query", problem)
+            return answer(Status.INVALID_QUERY, problem)
         ends = start.copy(), goal.copy()  # the rows at the ends repeat them exactly
         if robot.dof == 3:
             start[2] = (start[2] + math.pi) % (2 * math.pi) - math.pi
@@ -472,7 +472,7 @@ class Planner:
             graph, s_id, g_id, rd = _prepared.splice(self, start)
         if not math.isfinite(rd):
             return answer(
-                "no_path",
+                Status.NO_PATH,
                 "start and goal are not connected on the roadmap (sealed off, or the roadmap is too sparse)",
                 nodes=len(graph.poses),
             )
@@ -510,12 +510,12 @@ class Planner:
             if store.H < 0:  # first round: a start on a mover is not a query to search
                 hit = field_.collides_at(start, 0)
                 if hit is not None:
-                    return answer("invalid_query", f"start collides with mover {hit!r} at t0={t0:g}", rd=rd)
+                    return answer(Status.INVALID_QUERY, f"start collides with mover {hit!r} at t0={t0:g}", rd=rd)
                 keep = robot.mover_clearance
                 hit = field_.collides_at(start, 0, keep) if keep > 0 else None
                 if hit is not None:
                     return answer(
-                        "invalid_query",
+                        Status.INVALID_QUERY,
                         f"start is closer than robot.mover_clearance={keep:g} to mover {hit!r} at t0={t0:g}",
                         rd=rd,
                     )
@@ -524,7 +524,7 @@ class Planner:
             )
             expansions += res.expansions
             evaluations += field_.evaluations
-            if res.status != "no_path" or not res.horizon_hit or steps >= max_steps:
+            if res.status != Status.NO_PATH or not res.horizon_hit or steps >= max_steps:
                 break
             slack *= 2.0
         stats = {
@@ -537,17 +537,17 @@ class Planner:
         }
         if hold_steps:
             stats["hold"] = hold
-        if res.status == "no_path" and res.horizon_hit:
+        if res.status == Status.NO_PATH and res.horizon_hit:
             res.message = (
                 f"no safe trajectory within the planning horizon of {horizon:g} s"
                 + (f" (+ the hold of {hold:g} s)" if hold_steps else "")
                 + "; the horizon cut the search: a longer one (--horizon, PlanOptions.horizon) may find one"
             )
-        if res.status != "solved":
+        if res.status != Status.SOLVED:
             return answer(res.status, res.message, rd=rd, **stats)
         traj = Trajectory(timed_rows(res.nodes, res.steps, graph.poses, t0, opts.dt)[0], robot.circumradius)
         stats["search_seconds"] = time.perf_counter() - t_begin
-        result = answer("solved", "", traj, rd, **stats)
+        result = answer(Status.SOLVED, "", traj, rd, **stats)
         if opts.refine or opts.speed_layer:
             from .stages import StageContext, apply_stages
 

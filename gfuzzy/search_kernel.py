@@ -39,6 +39,7 @@ from numba import njit
 
 from .movers import MoverField
 from .spacetime import IntervalStore, SearchResult, SpaceTimeGraph
+from .status import Status
 
 __all__ = ["sipp_compiled", "warm"]
 
@@ -321,7 +322,7 @@ def sipp_compiled(
     h = np.ascontiguousarray(graph.heuristic, dtype=np.float64)
     n = len(h)
     if not math.isfinite(h[start]):
-        return SearchResult("no_path", message="the goal is not reachable on the roadmap")
+        return SearchResult(Status.NO_PATH, message="the goal is not reachable on the roadmap")
     indptr = np.ascontiguousarray(graph.indptr, dtype=np.int64)
     nbrs = np.ascontiguousarray(graph.neighbors, dtype=np.int64)
     wait_ok = np.ones(n, np.bool_) if graph.can_wait is None else np.ascontiguousarray(graph.can_wait, np.bool_)
@@ -383,7 +384,7 @@ def sipp_compiled(
                 pushed = True
         if not pushed:
             return SearchResult(
-                "no_path",
+                Status.NO_PATH,
                 message="no first motion from the start keeps clear of the movers (the start is too close to a mover at t0)",
             )
     while True:
@@ -398,7 +399,7 @@ def sipp_compiled(
         if code == _YIELD:
             if time.perf_counter() > deadline:
                 return SearchResult(
-                    "timeout",
+                    Status.TIMEOUT,
                     message="planning time budget exhausted",
                     expansions=int(ctr[_EXP]),
                     states=int(ctr[_TCOUNT]),
@@ -408,13 +409,13 @@ def sipp_compiled(
     expansions, states, hit = int(ctr[_EXP]), int(ctr[_TCOUNT]), bool(ctr[_HIT])
     if code == _SOLVED:
         nodes, steps = _path(tk, tb, tp, int(ctr[_RESULT]), stride)
-        return SearchResult("solved", nodes.tolist(), steps.tolist(), expansions=expansions, states=states)
+        return SearchResult(Status.SOLVED, nodes.tolist(), steps.tolist(), expansions=expansions, states=states)
     msg = (
         "no safe trajectory within the planning horizon"
         if hit
         else "the reachable space-time is exhausted: no safe trajectory exists on this graph"
     )
-    return SearchResult("no_path", message=msg, expansions=expansions, states=states, horizon_hit=hit)
+    return SearchResult(Status.NO_PATH, message=msg, expansions=expansions, states=states, horizon_hit=hit)
 
 
 def warm() -> None:

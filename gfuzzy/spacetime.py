@@ -18,6 +18,7 @@ import numpy as np
 
 from .poses import interpolate_segment, split_counts
 from .settings import INTERVAL_BATCH_CELLS
+from .status import Status
 from .typing import BoolArray, FloatArray, IntArray
 
 if TYPE_CHECKING:
@@ -65,9 +66,10 @@ class SpaceTimeGraph:
 
 @dataclass
 class SearchResult:
-    """Outcome of :func:`sipp`: ``status`` in {"solved", "no_path", "timeout"}."""
+    """Outcome of :func:`gfuzzy.timespace.sipp` (and the compiled search): ``status`` is
+    :attr:`Status.SOLVED`, :attr:`Status.NO_PATH` or :attr:`Status.TIMEOUT`."""
 
-    status: str
+    status: Status
     nodes: list = field(default_factory=list)  # node ids, one per arrival
     steps: list = field(default_factory=list)  # arrival steps
     message: str = ""

@@ -50,6 +50,7 @@ import numpy as np
 
 from .movers import MoverField
 from .spacetime import IntervalStore, SearchResult, SpaceTimeGraph
+from .status import Status
 
 __all__ = ["MoverField", "SpaceTimeGraph", "SearchResult", "IntervalStore", "sipp", "timed_rows"]
 
@@ -94,7 +95,7 @@ def sipp(
     wait_ok = None if graph.can_wait is None else graph.can_wait.tolist()
     inf = math.inf
     if not math.isfinite(hl[start]):
-        return SearchResult("no_path", message="the goal is not reachable on the roadmap")
+        return SearchResult(Status.NO_PATH, message="the goal is not reachable on the roadmap")
     s_starts, s_ends, _ = ivals(start)
     j0 = bisect_left(s_ends, start_step)
     # a state (node, interval index) is the integer node * stride + index
@@ -132,7 +133,7 @@ def sipp(
                 heappush(openq, (first + weight * hl[v], -first, v, j))
         if not openq:
             return SearchResult(
-                "no_path",
+                Status.NO_PATH,
                 message="no first motion from the start keeps clear of the movers (the start is too close to a mover at t0)",
             )
     expansions = 0
@@ -157,12 +158,12 @@ def sipp(
                 steps.append(best[key])
                 key = parent[key]
             return SearchResult(
-                "solved", nodes[::-1], steps[::-1], expansions=expansions, states=len(best)
+                Status.SOLVED, nodes[::-1], steps[::-1], expansions=expansions, states=len(best)
             )
         expansions += 1
         if expansions % 512 == 0 and time.perf_counter() > deadline:
             return SearchResult(
-                "timeout", message="planning time budget exhausted", expansions=expansions, states=len(best)
+                Status.TIMEOUT, message="planning time budget exhausted", expansions=expansions, states=len(best)
             )
         _, u_ends, u_cap = intervals[u]
         end_u = u_ends[ju]
@@ -195,7 +196,7 @@ def sipp(
         if horizon_hit
         else "the reachable space-time is exhausted: no safe trajectory exists on this graph"
     )
-    return SearchResult("no_path", message=msg, expansions=expansions, states=len(best), horizon_hit=horizon_hit)
+    return SearchResult(Status.NO_PATH, message=msg, expansions=expansions, states=len(best), horizon_hit=horizon_hit)
 
 
 def timed_rows(nodes, steps, poses, t0: float, dt: float, between=None):
