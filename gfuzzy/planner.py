@@ -21,11 +21,11 @@ import numpy as np
 from .errors import LimitError
 from .geometry import StaticGeometry, metric_distance
 from .movers import MoverField
-from .poses import split_counts
+from .poses import split_counts, wrap_angle
 from .roadmap import Roadmap
 from .scene import Scene
 from .settings import MAX_MOVER_SAMPLES, MAX_POINTS, SPEED_SAFETY
-from .spacetime import IntervalStore, SpaceTimeGraph, split_edges
+from .spacetime import IntervalStore, SearchResult, SpaceTimeGraph, split_edges
 from .status import Status
 from .timespace import sipp, timed_rows
 from .trajectory import Trajectory, TrajectoryFile
@@ -439,9 +439,7 @@ class Planner:
             or goal that is not ``dof`` finite numbers, or a non-finite ``t0``.
         """
         opts = options or PlanOptions()
-        hold = float(hold)
-        if not (math.isfinite(hold) and hold >= 0):
-            raise ValueError(f"hold must be a non-negative number, got {hold!r}")
+        hold = _check_hold(hold)
         hold_steps = int(math.ceil(hold / opts.dt - 1e-9)) if hold > 0 else 0
         t_begin = time.perf_counter()
         deadline = t_begin + opts.time_limit
@@ -449,22 +447,17 @@ class Planner:
         vmax = robot.vmax
         start = check_pose(start, robot.dof, "start")
         goal = check_pose(goal, robot.dof, "goal")
-        if isinstance(t0, bool) or not isinstance(t0, (int, float, np.number)) or not math.isfinite(t0):
-            raise ValueError(f"t0: expected a finite number, got {t0!r}")
-        t0 = float(t0)
+        t0 = _check_t0(t0)
 
         def answer(status, message="", traj=None, rd=math.inf, **stats):
-            return PlanResult(
-                Status(status), traj, message, rd, time.perf_counter() - t_begin, vmax, stats
-            )
+            return PlanResult(Status(status), traj, message, rd, time.perf_counter() - t_begin, vmax, stats)
 
         problem = query_problem(self.geometry, start, goal)
         if problem:
             return answer(Status.INVALID_QUERY, problem)
         ends = start.copy(), goal.copy()  # the rows at the ends repeat them exactly
         if robot.dof == 3:
-            start[2] = (start[2] + math.pi) % (2 * math.pi) - math.pi
-            goal[2] = (goal[2] + math.pi) % (2 * math.pi) - math.pi
+            start[2], goal[2] = wrap_angle(start[2]), wrap_angle(goal[2])
         vplan = vmax * SPEED_SAFETY
         if _prepared is None:
             graph, s_id, g_id, rd = self._graph(start, goal, opts.dt, vplan, opts.connect_k, opts.stretch)
@@ -476,63 +469,17 @@ class Planner:
                 "start and goal are not connected on the roadmap (sealed off, or the roadmap is too sparse)",
                 nodes=len(graph.poses),
             )
-        auto = opts.horizon is None
-        if auto:
-            max_horizon = 60.0 + 10.0 * rd / vmax + settle_time(self.scene, t0)
-            # never more than the movers can be sampled over (a default must not fail)
-            if self.scene.movers:
-                cap = (MAX_MOVER_SAMPLES // len(self.scene.movers) - 1 - hold_steps) * opts.dt
-                max_horizon = max(min(max_horizon, cap), opts.dt)
-        else:
-            max_horizon = opts.horizon
-        # Grow the horizon by doubling the slack above the static lower bound: safety is
-        # only computed for times a node can still matter at (from_start .. horizon - h),
-        # so a horizon close to the answer keeps that window, and the work, small.
-        h0 = float(graph.heuristic[s_id])
-        max_steps = int(math.ceil(max_horizon / opts.dt)) + hold_steps  # the parking comes on top
-        # First slack: with few movers the search dominates the cost and a second run
-        # would double it, so start generously; with many, the movers' safety dominates,
-        # it grows with the slack, and a rerun reuses it (IntervalStore): start tight.
-        slack = max(48.0, (0.35 if len(self.scene.movers) <= 10 else 0.15) * h0)
-        store = IntervalStore(graph)  # safety computed once, kept as the horizon grows
-        search = _search_function(opts.backend)
-        expansions = evaluations = 0
-        while True:
-            steps = min(max_steps, int(math.ceil(h0 + slack)) + hold_steps)
-            horizon = (steps - hold_steps) * opts.dt
-            if len(self.scene.movers) * (steps + 1) > MAX_MOVER_SAMPLES:
-                raise LimitError(
-                    f"{len(self.scene.movers)} movers over {steps:,} time steps are too many to "
-                    f"sample (at most {MAX_MOVER_SAMPLES:,}); use a larger dt or a shorter horizon"
-                )
-            field_ = MoverField(self.scene, t0, opts.dt, steps, vmax)
-            field_.compiled = opts.backend == "compiled"
-            if store.H < 0:  # first round: a start on a mover is not a query to search
-                hit = field_.collides_at(start, 0)
-                if hit is not None:
-                    return answer(Status.INVALID_QUERY, f"start collides with mover {hit!r} at t0={t0:g}", rd=rd)
-                keep = robot.mover_clearance
-                hit = field_.collides_at(start, 0, keep) if keep > 0 else None
-                if hit is not None:
-                    return answer(
-                        Status.INVALID_QUERY,
-                        f"start is closer than robot.mover_clearance={keep:g} to mover {hit!r} at t0={t0:g}",
-                        rd=rd,
-                    )
-            res = search(
-                graph, field_, s_id, g_id, deadline=deadline, weight=opts.weight, store=store, goal_hold=hold_steps
-            )
-            expansions += res.expansions
-            evaluations += field_.evaluations
-            if res.status != Status.NO_PATH or not res.horizon_hit or steps >= max_steps:
-                break
-            slack *= 2.0
+        max_steps = self._max_steps(opts, rd, t0, hold_steps)
+        run = self._search_rounds(graph, s_id, g_id, start, t0, opts, hold_steps, max_steps, deadline)
+        if run.problem:
+            return answer(Status.INVALID_QUERY, run.problem, rd=rd)
+        res, horizon = run.result, run.horizon
         stats = {
-            "expansions": expansions,
+            "expansions": run.expansions,
             "states": res.states,
             "graph_nodes": len(graph.poses),
             "roadmap_vertices": len(self.roadmap.vertices),
-            "mover_evaluations": evaluations,
+            "mover_evaluations": run.evaluations,
             "horizon": horizon,
         }
         if hold_steps:
@@ -556,6 +503,91 @@ class Planner:
         wps = result.trajectory.waypoints.copy()
         wps[0, 1:], wps[-1, 1:] = ends
         return replace(result, trajectory=Trajectory(wps, robot.circumradius), stats=_amax_stats(robot, result.stats))
+
+    def _max_steps(self, opts: PlanOptions, rd: float, t0: float, hold_steps: int) -> int:
+        """The longest horizon searched, in steps (the parking's steps come on top)."""
+        if opts.horizon is None:
+            max_horizon = 60.0 + 10.0 * rd / self.robot.vmax + settle_time(self.scene, t0)
+            # never more than the movers can be sampled over (a default must not fail)
+            if self.scene.movers:
+                cap = (MAX_MOVER_SAMPLES // len(self.scene.movers) - 1 - hold_steps) * opts.dt
+                max_horizon = max(min(max_horizon, cap), opts.dt)
+        else:
+            max_horizon = opts.horizon
+        return int(math.ceil(max_horizon / opts.dt)) + hold_steps
+
+    def _start_problem(self, field_: MoverField, start: FloatArray, t0: float) -> str:
+        """Why the start cannot be searched from (on a mover, or within mover_clearance), or ""."""
+        hit = field_.collides_at(start, 0)
+        if hit is not None:
+            return f"start collides with mover {hit!r} at t0={t0:g}"
+        keep = self.robot.mover_clearance
+        hit = field_.collides_at(start, 0, keep) if keep > 0 else None
+        if hit is not None:
+            return f"start is closer than robot.mover_clearance={keep:g} to mover {hit!r} at t0={t0:g}"
+        return ""
+
+    def _search_rounds(self, graph, s_id, g_id, start, t0, opts, hold_steps, max_steps, deadline) -> _Rounds:
+        """The search, rerun with a doubled slack while the horizon cut it off."""
+        # Grow the horizon by doubling the slack above the static lower bound: safety is
+        # only computed for times a node can still matter at (from_start .. horizon - h),
+        # so a horizon close to the answer keeps that window, and the work, small.
+        h0 = float(graph.heuristic[s_id])
+        # First slack: with few movers the search dominates the cost and a second run
+        # would double it, so start generously; with many, the movers' safety dominates,
+        # it grows with the slack, and a rerun reuses it (IntervalStore): start tight.
+        slack = max(48.0, (0.35 if len(self.scene.movers) <= 10 else 0.15) * h0)
+        store = IntervalStore(graph)  # safety computed once, kept as the horizon grows
+        search = _search_function(opts.backend)
+        expansions = evaluations = 0
+        while True:
+            steps = min(max_steps, int(math.ceil(h0 + slack)) + hold_steps)
+            horizon = (steps - hold_steps) * opts.dt
+            if len(self.scene.movers) * (steps + 1) > MAX_MOVER_SAMPLES:
+                raise LimitError(
+                    f"{len(self.scene.movers)} movers over {steps:,} time steps are too many to "
+                    f"sample (at most {MAX_MOVER_SAMPLES:,}); use a larger dt or a shorter horizon"
+                )
+            field_ = MoverField(self.scene, t0, opts.dt, steps, self.robot.vmax)
+            field_.compiled = opts.backend == "compiled"
+            if store.H < 0:  # first round: a start on a mover is not a query to search
+                problem = self._start_problem(field_, start, t0)
+                if problem:
+                    return _Rounds(None, horizon, 0, 0, problem)
+            res = search(
+                graph, field_, s_id, g_id, deadline=deadline, weight=opts.weight, store=store, goal_hold=hold_steps
+            )
+            expansions += res.expansions
+            evaluations += field_.evaluations
+            if res.status != Status.NO_PATH or not res.horizon_hit or steps >= max_steps:
+                return _Rounds(res, horizon, expansions, evaluations)
+            slack *= 2.0
+
+
+@dataclass
+class _Rounds:
+    """What :meth:`Planner._search_rounds` found: the last search, or why none ran."""
+
+    result: SearchResult | None
+    horizon: float
+    expansions: int
+    evaluations: int
+    problem: str = ""
+
+
+def _check_hold(hold) -> float:
+    """A query's ``hold`` as a float (ValueError when negative or not finite)."""
+    hold = float(hold)
+    if not (math.isfinite(hold) and hold >= 0):
+        raise ValueError(f"hold must be a non-negative number, got {hold!r}")
+    return hold
+
+
+def _check_t0(t0) -> float:
+    """A departure time as a float (ValueError when not a finite number)."""
+    if isinstance(t0, bool) or not isinstance(t0, (int, float, np.number)) or not math.isfinite(t0):
+        raise ValueError(f"t0: expected a finite number, got {t0!r}")
+    return float(t0)
 
 
 def _search_function(backend: str):

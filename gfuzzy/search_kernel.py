@@ -40,6 +40,7 @@ from numba import njit
 from .movers import MoverField
 from .spacetime import IntervalStore, SearchResult, SpaceTimeGraph
 from .status import Status
+from .timespace import NO_FIRST_MOTION, exhausted, first_motions
 
 __all__ = ["sipp_compiled", "warm"]
 
@@ -363,19 +364,9 @@ def sipp_compiled(
         key0 = start * stride + stride - 1
         tk, tb, tp = _set(tk, tb, tp, ctr, key0, start_step, -1)
         first = start_step + 1
-        moves = list(nbrs[indptr[start] : indptr[start + 1]].tolist())
-        if wait_ok[start]:
-            moves.append(start)
         pushed = False
-        for v in moves if first <= H else ():
-            if math.isinf(h[v]):
-                continue
-            starts, ends, _ = ivals(v)
-            j = bisect_left(ends, first)
-            if j >= len(starts) or starts[j] > first:
-                continue
-            if not field_.motion_safe(graph.poses[start], graph.poses[v], start_step):
-                continue
+        neighbours = nbrs[indptr[start] : indptr[start + 1]].tolist()
+        for v, j in first_motions(graph, field_, start, start_step, ivals, neighbours, bool(wait_ok[start])):
             key = v * stride + j
             if first < _get(tk, tb, key, np.iinfo(np.int64).max):
                 load(v)
@@ -383,10 +374,7 @@ def sipp_compiled(
                 hf, hq = _push(hf, hq, ctr, first + weight * h[v], -first, v, j)
                 pushed = True
         if not pushed:
-            return SearchResult(
-                Status.NO_PATH,
-                message="no first motion from the start keeps clear of the movers (the start is too close to a mover at t0)",
-            )
+            return SearchResult(Status.NO_PATH, message=NO_FIRST_MOTION)
     while True:
         code, hf, hq, tk, tb, tp = _run(
             indptr, nbrs, h, wait_ok, goal, goal_hold, H, float(weight), stride,
@@ -410,12 +398,7 @@ def sipp_compiled(
     if code == _SOLVED:
         nodes, steps = _path(tk, tb, tp, int(ctr[_RESULT]), stride)
         return SearchResult(Status.SOLVED, nodes.tolist(), steps.tolist(), expansions=expansions, states=states)
-    msg = (
-        "no safe trajectory within the planning horizon"
-        if hit
-        else "the reachable space-time is exhausted: no safe trajectory exists on this graph"
-    )
-    return SearchResult(Status.NO_PATH, message=msg, expansions=expansions, states=states, horizon_hit=hit)
+    return exhausted(expansions, states, hit)
 
 
 def warm() -> None:

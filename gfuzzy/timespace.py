@@ -52,9 +52,14 @@ from .movers import MoverField
 from .spacetime import IntervalStore, SearchResult, SpaceTimeGraph
 from .status import Status
 
-__all__ = ["MoverField", "SpaceTimeGraph", "SearchResult", "IntervalStore", "sipp", "timed_rows"]
+__all__ = ["MoverField", "SpaceTimeGraph", "SearchResult", "IntervalStore", "sipp", "timed_rows", "first_motions", "exhausted"]
 
 log = logging.getLogger(__name__)
+
+#: Why a search from a start the margin refuses found nothing (both backends).
+NO_FIRST_MOTION = (
+    "no first motion from the start keeps clear of the movers (the start is too close to a mover at t0)"
+)
 
 
 def sipp(
@@ -96,46 +101,13 @@ def sipp(
     inf = math.inf
     if not math.isfinite(hl[start]):
         return SearchResult(Status.NO_PATH, message="the goal is not reachable on the roadmap")
-    s_starts, s_ends, _ = ivals(start)
-    j0 = bisect_left(s_ends, start_step)
     # a state (node, interval index) is the integer node * stride + index
     stride = H + 2
     heappop, heappush = heapq.heappop, heapq.heappush
-    if j0 < len(s_starts) and s_starts[j0] <= start_step:
-        key0 = start * stride + j0
-        best = {key0: start_step}
-        parent: dict = {key0: -1}
-        openq = [(start_step + weight * hl[start], -start_step, start, j0)]
-    else:
-        # the margin refuses the start: decide each first motion exactly instead (the
-        # robot only lives from the start's step on, and only along the motion it takes)
-        key0 = start * stride + stride - 1  # an index no interval has (at most H / 2 + 1)
-        best = {key0: start_step}
-        parent = {key0: -1}
-        openq = []
-        first = start_step + 1
-        moves = list(nbrs[indptr[start] : indptr[start + 1]])
-        if wait_ok is None or wait_ok[start]:
-            moves.append(start)
-        for v in moves if first <= H else ():
-            if hl[v] == inf:
-                continue
-            starts, ends, _ = ivals(v)
-            j = bisect_left(ends, first)
-            if j >= len(starts) or starts[j] > first:
-                continue
-            if not field_.motion_safe(graph.poses[start], graph.poses[v], start_step):
-                continue
-            key = v * stride + j
-            if first < best.get(key, inf):
-                best[key] = first
-                parent[key] = key0
-                heappush(openq, (first + weight * hl[v], -first, v, j))
-        if not openq:
-            return SearchResult(
-                Status.NO_PATH,
-                message="no first motion from the start keeps clear of the movers (the start is too close to a mover at t0)",
-            )
+    best, parent, openq = _open(graph, field_, start, start_step, ivals, nbrs[indptr[start] : indptr[start + 1]],
+                                wait_ok is None or wait_ok[start], stride, weight)  # fmt: skip
+    if not openq:
+        return SearchResult(Status.NO_PATH, message=NO_FIRST_MOTION)
     expansions = 0
     horizon_hit = False
     while openq:
@@ -151,15 +123,8 @@ def sipp(
             if not parked and g_ends[ju] >= g_cap:  # cut by the horizon, not by a mover
                 horizon_hit = True
         if u == goal and parked:
-            nodes, steps = [], []
-            key = ukey
-            while key >= 0:
-                nodes.append(key // stride)
-                steps.append(best[key])
-                key = parent[key]
-            return SearchResult(
-                Status.SOLVED, nodes[::-1], steps[::-1], expansions=expansions, states=len(best)
-            )
+            nodes, steps = _walk_back(ukey, best, parent, stride)
+            return SearchResult(Status.SOLVED, nodes, steps, expansions=expansions, states=len(best))
         expansions += 1
         if expansions % 512 == 0 and time.perf_counter() > deadline:
             return SearchResult(
@@ -191,12 +156,83 @@ def sipp(
                     parent[key] = ukey
                     heappush(openq, (arr + weight * hv, -arr, v, j))
                 j += 1
+    return exhausted(expansions, len(best), horizon_hit)
+
+
+def _open(graph, field_, start, start_step, ivals, neighbours, can_wait, stride, weight):
+    """(best, parent, open list) of :func:`sipp` before its first expansion.
+
+    The start's own state when it is safe at ``start_step``; otherwise the first motions
+    decided exactly (an empty open list: none is clear).
+    """
+    hl = graph.heuristic
+    s_starts, s_ends, _ = ivals(start)
+    j0 = bisect_left(s_ends, start_step)
+    if j0 < len(s_starts) and s_starts[j0] <= start_step:
+        key0 = start * stride + j0
+        return {key0: start_step}, {key0: -1}, [(start_step + weight * float(hl[start]), -start_step, start, j0)]
+    # the margin refuses the start: decide each first motion exactly instead (the
+    # robot only lives from the start's step on, and only along the motion it takes)
+    key0 = start * stride + stride - 1  # an index no interval has (at most H / 2 + 1)
+    best = {key0: start_step}
+    parent = {key0: -1}
+    openq: list = []
+    first = start_step + 1
+    for v, j in first_motions(graph, field_, start, start_step, ivals, neighbours, can_wait):
+        key = v * stride + j
+        if first < best.get(key, math.inf):
+            best[key] = first
+            parent[key] = key0
+            heapq.heappush(openq, (first + weight * float(hl[v]), -first, v, j))
+    return best, parent, openq
+
+
+def exhausted(expansions: int, states: int, horizon_hit: bool) -> SearchResult:
+    """The NO_PATH answer of a search whose open list ran empty (both backends)."""
     msg = (
         "no safe trajectory within the planning horizon"
         if horizon_hit
         else "the reachable space-time is exhausted: no safe trajectory exists on this graph"
     )
-    return SearchResult(Status.NO_PATH, message=msg, expansions=expansions, states=len(best), horizon_hit=horizon_hit)
+    return SearchResult(Status.NO_PATH, message=msg, expansions=expansions, states=states, horizon_hit=horizon_hit)
+
+
+def first_motions(graph: SpaceTimeGraph, field_: MoverField, start: int, start_step: int, ivals, neighbours,
+                  can_wait: bool):  # fmt: skip
+    """The first motions from a start the margin refuses, decided exactly (both backends).
+
+    Yields ``(node, interval index)`` for each one-step motion (to a neighbour in
+    ``neighbours`` order, then waiting at the start when ``can_wait``) that arrives in a
+    safe interval and that :meth:`MoverField.motion_safe` proves clear over the step.
+    A generator, so that a caller may act between two motions as the loop it replaces did.
+    """
+    first = start_step + 1
+    if first > field_.steps:
+        return
+    moves = list(neighbours)
+    if can_wait:
+        moves.append(start)
+    h = graph.heuristic
+    for v in moves:
+        if h[v] == math.inf:
+            continue
+        starts, ends, _ = ivals(v)
+        j = bisect_left(ends, first)
+        if j >= len(starts) or starts[j] > first:
+            continue
+        if not field_.motion_safe(graph.poses[start], graph.poses[v], start_step):
+            continue
+        yield v, j
+
+
+def _walk_back(key: int, best: dict, parent: dict, stride: int) -> tuple[list, list]:
+    """(nodes, arrival steps) from the start to the state ``key``, following ``parent``."""
+    nodes, steps = [], []
+    while key >= 0:
+        nodes.append(key // stride)
+        steps.append(best[key])
+        key = parent[key]
+    return nodes[::-1], steps[::-1]
 
 
 def timed_rows(nodes, steps, poses, t0: float, dt: float, between=None):

@@ -26,9 +26,6 @@ MAX_FUNCTION_LINES = 100
 #: a new offender in the same file.
 PHASE_B = {
     "gfuzzy.ga": "1523 lines; refine_path: the GA split into population/operators/refine",
-    "gfuzzy.timespace": "sipp: the search loop (issue 11 compiles it)",
-    "gfuzzy.planner": "Planner.plan: graph building moves into the search module",
-    "gfuzzy.search_kernel": "issue 11's compiled kernel, split with the search",
 }
 
 
