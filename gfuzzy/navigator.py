@@ -41,7 +41,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .errors import InputError
+from .errors import InputError, check_number
 from .geometry import StaticGeometry
 from .planner import BACKENDS, _search_function
 from .poses import interpolate_segment, metric_distance, split_counts, wrap_angle
@@ -127,19 +127,14 @@ class NavOptions:
 
     def __post_init__(self):
         if self.backend not in BACKENDS:
-            raise ValueError(f"backend must be one of {', '.join(BACKENDS)}, got {self.backend!r}")
+            raise InputError(f"backend must be one of {', '.join(BACKENDS)}, got {self.backend!r}")
         for name in ("dt", "prediction_horizon", "reference_speed", "slice", "time_budget", "plan_slack", "evasion_time", "cover"):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise InputError(f"{name} must be a positive number, got {v!r}")
+            check_number(name, getattr(self, name))
         for name in ("uncertainty_growth", "safety_buffer", "stationary_hold", "goal_tolerance"):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
-                raise InputError(f"{name} must be a number >= 0, got {v!r}")
+            check_number(name, getattr(self, name), strict=False)
         if self.connect_k < 1 or self.evasion_headings < 4:
             raise InputError("connect_k must be >= 1 and evasion_headings >= 4")
-        if not (self.stretch >= 1.0 and math.isfinite(self.stretch)):
-            raise InputError(f"stretch must be a number >= 1, got {self.stretch}")
+        check_number("stretch", self.stretch, 1.0, strict=False)
 
 
 @dataclass(frozen=True)

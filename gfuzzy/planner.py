@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .errors import LimitError
+from .errors import InputError, LimitError, check_number
 from .geometry import StaticGeometry, metric_distance
 from .movers import MoverField
 from .poses import split_counts, wrap_angle
@@ -111,18 +111,14 @@ class PlanOptions:
     backend: str = "compiled"
 
     def __post_init__(self):
-        if not (self.dt > 0 and math.isfinite(self.dt)):
-            raise ValueError(f"dt must be a positive number, got {self.dt}")
-        if self.horizon is not None and not self.horizon > 0:
-            raise ValueError(f"horizon must be positive, got {self.horizon}")
-        if not self.time_limit > 0:
-            raise ValueError(f"time_limit must be positive, got {self.time_limit}")
-        if not (self.weight >= 1.0 and math.isfinite(self.weight)):
-            raise ValueError(f"weight must be a number >= 1, got {self.weight}")
-        if not (self.stretch >= 1.0 and math.isfinite(self.stretch)):
-            raise ValueError(f"stretch must be a number >= 1, got {self.stretch}")
+        check_number("dt", self.dt)
+        if self.horizon is not None:
+            check_number("horizon", self.horizon, finite=False)
+        check_number("time_limit", self.time_limit, finite=False)
+        check_number("weight", self.weight, 1.0, strict=False)
+        check_number("stretch", self.stretch, 1.0, strict=False)
         if self.backend not in BACKENDS:
-            raise ValueError(f"backend must be one of {', '.join(BACKENDS)}, got {self.backend!r}")
+            raise InputError(f"backend must be one of {', '.join(BACKENDS)}, got {self.backend!r}")
 
 
 @dataclass(frozen=True)
@@ -368,7 +364,7 @@ class Planner:
 
         Raises
         ------
-        ValueError
+        InputError
             A malformed goal (as :meth:`plan`).
         """
         from .prepared import prepare_goal
@@ -434,9 +430,9 @@ class Planner:
 
         Raises
         ------
-        ValueError
+        InputError
             A malformed request (bad input, as the command line's exit status 2): a start
-            or goal that is not ``dof`` finite numbers, or a non-finite ``t0``.
+            or goal that is not ``dof`` finite numbers, or a non-finite ``t0`` or ``hold``.
         """
         opts = options or PlanOptions()
         hold = _check_hold(hold)
@@ -576,17 +572,17 @@ class _Rounds:
 
 
 def _check_hold(hold) -> float:
-    """A query's ``hold`` as a float (ValueError when negative or not finite)."""
+    """A query's ``hold`` as a float (InputError when negative or not finite)."""
     hold = float(hold)
     if not (math.isfinite(hold) and hold >= 0):
-        raise ValueError(f"hold must be a non-negative number, got {hold!r}")
+        raise InputError(f"hold must be a non-negative number, got {hold!r}")
     return hold
 
 
 def _check_t0(t0) -> float:
-    """A departure time as a float (ValueError when not a finite number)."""
+    """A departure time as a float (InputError when not a finite number)."""
     if isinstance(t0, bool) or not isinstance(t0, (int, float, np.number)) or not math.isfinite(t0):
-        raise ValueError(f"t0: expected a finite number, got {t0!r}")
+        raise InputError(f"t0: expected a finite number, got {t0!r}")
     return float(t0)
 
 
@@ -600,7 +596,7 @@ def _search_function(backend: str):
 
 
 def check_pose(pose, dof: int, label: str) -> FloatArray:
-    """``pose`` as a (dof,) float array; ValueError naming ``label`` when it is malformed.
+    """``pose`` as a (dof,) float array; InputError naming ``label`` when it is malformed.
 
     A pose that is not ``dof`` finite numbers is bad input, like a bad scene file; a
     well-formed pose that collides or lies out of bounds is a query answered
@@ -610,12 +606,12 @@ def check_pose(pose, dof: int, label: str) -> FloatArray:
     try:
         arr = np.asarray(pose, dtype=float)
     except (TypeError, ValueError):
-        raise ValueError(f"{label}: expected {dof} finite numbers {want}, got {pose!r}") from None
+        raise InputError(f"{label}: expected {dof} finite numbers {want}, got {pose!r}") from None
     if arr.ndim != 1 or arr.shape != (dof,):
         got = f"{arr.size} numbers" if arr.ndim == 1 else f"shape {arr.shape}"
-        raise ValueError(f"{label}: expected {dof} finite numbers {want}, got {got}")
+        raise InputError(f"{label}: expected {dof} finite numbers {want}, got {got}")
     if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{label}: expected {dof} finite numbers {want}, got {arr.tolist()}")
+        raise InputError(f"{label}: expected {dof} finite numbers {want}, got {arr.tolist()}")
     return arr.copy()
 
 
