@@ -39,8 +39,6 @@ PHASE_B_CYCLES: list[set[str]] = []
 PHASE_A_REMAINING: dict[str, str] = {
     "gfuzzy.learning.tracking": "track (its hot pure-Python loop: a call per step costs ~5 %; "
     "a small stepper compiled with numba, now a dependency, is the way)",
-    "gfuzzy.render": "1081 lines, _draw_trajectory, render_animation (pictures vs animation "
-    "into two modules)",
 }
 
 
