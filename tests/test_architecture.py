@@ -36,10 +36,7 @@ PHASE_B_CYCLES: list[set[str]] = []
 
 #: Phase A's own leftovers (functions it had no time to split), fixed before phase B
 #: starts; listed in docs/architecture.md. Same rule as PHASE_B.
-PHASE_A_REMAINING: dict[str, str] = {
-    "gfuzzy.learning.tracking": "track (its hot pure-Python loop: a call per step costs ~5 %; "
-    "a small stepper compiled with numba, now a dependency, is the way)",
-}
+PHASE_A_REMAINING: dict[str, str] = {}
 
 
 def _module_name(path: Path) -> str:
