@@ -136,7 +136,9 @@ class PlanResult:
         Shortest start-to-goal distance on the roadmap (inf when not connected).
     planning_seconds : float
     stats : dict
-        Expansions, states, graph size, and the stages' reports as dicts (the file's keys).
+        Expansions, states, graph size; ``stats["refine"]`` / ``["speed_layer"]`` repeat
+        the reports' ``to_dict()`` for older readers (``tools/bench_ga.py``): the file and
+        ``amax_honoured`` are made from the reports themselves.
     refine_report, speed_report : gfuzzy.stages.RefineReport / SpeedReport or None
         What each stage did, when it ran.
     """
@@ -179,8 +181,12 @@ class PlanResult:
         ``amax_honoured`` (and ``amax_note`` saying why not when it is false).
         """
         rd = self.roadmap_distance if math.isfinite(self.roadmap_distance) else None
-        stats = dict(self.stats)
+        # the stages' entries come from their reports (the file keeps its keys and order)
+        stats = {k: v for k, v in self.stats.items() if k not in ("refine", "speed_layer")}
         extra = {key: stats.pop(key) for key in ("amax_honoured", "amax_note") if key in stats}
+        for key, report in (("refine", self.refine_report), ("speed_layer", self.speed_report)):
+            if report is not None:
+                stats[key] = report.to_dict()
         return TrajectoryFile(
             scene=scene,
             query=query,
@@ -195,25 +201,25 @@ class PlanResult:
         )
 
 
-def _amax_stats(robot, stats: dict) -> dict:
+def _amax_stats(robot, stats: dict, layer: SpeedReport | None) -> dict:
     """``stats`` plus whether a solved answer honours ``robot.amax`` (when the robot has one).
 
-    Only the speed layer limits acceleration; the search's and the GA's answers start, stop
-    and turn at full speed. A user who set ``amax`` is told when it was not applied, and why.
+    Only the speed layer (its report: ``layer``) limits acceleration; the search's and the
+    GA's answers start, stop and turn at full speed. A user who set ``amax`` is told when it
+    was not applied, and why.
     """
     if robot.amax is None:
         return stats
-    layer = stats.get("speed_layer")
-    out = dict(stats, amax_honoured=bool(layer is not None and layer.get("applied")))
+    out = dict(stats, amax_honoured=bool(layer is not None and layer.applied))
     if layer is None:
         out["amax_note"] = (
             f"robot.amax {robot.amax:g} is not honoured: only the speed layer bounds "
             "acceleration, and it is off (PlanOptions.speed_layer, --speed-layer)"
         )
-    elif not layer.get("applied"):
+    elif not layer.applied:
         out["amax_note"] = (
             f"robot.amax {robot.amax:g} is not honoured: the speed layer did not apply "
-            f"({layer.get('reason', 'no reason given')})"
+            f"({layer.reason or 'no reason given'})"
         )
     if not out["amax_honoured"]:
         log.info("%s", out["amax_note"])
@@ -498,7 +504,7 @@ class Planner:
         # headings are wrapped inside; the first and last rows give the query's own numbers
         wps = result.trajectory.waypoints.copy()
         wps[0, 1:], wps[-1, 1:] = ends
-        return replace(result, trajectory=Trajectory(wps, robot.circumradius), stats=_amax_stats(robot, result.stats))
+        return replace(result, trajectory=Trajectory(wps, robot.circumradius), stats=_amax_stats(robot, result.stats, result.speed_report))
 
     def _max_steps(self, opts: PlanOptions, rd: float, t0: float, hold_steps: int) -> int:
         """The longest horizon searched, in steps (the parking's steps come on top)."""
