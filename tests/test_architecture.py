@@ -5,9 +5,8 @@
   out).
 * Planning never imports the learning subpackage (rule learning, tracking simulation).
 * No module over ``MAX_MODULE_LINES`` lines and no function over ``MAX_FUNCTION_LINES``,
-  except the files listed in ``PHASE_B``: they are being rewritten on another branch
-  (issue 11) and are split after it lands (docs/architecture.md, "still to do").
-  Phase B empties that list.
+  except the files listed in ``PHASE_B``: ``ga.py``, being split on branch ``ga``
+  (docs/architecture.md, "Phase B: done, and what is left"). That branch empties the list.
 """
 
 from __future__ import annotations
@@ -34,8 +33,8 @@ PHASE_B = {
 #: intervals and SearchResult into spacetime).
 PHASE_B_CYCLES: list[set[str]] = []
 
-#: Phase A's own leftovers (functions it had no time to split), fixed before phase B
-#: starts; listed in docs/architecture.md. Same rule as PHASE_B.
+#: Phase A's own leftovers (functions it had no time to split): none left (phase B split
+#: render.py and learning/tracking.track). Same rule as PHASE_B.
 PHASE_A_REMAINING: dict[str, str] = {}
 
 
