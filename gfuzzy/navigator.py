@@ -10,7 +10,7 @@ roadmap-time search into a receding-horizon controller:
    uncertainty that grows by ``uncertainty_growth`` metres per second of prediction. The
    prediction is written as a chain of short ``trajectory`` movers (one per ``slice``,
    each with its own radius), so the search's continuous-time safety
-   (:class:`~gfuzzy.timespace.MoverField`) applies to it unchanged. Beyond the horizon a
+   (:class:`~gfuzzy.movers.MoverField`) applies to it unchanged. Beyond the horizon a
    walking person is dropped (too uncertain to plan around); a person standing still is
    kept where they stand for ``stationary_hold`` more seconds (someone standing in a
    doorway is likely to stay a while: the search then prefers another door or waits).

@@ -4,7 +4,7 @@ The reference search (:func:`gfuzzy.timespace.sipp`) stays the definition; this 
 runs the same A* loop over safe intervals in machine code and must give the same answers
 (tests/test_search_kernel.py cross-checks them). What stays in Python:
 
-* the movers' safety (:class:`gfuzzy.timespace.IntervalStore`, vectorised numpy), asked
+* the movers' safety (:class:`gfuzzy.spacetime.IntervalStore`, vectorised numpy), asked
   for lazily, node by node, exactly as the reference asks for it;
 * the first motions from a start that the margin refuses (:meth:`MoverField.motion_safe`),
   decided before the loop starts;
