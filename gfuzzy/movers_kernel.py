@@ -33,26 +33,6 @@ def _box_dist(px, py, hx, hy):
     return outside + inside
 
 
-@njit(cache=True, inline="always")
-def _exact(rx, ry, hc, mg, node, m, robot_in, inner, robot_kind, is_disc, robot_r, mrad, msize, cosp, sinp,
-           hx_r, hy_r):  # fmt: skip
-    """Robot-mover distance of one candidate of :func:`narrow_phase` (NaN: box against box,
-    left to the caller); inlined into the loop, so the loop's code is unchanged."""
-    if hc - robot_in - inner[m] < mg - 1e-9:
-        # the shapes' inscribed discs are closer than the margin, so the exact
-        # distance (or the separating-axis gap, a lower bound) is too
-        return -np.inf
-    if robot_kind == 0:
-        if is_disc[m]:
-            return math.hypot(rx, ry) - robot_r - mrad[m]
-        return _box_dist(rx, ry, 0.5 * msize[m, 0], 0.5 * msize[m, 1]) - robot_r
-    if is_disc[m]:
-        cc = cosp[node]
-        ss = sinp[node]
-        return _box_dist(cc * rx + ss * ry, -ss * rx + cc * ry, hx_r, hy_r) - mrad[m]
-    return np.nan
-
-
 @njit(cache=True)
 def narrow_phase(g3, m3, c3, chunk, lo, hi, present, mxy, margin_tab, ptr, xy, p0, seg, inv, seg2, dev,
                  body, extent, circ, robot_kind, robot_r, hx_r, hy_r, cosp, sinp, is_disc, mrad, msize,
@@ -72,26 +52,23 @@ def narrow_phase(g3, m3, c3, chunk, lo, hi, present, mxy, margin_tab, ptr, xy, p
     node, mover, step : (p,) int
         The pairs found unsafe, and those whose distance is left to the caller.
     margin, dist : (p,) float
-    evaluations : int
-        Pairs that passed the cheap tests (the reference's ``evaluations``).
+    evaluations : int  (pairs that passed the cheap tests: the reference's ``evaluations``)
     """
-    out_n = []
+    out_n = []  # five lists, not one tuple of them: numba types each list by its appends
     out_m = []
     out_s = []
     out_mg = []
     out_d = []
     count = 0
     for c in range(len(g3)):
-        g = g3[c]
-        m = m3[c]
+        g, m = g3[c], m3[c]
         a = ptr[g]
         n_g = ptr[g + 1] - a
         for k in range(chunk):
             st = c3[c] * chunk + k
             if st < lo[g] or st > hi[g] or not present[m, st]:
                 continue
-            qx = mxy[m, st, 0]
-            qy = mxy[m, st, 1]
+            qx, qy = mxy[m, st, 0], mxy[m, st, 1]
             tu = ((qx - p0[g, 0]) * seg[g, 0] + (qy - p0[g, 1]) * seg[g, 1]) * inv[g]
             tq = min(max(tu, 0.0), 1.0)
             ex = p0[g, 0] + tq * seg[g, 0] - qx
@@ -127,8 +104,20 @@ def narrow_phase(g3, m3, c3, chunk, lo, hi, present, mxy, margin_tab, ptr, xy, p
                 hc = math.hypot(rx, ry)
                 if not (hc - circ - extent[m] < mg):
                     continue
-                d = _exact(rx, ry, hc, mg, node, m, robot_in, inner, robot_kind, is_disc, robot_r, mrad, msize,
-                           cosp, sinp, hx_r, hy_r)  # fmt: skip
+                if hc - robot_in - inner[m] < mg - 1e-9:
+                    # the shapes' inscribed discs are closer than the margin, so the exact
+                    # distance (or the separating-axis gap, a lower bound) is too
+                    d = -np.inf
+                elif robot_kind == 0:
+                    if is_disc[m]:
+                        d = math.hypot(rx, ry) - robot_r - mrad[m]
+                    else:
+                        d = _box_dist(rx, ry, 0.5 * msize[m, 0], 0.5 * msize[m, 1]) - robot_r
+                elif is_disc[m]:
+                    cc, ss = cosp[node], sinp[node]
+                    d = _box_dist(cc * rx + ss * ry, -ss * rx + cc * ry, hx_r, hy_r) - mrad[m]
+                else:
+                    d = np.nan
                 count += 1
                 if d >= mg:  # safe (NaN never is: left to the caller)
                     continue
