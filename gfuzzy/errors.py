@@ -17,6 +17,9 @@ is a bug and shows its traceback.
 
 from __future__ import annotations
 
+import math
+import numbers
+
 
 class GfuzzyError(Exception):
     """Base class of every error gfuzzy raises on purpose."""
@@ -50,3 +53,20 @@ class SceneError(InputError):
         self.message = " ".join(str(message).split())
         where = f"{self.file}: {place}" if place else self.file
         super().__init__(f"{where}: {self.message}")
+
+
+def check_number(name: str, value, low: float = 0.0, *, strict: bool = True, finite: bool = True) -> None:
+    """The one validation of a numeric option (``PlanOptions``, ``NavOptions``, ...).
+
+    Raises :class:`InputError` naming ``name`` unless ``value`` is a real number above
+    ``low`` (at least ``low`` when not ``strict``), finite unless ``finite`` is False.
+    """
+    ok = isinstance(value, numbers.Real) and not math.isnan(value) and (not finite or math.isfinite(value))
+    if ok:
+        ok = value > low if strict else value >= low
+    if not ok:
+        if strict and low == 0:
+            want = "a positive number"
+        else:
+            want = f"a number {'>' if strict else '>='} {low:g}"
+        raise InputError(f"{name} must be {want}, got {value!r}")

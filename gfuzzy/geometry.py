@@ -17,14 +17,13 @@ import math
 import fcl
 import numpy as np
 
-from .poses import interpolate_segment, metric_distance, wrap_angle
+from .poses import metric_distance, wrap_angle
 from .scene import Box, Disc, Polygon, Robot, Scene
 from .typing import FloatArray
 
 __all__ = [
     "StaticGeometry",
     "metric_distance",
-    "interpolate_poses",
     "wrap_angle",
     "mover_distance",
 ]
@@ -34,11 +33,6 @@ _EPS_CERT_CLEARANCE = 1e-9  # clearance below which a motion is not certified (g
 _NEAR_CONTACT = 1e-4  # distances below this are decided by a collision test (0 or -1)
 _DIST_MARGIN = 1e-4  # subtracted from FCL distances (GJK overestimates; see obstacle_clearance)
 QUAD_EXACT = 2.0  # box-box distances are exact below this (see _quad_distance)
-
-
-#: The straight motion between two poses at fractions f: the name timespace imports
-#: (phase B switches it to :func:`gfuzzy.poses.interpolate_segment`).
-interpolate_poses = interpolate_segment
 
 
 def _yaw_transform(x: float, y: float, yaw: float = 0.0) -> fcl.Transform:

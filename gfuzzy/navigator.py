@@ -10,7 +10,7 @@ roadmap-time search into a receding-horizon controller:
    uncertainty that grows by ``uncertainty_growth`` metres per second of prediction. The
    prediction is written as a chain of short ``trajectory`` movers (one per ``slice``,
    each with its own radius), so the search's continuous-time safety
-   (:class:`~gfuzzy.timespace.MoverField`) applies to it unchanged. Beyond the horizon a
+   (:class:`~gfuzzy.movers.MoverField`) applies to it unchanged. Beyond the horizon a
    walking person is dropped (too uncertain to plan around); a person standing still is
    kept where they stand for ``stationary_hold`` more seconds (someone standing in a
    doorway is likely to stay a while: the search then prefers another door or waits).
@@ -41,13 +41,14 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .errors import InputError
+from .errors import InputError, check_number
 from .geometry import StaticGeometry
 from .planner import BACKENDS, _search_function
 from .poses import interpolate_segment, metric_distance, split_counts, wrap_angle
 from .roadmap import Roadmap
 from .scene import Mover, Scene
 from .settings import SPEED_SAFETY
+from .status import Status
 from .timespace import IntervalStore, MoverField, SpaceTimeGraph, timed_rows
 from .trajectory import Trajectory
 from .typing import FloatArray
@@ -126,19 +127,14 @@ class NavOptions:
 
     def __post_init__(self):
         if self.backend not in BACKENDS:
-            raise ValueError(f"backend must be one of {', '.join(BACKENDS)}, got {self.backend!r}")
+            raise InputError(f"backend must be one of {', '.join(BACKENDS)}, got {self.backend!r}")
         for name in ("dt", "prediction_horizon", "reference_speed", "slice", "time_budget", "plan_slack", "evasion_time", "cover"):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise InputError(f"{name} must be a positive number, got {v!r}")
+            check_number(name, getattr(self, name))
         for name in ("uncertainty_growth", "safety_buffer", "stationary_hold", "goal_tolerance"):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
-                raise InputError(f"{name} must be a number >= 0, got {v!r}")
+            check_number(name, getattr(self, name), strict=False)
         if self.connect_k < 1 or self.evasion_headings < 4:
             raise InputError("connect_k must be >= 1 and evasion_headings >= 4")
-        if not (self.stretch >= 1.0 and math.isfinite(self.stretch)):
-            raise InputError(f"stretch must be a number >= 1, got {self.stretch}")
+        check_number("stretch", self.stretch, 1.0, strict=False)
 
 
 @dataclass(frozen=True)
@@ -490,10 +486,10 @@ class Navigator:
             if time.perf_counter() > deadline:  # no time left to search: the fallback answers
                 return None, "time budget spent before the search"
             res = search(graph, field_, s_id, self._g_id, deadline=deadline, store=store)
-            if res.status != "no_path" or not res.horizon_hit or time.perf_counter() > deadline:
+            if res.status != Status.NO_PATH or not res.horizon_hit or time.perf_counter() > deadline:
                 break
             slack *= 2.0
-        if res.status != "solved":
+        if res.status != Status.SOLVED:
             return None, res.message
         rows, _ = timed_rows(res.nodes, res.steps, graph.poses, t, opts.dt)
         self._ahead = [(t + st * opts.dt, nd) for nd, st in zip(res.nodes, res.steps, strict=True) if nd <= self._nv]

@@ -23,6 +23,7 @@ from .geometry import metric_distance, mover_distance
 from .navigator import Navigator, NavOptions
 from .roadmap import Roadmap
 from .scene import Scene
+from .status import Status
 from .trajectory import Trajectory
 from .typing import FloatArray
 
@@ -40,8 +41,8 @@ class NavResult:
 
     Attributes
     ----------
-    status : str
-        ``"solved"`` (the goal was reached) or ``"timeout"`` (it was not by max_time).
+    status : Status
+        ``Status.SOLVED`` (the goal was reached) or ``Status.TIMEOUT`` (it was not by max_time).
     trajectory : Trajectory
         The executed motion, from the start at t0.
     replans : int
@@ -56,7 +57,7 @@ class NavResult:
         Some replans (every ``log_every``-th): time, pose, predicted discs, planned rows.
     """
 
-    status: str
+    status: Status
     trajectory: Trajectory
     replans: int
     replan_seconds: FloatArray = field(compare=False)
@@ -66,7 +67,7 @@ class NavResult:
 
     @property
     def reached(self) -> bool:
-        return self.status == "solved"
+        return self.status == Status.SOLVED
 
     @property
     def duration(self) -> float:
@@ -154,10 +155,10 @@ def simulate(
     seconds: list = []
     modes: dict = {}
     kept: list = []
-    status = "timeout"
+    status = Status.TIMEOUT
     while True:
         if float(metric_distance(pose, goal, cr)) <= nav.options.goal_tolerance:
-            status = "solved"
+            status = Status.SOLVED
             break
         if t >= t_stop - 1e-9:
             break

@@ -18,13 +18,16 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .errors import LimitError
+from .errors import InputError, LimitError, check_number
 from .geometry import StaticGeometry, metric_distance
+from .movers import MoverField
+from .poses import split_counts, wrap_angle
 from .roadmap import Roadmap
 from .scene import Scene
 from .settings import MAX_MOVER_SAMPLES, MAX_POINTS, SPEED_SAFETY
+from .spacetime import IntervalStore, SearchResult, SpaceTimeGraph, split_edges
 from .status import Status
-from .timespace import IntervalStore, MoverField, SpaceTimeGraph, sipp, timed_rows
+from .timespace import sipp, timed_rows
 from .trajectory import Trajectory, TrajectoryFile
 from .typing import FloatArray
 
@@ -108,18 +111,14 @@ class PlanOptions:
     backend: str = "compiled"
 
     def __post_init__(self):
-        if not (self.dt > 0 and math.isfinite(self.dt)):
-            raise ValueError(f"dt must be a positive number, got {self.dt}")
-        if self.horizon is not None and not self.horizon > 0:
-            raise ValueError(f"horizon must be positive, got {self.horizon}")
-        if not self.time_limit > 0:
-            raise ValueError(f"time_limit must be positive, got {self.time_limit}")
-        if not (self.weight >= 1.0 and math.isfinite(self.weight)):
-            raise ValueError(f"weight must be a number >= 1, got {self.weight}")
-        if not (self.stretch >= 1.0 and math.isfinite(self.stretch)):
-            raise ValueError(f"stretch must be a number >= 1, got {self.stretch}")
+        check_number("dt", self.dt)
+        if self.horizon is not None:
+            check_number("horizon", self.horizon, finite=False)
+        check_number("time_limit", self.time_limit, finite=False)
+        check_number("weight", self.weight, 1.0, strict=False)
+        check_number("stretch", self.stretch, 1.0, strict=False)
         if self.backend not in BACKENDS:
-            raise ValueError(f"backend must be one of {', '.join(BACKENDS)}, got {self.backend!r}")
+            raise InputError(f"backend must be one of {', '.join(BACKENDS)}, got {self.backend!r}")
 
 
 @dataclass(frozen=True)
@@ -137,7 +136,9 @@ class PlanResult:
         Shortest start-to-goal distance on the roadmap (inf when not connected).
     planning_seconds : float
     stats : dict
-        Expansions, states, graph size, and the stages' reports as dicts (the file's keys).
+        Expansions, states, graph size; ``stats["refine"]`` / ``["speed_layer"]`` repeat
+        the reports' ``to_dict()`` for older readers (``tools/bench_ga.py``): the file and
+        ``amax_honoured`` are made from the reports themselves.
     refine_report, speed_report : gfuzzy.stages.RefineReport / SpeedReport or None
         What each stage did, when it ran.
     """
@@ -180,8 +181,12 @@ class PlanResult:
         ``amax_honoured`` (and ``amax_note`` saying why not when it is false).
         """
         rd = self.roadmap_distance if math.isfinite(self.roadmap_distance) else None
-        stats = dict(self.stats)
+        # the stages' entries come from their reports (the file keeps its keys and order)
+        stats = {k: v for k, v in self.stats.items() if k not in ("refine", "speed_layer")}
         extra = {key: stats.pop(key) for key in ("amax_honoured", "amax_note") if key in stats}
+        for key, report in (("refine", self.refine_report), ("speed_layer", self.speed_report)):
+            if report is not None:
+                stats[key] = report.to_dict()
         return TrajectoryFile(
             scene=scene,
             query=query,
@@ -196,25 +201,25 @@ class PlanResult:
         )
 
 
-def _amax_stats(robot, stats: dict) -> dict:
+def _amax_stats(robot, stats: dict, layer: SpeedReport | None) -> dict:
     """``stats`` plus whether a solved answer honours ``robot.amax`` (when the robot has one).
 
-    Only the speed layer limits acceleration; the search's and the GA's answers start, stop
-    and turn at full speed. A user who set ``amax`` is told when it was not applied, and why.
+    Only the speed layer (its report: ``layer``) limits acceleration; the search's and the
+    GA's answers start, stop and turn at full speed. A user who set ``amax`` is told when it
+    was not applied, and why.
     """
     if robot.amax is None:
         return stats
-    layer = stats.get("speed_layer")
-    out = dict(stats, amax_honoured=bool(layer is not None and layer.get("applied")))
+    out = dict(stats, amax_honoured=bool(layer is not None and layer.applied))
     if layer is None:
         out["amax_note"] = (
             f"robot.amax {robot.amax:g} is not honoured: only the speed layer bounds "
             "acceleration, and it is off (PlanOptions.speed_layer, --speed-layer)"
         )
-    elif not layer.get("applied"):
+    elif not layer.applied:
         out["amax_note"] = (
             f"robot.amax {robot.amax:g} is not honoured: the speed layer did not apply "
-            f"({layer.get('reason', 'no reason given')})"
+            f"({layer.reason or 'no reason given'})"
         )
     if not out["amax_honoured"]:
         log.info("%s", out["amax_note"])
@@ -299,10 +304,14 @@ class Planner:
         lengths = np.concatenate([rm.lengths[keep], extra_w])
 
         # split edges into steps of at most vmax * dt; interior points of edge e get the
-        # ids n + offs[e] .. n + offs[e+1] - 1
-        step_len = vmax * dt
-        k = np.maximum(1, np.ceil(lengths / step_len)).astype(np.int64)
-        k = np.where(lengths / k > step_len, k + 1, k)
+        # ids n + offs[e] .. n + offs[e+1] - 1 (the size is checked before anything is cut)
+        total = n + int((split_counts(lengths, vmax * dt) - 1).sum())
+        if total > MAX_POINTS:
+            raise LimitError(
+                f"the time step is too fine for this roadmap: its edges would be cut into "
+                f"{total:,} points (at most {MAX_POINTS:,}); use a larger dt"
+            )
+        k, offs, inner, a, b, j, src, dst = split_edges(verts, edges, lengths, vmax * dt, n)
 
         # static shortest distances (Dijkstra on the roadmap): in metres for the roadmap
         # distance, in steps (edge e costs k[e]) for the heuristic, which is exact for the
@@ -322,28 +331,11 @@ class Planner:
         hops = sp(k.astype(float))
         hop_g, hop_s = np.rint(hops[0]), np.rint(hops[1])
 
-        n_int = k - 1
-        offs = np.concatenate([[0], np.cumsum(n_int)])
         total = n + int(offs[-1])
-        if total > MAX_POINTS:
-            raise LimitError(
-                f"the time step is too fine for this roadmap: its edges would be cut into "
-                f"{total:,} points (at most {MAX_POINTS:,}); use a larger dt"
-            )
-        e_of = np.repeat(np.arange(len(edges)), n_int)
-        j = np.arange(offs[-1]) - np.repeat(offs[:-1], n_int) + 1  # 1 .. k-1 along the edge
-        f = j / k[e_of]
-        a, b = edges[e_of, 0], edges[e_of, 1]
-        delta = verts[b] - verts[a]
-        if verts.shape[1] == 3:
-            delta[:, 2] = (delta[:, 2] + np.pi) % (2 * np.pi) - np.pi
         poses = np.empty((total, verts.shape[1]))
         poses[:n] = verts
-        inner = verts[a] + f[:, None] * delta
-        if verts.shape[1] == 3:
-            inner[:, 2] = (inner[:, 2] + np.pi) % (2 * np.pi) - np.pi
         poses[n:] = inner
-        ke = k[e_of]
+        ke = k[np.repeat(np.arange(len(edges)), k - 1)]
         heur = np.empty(total)
         heur[:n] = hop_g
         heur[n:] = np.minimum(hop_g[a] + j, hop_g[b] + ke - j)
@@ -351,14 +343,6 @@ class Planner:
         from_start[:n] = hop_s
         from_start[n:] = np.minimum(hop_s[a] + j, hop_s[b] + ke - j)
         # one-step moves: along each edge's chain a -> interior... -> b, both ways
-        ids = np.arange(n, total)
-        first = np.zeros(offs[-1], dtype=bool)
-        first[offs[:-1][n_int > 0]] = True
-        last = np.zeros(offs[-1], dtype=bool)
-        last[(offs[1:] - 1)[n_int > 0]] = True
-        prev = np.where(first, a, ids - 1)
-        src = np.concatenate([prev, ids[last], edges[n_int == 0, 0]])
-        dst = np.concatenate([ids, b[last], edges[n_int == 0, 1]])
         s2 = np.concatenate([src, dst])
         d2 = np.concatenate([dst, src])
         order = np.argsort(s2, kind="stable")  # by source; neighbours in any fixed order
@@ -386,7 +370,7 @@ class Planner:
 
         Raises
         ------
-        ValueError
+        InputError
             A malformed goal (as :meth:`plan`).
         """
         from .prepared import prepare_goal
@@ -452,14 +436,12 @@ class Planner:
 
         Raises
         ------
-        ValueError
+        InputError
             A malformed request (bad input, as the command line's exit status 2): a start
-            or goal that is not ``dof`` finite numbers, or a non-finite ``t0``.
+            or goal that is not ``dof`` finite numbers, or a non-finite ``t0`` or ``hold``.
         """
         opts = options or PlanOptions()
-        hold = float(hold)
-        if not (math.isfinite(hold) and hold >= 0):
-            raise ValueError(f"hold must be a non-negative number, got {hold!r}")
+        hold = _check_hold(hold)
         hold_steps = int(math.ceil(hold / opts.dt - 1e-9)) if hold > 0 else 0
         t_begin = time.perf_counter()
         deadline = t_begin + opts.time_limit
@@ -467,22 +449,17 @@ class Planner:
         vmax = robot.vmax
         start = check_pose(start, robot.dof, "start")
         goal = check_pose(goal, robot.dof, "goal")
-        if isinstance(t0, bool) or not isinstance(t0, (int, float, np.number)) or not math.isfinite(t0):
-            raise ValueError(f"t0: expected a finite number, got {t0!r}")
-        t0 = float(t0)
+        t0 = _check_t0(t0)
 
         def answer(status, message="", traj=None, rd=math.inf, **stats):
-            return PlanResult(
-                Status(status), traj, message, rd, time.perf_counter() - t_begin, vmax, stats
-            )
+            return PlanResult(Status(status), traj, message, rd, time.perf_counter() - t_begin, vmax, stats)
 
         problem = query_problem(self.geometry, start, goal)
         if problem:
-            return answer("invalid_query", problem)
+            return answer(Status.INVALID_QUERY, problem)
         ends = start.copy(), goal.copy()  # the rows at the ends repeat them exactly
         if robot.dof == 3:
-            start[2] = (start[2] + math.pi) % (2 * math.pi) - math.pi
-            goal[2] = (goal[2] + math.pi) % (2 * math.pi) - math.pi
+            start[2], goal[2] = wrap_angle(start[2]), wrap_angle(goal[2])
         vplan = vmax * SPEED_SAFETY
         if _prepared is None:
             graph, s_id, g_id, rd = self._graph(start, goal, opts.dt, vplan, opts.connect_k, opts.stretch)
@@ -490,24 +467,74 @@ class Planner:
             graph, s_id, g_id, rd = _prepared.splice(self, start)
         if not math.isfinite(rd):
             return answer(
-                "no_path",
+                Status.NO_PATH,
                 "start and goal are not connected on the roadmap (sealed off, or the roadmap is too sparse)",
                 nodes=len(graph.poses),
             )
-        auto = opts.horizon is None
-        if auto:
-            max_horizon = 60.0 + 10.0 * rd / vmax + settle_time(self.scene, t0)
+        max_steps = self._max_steps(opts, rd, t0, hold_steps)
+        run = self._search_rounds(graph, s_id, g_id, start, t0, opts, hold_steps, max_steps, deadline)
+        if run.problem:
+            return answer(Status.INVALID_QUERY, run.problem, rd=rd)
+        res, horizon = run.result, run.horizon
+        stats = {
+            "expansions": run.expansions,
+            "states": res.states,
+            "graph_nodes": len(graph.poses),
+            "roadmap_vertices": len(self.roadmap.vertices),
+            "mover_evaluations": run.evaluations,
+            "horizon": horizon,
+        }
+        if hold_steps:
+            stats["hold"] = hold
+        if res.status == Status.NO_PATH and res.horizon_hit:
+            res.message = (
+                f"no safe trajectory within the planning horizon of {horizon:g} s"
+                + (f" (+ the hold of {hold:g} s)" if hold_steps else "")
+                + "; the horizon cut the search: a longer one (--horizon, PlanOptions.horizon) may find one"
+            )
+        if res.status != Status.SOLVED:
+            return answer(res.status, res.message, rd=rd, **stats)
+        traj = Trajectory(timed_rows(res.nodes, res.steps, graph.poses, t0, opts.dt)[0], robot.circumradius)
+        stats["search_seconds"] = time.perf_counter() - t_begin
+        result = answer(Status.SOLVED, "", traj, rd, **stats)
+        if opts.refine or opts.speed_layer:
+            from .stages import StageContext, apply_stages
+
+            result = apply_stages(StageContext(self.scene, self.geometry), result, start, goal, t0, opts, t_begin, hold=hold)
+        # headings are wrapped inside; the first and last rows give the query's own numbers
+        wps = result.trajectory.waypoints.copy()
+        wps[0, 1:], wps[-1, 1:] = ends
+        return replace(result, trajectory=Trajectory(wps, robot.circumradius), stats=_amax_stats(robot, result.stats, result.speed_report))
+
+    def _max_steps(self, opts: PlanOptions, rd: float, t0: float, hold_steps: int) -> int:
+        """The longest horizon searched, in steps (the parking's steps come on top)."""
+        if opts.horizon is None:
+            max_horizon = 60.0 + 10.0 * rd / self.robot.vmax + settle_time(self.scene, t0)
             # never more than the movers can be sampled over (a default must not fail)
             if self.scene.movers:
                 cap = (MAX_MOVER_SAMPLES // len(self.scene.movers) - 1 - hold_steps) * opts.dt
                 max_horizon = max(min(max_horizon, cap), opts.dt)
         else:
             max_horizon = opts.horizon
+        return int(math.ceil(max_horizon / opts.dt)) + hold_steps
+
+    def _start_problem(self, field_: MoverField, start: FloatArray, t0: float) -> str:
+        """Why the start cannot be searched from (on a mover, or within mover_clearance), or ""."""
+        hit = field_.collides_at(start, 0)
+        if hit is not None:
+            return f"start collides with mover {hit!r} at t0={t0:g}"
+        keep = self.robot.mover_clearance
+        hit = field_.collides_at(start, 0, keep) if keep > 0 else None
+        if hit is not None:
+            return f"start is closer than robot.mover_clearance={keep:g} to mover {hit!r} at t0={t0:g}"
+        return ""
+
+    def _search_rounds(self, graph, s_id, g_id, start, t0, opts, hold_steps, max_steps, deadline) -> _Rounds:
+        """The search, rerun with a doubled slack while the horizon cut it off."""
         # Grow the horizon by doubling the slack above the static lower bound: safety is
         # only computed for times a node can still matter at (from_start .. horizon - h),
         # so a horizon close to the answer keeps that window, and the work, small.
         h0 = float(graph.heuristic[s_id])
-        max_steps = int(math.ceil(max_horizon / opts.dt)) + hold_steps  # the parking comes on top
         # First slack: with few movers the search dominates the cost and a second run
         # would double it, so start generously; with many, the movers' safety dominates,
         # it grows with the slack, and a rerun reuses it (IntervalStore): start tight.
@@ -523,57 +550,46 @@ class Planner:
                     f"{len(self.scene.movers)} movers over {steps:,} time steps are too many to "
                     f"sample (at most {MAX_MOVER_SAMPLES:,}); use a larger dt or a shorter horizon"
                 )
-            field_ = MoverField(self.scene, t0, opts.dt, steps, vmax)
+            field_ = MoverField(self.scene, t0, opts.dt, steps, self.robot.vmax)
             field_.compiled = opts.backend == "compiled"
             if store.H < 0:  # first round: a start on a mover is not a query to search
-                hit = field_.collides_at(start, 0)
-                if hit is not None:
-                    return answer("invalid_query", f"start collides with mover {hit!r} at t0={t0:g}", rd=rd)
-                keep = robot.mover_clearance
-                hit = field_.collides_at(start, 0, keep) if keep > 0 else None
-                if hit is not None:
-                    return answer(
-                        "invalid_query",
-                        f"start is closer than robot.mover_clearance={keep:g} to mover {hit!r} at t0={t0:g}",
-                        rd=rd,
-                    )
+                problem = self._start_problem(field_, start, t0)
+                if problem:
+                    return _Rounds(None, horizon, 0, 0, problem)
             res = search(
                 graph, field_, s_id, g_id, deadline=deadline, weight=opts.weight, store=store, goal_hold=hold_steps
             )
             expansions += res.expansions
             evaluations += field_.evaluations
-            if res.status != "no_path" or not res.horizon_hit or steps >= max_steps:
-                break
+            if res.status != Status.NO_PATH or not res.horizon_hit or steps >= max_steps:
+                return _Rounds(res, horizon, expansions, evaluations)
             slack *= 2.0
-        stats = {
-            "expansions": expansions,
-            "states": res.states,
-            "graph_nodes": len(graph.poses),
-            "roadmap_vertices": len(self.roadmap.vertices),
-            "mover_evaluations": evaluations,
-            "horizon": horizon,
-        }
-        if hold_steps:
-            stats["hold"] = hold
-        if res.status == "no_path" and res.horizon_hit:
-            res.message = (
-                f"no safe trajectory within the planning horizon of {horizon:g} s"
-                + (f" (+ the hold of {hold:g} s)" if hold_steps else "")
-                + "; the horizon cut the search: a longer one (--horizon, PlanOptions.horizon) may find one"
-            )
-        if res.status != "solved":
-            return answer(res.status, res.message, rd=rd, **stats)
-        traj = Trajectory(timed_rows(res.nodes, res.steps, graph.poses, t0, opts.dt)[0], robot.circumradius)
-        stats["search_seconds"] = time.perf_counter() - t_begin
-        result = answer("solved", "", traj, rd, **stats)
-        if opts.refine or opts.speed_layer:
-            from .stages import StageContext, apply_stages
 
-            result = apply_stages(StageContext(self.scene, self.geometry), result, start, goal, t0, opts, t_begin, hold=hold)
-        # headings are wrapped inside; the first and last rows give the query's own numbers
-        wps = result.trajectory.waypoints.copy()
-        wps[0, 1:], wps[-1, 1:] = ends
-        return replace(result, trajectory=Trajectory(wps, robot.circumradius), stats=_amax_stats(robot, result.stats))
+
+@dataclass
+class _Rounds:
+    """What :meth:`Planner._search_rounds` found: the last search, or why none ran."""
+
+    result: SearchResult | None
+    horizon: float
+    expansions: int
+    evaluations: int
+    problem: str = ""
+
+
+def _check_hold(hold) -> float:
+    """A query's ``hold`` as a float (InputError when negative or not finite)."""
+    hold = float(hold)
+    if not (math.isfinite(hold) and hold >= 0):
+        raise InputError(f"hold must be a non-negative number, got {hold!r}")
+    return hold
+
+
+def _check_t0(t0) -> float:
+    """A departure time as a float (InputError when not a finite number)."""
+    if isinstance(t0, bool) or not isinstance(t0, (int, float, np.number)) or not math.isfinite(t0):
+        raise InputError(f"t0: expected a finite number, got {t0!r}")
+    return float(t0)
 
 
 def _search_function(backend: str):
@@ -586,7 +602,7 @@ def _search_function(backend: str):
 
 
 def check_pose(pose, dof: int, label: str) -> FloatArray:
-    """``pose`` as a (dof,) float array; ValueError naming ``label`` when it is malformed.
+    """``pose`` as a (dof,) float array; InputError naming ``label`` when it is malformed.
 
     A pose that is not ``dof`` finite numbers is bad input, like a bad scene file; a
     well-formed pose that collides or lies out of bounds is a query answered
@@ -596,12 +612,12 @@ def check_pose(pose, dof: int, label: str) -> FloatArray:
     try:
         arr = np.asarray(pose, dtype=float)
     except (TypeError, ValueError):
-        raise ValueError(f"{label}: expected {dof} finite numbers {want}, got {pose!r}") from None
+        raise InputError(f"{label}: expected {dof} finite numbers {want}, got {pose!r}") from None
     if arr.ndim != 1 or arr.shape != (dof,):
         got = f"{arr.size} numbers" if arr.ndim == 1 else f"shape {arr.shape}"
-        raise ValueError(f"{label}: expected {dof} finite numbers {want}, got {got}")
+        raise InputError(f"{label}: expected {dof} finite numbers {want}, got {got}")
     if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{label}: expected {dof} finite numbers {want}, got {arr.tolist()}")
+        raise InputError(f"{label}: expected {dof} finite numbers {want}, got {arr.tolist()}")
     return arr.copy()
 
 

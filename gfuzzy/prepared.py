@@ -35,60 +35,10 @@ import numpy as np
 from .errors import LimitError
 from .geometry import metric_distance
 from .settings import MAX_POINTS, SPEED_SAFETY
-from .timespace import SpaceTimeGraph
+from .spacetime import SpaceTimeGraph, split_edges
 from .typing import FloatArray, IntArray
 
 __all__ = ["PreparedGoal", "split_edges"]
-
-
-def split_edges(verts: FloatArray, edges: IntArray, lengths: FloatArray, step_len: float, first_id: int):
-    """Cut edges into pieces of at most ``step_len`` (as :meth:`Planner._graph` does).
-
-    Parameters
-    ----------
-    verts : (n, d) float
-    edges : (e, 2) int
-    lengths : (e,) float
-    step_len : float
-    first_id : int
-        Id of the first interior point.
-
-    Returns
-    -------
-    k : (e,) int
-        Steps per edge.
-    offs : (e+1,) int
-        Interior points of edge i are ``first_id + offs[i] .. first_id + offs[i+1] - 1``.
-    inner : (offs[-1], d) float
-        Their poses.
-    a, b, j : (offs[-1],) int
-        Each interior point's edge ends and its index 1..k-1 along the edge.
-    src, dst : (c,) int
-        The one-step moves along the chains a -> interior... -> b (one direction).
-    """
-    k = np.maximum(1, np.ceil(lengths / step_len)).astype(np.int64)
-    k = np.where(lengths / k > step_len, k + 1, k)
-    n_int = k - 1
-    offs = np.concatenate([[0], np.cumsum(n_int)]).astype(np.int64)
-    e_of = np.repeat(np.arange(len(edges)), n_int)
-    j = np.arange(offs[-1]) - np.repeat(offs[:-1], n_int) + 1
-    f = j / k[e_of]
-    a, b = edges[e_of, 0], edges[e_of, 1]
-    delta = verts[b] - verts[a]
-    if verts.shape[1] == 3:
-        delta[:, 2] = (delta[:, 2] + np.pi) % (2 * np.pi) - np.pi
-    inner = verts[a] + f[:, None] * delta
-    if verts.shape[1] == 3:
-        inner[:, 2] = (inner[:, 2] + np.pi) % (2 * np.pi) - np.pi
-    ids = np.arange(first_id, first_id + offs[-1])
-    first = np.zeros(offs[-1], dtype=bool)
-    first[offs[:-1][n_int > 0]] = True
-    last = np.zeros(offs[-1], dtype=bool)
-    last[(offs[1:] - 1)[n_int > 0]] = True
-    prev = np.where(first, a, ids - 1)
-    src = np.concatenate([prev, ids[last], edges[n_int == 0, 0]])
-    dst = np.concatenate([ids, b[last], edges[n_int == 0, 1]])
-    return k, offs, inner, a, b, j, src, dst
 
 
 @dataclass

@@ -10,6 +10,7 @@ from typing import TextIO
 from .check import check_trajectory
 from .planner import Planner, PlanOptions
 from .scene import Query, Scene
+from .status import Status
 
 __all__ = ["RegressionRow", "regress_scene", "run_regression"]
 
@@ -39,9 +40,9 @@ def _expectation_problems(query: Query, status: str, duration, delay) -> list[st
         return out
     if exp.status is not None and status != exp.status:
         out.append(f"status {status}, expected {exp.status}")
-    if exp.max_duration is not None and status == "solved" and duration > exp.max_duration + 1e-9:
+    if exp.max_duration is not None and status == Status.SOLVED and duration > exp.max_duration + 1e-9:
         out.append(f"duration {duration:.3f} > max {exp.max_duration:g}")
-    if exp.max_delay_factor is not None and status == "solved" and delay > exp.max_delay_factor + 1e-9:
+    if exp.max_delay_factor is not None and status == Status.SOLVED and delay > exp.max_delay_factor + 1e-9:
         out.append(f"delay factor {delay:.3f} > max {exp.max_delay_factor:g}")
     return out
 

@@ -279,7 +279,7 @@ def _search_chain(
     steps = int(math.ceil(horizon / dt)) + hold_steps
     field_ = MoverField(scene, t0, dt, steps, robot.vmax)
     res = sipp(graph, field_, 0, m - 1, deadline=deadline, goal_hold=hold_steps)
-    if res.status != "solved":
+    if res.status != Status.SOLVED:
         return RetimeResult(res.status, None, res.message)
     between = None
     if corners is not None:

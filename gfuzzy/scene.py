@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from .errors import InputError, SceneError
+from .status import Status
 from .typing import FloatArray
 from .yamldoc import _V, MAX_MAGNITUDE, NAME_RE, _join, _kind, _load_yaml, _one_key
 
@@ -37,7 +38,7 @@ __all__ = [
 ]
 
 MODES = ("loop", "bounce", "once")
-STATUSES = ("solved", "no_path", "invalid_query", "timeout")
+STATUSES = tuple(s.value for s in Status)  # the file format spells them as strings
 
 
 # --------------------------------------------------------------------------- shapes

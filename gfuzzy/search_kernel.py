@@ -4,7 +4,7 @@ The reference search (:func:`gfuzzy.timespace.sipp`) stays the definition; this 
 runs the same A* loop over safe intervals in machine code and must give the same answers
 (tests/test_search_kernel.py cross-checks them). What stays in Python:
 
-* the movers' safety (:class:`gfuzzy.timespace.IntervalStore`, vectorised numpy), asked
+* the movers' safety (:class:`gfuzzy.spacetime.IntervalStore`, vectorised numpy), asked
   for lazily, node by node, exactly as the reference asks for it;
 * the first motions from a start that the margin refuses (:meth:`MoverField.motion_safe`),
   decided before the loop starts;
@@ -36,6 +36,11 @@ from bisect import bisect_left
 
 import numpy as np
 from numba import njit
+
+from .movers import MoverField
+from .spacetime import IntervalStore, SearchResult, SpaceTimeGraph
+from .status import Status
+from .timespace import NO_FIRST_MOTION, exhausted, first_motions
 
 __all__ = ["sipp_compiled", "warm"]
 
@@ -311,8 +316,6 @@ def sipp_compiled(
     goal_hold: int = 0,
 ):
     """:func:`gfuzzy.timespace.sipp` with the loop compiled; same arguments, same answer."""
-    from .timespace import IntervalStore, SearchResult
-
     H = field_.steps
     store = store or IntervalStore(graph)
     store.set_horizon(field_)
@@ -320,7 +323,7 @@ def sipp_compiled(
     h = np.ascontiguousarray(graph.heuristic, dtype=np.float64)
     n = len(h)
     if not math.isfinite(h[start]):
-        return SearchResult("no_path", message="the goal is not reachable on the roadmap")
+        return SearchResult(Status.NO_PATH, message="the goal is not reachable on the roadmap")
     indptr = np.ascontiguousarray(graph.indptr, dtype=np.int64)
     nbrs = np.ascontiguousarray(graph.neighbors, dtype=np.int64)
     wait_ok = np.ones(n, np.bool_) if graph.can_wait is None else np.ascontiguousarray(graph.can_wait, np.bool_)
@@ -361,19 +364,9 @@ def sipp_compiled(
         key0 = start * stride + stride - 1
         tk, tb, tp = _set(tk, tb, tp, ctr, key0, start_step, -1)
         first = start_step + 1
-        moves = list(nbrs[indptr[start] : indptr[start + 1]].tolist())
-        if wait_ok[start]:
-            moves.append(start)
         pushed = False
-        for v in moves if first <= H else ():
-            if math.isinf(h[v]):
-                continue
-            starts, ends, _ = ivals(v)
-            j = bisect_left(ends, first)
-            if j >= len(starts) or starts[j] > first:
-                continue
-            if not field_.motion_safe(graph.poses[start], graph.poses[v], start_step):
-                continue
+        neighbours = nbrs[indptr[start] : indptr[start + 1]].tolist()
+        for v, j in first_motions(graph, field_, start, start_step, ivals, neighbours, bool(wait_ok[start])):
             key = v * stride + j
             if first < _get(tk, tb, key, np.iinfo(np.int64).max):
                 load(v)
@@ -381,10 +374,7 @@ def sipp_compiled(
                 hf, hq = _push(hf, hq, ctr, first + weight * h[v], -first, v, j)
                 pushed = True
         if not pushed:
-            return SearchResult(
-                "no_path",
-                message="no first motion from the start keeps clear of the movers (the start is too close to a mover at t0)",
-            )
+            return SearchResult(Status.NO_PATH, message=NO_FIRST_MOTION)
     while True:
         code, hf, hq, tk, tb, tp = _run(
             indptr, nbrs, h, wait_ok, goal, goal_hold, H, float(weight), stride,
@@ -397,7 +387,7 @@ def sipp_compiled(
         if code == _YIELD:
             if time.perf_counter() > deadline:
                 return SearchResult(
-                    "timeout",
+                    Status.TIMEOUT,
                     message="planning time budget exhausted",
                     expansions=int(ctr[_EXP]),
                     states=int(ctr[_TCOUNT]),
@@ -407,19 +397,12 @@ def sipp_compiled(
     expansions, states, hit = int(ctr[_EXP]), int(ctr[_TCOUNT]), bool(ctr[_HIT])
     if code == _SOLVED:
         nodes, steps = _path(tk, tb, tp, int(ctr[_RESULT]), stride)
-        return SearchResult("solved", nodes.tolist(), steps.tolist(), expansions=expansions, states=states)
-    msg = (
-        "no safe trajectory within the planning horizon"
-        if hit
-        else "the reachable space-time is exhausted: no safe trajectory exists on this graph"
-    )
-    return SearchResult("no_path", message=msg, expansions=expansions, states=states, horizon_hit=hit)
+        return SearchResult(Status.SOLVED, nodes.tolist(), steps.tolist(), expansions=expansions, states=states)
+    return exhausted(expansions, states, hit)
 
 
 def warm() -> None:
     """Compile (or load from the cache) every kernel on a three-node graph."""
-    from .timespace import SpaceTimeGraph
-
     class _Field:  # no movers: every node safe over the whole horizon
         steps = 8
 
@@ -439,8 +422,7 @@ def warm() -> None:
 
     sipp_compiled(graph, _Field(), 0, 2, store=_Store())
     # the safety kernel, through MoverField as the planner calls it: disc and box robots
-    from .scene import parse_scene
-    from .timespace import MoverField
+    from .scene import parse_scene  # only for warming: the scene parser is not needed otherwise
 
     for robot, poses in (({"disc": 0.2, "vmax": 1.0}, [[0.5, 1.0], [1.5, 1.0]]),
                          ({"box": [0.4, 0.2], "vmax": 1.0}, [[0.5, 1.0, 0.0], [1.5, 1.0, 0.3]])):  # fmt: skip
@@ -459,131 +441,6 @@ def warm() -> None:
         field_ = MoverField(scene, 0.0, 0.1, 20, 1.0)
         field_.compiled = True
         field_.unsafe_pairs(np.array(poses), np.array([0, 2]), np.array([0]), np.array([20]))
-
-
-# ----------------------------------------------------------------------- safety kernel
-
-
-@njit(cache=True)
-def _hypot(x, y):
-    return math.hypot(x, y)
-
-
-@njit(cache=True)
-def _box_dist(px, py, hx, hy):
-    """:func:`gfuzzy.geometry._point_box_distance` for one point (same operations)."""
-    qx = abs(px) - hx
-    qy = abs(py) - hy
-    outside = math.hypot(max(qx, 0.0), max(qy, 0.0))
-    inside = min(max(qx, qy), 0.0)
-    return outside + inside
-
-
-@njit(cache=True)
-def narrow_phase(g3, m3, c3, chunk, lo, hi, present, mxy, margin_tab, ptr, xy, p0, seg, inv, seg2, dev,
-                 body, extent, circ, robot_kind, robot_r, hx_r, hy_r, cosp, sinp, is_disc, mrad, msize,
-                 robot_in, inner):  # fmt: skip
-    """Phases 2 and 3 of :meth:`gfuzzy.timespace.MoverField.unsafe_pairs` in one loop.
-
-    The same tests in the same floating-point operations, per candidate instead of per
-    array. ``robot_kind`` 0: disc robot, 1: box robot (``cosp``, ``sinp``: its headings'
-    cosines and sines, computed by numpy as the reference does). The exact distance is
-    computed here except for a box robot against a box mover (``dist`` NaN: the caller
-    uses the reference's separating-axis code). ``robot_in`` and ``inner``: the inscribed
-    radii of the robot and the movers; a pair whose inscribed discs are closer than the
-    margin is unsafe without its exact distance (which is at most theirs).
-
-    Returns
-    -------
-    node, mover, step : (p,) int
-        The pairs found unsafe, and those whose distance is left to the caller.
-    margin, dist : (p,) float
-    evaluations : int
-        Pairs that passed the cheap tests (the reference's ``evaluations``).
-    """
-    out_n = []
-    out_m = []
-    out_s = []
-    out_mg = []
-    out_d = []
-    count = 0
-    for c in range(len(g3)):
-        g = g3[c]
-        m = m3[c]
-        a = ptr[g]
-        n_g = ptr[g + 1] - a
-        for k in range(chunk):
-            st = c3[c] * chunk + k
-            if st < lo[g] or st > hi[g] or not present[m, st]:
-                continue
-            qx = mxy[m, st, 0]
-            qy = mxy[m, st, 1]
-            tu = ((qx - p0[g, 0]) * seg[g, 0] + (qy - p0[g, 1]) * seg[g, 1]) * inv[g]
-            tq = min(max(tu, 0.0), 1.0)
-            ex = p0[g, 0] + tq * seg[g, 0] - qx
-            ey = p0[g, 1] + tq * seg[g, 1] - qy
-            mg = margin_tab[m, st]
-            # a cheap superset test first (squares, with slack for rounding), then the
-            # reference's own test on what remains
-            lim = mg + body[g] + extent[m]
-            if lim > 0.0 and ex * ex + ey * ey > lim * lim * (1.0 + 1e-9) + 1e-12:
-                continue  # far outside: the test below fails too
-            dq = math.hypot(ex, ey)
-            if not (dq - body[g] - extent[m] < mg):
-                continue
-            first = 0
-            last = n_g - 1
-            if dev[g] < 1e-9 and n_g > 1:
-                length = math.sqrt(seg2[g])
-                fx = p0[g, 0] + tu * seg[g, 0]
-                fy = p0[g, 1] + tu * seg[g, 1]
-                perp2 = (qx - fx) ** 2 + (qy - fy) ** 2
-                reach = circ + extent[m] + mg
-                w = math.sqrt(max(reach**2 - perp2, 0.0))
-                spacing = length / (n_g - 1)
-                first = max(0, np.int64(math.ceil((tu * length - w) / spacing - 1e-9)))
-                last = min(n_g - 1, np.int64(math.floor((tu * length + w) / spacing + 1e-9)))
-            for i in range(first, last + 1):
-                node = a + i
-                rx = qx - xy[node, 0]
-                ry = qy - xy[node, 1]
-                lim = mg + circ + extent[m]
-                if lim > 0.0 and rx * rx + ry * ry > lim * lim * (1.0 + 1e-9) + 1e-12:
-                    continue  # far outside: the test below fails too
-                hc = math.hypot(rx, ry)
-                if not (hc - circ - extent[m] < mg):
-                    continue
-                if hc - robot_in - inner[m] < mg - 1e-9:
-                    # the shapes' inscribed discs are closer than the margin, so the exact
-                    # distance (or the separating-axis gap, a lower bound) is too
-                    d = -np.inf
-                elif robot_kind == 0:
-                    if is_disc[m]:
-                        d = math.hypot(rx, ry) - robot_r - mrad[m]
-                    else:
-                        d = _box_dist(rx, ry, 0.5 * msize[m, 0], 0.5 * msize[m, 1]) - robot_r
-                elif is_disc[m]:
-                    cc = cosp[node]
-                    ss = sinp[node]
-                    d = _box_dist(cc * rx + ss * ry, -ss * rx + cc * ry, hx_r, hy_r) - mrad[m]
-                else:
-                    d = np.nan
-                count += 1
-                if d >= mg:  # safe (NaN never is: left to the caller)
-                    continue
-                out_n.append(node)
-                out_m.append(m)
-                out_s.append(st)
-                out_mg.append(mg)
-                out_d.append(d)
-    return (
-        np.array(out_n, dtype=np.int64),
-        np.array(out_m, dtype=np.int64),
-        np.array(out_s, dtype=np.int64),
-        np.array(out_mg, dtype=np.float64),
-        np.array(out_d, dtype=np.float64),
-        count,
-    )
 
 
 if __name__ == "__main__":

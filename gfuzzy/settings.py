@@ -6,7 +6,7 @@ navigator) can use them without importing the planner that runs it.
 
 from __future__ import annotations
 
-__all__ = ["SPEED_SAFETY", "MAX_POINTS", "MAX_MOVER_SAMPLES", "AMAX_PER_VMAX"]
+__all__ = ["SPEED_SAFETY", "MAX_POINTS", "MAX_MOVER_SAMPLES", "AMAX_PER_VMAX", "INTERVAL_BATCH_CELLS"]
 
 #: Planning speed is vmax shrunk by this factor, so rounding never lifts a step above vmax.
 SPEED_SAFETY = 1.0 - 1e-9
@@ -18,3 +18,7 @@ MAX_MOVER_SAMPLES = 20_000_000
 #: The speed layer's acceleration bound for a robot without ``amax``: this many times
 #: vmax per second (full speed reached in half a second).
 AMAX_PER_VMAX = 2.0
+
+#: Cells (points x steps, one bool each) of the movers' safety computed in one batch by
+#: the search's interval store: about 8 MB of bools at a time, whatever the horizon.
+INTERVAL_BATCH_CELLS = 8_000_000

@@ -20,6 +20,7 @@ import numpy as np
 from .atomic import write_atomic
 from .errors import SceneError
 from .poses import metric_distance, pose_at
+from .status import Status
 from .typing import FloatArray
 
 __all__ = ["Trajectory", "load_trajectory", "TrajectoryFile"]
@@ -204,10 +205,10 @@ def load_trajectory(path: str | os.PathLike) -> TrajectoryFile:
             raise SceneError(file, key, "missing required key")
     if doc["version"] != 1:
         raise SceneError(file, "version", f"unsupported version {doc['version']!r}")
-    if doc["status"] not in ("solved", "no_path", "invalid_query", "timeout"):
+    if doc["status"] not in {s.value for s in Status}:
         raise SceneError(file, "status", f"unknown status {doc['status']!r}")
     wps = None
-    if doc["status"] == "solved":
+    if doc["status"] == Status.SOLVED:
         rows = doc.get("waypoints")
         if not isinstance(rows, list) or not rows:
             raise SceneError(file, "waypoints", "a solved trajectory needs a non-empty list of rows")

@@ -5,9 +5,7 @@
   out).
 * Planning never imports the learning subpackage (rule learning, tracking simulation).
 * No module over ``MAX_MODULE_LINES`` lines and no function over ``MAX_FUNCTION_LINES``,
-  except the files listed in ``PHASE_B``: they are being rewritten on another branch
-  (issue 11) and are split after it lands (docs/architecture.md, "still to do").
-  Phase B empties that list.
+  without exceptions.
 """
 
 from __future__ import annotations
@@ -15,38 +13,9 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
-import pytest
-
 PACKAGE = Path(__file__).resolve().parent.parent / "gfuzzy"
 MAX_MODULE_LINES = 800
 MAX_FUNCTION_LINES = 100
-
-#: Modules whose size (module or function) phase B fixes, with why; nothing else may
-#: break the limits. Each entry names what is over today so that the list cannot hide
-#: a new offender in the same file.
-PHASE_B = {
-    "gfuzzy.timespace": "sipp: the search loop (issue 11 compiles it)",
-    "gfuzzy.planner": "Planner.plan: graph building moves into the search module",
-    "gfuzzy.search_kernel": "issue 11's compiled kernel, split with the search",
-}
-
-
-#: Import cycles phase B removes, each with where it comes from; nothing else may cycle.
-#: (After issue 11 lands, timespace and search_kernel import each other lazily: the
-#: movers module and SearchResult's move in phase B end it.)
-PHASE_B_CYCLES = [
-    {"gfuzzy.search_kernel", "gfuzzy.timespace"},
-]
-
-#: Phase A's own leftovers (functions it had no time to split), fixed before phase B
-#: starts; listed in docs/architecture.md. Same rule as PHASE_B.
-PHASE_A_REMAINING: dict[str, str] = {
-    "gfuzzy.learning.tracking": "track (its hot pure-Python loop: a call per step costs ~5 %; "
-    "a small stepper compiled with numba, now a dependency, is the way)",
-    "gfuzzy.render": "1081 lines, _draw_trajectory, render_animation (pictures vs animation "
-    "into two modules)",
-}
-
 
 def _module_name(path: Path) -> str:
     rel = path.relative_to(PACKAGE.parent).with_suffix("")
@@ -153,7 +122,7 @@ def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
 def test_the_import_graph_has_no_cycle():
     graph = _graph()
     assert "gfuzzy.planner" in graph and "gfuzzy.stages" in graph["gfuzzy.planner"]  # lazy one seen
-    assert [c for c in _cycles(graph) if set(c) not in PHASE_B_CYCLES] == []
+    assert _cycles(graph) == []
 
 
 def test_the_cycle_finder_finds_a_cycle():
@@ -185,19 +154,7 @@ def _sizes():
 def test_no_module_or_function_is_too_long():
     over = {}
     for name, lines, long in _sizes():
-        if name in PHASE_B or name in PHASE_A_REMAINING:
-            continue
         problems = ([f"{lines} lines"] if lines > MAX_MODULE_LINES else []) + [f"{f}(): {n} lines" for f, n in long]
         if problems:
             over[name] = problems
     assert over == {}
-
-
-@pytest.mark.parametrize("name", sorted(PHASE_B) + sorted(PHASE_A_REMAINING))
-def test_the_phase_b_list_names_real_offenders(name):
-    """An entry leaves the list as soon as its module is within the limits."""
-    sizes = {n: (lines, long) for n, lines, long in _sizes()}
-    if name not in sizes:
-        pytest.skip(f"{name} is not in this branch yet")
-    lines, long = sizes[name]
-    assert lines > MAX_MODULE_LINES or long, f"{name} is within the limits: remove it from PHASE_B"

@@ -15,11 +15,11 @@ from reference import Reference, interpolate, mover_reference_distance, prism_me
 
 from gfuzzy.geometry import (
     StaticGeometry,
-    interpolate_poses,
     metric_distance,
     mover_distance,
     wrap_angle,
 )
+from gfuzzy.poses import interpolate_segment as interpolate_poses
 from gfuzzy.scene import parse_scene
 
 EPS = 1e-6

@@ -438,3 +438,26 @@ def test_search_on_the_spanner_stays_near_the_whole_roadmap(corridor, open_scene
         assert sparse.roadmap_distance == pytest.approx(whole.roadmap_distance)  # the contract's
         assert check_trajectory(scene, sparse.trajectory.waypoints, q).valid
         assert sparse.stats["graph_nodes"] < whole.stats["graph_nodes"]
+
+
+def test_bad_options_and_poses_raise_input_error():
+    """Bad values are InputError (the command line's exit 2), still a ValueError."""
+    from gfuzzy.errors import InputError, check_number
+    from gfuzzy.navigator import NavOptions
+    from gfuzzy.planner import check_pose
+
+    for kwargs in ({"dt": 0.0}, {"dt": float("nan")}, {"weight": 0.5}, {"stretch": float("inf")},
+                   {"time_limit": -1.0}, {"horizon": 0.0}, {"backend": "gpu"}):  # fmt: skip
+        with pytest.raises(InputError):
+            PlanOptions(**kwargs)
+    assert PlanOptions(time_limit=float("inf"), horizon=float("inf")).time_limit == float("inf")
+    for kwargs in ({"dt": -1.0}, {"safety_buffer": -0.1}, {"stretch": 0.9}, {"cover": "x"}):
+        with pytest.raises(InputError):
+            NavOptions(**kwargs)
+    with pytest.raises(InputError, match="start: expected 2 finite numbers"):
+        check_pose([0.0, float("nan")], 2, "start")
+    with pytest.raises(InputError, match="w must be a number >= 1, got 0.5"):
+        check_number("w", 0.5, 1.0, strict=False)
+    check_number("w", 1.0, 1.0, strict=False)
+    with pytest.raises(ValueError, match="x must be a positive number"):
+        check_number("x", 0)

@@ -72,3 +72,25 @@ def test_discretise_keeps_corners_and_bounds_the_step():
     for corner in path[:3]:  # every corner is a point of the chain
         assert np.min(np.abs(poses - corner).sum(axis=1)) < 1e-12
     np.testing.assert_allclose(poses[-1], path[-1])
+
+
+def test_the_space_time_graph_cuts_edges_by_the_same_rule():
+    """spacetime.split_edges (the planner's and prepared's graph) uses split_counts and
+    interpolate_segment: every one-step move is at most one step long, headings wrapped."""
+    from gfuzzy.spacetime import split_edges
+
+    rng = np.random.default_rng(3)
+    verts = np.column_stack([rng.uniform(0, 5, 12), rng.uniform(0, 5, 12), rng.uniform(-math.pi, math.pi, 12)])
+    edges = np.array([(i, (i * 5 + 3) % 12) for i in range(12) if i != (i * 5 + 3) % 12], dtype=np.int64)
+    r, step = 0.3, 0.25
+    lengths = metric_distance(verts[edges[:, 0]], verts[edges[:, 1]], r)
+    k, offs, inner, a, b, j, src, dst = split_edges(verts, edges, lengths, step, len(verts))
+    assert np.array_equal(k, split_counts(lengths, step))
+    assert np.array_equal(np.diff(offs), k - 1)
+    want = np.vstack([interpolate_segment(verts[e0], verts[e1], np.arange(1, n) / n)
+                      for (e0, e1), n in zip(edges, k, strict=True) if n > 1])  # fmt: skip
+    assert np.array_equal(inner, want)
+    assert np.all((inner[:, 2] >= -math.pi) & (inner[:, 2] < math.pi))
+    poses = np.vstack([verts, inner])
+    moves = metric_distance(poses[src], poses[dst], r)
+    assert len(src) == int(k.sum()) and np.all(moves <= step * (1 + 1e-12))

@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 from ..errors import InputError, SceneError
+from ..status import Status
 from .common import (
     EXIT_NO,
     EXIT_OK,
@@ -209,7 +210,7 @@ def cmd_navigate(args) -> int:
         raise BadInput(f"gfuzzy navigate: {exc}") from None
     problem = query_problem(StaticGeometry(scene), query.start, query.goal) or _start_on_mover(scene, query)
     if problem:
-        tf = TrajectoryFile(scene.name, query.name, "invalid_query", problem, None, None, None, 0.0)
+        tf = TrajectoryFile(scene.name, query.name, Status.INVALID_QUERY, problem, None, None, None, 0.0)
         if out is not None:
             tf.save(out)
         _say(f"{scene.name} {query.name}: invalid_query ({problem})", sys.stdout)
@@ -244,7 +245,7 @@ def cmd_navigate(args) -> int:
     tf = TrajectoryFile(
         scene=scene.name,
         query=query.name,
-        status="solved" if solved else "timeout",
+        status=Status.SOLVED if solved else Status.TIMEOUT,
         message=message,
         duration=res.duration if solved else None,
         roadmap_distance=rd if rd_ok else None,

@@ -8,6 +8,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from ..errors import InputError, LimitError
+from ..status import Status
 from .common import (
     EXIT_NO,
     EXIT_OK,
@@ -164,7 +165,7 @@ def cmd_check(args) -> int:
 
     scene = _apply_overrides(_load_scene(args.scene), args)
     tf = load_trajectory(args.trajectory)
-    if tf.status != "solved":
+    if tf.status != Status.SOLVED:
         _say(f"{args.trajectory}: status is {tf.status}: there is no trajectory to check")
         return EXIT_NO
     query = None

@@ -275,46 +275,41 @@ def track(
     if profile is None:
         profile = constant_profile(p, lim.vmax, lim.amax)
     ps, pv = _checked_profile(profile)
-
-    dt = opt.dt
-    x, y = float(p[0, 0]), float(p[0, 1])
     if p.shape[0] < 2 or length <= opt.goal_tolerance:
         heading = 0.0 if p.shape[0] < 2 else math.atan2(p[1, 1] - p[0, 1], p[1, 0] - p[0, 0])
-        return _at_rest(x, y, heading)
+        return _at_rest(float(p[0, 0]), float(p[0, 1]), heading)
+    status, rows, wc, vr, counts = _simulate(p, sp, ps, pv, lim, opt)
+    if status is Status.TIMEOUT:
+        logger.info("tracking timed out after %.1f s at s = %.2f of %.2f m", rows[-1][0], rows[-1][6], length)
+    T, X, Y, TH, V, W, SC, E = (list(c) for c in zip(*rows, strict=True))
+    return _result(status, (T, X, Y, TH, V, W, wc, vr, SC, E), Violations(*counts))
 
-    px, py = p[:, 0].tolist(), p[:, 1].tolist()
-    d = np.diff(p, axis=0)
-    seg_len = np.linalg.norm(d, axis=1)
-    ux, uy = (d[:, 0] / seg_len).tolist(), (d[:, 1] / seg_len).tolist()
-    seg_len = seg_len.tolist()
-    S = sp.tolist()
-    nseg = len(seg_len)
-    PS, Q = ps.tolist(), (pv * pv).tolist()
-    last_p = len(PS) - 1
 
+def _simulate(p: FloatArray, sp: FloatArray, ps: FloatArray, pv: FloatArray, lim, opt):
+    """The per-step loop of :func:`track` (one function: a call per step costs ~5 %). Returns
+    (status, rows of (t, x, y, heading, v, omega, s, lateral error), commanded omegas,
+    speed references, violation counts (speed, acceleration, omega, alpha, any))."""
+    dt, length = opt.dt, float(sp[-1])
+    x, y = float(p[0, 0]), float(p[0, 1])
+    px, py, ux, uy, seg_len, S, PS, Q = _as_lists(p, sp, ps, pv)
+    nseg, last_p = len(seg_len), len(PS) - 1
     vmax, wmax, amax, alpha_max = lim.vmax, lim.omega_max, lim.amax, lim.alpha_max
     tol = 1.0 + opt.violation_tolerance
     lmin, gain = opt.lookahead_min, opt.lookahead_gain
     creep = min(opt.creep_fraction * vmax, amax * dt)
+    lim_dv, lim_dw = amax * dt, alpha_max * dt  # the largest change of v and w in a step
+    v_bad, dv_bad, w_bad, dw_bad = vmax * tol, lim_dv * tol, wmax * tol, lim_dw * tol  # violations
     reach = lmin + gain * vmax + vmax * dt + 0.05
-    t_max = opt.timeout_factor * length / vmax + 5.0
-    n_max = int(t_max / dt) + 1
-
+    n_max = int((opt.timeout_factor * length / vmax + 5.0) / dt) + 1
     th = math.atan2(uy[0], ux[0])
-    v = w = 0.0
+    v = w = sc = 0.0
     k = 0
-    sc = 0.0
-    T, X, Y, TH, V, W, WC, VR, SC, E = ([] for _ in range(10))
+    rows, WC, VR = [], [], []
     n_v = n_a = n_w = n_al = n_any = 0
-    status = Status.TIMEOUT
     sin, cos, atan2, hypot, pi = math.sin, math.cos, math.atan2, math.hypot, math.pi
-
     for step in range(n_max):
-        # Closest point, searching forward from the last segment within reach (inline:
-        # this loop runs every step, and a call per step costs ~5 % of the simulation).
-        best = math.inf
-        kk = k
-        limit_s = sc + reach
+        # Closest point, searching forward from the last segment within reach.
+        best, kk, limit_s = math.inf, k, sc + reach
         while kk < nseg and S[kk] <= limit_s:
             rx, ry = x - px[kk], y - py[kk]
             u = rx * ux[kk] + ry * uy[kk]
@@ -329,24 +324,15 @@ def track(
             kk += 1
         k = k_best
         sc = S[k] + u_best
-        T.append(step * dt)
-        X.append(x)
-        Y.append(y)
-        TH.append(th)
-        V.append(v)
-        W.append(w)
-        SC.append(sc)
-        E.append(math.sqrt(best))
+        rows.append((step * dt, x, y, th, v, w, sc, math.sqrt(best)))
         if length - sc <= opt.goal_tolerance:
             WC.append(0.0)
             VR.append(0.0)
-            status = Status.SOLVED
-            break
-
+            return Status.SOLVED, rows, WC, VR, (n_v, n_a, n_w, n_al, n_any)
         # Speed reference at the mid-step position s + (v + v_cmd) dt / 2, solved
         # by fixed-point iteration from v + amax dt: exact on the profile's
         # constant-acceleration ramps (v**2 linear in s, interpolated as such).
-        v_ref = v + amax * dt
+        v_ref = v + lim_dv
         for _ in range(3):
             sq = sc + 0.5 * (v + v_ref) * dt
             i = bisect_right(PS, sq) - 1
@@ -357,12 +343,11 @@ def track(
             else:
                 q = Q[i] + (sq - PS[i]) * (Q[i + 1] - Q[i]) / (PS[i + 1] - PS[i])
             v_ref = math.sqrt(q) if q > 0.0 else 0.0
+        # The profile is a limit, not a demand: never ask for more speed than the robot
+        # can reach this step. Braking beyond amax is still a violation.
         v_cmd = v_ref if v_ref > creep else creep
-        # The profile is a limit, not a demand: never ask for more speed than
-        # the robot can reach this step. Braking beyond amax is still a violation.
-        if v_cmd > v + amax * dt:
-            v_cmd = v + amax * dt
-
+        if v_cmd > v + lim_dv:
+            v_cmd = v + lim_dv
         # Pure pursuit toward the point one look-ahead further along the path.
         st = sc + lmin + gain * v_cmd
         if st >= length:
@@ -379,44 +364,35 @@ def track(
         w_cmd = 2.0 * v_cmd * sin(alpha) / (dist if dist > 1e-6 else 1e-6)
         WC.append(w_cmd)
         VR.append(v_ref)
-
         # Bounds, checked before saturation.
-        bad = False
-        if v_cmd > vmax * tol:
-            n_v += 1
-            bad = True
-        if abs(v_cmd - v) > amax * dt * tol:
-            n_a += 1
-            bad = True
-        if abs(w_cmd) > wmax * tol:
-            n_w += 1
-            bad = True
         w_sat = w_cmd if -wmax <= w_cmd <= wmax else math.copysign(wmax, w_cmd)
-        if abs(w_sat - w) > alpha_max * dt * tol:
-            n_al += 1
-            bad = True
-        n_any += bad
-
+        if v_cmd > v_bad or abs(v_cmd - v) > dv_bad or abs(w_cmd) > w_bad or abs(w_sat - w) > dw_bad:
+            n_v, n_a = n_v + (v_cmd > v_bad), n_a + (abs(v_cmd - v) > dv_bad)
+            n_w, n_al = n_w + (abs(w_cmd) > w_bad), n_al + (abs(w_sat - w) > dw_bad)
+            n_any += 1
         # Saturate, then integrate with the step's mean speed and turn rate
         # (the inputs ramp linearly within a step under the rate bounds).
         v0, w0 = v, w
-        v_new = v_cmd if v_cmd < vmax else vmax
-        dv = v_new - v
-        lim_dv = amax * dt
+        dv = (v_cmd if v_cmd < vmax else vmax) - v
         v += lim_dv if dv > lim_dv else (-lim_dv if dv < -lim_dv else dv)
         dw = w_sat - w
-        lim_dw = alpha_max * dt
         w += lim_dw if dw > lim_dw else (-lim_dw if dw < -lim_dw else dw)
-        ds_step = 0.5 * (v0 + v) * dt
-        dth = 0.5 * (w0 + w) * dt
+        ds_step, dth = 0.5 * (v0 + v) * dt, 0.5 * (w0 + w) * dt
         mid = th + 0.5 * dth
         x += ds_step * cos(mid)
         y += ds_step * sin(mid)
         th += dth
+    return Status.TIMEOUT, rows, WC, VR, (n_v, n_a, n_w, n_al, n_any)
 
-    if status is Status.TIMEOUT:
-        logger.info("tracking timed out after %.1f s at s = %.2f of %.2f m", T[-1], sc, length)
-    return _result(status, (T, X, Y, TH, V, W, WC, VR, SC, E), Violations(n_v, n_a, n_w, n_al, n_any))
+
+def _as_lists(p: FloatArray, sp: FloatArray, ps: FloatArray, pv: FloatArray) -> tuple[list, ...]:
+    """The path and the profile as plain lists for :func:`_simulate`'s loop (numpy scalar
+    indexing costs ~10x more): x, y, unit directions, segment lengths, arc lengths of
+    the path; arc lengths and squared speeds of the profile."""
+    d = np.diff(p, axis=0)
+    seg_len = np.linalg.norm(d, axis=1)
+    ux, uy = (d[:, 0] / seg_len).tolist(), (d[:, 1] / seg_len).tolist()
+    return p[:, 0].tolist(), p[:, 1].tolist(), ux, uy, seg_len.tolist(), sp.tolist(), ps.tolist(), (pv * pv).tolist()
 
 
 def _checked_profile(profile) -> tuple[FloatArray, FloatArray]:

@@ -1,0 +1,258 @@
+"""The space-time graph the safe-interval search runs on, its safe intervals, its result.
+
+A roadmap (plus start and goal) becomes a :class:`SpaceTimeGraph` by cutting every edge
+into ``k`` equal one-step pieces (:func:`split_edges`, with the rule of
+:func:`gfuzzy.poses.split_counts`); :class:`IntervalStore` computes the safe intervals of
+its points from a :class:`gfuzzy.movers.MoverField`, in batches, on demand; both searches
+(:func:`gfuzzy.timespace.sipp` and the compiled :func:`gfuzzy.search_kernel.sipp_compiled`)
+return a :class:`SearchResult`.
+"""
+
+from __future__ import annotations
+
+from bisect import bisect_right
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .poses import interpolate_segment, split_counts
+from .settings import INTERVAL_BATCH_CELLS
+from .status import Status
+from .typing import BoolArray, FloatArray, IntArray
+
+if TYPE_CHECKING:
+    from .movers import MoverField
+
+__all__ = ["SpaceTimeGraph", "SearchResult", "IntervalStore", "split_edges", "BAND"]
+
+#: Safety is computed for every group whose static lower bound on f lies within this many
+#: steps of the group the search asks for: the A* order will want them soon.
+BAND = 6
+
+
+@dataclass
+class SpaceTimeGraph:
+    """A graph whose every edge takes exactly one time step.
+
+    Attributes
+    ----------
+    poses : (N, d) float
+    indptr : (N+1,) int
+    neighbors : (M,) int
+        CSR adjacency: the successors of node i are ``neighbors[indptr[i]:indptr[i+1]]``.
+    heuristic : (N,) float
+        Lower bound on the number of steps to the goal (inf: goal unreachable).
+    can_wait : (N,) bool or None
+        Where the robot may wait (None: everywhere).
+    groups : (G+1,) int or None
+        Nodes ``groups[j] .. groups[j+1]-1`` lie on one roadmap edge; their safe intervals
+        are computed together. Nodes below ``groups[0]`` are computed one by one.
+    from_start : (N,) float or None
+        Lower bound on the steps from the start to each node. With the heuristic it
+        bounds the useful times of a node to ``[from_start, horizon - heuristic]``: the
+        robot cannot be there earlier, nor reach the goal in time from there later, so
+        safety is only computed inside that window.
+    """
+
+    poses: FloatArray
+    indptr: IntArray
+    neighbors: IntArray
+    heuristic: FloatArray
+    can_wait: BoolArray | None = None
+    groups: IntArray | None = None
+    from_start: FloatArray | None = None
+
+
+@dataclass
+class SearchResult:
+    """Outcome of :func:`gfuzzy.timespace.sipp` (and the compiled search): ``status`` is
+    :attr:`Status.SOLVED`, :attr:`Status.NO_PATH` or :attr:`Status.TIMEOUT`."""
+
+    status: Status
+    nodes: list = field(default_factory=list)  # node ids, one per arrival
+    steps: list = field(default_factory=list)  # arrival steps
+    message: str = ""
+    expansions: int = 0
+    states: int = 0
+    horizon_hit: bool = False
+
+
+class IntervalStore:
+    """Safe intervals of a graph's points, computed in batches on demand.
+
+    A point's safety is only computed inside its time window ``[from_start, H - h]`` (see
+    :class:`SpaceTimeGraph`); when the search's horizon H grows, the windows grow and only
+    the new steps are computed, so a search restarted with a longer horizon redoes no
+    safety work.
+
+    Parameters
+    ----------
+    graph : SpaceTimeGraph
+    """
+
+    def __init__(self, graph: SpaceTimeGraph):
+        self.graph = graph
+        n = len(graph.poses)
+        h = graph.heuristic
+        # groups whose safety is computed together: each edge's points, every other node alone
+        first = int(graph.groups[0]) if graph.groups is not None else n
+        ptr = np.arange(first + 1, dtype=np.int64)
+        if graph.groups is not None:
+            ptr = np.unique(np.concatenate([ptr, np.asarray(graph.groups, dtype=np.int64)]))
+        ptr = ptr[ptr <= n]
+        if ptr[-1] != n:
+            ptr = np.append(ptr, n)
+        self.ptr = ptr
+        self._ptr_l = ptr.tolist()
+        fs = graph.from_start if graph.from_start is not None else np.zeros(n)
+        fs = np.where(np.isfinite(fs), fs, 0.0)
+        self.g_lo = np.maximum(0, np.floor(np.minimum.reduceat(fs, ptr[:-1]) + 1e-9)).astype(np.int64)
+        hmin = np.minimum.reduceat(h, ptr[:-1])
+        self._finite = np.isfinite(hmin)
+        self._hfloor = np.floor(np.where(self._finite, hmin, 0) + 1e-9).astype(np.int64)
+        self.f_lb = np.minimum.reduceat(fs + h, ptr[:-1])
+        self.done_hi = np.full(len(ptr) - 1, -1, dtype=np.int64)  # last step computed
+        self._done_l = self.done_hi.tolist()
+        # intervals stay in their batch's lists until a search asks for them
+        self._batches: list = []  # (starts, row pointers, ends, first step examined per row)
+        self._where = np.full(n, -1, dtype=np.int64)  # batch of a node's latest computation
+        self._local = np.zeros(n, dtype=np.int64)  # its row there
+        self._older: dict = {}  # node -> (starts, ends) from computations before the latest
+        self.batch_arrays: list = []  # the batches as arrays (see _compute)
+        self.field = None
+        self.H = -1
+
+    def set_horizon(self, field_: MoverField) -> None:
+        """Serve intervals for ``field_``'s horizon (never shorter than before)."""
+        if field_.steps < self.H:
+            raise ValueError("the horizon of an IntervalStore only grows")
+        self.field = field_
+        self.H = field_.steps
+        self.g_hi = np.where(self._finite, self.H - self._hfloor, -1).astype(np.int64)
+        self._g_hi_l = self.g_hi.tolist()
+        self._served: dict = {}
+
+    def group_of(self, node: int) -> int:
+        return bisect_right(self._ptr_l, node) - 1
+
+    def get(self, node: int) -> tuple[list, list, int]:
+        """(interval starts, interval ends, last step examined) of a node, as lists."""
+        iv = self._served.get(node)
+        if iv is not None:
+            return iv
+        g = self.group_of(node)
+        cap = self._g_hi_l[g]
+        if self._done_l[g] < cap:
+            self._compute(g)
+        starts, ends = self._intervals(node)
+        iv = (starts, ends, cap)
+        self._served[node] = iv
+        return iv
+
+    def _intervals(self, node: int) -> tuple[list, list]:
+        b = int(self._where[node])
+        if b < 0:
+            return [], []
+        cs, sp, ce, first = self._batches[b]
+        k = int(self._local[node])
+        a, z = sp[k], sp[k + 1]
+        old = self._older.get(node)
+        if old is None or not old[0]:
+            return cs[a:z], ce[a:z]
+        starts, ends = list(old[0]), list(old[1])
+        if a < z:
+            if ends[-1] == first[k] - 1 and cs[a] == first[k]:  # the last interval goes on
+                ends[-1] = ce[a]
+                a += 1
+            starts.extend(cs[a:z])
+            ends.extend(ce[a:z])
+        return starts, ends
+
+    def _compute(self, g: int) -> None:
+        ptr, field_ = self.ptr, self.field
+        need = self.done_hi < self.g_hi
+        pending = np.nonzero(need & (self.f_lb <= self.f_lb[g] + BAND))[0]
+        pending = pending[np.argsort(self.f_lb[pending], kind="stable")]
+        budget = max(1, INTERVAL_BATCH_CELLS // (self.H + 1))  # points per batch (points x steps bools)
+        sizes = ptr[pending + 1] - ptr[pending]
+        pending = pending[np.cumsum(sizes) <= budget]
+        if g not in set(pending.tolist()):
+            pending = np.append(pending, g)
+        lo = np.maximum(self.g_lo[pending], self.done_hi[pending] + 1)
+        hi = self.g_hi[pending]
+        self.done_hi[pending] = hi
+        for j, v in zip(pending.tolist(), hi.tolist(), strict=True):
+            self._done_l[j] = v
+        sizes = ptr[pending + 1] - ptr[pending]
+        sub_ptr = np.concatenate([[0], np.cumsum(sizes)])
+        nodes = np.repeat(ptr[pending], sizes) + (np.arange(sub_ptr[-1]) - np.repeat(sub_ptr[:-1], sizes))
+        lo_n, hi_n = np.repeat(lo, sizes), np.repeat(hi, sizes)
+        un, us = field_.unsafe_pairs(self.graph.poses[nodes], sub_ptr, lo, hi)
+        # safe intervals = the gaps between unsafe steps, with the window's ends as walls
+        k = len(nodes)
+        span = self.H + 3  # steps -1 .. H + 1 fit in [0, span) once shifted by one
+        rows = np.arange(k) * span
+        keys = np.sort(np.concatenate([un * span + us + 1, rows + lo_n, rows + hi_n + 2]))
+        wn, ws = keys // span, keys % span - 1  # repeated walls leave empty gaps, dropped below
+        same = wn[1:] == wn[:-1]
+        gs, ge = ws[:-1] + 1, ws[1:] - 1
+        ok = same & (gs <= ge)
+        rn = wn[:-1][ok]
+        sp_arr = np.searchsorted(rn, np.arange(k + 1))
+        extended = nodes[self._where[nodes] >= 0].tolist()
+        for nid in extended:  # extended windows: keep what was computed before
+            self._older[nid] = self._intervals(nid)
+        self._batches.append((gs[ok].tolist(), sp_arr.tolist(), ge[ok].tolist(), lo_n.tolist()))
+        # the same batch as arrays, for a consumer that loads whole batches at once
+        # (gfuzzy.search_kernel); nodes in `extended` also have older intervals
+        self.batch_arrays.append((nodes, gs[ok], ge[ok], sp_arr, extended))
+        self._where[nodes] = len(self._batches) - 1
+        self._local[nodes] = np.arange(k)
+
+
+def split_edges(verts: FloatArray, edges: IntArray, lengths: FloatArray, step_len: float, first_id: int):
+    """Cut edges into one-step pieces of at most ``step_len`` (:func:`gfuzzy.poses.split_counts`).
+
+    The one place the roadmap-time graph is cut: :meth:`gfuzzy.planner.Planner._graph`
+    and :func:`gfuzzy.prepared.prepare_goal` both call it.
+
+    Parameters
+    ----------
+    verts : (n, d) float
+    edges : (e, 2) int
+    lengths : (e,) float
+    step_len : float
+        vmax * dt.
+    first_id : int
+        Id of the first interior point.
+
+    Returns
+    -------
+    k : (e,) int
+        Steps per edge.
+    offs : (e+1,) int
+        Interior points of edge i are ``first_id + offs[i] .. first_id + offs[i+1] - 1``.
+    inner : (offs[-1], d) float
+        Their poses.
+    a, b, j : (offs[-1],) int
+        Each interior point's edge ends and its index 1..k-1 along the edge.
+    src, dst : (c,) int
+        The one-step moves along the chains a -> interior... -> b (one direction).
+    """
+    k = split_counts(lengths, step_len)
+    n_int = k - 1
+    offs = np.concatenate([[0], np.cumsum(n_int)]).astype(np.int64)
+    e_of = np.repeat(np.arange(len(edges)), n_int)
+    j = np.arange(offs[-1]) - np.repeat(offs[:-1], n_int) + 1
+    a, b = edges[e_of, 0], edges[e_of, 1]
+    inner = interpolate_segment(verts[a], verts[b], j / k[e_of])
+    ids = np.arange(first_id, first_id + offs[-1])
+    first = np.zeros(offs[-1], dtype=bool)
+    first[offs[:-1][n_int > 0]] = True
+    last = np.zeros(offs[-1], dtype=bool)
+    last[(offs[1:] - 1)[n_int > 0]] = True
+    prev = np.where(first, a, ids - 1)
+    src = np.concatenate([prev, ids[last], edges[n_int == 0, 0]])
+    dst = np.concatenate([ids, b[last], edges[n_int == 0, 1]])
+    return k, offs, inner, a, b, j, src, dst
