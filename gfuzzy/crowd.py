@@ -291,13 +291,19 @@ def _episode(roadmap, K: int, seed: int, options, policies) -> dict:
     return run_episode(circle_crossing(K, seed, name=f"crowd-{K}-{seed}"), roadmap, options, policies)
 
 
+def _same(x):
+    return x
+
+
 def episodes(client, roadmap, K: int, seeds, options, policies) -> list[dict]:
     """:func:`run_episode` of K humans for each of ``seeds``, in seed order: in this process
     (``client`` None), or one task each on a ``distributed.Client`` (the roadmap travels to
     every worker once; latencies are measured in the workers)."""
     if client is None:
         return [_episode(roadmap, K, s, options, policies) for s in seeds]
-    rm = client.scatter(roadmap, broadcast=True)
+    # the roadmap as a task's result, not scattered data: Dask recomputes a result that a
+    # dying worker took with it, while scattered data would be lost for the whole batch
+    rm = client.submit(_same, roadmap, pure=False)
     n = len(seeds)
     futures = client.map(_episode, [rm] * n, [K] * n, list(seeds), [options] * n, [policies] * n, pure=False)
     return client.gather(futures)

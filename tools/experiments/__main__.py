@@ -25,7 +25,7 @@ from gfuzzy.batch import local_cluster  # noqa: E402
 
 from .common import DOCS, IMG, Context  # noqa: E402
 
-EXPERIMENTS = ["table1", "fig12", "fig14", "ompl_peer", "crowd"]
+EXPERIMENTS = ["table1", "fig12", "fig14", "crowd", "ompl_peer"]
 
 INTRO = """# Results: the paper's experiments, reproduced
 
