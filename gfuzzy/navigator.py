@@ -43,13 +43,15 @@ import numpy as np
 
 from .errors import InputError, check_number
 from .geometry import StaticGeometry
+from .movers import MoverField
 from .planner import BACKENDS, _search_function
 from .poses import interpolate_segment, metric_distance, split_counts, wrap_angle
 from .roadmap import Roadmap
 from .scene import Mover, Scene
 from .settings import SPEED_SAFETY
+from .spacetime import IntervalStore, SpaceTimeGraph, split_edges
 from .status import Status
-from .timespace import IntervalStore, MoverField, SpaceTimeGraph, timed_rows
+from .timespace import timed_rows
 from .trajectory import Trajectory
 from .typing import FloatArray
 
@@ -249,7 +251,7 @@ class Navigator:
         lengths = np.concatenate([rm.lengths[keep], np.array([w for _, w in extra], dtype=float)])
         verts = np.vstack([rm.vertices, self._goal_wrapped[None]])
         n = len(verts)
-        k = _steps(lengths, self.step_len)
+        k = split_counts(lengths, self.step_len)
         w = np.maximum(k.astype(float), 1e-300)
         mat = coo_matrix(
             (np.r_[w, w], (np.r_[edges[:, 0], edges[:, 1]], np.r_[edges[:, 1], edges[:, 0]])), shape=(n, n)
@@ -262,7 +264,12 @@ class Navigator:
             (np.r_[full_w, full_w], (np.r_[full[:, 0], full[:, 1]], np.r_[full[:, 1], full[:, 0]])), shape=(n, n)
         ).tocsr()
         self._metres_v = dijkstra(mat, directed=True, indices=g_id)
-        poses, src, dst, heur, groups = _split(verts, edges, k, hop_g)
+        k, offs, inner, a, b, j, src, dst = split_edges(verts, edges, lengths, self.step_len, n)
+        poses = np.vstack([verts, inner])
+        e_of = np.repeat(np.arange(len(edges)), k - 1)
+        heur = np.concatenate([hop_g, np.minimum(hop_g[a] + j, hop_g[b] + k[e_of] - j)])
+        src, dst = np.concatenate([src, dst]), np.concatenate([dst, src])
+        groups = n + offs
         order = np.argsort(src, kind="stable")
         indptr = np.zeros(len(poses) + 1, dtype=np.int64)
         np.add.at(indptr, src + 1, 1)
@@ -309,7 +316,7 @@ class Navigator:
         s_id = N
         verts = np.vstack([self._poses[: self._nv + 1], pose[None]])
         tgt = np.array([v for v, _ in conns], dtype=np.int64)
-        k = _steps(np.array([w for _, w in conns]), self.step_len)
+        k = split_counts(np.array([w for _, w in conns]), self.step_len)
         new_poses, new_src, new_dst, new_h, new_groups = [pose[None]], [], [], [], []
         h_s = math.inf
         nxt = N + 1
@@ -608,49 +615,6 @@ class Navigator:
             if opts.cover > move_time[c]:
                 rows = np.vstack([rows, [t + opts.cover, *ends[c]]])
         return Trajectory(rows, cr)
-
-
-def _steps(lengths: FloatArray, step_len: float) -> np.ndarray:
-    """Steps per edge so that no step is longer than ``step_len``: :func:`gfuzzy.poses.split_counts`."""
-    return split_counts(lengths, step_len)
-
-
-def _split(verts: FloatArray, edges, k, hop_g):
-    """Every edge cut into ``k`` one-step pieces (as :meth:`Planner._graph` does).
-
-    Returns
-    -------
-    poses : (N, d) float
-    src, dst : (M,) int
-        One-step moves, both ways along every edge.
-    heur : (N,) float
-        Steps to the goal (exact on the static graph).
-    groups : (E'+1,) int
-        Boundaries of the interior points of each edge (for :class:`IntervalStore`).
-    """
-    n = len(verts)
-    n_int = k - 1
-    offs = np.concatenate([[0], np.cumsum(n_int)])
-    total = n + int(offs[-1])
-    e_of = np.repeat(np.arange(len(edges)), n_int)
-    j = np.arange(offs[-1]) - np.repeat(offs[:-1], n_int) + 1
-    f = j / k[e_of]
-    a, b = edges[e_of, 0], edges[e_of, 1]
-    poses = np.empty((total, verts.shape[1]))
-    poses[:n] = verts
-    poses[n:] = interpolate_segment(verts[a], verts[b], f)
-    heur = np.empty(total)
-    heur[:n] = hop_g
-    heur[n:] = np.minimum(hop_g[a] + j, hop_g[b] + k[e_of] - j)
-    ids = np.arange(n, total)
-    first = np.zeros(offs[-1], dtype=bool)
-    first[offs[:-1][n_int > 0]] = True
-    last = np.zeros(offs[-1], dtype=bool)
-    last[(offs[1:] - 1)[n_int > 0]] = True
-    prev = np.where(first, a, ids - 1)
-    src = np.concatenate([prev, ids[last], edges[n_int == 0, 0]])
-    dst = np.concatenate([ids, b[last], edges[n_int == 0, 1]])
-    return poses, np.concatenate([src, dst]), np.concatenate([dst, src]), heur, n + offs
 
 
 def _cut(traj: Trajectory, ta: float, tb: float) -> FloatArray:
