@@ -168,12 +168,7 @@ def cmd_check(args) -> int:
     if tf.status != Status.SOLVED:
         _say(f"{args.trajectory}: status is {tf.status}: there is no trajectory to check")
         return EXIT_NO
-    query = None
-    if tf.query:
-        try:
-            query = scene.query(tf.query)
-        except KeyError:
-            query = None
+    query = _query_of(scene, tf)
     if tf.scene and tf.scene != scene.name:
         _say(f"note: {args.trajectory} was planned for scene {tf.scene!r}, checking against {scene.name!r}")
     _rows_fit(scene, tf, args.trajectory)
@@ -211,17 +206,20 @@ def _rows_fit(scene, tf, path) -> None:
         )
 
 
+def _query_of(scene, tf):
+    """The scene's query a trajectory file names, or None (an ad-hoc query)."""
+    try:
+        return scene.query(tf.query) if tf.query else None
+    except KeyError:
+        return None
+
+
 def _violation(scene, tf, path):
     """(time, reason) of a drawn trajectory's first violation of the guarantees, told on
     stderr (render draws it anyway, `check` exits 1 on it); None when it is valid."""
     from ..check import check_trajectory
 
-    query = None
-    if tf.query:
-        try:
-            query = scene.query(tf.query)
-        except KeyError:
-            query = None
+    query = _query_of(scene, tf)
     rep = check_trajectory(scene, tf.waypoints, query)
     if rep.valid:
         return None
