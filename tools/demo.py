@@ -1,7 +1,8 @@
-"""`make demo`: plan the building-floor query and write its trajectory, picture and GIF.
+"""`make demo`: plan the building-floor query and write its trajectory, picture and GIF;
+then navigate among real pedestrians (ETH) without knowing their future.
 
-Runs the real command line (`gfuzzy plan`, `check`, `render`) on the bundled scene and
-roadmap; everything lands in out/.
+Runs the real command line (`gfuzzy plan`, `check`, `render`, `navigate`) on the bundled
+scenes and roadmaps; everything lands in out/.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from gfuzzy.cli import main
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "scenes" / "building-floor.yaml"
+PEOPLE = ROOT / "scenes" / "eth-crossing.yaml"
 ROADMAP = ROOT / "roadmaps" / "building-floor.json"
 OUT = ROOT / "out"
 
@@ -36,12 +38,17 @@ def demo() -> int:
         ("plan", SCENE, *roadmap, "--refine", "--speed-layer", "-o", OUT / "building-floor-refined.json"),
         ("check", SCENE, OUT / "building-floor-refined.json"),
         ("render", SCENE, OUT / "building-floor-refined.json", "-o", OUT / "building-floor-refined.png", "--speed"),
+        # among people: observed every 0.25 s, their future unknown; checked against the real tracks
+        ("navigate", PEOPLE, "-o", OUT / "eth-navigate.json"),
+        ("check", PEOPLE, OUT / "eth-navigate.json"),
+        ("render", PEOPLE, OUT / "eth-navigate.json", "-o", OUT / "eth-navigate.gif"),
     ]
     for args in steps:
         status = run(*args)
         if status != 0:
             return status
-    print(f"\nwrote {', '.join(sorted(p.name for p in OUT.glob('building-floor*')))} in {OUT}")
+    made = sorted(p.name for p in [*OUT.glob("building-floor*"), *OUT.glob("eth-navigate*")])
+    print(f"\nwrote {', '.join(made)} in {OUT}")
     return 0
 
 
