@@ -579,10 +579,11 @@ class _Rounds:
 
 def _check_hold(hold) -> float:
     """A query's ``hold`` as a float (InputError when negative or not finite)."""
-    hold = float(hold)
-    if not (math.isfinite(hold) and hold >= 0):
+    if isinstance(hold, bool) or not isinstance(hold, (int, float, np.number)) or not (
+        math.isfinite(hold) and hold >= 0
+    ):
         raise InputError(f"hold must be a non-negative number, got {hold!r}")
-    return hold
+    return float(hold)
 
 
 def _check_t0(t0) -> float:

@@ -78,6 +78,8 @@ class RoadmapOptions:
     bridge_ratio: float = 0.5
 
     def __post_init__(self):
+        if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)) or not 0 <= self.seed < 2**31:
+            raise InputError(f"seed must be a whole number from 0 to {2**31 - 1}, got {self.seed!r}")
         if self.vertices < 1:
             raise InputError(f"a roadmap needs at least 1 vertex, got {self.vertices}")
         if self.neighbors < 1:

@@ -226,7 +226,7 @@ def load_trajectory(path: str | os.PathLike) -> TrajectoryFile:
         if back.size:  # section 2: t strictly increasing; without it the rows are no trajectory
             j = int(back[0]) + 1
             raise SceneError(
-                file, f"waypoints[{j}][0]", f"t={wps[j, 0]!r} does not increase (the row before has t={wps[j - 1, 0]!r})"
+                file, f"waypoints[{j}][0]", f"t={float(wps[j, 0])!r} does not increase (the row before has t={float(wps[j - 1, 0])!r})"
             )
 
     def num(key):

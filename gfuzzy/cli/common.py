@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 from pathlib import Path
 
@@ -209,6 +210,10 @@ def _out_path(path, allowed):
     parent = Path(path).resolve().parent
     if not parent.is_dir():
         raise BadInput(f"{path}: folder {parent} does not exist")
+    if Path(path).is_dir():
+        raise BadInput(f"{path}: is a folder, not a file")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise BadInput(f"{path}: folder {parent} is not writable")
     return Path(path)
 
 

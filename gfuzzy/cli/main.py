@@ -190,10 +190,17 @@ def main(argv: list[str] | None = None) -> int:
     except (InputError, LimitError) as exc:  # SceneError included; any other exception is a bug
         _say(" ".join(str(exc).split()))
         return EXIT_BAD
+    except BrokenPipeError:
+        return EXIT_OK
+    except OSError as exc:
+        if exc.filename is None:
+            raise
+        # a file the command had to read or write and could not (a full disc, a folder
+        # that refuses writing, /proc): the user's to fix, one line, nothing half-written
+        _say(f"{exc.filename}: {exc.strerror or exc}")
+        return EXIT_BAD
     except KeyboardInterrupt:
         _say("interrupted")
         return 130
-    except BrokenPipeError:
-        return EXIT_OK
 
 

@@ -171,6 +171,12 @@ def cmd_check(args) -> int:
     query = _query_of(scene, tf)
     if tf.scene and tf.scene != scene.name:
         _say(f"note: {args.trajectory} was planned for scene {tf.scene!r}, checking against {scene.name!r}")
+    if query is None:
+        what = f"names query {tf.query!r}, which scene {scene.name!r} does not have" if tf.query else "names no query"
+        _say(
+            f"note: {args.trajectory} {what}: its start, goal, departure time and any hold are "
+            "not checked (only motion, speed and collisions; --hold checks a parking)"
+        )
     _rows_fit(scene, tf, args.trajectory)
     if args.hold is not None:  # park at the last row (an ad-hoc query has no hold of its own)
         from ..scene import Query
