@@ -342,23 +342,7 @@ def _improved(path, t_in, b, history, gen, coding, best, evaluator, chord) -> GA
         after[2],
         gen,
     )
-    return GAResult(
-        path=out,
-        chromosome=best.astype(np.int64),
-        fitness_history=history,
-        generations=gen,
-        improved=True,
-        fitness_before=b[0],
-        fitness_after=after[0],
-        length_before=b[1],
-        length_after=after[1],
-        smoothness_before=b[2],
-        smoothness_after=after[2],
-        clearance_before=b[3],
-        clearance_after=after[3],
-        trajectory=traj,
-        coding=coding,
-    )
+    return _result(out, best.astype(np.int64), history, gen, True, b, after, traj, coding)
 
 
 def _scalars(fp: FitnessParts) -> tuple[float, float, float, float]:
@@ -377,23 +361,7 @@ def _unchanged(path, t_in, b, history, gen, coding, opts, best=None) -> GAResult
         else best.astype(np.int64)
     )
     traj = None if t_in is None else np.column_stack([t_in, path])
-    return GAResult(
-        path=path.copy(),
-        chromosome=chrom,
-        fitness_history=np.asarray(history, dtype=float),
-        generations=gen,
-        improved=False,
-        fitness_before=b[0],
-        fitness_after=b[0],
-        length_before=b[1],
-        length_after=b[1],
-        smoothness_before=b[2],
-        smoothness_after=b[2],
-        clearance_before=b[3],
-        clearance_after=b[3],
-        trajectory=traj,
-        coding=coding,
-    )
+    return _result(path.copy(), chrom, np.asarray(history, dtype=float), gen, False, b, b, traj, coding)
 
 
 def _initial_population(rng: np.random.Generator, P: int, K: int, levels: int) -> IntArray:
@@ -428,3 +396,25 @@ def _timed(out: FloatArray, u_out: FloatArray, ref: FloatArray, t: FloatArray) -
     keep = np.ones(len(rows), dtype=bool)
     keep[1:] = np.any(np.abs(np.diff(rows, axis=0)) > 1e-12, axis=1)
     return rows[keep]
+
+
+def _result(path, chromosome, history, gen, improved, b, after, traj, coding) -> GAResult:
+    """A :class:`GAResult` from the before / after figures ``(cost, length, turning,
+    clearance)``."""
+    return GAResult(
+        path=path,
+        chromosome=chromosome,
+        fitness_history=history,
+        generations=gen,
+        improved=improved,
+        fitness_before=b[0],
+        fitness_after=after[0],
+        length_before=b[1],
+        length_after=after[1],
+        smoothness_before=b[2],
+        smoothness_after=after[2],
+        clearance_before=b[3],
+        clearance_after=after[3],
+        trajectory=traj,
+        coding=coding,
+    )
