@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from shared_scenes import LOOP
 
 from gfuzzy import load_scene, plan
 from gfuzzy.batch import COLUMNS, BatchOptions, local_cluster, run_batch, write_table
@@ -270,19 +271,6 @@ def test_cli_passes_the_plan_options(client, tmp_path):
         assert float(row["duration"]) == ref.duration
 
 
-# the cart passes the goal (4, 3) every 10 s, first just after the earliest arrival
-HOLD_SCENE = """
-version: 1
-name: park
-bounds: [0, 0, 6, 6]
-robot: {disc: 0.25, vmax: 1.0}
-movers:
-  - {name: cart, disc: 0.3, speed: 1.0, path: [[4, 1], [4, 5], [5, 5], [5, 1]], mode: loop, offset: 8.0}
-queries:
-  - {name: park, start: [1, 3], goal: [4, 3], hold: 2.0}
-"""
-
-
 def test_batch_keeps_each_querys_hold(client, tmp_path):
     import yaml
 
@@ -290,7 +278,7 @@ def test_batch_keeps_each_querys_hold(client, tmp_path):
     from gfuzzy.roadmap import RoadmapOptions
     from gfuzzy.scene import parse_scene
 
-    scene = parse_scene(yaml.safe_load(HOLD_SCENE))
+    scene = parse_scene(yaml.safe_load(LOOP))
     rm = build_roadmap(scene, RoadmapOptions(vertices=60, seed=1))
     res = run_batch(client, [(scene, rm)], BatchOptions(trajectories=str(tmp_path)))
     (row,) = res.rows
@@ -301,7 +289,7 @@ def test_batch_keeps_each_querys_hold(client, tmp_path):
     assert row.duration > plan(scene, rm, q.start, q.goal).duration  # it waited to park safely
     from gfuzzy.trajectory import load_trajectory
 
-    saved = load_trajectory(tmp_path / "park-park.json")
+    saved = load_trajectory(tmp_path / "loop-park.json")
     assert check_trajectory(scene, saved.waypoints, q).valid
 
 

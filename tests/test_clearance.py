@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 from conftest import run_cli_process
 from reference import reference_violation
+from shared_scenes import LOOP
 
 from gfuzzy.check import check_trajectory
 from gfuzzy.geometry import StaticGeometry
@@ -195,18 +196,6 @@ def test_ga_and_speed_layer_keep_the_clearances():
 
 # --------------------------------------------------------------------------- 2. hold
 
-# the cart runs a loop through the goal (4, 3) every 10 s, first at t = 4, just after the
-# earliest arrival (3 m at 1 m/s)
-LOOP = """
-version: 1
-name: loop
-bounds: [0, 0, 6, 6]
-robot: {disc: 0.25, vmax: 1.0}
-movers:
-  - {name: cart, disc: 0.3, speed: 1.0, path: [[4, 1], [4, 5], [5, 5], [5, 1]], mode: loop, offset: 8.0}
-queries:
-  - {name: park, start: [1, 3], goal: [4, 3], hold: 2.0}
-"""
 
 
 @pytest.fixture(scope="module")
