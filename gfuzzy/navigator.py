@@ -44,7 +44,7 @@ import numpy as np
 from .errors import InputError, check_number
 from .geometry import StaticGeometry
 from .movers import MoverField
-from .planner import BACKENDS, _search_function
+from .planner import BACKENDS, search_function
 from .poses import interpolate_segment, metric_distance, split_counts, wrap_angle
 from .roadmap import Roadmap
 from .scene import Mover, Scene
@@ -484,7 +484,7 @@ class Navigator:
             return None, "the goal is not reachable on the roadmap"
         scene = replace(self.scene, robot=self._pred_robot, movers=tuple(movers))
         store = IntervalStore(graph)
-        search = _search_function(opts.backend)
+        search = search_function(opts.backend)
         slack = (opts.plan_slack + opts.prediction_horizon) / opts.dt
         for _ in range(2):
             steps = int(math.ceil(h0 + slack))

@@ -45,6 +45,8 @@ __all__ = [
     "query_problem",
     "check_pose",
     "settle_time",
+    "search_function",
+    "BACKENDS",
 ]
 
 log = logging.getLogger(__name__)
@@ -540,7 +542,7 @@ class Planner:
         # it grows with the slack, and a rerun reuses it (IntervalStore): start tight.
         slack = max(48.0, (0.35 if len(self.scene.movers) <= 10 else 0.15) * h0)
         store = IntervalStore(graph)  # safety computed once, kept as the horizon grows
-        search = _search_function(opts.backend)
+        search = search_function(opts.backend)
         expansions = evaluations = 0
         while True:
             steps = min(max_steps, int(math.ceil(h0 + slack)) + hold_steps)
@@ -593,7 +595,7 @@ def _check_t0(t0) -> float:
     return float(t0)
 
 
-def _search_function(backend: str):
+def search_function(backend: str):
     """The search of ``backend``; numba loads only for the compiled one."""
     if backend == "reference":
         return sipp
