@@ -24,6 +24,10 @@ __all__ = ["MoverField", "CHUNK"]
 #: Steps per chunk of the movers' broad phase.
 CHUNK = 8
 
+#: Up to this many (group, chunk, mover) box tests the compiled kernel tests them all
+#: itself; above, the grid join of :meth:`MoverField._broad_phase` picks the candidates.
+DENSE_BROAD_PHASE = 2_000_000
+
 
 class MoverField:
     """The movers sampled on the time grid ``t_n = t0 + n * dt``, ``n = 0..steps``.
@@ -99,6 +103,7 @@ class MoverField:
         self._is_disc = np.array([mv.shape == "disc" for mv in self.movers], dtype=bool)
         self._radius = np.array([mv.radius for mv in self.movers])
         self._size = np.array([mv.size for mv in self.movers], dtype=float).reshape(-1, 2)
+        self._inner = np.where(self._is_disc, self._radius, 0.5 * self._size.min(axis=1, initial=np.inf))
         #: Phases 2 and 3 of unsafe_pairs compiled (gfuzzy.search_kernel); the same answers.
         self.compiled = False
 
@@ -157,6 +162,8 @@ class MoverField:
         none = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64))
         if not self.movers or K == 0:
             return none
+        if self.compiled:
+            return self._pairs_compiled(poses, ptr, lo, hi)
         xy = poses[:, :2]
         starts = ptr[:-1]
         gmin = np.minimum.reduceat(xy, starts, axis=0)
@@ -173,8 +180,6 @@ class MoverField:
         g3, m3, c3 = self._broad_phase(gmin, gmax, lo // CHUNK, hi // CHUNK)
         if g3.size == 0:
             return none
-        if self.compiled:
-            return self._narrow_compiled(poses, ptr, g3, m3, c3, lo, hi, p0, seg, inv, seg2, dev, body)
         # 2. mid phase: every step of those chunks, mover against the group's segment
         st = (c3[:, None] * CHUNK + np.arange(CHUNK)).ravel()
         g3 = np.repeat(g3, CHUNK)
@@ -223,29 +228,86 @@ class MoverField:
         bad = d < margin
         return node[bad], st4[bad]
 
-    def _narrow_compiled(self, poses, ptr, g3, m3, c3, lo, hi, p0, seg, inv, seg2, dev, body):
-        """Phases 2 and 3 of :meth:`unsafe_pairs` by :func:`gfuzzy.movers_kernel.narrow_phase`
-        (the same tests, compiled); a box robot against box movers keeps the numpy distance."""
-        from .movers_kernel import narrow_phase
+    def safe_intervals(self, poses: FloatArray, ptr: IntArray, lo: IntArray, hi: IntArray):
+        """Safe intervals of many groups of poses (the compiled kernel; see :meth:`unsafe_pairs`).
 
+        Parameters
+        ----------
+        poses : (k, d) float ; ptr : (g+1,) int ; lo, hi : (g,) int
+            As :meth:`unsafe_pairs`; only steps ``lo..hi`` of each group are examined
+            (clipped to ``0..steps``).
+
+        Returns
+        -------
+        starts, ends : (q,) int
+            Maximal runs of safe steps inside each point's window (inclusive), point by
+            point, in time order.
+        sp : (k+1,) int
+            Point i's intervals are ``starts[sp[i]:sp[i+1]]``.
+        """
+        from .movers_kernel import safe_runs
+
+        poses = np.asarray(poses, dtype=float)
+        ptr = np.asarray(ptr, dtype=np.int64)
+        lo = np.clip(np.asarray(lo, dtype=np.int64), 0, None)
+        hi = np.minimum(np.asarray(hi, dtype=np.int64), self.steps)
+        buf, row_off, lo_node = self._mark(poses, ptr, lo, hi)
+        return safe_runs(buf, row_off, lo_node)
+
+    def _pairs_compiled(self, poses, ptr, lo, hi):
+        """:meth:`unsafe_pairs` by the compiled kernel: its dense table read back as pairs."""
+        buf, row_off, lo_node = self._mark(poses, ptr, lo, hi)
+        cells = np.flatnonzero(buf)
+        node = np.searchsorted(row_off, cells, side="right") - 1
+        return node, lo_node[node] + cells - row_off[node]
+
+    def _mark(self, poses, ptr, lo, hi):
+        """Unsafe steps of every point as a dense table (:func:`gfuzzy.movers_kernel.mark_unsafe`).
+
+        Returns
+        -------
+        buf : (row_off[-1],) bool ; row_off : (k+1,) int ; lo_node : (k,) int
+            Point i's steps ``lo_node[i]..`` are ``buf[row_off[i]:row_off[i+1]]`` (True: unsafe).
+        """
+        from .movers_kernel import mark_unsafe
+
+        sizes = np.diff(ptr)
+        lo_node = np.repeat(lo, sizes)
+        row_off = np.zeros(len(poses) + 1, dtype=np.int64)
+        np.cumsum(np.repeat(np.maximum(hi - lo + 1, 0), sizes), out=row_off[1:])
+        buf = np.zeros(int(row_off[-1]), dtype=np.bool_)
+        if not self.movers or len(poses) == 0:
+            return buf, row_off, lo_node
         robot = self.robot
         box = robot.shape != "disc"
         cosp = np.cos(poses[:, 2]) if box else np.zeros(0)
         sinp = np.sin(poses[:, 2]) if box else np.zeros(0)
         half = 0.5 * np.asarray(robot.size, dtype=float) if box else np.zeros(2)
-        node, mv, st, margin, d, count = narrow_phase(
-            g3, m3, c3, CHUNK, lo, hi, self.present, self.xy, self.margin, ptr,
-            np.ascontiguousarray(poses[:, :2]), p0, seg, inv, seg2, dev, body, self._extent,
-            float(robot.circumradius), int(box), float(robot.radius), float(half[0]), float(half[1]),
-            cosp, sinp, self._is_disc, self._radius, self._size,
-            float(robot.inradius), np.where(self._is_disc, self._radius, 0.5 * self._size.min(axis=1, initial=np.inf)),
+        xy = np.ascontiguousarray(poses[:, :2])
+        chunks = np.maximum(np.minimum(hi // CHUNK, self.nc - 1) - np.maximum(lo // CHUNK, 0) + 1, 0)
+        if int(chunks.sum()) * len(self.movers) <= DENSE_BROAD_PHASE:
+            cand = np.zeros((0, 3), dtype=np.int64)  # the kernel tests every (group, mover, chunk)
+        else:  # many movers: a grid join finds the overlapping boxes
+            starts = ptr[:-1][sizes > 0]
+            keep = np.nonzero(sizes > 0)[0]
+            gmin = np.full((len(sizes), 2), np.inf)
+            gmax = np.full((len(sizes), 2), -np.inf)
+            gmin[keep] = np.minimum.reduceat(xy, starts, axis=0)
+            gmax[keep] = np.maximum.reduceat(xy, starts, axis=0)
+            cand = np.column_stack(self._broad_phase(gmin, gmax, lo // CHUNK, hi // CHUNK))
+            if len(cand) == 0:
+                return buf, row_off, lo_node
+        pairs, count = mark_unsafe(
+            cand, ptr, lo, hi, xy, cosp, sinp, row_off, buf, self.present, self.xy, self.margin, self.bbox,
+            CHUNK, self._extent, self._is_disc, self._radius, self._size, self._inner, int(box),
+            float(robot.circumradius), float(robot.radius), float(half[0]), float(half[1]), float(robot.inradius),
         )  # fmt: skip
-        todo = np.isnan(d)
-        if todo.any():
-            d[todo] = self._distance(poses[node[todo]], mv[todo], self.xy[mv[todo], st[todo]])
+        if len(pairs):  # a box robot against box movers: the numpy separating-axis distance
+            node, mv, st = pairs.T
+            bad = self._distance(poses[node], mv, self.xy[mv, st]) < self.margin[mv, st]
+            buf[row_off[node[bad]] + st[bad] - lo_node[node[bad]]] = True
         self.evaluations += count
-        bad = d < margin
-        return node[bad], st[bad]
+        return buf, row_off, lo_node
 
     def _broad_phase(self, gmin, gmax, c_lo, c_hi):
         """(group, mover, chunk) triples whose boxes overlap, chunk within the group's range.

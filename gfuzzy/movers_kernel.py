@@ -1,5 +1,12 @@
-"""The movers' safety kernel compiled with numba: phases 2 and 3 of
-:meth:`gfuzzy.movers.MoverField.unsafe_pairs` in one loop.
+"""The movers' safety kernel compiled with numba: phases 1-3 of
+:meth:`gfuzzy.movers.MoverField.unsafe_pairs` marking a dense table, and the safe
+intervals read off that table.
+
+:func:`mark_unsafe` runs the same tests in the same floating-point operations as the
+numpy reference (per candidate instead of per array) and marks every unsafe (point, step)
+in one bool row per point, instead of listing pairs: a list append per unsafe pair cost
+more than the distance itself. :func:`safe_runs` turns the rows into safe intervals (the
+gaps between unsafe steps), which is what the search consumes.
 
 numba is imported only when this module is (``MoverField`` imports it lazily, when its
 ``compiled`` flag is set); ``cache=True`` keeps the machine code on disk
@@ -13,14 +20,7 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["narrow_phase"]
-
-
-
-
-@njit(cache=True)
-def _hypot(x, y):
-    return math.hypot(x, y)
+__all__ = ["mark_unsafe", "safe_runs", "merge_runs"]
 
 
 @njit(cache=True)
@@ -34,103 +34,261 @@ def _box_dist(px, py, hx, hy):
 
 
 @njit(cache=True)
-def narrow_phase(g3, m3, c3, chunk, lo, hi, present, mxy, margin_tab, ptr, xy, p0, seg, inv, seg2, dev,
-                 body, extent, circ, robot_kind, robot_r, hx_r, hy_r, cosp, sinp, is_disc, mrad, msize,
-                 robot_in, inner):  # fmt: skip
-    """Phases 2 and 3 of :meth:`gfuzzy.movers.MoverField.unsafe_pairs` in one loop.
+def _group_geometry(xy, ptr, circ):
+    """Per group: bounding box, first point, segment to the last point, 1/|seg|^2, |seg|^2,
+    the points' largest deviation from the segment and the body radius around it (the
+    numpy reference's reductions, in its operations)."""
+    G = len(ptr) - 1
+    box = np.empty((G, 4))
+    p0 = np.empty((G, 2))
+    seg = np.empty((G, 2))
+    inv = np.empty(G)
+    seg2 = np.empty(G)
+    dev = np.empty(G)
+    body = np.empty(G)
+    for g in range(G):
+        a, z = ptr[g], ptr[g + 1]
+        if z == a:  # an empty group: nothing is examined, but keep the arrays defined
+            box[g] = np.inf
+            p0[g], seg[g] = 0.0, 0.0
+            inv[g] = seg2[g] = dev[g] = body[g] = 0.0
+            continue
+        x0, y0 = xy[a, 0], xy[a, 1]
+        sx, sy = xy[z - 1, 0] - x0, xy[z - 1, 1] - y0
+        s2 = sx * sx + sy * sy
+        iv = 1.0 / s2 if s2 > 0 else 0.0
+        bx0, by0, bx1, by1 = x0, y0, x0, y0
+        worst = 0.0
+        for i in range(a, z):
+            px, py = xy[i, 0], xy[i, 1]
+            bx0, bx1 = min(bx0, px), max(bx1, px)
+            by0, by1 = min(by0, py), max(by1, py)
+            t = ((px - x0) * sx + (py - y0) * sy) * iv
+            t = min(max(t, 0.0), 1.0)
+            d = math.hypot(x0 + t * sx - px, y0 + t * sy - py)
+            if i == a or d > worst:
+                worst = d
+        box[g, 0], box[g, 1], box[g, 2], box[g, 3] = bx0, by0, bx1, by1
+        p0[g, 0], p0[g, 1] = x0, y0
+        seg[g, 0], seg[g, 1] = sx, sy
+        inv[g], seg2[g], dev[g] = iv, s2, worst
+        body[g] = circ + worst
+    return box, p0, seg, inv, seg2, dev, body
 
-    The same tests in the same floating-point operations, per candidate instead of per
-    array. ``robot_kind`` 0: disc robot, 1: box robot (``cosp``, ``sinp``: its headings'
-    cosines and sines, computed by numpy as the reference does). The exact distance is
-    computed here except for a box robot against a box mover (``dist`` NaN: the caller
-    uses the reference's separating-axis code). ``robot_in`` and ``inner``: the inscribed
-    radii of the robot and the movers; a pair whose inscribed discs are closer than the
-    margin is unsafe without its exact distance (which is at most theirs).
 
-    Returns
-    -------
-    node, mover, step : (p,) int
-        The pairs found unsafe, and those whose distance is left to the caller.
-    margin, dist : (p,) float
-    evaluations : int  (pairs that passed the cheap tests: the reference's ``evaluations``)
-    """
-    out_n = []  # five lists, not one tuple of them: numba types each list by its appends
-    out_m = []
-    out_s = []
-    out_mg = []
-    out_d = []
+@njit(cache=True)
+def _mark_group(g, cand, c0, c1, a, n_g, lo_g, hi_g, box, p0x, p0y, sx, sy, inv_g, seg2_g, dev_g, body_g, row_off,
+                buf, present, mxy, margin_tab, bbox, chunk, xy, cosp, sinp, circ, extent, inner, is_disc, mrad,
+                msize, robot_kind, robot_r, hx_r, hy_r, robot_in, out):  # fmt: skip
+    """Phases 2 and 3 of :func:`mark_unsafe` for group ``g`` (points ``a..a+n_g-1`` near
+    the segment ``p0 + t * s``): its candidates ``cand[c0:c1]``, or with none every mover
+    and chunk whose box overlaps the group's ``box``. Returns the evaluations."""
     count = 0
-    for c in range(len(g3)):
-        g, m = g3[c], m3[c]
-        a = ptr[g]
-        n_g = ptr[g + 1] - a
-        for k in range(chunk):
-            st = c3[c] * chunk + k
-            if st < lo[g] or st > hi[g] or not present[m, st]:
+    n_m, nc = bbox.shape[0], bbox.shape[1]
+    dense = cand.shape[0] == 0
+    for o in range(max(lo_g // chunk, 0) * n_m, (min(hi_g // chunk, nc - 1) + 1) * n_m) if dense else range(c0, c1):
+        c, m = (o // n_m, o % n_m) if dense else (cand[o, 2], cand[o, 1])
+        if dense and not (bbox[m, c, 0] <= box[2] and box[0] <= bbox[m, c, 2]
+                          and bbox[m, c, 1] <= box[3] and box[1] <= bbox[m, c, 3]):  # fmt: skip
+            continue
+        for st in range(max(c * chunk, lo_g), min(c * chunk + chunk - 1, hi_g) + 1):
+            if not present[m, st]:
                 continue
             qx, qy = mxy[m, st, 0], mxy[m, st, 1]
-            tu = ((qx - p0[g, 0]) * seg[g, 0] + (qy - p0[g, 1]) * seg[g, 1]) * inv[g]
+            tu = ((qx - p0x) * sx + (qy - p0y) * sy) * inv_g
             tq = min(max(tu, 0.0), 1.0)
-            ex = p0[g, 0] + tq * seg[g, 0] - qx
-            ey = p0[g, 1] + tq * seg[g, 1] - qy
+            ex = p0x + tq * sx - qx
+            ey = p0y + tq * sy - qy
             mg = margin_tab[m, st]
             # a cheap superset test first (squares, with slack for rounding), then the
             # reference's own test on what remains
-            lim = mg + body[g] + extent[m]
+            lim = mg + body_g + extent[m]
             if lim > 0.0 and ex * ex + ey * ey > lim * lim * (1.0 + 1e-9) + 1e-12:
-                continue  # far outside: the test below fails too
-            dq = math.hypot(ex, ey)
-            if not (dq - body[g] - extent[m] < mg):
                 continue
-            first = 0
-            last = n_g - 1
-            if dev[g] < 1e-9 and n_g > 1:
-                length = math.sqrt(seg2[g])
-                fx = p0[g, 0] + tu * seg[g, 0]
-                fy = p0[g, 1] + tu * seg[g, 1]
-                perp2 = (qx - fx) ** 2 + (qy - fy) ** 2
-                reach = circ + extent[m] + mg
-                w = math.sqrt(max(reach**2 - perp2, 0.0))
+            if not (math.hypot(ex, ey) - body_g - extent[m] < mg):
+                continue
+            first, last = 0, n_g - 1
+            if dev_g < 1e-9 and n_g > 1:  # points evenly spaced on the segment: those in reach
+                length = math.sqrt(seg2_g)
+                perp2 = (qx - (p0x + tu * sx)) ** 2 + (qy - (p0y + tu * sy)) ** 2
+                w = math.sqrt(max((circ + extent[m] + mg) ** 2 - perp2, 0.0))
                 spacing = length / (n_g - 1)
                 first = max(0, np.int64(math.ceil((tu * length - w) / spacing - 1e-9)))
                 last = min(n_g - 1, np.int64(math.floor((tu * length + w) / spacing + 1e-9)))
-            for i in range(first, last + 1):
-                node = a + i
+            lim = mg + circ + extent[m]
+            # inscribed discs closer than this are unsafe (the test below); squared with
+            # slack, it decides most unsafe points without a hypot
+            lin = mg - 1e-9 + robot_in + inner[m]
+            lin2 = lin * lin * (1.0 - 1e-9) - 1e-12 if lin > 0.0 else -1.0
+            for node in range(a + first, a + last + 1):
+                cell = row_off[node] + st - lo_g
                 rx = qx - xy[node, 0]
                 ry = qy - xy[node, 1]
-                lim = mg + circ + extent[m]
-                if lim > 0.0 and rx * rx + ry * ry > lim * lim * (1.0 + 1e-9) + 1e-12:
-                    continue  # far outside: the test below fails too
+                r2 = rx * rx + ry * ry
+                if lim > 0.0 and r2 > lim * lim * (1.0 + 1e-9) + 1e-12:
+                    continue
+                if r2 < lin2:  # surely inside: both tests below pass (lin < lim)
+                    count += 1
+                    buf[cell] = True
+                    continue
                 hc = math.hypot(rx, ry)
                 if not (hc - circ - extent[m] < mg):
                     continue
+                count += 1
+                if buf[cell]:
+                    continue  # already unsafe (another mover): nothing to learn
                 if hc - robot_in - inner[m] < mg - 1e-9:
-                    # the shapes' inscribed discs are closer than the margin, so the exact
-                    # distance (or the separating-axis gap, a lower bound) is too
-                    d = -np.inf
+                    # the inscribed discs are closer than the margin, so the exact distance
+                    # (or the separating-axis gap) is too
+                    buf[cell] = True
                 elif robot_kind == 0:
                     if is_disc[m]:
-                        d = math.hypot(rx, ry) - robot_r - mrad[m]
+                        d = hc - robot_r - mrad[m]
                     else:
                         d = _box_dist(rx, ry, 0.5 * msize[m, 0], 0.5 * msize[m, 1]) - robot_r
+                    buf[cell] = d < mg
                 elif is_disc[m]:
                     cc, ss = cosp[node], sinp[node]
-                    d = _box_dist(cc * rx + ss * ry, -ss * rx + cc * ry, hx_r, hy_r) - mrad[m]
-                else:
-                    d = np.nan
-                count += 1
-                if d >= mg:  # safe (NaN never is: left to the caller)
-                    continue
-                out_n.append(node)
-                out_m.append(m)
-                out_s.append(st)
-                out_mg.append(mg)
-                out_d.append(d)
-    return (
-        np.array(out_n, dtype=np.int64),
-        np.array(out_m, dtype=np.int64),
-        np.array(out_s, dtype=np.int64),
-        np.array(out_mg, dtype=np.float64),
-        np.array(out_d, dtype=np.float64),
-        count,
-    )
+                    buf[cell] = _box_dist(cc * rx + ss * ry, -ss * rx + cc * ry, hx_r, hy_r) - mrad[m] < mg
+                else:  # box against box: the caller's separating-axis distance
+                    out.append((node, m, st))
+    return count
+
+
+@njit(cache=True)
+def mark_unsafe(cand, ptr, lo, hi, xy, cosp, sinp, row_off, buf, present, mxy, margin_tab, bbox, chunk,
+                extent, is_disc, mrad, msize, inner, robot_kind, circ, robot_r, hx_r, hy_r, robot_in):  # fmt: skip
+    """Mark the unsafe steps of points in groups (phases 1-3 of
+    :meth:`gfuzzy.movers.MoverField.unsafe_pairs`, the same tests in the same operations).
+
+    Parameters
+    ----------
+    cand : (c, 3) int
+        Broad-phase candidates (group, mover, chunk), sorted by group; with no rows,
+        every (group, mover, chunk) in the groups' ranges whose boxes overlap is examined
+        here (the same set).
+    ptr : (G+1,) int ; lo, hi : (G,) int
+        Groups of points and the steps examined per group (clipped to the field).
+    xy : (k, 2) float ; cosp, sinp : (k,) float
+        The points, and their headings' cosine and sine for a box robot (``robot_kind`` 1).
+    row_off : (k+1,) int ; buf : (row_off[-1],) bool
+        Point i's steps lo..hi of its group are ``buf[row_off[i]:row_off[i+1]]``: set
+        where unsafe.
+    present, mxy, margin_tab, bbox, chunk, extent, is_disc, mrad, msize, inner
+        The field's arrays (:class:`gfuzzy.movers.MoverField`); ``inner``: the movers'
+        inscribed radii.
+    robot_kind, circ, robot_r, hx_r, hy_r, robot_in : the robot (0 disc, 1 box), its
+        circumradius, disc radius, box half sizes, inscribed radius.
+
+    Returns
+    -------
+    pairs : (p, 3) int
+        (point, mover, step) whose distance is left to the caller (a box robot against a
+        box mover); unsafe where it is below the margin.
+    evaluations : int
+        Pairs that passed the cheap tests (the reference's ``evaluations``).
+    """
+    box, p0, seg, inv, seg2, dev, body = _group_geometry(xy, ptr, circ)
+    out = [(0, 0, 0)][:0]
+    count = 0
+    G = len(ptr) - 1
+    bounds = np.searchsorted(cand[:, 0], np.arange(G + 1)) if cand.shape[0] else np.zeros(G + 1, np.int64)
+    for g in range(G):
+        if lo[g] > hi[g] or (cand.shape[0] and bounds[g] == bounds[g + 1]):
+            continue
+        count += _mark_group(
+            g, cand, bounds[g], bounds[g + 1], ptr[g], ptr[g + 1] - ptr[g], lo[g], hi[g], box[g], p0[g, 0], p0[g, 1],
+            seg[g, 0], seg[g, 1], inv[g], seg2[g], dev[g], body[g], row_off, buf, present, mxy, margin_tab, bbox,
+            chunk, xy, cosp, sinp, circ, extent, inner, is_disc, mrad, msize, robot_kind, robot_r, hx_r, hy_r,
+            robot_in, out,
+        )  # fmt: skip
+    pairs = np.empty((len(out), 3), np.int64)
+    for i in range(len(out)):
+        pairs[i, 0], pairs[i, 1], pairs[i, 2] = out[i]
+    return pairs, count
+
+
+@njit(cache=True)
+def safe_runs(buf, row_off, lo_node):
+    """The safe intervals of every row: maximal runs of unmarked steps.
+
+    Parameters
+    ----------
+    buf : (row_off[-1],) bool
+    row_off : (k+1,) int
+    lo_node : (k,) int
+        The step of each row's first cell.
+
+    Returns
+    -------
+    starts, ends : (q,) int
+        Intervals (inclusive steps), row by row, in time order.
+    sp : (k+1,) int
+        Row i's intervals are ``starts[sp[i]:sp[i+1]]``.
+    """
+    k = len(row_off) - 1
+    n = 0
+    for r in range(k):
+        free = False
+        for i in range(row_off[r], row_off[r + 1]):
+            if not buf[i] and not free:
+                n += 1
+            free = not buf[i]
+    starts = np.empty(n, np.int64)
+    ends = np.empty(n, np.int64)
+    sp = np.empty(k + 1, np.int64)
+    q = 0
+    for r in range(k):
+        sp[r] = q
+        a, z = row_off[r], row_off[r + 1]
+        free = False
+        for i in range(a, z):
+            if not buf[i]:
+                if not free:
+                    starts[q] = lo_node[r] + i - a
+                    free = True
+            elif free:
+                ends[q] = lo_node[r] + i - a - 1
+                q += 1
+                free = False
+        if free:
+            ends[q] = lo_node[r] + z - a - 1
+            q += 1
+    sp[k] = q
+    return starts, ends, sp
+
+
+@njit(cache=True)
+def merge_runs(ps, pe, off, cnt, used, nodes, gs, ge, sp, first):
+    """Append a batch of safe intervals to a pool, after each node's older ones.
+
+    Node ``nodes[r]`` gets its older intervals ``ps/pe[off:off+cnt]`` (``cnt`` -1: none)
+    followed by the batch's ``gs/ge[sp[r]:sp[r+1]]``, which start at step ``first[r]``;
+    an older interval ending at ``first[r] - 1`` goes on into a new one starting at
+    ``first[r]``. ``off`` and ``cnt`` are updated; the pool must have room.
+
+    Returns
+    -------
+    int
+        The pool's new fill.
+    """
+    q = used
+    for r in range(len(nodes)):
+        v = nodes[r]
+        a, z = sp[r], sp[r + 1]
+        o, c = off[v], cnt[v]
+        begin = q
+        for i in range(max(c, 0)):
+            ps[q] = ps[o + i]
+            pe[q] = pe[o + i]
+            q += 1
+        if c > 0 and a < z and pe[q - 1] == first[r] - 1 and gs[a] == first[r]:
+            pe[q - 1] = ge[a]
+            a += 1
+        for i in range(a, z):
+            ps[q] = gs[i]
+            pe[q] = ge[i]
+            q += 1
+        off[v] = begin
+        cnt[v] = q - begin
+    return q

@@ -4,8 +4,9 @@ The reference search (:func:`gfuzzy.timespace.sipp`) stays the definition; this 
 runs the same A* loop over safe intervals in machine code and must give the same answers
 (tests/test_search_kernel.py cross-checks them). What stays in Python:
 
-* the movers' safety (:class:`gfuzzy.spacetime.IntervalStore`, vectorised numpy), asked
-  for lazily, node by node, exactly as the reference asks for it;
+* the driver of the movers' safety (:class:`gfuzzy.spacetime.IntervalStore`), asked for
+  lazily, node by node, exactly as the reference asks for it; its kernels are compiled too
+  (:mod:`gfuzzy.movers_kernel`) and the loop reads the store's pool of intervals directly;
 * the first motions from a start that the margin refuses (:meth:`MoverField.motion_safe`),
   decided before the loop starts;
 * the deadline: the loop hands control back every :data:`YIELD_EVERY` expansions.
@@ -256,54 +257,6 @@ def _path(tk, tb, tp, key, stride):
     return np.array(nodes[::-1], dtype=np.int64), np.array(steps[::-1], dtype=np.int64)
 
 
-class _Loaded:
-    """Safe intervals handed to the kernel: per node an offset into one pool."""
-
-    def __init__(self, n: int):
-        self.off = np.zeros(n, np.int64)
-        self.cnt = np.full(n, -1, np.int64)
-        self.cap = np.zeros(n, np.int64)
-        self.s = np.empty(1024, np.int64)
-        self.e = np.empty(1024, np.int64)
-        self.used = 0
-
-    def _room(self, k: int) -> None:
-        if self.used + k > len(self.s):
-            size = max(2 * len(self.s), self.used + k)
-            for name in ("s", "e"):
-                grown = np.empty(size, np.int64)
-                grown[: self.used] = getattr(self, name)[: self.used]
-                setattr(self, name, grown)
-
-    def load_batch(self, store, batch) -> None:
-        """Every node of one of ``store``'s batches at once (its intervals at the store's
-        current horizon, as :meth:`IntervalStore.get` would serve them)."""
-        nodes, gs, ge, sp, extended = batch
-        k = len(gs)
-        self._room(k)
-        self.s[self.used : self.used + k] = gs
-        self.e[self.used : self.used + k] = ge
-        self.off[nodes] = self.used + sp[:-1]
-        self.cnt[nodes] = np.diff(sp)
-        groups = np.searchsorted(store.ptr, nodes, side="right") - 1
-        self.cap[nodes] = store.g_hi[groups]
-        self.used += k
-        for nid in extended:  # windows grown with the horizon: older intervals merged
-            starts, ends = store._intervals(nid)
-            self.load(nid, (starts, ends, int(self.cap[nid])))
-
-    def load(self, node: int, iv) -> None:
-        starts, ends, cap = iv
-        k = len(starts)
-        self._room(k)
-        self.s[self.used : self.used + k] = starts
-        self.e[self.used : self.used + k] = ends
-        self.off[node] = self.used
-        self.cnt[node] = k
-        self.cap[node] = cap
-        self.used += k
-
-
 def sipp_compiled(
     graph,
     field_,
@@ -318,7 +271,7 @@ def sipp_compiled(
     """:func:`gfuzzy.timespace.sipp` with the loop compiled; same arguments, same answer."""
     H = field_.steps
     store = store or IntervalStore(graph)
-    store.set_horizon(field_)
+    store.set_horizon(field_, pool=True)  # the kernel reads the store's pool of arrays
     ivals = store.get
     h = np.ascontiguousarray(graph.heuristic, dtype=np.float64)
     n = len(h)
@@ -328,21 +281,7 @@ def sipp_compiled(
     nbrs = np.ascontiguousarray(graph.neighbors, dtype=np.int64)
     wait_ok = np.ones(n, np.bool_) if graph.can_wait is None else np.ascontiguousarray(graph.can_wait, np.bool_)
     stride = H + 2
-    loaded = _Loaded(n)
-
-    batches = getattr(store, "batch_arrays", [])
-    seen = len(batches)
-
-    def load(node):
-        nonlocal seen
-        if loaded.cnt[node] >= 0:
-            return
-        iv = ivals(node)  # may compute a batch of groups: load them all at once
-        while seen < len(batches):
-            loaded.load_batch(store, batches[seen])
-            seen += 1
-        if loaded.cnt[node] < 0:
-            loaded.load(node, iv)
+    load = store.ensure
 
     hf = np.empty(1024, np.float64)
     hq = np.empty((1024, 3), np.int64)
@@ -378,7 +317,7 @@ def sipp_compiled(
     while True:
         code, hf, hq, tk, tb, tp = _run(
             indptr, nbrs, h, wait_ok, goal, goal_hold, H, float(weight), stride,
-            loaded.off, loaded.cnt, loaded.cap, loaded.s, loaded.e, hf, hq, tk, tb, tp, ctr, need,
+            store.off, store.ready, store.cap, store.s, store.e, hf, hq, tk, tb, tp, ctr, need,
         )  # fmt: skip
         if code == _NEED:
             for v in need[: ctr[_NNEED]].tolist():
@@ -402,30 +341,12 @@ def sipp_compiled(
 
 
 def warm() -> None:
-    """Compile (or load from the cache) every kernel on a three-node graph."""
-    class _Field:  # no movers: every node safe over the whole horizon
-        steps = 8
-
-    graph = SpaceTimeGraph(
-        poses=np.zeros((3, 2)),
-        indptr=np.array([0, 1, 3, 4]),
-        neighbors=np.array([1, 0, 2, 1]),
-        heuristic=np.array([2.0, 1.0, 0.0]),
-    )
-
-    class _Store:
-        def set_horizon(self, field_):
-            pass
-
-        def get(self, node):
-            return [0], [8], 8
-
-    sipp_compiled(graph, _Field(), 0, 2, store=_Store())
-    # the safety kernel, through MoverField as the planner calls it: disc and box robots
+    """Compile (or load from the cache) every kernel: a search among movers on a small
+    graph, for a disc and a box robot, with a horizon that grows once (the pool's merge)."""
     from .scene import parse_scene  # only for warming: the scene parser is not needed otherwise
 
-    for robot, poses in (({"disc": 0.2, "vmax": 1.0}, [[0.5, 1.0], [1.5, 1.0]]),
-                         ({"box": [0.4, 0.2], "vmax": 1.0}, [[0.5, 1.0, 0.0], [1.5, 1.0, 0.3]])):  # fmt: skip
+    for robot, poses in (({"disc": 0.2, "vmax": 1.0}, [[0.5, 1.0], [1.0, 1.0], [1.5, 1.0]]),
+                         ({"box": [0.4, 0.2], "vmax": 1.0}, [[0.5, 1.0, 0.0], [1.0, 1.0, 0.2], [1.5, 1.0, 0.3]])):  # fmt: skip
         scene = parse_scene(
             {
                 "version": 1,
@@ -438,9 +359,18 @@ def warm() -> None:
                 ],
             }
         )
-        field_ = MoverField(scene, 0.0, 0.1, 20, 1.0)
-        field_.compiled = True
-        field_.unsafe_pairs(np.array(poses), np.array([0, 2]), np.array([0]), np.array([20]))
+        graph = SpaceTimeGraph(
+            poses=np.array(poses, dtype=float),
+            indptr=np.array([0, 1, 3, 4]),
+            neighbors=np.array([1, 0, 2, 1]),
+            heuristic=np.array([2.0, 1.0, 0.0]),
+        )
+        store = IntervalStore(graph)
+        for steps in (10, 20):
+            field_ = MoverField(scene, 0.0, 0.1, steps, 1.0)
+            field_.compiled = True
+            sipp_compiled(graph, field_, 0, 2, store=store)
+        field_.unsafe_pairs(graph.poses, np.array([0, 3]), np.array([0]), np.array([20]))
 
 
 if __name__ == "__main__":

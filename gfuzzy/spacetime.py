@@ -86,9 +86,24 @@ class IntervalStore:
     the new steps are computed, so a search restarted with a longer horizon redoes no
     safety work.
 
+    Two storages, chosen by the search at :meth:`set_horizon`: lists per batch, read node
+    by node (the reference search, :func:`gfuzzy.timespace.sipp`), or one pool of arrays
+    the compiled search reads directly (``pool=True``, :func:`gfuzzy.search_kernel.sipp_compiled`):
+    its batches come from the compiled kernel (:meth:`MoverField.safe_intervals`) and a
+    window grown with the horizon is merged with what was computed before in machine code.
+
     Parameters
     ----------
     graph : SpaceTimeGraph
+
+    Attributes
+    ----------
+    off, ready, cap : (N,) int
+        Pool storage only: node i's intervals are ``s[off[i]:off[i] + ready[i]]`` and
+        ``e[...]`` once computed up to the current horizon (``ready[i] >= 0``; -1: not
+        yet), and ``cap[i]`` is the last step examined for it.
+    s, e : (P,) int
+        The pool (reallocated as it grows: read the attributes again after a compute).
     """
 
     def __init__(self, graph: SpaceTimeGraph):
@@ -114,30 +129,57 @@ class IntervalStore:
         self.f_lb = np.minimum.reduceat(fs + h, ptr[:-1])
         self.done_hi = np.full(len(ptr) - 1, -1, dtype=np.int64)  # last step computed
         self._done_l = self.done_hi.tolist()
-        # intervals stay in their batch's lists until a search asks for them
-        self._batches: list = []  # (starts, row pointers, ends, first step examined per row)
-        self._where = np.full(n, -1, dtype=np.int64)  # batch of a node's latest computation
-        self._local = np.zeros(n, dtype=np.int64)  # its row there
-        self._older: dict = {}  # node -> (starts, ends) from computations before the latest
-        self.batch_arrays: list = []  # the batches as arrays (see _compute)
+        self.pool: bool | None = None  # the storage, fixed by the first set_horizon
         self.field = None
         self.H = -1
 
-    def set_horizon(self, field_: MoverField) -> None:
-        """Serve intervals for ``field_``'s horizon (never shorter than before)."""
+    def set_horizon(self, field_: MoverField, pool: bool = False) -> None:
+        """Serve intervals for ``field_``'s horizon (never shorter than before), from the
+        pool of arrays (``pool``) or from lists; a store keeps the storage it started with."""
         if field_.steps < self.H:
             raise ValueError("the horizon of an IntervalStore only grows")
+        if self.pool is None:
+            self.pool = bool(pool)
+            self._init_storage()
+        elif self.pool != bool(pool):
+            raise ValueError("an IntervalStore serves one kind of search (reference or compiled)")
         self.field = field_
         self.H = field_.steps
         self.g_hi = np.where(self._finite, self.H - self._hfloor, -1).astype(np.int64)
         self._g_hi_l = self.g_hi.tolist()
         self._served: dict = {}
+        if self.pool:
+            grp = self._node_group
+            self.cap = self.g_hi[grp]
+            self.ready = np.where(self.done_hi[grp] >= self.cap, np.maximum(self.cnt, 0), -1)
+
+    def _init_storage(self) -> None:
+        n = len(self.graph.poses)
+        if self.pool:
+            self._node_group = np.repeat(np.arange(len(self.ptr) - 1), np.diff(self.ptr))
+            self.off = np.zeros(n, dtype=np.int64)
+            self.cnt = np.full(n, -1, dtype=np.int64)  # -1: never computed
+            self.s = np.empty(4096, dtype=np.int64)
+            self.e = np.empty(4096, dtype=np.int64)
+            self.used = 0
+        else:  # intervals stay in their batch's lists until a search asks for them
+            self._batches: list = []  # (starts, row pointers, ends, first step examined per row)
+            self._where = np.full(n, -1, dtype=np.int64)  # batch of a node's latest computation
+            self._local = np.zeros(n, dtype=np.int64)  # its row there
+            self._older: dict = {}  # node -> (starts, ends) from computations before the latest
 
     def group_of(self, node: int) -> int:
         return bisect_right(self._ptr_l, node) - 1
 
-    def get(self, node: int) -> tuple[list, list, int]:
-        """(interval starts, interval ends, last step examined) of a node, as lists."""
+    def ensure(self, node: int) -> None:
+        """Compute ``node``'s intervals up to the current horizon (with a batch of others)."""
+        g = self.group_of(node)
+        if self._done_l[g] < self._g_hi_l[g]:
+            self._compute(g)
+
+    def get(self, node: int) -> tuple:
+        """(interval starts, interval ends, last step examined) of a node: lists, or array
+        slices from the pool."""
         iv = self._served.get(node)
         if iv is not None:
             return iv
@@ -145,8 +187,12 @@ class IntervalStore:
         cap = self._g_hi_l[g]
         if self._done_l[g] < cap:
             self._compute(g)
-        starts, ends = self._intervals(node)
-        iv = (starts, ends, cap)
+        if self.pool:
+            a, c = int(self.off[node]), max(int(self.cnt[node]), 0)
+            iv = (self.s[a : a + c], self.e[a : a + c], cap)
+        else:
+            starts, ends = self._intervals(node)
+            iv = (starts, ends, cap)
         self._served[node] = iv
         return iv
 
@@ -187,28 +233,57 @@ class IntervalStore:
         sizes = ptr[pending + 1] - ptr[pending]
         sub_ptr = np.concatenate([[0], np.cumsum(sizes)])
         nodes = np.repeat(ptr[pending], sizes) + (np.arange(sub_ptr[-1]) - np.repeat(sub_ptr[:-1], sizes))
-        lo_n, hi_n = np.repeat(lo, sizes), np.repeat(hi, sizes)
-        un, us = field_.unsafe_pairs(self.graph.poses[nodes], sub_ptr, lo, hi)
-        # safe intervals = the gaps between unsafe steps, with the window's ends as walls
-        k = len(nodes)
-        span = self.H + 3  # steps -1 .. H + 1 fit in [0, span) once shifted by one
-        rows = np.arange(k) * span
-        keys = np.sort(np.concatenate([un * span + us + 1, rows + lo_n, rows + hi_n + 2]))
-        wn, ws = keys // span, keys % span - 1  # repeated walls leave empty gaps, dropped below
-        same = wn[1:] == wn[:-1]
-        gs, ge = ws[:-1] + 1, ws[1:] - 1
-        ok = same & (gs <= ge)
-        rn = wn[:-1][ok]
-        sp_arr = np.searchsorted(rn, np.arange(k + 1))
-        extended = nodes[self._where[nodes] >= 0].tolist()
-        for nid in extended:  # extended windows: keep what was computed before
+        lo_n = np.repeat(lo, sizes)
+        if self.pool:
+            gs, ge, sp = field_.safe_intervals(self.graph.poses[nodes], sub_ptr, lo, hi)
+            self._pool_merge(nodes, gs, ge, sp, lo_n)
+            return
+        gs, ge, sp = _intervals_from_pairs(field_, self.graph.poses[nodes], sub_ptr, lo, hi, self.H)
+        for nid in nodes[self._where[nodes] >= 0].tolist():  # extended windows: keep what was computed before
             self._older[nid] = self._intervals(nid)
-        self._batches.append((gs[ok].tolist(), sp_arr.tolist(), ge[ok].tolist(), lo_n.tolist()))
-        # the same batch as arrays, for a consumer that loads whole batches at once
-        # (gfuzzy.search_kernel); nodes in `extended` also have older intervals
-        self.batch_arrays.append((nodes, gs[ok], ge[ok], sp_arr, extended))
+        self._batches.append((gs.tolist(), sp.tolist(), ge.tolist(), lo_n.tolist()))
         self._where[nodes] = len(self._batches) - 1
-        self._local[nodes] = np.arange(k)
+        self._local[nodes] = np.arange(len(nodes))
+
+    def _pool_merge(self, nodes, gs, ge, sp, lo_n) -> None:
+        """Append a batch to the pool; a node computed before (a window grown with the
+        horizon) gets its older intervals first, the last one joined to the new first
+        when they meet (:func:`gfuzzy.movers_kernel.merge_runs`)."""
+        from .movers_kernel import merge_runs
+
+        room = self.used + len(gs) + int(np.maximum(self.cnt[nodes], 0).sum())
+        if room > len(self.s):
+            size = max(2 * len(self.s), room)
+            for name in ("s", "e"):
+                grown = np.empty(size, dtype=np.int64)
+                grown[: self.used] = getattr(self, name)[: self.used]
+                setattr(self, name, grown)
+        self.used = merge_runs(self.s, self.e, self.off, self.cnt, self.used, nodes, gs, ge, sp, lo_n)
+        self.ready[nodes] = self.cnt[nodes]
+
+
+def _intervals_from_pairs(field_: MoverField, poses, ptr, lo, hi, H: int):
+    """Safe intervals of groups of points from the field's unsafe pairs (the numpy
+    reference): the gaps between unsafe steps, with each window's ends as walls.
+
+    Returns (starts, ends, sp) as :meth:`gfuzzy.movers.MoverField.safe_intervals`.
+    """
+    sizes = np.diff(ptr)
+    # walls at lo - 1 and hi + 1, kept inside the row's keys; an empty window (lo > hi: a
+    # point that cannot matter before the horizon) gets its walls side by side, no gap
+    lo_n = np.minimum(np.repeat(lo, sizes), H + 1)
+    hi_n = np.maximum(np.repeat(hi, sizes), lo_n - 1)
+    un, us = field_.unsafe_pairs(poses, ptr, lo, hi)
+    k = len(poses)
+    span = H + 3  # steps -1 .. H + 1 fit in [0, span) once shifted by one
+    rows = np.arange(k) * span
+    keys = np.sort(np.concatenate([un * span + us + 1, rows + lo_n, rows + hi_n + 2]))
+    wn, ws = keys // span, keys % span - 1  # repeated walls leave empty gaps, dropped below
+    same = wn[1:] == wn[:-1]
+    gs, ge = ws[:-1] + 1, ws[1:] - 1
+    ok = same & (gs <= ge)
+    rn = wn[:-1][ok]
+    return gs[ok], ge[ok], np.searchsorted(rn, np.arange(k + 1))
 
 
 def split_edges(verts: FloatArray, edges: IntArray, lengths: FloatArray, step_len: float, first_id: int):

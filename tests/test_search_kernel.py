@@ -147,10 +147,63 @@ def test_random_graphs_same_search(seed, tmp_path):
     assert (ref.expansions, ref.states, ref.horizon_hit) == (comp.expansions, comp.states, comp.horizon_hit)
 
 
+def _random_groups(rng, scene):
+    """40 groups of points along random segments (roadmap edges) and 20 single points."""
+    n = int(rng.integers(3, 9))
+    a, b = rng.uniform(0.3, 5.7, (2, 40, 2))
+    groups = [a[i] + np.linspace(0, 1, n)[:, None] * (b[i] - a[i]) for i in range(40)]
+    groups += [rng.uniform(0.3, 5.7, (1, 2)) for _ in range(20)]
+    poses = np.vstack(groups)
+    if scene.robot.dof == 3:
+        poses = np.column_stack([poses, rng.uniform(-math.pi, math.pi, len(poses))])
+    ptr = np.concatenate([[0], np.cumsum([len(g) for g in groups])])
+    return poses, ptr
+
+
+@pytest.mark.parametrize("broad", ["dense", "grid"])
 @pytest.mark.parametrize("seed", range(12))
-def test_compiled_safety_kernel_same_pairs(seed, tmp_path):
-    """unsafe_pairs: phases 2-3 compiled against numpy, on groups of points along segments
+def test_compiled_intervals_match_reference(seed, broad, tmp_path, monkeypatch):
+    """The safe intervals read off the compiled kernel's table equal the numpy reference's
+    (unsafe pairs, sorted between walls), with the kernel testing every box itself
+    (dense) or taking the grid join's candidates; windows include empty ones and ones
+    beyond the horizon (points that cannot matter in time)."""
+    from gfuzzy import movers
+    from gfuzzy.spacetime import _intervals_from_pairs
+
+    if broad == "grid":
+        monkeypatch.setattr(movers, "DENSE_BROAD_PHASE", 0)
+    rng = np.random.default_rng(300 + seed)
+    scene, _, _, _ = _random_case(rng, tmp_path)
+    poses, ptr = _random_groups(rng, scene)
+    H = 70
+    lo = rng.integers(0, 80, len(ptr) - 1)
+    hi = lo + rng.integers(-6, 60, len(ptr) - 1)
+    t0 = float(rng.uniform(0, 3))
+    out = []
+    for compiled in (False, True):
+        field = MoverField(scene, t0, 0.1, H, 1.0, clearance=0.1 * seed % 0.3)
+        field.compiled = compiled
+        if compiled:
+            out.append(field.safe_intervals(poses, ptr, lo, np.minimum(hi, H)))
+        else:
+            out.append(_intervals_from_pairs(field, poses, ptr, lo, np.minimum(hi, H), H))
+    for ref, comp in zip(*out, strict=True):
+        np.testing.assert_array_equal(ref, comp)
+    starts, ends, _ = out[1]
+    assert len(starts) > len(poses) // 2  # most windows hold intervals: a real comparison
+    window = np.repeat(np.maximum(np.minimum(hi, H) - lo + 1, 0), np.diff(ptr)).sum()
+    assert (ends - starts + 1).sum() < window  # and movers made some steps unsafe
+
+
+@pytest.mark.parametrize("broad", ["dense", "grid"])
+@pytest.mark.parametrize("seed", range(12))
+def test_compiled_safety_kernel_same_pairs(seed, broad, tmp_path, monkeypatch):
+    """unsafe_pairs: the compiled kernel against numpy, on groups of points along segments
     (the roadmap's edges) and single points, disc and box robots, disc and box movers."""
+    from gfuzzy import movers
+
+    if broad == "grid":
+        monkeypatch.setattr(movers, "DENSE_BROAD_PHASE", 0)
     rng = np.random.default_rng(100 + seed)
     scene, graph, _, _ = _random_case(rng, tmp_path)
     n = int(rng.integers(3, 9))
