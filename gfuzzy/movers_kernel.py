@@ -227,13 +227,7 @@ def safe_runs(buf, row_off, lo_node):
         Row i's intervals are ``starts[sp[i]:sp[i+1]]``.
     """
     k = len(row_off) - 1
-    n = 0
-    for r in range(k):
-        free = False
-        for i in range(row_off[r], row_off[r + 1]):
-            if not buf[i] and not free:
-                n += 1
-            free = not buf[i]
+    n = (len(buf) + k) // 2 + 1  # at most one interval per two cells of a row, plus one
     starts = np.empty(n, np.int64)
     ends = np.empty(n, np.int64)
     sp = np.empty(k + 1, np.int64)
@@ -255,7 +249,7 @@ def safe_runs(buf, row_off, lo_node):
             ends[q] = lo_node[r] + z - a - 1
             q += 1
     sp[k] = q
-    return starts, ends, sp
+    return starts[:q], ends[:q], sp
 
 
 @njit(cache=True)
