@@ -160,9 +160,13 @@ The unsolved variants are answers, not failures of the run: in `once`, mover A e
 at its start (3.2, 2.5), right in front of the central passage P2, and stays there, so once it
 is parked the only route is closed for good; only when the movers are slow does the robot get
 through P2 before A parks. The `reverse` variants that are not solved have no safe trajectory
-on the roadmap within the planning horizon (the planner's `no_path`); we have not analysed why
-the reversed loops close the route at these speeds when the forward loops do not (the phase at
-which A crosses P2 when the robot arrives differs; an independent search would settle it).
+on the roadmap within the planning horizon, and an independent search agrees
+(`python tools/check_reverse.py`): a breadth-first search over every (point, step) of the
+whole roadmap, without safe intervals, heuristic or time windows, finds no way to the goal
+within the same horizon at 1.6, 1.8 and 2. The verdict is the roadmap's: at 1.6 a
+3000-vertex roadmap grown from the same seed solves it (20.93 s) while a 1000-vertex one
+does not; at 1.8 and 2, where the movers are nearly twice as fast as the robot, neither does,
+even with a 600 s horizon.
 
 **Is time roughly linear in the delay factor?** Least squares over the {len(solved)} solved
 experiments: ms = {a:.1f} + {b:.1f} x delay factor, Pearson r = {r:.2f} (Spearman rank correlation
