@@ -297,15 +297,11 @@ class MoverField:
             cand = np.column_stack(self._broad_phase(gmin, gmax, lo // CHUNK, hi // CHUNK))
             if len(cand) == 0:
                 return buf, row_off, lo_node
-        pairs, count = mark_unsafe(
+        count = mark_unsafe(
             cand, ptr, lo, hi, xy, cosp, sinp, row_off, buf, self.present, self.xy, self.margin, self.bbox,
             CHUNK, self._extent, self._is_disc, self._radius, self._size, self._inner, int(box),
             float(robot.circumradius), float(robot.radius), float(half[0]), float(half[1]), float(robot.inradius),
         )  # fmt: skip
-        if len(pairs):  # a box robot against box movers: the numpy separating-axis distance
-            node, mv, st = pairs.T
-            bad = self._distance(poses[node], mv, self.xy[mv, st]) < self.margin[mv, st]
-            buf[row_off[node[bad]] + st[bad] - lo_node[node[bad]]] = True
         self.evaluations += count
         return buf, row_off, lo_node
 

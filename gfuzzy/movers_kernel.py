@@ -33,6 +33,55 @@ def _box_dist(px, py, hx, hy):
     return outside + inside
 
 
+#: :data:`gfuzzy.geometry.QUAD_EXACT`: beyond it a box-box distance is the circumscribed
+#: circles' (kept here so that numba does not import the geometry module).
+QUAD_EXACT = 2.0
+
+
+@njit(cache=True)
+def _box_box_gap(q, px, py, cc, ss, hl, hw, qx, qy, mhx, mhy):
+    """:func:`gfuzzy.geometry.mover_distance` (``exact=False``) of a box robot at
+    ``(px, py)`` with heading cosine/sine ``cc, ss`` and half sizes ``hl, hw`` against an
+    axis-aligned box mover at ``(qx, qy)`` with half sizes ``mhx, mhy``: the same
+    floating-point operations as ``Robot.corners`` and ``_quad_distance``. ``q``: a
+    (2, 4, 2) scratch array for the corners."""
+    for k in range(4):
+        lx = hl if k == 0 or k == 3 else -hl
+        ly = hw if k < 2 else -hw
+        q[0, k, 0] = px + (cc * lx + -ss * ly)
+        q[0, k, 1] = py + (ss * lx + cc * ly)
+        q[1, k, 0] = qx + mhx * (1.0 if k == 0 or k == 3 else -1.0)
+        q[1, k, 1] = qy + mhy * (1.0 if k < 2 else -1.0)
+    cx0 = (((q[0, 0, 0] + q[0, 1, 0]) + q[0, 2, 0]) + q[0, 3, 0]) / 4.0
+    cy0 = (((q[0, 0, 1] + q[0, 1, 1]) + q[0, 2, 1]) + q[0, 3, 1]) / 4.0
+    cx1 = (((q[1, 0, 0] + q[1, 1, 0]) + q[1, 2, 0]) + q[1, 3, 0]) / 4.0
+    cy1 = (((q[1, 0, 1] + q[1, 1, 1]) + q[1, 2, 1]) + q[1, 3, 1]) / 4.0
+    ra = 0.0
+    rb = 0.0
+    for k in range(4):
+        ra = max(ra, math.sqrt((q[0, k, 0] - cx0) ** 2 + (q[0, k, 1] - cy0) ** 2))
+        rb = max(rb, math.sqrt((q[1, k, 0] - cx1) ** 2 + (q[1, k, 1] - cy1) ** 2))
+    out = math.hypot(cx0 - cx1, cy0 - cy1) - ra - rb
+    if not (out < QUAD_EXACT):
+        return out
+    gap = -np.inf  # separating-axis test on the edge normals of both boxes (two each)
+    for w in range(2):
+        for k in range(2):
+            nx = -(q[w, k + 1, 1] - q[w, k, 1])
+            ny = q[w, k + 1, 0] - q[w, k, 0]
+            nn = math.sqrt(nx * nx + ny * ny)
+            nx, ny = nx / nn, ny / nn
+            p_lo = q_lo = np.inf
+            p_hi = q_hi = -np.inf
+            for j in range(4):
+                pp = q[w, j, 0] * nx + q[w, j, 1] * ny
+                qq = q[1 - w, j, 0] * nx + q[1 - w, j, 1] * ny
+                p_lo, p_hi = min(p_lo, pp), max(p_hi, pp)
+                q_lo, q_hi = min(q_lo, qq), max(q_hi, qq)
+            gap = max(gap, max(q_lo - p_hi, p_lo - q_hi))
+    return gap
+
+
 @njit(cache=True)
 def _group_geometry(xy, ptr, circ):
     """Per group: bounding box, first point, segment to the last point, 1/|seg|^2, |seg|^2,
@@ -79,7 +128,7 @@ def _group_geometry(xy, ptr, circ):
 @njit(cache=True)
 def _mark_group(g, cand, c0, c1, a, n_g, lo_g, hi_g, box, p0x, p0y, sx, sy, inv_g, seg2_g, dev_g, body_g, row_off,
                 buf, present, mxy, margin_tab, bbox, chunk, xy, cosp, sinp, circ, extent, inner, is_disc, mrad,
-                msize, robot_kind, robot_r, hx_r, hy_r, robot_in, out):  # fmt: skip
+                msize, robot_kind, robot_r, hx_r, hy_r, robot_in, scratch):  # fmt: skip
     """Phases 2 and 3 of :func:`mark_unsafe` for group ``g`` (points ``a..a+n_g-1`` near
     the segment ``p0 + t * s``): its candidates ``cand[c0:c1]``, or with none every mover
     and chunk whose box overlaps the group's ``box``. Returns the evaluations."""
@@ -150,8 +199,9 @@ def _mark_group(g, cand, c0, c1, a, n_g, lo_g, hi_g, box, p0x, p0y, sx, sy, inv_
                 elif is_disc[m]:
                     cc, ss = cosp[node], sinp[node]
                     buf[cell] = _box_dist(cc * rx + ss * ry, -ss * rx + cc * ry, hx_r, hy_r) - mrad[m] < mg
-                else:  # box against box: the caller's separating-axis distance
-                    out.append((node, m, st))
+                else:  # box against box: the separating-axis gap
+                    buf[cell] = _box_box_gap(scratch, xy[node, 0], xy[node, 1], cosp[node], sinp[node], hx_r, hy_r,
+                                             qx, qy, 0.5 * msize[m, 0], 0.5 * msize[m, 1]) < mg  # fmt: skip
     return count
 
 
@@ -182,14 +232,11 @@ def mark_unsafe(cand, ptr, lo, hi, xy, cosp, sinp, row_off, buf, present, mxy, m
 
     Returns
     -------
-    pairs : (p, 3) int
-        (point, mover, step) whose distance is left to the caller (a box robot against a
-        box mover); unsafe where it is below the margin.
-    evaluations : int
+    int
         Pairs that passed the cheap tests (the reference's ``evaluations``).
     """
     box, p0, seg, inv, seg2, dev, body = _group_geometry(xy, ptr, circ)
-    out = [(0, 0, 0)][:0]
+    scratch = np.empty((2, 4, 2))  # a box's corners, for _box_box_gap
     count = 0
     G = len(ptr) - 1
     bounds = np.searchsorted(cand[:, 0], np.arange(G + 1)) if cand.shape[0] else np.zeros(G + 1, np.int64)
@@ -200,12 +247,9 @@ def mark_unsafe(cand, ptr, lo, hi, xy, cosp, sinp, row_off, buf, present, mxy, m
             g, cand, bounds[g], bounds[g + 1], ptr[g], ptr[g + 1] - ptr[g], lo[g], hi[g], box[g], p0[g, 0], p0[g, 1],
             seg[g, 0], seg[g, 1], inv[g], seg2[g], dev[g], body[g], row_off, buf, present, mxy, margin_tab, bbox,
             chunk, xy, cosp, sinp, circ, extent, inner, is_disc, mrad, msize, robot_kind, robot_r, hx_r, hy_r,
-            robot_in, out,
+            robot_in, scratch,
         )  # fmt: skip
-    pairs = np.empty((len(out), 3), np.int64)
-    for i in range(len(out)):
-        pairs[i, 0], pairs[i, 1], pairs[i, 2] = out[i]
-    return pairs, count
+    return count
 
 
 @njit(cache=True)

@@ -314,3 +314,27 @@ def test_compiled_search_times_out_like_the_reference():
         assert search(graph, field, 0, side * side - 1, deadline=0.0).status == "timeout"
         done = search(graph, MoverField(scene, 0.0, 1.0, 400, 1.0), 0, side * side - 1)
         assert done.status == "solved" and done.steps[-1] == 2 * (side - 1)
+
+
+def test_compiled_box_box_gap_is_the_reference_bit_for_bit():
+    """The kernel's box robot against box mover distance equals geometry.mover_distance
+    (exact=False) exactly, near (separating-axis gap, overlaps included) and far (the
+    circumscribed circles' bound beyond QUAD_EXACT)."""
+    from gfuzzy.geometry import QUAD_EXACT, mover_distance
+    from gfuzzy.movers_kernel import QUAD_EXACT as KERNEL_QUAD_EXACT
+    from gfuzzy.movers_kernel import _box_box_gap
+    from gfuzzy.scene import parse_scene
+
+    assert KERNEL_QUAD_EXACT == QUAD_EXACT
+    robot = parse_scene({"version": 1, "name": "b", "bounds": [0, 0, 9, 9], "robot": {"box": [0.9, 0.436], "vmax": 1}}).robot
+    rng = np.random.default_rng(5)
+    n = 3000
+    poses = np.column_stack([rng.uniform(0, 5, (n, 2)), rng.uniform(-math.pi, math.pi, n)])
+    xy, size = rng.uniform(0, 5, (n, 2)), rng.uniform(0.05, 1.2, (n, 2))
+    ref = mover_distance(robot, poses, "box", np.zeros(n), size, xy, exact=False)
+    scratch = np.empty((2, 4, 2))
+    c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
+    hl, hw = 0.5 * np.asarray(robot.size)
+    got = [_box_box_gap(scratch, *poses[i, :2], c[i], s[i], hl, hw, *xy[i], *(0.5 * size[i])) for i in range(n)]
+    np.testing.assert_array_equal(np.array(got), ref)
+    assert (ref < 0).sum() > 50 and (ref >= QUAD_EXACT).sum() > 50 and ((ref > 0) & (ref < QUAD_EXACT)).sum() > 50
