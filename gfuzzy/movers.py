@@ -24,8 +24,8 @@ __all__ = ["MoverField", "CHUNK"]
 #: Steps per chunk of the movers' broad phase.
 CHUNK = 8
 
-#: Up to this many (group, chunk, mover) box tests the compiled kernel tests them all
-#: itself; above, the grid join of :meth:`MoverField._broad_phase` picks the candidates.
+#: Up to this many (group, chunk, mover) box tests the compiled kernel tests them all;
+#: above, it finds the overlapping boxes through a grid (:func:`gfuzzy.movers_kernel.grid_candidates`).
 DENSE_BROAD_PHASE = 2_000_000
 
 
@@ -285,20 +285,9 @@ class MoverField:
         half = 0.5 * np.asarray(robot.size, dtype=float) if box else np.zeros(2)
         xy = np.ascontiguousarray(poses[:, :2])
         chunks = np.maximum(np.minimum(hi // CHUNK, self.nc - 1) - np.maximum(lo // CHUNK, 0) + 1, 0)
-        if int(chunks.sum()) * len(self.movers) <= DENSE_BROAD_PHASE:
-            cand = np.zeros((0, 3), dtype=np.int64)  # the kernel tests every (group, mover, chunk)
-        else:  # many movers: a grid join finds the overlapping boxes
-            starts = ptr[:-1][sizes > 0]
-            keep = np.nonzero(sizes > 0)[0]
-            gmin = np.full((len(sizes), 2), np.inf)
-            gmax = np.full((len(sizes), 2), -np.inf)
-            gmin[keep] = np.minimum.reduceat(xy, starts, axis=0)
-            gmax[keep] = np.maximum.reduceat(xy, starts, axis=0)
-            cand = np.column_stack(self._broad_phase(gmin, gmax, lo // CHUNK, hi // CHUNK))
-            if len(cand) == 0:
-                return buf, row_off, lo_node
+        grid = int(chunks.sum()) * len(self.movers) > DENSE_BROAD_PHASE  # many movers: a grid finds the pairs
         count = mark_unsafe(
-            cand, ptr, lo, hi, xy, cosp, sinp, row_off, buf, self.present, self.xy, self.margin, self.bbox,
+            grid, ptr, lo, hi, xy, cosp, sinp, row_off, buf, self.present, self.xy, self.margin, self.bbox,
             CHUNK, self._extent, self._is_disc, self._radius, self._size, self._inner, int(box),
             float(robot.circumradius), float(robot.radius), float(half[0]), float(half[1]), float(robot.inradius),
         )  # fmt: skip

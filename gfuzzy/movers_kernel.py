@@ -206,17 +206,128 @@ def _mark_group(g, cand, c0, c1, a, n_g, lo_g, hi_g, box, p0x, p0y, sx, sy, inv_
 
 
 @njit(cache=True)
-def mark_unsafe(cand, ptr, lo, hi, xy, cosp, sinp, row_off, buf, present, mxy, margin_tab, bbox, chunk,
+def _grow(a, n):
+    """``a`` with room for at least ``n`` rows (doubled), its rows kept."""
+    if n <= a.shape[0]:
+        return a
+    b = np.empty((max(n, 2 * a.shape[0]),) + a.shape[1:], a.dtype)
+    b[: a.shape[0]] = a
+    return b
+
+
+@njit(cache=True)
+def grid_candidates(box, lo, hi, bbox, chunk):
+    """Phase 1 of :func:`mark_unsafe` for many movers: every (group, mover, chunk) whose
+    boxes overlap, the chunk within the group's steps ``lo..hi``, sorted by group; the
+    same set as testing every triple, found through a grid of cells rebuilt per chunk.
+
+    Parameters
+    ----------
+    box : (G, 4) float
+        Groups' boxes (x0, y0, x1, y1).
+    lo, hi : (G,) int
+    bbox : (M, nc, 4) float
+        Movers' boxes per chunk (empty, inf/-inf, where absent).
+    chunk : int
+
+    Returns
+    -------
+    (c, 3) int
+    """
+    G, M, nc = box.shape[0], bbox.shape[0], bbox.shape[1]
+    c0, c1 = nc, -1
+    x0 = y0 = np.inf
+    x1 = y1 = -np.inf
+    for g in range(G):
+        a, b = max(lo[g] // chunk, 0), min(hi[g] // chunk, nc - 1)
+        if a <= b and lo[g] <= hi[g] and box[g, 0] <= box[g, 2]:
+            c0, c1 = min(c0, a), max(c1, b)
+            x0, y0 = min(x0, box[g, 0]), min(y0, box[g, 1])
+            x1, y1 = max(x1, box[g, 2]), max(y1, box[g, 3])
+    out = np.empty((1024, 3), np.int64)
+    if c1 < c0:
+        return out[:0]
+    # cells about as wide as a mover's box over a chunk, at most 256 x 256 of them
+    wsum, wn = 0.0, 0
+    for m in range(M):
+        for c in range(c0, c1 + 1, max(1, (c1 - c0) // 8)):
+            if bbox[m, c, 0] <= bbox[m, c, 2]:
+                wsum += max(bbox[m, c, 2] - bbox[m, c, 0], bbox[m, c, 3] - bbox[m, c, 1])
+                wn += 1
+    cell = max(1.0 * wsum / max(wn, 1), (x1 - x0) / 256.0, (y1 - y0) / 256.0, 1e-3)
+    nx, ny = int((x1 - x0) / cell) + 1, int((y1 - y0) / cell) + 1
+    # the groups active in each chunk
+    gptr = np.zeros(c1 - c0 + 2, np.int64)
+    for g in range(G):
+        if lo[g] <= hi[g] and box[g, 0] <= box[g, 2]:
+            for c in range(max(lo[g] // chunk, c0), min(hi[g] // chunk, c1) + 1):
+                gptr[c - c0 + 1] += 1
+    gptr = np.cumsum(gptr)
+    glist = np.empty(gptr[-1], np.int64)
+    fill = gptr[:-1].copy()
+    for g in range(G):
+        if lo[g] <= hi[g] and box[g, 0] <= box[g, 2]:
+            for c in range(max(lo[g] // chunk, c0), min(hi[g] // chunk, c1) + 1):
+                glist[fill[c - c0]] = g
+                fill[c - c0] += 1
+    head = np.full(nx * ny, -1, np.int64)
+    stamp = np.full(nx * ny, -1, np.int64)  # the chunk a cell's list belongs to
+    ent = np.empty((4 * M + 16, 2), np.int64)  # (mover, next entry) linked lists per cell
+    seen = np.full(M, -1, np.int64)
+    n_out = 0
+    token = 0
+    for c in range(c0, c1 + 1):
+        n_ent = 0
+        for m in range(M):
+            bx = bbox[m, c]
+            if not (bx[0] <= bx[2]) or bx[0] > x1 or bx[2] < x0 or bx[1] > y1 or bx[3] < y0:
+                continue  # absent, or clear of every group
+            ix0, ix1 = max(int((bx[0] - x0) / cell), 0), min(int((bx[2] - x0) / cell), nx - 1)
+            iy0, iy1 = max(int((bx[1] - y0) / cell), 0), min(int((bx[3] - y0) / cell), ny - 1)
+            ent = _grow(ent, n_ent + (ix1 - ix0 + 1) * (iy1 - iy0 + 1))
+            for iy in range(iy0, iy1 + 1):
+                for ix in range(ix0, ix1 + 1):
+                    k = iy * nx + ix
+                    if stamp[k] != c:
+                        stamp[k], head[k] = c, -1
+                    ent[n_ent, 0], ent[n_ent, 1] = m, head[k]
+                    head[k] = n_ent
+                    n_ent += 1
+        for r in range(gptr[c - c0], gptr[c - c0 + 1]):
+            g = glist[r]
+            token += 1
+            ix0, ix1 = max(int((box[g, 0] - x0) / cell), 0), min(int((box[g, 2] - x0) / cell), nx - 1)
+            iy0, iy1 = max(int((box[g, 1] - y0) / cell), 0), min(int((box[g, 3] - y0) / cell), ny - 1)
+            for iy in range(iy0, iy1 + 1):
+                for ix in range(ix0, ix1 + 1):
+                    k = iy * nx + ix
+                    e = head[k] if stamp[k] == c else -1
+                    while e >= 0:
+                        m = ent[e, 0]
+                        e = ent[e, 1]
+                        if seen[m] == token:
+                            continue
+                        seen[m] = token
+                        if (bbox[m, c, 0] <= box[g, 2] and box[g, 0] <= bbox[m, c, 2]
+                                and bbox[m, c, 1] <= box[g, 3] and box[g, 1] <= bbox[m, c, 3]):  # fmt: skip
+                            out = _grow(out, n_out + 1)
+                            out[n_out, 0], out[n_out, 1], out[n_out, 2] = g, m, c
+                            n_out += 1
+    out = out[:n_out]
+    return out[np.argsort(out[:, 0], kind="mergesort")]
+
+
+@njit(cache=True)
+def mark_unsafe(grid, ptr, lo, hi, xy, cosp, sinp, row_off, buf, present, mxy, margin_tab, bbox, chunk,
                 extent, is_disc, mrad, msize, inner, robot_kind, circ, robot_r, hx_r, hy_r, robot_in):  # fmt: skip
     """Mark the unsafe steps of points in groups (phases 1-3 of
     :meth:`gfuzzy.movers.MoverField.unsafe_pairs`, the same tests in the same operations).
 
     Parameters
     ----------
-    cand : (c, 3) int
-        Broad-phase candidates (group, mover, chunk), sorted by group; with no rows,
-        every (group, mover, chunk) in the groups' ranges whose boxes overlap is examined
-        here (the same set).
+    grid : bool
+        Find the (group, mover, chunk) whose boxes overlap through a grid
+        (:func:`grid_candidates`: many movers), or test them all (few).
     ptr : (G+1,) int ; lo, hi : (G,) int
         Groups of points and the steps examined per group (clipped to the field).
     xy : (k, 2) float ; cosp, sinp : (k,) float
@@ -236,6 +347,9 @@ def mark_unsafe(cand, ptr, lo, hi, xy, cosp, sinp, row_off, buf, present, mxy, m
         Pairs that passed the cheap tests (the reference's ``evaluations``).
     """
     box, p0, seg, inv, seg2, dev, body = _group_geometry(xy, ptr, circ)
+    cand = grid_candidates(box, lo, hi, bbox, chunk) if grid else np.empty((0, 3), np.int64)
+    if grid and cand.shape[0] == 0:
+        return 0
     scratch = np.empty((2, 4, 2))  # a box's corners, for _box_box_gap
     count = 0
     G = len(ptr) - 1
