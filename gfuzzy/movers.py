@@ -2,9 +2,11 @@
 
 :class:`MoverField` samples every mover at ``t_n = t0 + n * dt`` and answers the safety
 questions of the safe-interval search (:mod:`gfuzzy.timespace`): which (point, step) pairs
-are unsafe (``unsafe_pairs``, a broad phase on chunks of steps then the exact distances,
-compiled in :mod:`gfuzzy.movers_kernel` when numba is in use), and whether one motion is
-safe over a whole step (``motion_safe``). The safety rule itself (the margin
+are unsafe (``unsafe_pairs``: a broad phase on chunks of steps, then the exact distances;
+the numpy reference, or the compiled kernel of :mod:`gfuzzy.movers_kernel` when the
+``compiled`` flag is set), the same answer as safe intervals (``safe_intervals``, always
+compiled: what the compiled search consumes), and whether one motion is safe over a whole
+step (``motion_safe``). The safety rule itself (the margin
 ``(vmax + v_mover) * dt / 2 + clearance``) is explained in :mod:`gfuzzy.timespace`.
 """
 
