@@ -49,7 +49,7 @@ __all__ = ["sipp_compiled", "warm"]
 YIELD_EVERY = 4096
 
 # return codes of the kernel
-_SOLVED, _EXHAUSTED, _NEED, _YIELD = 0, 1, 2, 3
+_SOLVED, _EXHAUSTED, _NEED, _YIELD, _ROOM = 0, 1, 2, 3, 4
 # counters (ctr)
 _HSIZE, _TCOUNT, _EXP, _HIT, _NNEED, _RESULT, _SINCE = range(7)
 
@@ -103,13 +103,8 @@ def _swap(hf, hq, a, b):
 
 @njit(cache=True)
 def _push(hf, hq, ctr, f, ng, v, j):
+    """Push onto the heap, which has room (the loop asks for it before an expansion)."""
     n = ctr[_HSIZE]
-    if n == len(hf):
-        nf = np.empty(2 * n, np.float64)
-        nq = np.empty((2 * n, 3), np.int64)
-        nf[:n] = hf
-        nq[:n] = hq
-        hf, hq = nf, nq
     hf[n] = f
     hq[n, 0] = ng
     hq[n, 1] = v
@@ -122,7 +117,6 @@ def _push(hf, hq, ctr, f, ng, v, j):
             n = p
         else:
             break
-    return hf, hq
 
 
 @njit(cache=True)
@@ -148,15 +142,13 @@ def _pop(hf, hq, ctr):
 
 @njit(cache=True)
 def _set(tk, tb, tp, ctr, key, best, parent):
-    if 2 * (ctr[_TCOUNT] + 1) > len(tk):
-        tk, tb, tp = _grow_table(tk, tb, tp)
+    """Set a state's arrival and parent; the table has room (at most half full)."""
     s = _slot(tk, key)
     if tk[s] == -1:
         tk[s] = key
         ctr[_TCOUNT] += 1
     tb[s] = best
     tp[s] = parent
-    return tk, tb, tp
 
 
 @njit(cache=True)
@@ -168,9 +160,12 @@ def _get(tk, tb, key, default):
 @njit(cache=True)
 def _run(indptr, nbrs, h, wait_ok, goal, goal_hold, H, weight, stride,
          iv_off, iv_cnt, iv_cap, pool_s, pool_e, hf, hq, tk, tb, tp, ctr, need):  # fmt: skip
-    """The A* loop of :func:`gfuzzy.timespace.sipp` until it ends or needs something.
+    """The A* loop of :func:`gfuzzy.timespace.sipp` until it ends or needs something:
+    intervals not loaded yet (``_NEED``), room in the heap or the table (``_ROOM``: at
+    most ``ctr[_NNEED]`` states are pushed by the next expansion), a deadline check
+    (``_YIELD``). The arrays are never reallocated here (no array returned per push).
 
-    Returns (code, hf, hq, tk, tb, tp): the arrays, reallocated when they grew.
+    Returns the code.
     """
     big = np.iinfo(np.int64).max
     while ctr[_HSIZE] > 0:
@@ -191,7 +186,7 @@ def _run(indptr, nbrs, h, wait_ok, goal, goal_hold, H, weight, stride,
                 ctr[_HIT] = 1
         if u == goal and parked:
             ctr[_RESULT] = ukey
-            return _SOLVED, hf, hq, tk, tb, tp
+            return _SOLVED
         lo = g + 1
         hi = end_u + 1 if wait_ok[u] else lo
         if hi > H:
@@ -199,18 +194,24 @@ def _run(indptr, nbrs, h, wait_ok, goal, goal_hold, H, weight, stride,
         if lo <= hi:
             # every neighbour's intervals must be loaded before the expansion starts
             nn = 0
+            pushes = 0  # at most one push per neighbour's interval
             for e in range(indptr[u], indptr[u + 1]):
                 v = nbrs[e]
-                if math.isinf(h[v]) or iv_cnt[v] >= 0:
+                if math.isinf(h[v]):
                     continue
-                need[nn] = v
-                nn += 1
+                if iv_cnt[v] < 0:
+                    need[nn] = v
+                    nn += 1
+                pushes += iv_cnt[v]
             if nn > 0:
                 ctr[_NNEED] = nn
-                return _NEED, hf, hq, tk, tb, tp
+                return _NEED
+            if ctr[_HSIZE] + pushes > len(hf) or 2 * (ctr[_TCOUNT] + pushes) > len(tk):
+                ctr[_NNEED] = pushes
+                return _ROOM
         if ctr[_SINCE] >= 4096:
             ctr[_SINCE] = 0
-            return _YIELD, hf, hq, tk, tb, tp
+            return _YIELD
         _pop(hf, hq, ctr)
         ctr[_EXP] += 1
         ctr[_SINCE] += 1
@@ -239,10 +240,10 @@ def _run(indptr, nbrs, h, wait_ok, goal, goal_hold, H, weight, stride,
                 arr = lo if s < lo else s
                 key = v * stride + j
                 if arr < _get(tk, tb, key, big):
-                    tk, tb, tp = _set(tk, tb, tp, ctr, key, arr, ukey)
-                    hf, hq = _push(hf, hq, ctr, arr + weight * hv, -arr, v, j)
+                    _set(tk, tb, tp, ctr, key, arr, ukey)
+                    _push(hf, hq, ctr, arr + weight * hv, -arr, v, j)
                 j += 1
-    return _EXHAUSTED, hf, hq, tk, tb, tp
+    return _EXHAUSTED
 
 
 @njit(cache=True)
@@ -255,6 +256,22 @@ def _path(tk, tb, tp, key, stride):
         steps.append(tb[s])
         key = tp[s]
     return np.array(nodes[::-1], dtype=np.int64), np.array(steps[::-1], dtype=np.int64)
+
+
+def _room(hf, hq, tk, tb, tp, ctr, pushes: int):
+    """The heap and the table grown (doubled, the table rehashed) until ``pushes`` more
+    states fit: the heap holds them, the table stays at most half full."""
+    size = len(hf)
+    while ctr[_HSIZE] + pushes > size:
+        size *= 2
+    if size > len(hf):
+        nf, nq = np.empty(size, np.float64), np.empty((size, 3), np.int64)
+        n = int(ctr[_HSIZE])
+        nf[:n], nq[:n] = hf[:n], hq[:n]
+        hf, hq = nf, nq
+    while 2 * (ctr[_TCOUNT] + pushes) > len(tk):
+        tk, tb, tp = _grow_table(tk, tb, tp)
+    return hf, hq, tk, tb, tp
 
 
 def sipp_compiled(
@@ -296,12 +313,12 @@ def sipp_compiled(
     j0 = bisect_left(s_ends, start_step)
     if j0 < len(s_starts) and s_starts[j0] <= start_step:
         key0 = start * stride + j0
-        tk, tb, tp = _set(tk, tb, tp, ctr, key0, start_step, -1)
-        hf, hq = _push(hf, hq, ctr, start_step + weight * h[start], -start_step, start, j0)
+        _set(tk, tb, tp, ctr, key0, start_step, -1)
+        _push(hf, hq, ctr, start_step + weight * h[start], -start_step, start, j0)
     else:
         # the reference's exact first motions, in Python (rare: a start beside a mover)
         key0 = start * stride + stride - 1
-        tk, tb, tp = _set(tk, tb, tp, ctr, key0, start_step, -1)
+        _set(tk, tb, tp, ctr, key0, start_step, -1)
         first = start_step + 1
         pushed = False
         neighbours = nbrs[indptr[start] : indptr[start + 1]].tolist()
@@ -309,19 +326,23 @@ def sipp_compiled(
             key = v * stride + j
             if first < _get(tk, tb, key, np.iinfo(np.int64).max):
                 load(v)
-                tk, tb, tp = _set(tk, tb, tp, ctr, key, first, key0)
-                hf, hq = _push(hf, hq, ctr, first + weight * h[v], -first, v, j)
+                hf, hq, tk, tb, tp = _room(hf, hq, tk, tb, tp, ctr, 1)
+                _set(tk, tb, tp, ctr, key, first, key0)
+                _push(hf, hq, ctr, first + weight * h[v], -first, v, j)
                 pushed = True
         if not pushed:
             return SearchResult(Status.NO_PATH, message=NO_FIRST_MOTION)
     while True:
-        code, hf, hq, tk, tb, tp = _run(
+        code = _run(
             indptr, nbrs, h, wait_ok, goal, goal_hold, H, float(weight), stride,
             store.off, store.ready, store.cap, store.s, store.e, hf, hq, tk, tb, tp, ctr, need,
         )  # fmt: skip
         if code == _NEED:
             for v in need[: ctr[_NNEED]].tolist():
                 load(v)
+            continue
+        if code == _ROOM:
+            hf, hq, tk, tb, tp = _room(hf, hq, tk, tb, tp, ctr, int(ctr[_NNEED]))
             continue
         if code == _YIELD:
             if time.perf_counter() > deadline:
