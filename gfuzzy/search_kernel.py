@@ -374,9 +374,9 @@ def warm() -> None:
                 "name": "warm",
                 "bounds": [0, 0, 2, 2],
                 "robot": robot,
-                "movers": [
-                    {"name": "a", "disc": 0.2, "speed": 1.0, "path": [[1, 0.2], [1, 1.8]], "mode": "bounce"},
-                    {"name": "b", "box": [0.3, 0.3], "speed": 1.0, "path": [[0.2, 1], [1.8, 1]], "mode": "loop"},
+                "movers": [  # a crosses the middle node, b passes by: the start is free at t0
+                    {"name": "a", "disc": 0.2, "speed": 1.0, "path": [[1, 1.8], [1, 0.2]], "mode": "bounce"},
+                    {"name": "b", "box": [0.3, 0.3], "speed": 1.0, "path": [[0.2, 1.8], [1.8, 1.8]], "mode": "loop"},
                 ],
             }
         )
@@ -387,11 +387,18 @@ def warm() -> None:
             heuristic=np.array([2.0, 1.0, 0.0]),
         )
         store = IntervalStore(graph)
-        for steps in (10, 20):
+        for steps in (10, 40):  # the search itself, then on the same store a longer horizon
             field_ = MoverField(scene, 0.0, 0.1, steps, 1.0)
             field_.compiled = True
-            sipp_compiled(graph, field_, 0, 2, store=store)
+            res = sipp_compiled(graph, field_, 0, 2, store=store)
+        if res.status != Status.SOLVED:  # the kernels would not all have run
+            raise RuntimeError(f"warm-up search: {res.status.value} {res.message}")
         field_.unsafe_pairs(graph.poses, np.array([0, 3]), np.array([0]), np.array([20]))
+    # what the driver calls itself only on rarer paths: a growing table, a start beside a mover
+    tk, tb, tp = np.full(4, -1, np.int64), np.empty(4, np.int64), np.empty(4, np.int64)
+    ctr = np.zeros(7, np.int64)
+    _room(np.empty(1), np.empty((1, 3), np.int64), tk, tb, tp, ctr, 4)
+    _get(tk, tb, 0, np.iinfo(np.int64).max)
 
 
 if __name__ == "__main__":

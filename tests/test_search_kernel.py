@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import subprocess
+import sys
 from collections import deque
 from pathlib import Path
 
@@ -369,3 +371,40 @@ def test_grid_candidates_are_every_overlapping_triple(seed):
     assert len(want) > 100  # a real comparison
     assert len(got) == len(want) and set(map(tuple, got.tolist())) == want
     assert np.all(np.diff(got[:, 0]) >= 0)
+
+
+WARM_PROBE = """
+import sys
+from pathlib import Path
+from numba.core.registry import CPUDispatcher
+from gfuzzy import movers_kernel, search_kernel
+from gfuzzy.planner import plan
+from gfuzzy.roadmap import RoadmapOptions, build_roadmap, load_roadmap
+from gfuzzy.scene import load_scene, parse_scene
+
+search_kernel.warm()
+kernels = [o for m in (movers_kernel, search_kernel) for o in vars(m).values() if isinstance(o, CPUDispatcher)]
+before = {f: set(f.overloads) for f in kernels}
+root = Path(sys.argv[1])
+for name in ("warehouse-mesh", "eth-crossing", "building-floor"):  # box-box, a crowd, a box robot
+    scene = load_scene(root / "scenes" / f"{name}.yaml")
+    rm = load_roadmap(root / "roadmaps" / f"{name}.json", scene)
+    for q in scene.queries:
+        plan(scene, rm, q.start, q.goal, q.t0, hold=q.hold)
+person = parse_scene({"version": 1, "name": "p", "bounds": [0, 0, 6, 6], "robot": {"disc": 0.25, "vmax": 1.0},
+                      "movers": [{"name": "ped", "disc": 0.3, "trajectory": [[0, 0.0, 1.0], [4.6, 5.98, 1.0]]}]})
+rm = build_roadmap(person, RoadmapOptions(vertices=40, seed=1))
+assert plan(person, rm, [2.6, 1.586], [2.6, 5.0], 2.0).solved  # a start the margin refuses: first motions
+print(sorted(f.py_func.__name__ for f in kernels if set(f.overloads) != before[f]))
+"""
+
+
+def test_warm_leaves_nothing_to_compile():
+    """After `make warm` (search_kernel.warm) a process compiles no kernel in the user's way:
+    plans among box movers, a crowd, a box robot and a start beside a walking person add no
+    compiled signature to any kernel (a fresh process: the kernels load only by warm)."""
+    out = subprocess.run(
+        [sys.executable, "-c", WARM_PROBE, str(ROOT)], capture_output=True, text=True, cwd=ROOT, timeout=300
+    )
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.strip().splitlines()[-1] == "[]"
