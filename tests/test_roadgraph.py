@@ -202,9 +202,9 @@ def test_caches_are_bounded_and_not_pickled():
 
 
 def test_a_cut_too_fine_is_refused_before_it_is_made():
-    from gfuzzy.errors import LimitError
-
     import yaml
+
+    from gfuzzy.errors import LimitError
 
     scene = parse_scene(yaml.safe_load(
         "version: 1\nname: open\nbounds: [0, 0, 6, 6]\nrobot: {disc: 0.2, vmax: 1.0}\n"
