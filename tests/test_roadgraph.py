@@ -214,3 +214,22 @@ def test_a_cut_too_fine_is_refused_before_it_is_made():
     with pytest.raises(LimitError, match="too fine"):
         Planner(scene, rm).plan([1, 1], [5, 5], 0.0, PlanOptions(dt=1e-6))
     assert not [key for key in rm._derived if key[0] == "split"]
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_plain_timed_rows_equal_the_loop_to_the_bit(seed):
+    """The vectorised rows of a search's answer against the loop that adds rows inside
+    steps (asked for none): the same times and poses, bit for bit, and the same waits."""
+    from gfuzzy.timespace import timed_rows
+
+    rng = np.random.default_rng(seed)
+    poses = rng.uniform(-5, 5, size=(40, 2 + seed % 2))
+    n = int(rng.integers(1, 30))
+    nodes = rng.integers(0, 40, size=n).tolist()
+    steps = np.cumsum(rng.integers(1, 4, size=n)).tolist()  # some waits, some plain moves
+    t0, dt = float(rng.uniform(0, 100)), float(rng.choice([0.07, 0.1, 0.033]))
+    rows, waits = timed_rows(nodes, steps, poses, t0, dt)
+    rows_loop, waits_loop = timed_rows(nodes, steps, poses, t0, dt, between=lambda a, b: [])
+    np.testing.assert_array_equal(rows, rows_loop)
+    assert waits == waits_loop
+    assert len(rows) == n + len(waits)
