@@ -22,7 +22,7 @@ from .errors import InputError, LimitError, check_number
 from .geometry import StaticGeometry, metric_distance
 from .movers import MoverField
 from .poses import wrap_angle
-from .roadgraph import connect, spanner_split
+from .roadgraph import connect, roadmap_metres, spanner_split
 from .roadmap import Roadmap
 from .scene import Scene
 from .settings import MAX_MOVER_SAMPLES, SPEED_SAFETY
@@ -291,24 +291,19 @@ class Planner:
         base = spanner_split(rm, vmax * dt, stretch)
         part = base.splice(extra_e, extra_w, np.vstack([start, goal]))
         n = base.n
-        edges = np.vstack([base.edges, extra_e])
 
         # static shortest distances (Dijkstra on the roadmap): in metres for the roadmap
         # distance, in steps (edge e costs k[e]) for the heuristic, which is exact for the
-        # static graph and so the tightest admissible one
-        from scipy.sparse import coo_matrix
+        # static graph and so the tightest admissible one; the vertex graphs are kept, the
+        # connections added per query
         from scipy.sparse.csgraph import dijkstra
 
-        def sp(weights, edges, indices):
-            w = np.maximum(weights, 1e-300)  # csgraph drops explicit zeros
-            rows = np.r_[edges[:, 0], edges[:, 1]]
-            cols = np.r_[edges[:, 1], edges[:, 0]]
-            mat = coo_matrix((np.r_[w, w], (rows, cols)), shape=(n, n)).tocsr()
-            out = dijkstra(mat, directed=True, indices=indices)
+        def sp(graph, weights, indices):
+            out = dijkstra(graph.with_edges(extra_e, weights), directed=True, indices=indices)
             return np.where(out < 1e-200, 0.0, out)
 
-        dist = sp(np.concatenate([rm.lengths, extra_w]), np.vstack([rm.edges, extra_e]), g_id)
-        hops = sp(np.concatenate([base.k, part.k]).astype(float), edges, [g_id, s_id])
+        dist = sp(roadmap_metres(rm), extra_w, g_id)
+        hops = sp(base.steps, part.k.astype(float), [g_id, s_id])
         hop_g, hop_s = np.rint(hops[0]), np.rint(hops[1])
 
         def along(hop):  # steps at every point: its vertices', then each edge's interior

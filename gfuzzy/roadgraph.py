@@ -31,7 +31,16 @@ from .settings import MAX_POINTS
 from .spacetime import split_edges
 from .typing import FloatArray, IntArray
 
-__all__ = ["SplitSpanner", "Spliced", "spanner_split", "vertex_clearances", "connect", "MAX_SPLITS"]
+__all__ = [
+    "SplitSpanner",
+    "Spliced",
+    "VertexGraph",
+    "spanner_split",
+    "roadmap_metres",
+    "vertex_clearances",
+    "connect",
+    "MAX_SPLITS",
+]
 
 #: Split spanners kept per roadmap (one per (step length, stretch) in use); the oldest
 #: goes first. A planner uses one; a few cover a caller alternating dt or stretch.
@@ -99,6 +108,61 @@ def connect(geometry: StaticGeometry, roadmap, pose: FloatArray, k: int, clearan
 
 
 @dataclass
+class VertexGraph:
+    """A symmetric weighted graph on the roadmap's vertices plus the start and the goal
+    (ids ``nv``, ``nv + 1``, no edges), as CSR arrays, for Dijkstra per query.
+
+    Attributes
+    ----------
+    n : int
+    indptr : (n + 1,) int
+    indices : (nnz,) int
+    data : (nnz,) float
+        Both directions of every edge; weights at least 1e-300 (csgraph drops zeros).
+    """
+
+    n: int
+    indptr: IntArray
+    indices: IntArray
+    data: FloatArray
+
+    @classmethod
+    def of(cls, n: int, edges: IntArray, weights: FloatArray) -> VertexGraph:
+        from scipy.sparse import coo_matrix
+
+        w = np.maximum(np.asarray(weights, dtype=float), 1e-300)
+        rows = np.r_[edges[:, 0], edges[:, 1]]
+        cols = np.r_[edges[:, 1], edges[:, 0]]
+        mat = coo_matrix((np.r_[w, w], (rows, cols)), shape=(n, n)).tocsr()
+        return cls(n, mat.indptr.astype(np.int64), mat.indices.astype(np.int64), mat.data)
+
+    def with_edges(self, edges: IntArray, weights: FloatArray):
+        """A scipy CSR matrix of this graph plus ``edges`` (both directions), each new
+        entry at the end of its row: one pass over the arrays, no sort."""
+        from scipy.sparse import csr_matrix
+
+        w = np.maximum(np.asarray(weights, dtype=float), 1e-300)
+        rows = np.r_[edges[:, 0], edges[:, 1]]
+        order = np.argsort(rows, kind="stable")  # by row: empty rows share an insertion place
+        rows, cols, w = rows[order], np.r_[edges[:, 1], edges[:, 0]][order], np.r_[w, w][order]
+        at = self.indptr[rows + 1]
+        indptr = self.indptr.copy()
+        indptr[1:] += np.cumsum(np.bincount(rows, minlength=self.n))
+        return csr_matrix(
+            (np.insert(self.data, at, w), np.insert(self.indices, at, cols), indptr), shape=(self.n, self.n)
+        )
+
+
+def roadmap_metres(roadmap) -> VertexGraph:
+    """The whole roadmap weighted in metres (the contract's roadmap distance), cached."""
+    hit = roadmap._derived.get(("metres",))
+    if hit is None:
+        n = len(roadmap.vertices) + 2
+        hit = roadmap._derived[("metres",)] = VertexGraph.of(n, roadmap.edges, roadmap.lengths)
+    return hit
+
+
+@dataclass
 class SplitSpanner:
     """A roadmap's spanner cut into one-step points, numbered as a query's graph numbers them.
 
@@ -123,6 +187,8 @@ class SplitSpanner:
         Where, in a vertex's list, a connection's last interior point goes: before the
         moves along the vertex's single-step spanner edges that end at it (the order of
         :func:`split_edges`' moves, see :meth:`splice`).
+    steps : VertexGraph
+        The spanner on the vertices, weighted in steps (``k``).
     """
 
     nv: int
@@ -141,6 +207,7 @@ class SplitSpanner:
     indptr: IntArray
     neighbors: IntArray
     cut: IntArray
+    steps: VertexGraph
 
     def splice(self, edges: IntArray, lengths: FloatArray, ends: FloatArray) -> Spliced:
         """The spanner with ``edges`` (each from the start or the goal) added after its own.
@@ -250,7 +317,7 @@ def spanner_split(roadmap, step_len: float, stretch: float) -> SplitSpanner:
     split = SplitSpanner(
         nv=nv, n=n, N0=N0, step_len=float(step_len), edges=edges, lengths=lengths, k=k, offs=offs,
         a=a, b=b, j=j, ke=np.repeat(k, k - 1), poses=np.vstack([verts, inner]), indptr=indptr,
-        neighbors=d2[order], cut=counts[:nv] - single_ends,
+        neighbors=d2[order], cut=counts[:nv] - single_ends, steps=VertexGraph.of(n, edges, k.astype(float)),
     )  # fmt: skip
     splits = [key_ for key_ in cache if key_[0] == "split"]
     for old in splits[: max(0, len(splits) - MAX_SPLITS + 1)]:
