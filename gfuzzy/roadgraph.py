@@ -15,7 +15,9 @@ to a vertex needs (:meth:`gfuzzy.geometry.StaticGeometry.motion_clearance`): com
 once per vertex, lazily, keyed by the scene's static hash and ``robot.clearance``.
 
 The caches live in ``Roadmap._derived`` (derived data: never saved, never pickled, never
-compared); a roadmap does not change after building, so they never go stale.
+compared); a roadmap does not change after building, so they never go stale. Two threads
+sharing a roadmap at worst compute an entry twice (each value is a pure function of its
+key), never read a half-made one: an entry enters the dict only once complete.
 """
 
 from __future__ import annotations
@@ -293,9 +295,9 @@ def spanner_split(roadmap, step_len: float, stretch: float) -> SplitSpanner:
     """
     key = ("split", float(step_len), float(stretch))
     cache = roadmap._derived
-    hit = cache.get(key)
+    hit = cache.pop(key, None)  # pop and put back: most recently used last
     if hit is not None:
-        cache[key] = cache.pop(key)  # most recently used last
+        cache[key] = hit
         return hit
     nv = len(roadmap.vertices)
     n = nv + 2
@@ -319,8 +321,8 @@ def spanner_split(roadmap, step_len: float, stretch: float) -> SplitSpanner:
         a=a, b=b, j=j, ke=np.repeat(k, k - 1), poses=np.vstack([verts, inner]), indptr=indptr,
         neighbors=d2[order], cut=counts[:nv] - single_ends, steps=VertexGraph.of(n, edges, k.astype(float)),
     )  # fmt: skip
-    splits = [key_ for key_ in cache if key_[0] == "split"]
+    splits = [key_ for key_ in list(cache) if key_[0] == "split"]
     for old in splits[: max(0, len(splits) - MAX_SPLITS + 1)]:
-        del cache[old]
+        cache.pop(old, None)  # (another thread may have dropped it: no KeyError)
     cache[key] = split
     return split
