@@ -348,7 +348,7 @@ class Planner:
 
     def plan_from(self, prepared, start, t0: float = 0.0, movers=None, hold: float = 0.0) -> PlanResult:
         """Answer a query to a prepared goal from ``start`` at ``t0``: :meth:`plan` without
-        rebuilding the graph (only the start is spliced in, no Dijkstra), same arrival.
+        rebuilding the graph (only the start is spliced in; one Dijkstra on the vertices), same arrival.
 
         Parameters
         ----------
