@@ -21,11 +21,12 @@ import numpy as np
 from .errors import InputError, LimitError, check_number
 from .geometry import StaticGeometry, metric_distance
 from .movers import MoverField
-from .poses import split_counts, wrap_angle
+from .poses import wrap_angle
+from .roadgraph import connect, roadmap_metres, spanner_split
 from .roadmap import Roadmap
 from .scene import Scene
-from .settings import MAX_MOVER_SAMPLES, MAX_POINTS, SPEED_SAFETY
-from .spacetime import IntervalStore, SearchResult, SpaceTimeGraph, split_edges
+from .settings import MAX_MOVER_SAMPLES, SPEED_SAFETY
+from .spacetime import IntervalStore, SearchResult, SpaceTimeGraph
 from .status import Status
 from .timespace import sipp, timed_rows
 from .trajectory import Trajectory, TrajectoryFile
@@ -258,100 +259,64 @@ class Planner:
         self.robot = scene.robot
 
     # ---------------------------------------------------------------- graph
-    def _connect(self, pose: FloatArray, k: int) -> list[tuple[int, float]]:
-        """Certified straight connections from ``pose`` to its nearest roadmap vertices."""
-        V = self.roadmap.vertices
-        if len(V) == 0:
-            return []
-        d = metric_distance(V, pose[None, :], self.robot.circumradius)
-        order = np.argsort(d, kind="stable")
-        out = []
-        tried = 0
-        for i in order:
-            if tried >= max(k, 1) and out:
-                break
-            if tried >= 4 * max(k, 1):
-                break
-            tried += 1
-            if self.geometry.motion_free(pose, V[i]):
-                out.append((int(i), float(d[i])))
-        return out
+    def _connect(self, pose: FloatArray, k: int, clearance: float | None = None) -> list[tuple[int, float]]:
+        """Certified straight connections from ``pose`` to its nearest roadmap vertices
+        (:func:`gfuzzy.roadgraph.connect`; ``clearance``: the pose's, when known)."""
+        return connect(self.geometry, self.roadmap, pose, k, clearance)
 
     def _graph(self, start, goal, dt, vmax, connect_k: int = 10, stretch: float = 1.0):
         """Roadmap + start + goal, every edge split into one-step pieces; static distances.
 
         The search runs on the roadmap's ``stretch`` spanner; the roadmap distance returned
-        (the contract's, for the delay factor) is measured on the whole roadmap.
+        (the contract's, for the delay factor) is measured on the whole roadmap. The
+        spanner's cut is kept on the roadmap (:mod:`gfuzzy.roadgraph`); only the start's
+        and the goal's connections are cut per query.
         """
         rm = self.roadmap
         nv = len(rm.vertices)
         s_id, g_id = nv, nv + 1
+        c_s, c_g = self.geometry.clearance1(start), self.geometry.clearance1(goal)
         extra_e, extra_w = [], []
-        for pose, node in ((start, s_id), (goal, g_id)):
-            for v, w in self._connect(pose, connect_k):
+        for pose, node, c in ((start, s_id, c_s), (goal, g_id, c_g)):
+            for v, w in self._connect(pose, connect_k, c):
                 extra_e.append((node, v))
                 extra_w.append(w)
         direct = float(metric_distance(start, goal, self.robot.circumradius))
-        if self.geometry.motion_free(start, goal):
+        if self.geometry.motion_free(start, goal, ca=c_s, cb=c_g):
             extra_e.append((s_id, g_id))
             extra_w.append(direct)
         extra_e = np.array(extra_e, dtype=np.int64).reshape(-1, 2)
         extra_w = np.array(extra_w, dtype=float)
-        verts = np.vstack([rm.vertices, start[None], goal[None]])
-        n = len(verts)
-        full_edges = np.vstack([rm.edges, extra_e])
-        full_lengths = np.concatenate([rm.lengths, extra_w])
-        keep = self.roadmap.spanner(stretch)
-        edges = np.vstack([rm.edges[keep], extra_e])
-        lengths = np.concatenate([rm.lengths[keep], extra_w])
-
-        # split edges into steps of at most vmax * dt; interior points of edge e get the
-        # ids n + offs[e] .. n + offs[e+1] - 1 (the size is checked before anything is cut)
-        total = n + int((split_counts(lengths, vmax * dt) - 1).sum())
-        if total > MAX_POINTS:
-            raise LimitError(
-                f"the time step is too fine for this roadmap: its edges would be cut into "
-                f"{total:,} points (at most {MAX_POINTS:,}); use a larger dt"
-            )
-        k, offs, inner, a, b, j, src, dst = split_edges(verts, edges, lengths, vmax * dt, n)
+        # interior points of the spanner's edges, then of the connections (ids from N0)
+        base = spanner_split(rm, vmax * dt, stretch)
+        part = base.splice(extra_e, extra_w, np.vstack([start, goal]))
+        n = base.n
 
         # static shortest distances (Dijkstra on the roadmap): in metres for the roadmap
         # distance, in steps (edge e costs k[e]) for the heuristic, which is exact for the
-        # static graph and so the tightest admissible one
-        from scipy.sparse import coo_matrix
+        # static graph and so the tightest admissible one; the vertex graphs are kept, the
+        # connections added per query
         from scipy.sparse.csgraph import dijkstra
 
-        def sp(weights, edges=edges):
-            w = np.maximum(weights, 1e-300)  # csgraph drops explicit zeros
-            rows = np.r_[edges[:, 0], edges[:, 1]]
-            cols = np.r_[edges[:, 1], edges[:, 0]]
-            mat = coo_matrix((np.r_[w, w], (rows, cols)), shape=(n, n)).tocsr()
-            out = dijkstra(mat, directed=True, indices=[g_id, s_id])
+        def sp(graph, weights, indices):
+            out = dijkstra(graph.with_edges(extra_e, weights), directed=True, indices=indices)
             return np.where(out < 1e-200, 0.0, out)
 
-        dist = sp(full_lengths, full_edges)[0]
-        hops = sp(k.astype(float))
+        dist = sp(roadmap_metres(rm), extra_w, g_id)
+        hops = sp(base.steps, part.k.astype(float), [g_id, s_id])
         hop_g, hop_s = np.rint(hops[0]), np.rint(hops[1])
 
-        total = n + int(offs[-1])
-        poses = np.empty((total, verts.shape[1]))
-        poses[:n] = verts
-        poses[n:] = inner
-        ke = k[np.repeat(np.arange(len(edges)), k - 1)]
-        heur = np.empty(total)
-        heur[:n] = hop_g
-        heur[n:] = np.minimum(hop_g[a] + j, hop_g[b] + ke - j)
-        from_start = np.empty(total)
-        from_start[:n] = hop_s
-        from_start[n:] = np.minimum(hop_s[a] + j, hop_s[b] + ke - j)
-        # one-step moves: along each edge's chain a -> interior... -> b, both ways
-        s2 = np.concatenate([src, dst])
-        d2 = np.concatenate([dst, src])
-        order = np.argsort(s2, kind="stable")  # by source; neighbours in any fixed order
-        indptr = np.zeros(total + 1, dtype=np.int64)
-        np.add.at(indptr, s2 + 1, 1)
+        def along(hop):  # steps at every point: its vertices', then each edge's interior
+            out = np.empty(len(part.poses))
+            out[:n] = hop
+            out[n : base.N0] = np.minimum(hop[base.a] + base.j, hop[base.b] + base.ke - base.j)
+            ke = np.repeat(part.k, part.k - 1)
+            out[base.N0 :] = np.minimum(hop[part.a] + part.j, hop[part.b] + ke - part.j)
+            return out
+
+        groups = np.concatenate([n + base.offs, base.N0 + part.offs[1:]])
         graph = SpaceTimeGraph(
-            poses, np.cumsum(indptr), d2[order], heur, groups=n + offs, from_start=from_start
+            part.poses, part.indptr, part.neighbors, along(hop_g), groups=groups, from_start=along(hop_s)
         )
         return graph, s_id, g_id, float(dist[s_id])
 
@@ -383,7 +348,7 @@ class Planner:
 
     def plan_from(self, prepared, start, t0: float = 0.0, movers=None, hold: float = 0.0) -> PlanResult:
         """Answer a query to a prepared goal from ``start`` at ``t0``: :meth:`plan` without
-        rebuilding the graph (only the start is spliced in, no Dijkstra), same arrival.
+        rebuilding the graph (only the start is spliced in; one Dijkstra on the vertices), same arrival.
 
         Parameters
         ----------

@@ -90,6 +90,19 @@ class RoadmapOptions:
             raise InputError(f"sampler must be 'uniform' or 'passage', got {self.sampler!r}")
 
 
+class _Derived(dict):
+    """A cache dict that pickles and copies as empty (a worker rebuilds what it needs)."""
+
+    def __reduce__(self):
+        return (_Derived, ())
+
+    def __copy__(self):
+        return _Derived()
+
+    def __deepcopy__(self, memo):
+        return _Derived()
+
+
 @dataclass
 class Roadmap:
     """A roadmap of the static scene.
@@ -120,6 +133,9 @@ class Roadmap:
     #: Cache of :meth:`spanner` results by stretch (derived data: not saved, not compared).
     #: A Roadmap is otherwise immutable after building, so the cache never goes stale.
     _spanners: dict = field(default_factory=dict, repr=False, compare=False)
+    #: Other derived data of the queries (:mod:`gfuzzy.roadgraph`: vertex clearances, split
+    #: spanners); never saved, pickled, compared or copied by ``dataclasses.replace``.
+    _derived: dict = field(default_factory=_Derived, init=False, repr=False, compare=False)
 
     @property
     def dof(self) -> int:

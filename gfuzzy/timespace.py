@@ -249,6 +249,8 @@ def timed_rows(nodes, steps, poses, t0: float, dt: float, between=None):
     waits : list of int
         The nodes where the answer waits.
     """
+    if between is None:
+        return _timed_rows_plain(nodes, steps, poses, t0, dt)
     rows = [(t0 + steps[0] * dt, poses[nodes[0]])]
     waits = []
     for k in range(1, len(nodes)):
@@ -262,3 +264,20 @@ def timed_rows(nodes, steps, poses, t0: float, dt: float, between=None):
                 rows.append((t0 + (depart + frac) * dt, pose))
         rows.append((t0 + steps[k] * dt, poses[b]))
     return np.array([[t, *p] for t, p in rows], dtype=float), waits
+
+
+def _timed_rows_plain(nodes, steps, poses, t0: float, dt: float):
+    """:func:`timed_rows` without rows inside the steps, vectorised (the same numbers:
+    each time is ``t0 + step * dt`` in float64, as the loop computes it)."""
+    nodes = np.asarray(nodes, dtype=np.int64)
+    steps = np.asarray(steps, dtype=np.int64)
+    depart = steps[1:] - 1
+    wait = depart > steps[:-1]
+    times = np.empty(2 * len(steps) - 1)
+    ids = np.empty(len(times), dtype=np.int64)
+    keep = np.ones(len(times), dtype=bool)
+    times[0], ids[0] = t0 + steps[0] * dt, nodes[0]
+    times[1::2], ids[1::2], keep[1::2] = t0 + depart * dt, nodes[:-1], wait  # waiting rows
+    times[2::2], ids[2::2] = t0 + steps[1:] * dt, nodes[1:]  # arrivals
+    rows = np.column_stack([times[keep], np.asarray(poses)[ids[keep]]])
+    return rows, nodes[:-1][wait].tolist()
