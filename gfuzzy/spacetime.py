@@ -227,18 +227,22 @@ class IntervalStore:
             pending = np.append(pending, g)
         lo = np.maximum(self.g_lo[pending], self.done_hi[pending] + 1)
         hi = self.g_hi[pending]
-        self.done_hi[pending] = hi
-        for j, v in zip(pending.tolist(), hi.tolist(), strict=True):
-            self._done_l[j] = v
         sizes = ptr[pending + 1] - ptr[pending]
         sub_ptr = np.concatenate([[0], np.cumsum(sizes)])
         nodes = np.repeat(ptr[pending], sizes) + (np.arange(sub_ptr[-1]) - np.repeat(sub_ptr[:-1], sizes))
         lo_n = np.repeat(lo, sizes)
+        # the safety first, the bookkeeping after: a field that raises (a deadline inside
+        # the batch) leaves the store as it was
         if self.pool:
             gs, ge, sp = field_.safe_intervals(self.graph.poses[nodes], sub_ptr, lo, hi)
+        else:
+            gs, ge, sp = _intervals_from_pairs(field_, self.graph.poses[nodes], sub_ptr, lo, hi, self.H)
+        self.done_hi[pending] = hi
+        for j, v in zip(pending.tolist(), hi.tolist(), strict=True):
+            self._done_l[j] = v
+        if self.pool:
             self._pool_merge(nodes, gs, ge, sp, lo_n)
             return
-        gs, ge, sp = _intervals_from_pairs(field_, self.graph.poses[nodes], sub_ptr, lo, hi, self.H)
         for nid in nodes[self._where[nodes] >= 0].tolist():  # extended windows: keep what was computed before
             self._older[nid] = self._intervals(nid)
         self._batches.append((gs.tolist(), sp.tolist(), ge.tolist(), lo_n.tolist()))

@@ -408,3 +408,33 @@ def test_warm_leaves_nothing_to_compile():
     )
     assert out.returncode == 0, out.stderr[-2000:]
     assert out.stdout.strip().splitlines()[-1] == "[]"
+
+
+@pytest.mark.parametrize("pool", [False, True])
+def test_interval_store_unchanged_when_the_field_raises(pool, tmp_path):
+    """A field that raises inside a batch (a navigator's deadline) leaves the store as it
+    was: asked again with a working field, it serves what a fresh store serves."""
+    rng = np.random.default_rng(4)
+    scene, graph, _, _ = _random_case(rng, tmp_path)
+
+    class Failing(MoverField):
+        def unsafe_pairs(self, *a):
+            raise TimeoutError
+
+        def safe_intervals(self, *a):
+            raise TimeoutError
+
+    def field(cls):
+        f = cls(scene, 0.5, 0.1, 40, 1.0)
+        f.compiled = True
+        return f
+
+    store, fresh = IntervalStore(graph), IntervalStore(graph)
+    store.set_horizon(field(Failing), pool=pool)
+    with pytest.raises(TimeoutError):
+        store.get(0)
+    store.set_horizon(field(MoverField), pool=pool)
+    fresh.set_horizon(field(MoverField), pool=pool)
+    for node in range(len(graph.poses)):
+        a, b = store.get(node), fresh.get(node)
+        assert (list(a[0]), list(a[1]), a[2]) == (list(b[0]), list(b[1]), b[2])
