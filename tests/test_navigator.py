@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import time
 
 import numpy as np
 import pytest
@@ -492,15 +493,51 @@ def test_exhausted_budget_builds_no_prediction(open_square, monkeypatch):
     np.testing.assert_allclose(traj.waypoints[0], [0.0, 0.0, -4.0])
 
 
-def test_the_cost_model_refuses_a_search_it_cannot_pay_for(open_square, monkeypatch):
+def test_the_field_answers_in_pieces_and_stops_at_the_deadline(open_square):
+    from gfuzzy.navigator import PIECE_WORK, _OutOfTime
+
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (0.0, 4.0), NavOptions(backend="reference"))
+    pose = np.array([0.0, -4.0])
+    obs = _crowd(np.random.default_rng(5), 25, np.array([0.0, 0.0]), 4.0)
+    infl = nav._inflation(pose, obs)
+    pts = nav._poses[: 3 * PIECE_WORK // len(obs) + 17]  # groups of the base graph: several pieces
+    groups = nav._groups[nav._groups <= len(pts)]
+    ptr = np.unique(np.concatenate([np.arange(nav._nv + 2), groups, [len(pts)]]))
+    rng = np.random.default_rng(1)
+    lo = rng.integers(0, 20, len(ptr) - 1)
+    hi = lo + rng.integers(0, 60, len(ptr) - 1)
+    timed = nav._field(0.0, obs, infl, 80)
+    whole = nav._field(0.0, obs, infl, 80)
+    whole.__class__ = gfuzzy.movers.MoverField  # the same field, answering in one piece
+    want = set(zip(*whole.unsafe_pairs(pts, ptr, lo, hi), strict=True))
+    assert want
+    assert set(zip(*timed.unsafe_pairs(pts, ptr, lo, hi), strict=True)) == want
+    ticks = iter([0.0, 0.0, 5.0, 5.0])  # the deadline passes after the first piece
+    late = nav._field(0.0, obs, infl, 80, deadline=1.0)
+    late.clock = lambda: next(ticks)
+    with pytest.raises(_OutOfTime):
+        late.unsafe_pairs(pts, ptr, lo, hi)
+
+
+def test_a_search_out_of_time_inside_a_batch_falls_back(open_square):
     scene, rm = open_square
     nav = Navigator(scene, rm, (0.0, 4.0))
     obs = np.array([[0.0, 0.0, 0.0, -1.0, 0.3], [2.0, 1.0, -1.0, 0.0, 0.3]])
-    nav._cost.per_step = 1.0  # as measured after a slow search: far beyond the budget
-    monkeypatch.setattr(Navigator, "_field", lambda *a: pytest.fail("the field was built"))
-    nav.step(0.0, np.array([0.0, -4.0]), obs)
-    assert nav.last.mode != "plan" and "budget" in nav.last.message
-    assert nav._cost.per_step < 1.0  # and it drifts down, so that the search is tried again
+    late = [0.0]
+    nav._clock = lambda: time.perf_counter() + late[0]  # the search keeps the real clock
+    real = Navigator._field
+
+    def field_then_late(self, *args):  # the budget is gone once the search asks for safety
+        field_ = real(self, *args)
+        late[0] = 1.0
+        return field_
+
+    nav._field = field_then_late.__get__(nav)
+    traj = nav.step(0.0, np.array([0.0, -4.0]), obs)
+    assert nav.last.mode in ("direct", "previous", "evasive")
+    assert nav.last.message == "time budget spent on the predicted people's safety"
+    assert _speeds_ok(traj, 1.0)
 
 
 @pytest.mark.parametrize("error", [RuntimeError("a bug"), TypeError("a bug")])

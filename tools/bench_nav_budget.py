@@ -78,16 +78,23 @@ class Crowd:
     def observe(self) -> np.ndarray:
         return np.column_stack([self.xy, self.v, np.full(len(self.xy), PERSON_R)])
 
+    def _blocked(self, new, robot_xy):
+        """Steps that would come closer to the robot (within 0.05 m) or into a pillar."""
+        blocked = np.zeros(len(new), dtype=bool)
+        for c, reach in [(robot_xy, PERSON_R + ROBOT_R + 0.05)] + [(c, PERSON_R + PILLAR_R) for c in PILLARS]:
+            d_new = np.hypot(*(new - np.asarray(c)).T)
+            blocked |= (d_new < reach) & (d_new < np.hypot(*(self.xy - np.asarray(c)).T))
+        return blocked
+
     def advance(self, dt: float, robot_xy) -> None:
         new = self.xy + self.v * dt
         for axis, size in ((0, W), (1, H)):
             out = (new[:, axis] < PERSON_R) | (new[:, axis] > size - PERSON_R)
             self.v[out, axis] *= -1.0
-        blocked = np.hypot(*(new - np.asarray(robot_xy)).T) < PERSON_R + ROBOT_R + 0.05
-        for c in PILLARS:
-            blocked |= np.hypot(*(new - np.asarray(c)).T) < PERSON_R + PILLAR_R
-        self.v[blocked] *= -1.0  # turn back (from the robot: give way)
-        moved = ~blocked
+        blocked = self._blocked(new, robot_xy)
+        self.v[blocked] *= -1.0  # turn back (from the robot: give way) and walk on if free
+        new = self.xy + self.v * dt
+        moved = ~self._blocked(new, robot_xy)
         self.xy[moved] = np.clip(new[moved], PERSON_R, [W - PERSON_R, H - PERSON_R])
 
 
