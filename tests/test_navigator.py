@@ -408,6 +408,9 @@ def test_prediction_field_matches_a_chain_of_slice_movers(robot, relaxed):
     got, want = ours.unsafe(pts), ref.unsafe(pts)
     assert want.any() and not want.all()
     np.testing.assert_array_equal(got, want)
+    ours.compiled = ref.compiled = True  # the compiled kernel's answers: the same
+    np.testing.assert_array_equal(ours.unsafe(pts), want)
+    np.testing.assert_array_equal(ref.unsafe(pts), want)
     # the first motions' exact check: the same answers for short motions from the pose
     for _ in range(60):
         d = rng.normal(size=pose.shape)
@@ -513,6 +516,9 @@ def test_the_field_answers_in_pieces_and_stops_at_the_deadline(open_square):
     want = set(zip(*whole.unsafe_pairs(pts, ptr, lo, hi), strict=True))
     assert want
     assert set(zip(*timed.unsafe_pairs(pts, ptr, lo, hi), strict=True)) == want
+    if hasattr(whole, "safe_intervals"):  # a store that asks for intervals (compiled kernel)
+        for x, y in zip(timed.safe_intervals(pts, ptr, lo, hi), whole.safe_intervals(pts, ptr, lo, hi), strict=True):
+            np.testing.assert_array_equal(x, y)
     ticks = iter([0.0, 0.0, 5.0, 5.0])  # the deadline passes after the first piece
     late = nav._field(0.0, obs, infl, 80, deadline=1.0)
     late.clock = lambda: next(ticks)

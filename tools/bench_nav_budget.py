@@ -3,6 +3,7 @@
     python tools/bench_nav_budget.py                       # 30, 60, 150, 300 people
     python tools/bench_nav_budget.py --crowds 150 --steps 40 --profile   # where the time goes
     python tools/bench_nav_budget.py --opt time_budget=0.2 prediction_horizon=3
+    python tools/bench_nav_budget.py --baseline 747cfd3    # + the navigator of that commit
 
 A room of 10 m x 8 m with four pillars, a 600-vertex roadmap (seeded, built once per run),
 and K people (discs of radius 0.2) who walk straight lines at 0.5-1.5 m/s and bounce off
@@ -16,14 +17,18 @@ fallback (anything but a fresh plan), how many people the navigator predicted in
 and the smallest robot-person gap over the run (people bounce off the robot's disc, so a
 gap below zero means the robot drove into someone). The first step of each crowd is not
 counted (it loads what stays cached). The figures are wall-clock on a shared machine.
+``--baseline REV`` also runs ``gfuzzy/navigator.py`` as it was at git revision REV (on
+today's other modules), on the same crowds in the same run.
 """
 
 from __future__ import annotations
 
 import argparse
 import cProfile
+import importlib.util
 import math
 import pstats
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -94,13 +99,27 @@ class Crowd:
         blocked = self._blocked(new, robot_xy)
         self.v[blocked] *= -1.0  # turn back (from the robot: give way) and walk on if free
         new = self.xy + self.v * dt
-        moved = ~self._blocked(new, robot_xy)
-        self.xy[moved] = np.clip(new[moved], PERSON_R, [W - PERSON_R, H - PERSON_R])
+        stuck = self._blocked(new, robot_xy)  # blocked both ways: stand, then a new heading
+        ang = self.rng.uniform(0, 2 * math.pi, int(stuck.sum()))
+        self.v[stuck] = np.column_stack([np.cos(ang), np.sin(ang)]) * np.hypot(*self.v[stuck].T)[:, None]
+        self.xy[~stuck] = np.clip(new[~stuck], PERSON_R, [W - PERSON_R, H - PERSON_R])
 
 
-def run(k: int, steps: int, seed: int, roadmap, scene, options: NavOptions) -> dict:
+def baseline_navigator(rev: str):
+    """The Navigator class of ``gfuzzy/navigator.py`` at git revision ``rev``."""
+    root = Path(__file__).resolve().parents[1]
+    src = subprocess.run(["git", "show", f"{rev}:gfuzzy/navigator.py"], cwd=root, capture_output=True, text=True, check=True).stdout
+    spec = importlib.util.spec_from_loader(f"gfuzzy._navigator_{rev}", loader=None)
+    mod = importlib.util.module_from_spec(spec)
+    mod.__package__ = "gfuzzy"
+    sys.modules[spec.name] = mod  # dataclasses look their module up
+    exec(compile(src, f"{rev}:gfuzzy/navigator.py", "exec"), mod.__dict__)
+    return mod.Navigator, mod.NavOptions
+
+
+def run(k: int, steps: int, seed: int, roadmap, scene, options: NavOptions, nav_class=Navigator) -> dict:
     rng = np.random.default_rng(seed)
-    navs = [Navigator(scene, roadmap, CORNERS[1], options), Navigator(scene, roadmap, CORNERS[0], options)]
+    navs = [nav_class(scene, roadmap, CORNERS[1], options), nav_class(scene, roadmap, CORNERS[0], options)]
     which = 0
     pose = np.array(CORNERS[0], dtype=float)
     crowd = Crowd(k, rng, pose)
@@ -160,27 +179,33 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--opt", nargs="*", help="NavOptions settings, key=value")
     ap.add_argument("--profile", action="store_true", help="cProfile the steps, print the top 25")
+    ap.add_argument("--baseline", metavar="REV", help="also run the navigator of this git revision")
     args = ap.parse_args(argv)
     scene = room()
     roadmap = gfuzzy.build_roadmap(scene, gfuzzy.RoadmapOptions(vertices=args.vertices, seed=args.seed))
     options = NavOptions(**parse_opts(args.opt))
     print(f"room {W:g} x {H:g} m, {len(roadmap.vertices)} vertices, time_budget {options.time_budget:g} s, "
           f"{args.steps} steps per crowd, seed {args.seed}")  # fmt: skip
-    print("| people | steps | p50 (ms) | p95 (ms) | max (ms) | over budget | fallback | predicted in detail | smallest gap (m) | modes |")
-    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    print("| navigator | people | steps | p50 (ms) | p95 (ms) | max (ms) | over budget | fallback | predicted in detail | smallest gap (m) | modes |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     prof = cProfile.Profile() if args.profile else None
+    policies = [("this", Navigator, options)]
+    if args.baseline:
+        nav_class, opt_class = baseline_navigator(args.baseline)
+        policies.append((args.baseline, nav_class, opt_class(**parse_opts(args.opt))))
     for k in args.crowds:
-        if prof:
-            prof.enable()
-        r = run(k, args.steps, args.seed + k, roadmap, scene, options)
-        if prof:
-            prof.disable()
-        modes = ", ".join(f"{m} {c}" for m, c in sorted(r["modes"].items()))
-        print(
-            f"| {k} | {r['steps']} | {r['p50'] * 1e3:.0f} | {r['p95'] * 1e3:.0f} | {r['max'] * 1e3:.0f} | "
-            f"{r['over']:.2f} | {r['fallback']:.2f} | {r['detailed']:.1f} | {r['gap']:.3f} | {modes} |",
-            flush=True,
-        )
+        for name, nav_class, opts in policies:
+            if prof:
+                prof.enable()
+            r = run(k, args.steps, args.seed + k, roadmap, scene, opts, nav_class)
+            if prof:
+                prof.disable()
+            modes = ", ".join(f"{m} {c}" for m, c in sorted(r["modes"].items()))
+            print(
+                f"| {name} | {k} | {r['steps']} | {r['p50'] * 1e3:.0f} | {r['p95'] * 1e3:.0f} | {r['max'] * 1e3:.0f} | "
+                f"{r['over']:.2f} | {r['fallback']:.2f} | {r['detailed']:.1f} | {r['gap']:.3f} | {modes} |",
+                flush=True,
+            )
     if prof:
         pstats.Stats(prof).sort_stats("cumulative").print_stats(25)
     return 0
