@@ -625,10 +625,11 @@ class Navigator:
         """The safe-interval search among the predicted people, within ``deadline``.
 
         The predictions are built only when the time left can pay for them (their cost
-        per person is measured as the navigator runs), and the search stops at
-        ``deadline`` even inside a batch of safety computations (:class:`_TimedField`). A bad request (:class:`InputError`, :class:`LimitError`:
-        e.g. a horizon beyond the memory bounds) is a hard situation the fallback answers;
-        any other exception is a bug and propagates.
+        per person is measured as the navigator runs); the search stops at ``deadline``
+        even inside a batch of safety computations (:class:`_TimedField`). A request the
+        search refuses (:class:`InputError`, :class:`LimitError`: e.g. a horizon beyond
+        the memory bounds) is a hard situation the fallback answers; any other exception
+        is a bug and propagates.
         """
         opts = self.options
         try:
