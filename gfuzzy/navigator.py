@@ -1,32 +1,27 @@
 """Navigation among movers whose future is unknown (CONTRACT.md section 5).
 
-The planner of :mod:`gfuzzy.planner` is told every mover's whole future. A robot among
+The planner of :mod:`gfuzzy.planner` is told every mover's whole future; a robot among
 people only sees where they are and how fast they walk now. :class:`Navigator` turns the
 roadmap-time search into a receding-horizon controller:
 
-1. **Predict.** Each observed disc ``[x, y, vx, vy, r]`` walks on at constant velocity (the
-   strong baseline on the ETH/UCY pedestrian data) for ``prediction_horizon`` seconds. Its
-   disc is inflated by the robot's ``mover_clearance``, a ``safety_buffer`` and an
-   uncertainty that grows by ``uncertainty_growth`` metres per second of prediction. The
-   prediction is written as a chain of short ``trajectory`` movers (one per ``slice``,
-   each with its own radius), so the search's continuous-time safety
-   (:class:`~gfuzzy.movers.MoverField`) applies to it unchanged. Beyond the horizon a
-   walking person is dropped (too uncertain to plan around); a person standing still is
-   kept where they stand for ``stationary_hold`` more seconds (someone standing in a
-   doorway is likely to stay a while: the search then prefers another door or waits).
-2. **Plan.** The safe-interval search (:func:`~gfuzzy.timespace.sipp`) runs from the
-   robot's current pose, which is generally not a roadmap vertex. The roadmap's split
-   graph (every edge cut into one-step pieces) and its exact static heuristic to the goal
-   are built once per navigator; each call only splices the current pose in, with
-   certified straight connections to its nearest vertices (and to the goal when it is in
-   sight). Safety is evaluated lazily, only near the predicted people.
-3. **Fall back.** When the search finds no plan (the predictions block every way, the
-   robot stands inside an inflated disc) or runs out of ``time_budget``, it is tried once
-   more without the buffer and the uncertainty ("relaxed"); then a finely checked straight
-   dash to a nearby goal ("direct"); then the previous plan, if it is still clear of the
-   new predictions; otherwise the robot takes its *evasive motion*: of straight motions in ``evasion_headings`` directions at two speeds
-   (and standing still), the statically free one that maximises the time to contact with
-   the predicted people (un-inflated), ties broken by progress to the goal.
+1. **Predict.** Each observed disc ``[x, y, vx, vy, r]`` walks on at constant velocity for
+   ``prediction_horizon`` seconds (a person standing still stays ``stationary_hold``
+   longer), inflated by the robot's ``mover_clearance``, a ``safety_buffer`` and an
+   uncertainty growing with the prediction time, by steps of ``slice`` seconds. Each
+   person is one ``trajectory`` mover of the search's :class:`~gfuzzy.movers.MoverField`
+   whose growing inflation is in the field's per-step margin (the same test as a chain of
+   ever larger discs); only people who can come within reach of where the robot can be
+   are predicted in detail (:meth:`Navigator._relevant`: the others cannot matter).
+2. **Plan.** The safe-interval search runs from the robot's current pose on the roadmap's
+   split graph, built once per navigator with its exact static heuristic; each call only
+   splices the pose in. It stops at 75 % of ``time_budget``, even inside a batch of
+   safety computations.
+3. **Fall back.** No plan (the predictions block every way, or no time): the same search
+   without the buffer and the uncertainty ("relaxed"); a finely checked straight dash to
+   a nearby goal ("direct"); the previous plan if still clear ("previous"); otherwise the
+   *evasive motion*, the statically free straight motion (or standing still) with the
+   latest contact with the people walking on. The fallbacks only look at the people who
+   can come near within their look-ahead, so their cost is bounded too.
 
 ``step`` never raises for a hard situation and always returns a trajectory whose first row
 is ``[t, *pose]`` and that meets the speed bound.
@@ -41,8 +36,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .errors import InputError, check_number
-from .geometry import StaticGeometry
+from .errors import InputError, LimitError, check_number
+from .geometry import StaticGeometry, mover_distance
 from .movers import MoverField
 from .planner import BACKENDS, search_function
 from .poses import interpolate_segment, metric_distance, split_counts, wrap_angle
@@ -53,7 +48,7 @@ from .spacetime import IntervalStore, SpaceTimeGraph, split_edges
 from .status import Status
 from .timespace import timed_rows
 from .trajectory import Trajectory
-from .typing import FloatArray
+from .typing import BoolArray, FloatArray
 
 __all__ = ["NavOptions", "NavStep", "Navigator"]
 
@@ -61,6 +56,21 @@ log = logging.getLogger(__name__)
 
 #: Below this speed (m/s) an observed person counts as standing still.
 STILL_SPEED = 0.1
+#: Share of ``time_budget`` the search may use; the rest is the fallback's.
+SEARCH_SHARE = 0.75
+#: Samples of the look-ahead in the test of who may come within reach (:meth:`Navigator._may_reach`).
+REACH_SAMPLES = 48
+#: Gaps (m) wider than this score the same in the evasive motion.
+EVASION_GAP = 0.5
+#: First guess (s) of the predictions' set-up per person (then measured per navigator).
+PERSON_SECONDS = 150e-6
+#: The predictions' field answers the search's safety questions in pieces of about this
+#: many (point, person) pairs (at least 64 points), looking at the clock between two
+#: pieces (a piece took 3-4 ms here).
+PIECE_WORK = 60_000
+#: Seconds the search's interval store takes per unsafe (point, step) pair it is given
+#: (it sorts them; 20-70 ns measured here), kept free before the deadline.
+PAIR_SECONDS = 60e-9
 
 
 @dataclass(frozen=True)
@@ -147,22 +157,89 @@ class NavStep:
     ----------
     mode : str
         ``"plan"`` (a fresh search), ``"relaxed"`` (a fresh search without the safety
-        buffer and the uncertainty, when the margins block every way), ``"direct"``
-        (straight to the goal nearby, checked finely), ``"previous"`` (the
-        last plan, still clear),
-        ``"evasive"``, ``"goal"`` (already there).
+        buffer and the uncertainty), ``"direct"`` (straight to the goal nearby, checked
+        finely), ``"previous"`` (the last plan, still clear), ``"evasive"``, ``"goal"``.
     seconds : float
         Wall-clock time of the call.
     message : str
         Why the search did not answer, when it did not.
     predicted : (k, 5) float
         The observations used, ``[x, y, vx, vy, inflated radius at t]``.
+    detailed : int
+        People predicted in detail for the search: those who can come within reach of
+        where the robot can be before their prediction ends (the others cannot matter).
     """
 
     mode: str
     seconds: float
     message: str = ""
     predicted: FloatArray = field(default_factory=lambda: np.zeros((0, 5)), compare=False)
+    detailed: int = 0
+
+
+class _OutOfTime(Exception):
+    """The search's deadline passed while the safety of its points was being computed."""
+
+
+class _TimedField(MoverField):
+    """The predictions' field, answering the search's safety questions in pieces of about
+    ``PIECE_WORK`` (point, person) pairs, raising :class:`_OutOfTime` between two pieces
+    once ``deadline`` (on ``clock``) has passed. The search looks at its deadline only
+    between expansions, and the interval store asks for the safety of thousands of points
+    at once (among 100 people one such batch took 60-140 ms here). The groups are
+    independent: the pieces' answers put together are the whole batch's.
+    """
+
+    deadline: float = math.inf
+    clock = staticmethod(time.perf_counter)
+
+    def unsafe_pairs(self, poses, ptr, lo, hi):
+        nodes, steps = [np.zeros(0, dtype=np.int64)], [np.zeros(0, dtype=np.int64)]
+        pairs = [0]  # the store then sorts the pairs: time kept for it (PAIR_SECONDS each)
+        for p, sub, a, b in self._pieces(ptr, lo, hi, lambda: pairs[0] * PAIR_SECONDS):
+            n, st = super().unsafe_pairs(poses[p[0] : p[-1]], sub, a, b)
+            nodes.append(n + p[0])
+            steps.append(st)
+            pairs[0] += len(n)
+        return np.concatenate(nodes), np.concatenate(steps)
+
+    def safe_intervals(self, poses, ptr, lo, hi):  # the compiled kernel's batches (newer stores)
+        starts, ends, sps = [np.zeros(0, dtype=np.int64)], [np.zeros(0, dtype=np.int64)], [np.zeros(1, np.int64)]
+        for p, sub, a, b in self._pieces(ptr, lo, hi, lambda: 0.0):
+            gs, ge, sp = super().safe_intervals(poses[p[0] : p[-1]], sub, a, b)
+            starts.append(gs)
+            ends.append(ge)
+            sps.append(np.asarray(sp[1:], dtype=np.int64) + sps[-1][-1])
+        return np.concatenate(starts), np.concatenate(ends), np.concatenate(sps)
+
+    def _pieces(self, ptr, lo, hi, after):
+        """(point pointers, group pointers from 0, lo, hi) of consecutive groups, while
+        the clock plus ``after()`` (seconds the caller still needs) is before the deadline."""
+        ptr = np.asarray(ptr, dtype=np.int64)
+        g = len(ptr) - 1
+        lo = np.broadcast_to(np.asarray(lo, dtype=np.int64), (g,))
+        hi = np.broadcast_to(np.asarray(hi, dtype=np.int64), (g,))
+        size = max(64, PIECE_WORK // max(len(self.movers), 1))
+        a = 0
+        while a < g:
+            if self.clock() + after() > self.deadline:
+                raise _OutOfTime
+            b = min(g, max(a + 1, int(np.searchsorted(ptr, ptr[a] + size, side="right")) - 1))
+            yield ptr[a : b + 1], ptr[a : b + 1] - ptr[a], lo[a:b], hi[a:b]
+            a = b
+
+
+@dataclass(frozen=True)
+class _Searched:
+    """What one search of :meth:`Navigator.step` found (the trajectory, or why not), and the
+    spliced graph, kept for a second search from the same pose."""
+
+    trajectory: Trajectory | None
+    message: str = ""
+    detailed: int = 0
+    out_of_time: bool = False
+    graph: SpaceTimeGraph | None = None
+    start: int = -1
 
 
 class Navigator:
@@ -215,6 +292,8 @@ class Navigator:
         self.last: NavStep | None = None
         self._previous: Trajectory | None = None
         self._ahead: list = []  # (arrival time, roadmap vertex) of the last plan
+        self._clock = time.perf_counter  # the budget's clock (a test may replace it)
+        self._person_seconds = PERSON_SECONDS  # the predictions' set-up per person, measured
         self._build_base()
         if opts.backend == "compiled":  # load the compiled kernels now, not inside a step's budget
             from .search_kernel import warm
@@ -356,7 +435,8 @@ class Navigator:
         A person already closer than the full inflation (someone walked up to the robot)
         gets an inflation that starts just inside their present gap and recovers at the
         robot's speed, so that the robot, which stands where it stands, is not inside its
-        own predictions and the search can move it away.
+        own predictions and the search can move it away. The inflation never decreases
+        from one slice to the next (both terms grow with the prediction time).
         """
         opts = self.options
         n_slices = int(math.ceil(opts.prediction_horizon / opts.slice - 1e-9))
@@ -374,29 +454,105 @@ class Navigator:
         return np.minimum(full, allowed[:, None] + self.vplan * tau[None, :])
 
     def _gap(self, pose: FloatArray, obs: FloatArray) -> FloatArray:
-        from .geometry import mover_distance
-
         if len(obs) == 0:
             return np.zeros(0)
         return mover_distance(self._pred_robot, pose[None, :], "disc", obs[:, 4], (0.0, 0.0), obs[:, :2])
 
-    def _predict(self, t: float, pose: FloatArray, obs: FloatArray, relaxed: bool = False) -> tuple[list, FloatArray]:
-        """Predicted movers (a chain of trajectory movers per person) and (k, S) inflation."""
+    def _walks(self, obs: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Predicted velocity (k, 2) (zero for someone standing) and presence (k,) in seconds
+        after ``t`` (the horizon; a person standing still is kept ``stationary_hold`` longer)."""
         opts = self.options
-        infl = self._inflation(pose, obs, relaxed)
-        movers = []
-        for i, (x, y, vx, vy, r) in enumerate(obs.tolist()):
-            still = math.hypot(vx, vy) < STILL_SPEED
-            for s in range(infl.shape[1]):
-                ta = s * opts.slice
-                tb = min((s + 1) * opts.slice, opts.prediction_horizon)
-                if still:
-                    vx = vy = 0.0
-                rows = np.array([[t + ta, x + vx * ta, y + vy * ta], [t + tb, x + vx * tb, y + vy * tb]])
-                if s == infl.shape[1] - 1 and still and opts.stationary_hold > 0:
-                    rows[1, 0] = t + tb + opts.stationary_hold
-                movers.append(Mover(f"p{i}s{s}", "disc", float(r + infl[i, s]), (0.0, 0.0), trajectory=rows))
-        return movers, infl
+        still = np.hypot(obs[:, 2], obs[:, 3]) < STILL_SPEED
+        vel = np.where(still[:, None], 0.0, obs[:, 2:4])
+        hold = opts.stationary_hold if opts.stationary_hold > 0 else 0.0
+        return vel, opts.prediction_horizon + np.where(still, hold, 0.0)
+
+    def _may_reach(self, pose: FloatArray, xy: FloatArray, vel: FloatArray, walk: FloatArray,
+                   look: FloatArray, reach: FloatArray) -> BoolArray:  # fmt: skip
+        """(k,) False for each person who certainly stays farther than ``reach`` from the
+        robot's reference point during the next ``look`` seconds, whatever the robot does.
+
+        The person's centre walks at ``vel`` for ``walk`` seconds and then stands; the
+        robot's reference point stays within ``vmax * tau`` of ``pose`` at time ``tau``
+        (the speed bound every answer keeps). The distance between the two changes no faster
+        than ``|vel| + vmax``, so its smallest value over samples ``h`` apart, minus that
+        rate times ``h / 2``, bounds it from below on the whole interval.
+        """
+        k = len(xy)
+        if k == 0:
+            return np.zeros(0, dtype=bool)
+        n = REACH_SAMPLES
+        look = np.broadcast_to(np.asarray(look, dtype=float), (k,))
+        tau = look[:, None] * np.linspace(0.0, 1.0, n)[None, :]  # (k, n)
+        walked = np.minimum(tau, np.broadcast_to(np.asarray(walk, dtype=float), (k,))[:, None])
+        centre = xy[:, None, :] + walked[..., None] * vel[:, None, :]
+        vmax = float(self.robot.vmax)
+        g = np.hypot(*(centre - pose[:2]).transpose(2, 0, 1)) - vmax * tau
+        slack = (np.hypot(vel[:, 0], vel[:, 1]) + vmax) * look / (n - 1) / 2
+        return g.min(axis=1) - slack <= reach
+
+    def _relevant(self, pose: FloatArray, obs: FloatArray, infl: FloatArray, seconds: float) -> BoolArray:
+        """(k,) the people whose prediction can make a robot pose unsafe within ``seconds``.
+
+        A predicted person makes a point unsafe at a step only if the robot there is closer
+        than their inflated radius plus the search's margin, and the robot is never farther
+        than ``vmax * tau`` from where it is now at time ``tau``: a person who stays beyond
+        that reach over their predicted presence (or the search's horizon) makes no pose
+        the search can reach unsafe, and leaving them out changes no answer.
+        """
+        opts = self.options
+        vel, presence = self._walks(obs)
+        speed = np.hypot(vel[:, 0], vel[:, 1])
+        reach = obs[:, 4] + infl.max(axis=1, initial=0.0) + self.robot.circumradius + (self.vplan + speed) * opts.dt
+        look = np.minimum(presence, seconds) + opts.dt  # the field keeps a mover half a step longer
+        return self._may_reach(pose, obs[:, :2], vel, opts.prediction_horizon, look, reach + 1e-6)
+
+    def _near(self, pose: FloatArray, obs: FloatArray, look: float, gap: float) -> FloatArray:
+        """The people (rows of ``obs``) who, walking on at constant velocity, may come within
+        ``gap`` of the robot (beyond both radii and the mover clearance) within ``look``
+        seconds; the fallbacks only look at them (the others cannot change their answers)."""
+        if len(obs) == 0:
+            return obs
+        reach = obs[:, 4] + self.robot.circumradius + self.mover_clearance + gap + 1e-6
+        return obs[self._may_reach(pose, obs[:, :2], obs[:, 2:4], math.inf, look, reach)]
+
+    def _field(self, t: float, obs: FloatArray, infl: FloatArray, steps: int, deadline: float = math.inf) -> MoverField:
+        """The predicted people on the search's time grid: one trajectory mover per person.
+
+        Person i walks on (or stands) as :meth:`_walks` says; the growing inflation goes
+        into the field's margin step by step instead of into the disc. For a disc,
+        inflating the radius by ``e`` and asking ``e`` more distance are the same test,
+        so this field makes exactly the (point, step) pairs unsafe that a chain of one
+        mover per prediction slice, each with its own inflated radius, would, with one
+        mover per person instead of one per slice (the field's set-up costs per mover).
+        Each mover's disc carries the inflation of the first step (the smallest: it never
+        shrinks with time), so that the exact check of the first motions
+        (:meth:`MoverField.motion_safe`) keeps it too.
+        """
+        opts = self.options
+        k, n_s = infl.shape
+        vel, presence = self._walks(obs)
+        # the slice whose inflation holds at step n: the latest one present within half a step
+        tau = (np.arange(steps + 1) + 0.5) * opts.dt
+        s_of = np.minimum(np.floor(tau / opts.slice + 1e-9).astype(np.int64), n_s - 1)
+        first = infl[:, s_of[0]]
+        radius = obs[:, 4] + first
+        ends = obs[:, :2] + vel * opts.prediction_horizon
+        movers = tuple(
+            Mover(f"p{i}", "disc", float(radius[i]), (0.0, 0.0),
+                  trajectory=np.array([[t, obs[i, 0], obs[i, 1]], [t + presence[i], ends[i, 0], ends[i, 1]]]))
+            for i in range(k)
+        )  # fmt: skip
+        extra = float(np.max(infl[:, -1] - first, initial=0.0))
+        scene = replace(self.scene, robot=self._pred_robot, movers=movers)
+        # built with the largest extra margin, so that its broad-phase boxes hold every
+        # step's; then each step gets its own (the robot's clearance is in the radii: keep 0)
+        field_ = _TimedField(scene, t, opts.dt, steps, self.vplan, clearance=extra)
+        field_.deadline, field_.clock = deadline, self._clock
+        field_.keep = 0.0
+        field_.margin += infl[:, s_of] - first[:, None] - extra
+        field_.compiled = opts.backend == "compiled"
+        return field_
 
     # ------------------------------------------------------------------- step
     def step(self, t: float, pose, observations) -> Trajectory:
@@ -421,7 +577,7 @@ class Navigator:
         ValueError
             Malformed input (wrong shapes, non-finite numbers): a caller's bug.
         """
-        t_begin = time.perf_counter()
+        t_begin = self._clock()
         opts = self.options
         t = float(t)
         pose = np.asarray(pose, dtype=float).reshape(-1).copy()
@@ -434,29 +590,19 @@ class Navigator:
         cr = self.robot.circumradius
         if float(metric_distance(pose, self.goal, cr)) <= opts.goal_tolerance:
             self.reached = True
-            self.last = NavStep("goal", time.perf_counter() - t_begin)
+            self.last = NavStep("goal", self._clock() - t_begin)
             return Trajectory(np.array([[t, *pose], [t + opts.cover, *pose]]), cr)
-        deadline = t_begin + 0.75 * opts.time_budget
-        movers, infl = self._predict(t, pose, obs)
+        deadline = t_begin + SEARCH_SHARE * opts.time_budget
+        infl = self._inflation(pose, obs)
         predicted = obs.copy()
         if len(obs):
             predicted[:, 4] = obs[:, 4] + infl[:, 0]
-        traj, message = None, ""
-        try:
-            traj, message = self._search(t, pose, movers, deadline)
-        except Exception as exc:  # never raise for a hard situation: the fallback answers
-            log.warning("navigator search failed at t=%g: %s", t, exc)
-            traj, message = None, f"search failed: {exc}"
-        mode = "plan"
-        if traj is None and len(obs) and time.perf_counter() < deadline and "budget" not in message:
+        found = self._search(t, pose, obs, infl, deadline)
+        traj, mode = found.trajectory, "plan"
+        if traj is None and len(obs) and not found.out_of_time and self._clock() < deadline:
             # blocked by the margins (someone standing beside the goal, a narrow gap): try
             # once more with the people's discs as they are, plus the mover clearance only
-            try:
-                relaxed, _ = self._predict(t, pose, obs, relaxed=True)
-                traj, _ = self._search(t, pose, relaxed, deadline)
-            except Exception as exc:
-                log.warning("navigator relaxed search failed at t=%g: %s", t, exc)
-                traj = None
+            traj = self._search(t, pose, obs, self._inflation(pose, obs, relaxed=True), deadline, found).trajectory
             mode = "relaxed"
         if traj is None:
             traj = self._direct(t, pose, obs)
@@ -471,38 +617,62 @@ class Navigator:
             self._previous = traj
         if mode == "evasive":
             self._previous = None
-        self.last = NavStep(mode, time.perf_counter() - t_begin, message, predicted)
+        self.last = NavStep(mode, self._clock() - t_begin, found.message, predicted, found.detailed)
         return traj
 
-    def _search(self, t: float, pose: FloatArray, movers: list, deadline: float):
+    def _search(self, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray, deadline: float,
+                before: _Searched | None = None) -> _Searched:  # fmt: skip
+        """The safe-interval search among the predicted people, within ``deadline``.
+
+        The predictions are built only when the time left can pay for them (their cost
+        per person is measured as the navigator runs); the search stops at ``deadline``
+        even inside a batch of safety computations (:class:`_TimedField`). A request the
+        search refuses (:class:`InputError`, :class:`LimitError`: e.g. a horizon beyond
+        the memory bounds) is a hard situation the fallback answers; any other exception
+        is a bug and propagates.
+        """
         opts = self.options
-        graph, s_id = self._splice(pose, t)
-        if graph is None:
-            return None, s_id
-        h0 = float(graph.heuristic[s_id])
-        if not math.isfinite(h0):
-            return None, "the goal is not reachable on the roadmap"
-        scene = replace(self.scene, robot=self._pred_robot, movers=tuple(movers))
-        store = IntervalStore(graph)
-        search = search_function(opts.backend)
-        slack = (opts.plan_slack + opts.prediction_horizon) / opts.dt
-        for _ in range(2):
-            steps = int(math.ceil(h0 + slack))
-            field_ = MoverField(scene, t, opts.dt, steps, self.vplan)
-            field_.compiled = opts.backend == "compiled"
-            if time.perf_counter() > deadline:  # no time left to search: the fallback answers
-                return None, "time budget spent before the search"
-            res = search(graph, field_, s_id, self._g_id, deadline=deadline, store=store)
-            if res.status != Status.NO_PATH or not res.horizon_hit or time.perf_counter() > deadline:
-                break
-            slack *= 2.0
+        try:
+            if before is not None and before.graph is not None:
+                graph, s_id = before.graph, before.start
+            else:
+                graph, s_id = self._splice(pose, t)
+            if graph is None:
+                return _Searched(None, s_id)
+            h0 = float(graph.heuristic[s_id])
+            if not math.isfinite(h0):
+                return _Searched(None, "the goal is not reachable on the roadmap", graph=graph, start=s_id)
+            store = IntervalStore(graph)
+            search = search_function(opts.backend)
+            slack = (opts.plan_slack + opts.prediction_horizon) / opts.dt
+            detailed = 0
+            for _ in range(2):
+                steps = int(math.ceil(h0 + slack))
+                keep = self._relevant(pose, obs, infl, steps * opts.dt)
+                detailed = int(keep.sum())
+                c0 = self._clock()
+                if c0 + detailed * self._person_seconds > deadline:  # the fallback answers
+                    return _Searched(None, "time budget spent before the search", detailed, True, graph, s_id)
+                field_ = self._field(t, obs[keep], infl[keep], steps, deadline)
+                if detailed >= 10:  # a cautious running estimate: up at once, down by a fifth
+                    took = (self._clock() - c0) / detailed
+                    self._person_seconds = max(took, 0.8 * self._person_seconds + 0.2 * took)
+                res = search(graph, field_, s_id, self._g_id, deadline=deadline, store=store)
+                if res.status != Status.NO_PATH or not res.horizon_hit or self._clock() > deadline:
+                    break
+                slack *= 2.0
+        except _OutOfTime:
+            return _Searched(None, "time budget spent on the predicted people's safety", detailed, True, graph, s_id)
+        except (InputError, LimitError) as exc:  # a request the search refuses: the fallback answers
+            log.warning("navigator search refused at t=%g: %s", t, exc)
+            return _Searched(None, f"search refused: {exc}")
         if res.status != Status.SOLVED:
-            return None, res.message
+            return _Searched(None, res.message, detailed, res.status == Status.TIMEOUT, graph, s_id)
         rows, _ = timed_rows(res.nodes, res.steps, graph.poses, t, opts.dt)
         self._ahead = [(t + st * opts.dt, nd) for nd, st in zip(res.nodes, res.steps, strict=True) if nd <= self._nv]
         rows[0, 1:] = pose
         rows[-1, 1:] = self.goal
-        return Trajectory(rows, self.robot.circumradius), ""
+        return _Searched(Trajectory(rows, self.robot.circumradius), "", detailed, False, graph, s_id)
 
     # --------------------------------------------------------------- fallback
     def _clearance_along(self, pts: FloatArray, times: FloatArray, obs: FloatArray) -> FloatArray:
@@ -513,8 +683,6 @@ class Navigator:
         if self.robot.shape == "disc":
             d = np.hypot(rel[..., 0], rel[..., 1]) - self.robot.radius - obs[:, 4]
         else:
-            from .geometry import mover_distance
-
             d = mover_distance(self._pred_robot, pts[..., None, :], "disc", obs[:, 4], (0.0, 0.0), pos)
         return d - self.mover_clearance
 
@@ -536,10 +704,12 @@ class Navigator:
             return None
         rows = np.array([[t, *pose], [t + duration, *self.goal]])
         traj = Trajectory(rows, cr)
+        speed = float(np.max(np.hypot(obs[:, 2], obs[:, 3]), initial=0.0))
+        tol = (self.vplan + speed) * 0.005 + 1e-3
+        obs = self._near(pose, obs, duration + 1.0 + 0.01, tol)
         if len(obs):
             times = np.arange(t, t + duration + 1.0 + 0.01, 0.01)
-            speed = float(np.max(np.hypot(obs[:, 2], obs[:, 3]), initial=0.0))
-            if np.min(self._clearance_along(traj.at(times), times, obs)) <= (self.vplan + speed) * 0.005 + 1e-3:
+            if np.min(self._clearance_along(traj.at(times), times, obs)) <= tol:
                 return None
         return traj
 
@@ -553,6 +723,7 @@ class Navigator:
             return None
         cut = _cut(prev, t, prev.t_end)
         cut[0, 1:] = pose
+        obs = self._near(pose, obs, self.options.prediction_horizon, 0.0)
         if len(obs):
             times = np.linspace(t, t + self.options.prediction_horizon, 61)
             pts = Trajectory(cut, self.robot.circumradius).at(times)
@@ -594,6 +765,7 @@ class Navigator:
         tau = times - t
         frac = np.clip(tau[None, :] / np.maximum(move_time[:, None], 1e-12), 0.0, 1.0)  # moves, then stands
         pts = pose[None, None, :] + frac[:, :, None] * (ends - pose[None])[:, None, :]  # (C, T, d)
+        obs = self._near(pose, obs, T, EVASION_GAP)  # farther people change no score below
         if len(obs):
             gap = self._clearance_along(pts, times, obs).min(axis=-1)  # (C, T)
             hit = gap <= 0
@@ -605,7 +777,7 @@ class Navigator:
         progress = metric_distance(pose, self.goal, cr) - metric_distance(ends, self.goal[None], cr)
         # the latest contact first (no contact within the horizon beats any), then the widest
         # gap while close, then progress to the goal
-        score = np.minimum(ttc, T + 1.0) * 100.0 + np.minimum(worst, 0.5) * 10.0 + progress
+        score = np.minimum(ttc, T + 1.0) * 100.0 + np.minimum(worst, EVASION_GAP) * 10.0 + progress
         score = np.where(free, score, -math.inf)
         c = int(np.argmax(score))
         if c == 0:

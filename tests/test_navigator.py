@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import time
 
 import numpy as np
 import pytest
@@ -345,3 +346,232 @@ def test_goal_beside_a_person_standing_still(open_square):
     assert 0.0 <= res.min_separation < 0.05
     assert gfuzzy.check_trajectory(scene, res.trajectory.waypoints, q).valid
     assert res.modes.get("direct", 0) >= 1
+
+
+# ----------------------------------------------------------------------------------------
+# predictions: one mover per person with the inflation in the margin, who is left out,
+# what the budget skips, which exceptions fall back
+
+
+def _chain_field(nav, t, pose, obs, steps, relaxed=False):
+    """The predictions as they were first written (a reference for ``Navigator._field``):
+    each person a chain of short trajectory movers, one per slice, each disc inflated by
+    its slice's inflation, in the stock :class:`MoverField`."""
+    from dataclasses import replace
+
+    from gfuzzy.movers import MoverField
+    from gfuzzy.navigator import STILL_SPEED
+    from gfuzzy.scene import Mover
+
+    opts = nav.options
+    infl = nav._inflation(pose, obs, relaxed)
+    movers = []
+    for i, (x, y, vx, vy, r) in enumerate(obs.tolist()):
+        still = math.hypot(vx, vy) < STILL_SPEED
+        if still:
+            vx = vy = 0.0
+        for s in range(infl.shape[1]):
+            ta = s * opts.slice
+            tb = min((s + 1) * opts.slice, opts.prediction_horizon)
+            rows = np.array([[t + ta, x + vx * ta, y + vy * ta], [t + tb, x + vx * tb, y + vy * tb]])
+            if s == infl.shape[1] - 1 and still and opts.stationary_hold > 0:
+                rows[1, 0] = t + tb + opts.stationary_hold
+            movers.append(Mover(f"p{i}s{s}", "disc", float(r + infl[i, s]), (0.0, 0.0), trajectory=rows))
+    scene = replace(nav.scene, robot=nav._pred_robot, movers=tuple(movers))
+    return MoverField(scene, t, opts.dt, steps, nav.vplan), infl
+
+
+def _crowd(rng, k, centre, spread=3.0):
+    xy = centre[:2] + rng.uniform(-spread, spread, size=(k, 2))
+    v = rng.uniform(-1.3, 1.3, size=(k, 2)) * (rng.random((k, 1)) > 0.25)
+    return np.column_stack([xy, v, rng.uniform(0.15, 0.35, k)])
+
+
+@pytest.mark.parametrize("robot", [None, {"box": [0.6, 0.3], "vmax": 1.0, "mover_clearance": 0.1}])
+@pytest.mark.parametrize("relaxed", [False, True])
+def test_prediction_field_matches_a_chain_of_slice_movers(robot, relaxed):
+    box = robot is not None
+    start, goal = ((0.0, -4.0, 0.0), (0.0, 4.0, 0.0)) if box else ((0.0, -4.0), (0.0, 4.0))
+    scene = _scene(robot=robot, bounds=(-6.0, -6.0, 6.0, 6.0), start=start, goal=goal)
+    rm = gfuzzy.build_roadmap(scene, gfuzzy.RoadmapOptions(vertices=60, seed=1))
+    nav = Navigator(scene, rm, goal, NavOptions(backend="reference"))
+    rng = np.random.default_rng(7)
+    pose = np.array([0.2, -0.3] if robot is None else [0.2, -0.3, 0.4])
+    obs = _crowd(rng, 12, pose)
+    obs[0] = [pose[0] + 0.75, pose[1], -0.8, 0.0, 0.3]  # walked up to the robot: shrunk inflation
+    obs[1, 2:4] = 0.05  # standing (under STILL_SPEED): held past the horizon
+    steps = 90
+    ref, infl = _chain_field(nav, 3.0, pose, obs, steps, relaxed)
+    ours = nav._field(3.0, obs, infl, steps)
+    assert len(ours.movers) == len(obs) < len(ref.movers)
+    pts = pose[None] + np.column_stack([rng.uniform(-4, 4, (400, 2)), rng.uniform(-3, 3, (400, int(box)))])
+    got, want = ours.unsafe(pts), ref.unsafe(pts)
+    assert want.any() and not want.all()
+    np.testing.assert_array_equal(got, want)
+    ours.compiled = ref.compiled = True  # the compiled kernel's answers: the same
+    np.testing.assert_array_equal(ours.unsafe(pts), want)
+    np.testing.assert_array_equal(ref.unsafe(pts), want)
+    # the first motions' exact check: the same answers for short motions from the pose
+    for _ in range(60):
+        d = rng.normal(size=pose.shape)
+        b = pose + d / np.linalg.norm(d) * nav.step_len * rng.uniform(0, 1)
+        assert ours.motion_safe(pose, b, 0) == ref.motion_safe(pose, b, 0)
+
+
+def test_people_who_cannot_come_within_reach_are_left_out(open_square):
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (0.0, 4.0), NavOptions(backend="reference"))
+    pose = np.array([0.0, -4.0])
+    rng = np.random.default_rng(3)
+    # people walking straight away from the robot, at 1 m/s from 0.9 to 2.05 m (the robot,
+    # at 0.99 m/s, closes on them only slowly while their inflation grows) and at 0.5 m/s
+    # from 2.6 to 3.75 m (it catches up): whether it can reach a far one's inflated disc
+    # before the prediction ends is a close call
+    ang = np.radians(np.arange(48) * 7.5)
+    u = np.column_stack([np.cos(ang), np.sin(ang)])
+    dist = np.concatenate([0.9 + 0.05 * np.arange(24), 2.6 + 0.05 * np.arange(24)])
+    speed = np.repeat([1.0, 0.5], 24)
+    ring = np.column_stack([pose + u * dist[:, None], u * speed[:, None], np.full(48, 0.3)])
+    obs = np.vstack([
+        ring,
+        _crowd(rng, 20, np.array([0.0, 0.0]), 4.5),
+        [[4.5, 4.5, 1.0, 1.0, 0.3], [-4.5, 4.0, 0.0, 1.2, 0.3]],  # far, walking away: out
+    ])  # fmt: skip
+    infl = nav._inflation(pose, obs)
+    steps = 80
+    keep = nav._relevant(pose, obs, infl, steps * nav.options.dt)
+    assert not keep[-2:].any()
+    assert keep[:24].any() and not keep[:24].all() and keep[24:48].any() and not keep[24:48].all()
+    full = nav._field(0.0, obs, infl, steps)
+    some = nav._field(0.0, obs[keep], infl[keep], steps)
+    # poses the robot can reach at step n: within vplan * n * dt of where it is; on the
+    # rim toward each ring person (where it comes closest), and anywhere inside
+    n_rim = np.tile(np.arange(steps + 1), 48)
+    rim = pose + np.repeat(u, steps + 1, axis=0) * (nav.vplan * n_rim * nav.options.dt)[:, None]
+    n_in = rng.integers(0, steps + 1, 2000)
+    a_in = rng.uniform(0, 2 * math.pi, 2000)
+    r_in = np.sqrt(rng.uniform(0, 1, 2000)) * nav.vplan * n_in * nav.options.dt
+    pts = np.vstack([rim, pose + np.column_stack([r_in * np.cos(a_in), r_in * np.sin(a_in)])])
+    n = np.concatenate([n_rim, n_in])
+    i = np.arange(len(pts))
+    a, b = full.unsafe(pts)[i, n], some.unsafe(pts)[i, n]
+    assert a[: len(rim)].any() and a[len(rim) :].any()
+    np.testing.assert_array_equal(a, b)
+
+
+def test_fallbacks_only_look_at_people_who_can_matter(open_square):
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (0.0, 4.0))
+    pose = np.array([0.0, -1.0])
+    near = np.array([[0.0, 0.2, 0.0, -1.0, 0.3], [1.2, -1.0, -0.5, 0.0, 0.3]])
+    far = np.array([[4.0, 4.0, 1.0, 0.5, 0.3], [-4.0, 3.0, -1.0, 0.0, 0.3]])
+    assert len(nav._near(pose, np.vstack([near, far]), nav.options.evasion_time, 0.5)) == 2
+    one = nav._evasive(0.0, pose, near)
+    both = nav._evasive(0.0, pose, np.vstack([near, far]))
+    np.testing.assert_array_equal(one.waypoints, both.waypoints)
+
+
+def test_exhausted_budget_builds_no_prediction(open_square, monkeypatch):
+    scene, rm = open_square
+    calls = []
+    real = Navigator._field
+
+    def counting(self, *args):
+        calls.append(args)
+        return real(self, *args)
+
+    monkeypatch.setattr(Navigator, "_field", counting)
+    obs = np.array([[0.0, 0.0, 0.0, -1.0, 0.3], [2.0, 1.0, -1.0, 0.0, 0.3]])
+    nav = Navigator(scene, rm, (0.0, 4.0))
+    nav.step(0.0, np.array([0.0, -4.0]), obs)
+    assert calls and nav.last.mode in ("plan", "relaxed")  # with time: the predictions are built
+    calls.clear()
+    late = Navigator(scene, rm, (0.0, 4.0))
+    ticks = iter([0.0] + [1.0] * 100)  # the clock: the call began, then a whole second went by
+    late._clock = lambda: next(ticks)
+    traj = late.step(0.0, np.array([0.0, -4.0]), obs)
+    assert not calls
+    assert late.last.mode in ("direct", "previous", "evasive")
+    assert "budget" in late.last.message
+    np.testing.assert_allclose(traj.waypoints[0], [0.0, 0.0, -4.0])
+
+
+def test_the_field_answers_in_pieces_and_stops_at_the_deadline(open_square):
+    from gfuzzy.navigator import PIECE_WORK, _OutOfTime
+
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (0.0, 4.0), NavOptions(backend="reference"))
+    pose = np.array([0.0, -4.0])
+    obs = _crowd(np.random.default_rng(5), 25, np.array([0.0, 0.0]), 4.0)
+    infl = nav._inflation(pose, obs)
+    pts = nav._poses[: 3 * PIECE_WORK // len(obs) + 17]  # groups of the base graph: several pieces
+    groups = nav._groups[nav._groups <= len(pts)]
+    ptr = np.unique(np.concatenate([np.arange(nav._nv + 2), groups, [len(pts)]]))
+    rng = np.random.default_rng(1)
+    lo = rng.integers(0, 20, len(ptr) - 1)
+    hi = lo + rng.integers(0, 60, len(ptr) - 1)
+    timed = nav._field(0.0, obs, infl, 80)
+    whole = nav._field(0.0, obs, infl, 80)
+    whole.__class__ = gfuzzy.movers.MoverField  # the same field, answering in one piece
+    want = set(zip(*whole.unsafe_pairs(pts, ptr, lo, hi), strict=True))
+    assert want
+    assert set(zip(*timed.unsafe_pairs(pts, ptr, lo, hi), strict=True)) == want
+    if hasattr(whole, "safe_intervals"):  # a store that asks for intervals (compiled kernel)
+        for x, y in zip(timed.safe_intervals(pts, ptr, lo, hi), whole.safe_intervals(pts, ptr, lo, hi), strict=True):
+            np.testing.assert_array_equal(x, y)
+    ticks = iter([0.0, 0.0, 5.0, 5.0])  # the deadline passes after the first piece
+    late = nav._field(0.0, obs, infl, 80, deadline=1.0)
+    late.clock = lambda: next(ticks)
+    with pytest.raises(_OutOfTime):
+        late.unsafe_pairs(pts, ptr, lo, hi)
+
+
+def test_a_search_out_of_time_inside_a_batch_falls_back(open_square):
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (0.0, 4.0))
+    obs = np.array([[0.0, 0.0, 0.0, -1.0, 0.3], [2.0, 1.0, -1.0, 0.0, 0.3]])
+    late = [0.0]
+    nav._clock = lambda: time.perf_counter() + late[0]  # the search keeps the real clock
+    real = Navigator._field
+
+    def field_then_late(self, *args):  # the budget is gone once the search asks for safety
+        field_ = real(self, *args)
+        late[0] = 1.0
+        return field_
+
+    nav._field = field_then_late.__get__(nav)
+    traj = nav.step(0.0, np.array([0.0, -4.0]), obs)
+    assert nav.last.mode in ("direct", "previous", "evasive")
+    assert nav.last.message == "time budget spent on the predicted people's safety"
+    assert _speeds_ok(traj, 1.0)
+
+
+@pytest.mark.parametrize("error", [RuntimeError("a bug"), TypeError("a bug")])
+def test_a_bug_in_the_search_propagates(open_square, monkeypatch, error):
+    scene, rm = open_square
+
+    def broken(graph, field_, start, goal, **kw):
+        raise error
+
+    monkeypatch.setattr("gfuzzy.navigator.search_function", lambda backend: broken)
+    nav = Navigator(scene, rm, (0.0, 4.0))
+    with pytest.raises(type(error), match="a bug"):
+        nav.step(0.0, np.array([0.0, -4.0]), np.array([[0.0, 0.0, 0.0, -1.0, 0.3]]))
+
+
+@pytest.mark.parametrize("family", ["LimitError", "InputError"])
+def test_a_refused_search_falls_back(open_square, monkeypatch, family):
+    import gfuzzy.errors
+
+    scene, rm = open_square
+    error = getattr(gfuzzy.errors, family)
+
+    def refusing(graph, field_, start, goal, **kw):
+        raise error("horizon beyond the memory bounds")
+
+    monkeypatch.setattr("gfuzzy.navigator.search_function", lambda backend: refusing)
+    nav = Navigator(scene, rm, (0.0, 4.0))
+    traj = nav.step(0.0, np.array([0.0, -4.0]), np.array([[0.0, 0.0, 0.0, -1.0, 0.3]]))
+    assert nav.last.mode in ("direct", "previous", "evasive")
+    assert "refused" in nav.last.message
+    np.testing.assert_allclose(traj.waypoints[0], [0.0, 0.0, -4.0])
