@@ -178,11 +178,23 @@ def _clearance_functions(ctx: StageContext, corridor: FloatArray):
     def static_clearance(xy: FloatArray) -> FloatArray:
         return geometry.clearance(poses_of(xy))
 
+    # The GA's segments join a few hundred lattice nodes: each node's clearance (an FCL
+    # distance query) is asked once and handed to the sphere tracing as its end clearance.
+    end_clearance: dict[tuple[float, ...], float] = {}
+
+    def pose_clearance(pose: list) -> float:
+        key = tuple(pose)
+        c = end_clearance.get(key)
+        if c is None:
+            c = end_clearance[key] = geometry.clearance1(pose)
+        return c
+
     def static_segment(a: FloatArray, b: FloatArray):
         """Certify each segment exactly (sphere tracing), with the poses the final path
         will have, so narrow passages do not defeat sampling."""
-        pa, pb = poses_of(a), poses_of(b)
-        mn = np.array([geometry.motion_clearance(p, q) for p, q in zip(pa, pb, strict=True)])
+        k = len(a)
+        ends = poses_of(np.concatenate([a, b])).tolist()  # one heading lookup for both ends
+        mn = np.array([_traced(geometry, p, q, pose_clearance) for p, q in zip(ends[:k], ends[k:], strict=True)])
         return np.where(mn >= 0, 0.0, -1.0), mn
 
     # The GA evaluates the mover clearance at every sample of every candidate, so the robot
@@ -221,6 +233,17 @@ def _clearance_functions(ctx: StageContext, corridor: FloatArray):
         return out - robot.mover_clearance  # the GA's clearance is what is left above it
 
     return poses_of, static_clearance, static_segment, mover_clearance
+
+
+def _traced(geometry: StaticGeometry, p: list, q: list, pose_clearance) -> float:
+    """``geometry.motion_clearance(p, q)`` with the end clearances from ``pose_clearance``
+    (the same values ``motion_clearance`` would compute: ``clearance1`` of the same poses),
+    asked only where it would ask them: ``q``'s not when ``p`` collides, nor when p == q."""
+    ca = pose_clearance(p)
+    if ca < 0:
+        return -1.0
+    cb = None if p == q else pose_clearance(q)
+    return geometry.motion_clearance(p, q, ca=ca, cb=cb)
 
 
 def _accept(ctx: StageContext, traj: Trajectory, query_like, before: Trajectory, max_slowdown: float):

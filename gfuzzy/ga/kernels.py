@@ -1,0 +1,215 @@
+"""Compiled (numba) inner loops of the GA's operators, bit for bit the numpy code they replace.
+
+A generation of the GA works on a population of 50 short chromosomes: its numpy code spends
+its time in the overhead of many small array calls, not in arithmetic. These kernels do the
+same work in one call each. They perform the same floating-point operations, in the same
+order, on the same operands as the numpy expressions they replace (no fast-math: IEEE
+``+ - * /``, ``abs``, ``rint`` and comparisons are exact functions of their operands), so the
+results are identical; what numba might compute differently from numpy (``arctan2``, and
+numpy's pairwise sums) stays in numpy, between two kernels. ``tests/test_ga_kernels.py``
+checks every kernel against the numpy expressions on random inputs.
+
+The random draws stay in the callers (numpy's ``Generator``), in the same order: the kernels
+only apply them. :func:`warm` compiles (or loads from numba's on-disk cache) every kernel;
+``make warm`` calls it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ..typing import BoolArray, IntArray
+from .options import _EPS, REMOVED
+
+
+@njit(cache=True)
+def crossover_apply(pop: IntArray, do: BoolArray, cut: IntArray) -> None:
+    """In place: pair i (rows 2i, 2i + 1) swaps its genes from ``cut[i]`` on when ``do[i]``."""
+    K = pop.shape[1]
+    for i in range(len(do)):
+        if do[i]:
+            a, b = 2 * i, 2 * i + 1
+            for k in range(cut[i], K):
+                t = pop[a, k]
+                pop[a, k] = pop[b, k]
+                pop[b, k] = t
+
+
+@njit(cache=True)
+def mutation_apply(pop: IntArray, hit: BoolArray, kinds: IntArray, levels: int) -> None:
+    """In place: the ``q``-th hit gene in row-major order takes mutation ``kinds[q]`` (UP 0,
+    DOWN 1, REMOVE 2; see :func:`gfuzzy.ga.operators.apply_mutation`)."""
+    mid = levels // 2
+    q = 0
+    P, K = pop.shape
+    for r in range(P):
+        for k in range(K):
+            if hit[r, k]:
+                g = pop[r, k]
+                kind = kinds[q]
+                q += 1
+                if kind == 0:
+                    new = mid if g == REMOVED else min(g + 1, levels - 1)
+                elif kind == 1:
+                    new = mid if g == REMOVED else max(g - 1, 0)
+                else:
+                    new = REMOVED
+                pop[r, k] = new
+
+
+@njit(cache=True)
+def _decode_row(g, start, goal, knots, normals, steps, mid, pts, mask) -> None:
+    """:meth:`PathCoding.decode` of one chromosome into ``pts`` (K + 2, 2), ``mask`` (K + 2,)."""
+    K = len(g)
+    pts[0, 0], pts[0, 1] = start[0], start[1]
+    pts[K + 1, 0], pts[K + 1, 1] = goal[0], goal[1]
+    mask[0] = mask[K + 1] = True
+    for k in range(K):
+        off = (0.0 if g[k] == REMOVED else float(g[k] - mid)) * steps[k]
+        pts[k + 1, 0] = knots[k, 0] + off * normals[k, 0]
+        pts[k + 1, 1] = knots[k, 1] + off * normals[k, 1]
+        mask[k + 1] = g[k] != REMOVED
+
+
+@njit(cache=True)
+def smooth_corners(sub, start, goal, knots, normals, steps, mid):
+    """First half of the smooth operator (see :func:`gfuzzy.ga.operators._propose_smooth`):
+    the decoded candidates, their kept neighbours, and the turning at every via-point as the
+    ``(cross, dot)`` whose ``arctan2`` numpy takes.
+
+    Returns
+    -------
+    pts : (Q, K + 2, 2) float
+    mask : (Q, K + 2) bool
+    prv, nxt : (Q, K) int
+        The last kept point before, and the first after, each via-point (point k + 1).
+    cross, dot : (Q, K) float
+    """
+    Q, K = sub.shape
+    M = K + 2
+    pts = np.empty((Q, M, 2))
+    mask = np.empty((Q, M), dtype=np.bool_)
+    prv = np.empty((Q, K), dtype=np.int64)
+    nxt = np.empty((Q, K), dtype=np.int64)
+    cross = np.empty((Q, K))
+    dot = np.empty((Q, K))
+    for q in range(Q):
+        _decode_row(sub[q], start, goal, knots, normals, steps, mid, pts[q], mask[q])
+        last = 0
+        for i in range(1, M - 1):
+            prv[q, i - 1] = last
+            if mask[q, i]:
+                last = i
+        first = M - 1
+        for i in range(M - 2, 0, -1):
+            nxt[q, i - 1] = first
+            if mask[q, i]:
+                first = i
+        for i in range(1, M - 1):
+            a, b = prv[q, i - 1], nxt[q, i - 1]
+            din0 = pts[q, i, 0] - pts[q, a, 0]
+            din1 = pts[q, i, 1] - pts[q, a, 1]
+            dout0 = pts[q, b, 0] - pts[q, i, 0]
+            dout1 = pts[q, b, 1] - pts[q, i, 1]
+            cross[q, i - 1] = din0 * dout1 - din1 * dout0
+            # numpy's sum over the last axis of din * dout: 0.0 + the first, + the second
+            dot[q, i - 1] = (0.0 + din0 * dout0) + din1 * dout1
+    return pts, mask, prv, nxt, cross, dot
+
+
+@njit(cache=True)
+def smooth_reencode(sub, pts, mask, prv, nxt, ang, lam, knots, normals, steps, mid, levels):
+    """Second half of the smooth operator: the sharpest corner's U, A, C, B, W polyline and
+    the re-encoded genes of the knots between U and W.
+
+    Parameters
+    ----------
+    sub : (Q, K) int
+    pts, mask, prv, nxt
+        From :func:`smooth_corners`.
+    ang : (Q, K) float
+        ``|arctan2(cross, dot)|``.
+    lam : (Q,) float
+        The corner fractions drawn.
+
+    Returns
+    -------
+    cand : (Q, K) int64
+    changed : (Q,) bool
+    new_slots : (Q, K + 1) bool
+    """
+    Q, K = sub.shape
+    M = K + 2
+    cand = np.empty((Q, K), dtype=np.int64)
+    changed = np.zeros(Q, dtype=np.bool_)
+    new_slots = np.zeros((Q, M - 1), dtype=np.bool_)
+    poly = np.empty((5, 2))
+    for q in range(Q):
+        k, best = 0, -1.0
+        for i in range(K):
+            a = ang[q, i] if mask[q, i + 1] else 0.0
+            if a != a:  # argmax stops at the first NaN
+                k, best = i, a
+                break
+            if a > best:  # the first largest, as argmax
+                k, best = i, a
+        valid = best > 1e-6
+        iu, iw = prv[q, k], nxt[q, k]
+        lq = lam[q]
+        for c in range(2):
+            U, V, W = pts[q, iu, c], pts[q, k + 1, c], pts[q, iw, c]
+            A = V + lq * (U - V)
+            B = V + lq * (W - V)
+            poly[0, c], poly[1, c], poly[3, c], poly[4, c] = U, A, B, W
+            poly[2, c] = 0.25 * A + 0.5 * V + 0.25 * B
+        for kk in range(K):
+            g = sub[q, kk]
+            cand[q, kk] = g
+            if not (valid and iu < kk + 1 < iw):
+                continue
+            cur = 0.0 if g == REMOVED else float(g - mid) * steps[kk]
+            n0, n1 = normals[kk, 0], normals[kk, 1]
+            best_score, best_s = np.inf, 0.0
+            for j in range(4):
+                e0 = poly[j + 1, 0] - poly[j, 0]
+                e1 = poly[j + 1, 1] - poly[j, 1]
+                r0 = poly[j, 0] - knots[kk, 0]
+                r1 = poly[j, 1] - knots[kk, 1]
+                den = n0 * e1 - n1 * e0
+                ok = abs(den) > _EPS
+                sd = den if ok else 1.0
+                s = (r0 * e1 - r1 * e0) / sd
+                tau = (r0 * n1 - r1 * n0) / sd
+                score = abs(s - cur) if (ok and tau >= -1e-9 and tau <= 1 + 1e-9) else np.inf
+                if j == 0 or score < best_score:  # the first smallest, as argmin
+                    best_score, best_s = score, s
+            new = REMOVED
+            if np.isfinite(best_score):
+                lvl = int(np.rint(best_s / steps[kk])) + mid
+                if 0 <= lvl < levels:
+                    new = lvl
+            cand[q, kk] = new
+            if new != g:
+                changed[q] = True
+        for j in range(M - 1):
+            new_slots[q, j] = iu < j + 1 <= iw
+    return cand, changed, new_slots
+
+
+def warm() -> None:
+    """Compile (or load from numba's cache) every kernel, with the argument types the GA
+    passes: int16 genes (the GA's populations), int64 (callers' arrays) and a
+    :class:`~gfuzzy.ga.coding.PathCoding`'s read-only arrays."""
+    from .coding import PathCoding
+
+    c = PathCoding.from_path(np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 0.0]]), 4, 5, 0.1)
+    rng = np.random.default_rng(0)
+    for dtype in (np.int16, np.int64):
+        pop = rng.integers(-1, 5, (6, 4)).astype(dtype)
+        crossover_apply(pop, np.ones(3, dtype=bool), np.ones(3, dtype=np.int64))
+        mutation_apply(pop, np.ones(pop.shape, dtype=bool), np.zeros(pop.size, dtype=np.int64), 5)
+    sub = pop.astype(np.int64)
+    pts, mask, prv, nxt, cross, dot = smooth_corners(sub, c.start, c.goal, c.knots, c.normals, c.steps, c.mid)
+    smooth_reencode(sub, pts, mask, prv, nxt, np.abs(np.arctan2(cross, dot)), np.ones(len(sub)), c.knots,
+                    c.normals, c.steps, c.mid, c.levels)  # fmt: skip
