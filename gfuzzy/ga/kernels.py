@@ -197,6 +197,183 @@ def smooth_reencode(sub, pts, mask, prv, nxt, ang, lam, knots, normals, steps, m
     return cand, changed, new_slots
 
 
+@njit(cache=True)
+def lattice_geometry(genes, start, goal, knots, normals, steps, mid, levels, arc, n_nodes):
+    """Decoding and segments of a population (:meth:`PathCoding.decode`, ``node_ids``,
+    ``_Geometry`` and ``_arc_fractions`` of :mod:`gfuzzy.ga.fitness` with a 1-D ``arc``).
+
+    Returns
+    -------
+    mask : (P, M) bool
+    a_pts, d : (P, M - 1, 2) float
+        Start and vector of every slot's segment (0 where the slot's end point is removed).
+    active : (P, M - 1) bool
+    u_start, u_end : (P, M - 1) float
+    rows, slots, fs, keys : (S,) int
+        The kept segments in row-major order (``np.nonzero(active)``), their flat slot and
+        node-pair key.
+    """
+    P, K = genes.shape
+    M = K + 2
+    pts = np.empty((P, M, 2))
+    mask = np.empty((P, M), dtype=np.bool_)
+    a_pts = np.empty((P, M - 1, 2))
+    d = np.empty((P, M - 1, 2))
+    active = np.empty((P, M - 1), dtype=np.bool_)
+    u_start = np.empty((P, M - 1))
+    u_end = np.empty((P, M - 1))
+    ids = np.empty(M, dtype=np.int64)
+    S = 0
+    for p in range(P):
+        _decode_row(genes[p], start, goal, knots, normals, steps, mid, pts[p], mask[p])
+        for j in range(M - 1):
+            S += mask[p, j + 1]
+    rows = np.empty(S, dtype=np.int64)
+    slots = np.empty(S, dtype=np.int64)
+    keys = np.empty(S, dtype=np.int64)
+    i = 0
+    for p in range(P):
+        ids[0] = 0
+        ids[M - 1] = 1 + K * levels
+        for k in range(K):
+            ids[k + 1] = 1 + k * levels + max(genes[p, k], 0)
+        last = 0
+        for j in range(M - 1):
+            on = mask[p, j + 1]
+            active[p, j] = on
+            a_pts[p, j, 0], a_pts[p, j, 1] = pts[p, last, 0], pts[p, last, 1]
+            u_start[p, j] = arc[last]
+            if on:
+                d[p, j, 0] = pts[p, j + 1, 0] - pts[p, last, 0]
+                d[p, j, 1] = pts[p, j + 1, 1] - pts[p, last, 1]
+                rows[i], slots[i], keys[i] = p, j, ids[last] * n_nodes + ids[j + 1]
+                i += 1
+                last = j + 1
+            else:
+                d[p, j, 0] = d[p, j, 1] = 0.0
+            u_end[p, j] = arc[last]
+    return mask, a_pts, d, active, u_start, u_end, rows, slots, rows * (M - 1) + slots, keys
+
+
+@njit(cache=True)
+def lattice_turning(mask, d, seglen):
+    """``_turning`` of :mod:`gfuzzy.ga.fitness` up to its ``arctan2``: at each interior
+    point, the ``(cross, dot)`` of its incoming and outgoing segments and whether it turns.
+
+    Returns
+    -------
+    cross, dot : (P, M - 2) float
+    ok : (P, M - 2) bool
+    """
+    P, M = mask.shape
+    cross = np.empty((P, M - 2))
+    dot = np.empty((P, M - 2))
+    ok = np.empty((P, M - 2), dtype=np.bool_)
+    turn = np.empty(M, dtype=np.bool_)
+    first = np.empty(M, dtype=np.int64)
+    for p in range(P):
+        for j in range(M):
+            turn[j] = mask[p, j]
+            if 0 < j < M - 1:
+                turn[j] = turn[j] and seglen[p, j - 1] > _EPS
+        f = M
+        for j in range(M - 1, -1, -1):
+            if turn[j]:
+                f = j
+            first[j] = f
+        for j in range(1, M - 1):
+            out = first[j + 1] - 1
+            i0, i1 = d[p, j - 1, 0], d[p, j - 1, 1]
+            o0, o1 = d[p, out, 0], d[p, out, 1]
+            cross[p, j - 1] = i0 * o1 - i1 * o0
+            dot[p, j - 1] = i0 * o0 + i1 * o1
+            ok[p, j - 1] = turn[j] and seglen[p, out] > _EPS
+    return cross, dot, ok
+
+
+@njit(cache=True)
+def _minimum(a: float, b: float) -> float:
+    """``np.minimum`` of two floats (NaN wins)."""
+    if a != a or b != b:
+        return a + b
+    return b if b < a else a
+
+
+@njit(cache=True)
+def lattice_speed(active, seglen, u_start, u_end, ref_length):
+    """(P,) bool: no kept segment longer than the stretch of the input whose time it takes."""
+    P, S = active.shape
+    feasible = np.ones(P, dtype=np.bool_)
+    for p in range(P):
+        for j in range(S):
+            span = (u_end[p, j] - u_start[p, j]) * ref_length
+            if active[p, j] and seglen[p, j] > span * (1 + 1e-9) + 1e-12:
+                feasible[p] = False
+    return feasible
+
+
+@njit(cache=True)
+def lattice_movers(P, S, rows, fs, cs, c0, feasible):
+    """The cached mover clearances laid out per slot (``_timing_checks``), in place on
+    ``feasible``. Returns seg_mover (P, S) and mover_min (P,)."""
+    seg = np.full((P, S), np.inf)
+    flat = seg.reshape(-1)
+    for i in range(len(fs)):
+        flat[fs[i]] = cs[i]
+    mover_min = np.full(P, c0)
+    for i in range(len(rows)):
+        mover_min[rows[i]] = _minimum(mover_min[rows[i]], cs[i])
+    for p in range(P):
+        seg[p, 0] = _minimum(seg[p, 0], c0)
+        lo = np.inf
+        for j in range(S):
+            lo = _minimum(lo, seg[p, j])
+        if not lo >= 0:
+            feasible[p] = False
+    return seg, mover_min
+
+
+@njit(cache=True)
+def lattice_finish(rows, fs, seg_lb, seg_min, seg_mover, mover_min, feasible, length, smoothness, chord, safe,
+                   w_length, w_security, w_smooth):  # fmt: skip
+    """The end of ``PathEvaluator.evaluate`` and ``fitness``: per-slot clearance, smallest
+    clearance, feasibility (in place) and cost.
+
+    Returns
+    -------
+    seg_full : (P, S) float
+    min_clear, cost : (P,) float
+    """
+    P, S = seg_mover.shape
+    seg_full = np.full((P, S), np.inf)
+    flat = seg_full.reshape(-1)
+    for i in range(len(fs)):
+        flat[fs[i]] = seg_lb[i]
+    min_clear = np.full(P, np.inf)
+    for i in range(len(rows)):
+        min_clear[rows[i]] = _minimum(min_clear[rows[i]], seg_min[i])
+    cost = np.empty(P)
+    for p in range(P):
+        lo = np.inf
+        for j in range(S):
+            seg_full[p, j] = _minimum(seg_full[p, j], seg_mover[p, j])
+            lo = _minimum(lo, seg_full[p, j])
+        min_clear[p] = _minimum(min_clear[p], mover_min[p])
+        feasible[p] = feasible[p] and lo >= 0
+        fit_length = length[p] / chord if chord > _EPS else length[p]
+        sec = min_clear[p] / safe
+        if sec < 0.0:
+            sec = 0.0
+        elif sec > 1.0:
+            sec = 1.0
+        fit_security = 1.0 - sec
+        if fit_security != fit_security:  # np.nan_to_num
+            fit_security = 0.0
+        c = w_length * fit_length + w_smooth * (smoothness[p] / np.pi)
+        cost[p] = c + w_security * fit_security if feasible[p] else np.inf
+    return seg_full, min_clear, cost
+
+
 def warm() -> None:
     """Compile (or load from numba's cache) every kernel, with the argument types the GA
     passes: int16 genes (the GA's populations), int64 (callers' arrays) and a
