@@ -204,16 +204,7 @@ def _clearance_functions(ctx: StageContext, corridor: FloatArray):
     # The re-timing afterwards decides safety with the exact shapes.
     disc = replace(robot, shape="disc", radius=robot.circumradius, size=(0.0, 0.0))
 
-    states: dict = {}  # the GA asks at the same times every generation: movers' states once
-
-    def mover_states(t: FloatArray) -> list:
-        key = t.tobytes()
-        got = states.get(key)
-        if got is None:
-            if len(states) > 64:
-                states.clear()
-            got = states[key] = [mv.state(t) for mv in scene.movers]
-        return got
+    mover_states = _StateTable(scene.movers)  # the GA asks at the times of one grid
 
     def mover_clearance(xy: FloatArray, t: FloatArray) -> FloatArray:
         xy = np.atleast_2d(np.asarray(xy, dtype=float))
@@ -233,6 +224,35 @@ def _clearance_functions(ctx: StageContext, corridor: FloatArray):
         return out - robot.mover_clearance  # the GA's clearance is what is left above it
 
     return poses_of, static_clearance, static_segment, mover_clearance
+
+
+class _StateTable:
+    """``[mv.state(t) for mv in movers]``, each time's state computed once: a mover's state
+    at a time does not depend on the other times asked with it, so the rows of earlier
+    answers are the answer."""
+
+    def __init__(self, movers):
+        self.movers = movers
+        self.times = np.empty(0)
+        self.rows = [(np.empty((0, 2)), np.empty(0, dtype=bool)) for _ in movers]
+
+    def __call__(self, t: FloatArray) -> list:
+        t = np.asarray(t, dtype=float)
+        if not np.all(np.isfinite(t)):
+            return [mv.state(t) for mv in self.movers]
+        idx = np.searchsorted(self.times, t)
+        if not (len(self.times) and np.array_equal(self.times.take(idx, mode="clip"), t)):
+            new = np.unique(t)
+            new = new[~np.isin(new, self.times)]
+            times = np.concatenate([self.times, new])
+            order = np.argsort(times, kind="stable")
+            self.times = times[order]
+            self.rows = [
+                (np.concatenate([pos, p])[order], np.concatenate([present, q])[order])
+                for (pos, present), (p, q) in zip(self.rows, (mv.state(new) for mv in self.movers), strict=True)
+            ]
+            idx = np.searchsorted(self.times, t)
+        return [(pos[idx], present[idx]) for pos, present in self.rows]
 
 
 def _traced(geometry: StaticGeometry, p: list, q: list, pose_clearance) -> float:
