@@ -10,8 +10,8 @@ numpy's pairwise sums) stays in numpy, between two kernels. ``tests/test_ga_kern
 checks every kernel against the numpy expressions on random inputs.
 
 The random draws stay in the callers (numpy's ``Generator``), in the same order: the kernels
-only apply them. :func:`warm` compiles (or loads from numba's on-disk cache) every kernel;
-``make warm`` calls it.
+only apply them. :func:`gfuzzy.ga.refine.warm` compiles (or loads from numba's on-disk cache) every
+kernel; ``make warm`` calls it.
 """
 
 from __future__ import annotations
@@ -372,21 +372,3 @@ def lattice_finish(rows, fs, seg_lb, seg_min, seg_mover, mover_min, feasible, le
         c = w_length * fit_length + w_smooth * (smoothness[p] / np.pi)
         cost[p] = c + w_security * fit_security if feasible[p] else np.inf
     return seg_full, min_clear, cost
-
-
-def warm() -> None:
-    """Compile (or load from numba's cache) every kernel, with the argument types the GA
-    passes: int16 genes (the GA's populations), int64 (callers' arrays) and a
-    :class:`~gfuzzy.ga.coding.PathCoding`'s read-only arrays."""
-    from .coding import PathCoding
-
-    c = PathCoding.from_path(np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 0.0]]), 4, 5, 0.1)
-    rng = np.random.default_rng(0)
-    for dtype in (np.int16, np.int64):
-        pop = rng.integers(-1, 5, (6, 4)).astype(dtype)
-        crossover_apply(pop, np.ones(3, dtype=bool), np.ones(3, dtype=np.int64))
-        mutation_apply(pop, np.ones(pop.shape, dtype=bool), np.zeros(pop.size, dtype=np.int64), 5)
-    sub = pop.astype(np.int64)
-    pts, mask, prv, nxt, cross, dot = smooth_corners(sub, c.start, c.goal, c.knots, c.normals, c.steps, c.mid)
-    smooth_reencode(sub, pts, mask, prv, nxt, np.abs(np.arctan2(cross, dot)), np.ones(len(sub)), c.knots,
-                    c.normals, c.steps, c.mid, c.levels)  # fmt: skip

@@ -57,7 +57,7 @@ def evaluate_genes(
     cost : (P,) float
     """
     ev, c = evaluator, coding
-    genes = np.asarray(batch, dtype=np.int64)
+    genes = np.ascontiguousarray(batch, dtype=np.int64)
     P, M = len(genes), c.n_knots + 2
     mask, a_pts, d, active, u_start, u_end, rows, slots, fs, keys = kernels.lattice_geometry(
         genes, c.start, c.goal, c.knots, c.normals, c.steps, c.mid, c.levels, c.arc, ev._n_nodes

@@ -425,3 +425,19 @@ def _result(path, chromosome, history, gen, improved, b, after, traj, coding) ->
         trajectory=traj,
         coding=coding,
     )
+
+
+def warm() -> None:
+    """Compile (or load from numba's on-disk cache) the GA's kernels with the argument types
+    the GA passes them (``make warm`` runs this, so no GA pays a compile): a tiny refinement
+    among a mover with the input's timing, and the operators on int16 and int64 genes."""
+    path = np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 0.0], [3.0, 1.0]])
+
+    def free(xy):
+        return np.ones(len(xy))
+
+    opts = GAOptions(n_knots=4, levels=5, population=6, generations=3, patience=None, p_smooth=1.0)
+    refine_path(path, np.arange(4.0), 0.1, free, lambda xy, t: free(xy), opts, seed=0)
+    rng = np.random.default_rng(0)
+    for dtype in (np.int16, np.int64):
+        mutate(crossover(rng.integers(-1, 5, (6, 4)).astype(dtype), rng, 1.0), rng, 0.5, 5)
