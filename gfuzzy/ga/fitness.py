@@ -197,7 +197,8 @@ class PathEvaluator:
             own arc-length fraction (the whole path follows the input's timing).
         exact : (P, M - 1) bool or None
             None: everything is evaluated. Otherwise the static check of a row already ruled
-            out by the speed rule or the movers is skipped, except on the slots marked here:
+            out by the speed rule, the movers or a cached static bound below zero (one of its
+            segments is known to be blocked) is skipped, except on the slots marked here:
             such a row stays infeasible (cost ``inf``), but its ``min_clearance`` and its
             ``segment_clearance`` outside the marked slots may be too high.
 
@@ -219,7 +220,8 @@ class PathEvaluator:
         feasible, seg_mover, mover_min = self._timing_checks(g, keys, arc)
         skip = None
         if exact is not None:
-            need = feasible[g.rows] | np.asarray(exact, dtype=bool).reshape(-1).take(g.fs)
+            alive = feasible & ~self._cached_blocked(g.rows, keys, P)
+            need = alive[g.rows] | np.asarray(exact, dtype=bool).reshape(-1).take(g.fs)
             skip = ~need
         seg_lb, seg_min = self._segment_clearance(g, keys, skip)
         seg_full = np.full((P, M - 1), np.inf)
@@ -231,6 +233,14 @@ class PathEvaluator:
             min_clear = np.minimum(min_clear, mover_min)
         feasible &= seg_full.min(axis=1) >= 0
         return Evaluation(g.length, smoothness, min_clear, seg_full, feasible)
+
+    def _cached_blocked(self, rows: IntArray, keys: IntArray | None, P: int) -> BoolArray:
+        """(P,) bool: rows with a kept segment whose cached static bound is below zero (so
+        infeasible whatever their other segments hold)."""
+        blocked = np.zeros(P, dtype=bool)
+        if keys is not None and self._cache is not None:
+            blocked[rows[self._cache[0].take(keys) < 0]] = True
+        return blocked
 
     def _timing_checks(self, g: _Geometry, keys: IntArray | None, arc: FloatArray | None):
         """The speed rule and the movers on the timing grid.

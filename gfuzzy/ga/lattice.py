@@ -82,7 +82,8 @@ def evaluate_genes(
         seg_mover, mover_min = kernels.lattice_movers(P, M - 1, rows, fs, cs, c0, feasible)
     else:
         seg_mover, mover_min = np.full((P, M - 1), np.inf), np.full(P, np.inf)
-    seg_lb, seg_min = _static(ev, keys, fs, a_pts, d, seglen, feasible[rows] | _exact(exact, fs))
+    alive = feasible & ~ev._cached_blocked(rows, keys, P)
+    seg_lb, seg_min = _static(ev, keys, fs, a_pts, d, seglen, alive[rows] | _exact(exact, fs))
     o = ev.options
     seg_full, min_clear, cost = kernels.lattice_finish(
         rows, fs, seg_lb, seg_min, seg_mover, mover_min, feasible, length, smoothness, float(chord),
