@@ -372,3 +372,49 @@ def lattice_finish(rows, fs, seg_lb, seg_min, seg_mover, mover_min, feasible, le
         c = w_length * fit_length + w_smooth * (smoothness[p] / np.pi)
         cost[p] = c + w_security * fit_security if feasible[p] else np.inf
     return seg_full, min_clear, cost
+
+
+@njit(cache=True)
+def lattice_static_lookup(cache_lb, cache_min, keys, rows, feasible, exact, fs):
+    """The static node-pair cache read for a batch (``PathEvaluator._cached_blocked`` and
+    the lookup of ``_segment_clearance``).
+
+    Parameters
+    ----------
+    cache_lb, cache_min : (N * N,) float
+        The cache (NaN: not computed).
+    keys, rows, fs : (S,) int
+    feasible : (P,) bool
+        Not ruled out by the speed rule or the movers.
+    exact : (P * (M - 1),) bool
+        Slots whose static check is wanted whatever the row.
+
+    Returns
+    -------
+    seg_lb, seg_min : (S,) float
+        Cached values, ``inf`` where not cached.
+    sel : (q,) int
+        The kept segments to compute: not cached, and in a row not ruled out (by the speed
+        rule, the movers or a cached bound below zero) or on an exact slot.
+    """
+    S = len(keys)
+    alive = feasible.copy()
+    lb = np.empty(S)
+    for i in range(S):
+        lb[i] = cache_lb[keys[i]]
+        if lb[i] < 0:
+            alive[rows[i]] = False
+    seg_lb = np.empty(S)
+    seg_min = np.empty(S)
+    sel = np.empty(S, dtype=np.int64)
+    q = 0
+    for i in range(S):
+        if lb[i] != lb[i]:
+            seg_lb[i] = seg_min[i] = np.inf
+            if alive[rows[i]] or exact[fs[i]]:
+                sel[q] = i
+                q += 1
+        else:
+            seg_lb[i] = lb[i]
+            seg_min[i] = cache_min[keys[i]]
+    return seg_lb, seg_min, sel[:q]

@@ -82,8 +82,7 @@ def evaluate_genes(
         seg_mover, mover_min = kernels.lattice_movers(P, M - 1, rows, fs, cs, c0, feasible)
     else:
         seg_mover, mover_min = np.full((P, M - 1), np.inf), np.full(P, np.inf)
-    alive = feasible & ~ev._cached_blocked(rows, keys, P)
-    seg_lb, seg_min = _static(ev, keys, fs, a_pts, d, seglen, alive[rows] | _exact(exact, fs))
+    seg_lb, seg_min = _static(ev, keys, rows, fs, a_pts, d, seglen, feasible, exact)
     o = ev.options
     seg_full, min_clear, cost = kernels.lattice_finish(
         rows, fs, seg_lb, seg_min, seg_mover, mover_min, feasible, length, smoothness, float(chord),
@@ -92,20 +91,13 @@ def evaluate_genes(
     return Evaluation(length, smoothness, min_clear, seg_full, feasible), cost
 
 
-def _exact(exact: BoolArray | None, fs: IntArray) -> BoolArray:
-    if exact is None:
-        return np.zeros(len(fs), dtype=bool)
-    return np.asarray(exact, dtype=bool).reshape(-1).take(fs)
-
-
-def _static(ev: PathEvaluator, keys, fs, a_pts, d, seglen, wanted) -> tuple[FloatArray, FloatArray]:
+def _static(ev: PathEvaluator, keys, rows, fs, a_pts, d, seglen, feasible, exact) -> tuple[FloatArray, FloatArray]:
     """``PathEvaluator._segment_clearance`` through the node-pair cache: the cached bounds,
-    and the caller's check for the ``wanted`` kept segments not cached yet."""
-    lb_all = ev._cache[0].take(keys)
-    need = np.isnan(lb_all)
-    seg_lb = np.where(need, np.inf, lb_all)
-    seg_min = np.where(need, np.inf, ev._cache[1].take(keys))
-    sel = np.flatnonzero(need & wanted)
+    and the caller's check for the kept segments not cached yet in rows not ruled out
+    (see ``exact`` in :meth:`PathEvaluator.evaluate`) or on ``exact`` slots."""
+    P, S = seglen.shape
+    marks = np.zeros(P * S, dtype=bool) if exact is None else np.ascontiguousarray(exact, dtype=bool).reshape(-1)
+    seg_lb, seg_min, sel = kernels.lattice_static_lookup(ev._cache[0], ev._cache[1], keys, rows, feasible, marks, fs)
     if len(sel):
         fsel = fs.take(sel)
         L = seglen.reshape(-1).take(fsel)
