@@ -10,6 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..typing import ArrayLike, BoolArray, FloatArray, IntArray
+from . import kernels
 from .options import (
     _EPS,
     GAOptions,
@@ -382,31 +383,14 @@ class PathEvaluator:
     def _fill_mover_cache(self, g, keys: IntArray, todo: IntArray, u_start: FloatArray, u_end: FloatArray):
         """The node-pair mover cache for the kept segments ``todo`` (not cached yet); ``g``
         has the :class:`_Geometry` attributes ``M, fs, slots, a_pts, d``."""
-        gu, gt = self._grid_u, self._grid_t
         S = g.M - 1
-        uk, first = np.unique(keys[todo], return_index=True)
-        j = todo[first]  # one kept segment per new node pair
-        fs = g.fs.take(j)
-        u0, u1 = u_start.reshape(-1).take(fs), u_end.reshape(-1).take(fs)
-        lo = np.searchsorted(gu, u0, side="right")
-        hi = np.searchsorted(gu, u1, side="right")
-        hi[g.slots.take(j) == S - 1] = len(gu)
-        cnt = np.maximum(hi - lo, 0)
-        seg = np.repeat(np.arange(len(j)), cnt)
-        offs = np.zeros(len(j), dtype=np.int64)
-        np.cumsum(cnt[:-1], out=offs[1:])
-        gi = lo.take(seg) + (np.arange(len(seg)) - offs.take(seg))
-        width = u1 - u0
-        f = (gu.take(gi) - u0.take(seg)) / np.where(width > 0, width, 1.0).take(seg)
-        np.clip(f, 0.0, 1.0, out=f)
-        xy = g.a_pts.reshape(-1, 2).take(fs.take(seg), axis=0) + f[:, None] * g.d.reshape(
-            -1, 2
-        ).take(fs.take(seg), axis=0)
-        out = np.full(len(j), np.inf)
-        if len(seg):
-            cm = _call_mover(self.mover_clearance, xy, gt.take(gi))
-            nz = cnt > 0
-            out[nz] = np.minimum.reduceat(cm, offs[nz])
+        uk, cnt, xy, gi = kernels.mover_grid_points(
+            keys, todo, g.fs, g.slots, u_start.reshape(-1), u_end.reshape(-1), g.a_pts.reshape(-1, 2),
+            g.d.reshape(-1, 2), self._grid_u, S - 1,
+        )  # fmt: skip
+        out = np.full(len(uk), np.inf)
+        if len(gi):
+            out = kernels.segment_minima(_call_mover(self.mover_clearance, xy, self._grid_t.take(gi)), cnt)
         self._mover_cache[uk] = out
 
     def _start_mover_clearance(self, start: FloatArray) -> float:

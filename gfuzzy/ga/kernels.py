@@ -418,3 +418,83 @@ def lattice_static_lookup(cache_lb, cache_min, keys, rows, feasible, exact, fs):
             seg_lb[i] = lb[i]
             seg_min[i] = cache_min[keys[i]]
     return seg_lb, seg_min, sel[:q]
+
+
+@njit(cache=True)
+def mover_grid_points(keys, todo, fs, slots, u_start, u_end, a_pts, d, gu, last_slot):
+    """The timing-grid points of the new node pairs (``PathEvaluator._fill_mover_cache``):
+    one kept segment per distinct key of ``keys[todo]`` (its first, keys in increasing
+    order, as ``np.unique(..., return_index=True)``), and on it the grid points with ``u`` in
+    its (u_start, u_end] (to the grid's end for the last slot).
+
+    Parameters
+    ----------
+    keys, todo, fs, slots : int arrays
+    u_start, u_end : (P * S,) float
+    a_pts, d : (P * S, 2) float
+    gu : (G,) float
+    last_slot : int
+
+    Returns
+    -------
+    uk : (U,) int
+        The new keys.
+    cnt : (U,) int
+        Grid points per key.
+    xy : (N, 2) float
+    gi : (N,) int
+        Grid index of each point.
+    """
+    kt = keys[todo]
+    order = np.argsort(kt, kind="mergesort")
+    uk = np.empty(len(kt), dtype=np.int64)
+    j = np.empty(len(kt), dtype=np.int64)
+    U = 0
+    for i in range(len(order)):
+        if i == 0 or kt[order[i]] != kt[order[i - 1]]:
+            uk[U], j[U] = kt[order[i]], todo[order[i]]
+            U += 1
+    uk, j = uk[:U], j[:U]
+    lo = np.empty(U, dtype=np.int64)
+    cnt = np.empty(U, dtype=np.int64)
+    for i in range(U):
+        f = fs[j[i]]
+        lo[i] = np.searchsorted(gu, u_start[f], side="right")
+        hi = len(gu) if slots[j[i]] == last_slot else np.searchsorted(gu, u_end[f], side="right")
+        cnt[i] = max(hi - lo[i], 0)
+    xy = np.empty((cnt.sum(), 2))
+    gi = np.empty(cnt.sum(), dtype=np.int64)
+    q = 0
+    for i in range(U):
+        f = fs[j[i]]
+        u0 = u_start[f]
+        width = u_end[f] - u0
+        w = width if width > 0 else 1.0
+        for k in range(cnt[i]):
+            g = lo[i] + k
+            t = (gu[g] - u0) / w
+            if t < 0.0:  # np.clip(f, 0, 1)
+                t = 0.0
+            elif t > 1.0:
+                t = 1.0
+            xy[q, 0] = a_pts[f, 0] + t * d[f, 0]
+            xy[q, 1] = a_pts[f, 1] + t * d[f, 1]
+            gi[q] = g
+            q += 1
+    return uk, cnt, xy, gi
+
+
+@njit(cache=True)
+def segment_minima(values, cnt):
+    """(U,) the smallest of each run of ``cnt[i]`` consecutive ``values`` (``inf`` for an
+    empty run), as ``np.minimum.reduceat``."""
+    out = np.full(len(cnt), np.inf)
+    q = 0
+    for i in range(len(cnt)):
+        if cnt[i] > 0:
+            m = values[q]
+            for k in range(1, cnt[i]):
+                m = _minimum(m, values[q + k])
+            out[i] = m
+            q += cnt[i]
+    return out
