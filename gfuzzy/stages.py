@@ -237,7 +237,7 @@ class _StateTable:
         self.rows = [(np.empty((0, 2)), np.empty(0, dtype=bool)) for _ in movers]
 
     def __call__(self, t: FloatArray) -> list:
-        t = np.asarray(t, dtype=float)
+        t = np.atleast_1d(np.asarray(t, dtype=float))  # as Mover.state
         if not np.all(np.isfinite(t)):
             return [mv.state(t) for mv in self.movers]
         idx = np.searchsorted(self.times, t)

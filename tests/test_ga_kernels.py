@@ -329,7 +329,11 @@ def test_state_table_is_the_movers_states(building_floor):
             want_pos, want_present = mv.state(t)
             np.testing.assert_array_equal(pos, want_pos)
             np.testing.assert_array_equal(present, want_present)
-    assert 0 < len(table.times) < 301 + 3
+    for mv, (pos, present) in zip(scene.movers, table(2.5), strict=True):  # a scalar time
+        want_pos, want_present = mv.state(2.5)
+        np.testing.assert_array_equal(pos, want_pos)
+        np.testing.assert_array_equal(present, want_present)
+    assert 0 < len(table.times) < 301 + 4
     assert np.all(np.diff(table.times) > 0)
 
 
