@@ -214,7 +214,7 @@ def _evaluation_case(seed, kind):
         times[1:] += 1.0  # a wait at the start
         path = np.insert(path, 0, path[0], axis=0)
         times = np.insert(times, 0, 0.0)
-    centre = path[len(path) // 2] + rng.normal(0, 0.3, 2) + [0.0, 1.5 if kind == "timed" else 0.6]
+    centre = path[len(path) // 2] + rng.normal(0, 0.3, 2) + [0.0, 1.5 if kind in ("timed", "speed") else 0.6]
 
     def static(xy):
         return np.hypot(*(np.asarray(xy) - centre).T) - 0.4 - R_ROBOT
@@ -235,9 +235,9 @@ def _evaluation_case(seed, kind):
 
     def make():
         recs = {"static": _Recorder(static), "segment": _Recorder(segment), "mover": _Recorder(mover)}
-        timed = kind != "static"
+        timed = kind != "static"  # "speed": the input's timing (the speed rule), no mover
         ev = PathEvaluator(
-            R_ROBOT, recs["static"], recs["mover"] if timed else None, path if timed else None,
+            R_ROBOT, recs["static"], recs["mover"] if timed and kind != "speed" else None, path if timed else None,
             times if timed else None, opts, recs["segment"] if kind == "segment" else None,
         )  # fmt: skip
         ev._enable_segment_cache(K * levels + 2)
@@ -250,7 +250,7 @@ def _evaluation_case(seed, kind):
 
 
 @pytest.mark.parametrize("seed", range(4))
-@pytest.mark.parametrize("kind", ["static", "timed", "segment"])
+@pytest.mark.parametrize("kind", ["static", "timed", "segment", "speed"])
 def test_compiled_evaluation_is_the_reference(seed, kind):
     coding, make, pop, exact = _evaluation_case(seed, kind)
     ref, ref_calls = make()
