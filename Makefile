@@ -17,6 +17,7 @@ $(VENV): $(STAMP)
 # compiles the search kernels once (numba's on-disk cache), so no query pays for it
 warm: $(STAMP)
 	$(BIN)/python -m gfuzzy.search_kernel
+	$(BIN)/python -c 'import gfuzzy.ga.refine as r; r.warm()'
 
 demo: warm
 	$(BIN)/python tools/demo.py

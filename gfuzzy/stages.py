@@ -178,11 +178,23 @@ def _clearance_functions(ctx: StageContext, corridor: FloatArray):
     def static_clearance(xy: FloatArray) -> FloatArray:
         return geometry.clearance(poses_of(xy))
 
+    # The GA's segments join a few hundred lattice nodes: each node's clearance (an FCL
+    # distance query) is asked once and handed to the sphere tracing as its end clearance.
+    end_clearance: dict[tuple[float, ...], float] = {}
+
+    def pose_clearance(pose: list) -> float:
+        key = tuple(pose)
+        c = end_clearance.get(key)
+        if c is None:
+            c = end_clearance[key] = geometry.clearance1(pose)
+        return c
+
     def static_segment(a: FloatArray, b: FloatArray):
         """Certify each segment exactly (sphere tracing), with the poses the final path
         will have, so narrow passages do not defeat sampling."""
-        pa, pb = poses_of(a), poses_of(b)
-        mn = np.array([geometry.motion_clearance(p, q) for p, q in zip(pa, pb, strict=True)])
+        k = len(a)
+        ends = poses_of(np.concatenate([a, b])).tolist()  # one heading lookup for both ends
+        mn = np.array([_traced(geometry, p, q, pose_clearance) for p, q in zip(ends[:k], ends[k:], strict=True)])
         return np.where(mn >= 0, 0.0, -1.0), mn
 
     # The GA evaluates the mover clearance at every sample of every candidate, so the robot
@@ -192,16 +204,7 @@ def _clearance_functions(ctx: StageContext, corridor: FloatArray):
     # The re-timing afterwards decides safety with the exact shapes.
     disc = replace(robot, shape="disc", radius=robot.circumradius, size=(0.0, 0.0))
 
-    states: dict = {}  # the GA asks at the same times every generation: movers' states once
-
-    def mover_states(t: FloatArray) -> list:
-        key = t.tobytes()
-        got = states.get(key)
-        if got is None:
-            if len(states) > 64:
-                states.clear()
-            got = states[key] = [mv.state(t) for mv in scene.movers]
-        return got
+    mover_states = _StateTable(scene.movers)  # the GA asks at the times of one grid
 
     def mover_clearance(xy: FloatArray, t: FloatArray) -> FloatArray:
         xy = np.atleast_2d(np.asarray(xy, dtype=float))
@@ -221,6 +224,46 @@ def _clearance_functions(ctx: StageContext, corridor: FloatArray):
         return out - robot.mover_clearance  # the GA's clearance is what is left above it
 
     return poses_of, static_clearance, static_segment, mover_clearance
+
+
+class _StateTable:
+    """``[mv.state(t) for mv in movers]``, each time's state computed once: a mover's state
+    at a time does not depend on the other times asked with it, so the rows of earlier
+    answers are the answer."""
+
+    def __init__(self, movers):
+        self.movers = movers
+        self.times = np.empty(0)
+        self.rows = [(np.empty((0, 2)), np.empty(0, dtype=bool)) for _ in movers]
+
+    def __call__(self, t: FloatArray) -> list:
+        t = np.atleast_1d(np.asarray(t, dtype=float))  # as Mover.state
+        if not np.all(np.isfinite(t)):
+            return [mv.state(t) for mv in self.movers]
+        idx = np.searchsorted(self.times, t)
+        if not (len(self.times) and np.array_equal(self.times.take(idx, mode="clip"), t)):
+            new = np.unique(t)
+            new = new[~np.isin(new, self.times)]
+            times = np.concatenate([self.times, new])
+            order = np.argsort(times, kind="stable")
+            self.times = times[order]
+            self.rows = [
+                (np.concatenate([pos, p])[order], np.concatenate([present, q])[order])
+                for (pos, present), (p, q) in zip(self.rows, (mv.state(new) for mv in self.movers), strict=True)
+            ]
+            idx = np.searchsorted(self.times, t)
+        return [(pos[idx], present[idx]) for pos, present in self.rows]
+
+
+def _traced(geometry: StaticGeometry, p: list, q: list, pose_clearance) -> float:
+    """``geometry.motion_clearance(p, q)`` with the end clearances from ``pose_clearance``
+    (the same values ``motion_clearance`` would compute: ``clearance1`` of the same poses),
+    asked only where it would ask them: ``q``'s not when ``p`` collides, nor when p == q."""
+    ca = pose_clearance(p)
+    if ca < 0:
+        return -1.0
+    cb = None if p == q else pose_clearance(q)
+    return geometry.motion_clearance(p, q, ca=ca, cb=cb)
 
 
 def _accept(ctx: StageContext, traj: Trajectory, query_like, before: Trajectory, max_slowdown: float):

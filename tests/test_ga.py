@@ -572,3 +572,33 @@ def test_lazy_static_check_keeps_costs_and_marked_slots():
     np.testing.assert_array_equal(got.feasible, want.feasible)
     np.testing.assert_array_equal(full.fitness(got, 10.0).cost, full.fitness(want, 10.0).cost)
     np.testing.assert_array_equal(got.segment_clearance[exact], want.segment_clearance[exact])
+
+
+def test_rows_blocked_by_a_cached_bound_skip_the_static_check():
+    # A row with a segment whose cached static bound is below zero is infeasible whatever its
+    # other segments hold: their static check is skipped unless a slot is marked exact.
+    path, _, _, static, coding, pop, _, _ = _cache_case(4)
+    calls = []
+
+    def counting(xy):
+        calls.append(len(xy))
+        return static(xy)
+
+    ev = PathEvaluator(R_ROBOT, counting)
+    n_nodes = coding.n_knots * coding.levels + 2
+    ev._enable_segment_cache(n_nodes)
+    row = np.full((1, coding.n_knots), coding.mid)
+    pts, mask = coding.decode(row)
+    ids = coding.node_ids(row)
+    ev._cache[:, ids[0, 0] * n_nodes + ids[0, 1]] = -1.0  # slot 0 known to be blocked
+    none = np.zeros((1, coding.n_knots + 1), dtype=bool)
+    got = ev.evaluate(pts, mask, ids, coding.arc, none)
+    assert calls == [] and not got.feasible[0] and ev.fitness(got, 10.0).cost[0] == np.inf
+    marked = none.copy()
+    marked[0, 4] = True
+    got = ev.evaluate(pts, mask, ids, coding.arc, marked)
+    assert len(calls) == 1  # the marked slot only
+    want = PathEvaluator(R_ROBOT, static).evaluate(pts, mask, None, coding.arc)
+    assert got.segment_clearance[0, 4] == want.segment_clearance[0, 4]
+    got = ev.evaluate(pts, mask, ids, coding.arc)  # exact=None: everything
+    np.testing.assert_array_equal(got.segment_clearance[0, 1:], want.segment_clearance[0, 1:])

@@ -15,9 +15,11 @@ for every bundled query.
                              [--reference REV]
 
 ``--reference REV`` also runs the GA of git revision REV (its single-file ``gfuzzy/ga.py``,
-e.g. ``1a8460d``, before the GA package and its caches) on the same runs, in the same
-process, and prints its time next to the current one, and whether both results are the
-same (path, chromosome, fitness history, figures).
+e.g. ``1a8460d``, before the GA package and its caches, or its ``gfuzzy/ga/`` package, e.g.
+``747cfd3``, before the compiled kernels) on the same runs, in the same process, and prints
+its time next to the current one, and whether both results are the same (path, chromosome,
+fitness history, figures). Both use the current clearance callables; for the whole change
+(callables included) on every bundled query, see ``tools/ga_snapshot.py``.
 """
 
 from __future__ import annotations
@@ -100,17 +102,40 @@ def scenario(seed):
 
 
 def load_reference(rev: str):
-    """The module ``gfuzzy/ga.py`` of git revision ``rev``, imported as
-    ``gfuzzy._ga_reference`` (its relative imports resolve in the current package)."""
+    """The GA of git revision ``rev``, imported as ``gfuzzy._ga_reference``: its single-file
+    ``gfuzzy/ga.py`` (e.g. ``1a8460d``) or its ``gfuzzy/ga/`` package (e.g. ``747cfd3``). Its
+    relative imports of the rest of gfuzzy resolve in the current package."""
     root = Path(__file__).resolve().parent.parent
-    src = subprocess.run(
-        ["git", "show", f"{rev}:gfuzzy/ga.py"], cwd=root, capture_output=True, text=True, check=True
-    ).stdout
-    spec = importlib.util.spec_from_loader("gfuzzy._ga_reference", loader=None)
+
+    def show(path: str) -> str:
+        return subprocess.run(
+            ["git", "show", f"{rev}:{path}"], cwd=root, capture_output=True, text=True, check=True
+        ).stdout
+
+    def module(name: str, src: str, origin: str, package: bool = False):
+        spec = importlib.util.spec_from_loader(name, loader=None, is_package=package)
+        mod = importlib.util.module_from_spec(spec)
+        mod.__package__ = name if package else name.rpartition(".")[0]
+        sys.modules[name] = mod  # dataclasses look their module up there
+        exec(compile(src, f"{rev}:{origin}", "exec"), mod.__dict__)
+        return mod
+
+    files = subprocess.run(
+        ["git", "ls-tree", "--name-only", rev, "gfuzzy/ga/"], cwd=root, capture_output=True, text=True, check=True
+    ).stdout.split()
+    if not files:
+        return module("gfuzzy._ga_reference", show("gfuzzy/ga.py"), "gfuzzy/ga.py")
+    names = {Path(f).stem for f in files if f.endswith(".py")}
+    pkg = "gfuzzy._ga_reference"
+    spec = importlib.util.spec_from_loader(pkg, loader=None, is_package=True)
     mod = importlib.util.module_from_spec(spec)
-    mod.__package__ = "gfuzzy"
-    sys.modules[mod.__name__] = mod  # dataclasses look their module up there
-    exec(compile(src, f"{rev}:gfuzzy/ga.py", "exec"), mod.__dict__)
+    mod.__path__ = []
+    sys.modules[pkg] = mod
+    # each module imports only the ones before it (docs/ga.md); unknown ones go last
+    order = ["options", "coding", "fitness", "kernels", "operators", "lattice", "refine"]
+    for name in [n for n in order if n in names] + sorted(names - set(order) - {"__init__"}):
+        setattr(mod, name, module(f"{pkg}.{name}", show(f"gfuzzy/ga/{name}.py"), f"gfuzzy/ga/{name}.py"))
+    exec(compile(show("gfuzzy/ga/__init__.py"), f"{rev}:gfuzzy/ga/__init__.py", "exec"), mod.__dict__)
     return mod
 
 
@@ -181,7 +206,7 @@ def main(argv=None):
             )
     print("times: best of --repeat runs with the same seed")
     if not args.skip_scenes:
-        bundled(args.seed, args.generations, ref, args.reference)
+        bundled(args.seed, args.generations, ref, args.reference, args.repeat)
 
 
 FIGURES = (("length", ".2f"), ("smoothness", ".2f"), ("min_clearance", ".3f"), ("duration", ".2f"))
@@ -193,7 +218,7 @@ def _pair(before: dict, after: dict, key: str, fmt: str) -> str:
     return f"{format(before[key], fmt):>6} -> {format(after[key], fmt):<6}"
 
 
-def bundled(seed: int, generations: int, ref=None, rev: str | None = None) -> None:
+def bundled(seed: int, generations: int, ref=None, rev: str | None = None, repeat: int = 1) -> None:
     from gfuzzy.planner import Planner, PlanOptions
     from gfuzzy.roadmap import load_roadmap
     from gfuzzy.scene import load_scene
@@ -216,18 +241,26 @@ def bundled(seed: int, generations: int, ref=None, rev: str | None = None) -> No
             module.GAOptions(generations=generations, patience=None), seed=seed, static_segment=segment,
         )  # fmt: skip
 
-    t0 = time.perf_counter()
-    ga = corridor(current)
+    def timed(module):
+        """The result and the wall times of ``repeat`` runs."""
+        walls = []
+        for _ in range(repeat):
+            t0 = time.perf_counter()
+            out = corridor(module)
+            walls.append(time.perf_counter() - t0)
+        return out, walls
+
+    def spread(walls) -> str:
+        return f"{min(walls):.2f} s" if len(walls) == 1 else f"{min(walls):.2f}-{max(walls):.2f} s ({len(walls)} runs)"
+
+    ga, walls = timed(current)
     print(
         f"\nbuilding-floor corridor, population 50 x {ga.generations} generations, patience off: "
-        f"{time.perf_counter() - t0:.2f} s (improved: {ga.improved}, best cost {ga.fitness_history[-1]:.4g})"
+        f"{spread(walls)} (improved: {ga.improved}, best cost {ga.fitness_history[-1]:.4g})"
     )
     if ref is not None:
-        t0 = time.perf_counter()
-        r_ga = corridor(ref)
-        print(
-            f"  reference {rev}: {time.perf_counter() - t0:.2f} s, same result: {same_result(ga, r_ga)}"
-        )
+        r_ga, r_walls = timed(ref)
+        print(f"  reference {rev}: {spread(r_walls)}, same result: {same_result(ga, r_ga)}")
     print(
         f"\n{'scene/query':<36}{'applied':>8}{'ms':>7}  {'length':>15}  {'turning rad':>14}  "
         f"{'min clear':>15}  {'duration':>15}  note"

@@ -23,7 +23,9 @@ The package is independent of the rest of the planner: it takes a polyline and t
 callables. See ``docs/ga.md`` for the design and its reasons. Its modules, each importing
 only the ones before it: :mod:`.options` (settings, gene constants, input checks),
 :mod:`.coding` (knots, search lines, steps), :mod:`.fitness` (batch evaluation and cost),
-:mod:`.operators` (selection, crossover, mutation, smooth) and :mod:`.refine` (the driver).
+:mod:`.kernels` (numba kernels, bit for bit the numpy they replace), :mod:`.operators`
+(selection, crossover, mutation, smooth), :mod:`.lattice` (the GA's compiled evaluation of a
+population) and :mod:`.refine` (the driver).
 """
 
 from .coding import PathCoding

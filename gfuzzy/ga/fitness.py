@@ -10,6 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..typing import ArrayLike, BoolArray, FloatArray, IntArray
+from . import kernels
 from .options import (
     _EPS,
     GAOptions,
@@ -197,7 +198,8 @@ class PathEvaluator:
             own arc-length fraction (the whole path follows the input's timing).
         exact : (P, M - 1) bool or None
             None: everything is evaluated. Otherwise the static check of a row already ruled
-            out by the speed rule or the movers is skipped, except on the slots marked here:
+            out by the speed rule, the movers or a cached static bound below zero (one of its
+            segments is known to be blocked) is skipped, except on the slots marked here:
             such a row stays infeasible (cost ``inf``), but its ``min_clearance`` and its
             ``segment_clearance`` outside the marked slots may be too high.
 
@@ -219,7 +221,8 @@ class PathEvaluator:
         feasible, seg_mover, mover_min = self._timing_checks(g, keys, arc)
         skip = None
         if exact is not None:
-            need = feasible[g.rows] | np.asarray(exact, dtype=bool).reshape(-1).take(g.fs)
+            alive = feasible & ~self._cached_blocked(g.rows, keys, P)
+            need = alive[g.rows] | np.asarray(exact, dtype=bool).reshape(-1).take(g.fs)
             skip = ~need
         seg_lb, seg_min = self._segment_clearance(g, keys, skip)
         seg_full = np.full((P, M - 1), np.inf)
@@ -231,6 +234,14 @@ class PathEvaluator:
             min_clear = np.minimum(min_clear, mover_min)
         feasible &= seg_full.min(axis=1) >= 0
         return Evaluation(g.length, smoothness, min_clear, seg_full, feasible)
+
+    def _cached_blocked(self, rows: IntArray, keys: IntArray | None, P: int) -> BoolArray:
+        """(P,) bool: rows with a kept segment whose cached static bound is below zero (so
+        infeasible whatever their other segments hold)."""
+        blocked = np.zeros(P, dtype=bool)
+        if keys is not None and self._cache is not None:
+            blocked[rows[self._cache[0].take(keys) < 0]] = True
+        return blocked
 
     def _timing_checks(self, g: _Geometry, keys: IntArray | None, arc: FloatArray | None):
         """The speed rule and the movers on the timing grid.
@@ -313,15 +324,7 @@ class PathEvaluator:
         if need.any():
             sel = None if need.all() else np.nonzero(need)[0]
             pick = slice(None) if sel is None else sel
-            if self.static_segment is not None:
-                # the caller certifies whole segments (e.g. by sphere tracing)
-                lb, mn = self.static_segment(a[pick], a[pick] + e[pick])
-                lb, mn = np.asarray(lb, dtype=float), np.asarray(mn, dtype=float)
-            else:
-                s_offs, _, _, s_xy, s_gap = _samples(a[pick], e[pick], L[pick], n[pick])
-                c = _call_static(self.static_clearance, s_xy)
-                lb = np.minimum.reduceat(_lipschitz_bound(c, s_gap, s_offs), s_offs)
-                mn = np.minimum.reduceat(c, s_offs)
+            lb, mn = self._static_bounds(a[pick], e[pick], L[pick], n[pick])
             if sel is None:
                 seg_lb, seg_min = lb, mn
             else:
@@ -340,6 +343,19 @@ class PathEvaluator:
             seg_lb = np.minimum(seg_lb, np.minimum.reduceat(cm, offs))
         return seg_lb, seg_min
 
+    def _static_bounds(self, a: FloatArray, e: FloatArray, L: FloatArray, n: IntArray):
+        """Static bound and smallest clearance of the segments ``a`` to ``a + e`` (lengths
+        ``L``, ``n`` sample gaps): the caller's segment check, or samples of the static
+        clearance. Returns (lb, mn), (S,) float each."""
+        if self.static_segment is not None:
+            # the caller certifies whole segments (e.g. by sphere tracing)
+            lb, mn = self.static_segment(a, a + e)
+            return np.asarray(lb, dtype=float), np.asarray(mn, dtype=float)
+        s_offs, _, _, s_xy, s_gap = _samples(a, e, L, n)
+        c = _call_static(self.static_clearance, s_xy)
+        lb = np.minimum.reduceat(_lipschitz_bound(c, s_gap, s_offs), s_offs)
+        return lb, np.minimum.reduceat(c, s_offs)
+
     def _grid_clearance_cached(
         self, g: _Geometry, keys: IntArray, u_start: FloatArray, u_end: FloatArray
     ) -> tuple[FloatArray, float]:
@@ -357,37 +373,30 @@ class PathEvaluator:
         start : float
             Smallest mover clearance at the start's grid points.
         """
-        gu, gt = self._grid_u, self._grid_t
-        S = g.M - 1
         vals = self._mover_cache[keys]
         todo = np.nonzero(np.isnan(vals))[0]
         if len(todo):
-            uk, first = np.unique(keys[todo], return_index=True)
-            j = todo[first]  # one kept segment per new node pair
-            fs = g.fs.take(j)
-            u0, u1 = u_start.reshape(-1).take(fs), u_end.reshape(-1).take(fs)
-            lo = np.searchsorted(gu, u0, side="right")
-            hi = np.searchsorted(gu, u1, side="right")
-            hi[g.slots.take(j) == S - 1] = len(gu)
-            cnt = np.maximum(hi - lo, 0)
-            seg = np.repeat(np.arange(len(j)), cnt)
-            offs = np.zeros(len(j), dtype=np.int64)
-            np.cumsum(cnt[:-1], out=offs[1:])
-            gi = lo.take(seg) + (np.arange(len(seg)) - offs.take(seg))
-            width = u1 - u0
-            f = (gu.take(gi) - u0.take(seg)) / np.where(width > 0, width, 1.0).take(seg)
-            np.clip(f, 0.0, 1.0, out=f)
-            xy = g.a_pts.reshape(-1, 2).take(fs.take(seg), axis=0) + f[:, None] * g.d.reshape(
-                -1, 2
-            ).take(fs.take(seg), axis=0)
-            out = np.full(len(j), np.inf)
-            if len(seg):
-                cm = _call_mover(self.mover_clearance, xy, gt.take(gi))
-                nz = cnt > 0
-                out[nz] = np.minimum.reduceat(cm, offs[nz])
-            self._mover_cache[uk] = out
+            self._fill_mover_cache(g, keys, todo, u_start, u_end)
             vals = self._mover_cache[keys]
-        start = g.a_pts[0, 0]
+        return vals, self._start_mover_clearance(g.a_pts[0, 0])
+
+    def _fill_mover_cache(self, g, keys: IntArray, todo: IntArray, u_start: FloatArray, u_end: FloatArray):
+        """The node-pair mover cache for the kept segments ``todo`` (not cached yet); ``g``
+        has the :class:`_Geometry` attributes ``M, fs, slots, a_pts, d``."""
+        S = g.M - 1
+        uk, cnt, xy, gi = kernels.mover_grid_points(
+            keys, todo, g.fs, g.slots, u_start.reshape(-1), u_end.reshape(-1), g.a_pts.reshape(-1, 2),
+            g.d.reshape(-1, 2), self._grid_u, S - 1,
+        )  # fmt: skip
+        out = np.full(len(uk), np.inf)
+        if len(gi):
+            out = kernels.segment_minima(_call_mover(self.mover_clearance, xy, self._grid_t.take(gi)), cnt)
+        self._mover_cache[uk] = out
+
+    def _start_mover_clearance(self, start: FloatArray) -> float:
+        """Smallest mover clearance at the grid points at u <= 0 (the input waiting at its
+        start), at ``start``."""
+        gu, gt = self._grid_u, self._grid_t
         key = start.tobytes()
         c0 = self._start_clearance.get(key)
         if c0 is None:
@@ -396,7 +405,7 @@ class PathEvaluator:
             c0 = self._start_clearance[key] = float(
                 _call_mover(self.mover_clearance, xy0, gt[:n0]).min(initial=np.inf)
             )
-        return vals, c0
+        return c0
 
     def _grid_clearance(self, a_pts, d, u_start, u_end) -> tuple[IntArray, FloatArray]:
         """Mover clearance on the timing grid.

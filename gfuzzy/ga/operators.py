@@ -8,6 +8,7 @@ from enum import IntEnum
 import numpy as np
 
 from ..typing import BoolArray, FloatArray, IntArray
+from . import kernels
 from .coding import PathCoding
 from .fitness import PathEvaluator
 from .options import _EPS, REMOVED
@@ -87,10 +88,7 @@ def crossover(chromosomes: IntArray, rng: np.random.Generator, pc: float) -> Int
         return pop
     do = rng.random(npairs) < pc
     cut = rng.integers(1, K, npairs)
-    swap = do[:, None] & (np.arange(K)[None, :] >= cut[:, None])
-    a, b = pop[0 : 2 * npairs : 2].copy(), pop[1 : 2 * npairs : 2].copy()
-    pop[0 : 2 * npairs : 2] = np.where(swap, b, a)
-    pop[1 : 2 * npairs : 2] = np.where(swap, a, b)
+    kernels.crossover_apply(pop, do, cut)
     return pop
 
 
@@ -139,11 +137,12 @@ def mutate(chromosomes: IntArray, rng: np.random.Generator, pm: float, levels: i
     (P, K) int
         A new array.
     """
-    pop = np.asarray(chromosomes)
+    pop = np.array(chromosomes, copy=True)
     hit = rng.random(pop.shape) < pm
-    rows, genes = np.nonzero(hit)
-    kinds = rng.integers(0, 3, len(rows))
-    return apply_mutation(pop, rows, genes, kinds, levels)
+    kinds = rng.integers(0, 3, np.count_nonzero(hit))
+    # apply_mutation on the hits in row-major order (np.nonzero's), compiled
+    kernels.mutation_apply(pop, hit, kinds, levels)
+    return pop
 
 
 def smooth(
@@ -217,56 +216,11 @@ def _propose_smooth(
     if len(tried) == 0:
         return tried, pop[:0], np.zeros((0, K + 1), dtype=bool)
     lam = rng.uniform(*_SMOOTH_FRACTION, len(tried))
-    sub = pop[tried]
-    pts, mask = coding.decode(sub)
-    Q, M = mask.shape
-    idx = np.arange(M)
-    last = np.maximum.accumulate(np.where(mask, idx, -1), axis=1)
-    first = np.minimum.accumulate(np.where(mask, idx, M)[:, ::-1], axis=1)[:, ::-1]
-    prv, nxt = last[:, :-2], first[:, 2:]  # kept neighbours of points 1..M-2
-    flat = pts.reshape(-1, 2)
-    base = np.arange(Q)[:, None] * M
-    inner = pts[:, 1:-1]
-    din = inner - flat.take((base + prv).ravel(), axis=0).reshape(inner.shape)
-    dout = flat.take((base + nxt).ravel(), axis=0).reshape(inner.shape) - inner
-    cross = din[..., 0] * dout[..., 1] - din[..., 1] * dout[..., 0]
-    dot = (din * dout).sum(-1)
-    ang = np.where(mask[:, 1:-1], np.abs(np.arctan2(cross, dot)), 0.0)
-    k = ang.argmax(axis=1)  # via index; point index k + 1
-    valid = ang[np.arange(Q), k] > 1e-6
-    r = np.arange(Q)
-    iu, iw = prv[r, k], nxt[r, k]
-    U, V, W = (
-        flat.take(r * M + iu, axis=0),
-        flat.take(r * M + k + 1, axis=0),
-        flat.take(r * M + iw, axis=0),
+    sub = pop[tried].astype(np.int64)
+    c = coding
+    pts, mask, prv, nxt, cross, dot = kernels.smooth_corners(sub, c.start, c.goal, c.knots, c.normals, c.steps, c.mid)
+    ang = np.abs(np.arctan2(cross, dot))  # numpy's arctan2, as the numpy operator took
+    cand, changed, new_slots = kernels.smooth_reencode(
+        sub, pts, mask, prv, nxt, ang, lam, c.knots, c.normals, c.steps, c.mid, c.levels
     )
-    A = V + lam[:, None] * (U - V)
-    B = V + lam[:, None] * (W - V)
-    C = 0.25 * A + 0.5 * V + 0.25 * B
-    poly = np.stack([U, A, C, B, W], axis=1)  # (Q, 5, 2)
-    p0, e = poly[:, :-1], np.diff(poly, axis=1)  # (Q, 4, 2)
-    # intersect every knot line (p + s n) with every segment (p0 + tau e)
-    rr = p0[:, None, :, :] - coding.knots[None, :, None, :]  # (Q, K, 4, 2)
-    n = coding.normals[None, :, None, :]
-    ee = e[:, None, :, :]
-    den = n[..., 0] * ee[..., 1] - n[..., 1] * ee[..., 0]
-    safe_den = np.where(np.abs(den) > _EPS, den, 1.0)
-    s = (rr[..., 0] * ee[..., 1] - rr[..., 1] * ee[..., 0]) / safe_den
-    tau = (rr[..., 0] * n[..., 1] - rr[..., 1] * n[..., 0]) / safe_den
-    hits = (np.abs(den) > _EPS) & (tau >= -1e-9) & (tau <= 1 + 1e-9)
-    cur = np.nan_to_num(coding.offsets(sub))  # removed genes: origin 0
-    score = np.where(hits, np.abs(s - cur[..., None]), np.inf)
-    j = score.reshape(-1, 4).argmin(axis=1) + 4 * np.arange(Q * K)
-    s_best = s.take(j).reshape(Q, K)
-    hit_any = np.isfinite(score.take(j)).reshape(Q, K)
-    lvl = np.rint(s_best / coding.steps).astype(np.int64) + coding.mid
-    in_range = hit_any & (lvl >= 0) & (lvl < coding.levels)
-    new_genes = np.where(in_range, lvl, REMOVED)
-    knot_pt = np.arange(K)[None, :] + 1
-    region = (knot_pt > iu[:, None]) & (knot_pt < iw[:, None]) & valid[:, None]
-    cand = np.where(region, new_genes, sub).astype(pop.dtype)
-    changed = np.any(cand != sub, axis=1)
-    slot_pt = np.arange(1, M)[None, :]
-    new_slots = (slot_pt > iu[:, None]) & (slot_pt <= iw[:, None])
-    return tried[changed], cand[changed], new_slots[changed]
+    return tried[changed], cand[changed].astype(pop.dtype), new_slots[changed]

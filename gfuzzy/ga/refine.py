@@ -25,6 +25,7 @@ import numpy as np
 
 from ..rng import create_rng
 from ..typing import ArrayLike, BoolArray, FloatArray, IntArray
+from . import lattice
 from .coding import PathCoding, _dedupe, _derive_steps
 from .fitness import Evaluation, FitnessParts, PathEvaluator
 from .operators import _free, _propose_smooth, crossover, mutate, roulette_select
@@ -232,39 +233,45 @@ class _Costs:
     def __init__(self, coding: PathCoding, evaluator: PathEvaluator, chord: float):
         self.coding, self.evaluator, self.chord = coding, evaluator, chord
         self.cache: dict[bytes, float] = {}
+        self.compiled = lattice.supported(evaluator)
 
     def evaluate(self, batch: IntArray, exact: BoolArray | None = None) -> Evaluation:
         """Evaluate ``batch`` (P, K) and remember its costs; ``exact`` (P, K + 1): the slots
         whose segment clearance must be exact even in an infeasible row (see
         :meth:`PathEvaluator.evaluate`); None: none (the costs are exact anyway)."""
         coding = self.coding
-        pts, mask = coding.decode(batch)
-        if exact is None:
-            exact = np.zeros((len(batch), coding.n_knots + 1), dtype=bool)
-        ev = self.evaluator.evaluate(pts, mask, coding.node_ids(batch), coding.arc, exact)
-        self.cache.update(
-            zip(
-                (row.tobytes() for row in batch),
-                self.evaluator.fitness(ev, self.chord).cost.tolist(),
-                strict=True,
-            )
-        )
+        if self.compiled and len(batch):
+            ev, cost = lattice.evaluate_genes(self.evaluator, coding, batch, exact, self.chord)
+        else:
+            pts, mask = coding.decode(batch)
+            if exact is None:
+                exact = np.zeros((len(batch), coding.n_knots + 1), dtype=bool)
+            ev = self.evaluator.evaluate(pts, mask, coding.node_ids(batch), coding.arc, exact)
+            cost = self.evaluator.fitness(ev, self.chord).cost
+        self.cache.update(zip(_keys(batch), cost.tolist(), strict=True))
         return ev
 
     def missing(self, pop: IntArray) -> IntArray:
         """Rows of ``pop`` not evaluated yet, the first of each distinct chromosome."""
         seen: set[bytes] = set()
         rows = []
-        for i, row in enumerate(pop):
-            key = row.tobytes()
-            if key not in self.cache and key not in seen:
+        cache = self.cache
+        for i, key in enumerate(_keys(pop)):
+            if key not in cache and key not in seen:
                 seen.add(key)
                 rows.append(i)
         return np.asarray(rows, dtype=np.int64)
 
     def of(self, pop: IntArray) -> FloatArray:
         """(P,) costs of evaluated chromosomes."""
-        return np.fromiter((self.cache[row.tobytes()] for row in pop), dtype=float, count=len(pop))
+        cache = self.cache
+        return np.array([cache[key] for key in _keys(pop)], dtype=float)
+
+
+def _keys(pop: IntArray) -> list[bytes]:
+    """Each row's bytes (``row.tobytes()``), in one call."""
+    pop = np.ascontiguousarray(pop)
+    return pop.view(np.dtype((np.void, pop.shape[1] * pop.itemsize))).reshape(-1).tolist()
 
 
 def _evolve(
@@ -418,3 +425,19 @@ def _result(path, chromosome, history, gen, improved, b, after, traj, coding) ->
         trajectory=traj,
         coding=coding,
     )
+
+
+def warm() -> None:
+    """Compile (or load from numba's on-disk cache) the GA's kernels with the argument types
+    the GA passes them (``make warm`` runs this, so no GA pays a compile): a tiny refinement
+    among a mover with the input's timing, and the operators on int16 and int64 genes."""
+    path = np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 0.0], [3.0, 1.0]])
+
+    def free(xy):
+        return np.ones(len(xy))
+
+    opts = GAOptions(n_knots=4, levels=5, population=6, generations=3, patience=None, p_smooth=1.0)
+    refine_path(path, np.arange(4.0), 0.1, free, lambda xy, t: free(xy), opts, seed=0)
+    rng = np.random.default_rng(0)
+    for dtype in (np.int16, np.int64):
+        mutate(crossover(rng.integers(-1, 5, (6, 4)).astype(dtype), rng, 1.0), rng, 0.5, 5)
