@@ -128,7 +128,6 @@ class IntervalStore:
         self._hfloor = np.floor(np.where(self._finite, hmin, 0) + 1e-9).astype(np.int64)
         self.f_lb = np.minimum.reduceat(fs + h, ptr[:-1])
         self.done_hi = np.full(len(ptr) - 1, -1, dtype=np.int64)  # last step computed
-        self._done_l = self.done_hi.tolist()
         self.pool: bool | None = None  # the storage, fixed by the first set_horizon
         self.field = None
         self.H = -1
@@ -174,7 +173,7 @@ class IntervalStore:
     def ensure(self, node: int) -> None:
         """Compute ``node``'s intervals up to the current horizon (with a batch of others)."""
         g = self.group_of(node)
-        if self._done_l[g] < self._g_hi_l[g]:
+        if self.done_hi[g] < self._g_hi_l[g]:
             self._compute(g)
 
     def get(self, node: int) -> tuple:
@@ -185,7 +184,7 @@ class IntervalStore:
             return iv
         g = self.group_of(node)
         cap = self._g_hi_l[g]
-        if self._done_l[g] < cap:
+        if self.done_hi[g] < cap:
             self._compute(g)
         if self.pool:
             a, c = int(self.off[node]), max(int(self.cnt[node]), 0)
@@ -223,7 +222,7 @@ class IntervalStore:
         budget = max(1, INTERVAL_BATCH_CELLS // (self.H + 1))  # points per batch (points x steps bools)
         sizes = ptr[pending + 1] - ptr[pending]
         pending = pending[np.cumsum(sizes) <= budget]
-        if g not in set(pending.tolist()):
+        if not (pending == g).any():
             pending = np.append(pending, g)
         lo = np.maximum(self.g_lo[pending], self.done_hi[pending] + 1)
         hi = self.g_hi[pending]
@@ -238,8 +237,6 @@ class IntervalStore:
         else:
             gs, ge, sp = _intervals_from_pairs(field_, self.graph.poses[nodes], sub_ptr, lo, hi, self.H)
         self.done_hi[pending] = hi
-        for j, v in zip(pending.tolist(), hi.tolist(), strict=True):
-            self._done_l[j] = v
         if self.pool:
             self._pool_merge(nodes, gs, ge, sp, lo_n)
             return
