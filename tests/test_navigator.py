@@ -575,3 +575,20 @@ def test_a_refused_search_falls_back(open_square, monkeypatch, family):
     assert nav.last.mode in ("direct", "previous", "evasive")
     assert "refused" in nav.last.message
     np.testing.assert_allclose(traj.waypoints[0], [0.0, 0.0, -4.0])
+
+
+def test_evasive_motion_backs_out_of_a_contact(open_square):
+    """Already touching a person (everyone's gap is the same now), the evasive motion opens
+    the gap rather than heading on to the goal through them (found by the budget bench:
+    60 people, the robot pushed 9 cm into a person walking across its way)."""
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (-3.0, 0.0))
+    pose = np.array([0.0, 0.0])
+    # a person overlapping the robot by 1 cm, between it and the goal, walking slowly away
+    obs = np.array([[-0.59, 0.0, -0.3, 0.0, 0.3]])
+    traj = nav._evasive(0.0, pose, obs)
+    ts = np.linspace(0.0, 0.25, 26)
+    person = obs[0, :2] + ts[:, None] * obs[0, 2:4]
+    gap = np.hypot(*(traj.at(ts)[:, :2] - person).T) - 0.6
+    assert gap[0] < 0  # in contact at the start
+    assert np.all(np.diff(gap) >= -1e-12) and gap[-1] > 0  # the gap only opens, and is open by one period

@@ -79,9 +79,10 @@ class Crowd:
         speed = rng.uniform(0.5, 1.5, k) * (rng.random(k) >= 0.2)
         self.xy = xy
         self.v = np.column_stack([np.cos(ang), np.sin(ang)]) * speed[:, None]
+        self.seen_v = self.v.copy()  # the velocity a sensor sees: the last sub-step's motion
 
     def observe(self) -> np.ndarray:
-        return np.column_stack([self.xy, self.v, np.full(len(self.xy), PERSON_R)])
+        return np.column_stack([self.xy, self.seen_v, np.full(len(self.xy), PERSON_R)])
 
     def _blocked(self, new, robot_xy):
         """Steps that would come closer to the robot (within 0.05 m) or into a pillar."""
@@ -102,7 +103,9 @@ class Crowd:
         stuck = self._blocked(new, robot_xy)  # blocked both ways: stand, then a new heading
         ang = self.rng.uniform(0, 2 * math.pi, int(stuck.sum()))
         self.v[stuck] = np.column_stack([np.cos(ang), np.sin(ang)]) * np.hypot(*self.v[stuck].T)[:, None]
+        before = self.xy.copy()
         self.xy[~stuck] = np.clip(new[~stuck], PERSON_R, [W - PERSON_R, H - PERSON_R])
+        self.seen_v = (self.xy - before) / dt  # a person standing (stuck) is seen standing
 
 
 def baseline_navigator(rev: str):
