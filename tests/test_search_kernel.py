@@ -208,16 +208,9 @@ def test_compiled_safety_kernel_same_pairs(seed, broad, tmp_path, monkeypatch):
         monkeypatch.setattr(movers, "DENSE_BROAD_PHASE", 0)
     rng = np.random.default_rng(100 + seed)
     scene, graph, _, _ = _random_case(rng, tmp_path)
-    n = int(rng.integers(3, 9))
-    a, b = rng.uniform(0.3, 5.7, (2, 40, 2))
-    groups = [a[i] + np.linspace(0, 1, n)[:, None] * (b[i] - a[i]) for i in range(40)]
-    groups += [rng.uniform(0.3, 5.7, (1, 2)) for _ in range(20)]
-    poses = np.vstack(groups)
-    if scene.robot.dof == 3:
-        poses = np.column_stack([poses, rng.uniform(-math.pi, math.pi, len(poses))])
-    ptr = np.concatenate([[0], np.cumsum([len(g) for g in groups])])
-    lo = rng.integers(0, 20, len(groups))
-    hi = lo + rng.integers(0, 60, len(groups))
+    poses, ptr = _random_groups(rng, scene)
+    lo = rng.integers(0, 20, len(ptr) - 1)
+    hi = lo + rng.integers(0, 60, len(ptr) - 1)
     pairs = []
     t0 = float(rng.uniform(0, 3))
     for compiled in (False, True):
