@@ -768,10 +768,7 @@ class Navigator:
         obs = self._near(pose, obs, T, EVASION_GAP)  # farther people change no score below
         if len(obs):
             gap = self._clearance_along(pts, times, obs).min(axis=-1)  # (C, T)
-            # contact: a gap at or below zero that is not opening up; a robot already
-            # touching someone (the same gap now for every candidate) so prefers the
-            # motions that get it out, not the ones that push on towards the goal
-            later = gap[:, 1:]
+            later = gap[:, 1:]  # contact: a gap <= 0 not opening up (a robot touching someone backs out)
             hit = (later <= 0) & (later <= gap[:, :1])
             ttc = np.where(hit.any(axis=1), tau[1:][np.argmax(hit, axis=1)], math.inf)
             worst = later.min(axis=1)
