@@ -514,8 +514,10 @@ class Planner:
             horizon = (steps - hold_steps) * opts.dt
             if len(self.scene.movers) * (steps + 1) > MAX_MOVER_SAMPLES:
                 raise LimitError(
-                    f"{len(self.scene.movers)} movers over {steps:,} time steps are too many to "
-                    f"sample (at most {MAX_MOVER_SAMPLES:,}); use a larger dt or a shorter horizon"
+                    f"{len(self.scene.movers)} movers over {steps:,} time steps"
+                    + (f" (the hold's {hold_steps:,} included)" if hold_steps else "")
+                    + f" are too many to sample ({len(self.scene.movers) * (steps + 1):,} samples, at most "
+                    f"{MAX_MOVER_SAMPLES:,}); use a larger dt, a shorter horizon or hold"
                 )
             field_ = MoverField(self.scene, t0, opts.dt, steps, self.robot.vmax)
             field_.compiled = opts.backend == "compiled"

@@ -41,7 +41,7 @@ from numba import njit
 from .movers import MoverField
 from .spacetime import IntervalStore, SearchResult, SpaceTimeGraph
 from .status import Status
-from .timespace import NO_FIRST_MOTION, exhausted, first_motions
+from .timespace import NO_FIRST_MOTION, exhausted, first_motions, too_short
 
 __all__ = ["sipp_compiled", "warm"]
 
@@ -294,6 +294,8 @@ def sipp_compiled(
     n = len(h)
     if not math.isfinite(h[start]):
         return SearchResult(Status.NO_PATH, message="the goal is not reachable on the roadmap")
+    if start_step + h[start] > H:
+        return too_short()
     indptr = np.ascontiguousarray(graph.indptr, dtype=np.int64)
     nbrs = np.ascontiguousarray(graph.neighbors, dtype=np.int64)
     wait_ok = np.ones(n, np.bool_) if graph.can_wait is None else np.ascontiguousarray(graph.can_wait, np.bool_)
@@ -319,16 +321,15 @@ def sipp_compiled(
         # the reference's exact first motions, in Python (rare: a start beside a mover)
         key0 = start * stride + stride - 1
         _set(tk, tb, tp, ctr, key0, start_step, -1)
-        first = start_step + 1
         pushed = False
         neighbours = nbrs[indptr[start] : indptr[start + 1]].tolist()
-        for v, j in first_motions(graph, field_, start, start_step, ivals, neighbours, bool(wait_ok[start])):
+        for v, j, arrive in first_motions(graph, field_, start, start_step, ivals, neighbours, bool(wait_ok[start])):
             key = v * stride + j
-            if first < _get(tk, tb, key, np.iinfo(np.int64).max):
+            if arrive < _get(tk, tb, key, np.iinfo(np.int64).max):
                 load(v)
                 hf, hq, tk, tb, tp = _room(hf, hq, tk, tb, tp, ctr, 1)
-                _set(tk, tb, tp, ctr, key, first, key0)
-                _push(hf, hq, ctr, first + weight * h[v], -first, v, j)
+                _set(tk, tb, tp, ctr, key, arrive, key0)
+                _push(hf, hq, ctr, arrive + weight * h[v], -arrive, v, j)
                 pushed = True
         if not pushed:
             return SearchResult(Status.NO_PATH, message=NO_FIRST_MOTION)
@@ -337,14 +338,13 @@ def sipp_compiled(
             indptr, nbrs, h, wait_ok, goal, goal_hold, H, float(weight), stride,
             store.off, store.ready, store.cap, store.s, store.e, hf, hq, tk, tb, tp, ctr, need,
         )  # fmt: skip
-        if code == _NEED:
-            for v in need[: ctr[_NNEED]].tolist():
-                load(v)
-            continue
         if code == _ROOM:
             hf, hq, tk, tb, tp = _room(hf, hq, tk, tb, tp, ctr, int(ctr[_NNEED]))
             continue
-        if code == _YIELD:
+        if code == _NEED:  # the safety of a batch can take long among many movers: the clock too
+            for v in need[: ctr[_NNEED]].tolist():
+                load(v)
+        if code in (_NEED, _YIELD):
             if time.perf_counter() > deadline:
                 return SearchResult(
                     Status.TIMEOUT,

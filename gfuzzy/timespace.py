@@ -101,6 +101,8 @@ def sipp(
     inf = math.inf
     if not math.isfinite(hl[start]):
         return SearchResult(Status.NO_PATH, message="the goal is not reachable on the roadmap")
+    if start_step + hl[start] > H:
+        return too_short()
     # a state (node, interval index) is the integer node * stride + index
     stride = H + 2
     heappop, heappush = heapq.heappop, heapq.heappush
@@ -177,14 +179,19 @@ def _open(graph, field_, start, start_step, ivals, neighbours, can_wait, stride,
     best = {key0: start_step}
     parent = {key0: -1}
     openq: list = []
-    first = start_step + 1
-    for v, j in first_motions(graph, field_, start, start_step, ivals, neighbours, can_wait):
+    for v, j, arrive in first_motions(graph, field_, start, start_step, ivals, neighbours, can_wait):
         key = v * stride + j
-        if first < best.get(key, math.inf):
-            best[key] = first
+        if arrive < best.get(key, math.inf):
+            best[key] = arrive
             parent[key] = key0
-            heapq.heappush(openq, (first + weight * float(hl[v]), -first, v, j))
+            heapq.heappush(openq, (arrive + weight * float(hl[v]), -arrive, v, j))
     return best, parent, openq
+
+
+def too_short() -> SearchResult:
+    """The NO_PATH answer when the horizon is shorter than the static distance to the goal
+    (both backends): the horizon, not the movers, cut the search."""
+    return SearchResult(Status.NO_PATH, message="no safe trajectory within the planning horizon", horizon_hit=True)
 
 
 def exhausted(expansions: int, states: int, horizon_hit: bool) -> SearchResult:
@@ -197,32 +204,46 @@ def exhausted(expansions: int, states: int, horizon_hit: bool) -> SearchResult:
     return SearchResult(Status.NO_PATH, message=msg, expansions=expansions, states=states, horizon_hit=horizon_hit)
 
 
+#: Steps a start the margin refuses may be waited at, each decided exactly, before the
+#: robot must have left it or the margin must accept it.
+FIRST_WAIT_STEPS = 40
+
+
 def first_motions(graph: SpaceTimeGraph, field_: MoverField, start: int, start_step: int, ivals, neighbours,
                   can_wait: bool):  # fmt: skip
     """The first motions from a start the margin refuses, decided exactly (both backends).
 
-    Yields ``(node, interval index)`` for each one-step motion (to a neighbour in
-    ``neighbours`` order, then waiting at the start when ``can_wait``) that arrives in a
-    safe interval and that :meth:`MoverField.motion_safe` proves clear over the step.
-    A generator, so that a caller may act between two motions as the loop it replaces did.
+    Yields ``(node, interval index, arrival step)`` for each motion that waits at the start
+    for ``k`` steps (0 <= k < :data:`FIRST_WAIT_STEPS`, each waiting step proven clear
+    by :meth:`MoverField.motion_safe`, only when ``can_wait``) and then moves in one step to
+    a neighbour (in ``neighbours`` order) proven clear over that step, arriving in a safe
+    interval; and the start itself at the first step the margin accepts it, if waiting
+    there stays clear until then. A mover touching the start and walking away is so left
+    behind by waiting, which one exact step alone could not prove. A generator, so that a
+    caller may act between two motions as the loop it replaces did.
     """
-    first = start_step + 1
-    if first > field_.steps:
-        return
-    moves = list(neighbours)
-    if can_wait:
-        moves.append(start)
     h = graph.heuristic
-    for v in moves:
-        if h[v] == math.inf:
-            continue
-        starts, ends, _ = ivals(v)
-        j = bisect_left(ends, first)
-        if j >= len(starts) or starts[j] > first:
-            continue
-        if not field_.motion_safe(graph.poses[start], graph.poses[v], start_step):
-            continue
-        yield v, j
+    p0 = graph.poses[start]
+    last = min(field_.steps, start_step + (FIRST_WAIT_STEPS if can_wait else 1))
+    for depart in range(start_step, last):
+        arrive = depart + 1
+        for v in neighbours:
+            if h[v] == math.inf:
+                continue
+            starts, ends, _ = ivals(v)
+            j = bisect_left(ends, arrive)
+            if j >= len(starts) or starts[j] > arrive:
+                continue
+            if not field_.motion_safe(p0, graph.poses[v], depart):
+                continue
+            yield v, j, arrive
+        if not can_wait or not field_.motion_safe(p0, p0, depart):
+            return  # the robot cannot stay at the start over this step
+        starts, ends, _ = ivals(start)
+        j = bisect_left(ends, arrive)
+        if j < len(starts) and starts[j] <= arrive:  # the margin accepts the start again
+            yield start, j, arrive
+            return
 
 
 def _walk_back(key: int, best: dict, parent: dict, stride: int) -> tuple[list, list]:

@@ -225,10 +225,11 @@ def test_min_separation_exact_matches_sampling():
     assert exact == pytest.approx(sampled, abs=1e-3)
 
 
-def test_navigate_cli_on_a_pedestrian_replay(tmp_path):
+@pytest.mark.parametrize("backend", ["compiled", "reference"])
+def test_navigate_cli_on_a_pedestrian_replay(tmp_path, backend):
     out = tmp_path / "eth.json"
     scene = ROOT / "scenes" / "eth-crossing.yaml"
-    p = run_cli_process("navigate", scene, "-o", out)
+    p = run_cli_process("navigate", scene, "--backend", backend, "-o", out)
     assert p.returncode == 0, p.stdout + p.stderr
     doc = json.loads(out.read_text())
     assert doc["status"] == "solved"

@@ -461,3 +461,14 @@ def test_bad_options_and_poses_raise_input_error():
     check_number("w", 1.0, 1.0, strict=False)
     with pytest.raises(ValueError, match="x must be a positive number"):
         check_number("x", 0)
+
+
+def test_a_hold_too_long_to_sample_names_the_hold(open_scene):
+    """A hold beyond what the movers can be sampled over is refused with a message that
+    says the hold is the cause (it read as a horizon too long, with no word of the hold)."""
+    from gfuzzy.errors import LimitError
+
+    scene, rm = open_scene
+    q = scene.queries[0]
+    with pytest.raises(LimitError, match="hold"):
+        Planner(scene, rm).plan(q.start, q.goal, 0.0, hold=1e6)

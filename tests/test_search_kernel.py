@@ -19,11 +19,12 @@ import numpy as np
 import pytest
 from test_planner import _brute_force_steps, corridor, open_scene  # noqa: F401 (fixtures)
 
+from gfuzzy.check import check_trajectory
 from gfuzzy.planner import Planner, PlanOptions, Status
 from gfuzzy.roadmap import load_roadmap
-from gfuzzy.scene import load_scene
+from gfuzzy.scene import Query, load_scene
 from gfuzzy.search_kernel import sipp_compiled
-from gfuzzy.timespace import IntervalStore, MoverField, SpaceTimeGraph, sipp
+from gfuzzy.timespace import IntervalStore, MoverField, SpaceTimeGraph, sipp, timed_rows
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = sorted((ROOT / "scenes").glob("*.yaml"))
@@ -431,3 +432,46 @@ def test_interval_store_unchanged_when_the_field_raises(pool, tmp_path):
     for node in range(len(graph.poses)):
         a, b = store.get(node), fresh.get(node)
         assert (list(a[0]), list(a[1]), a[2]) == (list(b[0]), list(b[1]), b[2])
+
+
+@pytest.mark.parametrize("search", [sipp, sipp_compiled])
+def test_a_start_beside_a_person_walking_away_waits_until_clear(search, tmp_path):
+    """A start 1 cm from a person walking away (the margin refuses it for two steps): the
+    robot may wait there, each step proven clear exactly, until a move or the start itself is
+    accepted (one exact step alone found nothing, and the query was answered no_path)."""
+    p = tmp_path / "away.yaml"
+    p.write_text(
+        "version: 1\nname: away\nbounds: [0, 0, 4, 3]\nrobot: {disc: 0.25, vmax: 1.0}\n"
+        "movers:\n  - {name: p, disc: 0.3, trajectory: [[0, 1.0, 1.56], [5, 1.0, 3.06]]}\n"
+    )
+    scene = load_scene(p)
+    xs = np.arange(1.0, 3.0 + 1e-9, 0.07)  # a chain of one-step points along +x
+    n = len(xs)
+    nbrs = [[i + 1] if i == 0 else ([i - 1, i + 1] if i < n - 1 else [i - 1]) for i in range(n)]
+    graph = SpaceTimeGraph(
+        np.column_stack([xs, np.ones(n)]),
+        np.concatenate([[0], np.cumsum([len(a) for a in nbrs])]),
+        np.array([v for a in nbrs for v in a]),
+        np.arange(n)[::-1].astype(float),
+    )
+    field = MoverField(scene, 0.0, 0.07, 80, 1.0)
+    field.compiled = True
+    assert field.margin[0, 1] > 0.031  # waiting or stepping once is refused by the margin
+    res = search(graph, field, 0, n - 1)
+    assert res.status == "solved", res.message
+    assert res.steps[-1] <= n - 1 + 3  # about two steps of waiting
+    rows, _ = timed_rows(res.nodes, res.steps, graph.poses, 0.0, 0.07)
+    report = check_trajectory(scene, rows, Query("away", (1.0, 1.0), (float(xs[-1]), 1.0), 0.0))
+    assert report.valid, report.message
+
+
+@pytest.mark.parametrize("backend", ["reference", "compiled"])
+def test_a_horizon_shorter_than_the_route_names_the_horizon(backend):
+    """A horizon below the static distance to the goal is the horizon's fault, not a mover's
+    (it was reported as a start too close to a mover)."""
+    scene = load_scene(ROOT / "scenes" / "building-floor.yaml")
+    rm = load_roadmap(ROOT / "roadmaps" / "building-floor.json", scene)
+    q = scene.queries[0]
+    res = Planner(scene, rm).plan(q.start, q.goal, q.t0, PlanOptions(horizon=15.0, backend=backend))
+    assert res.status is Status.NO_PATH
+    assert "horizon" in res.message and "mover" not in res.message, res.message

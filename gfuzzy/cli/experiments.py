@@ -205,7 +205,7 @@ def cmd_navigate(args) -> int:
         raise BadInput(f"{scene.source}: queries: the scene has no queries to navigate")
     out = _out_path(args.output, (".json",)) if args.output else None
     try:
-        options = NavOptions(dt=args.dt, time_budget=args.time_budget)
+        options = NavOptions(dt=args.dt, time_budget=args.time_budget, backend=args.backend)
     except InputError as exc:
         raise BadInput(f"gfuzzy navigate: {exc}") from None
     problem = query_problem(StaticGeometry(scene), query.start, query.goal) or _start_on_mover(scene, query)

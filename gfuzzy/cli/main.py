@@ -105,6 +105,8 @@ def _add_navigate(sub) -> None:
     v.add_argument("--dt", type=float, default=0.1, help="time step of the replanning search (default 0.1)")
     v.add_argument("--time-budget", type=float, default=0.1, help="seconds one replan may take (default 0.1)")
     v.add_argument("--log-every", type=int, default=4, help="keep every k-th replan's predictions in the file (default 4)")
+    v.add_argument("--backend", choices=("compiled", "reference"), default="compiled",
+                   help="search implementation: compiled (numba, default) or the pure-Python reference")  # fmt: skip
     _clearance_flags(v)
     v.add_argument("-o", "--output", metavar="OUT.json", help="the executed trajectory file")
     v.set_defaults(func=cmd_navigate)
