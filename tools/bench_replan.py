@@ -14,7 +14,7 @@ differs is the graph), alternating, median of ``--repeat`` runs each. Printed pe
   ratio (fresh / plan_from), measured in the same run;
 * ``graph ms`` / ``splice ms``: the graph part alone, ``Planner._graph`` (connections, the
   spanner's cut from the roadmap's cache, two Dijkstras) against ``PreparedGoal.splice``
-  (the start's connections and the bounds, no Dijkstra);
+  (the start's connections, one Dijkstra on the vertices);
 * ``same``: on how many starts both give the same status and arrival (they must: the
   arrival is optimal for both; routes may differ).
 

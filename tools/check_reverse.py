@@ -1,6 +1,6 @@
 """Why Figure 12's `reverse` variants at mover speeds 1.6-2.0 answer `no_path`.
 
-    python tools/check_reverse.py [--speeds 1.6 1.8 2.0] [--sizes 200 1000 3000]
+    python tools/check_reverse.py [--speeds 1.6 1.8 2.0] [--sizes 1000 3000]
 
 For each speed: the planner's answer on the bundled roadmap with the default
 horizon, then an independent check of that verdict, a breadth-first search over every
