@@ -15,6 +15,7 @@ import pytest
 from conftest import run_cli_process
 from reference import reference_violation
 from shared_scenes import LOOP
+from test_planner import _brute_force_steps
 
 from gfuzzy.check import check_trajectory
 from gfuzzy.geometry import StaticGeometry
@@ -439,35 +440,6 @@ def test_cli_overrides_rebuild_the_roadmap_and_check_enforces_them(tmp_path):
         assert len(bad.stderr.strip().splitlines()) == 1
 
 
-def _brute_force(planner: Planner, start, goal, t0, dt, horizon_steps, hold_steps):
-    """Breadth-first search over every (node, step), the goal accepted only where it stays
-    safe ``hold_steps`` more steps: the time-expanded graph, no intervals."""
-    from collections import deque
-
-    from gfuzzy.planner import SPEED_SAFETY
-
-    vplan = planner.robot.vmax * SPEED_SAFETY
-    graph, s_id, g_id, _ = planner._graph(np.asarray(start, float), np.asarray(goal, float), dt, vplan)
-    field_ = MoverField(planner.scene, t0, dt, horizon_steps + hold_steps, planner.robot.vmax)
-    unsafe = field_.unsafe(graph.poses)
-    if unsafe[s_id, 0]:
-        return None
-    seen = np.zeros_like(unsafe)
-    seen[s_id, 0] = True
-    frontier = deque([(s_id, 0)])
-    while frontier:
-        u, n = frontier.popleft()
-        if u == g_id and not unsafe[g_id, n : n + hold_steps + 1].any():
-            return n
-        if n == horizon_steps:
-            continue
-        for v in list(graph.neighbors[graph.indptr[u] : graph.indptr[u + 1]]) + [u]:
-            if not unsafe[v, n + 1] and not seen[v, n + 1]:
-                seen[v, n + 1] = True
-                frontier.append((v, n + 1))
-    return None
-
-
 @pytest.mark.parametrize("hold", [0.0, 2.0, 5.0, 9.5])
 @pytest.mark.parametrize("keep", [0.0, 0.2])
 def test_hold_and_mover_clearance_match_brute_force(loop, hold, keep):
@@ -477,7 +449,7 @@ def test_hold_and_mover_clearance_match_brute_force(loop, hold, keep):
     planner = Planner(scene, rm)
     dt, horizon = 0.1, 15.0
     res = planner.plan(q.start, q.goal, 0.0, PlanOptions(dt=dt, horizon=horizon, stretch=1.0), hold=hold)
-    steps = _brute_force(planner, q.start, q.goal, 0.0, dt, int(math.ceil(horizon / dt)), int(math.ceil(hold / dt - 1e-9)))
+    steps = _brute_force_steps(planner, q.start, q.goal, 0.0, dt, int(math.ceil(horizon / dt)), int(math.ceil(hold / dt - 1e-9)))
     if steps is None:
         assert res.status is Status.NO_PATH
     else:

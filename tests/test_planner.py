@@ -64,13 +64,14 @@ def open_scene(tmp_path_factory):
     return scene, build_roadmap(scene, RoadmapOptions(vertices=40, seed=5))
 
 
-def _brute_force_steps(planner: Planner, start, goal, t0, dt, horizon_steps):
-    """Breadth-first search over every (node, step): the time-expanded graph, no intervals."""
+def _brute_force_steps(planner: Planner, start, goal, t0, dt, horizon_steps, hold_steps: int = 0):
+    """Breadth-first search over every (node, step): the time-expanded graph, no intervals;
+    the goal accepted only where it stays safe ``hold_steps`` more steps."""
     from gfuzzy.planner import SPEED_SAFETY
 
     vplan = planner.robot.vmax * SPEED_SAFETY
     graph, s_id, g_id, rd = planner._graph(np.asarray(start, float), np.asarray(goal, float), dt, vplan)
-    field = MoverField(planner.scene, t0, dt, horizon_steps, planner.robot.vmax)
+    field = MoverField(planner.scene, t0, dt, horizon_steps + hold_steps, planner.robot.vmax)
     unsafe = field.unsafe(graph.poses)  # every node at every step: fine on tiny graphs
     if unsafe[s_id, 0]:
         return None
@@ -79,7 +80,7 @@ def _brute_force_steps(planner: Planner, start, goal, t0, dt, horizon_steps):
     frontier = deque([(s_id, 0)])
     while frontier:
         u, n = frontier.popleft()
-        if u == g_id:
+        if u == g_id and not unsafe[g_id, n : n + hold_steps + 1].any():
             return n
         if n == horizon_steps:
             continue
@@ -91,14 +92,15 @@ def _brute_force_steps(planner: Planner, start, goal, t0, dt, horizon_steps):
     return None
 
 
+@pytest.mark.parametrize("backend", ["reference", "compiled"])
 @pytest.mark.parametrize("fixture", ["corridor", "open_scene"])
 @pytest.mark.parametrize("t0", [0.0, 1.3, 4.2])
-def test_search_matches_brute_force(fixture, t0, request):
+def test_search_matches_brute_force(fixture, t0, backend, request):
     scene, rm = request.getfixturevalue(fixture)
     q = scene.queries[0]
     planner = Planner(scene, rm)
     dt = 0.1
-    res = planner.plan(q.start, q.goal, t0, PlanOptions(dt=dt, horizon=40.0, stretch=1.0))
+    res = planner.plan(q.start, q.goal, t0, PlanOptions(dt=dt, horizon=40.0, stretch=1.0, backend=backend))
     steps = _brute_force_steps(planner, q.start, q.goal, t0, dt, int(math.ceil(40.0 / dt)))
     if steps is None:
         assert res.status is Status.NO_PATH

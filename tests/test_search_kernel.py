@@ -17,7 +17,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_planner import _brute_force_steps, corridor, open_scene  # noqa: F401 (fixtures)
 
 from gfuzzy.check import check_trajectory
 from gfuzzy.planner import Planner, PlanOptions, Status
@@ -232,21 +231,6 @@ def test_random_graphs_cover_both_outcomes(tmp_path):
         field = MoverField(scene, float(rng.uniform(0, 5)), 0.2, int(rng.integers(20, 80)), 1.0)
         statuses.add(sipp_compiled(graph, field, start, goal).status)
     assert statuses == {"solved", "no_path"}
-
-
-@pytest.mark.parametrize("t0", [0.0, 1.3, 4.2])
-def test_compiled_matches_brute_force(open_scene, corridor, t0):  # noqa: F811 (fixtures)
-    for scene, rm in (open_scene, corridor):
-        q = scene.queries[0]
-        planner = Planner(scene, rm)
-        dt = 0.1
-        res = planner.plan(q.start, q.goal, t0, PlanOptions(dt=dt, horizon=40.0, stretch=1.0, backend="compiled"))
-        steps = _brute_force_steps(planner, q.start, q.goal, t0, dt, int(math.ceil(40.0 / dt)))
-        if steps is None:
-            assert res.status is Status.NO_PATH
-        else:
-            assert res.status is Status.SOLVED
-            assert abs(res.duration - steps * dt) <= dt + 1e-9
 
 
 def test_reference_path_never_imports_numba():
