@@ -98,8 +98,14 @@ def _add_navigate(sub) -> None:
     v.add_argument("--query", metavar="NAME", help="a query of the scene (default: its first)")
     v.add_argument("--roadmap", metavar="FILE", help="roadmap file (default roadmaps/<scene name>.json)")
     v.add_argument("-n", "--vertices", type=int, help="build a roadmap of this many vertices")
-    v.add_argument("--seed", type=int, help="roadmap seed when building (default 1)")
+    v.add_argument("--seed", type=int, help="roadmap seed when building, and the sensor noise's seed (default 1)")
     v.add_argument("--period", type=float, default=0.25, help="seconds between observations and replans (default 0.25)")
+    v.add_argument("--velocity", choices=("estimated", "true"), default="estimated",
+                   help="movers' velocity: estimated from positions one period apart (default), or their true one")
+    v.add_argument("--noise", type=float, default=0.0, help="Gaussian noise (m) on observed positions (default 0)")
+    v.add_argument("--fov", type=float, default=360.0,
+                   help="field of view (degrees) about the robot's heading or direction of motion (default 360)")
+    v.add_argument("--occlusion", action="store_true", help="static obstacles hide the movers behind them")
     v.add_argument("--sense", type=float, help="range in metres within which movers are seen (default: all)")
     v.add_argument("--max-time", type=float, default=120.0, help="give up this long after t0 (default 120 s)")
     v.add_argument("--dt", type=float, default=0.1, help="time step of the replanning search (default 0.1)")
