@@ -21,7 +21,7 @@ import numpy as np
 
 from .errors import InputError
 from .geometry import metric_distance, mover_distance
-from .navigator import NavMode, Navigator, NavOptions
+from .navigator import Navigator, NavMode, NavOptions
 from .roadmap import Roadmap
 from .scene import Scene
 from .sensing import Sensor, SensorOptions
