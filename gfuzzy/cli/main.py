@@ -7,6 +7,7 @@ import sys
 
 from ..errors import InputError, LimitError
 from .common import EXIT_BAD, EXIT_OK, BadInput, _Parser, _say
+from .crowds import add_crowd, add_populate
 from .experiments import cmd_batch, cmd_navigate, cmd_tracks
 from .planning import cmd_check, cmd_plan, cmd_regress, cmd_render, cmd_roadmap
 
@@ -175,7 +176,8 @@ def _parser() -> argparse.ArgumentParser:
         description="Roadmap-time-space motion planning among moving obstacles (OMPL + FCL).",
     )
     sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
-    for add in (_add_roadmap, _add_plan, _add_check, _add_render, _add_navigate, _add_regress, _add_tracks, _add_batch):
+    for add in (_add_roadmap, _add_plan, _add_check, _add_render, _add_navigate, _add_regress, _add_tracks, _add_batch,
+                add_crowd, add_populate):
         add(sub)
     return p
 
