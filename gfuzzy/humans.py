@@ -33,7 +33,7 @@ __all__ = ["ORCA", "OrcaCrowd", "SocialForceCrowd", "social_force_velocity", "pr
 ORCA = {"neighbor_dist": 10.0, "max_neighbors": 10, "time_horizon": 5.0, "time_horizon_obst": 5.0}
 #: Social force parameters: relaxation time (s), repulsion strength (m/s^2) and range (m),
 #: anisotropy, integration sub-step (s).
-SF = {"tau": 0.5, "A": 2.0, "B": 0.3, "lam": 0.35, "substep": 0.05}
+SF = {"tau": 0.5, "A": 10.0, "B": 0.2, "lam": 0.35, "substep": 0.05}
 
 
 def _rvo():
