@@ -176,9 +176,15 @@ class Roadmap:
         if cached is not None:  # computed once per roadmap and stretch
             return cached
         keep = np.ones(len(self.edges), dtype=bool)
+        if stretch > 1.0:
+            self._prune_to_spanner(keep, stretch)
+        # published only once complete (an interrupted build leaves nothing behind), read-only
+        keep.flags.writeable = False
         self._spanners[stretch] = keep
-        if stretch == 1.0:
-            return keep
+        return keep
+
+    def _prune_to_spanner(self, keep: np.ndarray, stretch: float) -> None:
+        """Clear in ``keep`` the edges the greedy two-edge test drops (see `spanner`)."""
         adj: list[dict] = [{} for _ in range(len(self.vertices))]
         ends, lens = self.edges.tolist(), self.lengths.tolist()
         for e in np.argsort(self.lengths, kind="stable").tolist():
@@ -193,7 +199,6 @@ class Roadmap:
                 continue
             adj[a][b] = length
             adj[b][a] = length
-        return keep
 
     def check_scene(self, scene: Scene, file: str = "<roadmap>") -> None:
         """Raise SceneError if this roadmap was not built for ``scene``'s static part."""

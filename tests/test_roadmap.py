@@ -410,3 +410,22 @@ def test_building_leaves_ompl_log_level_as_it_was():
         assert ou.getLogLevel() == ou.LogLevel.LOG_DEBUG
     finally:
         ou.setLogLevel(before)
+
+
+def test_spanner_interrupted_midway_caches_nothing_and_is_read_only(monkeypatch):
+    scene = load_scene(ROOT / "scenes" / "building-floor.yaml")
+    rm = load_roadmap(ROOT / "roadmaps" / "building-floor.json", scene)
+    fresh = load_roadmap(ROOT / "roadmaps" / "building-floor.json", scene).spanner(1.05)
+    assert not fresh.all()  # the spanner drops edges on this roadmap
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    with monkeypatch.context() as m:
+        m.setattr(np, "argsort", interrupted)
+        with pytest.raises(KeyboardInterrupt):
+            rm.spanner(1.05)
+    keep = rm.spanner(1.05)  # not the half-built mask of the interrupted call
+    np.testing.assert_array_equal(keep, fresh)
+    with pytest.raises(ValueError):
+        keep[0] = not keep[0]  # callers cannot corrupt the cache
