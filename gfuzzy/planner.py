@@ -507,21 +507,25 @@ class Planner:
         stats = replace(stats, search_seconds=time.perf_counter() - t_begin)
         result = answer(Status.SOLVED, "", traj, rd, stats=stats)
         if opts.refine or opts.speed_layer:
-            from .stages import StageContext, apply_stages
-
-            query = Query("stage", tuple(start), tuple(goal), t0, hold=hold)
-            staged = apply_stages(StageContext(self.scene, self.geometry), traj, query, opts, deadline)
-            result = replace(
-                result,
-                trajectory=staged.trajectory,
-                planning_seconds=time.perf_counter() - t_begin,
-                refine_report=staged.refine_report,
-                speed_report=staged.speed_report,
-            )
+            result = self._staged(result, Query("stage", tuple(start), tuple(goal), t0, hold=hold), opts, t_begin)
         # headings are wrapped inside; the first and last rows give the query's own numbers
         wps = result.trajectory.waypoints.copy()
         wps[0, 1:], wps[-1, 1:] = ends
         return replace(result, trajectory=Trajectory(wps, robot.circumradius), stats=_amax_stats(robot, result.stats, result.speed_report))
+
+    def _staged(self, result: PlanResult, query: Query, opts: PlanOptions, t_begin: float) -> PlanResult:
+        """``result`` after the GA refinement and/or the speed layer (:mod:`gfuzzy.stages`)."""
+        from .stages import StageContext, apply_stages
+
+        ctx = StageContext(self.scene, self.geometry)
+        staged = apply_stages(ctx, result.trajectory, query, opts, t_begin + opts.time_limit)
+        return replace(
+            result,
+            trajectory=staged.trajectory,
+            planning_seconds=time.perf_counter() - t_begin,
+            refine_report=staged.refine_report,
+            speed_report=staged.speed_report,
+        )
 
     def _max_steps(self, opts: PlanOptions, rd: float, t0: float, hold_steps: int) -> int:
         """The longest horizon searched, in steps (the parking's steps come on top)."""
