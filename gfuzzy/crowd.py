@@ -70,7 +70,7 @@ def _rvo():
     try:
         import pyrvo
     except ImportError as exc:  # an optional dependency: say which extra brings it
-        raise ImportError("crowd episodes need pyrvo (pip install 'gfuzzy[bench]')") from exc
+        raise ImportError("crowd episodes need pyrvo (pip install 'gfuzzy[crowd]')") from exc
     return pyrvo
 
 

@@ -128,6 +128,13 @@ def _write_csv(path, setting, runs) -> None:
     write_atomic(path, buf.getvalue())
 
 
+def _need_pyrvo(command: str) -> None:
+    try:
+        import pyrvo  # noqa: F401
+    except ImportError:
+        raise BadInput(f"gfuzzy {command}: ORCA people need pyrvo: pip install 'gfuzzy[crowd]'") from None
+
+
 def cmd_crowd(args) -> int:
     """Run the crowd benchmark; print the table of section 7; write the CSV."""
     import contextlib
@@ -135,6 +142,7 @@ def cmd_crowd(args) -> int:
     from ..crowd import crowd_roadmap, episodes
 
     setting, options, policies = _setting(args)
+    _need_pyrvo("crowd")
     out = _out_path(args.output, (".csv",)) if args.output else None
     roadmap = crowd_roadmap(setting)
     bar = _progress_bar(f"crowd {setting.scenario} x{args.episodes}")
@@ -171,6 +179,7 @@ def cmd_populate(args) -> int:
     from ..populate import PopulateOptions, populate, write_scene
 
     scene = _load_scene(args.scene)
+    _need_pyrvo("populate")
     out = _out_path(args.output, (".yaml", ".yml"))
     waypoints = None
     if args.waypoints:
