@@ -1,25 +1,29 @@
-"""Crowd episodes: the CrowdNav circle-crossing protocol as scenes, and its ORCA robot.
+"""Crowd navigation benchmarks: CrowdNav's and CrowdNav++'s protocols (``gfuzzy crowd``).
 
 After Chen, Liu, Kreiss & Alahi, "Crowd-Robot Interaction: Crowd-aware Robot Navigation
-with Attention-based Deep Reinforcement Learning" (ICRA 2019) and its CrowdNav code:
+with Attention-based Deep Reinforcement Learning" (ICRA 2019) and its CrowdNav code, and
+Liu et al., "Intention Aware Robot Crowd Navigation with Attention-Based Interaction
+Graph" (ICRA 2023) and its CrowdNav++ code (read, not copied):
 
-* K humans, discs of radius 0.3 with a preferred speed of 1 m/s, start on a circle of
-  radius 4 about the origin at a uniformly random angle, each coordinate perturbed by a
-  uniform noise in [-0.5, 0.5) m (``(random - 0.5) * v_pref``), and walk to the opposite
-  point ``(-x, -y)``. A draw is rejected when the new human's start lies within
-  ``0.3 + r + 0.2`` m (the discomfort distance) of an earlier agent's start or goal,
-  the robot's included.
-* The humans are moved by ORCA (van den Berg et al., the RVO2 library through ``pyrvo``)
-  with CrowdNav's parameters: neighbour distance 10 m, 10 neighbours, time horizons 5 s,
-  radius 0.3 + 0.01, maximum speed 1, preferred velocity toward the goal (unit length
-  farther than 1 m away, the remaining vector nearer). They do not see the robot. Once at
-  their goal they stay there (still ORCA agents for the others).
-* Time step 0.25 s; the humans' positions are sampled at every step and move linearly in
-  between, which is exactly how a scene's ``trajectory`` mover moves, so collisions are
-  decided exactly between samples.
-* The robot is a disc of radius 0.3, vmax 1, from (0, -4) to (0, 4) within 25 s.
+* :func:`layout` draws an episode: ``circle`` (K humans, discs of radius 0.3 with a
+  preferred speed of 1 m/s, on a circle of radius 4 at a uniform angle, each coordinate
+  perturbed by U[-0.5, 0.5) m, walking to the opposite point; a draw within ``0.3 + r +
+  0.2`` m of an earlier agent's start or goal, the robot's included, is redrawn; the robot
+  from (0, -4) to (0, 4) within 25 s), ``square`` (CrowdNav's square crossing, width
+  10 m) and ``arena`` (CrowdNav++: 12 x 12 m, humans on the circle of radius 6 sqrt(2)
+  who change goals, 5 m sensing, 50 s).
+* The humans (:mod:`gfuzzy.humans`) are ORCA agents with CrowdNav's parameters, or a
+  social-force crowd; *visible* humans take the robot as one more agent.
+* :func:`run_episode` runs each policy (``navigator``, ``orca``, ``social-force``,
+  ``oracle``) in a closed loop with time step 0.25 s, observing through
+  :class:`gfuzzy.sensing.Sensor`; positions move linearly between samples (a scene's
+  ``trajectory`` mover), so collisions are decided exactly. Results are typed
+  (:class:`Episode`, :class:`Outcome`, :class:`PolicySummary`).
 
-``pyrvo`` is an optional dependency (the ``test`` and ``bench`` extras).
+:func:`circle_crossing` and :func:`orca_robot` are the older one-scene helpers (humans who
+ignore the robot, as ``trajectory`` movers of a scene; CrowdNav's ORCA robot).
+
+``pyrvo`` is an optional dependency (the ``crowd`` and ``test`` extras).
 """
 
 from __future__ import annotations
