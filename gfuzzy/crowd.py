@@ -40,7 +40,6 @@ from .rng import create_rng
 from .scene import Mover, Scene, parse_scene
 from .sensing import Sensor, SensorOptions
 from .socialmetrics import INTRUSION_HORIZON, SocialMetrics, social_metrics
-from .trajectory import Trajectory
 from .typing import FloatArray
 
 __all__ = [
@@ -521,118 +520,6 @@ def crowd_scene(setting: CrowdSetting, lay: Layout | None = None, tracks: FloatA
     return scene
 
 
-# ---- the robot's policies: each answers (t, pose, observations) with a trajectory from t
-
-
-class _OrcaPolicy:
-    """CrowdNav's ORCA robot: its ORCA velocity among the observed humans, who it assumes
-    take half of the avoidance, held for one step."""
-
-    def __init__(self, goal):
-        self.goal = np.asarray(goal, float)
-        self.vel = np.zeros(2)
-
-    def __call__(self, t, pose, obs) -> Trajectory:
-        pyrvo = _rvo()
-        c, dt = CROWD, CROWD["time_step"]
-        sim = pyrvo.RVOSimulator(dt, c["neighbor_dist"], c["max_neighbors"], c["time_horizon"],
-                                 c["time_horizon_obst"], c["robot_radius"] + 0.01, c["robot_vmax"])  # fmt: skip
-        me = sim.add_agent((float(pose[0]), float(pose[1])))
-        sim.set_agent_velocity(me, (float(self.vel[0]), float(self.vel[1])))
-        pref = _toward(pose, self.goal, c["robot_vmax"])
-        sim.set_agent_pref_velocity(me, (float(pref[0]), float(pref[1])))
-        for x, y, vx, vy, r in obs:
-            h = sim.add_agent((float(x), float(y)), c["neighbor_dist"], c["max_neighbors"], c["time_horizon"],
-                              c["time_horizon_obst"], float(r) + 0.01, c["v_pref"], (float(vx), float(vy)))  # fmt: skip
-            sim.set_agent_pref_velocity(h, (float(vx), float(vy)))
-        sim.do_step()
-        v = sim.get_agent_velocity(me)
-        self.vel = _capped(np.array([v.x, v.y]), c["robot_vmax"])
-        return _straight(t, pose, self.vel, dt)
-
-
-class _SocialForcePolicy:
-    """A social-force robot: the model of :mod:`gfuzzy.humans` for the robot, pushed away
-    from the observed humans (walking on at their observed velocity), held for one step."""
-
-    def __init__(self, goal):
-        self.goal = np.asarray(goal, float)
-        self.vel = np.zeros(2)
-
-    def __call__(self, t, pose, obs) -> Trajectory:
-        from .humans import SF, social_force_velocity
-
-        c, dt = CROWD, CROWD["time_step"]
-        n_sub = max(1, int(round(dt / SF["substep"])))
-        h = dt / n_sub
-        p = np.asarray(pose, float)[:2].copy()
-        v = self.vel.copy()
-        rows = [[t, *p]]
-        for j in range(n_sub):
-            others = obs[:, :2] + obs[:, 2:4] * (j * h)
-            v = social_force_velocity(p[None], v[None], self.goal[None], others, np.array([c["robot_radius"]]),
-                                      obs[:, 4], c["robot_vmax"], h)[0]  # fmt: skip
-            v = _capped(v, c["robot_vmax"])
-            p = p + v * h
-            rows.append([t + (j + 1) * h, *p])
-        self.vel = (p - np.asarray(pose, float)[:2]) / dt
-        return Trajectory(np.array(rows), c["robot_radius"])
-
-
-class _NavigatorPolicy:
-    def __init__(self, nav):
-        self.nav = nav
-
-    def __call__(self, t, pose, obs) -> Trajectory:
-        return self.nav.step(t, pose, obs)
-
-
-class _OraclePolicy:
-    """The plan told the humans' true future (they ignore the robot): followed as planned."""
-
-    def __init__(self, traj: Trajectory | None, start):
-        self.traj = traj
-        self.start = np.asarray(start, float)
-
-    def __call__(self, t, pose, obs) -> Trajectory:
-        if self.traj is None:  # no plan: stand
-            return Trajectory(np.array([[t, *pose], [t + 1.0, *pose]]), CROWD["robot_radius"])
-        return Trajectory(_rows_from(self.traj, t), CROWD["robot_radius"])
-
-
-def _toward(pose, goal, vmax) -> FloatArray:
-    d = np.asarray(goal, float)[:2] - np.asarray(pose, float)[:2]
-    n = float(np.hypot(*d))
-    return d / n * vmax if n > 1.0 else d * vmax
-
-
-def _capped(v: FloatArray, vmax: float) -> FloatArray:
-    s = float(np.hypot(*v))
-    return v * (vmax / s * (1 - 1e-9)) if s > vmax * (1 - 1e-9) else v
-
-
-def _straight(t, pose, vel, dt) -> Trajectory:
-    p = np.asarray(pose, float)[:2]
-    return Trajectory(np.array([[t, *p], [t + dt, *(p + vel * dt)]]), CROWD["robot_radius"])
-
-
-def _rows_from(traj: Trajectory, t: float) -> FloatArray:
-    """Rows of ``traj`` from ``t`` on (standing at its end for a second after it)."""
-    w = traj.waypoints
-    if t >= w[-1, 0] - 1e-9:
-        return np.array([[t, *w[-1, 1:]], [t + 1.0, *w[-1, 1:]]])
-    inner = w[w[:, 0] > t + 1e-9]
-    return np.vstack([np.array([t, *traj.at(t)])[None], inner])
-
-
-def _piece(traj: Trajectory, ta: float, tb: float) -> FloatArray:
-    """Rows of the motion along ``traj`` from ``ta`` to ``tb`` (standing after its end)."""
-    w = traj.waypoints
-    inner = w[(w[:, 0] > ta + 1e-9) & (w[:, 0] < tb - 1e-9)]
-    end = traj.at(min(tb, w[-1, 0]))
-    return np.vstack([np.array([ta, *traj.at(ta)])[None], inner, np.array([tb, *end])[None]])
-
-
 def _roadmap_options(setting: CrowdSetting):
     from .roadmap import RoadmapOptions
 
@@ -681,6 +568,7 @@ def run_episode(setting: CrowdSetting, roadmap, seed: int, index: int, policies,
     centre within its radius of the goal at a step's end, CrowdNav's test), or at the
     time limit (25 s; 50 s in the arena).
     """
+    from .crowdpolicies import NavigatorPolicy, OraclePolicy, OrcaPolicy, SocialForcePolicy
     from .navigator import Navigator, NavOptions
     from .planner import PlanOptions, plan
 
@@ -703,14 +591,14 @@ def run_episode(setting: CrowdSetting, roadmap, seed: int, index: int, policies,
     for policy in policies:
         scene = crowd_scene(setting, lay, tracks, f"crowd-{setting.scenario}-{index}")
         if policy == "navigator":
-            act = _NavigatorPolicy(Navigator(scene, roadmap, lay.goal, options or NavOptions()))
+            act = NavigatorPolicy(Navigator(scene, roadmap, lay.goal, options or NavOptions()))
         elif policy == "orca":
-            act = _OrcaPolicy(lay.goal)
+            act = OrcaPolicy(lay.goal, CROWD)
         elif policy == "social-force":
-            act = _SocialForcePolicy(lay.goal)
+            act = SocialForcePolicy(lay.goal, CROWD)
         elif policy == "oracle":
             res = plan(scene, roadmap, lay.start, lay.goal, 0.0, PlanOptions(horizon=limit))
-            act = _OraclePolicy(res.trajectory if res.solved else None, lay.start)
+            act = OraclePolicy(res.trajectory if res.solved else None, CROWD["robot_radius"])
         else:
             raise InputError(f"policy must be one of {', '.join(POLICIES)}, got {policy!r}")
         world = None if tracks is not None else _World(setting, lay, np.random.default_rng([seed, index, 1]), True)
@@ -720,6 +608,8 @@ def run_episode(setting: CrowdSetting, roadmap, seed: int, index: int, policies,
 
 def _drive(setting, policy, index, lay, act, tracks, world, n_steps, extra) -> Episode:
     """The closed loop of one policy's episode (see :func:`run_episode`)."""
+    from .crowdpolicies import piece_of
+
     c = CROWD
     dt, rr = c["time_step"], c["robot_radius"]
     sensor = Sensor(crowd_scene(setting), replace(setting.sensor, sense=setting.sense))
@@ -744,10 +634,10 @@ def _drive(setting, policy, index, lay, act, tracks, world, n_steps, extra) -> E
         c0 = time.perf_counter()
         traj = act(t, pose, obs)
         seconds.append(time.perf_counter() - c0)
-        if isinstance(act, _NavigatorPolicy):
+        if hasattr(act, "nav"):
             m = str(act.nav.last.mode)
             modes[m] = modes.get(m, 0) + 1
-        piece = _piece(traj, t, t + dt)
+        piece = piece_of(traj, t, t + dt)
         piece[0, 1:] = pose
         rows.extend(piece[1:])
         new = piece[-1, 1:3].copy()

@@ -32,14 +32,14 @@ from __future__ import annotations
 import logging
 import math
 import time
-from dataclasses import dataclass, field, replace
-from enum import Enum
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from .errors import InputError, LimitError, check_number
 from .geometry import StaticGeometry, mover_distance
 from .movers import MoverField
+from .navtypes import NavMode, NavStep
 from .planner import BACKENDS, search_function
 from .poses import interpolate_segment, metric_distance, split_counts, wrap_angle
 from .roadmap import Roadmap
@@ -155,48 +155,6 @@ class NavOptions:
         if self.connect_k < 1 or self.evasion_headings < 4:
             raise InputError("connect_k must be >= 1 and evasion_headings >= 4")
         check_number("stretch", self.stretch, 1.0, strict=False)
-
-
-class NavMode(str, Enum):
-    """How one :meth:`Navigator.step` answered (a ``str``: ``NavMode.PLAN == "plan"``)."""
-
-    PLAN = "plan"  # a fresh search
-    RELAXED = "relaxed"  # a fresh search without the buffer, personal space and uncertainty
-    DIRECT = "direct"  # straight to the goal nearby, checked finely
-    PREVIOUS = "previous"  # the last plan, still clear
-    EVASIVE = "evasive"  # the statically free straight motion with the latest contact
-    GOAL = "goal"  # already at the goal
-
-    def __str__(self) -> str:
-        return self.value
-
-
-@dataclass(frozen=True)
-class NavStep:
-    """What one :meth:`Navigator.step` did (``Navigator.last``).
-
-    Attributes
-    ----------
-    mode : NavMode
-        ``"plan"`` (a fresh search), ``"relaxed"`` (a fresh search without the safety
-        buffer, the personal space and the uncertainty), ``"direct"`` (straight to the goal nearby, checked
-        finely), ``"previous"`` (the last plan, still clear), ``"evasive"``, ``"goal"``.
-    seconds : float
-        Wall-clock time of the call.
-    message : str
-        Why the search did not answer, when it did not.
-    predicted : (k, 5) float
-        The observations used, ``[x, y, vx, vy, inflated radius at t]``.
-    detailed : int
-        People predicted in detail for the search: those who can come within reach of
-        where the robot can be before their prediction ends (the others cannot matter).
-    """
-
-    mode: NavMode
-    seconds: float
-    message: str = ""
-    predicted: FloatArray = field(default_factory=lambda: np.zeros((0, 5)), compare=False)
-    detailed: int = 0
 
 
 class _OutOfTime(Exception):

@@ -151,10 +151,7 @@ def simulate(
     -------
     NavResult
     """
-    if not (period > 0 and math.isfinite(period)):
-        raise InputError(f"period must be a positive number, got {period}")
-    if not max_time > 0:
-        raise InputError(f"max_time must be positive, got {max_time}")
+    _check_run(period, max_time)
     robot = scene.robot
     cr = robot.circumradius
     goal = np.asarray(goal, dtype=float).reshape(-1)
@@ -167,34 +164,21 @@ def simulate(
     modes: dict = {}
     kept: list = []
     status = Status.TIMEOUT
-    sensor_opts = replace(sensor or SensorOptions(velocity="exact"), sense=sense)
-    eye = None if sensor_opts.ideal else Sensor(scene, sensor_opts)
-    heading = _initial_heading(pose, goal)
+    eyes = _Eyes(scene, sense, sensor, pose, goal)
     while True:
         if float(metric_distance(pose, goal, cr)) <= nav.options.goal_tolerance:
             status = Status.SOLVED
             break
         if t >= t_stop - 1e-9:
             break
-        if eye is None:
-            obs = observe(scene, t, pose, sense)
-        else:
-            obs = eye.observe(t, pose, heading, observe(scene, t, pose))
+        obs = eyes(t, pose)
         c0 = time.perf_counter()
         traj = nav.step(t, pose, obs)
         seconds.append(time.perf_counter() - c0)
         mode = str(nav.last.mode if nav.last is not None else NavMode.PLAN)
         modes[mode] = modes.get(mode, 0) + 1
         if log_every and (len(seconds) - 1) % log_every == 0:
-            kept.append(
-                {
-                    "t": t,
-                    "pose": pose.tolist(),
-                    "mode": mode,
-                    "predicted": np.round(nav.last.predicted, 4).tolist() if nav.last is not None else [],
-                    "plan": np.round(_thin(traj.waypoints, 40), 4).tolist(),
-                }
-            )
+            kept.append(_log_entry(t, pose, mode, nav, traj))
         t_next = min(t + period, t_stop)
         w = traj.waypoints
         if abs(w[0, 0] - t) > 1e-9 or float(metric_distance(w[0, 1:], pose, cr)) > 1e-6:
@@ -207,7 +191,7 @@ def simulate(
         end = max(end, t + 1e-6)
         piece = _follow(traj, t, end)
         rows.extend(piece[1:])
-        heading = _heading(pose, piece[-1, 1:], heading)
+        eyes.moved(pose, piece[-1, 1:])
         pose = piece[-1, 1:].copy()
         if at_goal.size and abs(end - w[at_goal[0], 0]) <= 1e-9:
             pose = goal.copy()
@@ -218,6 +202,43 @@ def simulate(
     sep = min_separation(scene, wps)
     social = social_metrics(wps, cr, scene.movers, period)
     return NavResult(status, executed, len(seconds), np.array(seconds), modes, sep, kept, social)
+
+
+def _check_run(period: float, max_time: float) -> None:
+    if not (period > 0 and math.isfinite(period)):
+        raise InputError(f"period must be a positive number, got {period}")
+    if not max_time > 0:
+        raise InputError(f"max_time must be positive, got {max_time}")
+
+
+def _log_entry(t: float, pose: FloatArray, mode: str, nav: Navigator, traj: Trajectory) -> dict:
+    """One replan of :attr:`NavResult.log`."""
+    return {
+        "t": t,
+        "pose": pose.tolist(),
+        "mode": mode,
+        "predicted": np.round(nav.last.predicted, 4).tolist() if nav.last is not None else [],
+        "plan": np.round(_thin(traj.waypoints, 40), 4).tolist(),
+    }
+
+
+class _Eyes:
+    """What the robot of :func:`simulate` sees: the movers' true state within ``sense``
+    (the ideal sensor of section 5), or what a :class:`Sensor` makes of it."""
+
+    def __init__(self, scene: Scene, sense: float, sensor: SensorOptions | None, pose, goal):
+        opts = replace(sensor or SensorOptions(velocity="exact"), sense=sense)
+        self.scene, self.sense = scene, sense
+        self.sensor = None if opts.ideal else Sensor(scene, opts)
+        self.heading = _initial_heading(pose, goal)
+
+    def __call__(self, t: float, pose: FloatArray) -> FloatArray:
+        if self.sensor is None:
+            return observe(self.scene, t, pose, self.sense)
+        return self.sensor.observe(t, pose, self.heading, observe(self.scene, t, pose))
+
+    def moved(self, before: FloatArray, after: FloatArray) -> None:
+        self.heading = _heading(before, after, self.heading)
 
 
 def _initial_heading(pose: FloatArray, goal: FloatArray) -> float:

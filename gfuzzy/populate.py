@@ -241,10 +241,7 @@ def populate(scene: Scene, options: PopulateOptions | None = None) -> Populated:
         No free space for the people, too many people for it, or a waypoint that is not
         free.
     """
-    import shapely
-
-    from .crowd import _rvo
-    from .humans import preferred_velocity
+    from .humans import _rvo, preferred_velocity
 
     o = options or PopulateOptions()
     rng = create_rng(o.seed)
@@ -263,30 +260,8 @@ def populate(scene: Scene, options: PopulateOptions | None = None) -> Populated:
             if not grid.free[grid.index(p)]:
                 raise InputError(f"waypoints[{i}] ({p[0]:g}, {p[1]:g}) is not free for a person of radius {o.radius:g} m")
 
-    def free_point() -> FloatArray:
-        return usable[rng.integers(len(usable))] + rng.uniform(-0.4, 0.4, 2) * grid.res
-
-    starts: list = []
-    for _ in range(o.people):
-        for _try in range(2000):
-            p = free_point() if wps is None else wps[rng.integers(len(wps))] + rng.normal(0, 0.5, 2)
-            if not grid.free[grid.index(p)]:
-                continue
-            if all(np.hypot(*(p - q)) >= 2 * o.radius + 0.1 for q in starts):
-                starts.append(p)
-                break
-        else:
-            raise InputError(f"{scene.source}: no room for {o.people} people of radius {o.radius:g} m")
-    starts_a = np.array(starts)
-    order = [None] * o.people
-    goals = []
-    for i in range(o.people):
-        if wps is None:
-            goals.append(free_point())
-        else:
-            k = int(rng.integers(len(wps)))
-            order[i] = (k, 1 if rng.random() < 0.5 else -1)
-            goals.append(wps[k].copy())
+    free_point = _FreePoints(usable, grid.res, rng)
+    starts_a, goals, order = _place(scene, o, grid, free_point, wps, rng)
     pyrvo = _rvo()
     sim = pyrvo.RVOSimulator(o.dt, 5.0, 10, 3.0, 1.0, o.radius + 0.01, o.speed)
     ids = [sim.add_agent((float(x), float(y))) for x, y in starts_a]
@@ -322,6 +297,53 @@ def populate(scene: Scene, options: PopulateOptions | None = None) -> Populated:
             pos[i] = (p.x, p.y)
         track[:, k] = pos
 
+    movers, cut = _movers(scene, o, track, union)
+    if cut:
+        log.info("%d of %d people stopped where they would have touched an obstacle", cut, o.people)
+    return Populated(tuple(movers), cut)
+
+
+class _FreePoints:
+    """Random free points: a free cell's centre, jittered within the cell."""
+
+    def __init__(self, cells: FloatArray, res: float, rng: np.random.Generator):
+        self.cells, self.res, self.rng = cells, res, rng
+
+    def __call__(self) -> FloatArray:
+        return self.cells[self.rng.integers(len(self.cells))] + self.rng.uniform(-0.4, 0.4, 2) * self.res
+
+
+def _place(scene: Scene, o: PopulateOptions, grid: _Grid, free_point, wps, rng):
+    """The people's starts (K, 2), first goals (list) and, with waypoints, (index, direction)."""
+    starts: list = []
+    for _ in range(o.people):
+        for _try in range(2000):
+            p = free_point() if wps is None else wps[rng.integers(len(wps))] + rng.normal(0, 0.5, 2)
+            if not grid.free[grid.index(p)]:
+                continue
+            if all(np.hypot(*(p - q)) >= 2 * o.radius + 0.1 for q in starts):
+                starts.append(p)
+                break
+        else:
+            raise InputError(f"{scene.source}: no room for {o.people} people of radius {o.radius:g} m")
+    order: list = [None] * o.people
+    goals = []
+    for i in range(o.people):
+        if wps is None:
+            goals.append(free_point())
+        else:
+            k = int(rng.integers(len(wps)))
+            order[i] = (k, 1 if rng.random() < 0.5 else -1)
+            goals.append(wps[k].copy())
+    return np.array(starts), goals, order
+
+
+def _movers(scene: Scene, o: PopulateOptions, track: FloatArray, union) -> tuple[list, int]:
+    """``trajectory`` movers of the tracks (K, n, 2), each cut before its first motion that
+    would come closer than its radius to an obstacle or the bounds; (movers, people cut)."""
+    import shapely
+
+    n = track.shape[1]
     times = np.arange(n) * o.dt
     movers, cut = [], 0
     taken = {m.name for m in scene.movers}
@@ -346,9 +368,7 @@ def populate(scene: Scene, options: PopulateOptions | None = None) -> Populated:
         taken.add(name)
         rows = np.column_stack([times[:last], np.round(tr[:last], 6)])
         movers.append(Mover(name, "disc", o.radius, (0.0, 0.0), trajectory=rows))
-    if cut:
-        log.info("%d of %d people stopped where they would have touched an obstacle", cut, o.people)
-    return Populated(tuple(movers), cut)
+    return movers, cut
 
 
 def write_scene(source: str | os.PathLike, result: Populated, out: str | os.PathLike) -> None:

@@ -258,11 +258,9 @@ def cmd_navigate(args) -> int:
         "intrusion_ratio": round(res.social.intrusion_ratio, 6),
         "check": {"valid": report.valid, "reason": report.reason},
         "modes": res.modes,
-        "navigate": {
-            "period": args.period, "sense": None if math.isinf(sense) else sense, "max_time": args.max_time,
-            "velocity": args.velocity, "noise": args.noise, "fov": args.fov, "occlusion": args.occlusion,
-            "seed": sensor.seed,
-        },
+        "navigate": {"period": args.period, "sense": None if math.isinf(sense) else sense, "max_time": args.max_time,
+                     "velocity": args.velocity, "noise": args.noise, "fov": args.fov, "occlusion": args.occlusion,
+                     "seed": sensor.seed},  # fmt: skip
         "replan_log": res.log,
     }
     if not solved:  # only a solved file carries waypoints (section 2): the motion goes here
