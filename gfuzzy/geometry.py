@@ -18,7 +18,7 @@ import fcl
 import numpy as np
 
 from .poses import metric_distance, wrap_angle
-from .scene import Box, Disc, Polygon, Robot, Scene
+from .scene import Box, Disc, MapObstacle, Polygon, Robot, Scene
 from .typing import FloatArray
 
 __all__ = [
@@ -77,6 +77,10 @@ def static_objects(scene: Scene) -> list[fcl.CollisionObject]:
         elif isinstance(ob, Box):
             geom = fcl.Box(ob.size[0], ob.size[1], 2 * _HEIGHT)
             objs.append(fcl.CollisionObject(geom, _yaw_transform(ob.center[0], ob.center[1], ob.angle)))
+        elif isinstance(ob, MapObstacle):  # its blocked cells, as exact rectangles
+            for x0, y0, x1, y1 in ob.rects.tolist():
+                geom = fcl.Box(x1 - x0, y1 - y0, 2 * _HEIGHT)
+                objs.append(fcl.CollisionObject(geom, _yaw_transform(0.5 * (x0 + x1), 0.5 * (y0 + y1))))
         else:
             for tri in _triangulate(ob):
                 objs.append(fcl.CollisionObject(_prism(tri), fcl.Transform()))
