@@ -196,6 +196,17 @@ def _read_bytes(v: _V, path: Path, place: str, what: str) -> bytes:
     raise AssertionError  # unreachable: fail raises
 
 
+def _scalar(value):
+    """A number written as YAML 1.1 reads it as a string (``1e-07``) is a number to
+    yaml-cpp, which Nav2 reads these files with."""
+    if isinstance(value, str):
+        try:
+            return float(value)
+        except ValueError:
+            return value
+    return value
+
+
 def read_map_yaml(
     path: str | os.PathLike, root: str | os.PathLike | None = None
 ) -> tuple[MapInfo, bytes]:
@@ -242,6 +253,10 @@ def read_map_yaml(
         image.relative_to(root)
     except ValueError:
         v.fail("image", f"image path {doc['image']!r} leaves the scene file's folder")
+    for key in ("resolution", "occupied_thresh", "free_thresh"):
+        doc[key] = _scalar(doc[key])
+    if isinstance(doc["origin"], list):
+        doc["origin"] = [_scalar(x) for x in doc["origin"]]
     resolution = v.number(doc["resolution"], "resolution", positive=True)
     origin = v.vector(doc["origin"], "origin", 3)
     if origin[2] != 0.0:
