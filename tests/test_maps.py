@@ -267,15 +267,19 @@ small_maps = st.integers(1, 9).flatmap(
     mode=st.sampled_from(["trinary", "scale", "raw"]),
     negate=st.sampled_from([0, 1]),
     unknown=st.sampled_from(["blocked", "free"]),
+    robot=st.sampled_from([("disc", 0.01), ("disc", 0.2), ("disc", 0.7), ("box", (0.5, 0.2)), ("box", (1.5, 0.4))]),
     data=st.data(),
 )
-def test_random_maps_fcl_and_oracle_agree(tmp_path, pixels, resolution, ox, oy, mode, negate, unknown, data):
+def test_random_maps_fcl_and_oracle_agree(tmp_path, pixels, resolution, ox, oy, mode, negate, unknown, robot, data):
     folder = tmp_path / f"r{abs(hash((str(pixels), ox, oy, mode))) % 10**9}"
     write_map(folder, pixels, mode=mode, negate=negate, occ=0.6, free=0.3, resolution=resolution, origin=(ox, oy, 0.0))
     h, w = len(pixels), len(pixels[0])
     bounds = [ox - 1, oy - 1, ox + w * resolution + 1, oy + h * resolution + 1]
-    radius = 0.01
-    (folder / "s.yaml").write_text(scene_text(unknown=unknown, bounds=bounds, robot=f"disc: {radius}"))
+    shape, size = robot
+    radius = size if shape == "disc" else float(np.hypot(*size)) / 2
+    bounds = [bounds[0] - radius, bounds[1] - radius, bounds[2] + radius, bounds[3] + radius]
+    spec = f"disc: {size}" if shape == "disc" else f"box: [{size[0]}, {size[1]}]"
+    (folder / "s.yaml").write_text(scene_text(unknown=unknown, bounds=bounds, robot=spec))
     scene = load_scene(folder / "s.yaml")
     (grid,) = scene.obstacles
     values = oracle_values(folder / "m.png", mode, negate, 0.6, 0.3)
@@ -283,14 +287,26 @@ def test_random_maps_fcl_and_oracle_agree(tmp_path, pixels, resolution, ox, oy, 
     region = oracle_region(values, unknown == "free", resolution, (ox, oy))
     assert rects_region(grid).symmetric_difference(region).area == pytest.approx(0.0, abs=1e-9)
     geo = StaticGeometry(scene)
-    pts = np.array(data.draw(st.lists(st.tuples(st.floats(0, 1), st.floats(0, 1)), min_size=20, max_size=20)))
-    lo = np.array([bounds[0], bounds[1]]) + 0.5  # inside the bounds by more than the radius
-    pts = lo + pts * np.array([bounds[2] - bounds[0] - 1.0, bounds[3] - bounds[1] - 1.0])
+    unit = st.floats(0, 1)
+    pts = np.array(data.draw(st.lists(st.tuples(unit, unit, unit), min_size=20, max_size=20)))
+    lo = np.array([bounds[0], bounds[1]]) + radius + 0.01  # the body inside the bounds
+    pts[:, :2] = lo + pts[:, :2] * np.array([bounds[2] - bounds[0], bounds[3] - bounds[1]]) - 2 * (radius + 0.01) * pts[:, :2]
+    pts[:, 2] = (pts[:, 2] - 0.5) * 2 * np.pi
     for p in pts:
-        d = region.distance(shapely.Point(p)) if not region.is_empty else np.inf
-        if abs(d - radius) < 1e-6:
-            continue  # touching: either answer is right
-        assert geo.is_valid(p) == (d > radius), (p, d)
+        if shape == "disc":
+            d = region.distance(shapely.Point(p[:2])) if not region.is_empty else np.inf
+            if abs(d - radius) < 1e-6:
+                continue  # touching: either answer is right
+            assert geo.is_valid(p[:2]) == (d > radius), (p, d)
+        else:
+            c, s_ = np.cos(p[2]), np.sin(p[2])
+            hl, hw = size[0] / 2, size[1] / 2
+            body = shapely.Polygon([(p[0] + c * a - s_ * b, p[1] + s_ * a + c * b) for a, b in ((hl, hw), (-hl, hw), (-hl, -hw), (hl, -hw))])
+            overlap = body.intersection(region).area if not region.is_empty else 0.0
+            gap = body.distance(region) if not region.is_empty else np.inf
+            if overlap < 1e-9 and gap < 1e-6:
+                continue  # touching
+            assert geo.is_valid(p) == (overlap < 1e-9), (p, overlap, gap)
 
 
 @settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
