@@ -417,3 +417,22 @@ def test_gfuzzy_map_refuses_a_map_outside_the_folder(tmp_path, capsys):
     assert not out.exists()
     assert main(["map", str(tmp_path / "a" / "m.yaml"), "--robot-footprint", "0", "0", "1", "-o", str(tmp_path / "a" / "s.yaml")]) == 2
     assert not (tmp_path / "a" / "s.yaml").exists()
+
+
+def test_gfuzzy_map_with_a_footprint_writes_the_contract_key(tmp_path):
+    for f in ("tb3_sandbox.yaml", "tb3_sandbox.pgm"):
+        shutil.copy(MAPS / f, tmp_path / f)
+    out = tmp_path / "fp.yaml"
+    argv = ["map", str(tmp_path / "tb3_sandbox.yaml"), "--robot-footprint", "0.15", "0.1", "-0.1", "0.1", "-0.1", "-0.1", "0.15", "-0.1"]
+    assert main([*argv, "-o", str(out)]) == 0
+    import yaml
+
+    doc = yaml.safe_load(out.read_text())
+    assert doc["robot"]["footprint"] == [[0.15, 0.1], [-0.1, 0.1], [-0.1, -0.1], [0.15, -0.1]]
+    assert "disc" not in doc["robot"] and "box" not in doc["robot"]
+    q = doc["queries"][0]
+    assert len(q["start"]) == 3 and len(q["goal"]) == 3
+    # the robot's circumscribed disc (radius 0.1803) fits at both ends
+    geo = StaticGeometry(load_scene_text(scene_text("tb3_sandbox.yaml", robot="disc: 0.1803"), tmp_path))
+    for pose in (q["start"], q["goal"]):
+        assert geo.is_valid(pose[:2]), pose
