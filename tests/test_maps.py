@@ -436,3 +436,22 @@ def test_gfuzzy_map_with_a_footprint_writes_the_contract_key(tmp_path):
     geo = StaticGeometry(load_scene_text(scene_text("tb3_sandbox.yaml", robot="disc: 0.1803"), tmp_path))
     for pose in (q["start"], q["goal"]):
         assert geo.is_valid(pose[:2]), pose
+
+
+def test_render_draws_the_grid_at_its_place(tmp_path):
+    px = np.full((20, 40), 254, dtype=np.uint8)
+    px[:, :20] = 205  # the west half unknown (gray), the east half free
+    px[1:5, 30:34] = 0  # an occupied block in the north-east (row 0 is the top)
+    write_map(tmp_path, px, resolution=0.5, origin=(0.0, 0.0, 0.0))
+    (tmp_path / "s.yaml").write_text(scene_text())
+    out = tmp_path / "r.png"
+    assert main(["render", str(tmp_path / "s.yaml"), "--no-roadmap", "-o", str(out)]) == 0
+    img = np.asarray(Image.open(out).convert("L"), dtype=float)
+    dark = img < 128
+    rows, cols = np.nonzero(dark & (np.arange(img.shape[1]) > img.shape[1] * 0.55)[None, :])
+    assert len(rows)  # the occupied block, drawn east of the middle
+    gray = (img > 150) & (img < 220)
+    west, east = gray[:, : img.shape[1] // 2].sum(), gray[:, img.shape[1] // 2 :].sum()
+    assert west > 10 * max(east, 1)  # unknown cells drawn gray, on the west side only
+    grow = np.nonzero(gray[:, : img.shape[1] // 2].any(axis=1))[0]  # the map's rows on the picture
+    assert rows.mean() < 0.5 * (grow.min() + grow.max())  # the block in the north half
