@@ -169,6 +169,9 @@ class StaticGeometry:
         self._robot_obj = fcl.CollisionObject(robot_geometry(scene.robot), fcl.Transform())
         self._grids = [ob for ob in scene.obstacles if isinstance(ob, MapObstacle) and len(ob.rects)]
         self._inner = _inner_point(scene.robot)
+        # with maps only, a distance transform of their cells answers most validity questions
+        self._map_only = bool(self._grids) and len(self._objects) == len(self._grids)
+        self._edt: list | None = None
         self._creq = fcl.CollisionRequest()
         self._dreq = fcl.DistanceRequest()
         self.calls = 0
@@ -243,6 +246,8 @@ class StaticGeometry:
             return False
         if not self._objects:
             return True
+        if self._map_only and self._map_bound(pose) > self.keep:
+            return True
         if self.keep > 0:  # a distance, not a collision test, decides the clearance
             return self.obstacle_clearance(pose) >= self.keep
         if self._grids and self._inside_map(pose):
@@ -270,6 +275,32 @@ class StaticGeometry:
         if d <= _NEAR_CONTACT:
             return -1.0 if self._collides() else 0.0
         return d
+
+    def _map_bound(self, pose) -> float:
+        """A lower bound of the robot's distance to the maps' blocked cells (-inf off a map).
+
+        For the cell holding the reference point, e = the distance from its centre to the
+        nearest blocked cell's centre; the blocked region is at least e - res sqrt(2) from
+        the point (half a diagonal at each end) and the body at least that minus the
+        circumradius from it.
+        """
+        if self._edt is None:
+            from scipy import ndimage
+
+            self._edt = [
+                (ndimage.distance_transform_edt(~g.blocked) * g.resolution - g.resolution * math.sqrt(2.0))
+                for g in self._grids
+            ]
+        x, y = float(pose[0]), float(pose[1])
+        low = math.inf
+        for grid, edt in zip(self._grids, self._edt, strict=True):
+            h, w = edt.shape
+            j = math.floor((x - grid.origin[0]) / grid.resolution)
+            k = math.floor((y - grid.origin[1]) / grid.resolution)
+            if not (0 <= j < w and 0 <= k < h):
+                return -math.inf
+            low = min(low, float(edt[h - 1 - k, j]))
+        return low - self.r
 
     def _inside_map(self, pose) -> bool:
         """Whether a point inside the robot's body lies in a blocked map cell."""
