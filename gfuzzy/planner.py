@@ -344,6 +344,10 @@ class Planner:
 
         opts = options or PlanOptions()
         goal = check_pose(goal, self.robot.dof, "goal")
+        if self.robot.unicycle:  # the copies' graph is kept on the roadmap; the rest is per query
+            from .unicycle import UnicyclePrepared
+
+            return UnicyclePrepared(goal, opts)
         return prepare_goal(self, goal, opts)
 
     def plan_from(self, prepared, start, t0: float = 0.0, movers=None, hold: float = 0.0) -> PlanResult:
@@ -382,7 +386,9 @@ class Planner:
         Parameters
         ----------
         start, goal : (d,) float
-            Poses ``[x, y]`` (disc robot) or ``[x, y, heading]`` (box robot).
+            Poses ``[x, y]`` (disc robot) or ``[x, y, heading]`` (box robot, or any
+            unicycle: its answers are waits, turns in place and straight moves along the
+            heading, :mod:`gfuzzy.unicycle`).
         t0 : float
             Departure time.
         options : PlanOptions, optional
@@ -428,7 +434,12 @@ class Planner:
         if robot.dof == 3:
             start[2], goal[2] = wrap_angle(start[2]), wrap_angle(goal[2])
         vplan = vmax * SPEED_SAFETY
-        if _prepared is None:
+        if robot.unicycle:  # a differential drive: the graph of heading copies
+            from .unicycle import build_graph
+
+            ug = build_graph(self, start, goal, opts.dt, vplan, opts.connect_k, opts.stretch)
+            graph, s_id, g_id, rd = ug.graph, ug.s_id, ug.g_id, ug.roadmap_distance
+        elif _prepared is None:
             graph, s_id, g_id, rd = self._graph(start, goal, opts.dt, vplan, opts.connect_k, opts.stretch)
         else:  # plan_from: the kept graph with this start spliced in
             graph, s_id, g_id, rd = _prepared.splice(self, start)

@@ -1,0 +1,514 @@
+"""The differential drive (``kinematics: unicycle``): a roadmap of heading copies.
+
+A unicycle moves only along its heading and turns only in place (CONTRACT section 6). The
+search graph keeps the roadmap's positions and straight edges and gives every vertex one
+*copy* per heading it can leave or arrive with:
+
+* a **lane** is a roadmap edge (u, v) driven at the heading of u -> v (forward from u to v;
+  backwards from v to u too when ``robot.reverse``), certified free for the body held at that
+  heading (:meth:`gfuzzy.geometry.StaticGeometry.motion_free` with a fixed heading);
+* a **turn** joins two copies at one vertex that are neighbours in heading order, both ways
+  round; it takes ``|dh| / turn_rate`` seconds and, for a body that is not a disc, is
+  certified against walls while it sweeps (a vertex where the sweep collides loses that turn);
+* every lane and turn is a *piece* from one copy to another, cut into one-step points like
+  any motion (:func:`gfuzzy.poses.split_counts`) with a turn's length counted as
+  ``|dh| * vmax / turn_rate``: a step never exceeds ``vmax dt`` in the contract's metric nor
+  ``turn_rate dt`` in heading, so the movers' safety of :mod:`gfuzzy.movers` holds over it;
+  the robot may wait at any point.
+
+The start and the goal join through turn + straight + turn: the start turns in place towards a
+nearby vertex, drives to a new copy there (which joins its vertex's heading neighbours), and
+the goal is reached from a copy at a vertex driving straight to the goal's position, then
+turning to the goal's heading. The safe-interval search (:func:`gfuzzy.timespace.sipp` and
+its compiled twin) runs unchanged on this directed graph: the answer is time-optimal on it
+at the step dt.
+
+For a disc the lanes are the roadmap's (its spanner's) edges: a disc's body does not depend
+on its heading. For a box the lanes come from the SE(2) roadmap's vertex positions: its
+edges and each vertex's nearest neighbours in the plane, each re-certified at its heading.
+The lanes and the query-independent pieces are kept in ``Roadmap._derived``.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .poses import split_counts, wrap_angle
+from .spacetime import SpaceTimeGraph
+from .typing import FloatArray, IntArray
+
+__all__ = ["UnicycleGraph", "UnicyclePrepared", "build_graph", "lanes", "LANE_NEIGHBOURS", "SAME_HEADING"]
+
+log = logging.getLogger(__name__)
+
+#: For an SE(2) roadmap (box robots): how many nearest vertices in the plane each vertex
+#: tries as extra lanes, besides the roadmap's own edges.
+LANE_NEIGHBOURS = 10
+#: Headings closer than this (rad) at one vertex are one copy.
+SAME_HEADING = 1e-9
+#: A turn's sweep is certified in arcs of at most this (rad): ``motion_free`` turns along
+#: the shorter arc.
+_ARC = 0.5 * math.pi
+
+
+@dataclass
+class Lanes:
+    """The plane roadmap of a unicycle: positions and certified lanes.
+
+    Attributes
+    ----------
+    xy : (V, 2) float
+    edges : (E, 2) int
+    ok : (E, 2) bool
+        Whether edge ``(u, v)`` is free at the heading of u -> v (column 0) and of v -> u
+        (column 1), the body held at that heading along the whole segment.
+    """
+
+    xy: FloatArray
+    edges: IntArray
+    ok: np.ndarray
+
+
+@dataclass
+class _Base:
+    """The query-independent pieces (see the module docstring).
+
+    Attributes
+    ----------
+    poses : (K, 3) float
+        The copies: a vertex's position and a heading.
+    vertex : (K,) int
+        The roadmap vertex of each copy.
+    a, b : (P,) int
+        Pieces: from copy a to copy b.
+    dh : (P,) float
+        A turn's signed heading change; 0 for a lane.
+    length : (P,) float
+        Metres at vmax: a lane's length, ``|dh| vmax / turn_rate`` for a turn.
+    """
+
+    poses: FloatArray
+    vertex: IntArray
+    a: IntArray
+    b: IntArray
+    dh: FloatArray
+    length: FloatArray
+
+    def copies_at(self, v: int) -> IntArray:
+        lo, hi = np.searchsorted(self.vertex, [v, v + 1])
+        return np.arange(lo, hi)
+
+
+@dataclass
+class UnicycleGraph:
+    """A query's graph: the search's :class:`SpaceTimeGraph` and what the planner reports.
+
+    Attributes
+    ----------
+    graph : SpaceTimeGraph
+    s_id, g_id : int
+    roadmap_distance : float
+        Shortest static start-goal time on this graph times vmax (metres at vmax: lanes'
+        lengths plus turns' ``|dh| vmax / turn_rate``); inf when not connected.
+    """
+
+    graph: SpaceTimeGraph
+    s_id: int
+    g_id: int
+    roadmap_distance: float
+
+
+def _xy_pose(robot, x: float, y: float, h: float) -> list:
+    """A pose for the static geometry: [x, y] for a disc, [x, y, h] otherwise."""
+    return [x, y] if robot.shape == "disc" else [x, y, h]
+
+
+def turn_free(geometry, x: float, y: float, h: float, dh: float) -> bool:
+    """Whether turning in place at (x, y) from ``h`` by ``dh`` (signed, any size) is free,
+    the sweep certified (a disc: the pose alone)."""
+    robot = geometry.robot
+    if robot.shape == "disc":
+        return geometry.clearance1([x, y]) >= 0
+    n = max(1, int(math.ceil(abs(dh) / _ARC)))
+    prev = [x, y, wrap_angle(h)]
+    for i in range(1, n + 1):
+        cur = [x, y, wrap_angle(h + dh * i / n)]
+        if not geometry.motion_free(prev, cur):
+            return False
+        prev = cur
+    return True
+
+
+def pick_turn(geometry, x: float, y: float, h1: float, h2: float) -> float | None:
+    """The signed turn from ``h1`` to ``h2``: the shorter arc when its sweep is free, else
+    the longer one, else None (0 when the headings are the same)."""
+    d = float(wrap_angle(h2 - h1))
+    if abs(d) <= SAME_HEADING:
+        return 0.0
+    for dh in (d, d - math.copysign(2 * math.pi, d)):
+        if turn_free(geometry, x, y, h1, dh):
+            return dh
+    return None
+
+
+def lanes(roadmap, geometry, stretch: float = 1.0) -> Lanes:
+    """The unicycle's plane roadmap of ``roadmap`` (see the module docstring), cached."""
+    robot = geometry.robot
+    key = ("unicycle-lanes", geometry.scene.static_hash, float(geometry.keep), float(stretch), robot.shape, robot.size)
+    hit = roadmap._derived.get(key)
+    if hit is not None:
+        return hit
+    xy = np.ascontiguousarray(roadmap.vertices[:, :2], dtype=float)
+    if robot.shape == "disc":
+        keep = roadmap.spanner(stretch)
+        edges = roadmap.edges[keep].astype(np.int64).reshape(-1, 2)
+        out = Lanes(xy, edges, np.ones((len(edges), 2), dtype=bool))
+    else:
+        out = _box_lanes(roadmap, geometry, xy)
+    roadmap._derived[key] = out
+    return out
+
+
+def _box_lanes(roadmap, geometry, xy: FloatArray) -> Lanes:
+    from scipy.spatial import cKDTree
+
+    cand = [np.sort(roadmap.edges.astype(np.int64).reshape(-1, 2), axis=1)]
+    if len(xy) > 1:
+        k = min(LANE_NEIGHBOURS + 1, len(xy))
+        _, idx = cKDTree(xy).query(xy, k=k)
+        u = np.repeat(np.arange(len(xy)), k - 1)
+        cand.append(np.sort(np.stack([u, idx[:, 1:].reshape(-1)], axis=1), axis=1))
+    edges = np.unique(np.vstack(cand), axis=0)
+    d = np.hypot(*(xy[edges[:, 1]] - xy[edges[:, 0]]).T)
+    edges = edges[(edges[:, 0] != edges[:, 1]) & (d > 1e-9)]
+    ok = np.zeros((len(edges), 2), dtype=bool)
+    symmetric = geometry.robot.shape == "box"  # a centred box is the same body turned by pi
+    for i, (u, v) in enumerate(edges.tolist()):
+        (ux, uy), (vx, vy) = xy[u], xy[v]
+        h = math.atan2(vy - uy, vx - ux)
+        ok[i, 0] = geometry.motion_free([ux, uy, h], [vx, vy, h])
+        ok[i, 1] = ok[i, 0] if symmetric else geometry.motion_free([vx, vy, h + math.pi], [ux, uy, h + math.pi])
+    keep = ok.any(axis=1)
+    return Lanes(xy, edges[keep], ok[keep])
+
+
+def _base(roadmap, geometry, stretch: float, vmax: float) -> _Base:
+    """The copies, lanes and turns of the roadmap, cached per (robot, stretch)."""
+    robot = geometry.robot
+    rate = robot.turn_rate
+    key = ("unicycle-base", geometry.scene.static_hash, float(geometry.keep), float(stretch), robot.shape,
+           robot.size, bool(robot.reverse), float(rate), float(vmax))  # fmt: skip
+    hit = roadmap._derived.get(key)
+    if hit is not None:
+        return hit
+    ln = lanes(roadmap, geometry, stretch)
+    xy, e = ln.xy, ln.edges
+    h_uv = np.arctan2(xy[e[:, 1], 1] - xy[e[:, 0], 1], xy[e[:, 1], 0] - xy[e[:, 0], 0])
+    h_vu = wrap_angle(h_uv + math.pi)
+    # copies: (vertex, heading) at both ends of every certified lane
+    cv, ch = [], []
+    for col, h in ((0, h_uv), (1, h_vu)):
+        m = ln.ok[:, col]
+        cv += [e[m, 0], e[m, 1]]
+        ch += [h[m], h[m]]
+    cv = np.concatenate(cv) if cv else np.zeros(0, dtype=np.int64)
+    ch = np.asarray(wrap_angle(np.concatenate(ch)), dtype=float) if ch else np.zeros(0)
+    order = np.lexsort((ch, cv))
+    cv, ch = cv[order], ch[order]
+    new = np.ones(len(cv), dtype=bool)
+    new[1:] = (cv[1:] != cv[:-1]) | (ch[1:] - ch[:-1] > SAME_HEADING)
+    cv, ch = cv[new], ch[new]
+
+    def copy_id(v, h):
+        lo, hi = np.searchsorted(cv, v), np.searchsorted(cv, v, side="right")
+        # the nearest heading among the vertex's copies (the copy made from this lane)
+        seg = ch[lo:hi] if np.ndim(v) == 0 else None
+        if seg is not None:
+            return lo + int(np.argmin(np.abs(wrap_angle(seg - h))))
+        out = np.empty(len(v), dtype=np.int64)
+        for i in range(len(v)):
+            s = ch[lo[i] : hi[i]]
+            out[i] = lo[i] + int(np.argmin(np.abs(wrap_angle(s - h[i]))))
+        return out
+
+    pa, pb, pdh, plen = [], [], [], []
+    lens = np.hypot(*(xy[e[:, 1]] - xy[e[:, 0]]).T)
+    for col, h in ((0, h_uv), (1, h_vu)):
+        m = ln.ok[:, col]
+        tail, head = (e[m, 0], e[m, 1]) if col == 0 else (e[m, 1], e[m, 0])
+        ct, chd = copy_id(tail, h[m]), copy_id(head, h[m])
+        pa.append(ct)
+        pb.append(chd)
+        plen.append(lens[m])
+        if robot.reverse:  # backwards along the same lane, the same heading
+            pa.append(chd)
+            pb.append(ct)
+            plen.append(lens[m])
+    pa = np.concatenate(pa) if pa else np.zeros(0, dtype=np.int64)
+    pb = np.concatenate(pb) if pb else np.zeros(0, dtype=np.int64)
+    plen = np.concatenate(plen) if plen else np.zeros(0)
+    pdh = np.zeros(len(pa))
+    # turns between neighbours in heading order, both ways round
+    ta, tb, tdh = [], [], []
+    bounds = np.searchsorted(cv, np.arange(len(xy) + 1))
+    for v in range(len(xy)):
+        lo, hi = int(bounds[v]), int(bounds[v + 1])
+        m = hi - lo
+        if m < 2:
+            continue
+        x, y = xy[v]
+        for i in range(m):
+            j = (i + 1) % m
+            if m == 2 and i == 1:
+                arc = 2 * math.pi - (ch[lo + 1] - ch[lo])  # the other way round
+            else:
+                arc = (ch[lo + j] - ch[lo + i]) % (2 * math.pi)
+            if turn_free(geometry, x, y, ch[lo + i], arc):
+                ta += [lo + i, lo + j]
+                tb += [lo + j, lo + i]
+                tdh += [arc, -arc]
+    scale = vmax / rate
+    return_ = _Base(
+        poses=np.column_stack([xy[cv], ch]) if len(cv) else np.zeros((0, 3)),
+        vertex=cv,
+        a=np.concatenate([pa, np.asarray(ta, dtype=np.int64)]),
+        b=np.concatenate([pb, np.asarray(tb, dtype=np.int64)]),
+        dh=np.concatenate([pdh, np.asarray(tdh, dtype=float)]),
+        length=np.concatenate([plen, np.abs(np.asarray(tdh, dtype=float)) * scale]),
+    )
+    roadmap._derived[key] = return_
+    return return_
+
+
+@dataclass(frozen=True)
+class UnicyclePrepared:
+    """:meth:`gfuzzy.planner.Planner.prepare` for a unicycle: the query-independent pieces
+    are kept on the roadmap (``Roadmap._derived``), so only the goal and the options are.
+
+    Attributes
+    ----------
+    goal_raw : (3,) float
+    options : PlanOptions
+    """
+
+    goal_raw: FloatArray
+    options: object
+
+
+class _Extras:
+    """The query's own copies and pieces, appended after the base's."""
+
+    def __init__(self, base: _Base, geometry, scale: float):
+        self.base, self.geometry, self.scale = base, geometry, scale
+        self.poses: list = []
+        self.pieces: list = []  # (a, b, dh, length)
+        self.n0 = len(base.poses)
+
+    def node(self, x: float, y: float, h: float) -> int:
+        self.poses.append((float(x), float(y), float(wrap_angle(h))))
+        return self.n0 + len(self.poses) - 1
+
+    def pose(self, i: int):
+        return self.base.poses[i] if i < self.n0 else self.poses[i - self.n0]
+
+    def lane(self, a: int, b: int) -> None:
+        pa, pb = self.pose(a), self.pose(b)
+        self.pieces.append((a, b, 0.0, math.hypot(pb[0] - pa[0], pb[1] - pa[1])))
+
+    def turn(self, a: int, b: int, dh: float) -> None:
+        if dh != 0.0:
+            self.pieces.append((a, b, float(dh), abs(dh) * self.scale))
+
+    def copy_at(self, v: int, h: float) -> int:
+        """The copy of vertex v at heading h: the base's when it has one, else a new copy
+        joined by turns to its heading neighbours there, both ways round."""
+        geo, base = self.geometry, self.base
+        ids = base.copies_at(v)
+        rel = (base.poses[ids, 2] - h) % (2 * math.pi)
+        same = (rel <= SAME_HEADING) | (rel >= 2 * math.pi - SAME_HEADING)
+        if same.any():
+            return int(ids[np.nonzero(same)[0][0]])
+        x, y = (float(c) for c in base.poses[ids[0], :2])
+        c = self.node(x, y, h)
+        nxt, prv = ids[int(np.argmin(rel))], ids[int(np.argmax(rel))]
+        for other, arc in ((nxt, float(rel.min())), (prv, float(rel.max()) - 2 * math.pi)):
+            if turn_free(geo, x, y, h, arc):
+                self.turn(c, other, arc)
+                self.turn(other, c, -arc)
+        return c
+
+
+def build_graph(planner, start: FloatArray, goal: FloatArray, dt: float, vplan: float,
+                connect_k: int = 10, stretch: float = 1.0) -> UnicycleGraph:  # fmt: skip
+    """The unicycle's space-time graph of a query (see the module docstring).
+
+    Parameters
+    ----------
+    planner : gfuzzy.planner.Planner
+    start, goal : (3,) float
+        ``[x, y, heading]``, headings wrapped.
+    dt : float
+    vplan : float
+        The speed the graph is cut for (``vmax * SPEED_SAFETY``).
+    connect_k : int
+        How many vertices the start and the goal try to join (as many lanes each way).
+    stretch : float
+        The disc's roadmap spanner (a box uses all its lanes).
+
+    Returns
+    -------
+    UnicycleGraph
+    """
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import dijkstra
+
+    from .errors import LimitError
+    from .settings import MAX_POINTS
+
+    geo, robot, rm = planner.geometry, planner.robot, planner.roadmap
+    base = _base(rm, geo, stretch, robot.vmax)
+    scale = robot.vmax / robot.turn_rate
+    ex = _Extras(base, geo, scale)
+    s_id = ex.node(*start)
+    g_id = ex.node(*goal)
+    sx, sy, sh = (float(v) for v in start)
+    gx, gy, gh = (float(v) for v in goal)
+    dirs = (False, True) if robot.reverse else (False,)
+
+    def drive(ax, ay, bx, by, back):
+        """Heading for driving from a to b (backwards: facing away from b), or None when the
+        lane is not free."""
+        h = math.atan2(by - ay, bx - ax) + (math.pi if back else 0.0)
+        if not geo.motion_free(_xy_pose(robot, ax, ay, h), _xy_pose(robot, bx, by, h)):
+            return None
+        return h
+
+    def leave(v, vx, vy):  # start -> vertex v
+        done = False
+        for back in dirs:
+            h = drive(sx, sy, vx, vy, back)
+            if h is None:
+                continue
+            dh = pick_turn(geo, sx, sy, sh, h)
+            if dh is None:
+                continue
+            a = s_id
+            if dh != 0.0:
+                a = ex.node(sx, sy, h)
+                ex.turn(s_id, a, dh)
+            ex.lane(a, ex.copy_at(v, h))
+            done = True
+        return done
+
+    def arrive(v, vx, vy):  # vertex v -> goal
+        done = False
+        for back in dirs:
+            h = drive(vx, vy, gx, gy, back)
+            if h is None:
+                continue
+            dh = pick_turn(geo, gx, gy, h, gh)
+            if dh is None:
+                continue
+            a = g_id
+            if dh != 0.0:
+                a = ex.node(gx, gy, h)
+                ex.turn(a, g_id, dh)
+            ex.lane(ex.copy_at(v, h), a)
+            done = True
+        return done
+
+    xy = rm.vertices[:, :2]
+    has_copies = np.zeros(len(xy), dtype=bool)
+    has_copies[base.vertex] = True
+    for (px, py), join in (((sx, sy), leave), ((gx, gy), arrive)):
+        d = np.hypot(xy[:, 0] - px, xy[:, 1] - py)
+        order = np.argsort(d, kind="stable")
+        order = order[has_copies[order] & (d[order] > 1e-9)]
+        tried = joined = 0
+        for v in order[: 4 * max(connect_k, 1)].tolist():
+            if tried >= connect_k and joined:
+                break
+            tried += 1
+            joined += join(v, float(xy[v, 0]), float(xy[v, 1]))
+    if math.hypot(gx - sx, gy - sy) <= 1e-9:  # the same place: a turn in place
+        dh = pick_turn(geo, sx, sy, sh, gh)
+        if dh is not None:
+            ex.turn(s_id, g_id, dh)
+    else:
+        for back in dirs:
+            h = drive(sx, sy, gx, gy, back)
+            if h is None:
+                continue
+            d1, d2 = pick_turn(geo, sx, sy, sh, h), pick_turn(geo, gx, gy, h, gh)
+            if d1 is None or d2 is None:
+                continue
+            a = s_id if d1 == 0.0 else ex.node(sx, sy, h)
+            c = g_id if d2 == 0.0 else ex.node(gx, gy, h)
+            ex.turn(s_id, a, d1)
+            ex.turn(c, g_id, d2)
+            ex.lane(a, c)
+
+    # ---- all nodes and pieces
+    nodes = np.vstack([base.poses, np.asarray(ex.poses, dtype=float).reshape(-1, 3)])
+    xp = np.asarray(ex.pieces, dtype=float).reshape(-1, 4)
+    A = np.concatenate([base.a, xp[:, 0].astype(np.int64)])
+    B = np.concatenate([base.b, xp[:, 1].astype(np.int64)])
+    DH = np.concatenate([base.dh, xp[:, 2]])
+    L = np.concatenate([base.length, xp[:, 3]])
+    zero = L <= 0.0  # the same pose twice: joined by one step (a wait's length)
+    k = split_counts(L, vplan * dt)
+    nn = len(nodes)
+    n_int = k - 1
+    total = nn + int(n_int.sum())
+    if total > MAX_POINTS:
+        raise LimitError(
+            f"the time step is too fine for this roadmap: the unicycle's graph would have {total:,} points "
+            f"(at most {MAX_POINTS:,}); use a larger dt"
+        )
+    offs = np.concatenate([[0], np.cumsum(n_int)]).astype(np.int64)
+    p_of = np.repeat(np.arange(len(A)), n_int)
+    j = np.arange(offs[-1]) - np.repeat(offs[:-1], n_int) + 1
+    f = j / k[p_of]
+    pa, pb = nodes[A[p_of]], nodes[B[p_of]]
+    inner = np.empty((len(p_of), 3))
+    inner[:, :2] = pa[:, :2] + f[:, None] * (pb[:, :2] - pa[:, :2])
+    inner[:, 2] = np.where(DH[p_of] != 0.0, wrap_angle(pa[:, 2] + f * DH[p_of]), pa[:, 2])
+    poses = np.vstack([nodes, inner])
+    ids = nn + np.arange(offs[-1])
+    first = np.zeros(offs[-1], dtype=bool)
+    first[offs[:-1][n_int > 0]] = True
+    last = np.zeros(offs[-1], dtype=bool)
+    last[(offs[1:] - 1)[n_int > 0]] = True
+    src = np.concatenate([np.where(first, A[p_of], ids - 1), ids[last], A[n_int == 0]])
+    dst = np.concatenate([ids, B[p_of][last], B[n_int == 0]])
+    order = np.argsort(src, kind="stable")
+    indptr = np.zeros(total + 1, dtype=np.int64)
+    np.cumsum(np.bincount(src, minlength=total), out=indptr[1:])
+    neighbors = dst[order]
+
+    # ---- static distances on the copies' graph: steps (heuristic, windows), metres at vmax
+    def matrix(w):
+        key = A * nn + B
+        o = np.lexsort((w, key))
+        keep = np.ones(len(o), dtype=bool)
+        keep[1:] = key[o][1:] != key[o][:-1]  # parallel pieces: the shortest
+        o = o[keep]
+        return csr_matrix((np.maximum(w[o], 1e-300), (A[o], B[o])), shape=(nn, nn))
+
+    steps_m = matrix(k.astype(float))
+    hop_g = np.rint(np.where((d := dijkstra(steps_m.T.tocsr(), directed=True, indices=g_id)) < 1e-200, 0.0, d))
+    hop_s = np.rint(np.where((d := dijkstra(steps_m, directed=True, indices=s_id)) < 1e-200, 0.0, d))
+    metres = dijkstra(matrix(np.where(zero, 0.0, L)), directed=True, indices=s_id)
+    rd = float(metres[g_id]) if metres[g_id] > 1e-200 else 0.0
+    heur = np.empty(total)
+    heur[:nn] = hop_g
+    heur[nn:] = hop_g[B[p_of]] + k[p_of] - j
+    from_start = np.empty(total)
+    from_start[:nn] = hop_s
+    from_start[nn:] = hop_s[A[p_of]] + j
+    graph = SpaceTimeGraph(poses, indptr, neighbors, heur, groups=nn + offs, from_start=from_start)
+    return UnicycleGraph(graph, s_id, g_id, rd)
