@@ -84,11 +84,22 @@ class _Base:
     vertex : (K,) int
         The roadmap vertex of each copy.
     a, b : (P,) int
-        Pieces: from copy a to copy b.
+        Pieces: from copy a to copy b; a negative id -(1 + i) is ring point i.
     dh : (P,) float
         A turn's signed heading change; 0 for a lane.
     length : (P,) float
         Metres at vmax: a lane's length, ``|dh| vmax / turn_rate`` for a turn.
+    ring : (R, 3) float
+        Turning rings: every vertex with copies has ``n_ring`` points at its position, at
+        headings ``-pi + i 2 pi / n_ring`` (one turning step apart), joined in a circle both
+        ways; each copy joins the two ring points around its heading. A turn from one copy
+        to another goes copy -> ring ... ring -> copy: at most two steps longer than the
+        turn itself, however many copies the vertex has. Points where the body collides,
+        and arcs whose sweep does, are left out (``ring_ok``).
+    ring_ptr : (V,) int
+        First ring point of each vertex (-1: no ring).
+    ring_ok : (R,) bool
+    n_ring : int
     """
 
     poses: FloatArray
@@ -97,6 +108,10 @@ class _Base:
     b: IntArray
     dh: FloatArray
     length: FloatArray
+    ring: FloatArray
+    ring_ptr: IntArray
+    ring_ok: np.ndarray
+    n_ring: int
 
     def copies_at(self, v: int) -> IntArray:
         lo, hi = np.searchsorted(self.vertex, [v, v + 1])
@@ -196,12 +211,22 @@ def _box_lanes(roadmap, geometry, xy: FloatArray) -> Lanes:
     return Lanes(xy, edges[keep], ok[keep])
 
 
-def _base(roadmap, geometry, stretch: float, vmax: float) -> _Base:
+def _brackets(h: float, r0: int, n_ring: int, step_h: float) -> list:
+    """The two ring points around heading ``h`` (ring of ``n_ring`` headings from -pi, its
+    first point ``r0``): [(point, signed turn to it)], the one below first."""
+    u = (h + math.pi) / step_h
+    i = int(math.floor(u)) % n_ring
+    below = -((h + math.pi - i * step_h) % (2 * math.pi))
+    above = ((i + 1) * step_h - math.pi - h) % (2 * math.pi)
+    return [(r0 + i, below), (r0 + (i + 1) % n_ring, above)]
+
+
+def _base(roadmap, geometry, stretch: float, vmax: float, step_len: float) -> _Base:
     """The copies, lanes and turns of the roadmap, cached per (robot, stretch)."""
     robot = geometry.robot
     rate = robot.turn_rate
     key = ("unicycle-base", geometry.scene.static_hash, float(geometry.keep), float(stretch), robot.shape,
-           robot.size, bool(robot.reverse), float(rate), float(vmax))  # fmt: skip
+           robot.size, bool(robot.reverse), float(rate), float(vmax), float(step_len))  # fmt: skip
     hit = roadmap._derived.get(key)
     if hit is not None:
         return hit
@@ -252,33 +277,50 @@ def _base(roadmap, geometry, stretch: float, vmax: float) -> _Base:
     pb = np.concatenate(pb) if pb else np.zeros(0, dtype=np.int64)
     plen = np.concatenate(plen) if plen else np.zeros(0)
     pdh = np.zeros(len(pa))
-    # turns between neighbours in heading order, both ways round
-    ta, tb, tdh = [], [], []
-    bounds = np.searchsorted(cv, np.arange(len(xy) + 1))
-    for v in range(len(xy)):
-        lo, hi = int(bounds[v]), int(bounds[v + 1])
-        m = hi - lo
-        if m < 2:
-            continue
-        x, y = xy[v]
-        for i in range(m):
-            j = (i + 1) % m
-            if m == 2 and i == 1:
-                arc = 2 * math.pi - (ch[lo + 1] - ch[lo])  # the other way round
-            else:
-                arc = (ch[lo + j] - ch[lo + i]) % (2 * math.pi)
-            if turn_free(geometry, x, y, ch[lo + i], arc):
-                ta += [lo + i, lo + j]
-                tb += [lo + j, lo + i]
-                tdh += [arc, -arc]
+    # turns: a ring of headings per vertex, on a grid one turning step apart (see _Base)
     scale = vmax / rate
+    n_ring = int(split_counts(np.array([2 * math.pi * scale]), step_len)[0])
+    step_h = 2 * math.pi / n_ring
+    bounds = np.searchsorted(cv, np.arange(len(xy) + 1))
+    has = np.diff(bounds) > 0
+    ring_ptr = np.full(len(xy), -1, dtype=np.int64)
+    ring_ptr[has] = np.arange(int(has.sum())) * n_ring
+    grid = -math.pi + step_h * np.arange(n_ring)
+    ring_v = np.repeat(np.nonzero(has)[0], n_ring)
+    ring_h = np.tile(grid, int(has.sum()))
+    ring_ok = np.ones(len(ring_v), dtype=bool)
+    ta, tb, tdh = [], [], []
+    disc = robot.shape == "disc"
+    for v in np.nonzero(has)[0].tolist():
+        x, y = (float(c) for c in xy[v])
+        r0 = int(ring_ptr[v])
+        if not disc:
+            for i in range(n_ring):
+                ring_ok[r0 + i] = geometry.clearance1([x, y, grid[i]]) >= 0
+        for i in range(n_ring):
+            j = (i + 1) % n_ring
+            if ring_ok[r0 + i] and ring_ok[r0 + j] and (disc or turn_free(geometry, x, y, grid[i], step_h)):
+                ta += [-(1 + r0 + i), -(1 + r0 + j)]
+                tb += [-(1 + r0 + j), -(1 + r0 + i)]
+                tdh += [step_h, -step_h]
+        for c in range(int(bounds[v]), int(bounds[v + 1])):
+            for r, arc in _brackets(ch[c], r0, n_ring, step_h):
+                if ring_ok[r] and (disc or turn_free(geometry, x, y, ch[c], arc)):
+                    ta += [c, -(1 + r)]
+                    tb += [-(1 + r), c]
+                    tdh += [arc, -arc]
+    tdh = np.asarray(tdh, dtype=float)
     return_ = _Base(
         poses=np.column_stack([xy[cv], ch]) if len(cv) else np.zeros((0, 3)),
         vertex=cv,
         a=np.concatenate([pa, np.asarray(ta, dtype=np.int64)]),
         b=np.concatenate([pb, np.asarray(tb, dtype=np.int64)]),
-        dh=np.concatenate([pdh, np.asarray(tdh, dtype=float)]),
-        length=np.concatenate([plen, np.abs(np.asarray(tdh, dtype=float)) * scale]),
+        dh=np.concatenate([pdh, tdh]),
+        length=np.concatenate([plen, np.abs(tdh) * scale]),
+        ring=np.column_stack([xy[ring_v], ring_h]) if len(ring_v) else np.zeros((0, 3)),
+        ring_ptr=ring_ptr,
+        ring_ok=ring_ok,
+        n_ring=n_ring,
     )
     roadmap._derived[key] = return_
     return return_
@@ -313,6 +355,8 @@ class _Extras:
         return self.n0 + len(self.poses) - 1
 
     def pose(self, i: int):
+        if i < 0:
+            return self.base.ring[-i - 1]
         return self.base.poses[i] if i < self.n0 else self.poses[i - self.n0]
 
     def lane(self, a: int, b: int) -> None:
@@ -334,11 +378,12 @@ class _Extras:
             return int(ids[np.nonzero(same)[0][0]])
         x, y = (float(c) for c in base.poses[ids[0], :2])
         c = self.node(x, y, h)
-        nxt, prv = ids[int(np.argmin(rel))], ids[int(np.argmax(rel))]
-        for other, arc in ((nxt, float(rel.min())), (prv, float(rel.max()) - 2 * math.pi)):
-            if turn_free(geo, x, y, h, arc):
-                self.turn(c, other, arc)
-                self.turn(other, c, -arc)
+        r0 = int(base.ring_ptr[v])
+        step_h = 2 * math.pi / base.n_ring
+        for r, arc in _brackets(h, r0, base.n_ring, step_h):
+            if base.ring_ok[r] and turn_free(geo, x, y, h, arc):
+                self.turn(c, -(1 + r), arc)
+                self.turn(-(1 + r), c, -arc)
         return c
 
 
@@ -370,7 +415,7 @@ def build_graph(planner, start: FloatArray, goal: FloatArray, dt: float, vplan: 
     from .settings import MAX_POINTS
 
     geo, robot, rm = planner.geometry, planner.robot, planner.roadmap
-    base = _base(rm, geo, stretch, robot.vmax)
+    base = _base(rm, geo, stretch, robot.vmax, vplan * dt)
     scale = robot.vmax / robot.turn_rate
     ex = _Extras(base, geo, scale)
     s_id = ex.node(*start)
@@ -453,10 +498,14 @@ def build_graph(planner, start: FloatArray, goal: FloatArray, dt: float, vplan: 
             ex.lane(a, c)
 
     # ---- all nodes and pieces
-    nodes = np.vstack([base.poses, np.asarray(ex.poses, dtype=float).reshape(-1, 3)])
+    # node ids: the copies, the query's own nodes, the rings (negative ids until here)
+    first_ring = len(base.poses) + len(ex.poses)
+    nodes = np.vstack([base.poses, np.asarray(ex.poses, dtype=float).reshape(-1, 3), base.ring])
     xp = np.asarray(ex.pieces, dtype=float).reshape(-1, 4)
     A = np.concatenate([base.a, xp[:, 0].astype(np.int64)])
     B = np.concatenate([base.b, xp[:, 1].astype(np.int64)])
+    A = np.where(A < 0, first_ring - 1 - A, A)
+    B = np.where(B < 0, first_ring - 1 - B, B)
     DH = np.concatenate([base.dh, xp[:, 2]])
     L = np.concatenate([base.length, xp[:, 3]])
     zero = L <= 0.0  # the same pose twice: joined by one step (a wait's length)
@@ -510,5 +559,7 @@ def build_graph(planner, start: FloatArray, goal: FloatArray, dt: float, vplan: 
     from_start = np.empty(total)
     from_start[:nn] = hop_s
     from_start[nn:] = hop_s[A[p_of]] + j
-    graph = SpaceTimeGraph(poses, indptr, neighbors, heur, groups=nn + offs, from_start=from_start)
+    rings = first_ring + base.n_ring * np.arange(len(base.ring) // max(base.n_ring, 1))
+    groups = np.concatenate([rings, nn + offs])  # a ring's points share a position: one group
+    graph = SpaceTimeGraph(poses, indptr, neighbors, heur, groups=groups, from_start=from_start)
     return UnicycleGraph(graph, s_id, g_id, rd)
