@@ -563,3 +563,47 @@ def build_graph(planner, start: FloatArray, goal: FloatArray, dt: float, vplan: 
     groups = np.concatenate([rings, nn + offs])  # a ring's points share a position: one group
     graph = SpaceTimeGraph(poses, indptr, neighbors, heur, groups=groups, from_start=from_start)
     return UnicycleGraph(graph, s_id, g_id, rd)
+
+
+def turn_path(start: FloatArray, via: FloatArray, goal: FloatArray, reverse: bool = False) -> FloatArray:
+    """A unicycle path through via-points: straight segments joined by turns in place.
+
+    The robot turns in place at the start towards the first via-point, drives there, turns
+    towards the next one, ..., drives to the goal's position and turns to the goal's
+    heading; every turn takes the shorter arc. (The GA moves via-points; this is the path a
+    differential drive follows through them.)
+
+    Parameters
+    ----------
+    start, goal : (3,) float
+        Poses ``[x, y, heading]``.
+    via : (m, 2) float
+    reverse : bool
+        Unused for now: the path drives forwards (allowed either way).
+
+    Returns
+    -------
+    (n, 3) float
+        Poses; consecutive ones differ only in heading (a turn) or only in position along
+        their common heading (a straight move). Repeated poses are dropped.
+    """
+    pts = np.vstack([np.asarray(start, dtype=float)[None, :2], np.asarray(via, dtype=float).reshape(-1, 2),
+                     np.asarray(goal, dtype=float)[None, :2]])  # fmt: skip
+    keep = np.ones(len(pts), dtype=bool)
+    keep[1:] = np.hypot(*np.diff(pts, axis=0).T) > 1e-12
+    pts = pts[keep]
+    out = [np.asarray(start, dtype=float)]
+    h = float(start[2])
+    for a, b in zip(pts[:-1], pts[1:], strict=True):
+        hn = math.atan2(b[1] - a[1], b[0] - a[0])
+        if abs(wrap_angle(hn - h)) > SAME_HEADING:
+            out.append(np.array([a[0], a[1], h + wrap_angle(hn - h)]))
+        h = out[-1][2] if abs(wrap_angle(hn - h)) > SAME_HEADING else h
+        out.append(np.array([b[0], b[1], h]))
+    g = np.asarray(goal, dtype=float)
+    if abs(wrap_angle(g[2] - h)) > SAME_HEADING:
+        out.append(np.array([g[0], g[1], h + wrap_angle(g[2] - h)]))
+    path = np.array(out)
+    path[-1, :2] = g[:2]
+    path[:, 2] = wrap_angle(path[:, 2])
+    return path
