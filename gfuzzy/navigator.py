@@ -343,7 +343,8 @@ class Navigator:
             (np.r_[full_w, full_w], (np.r_[full[:, 0], full[:, 1]], np.r_[full[:, 1], full[:, 0]])), shape=(n, n)
         ).tocsr()
         self._metres_v = dijkstra(mat, directed=True, indices=g_id)
-        k, offs, inner, a, b, j, src, dst = split_edges(verts, edges, lengths, self.step_len, n)
+        cut = split_edges(verts, edges, lengths, self.step_len, n)
+        k, offs, inner, a, b, j, src, dst = cut.k, cut.offs, cut.inner, cut.a, cut.b, cut.j, cut.src, cut.dst
         poses = np.vstack([verts, inner])
         e_of = np.repeat(np.arange(len(edges)), k - 1)
         heur = np.concatenate([hop_g, np.minimum(hop_g[a] + j, hop_g[b] + k[e_of] - j)])

@@ -174,7 +174,8 @@ def _split_from(start, ends, edges, lengths, step_len, first_id):
     m = len(edges)
     verts = np.vstack([start[None], ends]) if m else start[None]
     local = np.stack([np.zeros(m, dtype=np.int64), np.arange(1, m + 1)], axis=1)
-    k, offs, inner, a, b, j, src, dst = split_edges(verts, local, lengths, step_len, first_id)
+    cut = split_edges(verts, local, lengths, step_len, first_id)
+    k, offs, inner, a, b, j, src, dst = cut.k, cut.offs, cut.inner, cut.a, cut.b, cut.j, cut.src, cut.dst
     ids = np.concatenate([edges[:, 1], [edges[0, 0]] if m else []]).astype(np.int64)
 
     def back(x):  # local ids (0: the start, 1..m: the ends) to graph ids; interior unchanged

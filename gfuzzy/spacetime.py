@@ -24,7 +24,7 @@ from .typing import BoolArray, FloatArray, IntArray
 if TYPE_CHECKING:
     from .movers import MoverField
 
-__all__ = ["SpaceTimeGraph", "SearchResult", "IntervalStore", "split_edges", "BAND"]
+__all__ = ["SpaceTimeGraph", "SearchResult", "IntervalStore", "SplitEdges", "split_edges", "BAND"]
 
 #: Safety is computed for every group whose static lower bound on f lies within this many
 #: steps of the group the search asks for: the A* order will want them soon.
@@ -287,7 +287,35 @@ def _intervals_from_pairs(field_: MoverField, poses, ptr, lo, hi, H: int):
     return gs[ok], ge[ok], np.searchsorted(rn, np.arange(k + 1))
 
 
-def split_edges(verts: FloatArray, edges: IntArray, lengths: FloatArray, step_len: float, first_id: int):
+@dataclass(frozen=True)
+class SplitEdges:
+    """Edges cut into one-step pieces (:func:`split_edges`).
+
+    Attributes
+    ----------
+    k : (e,) int
+        Steps per edge.
+    offs : (e+1,) int
+        Interior points of edge i are ``first_id + offs[i] .. first_id + offs[i+1] - 1``.
+    inner : (offs[-1], d) float
+        Their poses.
+    a, b, j : (offs[-1],) int
+        Each interior point's edge ends and its index 1..k-1 along the edge.
+    src, dst : (c,) int
+        The one-step moves along the chains a -> interior... -> b (one direction).
+    """
+
+    k: IntArray
+    offs: IntArray
+    inner: FloatArray
+    a: IntArray
+    b: IntArray
+    j: IntArray
+    src: IntArray
+    dst: IntArray
+
+
+def split_edges(verts: FloatArray, edges: IntArray, lengths: FloatArray, step_len: float, first_id: int) -> SplitEdges:
     """Cut edges into one-step pieces of at most ``step_len`` (:func:`gfuzzy.poses.split_counts`).
 
     The one place the roadmap-time graph is cut: :meth:`gfuzzy.planner.Planner._graph`
@@ -305,16 +333,7 @@ def split_edges(verts: FloatArray, edges: IntArray, lengths: FloatArray, step_le
 
     Returns
     -------
-    k : (e,) int
-        Steps per edge.
-    offs : (e+1,) int
-        Interior points of edge i are ``first_id + offs[i] .. first_id + offs[i+1] - 1``.
-    inner : (offs[-1], d) float
-        Their poses.
-    a, b, j : (offs[-1],) int
-        Each interior point's edge ends and its index 1..k-1 along the edge.
-    src, dst : (c,) int
-        The one-step moves along the chains a -> interior... -> b (one direction).
+    SplitEdges
     """
     k = split_counts(lengths, step_len)
     n_int = k - 1
@@ -331,4 +350,4 @@ def split_edges(verts: FloatArray, edges: IntArray, lengths: FloatArray, step_le
     prev = np.where(first, a, ids - 1)
     src = np.concatenate([prev, ids[last], edges[n_int == 0, 0]])
     dst = np.concatenate([ids, b[last], edges[n_int == 0, 1]])
-    return k, offs, inner, a, b, j, src, dst
+    return SplitEdges(k, offs, inner, a, b, j, src, dst)
