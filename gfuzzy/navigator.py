@@ -294,7 +294,15 @@ class Navigator:
         self._ahead: list = []  # (arrival time, roadmap vertex) of the last plan
         self._clock = time.perf_counter  # the budget's clock (a test may replace it)
         self._person_seconds = PERSON_SECONDS  # the predictions' set-up per person, measured
-        self._build_base()
+        if robot.unicycle:  # the graph of heading copies, built per call (gfuzzy.unicycle)
+            from .planner import Planner
+
+            self._planner = Planner(scene, roadmap)
+            self._planner.geometry = self.geometry
+            self._nv = -1  # no roadmap vertex is "ahead": every copy has its own heading
+            self._g_id = -1
+        else:
+            self._build_base()
         if opts.backend == "compiled":  # load the compiled kernels now, not inside a step's budget
             from .search_kernel import warm
 
@@ -365,8 +373,11 @@ class Navigator:
 
     def roadmap_distance(self, pose) -> float:
         """Shortest distance from ``pose`` to the goal on the whole roadmap (static
-        obstacles only; inf when not connected)."""
+        obstacles only; inf when not connected; a unicycle's: its turns included, see
+        :class:`gfuzzy.unicycle.UnicycleGraph`)."""
         pose = np.asarray(pose, dtype=float).reshape(-1)
+        if self.robot.unicycle:
+            return self._unicycle_graph(pose).roadmap_distance
         best = math.inf
         if self.geometry.motion_free(pose, self._goal_wrapped):
             best = float(metric_distance(pose, self._goal_wrapped, self.robot.circumradius))
@@ -374,9 +385,23 @@ class Navigator:
             best = min(best, w + float(self._metres_v[v]))
         return best
 
+    def _unicycle_graph(self, pose: FloatArray):
+        from .unicycle import build_graph
+
+        opts = self.options
+        start = pose.copy()
+        start[2] = wrap_angle(start[2])
+        return build_graph(self._planner, start, self._goal_wrapped, opts.dt, self.vplan, opts.connect_k, opts.stretch)
+
     def _splice(self, pose: FloatArray, t: float = -math.inf):
         """The base graph with ``pose`` spliced in: (graph, start id), or (None, reason)."""
         opts = self.options
+        if self.robot.unicycle:
+            ug = self._unicycle_graph(pose)
+            self._g_id = ug.g_id
+            if not math.isfinite(ug.roadmap_distance):
+                return None, "the robot's pose connects to no roadmap vertex that leads to the goal"
+            return ug.graph, ug.s_id
         conns = self._connect(pose, opts.connect_k)
         # the robot is usually inside an edge of its last plan: connect it to the vertices
         # that plan was heading for too (the nearest ones may all lie behind it, and going
@@ -696,14 +721,20 @@ class Navigator:
         beside a person standing still; this motion is checked every 0.01 s with a margin
         of 0.02 m, which bounds the gap between the samples (it changes by at most 2 m/s).
         """
-        if not self.geometry.motion_free(pose, self.goal):
-            return None
         cr = self.robot.circumradius
-        length = float(metric_distance(pose, self.goal, cr))
-        duration = length / self.vplan
+        if self.robot.unicycle:
+            rows = self._turn_and_drive(t, pose, [], self.goal)
+            if rows is None:
+                return None
+            duration = float(rows[-1, 0] - t)
+        else:
+            if not self.geometry.motion_free(pose, self.goal):
+                return None
+            length = float(metric_distance(pose, self.goal, cr))
+            duration = length / self.vplan
+            rows = np.array([[t, *pose], [t + duration, *self.goal]])
         if duration > self.options.prediction_horizon:
             return None
-        rows = np.array([[t, *pose], [t + duration, *self.goal]])
         traj = Trajectory(rows, cr)
         speed = float(np.max(np.hypot(obs[:, 2], obs[:, 3]), initial=0.0))
         tol = (self.vplan + speed) * 0.005 + 1e-3
@@ -732,6 +763,23 @@ class Navigator:
                 return None
         return Trajectory(cut, self.robot.circumradius)
 
+    def _turn_and_drive(self, t: float, pose: FloatArray, via, goal) -> FloatArray | None:
+        """Rows of a unicycle driving from ``pose`` through ``via`` to ``goal`` at full
+        speed, turning in place at full rate (:func:`gfuzzy.unicycle.turn_path`), each piece
+        statically certified; None when one is not free."""
+        from .unicycle import turn_path
+
+        path = turn_path(pose, np.asarray(via, dtype=float).reshape(-1, 2), goal)
+        rows = [[t, *pose]]
+        for a, b in zip(path[:-1], path[1:], strict=True):
+            if not self.geometry.motion_free(a if self.robot.shape != "disc" else a[:2], b if self.robot.shape != "disc" else b[:2]):
+                return None
+            dh = abs(wrap_angle(b[2] - a[2]))
+            step = float(np.hypot(*(b[:2] - a[:2]))) / self.vplan + dh / (self.robot.turn_rate * SPEED_SAFETY)
+            rows.append([rows[-1][0] + step, *b])
+        rows[-1][1:] = list(goal)
+        return np.array(rows, dtype=float)
+
     def _evasive(self, t: float, pose: FloatArray, obs: FloatArray) -> Trajectory:
         """The statically free straight motion (or standing still) with the latest contact.
 
@@ -744,6 +792,8 @@ class Navigator:
         opts = self.options
         cr = self.robot.circumradius
         T = opts.evasion_time
+        if self.robot.unicycle:
+            return self._evasive_unicycle(t, pose, obs)
         ang = np.arange(opts.evasion_headings) * (2 * math.pi / opts.evasion_headings)
         speeds = np.array([1.0, 0.5]) * self.vplan
         dirs = np.column_stack([np.cos(ang), np.sin(ang)])
@@ -789,6 +839,65 @@ class Navigator:
             if opts.cover > move_time[c]:
                 rows = np.vstack([rows, [t + opts.cover, *ends[c]]])
         return Trajectory(rows, cr)
+
+
+    def _evasive_unicycle(self, t: float, pose: FloatArray, obs: FloatArray) -> Trajectory:
+        """:meth:`_evasive` for a differential drive: standing still, or turning in place to
+        one of ``evasion_headings`` headings and then driving straight along it (forwards;
+        backwards too with ``robot.reverse``) at full or half speed for what is left of
+        ``evasion_time`` (or half, or a quarter of it, whichever is statically free), then
+        standing. Scored as :meth:`_evasive` does."""
+        opts = self.options
+        cr = self.robot.circumradius
+        T = opts.evasion_time
+        rate = self.robot.turn_rate * SPEED_SAFETY
+        cands = [np.array([[t, *pose], [t + max(T, opts.cover), *pose]])]
+        ang = pose[2] + np.arange(opts.evasion_headings) * (2 * math.pi / opts.evasion_headings)
+        signs = (1.0, -1.0) if self.robot.reverse else (1.0,)
+        for h in ang.tolist():
+            dh = float(wrap_angle(h - pose[2]))
+            t_turn = abs(dh) / rate
+            turned = np.array([pose[0], pose[1], wrap_angle(pose[2] + dh)])
+            if t_turn > 0 and self.robot.shape != "disc" and not self.geometry.motion_free(pose, turned):
+                continue
+            left = T - t_turn
+            if left <= 0:
+                continue
+            for sign in signs:
+                for speed in (1.0, 0.5):
+                    for frac in (1.0, 0.5, 0.25):
+                        move = left * frac
+                        end = turned.copy()
+                        end[:2] += sign * speed * self.vplan * move * np.array([math.cos(turned[2]), math.sin(turned[2])])
+                        a, b = (turned, end) if self.robot.shape != "disc" else (turned[:2], end[:2])
+                        if self.geometry.bounds_clearance(end[None])[0] >= 0 and self.geometry.motion_free(a, b):
+                            rows = [[t, *pose]]
+                            if t_turn > 0:
+                                rows.append([t + t_turn, *turned])
+                            rows.append([t + t_turn + move, *end])
+                            if opts.cover > t_turn + move:
+                                rows.append([t + opts.cover, *end])
+                            cands.append(np.array(rows, dtype=float))
+                            break
+        n_t = int(math.ceil(T / 0.05)) + 1
+        times = t + np.linspace(0.0, T, n_t)
+        tau = times - t
+        trajs = [Trajectory(rows, cr) for rows in cands]
+        pts = np.stack([tr.at(np.minimum(times, tr.t_end)) for tr in trajs])  # (C, T, d)
+        ends = np.array([rows[-1, 1:] for rows in cands])
+        obs = self._near(pose, obs, T, EVASION_GAP)
+        if len(obs):
+            gap = self._clearance_along(pts, times, obs).min(axis=-1)
+            later = gap[:, 1:]
+            hit = (later <= 0) & (later <= gap[:, :1])
+            ttc = np.where(hit.any(axis=1), tau[1:][np.argmax(hit, axis=1)], math.inf)
+            worst = later.min(axis=1)
+        else:
+            ttc = np.full(len(cands), math.inf)
+            worst = np.full(len(cands), math.inf)
+        progress = metric_distance(pose, self.goal, cr) - metric_distance(ends, self.goal[None], cr)
+        score = np.minimum(ttc, T + 1.0) * 100.0 + np.minimum(worst, EVASION_GAP) * 10.0 + progress
+        return trajs[int(np.argmax(score))]
 
 
 def _cut(traj: Trajectory, ta: float, tb: float) -> FloatArray:
