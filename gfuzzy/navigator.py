@@ -299,6 +299,9 @@ class Navigator:
 
             self._planner = Planner(scene, roadmap)
             self._planner.geometry = self.geometry
+            from .unicycle import prepare_goal as prepare_unicycle
+
+            self._kept = prepare_unicycle(self._planner, self._goal_wrapped, opts.dt, self.vplan, opts.connect_k, opts.stretch)
             self._nv = -1  # no roadmap vertex is "ahead": every copy has its own heading
             self._g_id = -1
         else:
@@ -386,12 +389,9 @@ class Navigator:
         return best
 
     def _unicycle_graph(self, pose: FloatArray):
-        from .unicycle import build_graph
-
-        opts = self.options
         start = pose.copy()
         start[2] = wrap_angle(start[2])
-        return build_graph(self._planner, start, self._goal_wrapped, opts.dt, self.vplan, opts.connect_k, opts.stretch)
+        return self._kept.splice(self._planner, start, exact=False)
 
     def _splice(self, pose: FloatArray, t: float = -math.inf):
         """The base graph with ``pose`` spliced in: (graph, start id), or (None, reason)."""

@@ -346,8 +346,12 @@ class Planner:
         goal = check_pose(goal, self.robot.dof, "goal")
         if self.robot.unicycle:  # the copies' graph is kept on the roadmap; the rest is per query
             from .unicycle import UnicyclePrepared
+            from .unicycle import prepare_goal as prepare_unicycle
 
-            return UnicyclePrepared(goal, opts)
+            wrapped = goal.copy()
+            wrapped[2] = wrap_angle(wrapped[2])
+            kept = prepare_unicycle(self, wrapped, opts.dt, self.robot.vmax * SPEED_SAFETY, opts.connect_k, opts.stretch)
+            return UnicyclePrepared(goal, opts, kept)
         return prepare_goal(self, goal, opts)
 
     def plan_from(self, prepared, start, t0: float = 0.0, movers=None, hold: float = 0.0) -> PlanResult:
@@ -437,7 +441,10 @@ class Planner:
         if robot.unicycle:  # a differential drive: the graph of heading copies
             from .unicycle import build_graph
 
-            ug = build_graph(self, start, goal, opts.dt, vplan, opts.connect_k, opts.stretch)
+            if _prepared is None:
+                ug = build_graph(self, start, goal, opts.dt, vplan, opts.connect_k, opts.stretch)
+            else:
+                ug = _prepared.splice(self, start)
             graph, s_id, g_id, rd = ug.graph, ug.s_id, ug.g_id, ug.roadmap_distance
         elif _prepared is None:
             graph, s_id, g_id, rd = self._graph(start, goal, opts.dt, vplan, opts.connect_k, opts.stretch)

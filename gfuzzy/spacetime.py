@@ -128,6 +128,7 @@ class IntervalStore:
         self._hfloor = np.floor(np.where(self._finite, hmin, 0) + 1e-9).astype(np.int64)
         self.f_lb = np.minimum.reduceat(fs + h, ptr[:-1])
         self.done_hi = np.full(len(ptr) - 1, -1, dtype=np.int64)  # last step computed
+        self._same = _same_position_groups(graph.poses, ptr)
         self.pool: bool | None = None  # the storage, fixed by the first set_horizon
         self.field = None
         self.H = -1
@@ -233,7 +234,7 @@ class IntervalStore:
         # the safety first, the bookkeeping after: a field that raises (a deadline inside
         # the batch) leaves the store as it was
         if self.pool:
-            gs, ge, sp = field_.safe_intervals(self.graph.poses[nodes], sub_ptr, lo, hi)
+            gs, ge, sp = _safe_intervals_shared(field_, self.graph.poses[nodes], sub_ptr, lo, hi, self._same[pending])
         else:
             gs, ge, sp = _intervals_from_pairs(field_, self.graph.poses[nodes], sub_ptr, lo, hi, self.H)
         self.done_hi[pending] = hi
@@ -261,6 +262,40 @@ class IntervalStore:
                 setattr(self, name, grown)
         self.used = merge_runs(self.s, self.e, self.off, self.cnt, self.used, nodes, gs, ge, sp, lo_n)
         self.ready[nodes] = self.cnt[nodes]
+
+
+def _same_position_groups(poses, ptr) -> BoolArray:
+    """(G,) bool: groups of more than one point, all at one position (a unicycle's turning
+    ring, a turn in place). A group is the points of one straight motion, so its first and
+    last points share a position only when all do."""
+    sizes = np.diff(ptr)
+    multi = np.nonzero(sizes > 1)[0]
+    out = np.zeros(len(sizes), dtype=bool)
+    out[multi] = np.all(poses[ptr[multi], :2] == poses[ptr[multi + 1] - 1, :2], axis=1)
+    return out
+
+
+def _safe_intervals_shared(field_: MoverField, poses, ptr, lo, hi, same):
+    """:meth:`MoverField.safe_intervals`, computed once for a group whose points all share
+    one position (``same``, per group: a unicycle's turn in place) when the robot is a disc,
+    whose body ignores the heading, and handed to each of its points.
+
+    Parameters and returns as :meth:`gfuzzy.movers.MoverField.safe_intervals`.
+    """
+    sizes = np.diff(ptr)
+    n = len(poses)
+    collapse = same & (sizes > 1) if field_.robot.shape == "disc" else None
+    if n == 0 or collapse is None or not collapse.any():
+        return field_.safe_intervals(poses, ptr, lo, hi)
+    first = np.repeat(ptr[:-1], sizes)
+    keep = ~(np.repeat(collapse, sizes) & (np.arange(n) != first))
+    small = np.concatenate([[0], np.cumsum(np.where(collapse, 1, sizes))]).astype(np.int64)
+    rgs, rge, rsp = field_.safe_intervals(poses[keep], small, lo, hi)
+    rep = np.cumsum(keep) - 1  # a collapsed group's points: its first point's row
+    counts = rsp[rep + 1] - rsp[rep]
+    sp = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    idx = np.repeat(rsp[rep], counts) + (np.arange(sp[-1]) - np.repeat(sp[:-1], counts))
+    return rgs[idx], rge[idx], sp
 
 
 def _intervals_from_pairs(field_: MoverField, poses, ptr, lo, hi, H: int):

@@ -113,6 +113,8 @@ class _Base:
     ring_ok: np.ndarray
     n_ring: int
 
+    vertex_xy: FloatArray = None
+
     def copies_at(self, v: int) -> IntArray:
         lo, hi = np.searchsorted(self.vertex, [v, v + 1])
         return np.arange(lo, hi)
@@ -321,6 +323,7 @@ def _base(roadmap, geometry, stretch: float, vmax: float, step_len: float) -> _B
         ring_ptr=ring_ptr,
         ring_ok=ring_ok,
         n_ring=n_ring,
+        vertex_xy=xy,
     )
     roadmap._derived[key] = return_
     return return_
@@ -328,36 +331,52 @@ def _base(roadmap, geometry, stretch: float, vmax: float, step_len: float) -> _B
 
 @dataclass(frozen=True)
 class UnicyclePrepared:
-    """:meth:`gfuzzy.planner.Planner.prepare` for a unicycle: the query-independent pieces
-    are kept on the roadmap (``Roadmap._derived``), so only the goal and the options are.
+    """:meth:`gfuzzy.planner.Planner.prepare` for a unicycle: the goal's kept graph
+    (:class:`UnicycleGoal`; the roadmap's copies, lanes and rings are cached on the roadmap).
 
     Attributes
     ----------
     goal_raw : (3,) float
     options : PlanOptions
+    kept : UnicycleGoal
     """
 
     goal_raw: FloatArray
     options: object
+    kept: object
+
+    def splice(self, planner, start: FloatArray) -> UnicycleGraph:
+        return self.kept.splice(planner, start)
 
 
 class _Extras:
-    """The query's own copies and pieces, appended after the base's."""
+    """A query's own nodes and pieces (the goal's when preparing, the start's per call).
 
-    def __init__(self, base: _Base, geometry, scale: float):
+    Node ids: base copies ``< n_copies``; new nodes from ``first``; ring point i is
+    ``ring_at + i`` (or the placeholder ``-(1 + i)`` while the ring's place is not known).
+    """
+
+    def __init__(self, base: _Base, geometry, scale: float, first: int, ring_at: int | None = None):
         self.base, self.geometry, self.scale = base, geometry, scale
+        self.first = first
+        self.ring_at = ring_at
         self.poses: list = []
         self.pieces: list = []  # (a, b, dh, length)
-        self.n0 = len(base.poses)
+        self.kept: FloatArray | None = None  # the kept graph's poses, when splicing into one
 
     def node(self, x: float, y: float, h: float) -> int:
         self.poses.append((float(x), float(y), float(wrap_angle(h))))
-        return self.n0 + len(self.poses) - 1
+        return self.first + len(self.poses) - 1
+
+    def ring(self, i: int) -> int:
+        return -(1 + i) if self.ring_at is None else self.ring_at + i
 
     def pose(self, i: int):
         if i < 0:
             return self.base.ring[-i - 1]
-        return self.base.poses[i] if i < self.n0 else self.poses[i - self.n0]
+        if i >= self.first:
+            return self.poses[i - self.first]
+        return self.base.poses[i] if self.kept is None else self.kept[i]
 
     def lane(self, a: int, b: int) -> None:
         pa, pb = self.pose(a), self.pose(b)
@@ -369,7 +388,7 @@ class _Extras:
 
     def copy_at(self, v: int, h: float) -> int:
         """The copy of vertex v at heading h: the base's when it has one, else a new copy
-        joined by turns to its heading neighbours there, both ways round."""
+        joined by turns to the two ring points around its heading, both ways."""
         geo, base = self.geometry, self.base
         ids = base.copies_at(v)
         rel = (base.poses[ids, 2] - h) % (2 * math.pi)
@@ -382,14 +401,294 @@ class _Extras:
         step_h = 2 * math.pi / base.n_ring
         for r, arc in _brackets(h, r0, base.n_ring, step_h):
             if base.ring_ok[r] and turn_free(geo, x, y, h, arc):
-                self.turn(c, -(1 + r), arc)
-                self.turn(-(1 + r), c, -arc)
+                self.turn(c, self.ring(r), arc)
+                self.turn(self.ring(r), c, -arc)
         return c
+
+    def join(self, pose: FloatArray, node: int, connect_k: int, outward: bool, reverse: bool) -> None:
+        """Join ``node`` (at ``pose``) to its nearest vertices: turn + straight to a copy
+        there (``outward``: the start), or a copy there + straight + turn (the goal)."""
+        geo, base = self.geometry, self.base
+        robot = geo.robot
+        px, py, ph = (float(c) for c in pose)
+        xy = base.vertex_xy
+        has = np.zeros(len(xy), dtype=bool)
+        has[base.vertex] = True
+        d = np.hypot(xy[:, 0] - px, xy[:, 1] - py)
+        order = np.argsort(d, kind="stable")
+        order = order[has[order] & (d[order] > 1e-9)]
+        tried = joined = 0
+        for v in order[: 4 * max(connect_k, 1)].tolist():
+            if tried >= connect_k and joined:
+                break
+            tried += 1
+            vx, vy = float(xy[v, 0]), float(xy[v, 1])
+            for back in (False, True) if reverse else (False,):
+                ax, ay, bx, by = (px, py, vx, vy) if outward else (vx, vy, px, py)
+                h = _drive(geo, robot, ax, ay, bx, by, back)
+                if h is None:
+                    continue
+                dh = pick_turn(geo, px, py, ph, h) if outward else pick_turn(geo, px, py, h, ph)
+                if dh is None:
+                    continue
+                here = node
+                if dh != 0.0:
+                    here = self.node(px, py, h)
+                    if outward:
+                        self.turn(node, here, dh)
+                    else:
+                        self.turn(here, node, dh)
+                c = self.copy_at(v, h)
+                if outward:
+                    self.lane(here, c)
+                else:
+                    self.lane(c, here)
+                joined += 1
+
+
+def _drive(geo, robot, ax, ay, bx, by, back: bool):
+    """Heading for driving from a to b (backwards: facing away from b), or None when the
+    lane is not free for the body held at it."""
+    h = math.atan2(by - ay, bx - ax) + (math.pi if back else 0.0)
+    if not geo.motion_free(_xy_pose(robot, ax, ay, h), _xy_pose(robot, bx, by, h)):
+        return None
+    return h
+
+
+def _cut_pieces(nodes: FloatArray, A: IntArray, B: IntArray, DH: FloatArray, L: FloatArray, step_len: float,
+                first: int):  # fmt: skip
+    """Pieces cut into one-step points (:func:`gfuzzy.poses.split_counts`): (k, offs, p_of,
+    j, inner poses, src, dst) with interior ids from ``first``."""
+    k = split_counts(L, step_len)
+    n_int = k - 1
+    offs = np.concatenate([[0], np.cumsum(n_int)]).astype(np.int64)
+    p_of = np.repeat(np.arange(len(A)), n_int)
+    j = np.arange(offs[-1]) - np.repeat(offs[:-1], n_int) + 1
+    f = j / k[p_of]
+    pa, pb = nodes[A[p_of]], nodes[B[p_of]]
+    inner = np.empty((len(p_of), 3))
+    inner[:, :2] = pa[:, :2] + f[:, None] * (pb[:, :2] - pa[:, :2])
+    inner[:, 2] = np.where(DH[p_of] != 0.0, wrap_angle(pa[:, 2] + f * DH[p_of]), pa[:, 2])
+    ids = first + np.arange(offs[-1])
+    is_first = np.zeros(offs[-1], dtype=bool)
+    is_first[offs[:-1][n_int > 0]] = True
+    is_last = np.zeros(offs[-1], dtype=bool)
+    is_last[(offs[1:] - 1)[n_int > 0]] = True
+    src = np.concatenate([np.where(is_first, A[p_of], ids - 1), ids[is_last], A[n_int == 0]])
+    dst = np.concatenate([ids, B[p_of][is_last], B[n_int == 0]])
+    return k, offs, p_of, j, inner, src, dst
+
+
+def _too_many(total: int):
+    from .errors import LimitError
+    from .settings import MAX_POINTS
+
+    if total > MAX_POINTS:
+        raise LimitError(
+            f"the time step is too fine for this roadmap: the unicycle's graph would have {total:,} points "
+            f"(at most {MAX_POINTS:,}); use a larger dt"
+        )
+
+
+def _matrix(A, B, w, n):
+    """Node-level graph (parallel pieces: the shortest), scipy CSR (n, n)."""
+    from scipy.sparse import csr_matrix
+
+    key = A * n + B
+    o = np.lexsort((w, key))
+    keep = np.ones(len(o), dtype=bool)
+    keep[1:] = key[o][1:] != key[o][:-1]
+    o = o[keep]
+    return csr_matrix((np.maximum(w[o], 1e-300), (A[o], B[o])), shape=(n, n))
+
+
+def _dijkstra(mat, index: int) -> FloatArray:
+    from scipy.sparse.csgraph import dijkstra
+
+    d = dijkstra(mat, directed=True, indices=index)
+    return np.where(d < 1e-200, 0.0, d)
+
+
+@dataclass
+class UnicycleGoal:
+    """A goal's graph kept for many starts (the one builder of a unicycle's query graph:
+    :meth:`gfuzzy.planner.Planner.plan`, ``plan_from`` and the navigator use it).
+
+    Numbering: the base's copies, the goal's own nodes (the goal ``g_id`` first), the
+    rings, then the pieces' interior points; a start adds its nodes and points after these
+    (:meth:`splice`).
+
+    Attributes
+    ----------
+    goal : (3,) float
+    base : _Base
+    poses : (N, 3) float
+    indptr, neighbors : CSR one-step moves of the kept graph
+    nn : int
+        Nodes (copies, the goal's, rings) before the interior points.
+    A, B : (P,) int ; k : (P,) int ; L : (P,) float
+        The kept pieces at node level (ends, steps, metres at vmax).
+    hop : (nn,) float
+        Steps to the goal per node; ``heuristic`` (N,) per point.
+    metres : (nn,) float
+        Metres at vmax to the goal per node.
+    groups : (G,) int
+    p_of, j : (N - nn,) int
+        Each interior point's piece and index along it.
+    step_len, scale : float
+    """
+
+    goal: FloatArray
+    base: _Base
+    poses: FloatArray
+    indptr: IntArray
+    neighbors: IntArray
+    nn: int
+    A: IntArray
+    B: IntArray
+    k: IntArray
+    L: FloatArray
+    hop: FloatArray
+    heuristic: FloatArray
+    metres: FloatArray
+    groups: IntArray
+    p_of: IntArray
+    j: IntArray
+    g_id: int
+    step_len: float
+    scale: float
+    connect_k: int
+
+    def splice(self, planner, start: FloatArray, exact: bool = True) -> UnicycleGraph:
+        """This graph with ``start`` (``[x, y, heading]``, heading wrapped) joined in.
+
+        ``exact``: the steps from the start to every point by Dijkstra (a fresh plan's
+        safety windows); otherwise the straight distance over a step's length, a cheaper
+        lower bound (the navigator's).
+        """
+        geo, robot = planner.geometry, planner.robot
+        N = len(self.poses)
+        ex = _Extras(self.base, geo, self.scale, N, ring_at=self.nn - len(self.base.ring))
+        ex.kept = self.poses
+        s_id = ex.node(*start)
+        ex.join(start, s_id, self.connect_k, True, robot.reverse)
+        sx, sy, sh = (float(v) for v in start)
+        gx, gy, gh = (float(v) for v in self.goal)
+        if math.hypot(gx - sx, gy - sy) <= 1e-9:  # the same place: a turn in place
+            dh = pick_turn(geo, sx, sy, sh, gh)
+            if dh is not None:
+                ex.turn(s_id, self.g_id, dh)
+        else:
+            for back in (False, True) if robot.reverse else (False,):
+                h = _drive(geo, robot, sx, sy, gx, gy, back)
+                if h is None:
+                    continue
+                d1, d2 = pick_turn(geo, sx, sy, sh, h), pick_turn(geo, gx, gy, h, gh)
+                if d1 is None or d2 is None:
+                    continue
+                a = s_id if d1 == 0.0 else ex.node(sx, sy, h)
+                c = self.g_id if d2 == 0.0 else ex.node(gx, gy, h)
+                ex.turn(s_id, a, d1)
+                ex.turn(c, self.g_id, d2)
+                ex.lane(a, c)
+        new = np.asarray(ex.poses, dtype=float).reshape(-1, 3)
+        x = len(new)
+        xp = np.asarray(ex.pieces, dtype=float).reshape(-1, 4)
+        A, B = xp[:, 0].astype(np.int64), xp[:, 1].astype(np.int64)
+        nodes = np.vstack([self.poses, new])
+        k, offs, p_of, j, inner, src, dst = _cut_pieces(nodes, A, B, xp[:, 2], xp[:, 3], self.step_len, N + x)
+        total = N + x + int(offs[-1])
+        _too_many(total)
+        # steps and metres to the goal of the new nodes: the kept ones bound them (a start's
+        # pieces lead into the kept graph, never out of it and back)
+        hop = np.concatenate([np.full(N, np.inf), np.full(x, np.inf)])
+        hop[: self.nn] = self.hop
+        met = hop.copy()
+        met[: self.nn] = self.metres
+        Lw = np.where(xp[:, 3] > 0, xp[:, 3], 0.0)
+        for _ in range(x + 1):
+            nh, nm = k + hop[B], Lw + met[B]
+            changed = False
+            for i in range(len(A)):
+                if nh[i] < hop[A[i]]:
+                    hop[A[i]], changed = nh[i], True
+                if nm[i] < met[A[i]]:
+                    met[A[i]], changed = nm[i], True
+            if not changed:
+                break
+        rd = float(met[s_id])
+        heur = np.concatenate([self.heuristic, hop[N:], hop[B[p_of]] + k[p_of] - j])
+        poses = np.vstack([nodes, inner])
+        # adjacency: the kept lists get the start's moves out of kept nodes (rings -> new
+        # copies) at their ends; the new nodes' and points' lists follow
+        order = np.argsort(src, kind="stable")
+        s2, d2 = src[order], dst[order]
+        at = np.where(s2 < N, self.indptr[np.minimum(s2, N - 1) + 1], len(self.neighbors))
+        nbrs = np.insert(self.neighbors, at, d2)
+        indptr = np.concatenate([self.indptr, np.full(total - N, self.indptr[-1])])
+        indptr[1:] += np.cumsum(np.bincount(s2, minlength=total))
+        if exact:
+            allA = np.concatenate([self.A, A])
+            allB = np.concatenate([self.B, B])
+            allk = np.concatenate([self.k, k]).astype(float)
+            hop_s = np.rint(_dijkstra(_matrix(allA, allB, allk, N + x), s_id))
+            from_start = np.empty(total)
+            from_start[: N + x] = hop_s
+            from_start[self.nn : N] = hop_s[self.A[self.p_of]] + self.j
+            from_start[N + x :] = hop_s[A[p_of]] + j
+        else:
+            from_start = np.floor(np.hypot(*(poses[:, :2] - start[:2]).T) / self.step_len - 1e-9)
+            from_start = np.maximum(from_start, 0.0)
+        groups = np.concatenate([self.groups, N + np.arange(x + 1), N + x + offs[1:]])
+        graph = SpaceTimeGraph(poses, indptr, nbrs, heur, groups=groups, from_start=from_start)
+        return UnicycleGraph(graph, s_id, self.g_id, rd)
+
+
+def prepare_goal(planner, goal: FloatArray, dt: float, vplan: float, connect_k: int = 10,
+                 stretch: float = 1.0) -> UnicycleGoal:  # fmt: skip
+    """The kept graph of ``goal`` (``[x, y, heading]``, heading wrapped): the base's copies,
+    lanes and rings (cached on the roadmap) with the goal joined in, cut into steps, and the
+    static steps and metres to the goal."""
+    geo, robot, rm = planner.geometry, planner.robot, planner.roadmap
+    step_len = vplan * dt
+    base = _base(rm, geo, stretch, robot.vmax, step_len)
+    scale = robot.vmax / robot.turn_rate
+    ex = _Extras(base, geo, scale, len(base.poses))
+    g_id = ex.node(*goal)
+    ex.join(goal, g_id, connect_k, False, robot.reverse)
+    first_ring = len(base.poses) + len(ex.poses)
+    nodes = np.vstack([base.poses, np.asarray(ex.poses, dtype=float).reshape(-1, 3), base.ring])
+    xp = np.asarray(ex.pieces, dtype=float).reshape(-1, 4)
+    A = np.concatenate([base.a, xp[:, 0].astype(np.int64)])
+    B = np.concatenate([base.b, xp[:, 1].astype(np.int64)])
+    A = np.where(A < 0, first_ring - 1 - A, A)
+    B = np.where(B < 0, first_ring - 1 - B, B)
+    DH = np.concatenate([base.dh, xp[:, 2]])
+    L = np.concatenate([base.length, xp[:, 3]])
+    nn = len(nodes)
+    k, offs, p_of, j, inner, src, dst = _cut_pieces(nodes, A, B, DH, L, step_len, nn)
+    total = nn + int(offs[-1])
+    _too_many(total)
+    order = np.argsort(src, kind="stable")
+    indptr = np.zeros(total + 1, dtype=np.int64)
+    np.cumsum(np.bincount(src, minlength=total), out=indptr[1:])
+    hop = np.rint(_dijkstra(_matrix(A, B, k.astype(float), nn).T.tocsr(), g_id))
+    metres = _dijkstra(_matrix(A, B, np.where(L > 0, L, 0.0), nn).T.tocsr(), g_id)
+    heur = np.concatenate([hop, hop[B[p_of]] + k[p_of] - j])
+    rings = first_ring + base.n_ring * np.arange(len(base.ring) // max(base.n_ring, 1))
+    # a ring's points share a position: one group; pieces without interior points add none
+    groups = np.concatenate([rings, nn + offs[np.r_[True, np.diff(offs) > 0]]])
+    return UnicycleGoal(
+        goal=np.asarray(goal, dtype=float), base=base, poses=np.vstack([nodes, inner]), indptr=indptr,
+        neighbors=dst[order], nn=nn, A=A, B=B, k=k, L=L, hop=hop, heuristic=heur, metres=metres,
+        groups=groups, p_of=p_of, j=j, g_id=g_id, step_len=step_len, scale=scale, connect_k=connect_k,
+    )  # fmt: skip
 
 
 def build_graph(planner, start: FloatArray, goal: FloatArray, dt: float, vplan: float,
                 connect_k: int = 10, stretch: float = 1.0) -> UnicycleGraph:  # fmt: skip
-    """The unicycle's space-time graph of a query (see the module docstring).
+    """The unicycle's space-time graph of a query (see the module docstring):
+    :func:`prepare_goal` then :meth:`UnicycleGoal.splice` with exact safety windows.
 
     Parameters
     ----------
@@ -400,7 +699,7 @@ def build_graph(planner, start: FloatArray, goal: FloatArray, dt: float, vplan: 
     vplan : float
         The speed the graph is cut for (``vmax * SPEED_SAFETY``).
     connect_k : int
-        How many vertices the start and the goal try to join (as many lanes each way).
+        How many vertices the start and the goal try to join.
     stretch : float
         The disc's roadmap spanner (a box uses all its lanes).
 
@@ -408,161 +707,7 @@ def build_graph(planner, start: FloatArray, goal: FloatArray, dt: float, vplan: 
     -------
     UnicycleGraph
     """
-    from scipy.sparse import csr_matrix
-    from scipy.sparse.csgraph import dijkstra
-
-    from .errors import LimitError
-    from .settings import MAX_POINTS
-
-    geo, robot, rm = planner.geometry, planner.robot, planner.roadmap
-    base = _base(rm, geo, stretch, robot.vmax, vplan * dt)
-    scale = robot.vmax / robot.turn_rate
-    ex = _Extras(base, geo, scale)
-    s_id = ex.node(*start)
-    g_id = ex.node(*goal)
-    sx, sy, sh = (float(v) for v in start)
-    gx, gy, gh = (float(v) for v in goal)
-    dirs = (False, True) if robot.reverse else (False,)
-
-    def drive(ax, ay, bx, by, back):
-        """Heading for driving from a to b (backwards: facing away from b), or None when the
-        lane is not free."""
-        h = math.atan2(by - ay, bx - ax) + (math.pi if back else 0.0)
-        if not geo.motion_free(_xy_pose(robot, ax, ay, h), _xy_pose(robot, bx, by, h)):
-            return None
-        return h
-
-    def leave(v, vx, vy):  # start -> vertex v
-        done = False
-        for back in dirs:
-            h = drive(sx, sy, vx, vy, back)
-            if h is None:
-                continue
-            dh = pick_turn(geo, sx, sy, sh, h)
-            if dh is None:
-                continue
-            a = s_id
-            if dh != 0.0:
-                a = ex.node(sx, sy, h)
-                ex.turn(s_id, a, dh)
-            ex.lane(a, ex.copy_at(v, h))
-            done = True
-        return done
-
-    def arrive(v, vx, vy):  # vertex v -> goal
-        done = False
-        for back in dirs:
-            h = drive(vx, vy, gx, gy, back)
-            if h is None:
-                continue
-            dh = pick_turn(geo, gx, gy, h, gh)
-            if dh is None:
-                continue
-            a = g_id
-            if dh != 0.0:
-                a = ex.node(gx, gy, h)
-                ex.turn(a, g_id, dh)
-            ex.lane(ex.copy_at(v, h), a)
-            done = True
-        return done
-
-    xy = rm.vertices[:, :2]
-    has_copies = np.zeros(len(xy), dtype=bool)
-    has_copies[base.vertex] = True
-    for (px, py), join in (((sx, sy), leave), ((gx, gy), arrive)):
-        d = np.hypot(xy[:, 0] - px, xy[:, 1] - py)
-        order = np.argsort(d, kind="stable")
-        order = order[has_copies[order] & (d[order] > 1e-9)]
-        tried = joined = 0
-        for v in order[: 4 * max(connect_k, 1)].tolist():
-            if tried >= connect_k and joined:
-                break
-            tried += 1
-            joined += join(v, float(xy[v, 0]), float(xy[v, 1]))
-    if math.hypot(gx - sx, gy - sy) <= 1e-9:  # the same place: a turn in place
-        dh = pick_turn(geo, sx, sy, sh, gh)
-        if dh is not None:
-            ex.turn(s_id, g_id, dh)
-    else:
-        for back in dirs:
-            h = drive(sx, sy, gx, gy, back)
-            if h is None:
-                continue
-            d1, d2 = pick_turn(geo, sx, sy, sh, h), pick_turn(geo, gx, gy, h, gh)
-            if d1 is None or d2 is None:
-                continue
-            a = s_id if d1 == 0.0 else ex.node(sx, sy, h)
-            c = g_id if d2 == 0.0 else ex.node(gx, gy, h)
-            ex.turn(s_id, a, d1)
-            ex.turn(c, g_id, d2)
-            ex.lane(a, c)
-
-    # ---- all nodes and pieces
-    # node ids: the copies, the query's own nodes, the rings (negative ids until here)
-    first_ring = len(base.poses) + len(ex.poses)
-    nodes = np.vstack([base.poses, np.asarray(ex.poses, dtype=float).reshape(-1, 3), base.ring])
-    xp = np.asarray(ex.pieces, dtype=float).reshape(-1, 4)
-    A = np.concatenate([base.a, xp[:, 0].astype(np.int64)])
-    B = np.concatenate([base.b, xp[:, 1].astype(np.int64)])
-    A = np.where(A < 0, first_ring - 1 - A, A)
-    B = np.where(B < 0, first_ring - 1 - B, B)
-    DH = np.concatenate([base.dh, xp[:, 2]])
-    L = np.concatenate([base.length, xp[:, 3]])
-    zero = L <= 0.0  # the same pose twice: joined by one step (a wait's length)
-    k = split_counts(L, vplan * dt)
-    nn = len(nodes)
-    n_int = k - 1
-    total = nn + int(n_int.sum())
-    if total > MAX_POINTS:
-        raise LimitError(
-            f"the time step is too fine for this roadmap: the unicycle's graph would have {total:,} points "
-            f"(at most {MAX_POINTS:,}); use a larger dt"
-        )
-    offs = np.concatenate([[0], np.cumsum(n_int)]).astype(np.int64)
-    p_of = np.repeat(np.arange(len(A)), n_int)
-    j = np.arange(offs[-1]) - np.repeat(offs[:-1], n_int) + 1
-    f = j / k[p_of]
-    pa, pb = nodes[A[p_of]], nodes[B[p_of]]
-    inner = np.empty((len(p_of), 3))
-    inner[:, :2] = pa[:, :2] + f[:, None] * (pb[:, :2] - pa[:, :2])
-    inner[:, 2] = np.where(DH[p_of] != 0.0, wrap_angle(pa[:, 2] + f * DH[p_of]), pa[:, 2])
-    poses = np.vstack([nodes, inner])
-    ids = nn + np.arange(offs[-1])
-    first = np.zeros(offs[-1], dtype=bool)
-    first[offs[:-1][n_int > 0]] = True
-    last = np.zeros(offs[-1], dtype=bool)
-    last[(offs[1:] - 1)[n_int > 0]] = True
-    src = np.concatenate([np.where(first, A[p_of], ids - 1), ids[last], A[n_int == 0]])
-    dst = np.concatenate([ids, B[p_of][last], B[n_int == 0]])
-    order = np.argsort(src, kind="stable")
-    indptr = np.zeros(total + 1, dtype=np.int64)
-    np.cumsum(np.bincount(src, minlength=total), out=indptr[1:])
-    neighbors = dst[order]
-
-    # ---- static distances on the copies' graph: steps (heuristic, windows), metres at vmax
-    def matrix(w):
-        key = A * nn + B
-        o = np.lexsort((w, key))
-        keep = np.ones(len(o), dtype=bool)
-        keep[1:] = key[o][1:] != key[o][:-1]  # parallel pieces: the shortest
-        o = o[keep]
-        return csr_matrix((np.maximum(w[o], 1e-300), (A[o], B[o])), shape=(nn, nn))
-
-    steps_m = matrix(k.astype(float))
-    hop_g = np.rint(np.where((d := dijkstra(steps_m.T.tocsr(), directed=True, indices=g_id)) < 1e-200, 0.0, d))
-    hop_s = np.rint(np.where((d := dijkstra(steps_m, directed=True, indices=s_id)) < 1e-200, 0.0, d))
-    metres = dijkstra(matrix(np.where(zero, 0.0, L)), directed=True, indices=s_id)
-    rd = float(metres[g_id]) if metres[g_id] > 1e-200 else 0.0
-    heur = np.empty(total)
-    heur[:nn] = hop_g
-    heur[nn:] = hop_g[B[p_of]] + k[p_of] - j
-    from_start = np.empty(total)
-    from_start[:nn] = hop_s
-    from_start[nn:] = hop_s[A[p_of]] + j
-    rings = first_ring + base.n_ring * np.arange(len(base.ring) // max(base.n_ring, 1))
-    groups = np.concatenate([rings, nn + offs])  # a ring's points share a position: one group
-    graph = SpaceTimeGraph(poses, indptr, neighbors, heur, groups=groups, from_start=from_start)
-    return UnicycleGraph(graph, s_id, g_id, rd)
+    return prepare_goal(planner, goal, dt, vplan, connect_k, stretch).splice(planner, start)
 
 
 def turn_path(start: FloatArray, via: FloatArray, goal: FloatArray, reverse: bool = False) -> FloatArray:
