@@ -363,6 +363,24 @@ class Planner:
         )
         return graph, s_id, g_id, float(dist[s_id])
 
+    def _query_graph(self, start, goal, opts: PlanOptions, prepared=None):
+        """(graph, start id, goal id, roadmap distance) of a query (headings wrapped): the
+        roadmap's cut with the ends connected (:meth:`_graph`), or the prepared goal's graph
+        with the start spliced in (``prepare`` / ``plan_from``, and the navigator); for a
+        differential drive the graph of heading copies (:mod:`gfuzzy.unicycle`)."""
+        vplan = self.robot.vmax * SPEED_SAFETY
+        if self.robot.unicycle:
+            from .unicycle import build_graph
+
+            if prepared is None:
+                ug = build_graph(self, start, goal, opts.dt, vplan, opts.connect_k, opts.stretch)
+            else:
+                ug = prepared.splice(self, start)
+            return ug.graph, ug.s_id, ug.g_id, ug.roadmap_distance
+        if prepared is None:
+            return self._graph(start, goal, opts.dt, vplan, opts.connect_k, opts.stretch)
+        return prepared.splice(self, start)
+
     # ---------------------------------------------------------------- query
     def prepare(self, goal, options: PlanOptions | None = None):
         """Keep what replanning to ``goal`` reuses: the split roadmap graph and the static
@@ -480,19 +498,7 @@ class Planner:
         ends = start.copy(), goal.copy()  # the rows at the ends repeat them exactly
         if robot.dof == 3:
             start[2], goal[2] = wrap_angle(start[2]), wrap_angle(goal[2])
-        vplan = vmax * SPEED_SAFETY
-        if robot.unicycle:  # a differential drive: the graph of heading copies
-            from .unicycle import build_graph
-
-            if _prepared is None:
-                ug = build_graph(self, start, goal, opts.dt, vplan, opts.connect_k, opts.stretch)
-            else:
-                ug = _prepared.splice(self, start)
-            graph, s_id, g_id, rd = ug.graph, ug.s_id, ug.g_id, ug.roadmap_distance
-        elif _prepared is None:
-            graph, s_id, g_id, rd = self._graph(start, goal, opts.dt, vplan, opts.connect_k, opts.stretch)
-        else:  # plan_from: the kept graph with this start spliced in
-            graph, s_id, g_id, rd = _prepared.splice(self, start)
+        graph, s_id, g_id, rd = self._query_graph(start, goal, opts, _prepared)
         if not math.isfinite(rd):
             return answer(
                 Status.NO_PATH,

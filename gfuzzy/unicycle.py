@@ -41,7 +41,7 @@ from .poses import split_counts, wrap_angle
 from .spacetime import SpaceTimeGraph
 from .typing import FloatArray, IntArray
 
-__all__ = ["UnicycleGraph", "UnicyclePrepared", "build_graph", "lanes", "LANE_NEIGHBOURS", "SAME_HEADING"]
+__all__ = ["UnicycleGraph", "UnicycleGoal", "UnicyclePrepared", "prepare_goal", "build_graph", "lanes", "LANE_NEIGHBOURS", "SAME_HEADING"]
 
 log = logging.getLogger(__name__)
 
@@ -223,6 +223,49 @@ def _brackets(h: float, r0: int, n_ring: int, step_h: float) -> list:
     return [(r0 + i, below), (r0 + (i + 1) % n_ring, above)]
 
 
+def _rings(geometry, xy: FloatArray, cv: IntArray, ch: FloatArray, n_ring: int):
+    """The turning rings of the vertices with copies (see :class:`_Base`) and the turns
+    joining them and the copies (ring points as ``-(1 + i)``).
+
+    Returns
+    -------
+    ring_ptr : (V,) int ; ring_v : (R,) int ; ring_h : (R,) float ; ring_ok : (R,) bool
+    ta, tb : list of int ; tdh : list of float
+        The turns: from, to, signed heading change.
+    """
+    robot = geometry.robot
+    step_h = 2 * math.pi / n_ring
+    bounds = np.searchsorted(cv, np.arange(len(xy) + 1))
+    has = np.diff(bounds) > 0
+    ring_ptr = np.full(len(xy), -1, dtype=np.int64)
+    ring_ptr[has] = np.arange(int(has.sum())) * n_ring
+    grid = -math.pi + step_h * np.arange(n_ring)
+    ring_v = np.repeat(np.nonzero(has)[0], n_ring)
+    ring_h = np.tile(grid, int(has.sum()))
+    ring_ok = np.ones(len(ring_v), dtype=bool)
+    ta, tb, tdh = [], [], []
+    disc = robot.shape == "disc"
+    for v in np.nonzero(has)[0].tolist():
+        x, y = (float(c) for c in xy[v])
+        r0 = int(ring_ptr[v])
+        if not disc:
+            for i in range(n_ring):
+                ring_ok[r0 + i] = geometry.clearance1([x, y, grid[i]]) >= 0
+        for i in range(n_ring):
+            j = (i + 1) % n_ring
+            if ring_ok[r0 + i] and ring_ok[r0 + j] and (disc or turn_free(geometry, x, y, grid[i], step_h)):
+                ta += [-(1 + r0 + i), -(1 + r0 + j)]
+                tb += [-(1 + r0 + j), -(1 + r0 + i)]
+                tdh += [step_h, -step_h]
+        for c in range(int(bounds[v]), int(bounds[v + 1])):
+            for r, arc in _brackets(ch[c], r0, n_ring, step_h):
+                if ring_ok[r] and (disc or turn_free(geometry, x, y, ch[c], arc)):
+                    ta += [c, -(1 + r)]
+                    tb += [-(1 + r), c]
+                    tdh += [arc, -arc]
+    return ring_ptr, ring_v, ring_h, ring_ok, ta, tb, tdh
+
+
 def _base(roadmap, geometry, stretch: float, vmax: float, step_len: float) -> _Base:
     """The copies, lanes and turns of the roadmap, cached per (robot, stretch)."""
     robot = geometry.robot
@@ -282,35 +325,7 @@ def _base(roadmap, geometry, stretch: float, vmax: float, step_len: float) -> _B
     # turns: a ring of headings per vertex, on a grid one turning step apart (see _Base)
     scale = vmax / rate
     n_ring = int(split_counts(np.array([2 * math.pi * scale]), step_len)[0])
-    step_h = 2 * math.pi / n_ring
-    bounds = np.searchsorted(cv, np.arange(len(xy) + 1))
-    has = np.diff(bounds) > 0
-    ring_ptr = np.full(len(xy), -1, dtype=np.int64)
-    ring_ptr[has] = np.arange(int(has.sum())) * n_ring
-    grid = -math.pi + step_h * np.arange(n_ring)
-    ring_v = np.repeat(np.nonzero(has)[0], n_ring)
-    ring_h = np.tile(grid, int(has.sum()))
-    ring_ok = np.ones(len(ring_v), dtype=bool)
-    ta, tb, tdh = [], [], []
-    disc = robot.shape == "disc"
-    for v in np.nonzero(has)[0].tolist():
-        x, y = (float(c) for c in xy[v])
-        r0 = int(ring_ptr[v])
-        if not disc:
-            for i in range(n_ring):
-                ring_ok[r0 + i] = geometry.clearance1([x, y, grid[i]]) >= 0
-        for i in range(n_ring):
-            j = (i + 1) % n_ring
-            if ring_ok[r0 + i] and ring_ok[r0 + j] and (disc or turn_free(geometry, x, y, grid[i], step_h)):
-                ta += [-(1 + r0 + i), -(1 + r0 + j)]
-                tb += [-(1 + r0 + j), -(1 + r0 + i)]
-                tdh += [step_h, -step_h]
-        for c in range(int(bounds[v]), int(bounds[v + 1])):
-            for r, arc in _brackets(ch[c], r0, n_ring, step_h):
-                if ring_ok[r] and (disc or turn_free(geometry, x, y, ch[c], arc)):
-                    ta += [c, -(1 + r)]
-                    tb += [-(1 + r), c]
-                    tdh += [arc, -arc]
+    ring_ptr, ring_v, ring_h, ring_ok, ta, tb, tdh = _rings(geometry, xy, cv, ch, n_ring)
     tdh = np.asarray(tdh, dtype=float)
     return_ = _Base(
         poses=np.column_stack([xy[cv], ch]) if len(cv) else np.zeros((0, 3)),
@@ -709,46 +724,3 @@ def build_graph(planner, start: FloatArray, goal: FloatArray, dt: float, vplan: 
     """
     return prepare_goal(planner, goal, dt, vplan, connect_k, stretch).splice(planner, start)
 
-
-def turn_path(start: FloatArray, via: FloatArray, goal: FloatArray, reverse: bool = False) -> FloatArray:
-    """A unicycle path through via-points: straight segments joined by turns in place.
-
-    The robot turns in place at the start towards the first via-point, drives there, turns
-    towards the next one, ..., drives to the goal's position and turns to the goal's
-    heading; every turn takes the shorter arc. (The GA moves via-points; this is the path a
-    differential drive follows through them.)
-
-    Parameters
-    ----------
-    start, goal : (3,) float
-        Poses ``[x, y, heading]``.
-    via : (m, 2) float
-    reverse : bool
-        Unused for now: the path drives forwards (allowed either way).
-
-    Returns
-    -------
-    (n, 3) float
-        Poses; consecutive ones differ only in heading (a turn) or only in position along
-        their common heading (a straight move). Repeated poses are dropped.
-    """
-    pts = np.vstack([np.asarray(start, dtype=float)[None, :2], np.asarray(via, dtype=float).reshape(-1, 2),
-                     np.asarray(goal, dtype=float)[None, :2]])  # fmt: skip
-    keep = np.ones(len(pts), dtype=bool)
-    keep[1:] = np.hypot(*np.diff(pts, axis=0).T) > 1e-12
-    pts = pts[keep]
-    out = [np.asarray(start, dtype=float)]
-    h = float(start[2])
-    for a, b in zip(pts[:-1], pts[1:], strict=True):
-        hn = math.atan2(b[1] - a[1], b[0] - a[0])
-        if abs(wrap_angle(hn - h)) > SAME_HEADING:
-            out.append(np.array([a[0], a[1], h + wrap_angle(hn - h)]))
-        h = out[-1][2] if abs(wrap_angle(hn - h)) > SAME_HEADING else h
-        out.append(np.array([b[0], b[1], h]))
-    g = np.asarray(goal, dtype=float)
-    if abs(wrap_angle(g[2] - h)) > SAME_HEADING:
-        out.append(np.array([g[0], g[1], h + wrap_angle(g[2] - h)]))
-    path = np.array(out)
-    path[-1, :2] = g[:2]
-    path[:, 2] = wrap_angle(path[:, 2])
-    return path

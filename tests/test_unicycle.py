@@ -14,11 +14,11 @@ import numpy as np
 import pytest
 
 from gfuzzy.check import check_trajectory
+from gfuzzy.drive import turn_path
 from gfuzzy.errors import SceneError
 from gfuzzy.planner import Planner, PlanOptions
 from gfuzzy.roadmap import Roadmap
 from gfuzzy.scene import parse_scene
-from gfuzzy.unicycle import turn_path
 
 
 def doc(robot=None, movers=(), obstacles=(), queries=(), bounds=(0, 0, 6, 4)):
@@ -279,3 +279,57 @@ def test_box_unicycle_plans_on_an_se2_roadmap():
     w = res.trajectory.waypoints
     near = np.abs(w[:, 1] - 3.0) < 0.5  # in the gap (0.6 wide): the box is lengthwise
     assert near.any() and np.all(np.abs(np.cos(w[near, 3])) > 0.9)
+
+
+# --------------------------------------------------------------------------- replanning, navigation
+
+
+def _crossing_scene(reverse=False):
+    mover = {"name": "m", "disc": 0.3, "speed": 0.7, "path": [[3.0, 0.4], [3.0, 3.6]], "mode": "bounce"}
+    wall = {"box": {"center": [3.0, 3.3], "size": [0.3, 1.4]}}
+    robot = {"disc": 0.25, "vmax": 1.0, "kinematics": "unicycle", "wmax": 2.0, "reverse": reverse}
+    return parse_scene(doc(robot, movers=[mover], obstacles=[wall]))
+
+
+@pytest.fixture(scope="module")
+def crossing():
+    from gfuzzy.roadmap import RoadmapOptions, build_roadmap
+
+    sc = _crossing_scene()
+    return sc, build_roadmap(sc, RoadmapOptions(vertices=120, seed=4))
+
+
+def test_plan_from_a_prepared_goal_arrives_with_a_fresh_plan(crossing):
+    sc, rm = crossing
+    planner = Planner(sc, rm)
+    goal = [5.2, 2.0, -2.0]
+    prepared = planner.prepare(goal, PlanOptions(dt=0.1))
+    for start, t0 in (([0.8, 2.0, 0.3], 0.0), ([1.0, 0.8, 2.5], 1.3), ([0.7, 3.2, -1.0], 4.0)):
+        fresh = planner.plan(start, goal, t0, PlanOptions(dt=0.1))
+        kept = planner.plan_from(prepared, start, t0)
+        assert fresh.solved and kept.solved
+        assert kept.duration == pytest.approx(fresh.duration, abs=1e-9)
+        assert check_trajectory(sc, kept.trajectory.waypoints).valid
+
+
+def test_the_navigator_drives_a_unicycle_by_the_rule(crossing):
+    """Every trajectory the navigator returns (plans, direct motions, evasions) turns only
+    in place and drives only along the heading; the simulated run reaches the goal."""
+    from gfuzzy.navigator import Navigator, NavOptions
+    from gfuzzy.navsim import simulate
+
+    sc, rm = crossing
+    res = simulate(sc, rm, [0.8, 2.0, 0.0], [5.2, 2.0, 0.0], 0.0, 0.25, max_time=40.0,
+                   options=NavOptions(time_budget=5.0))  # fmt: skip
+    assert res.reached
+    rep = check_trajectory(sc, res.trajectory.waypoints)
+    assert rep.valid, rep.reason
+    nav = Navigator(sc, rm, [5.2, 2.0, 0.0])
+    pose = np.array([1.5, 2.0, 0.7])
+    crowd = np.array([[1.9, 2.0, -0.8, 0.0, 0.3], [1.5, 2.6, 0.0, -0.8, 0.3]])  # about to hit it
+    evasive = nav._evasive(0.0, pose, crowd)
+    from gfuzzy.check import _unicycle_problem
+
+    assert len(evasive.waypoints) >= 2 and _unicycle_problem(sc.robot, evasive.waypoints) is None
+    direct = nav._direct(0.0, np.array([4.5, 2.0, 2.0]), np.zeros((0, 5)))
+    assert direct is not None and _unicycle_problem(sc.robot, direct.waypoints) is None
