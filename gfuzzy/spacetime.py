@@ -10,6 +10,7 @@ return a :class:`SearchResult`.
 
 from __future__ import annotations
 
+import copy
 from bisect import bisect_right
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
@@ -234,9 +235,14 @@ class IntervalStore:
         # the safety first, the bookkeeping after: a field that raises (a deadline inside
         # the batch) leaves the store as it was
         if self.pool:
-            gs, ge, sp = _safe_intervals_shared(field_, self.graph.poses[nodes], sub_ptr, lo, hi, self._same[pending])
+            compute = _pool_intervals
         else:
-            gs, ge, sp = _intervals_from_pairs(field_, self.graph.poses[nodes], sub_ptr, lo, hi, self.H)
+            H = self.H
+
+            def compute(f, p, pt, a, b):
+                return _intervals_from_pairs(f, p, pt, a, b, H)
+
+        gs, ge, sp = _safe_intervals_shared(field_, self.graph.poses[nodes], sub_ptr, lo, hi, self._same[pending], compute)
         self.done_hi[pending] = hi
         if self.pool:
             self._pool_merge(nodes, gs, ge, sp, lo_n)
@@ -275,27 +281,56 @@ def _same_position_groups(poses, ptr) -> BoolArray:
     return out
 
 
-def _safe_intervals_shared(field_: MoverField, poses, ptr, lo, hi, same):
-    """:meth:`MoverField.safe_intervals`, computed once for a group whose points all share
-    one position (``same``, per group: a unicycle's turn in place) when the robot is a disc,
-    whose body ignores the heading, and handed to each of its points.
+def _pool_intervals(field_, poses, ptr, lo, hi):
+    return field_.safe_intervals(poses, ptr, lo, hi)
 
-    Parameters and returns as :meth:`gfuzzy.movers.MoverField.safe_intervals`.
+
+def _turn_field(field_: MoverField) -> MoverField:
+    """``field_`` for a robot turning in place: its circumscribed disc, which holds the body
+    at every heading (the same field for a disc robot)."""
+    robot = field_.robot
+    if robot.shape == "disc":
+        return field_
+    from dataclasses import replace as _replace
+
+    body = copy.copy(field_)
+    body.robot = _replace(robot, shape="disc", radius=robot.circumradius, size=(0.0, 0.0))
+    return body
+
+
+def _safe_intervals_shared(field_: MoverField, poses, ptr, lo, hi, same, compute):
+    """Safe intervals of groups of points (``compute(field, poses, ptr, lo, hi)``, e.g.
+    :meth:`MoverField.safe_intervals`), computed once for a group whose points all share one
+    position (``same``, per group: a unicycle's turn in place) and handed to each of its
+    points. Such a group is judged with the robot's circumscribed disc (:func:`_turn_field`):
+    the body at any heading lies inside it, so every point's safety is sound, and for a disc
+    robot exact.
+
+    Returns (starts, ends, sp) as :meth:`gfuzzy.movers.MoverField.safe_intervals`.
     """
     sizes = np.diff(ptr)
     n = len(poses)
-    collapse = same & (sizes > 1) if field_.robot.shape == "disc" else None
-    if n == 0 or collapse is None or not collapse.any():
-        return field_.safe_intervals(poses, ptr, lo, hi)
-    first = np.repeat(ptr[:-1], sizes)
-    keep = ~(np.repeat(collapse, sizes) & (np.arange(n) != first))
-    small = np.concatenate([[0], np.cumsum(np.where(collapse, 1, sizes))]).astype(np.int64)
-    rgs, rge, rsp = field_.safe_intervals(poses[keep], small, lo, hi)
-    rep = np.cumsum(keep) - 1  # a collapsed group's points: its first point's row
-    counts = rsp[rep + 1] - rsp[rep]
-    sp = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-    idx = np.repeat(rsp[rep], counts) + (np.arange(sp[-1]) - np.repeat(sp[:-1], counts))
-    return rgs[idx], rge[idx], sp
+    collapse = same & (sizes > 1)
+    if n == 0 or not collapse.any():
+        return compute(field_, poses, ptr, lo, hi)
+    norm = ~collapse
+    pn = np.repeat(norm, sizes)
+    ga, ea, spa = compute(field_, poses[pn], np.concatenate([[0], np.cumsum(sizes[norm])]).astype(np.int64),
+                          lo[norm], hi[norm])  # fmt: skip
+    body = _turn_field(field_)
+    before = body.evaluations
+    firsts = ptr[:-1][collapse]
+    gb, eb, spb = compute(body, poses[firsts], np.arange(len(firsts) + 1, dtype=np.int64), lo[collapse], hi[collapse])
+    if body is not field_:
+        field_.evaluations += body.evaluations - before
+    start = np.empty(n, dtype=np.int64)
+    count = np.empty(n, dtype=np.int64)
+    start[pn], count[pn] = spa[:-1], np.diff(spa)
+    cidx = np.repeat(np.cumsum(collapse) - 1, sizes)[~pn]  # each point's collapsed group
+    start[~pn], count[~pn] = spb[:-1][cidx] + len(ga), np.diff(spb)[cidx]
+    sp = np.concatenate([[0], np.cumsum(count)]).astype(np.int64)
+    idx = np.repeat(start, count) + (np.arange(sp[-1]) - np.repeat(sp[:-1], count))
+    return np.concatenate([ga, gb])[idx], np.concatenate([ea, eb])[idx], sp
 
 
 def _intervals_from_pairs(field_: MoverField, poses, ptr, lo, hi, H: int):
