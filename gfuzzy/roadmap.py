@@ -343,7 +343,7 @@ def load_roadmap(path: str | os.PathLike, scene: Scene | None = None) -> Roadmap
     )
     if scene is not None:
         rm.check_scene(scene, file)
-        if rm.dof != scene.robot.dof:
+        if rm.dof != scene.robot.space_dof:
             raise SceneError(file, "vertices", "roadmap poses do not match the robot kind")
         if abs(circumradius - scene.robot.circumradius) > 1e-12:
             raise SceneError(file, "circumradius", "does not match the scene's robot")
