@@ -25,7 +25,7 @@ from .typing import FloatArray, IntArray
 __all__ = ["dijkstra", "shortest_paths"]
 
 
-@njit(cache=True)
+@njit(lazy=True, cache=True)
 def dijkstra(indptr, indices, data, sources):
     """Shortest distances from each source over a directed CSR graph (lazy binary heap).
 

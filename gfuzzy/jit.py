@@ -31,6 +31,7 @@ import json
 import logging
 import os
 import sys
+import types
 from pathlib import Path
 
 import numpy as np
@@ -47,6 +48,8 @@ BUILDING = False
 
 _PACKAGE = Path(__file__).resolve().parent
 _state: dict[str, object] = {}
+_registry: dict[str, dict[str, tuple]] = {}  # module -> kernel name -> (function, options)
+_dispatchers: dict[str, dict[str, object]] = {}  # numba's, made for a fallback
 
 
 def kernel_key() -> str:
@@ -110,13 +113,30 @@ def _numba_njit(func, options):
     return numba_njit(**options)(func)
 
 
+def _dispatcher(func):
+    """numba's dispatcher of a kernel whose module holds precompiled or lazy stand-ins:
+    compiled over a copy of the module's globals in which every other kernel is numba's
+    too (nopython code cannot call the stand-ins)."""
+    kernels = _registry.setdefault(func.__module__, {})
+    made = _dispatchers.setdefault(func.__module__, {})
+    if func.__name__ not in made:
+        names = dict(func.__globals__)
+        copy = types.FunctionType(func.__code__, names, func.__name__, func.__defaults__, func.__closure__)
+        copy.__qualname__, copy.__module__ = func.__qualname__, func.__module__
+        made[func.__name__] = _numba_njit(copy, kernels[func.__name__][1])
+        for name, (other, _) in kernels.items():
+            if name != func.__name__:
+                names[name] = _dispatcher(other)
+    return made[func.__name__]
+
+
 def _lazy(func, options):
     """numba's dispatcher of ``func``, made (numba imported) at its first call."""
     made: list = []
 
     def call(*args):
         if not made:
-            made.append(_numba_njit(func, options))
+            made.append(_dispatcher(func))
         return made[0](*args)
 
     return call
@@ -147,16 +167,22 @@ def _wrapped(call, func, precompiled=False):
     return call
 
 
-def njit(**options):
+def njit(lazy: bool = False, **options):
     """``numba.njit(**options)``, or the precompiled function when a fresh extension has it.
+
+    ``lazy``: without the extension, numba is imported at the kernel's first call rather
+    than here (for a module that is imported on paths that need not call it).
 
     A kernel compiled only inside other kernels (never called from Python) may have no
     precompiled entry point: called from Python, it is compiled by numba then.
     """
 
     def wrap(func):
+        _registry.setdefault(func.__module__, {})[func.__name__] = (func, options)
         ext = loaded()
         if ext is None:
+            if lazy and not BUILDING:
+                return _wrapped(_lazy(func, options), func)
             return _numba_njit(func, options)
         export = f"{func.__module__.rsplit('.', 1)[-1]}__{func.__name__}"
         sig = _state["ext"][1].get(export)
