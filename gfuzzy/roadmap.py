@@ -17,7 +17,6 @@ import os
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field, fields
-from importlib import metadata
 from pathlib import Path
 
 import numpy as np
@@ -359,6 +358,8 @@ def default_roadmap_path(scene: Scene, folder: str | os.PathLike = "roadmaps") -
 
 
 def _ompl_version() -> str:
+    from importlib import metadata  # ~20 ms to import: only when a roadmap is built
+
     try:
         return metadata.version("ompl")
     except metadata.PackageNotFoundError:  # pragma: no cover
