@@ -387,8 +387,8 @@ def _clearance_outline(scene: Scene, pose, margin: float, **kw):
 
 
 def _heading_tick(scene: Scene, pose) -> FloatArray:
-    """(2, 2): centre to front of a box robot."""
-    half = 0.5 * scene.robot.size[0]
+    """(2, 2): centre to front of a robot with a heading (a box; a unicycle disc: to its rim)."""
+    half = scene.robot.radius if scene.robot.shape == "disc" else 0.5 * scene.robot.size[0]
     front = [pose[0] + half * math.cos(pose[2]), pose[1] + half * math.sin(pose[2])]
     return np.array([pose[:2], front])
 
@@ -400,7 +400,7 @@ def _draw_queries(ax, scene: Scene) -> None:
             (q.goal, GOAL_COLOR, "*", "goal"),
         ):
             ax.add_patch(_footprint(scene, pose, fill=False, ec=color, lw=1.0, ls=":", zorder=4))
-            if scene.robot.shape == "box":
+            if scene.robot.dof == 3:  # a box, or any unicycle: its heading
                 tick = _heading_tick(scene, pose)
                 ax.plot(tick[:, 0], tick[:, 1], color=color, lw=1.0, zorder=4)
             ax.plot(
@@ -508,7 +508,7 @@ def _draw_footprints(ax, scene: Scene, wp: FloatArray, footprints: int) -> None:
                 label="robot footprint" if k == 0 else None,
             )
         )
-        if scene.robot.shape == "box":
+        if scene.robot.dof == 3:
             tick = _heading_tick(scene, pose)
             ax.plot(tick[:, 0], tick[:, 1], color=ROBOT_COLOR, lw=1.0, zorder=4.6)
         # the clearances kept: from static obstacles (dashed), from movers (dotted)

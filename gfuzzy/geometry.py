@@ -220,7 +220,7 @@ class StaticGeometry:
         """Scalar fast path of :meth:`bounds_clearance` for one pose."""
         xmin, ymin, xmax, ymax = self.scene.bounds
         x, y = pose[0], pose[1]
-        if len(pose) == 2:
+        if len(pose) == 2 or self.robot.shape == "disc":
             ex = ey = self.robot.radius
         else:
             c, s = abs(math.cos(pose[2])), abs(math.sin(pose[2]))

@@ -17,7 +17,6 @@ import os
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field, fields
-from importlib import metadata
 from pathlib import Path
 
 import numpy as np
@@ -109,21 +108,10 @@ class _Derived(dict):
 class RoadmapInfo:
     """How a roadmap was built (its file's ``info``).
 
-    Attributes
-    ----------
-    ompl_version : str
-    seconds : float
-        Wall-clock time of the whole build.
-    grow_seconds : float
-        Of which OMPL's PRM growing the roadmap.
-    validity_calls, certify_calls : int
-        Collision-model calls while growing and while certifying the edges.
-    edges_dropped : int
-        PRM edges that could not be certified free.
-    components : int
-        Connected components of the roadmap.
-    extra : dict
-        Keys of a file written by another version, kept as they were.
+    ``seconds`` is the whole build, ``grow_seconds`` OMPL's PRM growing; ``validity_calls`` and
+    ``certify_calls`` count collision-model calls while growing and while certifying edges;
+    ``edges_dropped`` PRM edges that could not be certified free; ``components`` the
+    roadmap's connected components; ``extra`` keys of another version's file, kept as they were.
     """
 
     ompl_version: str = ""
@@ -344,7 +332,7 @@ def load_roadmap(path: str | os.PathLike, scene: Scene | None = None) -> Roadmap
     )
     if scene is not None:
         rm.check_scene(scene, file)
-        if rm.dof != scene.robot.dof:
+        if rm.dof != scene.robot.space_dof:
             raise SceneError(file, "vertices", "roadmap poses do not match the robot kind")
         if abs(circumradius - scene.robot.circumradius) > 1e-12:
             raise SceneError(file, "circumradius", "does not match the scene's robot")
@@ -360,6 +348,8 @@ def default_roadmap_path(scene: Scene, folder: str | os.PathLike = "roadmaps") -
 
 
 def _ompl_version() -> str:
+    from importlib import metadata  # ~20 ms to import: only when a roadmap is built
+
     try:
         return metadata.version("ompl")
     except metadata.PackageNotFoundError:  # pragma: no cover
