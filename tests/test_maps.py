@@ -458,3 +458,16 @@ def test_render_draws_the_grid_at_its_place(tmp_path):
     assert west > 10 * max(east, 1)  # unknown cells drawn gray, on the west side only
     grow = np.nonzero(gray[:, : img.shape[1] // 2].any(axis=1))[0]  # the map's rows on the picture
     assert rows.mean() < 0.5 * (grow.min() + grow.max())  # the block in the north half
+
+
+def test_tracks_on_a_map_scene_rewrite_the_map_path(tmp_path):
+    folder = tmp_path / "arena"
+    shutil.copytree(MAPS, folder / "maps")
+    shutil.copy(ROOT / "scenes" / "tb3-arena.yaml", folder / "tb3-arena.yaml")
+    csv = tmp_path / "people.csv"
+    csv.write_text("t,id,x,y\n0,1,-2.0,0.55\n4,1,2.0,0.55\n")
+    out = tmp_path / "people.yaml"  # one folder up: the map is now arena/maps/...
+    argv = ["tracks", str(csv), "--static", str(folder / "tb3-arena.yaml"), "--start", "-2.4", "0", "--goal", "2.0", "0.3"]
+    assert main([*argv, "-o", str(out)]) == 0
+    assert "file: arena/maps/tb3_sandbox.yaml" in out.read_text()
+    assert load_scene(out).static_hash == load_scene(folder / "tb3-arena.yaml").static_hash
