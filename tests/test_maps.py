@@ -471,3 +471,19 @@ def test_tracks_on_a_map_scene_rewrite_the_map_path(tmp_path):
     assert main([*argv, "-o", str(out)]) == 0
     assert "file: arena/maps/tb3_sandbox.yaml" in out.read_text()
     assert load_scene(out).static_hash == load_scene(folder / "tb3-arena.yaml").static_hash
+
+
+def test_a_map_beside_other_obstacles_and_beyond_its_extent(tmp_path):
+    px = np.full((10, 10), 254, dtype=np.uint8)
+    px[4:6, 4:6] = 0  # a 1 m block at [2, 3] x [2, 3]
+    write_map(tmp_path, px, resolution=0.5, origin=(0.0, 0.0, 0.0))
+    text = scene_text(bounds=[-3, -3, 8, 8], robot="disc: 0.2, clearance: 0.1")
+    text = text.replace("obstacles:\n", "obstacles:\n  - box: {center: [6.5, 6.5], size: [1, 1]}\n")
+    (tmp_path / "s.yaml").write_text(text)
+    geo = StaticGeometry(load_scene(tmp_path / "s.yaml"))
+    assert not geo.is_valid((2.5, 2.5))  # inside the map's block
+    assert not geo.is_valid((3.25, 2.5))  # 0.25 from it: within radius + clearance
+    assert geo.is_valid((3.35, 2.5))  # 0.35 from it
+    assert not geo.is_valid((5.75, 6.5))  # 0.25 from the box, off the map
+    assert geo.is_valid((-2.0, -2.0))  # off the map: free
+    assert geo.obstacle_clearance((2.5, 0.5)) == pytest.approx(1.5 - 0.2, abs=2e-4)  # below y = 2
