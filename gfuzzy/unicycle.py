@@ -186,6 +186,13 @@ def lanes(roadmap, geometry, stretch: float = 1.0) -> Lanes:
         out = Lanes(xy, edges, np.ones((len(edges), 2), dtype=bool))
     else:
         out = _box_lanes(roadmap, geometry, xy)
+        if stretch > 1.0 and len(out.edges):  # as the disc's: a spanner of the lanes
+            from .roadmap import Roadmap
+
+            lens = np.hypot(*(xy[out.edges[:, 1]] - xy[out.edges[:, 0]]).T)
+            plane = Roadmap(xy, out.edges, lens, roadmap.scene_name, roadmap.scene_hash, roadmap.circumradius)
+            keep = plane.spanner(stretch)
+            out = Lanes(xy, out.edges[keep], out.ok[keep])
     roadmap._derived[key] = out
     return out
 
