@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 
-from .scene import Box, Disc, Query, Scene
+from .scene import Box, Disc, MapObstacle, Query, Scene
 from .typing import FloatArray
 
 __all__ = ["CheckReport", "check_trajectory"]
@@ -59,6 +59,30 @@ class CheckReport:
     time: float | None = None
 
 
+def _grid_region(grid: MapObstacle):
+    """The blocked region of a map, from its cell values (not the planner's rectangles).
+
+    Nav2's values are read once (``maps.nav2_values``, tested against an oracle of its
+    own); what the checker verifies is the planner's collision model of them, so it
+    derives the region again: cell value 100, or -1 unless unknown is free, each row's
+    runs of such cells as boxes, and their union.
+    """
+    values = np.asarray(grid.values)
+    blocked = values == 100
+    if not grid.unknown_free:
+        blocked = blocked | (values == -1)
+    h, w = blocked.shape
+    res = grid.info.resolution
+    ox, oy = grid.info.origin
+    edges = np.diff(np.pad(blocked.astype(np.int8), ((0, 0), (1, 1))), axis=1)
+    rows, starts = np.nonzero(edges > 0)
+    _, stops = np.nonzero(edges < 0)
+    if len(rows) == 0:
+        return shapely.Polygon()
+    boxes = shapely.box(ox + starts * res, oy + (h - 1 - rows) * res, ox + stops * res, oy + (h - rows) * res)
+    return shapely.union_all(boxes)
+
+
 def _wrap(a):
     return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
 
@@ -78,6 +102,8 @@ class _World:
                 self.discs.append((np.array(ob.center, float), ob.radius))
             elif isinstance(ob, Box):
                 polys.append(shapely.Polygon(ob.vertices()))
+            elif isinstance(ob, MapObstacle):
+                polys.append(_grid_region(ob))
             else:
                 polys.append(shapely.Polygon(ob.points, [h for h in ob.holes]))
         self.static = shapely.union_all(polys) if polys else None

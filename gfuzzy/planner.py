@@ -339,10 +339,8 @@ class Planner:
         # distance, in steps (edge e costs k[e]) for the heuristic, which is exact for the
         # static graph and so the tightest admissible one; the vertex graphs are kept, the
         # connections added per query
-        from scipy.sparse.csgraph import dijkstra
-
         def sp(graph, weights, indices):
-            out = dijkstra(graph.with_edges(extra_e, weights), directed=True, indices=indices)
+            out = graph.with_edges(extra_e, weights).distances(indices)
             return np.where(out < 1e-200, 0.0, out)
 
         dist = sp(roadmap_metres(rm), extra_w, g_id)

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from .errors import InputError, SceneError
+from .maps import MapObstacle, load_map
 from .status import Status
 from .typing import FloatArray
 from .yamldoc import _V, MAX_MAGNITUDE, NAME_RE, _join, _kind, _load_yaml, _one_key
@@ -29,6 +30,7 @@ __all__ = [
     "Disc",
     "Box",
     "Polygon",
+    "MapObstacle",
     "Mover",
     "Query",
     "Expect",
@@ -513,9 +515,13 @@ def _parse_obstacles(v: _V, doc: dict, folder: Path, hasher) -> list:
         v.fail("obstacles", f"expected a list, got {_kind(doc['obstacles'])}")
     for i, item in enumerate(obs_doc):
         place = f"obstacles[{i}]"
-        kind, spec = _one_key(v, item, place, ("box", "disc", "polygon", "mesh"))
+        kind, spec = _one_key(v, item, place, ("box", "disc", "polygon", "mesh", "map"))
         kplace = _join(place, kind)
-        if kind == "box":
+        if kind == "map":
+            grid = load_map(spec, kplace, v.file, folder)
+            hasher.update(bytes.fromhex(grid.digest))
+            obstacles.append(grid)
+        elif kind == "box":
             spec = v.mapping(spec, kplace, required=("center", "size"), optional=("angle",))
             obstacles.append(
                 Box(
@@ -664,19 +670,26 @@ def parse_scene(doc: Any, file: str = "<string>", folder: str | os.PathLike | No
     v.mapping(
         doc,
         "",
-        required=("version", "name", "bounds", "robot"),
-        optional=("obstacles", "movers", "queries"),
+        required=("version", "name", "robot"),
+        optional=("bounds", "obstacles", "movers", "queries"),
     )
     if doc["version"] != 1 or isinstance(doc["version"], bool):
         v.fail("version", f"unsupported version {doc['version']!r} (this reads version 1)")
     name = v.name(doc["name"], "name", NAME_RE)
-    bounds = v.vector(doc["bounds"], "bounds", 4)
-    if not (bounds[0] < bounds[2] and bounds[1] < bounds[3]):
-        v.fail("bounds", f"inverted or empty bounds {list(bounds)} (need xmin < xmax, ymin < ymax)")
+    if "bounds" in doc:
+        bounds = v.vector(doc["bounds"], "bounds", 4)
+        if not (bounds[0] < bounds[2] and bounds[1] < bounds[3]):
+            v.fail("bounds", f"inverted or empty bounds {list(bounds)} (need xmin < xmax, ymin < ymax)")
 
     robot, robot_repr = _parse_robot(v, doc["robot"])
     hasher = hashlib.sha256()
     obstacles = _parse_obstacles(v, doc, folder, hasher)
+    if "bounds" not in doc:
+        grids = [o for o in obstacles if isinstance(o, MapObstacle)]
+        if not grids:
+            v.fail("bounds", "missing required key (it may be left out only when the scene has a map)")
+        ext = np.array([g.extent for g in grids])
+        bounds = (float(ext[:, 0].min()), float(ext[:, 1].min()), float(ext[:, 2].max()), float(ext[:, 3].max()))
     movers = _parse_movers(v, doc)
     queries = _parse_queries(v, doc, robot)
 
@@ -710,6 +723,8 @@ def _static_hash(shape_hash: str, clearance: float) -> str:
 
 
 def _static_repr(o) -> dict:
+    if isinstance(o, MapObstacle):
+        return {"map": o.digest, "unknown_free": o.unknown_free}
     if isinstance(o, Disc):
         return {"disc": [list(o.center), o.radius]}
     if isinstance(o, Box):
