@@ -114,6 +114,8 @@ class _Base:
     n_ring: int
 
     vertex_xy: FloatArray = None
+    #: Static clearances of the vertices' positions (a disc's), filled as connections need them.
+    clearance: FloatArray = None
 
     def copies_at(self, v: int) -> IntArray:
         lo, hi = np.searchsorted(self.vertex, [v, v + 1])
@@ -346,6 +348,7 @@ def _base(roadmap, geometry, stretch: float, vmax: float, step_len: float) -> _B
         ring_ok=ring_ok,
         n_ring=n_ring,
         vertex_xy=xy,
+        clearance=np.full(len(xy), np.nan),
     )
     roadmap._derived[key] = return_
     return return_
@@ -408,9 +411,10 @@ class _Extras:
         if dh != 0.0:
             self.pieces.append((a, b, float(dh), abs(dh) * self.scale))
 
-    def copy_at(self, v: int, h: float) -> int:
+    def copy_at(self, v: int, h: float, out: bool) -> int:
         """The copy of vertex v at heading h: the base's when it has one, else a new copy
-        joined by turns to the two ring points around its heading, both ways."""
+        joined by turns to the two ring points around its heading: out to them (``out``:
+        the start arrives there and turns on), else in from them (the goal leaves there)."""
         geo, base = self.geometry, self.base
         ids = base.copies_at(v)
         rel = (base.poses[ids, 2] - h) % (2 * math.pi)
@@ -423,8 +427,10 @@ class _Extras:
         step_h = 2 * math.pi / base.n_ring
         for r, arc in _brackets(h, r0, base.n_ring, step_h):
             if base.ring_ok[r] and turn_free(geo, x, y, h, arc):
-                self.turn(c, self.ring(r), arc)
-                self.turn(self.ring(r), c, -arc)
+                if out:
+                    self.turn(c, self.ring(r), arc)
+                else:
+                    self.turn(self.ring(r), c, -arc)
         return c
 
     def join(self, pose: FloatArray, node: int, connect_k: int, outward: bool, reverse: bool) -> None:
@@ -440,14 +446,23 @@ class _Extras:
         order = np.argsort(d, kind="stable")
         order = order[has[order] & (d[order] > 1e-9)]
         tried = joined = 0
+        disc = robot.shape == "disc"
+        c_p = geo.clearance1([px, py]) if disc else None
+        table = self.base.clearance if disc else None  # the vertices' (shared by every query)
         for v in order[: 4 * max(connect_k, 1)].tolist():
             if tried >= connect_k and joined:
                 break
             tried += 1
             vx, vy = float(xy[v, 0]), float(xy[v, 1])
+            c_v = None
+            if disc:
+                c_v = table[v]
+                if c_v != c_v:  # NaN: not computed yet
+                    c_v = table[v] = geo.clearance1([vx, vy])
             for back in (False, True) if reverse else (False,):
                 ax, ay, bx, by = (px, py, vx, vy) if outward else (vx, vy, px, py)
-                h = _drive(geo, robot, ax, ay, bx, by, back)
+                ca, cb = (c_p, c_v) if outward else (c_v, c_p)
+                h = _drive(geo, robot, ax, ay, bx, by, back, ca, cb)
                 if h is None:
                     continue
                 dh = pick_turn(geo, px, py, ph, h) if outward else pick_turn(geo, px, py, h, ph)
@@ -460,7 +475,7 @@ class _Extras:
                         self.turn(node, here, dh)
                     else:
                         self.turn(here, node, dh)
-                c = self.copy_at(v, h)
+                c = self.copy_at(v, h, outward)
                 if outward:
                     self.lane(here, c)
                 else:
@@ -468,11 +483,12 @@ class _Extras:
                 joined += 1
 
 
-def _drive(geo, robot, ax, ay, bx, by, back: bool):
+def _drive(geo, robot, ax, ay, bx, by, back: bool, ca=None, cb=None):
     """Heading for driving from a to b (backwards: facing away from b), or None when the
-    lane is not free for the body held at it."""
+    lane is not free for the body held at it (``ca``, ``cb``: the ends' clearances, when
+    known: a disc's do not depend on the heading)."""
     h = math.atan2(by - ay, bx - ax) + (math.pi if back else 0.0)
-    if not geo.motion_free(_xy_pose(robot, ax, ay, h), _xy_pose(robot, bx, by, h)):
+    if not geo.motion_free(_xy_pose(robot, ax, ay, h), _xy_pose(robot, bx, by, h), ca=ca, cb=cb):
         return None
     return h
 
@@ -558,6 +574,8 @@ class UnicycleGoal:
     p_of, j : (N - nn,) int
         Each interior point's piece and index along it.
     step_len, scale : float
+    steps : scipy CSR (nn, nn)
+        The kept pieces at node level weighted in steps (the starts' Dijkstra extends it).
     """
 
     goal: FloatArray
@@ -580,6 +598,7 @@ class UnicycleGoal:
     step_len: float
     scale: float
     connect_k: int
+    steps: object = None
 
     def splice(self, planner, start: FloatArray, exact: bool = True) -> UnicycleGraph:
         """This graph with ``start`` (``[x, y, heading]``, heading wrapped) joined in.
@@ -641,23 +660,27 @@ class UnicycleGoal:
         rd = float(met[s_id])
         heur = np.concatenate([self.heuristic, hop[N:], hop[B[p_of]] + k[p_of] - j])
         poses = np.vstack([nodes, inner])
-        # adjacency: the kept lists get the start's moves out of kept nodes (rings -> new
-        # copies) at their ends; the new nodes' and points' lists follow
+        # adjacency: every move of the start's is out of a new node or point (kept lists
+        # stay as they are), so the new lists follow the kept ones
         order = np.argsort(src, kind="stable")
-        s2, d2 = src[order], dst[order]
-        at = np.where(s2 < N, self.indptr[np.minimum(s2, N - 1) + 1], len(self.neighbors))
-        nbrs = np.insert(self.neighbors, at, d2)
-        indptr = np.concatenate([self.indptr, np.full(total - N, self.indptr[-1])])
-        indptr[1:] += np.cumsum(np.bincount(s2, minlength=total))
-        if exact:
-            allA = np.concatenate([self.A, A])
-            allB = np.concatenate([self.B, B])
-            allk = np.concatenate([self.k, k]).astype(float)
-            hop_s = np.rint(_dijkstra(_matrix(allA, allB, allk, N + x), s_id))
+        nbrs = np.concatenate([self.neighbors, dst[order]])
+        indptr = np.concatenate([self.indptr, self.indptr[-1] + np.cumsum(np.bincount(src - N, minlength=total - N))])
+        if exact:  # steps from the start: Dijkstra over the nodes (new ones renumbered after the kept)
+            from scipy.sparse import csr_matrix
+
+            nn = self.nn
+            a_c, b_c = A - N + nn, np.where(B >= N, B - N + nn, B)
+            new = _matrix(a_c, b_c, k.astype(float), nn + x)
+            m = self.steps
+            mat = csr_matrix((np.concatenate([m.data, new.data]), np.concatenate([m.indices, new.indices]),
+                              np.concatenate([m.indptr, m.indptr[-1] + new.indptr[nn + 1 :]])), shape=(nn + x, nn + x))  # fmt: skip
+            hop_s = np.rint(_dijkstra(mat, nn))
             from_start = np.empty(total)
-            from_start[: N + x] = hop_s
+            from_start[:nn] = hop_s[:nn]
+            from_start[N : N + x] = hop_s[nn:]
             from_start[self.nn : N] = hop_s[self.A[self.p_of]] + self.j
-            from_start[N + x :] = hop_s[A[p_of]] + j
+            hs = np.concatenate([hop_s[:nn], np.zeros(N - nn), hop_s[nn:]])
+            from_start[N + x :] = hs[A[p_of]] + j
         else:
             from_start = np.floor(np.hypot(*(poses[:, :2] - start[:2]).T) / self.step_len - 1e-9)
             from_start = np.maximum(from_start, 0.0)
@@ -694,7 +717,8 @@ def prepare_goal(planner, goal: FloatArray, dt: float, vplan: float, connect_k: 
     order = np.argsort(src, kind="stable")
     indptr = np.zeros(total + 1, dtype=np.int64)
     np.cumsum(np.bincount(src, minlength=total), out=indptr[1:])
-    hop = np.rint(_dijkstra(_matrix(A, B, k.astype(float), nn).T.tocsr(), g_id))
+    steps = _matrix(A, B, k.astype(float), nn)
+    hop = np.rint(_dijkstra(steps.T.tocsr(), g_id))
     metres = _dijkstra(_matrix(A, B, np.where(L > 0, L, 0.0), nn).T.tocsr(), g_id)
     heur = np.concatenate([hop, hop[B[p_of]] + k[p_of] - j])
     rings = first_ring + base.n_ring * np.arange(len(base.ring) // max(base.n_ring, 1))
@@ -703,7 +727,7 @@ def prepare_goal(planner, goal: FloatArray, dt: float, vplan: float, connect_k: 
     return UnicycleGoal(
         goal=np.asarray(goal, dtype=float), base=base, poses=np.vstack([nodes, inner]), indptr=indptr,
         neighbors=dst[order], nn=nn, A=A, B=B, k=k, L=L, hop=hop, heuristic=heur, metres=metres,
-        groups=groups, p_of=p_of, j=j, g_id=g_id, step_len=step_len, scale=scale, connect_k=connect_k,
+        groups=groups, p_of=p_of, j=j, g_id=g_id, step_len=step_len, scale=scale, connect_k=connect_k, steps=steps,
     )  # fmt: skip
 
 
