@@ -609,7 +609,7 @@ class UnicycleGoal:
         """
         geo, robot = planner.geometry, planner.robot
         N = len(self.poses)
-        ex = _Extras(self.base, geo, self.scale, N, ring_at=self.nn - len(self.base.ring))
+        ex = _Extras(self.base, geo, self.scale, N, ring_at=len(self.base.poses))
         ex.kept = self.poses
         s_id = ex.node(*start)
         ex.join(start, s_id, self.connect_k, True, robot.reverse)
@@ -689,45 +689,113 @@ class UnicycleGoal:
         return UnicycleGraph(graph, s_id, self.g_id, rd)
 
 
+@dataclass
+class _BaseCut:
+    """The base's pieces cut into steps, cached with it: nodes ``[copies][rings]`` (``nn0``),
+    interior points numbered from ``nn0`` (a goal's nodes go between the two, shifting them),
+    the moves sorted by source, and node-level graphs (forward in steps; backward in steps
+    and in metres) as CSR arrays of ``nn0`` rows."""
+
+    nodes: FloatArray
+    A: IntArray
+    B: IntArray
+    k: IntArray
+    L: FloatArray
+    offs: IntArray
+    p_of: IntArray
+    j: IntArray
+    inner: FloatArray
+    src: IntArray
+    dst: IntArray
+    fwd: object
+    back_steps: object
+    back_metres: object
+
+
+def _base_cut(base: _Base, step_len: float) -> _BaseCut:
+    hit = getattr(base, "_cut", None)
+    if hit is not None and hit[0] == step_len:
+        return hit[1]
+    K = len(base.poses)
+    nodes = np.vstack([base.poses, base.ring])
+    nn0 = len(nodes)
+    A = np.where(base.a < 0, K - 1 - base.a, base.a)
+    B = np.where(base.b < 0, K - 1 - base.b, base.b)
+    k, offs, p_of, j, inner, src, dst = _cut_pieces(nodes, A, B, base.dh, base.length, step_len, nn0)
+    order = np.argsort(src, kind="stable")
+    L = np.where(base.length > 0, base.length, 0.0)
+    cut = _BaseCut(nodes, A, B, k, L, offs, p_of, j, inner, src[order], dst[order],
+                   _matrix(A, B, k.astype(float), nn0), _matrix(B, A, k.astype(float), nn0), _matrix(B, A, L, nn0))  # fmt: skip
+    base._cut = (step_len, cut)
+    return cut
+
+
+def _with_rows(mat, A, B, w, n: int):
+    """CSR ``mat`` (its rows first) grown to (n, n) with entries (A, B, w) inserted at their
+    rows' ends (parallel ones: the shortest, :func:`_matrix`)."""
+    from scipy.sparse import csr_matrix
+
+    extra = _matrix(A, B, w, n)
+    rows = np.repeat(np.arange(n), np.diff(extra.indptr))
+    m_indptr = np.concatenate([mat.indptr, np.full(n - mat.shape[0], mat.indptr[-1])])
+    at = m_indptr[rows + 1]
+    indptr = m_indptr + np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=n))])
+    return csr_matrix((np.insert(mat.data, at, extra.data), np.insert(mat.indices, at, extra.indices), indptr),
+                      shape=(n, n))  # fmt: skip
+
+
 def prepare_goal(planner, goal: FloatArray, dt: float, vplan: float, connect_k: int = 10,
                  stretch: float = 1.0) -> UnicycleGoal:  # fmt: skip
     """The kept graph of ``goal`` (``[x, y, heading]``, heading wrapped): the base's copies,
-    lanes and rings (cached on the roadmap) with the goal joined in, cut into steps, and the
-    static steps and metres to the goal."""
+    lanes and rings cut into steps (cached on the roadmap) with the goal joined in, and the
+    static steps and metres to the goal.
+
+    Numbering: the copies, the rings, the goal's nodes (the goal first), then the base's
+    interior points and the goal's pieces' ones.
+    """
     geo, robot, rm = planner.geometry, planner.robot, planner.roadmap
     step_len = vplan * dt
     base = _base(rm, geo, stretch, robot.vmax, step_len)
+    cut = _base_cut(base, step_len)
     scale = robot.vmax / robot.turn_rate
-    ex = _Extras(base, geo, scale, len(base.poses))
+    nn0 = len(cut.nodes)
+    ex = _Extras(base, geo, scale, nn0, ring_at=len(base.poses))
     g_id = ex.node(*goal)
     ex.join(goal, g_id, connect_k, False, robot.reverse)
-    first_ring = len(base.poses) + len(ex.poses)
-    nodes = np.vstack([base.poses, np.asarray(ex.poses, dtype=float).reshape(-1, 3), base.ring])
+    xg = len(ex.poses)
+    nn = nn0 + xg
+    nodes = np.vstack([cut.nodes, np.asarray(ex.poses, dtype=float).reshape(-1, 3)])
     xp = np.asarray(ex.pieces, dtype=float).reshape(-1, 4)
-    A = np.concatenate([base.a, xp[:, 0].astype(np.int64)])
-    B = np.concatenate([base.b, xp[:, 1].astype(np.int64)])
-    A = np.where(A < 0, first_ring - 1 - A, A)
-    B = np.where(B < 0, first_ring - 1 - B, B)
-    DH = np.concatenate([base.dh, xp[:, 2]])
-    L = np.concatenate([base.length, xp[:, 3]])
-    nn = len(nodes)
-    k, offs, p_of, j, inner, src, dst = _cut_pieces(nodes, A, B, DH, L, step_len, nn)
-    total = nn + int(offs[-1])
+    Ag, Bg = xp[:, 0].astype(np.int64), xp[:, 1].astype(np.int64)
+    I0 = int(cut.offs[-1])
+    kg, offg, pg, jg, innerg, srcg, dstg = _cut_pieces(nodes, Ag, Bg, xp[:, 2], xp[:, 3], step_len, nn + I0)
+    total = nn + I0 + int(offg[-1])
     _too_many(total)
-    order = np.argsort(src, kind="stable")
+    shift = np.int64(xg)
+    s0 = np.where(cut.src >= nn0, cut.src + shift, cut.src)
+    d0 = np.where(cut.dst >= nn0, cut.dst + shift, cut.dst)
+    o = np.argsort(srcg, kind="stable")
+    neighbors = np.insert(d0, np.searchsorted(s0, srcg[o], side="right"), dstg[o])
     indptr = np.zeros(total + 1, dtype=np.int64)
-    np.cumsum(np.bincount(src, minlength=total), out=indptr[1:])
-    steps = _matrix(A, B, k.astype(float), nn)
-    hop = np.rint(_dijkstra(steps.T.tocsr(), g_id))
-    metres = _dijkstra(_matrix(A, B, np.where(L > 0, L, 0.0), nn).T.tocsr(), g_id)
+    np.cumsum(np.bincount(np.concatenate([s0, srcg]), minlength=total), out=indptr[1:])
+    Lg = np.where(xp[:, 3] > 0, xp[:, 3], 0.0)
+    hop = np.rint(_dijkstra(_with_rows(cut.back_steps, Bg, Ag, kg.astype(float), nn), g_id))
+    metres = _dijkstra(_with_rows(cut.back_metres, Bg, Ag, Lg, nn), g_id)
+    A, B = np.concatenate([cut.A, Ag]), np.concatenate([cut.B, Bg])
+    k = np.concatenate([cut.k, kg])
+    p_of = np.concatenate([cut.p_of, len(cut.A) + pg])
+    j = np.concatenate([cut.j, jg])
     heur = np.concatenate([hop, hop[B[p_of]] + k[p_of] - j])
-    rings = first_ring + base.n_ring * np.arange(len(base.ring) // max(base.n_ring, 1))
-    # a ring's points share a position: one group; pieces without interior points add none
-    groups = np.concatenate([rings, nn + offs[np.r_[True, np.diff(offs) > 0]]])
+    rings = len(base.poses) + base.n_ring * np.arange(len(base.ring) // max(base.n_ring, 1))
+    # a ring's points share a position: one group; the goal's nodes one each; pieces without
+    # interior points add none
+    offs = np.concatenate([cut.offs, I0 + offg[1:]])
+    groups = np.concatenate([rings, nn0 + np.arange(xg + 1), nn + offs[np.r_[True, np.diff(offs) > 0]]])
     return UnicycleGoal(
-        goal=np.asarray(goal, dtype=float), base=base, poses=np.vstack([nodes, inner]), indptr=indptr,
-        neighbors=dst[order], nn=nn, A=A, B=B, k=k, L=L, hop=hop, heuristic=heur, metres=metres,
-        groups=groups, p_of=p_of, j=j, g_id=g_id, step_len=step_len, scale=scale, connect_k=connect_k, steps=steps,
+        goal=np.asarray(goal, dtype=float), base=base, poses=np.vstack([nodes, cut.inner, innerg]), indptr=indptr,
+        neighbors=neighbors, nn=nn, A=A, B=B, k=k, L=np.concatenate([cut.L, Lg]), hop=hop, heuristic=heur,
+        metres=metres, groups=groups, p_of=p_of, j=j, g_id=g_id, step_len=step_len, scale=scale, connect_k=connect_k,
+        steps=_with_rows(cut.fwd, Ag, Bg, kg.astype(float), nn),
     )  # fmt: skip
 
 
