@@ -496,14 +496,15 @@ def _drive(geo, robot, ax, ay, bx, by, back: bool, ca=None, cb=None):
 def _cut_pieces(nodes: FloatArray, A: IntArray, B: IntArray, DH: FloatArray, L: FloatArray, step_len: float,
                 first: int):  # fmt: skip
     """Pieces cut into one-step points (:func:`gfuzzy.poses.split_counts`): (k, offs, p_of,
-    j, inner poses, src, dst) with interior ids from ``first``."""
+    j, inner poses, src, dst) with interior ids from ``first``. ``nodes``: the poses of the
+    nodes, or a function of node ids giving them."""
     k = split_counts(L, step_len)
     n_int = k - 1
     offs = np.concatenate([[0], np.cumsum(n_int)]).astype(np.int64)
     p_of = np.repeat(np.arange(len(A)), n_int)
     j = np.arange(offs[-1]) - np.repeat(offs[:-1], n_int) + 1
     f = j / k[p_of]
-    pa, pb = nodes[A[p_of]], nodes[B[p_of]]
+    pa, pb = (nodes(A[p_of]), nodes(B[p_of])) if callable(nodes) else (nodes[A[p_of]], nodes[B[p_of]])
     inner = np.empty((len(p_of), 3))
     inner[:, :2] = pa[:, :2] + f[:, None] * (pb[:, :2] - pa[:, :2])
     inner[:, 2] = np.where(DH[p_of] != 0.0, wrap_angle(pa[:, 2] + f * DH[p_of]), pa[:, 2])
@@ -636,8 +637,14 @@ class UnicycleGoal:
         x = len(new)
         xp = np.asarray(ex.pieces, dtype=float).reshape(-1, 4)
         A, B = xp[:, 0].astype(np.int64), xp[:, 1].astype(np.int64)
-        nodes = np.vstack([self.poses, new])
-        k, offs, p_of, j, inner, src, dst = _cut_pieces(nodes, A, B, xp[:, 2], xp[:, 3], self.step_len, N + x)
+        def pose_of(ids):
+            out = np.empty((len(ids), 3))
+            kept = ids < N
+            out[kept] = self.poses[ids[kept]]
+            out[~kept] = new[ids[~kept] - N]
+            return out
+
+        k, offs, p_of, j, inner, src, dst = _cut_pieces(pose_of, A, B, xp[:, 2], xp[:, 3], self.step_len, N + x)
         total = N + x + int(offs[-1])
         _too_many(total)
         # steps and metres to the goal of the new nodes: the kept ones bound them (a start's
@@ -659,7 +666,7 @@ class UnicycleGoal:
                 break
         rd = float(met[s_id])
         heur = np.concatenate([self.heuristic, hop[N:], hop[B[p_of]] + k[p_of] - j])
-        poses = np.vstack([nodes, inner])
+        poses = np.concatenate([self.poses, new, inner])
         # adjacency: every move of the start's is out of a new node or point (kept lists
         # stay as they are), so the new lists follow the kept ones
         order = np.argsort(src, kind="stable")
@@ -670,10 +677,15 @@ class UnicycleGoal:
 
             nn = self.nn
             a_c, b_c = A - N + nn, np.where(B >= N, B - N + nn, B)
-            new = _matrix(a_c, b_c, k.astype(float), nn + x)
+            o = np.lexsort((k, b_c, a_c))  # by row; parallel pieces: the shortest first
+            first = np.ones(len(o), dtype=bool)
+            first[1:] = (a_c[o][1:] != a_c[o][:-1]) | (b_c[o][1:] != b_c[o][:-1])
+            o = o[first]
             m = self.steps
-            mat = csr_matrix((np.concatenate([m.data, new.data]), np.concatenate([m.indices, new.indices]),
-                              np.concatenate([m.indptr, m.indptr[-1] + new.indptr[nn + 1 :]])), shape=(nn + x, nn + x))  # fmt: skip
+            rows = np.cumsum(np.bincount(a_c[o] - nn, minlength=x))
+            mat = csr_matrix((np.concatenate([m.data, np.maximum(k[o], 1e-300).astype(float)]),
+                              np.concatenate([m.indices, b_c[o]]), np.concatenate([m.indptr, m.indptr[-1] + rows])),
+                             shape=(nn + x, nn + x))  # fmt: skip
             hop_s = np.rint(_dijkstra(mat, nn))
             from_start = np.empty(total)
             from_start[:nn] = hop_s[:nn]
