@@ -46,15 +46,16 @@ STATUSES = tuple(s.value for s in Status)  # the file format spells them as stri
 
 @dataclass(frozen=True)
 class Robot:
-    """The robot: a disc (poses ``[x, y]``) or a box (poses ``[x, y, heading]``).
+    """The robot: a disc (poses ``[x, y]``), a box or a footprint polygon (poses
+    ``[x, y, heading]``). :mod:`gfuzzy.shapes` holds the geometry of each shape.
 
     Attributes
     ----------
-    shape : {"disc", "box"}
+    shape : {"disc", "box", "footprint"}
     radius : float
-        Disc radius (0 for a box).
+        Disc radius (0 otherwise).
     size : (2,) tuple
-        Box ``(length, width)``, length along the heading ((0, 0) for a disc).
+        Box ``(length, width)``, length along the heading ((0, 0) otherwise).
     vmax : float
         Bound on configuration speed (euclidean xy speed + |heading rate| * circumradius).
     amax : float or None
@@ -63,6 +64,9 @@ class Robot:
         Distance every answer keeps from static obstacles (not from the bounds), metres.
     mover_clearance : float
         Distance every answer keeps from every present mover, metres.
+    footprint : tuple of (x, y)
+        A footprint robot's simple polygon in its own frame (x forward, y left),
+        counter-clockwise; empty for a disc or a box.
     """
 
     shape: str
@@ -72,17 +76,25 @@ class Robot:
     amax: float | None = None
     clearance: float = 0.0
     mover_clearance: float = 0.0
+    footprint: tuple[tuple[float, float], ...] = ()
 
     @property
     def circumradius(self) -> float:
         """Radius of the smallest disc about the reference point holding the whole robot."""
         if self.shape == "disc":
             return self.radius
+        if self.shape == "footprint":
+            return max(math.hypot(x, y) for x, y in self.footprint)
         return 0.5 * math.hypot(*self.size)
 
     @property
     def inradius(self) -> float:
-        """Radius of the largest disc about the reference point inside the robot."""
+        """Radius of the largest disc about the reference point inside the robot (0 when
+        the reference point is outside a footprint)."""
+        if self.shape == "footprint":
+            from .shapes import shape_of
+
+            return shape_of(self).inradius
         return self.radius if self.shape == "disc" else 0.5 * min(self.size)
 
     @property
@@ -91,7 +103,7 @@ class Robot:
         return 2 if self.shape == "disc" else 3
 
     def corners(self, poses: FloatArray) -> FloatArray:
-        """Corners of a box robot, counter-clockwise.
+        """Corners of a box robot (or a footprint's vertices), counter-clockwise.
 
         Parameters
         ----------
@@ -100,10 +112,14 @@ class Robot:
         Returns
         -------
         (n, 4, 2) float
+            (n, k, 2) for a footprint of k vertices.
         """
         poses = np.asarray(poses, dtype=float).reshape(-1, 3)
-        hl, hw = 0.5 * self.size[0], 0.5 * self.size[1]
-        local = np.array([[hl, hw], [-hl, hw], [-hl, -hw], [hl, -hw]])
+        if self.shape == "footprint":
+            local = np.array(self.footprint, dtype=float)
+        else:
+            hl, hw = 0.5 * self.size[0], 0.5 * self.size[1]
+            local = np.array([[hl, hw], [-hl, hw], [-hl, -hw], [hl, -hw]])
         c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
         rot = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)  # (n, 2, 2)
         return poses[:, None, :2] + np.einsum("nij,kj->nki", rot, local)
@@ -445,22 +461,33 @@ def _mesh_footprint(v: _V, spec, place: str, folder: Path) -> tuple[list, bytes]
 def _parse_robot(v: _V, rd) -> tuple[Robot, dict]:
     """``robot:``: the Robot, and its shape as it enters the static hash."""
     rd = v.mapping(
-        rd, "robot", required=("vmax",), optional=("disc", "box", "amax", "clearance", "mover_clearance")
+        rd,
+        "robot",
+        required=("vmax",),
+        optional=("disc", "box", "footprint", "amax", "clearance", "mover_clearance"),
     )
-    if ("disc" in rd) == ("box" in rd):
-        v.fail("robot", "give exactly one of disc or box")
+    given = [k for k in ("disc", "box", "footprint") if k in rd]
+    if len(given) != 1:
+        v.fail("robot", "give exactly one of disc, box or footprint" + (f", not {' and '.join(given)}" if given else ""))
+    footprint: tuple = ()
     if "disc" in rd:
         robot_shape, radius, size = "disc", v.number(rd["disc"], "robot.disc", positive=True), (0.0, 0.0)
-    else:
+    elif "box" in rd:
         robot_shape, radius = "box", 0.0
         size = v.vector(rd["box"], "robot.box", 2, positive=True)
+    else:
+        robot_shape, radius, size = "footprint", 0.0, (0.0, 0.0)
+        pts = _check_polygon(v, v.points(rd["footprint"], "robot.footprint", min_rows=3), "robot.footprint")
+        footprint = tuple((float(x), float(y)) for x, y in pts)
     vmax = v.number(rd["vmax"], "robot.vmax", positive=True)
     amax = v.number(rd["amax"], "robot.amax", positive=True) if "amax" in rd else None
     clear = v.number(rd.get("clearance", 0.0), "robot.clearance", nonneg=True)
     mover_clear = v.number(rd.get("mover_clearance", 0.0), "robot.mover_clearance", nonneg=True)
-    robot = Robot(robot_shape, radius, size, vmax, amax, clear, mover_clear)
-
-    return robot, {"shape": robot_shape, "radius": radius, "size": list(size)}
+    robot = Robot(robot_shape, radius, size, vmax, amax, clear, mover_clear, footprint)
+    shape_repr = {"shape": robot_shape, "radius": radius, "size": list(size)}
+    if footprint:  # only then: the static hash of disc and box scenes is unchanged
+        shape_repr["footprint"] = [list(p) for p in footprint]
+    return robot, shape_repr
 
 
 def _parse_obstacles(v: _V, doc: dict, folder: Path, hasher) -> list:
