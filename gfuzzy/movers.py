@@ -287,8 +287,11 @@ class MoverField:
         sinp = np.sin(poses[:, 2]) if box else np.zeros(0)
         half = 0.5 * np.asarray(robot.size, dtype=float) if box else np.zeros(2)
         kind = {"disc": 0, "box": 1, "footprint": 2}[robot.shape]
+        inner = float(robot.inradius)
         if kind == 2:
             pieces, counts = shape_of(robot).padded()
+            if not shape_of(robot).origin_inside:  # no disc about the reference point is inside
+                inner = -math.inf
         else:
             pieces, counts = np.zeros((1, 1, 2)), np.zeros(1, dtype=np.int64)
         xy = np.ascontiguousarray(poses[:, :2])
@@ -297,7 +300,7 @@ class MoverField:
         count = mark_unsafe(
             grid, ptr, lo, hi, xy, cosp, sinp, row_off, buf, self.present, self.xy, self.margin, self.bbox,
             CHUNK, self._extent, self._is_disc, self._radius, self._size, self._inner, kind,
-            float(robot.circumradius), float(robot.radius), float(half[0]), float(half[1]), float(robot.inradius),
+            float(robot.circumradius), float(robot.radius), float(half[0]), float(half[1]), inner,
             pieces, counts,
         )  # fmt: skip
         self.evaluations += count

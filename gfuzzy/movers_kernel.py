@@ -422,7 +422,8 @@ def mark_unsafe(grid, ptr, lo, hi, xy, cosp, sinp, row_off, buf, present, mxy, m
         The field's arrays (:class:`gfuzzy.movers.MoverField`); ``inner``: the movers'
         inscribed radii.
     robot_kind, circ, robot_r, hx_r, hy_r, robot_in : the robot (0 disc, 1 box, 2
-        footprint), its circumradius, disc radius, box half sizes, inscribed radius.
+        footprint), its circumradius, disc radius, box half sizes, inscribed radius (-inf
+        when the reference point is outside a footprint: no disc about it is inside).
     pieces : (P, V, 2) float ; counts : (P,) int
         A footprint's convex pieces (:meth:`gfuzzy.shapes.FootprintShape.padded`); unused
         otherwise.

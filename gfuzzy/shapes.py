@@ -403,11 +403,17 @@ class FootprintShape:
         return float(max(math.hypot(x, y) for x, y in self.points))
 
     @property
+    def origin_inside(self) -> bool:
+        """Whether the reference point is inside the body (strictly)."""
+        o = np.zeros((1, 2))
+        return min(float(point_convex_distance(o, p)[0]) for p in self.pieces) < 0 and bool(
+            _segments_distance(o, self.points)[0] > 0
+        )
+
+    @property
     def inradius(self) -> float:
         """Distance from the reference point to the outline when it is inside, else 0."""
-        o = np.zeros((1, 2))
-        inside = min(float(point_convex_distance(o, p)[0]) for p in self.pieces) < 0
-        return float(_segments_distance(o, self.points)[0]) if inside else 0.0
+        return float(_segments_distance(np.zeros((1, 2)), self.points)[0]) if self.origin_inside else 0.0
 
     def padded(self) -> tuple[FloatArray, np.ndarray]:
         """The pieces as one array (P, V, 2) (rows past a piece's count repeat its first
