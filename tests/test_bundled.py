@@ -62,7 +62,7 @@ def test_refined_answers_keep_the_guarantees(path):
             continue
         rep = check_trajectory(scene, refined.trajectory.waypoints, q)
         assert rep.valid, f"{q.name}: {rep.reason}"
-        info = refined.stats["refine"]
+        info = refined.refine_report.to_dict()
         if info["applied"]:
             before, after = info["before"], info["after"]
             assert after["length"] < before["length"] - 1e-9 or after["smoothness"] < before["smoothness"] - 1e-9
@@ -78,8 +78,8 @@ def test_refinement_applies_on_most_queries():
         for _, r in _answers(path, True, False):
             if r.solved:
                 solved += 1
-                applied += r.stats["refine"]["applied"]
-                boxes += r.stats["refine"]["applied"] and scene.robot.shape == "box"
+                applied += r.refine_report.applied
+                boxes += r.refine_report.applied and scene.robot.shape == "box"
     assert applied >= 0.75 * solved
     assert boxes >= 1  # box robots too, through 0.6 m doors
 
@@ -104,7 +104,7 @@ def test_speed_layer_answers_keep_the_guarantees(path):
         w = res.trajectory.waypoints
         rep = check_trajectory(scene, w, q)
         assert rep.valid, f"{q.name}: {rep.reason}"
-        info = res.stats["speed_layer"]
+        info = res.speed_report.to_dict()
         if not info["applied"]:
             continue
         # the profile respects the acceleration bound: speed changes between steps stay
@@ -122,5 +122,5 @@ def test_speed_layer_applies_on_most_queries():
         for _, r in _answers(path, False, True):
             if r.solved:
                 total += 1
-                applied += r.stats["speed_layer"]["applied"]
+                applied += r.speed_report.applied
     assert applied >= 0.6 * total

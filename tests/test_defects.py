@@ -361,14 +361,14 @@ def test_the_answer_says_when_amax_is_not_honoured(line_roadmap):
     assert _speed_change_rate(res.trajectory) > scene.robot.amax  # the claim is true
     layered = plan(scene, rm, q.start, q.goal, q.t0, PlanOptions(speed_layer=True))
     assert layered.solved
-    applied = layered.stats["speed_layer"]["applied"]
+    applied = layered.speed_report.applied
     doc = layered.to_file(scene.name, q.name).to_dict()
     assert doc["amax_honoured"] is applied
     if applied:  # and so is this one
         assert "amax_note" not in doc
         assert _speed_change_rate(layered.trajectory) <= scene.robot.amax * (1 + 1e-6)
     else:
-        assert layered.stats["speed_layer"]["reason"] in doc["amax_note"]
+        assert layered.speed_report.reason in doc["amax_note"]
 
 
 def test_no_amax_no_claim():

@@ -184,7 +184,7 @@ queries:
     rm = build_roadmap(scene, RoadmapOptions(vertices=80, seed=2))
     res = plan(scene, rm, [1, 2], [4.5, 2], 0.0)
     assert res.status is Status.NO_PATH
-    assert res.stats.get("expansions", 0) == 0  # decided on the static graph: no space-time search
+    assert res.stats.expansions is None  # decided on the static graph: no space-time search
 
 
 def test_mover_parks_in_doorway_no_path(tmp_path):
@@ -224,7 +224,7 @@ def test_timeout(open_scene):
     # the budget is looked at every few hundred (the compiled search: 4096) expansions: a
     # search long enough that it is looked at
     full = plan(scene, rm, q.start, q.goal, 0.0, PlanOptions(dt=0.001))
-    assert full.solved and full.stats["expansions"] > 5000
+    assert full.solved and full.stats.expansions > 5000
     res = plan(scene, rm, q.start, q.goal, 0.0, PlanOptions(dt=0.001, time_limit=1e-9))
     assert res.status is Status.TIMEOUT
     assert res.trajectory is None and "budget" in res.message
@@ -439,7 +439,7 @@ def test_search_on_the_spanner_stays_near_the_whole_roadmap(corridor, open_scene
         assert whole.solved and sparse.solved
         assert sparse.roadmap_distance == pytest.approx(whole.roadmap_distance)  # the contract's
         assert check_trajectory(scene, sparse.trajectory.waypoints, q).valid
-        assert sparse.stats["graph_nodes"] < whole.stats["graph_nodes"]
+        assert sparse.stats.graph_nodes < whole.stats.graph_nodes
 
 
 def test_bad_options_and_poses_raise_input_error():

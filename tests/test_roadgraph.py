@@ -162,7 +162,7 @@ def test_answers_equal_with_a_cold_and_a_warm_roadmap():
         cold = Planner(scene, load_roadmap(ROOT / "roadmaps" / "zara-crowd.json", scene))
         a, b = cold.plan(q.start, q.goal, q.t0), warm.plan(q.start, q.goal, q.t0)
         assert (a.status, a.duration, a.roadmap_distance) == (b.status, b.duration, b.roadmap_distance)
-        assert a.stats.get("expansions") == b.stats.get("expansions")
+        assert a.stats.expansions == b.stats.expansions
     assert rm._derived  # the warm roadmap did keep its cut and clearances
 
 

@@ -18,7 +18,7 @@ from reference import Reference, interpolate
 
 import gfuzzy.roadmap as roadmap_module
 from gfuzzy.errors import SceneError
-from gfuzzy.roadmap import RoadmapOptions, build_roadmap, load_roadmap, roadmap_digest
+from gfuzzy.roadmap import RoadmapInfo, RoadmapOptions, build_roadmap, load_roadmap, roadmap_digest
 from gfuzzy.scene import load_scene, parse_scene
 
 ROBOTS = {"disc": {"disc": 0.15, "vmax": 1.0}, "box": {"box": [0.4, 0.2], "vmax": 1.0, "amax": 2.0}}
@@ -172,11 +172,21 @@ def test_every_vertex_and_edge_is_free_under_shapely(small, kind):
     assert not bad.any(), f"{bad.sum()} of {len(samples)} edge samples collide, e.g. {samples[bad][:3]}"
 
 
-def test_info_is_plain_json(small):
-    _, _, rm = small["disc"]
-    json.dumps(rm.info)
-    assert rm.info["components"] >= 1
+def test_info_is_typed_and_plain_json_in_the_file(small, tmp_path):
+    _, scene, rm = small["disc"]
+    assert isinstance(rm.info, RoadmapInfo)
+    assert rm.info.components >= 1 and rm.info.validity_calls > 0 and rm.info.ompl_version
     assert rm.scene_hash and rm.scene_name == "small-disc"
+    rm.save(tmp_path / "rm.json")
+    doc = json.loads((tmp_path / "rm.json").read_text())
+    assert doc["info"]["components"] == rm.info.components  # the file keeps its keys
+    assert load_roadmap(tmp_path / "rm.json", scene).info == rm.info
+    # a key of another version's file survives a load and a save
+    doc["info"]["repaired_vertices"] = 7
+    (tmp_path / "rm.json").write_text(json.dumps(doc))
+    again = load_roadmap(tmp_path / "rm.json", scene)
+    assert again.info.extra == {"repaired_vertices": 7}
+    assert again.info.to_dict()["repaired_vertices"] == 7 and again.info.components == rm.info.components
 
 
 # --------------------------------------------------------------------------- files
@@ -410,3 +420,22 @@ def test_building_leaves_ompl_log_level_as_it_was():
         assert ou.getLogLevel() == ou.LogLevel.LOG_DEBUG
     finally:
         ou.setLogLevel(before)
+
+
+def test_spanner_interrupted_midway_caches_nothing_and_is_read_only(monkeypatch):
+    scene = load_scene(ROOT / "scenes" / "building-floor.yaml")
+    rm = load_roadmap(ROOT / "roadmaps" / "building-floor.json", scene)
+    fresh = load_roadmap(ROOT / "roadmaps" / "building-floor.json", scene).spanner(1.05)
+    assert not fresh.all()  # the spanner drops edges on this roadmap
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    with monkeypatch.context() as m:
+        m.setattr(np, "argsort", interrupted)
+        with pytest.raises(KeyboardInterrupt):
+            rm.spanner(1.05)
+    keep = rm.spanner(1.05)  # not the half-built mask of the interrupted call
+    np.testing.assert_array_equal(keep, fresh)
+    with pytest.raises(ValueError):
+        keep[0] = not keep[0]  # callers cannot corrupt the cache

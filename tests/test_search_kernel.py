@@ -32,7 +32,7 @@ SCENES = sorted((ROOT / "scenes").glob("*.yaml"))
 def _same(a, b):
     assert a.status == b.status
     assert a.message == b.message
-    assert a.stats.get("expansions") == b.stats.get("expansions")
+    assert a.stats.expansions == b.stats.expansions
     if a.trajectory is None:
         assert b.trajectory is None
     else:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -10,11 +11,10 @@ import yaml
 from reference import reference_violation
 
 from gfuzzy.geometry import StaticGeometry
-from gfuzzy.planner import Planner, PlanOptions, PlanResult
+from gfuzzy.planner import Planner, PlanOptions
 from gfuzzy.roadmap import RoadmapOptions, build_roadmap
-from gfuzzy.scene import parse_scene
+from gfuzzy.scene import Query, parse_scene
 from gfuzzy.stages import RefineReport, SpeedReport, StageContext, apply_stages
-from gfuzzy.status import Status
 from gfuzzy.trajectory import Trajectory
 
 # an L-shaped hall: the search's answer turns a corner, the stages have work to do
@@ -39,6 +39,10 @@ def hall():
     return doc, scene, build_roadmap(scene, RoadmapOptions(vertices=60, seed=3))
 
 
+def _query(q):
+    return Query(q.name, tuple(q.start), tuple(q.goal), q.t0, hold=q.hold)
+
+
 def _searched(scene, rm, q):
     res = Planner(scene, rm).plan(q.start, q.goal, q.t0)
     assert res.solved
@@ -51,14 +55,16 @@ def test_both_stages_report_and_keep_a_safe_answer(hall):
     base = _searched(scene, rm, q)
     ctx = StageContext(scene, StaticGeometry(scene))
     opts = PlanOptions(refine=True, speed_layer=True, seed=2)
-    out = apply_stages(ctx, base, np.array(q.start), np.array(q.goal), q.t0, opts, time.perf_counter())
+    out = apply_stages(ctx, base.trajectory, _query(q), opts, time.perf_counter() + opts.time_limit)
     assert isinstance(out.refine_report, RefineReport) and isinstance(out.speed_report, SpeedReport)
-    # the file keeps its keys: stats holds the reports' dict forms
-    assert out.stats["refine"] == out.refine_report.to_dict()
-    assert out.stats["speed_layer"] == out.speed_report.to_dict()
+    # the file keeps its keys: its stats hold the reports' dict forms
+    file_stats = replace(base, trajectory=out.trajectory, refine_report=out.refine_report,
+                         speed_report=out.speed_report).to_file("s", "q").to_dict()["stats"]  # fmt: skip
+    assert file_stats["refine"] == out.refine_report.to_dict()
+    assert file_stats["speed_layer"] == out.speed_report.to_dict()
     assert out.speed_report.amax == 2.0  # AMAX_PER_VMAX * vmax for a robot without amax
     assert out.speed_report.applied, out.speed_report.reason
-    assert set(out.stats["speed_layer"]) >= {"applied", "amax", "profile_seconds", "stops", "before", "after"}
+    assert set(file_stats["speed_layer"]) >= {"applied", "amax", "profile_seconds", "stops", "before", "after"}
     assert reference_violation(doc, out.trajectory.waypoints) == ""
     r = out.refine_report
     assert r.applied, r.reason
@@ -70,10 +76,10 @@ def test_a_straight_answer_is_left_to_the_search(hall):
     _, scene, rm = hall
     ctx = StageContext(scene, StaticGeometry(scene))
     wps = np.array([[0.0, 5.5, 0.5], [1.0, 5.5, 1.5]])
-    res = PlanResult(Status.SOLVED, Trajectory(wps, scene.robot.radius), roadmap_distance=1.0)
-    out = apply_stages(ctx, res, wps[0, 1:], wps[-1, 1:], 0.0, PlanOptions(refine=True), time.perf_counter())
+    query = Query("q", tuple(wps[0, 1:]), tuple(wps[-1, 1:]), 0.0)
+    out = apply_stages(ctx, Trajectory(wps, scene.robot.radius), query, PlanOptions(refine=True), time.perf_counter() + 60)
     assert out.refine_report == RefineReport(False, "the path is a straight segment already")
-    assert out.stats["refine"] == {"applied": False, "reason": "the path is a straight segment already"}
+    assert out.refine_report.to_dict() == {"applied": False, "reason": "the path is a straight segment already"}
     np.testing.assert_array_equal(out.trajectory.waypoints, wps)
 
 
@@ -81,10 +87,10 @@ def test_start_is_goal_has_nothing_to_slow():
     scene = parse_scene(yaml.safe_load(HALL))
     ctx = StageContext(scene, StaticGeometry(scene))
     wps = np.array([[0.0, 5.5, 0.5]])
-    res = PlanResult(Status.SOLVED, Trajectory(wps, 0.2), roadmap_distance=0.0)
-    out = apply_stages(ctx, res, wps[0, 1:], wps[0, 1:], 0.0, PlanOptions(speed_layer=True), time.perf_counter())
+    query = Query("q", tuple(wps[0, 1:]), tuple(wps[0, 1:]), 0.0)
+    out = apply_stages(ctx, Trajectory(wps, 0.2), query, PlanOptions(speed_layer=True), time.perf_counter() + 60)
     assert out.speed_report == SpeedReport(False, 2.0, "the start is the goal")
-    assert out.stats["speed_layer"] == {"applied": False, "amax": 2.0, "reason": "the start is the goal"}
+    assert out.speed_report.to_dict() == {"applied": False, "amax": 2.0, "reason": "the start is the goal"}
 
 
 def test_the_planner_hands_the_stages_a_context(hall):
