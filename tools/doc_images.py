@@ -24,6 +24,7 @@ SCENES = ROOT / "scenes"
 PICTURES = {
     "building-floor.png": ("building-floor", [], []),
     "office-refined-speed.png": ("office-polygons", ["--refine", "--speed-layer"], ["--speed", "--no-roadmap"]),
+    "footprint-office.png": ("footprint-office", ["--query", "dock", "--refine", "--speed-layer"], ["--no-roadmap"]),
 }
 
 
