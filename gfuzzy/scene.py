@@ -92,9 +92,7 @@ class Robot:
         """Radius of the largest disc about the reference point inside the robot (0 when
         the reference point is outside a footprint)."""
         if self.shape == "footprint":
-            from .shapes import shape_of
-
-            return shape_of(self).inradius
+            return footprint_inradius(self.footprint)
         return self.radius if self.shape == "disc" else 0.5 * min(self.size)
 
     @property
@@ -123,6 +121,21 @@ class Robot:
         c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
         rot = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)  # (n, 2, 2)
         return poses[:, None, :2] + np.einsum("nij,kj->nki", rot, local)
+
+
+def footprint_inradius(points) -> float:
+    """Distance from the origin to the outline of the simple polygon ``points`` (k, 2)
+    when the origin is strictly inside it, else 0 (crossing-number test)."""
+    P = np.asarray(points, dtype=float)
+    Q = np.roll(P, -1, axis=0)
+    crosses = (P[:, 1] > 0) != (Q[:, 1] > 0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x_at = P[:, 0] + (0.0 - P[:, 1]) * (Q[:, 0] - P[:, 0]) / (Q[:, 1] - P[:, 1])
+    inside = int(np.count_nonzero(crosses & (x_at > 0))) % 2 == 1
+    e = Q - P
+    t = np.clip(-(P * e).sum(1) / np.maximum((e * e).sum(1), 1e-300), 0.0, 1.0)
+    dist = float(np.hypot(*(P + t[:, None] * e).T).min())
+    return dist if inside and dist > 0 else 0.0
 
 
 @dataclass(frozen=True)

@@ -24,7 +24,7 @@ from typing import Protocol
 import fcl
 import numpy as np
 
-from .scene import Robot
+from .scene import Robot, footprint_inradius
 from .typing import FloatArray
 
 __all__ = ["Shape", "DiscShape", "BoxShape", "FootprintShape", "shape_of", "convex_pieces", "HEIGHT", "QUAD_EXACT"]
@@ -405,15 +405,12 @@ class FootprintShape:
     @property
     def origin_inside(self) -> bool:
         """Whether the reference point is inside the body (strictly)."""
-        o = np.zeros((1, 2))
-        return min(float(point_convex_distance(o, p)[0]) for p in self.pieces) < 0 and bool(
-            _segments_distance(o, self.points)[0] > 0
-        )
+        return self.inradius > 0
 
     @property
     def inradius(self) -> float:
         """Distance from the reference point to the outline when it is inside, else 0."""
-        return float(_segments_distance(np.zeros((1, 2)), self.points)[0]) if self.origin_inside else 0.0
+        return footprint_inradius(self.points)
 
     def padded(self) -> tuple[FloatArray, np.ndarray]:
         """The pieces as one array (P, V, 2) (rows past a piece's count repeat its first

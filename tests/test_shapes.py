@@ -501,3 +501,16 @@ def test_shape_interface_is_one_per_kind():
     assert isinstance(fp, FootprintShape) and len(fp.fcl_geometries()) == 3
     x0, y0, x1, y1 = fp.extents(math.pi / 2)
     assert (x0, y0, x1, y1) == pytest.approx((-0.45, -0.4, 0.45, 0.4))
+
+
+@settings(max_examples=80, deadline=None)
+@given(star_polygons())
+def test_inradius_against_shapely(pts):
+    if not _simple(pts):
+        return
+    robot = _scene({"footprint": pts}).robot
+    poly = shapely.Polygon(pts)
+    origin = shapely.Point(0.0, 0.0)
+    want = poly.exterior.distance(origin) if poly.contains(origin) else 0.0
+    assert robot.inradius == pytest.approx(want, abs=1e-12)
+    assert shape_of(robot).origin_inside == (want > 0)
