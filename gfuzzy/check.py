@@ -432,7 +432,10 @@ def _unicycle_problem(robot, w: FloatArray, tol: float = 1e-6) -> CheckReport | 
     dt = np.diff(t)
     dx, dy = np.diff(x), np.diff(y)
     dh = _wrap(np.diff(h))
-    r = robot.radius if robot.shape == "disc" else 0.5 * math.hypot(*robot.size)
+    if robot.shape == "footprint":  # its farthest vertex from the reference point
+        r = max(math.hypot(px, py) for px, py in robot.footprint)
+    else:
+        r = robot.radius if robot.shape == "disc" else 0.5 * math.hypot(*robot.size)
     wmax = robot.wmax if robot.wmax is not None else robot.vmax / r
     still = (np.abs(dx) <= UNICYCLE_XY_TOL) & (np.abs(dy) <= UNICYCLE_XY_TOL)
     turning = np.abs(dh) > UNICYCLE_HEADING_TOL

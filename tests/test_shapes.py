@@ -514,3 +514,26 @@ def test_inradius_against_shapely(pts):
     want = poly.exterior.distance(origin) if poly.contains(origin) else 0.0
     assert robot.inradius == pytest.approx(want, abs=1e-12)
     assert shape_of(robot).origin_inside == (want > 0)
+
+
+@pytest.mark.slow  # the unicycle kernels' first compilation dominates
+def test_unicycle_footprint_docks_and_its_rows_are_unicycle_moves(dock):
+    """kinematics: unicycle with a footprint (CONTRACT section 6): the same roadmap, an
+    answer of waits, turns in place and straight moves, accepted by the checker (whose turn
+    bound uses the footprint's circumradius)."""
+    import dataclasses
+
+    scene, rm = dock
+    uni = dataclasses.replace(scene, robot=dataclasses.replace(scene.robot, kinematics="unicycle"))
+    q = uni.queries[0]
+    res = Planner(uni, rm).plan(q.start, q.goal, q.t0)
+    assert res.status == Status.SOLVED
+    report = check_trajectory(uni, res.trajectory.waypoints, q)
+    assert report.valid, report.reason
+    wp = res.trajectory.waypoints
+    d = np.diff(wp[:, 1:], axis=0)
+    moved = np.hypot(d[:, 0], d[:, 1]) > 1e-9
+    lateral = np.abs(-np.sin(wp[:-1, 3]) * d[:, 0] + np.cos(wp[:-1, 3]) * d[:, 1])
+    assert np.all(lateral[moved] <= 1e-6)
+    turned = np.abs((d[:, 2] + np.pi) % (2 * np.pi) - np.pi) > 1e-9
+    assert not np.any(moved & turned) and turned.any()
