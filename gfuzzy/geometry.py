@@ -20,7 +20,7 @@ import numpy as np
 from .poses import metric_distance, wrap_angle
 from .scene import Box, Disc, MapObstacle, Polygon, Robot, Scene
 from .shapes import HEIGHT as _HEIGHT
-from .shapes import QUAD_EXACT, _point_box_distance, _quad_distance, _vertex_edge_distance, shape_of
+from .shapes import QUAD_EXACT, shape_of
 from .typing import FloatArray
 
 __all__ = [
@@ -29,9 +29,6 @@ __all__ = [
     "wrap_angle",
     "mover_distance",
     "QUAD_EXACT",
-    "_point_box_distance",
-    "_quad_distance",
-    "_vertex_edge_distance",
 ]
 
 _EPS_CERT_CLEARANCE = 1e-9  # clearance below which a motion is not certified (grazing)

@@ -26,7 +26,7 @@ __all__ = ["mark_unsafe", "safe_runs", "merge_runs"]
 
 @njit(cache=True)
 def _box_dist(px, py, hx, hy):
-    """:func:`gfuzzy.geometry._point_box_distance` for one point (same operations)."""
+    """:func:`gfuzzy.shapes._point_box_distance` for one point (same operations)."""
     qx = abs(px) - hx
     qy = abs(py) - hy
     outside = math.hypot(max(qx, 0.0), max(qy, 0.0))

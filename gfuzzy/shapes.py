@@ -161,8 +161,8 @@ def point_convex_distance(p: FloatArray, ring: FloatArray) -> FloatArray:
 
 
 def convex_convex_distance(P: FloatArray, ring: FloatArray, exact: bool = True) -> FloatArray:
-    """Distance between convex polygons P (n, 4, 2) (any vertex count, counter-clockwise)
-    and one convex counter-clockwise ``ring`` (V, 2): the separating-axis gap (<= 0 when
+    """Distance between convex polygons P (n, m, 2) (counter-clockwise) and one convex
+    counter-clockwise ``ring`` (V, 2): the separating-axis gap (<= 0 when
     they overlap); where it is positive and ``exact``, the exact distance (the nearest
     vertex-edge pair either way).
 
