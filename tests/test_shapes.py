@@ -441,8 +441,11 @@ def test_footprint_equal_to_a_box_gives_the_box_answers():
     assert rf.duration == pytest.approx(rb.duration, abs=1e-9)
 
 
-def test_bundled_footprint_scene_regresses_with_refinement_and_speed_layer():
-    p = run_cli_process("regress", ROOT / "scenes" / "footprint-office.yaml", "--refine", "--speed-layer", cwd=ROOT)
+@pytest.mark.parametrize(
+    "flags", [[], pytest.param(["--refine", "--speed-layer"], marks=pytest.mark.slow)], ids=["search", "stages"]
+)
+def test_bundled_footprint_scene_meets_its_expectations(flags):
+    p = run_cli_process("regress", ROOT / "scenes" / "footprint-office.yaml", *flags, cwd=ROOT)
     assert p.returncode == 0, p.stdout + p.stderr
     assert "3 of 3 queries met their expectations" in p.stdout
 
