@@ -57,6 +57,18 @@ def robot_corners(size, poses, shrink: float = 0.0) -> np.ndarray:
     return np.stack([x, y], axis=-1)
 
 
+def footprint_bodies(points, poses, shrink: float = 0.0):
+    """A footprint polygon (k, 2) placed at ``poses`` (n, 3), as shapely polygons, eroded by
+    ``shrink`` (shapely's buffer)."""
+    poses = np.atleast_2d(np.asarray(poses, dtype=float))
+    local = np.asarray(points, dtype=float)
+    c, s = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
+    x = poses[:, 0:1] + c * local[:, 0] - s * local[:, 1]
+    y = poses[:, 1:2] + s * local[:, 0] + c * local[:, 1]
+    bodies = shapely.polygons(np.stack([x, y], axis=-1))
+    return shapely.buffer(bodies, -shrink, join_style="mitre") if shrink > 0 else bodies
+
+
 def interpolate(a, b, f) -> np.ndarray:
     """Poses at fractions ``f`` along a -> b; heading along the shorter arc (written afresh)."""
     a = np.asarray(a, dtype=float)
@@ -86,6 +98,9 @@ class Reference:
         robot = doc["robot"]
         if "disc" in robot:
             self.robot_kind, self.radius, self.size = "disc", float(robot["disc"]), None
+        elif "footprint" in robot:
+            self.robot_kind, self.radius, self.size = "footprint", 0.0, None
+            self.points = np.asarray(robot["footprint"], dtype=float)
         else:
             self.robot_kind, self.radius, self.size = "box", 0.0, tuple(map(float, robot["box"]))
         polys, discs = [], []
@@ -110,7 +125,10 @@ class Reference:
         if self.robot_kind == "disc":
             x, y, r = poses[:, 0], poses[:, 1], self.radius
             return np.min([x - r - xmin, xmax - x - r, y - r - ymin, ymax - y - r], axis=0)
-        c = robot_corners(self.size, poses)
+        if self.robot_kind == "footprint":
+            c = np.stack([shapely.get_coordinates(b)[:-1] for b in footprint_bodies(self.points, poses)])
+        else:
+            c = robot_corners(self.size, poses)
         return np.min(
             [
                 c[..., 0].min(-1) - xmin,
@@ -125,6 +143,8 @@ class Reference:
         """Robot bodies as shapely geometry, plus the radius still to subtract."""
         if self.robot_kind == "disc":
             return shapely.points(poses[:, :2]), self.radius - shrink
+        if self.robot_kind == "footprint":
+            return footprint_bodies(self.points, poses, shrink), 0.0
         return shapely.polygons(robot_corners(self.size, poses, shrink)), 0.0
 
     def distances_by_kind(self, poses) -> tuple[np.ndarray, np.ndarray]:
@@ -181,6 +201,8 @@ def mover_reference_distance(robot: dict, pose, mover_shape: str, mover_param, x
     """
     if "disc" in robot:
         body, r = shapely.Point(pose[0], pose[1]), float(robot["disc"])
+    elif "footprint" in robot:
+        body, r = footprint_bodies(robot["footprint"], [pose])[0], 0.0
     else:
         body, r = shapely.polygons(robot_corners(robot["box"], [pose]))[0], 0.0
     if mover_shape == "disc":
