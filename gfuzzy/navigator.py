@@ -41,6 +41,7 @@ from .geometry import StaticGeometry, mover_distance
 from .movers import MoverField
 from .planner import BACKENDS, search_function
 from .poses import interpolate_segment, metric_distance, split_counts, wrap_angle
+from .roadgraph import VertexGraph
 from .roadmap import Roadmap
 from .scene import Mover, Scene
 from .settings import SPEED_SAFETY
@@ -318,9 +319,6 @@ class Navigator:
 
     def _build_base(self) -> None:
         """The roadmap + goal, split into one-step points, with the hop heuristic to the goal."""
-        from scipy.sparse import coo_matrix
-        from scipy.sparse.csgraph import dijkstra
-
         rm, opts = self.roadmap, self.options
         nv = len(rm.vertices)
         g_id = nv
@@ -331,18 +329,11 @@ class Navigator:
         verts = np.vstack([rm.vertices, self._goal_wrapped[None]])
         n = len(verts)
         k = split_counts(lengths, self.step_len)
-        w = np.maximum(k.astype(float), 1e-300)
-        mat = coo_matrix(
-            (np.r_[w, w], (np.r_[edges[:, 0], edges[:, 1]], np.r_[edges[:, 1], edges[:, 0]])), shape=(n, n)
-        ).tocsr()
-        hop_g = np.rint(dijkstra(mat, directed=True, indices=g_id))
+        hop_g = np.rint(VertexGraph.of(n, edges, k.astype(float)).distances(g_id))
         # metres to the goal on the whole roadmap (the contract's roadmap distance)
         full = np.vstack([rm.edges, edges[len(rm.edges[keep]) :]])
-        full_w = np.maximum(np.concatenate([rm.lengths, lengths[len(rm.lengths[keep]) :]]), 1e-300)
-        mat = coo_matrix(
-            (np.r_[full_w, full_w], (np.r_[full[:, 0], full[:, 1]], np.r_[full[:, 1], full[:, 0]])), shape=(n, n)
-        ).tocsr()
-        self._metres_v = dijkstra(mat, directed=True, indices=g_id)
+        full_w = np.concatenate([rm.lengths, lengths[len(rm.lengths[keep]) :]])
+        self._metres_v = VertexGraph.of(n, full, full_w).distances(g_id)
         k, offs, inner, a, b, j, src, dst = split_edges(verts, edges, lengths, self.step_len, n)
         poses = np.vstack([verts, inner])
         e_of = np.repeat(np.arange(len(edges)), k - 1)
