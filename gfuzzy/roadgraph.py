@@ -250,7 +250,8 @@ class SplitSpanner:
             raise _too_many(total)
         verts = self.poses[: self.n].copy()
         verts[self.nv :] = ends
-        kx, offx, inner, ax, bx, jx, srcx, dstx = split_edges(verts, edges, lengths, self.step_len, self.N0)
+        cut = split_edges(verts, edges, lengths, self.step_len, self.N0)
+        kx, offx, inner, ax, bx, jx, srcx, dstx = cut.k, cut.offs, cut.inner, cut.a, cut.b, cut.j, cut.src, cut.dst
         poses = np.concatenate([self.poses, inner])
         poses[self.nv : self.n] = ends
         # A build from scratch sorts the moves of all edges by source, stably, over
@@ -318,7 +319,8 @@ def spanner_split(roadmap, step_len: float, stretch: float) -> SplitSpanner:
     if total > MAX_POINTS:
         raise _too_many(total)
     verts = np.vstack([roadmap.vertices, np.zeros((2, roadmap.vertices.shape[1]))])
-    k, offs, inner, a, b, j, src, dst = split_edges(verts, edges, lengths, step_len, n)
+    cut = split_edges(verts, edges, lengths, step_len, n)
+    k, offs, inner, a, b, j, src, dst = cut.k, cut.offs, cut.inner, cut.a, cut.b, cut.j, cut.src, cut.dst
     N0 = n + int(offs[-1])
     s2 = np.concatenate([src, dst])
     d2 = np.concatenate([dst, src])

@@ -42,6 +42,7 @@ FORMAT = "gfuzzy-roadmap"
 #: Validity checks without a new milestone after which the free space counts as empty.
 STALL_CHECKS = 200_000
 FORMAT_VERSION = 1
+FREE_CELL_SHARE = 0.5  # maps' free cells below this share of the bounds: half the samples drawn in them
 
 
 @dataclass(frozen=True)
@@ -106,21 +107,10 @@ class _Derived(dict):
 class RoadmapInfo:
     """How a roadmap was built (its file's ``info``).
 
-    Attributes
-    ----------
-    ompl_version : str
-    seconds : float
-        Wall-clock time of the whole build.
-    grow_seconds : float
-        Of which OMPL's PRM growing the roadmap.
-    validity_calls, certify_calls : int
-        Collision-model calls while growing and while certifying the edges.
-    edges_dropped : int
-        PRM edges that could not be certified free.
-    components : int
-        Connected components of the roadmap.
-    extra : dict
-        Keys of a file written by another version, kept as they were.
+    ``seconds`` is the whole build, ``grow_seconds`` OMPL's PRM growing; ``validity_calls`` and
+    ``certify_calls`` count collision-model calls while growing and while certifying edges;
+    ``edges_dropped`` PRM edges that could not be certified free; ``components`` the
+    roadmap's connected components; ``extra`` keys of another version's file, kept as they were.
     """
 
     ompl_version: str = ""
@@ -341,7 +331,7 @@ def load_roadmap(path: str | os.PathLike, scene: Scene | None = None) -> Roadmap
     )
     if scene is not None:
         rm.check_scene(scene, file)
-        if rm.dof != scene.robot.dof:
+        if rm.dof != scene.robot.space_dof:
             raise SceneError(file, "vertices", "roadmap poses do not match the robot kind")
         if abs(circumradius - scene.robot.circumradius) > 1e-12:
             raise SceneError(file, "circumradius", "does not match the scene's robot")
@@ -380,10 +370,13 @@ def _blocked_points(scene: Scene):
     """A vectorised test: which xy points lie inside a static obstacle or outside bounds."""
     import shapely
 
-    from .scene import Box, Disc
+    from .scene import Box, Disc, MapObstacle
 
     shapes = []
+    grids = [ob_ for ob_ in scene.obstacles if isinstance(ob_, MapObstacle)]
     for ob_ in scene.obstacles:
+        if isinstance(ob_, MapObstacle):
+            continue
         if isinstance(ob_, Disc):
             shapes.append(shapely.Point(ob_.center).buffer(ob_.radius, 32))
         elif isinstance(ob_, Box):
@@ -399,9 +392,41 @@ def _blocked_points(scene: Scene):
         out = (x <= xmin) | (x >= xmax) | (y <= ymin) | (y >= ymax)
         if shapes:
             out |= shapely.contains_xy(union, x, y)
+        for grid in grids:
+            rows, cols, inside = grid.cells_of(xy)
+            out |= inside & grid.blocked[rows, cols]
         return out
 
     return blocked
+
+
+def _free_cell_draw(scene: Scene, rng: np.random.Generator):
+    """A draw of points uniform over the free cells of the scene's maps, or None.
+
+    Returns None without a map, or when the free cells cover most of the bounds anyway
+    (uniform sampling in the bounds then wastes little).
+    """
+    from .scene import MapObstacle
+
+    xmin, ymin, xmax, ymax = scene.bounds
+    centres, sizes = [], []
+    for grid in scene.obstacles:
+        if isinstance(grid, MapObstacle):
+            c = grid.free_centres()
+            c = c[(c[:, 0] > xmin) & (c[:, 0] < xmax) & (c[:, 1] > ymin) & (c[:, 1] < ymax)]
+            centres.append(c)
+            sizes.append(np.full(len(c), grid.resolution))
+    if not centres:
+        return None
+    c, size = np.concatenate(centres), np.concatenate(sizes)
+    if len(c) == 0 or float(np.sum(size**2)) > FREE_CELL_SHARE * (xmax - xmin) * (ymax - ymin):
+        return None
+
+    def draw() -> FloatArray:
+        k = int(rng.integers(len(c)))
+        return c[k] + (rng.random(2) - 0.5) * size[k]
+
+    return draw
 
 
 def _make_passage_sampler(
@@ -419,6 +444,7 @@ def _make_passage_sampler(
     valid = geometry.is_valid
     blocked = _blocked_points(scene)
     span = 2.0 * scene.robot.circumradius
+    in_free_cell = _free_cell_draw(scene, rng)
 
     class PassageSampler(ob.ValidStateSampler):
         def __init__(self):
@@ -428,7 +454,10 @@ def _make_passage_sampler(
             self.dry = 0  # refills in a row that found no bridge
 
         def _uniform(self):
-            q = [rng.uniform(xmin, xmax), rng.uniform(ymin, ymax)]
+            if in_free_cell is not None and rng.random() < 0.5:  # a map mostly blocked
+                q = list(in_free_cell())
+            else:
+                q = [rng.uniform(xmin, xmax), rng.uniform(ymin, ymax)]
             if box:
                 q.append(rng.uniform(-math.pi, math.pi))
             return np.array(q)

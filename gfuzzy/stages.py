@@ -322,10 +322,15 @@ def _refine(ctx: StageContext, traj: Trajectory, query, opts, deadline) -> tuple
     report = RefineReport(False, "", ga_opts.n_knots, res.generations, seconds, before)
     if not res.improved:
         return traj, replace(report, reason="the GA found nothing better than the corridor")
-    path = funcs[0](res.path)  # poses_of: a box robot takes the corridor's headings
-    if ctx.robot.dof == 3:  # the ends keep their exact poses
-        path[0], path[-1] = traj.poses[0], traj.poses[-1]
-    path[0, :2], path[-1, :2] = traj.poses[0, :2], traj.poses[-1, :2]
+    if ctx.robot.unicycle:  # straight segments through the via-points, turns in place
+        from .drive import turn_path
+
+        path = turn_path(traj.poses[0], res.path[1:-1], traj.poses[-1])
+    else:
+        path = funcs[0](res.path)  # poses_of: a box robot takes the corridor's headings
+        if ctx.robot.dof == 3:  # the ends keep their exact poses
+            path[0], path[-1] = traj.poses[0], traj.poses[-1]
+        path[0, :2], path[-1, :2] = traj.poses[0, :2], traj.poses[-1, :2]
     for a, b in zip(path[:-1], path[1:], strict=True):
         if not ctx.geometry.motion_free(a, b):
             return traj, replace(report, reason="a refined segment could not be certified free of static obstacles")

@@ -18,6 +18,7 @@ from reference import Reference, interpolate
 
 import gfuzzy.roadmap as roadmap_module
 from gfuzzy.errors import SceneError
+from gfuzzy.geometry import StaticGeometry
 from gfuzzy.roadmap import RoadmapInfo, RoadmapOptions, build_roadmap, load_roadmap, roadmap_digest
 from gfuzzy.scene import load_scene, parse_scene
 
@@ -439,3 +440,19 @@ def test_spanner_interrupted_midway_caches_nothing_and_is_read_only(monkeypatch)
     np.testing.assert_array_equal(keep, fresh)
     with pytest.raises(ValueError):
         keep[0] = not keep[0]  # callers cannot corrupt the cache
+
+
+def test_the_roadmap_keeps_the_static_clearance(door):
+    """Every vertex and every edge of a roadmap built with a clearance keeps it."""
+    scene, rm = door
+    free = StaticGeometry(scene.with_clearances(0.0))
+
+    def to_obstacles(poses):  # the bounds are not held to the clearance
+        return min(free.obstacle_clearance(p) for p in poses)
+
+    assert to_obstacles(rm.vertices) >= 0.05 - 1e-9
+    assert to_obstacles(rm.vertices) < 0.1  # some vertex does go near the walls
+    for a, b in rm.edges[:: max(1, len(rm.edges) // 60)]:
+        f = np.linspace(0, 1, 25)
+        poses = rm.vertices[a] + f[:, None] * (rm.vertices[b] - rm.vertices[a])
+        assert to_obstacles(poses) >= 0.05 - 1e-6
