@@ -8,9 +8,9 @@ in one bool row per point, instead of listing pairs: a list append per unsafe pa
 more than the distance itself. :func:`safe_runs` turns the rows into safe intervals (the
 gaps between unsafe steps), which is what the search consumes.
 
-numba is imported only when this module is (``MoverField`` imports it lazily, when its
-``compiled`` flag is set); ``cache=True`` keeps the machine code on disk
-(``python -m gfuzzy.search_kernel`` warms it with the search loop).
+``MoverField`` imports this module lazily, when its ``compiled`` flag is set; the kernels
+are the precompiled extension's when ``make warm`` built it (:mod:`gfuzzy.jit`), numba's
+otherwise (imported then, ``cache=True`` keeping the machine code on disk).
 """
 
 from __future__ import annotations
