@@ -156,17 +156,28 @@ def _mark_polygon(occ: np.ndarray, poly, w: int, h: int, ox: float, oy: float, r
 
 
 def obstacle_boxes(ob) -> FloatArray | None:
-    """The blocked cells of a map obstacle as boxes ``(x0, y0, x1, y1)`` (rows of a map's
-    blocked cells merged along x), or None for an obstacle that is not a map.
+    """The blocked cells of a map obstacle as boxes ``(x0, y0, x1, y1)`` (its ``rects``:
+    rectangles whose union is exactly the blocked cells), or None for another obstacle.
 
     Returns
     -------
     (k, 4) float or None
     """
-    boxes = getattr(ob, "boxes", None)
-    if callable(boxes):
-        return np.asarray(boxes(), dtype=float).reshape(-1, 4)
-    return None
+    rects = getattr(ob, "rects", None)
+    if rects is None:
+        return None
+    return np.asarray(rects, dtype=float).reshape(-1, 4)
+
+
+def _mark_rects(occ: np.ndarray, rects: FloatArray, w: int, h: int, ox: float, oy: float, res: float) -> None:
+    """Axis-aligned rectangles, exactly: the open cell (a, b) meets the open rectangle
+    (x0, x1) when a < x1 and b > x0 (and the same along y)."""
+    xe, ye = _cell_edges(ox, res, 0, w), _cell_edges(oy, res, 0, h)
+    for x0, y0, x1, y1 in rects:
+        ja, jb = int(np.searchsorted(xe[1:], x0, side="right")), int(np.searchsorted(xe[:-1], x1, side="left"))
+        ka, kb = int(np.searchsorted(ye[1:], y0, side="right")), int(np.searchsorted(ye[:-1], y1, side="left"))
+        if ja < jb and ka < kb:
+            occ[ka:kb, ja:jb] = True
 
 
 def _shapes(ob, index: int):
@@ -177,9 +188,6 @@ def _shapes(ob, index: int):
         return [shapely.Polygon(ob.vertices())]
     if isinstance(ob, Polygon):
         return [shapely.Polygon(ob.points, list(ob.holes))]
-    boxes = obstacle_boxes(ob)
-    if boxes is not None:
-        return list(shapely.box(boxes[:, 0], boxes[:, 1], boxes[:, 2], boxes[:, 3]))
     raise InputError(f"obstacles[{index}]: cannot rasterise an obstacle of type {type(ob).__name__}")
 
 
@@ -207,8 +215,11 @@ def rasterise(scene: Scene, resolution: float = 0.05) -> NavMap:
     w, h, ox, oy = _grid(scene, res)
     occ = np.zeros((h, w), dtype=bool)  # row k is y-index k (bottom first) until flipped
     for i, ob in enumerate(scene.obstacles):
+        boxes = obstacle_boxes(ob)
         if isinstance(ob, Disc):
             _mark_disc(occ, ob, w, h, ox, oy, res)
+        elif boxes is not None:
+            _mark_rects(occ, boxes, w, h, ox, oy, res)
         else:
             for poly in _shapes(ob, i):
                 _mark_polygon(occ, poly, w, h, ox, oy, res)

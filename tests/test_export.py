@@ -12,7 +12,10 @@ import jsonschema
 import numpy as np
 import pytest
 import yaml
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from mcap.reader import make_reader
+from test_scene import scene_docs
 
 from gfuzzy.cli import main
 from gfuzzy.errors import InputError
@@ -445,3 +448,124 @@ def test_cli_map(tmp_path, capsys):
     assert "occupied" in capsys.readouterr().out
     occupied, res, _ = read_nav2_map(out)
     assert res == 0.1 and occupied.any() and not occupied.all()
+
+
+# --------------------------------------------------------------------------- the scene schema
+
+SCHEMA_FILE = ROOT / "docs" / "scene.schema.json"
+BAD_SCENES = ROOT / "tests" / "bad_scenes"
+
+#: Bad scenes a JSON Schema cannot refuse, and why (the parser does).
+BEYOND_A_SCHEMA = {
+    "duplicate_mover": "unique names",
+    "duplicate_query": "unique names",
+    "inverted_bounds": "xmin < xmax compares two items",
+    "mesh_escape": "a relative path that leaves the folder",
+    "mesh_garbage": "the file's contents",
+    "mesh_missing": "the file system",
+    "nan_center": "NaN passes every numeric keyword",
+    "nan_mover_clearance": "NaN passes every numeric keyword",
+    "nan_trajectory": "NaN passes every numeric keyword",
+    "path_zero_length": "a polyline's length",
+    "polygon_bowtie": "self-intersection",
+    "polygon_collinear": "area",
+    "trajectory_backward": "increasing times compare items",
+    "trajectory_equal_time": "increasing times compare items",
+}
+
+
+@pytest.fixture(scope="module")
+def scene_validator():
+    schema = json.loads(SCHEMA_FILE.read_text(encoding="utf-8"))
+    jsonschema.Draft7Validator.check_schema(schema)
+    return jsonschema.Draft7Validator(schema)
+
+
+def _yaml_doc(path):
+    from gfuzzy.yamldoc import _load_yaml
+
+    return _load_yaml(path.read_text(encoding="utf-8"), str(path))
+
+
+def test_schema_file_is_what_the_tool_writes():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("make_scene_schema", ROOT / "tools" / "make_scene_schema.py")
+    tool = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(tool)
+    assert SCHEMA_FILE.read_text(encoding="utf-8") == tool.render()
+
+
+@pytest.mark.parametrize("path", sorted(SCENES.rglob("*.yaml")), ids=lambda p: p.stem)
+def test_schema_accepts_every_bundled_scene(scene_validator, path):
+    doc = _yaml_doc(path)
+    if not (isinstance(doc, dict) and "robot" in doc):
+        pytest.skip(f"{path.name} is not a scene (a map's YAML)")
+    load_scene(path)  # the parser accepts it ...
+    errors = [e.message for e in scene_validator.iter_errors(doc)]
+    assert not errors, errors  # ... and so does the schema
+
+
+def test_schema_rejects_the_bad_scenes_a_schema_can(scene_validator):
+    from gfuzzy.errors import SceneError
+
+    accepted, refused = set(), 0
+    for path in sorted(BAD_SCENES.glob("*.yaml")):
+        try:
+            doc = _yaml_doc(path)
+        except SceneError:
+            continue  # not YAML a schema could see (syntax, duplicate keys, aliases, empty)
+        with pytest.raises(SceneError):
+            load_scene(path)
+        if scene_validator.is_valid(doc):
+            accepted.add(path.stem)
+        else:
+            refused += 1
+    assert accepted == set(BEYOND_A_SCHEMA)
+    assert refused >= 60
+
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@given(doc=scene_docs())
+def test_schema_accepts_every_random_valid_scene(scene_validator, doc):
+    parse_scene(doc)  # valid by construction: the parser accepts it
+    errors = [e.message for e in scene_validator.iter_errors(doc)]
+    assert not errors, errors
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@given(doc=scene_docs(), where=st.sampled_from(["top", "robot", "obstacle", "mover", "query", "expect"]), key=st.sampled_from(["colour", "Vmax", "radius2"]))
+def test_schema_and_parser_both_refuse_an_unknown_key(scene_validator, doc, where, key):
+    from gfuzzy.errors import SceneError
+
+    targets = {"top": [doc], "robot": [doc["robot"]]}
+    targets["obstacle"] = [next(iter(o.values())) for o in doc.get("obstacles") or [] if isinstance(next(iter(o.values())), dict)]
+    targets["mover"] = list(doc.get("movers") or [])
+    targets["query"] = list(doc.get("queries") or [])
+    targets["expect"] = [q["expect"] for q in doc.get("queries") or [] if "expect" in q]
+    if not targets[where]:
+        return
+    targets[where][0][key] = 1.0
+    with pytest.raises(SceneError):
+        parse_scene(doc)
+    assert not scene_validator.is_valid(doc)
+
+
+def test_schema_pose_length_follows_the_robot(scene_validator):
+    base = {"version": 1, "name": "p", "bounds": [0, 0, 4, 3], "queries": [{"name": "q", "start": [1, 1], "goal": [2, 2]}]}
+    disc = dict(base, robot={"disc": 0.2, "vmax": 1})
+    assert scene_validator.is_valid(disc)
+    box = dict(base, robot={"box": [0.4, 0.2], "vmax": 1})
+    assert not scene_validator.is_valid(box)
+    unicycle = dict(base, robot={"disc": 0.2, "vmax": 1, "kinematics": "unicycle"})
+    assert not scene_validator.is_valid(unicycle)
+    three = [{"name": "q", "start": [1, 1, 0], "goal": [2, 2, 0]}]
+    assert scene_validator.is_valid(dict(box, queries=three))
+    assert scene_validator.is_valid(dict(unicycle, queries=three))
+    footprint = dict(base, robot={"footprint": [[0.3, 0.2], [-0.2, 0.2], [-0.2, -0.2]], "vmax": 1, "kinematics": "unicycle", "wmax": 1.5, "reverse": True}, queries=three)
+    assert scene_validator.is_valid(footprint)
+    # bounds may be left out only with a map
+    no_bounds = {k: v for k, v in disc.items() if k != "bounds"}
+    assert not scene_validator.is_valid(no_bounds)
+    assert scene_validator.is_valid(dict(no_bounds, obstacles=[{"map": {"file": "maps/a.yaml", "unknown": "free"}}]))
