@@ -340,6 +340,49 @@ def _valid_predictions(predictions) -> list:
 # --------------------------------------------------------------------------- the file
 
 
+def _check_rows(trajectory) -> FloatArray | None:
+    """The trajectory's rows, validated (None for none)."""
+    if trajectory is None:
+        return None
+    rows = np.asarray(trajectory, dtype=float)
+    if rows.ndim != 2 or rows.shape[1] not in (3, 4) or len(rows) == 0 or not np.all(np.isfinite(rows)):
+        raise InputError("trajectory: expected finite rows [t, x, y] or [t, x, y, heading]")
+    if np.any(np.diff(rows[:, 0]) <= 0):
+        raise InputError("trajectory: t must increase strictly")
+    if rows[0, 0] < 0:
+        raise InputError(f"trajectory starts at t={rows[0, 0]:g}: MCAP log times are nanoseconds from 0, so a trajectory must start at t >= 0")
+    return rows
+
+
+def _messages(scene: Scene, rows: FloatArray | None, preds: list, times: FloatArray, opts: ExportOptions):
+    """Every message as ``(topic, log time ns, message)``, in log-time order."""
+    t0_ns = _ns(times[0])
+    yield "/scene", t0_ns, _scene_update(scene, t0_ns, rows, opts)
+    robot = robot_yaw = None
+    if rows is not None:
+        from .trajectory import Trajectory
+
+        ns0 = _ns(rows[0, 0])
+        yaws = _headings(rows, rows[:, 0])
+        poses_ = [pose(r[1], r[2], y) for r, y in zip(rows, yaws, strict=True)]
+        yield "/path", ns0, {"timestamp": timestamp(ns0), "frame_id": FRAME, "poses": poses_}
+        robot = Trajectory(rows).at(times).reshape(len(times), -1)
+        robot_yaw = _headings(rows, times)
+    movers = _mover_updates(scene, times, opts) if scene.movers else None
+    pending = list(preds)
+    for k, t in enumerate(times):
+        t_ns = _ns(t)
+        while pending and _ns(pending[0]["t"]) <= t_ns:
+            e = pending.pop(0)
+            yield "/predictions", _ns(e["t"]), _prediction_update(e, _ns(e["t"]), opts)
+        if movers is not None:
+            yield ("/movers", *next(movers))
+        if robot is not None:
+            yield "/robot", t_ns, {"timestamp": timestamp(t_ns), "frame_id": FRAME, "pose": pose(robot[k, 0], robot[k, 1], robot_yaw[k])}
+    for e in pending:
+        yield "/predictions", _ns(e["t"]), _prediction_update(e, _ns(e["t"]), opts)
+
+
 def export_mcap(
     scene: Scene,
     path,
@@ -381,68 +424,28 @@ def export_mcap(
         raise ImportError("gfuzzy export needs the mcap package: pip install 'gfuzzy[export]' (or pip install mcap)") from None
     from . import __version__
 
-    rows = None
-    if trajectory is not None:
-        rows = np.asarray(trajectory, dtype=float)
-        if rows.ndim != 2 or rows.shape[1] not in (3, 4) or len(rows) == 0 or not np.all(np.isfinite(rows)):
-            raise InputError("trajectory: expected finite rows [t, x, y] or [t, x, y, heading]")
-        if np.any(np.diff(rows[:, 0]) <= 0):
-            raise InputError("trajectory: t must increase strictly")
-        if rows[0, 0] < 0:
-            raise InputError(f"trajectory starts at t={rows[0, 0]:g}: MCAP log times are nanoseconds from 0, so a trajectory must start at t >= 0")
+    rows = _check_rows(trajectory)
     preds = _valid_predictions(predictions)
     if any(float(e["t"]) < 0 for e in preds):
         raise InputError("replan_log: a replan before t = 0 cannot be an MCAP log time")
-
     if rows is not None:
         times = step_times(float(rows[0, 0]), float(rows[-1, 0]), opts.step)
     else:
         times = step_times(0.0, opts.span if opts.span is not None else _default_span(scene), opts.step)
-    t_first = float(times[0])
     counts = {topic: 0 for topic in TOPICS}
 
     def write(tmp: str) -> None:
         with open(tmp, "wb") as fh:
             w = Writer(fh, compression=CompressionType.ZSTD)
             w.start(profile="", library=f"gfuzzy {__version__}")
-            schema_ids = {name: w.register_schema(name, "jsonschema", json.dumps(SCHEMAS[name]).encode()) for name in set(TOPICS.values())}
+            schema_ids = {name: w.register_schema(name, "jsonschema", json.dumps(SCHEMAS[name]).encode()) for name in sorted(set(TOPICS.values()))}
             channels: dict = {}
-
-            def emit(topic: str, t_ns: int, msg: dict) -> None:
+            for topic, t_ns, msg in _messages(scene, rows, preds, times, opts):
                 if topic not in channels:
                     channels[topic] = w.register_channel(topic, "json", schema_ids[TOPICS[topic]])
                 data = json.dumps(msg, separators=(",", ":"), allow_nan=False).encode()
                 w.add_message(channels[topic], log_time=t_ns, data=data, publish_time=t_ns, sequence=counts[topic])
                 counts[topic] += 1
-
-            t0_ns = _ns(t_first)
-            emit("/scene", t0_ns, _scene_update(scene, t0_ns, rows, opts))
-            if rows is not None:
-                ns0 = _ns(rows[0, 0])
-                yaws = _headings(rows, rows[:, 0])
-                poses_ = [pose(r[1], r[2], y) for r, y in zip(rows, yaws, strict=True)]
-                emit("/path", ns0, {"timestamp": timestamp(ns0), "frame_id": FRAME, "poses": poses_})
-            # the time-varying topics, interleaved in log-time order
-            robot = None
-            if rows is not None:
-                from .trajectory import Trajectory
-
-                robot = Trajectory(rows).at(times).reshape(len(times), -1)
-                robot_yaw = _headings(rows, times)
-            movers = _mover_updates(scene, times, opts) if scene.movers else iter(())
-            pending = list(preds)
-            for k, t in enumerate(times):
-                t_ns = _ns(t)
-                while pending and _ns(pending[0]["t"]) <= t_ns:
-                    e = pending.pop(0)
-                    emit("/predictions", _ns(e["t"]), _prediction_update(e, _ns(e["t"]), opts))
-                if scene.movers:
-                    m_ns, msg = next(movers)
-                    emit("/movers", m_ns, msg)
-                if robot is not None:
-                    emit("/robot", t_ns, {"timestamp": timestamp(t_ns), "frame_id": FRAME, "pose": pose(robot[k, 0], robot[k, 1], robot_yaw[k])})
-            for e in pending:
-                emit("/predictions", _ns(e["t"]), _prediction_update(e, _ns(e["t"]), opts))
             w.finish()
 
     write_atomic_with(path, write)
@@ -451,4 +454,4 @@ def export_mcap(
     if preds:
         t_end = max(t_end, float(preds[-1]["t"]))
     log.info("wrote %s: %s", path, counts)
-    return McapReport(Path(path), counts, t_first, t_end)
+    return McapReport(Path(path), counts, float(times[0]), t_end)

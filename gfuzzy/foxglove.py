@@ -104,7 +104,8 @@ def _enum(title: str, description: str, values: list[tuple[str, int]]) -> dict:
     return {"title": title, "description": description, "oneOf": [{"title": n, "const": v} for n, v in values]}
 
 
-def _scene_update() -> dict:
+def _primitives() -> dict:
+    """The SceneEntity fields that hold primitives -> their array schemas."""
     pose = _pose("Position and orientation of the primitive")
     arrow = _obj(
         {
@@ -185,6 +186,19 @@ def _scene_update() -> dict:
         "description": "A primitive representing a 3D model file loaded from an external URL or embedded data",
         "type": "object",
     }
+    return {
+        "arrows": _array(arrow, "Arrow primitives"),
+        "cubes": _array(cube, "Cube primitives"),
+        "spheres": _array(sphere, "Sphere primitives"),
+        "cylinders": _array(cylinder, "Cylinder primitives"),
+        "lines": _array(line, "Line primitives"),
+        "triangles": _array(triangles, "Triangle list primitives"),
+        "texts": _array(text, "Text primitives"),
+        "models": _array(model, "Model primitives"),
+    }
+
+
+def _scene_update() -> dict:
     entity = _obj(
         {
             "timestamp": _time("Timestamp of the entity"),
@@ -196,14 +210,7 @@ def _scene_update() -> dict:
                 _obj({"key": {"type": "string"}, "value": {"type": "string"}}, "foxglove.KeyValuePair", "A key with its associated value"),
                 "Additional user-provided metadata associated with the entity; keys must be unique",
             ),
-            "arrows": _array(arrow, "Arrow primitives"),
-            "cubes": _array(cube, "Cube primitives"),
-            "spheres": _array(sphere, "Sphere primitives"),
-            "cylinders": _array(cylinder, "Cylinder primitives"),
-            "lines": _array(line, "Line primitives"),
-            "triangles": _array(triangles, "Triangle list primitives"),
-            "texts": _array(text, "Text primitives"),
-            "models": _array(model, "Model primitives"),
+            **_primitives(),
         },
         "foxglove.SceneEntity",
         "A visual element in a 3D scene; its primitives share one frame of reference",

@@ -569,3 +569,13 @@ def test_schema_pose_length_follows_the_robot(scene_validator):
     no_bounds = {k: v for k, v in disc.items() if k != "bounds"}
     assert not scene_validator.is_valid(no_bounds)
     assert scene_validator.is_valid(dict(no_bounds, obstacles=[{"map": {"file": "maps/a.yaml", "unknown": "free"}}]))
+
+
+def test_cli_says_in_one_line_when_mcap_is_missing(tmp_path, capsys, monkeypatch):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "mcap.writer", None)  # as if the package were not installed
+    rc = main(["export", str(SCENES / "office-polygons.yaml"), "-o", str(tmp_path / "o.mcap")])
+    err = capsys.readouterr().err
+    assert rc == 2 and "pip install 'gfuzzy[export]'" in err and err.count("\n") == 1
+    assert list(tmp_path.iterdir()) == []
