@@ -13,6 +13,7 @@ topic                     schema                     messages
 ``/movers``               ``foxglove.SceneUpdate``   one per time step: the movers present
 ``/robot``                ``foxglove.PoseInFrame``   one per time step: the pose on the trajectory
 ``/path``                 ``foxglove.PosesInFrame``  one: every row of the trajectory
+``/robot_body``           ``foxglove.SceneUpdate``   one per time step: the robot's shape there
 ``/predictions``          ``foxglove.SceneUpdate``   one per logged replan of a navigate file
 ========================= ========================== ==========================================
 
@@ -50,6 +51,7 @@ TOPICS = {
     "/robot": "foxglove.PoseInFrame",
     "/path": "foxglove.PosesInFrame",
     "/predictions": "foxglove.SceneUpdate",
+    "/robot_body": "foxglove.SceneUpdate",
 }
 #: Most time steps one export writes (a step far too small for the span is refused).
 MAX_STEPS = 2_000_000
@@ -61,6 +63,7 @@ _BOUNDS = color(0.15, 0.15, 0.15, 1.0)
 _MOVER = color(0.85, 0.33, 0.1, 0.9)
 _PREDICTED = color(0.5, 0.5, 0.5, 0.35)
 _PLAN = color(0.12, 0.47, 0.71, 0.8)
+_ROBOT = color(0.12, 0.47, 0.71, 0.85)
 _START = color(0.17, 0.63, 0.17, 1.0)
 _GOAL = color(0.84, 0.15, 0.16, 1.0)
 
@@ -80,12 +83,15 @@ class ExportOptions:
         Height, metres, the planar obstacles are drawn with.
     mover_height : float
         Height, metres, the movers are drawn with.
+    robot_height : float
+        Height, metres, the robot's body is drawn with (``/robot_body``).
     """
 
     step: float = 0.1
     span: float | None = None
     obstacle_height: float = 0.5
     mover_height: float = 1.0
+    robot_height: float = 0.4
 
     def __post_init__(self) -> None:
         check_number("step", self.step)
@@ -93,6 +99,7 @@ class ExportOptions:
             check_number("span", self.span)
         check_number("obstacle_height", self.obstacle_height)
         check_number("mover_height", self.mover_height)
+        check_number("robot_height", self.robot_height)
 
 
 @dataclass(frozen=True)
@@ -278,6 +285,21 @@ def _scene_update(scene: Scene, t_ns: int, rows: FloatArray | None, opts: Export
     return {"deletions": [], "entities": ents}
 
 
+def _robot_body(robot, x: float, y: float, yaw: float, t_ns: int, h: float) -> dict:
+    """The robot's body at a pose: one entity ``robot`` (disc, box or footprint)."""
+    import shapely
+
+    if robot.shape == "disc":
+        prims = {"cylinders": [_cylinder(x, y, robot.radius, h, _ROBOT)]}
+    elif robot.shape == "box":
+        prims = {"cubes": [_cube(x, y, yaw, *robot.size, h, _ROBOT)]}
+    else:  # a footprint polygon in the robot's frame, placed by the primitive's pose
+        prism = _prism(shapely.Polygon(getattr(robot, "footprint", ())), h, _ROBOT)
+        prism["pose"] = pose(x, y, yaw)
+        prims = {"triangles": [prism]}
+    return {"deletions": [], "entities": [_entity("robot", t_ns, **prims)]}
+
+
 def _mover_updates(scene: Scene, times: FloatArray, opts: ExportOptions):
     """One SceneUpdate per time: everything before it deleted, the present movers added."""
     xy, present = scene.mover_states(times)  # (m, n, 2), (m, n)
@@ -378,7 +400,9 @@ def _messages(scene: Scene, rows: FloatArray | None, preds: list, times: FloatAr
         if movers is not None:
             yield ("/movers", *next(movers))
         if robot is not None:
-            yield "/robot", t_ns, {"timestamp": timestamp(t_ns), "frame_id": FRAME, "pose": pose(robot[k, 0], robot[k, 1], robot_yaw[k])}
+            x, y, yaw = robot[k, 0], robot[k, 1], robot_yaw[k]
+            yield "/robot", t_ns, {"timestamp": timestamp(t_ns), "frame_id": FRAME, "pose": pose(x, y, yaw)}
+            yield "/robot_body", t_ns, _robot_body(scene.robot, x, y, yaw, t_ns, opts.robot_height)
     for e in pending:
         yield "/predictions", _ns(e["t"]), _prediction_update(e, _ns(e["t"]), opts)
 

@@ -94,8 +94,14 @@ def test_mcap_topics_schemas_counts_times_and_poses(tmp_path):
     report = export_mcap(scene, out, rows, options=ExportOptions(step=0.25))
     msgs, kinds = read_mcap(out)
 
-    assert set(msgs) == {"/scene", "/movers", "/robot", "/path"}
-    want_schema = {"/scene": "foxglove.SceneUpdate", "/movers": "foxglove.SceneUpdate", "/robot": "foxglove.PoseInFrame", "/path": "foxglove.PosesInFrame"}
+    assert set(msgs) == {"/scene", "/movers", "/robot", "/path", "/robot_body"}
+    want_schema = {
+        "/scene": "foxglove.SceneUpdate",
+        "/movers": "foxglove.SceneUpdate",
+        "/robot": "foxglove.PoseInFrame",
+        "/path": "foxglove.PosesInFrame",
+        "/robot_body": "foxglove.SceneUpdate",
+    }
     for topic, name in want_schema.items():
         assert kinds[topic][0] == name
         assert kinds[topic][1] == "jsonschema"
@@ -108,6 +114,7 @@ def test_mcap_topics_schemas_counts_times_and_poses(tmp_path):
     assert [m[0] for m in msgs["/robot"]] == ns
     assert [m[0] for m in msgs["/movers"]] == ns
     assert msgs["/scene"][0][0] == ns[0] and msgs["/path"][0][0] == ns[0]
+    assert [m[0] for m in msgs["/robot_body"]] == ns
 
     traj = Trajectory(rows)
     for (log_time, publish_time, msg), t in zip(msgs["/robot"], times, strict=True):
@@ -119,6 +126,11 @@ def test_mcap_topics_schemas_counts_times_and_poses(tmp_path):
         assert p["x"] == pytest.approx(want[0], abs=1e-12) and p["y"] == pytest.approx(want[1], abs=1e-12)
         assert p["z"] == 0.0
         assert angle_diff(yaw_of(msg["pose"]["orientation"]), want[2]) < 1e-9
+    for (_, _, msg), (_, _, body) in zip(msgs["/robot"], msgs["/robot_body"], strict=True):
+        (cube,) = body["entities"][0]["cubes"]  # the box robot's body, at the same pose
+        assert cube["pose"]["orientation"] == msg["pose"]["orientation"]
+        assert (cube["pose"]["position"]["x"], cube["pose"]["position"]["y"]) == (msg["pose"]["position"]["x"], msg["pose"]["position"]["y"])
+        assert (cube["size"]["x"], cube["size"]["y"]) == scene.robot.size
 
     path = msgs["/path"][0][2]
     assert path["frame_id"] == "map" and len(path["poses"]) == len(rows)
@@ -215,7 +227,7 @@ def test_cli_navigate_file_adds_predictions(tmp_path, capsys):
     assert main(["export", str(SCENES / "office-polygons.yaml"), str(nav), "-o", str(out), "--step", "0.2"]) == 0
     assert "wrote" in capsys.readouterr().out
     msgs, kinds = read_mcap(out)
-    assert set(msgs) == {"/scene", "/movers", "/robot", "/path", "/predictions"}
+    assert set(msgs) == {"/scene", "/movers", "/robot", "/path", "/robot_body", "/predictions"}
     assert kinds["/predictions"][0] == "foxglove.SceneUpdate"
     assert [m[0] for m in msgs["/predictions"]] == [0, 10**9, 2 * 10**9]
     first = {e["id"]: e for e in msgs["/predictions"][0][2]["entities"]}
