@@ -246,6 +246,27 @@ def test_cli_navigate_file_adds_predictions(tmp_path, capsys):
     validate_all(msgs, kinds)
 
 
+def test_cli_real_navigate_run(tmp_path, capsys):
+    """What `gfuzzy navigate` really writes: one /predictions message per logged replan."""
+    nav = tmp_path / "nav.json"
+    scene = SCENES / "office-polygons.yaml"
+    assert main(["navigate", str(scene), "-o", str(nav), "--log-every", "8"]) in (0, 1)
+    doc = json.loads(nav.read_text(encoding="utf-8"))
+    out = tmp_path / "nav.mcap"
+    assert main(["export", str(scene), str(nav), "-o", str(out)]) == 0
+    capsys.readouterr()
+    msgs, kinds = read_mcap(out)
+    log = doc["replan_log"]
+    assert len(log) >= 2
+    assert [m[0] for m in msgs["/predictions"]] == [round(e["t"] * 1e9) for e in log]
+    for (_, _, msg), entry in zip(msgs["/predictions"], log, strict=True):
+        discs = [e for e in msg["entities"] if e["id"].startswith("predicted-")]
+        assert len(discs) == len(entry["predicted"])
+    rows = np.asarray(doc.get("waypoints") or doc["executed"], dtype=float)
+    assert msgs["/path"][0][2]["poses"][-1]["position"]["x"] == rows[-1, 1]
+    validate_all(msgs, kinds)
+
+
 def test_disc_robot_faces_where_it_goes(tmp_path):
     scene = load_scene(SCENES / "office-polygons.yaml")
     rows = np.array([[0.0, 0.5, 0.5], [1.0, 0.5, 0.5], [2.0, 1.5, 0.5], [3.0, 1.5, 0.5], [4.0, 1.5, 1.5]])
