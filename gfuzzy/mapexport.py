@@ -2,12 +2,13 @@
 
 :func:`rasterise` marks every grid cell that an obstacle overlaps with positive area: the
 cell's open square meets the obstacle's interior. That is exact, not sampled: discs by the
-distance from their centre to the square, every other obstacle (boxes, polygons, mesh
-footprints, map cells) with shapely's exact predicates (a cell strictly inside, then the
-DE-9IM interior-interior test for the cells on the boundary). So the map never loses an
-obstacle: the blocked cells cover each obstacle, and a robot that overlaps an obstacle
-overlaps a blocked cell. An edge lying exactly on a cell border does not mark the cell
-beyond it (touching is no collision, contract section 1).
+distance from their centre to the square, map obstacles by their rectangles' coordinates,
+boxes, polygons and mesh footprints with shapely's exact predicates: the cells near the
+boundary (traced along every ring) by the DE-9IM interior-interior test, every other cell,
+which lies wholly inside or outside, by its centre. So the map never loses an obstacle: the
+blocked cells cover each obstacle, and a robot that overlaps an obstacle overlaps a blocked
+cell. An edge lying exactly on a cell border does not mark the cell beyond it (touching is
+no collision, contract section 1).
 
 The grid covers the scene's bounds from their lower-left corner, rounded up to whole cells;
 image row 0 is the top (contract section 6), so the cell in row i, column j of an H-row
@@ -131,7 +132,40 @@ def _mark_disc(occ: np.ndarray, d: Disc, w: int, h: int, ox: float, oy: float, r
     occ[ka:kb, ja:jb] |= hit
 
 
+def _boundary_cells(poly, ja: int, ka: int, shape: tuple[int, int], ox: float, oy: float, res: float) -> np.ndarray:
+    """A superset of the cells (in the block starting at column ``ja``, row ``ka``) whose
+    closed square meets the polygon's boundary: points every res/4 along every ring, and
+    the 3 x 3 cells around each.
+
+    Returns
+    -------
+    (rows, cols) bool
+    """
+    segs = []
+    for ring in (poly.exterior, *poly.interiors):
+        c = np.asarray(ring.coords, dtype=float)
+        segs.append(np.stack([c[:-1], c[1:]], axis=1))
+    seg = np.concatenate(segs)  # (m, 2, 2)
+    d = seg[:, 1] - seg[:, 0]
+    n = np.ceil(np.hypot(d[:, 0], d[:, 1]) / (0.25 * res)).astype(np.int64) + 1
+    which = np.repeat(np.arange(len(seg)), n)
+    start = np.repeat(np.cumsum(n) - n, n)
+    frac = (np.arange(int(n.sum())) - start) / np.repeat(np.maximum(n - 1, 1), n)
+    pts = seg[which, 0] + frac[:, None] * d[which]
+    j = np.floor((pts[:, 0] - ox) / res).astype(np.int64) - ja
+    k = np.floor((pts[:, 1] - oy) / res).astype(np.int64) - ka
+    out = np.zeros(shape, dtype=bool)
+    for dk in (-1, 0, 1):
+        for dj in (-1, 0, 1):
+            kk, jj = k + dk, j + dj
+            ok = (kk >= 0) & (kk < shape[0]) & (jj >= 0) & (jj < shape[1])
+            out[kk[ok], jj[ok]] = True
+    return out
+
+
 def _mark_polygon(occ: np.ndarray, poly, w: int, h: int, ox: float, oy: float, res: float) -> None:
+    """Cells near the boundary by the exact DE-9IM test (their open square meets the
+    interior); every other cell lies wholly inside or outside, which its centre tells."""
     import shapely
 
     bx0, by0, bx1, by1 = poly.bounds
@@ -141,18 +175,19 @@ def _mark_polygon(occ: np.ndarray, poly, w: int, h: int, ox: float, oy: float, r
         return
     shapely.prepare(poly)
     xe, ye = _cell_edges(ox, res, ja, jb), _cell_edges(oy, res, ka, kb)
-    ncol = jb - ja
-    rows_per = max(1, _BATCH // ncol)
-    for k0 in range(ka, kb, rows_per):
-        k1 = min(kb, k0 + rows_per)
-        yy0 = ye[k0 - ka : k1 - ka][:, None]
-        yy1 = ye[k0 - ka + 1 : k1 - ka + 1][:, None]
-        cells = shapely.box(xe[None, :-1], yy0, xe[None, 1:], yy1)  # (k1-k0, ncol)
-        hit = shapely.contains_properly(poly, cells)
-        edge = ~hit & shapely.intersects(poly, cells)
-        if edge.any():
-            hit[edge] = shapely.relate_pattern(cells[edge], poly, "T********")
-        occ[k0:k1, ja:jb] |= hit
+    near = _boundary_cells(poly, ja, ka, (kb - ka, jb - ja), ox, oy, res)
+    xc = 0.5 * (xe[:-1] + xe[1:])
+    rows_per = max(1, _BATCH // (jb - ja))
+    for r0 in range(0, kb - ka, rows_per):
+        r1 = min(kb - ka, r0 + rows_per)
+        yc = 0.5 * (ye[r0:r1] + ye[r0 + 1 : r1 + 1])
+        inside = shapely.contains_xy(poly, xc[None, :], yc[:, None])
+        occ[ka + r0 : ka + r1, ja:jb] |= inside & ~near[r0:r1]
+    k, j = np.nonzero(near)
+    if len(k):
+        cells = shapely.box(xe[j], ye[k], xe[j + 1], ye[k + 1])
+        hit = shapely.relate_pattern(cells, poly, "T********")
+        occ[ka + k[hit], ja + j[hit]] = True
 
 
 def obstacle_boxes(ob) -> FloatArray | None:
