@@ -16,8 +16,7 @@ import math
 import os
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
-from importlib import metadata
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
@@ -43,6 +42,7 @@ FORMAT = "gfuzzy-roadmap"
 #: Validity checks without a new milestone after which the free space counts as empty.
 STALL_CHECKS = 200_000
 FORMAT_VERSION = 1
+FREE_CELL_SHARE = 0.5  # maps' free cells below this share of the bounds: half the samples drawn in them
 
 
 @dataclass(frozen=True)
@@ -103,6 +103,57 @@ class _Derived(dict):
         return _Derived()
 
 
+@dataclass(frozen=True)
+class RoadmapInfo:
+    """How a roadmap was built (its file's ``info``).
+
+    Attributes
+    ----------
+    ompl_version : str
+    seconds : float
+        Wall-clock time of the whole build.
+    grow_seconds : float
+        Of which OMPL's PRM growing the roadmap.
+    validity_calls, certify_calls : int
+        Collision-model calls while growing and while certifying the edges.
+    edges_dropped : int
+        PRM edges that could not be certified free.
+    components : int
+        Connected components of the roadmap.
+    extra : dict
+        Keys of a file written by another version, kept as they were.
+    """
+
+    ompl_version: str = ""
+    seconds: float = 0.0
+    grow_seconds: float = 0.0
+    validity_calls: int = 0
+    certify_calls: int = 0
+    edges_dropped: int = 0
+    components: int = 0
+    extra: dict = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        """Plain JSON: the fields, then the extra keys."""
+        doc = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "extra"}
+        return {**doc, **self.extra}
+
+    @classmethod
+    def from_dict(cls, doc) -> RoadmapInfo:
+        """From a roadmap file's ``info`` (anything but a mapping gives the defaults)."""
+        if not isinstance(doc, dict):
+            return cls()
+        casts = {"str": str, "float": float, "int": int}
+        types = {f.name: casts[f.type] for f in fields(cls) if f.name != "extra"}
+        kwargs, extra = {}, {}
+        for key, value in doc.items():
+            try:
+                kwargs[key] = types[key](value)
+            except (KeyError, TypeError, ValueError):  # another version's key, or odd: kept
+                extra[key] = value
+        return cls(**kwargs, extra=extra)
+
+
 @dataclass
 class Roadmap:
     """A roadmap of the static scene.
@@ -118,7 +169,7 @@ class Roadmap:
     scene_name, scene_hash : str
         The scene it was built for (``Scene.static_hash``).
     options : RoadmapOptions
-    info : dict
+    info : RoadmapInfo
         Build statistics: seconds, validity calls, edges dropped, OMPL version.
     """
 
@@ -129,7 +180,7 @@ class Roadmap:
     scene_hash: str
     circumradius: float
     options: RoadmapOptions = field(default_factory=RoadmapOptions)
-    info: dict = field(default_factory=dict)
+    info: RoadmapInfo = field(default_factory=RoadmapInfo)
     #: Cache of :meth:`spanner` results by stretch (derived data: not saved, not compared).
     #: A Roadmap is otherwise immutable after building, so the cache never goes stale.
     _spanners: dict = field(default_factory=dict, repr=False, compare=False)
@@ -176,9 +227,15 @@ class Roadmap:
         if cached is not None:  # computed once per roadmap and stretch
             return cached
         keep = np.ones(len(self.edges), dtype=bool)
+        if stretch > 1.0:
+            self._prune_to_spanner(keep, stretch)
+        # published only once complete (an interrupted build leaves nothing behind), read-only
+        keep.flags.writeable = False
         self._spanners[stretch] = keep
-        if stretch == 1.0:
-            return keep
+        return keep
+
+    def _prune_to_spanner(self, keep: np.ndarray, stretch: float) -> None:
+        """Clear in ``keep`` the edges the greedy two-edge test drops (see `spanner`)."""
         adj: list[dict] = [{} for _ in range(len(self.vertices))]
         ends, lens = self.edges.tolist(), self.lengths.tolist()
         for e in np.argsort(self.lengths, kind="stable").tolist():
@@ -193,7 +250,6 @@ class Roadmap:
                 continue
             adj[a][b] = length
             adj[b][a] = length
-        return keep
 
     def check_scene(self, scene: Scene, file: str = "<roadmap>") -> None:
         """Raise SceneError if this roadmap was not built for ``scene``'s static part."""
@@ -214,7 +270,7 @@ class Roadmap:
             "scene_hash": self.scene_hash,
             "circumradius": self.circumradius,
             "options": asdict(self.options),
-            "info": self.info,
+            "info": self.info.to_dict(),
             "vertices": self.vertices.tolist(),
             "edges": self.edges.tolist(),
             "lengths": self.lengths.tolist(),
@@ -282,11 +338,11 @@ def load_roadmap(path: str | os.PathLike, scene: Scene | None = None) -> Roadmap
         str(doc["scene_hash"]),
         circumradius,
         opts,
-        dict(doc.get("info", {})) if isinstance(doc.get("info", {}), dict) else {},
+        RoadmapInfo.from_dict(doc.get("info", {})),
     )
     if scene is not None:
         rm.check_scene(scene, file)
-        if rm.dof != scene.robot.dof:
+        if rm.dof != scene.robot.space_dof:
             raise SceneError(file, "vertices", "roadmap poses do not match the robot kind")
         if abs(circumradius - scene.robot.circumradius) > 1e-12:
             raise SceneError(file, "circumradius", "does not match the scene's robot")
@@ -302,6 +358,8 @@ def default_roadmap_path(scene: Scene, folder: str | os.PathLike = "roadmaps") -
 
 
 def _ompl_version() -> str:
+    from importlib import metadata  # ~20 ms to import: only when a roadmap is built
+
     try:
         return metadata.version("ompl")
     except metadata.PackageNotFoundError:  # pragma: no cover
@@ -323,10 +381,13 @@ def _blocked_points(scene: Scene):
     """A vectorised test: which xy points lie inside a static obstacle or outside bounds."""
     import shapely
 
-    from .scene import Box, Disc
+    from .scene import Box, Disc, MapObstacle
 
     shapes = []
+    grids = [ob_ for ob_ in scene.obstacles if isinstance(ob_, MapObstacle)]
     for ob_ in scene.obstacles:
+        if isinstance(ob_, MapObstacle):
+            continue
         if isinstance(ob_, Disc):
             shapes.append(shapely.Point(ob_.center).buffer(ob_.radius, 32))
         elif isinstance(ob_, Box):
@@ -342,9 +403,41 @@ def _blocked_points(scene: Scene):
         out = (x <= xmin) | (x >= xmax) | (y <= ymin) | (y >= ymax)
         if shapes:
             out |= shapely.contains_xy(union, x, y)
+        for grid in grids:
+            rows, cols, inside = grid.cells_of(xy)
+            out |= inside & grid.blocked[rows, cols]
         return out
 
     return blocked
+
+
+def _free_cell_draw(scene: Scene, rng: np.random.Generator):
+    """A draw of points uniform over the free cells of the scene's maps, or None.
+
+    Returns None without a map, or when the free cells cover most of the bounds anyway
+    (uniform sampling in the bounds then wastes little).
+    """
+    from .scene import MapObstacle
+
+    xmin, ymin, xmax, ymax = scene.bounds
+    centres, sizes = [], []
+    for grid in scene.obstacles:
+        if isinstance(grid, MapObstacle):
+            c = grid.free_centres()
+            c = c[(c[:, 0] > xmin) & (c[:, 0] < xmax) & (c[:, 1] > ymin) & (c[:, 1] < ymax)]
+            centres.append(c)
+            sizes.append(np.full(len(c), grid.resolution))
+    if not centres:
+        return None
+    c, size = np.concatenate(centres), np.concatenate(sizes)
+    if len(c) == 0 or float(np.sum(size**2)) > FREE_CELL_SHARE * (xmax - xmin) * (ymax - ymin):
+        return None
+
+    def draw() -> FloatArray:
+        k = int(rng.integers(len(c)))
+        return c[k] + (rng.random(2) - 0.5) * size[k]
+
+    return draw
 
 
 def _make_passage_sampler(
@@ -362,6 +455,7 @@ def _make_passage_sampler(
     valid = geometry.is_valid
     blocked = _blocked_points(scene)
     span = 2.0 * scene.robot.circumradius
+    in_free_cell = _free_cell_draw(scene, rng)
 
     class PassageSampler(ob.ValidStateSampler):
         def __init__(self):
@@ -371,7 +465,10 @@ def _make_passage_sampler(
             self.dry = 0  # refills in a row that found no bridge
 
         def _uniform(self):
-            q = [rng.uniform(xmin, xmax), rng.uniform(ymin, ymax)]
+            if in_free_cell is not None and rng.random() < 0.5:  # a map mostly blocked
+                q = list(in_free_cell())
+            else:
+                q = [rng.uniform(xmin, xmax), rng.uniform(ymin, ymax)]
             if box:
                 q.append(rng.uniform(-math.pi, math.pi))
             return np.array(q)
@@ -658,15 +755,15 @@ def grow_roadmaps(
             )
             if dropped:
                 log.info("dropped %d of %d PRM edges that could not be certified free", dropped, len(keep))
-            info = {
-                "ompl_version": _ompl_version(),
-                "seconds": round(time.perf_counter() - t_start, 4),
-                "grow_seconds": round(t_grow, 4),
-                "validity_calls": int(calls_grow),
-                "certify_calls": int(geometry.calls - calls0 - calls_grow),
-                "edges_dropped": dropped,
-                "components": _components(len(vertices), edges),
-            }
+            info = RoadmapInfo(
+                ompl_version=_ompl_version(),
+                seconds=round(time.perf_counter() - t_start, 4),
+                grow_seconds=round(t_grow, 4),
+                validity_calls=int(calls_grow),
+                certify_calls=int(geometry.calls - calls0 - calls_grow),
+                edges_dropped=dropped,
+                components=_components(len(vertices), edges),
+            )
             opts = RoadmapOptions(**{**asdict(options), "vertices": n})
             out.append(
                 Roadmap(

@@ -533,6 +533,63 @@ def test_map_pair_written_together_or_not_at_all(tmp_path, monkeypatch):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["m.pgm", "m.yaml"]
 
 
+def _read_back(tmp_path, map_yaml):
+    """The exported map read by gfuzzy's own map reader, as a scene's map obstacle."""
+    from gfuzzy.maps import MapObstacle
+
+    scene_file = tmp_path / "back.yaml"
+    scene_file.write_text(
+        f"version: 1\nname: back\nrobot: {{disc: 0.1, vmax: 1}}\nobstacles:\n  - map: {{file: {map_yaml.name}}}\n", encoding="utf-8"
+    )
+    scene = load_scene(scene_file)
+    (grid,) = [o for o in scene.obstacles if isinstance(o, MapObstacle)]
+    return scene, grid
+
+
+@pytest.mark.parametrize("name, res", [("office-polygons", 0.05), ("warehouse-mesh", 0.07)])
+def test_map_read_back_by_gfuzzy_covers_every_obstacle(tmp_path, name, res):
+    scene = load_scene(SCENES / f"{name}.yaml")
+    out = tmp_path / "m.yaml"
+    written = export_nav2_map(scene, out, res)
+    back, grid = _read_back(tmp_path, out)
+    np.testing.assert_array_equal(grid.blocked, written.occupied)
+    assert back.bounds[:2] == scene.bounds[:2]
+    rng = np.random.default_rng(3)
+    for ob in scene.obstacles:
+        rows, cols, on_grid = grid.cells_of(samples_inside(ob, rng))
+        assert on_grid.all() and grid.blocked[rows, cols].all()
+
+
+def test_map_scene_round_trips_exactly(tmp_path):
+    """A scene on a map, exported at the map's resolution on the map's own grid: the very
+    same blocked cells (cells are rectangles, and the grid is aligned)."""
+    from gfuzzy.maps import MapObstacle
+
+    scene = load_scene(SCENES / "depot.yaml")
+    (original,) = [o for o in scene.obstacles if isinstance(o, MapObstacle)]
+    out = tmp_path / "depot.yaml"
+    export_nav2_map(scene, out, original.resolution)
+    _, grid = _read_back(tmp_path, out)
+    assert grid.shape == original.shape
+    np.testing.assert_array_equal(grid.blocked, original.blocked)
+
+
+def test_mcap_map_scene_draws_the_blocked_cells(tmp_path):
+    from gfuzzy.maps import MapObstacle
+
+    scene = load_scene(SCENES / "depot.yaml")
+    (i, original), = [(i, o) for i, o in enumerate(scene.obstacles) if isinstance(o, MapObstacle)]
+    out = tmp_path / "depot.mcap"
+    export_mcap(scene, out, options=ExportOptions(span=2.0, step=0.5))
+    msgs, kinds = read_mcap(out)
+    ent = {e["id"]: e for e in msgs["/scene"][0][2]["entities"]}[f"obstacle-{i}"]
+    cubes = ent["cubes"]
+    area = sum(c["size"]["x"] * c["size"]["y"] for c in cubes)
+    assert len(cubes) == len(original.rects)
+    assert area == pytest.approx(original.blocked.sum() * original.resolution**2, rel=1e-9)
+    validate_all(msgs, kinds)
+
+
 def test_cli_map(tmp_path, capsys):
     out = tmp_path / "floor.yaml"
     assert main(["export", str(SCENES / "building-floor.yaml"), "--map", str(out), "--resolution", "0.1"]) == 0
