@@ -352,9 +352,12 @@ def _valid_predictions(predictions) -> list:
         if isinstance(t, bool) or not isinstance(t, (int, float)) or not math.isfinite(t):
             raise InputError(f"replan_log[{i}].t: expected a finite number, got {t!r}")
         try:
-            np.asarray(e.get("predicted", []), dtype=float).reshape(-1, 5)
+            pred = np.asarray(e.get("predicted", []), dtype=float).reshape(-1, 5)
+            plan = np.asarray(e.get("plan", []), dtype=float)
         except (TypeError, ValueError):
-            raise InputError(f"replan_log[{i}].predicted: expected rows [x, y, vx, vy, radius]") from None
+            raise InputError(f"replan_log[{i}]: predicted must be rows [x, y, vx, vy, radius] and plan rows [t, x, y, ...]") from None
+        if not (np.all(np.isfinite(pred)) and np.all(np.isfinite(plan))):
+            raise InputError(f"replan_log[{i}]: expected finite numbers")
         out.append(e)
     return sorted(out, key=lambda e: float(e["t"]))
 

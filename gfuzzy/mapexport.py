@@ -17,6 +17,7 @@ image is ``[ox + j res, ox + (j+1) res] x [oy + (H-1-i) res, oy + (H-i) res]``.
 
 from __future__ import annotations
 
+import json
 import logging
 import math
 import os
@@ -82,7 +83,7 @@ class NavMap:
         """The map YAML naming ``image`` (relative to the YAML)."""
         ox, oy = self.origin
         return (
-            f"image: {image}\n"
+            f"image: {json.dumps(image)}\n"  # a JSON string is a YAML scalar, whatever the name
             f"mode: trinary\n"
             f"resolution: {self.resolution!r}\n"
             f"origin: [{ox!r}, {oy!r}, 0.0]\n"

@@ -340,6 +340,14 @@ def test_cli_bad_trajectory_files(tmp_path, capsys):
         err = capsys.readouterr().err
         assert rc == 2 and needle in err and err.count("\n") == 1, err
         assert not (tmp_path / "o.mcap").exists()
+    ragged = tmp_path / "ragged.json"
+    doc = _navigate_doc(np.array([[0.0, 0.5, 0.5], [1.0, 1.5, 1.2]]))
+    doc["replan_log"][1]["plan"] = [[0.0, 1.0, 1.0], [1.0, 2.0]]
+    ragged.write_text(json.dumps(doc), encoding="utf-8")
+    rc = main(["export", str(scene), str(ragged), "-o", str(tmp_path / "o.mcap")])
+    err = capsys.readouterr().err
+    assert rc == 2 and "replan_log[1]" in err and err.count("\n") == 1, err
+    assert not (tmp_path / "o.mcap").exists()
     with pytest.raises(InputError):
         ExportOptions(step=-1)
 
@@ -558,6 +566,16 @@ def test_map_read_back_by_gfuzzy_covers_every_obstacle(tmp_path, name, res):
     for ob in scene.obstacles:
         rows, cols, on_grid = grid.cells_of(samples_inside(ob, rng))
         assert on_grid.all() and grid.blocked[rows, cols].all()
+
+
+def test_map_file_name_that_yaml_would_misread(tmp_path):
+    scene = load_scene(SCENES / "office-polygons.yaml")
+    out = tmp_path / "#1 & map: x.yaml"
+    written = export_nav2_map(scene, out, 0.2)
+    meta = yaml.safe_load(out.read_text(encoding="utf-8"))
+    assert meta["image"] == "#1 & map: x.pgm" and (tmp_path / meta["image"]).is_file()
+    occupied, _, _ = read_nav2_map(out)
+    np.testing.assert_array_equal(occupied, written.occupied)
 
 
 def test_map_scene_round_trips_exactly(tmp_path):
