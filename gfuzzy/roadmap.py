@@ -107,21 +107,10 @@ class _Derived(dict):
 class RoadmapInfo:
     """How a roadmap was built (its file's ``info``).
 
-    Attributes
-    ----------
-    ompl_version : str
-    seconds : float
-        Wall-clock time of the whole build.
-    grow_seconds : float
-        Of which OMPL's PRM growing the roadmap.
-    validity_calls, certify_calls : int
-        Collision-model calls while growing and while certifying the edges.
-    edges_dropped : int
-        PRM edges that could not be certified free.
-    components : int
-        Connected components of the roadmap.
-    extra : dict
-        Keys of a file written by another version, kept as they were.
+    ``seconds`` is the whole build, ``grow_seconds`` OMPL's PRM growing; ``validity_calls`` and
+    ``certify_calls`` count collision-model calls while growing and while certifying edges;
+    ``edges_dropped`` PRM edges that could not be certified free; ``components`` the
+    roadmap's connected components; ``extra`` keys of another version's file, kept as they were.
     """
 
     ompl_version: str = ""
