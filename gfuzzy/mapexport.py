@@ -129,8 +129,23 @@ def _mark_disc(occ: np.ndarray, d: Disc, w: int, h: int, ox: float, oy: float, r
     # open disc exactly when that distance is below the radius
     dx = np.maximum(np.maximum(xe[:-1] - cx, cx - xe[1:]), 0.0)
     dy = np.maximum(np.maximum(ye[:-1] - cy, cy - ye[1:]), 0.0)
-    hit = dy[:, None] ** 2 + dx[None, :] ** 2 < r * r  # (rows by y, cols)
+    d2 = dy[:, None] ** 2 + dx[None, :] ** 2  # (rows by y, cols)
+    hit = d2 < r * r
+    # where rounding could decide (a cell within a few ulps of the circle), decide exactly
+    for k, j in zip(*np.nonzero(np.abs(d2 - r * r) <= 1e-9 * r * r), strict=True):
+        hit[k, j] = _disc_meets_cell(cx, cy, r, xe[j], ye[k], xe[j + 1], ye[k + 1])
     occ[ka:kb, ja:jb] |= hit
+
+
+def _disc_meets_cell(cx: float, cy: float, r: float, x0: float, y0: float, x1: float, y1: float) -> bool:
+    """Whether the open disc meets the open square, in exact rational arithmetic on the
+    floats given."""
+    from fractions import Fraction as F
+
+    cx, cy, r, x0, y0, x1, y1 = (F(float(v)) for v in (cx, cy, r, x0, y0, x1, y1))
+    dx = max(x0 - cx, cx - x1, F(0))
+    dy = max(y0 - cy, cy - y1, F(0))
+    return dx * dx + dy * dy < r * r
 
 
 def _boundary_cells(poly, ja: int, ka: int, shape: tuple[int, int], ox: float, oy: float, res: float) -> np.ndarray:

@@ -466,7 +466,9 @@ def test_map_hand_computed_cells(obstacle, cells):
 
 def _oracle_cells(scene, res):
     """Every cell of the grid tested on its own (no bounding boxes, no boundary tracing):
-    the DE-9IM interior test for polygons and boxes, shapely's distance for discs."""
+    the DE-9IM interior test for polygons and boxes, exact rational arithmetic for discs."""
+    from fractions import Fraction
+
     import shapely
 
     x0, y0, x1, y1 = scene.bounds
@@ -476,7 +478,13 @@ def _oracle_cells(scene, res):
     occ = np.zeros((h, w), dtype=bool)
     for ob in scene.obstacles:
         if isinstance(ob, Disc):
-            occ |= shapely.distance(shapely.Point(ob.center), cells) < ob.radius
+            cx, cy, r = (Fraction(v) for v in (*ob.center, ob.radius))
+            for kk in range(h):
+                for jj in range(w):
+                    # the nearest point of the closed square, exactly
+                    nx = min(max(cx, Fraction(x0 + jj * res)), Fraction(x0 + (jj + 1) * res))
+                    ny = min(max(cy, Fraction(y0 + kk * res)), Fraction(y0 + (kk + 1) * res))
+                    occ[kk, jj] |= (nx - cx) ** 2 + (ny - cy) ** 2 < r * r
         else:
             shape = shapely.Polygon(ob.vertices()) if isinstance(ob, Box) else shapely.Polygon(ob.points, list(ob.holes))
             occ |= shapely.relate_pattern(cells, shape, "T********")
@@ -520,6 +528,16 @@ def small_scenes(draw):
 def test_map_equals_the_cell_by_cell_oracle(case):
     scene, res = case
     np.testing.assert_array_equal(rasterise(scene, res).occupied, _oracle_cells(scene, res))
+
+
+def test_map_disc_one_ulp_into_a_cell():
+    """Found by the oracle test: the disc's top, 0.6000000000000001 + 0.7000000000000001, lies
+    2.2e-16 m above the cell border 13 x 0.1: the cell is occupied (rounding must not decide)."""
+    doc = {"version": 1, "name": "u", "bounds": [0, 0, 5, 4], "robot": {"disc": 0.1, "vmax": 1}}
+    doc["obstacles"] = [{"disc": {"center": [0.75, 0.6000000000000001], "radius": 0.7000000000000001}}]
+    grid = rasterise(parse_scene(doc), 0.1)
+    assert grid.occupied[grid.shape[0] - 1 - 13, 7]
+    assert not grid.occupied[grid.shape[0] - 1 - 14, 7]
 
 
 def test_map_pair_written_together_or_not_at_all(tmp_path, monkeypatch):
