@@ -2,7 +2,8 @@
 
 :func:`rasterise` marks every grid cell that an obstacle overlaps with positive area: the
 cell's open square meets the obstacle's interior. That is exact, not sampled: discs by the
-distance from their centre to the square, map obstacles by their rectangles' coordinates,
+distance from their centre to the square (in rational arithmetic where rounding could
+decide), map obstacles by their rectangles' coordinates,
 boxes, polygons and mesh footprints with shapely's exact predicates: the cells near the
 boundary (traced along every ring) by the DE-9IM interior-interior test, every other cell,
 which lies wholly inside or outside, by its centre. So the map never loses an obstacle: the
