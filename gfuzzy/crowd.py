@@ -502,18 +502,39 @@ def _movers(tracks: FloatArray) -> tuple:
     )
 
 
+#: A unicycle robot's largest turning rate in the benchmarks (rad/s; issue 19's setting).
+UNICYCLE_WMAX = 1.0
+
+
+def _robot_doc(setting: CrowdSetting) -> dict:
+    c = CROWD
+    doc = {"disc": c["robot_radius"], "vmax": c["robot_vmax"]}
+    if setting.kinematics == "unicycle":
+        doc.update(kinematics="unicycle", wmax=UNICYCLE_WMAX)
+    return doc
+
+
+def _poses(setting: CrowdSetting, lay: Layout) -> tuple[FloatArray, FloatArray]:
+    """The robot's start and goal poses: a unicycle starts and ends facing from its start
+    to its goal."""
+    if setting.kinematics != "unicycle":
+        return lay.start.astype(float), lay.goal.astype(float)
+    theta = math.atan2(*(lay.goal - lay.start)[::-1])
+    return np.array([*lay.start, theta]), np.array([*lay.goal, theta])
+
+
 def crowd_scene(setting: CrowdSetting, lay: Layout | None = None, tracks: FloatArray | None = None,
                 name: str = "crowd") -> Scene:  # fmt: skip
     """The episode's world as a scene: bounds, the robot (disc 0.3, vmax 1), no static
     obstacles, the humans' ``tracks`` (K, n, 2) as ``trajectory`` movers, the query."""
-    c = CROWD
     doc = {
         "version": 1, "name": name, "bounds": list(setting.bounds),
-        "robot": {"disc": c["robot_radius"], "vmax": c["robot_vmax"]}, "obstacles": [],
+        "robot": _robot_doc(setting), "obstacles": [],
         "movers": [], "queries": [],
     }  # fmt: skip
     if lay is not None:
-        doc["queries"] = [{"name": "cross", "start": lay.start.tolist(), "goal": lay.goal.tolist(), "t0": 0.0}]
+        start, goal = _poses(setting, lay)
+        doc["queries"] = [{"name": "cross", "start": start.tolist(), "goal": goal.tolist(), "t0": 0.0}]
     scene = parse_scene(doc, f"<{name}>")
     if tracks is not None and len(tracks):
         scene = replace(scene, movers=_movers(tracks))
@@ -531,7 +552,8 @@ def crowd_roadmap(setting: CrowdSetting):
     for the arena)."""
     from .roadmap import build_roadmap
 
-    return build_roadmap(crowd_scene(setting), _roadmap_options(setting))
+    # a unicycle navigates on the roadmap of the plane too (its own graph turns in place)
+    return build_roadmap(crowd_scene(replace(setting, kinematics="holonomic")), _roadmap_options(setting))
 
 
 def run_episode(setting: CrowdSetting, roadmap, seed: int, index: int, policies, options=None) -> list[Episode]:
@@ -572,8 +594,9 @@ def run_episode(setting: CrowdSetting, roadmap, seed: int, index: int, policies,
     from .navigator import Navigator, NavOptions
     from .planner import PlanOptions, plan
 
-    if setting.kinematics == "unicycle":
-        raise InputError("unicycle robots are not available in this build (the unicycle navigator is not merged)")
+    if setting.kinematics == "unicycle" and set(policies) - {"navigator"}:
+        raise InputError("with a unicycle robot only the navigator policy runs (ORCA, social force and the "
+                         "oracle's plan are holonomic here)")
     if "oracle" in policies and setting.visible:
         raise InputError("the oracle policy needs humans who ignore the robot (not --visible)")
     c = CROWD
@@ -591,7 +614,7 @@ def run_episode(setting: CrowdSetting, roadmap, seed: int, index: int, policies,
     for policy in policies:
         scene = crowd_scene(setting, lay, tracks, f"crowd-{setting.scenario}-{index}")
         if policy == "navigator":
-            act = NavigatorPolicy(Navigator(scene, roadmap, lay.goal, options or NavOptions()))
+            act = NavigatorPolicy(Navigator(scene, roadmap, _poses(setting, lay)[1], options or NavOptions()))
         elif policy == "orca":
             act = OrcaPolicy(lay.goal, CROWD)
         elif policy == "social-force":
@@ -613,7 +636,7 @@ def _drive(setting, policy, index, lay, act, tracks, world, n_steps, extra) -> E
     c = CROWD
     dt, rr = c["time_step"], c["robot_radius"]
     sensor = Sensor(crowd_scene(setting), replace(setting.sensor, sense=setting.sense))
-    pose = lay.start.astype(float).copy()
+    pose = _poses(setting, lay)[0].copy()
     heading = math.atan2(*(lay.goal - lay.start)[::-1])
     rows = [np.array([0.0, *pose])]
     vel = np.zeros(2)
@@ -640,7 +663,7 @@ def _drive(setting, policy, index, lay, act, tracks, world, n_steps, extra) -> E
         piece = piece_of(traj, t, t + dt)
         piece[0, 1:] = pose
         rows.extend(piece[1:])
-        new = piece[-1, 1:3].copy()
+        new = piece[-1, 1:].copy()
         if world is not None:
             world.step(pose[:2], vel)
             nxt = world.track[-1]
@@ -648,15 +671,17 @@ def _drive(setting, policy, index, lay, act, tracks, world, n_steps, extra) -> E
             nxt = tracks[:, k + 1]
         step_tracks = np.stack([here, nxt], axis=1)  # (K, 2, 2)
         gap = _step_gap(piece, step_tracks, t, dt, rr + c["human_radius"])
-        d = new - pose[:2]
-        if np.hypot(*d) > 1e-9:
+        d = new[:2] - pose[:2]
+        if len(new) == 3:  # a unicycle looks where it faces
+            heading = float(new[2])
+        elif np.hypot(*d) > 1e-9:
             heading = math.atan2(d[1], d[0])
         vel = d / dt
         pose = new
         if gap < 0:
             outcome = Outcome.COLLISION
             break
-        if np.hypot(*(pose - lay.goal)) < rr:
+        if np.hypot(*(pose[:2] - lay.goal)) < rr:
             outcome, t_goal = Outcome.SUCCESS, t + dt
             break
     w = np.array(rows)

@@ -339,10 +339,8 @@ class Planner:
         # distance, in steps (edge e costs k[e]) for the heuristic, which is exact for the
         # static graph and so the tightest admissible one; the vertex graphs are kept, the
         # connections added per query
-        from scipy.sparse.csgraph import dijkstra
-
         def sp(graph, weights, indices):
-            out = dijkstra(graph.with_edges(extra_e, weights), directed=True, indices=indices)
+            out = graph.with_edges(extra_e, weights).distances(indices)
             return np.where(out < 1e-200, 0.0, out)
 
         dist = sp(roadmap_metres(rm), extra_w, g_id)
@@ -362,6 +360,24 @@ class Planner:
             part.poses, part.indptr, part.neighbors, along(hop_g), groups=groups, from_start=along(hop_s)
         )
         return graph, s_id, g_id, float(dist[s_id])
+
+    def _query_graph(self, start, goal, opts: PlanOptions, prepared=None):
+        """(graph, start id, goal id, roadmap distance) of a query (headings wrapped): the
+        roadmap's cut with the ends connected (:meth:`_graph`), or the prepared goal's graph
+        with the start spliced in (``prepare`` / ``plan_from``, and the navigator); for a
+        differential drive the graph of heading copies (:mod:`gfuzzy.unicycle`)."""
+        vplan = self.robot.vmax * SPEED_SAFETY
+        if self.robot.unicycle:
+            from .unicycle import build_graph
+
+            if prepared is None:
+                ug = build_graph(self, start, goal, opts.dt, vplan, opts.connect_k, opts.stretch)
+            else:
+                ug = prepared.splice(self, start)
+            return ug.graph, ug.s_id, ug.g_id, ug.roadmap_distance
+        if prepared is None:
+            return self._graph(start, goal, opts.dt, vplan, opts.connect_k, opts.stretch)
+        return prepared.splice(self, start)
 
     # ---------------------------------------------------------------- query
     def prepare(self, goal, options: PlanOptions | None = None):
@@ -387,6 +403,14 @@ class Planner:
 
         opts = options or PlanOptions()
         goal = check_pose(goal, self.robot.dof, "goal")
+        if self.robot.unicycle:  # the copies' graph is kept on the roadmap; the rest is per query
+            from .unicycle import UnicyclePrepared
+            from .unicycle import prepare_goal as prepare_unicycle
+
+            wrapped = goal.copy()
+            wrapped[2] = wrap_angle(wrapped[2])
+            kept = prepare_unicycle(self, wrapped, opts.dt, self.robot.vmax * SPEED_SAFETY, opts.connect_k, opts.stretch)
+            return UnicyclePrepared(goal, opts, kept)
         return prepare_goal(self, goal, opts)
 
     def plan_from(self, prepared, start, t0: float = 0.0, movers=None, hold: float = 0.0) -> PlanResult:
@@ -425,7 +449,9 @@ class Planner:
         Parameters
         ----------
         start, goal : (d,) float
-            Poses ``[x, y]`` (disc robot) or ``[x, y, heading]`` (box robot).
+            Poses ``[x, y]`` (disc robot) or ``[x, y, heading]`` (box robot, or any
+            unicycle: its answers are waits, turns in place and straight moves along the
+            heading, :mod:`gfuzzy.unicycle`).
         t0 : float
             Departure time.
         options : PlanOptions, optional
@@ -470,11 +496,7 @@ class Planner:
         ends = start.copy(), goal.copy()  # the rows at the ends repeat them exactly
         if robot.dof == 3:
             start[2], goal[2] = wrap_angle(start[2]), wrap_angle(goal[2])
-        vplan = vmax * SPEED_SAFETY
-        if _prepared is None:
-            graph, s_id, g_id, rd = self._graph(start, goal, opts.dt, vplan, opts.connect_k, opts.stretch)
-        else:  # plan_from: the kept graph with this start spliced in
-            graph, s_id, g_id, rd = _prepared.splice(self, start)
+        graph, s_id, g_id, rd = self._query_graph(start, goal, opts, _prepared)
         if not math.isfinite(rd):
             return answer(
                 Status.NO_PATH,

@@ -47,7 +47,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .geometry import metric_distance
-from .roadgraph import spanner_split
+from .roadgraph import VertexGraph, spanner_split
 from .settings import SPEED_SAFETY
 from .spacetime import SpaceTimeGraph, split_edges
 from .typing import FloatArray, IntArray
@@ -79,7 +79,7 @@ class PreparedGoal:
     step_len : float
     goal_clearance : float
         The goal's static clearance (``StaticGeometry.clearance1``).
-    vgraph : scipy CSR (n, n)
+    vgraph : VertexGraph (n vertices)
         The kept vertex graph, weights in steps; the start's row is empty.
     pa, pb, pj, pk : (N - n,) int
         Per kept interior point: its edge's ends, its index along it, the edge's steps.
@@ -104,12 +104,21 @@ class PreparedGoal:
     pj: IntArray
     pk: IntArray
 
-    def splice(self, planner, start: FloatArray):
-        """The kept graph with ``start`` connected: (graph, s_id, g_id, roadmap distance)."""
+    def splice(self, planner, start: FloatArray, ahead=()):
+        """The kept graph with ``start`` connected: (graph, s_id, g_id, roadmap distance).
+
+        ``ahead``: roadmap vertices to try too, after the nearest (the navigator's: those
+        its last plan was heading for); the first two not connected already are tried.
+        """
         opts = self.options
         robot = planner.robot
         c_s = planner.geometry.clearance1(start)
         conn = planner._connect(start, opts.connect_k, c_s)
+        seen = {v for v, _ in conn}
+        for v in [v for v in ahead if v not in seen][:2]:
+            target = planner.roadmap.vertices[v]
+            if planner.geometry.motion_free(start, target, ca=c_s):
+                conn.append((int(v), float(metric_distance(start, target, robot.circumradius))))
         e = [(self.s_id, v) for v, _ in conn]
         w = [d for _, d in conn]
         if planner.geometry.motion_free(start, self.goal, ca=c_s, cb=self.goal_clearance):
@@ -156,17 +165,12 @@ class PreparedGoal:
 
     def _from_start(self, ends: IntArray, k: IntArray) -> FloatArray:
         """Steps from the start to every vertex of the kept graph (Dijkstra)."""
-        from scipy.sparse import csr_matrix
-        from scipy.sparse.csgraph import dijkstra
-
         g = self.vgraph
         at = g.indptr[self.s_id]
         indptr = g.indptr.copy()
         indptr[self.s_id + 1 :] += len(ends)
-        mat = csr_matrix(
-            (np.insert(g.data, at, np.maximum(k, 1e-300)), np.insert(g.indices, at, ends), indptr), shape=g.shape
-        )
-        return np.rint(dijkstra(mat, directed=True, indices=self.s_id))
+        mat = VertexGraph(g.n, indptr, np.insert(g.indices, at, ends), np.insert(g.data, at, np.maximum(k, 1e-300)))
+        return np.rint(mat.distances(self.s_id))
 
 
 def _split_from(start, ends, edges, lengths, step_len, first_id):
@@ -174,7 +178,8 @@ def _split_from(start, ends, edges, lengths, step_len, first_id):
     m = len(edges)
     verts = np.vstack([start[None], ends]) if m else start[None]
     local = np.stack([np.zeros(m, dtype=np.int64), np.arange(1, m + 1)], axis=1)
-    k, offs, inner, a, b, j, src, dst = split_edges(verts, local, lengths, step_len, first_id)
+    cut = split_edges(verts, local, lengths, step_len, first_id)
+    k, offs, inner, a, b, j, src, dst = cut.k, cut.offs, cut.inner, cut.a, cut.b, cut.j, cut.src, cut.dst
     ids = np.concatenate([edges[:, 1], [edges[0, 0]] if m else []]).astype(np.int64)
 
     def back(x):  # local ids (0: the start, 1..m: the ends) to graph ids; interior unchanged
@@ -189,9 +194,6 @@ def _split_from(start, ends, edges, lengths, step_len, first_id):
 
 def prepare_goal(planner, goal: FloatArray, options) -> PreparedGoal:
     """Build a :class:`PreparedGoal` (see :meth:`gfuzzy.planner.Planner.prepare`)."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import dijkstra
-
     robot = planner.robot
     rm = planner.roadmap
     goal_raw = np.asarray(goal, dtype=float).copy()
@@ -209,19 +211,15 @@ def prepare_goal(planner, goal: FloatArray, options) -> PreparedGoal:
     kept = base.splice(extra_e, extra_w, np.vstack([goal, goal]))  # the start's row: filled per call
     n = base.n
 
-    def matrix(edges_, weights):
-        w = np.maximum(weights, 1e-300)  # csgraph drops explicit zeros
-        rows = np.r_[edges_[:, 0], edges_[:, 1]]
-        cols = np.r_[edges_[:, 1], edges_[:, 0]]
-        return coo_matrix((np.r_[w, w], (rows, cols)), shape=(n, n)).tocsr()
+    def matrix(edges_, weights):  # sorted CSR, weights at least 1e-300 (csgraph drops zeros)
+        return VertexGraph.of(n, edges_, weights)
 
     def sp(mat):
-        out = dijkstra(mat, directed=True, indices=g_id)
+        out = mat.distances(g_id)
         return np.where(out < 1e-200, 0.0, out)
 
     dist = sp(matrix(np.vstack([rm.edges, extra_e]), np.concatenate([rm.lengths, extra_w])))
     vgraph = matrix(np.vstack([base.edges, extra_e]), np.concatenate([base.k, kept.k]).astype(float))
-    vgraph.sort_indices()
     hop_g = np.rint(sp(vgraph))
     heur = np.empty(len(kept.poses))
     heur[:n] = hop_g

@@ -17,7 +17,6 @@ import os
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field, fields
-from importlib import metadata
 from pathlib import Path
 
 import numpy as np
@@ -25,6 +24,7 @@ import numpy as np
 from .atomic import write_atomic
 from .errors import InputError, SceneError
 from .geometry import StaticGeometry, metric_distance
+from .maps import free_cell_draw
 from .scene import Scene
 from .typing import FloatArray, IntArray
 
@@ -43,6 +43,7 @@ FORMAT = "gfuzzy-roadmap"
 #: Validity checks without a new milestone after which the free space counts as empty.
 STALL_CHECKS = 200_000
 FORMAT_VERSION = 1
+FREE_CELL_SHARE = 0.5  # maps' free cells below this share of the bounds: half the samples drawn in them
 
 
 @dataclass(frozen=True)
@@ -107,21 +108,10 @@ class _Derived(dict):
 class RoadmapInfo:
     """How a roadmap was built (its file's ``info``).
 
-    Attributes
-    ----------
-    ompl_version : str
-    seconds : float
-        Wall-clock time of the whole build.
-    grow_seconds : float
-        Of which OMPL's PRM growing the roadmap.
-    validity_calls, certify_calls : int
-        Collision-model calls while growing and while certifying the edges.
-    edges_dropped : int
-        PRM edges that could not be certified free.
-    components : int
-        Connected components of the roadmap.
-    extra : dict
-        Keys of a file written by another version, kept as they were.
+    ``seconds`` is the whole build, ``grow_seconds`` OMPL's PRM growing; ``validity_calls`` and
+    ``certify_calls`` count collision-model calls while growing and while certifying edges;
+    ``edges_dropped`` PRM edges that could not be certified free; ``components`` the
+    roadmap's connected components; ``extra`` keys of another version's file, kept as they were.
     """
 
     ompl_version: str = ""
@@ -342,7 +332,7 @@ def load_roadmap(path: str | os.PathLike, scene: Scene | None = None) -> Roadmap
     )
     if scene is not None:
         rm.check_scene(scene, file)
-        if rm.dof != scene.robot.dof:
+        if rm.dof != scene.robot.space_dof:
             raise SceneError(file, "vertices", "roadmap poses do not match the robot kind")
         if abs(circumradius - scene.robot.circumradius) > 1e-12:
             raise SceneError(file, "circumradius", "does not match the scene's robot")
@@ -358,6 +348,8 @@ def default_roadmap_path(scene: Scene, folder: str | os.PathLike = "roadmaps") -
 
 
 def _ompl_version() -> str:
+    from importlib import metadata  # ~20 ms to import: only when a roadmap is built
+
     try:
         return metadata.version("ompl")
     except metadata.PackageNotFoundError:  # pragma: no cover
@@ -379,10 +371,13 @@ def _blocked_points(scene: Scene):
     """A vectorised test: which xy points lie inside a static obstacle or outside bounds."""
     import shapely
 
-    from .scene import Box, Disc
+    from .scene import Box, Disc, MapObstacle
 
     shapes = []
+    grids = [ob_ for ob_ in scene.obstacles if isinstance(ob_, MapObstacle)]
     for ob_ in scene.obstacles:
+        if isinstance(ob_, MapObstacle):
+            continue
         if isinstance(ob_, Disc):
             shapes.append(shapely.Point(ob_.center).buffer(ob_.radius, 32))
         elif isinstance(ob_, Box):
@@ -398,6 +393,9 @@ def _blocked_points(scene: Scene):
         out = (x <= xmin) | (x >= xmax) | (y <= ymin) | (y >= ymax)
         if shapes:
             out |= shapely.contains_xy(union, x, y)
+        for grid in grids:
+            rows, cols, inside = grid.cells_of(xy)
+            out |= inside & grid.blocked[rows, cols]
         return out
 
     return blocked
@@ -413,11 +411,12 @@ def _make_passage_sampler(
     """
     scene = geometry.scene
     xmin, ymin, xmax, ymax = scene.bounds
-    box = scene.robot.shape == "box"
+    box = scene.robot.space_dof == 3
     sigma = max(scene.robot.circumradius, 1e-3)
     valid = geometry.is_valid
     blocked = _blocked_points(scene)
     span = 2.0 * scene.robot.circumradius
+    in_free_cell = free_cell_draw(scene.obstacles, scene.bounds, rng, FREE_CELL_SHARE)
 
     class PassageSampler(ob.ValidStateSampler):
         def __init__(self):
@@ -427,7 +426,10 @@ def _make_passage_sampler(
             self.dry = 0  # refills in a row that found no bridge
 
         def _uniform(self):
-            q = [rng.uniform(xmin, xmax), rng.uniform(ymin, ymax)]
+            if in_free_cell is not None and rng.random() < 0.5:  # a map mostly blocked
+                q = list(in_free_cell())
+            else:
+                q = [rng.uniform(xmin, xmax), rng.uniform(ymin, ymax)]
             if box:
                 q.append(rng.uniform(-math.pi, math.pi))
             return np.array(q)
@@ -519,7 +521,7 @@ class _Builder:
         bounds.setHigh(0, xmax)
         bounds.setLow(1, ymin)
         bounds.setHigh(1, ymax)
-        self.box = scene.robot.shape == "box"
+        self.box = scene.robot.space_dof == 3
         if self.box:
             space = ob.SE2StateSpace()
             space.setBounds(bounds)

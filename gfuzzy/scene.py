@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from .errors import InputError, SceneError
+from .maps import MapObstacle, load_map
 from .status import Status
 from .typing import FloatArray
 from .yamldoc import _V, MAX_MAGNITUDE, NAME_RE, _join, _kind, _load_yaml, _one_key
@@ -29,6 +30,7 @@ __all__ = [
     "Disc",
     "Box",
     "Polygon",
+    "MapObstacle",
     "Mover",
     "Query",
     "Expect",
@@ -38,6 +40,7 @@ __all__ = [
 ]
 
 MODES = ("loop", "bounce", "once")
+KINEMATICS = ("holonomic", "unicycle")
 STATUSES = tuple(s.value for s in Status)  # the file format spells them as strings
 
 
@@ -46,15 +49,16 @@ STATUSES = tuple(s.value for s in Status)  # the file format spells them as stri
 
 @dataclass(frozen=True)
 class Robot:
-    """The robot: a disc (poses ``[x, y]``) or a box (poses ``[x, y, heading]``).
+    """The robot: a disc (poses ``[x, y]``), a box or a footprint polygon (poses
+    ``[x, y, heading]``). :mod:`gfuzzy.shapes` holds the geometry of each shape.
 
     Attributes
     ----------
-    shape : {"disc", "box"}
+    shape : {"disc", "box", "footprint"}
     radius : float
-        Disc radius (0 for a box).
+        Disc radius (0 otherwise).
     size : (2,) tuple
-        Box ``(length, width)``, length along the heading ((0, 0) for a disc).
+        Box ``(length, width)``, length along the heading ((0, 0) otherwise).
     vmax : float
         Bound on configuration speed (euclidean xy speed + |heading rate| * circumradius).
     amax : float or None
@@ -63,6 +67,16 @@ class Robot:
         Distance every answer keeps from static obstacles (not from the bounds), metres.
     mover_clearance : float
         Distance every answer keeps from every present mover, metres.
+    kinematics : {"holonomic", "unicycle"}
+        ``unicycle``: a differential drive; poses are ``[x, y, heading]`` for every shape and
+        answers are waits, turns in place and straight moves along the heading.
+    wmax : float or None
+        Unicycle: bound on |turning rate| (rad/s); None: vmax / circumradius.
+    reverse : bool
+        Unicycle: may it drive backwards.
+    footprint : tuple of (x, y)
+        A footprint robot's simple polygon in its own frame (x forward, y left),
+        counter-clockwise; empty for a disc or a box.
     """
 
     shape: str
@@ -72,26 +86,53 @@ class Robot:
     amax: float | None = None
     clearance: float = 0.0
     mover_clearance: float = 0.0
+    kinematics: str = "holonomic"
+    wmax: float | None = None
+    reverse: bool = False
+    footprint: tuple[tuple[float, float], ...] = ()
+
+    @property
+    def unicycle(self) -> bool:
+        """True for a differential drive (``kinematics: unicycle``, CONTRACT section 6)."""
+        return self.kinematics == "unicycle"
+
+    @property
+    def turn_rate(self) -> float:
+        """Largest turning rate a unicycle may use, rad/s: ``wmax`` (default vmax / r),
+        never above vmax / r (the speed bound of a turn in place)."""
+        bound = self.vmax / self.circumradius
+        return bound if self.wmax is None else min(float(self.wmax), bound)
 
     @property
     def circumradius(self) -> float:
         """Radius of the smallest disc about the reference point holding the whole robot."""
         if self.shape == "disc":
             return self.radius
+        if self.shape == "footprint":
+            return max(math.hypot(x, y) for x, y in self.footprint)
         return 0.5 * math.hypot(*self.size)
 
     @property
     def inradius(self) -> float:
-        """Radius of the largest disc about the reference point inside the robot."""
+        """Radius of the largest disc about the reference point inside the robot (0 when
+        the reference point is outside a footprint)."""
+        if self.shape == "footprint":
+            return footprint_inradius(self.footprint)
         return self.radius if self.shape == "disc" else 0.5 * min(self.size)
 
     @property
     def dof(self) -> int:
-        """Length of a pose: 2 for a disc, 3 for a box."""
+        """Length of a pose: 2 for a holonomic disc, 3 for a box or any unicycle."""
+        return 3 if self.unicycle else self.space_dof
+
+    @property
+    def space_dof(self) -> int:
+        """Dimension of the roadmap's configuration space: 2 for a disc (R^2), 3 otherwise
+        (SE(2)); a unicycle disc has 3-number poses on an R^2 roadmap."""
         return 2 if self.shape == "disc" else 3
 
     def corners(self, poses: FloatArray) -> FloatArray:
-        """Corners of a box robot, counter-clockwise.
+        """Corners of a box robot (or a footprint's vertices), counter-clockwise.
 
         Parameters
         ----------
@@ -100,13 +141,32 @@ class Robot:
         Returns
         -------
         (n, 4, 2) float
+            (n, k, 2) for a footprint of k vertices.
         """
         poses = np.asarray(poses, dtype=float).reshape(-1, 3)
-        hl, hw = 0.5 * self.size[0], 0.5 * self.size[1]
-        local = np.array([[hl, hw], [-hl, hw], [-hl, -hw], [hl, -hw]])
+        if self.shape == "footprint":
+            local = np.array(self.footprint, dtype=float)
+        else:
+            hl, hw = 0.5 * self.size[0], 0.5 * self.size[1]
+            local = np.array([[hl, hw], [-hl, hw], [-hl, -hw], [hl, -hw]])
         c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
         rot = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)  # (n, 2, 2)
         return poses[:, None, :2] + np.einsum("nij,kj->nki", rot, local)
+
+
+def footprint_inradius(points) -> float:
+    """Distance from the origin to the outline of the simple polygon ``points`` (k, 2)
+    when the origin is strictly inside it, else 0 (crossing-number test)."""
+    P = np.asarray(points, dtype=float)
+    Q = np.roll(P, -1, axis=0)
+    crosses = (P[:, 1] > 0) != (Q[:, 1] > 0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x_at = P[:, 0] + (0.0 - P[:, 1]) * (Q[:, 0] - P[:, 0]) / (Q[:, 1] - P[:, 1])
+    inside = int(np.count_nonzero(crosses & (x_at > 0))) % 2 == 1
+    e = Q - P
+    t = np.clip(-(P * e).sum(1) / np.maximum((e * e).sum(1), 1e-300), 0.0, 1.0)
+    dist = float(np.hypot(*(P + t[:, None] * e).T).min())
+    return dist if inside and dist > 0 else 0.0
 
 
 @dataclass(frozen=True)
@@ -445,22 +505,43 @@ def _mesh_footprint(v: _V, spec, place: str, folder: Path) -> tuple[list, bytes]
 def _parse_robot(v: _V, rd) -> tuple[Robot, dict]:
     """``robot:``: the Robot, and its shape as it enters the static hash."""
     rd = v.mapping(
-        rd, "robot", required=("vmax",), optional=("disc", "box", "amax", "clearance", "mover_clearance")
+        rd,
+        "robot",
+        required=("vmax",),
+        optional=("disc", "box", "footprint", "amax", "clearance", "mover_clearance", "kinematics", "wmax", "reverse"),
     )
-    if ("disc" in rd) == ("box" in rd):
-        v.fail("robot", "give exactly one of disc or box")
+    given = [k for k in ("disc", "box", "footprint") if k in rd]
+    if len(given) != 1:
+        v.fail("robot", "give exactly one of disc, box or footprint" + (f", not {' and '.join(given)}" if given else ""))
+    footprint: tuple = ()
     if "disc" in rd:
         robot_shape, radius, size = "disc", v.number(rd["disc"], "robot.disc", positive=True), (0.0, 0.0)
-    else:
+    elif "box" in rd:
         robot_shape, radius = "box", 0.0
         size = v.vector(rd["box"], "robot.box", 2, positive=True)
+    else:
+        robot_shape, radius, size = "footprint", 0.0, (0.0, 0.0)
+        pts = _check_polygon(v, v.points(rd["footprint"], "robot.footprint", min_rows=3), "robot.footprint")
+        footprint = tuple((float(x), float(y)) for x, y in pts)
     vmax = v.number(rd["vmax"], "robot.vmax", positive=True)
     amax = v.number(rd["amax"], "robot.amax", positive=True) if "amax" in rd else None
     clear = v.number(rd.get("clearance", 0.0), "robot.clearance", nonneg=True)
     mover_clear = v.number(rd.get("mover_clearance", 0.0), "robot.mover_clearance", nonneg=True)
-    robot = Robot(robot_shape, radius, size, vmax, amax, clear, mover_clear)
-
-    return robot, {"shape": robot_shape, "radius": radius, "size": list(size)}
+    kin = rd.get("kinematics", "holonomic")
+    if kin not in KINEMATICS:
+        v.fail("robot.kinematics", f"unknown kinematics {kin!r} (allowed: {', '.join(KINEMATICS)})")
+    for key in ("wmax", "reverse"):
+        if key in rd and kin != "unicycle":
+            v.fail(f"robot.{key}", "only for kinematics: unicycle")
+    wmax = v.number(rd["wmax"], "robot.wmax", positive=True) if "wmax" in rd else None
+    reverse = rd.get("reverse", False)
+    if not isinstance(reverse, bool):
+        v.fail("robot.reverse", f"expected true or false, got {_kind(reverse)}")
+    robot = Robot(robot_shape, radius, size, vmax, amax, clear, mover_clear, kin, wmax, reverse, footprint)
+    shape_repr = {"shape": robot_shape, "radius": radius, "size": list(size)}
+    if footprint:  # only then: the static hash of disc and box scenes is unchanged
+        shape_repr["footprint"] = [list(p) for p in footprint]
+    return robot, shape_repr
 
 
 def _parse_obstacles(v: _V, doc: dict, folder: Path, hasher) -> list:
@@ -471,9 +552,13 @@ def _parse_obstacles(v: _V, doc: dict, folder: Path, hasher) -> list:
         v.fail("obstacles", f"expected a list, got {_kind(doc['obstacles'])}")
     for i, item in enumerate(obs_doc):
         place = f"obstacles[{i}]"
-        kind, spec = _one_key(v, item, place, ("box", "disc", "polygon", "mesh"))
+        kind, spec = _one_key(v, item, place, ("box", "disc", "polygon", "mesh", "map"))
         kplace = _join(place, kind)
-        if kind == "box":
+        if kind == "map":
+            grid = load_map(spec, kplace, v.file, folder)
+            hasher.update(bytes.fromhex(grid.digest))
+            obstacles.append(grid)
+        elif kind == "box":
             spec = v.mapping(spec, kplace, required=("center", "size"), optional=("angle",))
             obstacles.append(
                 Box(
@@ -622,19 +707,26 @@ def parse_scene(doc: Any, file: str = "<string>", folder: str | os.PathLike | No
     v.mapping(
         doc,
         "",
-        required=("version", "name", "bounds", "robot"),
-        optional=("obstacles", "movers", "queries"),
+        required=("version", "name", "robot"),
+        optional=("bounds", "obstacles", "movers", "queries"),
     )
     if doc["version"] != 1 or isinstance(doc["version"], bool):
         v.fail("version", f"unsupported version {doc['version']!r} (this reads version 1)")
     name = v.name(doc["name"], "name", NAME_RE)
-    bounds = v.vector(doc["bounds"], "bounds", 4)
-    if not (bounds[0] < bounds[2] and bounds[1] < bounds[3]):
-        v.fail("bounds", f"inverted or empty bounds {list(bounds)} (need xmin < xmax, ymin < ymax)")
+    if "bounds" in doc:
+        bounds = v.vector(doc["bounds"], "bounds", 4)
+        if not (bounds[0] < bounds[2] and bounds[1] < bounds[3]):
+            v.fail("bounds", f"inverted or empty bounds {list(bounds)} (need xmin < xmax, ymin < ymax)")
 
     robot, robot_repr = _parse_robot(v, doc["robot"])
     hasher = hashlib.sha256()
     obstacles = _parse_obstacles(v, doc, folder, hasher)
+    if "bounds" not in doc:
+        grids = [o for o in obstacles if isinstance(o, MapObstacle)]
+        if not grids:
+            v.fail("bounds", "missing required key (it may be left out only when the scene has a map)")
+        ext = np.array([g.extent for g in grids])
+        bounds = (float(ext[:, 0].min()), float(ext[:, 1].min()), float(ext[:, 2].max()), float(ext[:, 3].max()))
     movers = _parse_movers(v, doc)
     queries = _parse_queries(v, doc, robot)
 
@@ -668,6 +760,8 @@ def _static_hash(shape_hash: str, clearance: float) -> str:
 
 
 def _static_repr(o) -> dict:
+    if isinstance(o, MapObstacle):
+        return {"map": o.digest, "unknown_free": o.unknown_free}
     if isinstance(o, Disc):
         return {"disc": [list(o.center), o.radius]}
     if isinstance(o, Box):

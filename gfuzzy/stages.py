@@ -203,11 +203,11 @@ def _clearance_functions(ctx: StageContext, corridor: FloatArray):
         return np.where(mn >= 0, 0.0, -1.0), mn
 
     # The GA evaluates the mover clearance at every sample of every candidate, so the robot
-    # is first taken as its circumscribed disc (cheap, a lower bound), and a box robot, only
+    # is first taken as its circumscribed disc (cheap, a lower bound), and a box or footprint robot, only
     # where that bound is negative, as the box at the corridor's heading (the separating-axis
     # bound).
     # The re-timing afterwards decides safety with the exact shapes.
-    disc = replace(robot, shape="disc", radius=robot.circumradius, size=(0.0, 0.0))
+    disc = replace(robot, shape="disc", radius=robot.circumradius, size=(0.0, 0.0), footprint=())
 
     mover_states = _StateTable(scene.movers)  # the GA asks at the times of one grid
 
@@ -322,10 +322,15 @@ def _refine(ctx: StageContext, traj: Trajectory, query, opts, deadline) -> tuple
     report = RefineReport(False, "", ga_opts.n_knots, res.generations, seconds, before)
     if not res.improved:
         return traj, replace(report, reason="the GA found nothing better than the corridor")
-    path = funcs[0](res.path)  # poses_of: a box robot takes the corridor's headings
-    if ctx.robot.dof == 3:  # the ends keep their exact poses
-        path[0], path[-1] = traj.poses[0], traj.poses[-1]
-    path[0, :2], path[-1, :2] = traj.poses[0, :2], traj.poses[-1, :2]
+    if ctx.robot.unicycle:  # straight segments through the via-points, turns in place
+        from .drive import turn_path
+
+        path = turn_path(traj.poses[0], res.path[1:-1], traj.poses[-1])
+    else:
+        path = funcs[0](res.path)  # poses_of: a box robot takes the corridor's headings
+        if ctx.robot.dof == 3:  # the ends keep their exact poses
+            path[0], path[-1] = traj.poses[0], traj.poses[-1]
+        path[0, :2], path[-1, :2] = traj.poses[0, :2], traj.poses[-1, :2]
     for a, b in zip(path[:-1], path[1:], strict=True):
         if not ctx.geometry.motion_free(a, b):
             return traj, replace(report, reason="a refined segment could not be certified free of static obstacles")

@@ -139,6 +139,14 @@ def test_navigator_episode_succeeds_among_a_few_people(roadmap):
     assert len(ep.replan_seconds) == ep.social.steps
 
 
+def test_a_unicycle_robot_turns_toward_its_way_and_arrives(roadmap):
+    s = C.CrowdSetting(humans=2, kinematics="unicycle")
+    ep = C.run_episode(s, roadmap, 1, 0, ["navigator"])[0]
+    assert ep.reached and ep.min_separation >= 0
+    scene = C.crowd_scene(s, C.layout(s, np.random.default_rng([1, 0])))
+    assert scene.robot.kinematics == "unicycle" and len(scene.queries[0].start) == 3
+
+
 def test_summary_by_hand():
     def ep(outcome, time, steps, disc, intr, sep, lat):
         return C.Episode("p", 0, outcome, time, sep, SocialMetrics(steps, disc, intr), np.array(lat))
@@ -155,7 +163,7 @@ def test_summary_by_hand():
     assert s.replan_p50 == pytest.approx(0.025)
 
 
-def test_oracle_and_unicycle_are_refused(roadmap):
+def test_oracle_with_visible_humans_and_other_policies_for_a_unicycle_are_refused(roadmap):
     with pytest.raises(InputError):
         C.run_episode(C.CrowdSetting(humans=2, visible=True), roadmap, 1, 0, ["oracle"])
     with pytest.raises(InputError):
@@ -205,7 +213,8 @@ def test_crowd_command_navigator_visible(tmp_path, workers):
 
 
 @pytest.mark.parametrize("flags", [
-    ["--humans", "-1"], ["--episodes", "0"], ["--kinematics", "unicycle"], ["--visible", "--policy", "oracle"],
+    ["--humans", "-1"], ["--episodes", "0"], ["--kinematics", "unicycle", "--policy", "orca"],
+    ["--visible", "--policy", "oracle"],
     ["--scenario", "hall"], ["--fov", "0"], ["--noise", "-0.1"], ["--workers", "-1"], ["--time-budget", "0"],
 ])  # fmt: skip
 def test_crowd_command_refuses_bad_arguments_in_one_line(tmp_path, flags):

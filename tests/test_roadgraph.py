@@ -63,7 +63,8 @@ def _scratch_graph(planner, start, goal, dt, vmax, connect_k, stretch):
     keep = rm.spanner(stretch)
     edges = np.vstack([rm.edges[keep], extra_e])
     lengths = np.concatenate([rm.lengths[keep], extra_w])
-    k, offs, inner, a, b, j, src, dst = split_edges(verts, edges, lengths, vmax * dt, n)
+    cut = split_edges(verts, edges, lengths, vmax * dt, n)
+    k, offs, inner, a, b, j, src, dst = cut.k, cut.offs, cut.inner, cut.a, cut.b, cut.j, cut.src, cut.dst
 
     def sp(weights, edges_):
         w = np.maximum(weights, 1e-300)

@@ -14,7 +14,9 @@ import numpy as np
 import pytest
 import yaml
 from conftest import ROOT
+from helpers import scene_doc as door_doc
 from reference import Reference, interpolate
+from shared_scenes import DOOR
 
 import gfuzzy.roadmap as roadmap_module
 from gfuzzy.errors import SceneError
@@ -439,3 +441,21 @@ def test_spanner_interrupted_midway_caches_nothing_and_is_read_only(monkeypatch)
     np.testing.assert_array_equal(keep, fresh)
     with pytest.raises(ValueError):
         keep[0] = not keep[0]  # callers cannot corrupt the cache
+
+
+def test_the_roadmap_keeps_the_static_clearance(door):
+    """Every vertex and every edge of a roadmap built with a clearance keeps it."""
+    scene, rm = door
+    # the oracle: shapely on the scene document (tests/reference.py), not the geometry the
+    # roadmap was built with
+    free = Reference(door_doc(DOOR))
+
+    def to_obstacles(poses):  # the bounds are not held to the clearance
+        return float(free.obstacle_distance(np.asarray(poses)).min())
+
+    assert to_obstacles(rm.vertices) >= 0.05 - 1e-9
+    assert to_obstacles(rm.vertices) < 0.1  # some vertex does go near the walls
+    for a, b in rm.edges[:: max(1, len(rm.edges) // 60)]:
+        f = np.linspace(0, 1, 25)
+        poses = rm.vertices[a] + f[:, None] * (rm.vertices[b] - rm.vertices[a])
+        assert to_obstacles(poses) >= 0.05 - 1e-6

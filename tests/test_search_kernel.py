@@ -3,7 +3,7 @@
 Both must search in the same order and so return the same answer: same status, same
 (node, step) rows, same expansions. Cross-checked on every bundled scene's queries (as
 given, with a hold, with a mover clearance), on seeded random graphs among random movers,
-and against the brute-force time-expanded search of test_planner.
+and (in test_planner) against the brute-force time-expanded search of tests/reference.py.
 """
 
 from __future__ import annotations
@@ -235,11 +235,14 @@ def test_random_graphs_cover_both_outcomes(tmp_path):
 
 def test_reference_path_never_imports_numba():
     """`import gfuzzy` and a reference-backend query run without numba (cold start), and
-    the compiled backend loads it."""
+    the compiled backend loads it when no precompiled kernels serve it
+    (``GFUZZY_PRECOMPILED=0``; with them: tests/test_jit.py)."""
     from conftest import run_python
 
     code = (
-        "import sys, gfuzzy\n"
+        "import os, sys\n"
+        "os.environ['GFUZZY_PRECOMPILED'] = '0'\n"
+        "import gfuzzy\n"
         "from gfuzzy.scene import load_scene\n"
         "from gfuzzy.roadmap import load_roadmap\n"
         "s = load_scene('scenes/sim-4s1m.yaml')\n"

@@ -8,10 +8,19 @@ from dataclasses import replace
 import numpy as np
 import pytest
 import yaml
+from conftest import ROOT
+from helpers import BUNDLED_PARAMS
+from helpers import BUNDLED_SCENES as SCENES
+from helpers import bundled_answers as _answers
+from helpers import bundled_setup as _setup
+from helpers import scene_doc as _doc
+from helpers import scene_of as _scene
 from reference import reference_violation
+from shared_scenes import CROSSING
 
+from gfuzzy.check import check_trajectory
 from gfuzzy.geometry import StaticGeometry
-from gfuzzy.planner import Planner, PlanOptions
+from gfuzzy.planner import Planner, PlanOptions, plan
 from gfuzzy.roadmap import RoadmapOptions, build_roadmap
 from gfuzzy.scene import Query, parse_scene
 from gfuzzy.stages import RefineReport, SpeedReport, StageContext, apply_stages
@@ -99,3 +108,89 @@ def test_the_planner_hands_the_stages_a_context(hall):
     res = Planner(scene, rm).plan(q.start, q.goal, q.t0, PlanOptions(speed_layer=True))
     assert res.speed_report is not None and res.refine_report is None
     assert res.to_file(scene.name, q.name).to_dict()["stats"]["speed_layer"]["applied"] == res.speed_report.applied
+
+
+def test_ga_and_speed_layer_keep_the_clearances():
+    scene = _scene(CROSSING, clearance=0.05, mover_clearance=0.2)
+    rm = build_roadmap(scene, RoadmapOptions(vertices=60, seed=1))
+    q = scene.queries[0]
+    res = plan(scene, rm, q.start, q.goal, options=PlanOptions(refine=True, speed_layer=True))
+    assert res.solved
+    # the stages keep only answers check_trajectory accepts: the oracle is the independent
+    # shapely reference, which shares no code with the planner or the checker
+    assert reference_violation(_doc(CROSSING, clearance=0.05, mover_clearance=0.2), res.trajectory.waypoints) == ""
+
+
+@pytest.mark.parametrize("path", BUNDLED_PARAMS)  # the large scenes: slow
+def test_refined_answers_keep_the_guarantees(path):
+    scene = _setup(path)[0]
+    for (q, plain), (_, refined) in zip(_answers(path, False, False), _answers(path, True, False), strict=True):
+        assert refined.status == plain.status
+        if not refined.solved:
+            continue
+        rep = check_trajectory(scene, refined.trajectory.waypoints, q)
+        assert rep.valid, f"{q.name}: {rep.reason}"
+        info = refined.refine_report.to_dict()
+        if info["applied"]:
+            before, after = info["before"], info["after"]
+            assert after["length"] < before["length"] - 1e-9 or after["smoothness"] < before["smoothness"] - 1e-9
+            assert refined.duration <= plain.duration * 1.1 + 1e-9
+        else:
+            assert np.array_equal(refined.trajectory.waypoints, plain.trajectory.waypoints)
+
+
+@pytest.mark.slow  # an experiment: how often the stage helps, on every bundled scene
+def test_refinement_applies_on_most_queries():
+    applied = solved = boxes = 0
+    for path in SCENES:
+        scene = _setup(path)[0]
+        for _, r in _answers(path, True, False):
+            if r.solved:
+                solved += 1
+                applied += r.refine_report.applied
+                boxes += r.refine_report.applied and scene.robot.shape == "box"
+    assert applied >= 0.75 * solved
+    assert boxes >= 1  # box robots too, through 0.6 m doors
+
+
+def test_refinement_is_reproducible():
+    path = ROOT / "scenes" / "sim-4s1m.yaml"
+    scene, _, planner = _setup(path)
+    q = scene.queries[0]
+    a = planner.plan(q.start, q.goal, q.t0, PlanOptions(refine=True, seed=11))
+    b = planner.plan(q.start, q.goal, q.t0, PlanOptions(refine=True, seed=11))
+    assert np.array_equal(a.trajectory.waypoints, b.trajectory.waypoints)
+
+
+@pytest.mark.parametrize("path", BUNDLED_PARAMS)  # the large scenes: slow
+def test_speed_layer_answers_keep_the_guarantees(path):
+    scene = _setup(path)[0]
+    robot = scene.robot
+    amax = robot.amax if robot.amax is not None else 2 * robot.vmax
+    for q, res in _answers(path, False, True):
+        if not res.solved:
+            continue
+        w = res.trajectory.waypoints
+        rep = check_trajectory(scene, w, q)
+        assert rep.valid, f"{q.name}: {rep.reason}"
+        info = res.speed_report.to_dict()
+        if not info["applied"]:
+            continue
+        # the profile respects the acceleration bound: speed changes between steps stay
+        # within amax * dt (plus the discretization of the profile onto the time grid)
+        v = res.trajectory.speeds()
+        dt = np.diff(w[:, 0])
+        moving = dt < 0.07 + 1e-9
+        dv = np.abs(np.diff(v))[moving[1:] & moving[:-1]]
+        assert dv.max(initial=0.0) <= amax * 0.07 * 1.5 + 1e-9, (q.name, dv.max())
+
+
+@pytest.mark.slow  # an experiment: how often the stage helps, on every bundled scene
+def test_speed_layer_applies_on_most_queries():
+    applied = total = 0
+    for path in SCENES:
+        for _, r in _answers(path, False, True):
+            if r.solved:
+                total += 1
+                applied += r.speed_report.applied
+    assert applied >= 0.6 * total

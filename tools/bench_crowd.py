@@ -71,8 +71,6 @@ def run_setting(name, episodes, seed, client, only_policy=None):
           f"{' --workers 2' if client is not None else ''}")
     try:
         setting = setting_of(kw, seed)
-        if setting.kinematics == "unicycle":
-            raise C.InputError("unicycle robots are not available in this build (the unicycle navigator is not merged)")
     except C.InputError as exc:
         print(f"not run: {exc}")
         return

@@ -18,7 +18,8 @@ def add_crowd(sub) -> None:
     c.add_argument("--humans", type=int, metavar="K", help="number of humans (default 5; 20 in the arena)")
     c.add_argument("--visible", action="store_true", help="the humans see the robot and react to it")
     c.add_argument("--crowd", choices=("orca", "social-force"), default="orca", help="how the humans move (default orca)")
-    c.add_argument("--kinematics", choices=("holonomic", "unicycle"), default="holonomic", help="the robot's kinematics")
+    c.add_argument("--kinematics", choices=("holonomic", "unicycle"), default="holonomic",
+                   help="the robot's kinematics (unicycle: a differential drive turning at most 1 rad/s, navigator only)")
     c.add_argument("--episodes", type=int, default=100, metavar="N", help="episodes (default 100)")
     c.add_argument("--seed", type=int, default=1, help="the run's seed: same seed, same episodes (default 1)")
     c.add_argument("--policy", nargs="+", choices=("navigator", "orca", "social-force", "oracle"),
@@ -65,8 +66,6 @@ def _setting(args):
         raise BadInput(f"gfuzzy crowd: --episodes must be >= 1, got {args.episodes}")
     if args.workers < 0:
         raise BadInput(f"gfuzzy crowd: --workers must be >= 0, got {args.workers}")
-    if args.kinematics == "unicycle":
-        raise BadInput("gfuzzy crowd: --kinematics unicycle is not available yet: the unicycle navigator is not merged")
     for flag, value in (("--noise", args.noise), ("--fov", args.fov), ("--time-budget", args.time_budget),
                         ("--personal-space", args.personal_space)):  # fmt: skip
         if not math.isfinite(value):
@@ -80,6 +79,10 @@ def _setting(args):
     except InputError as exc:
         raise BadInput(f"gfuzzy crowd: {exc}") from None
     policies = args.policy or (["navigator", "orca"] + ([] if args.visible else ["oracle"]))
+    if args.kinematics == "unicycle":
+        if args.policy and set(args.policy) - {"navigator"}:
+            raise BadInput("gfuzzy crowd: with --kinematics unicycle only --policy navigator runs")
+        policies = ["navigator"]
     if "oracle" in policies and args.visible:
         raise BadInput("gfuzzy crowd: --policy oracle needs humans who do not see the robot (drop --visible)")
     return setting, options, list(dict.fromkeys(policies))
