@@ -411,7 +411,7 @@ def _make_passage_sampler(
     """
     scene = geometry.scene
     xmin, ymin, xmax, ymax = scene.bounds
-    box = scene.robot.shape == "box"
+    box = scene.robot.space_dof == 3
     sigma = max(scene.robot.circumradius, 1e-3)
     valid = geometry.is_valid
     blocked = _blocked_points(scene)
@@ -521,7 +521,7 @@ class _Builder:
         bounds.setHigh(0, xmax)
         bounds.setLow(1, ymin)
         bounds.setHigh(1, ymax)
-        self.box = scene.robot.shape == "box"
+        self.box = scene.robot.space_dof == 3
         if self.box:
             space = ob.SE2StateSpace()
             space.setBounds(bounds)

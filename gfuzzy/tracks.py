@@ -431,7 +431,7 @@ def _robot_doc(options: TrackSceneOptions, static: Scene | None):
         dof, inradius = static.robot.dof, static.robot.inradius
     else:
         robot = {"disc": options.robot_radius if options.robot_radius is not None else 0.2}
-        robot.update({k: v for k, v in base.items() if k not in ("disc", "box")})
+        robot.update({k: v for k, v in base.items() if k not in ("disc", "box", "footprint")})
         dof, inradius = 2, robot["disc"]
     for key in ("vmax", "amax"):
         if getattr(options, key) is not None:
