@@ -643,6 +643,9 @@ BAD_SCENES = ROOT / "tests" / "bad_scenes"
 BEYOND_A_SCHEMA = {
     "duplicate_mover": "unique names",
     "duplicate_query": "unique names",
+    "footprint_bowtie": "self-intersection",
+    "footprint_collinear": "area",
+    "footprint_nan": "NaN passes every numeric keyword",
     "inverted_bounds": "xmin < xmax compares two items",
     "mesh_escape": "a relative path that leaves the folder",
     "mesh_garbage": "the file's contents",
