@@ -68,6 +68,11 @@ class RoadmapOptions:
         a chain of aligned milestones crosses a door the robot fits through only turned.
     bridge_ratio : float
         Share of bridge-test samples in the ``"passage"`` sampler.
+    repair : bool
+        Disc robots: after PRM, join the roadmap components that share a region of the
+        exactly computed free space (:func:`gfuzzy.freespace.repair`), adding vertices
+        beyond ``vertices`` as needed (``info["repair"]`` says how many). Roadmap files
+        written before this option existed load with ``repair=False``.
     """
 
     vertices: int = 200
@@ -76,6 +81,7 @@ class RoadmapOptions:
     resolution: float = 0.05
     sampler: str = "passage"
     bridge_ratio: float = 0.5
+    repair: bool = True
 
     def __post_init__(self):
         if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)) or not 0 <= self.seed < 2**31:
@@ -251,7 +257,10 @@ def load_roadmap(path: str | os.PathLike, scene: Scene | None = None) -> Roadmap
         vertices = np.asarray(doc["vertices"], dtype=float)
         raw_edges = np.asarray(doc["edges"])
         lengths = np.asarray(doc["lengths"], dtype=float)
-        opts = RoadmapOptions(**doc["options"])
+        raw_opts = doc["options"]
+        if isinstance(raw_opts, dict) and "repair" not in raw_opts:  # a file from before the repair
+            raw_opts = {**raw_opts, "repair": False}
+        opts = RoadmapOptions(**raw_opts)
         circumradius = float(doc["circumradius"])
     except (KeyError, TypeError, ValueError, OverflowError) as exc:
         raise SceneError(file, "", f"malformed roadmap: {' '.join(str(exc).split())[:80]}") from None
@@ -625,6 +634,11 @@ def grow_roadmaps(
     t_start = time.perf_counter()
     _seed_ompl(options.seed)
     builder = _Builder(scene, options, geometry)
+    fs = None
+    if options.repair and scene.robot.shape == "disc":
+        from .freespace import free_space
+
+        fs = free_space(scene)
     certified: dict = {}  # (pose a, pose b) bytes -> free: later sizes reuse the answers
     vertex_clear: dict = {}  # pose bytes -> clearance
     out = []
@@ -653,6 +667,18 @@ def grow_roadmaps(
                     progress(k + 1, len(edges))
             dropped = int((~keep).sum())
             edges = edges[keep]
+            repaired = None
+            if fs is not None:
+                from .freespace import repair
+
+                t_rep = time.perf_counter()
+                repaired = repair(geometry, fs, vertices, edges)
+                vertices, edges = repaired.vertices, repaired.edges
+                if repaired.added_vertices:
+                    log.info(
+                        "free-space repair: %d roadmap components joined, %d vertices added",
+                        repaired.joined, repaired.added_vertices,
+                    )
             lengths = metric_distance(
                 vertices[edges[:, 0]], vertices[edges[:, 1]], scene.robot.circumradius
             )
@@ -667,6 +693,8 @@ def grow_roadmaps(
                 "edges_dropped": dropped,
                 "components": _components(len(vertices), edges),
             }
+            if repaired is not None:
+                info["repair"] = {**repaired.to_dict(), "seconds": round(time.perf_counter() - t_rep, 4)}
             opts = RoadmapOptions(**{**asdict(options), "vertices": n})
             out.append(
                 Roadmap(
