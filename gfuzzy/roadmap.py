@@ -328,8 +328,15 @@ def _seed_ompl(seed: int) -> None:
         ou.setLogLevel(level)
 
 
-def _blocked_points(scene: Scene):
-    """A vectorised test: which xy points lie inside a static obstacle or outside bounds."""
+def _blocked_points(scene: Scene, grow: float = 0.0):
+    """A vectorised test: which xy points lie within ``grow`` of a static obstacle or of
+    the outside of the bounds.
+
+    With ``grow`` the robot's inradius (plus its clearance, from the obstacles), a blocked
+    point is one where the robot collides at every heading: the bridge test's ends then
+    lie in C-space obstacles, and its midpoints in the gaps the robot may fit through.
+    Arcs are cut into a few chords: this only steers sampling, the validity check decides.
+    """
     import shapely
 
     from .scene import Box, Disc
@@ -337,14 +344,18 @@ def _blocked_points(scene: Scene):
     shapes = []
     for ob_ in scene.obstacles:
         if isinstance(ob_, Disc):
-            shapes.append(shapely.Point(ob_.center).buffer(ob_.radius, 32))
-        elif isinstance(ob_, Box):
-            shapes.append(shapely.Polygon(ob_.vertices()))
+            shapes.append(shapely.Point(ob_.center).buffer(ob_.radius + grow, 8))
+            continue
+        if isinstance(ob_, Box):
+            shape = shapely.Polygon(ob_.vertices())
         else:
-            shapes.append(shapely.Polygon(ob_.points, list(ob_.holes)))
+            shape = shapely.Polygon(ob_.points, list(ob_.holes))
+        shapes.append(shape.buffer(grow, 8) if grow > 0 else shape)
     union = shapely.union_all(shapes) if shapes else shapely.Polygon()
     shapely.prepare(union)
+    inset = scene.robot.inradius if grow > 0 else 0.0
     xmin, ymin, xmax, ymax = scene.bounds
+    xmin, ymin, xmax, ymax = xmin + inset, ymin + inset, xmax - inset, ymax - inset
 
     def blocked(xy: FloatArray) -> np.ndarray:
         x, y = xy[:, 0], xy[:, 1]
@@ -369,7 +380,7 @@ def _make_passage_sampler(
     box = scene.robot.shape == "box"
     sigma = max(scene.robot.circumradius, 1e-3)
     valid = geometry.is_valid
-    blocked = _blocked_points(scene)
+    blocked = _blocked_points(scene, scene.robot.inradius + scene.robot.clearance)
     span = 2.0 * scene.robot.circumradius
 
     class PassageSampler(ob.ValidStateSampler):
