@@ -539,7 +539,7 @@ class Separation:
             f"({self.start[0]:.3f}, {self.start[1]:.3f}), the goal's around ({self.goal[0]:.3f}, {self.goal[1]:.3f})"
         )
         if self.passes_below == 0.0:
-            return msg + "; they are sealed off from each other (not even a point robot passes)"
+            return msg + "; they are sealed off from each other (the obstacles themselves, not grown, leave no way between them)"
         if self.narrowest is not None:
             msg += f"; the narrowest place between them is near ({self.narrowest[0]:.3f}, {self.narrowest[1]:.3f})"
         if self.passes_below is not None:
