@@ -18,7 +18,8 @@ settings (-n 200) and answers the query:
   space (run the same tool on an older checkout for the older sampler's figures);
 * ``no-repair``: the passage sampler without the repair, queries linked through the free
   space (what a roadmap file written before the repair gets);
-* ``repair``: the default (passage sampler + free-space repair + links for discs).
+* ``repair``: the default (passage sampler + free-space repair + links for discs);
+* ``uniform+repair``: OMPL's uniform sampler with the repair and links (the repair alone).
 
 Columns: solved / seeds, the mean and max roadmap build time, the vertices the repair added
 (mean), and the roadmap's components (mean). Every solved answer is checked by
@@ -48,6 +49,7 @@ MODES = {
     "before": ({"repair": False}, False),
     "no-repair": ({"repair": False}, True),
     "repair": ({"repair": True}, True),
+    "uniform+repair": ({"repair": True, "sampler": "uniform"}, True),
 }
 
 
@@ -107,7 +109,7 @@ def main() -> int:
     args = ap.parse_args()
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(f"# {args.seeds} seeds, -n {args.vertices}, load average {load:.2f}")
-    print(f"{'robot':<22} {'door':>6} {'slack':>6} {'mode':<10} {'solved':>7} {'mean s':>7} {'max s':>7} {'added':>6} {'comps':>6}")
+    print(f"{'robot':<22} {'door':>6} {'slack':>6} {'mode':<14} {'solved':>7} {'mean s':>7} {'max s':>7} {'added':>6} {'comps':>6}")
     cases = []
     if args.kind in ("disc", "both"):
         robot = {"disc": 0.3, "vmax": 1.0, "clearance": 0.05}
@@ -120,12 +122,12 @@ def main() -> int:
     for name, width, slack, robot, start, goal in cases:
         scene = door_scene(width, robot)
         for mode in args.modes:
-            if "box" in robot and mode in ("no-repair", "repair"):
+            if "box" in robot and mode in ("no-repair", "repair", "uniform+repair"):
                 continue  # the free space is for discs: the same as "before"
             r = run_case(scene, start, goal, mode, args.seeds, args.vertices)
             bad = f"  ({r['bad']} FAILED CHECK)" if r["bad"] else ""
             print(
-                f"{name:<22} {width:6.3f} {slack:6.3f} {mode:<10} {r['solved']:>3}/{args.seeds:<3} "
+                f"{name:<22} {width:6.3f} {slack:6.3f} {mode:<14} {r['solved']:>3}/{args.seeds:<3} "
                 f"{r['mean_s']:7.2f} {r['max_s']:7.2f} {r['added']:6.1f} {r['components']:6.1f}{bad}",
                 flush=True,
             )
