@@ -408,8 +408,6 @@ def repair(geometry: StaticGeometry, fs: FreeSpace, vertices: FloatArray, edges:
     -------
     Repair
     """
-    from scipy.spatial import cKDTree
-
     verts = [tuple(v) for v in np.asarray(vertices, dtype=float).tolist()]
     new_edges: list = []
     uf = _Union(len(verts))
@@ -444,6 +442,8 @@ def repair(geometry: StaticGeometry, fs: FreeSpace, vertices: FloatArray, edges:
                 groups.setdefault(uf.find(i), []).append(i)
             if len(groups) < 2:
                 break
+            from scipy.spatial import cKDTree  # only when there is something to join
+
             order = sorted(groups, key=lambda g: (-len(groups[g]), g))
             main = np.asarray([verts[i] for i in groups[order[0]]])
             tree = cKDTree(main)

@@ -16,6 +16,8 @@ import math
 import numpy as np
 import pytest
 import shapely
+import yaml
+from conftest import run_cli_process
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
@@ -109,6 +111,21 @@ def test_no_repair_is_the_old_behaviour_and_the_query_still_joins():
     res = solve(scene, plain, [1.0, 1.0], [5.0, 3.0])
     assert res.status == "solved"
     assert res.stats["roadmap_vertices"] > len(plain)
+
+
+def test_cli_roadmap_says_what_the_repair_added(tmp_path):
+    path = tmp_path / "door.yaml"
+    path.write_text(yaml.safe_dump(door_doc(0.74)), encoding="utf-8")
+    out = tmp_path / "rm.json"
+    p = run_cli_process("roadmap", path, "-n", "30", "--seed", "4", "-o", out)
+    assert p.returncode == 0, p.stderr
+    assert "free-space repair: PRM missed 1 passage(s); 2 vertices beyond -n 30 join them" in p.stdout
+    doc = json.loads(out.read_text())
+    assert len(doc["vertices"]) == 32 and doc["options"]["repair"] is True
+    p = run_cli_process("roadmap", path, "-n", "30", "--seed", "4", "--no-repair", "-o", out)
+    assert p.returncode == 0 and "free-space repair" not in p.stdout
+    doc = json.loads(out.read_text())
+    assert len(doc["vertices"]) == 30 and doc["options"]["repair"] is False and doc["info"]["components"] == 2
 
 
 def test_old_roadmap_files_load_as_unrepaired(tmp_path):
