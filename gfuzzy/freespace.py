@@ -386,14 +386,36 @@ class _Union:
             self.parent[max(ra, rb)] = min(ra, rb)
 
 
-def repair(geometry: StaticGeometry, fs: FreeSpace, vertices: FloatArray, edges: IntArray) -> Repair:
+def _wire(geometry: StaticGeometry, verts: FloatArray, n0: int, k: int, have: set) -> list:
+    """Certified edges from each added vertex (index >= n0) to its k nearest vertices, as
+    PRM connects its own: a repair path's corners then serve routes in every direction, not
+    only along the path."""
+    from scipy.spatial import cKDTree
+
+    tree = cKDTree(verts)
+    out = []
+    _, near = tree.query(verts[n0:], k=min(k + 1, len(verts)))
+    for i, row in enumerate(np.atleast_2d(near).tolist(), start=n0):
+        for j in row:
+            e = (min(i, j), max(i, j))
+            if j == i or j >= len(verts) or e in have:
+                continue
+            have.add(e)
+            if geometry.motion_free(verts[i], verts[j]):
+                out.append(e)
+    return out
+
+
+def repair(
+    geometry: StaticGeometry, fs: FreeSpace, vertices: FloatArray, edges: IntArray, neighbors: int = 10
+) -> Repair:
     """Join the roadmap components that share a free-space region.
 
     For every region holding vertices of several roadmap components, the component with
     the most vertices there is joined to each other one by a path through the region (a
     triangulation of the region eroded by a margin, Dijkstra through its inner edges'
     midpoints, a greedy shortcut), its corners added as vertices and every motion
-    certified. A region without any vertex gets one (a point inside it), so that a query
+    certified; each added vertex is then connected to its nearest vertices too. A region without any vertex gets one (a point inside it), so that a query
     there has a vertex to reach. Deterministic: no randomness.
 
     Parameters
@@ -403,6 +425,9 @@ def repair(geometry: StaticGeometry, fs: FreeSpace, vertices: FloatArray, edges:
     fs : FreeSpace
     vertices : (V, 2) float
     edges : (E, 2) int
+    neighbors : int
+        Each added vertex is also joined to its ``neighbors`` nearest vertices where the
+        motion is certified (as PRM's k nearest; 0: only along the repair paths).
 
     Returns
     -------
@@ -465,7 +490,10 @@ def repair(geometry: StaticGeometry, fs: FreeSpace, vertices: FloatArray, edges:
                 log.warning("free-space repair: could not certify a path into roadmap component %d", other)
                 members = [i for i in members if uf.find(i) != other]
     n0 = len(vertices)
-    all_edges = np.vstack([np.asarray(edges, dtype=np.int64).reshape(-1, 2), np.asarray(sorted(set(new_edges)), dtype=np.int64).reshape(-1, 2)])
+    if len(verts) > n0 and neighbors > 0:
+        new_edges += _wire(geometry, np.asarray(verts, dtype=float), n0, neighbors, set(new_edges))
+    old = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    all_edges = np.vstack([old, np.asarray(sorted(set(new_edges)), dtype=np.int64).reshape(-1, 2)])
     return Repair(
         np.asarray(verts, dtype=float).reshape(-1, 2),
         all_edges,

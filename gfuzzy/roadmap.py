@@ -683,7 +683,7 @@ def grow_roadmaps(
                 from .freespace import repair
 
                 t_rep = time.perf_counter()
-                repaired = repair(geometry, fs, vertices, edges)
+                repaired = repair(geometry, fs, vertices, edges, options.neighbors)
                 vertices, edges = repaired.vertices, repaired.edges
                 if repaired.added_vertices:
                     log.info(

@@ -217,18 +217,18 @@ def oracle_regions(doc: dict):
 
 
 def oracle_region(regions, p, margin):
-    """Index of the region holding p at least ``margin`` inside, -1 if none, None if p is
-    too close to a boundary to judge."""
+    """Index of the region holding p, -1 if none, None if p lies within ``margin`` of a
+    region's boundary (too close to judge)."""
     pt = shapely.Point(p)
+    if any(g.boundary.distance(pt) <= margin for g in regions):
+        return None
     for k, g in enumerate(regions):
         if g.contains(pt):
-            return k if g.exterior.distance(pt) > margin and all(
-                shapely.LinearRing(h).distance(pt) > margin for h in g.interiors
-            ) else None
+            return k
     return -1
 
 
-@settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(
     radius=st.floats(0.15, 0.35),
     clearance=st.sampled_from([0.0, 0.03, 0.05]),
