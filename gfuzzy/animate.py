@@ -304,7 +304,7 @@ class _RobotArtists:
             self.ring.set_animated(True)
             ax.add_patch(self.ring)
             self.artists.append(self.ring)
-        if scene.robot.shape == "box":
+        if scene.robot.dof == 3:  # a box, or any unicycle: its heading
             self.tick = Line2D([], [], color="white", lw=1.5, zorder=6.1, animated=True)
             ax.add_line(self.tick)
             self.artists.append(self.tick)
@@ -325,6 +325,7 @@ class _RobotArtists:
             self.robot.set_center(pose[:2])
         else:
             self.robot.set_xy(scene.robot.corners(pose[None, :3])[0])
+        if scene.robot.dof == 3:
             self.tick.set_data(*_heading_tick(scene, pose).T)
         if ring is not None and scene.robot.shape == "disc":
             ring.set_center(pose[:2])

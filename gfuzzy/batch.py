@@ -25,6 +25,7 @@ import io
 import logging
 import math
 import time
+import traceback
 import uuid
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import asdict, dataclass, field, fields
@@ -84,6 +85,8 @@ class BatchRow:
     ``status`` is a planner status (``solved``, ``no_path``, ``invalid_query``,
     ``timeout``) or ``error`` when the query failed to run (``error`` then says why).
     ``check`` is ``valid`` or ``invalid`` for a solved answer, ``""`` otherwise.
+    ``traceback`` is the failure's traceback for an ``error`` row that is a bug (not an
+    `InputError`): kept for the terminal and the log, never a column of the table.
     """
 
     scene: str
@@ -95,6 +98,7 @@ class BatchRow:
     planning_seconds: float | None = None
     check: str = ""
     error: str = ""
+    traceback: str = field(default="", repr=False)
 
     @property
     def ran(self) -> bool:
@@ -102,7 +106,7 @@ class BatchRow:
 
 
 #: Column order of the results table.
-COLUMNS = tuple(f.name for f in fields(BatchRow))
+COLUMNS = tuple(f.name for f in fields(BatchRow) if f.name != "traceback")
 
 
 @dataclass(frozen=True)
@@ -211,12 +215,20 @@ def run_query(
         )
         return QueryAnswer(row, res.to_file(scene.name, q.name).to_dict())
     except Exception as exc:  # noqa: BLE001 - any failure of one query is its row, not the batch's
-        return QueryAnswer(BatchRow(scene.name, q.name, "error", error=_one_line(exc)))
+        return QueryAnswer(_error_row(scene.name, q.name, exc))
 
 
 def _one_line(exc: BaseException) -> str:
     text = " ".join(str(exc).split())
     return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+
+
+def _error_row(scene: str, query: str, exc: BaseException) -> BatchRow:
+    """The ``error`` row of a query that raised ``exc``: a bug keeps its traceback."""
+    tb = "" if isinstance(exc, InputError) else "".join(traceback.format_exception(exc))
+    if tb:
+        log.error("%s/%s failed:\n%s", scene, query, tb.rstrip())
+    return BatchRow(scene, query, "error", error=_one_line(exc), traceback=tb)
 
 
 # ------------------------------------------------------------------ the client side
@@ -409,12 +421,7 @@ def _round(client, bundles, jobs, ids, options, before, record) -> list[int]:
                 continue
             except Exception as exc:  # noqa: BLE001 - a lost cluster, a bad pickle: this query's row
                 scene = bundles[jobs[j][0]].scene
-                row, doc = (
-                    BatchRow(
-                        scene.name, scene.queries[jobs[j][1]].name, "error", error=_one_line(exc)
-                    ),
-                    None,
-                )
+                row, doc = _error_row(scene.name, scene.queries[jobs[j][1]].name, exc), None
             record(j, row, doc)
     finally:
         with contextlib.suppress(Exception):

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 
-from .scene import Box, Disc, Query, Scene
+from .scene import Box, Disc, MapObstacle, Query, Scene
 from .typing import FloatArray
 
 __all__ = ["CheckReport", "check_trajectory"]
@@ -59,6 +59,30 @@ class CheckReport:
     time: float | None = None
 
 
+def _grid_region(grid: MapObstacle):
+    """The blocked region of a map, from its cell values (not the planner's rectangles).
+
+    Nav2's values are read once (``maps.nav2_values``, tested against an oracle of its
+    own); what the checker verifies is the planner's collision model of them, so it
+    derives the region again: cell value 100, or -1 unless unknown is free, each row's
+    runs of such cells as boxes, and their union.
+    """
+    values = np.asarray(grid.values)
+    blocked = values == 100
+    if not grid.unknown_free:
+        blocked = blocked | (values == -1)
+    h, w = blocked.shape
+    res = grid.info.resolution
+    ox, oy = grid.info.origin
+    edges = np.diff(np.pad(blocked.astype(np.int8), ((0, 0), (1, 1))), axis=1)
+    rows, starts = np.nonzero(edges > 0)
+    _, stops = np.nonzero(edges < 0)
+    if len(rows) == 0:
+        return shapely.Polygon()
+    boxes = shapely.box(ox + starts * res, oy + (h - 1 - rows) * res, ox + stops * res, oy + (h - rows) * res)
+    return shapely.union_all(boxes)
+
+
 def _wrap(a):
     return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
 
@@ -78,6 +102,8 @@ class _World:
                 self.discs.append((np.array(ob.center, float), ob.radius))
             elif isinstance(ob, Box):
                 polys.append(shapely.Polygon(ob.vertices()))
+            elif isinstance(ob, MapObstacle):
+                polys.append(_grid_region(ob))
             else:
                 polys.append(shapely.Polygon(ob.points, [h for h in ob.holes]))
         self.static = shapely.union_all(polys) if polys else None
@@ -348,6 +374,10 @@ def _rows_problem(robot, w: FloatArray, query) -> CheckReport | None:
     if np.any(dt <= 0):
         i = int(np.nonzero(dt <= 0)[0][0]) + 1
         return CheckReport(False, f"t does not increase strictly at row {i} (t={float(t[i])!r})", time=float(t[i]))
+    if getattr(robot, "kinematics", "holonomic") == "unicycle":
+        bad = _unicycle_problem(robot, w)
+        if bad is not None:
+            return bad
     if query is not None:
         if abs(t[0] - query.t0) > 1e-6:
             return CheckReport(False, f"first row is at t={float(t[0])!r}, the query departs at t0={query.t0!r}", time=float(t[0]))
@@ -355,6 +385,48 @@ def _rows_problem(robot, w: FloatArray, query) -> CheckReport | None:
             return CheckReport(False, f"first row {w[0, 1:].tolist()} is not the start {list(query.start)}", time=float(t[0]))
         if not _pose_equal(w[-1, 1:], query.goal):
             return CheckReport(False, f"last row {w[-1, 1:].tolist()} is not the goal {list(query.goal)}", time=float(t[-1]))
+    return None
+
+
+#: A unicycle's rows: a turn in place keeps x and y within this (m); a straight move keeps
+#: its heading within this (rad). The lateral bound is the contract's 1e-6 m.
+UNICYCLE_XY_TOL = 1e-9
+UNICYCLE_HEADING_TOL = 1e-9
+UNICYCLE_LATERAL_TOL = 1e-6
+
+
+def _unicycle_problem(robot, w: FloatArray, tol: float = 1e-6) -> CheckReport | None:
+    """The first pair of rows that is not a wait, a turn in place within ``wmax`` or a
+    straight move along the heading (forward unless ``robot.reverse``), or None.
+
+    Measured here from the rows alone (CONTRACT section 6), sharing nothing with the planner.
+    """
+    t, x, y, h = w[:, 0], w[:, 1], w[:, 2], w[:, 3]
+    dt = np.diff(t)
+    dx, dy = np.diff(x), np.diff(y)
+    dh = _wrap(np.diff(h))
+    r = robot.radius if robot.shape == "disc" else 0.5 * math.hypot(*robot.size)
+    wmax = robot.wmax if robot.wmax is not None else robot.vmax / r
+    still = (np.abs(dx) <= UNICYCLE_XY_TOL) & (np.abs(dy) <= UNICYCLE_XY_TOL)
+    turning = np.abs(dh) > UNICYCLE_HEADING_TOL
+    c, sn = np.cos(h[:-1]), np.sin(h[:-1])
+    lateral = np.abs(-sn * dx + c * dy)
+    along = c * dx + sn * dy
+    for i in range(len(dt)):
+        when = f"between t={float(t[i])!r} and t={float(t[i + 1])!r}"
+        if still[i]:
+            if turning[i] and abs(dh[i]) / dt[i] > wmax * (1 + tol):
+                rate = abs(dh[i]) / dt[i]
+                return CheckReport(False, f"turns at {rate:.9g} rad/s, faster than wmax {wmax:g}, {when}", time=float(t[i]))
+            continue
+        if turning[i]:
+            return CheckReport(False, f"turns while moving (a unicycle turns only in place) {when}", time=float(t[i]))
+        if lateral[i] > UNICYCLE_LATERAL_TOL:
+            return CheckReport(
+                False, f"slides sideways by {lateral[i]:.3g} m (a unicycle moves along its heading) {when}", time=float(t[i])
+            )
+        if along[i] < 0 and not robot.reverse:
+            return CheckReport(False, f"drives backwards (robot.reverse is false) {when}", time=float(t[i]))
     return None
 
 

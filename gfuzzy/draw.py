@@ -29,7 +29,7 @@ from matplotlib.path import Path as MplPath
 
 from .errors import InputError
 from .poses import wrap_angle
-from .scene import Box, Disc, Mover, Polygon, Scene
+from .scene import Box, Disc, MapObstacle, Mover, Polygon, Scene
 from .trajectory import Trajectory
 from .typing import FloatArray
 
@@ -230,6 +230,37 @@ def _draw_obstacles(ax, scene: Scene) -> None:
             ax.add_patch(PolygonPatch(ob.vertices(), closed=True, label=label, **style))
         elif isinstance(ob, Polygon):
             ax.add_patch(_polygon_patch(ob, label=label, **style))
+        elif isinstance(ob, MapObstacle):
+            _draw_map(ax, ob, scene.bounds)
+
+
+MAP_OCCUPIED = (0.30, 0.30, 0.30, 1.0)  # OBSTACLE_EDGE
+MAP_UNKNOWN = (0.72, 0.72, 0.72, 1.0)  # blocking unknown cells; free unknown ones are paler
+MAP_UNKNOWN_FREE = (0.72, 0.72, 0.72, 0.35)
+
+
+def _draw_map(ax, grid: MapObstacle, bounds) -> None:
+    """The grid's cells that meet the bounds, at their true extent: occupied dark,
+    unknown gray, costs (scale / raw modes) a transparent gray by value, free cells
+    transparent."""
+    h, w = grid.shape
+    ox, oy = grid.origin
+    res = grid.resolution
+    c0 = max(0, math.floor((bounds[0] - ox) / res))
+    c1 = min(w, math.ceil((bounds[2] - ox) / res))
+    k0 = max(0, math.floor((bounds[1] - oy) / res))  # rows counted from the bottom
+    k1 = min(h, math.ceil((bounds[3] - oy) / res))
+    if c0 >= c1 or k0 >= k1:
+        return
+    values = np.asarray(grid.values)[h - k1 : h - k0, c0:c1]
+    rgba = np.zeros(values.shape + (4,))
+    cost = (values > 0) & (values < 100)
+    rgba[cost] = (0.3, 0.3, 0.3, 0.0)
+    rgba[cost, 3] = 0.6 * values[cost] / 100.0
+    rgba[values == 100] = MAP_OCCUPIED
+    rgba[values == -1] = MAP_UNKNOWN_FREE if grid.unknown_free else MAP_UNKNOWN
+    extent = (ox + c0 * res, ox + c1 * res, oy + k0 * res, oy + k1 * res)
+    ax.imshow(rgba, extent=extent, origin="upper", interpolation="nearest", zorder=1.8)
 
 
 def _draw_roadmap(ax, roadmap) -> None:
@@ -356,8 +387,8 @@ def _clearance_outline(scene: Scene, pose, margin: float, **kw):
 
 
 def _heading_tick(scene: Scene, pose) -> FloatArray:
-    """(2, 2): centre to front of a box robot."""
-    half = 0.5 * scene.robot.size[0]
+    """(2, 2): centre to front of a robot with a heading (a box; a unicycle disc: to its rim)."""
+    half = scene.robot.radius if scene.robot.shape == "disc" else 0.5 * scene.robot.size[0]
     front = [pose[0] + half * math.cos(pose[2]), pose[1] + half * math.sin(pose[2])]
     return np.array([pose[:2], front])
 
@@ -369,7 +400,7 @@ def _draw_queries(ax, scene: Scene) -> None:
             (q.goal, GOAL_COLOR, "*", "goal"),
         ):
             ax.add_patch(_footprint(scene, pose, fill=False, ec=color, lw=1.0, ls=":", zorder=4))
-            if scene.robot.shape == "box":
+            if scene.robot.dof == 3:  # a box, or any unicycle: its heading
                 tick = _heading_tick(scene, pose)
                 ax.plot(tick[:, 0], tick[:, 1], color=color, lw=1.0, zorder=4)
             ax.plot(
@@ -477,7 +508,7 @@ def _draw_footprints(ax, scene: Scene, wp: FloatArray, footprints: int) -> None:
                 label="robot footprint" if k == 0 else None,
             )
         )
-        if scene.robot.shape == "box":
+        if scene.robot.dof == 3:
             tick = _heading_tick(scene, pose)
             ax.plot(tick[:, 0], tick[:, 1], color=ROBOT_COLOR, lw=1.0, zorder=4.6)
         # the clearances kept: from static obstacles (dashed), from movers (dotted)

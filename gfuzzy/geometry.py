@@ -18,7 +18,7 @@ import fcl
 import numpy as np
 
 from .poses import metric_distance, wrap_angle
-from .scene import Box, Disc, Polygon, Robot, Scene
+from .scene import Box, Disc, MapObstacle, Polygon, Robot, Scene
 from .typing import FloatArray
 
 __all__ = [
@@ -65,6 +65,35 @@ def _triangulate(poly: Polygon) -> list[FloatArray]:
     return out
 
 
+def _walls(rects: FloatArray) -> fcl.BVHModel:
+    """One FCL mesh of the side faces of the map's blocked rectangles, twice as tall as
+    the robot (so its top and bottom are never reached).
+
+    A single mesh keeps a query in FCL's C++ traversal (thousands of separate objects cost
+    a Python callback each). A mesh is only a surface: a robot wholly inside one
+    rectangle touches none of it, which :meth:`StaticGeometry._inside_map` catches.
+
+    Parameters
+    ----------
+    rects : (k, 4) float
+        ``[xmin, ymin, xmax, ymax]`` rows.
+    """
+    k = len(rects)
+    x0, y0, x1, y1 = (rects[:, i] for i in range(4))
+    corners = np.stack([np.stack([x0, y0], -1), np.stack([x1, y0], -1), np.stack([x1, y1], -1), np.stack([x0, y1], -1)], 1)
+    h = 2 * _HEIGHT
+    verts = np.concatenate([np.c_[corners.reshape(-1, 2), np.full(4 * k, -h)], np.c_[corners.reshape(-1, 2), np.full(4 * k, h)]])
+    base = (np.arange(k) * 4)[:, None]
+    lo, hi = base + np.arange(4), 4 * k + base + np.arange(4)
+    lo2, hi2 = base + (np.arange(4) + 1) % 4, 4 * k + base + (np.arange(4) + 1) % 4
+    tris = np.concatenate([np.stack([lo, lo2, hi2], -1), np.stack([lo, hi2, hi], -1)], 1).reshape(-1, 3)
+    model = fcl.BVHModel()
+    model.beginModel(len(tris), len(verts))
+    model.addSubModel(verts, tris.astype(np.int32))
+    model.endModel()
+    return model
+
+
 def static_objects(scene: Scene) -> list[fcl.CollisionObject]:
     """FCL collision objects for every static obstacle of ``scene``."""
     objs = []
@@ -77,10 +106,28 @@ def static_objects(scene: Scene) -> list[fcl.CollisionObject]:
         elif isinstance(ob, Box):
             geom = fcl.Box(ob.size[0], ob.size[1], 2 * _HEIGHT)
             objs.append(fcl.CollisionObject(geom, _yaw_transform(ob.center[0], ob.center[1], ob.angle)))
+        elif isinstance(ob, MapObstacle):
+            if len(ob.rects):
+                objs.append(fcl.CollisionObject(_walls(ob.rects), fcl.Transform()))
         else:
             for tri in _triangulate(ob):
                 objs.append(fcl.CollisionObject(_prism(tri), fcl.Transform()))
     return objs
+
+
+def _inner_point(robot: Robot) -> tuple[float, float]:
+    """A point inside the robot's body, in its frame: its reference point, or for a
+    footprint that may not hold it, an interior point of the polygon."""
+    footprint = getattr(robot, "footprint", None)
+    if footprint is None or len(footprint) == 0:
+        return (0.0, 0.0)
+    import shapely
+
+    poly = shapely.Polygon(np.asarray(footprint, dtype=float))
+    if poly.contains(shapely.Point(0.0, 0.0)):
+        return (0.0, 0.0)
+    p = poly.representative_point()
+    return (float(p.x), float(p.y))
 
 
 def robot_geometry(robot: Robot):
@@ -120,6 +167,8 @@ class StaticGeometry:
             self._manager.registerObjects(self._objects)
         self._manager.setup()
         self._robot_obj = fcl.CollisionObject(robot_geometry(scene.robot), fcl.Transform())
+        self._grids = [ob for ob in scene.obstacles if isinstance(ob, MapObstacle) and len(ob.rects)]
+        self._inner = _inner_point(scene.robot)
         self._creq = fcl.CollisionRequest()
         self._dreq = fcl.DistanceRequest()
         self.calls = 0
@@ -168,7 +217,7 @@ class StaticGeometry:
         """Scalar fast path of :meth:`bounds_clearance` for one pose."""
         xmin, ymin, xmax, ymax = self.scene.bounds
         x, y = pose[0], pose[1]
-        if len(pose) == 2:
+        if len(pose) == 2 or self.robot.shape == "disc":
             ex = ey = self.robot.radius
         else:
             c, s = abs(math.cos(pose[2])), abs(math.sin(pose[2]))
@@ -196,6 +245,8 @@ class StaticGeometry:
             return True
         if self.keep > 0:  # a distance, not a collision test, decides the clearance
             return self.obstacle_clearance(pose) >= self.keep
+        if self._grids and self._inside_map(pose):
+            return False
         self._place(pose)
         data = fcl.CollisionData(request=self._creq)
         self._manager.collide(self._robot_obj, data, fcl.defaultCollisionCallback)
@@ -206,6 +257,8 @@ class StaticGeometry:
         """Distance from the robot at ``pose`` to the nearest static obstacle (<= 0 when touching)."""
         if not self._objects:
             return math.inf
+        if self._grids and self._inside_map(pose):
+            return -1.0
         self._place(pose)
         data = fcl.DistanceData(request=self._dreq)
         self._manager.distance(self._robot_obj, data, fcl.defaultDistanceCallback)
@@ -217,6 +270,20 @@ class StaticGeometry:
         if d <= _NEAR_CONTACT:
             return -1.0 if self._collides() else 0.0
         return d
+
+    def _inside_map(self, pose) -> bool:
+        """Whether a point inside the robot's body lies in a blocked map cell."""
+        x, y = float(pose[0]), float(pose[1])
+        if len(pose) > 2 and self._inner != (0.0, 0.0):
+            c, s = math.cos(pose[2]), math.sin(pose[2])
+            x, y = x + c * self._inner[0] - s * self._inner[1], y + s * self._inner[0] + c * self._inner[1]
+        for grid in self._grids:
+            h, w = grid.blocked.shape
+            j = math.floor((x - grid.origin[0]) / grid.resolution)
+            k = math.floor((y - grid.origin[1]) / grid.resolution)
+            if 0 <= j < w and 0 <= k < h and grid.blocked[h - 1 - k, j]:
+                return True
+        return False
 
     def _collides(self) -> bool:
         data = fcl.CollisionData(request=self._creq)

@@ -205,7 +205,7 @@ class MoverField:
         n_g = sizes[g3]
         first = np.zeros(len(g3), dtype=np.int64)
         last = n_g - 1
-        line = (dev[g3] < 1e-9) & (n_g > 1)
+        line = (dev[g3] < 1e-9) & (n_g > 1) & (seg2[g3] > 0)
         if line.any():
             gl = g3[line]
             length = np.sqrt(seg2[gl])

@@ -18,7 +18,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from .jit import njit
 
 __all__ = ["mark_unsafe", "safe_runs", "merge_runs"]
 
@@ -157,7 +158,7 @@ def _mark_group(g, cand, c0, c1, a, n_g, lo_g, hi_g, box, p0x, p0y, sx, sy, inv_
             if not (math.hypot(ex, ey) - body_g - extent[m] < mg):
                 continue
             first, last = 0, n_g - 1
-            if dev_g < 1e-9 and n_g > 1:  # points evenly spaced on the segment: those in reach
+            if dev_g < 1e-9 and n_g > 1 and seg2_g > 0.0:  # points evenly spaced on a segment: those in reach
                 length = math.sqrt(seg2_g)
                 perp2 = (qx - (p0x + tu * sx)) ** 2 + (qy - (p0y + tu * sy)) ** 2
                 w = math.sqrt(max((circ + extent[m] + mg) ** 2 - perp2, 0.0))

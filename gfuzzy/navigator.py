@@ -36,15 +36,16 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from .drive import drive_rows, evasions
 from .errors import InputError, LimitError, check_number
 from .geometry import StaticGeometry, mover_distance
 from .movers import MoverField
 from .planner import BACKENDS, search_function
-from .poses import interpolate_segment, metric_distance, split_counts, wrap_angle
+from .poses import metric_distance, wrap_angle
 from .roadmap import Roadmap
 from .scene import Mover, Scene
 from .settings import SPEED_SAFETY
-from .spacetime import IntervalStore, SpaceTimeGraph, split_edges
+from .spacetime import IntervalStore, SpaceTimeGraph
 from .status import Status
 from .timespace import timed_rows
 from .trajectory import Trajectory
@@ -301,131 +302,48 @@ class Navigator:
             warm()
 
     # ------------------------------------------------------------------ graph
-    def _connect(self, pose: FloatArray, k: int) -> list[tuple[int, float]]:
-        """Certified straight connections from ``pose`` to its nearest roadmap vertices."""
-        V = self.roadmap.vertices
-        if len(V) == 0:
-            return []
-        d = metric_distance(V, pose[None, :], self.robot.circumradius)
-        order = np.argsort(d, kind="stable")[: 4 * k]
-        out = []
-        for i in order.tolist():
-            if len(out) >= k:
-                break
-            if self.geometry.motion_free(pose, V[i]):
-                out.append((int(i), float(d[i])))
-        return out
-
     def _build_base(self) -> None:
-        """The roadmap + goal, split into one-step points, with the hop heuristic to the goal."""
-        from scipy.sparse import coo_matrix
-        from scipy.sparse.csgraph import dijkstra
+        """The goal's graph, kept for every call: the planner's (``Planner.prepare``:
+        :class:`gfuzzy.prepared.PreparedGoal`, or :class:`gfuzzy.unicycle.UnicycleGoal` for a
+        differential drive); each call splices the robot's pose in (:meth:`_splice`)."""
+        from .planner import Planner, PlanOptions
 
-        rm, opts = self.roadmap, self.options
-        nv = len(rm.vertices)
-        g_id = nv
-        keep = rm.spanner(opts.stretch)
-        extra = self._connect(self._goal_wrapped, opts.connect_k)
-        edges = np.vstack([rm.edges[keep], np.array([(g_id, v) for v, _ in extra], dtype=np.int64).reshape(-1, 2)])
-        lengths = np.concatenate([rm.lengths[keep], np.array([w for _, w in extra], dtype=float)])
-        verts = np.vstack([rm.vertices, self._goal_wrapped[None]])
-        n = len(verts)
-        k = split_counts(lengths, self.step_len)
-        w = np.maximum(k.astype(float), 1e-300)
-        mat = coo_matrix(
-            (np.r_[w, w], (np.r_[edges[:, 0], edges[:, 1]], np.r_[edges[:, 1], edges[:, 0]])), shape=(n, n)
-        ).tocsr()
-        hop_g = np.rint(dijkstra(mat, directed=True, indices=g_id))
-        # metres to the goal on the whole roadmap (the contract's roadmap distance)
-        full = np.vstack([rm.edges, edges[len(rm.edges[keep]) :]])
-        full_w = np.maximum(np.concatenate([rm.lengths, lengths[len(rm.lengths[keep]) :]]), 1e-300)
-        mat = coo_matrix(
-            (np.r_[full_w, full_w], (np.r_[full[:, 0], full[:, 1]], np.r_[full[:, 1], full[:, 0]])), shape=(n, n)
-        ).tocsr()
-        self._metres_v = dijkstra(mat, directed=True, indices=g_id)
-        k, offs, inner, a, b, j, src, dst = split_edges(verts, edges, lengths, self.step_len, n)
-        poses = np.vstack([verts, inner])
-        e_of = np.repeat(np.arange(len(edges)), k - 1)
-        heur = np.concatenate([hop_g, np.minimum(hop_g[a] + j, hop_g[b] + k[e_of] - j)])
-        src, dst = np.concatenate([src, dst]), np.concatenate([dst, src])
-        groups = n + offs
-        order = np.argsort(src, kind="stable")
-        indptr = np.zeros(len(poses) + 1, dtype=np.int64)
-        np.add.at(indptr, src + 1, 1)
-        self._poses = poses
-        self._indptr = np.cumsum(indptr)
-        self._nbrs = dst[order]
-        self._heur = heur
-        self._groups = groups
-        self._hop_v = hop_g  # per roadmap vertex (and the goal)
-        self._g_id = g_id
-        self._nv = nv
-        log.debug("navigator graph: %d points, %d moves", len(poses), len(dst))
+        opts = self.options
+        self._planner = Planner(self.scene, self.roadmap)
+        self._planner.geometry = self.geometry
+        popts = PlanOptions(dt=opts.dt, connect_k=opts.connect_k, stretch=opts.stretch, backend=opts.backend)
+        self._kept = self._planner.prepare(self.goal, popts)
+        self._nv = 0 if self.robot.unicycle else len(self.roadmap.vertices)  # vertices "ahead"
+        self._g_id = -1
+
+    def _splice_ends(self, pose: FloatArray, ahead=()):
+        """(graph, start id, goal id, roadmap distance) of the kept graph with ``pose`` in."""
+        start = pose.copy()
+        if self.robot.dof == 3:
+            start[2] = wrap_angle(start[2])
+        if self.robot.unicycle:  # a cheap lower bound for the windows: the call's budget is short
+            ug = self._kept.kept.splice(self._planner, start, exact=False)
+            return ug.graph, ug.s_id, ug.g_id, ug.roadmap_distance
+        return self._kept.splice(self._planner, start, ahead=ahead)
 
     def roadmap_distance(self, pose) -> float:
         """Shortest distance from ``pose`` to the goal on the whole roadmap (static
-        obstacles only; inf when not connected)."""
-        pose = np.asarray(pose, dtype=float).reshape(-1)
-        best = math.inf
-        if self.geometry.motion_free(pose, self._goal_wrapped):
-            best = float(metric_distance(pose, self._goal_wrapped, self.robot.circumradius))
-        for v, w in self._connect(pose, self.options.connect_k):
-            best = min(best, w + float(self._metres_v[v]))
-        return best
+        obstacles only; inf when not connected; a unicycle's: its turns included, see
+        :class:`gfuzzy.unicycle.UnicycleGraph`)."""
+        return float(self._splice_ends(np.asarray(pose, dtype=float).reshape(-1))[3])
 
     def _splice(self, pose: FloatArray, t: float = -math.inf):
-        """The base graph with ``pose`` spliced in: (graph, start id), or (None, reason)."""
-        opts = self.options
-        conns = self._connect(pose, opts.connect_k)
-        # the robot is usually inside an edge of its last plan: connect it to the vertices
-        # that plan was heading for too (the nearest ones may all lie behind it, and going
-        # back to one of them before going on would make it dither)
-        seen = {v for v, _ in conns}
-        ahead = [v for ta, v in self._ahead if ta > t + 1e-9 and v not in seen][:2]
-        for v in ahead:
-            target = self._poses[v]
-            if self.geometry.motion_free(pose, target):
-                conns.append((v, float(metric_distance(pose, target, self.robot.circumradius))))
-        if self.geometry.motion_free(pose, self._goal_wrapped):
-            conns.append((self._g_id, float(metric_distance(pose, self._goal_wrapped, self.robot.circumradius))))
-        conns = [(v, w) for v, w in conns if math.isfinite(self._hop_v[v])]
-        if not conns:
+        """The kept graph with ``pose`` spliced in: (graph, start id), or (None, reason).
+
+        The robot is usually inside an edge of its last plan: it also connects to the
+        vertices that plan was heading for (the nearest ones may all lie behind it, and
+        going back to one of them before going on would make it dither).
+        """
+        ahead = [v for ta, v in self._ahead if ta > t + 1e-9]
+        graph, s_id, g_id, rd = self._splice_ends(pose, ahead)
+        self._g_id = g_id
+        if not math.isfinite(rd):
             return None, "the robot's pose connects to no roadmap vertex that leads to the goal"
-        N = len(self._poses)
-        s_id = N
-        verts = np.vstack([self._poses[: self._nv + 1], pose[None]])
-        tgt = np.array([v for v, _ in conns], dtype=np.int64)
-        k = split_counts(np.array([w for _, w in conns]), self.step_len)
-        new_poses, new_src, new_dst, new_h, new_groups = [pose[None]], [], [], [], []
-        h_s = math.inf
-        nxt = N + 1
-        new_groups.append(nxt)
-        for v, kc in zip(tgt.tolist(), k.tolist(), strict=True):
-            inner = interpolate_segment(pose, verts[v], np.arange(1, kc) / kc)
-            ids = np.arange(nxt, nxt + kc - 1)
-            chain = np.concatenate([[s_id], ids, [v]])
-            new_src.append(chain[:-1])
-            new_dst.append(chain[1:])
-            new_poses.append(inner)
-            new_h.append(self._hop_v[v] + kc - np.arange(1, kc))
-            h_s = min(h_s, self._hop_v[v] + kc)
-            nxt += kc - 1
-            new_groups.append(nxt)
-        new_src = np.concatenate(new_src)
-        new_dst = np.concatenate(new_dst)
-        poses = np.vstack([self._poses, *new_poses])
-        heur = np.concatenate([self._heur, [h_s], *new_h])
-        order = np.argsort(new_src, kind="stable")
-        deg = np.bincount(new_src - N, minlength=len(poses) - N)
-        indptr = np.concatenate([self._indptr, self._indptr[-1] + np.cumsum(deg)])
-        nbrs = np.concatenate([self._nbrs, new_dst[order]])
-        groups = np.concatenate([self._groups, np.unique(np.array(new_groups, dtype=np.int64))])
-        groups = groups[groups <= len(poses)]
-        # steps from the pose: at least the straight distance over one step's length
-        from_start = np.floor(np.hypot(*(poses[:, :2] - pose[:2]).T) / self.step_len - 1e-9)
-        graph = SpaceTimeGraph(
-            poses, indptr, nbrs, heur, groups=np.unique(groups), from_start=np.maximum(from_start, 0.0)
-        )
         return graph, s_id
 
     # ------------------------------------------------------------- prediction
@@ -669,7 +587,7 @@ class Navigator:
         if res.status != Status.SOLVED:
             return _Searched(None, res.message, detailed, res.status == Status.TIMEOUT, graph, s_id)
         rows, _ = timed_rows(res.nodes, res.steps, graph.poses, t, opts.dt)
-        self._ahead = [(t + st * opts.dt, nd) for nd, st in zip(res.nodes, res.steps, strict=True) if nd <= self._nv]
+        self._ahead = [(t + st * opts.dt, nd) for nd, st in zip(res.nodes, res.steps, strict=True) if nd < self._nv]
         rows[0, 1:] = pose
         rows[-1, 1:] = self.goal
         return _Searched(Trajectory(rows, self.robot.circumradius), "", detailed, False, graph, s_id)
@@ -695,14 +613,20 @@ class Navigator:
         beside a person standing still; this motion is checked every 0.01 s with a margin
         of 0.02 m, which bounds the gap between the samples (it changes by at most 2 m/s).
         """
-        if not self.geometry.motion_free(pose, self.goal):
-            return None
         cr = self.robot.circumradius
-        length = float(metric_distance(pose, self.goal, cr))
-        duration = length / self.vplan
+        if self.robot.unicycle:
+            rows = drive_rows(self.geometry, t, pose, [], self.goal, self.vplan)
+            if rows is None:
+                return None
+            duration = float(rows[-1, 0] - t)
+        else:
+            if not self.geometry.motion_free(pose, self.goal):
+                return None
+            length = float(metric_distance(pose, self.goal, cr))
+            duration = length / self.vplan
+            rows = np.array([[t, *pose], [t + duration, *self.goal]])
         if duration > self.options.prediction_horizon:
             return None
-        rows = np.array([[t, *pose], [t + duration, *self.goal]])
         traj = Trajectory(rows, cr)
         speed = float(np.max(np.hypot(obs[:, 2], obs[:, 3]), initial=0.0))
         tol = (self.vplan + speed) * 0.005 + 1e-3
@@ -743,6 +667,14 @@ class Navigator:
         opts = self.options
         cr = self.robot.circumradius
         T = opts.evasion_time
+        n_t = int(math.ceil(T / 0.05)) + 1
+        times = t + np.linspace(0.0, T, n_t)
+        if self.robot.unicycle:  # turn in place, then drive along the heading (drive.evasions)
+            cands = evasions(self.geometry, t, pose, T, opts.cover, opts.evasion_headings, self.vplan)
+            trajs = [Trajectory(rows, cr) for rows in cands]
+            pts = np.stack([tr.at(np.minimum(times, tr.t_end)) for tr in trajs])
+            ends = np.array([rows[-1, 1:] for rows in cands])
+            return trajs[int(np.argmax(self._evasion_scores(t, pose, obs, pts, times, ends)))]
         ang = np.arange(opts.evasion_headings) * (2 * math.pi / opts.evasion_headings)
         speeds = np.array([1.0, 0.5]) * self.vplan
         dirs = np.column_stack([np.cos(ang), np.sin(ang)])
@@ -760,26 +692,10 @@ class Navigator:
                     break
         ends = np.repeat(pose[None], len(vel), axis=0)
         ends[:, :2] += vel * move_time[:, None]
-        n_t = int(math.ceil(T / 0.05)) + 1
-        times = t + np.linspace(0.0, T, n_t)
         tau = times - t
         frac = np.clip(tau[None, :] / np.maximum(move_time[:, None], 1e-12), 0.0, 1.0)  # moves, then stands
         pts = pose[None, None, :] + frac[:, :, None] * (ends - pose[None])[:, None, :]  # (C, T, d)
-        obs = self._near(pose, obs, T, EVASION_GAP)  # farther people change no score below
-        if len(obs):
-            gap = self._clearance_along(pts, times, obs).min(axis=-1)  # (C, T)
-            later = gap[:, 1:]  # contact: a gap <= 0 not opening up (a robot touching someone backs out)
-            hit = (later <= 0) & (later <= gap[:, :1])
-            ttc = np.where(hit.any(axis=1), tau[1:][np.argmax(hit, axis=1)], math.inf)
-            worst = later.min(axis=1)
-        else:
-            ttc = np.full(len(vel), math.inf)
-            worst = np.full(len(vel), math.inf)
-        progress = metric_distance(pose, self.goal, cr) - metric_distance(ends, self.goal[None], cr)
-        # the latest contact first (no contact within the horizon beats any), then the widest
-        # gap while close, then progress to the goal
-        score = np.minimum(ttc, T + 1.0) * 100.0 + np.minimum(worst, EVASION_GAP) * 10.0 + progress
-        score = np.where(free, score, -math.inf)
+        score = np.where(free, self._evasion_scores(t, pose, obs, pts, times, ends), -math.inf)
         c = int(np.argmax(score))
         if c == 0:
             rows = np.array([[t, *pose], [t + max(T, opts.cover), *pose]])
@@ -789,6 +705,27 @@ class Navigator:
                 rows = np.vstack([rows, [t + opts.cover, *ends[c]]])
         return Trajectory(rows, cr)
 
+
+
+    def _evasion_scores(self, t, pose, obs, pts, times, ends) -> FloatArray:
+        """(C,) score of candidate motions ``pts`` (C, T, d) at ``times`` ending at ``ends``:
+        the latest contact first (no contact within the horizon beats any), then the widest
+        gap while close, then progress to the goal."""
+        T = times[-1] - t
+        tau = times - t
+        obs = self._near(pose, obs, T, EVASION_GAP)  # farther people change no score below
+        if len(obs):
+            gap = self._clearance_along(pts, times, obs).min(axis=-1)  # (C, T)
+            later = gap[:, 1:]  # contact: a gap <= 0 not opening up (a robot touching someone backs out)
+            hit = (later <= 0) & (later <= gap[:, :1])
+            ttc = np.where(hit.any(axis=1), tau[1:][np.argmax(hit, axis=1)], math.inf)
+            worst = later.min(axis=1)
+        else:
+            ttc = np.full(len(pts), math.inf)
+            worst = np.full(len(pts), math.inf)
+        cr = self.robot.circumradius
+        progress = metric_distance(pose, self.goal, cr) - metric_distance(ends, self.goal[None], cr)
+        return np.minimum(ttc, T + 1.0) * 100.0 + np.minimum(worst, EVASION_GAP) * 10.0 + progress
 
 def _cut(traj: Trajectory, ta: float, tb: float) -> FloatArray:
     """Rows of ``traj`` between ``ta`` and ``tb`` (both ends interpolated), t strictly increasing."""

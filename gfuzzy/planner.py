@@ -13,7 +13,7 @@ import copy
 import logging
 import math
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -24,7 +24,7 @@ from .movers import MoverField
 from .poses import wrap_angle
 from .roadgraph import connect, roadmap_metres, spanner_split
 from .roadmap import Roadmap
-from .scene import Scene
+from .scene import Query, Scene
 from .settings import MAX_MOVER_SAMPLES, SPEED_SAFETY
 from .spacetime import IntervalStore, SearchResult, SpaceTimeGraph
 from .status import Status
@@ -125,6 +125,50 @@ class PlanOptions:
 
 
 @dataclass(frozen=True)
+class PlanStats:
+    """What one query's planning did; a field is None where that step did not run.
+
+    Attributes
+    ----------
+    expansions, states : int or None
+        States the search expanded and generated.
+    graph_nodes : int or None
+        Points of the space-time graph searched.
+    roadmap_vertices : int or None
+    mover_evaluations : int or None
+        (point, step) pairs whose safety from the movers was computed.
+    horizon : float or None
+        The planning horizon (s after t0) of the last search round.
+    hold : float or None
+        The query's ``hold``, when it has one.
+    search_seconds : float or None
+        Seconds until the search's answer (before the stages).
+    nodes : int or None
+        Graph size when start and goal are not connected (no search ran).
+    amax_honoured : bool or None
+        For a robot with ``amax``: whether the answer keeps it (only the speed layer does).
+    amax_note : str or None
+        Why ``amax`` is not honoured.
+    """
+
+    expansions: int | None = None
+    states: int | None = None
+    graph_nodes: int | None = None
+    roadmap_vertices: int | None = None
+    mover_evaluations: int | None = None
+    horizon: float | None = None
+    hold: float | None = None
+    search_seconds: float | None = None
+    nodes: int | None = None
+    amax_honoured: bool | None = None
+    amax_note: str | None = None
+
+    def to_dict(self) -> dict:
+        """The trajectory file's ``stats`` form: the fields that are set, in this order."""
+        return {f.name: getattr(self, f.name) for f in fields(self) if getattr(self, f.name) is not None}
+
+
+@dataclass(frozen=True)
 class PlanResult:
     """Answer to a query.
 
@@ -138,10 +182,9 @@ class PlanResult:
     roadmap_distance : float
         Shortest start-to-goal distance on the roadmap (inf when not connected).
     planning_seconds : float
-    stats : dict
-        Expansions, states, graph size; ``stats["refine"]`` / ``["speed_layer"]`` repeat
-        the reports' ``to_dict()`` for older readers (``tools/bench_ga.py``): the file and
-        ``amax_honoured`` are made from the reports themselves.
+    stats : PlanStats
+        What the search did (expansions, states, graph size, horizon) and whether the
+        answer honours ``robot.amax``.
     refine_report, speed_report : gfuzzy.stages.RefineReport / SpeedReport or None
         What each stage did, when it ran.
     """
@@ -152,7 +195,7 @@ class PlanResult:
     roadmap_distance: float = math.inf
     planning_seconds: float = 0.0
     vmax: float = 1.0
-    stats: dict = field(default_factory=dict)
+    stats: PlanStats = field(default_factory=lambda: PlanStats())
     refine_report: RefineReport | None = None
     speed_report: SpeedReport | None = None
 
@@ -173,9 +216,9 @@ class PlanResult:
     @property
     def amax_honoured(self) -> bool | None:
         """Whether the answer keeps the robot's ``amax`` (only the speed layer does); None
-        when the robot has no ``amax`` or the query is not solved. ``stats["amax_note"]``
+        when the robot has no ``amax`` or the query is not solved. ``stats.amax_note``
         says why not."""
-        return self.stats.get("amax_honoured")
+        return self.stats.amax_honoured
 
     def to_file(self, scene: str, query: str) -> TrajectoryFile:
         """The contract's trajectory file for this answer.
@@ -184,8 +227,7 @@ class PlanResult:
         ``amax_honoured`` (and ``amax_note`` saying why not when it is false).
         """
         rd = self.roadmap_distance if math.isfinite(self.roadmap_distance) else None
-        # the stages' entries come from their reports (the file keeps its keys and order)
-        stats = {k: v for k, v in self.stats.items() if k not in ("refine", "speed_layer")}
+        stats = self.stats.to_dict()
         extra = {key: stats.pop(key) for key in ("amax_honoured", "amax_note") if key in stats}
         for key, report in (("refine", self.refine_report), ("speed_layer", self.speed_report)):
             if report is not None:
@@ -204,7 +246,7 @@ class PlanResult:
         )
 
 
-def _amax_stats(robot, stats: dict, layer: SpeedReport | None) -> dict:
+def _amax_stats(robot, stats: PlanStats, layer: SpeedReport | None) -> PlanStats:
     """``stats`` plus whether a solved answer honours ``robot.amax`` (when the robot has one).
 
     Only the speed layer (its report: ``layer``) limits acceleration; the search's and the
@@ -213,20 +255,21 @@ def _amax_stats(robot, stats: dict, layer: SpeedReport | None) -> dict:
     """
     if robot.amax is None:
         return stats
-    out = dict(stats, amax_honoured=bool(layer is not None and layer.applied))
+    honoured = bool(layer is not None and layer.applied)
+    note = None
     if layer is None:
-        out["amax_note"] = (
+        note = (
             f"robot.amax {robot.amax:g} is not honoured: only the speed layer bounds "
             "acceleration, and it is off (PlanOptions.speed_layer, --speed-layer)"
         )
     elif not layer.applied:
-        out["amax_note"] = (
+        note = (
             f"robot.amax {robot.amax:g} is not honoured: the speed layer did not apply "
             f"({layer.reason or 'no reason given'})"
         )
-    if not out["amax_honoured"]:
-        log.info("%s", out["amax_note"])
-    return out
+    if note:
+        log.info("%s", note)
+    return replace(stats, amax_honoured=honoured, amax_note=note)
 
 
 def _jsonable(obj):
@@ -366,10 +409,8 @@ class Planner:
         # distance, in steps (edge e costs k[e]) for the heuristic, which is exact for the
         # static graph and so the tightest admissible one; the vertex graphs are kept, the
         # connections added per query
-        from scipy.sparse.csgraph import dijkstra
-
         def sp(graph, weights, indices):
-            out = dijkstra(graph.with_edges(extra_e, weights), directed=True, indices=indices)
+            out = graph.with_edges(extra_e, weights).distances(indices)
             return np.where(out < 1e-200, 0.0, out)
 
         dist = sp(roadmap_metres(rm), extra_w, g_id)
@@ -389,6 +430,24 @@ class Planner:
             part.poses, part.indptr, part.neighbors, along(hop_g), groups=groups, from_start=along(hop_s)
         )
         return graph, s_id, g_id, float(dist[s_id])
+
+    def _query_graph(self, start, goal, opts: PlanOptions, prepared=None):
+        """(graph, start id, goal id, roadmap distance) of a query (headings wrapped): the
+        roadmap's cut with the ends connected (:meth:`_graph`), or the prepared goal's graph
+        with the start spliced in (``prepare`` / ``plan_from``, and the navigator); for a
+        differential drive the graph of heading copies (:mod:`gfuzzy.unicycle`)."""
+        vplan = self.robot.vmax * SPEED_SAFETY
+        if self.robot.unicycle:
+            from .unicycle import build_graph
+
+            if prepared is None:
+                ug = build_graph(self, start, goal, opts.dt, vplan, opts.connect_k, opts.stretch)
+            else:
+                ug = prepared.splice(self, start)
+            return ug.graph, ug.s_id, ug.g_id, ug.roadmap_distance
+        if prepared is None:
+            return self._graph(start, goal, opts.dt, vplan, opts.connect_k, opts.stretch)
+        return prepared.splice(self, start)
 
     # ---------------------------------------------------------------- query
     def prepare(self, goal, options: PlanOptions | None = None):
@@ -414,6 +473,14 @@ class Planner:
 
         opts = options or PlanOptions()
         goal = check_pose(goal, self.robot.dof, "goal")
+        if self.robot.unicycle:  # the copies' graph is kept on the roadmap; the rest is per query
+            from .unicycle import UnicyclePrepared
+            from .unicycle import prepare_goal as prepare_unicycle
+
+            wrapped = goal.copy()
+            wrapped[2] = wrap_angle(wrapped[2])
+            kept = prepare_unicycle(self, wrapped, opts.dt, self.robot.vmax * SPEED_SAFETY, opts.connect_k, opts.stretch)
+            return UnicyclePrepared(goal, opts, kept)
         return prepare_goal(self, goal, opts)
 
     def plan_from(self, prepared, start, t0: float = 0.0, movers=None, hold: float = 0.0) -> PlanResult:
@@ -453,7 +520,9 @@ class Planner:
         Parameters
         ----------
         start, goal : (d,) float
-            Poses ``[x, y]`` (disc robot) or ``[x, y, heading]`` (box robot).
+            Poses ``[x, y]`` (disc robot) or ``[x, y, heading]`` (box robot, or any
+            unicycle: its answers are waits, turns in place and straight moves along the
+            heading, :mod:`gfuzzy.unicycle`).
         t0 : float
             Departure time.
         options : PlanOptions, optional
@@ -489,8 +558,8 @@ class Planner:
         goal = check_pose(goal, robot.dof, "goal")
         t0 = _check_t0(t0)
 
-        def answer(status, message="", traj=None, rd=math.inf, **stats):
-            return PlanResult(Status(status), traj, message, rd, time.perf_counter() - t_begin, vmax, stats)
+        def answer(status, message="", traj=None, rd=math.inf, stats=None):
+            return PlanResult(Status(status), traj, message, rd, time.perf_counter() - t_begin, vmax, stats or PlanStats())
 
         problem = query_problem(self.geometry, start, goal)
         if problem:
@@ -498,31 +567,26 @@ class Planner:
         ends = start.copy(), goal.copy()  # the rows at the ends repeat them exactly
         if robot.dof == 3:
             start[2], goal[2] = wrap_angle(start[2]), wrap_angle(goal[2])
-        vplan = vmax * SPEED_SAFETY
-        if _prepared is None:
-            graph, s_id, g_id, rd = self._graph(start, goal, opts.dt, vplan, opts.connect_k, opts.stretch)
-        else:  # plan_from: the kept graph with this start spliced in
-            graph, s_id, g_id, rd = _prepared.splice(self, start)
+        graph, s_id, g_id, rd = self._query_graph(start, goal, opts, _prepared)
         if not math.isfinite(rd):
             linked, message = self._not_joined(start, goal, _prepared is not None, _linked)
             if linked is not None:
                 return linked.plan(ends[0], ends[1], t0, options, hold=hold, _linked=True)
-            return answer(Status.NO_PATH, message, nodes=len(graph.poses))
+            return answer(Status.NO_PATH, message, stats=PlanStats(nodes=len(graph.poses)))
         max_steps = self._max_steps(opts, rd, t0, hold_steps)
         run = self._search_rounds(graph, s_id, g_id, start, t0, opts, hold_steps, max_steps, deadline)
         if run.problem:
             return answer(Status.INVALID_QUERY, run.problem, rd=rd)
         res, horizon = run.result, run.horizon
-        stats = {
-            "expansions": run.expansions,
-            "states": res.states,
-            "graph_nodes": len(graph.poses),
-            "roadmap_vertices": len(self.roadmap.vertices),
-            "mover_evaluations": run.evaluations,
-            "horizon": horizon,
-        }
-        if hold_steps:
-            stats["hold"] = hold
+        stats = PlanStats(
+            expansions=run.expansions,
+            states=res.states,
+            graph_nodes=len(graph.poses),
+            roadmap_vertices=len(self.roadmap.vertices),
+            mover_evaluations=run.evaluations,
+            horizon=horizon,
+            hold=hold if hold_steps else None,
+        )
         if res.status == Status.NO_PATH and res.horizon_hit:
             res.message = (
                 f"no safe trajectory within the planning horizon of {horizon:g} s"
@@ -530,18 +594,30 @@ class Planner:
                 + "; the horizon cut the search: a longer one (--horizon, PlanOptions.horizon) may find one"
             )
         if res.status != Status.SOLVED:
-            return answer(res.status, res.message, rd=rd, **stats)
+            return answer(res.status, res.message, rd=rd, stats=stats)
         traj = Trajectory(timed_rows(res.nodes, res.steps, graph.poses, t0, opts.dt)[0], robot.circumradius)
-        stats["search_seconds"] = time.perf_counter() - t_begin
-        result = answer(Status.SOLVED, "", traj, rd, **stats)
+        stats = replace(stats, search_seconds=time.perf_counter() - t_begin)
+        result = answer(Status.SOLVED, "", traj, rd, stats=stats)
         if opts.refine or opts.speed_layer:
-            from .stages import StageContext, apply_stages
-
-            result = apply_stages(StageContext(self.scene, self.geometry), result, start, goal, t0, opts, t_begin, hold=hold)
+            result = self._staged(result, Query("stage", tuple(start), tuple(goal), t0, hold=hold), opts, t_begin)
         # headings are wrapped inside; the first and last rows give the query's own numbers
         wps = result.trajectory.waypoints.copy()
         wps[0, 1:], wps[-1, 1:] = ends
         return replace(result, trajectory=Trajectory(wps, robot.circumradius), stats=_amax_stats(robot, result.stats, result.speed_report))
+
+    def _staged(self, result: PlanResult, query: Query, opts: PlanOptions, t_begin: float) -> PlanResult:
+        """``result`` after the GA refinement and/or the speed layer (:mod:`gfuzzy.stages`)."""
+        from .stages import StageContext, apply_stages
+
+        ctx = StageContext(self.scene, self.geometry)
+        staged = apply_stages(ctx, result.trajectory, query, opts, t_begin + opts.time_limit)
+        return replace(
+            result,
+            trajectory=staged.trajectory,
+            planning_seconds=time.perf_counter() - t_begin,
+            refine_report=staged.refine_report,
+            speed_report=staged.speed_report,
+        )
 
     def _max_steps(self, opts: PlanOptions, rd: float, t0: float, hold_steps: int) -> int:
         """The longest horizon searched, in steps (the parking's steps come on top)."""

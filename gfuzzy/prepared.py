@@ -104,12 +104,21 @@ class PreparedGoal:
     pj: IntArray
     pk: IntArray
 
-    def splice(self, planner, start: FloatArray):
-        """The kept graph with ``start`` connected: (graph, s_id, g_id, roadmap distance)."""
+    def splice(self, planner, start: FloatArray, ahead=()):
+        """The kept graph with ``start`` connected: (graph, s_id, g_id, roadmap distance).
+
+        ``ahead``: roadmap vertices to try too, after the nearest (the navigator's: those
+        its last plan was heading for); the first two not connected already are tried.
+        """
         opts = self.options
         robot = planner.robot
         c_s = planner.geometry.clearance1(start)
         conn = planner._connect(start, opts.connect_k, c_s)
+        seen = {v for v, _ in conn}
+        for v in [v for v in ahead if v not in seen][:2]:
+            target = planner.roadmap.vertices[v]
+            if planner.geometry.motion_free(start, target, ca=c_s):
+                conn.append((int(v), float(metric_distance(start, target, robot.circumradius))))
         e = [(self.s_id, v) for v, _ in conn]
         w = [d for _, d in conn]
         if planner.geometry.motion_free(start, self.goal, ca=c_s, cb=self.goal_clearance):
@@ -174,7 +183,8 @@ def _split_from(start, ends, edges, lengths, step_len, first_id):
     m = len(edges)
     verts = np.vstack([start[None], ends]) if m else start[None]
     local = np.stack([np.zeros(m, dtype=np.int64), np.arange(1, m + 1)], axis=1)
-    k, offs, inner, a, b, j, src, dst = split_edges(verts, local, lengths, step_len, first_id)
+    cut = split_edges(verts, local, lengths, step_len, first_id)
+    k, offs, inner, a, b, j, src, dst = cut.k, cut.offs, cut.inner, cut.a, cut.b, cut.j, cut.src, cut.dst
     ids = np.concatenate([edges[:, 1], [edges[0, 0]] if m else []]).astype(np.int64)
 
     def back(x):  # local ids (0: the start, 1..m: the ends) to graph ids; interior unchanged

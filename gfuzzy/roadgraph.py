@@ -130,19 +130,25 @@ class VertexGraph:
 
     @classmethod
     def of(cls, n: int, edges: IntArray, weights: FloatArray) -> VertexGraph:
-        from scipy.sparse import coo_matrix
-
+        """Both directions of ``edges`` in CSR form, columns sorted within a row and
+        repeated entries summed (what scipy's ``coo_matrix(...).tocsr()`` gives), in numpy:
+        no scipy import for a query."""
         w = np.maximum(np.asarray(weights, dtype=float), 1e-300)
+        edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
         rows = np.r_[edges[:, 0], edges[:, 1]]
         cols = np.r_[edges[:, 1], edges[:, 0]]
-        mat = coo_matrix((np.r_[w, w], (rows, cols)), shape=(n, n)).tocsr()
-        return cls(n, mat.indptr.astype(np.int64), mat.indices.astype(np.int64), mat.data)
+        order = np.lexsort((cols, rows))
+        rows, cols, w = rows[order], cols[order], np.r_[w, w][order]
+        first = np.r_[True, (rows[1:] != rows[:-1]) | (cols[1:] != cols[:-1])] if len(rows) else np.zeros(0, bool)
+        at = np.flatnonzero(first)
+        data = np.add.reduceat(w, at) if len(at) else w
+        indptr = np.zeros(n + 1, dtype=np.int64)
+        np.cumsum(np.bincount(rows[at], minlength=n), out=indptr[1:])
+        return cls(n, indptr, cols[at], data)
 
-    def with_edges(self, edges: IntArray, weights: FloatArray):
-        """A scipy CSR matrix of this graph plus ``edges`` (both directions), each new
-        entry at the end of its row: one pass over the arrays, no sort."""
-        from scipy.sparse import csr_matrix
-
+    def with_edges(self, edges: IntArray, weights: FloatArray) -> VertexGraph:
+        """This graph plus ``edges`` (both directions), each new entry at the end of its
+        row: one pass over the arrays, no sort."""
         w = np.maximum(np.asarray(weights, dtype=float), 1e-300)
         rows = np.r_[edges[:, 0], edges[:, 1]]
         order = np.argsort(rows, kind="stable")  # by row: empty rows share an insertion place
@@ -150,9 +156,14 @@ class VertexGraph:
         at = self.indptr[rows + 1]
         indptr = self.indptr.copy()
         indptr[1:] += np.cumsum(np.bincount(rows, minlength=self.n))
-        return csr_matrix(
-            (np.insert(self.data, at, w), np.insert(self.indices, at, cols), indptr), shape=(self.n, self.n)
-        )
+        return VertexGraph(self.n, indptr, np.insert(self.indices, at, cols), np.insert(self.data, at, w))
+
+    def distances(self, sources) -> FloatArray:
+        """Shortest distances from ``sources`` (:func:`gfuzzy.graph_kernel.shortest_paths`:
+        (n,) for one source, (s, n) for a list)."""
+        from .graph_kernel import shortest_paths
+
+        return shortest_paths(self.indptr, self.indices, self.data, sources)
 
 
 def roadmap_metres(roadmap) -> VertexGraph:
@@ -239,7 +250,8 @@ class SplitSpanner:
             raise _too_many(total)
         verts = self.poses[: self.n].copy()
         verts[self.nv :] = ends
-        kx, offx, inner, ax, bx, jx, srcx, dstx = split_edges(verts, edges, lengths, self.step_len, self.N0)
+        cut = split_edges(verts, edges, lengths, self.step_len, self.N0)
+        kx, offx, inner, ax, bx, jx, srcx, dstx = cut.k, cut.offs, cut.inner, cut.a, cut.b, cut.j, cut.src, cut.dst
         poses = np.concatenate([self.poses, inner])
         poses[self.nv : self.n] = ends
         # A build from scratch sorts the moves of all edges by source, stably, over
@@ -307,7 +319,8 @@ def spanner_split(roadmap, step_len: float, stretch: float) -> SplitSpanner:
     if total > MAX_POINTS:
         raise _too_many(total)
     verts = np.vstack([roadmap.vertices, np.zeros((2, roadmap.vertices.shape[1]))])
-    k, offs, inner, a, b, j, src, dst = split_edges(verts, edges, lengths, step_len, n)
+    cut = split_edges(verts, edges, lengths, step_len, n)
+    k, offs, inner, a, b, j, src, dst = cut.k, cut.offs, cut.inner, cut.a, cut.b, cut.j, cut.src, cut.dst
     N0 = n + int(offs[-1])
     s2 = np.concatenate([src, dst])
     d2 = np.concatenate([dst, src])

@@ -16,14 +16,14 @@ import math
 import os
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
-from importlib import metadata
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
 
 from .atomic import write_atomic
 from .errors import InputError, SceneError
+from .freespace import blocked_points
 from .geometry import StaticGeometry, metric_distance
 from .scene import Scene
 from .typing import FloatArray, IntArray
@@ -43,6 +43,7 @@ FORMAT = "gfuzzy-roadmap"
 #: Validity checks without a new milestone after which the free space counts as empty.
 STALL_CHECKS = 200_000
 FORMAT_VERSION = 1
+FREE_CELL_SHARE = 0.5  # maps' free cells below this share of the bounds: half the samples drawn in them
 
 
 @dataclass(frozen=True)
@@ -109,6 +110,65 @@ class _Derived(dict):
         return _Derived()
 
 
+@dataclass(frozen=True)
+class RoadmapInfo:
+    """How a roadmap was built (its file's ``info``).
+
+    Attributes
+    ----------
+    ompl_version : str
+    seconds : float
+        Wall-clock time of the whole build.
+    grow_seconds : float
+        Of which OMPL's PRM growing the roadmap.
+    validity_calls, certify_calls : int
+        Collision-model calls while growing and while certifying the edges.
+    edges_dropped : int
+        PRM edges that could not be certified free.
+    components : int
+        Connected components of the roadmap.
+    repair : dict
+        Disc robots: what the free-space repair added (``added_vertices``, ``added_edges``,
+        ``free_space_regions``, ``components_joined``, ``components_unjoined``,
+        ``seconds``; :meth:`gfuzzy.freespace.Repair.to_dict`); empty without it (not
+        written then).
+    extra : dict
+        Keys of a file written by another version, kept as they were.
+    """
+
+    ompl_version: str = ""
+    seconds: float = 0.0
+    grow_seconds: float = 0.0
+    validity_calls: int = 0
+    certify_calls: int = 0
+    edges_dropped: int = 0
+    components: int = 0
+    repair: dict = field(default_factory=dict)
+    extra: dict = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        """Plain JSON: the fields, then the extra keys."""
+        doc = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "extra"}
+        if not doc["repair"]:  # as files written before the repair
+            del doc["repair"]
+        return {**doc, **self.extra}
+
+    @classmethod
+    def from_dict(cls, doc) -> RoadmapInfo:
+        """From a roadmap file's ``info`` (anything but a mapping gives the defaults)."""
+        if not isinstance(doc, dict):
+            return cls()
+        casts = {"str": str, "float": float, "int": int, "dict": dict}
+        types = {f.name: casts[f.type] for f in fields(cls) if f.name != "extra"}
+        kwargs, extra = {}, {}
+        for key, value in doc.items():
+            try:
+                kwargs[key] = types[key](value)
+            except (KeyError, TypeError, ValueError):  # another version's key, or odd: kept
+                extra[key] = value
+        return cls(**kwargs, extra=extra)
+
+
 @dataclass
 class Roadmap:
     """A roadmap of the static scene.
@@ -124,7 +184,7 @@ class Roadmap:
     scene_name, scene_hash : str
         The scene it was built for (``Scene.static_hash``).
     options : RoadmapOptions
-    info : dict
+    info : RoadmapInfo
         Build statistics: seconds, validity calls, edges dropped, OMPL version.
     """
 
@@ -135,7 +195,7 @@ class Roadmap:
     scene_hash: str
     circumradius: float
     options: RoadmapOptions = field(default_factory=RoadmapOptions)
-    info: dict = field(default_factory=dict)
+    info: RoadmapInfo = field(default_factory=RoadmapInfo)
     #: Cache of :meth:`spanner` results by stretch (derived data: not saved, not compared).
     #: A Roadmap is otherwise immutable after building, so the cache never goes stale.
     _spanners: dict = field(default_factory=dict, repr=False, compare=False)
@@ -182,9 +242,15 @@ class Roadmap:
         if cached is not None:  # computed once per roadmap and stretch
             return cached
         keep = np.ones(len(self.edges), dtype=bool)
+        if stretch > 1.0:
+            self._prune_to_spanner(keep, stretch)
+        # published only once complete (an interrupted build leaves nothing behind), read-only
+        keep.flags.writeable = False
         self._spanners[stretch] = keep
-        if stretch == 1.0:
-            return keep
+        return keep
+
+    def _prune_to_spanner(self, keep: np.ndarray, stretch: float) -> None:
+        """Clear in ``keep`` the edges the greedy two-edge test drops (see `spanner`)."""
         adj: list[dict] = [{} for _ in range(len(self.vertices))]
         ends, lens = self.edges.tolist(), self.lengths.tolist()
         for e in np.argsort(self.lengths, kind="stable").tolist():
@@ -199,7 +265,6 @@ class Roadmap:
                 continue
             adj[a][b] = length
             adj[b][a] = length
-        return keep
 
     def check_scene(self, scene: Scene, file: str = "<roadmap>") -> None:
         """Raise SceneError if this roadmap was not built for ``scene``'s static part."""
@@ -220,7 +285,7 @@ class Roadmap:
             "scene_hash": self.scene_hash,
             "circumradius": self.circumradius,
             "options": asdict(self.options),
-            "info": self.info,
+            "info": self.info.to_dict(),
             "vertices": self.vertices.tolist(),
             "edges": self.edges.tolist(),
             "lengths": self.lengths.tolist(),
@@ -291,11 +356,11 @@ def load_roadmap(path: str | os.PathLike, scene: Scene | None = None) -> Roadmap
         str(doc["scene_hash"]),
         circumradius,
         opts,
-        dict(doc.get("info", {})) if isinstance(doc.get("info", {}), dict) else {},
+        RoadmapInfo.from_dict(doc.get("info", {})),
     )
     if scene is not None:
         rm.check_scene(scene, file)
-        if rm.dof != scene.robot.dof:
+        if rm.dof != scene.robot.space_dof:
             raise SceneError(file, "vertices", "roadmap poses do not match the robot kind")
         if abs(circumradius - scene.robot.circumradius) > 1e-12:
             raise SceneError(file, "circumradius", "does not match the scene's robot")
@@ -311,6 +376,8 @@ def default_roadmap_path(scene: Scene, folder: str | os.PathLike = "roadmaps") -
 
 
 def _ompl_version() -> str:
+    from importlib import metadata  # ~20 ms to import: only when a roadmap is built
+
     try:
         return metadata.version("ompl")
     except metadata.PackageNotFoundError:  # pragma: no cover
@@ -328,43 +395,33 @@ def _seed_ompl(seed: int) -> None:
         ou.setLogLevel(level)
 
 
-def _blocked_points(scene: Scene, grow: float = 0.0):
-    """A vectorised test: which xy points lie within ``grow`` of a static obstacle or of
-    the outside of the bounds.
+def _free_cell_draw(scene: Scene, rng: np.random.Generator):
+    """A draw of points uniform over the free cells of the scene's maps, or None.
 
-    With ``grow`` the robot's inradius (plus its clearance, from the obstacles), a blocked
-    point is one where the robot collides at every heading: the bridge test's ends then
-    lie in C-space obstacles, and its midpoints in the gaps the robot may fit through.
-    Arcs are cut into a few chords: this only steers sampling, the validity check decides.
+    Returns None without a map, or when the free cells cover most of the bounds anyway
+    (uniform sampling in the bounds then wastes little).
     """
-    import shapely
+    from .scene import MapObstacle
 
-    from .scene import Box, Disc
-
-    shapes = []
-    for ob_ in scene.obstacles:
-        if isinstance(ob_, Disc):
-            shapes.append(shapely.Point(ob_.center).buffer(ob_.radius + grow, 8))
-            continue
-        if isinstance(ob_, Box):
-            shape = shapely.Polygon(ob_.vertices())
-        else:
-            shape = shapely.Polygon(ob_.points, list(ob_.holes))
-        shapes.append(shape.buffer(grow, 8) if grow > 0 else shape)
-    union = shapely.union_all(shapes) if shapes else shapely.Polygon()
-    shapely.prepare(union)
-    inset = scene.robot.inradius if grow > 0 else 0.0
     xmin, ymin, xmax, ymax = scene.bounds
-    xmin, ymin, xmax, ymax = xmin + inset, ymin + inset, xmax - inset, ymax - inset
+    centres, sizes = [], []
+    for grid in scene.obstacles:
+        if isinstance(grid, MapObstacle):
+            c = grid.free_centres()
+            c = c[(c[:, 0] > xmin) & (c[:, 0] < xmax) & (c[:, 1] > ymin) & (c[:, 1] < ymax)]
+            centres.append(c)
+            sizes.append(np.full(len(c), grid.resolution))
+    if not centres:
+        return None
+    c, size = np.concatenate(centres), np.concatenate(sizes)
+    if len(c) == 0 or float(np.sum(size**2)) > FREE_CELL_SHARE * (xmax - xmin) * (ymax - ymin):
+        return None
 
-    def blocked(xy: FloatArray) -> np.ndarray:
-        x, y = xy[:, 0], xy[:, 1]
-        out = (x <= xmin) | (x >= xmax) | (y <= ymin) | (y >= ymax)
-        if shapes:
-            out |= shapely.contains_xy(union, x, y)
-        return out
+    def draw() -> FloatArray:
+        k = int(rng.integers(len(c)))
+        return c[k] + (rng.random(2) - 0.5) * size[k]
 
-    return blocked
+    return draw
 
 
 def _make_passage_sampler(
@@ -380,8 +437,9 @@ def _make_passage_sampler(
     box = scene.robot.shape == "box"
     sigma = max(scene.robot.circumradius, 1e-3)
     valid = geometry.is_valid
-    blocked = _blocked_points(scene, scene.robot.inradius + scene.robot.clearance)
+    blocked = blocked_points(scene, scene.robot.inradius + scene.robot.clearance)
     span = 2.0 * scene.robot.circumradius
+    in_free_cell = _free_cell_draw(scene, rng)
 
     class PassageSampler(ob.ValidStateSampler):
         def __init__(self):
@@ -391,7 +449,10 @@ def _make_passage_sampler(
             self.dry = 0  # refills in a row that found no bridge
 
         def _uniform(self):
-            q = [rng.uniform(xmin, xmax), rng.uniform(ymin, ymax)]
+            if in_free_cell is not None and rng.random() < 0.5:  # a map mostly blocked
+                q = list(in_free_cell())
+            else:
+                q = [rng.uniform(xmin, xmax), rng.uniform(ymin, ymax)]
             if box:
                 q.append(rng.uniform(-math.pi, math.pi))
             return np.array(q)
@@ -678,34 +739,22 @@ def grow_roadmaps(
                     progress(k + 1, len(edges))
             dropped = int((~keep).sum())
             edges = edges[keep]
-            repaired = None
-            if fs is not None:
-                from .freespace import repair
-
-                t_rep = time.perf_counter()
-                repaired = repair(geometry, fs, vertices, edges, options.neighbors)
-                vertices, edges = repaired.vertices, repaired.edges
-                if repaired.added_vertices:
-                    log.info(
-                        "free-space repair: %d roadmap components joined, %d vertices added",
-                        repaired.joined, repaired.added_vertices,
-                    )
+            vertices, edges, repaired = _repair(geometry, fs, vertices, edges, options.neighbors)
             lengths = metric_distance(
                 vertices[edges[:, 0]], vertices[edges[:, 1]], scene.robot.circumradius
             )
             if dropped:
                 log.info("dropped %d of %d PRM edges that could not be certified free", dropped, len(keep))
-            info = {
-                "ompl_version": _ompl_version(),
-                "seconds": round(time.perf_counter() - t_start, 4),
-                "grow_seconds": round(t_grow, 4),
-                "validity_calls": int(calls_grow),
-                "certify_calls": int(geometry.calls - calls0 - calls_grow),
-                "edges_dropped": dropped,
-                "components": _components(len(vertices), edges),
-            }
-            if repaired is not None:
-                info["repair"] = {**repaired.to_dict(), "seconds": round(time.perf_counter() - t_rep, 4)}
+            info = RoadmapInfo(
+                ompl_version=_ompl_version(),
+                seconds=round(time.perf_counter() - t_start, 4),
+                grow_seconds=round(t_grow, 4),
+                validity_calls=int(calls_grow),
+                certify_calls=int(geometry.calls - calls0 - calls_grow),
+                edges_dropped=dropped,
+                components=_components(len(vertices), edges),
+                repair=repaired,
+            )
             opts = RoadmapOptions(**{**asdict(options), "vertices": n})
             out.append(
                 Roadmap(
@@ -722,6 +771,20 @@ def grow_roadmaps(
     finally:
         builder.close()
     return out
+
+
+def _repair(geometry: StaticGeometry, fs, vertices: FloatArray, edges: IntArray, k: int):
+    """(vertices, edges, the repair's report) after :func:`gfuzzy.freespace.repair`, or
+    as given with an empty report when ``fs`` is None (not a disc, or no repair)."""
+    if fs is None:
+        return vertices, edges, {}
+    from .freespace import repair
+
+    t = time.perf_counter()
+    rep = repair(geometry, fs, vertices, edges, k)
+    if rep.added_vertices:
+        log.info("free-space repair: %d components joined, %d vertices added", rep.joined, rep.added_vertices)
+    return rep.vertices, rep.edges, {**rep.to_dict(), "seconds": round(time.perf_counter() - t, 4)}
 
 
 def _components(n: int, edges: IntArray) -> int:

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from .errors import InputError, SceneError
+from .maps import MapObstacle, load_map
 from .status import Status
 from .typing import FloatArray
 from .yamldoc import _V, MAX_MAGNITUDE, NAME_RE, _join, _kind, _load_yaml, _one_key
@@ -29,6 +30,7 @@ __all__ = [
     "Disc",
     "Box",
     "Polygon",
+    "MapObstacle",
     "Mover",
     "Query",
     "Expect",
@@ -38,6 +40,7 @@ __all__ = [
 ]
 
 MODES = ("loop", "bounce", "once")
+KINEMATICS = ("holonomic", "unicycle")
 STATUSES = tuple(s.value for s in Status)  # the file format spells them as strings
 
 
@@ -63,6 +66,13 @@ class Robot:
         Distance every answer keeps from static obstacles (not from the bounds), metres.
     mover_clearance : float
         Distance every answer keeps from every present mover, metres.
+    kinematics : {"holonomic", "unicycle"}
+        ``unicycle``: a differential drive; poses are ``[x, y, heading]`` for every shape and
+        answers are waits, turns in place and straight moves along the heading.
+    wmax : float or None
+        Unicycle: bound on |turning rate| (rad/s); None: vmax / circumradius.
+    reverse : bool
+        Unicycle: may it drive backwards.
     """
 
     shape: str
@@ -72,6 +82,21 @@ class Robot:
     amax: float | None = None
     clearance: float = 0.0
     mover_clearance: float = 0.0
+    kinematics: str = "holonomic"
+    wmax: float | None = None
+    reverse: bool = False
+
+    @property
+    def unicycle(self) -> bool:
+        """True for a differential drive (``kinematics: unicycle``, CONTRACT section 6)."""
+        return self.kinematics == "unicycle"
+
+    @property
+    def turn_rate(self) -> float:
+        """Largest turning rate a unicycle may use, rad/s: ``wmax`` (default vmax / r),
+        never above vmax / r (the speed bound of a turn in place)."""
+        bound = self.vmax / self.circumradius
+        return bound if self.wmax is None else min(float(self.wmax), bound)
 
     @property
     def circumradius(self) -> float:
@@ -87,7 +112,13 @@ class Robot:
 
     @property
     def dof(self) -> int:
-        """Length of a pose: 2 for a disc, 3 for a box."""
+        """Length of a pose: 2 for a holonomic disc, 3 for a box or any unicycle."""
+        return 3 if self.unicycle else self.space_dof
+
+    @property
+    def space_dof(self) -> int:
+        """Dimension of the roadmap's configuration space: 2 for a disc (R^2), 3 otherwise
+        (SE(2)); a unicycle disc has 3-number poses on an R^2 roadmap."""
         return 2 if self.shape == "disc" else 3
 
     def corners(self, poses: FloatArray) -> FloatArray:
@@ -445,7 +476,10 @@ def _mesh_footprint(v: _V, spec, place: str, folder: Path) -> tuple[list, bytes]
 def _parse_robot(v: _V, rd) -> tuple[Robot, dict]:
     """``robot:``: the Robot, and its shape as it enters the static hash."""
     rd = v.mapping(
-        rd, "robot", required=("vmax",), optional=("disc", "box", "amax", "clearance", "mover_clearance")
+        rd,
+        "robot",
+        required=("vmax",),
+        optional=("disc", "box", "amax", "clearance", "mover_clearance", "kinematics", "wmax", "reverse"),
     )
     if ("disc" in rd) == ("box" in rd):
         v.fail("robot", "give exactly one of disc or box")
@@ -458,7 +492,17 @@ def _parse_robot(v: _V, rd) -> tuple[Robot, dict]:
     amax = v.number(rd["amax"], "robot.amax", positive=True) if "amax" in rd else None
     clear = v.number(rd.get("clearance", 0.0), "robot.clearance", nonneg=True)
     mover_clear = v.number(rd.get("mover_clearance", 0.0), "robot.mover_clearance", nonneg=True)
-    robot = Robot(robot_shape, radius, size, vmax, amax, clear, mover_clear)
+    kin = rd.get("kinematics", "holonomic")
+    if kin not in KINEMATICS:
+        v.fail("robot.kinematics", f"unknown kinematics {kin!r} (allowed: {', '.join(KINEMATICS)})")
+    for key in ("wmax", "reverse"):
+        if key in rd and kin != "unicycle":
+            v.fail(f"robot.{key}", "only for kinematics: unicycle")
+    wmax = v.number(rd["wmax"], "robot.wmax", positive=True) if "wmax" in rd else None
+    reverse = rd.get("reverse", False)
+    if not isinstance(reverse, bool):
+        v.fail("robot.reverse", f"expected true or false, got {_kind(reverse)}")
+    robot = Robot(robot_shape, radius, size, vmax, amax, clear, mover_clear, kin, wmax, reverse)
 
     return robot, {"shape": robot_shape, "radius": radius, "size": list(size)}
 
@@ -471,9 +515,13 @@ def _parse_obstacles(v: _V, doc: dict, folder: Path, hasher) -> list:
         v.fail("obstacles", f"expected a list, got {_kind(doc['obstacles'])}")
     for i, item in enumerate(obs_doc):
         place = f"obstacles[{i}]"
-        kind, spec = _one_key(v, item, place, ("box", "disc", "polygon", "mesh"))
+        kind, spec = _one_key(v, item, place, ("box", "disc", "polygon", "mesh", "map"))
         kplace = _join(place, kind)
-        if kind == "box":
+        if kind == "map":
+            grid = load_map(spec, kplace, v.file, folder)
+            hasher.update(bytes.fromhex(grid.digest))
+            obstacles.append(grid)
+        elif kind == "box":
             spec = v.mapping(spec, kplace, required=("center", "size"), optional=("angle",))
             obstacles.append(
                 Box(
@@ -622,19 +670,26 @@ def parse_scene(doc: Any, file: str = "<string>", folder: str | os.PathLike | No
     v.mapping(
         doc,
         "",
-        required=("version", "name", "bounds", "robot"),
-        optional=("obstacles", "movers", "queries"),
+        required=("version", "name", "robot"),
+        optional=("bounds", "obstacles", "movers", "queries"),
     )
     if doc["version"] != 1 or isinstance(doc["version"], bool):
         v.fail("version", f"unsupported version {doc['version']!r} (this reads version 1)")
     name = v.name(doc["name"], "name", NAME_RE)
-    bounds = v.vector(doc["bounds"], "bounds", 4)
-    if not (bounds[0] < bounds[2] and bounds[1] < bounds[3]):
-        v.fail("bounds", f"inverted or empty bounds {list(bounds)} (need xmin < xmax, ymin < ymax)")
+    if "bounds" in doc:
+        bounds = v.vector(doc["bounds"], "bounds", 4)
+        if not (bounds[0] < bounds[2] and bounds[1] < bounds[3]):
+            v.fail("bounds", f"inverted or empty bounds {list(bounds)} (need xmin < xmax, ymin < ymax)")
 
     robot, robot_repr = _parse_robot(v, doc["robot"])
     hasher = hashlib.sha256()
     obstacles = _parse_obstacles(v, doc, folder, hasher)
+    if "bounds" not in doc:
+        grids = [o for o in obstacles if isinstance(o, MapObstacle)]
+        if not grids:
+            v.fail("bounds", "missing required key (it may be left out only when the scene has a map)")
+        ext = np.array([g.extent for g in grids])
+        bounds = (float(ext[:, 0].min()), float(ext[:, 1].min()), float(ext[:, 2].max()), float(ext[:, 3].max()))
     movers = _parse_movers(v, doc)
     queries = _parse_queries(v, doc, robot)
 
@@ -668,6 +723,8 @@ def _static_hash(shape_hash: str, clearance: float) -> str:
 
 
 def _static_repr(o) -> dict:
+    if isinstance(o, MapObstacle):
+        return {"map": o.digest, "unknown_free": o.unknown_free}
     if isinstance(o, Disc):
         return {"disc": [list(o.center), o.radius]}
     if isinstance(o, Box):

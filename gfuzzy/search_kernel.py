@@ -36,8 +36,8 @@ import time
 from bisect import bisect_left
 
 import numpy as np
-from numba import njit
 
+from .jit import njit
 from .movers import MoverField
 from .spacetime import IntervalStore, SearchResult, SpaceTimeGraph
 from .status import Status

@@ -10,6 +10,7 @@ return a :class:`SearchResult`.
 
 from __future__ import annotations
 
+import copy
 from bisect import bisect_right
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
@@ -24,7 +25,7 @@ from .typing import BoolArray, FloatArray, IntArray
 if TYPE_CHECKING:
     from .movers import MoverField
 
-__all__ = ["SpaceTimeGraph", "SearchResult", "IntervalStore", "split_edges", "BAND"]
+__all__ = ["SpaceTimeGraph", "SearchResult", "IntervalStore", "SplitEdges", "split_edges", "BAND"]
 
 #: Safety is computed for every group whose static lower bound on f lies within this many
 #: steps of the group the search asks for: the A* order will want them soon.
@@ -114,7 +115,8 @@ class IntervalStore:
         first = int(graph.groups[0]) if graph.groups is not None else n
         ptr = np.arange(first + 1, dtype=np.int64)
         if graph.groups is not None:
-            ptr = np.unique(np.concatenate([ptr, np.asarray(graph.groups, dtype=np.int64)]))
+            ptr = np.sort(np.concatenate([ptr, np.asarray(graph.groups, dtype=np.int64)]))
+            ptr = ptr[np.r_[True, ptr[1:] != ptr[:-1]]]  # np.unique, which imports numpy.ma (~20 ms)
         ptr = ptr[ptr <= n]
         if ptr[-1] != n:
             ptr = np.append(ptr, n)
@@ -128,6 +130,7 @@ class IntervalStore:
         self._hfloor = np.floor(np.where(self._finite, hmin, 0) + 1e-9).astype(np.int64)
         self.f_lb = np.minimum.reduceat(fs + h, ptr[:-1])
         self.done_hi = np.full(len(ptr) - 1, -1, dtype=np.int64)  # last step computed
+        self._same = _same_position_groups(graph.poses, ptr)
         self.pool: bool | None = None  # the storage, fixed by the first set_horizon
         self.field = None
         self.H = -1
@@ -233,9 +236,14 @@ class IntervalStore:
         # the safety first, the bookkeeping after: a field that raises (a deadline inside
         # the batch) leaves the store as it was
         if self.pool:
-            gs, ge, sp = field_.safe_intervals(self.graph.poses[nodes], sub_ptr, lo, hi)
+            compute = _pool_intervals
         else:
-            gs, ge, sp = _intervals_from_pairs(field_, self.graph.poses[nodes], sub_ptr, lo, hi, self.H)
+            H = self.H
+
+            def compute(f, p, pt, a, b):
+                return _intervals_from_pairs(f, p, pt, a, b, H)
+
+        gs, ge, sp = _safe_intervals_shared(field_, self.graph.poses[nodes], sub_ptr, lo, hi, self._same[pending], compute)
         self.done_hi[pending] = hi
         if self.pool:
             self._pool_merge(nodes, gs, ge, sp, lo_n)
@@ -263,6 +271,69 @@ class IntervalStore:
         self.ready[nodes] = self.cnt[nodes]
 
 
+def _same_position_groups(poses, ptr) -> BoolArray:
+    """(G,) bool: groups of more than one point, all at one position (a unicycle's turning
+    ring, a turn in place). A group is the points of one straight motion, so its first and
+    last points share a position only when all do."""
+    sizes = np.diff(ptr)
+    multi = np.nonzero(sizes > 1)[0]
+    out = np.zeros(len(sizes), dtype=bool)
+    out[multi] = np.all(poses[ptr[multi], :2] == poses[ptr[multi + 1] - 1, :2], axis=1)
+    return out
+
+
+def _pool_intervals(field_, poses, ptr, lo, hi):
+    return field_.safe_intervals(poses, ptr, lo, hi)
+
+
+def _turn_field(field_: MoverField) -> MoverField:
+    """``field_`` for a robot turning in place: its circumscribed disc, which holds the body
+    at every heading (the same field for a disc robot)."""
+    robot = field_.robot
+    if robot.shape == "disc":
+        return field_
+    from dataclasses import replace as _replace
+
+    body = copy.copy(field_)
+    body.robot = _replace(robot, shape="disc", radius=robot.circumradius, size=(0.0, 0.0))
+    return body
+
+
+def _safe_intervals_shared(field_: MoverField, poses, ptr, lo, hi, same, compute):
+    """Safe intervals of groups of points (``compute(field, poses, ptr, lo, hi)``, e.g.
+    :meth:`MoverField.safe_intervals`), computed once for a group whose points all share one
+    position (``same``, per group: a unicycle's turn in place) and handed to each of its
+    points. Such a group is judged with the robot's circumscribed disc (:func:`_turn_field`):
+    the body at any heading lies inside it, so every point's safety is sound, and for a disc
+    robot exact.
+
+    Returns (starts, ends, sp) as :meth:`gfuzzy.movers.MoverField.safe_intervals`.
+    """
+    sizes = np.diff(ptr)
+    n = len(poses)
+    collapse = same & (sizes > 1)
+    if n == 0 or not collapse.any():
+        return compute(field_, poses, ptr, lo, hi)
+    norm = ~collapse
+    pn = np.repeat(norm, sizes)
+    ga, ea, spa = compute(field_, poses[pn], np.concatenate([[0], np.cumsum(sizes[norm])]).astype(np.int64),
+                          lo[norm], hi[norm])  # fmt: skip
+    body = _turn_field(field_)
+    before = body.evaluations
+    firsts = ptr[:-1][collapse]
+    gb, eb, spb = compute(body, poses[firsts], np.arange(len(firsts) + 1, dtype=np.int64), lo[collapse], hi[collapse])
+    if body is not field_:
+        field_.evaluations += body.evaluations - before
+    start = np.empty(n, dtype=np.int64)
+    count = np.empty(n, dtype=np.int64)
+    start[pn], count[pn] = spa[:-1], np.diff(spa)
+    cidx = np.repeat(np.cumsum(collapse) - 1, sizes)[~pn]  # each point's collapsed group
+    start[~pn], count[~pn] = spb[:-1][cidx] + len(ga), np.diff(spb)[cidx]
+    sp = np.concatenate([[0], np.cumsum(count)]).astype(np.int64)
+    idx = np.repeat(start, count) + (np.arange(sp[-1]) - np.repeat(sp[:-1], count))
+    return np.concatenate([ga, gb])[idx], np.concatenate([ea, eb])[idx], sp
+
+
 def _intervals_from_pairs(field_: MoverField, poses, ptr, lo, hi, H: int):
     """Safe intervals of groups of points from the field's unsafe pairs (the numpy
     reference): the gaps between unsafe steps, with each window's ends as walls.
@@ -287,7 +358,35 @@ def _intervals_from_pairs(field_: MoverField, poses, ptr, lo, hi, H: int):
     return gs[ok], ge[ok], np.searchsorted(rn, np.arange(k + 1))
 
 
-def split_edges(verts: FloatArray, edges: IntArray, lengths: FloatArray, step_len: float, first_id: int):
+@dataclass(frozen=True)
+class SplitEdges:
+    """Edges cut into one-step pieces (:func:`split_edges`).
+
+    Attributes
+    ----------
+    k : (e,) int
+        Steps per edge.
+    offs : (e+1,) int
+        Interior points of edge i are ``first_id + offs[i] .. first_id + offs[i+1] - 1``.
+    inner : (offs[-1], d) float
+        Their poses.
+    a, b, j : (offs[-1],) int
+        Each interior point's edge ends and its index 1..k-1 along the edge.
+    src, dst : (c,) int
+        The one-step moves along the chains a -> interior... -> b (one direction).
+    """
+
+    k: IntArray
+    offs: IntArray
+    inner: FloatArray
+    a: IntArray
+    b: IntArray
+    j: IntArray
+    src: IntArray
+    dst: IntArray
+
+
+def split_edges(verts: FloatArray, edges: IntArray, lengths: FloatArray, step_len: float, first_id: int) -> SplitEdges:
     """Cut edges into one-step pieces of at most ``step_len`` (:func:`gfuzzy.poses.split_counts`).
 
     The one place the roadmap-time graph is cut: :meth:`gfuzzy.planner.Planner._graph`
@@ -305,16 +404,7 @@ def split_edges(verts: FloatArray, edges: IntArray, lengths: FloatArray, step_le
 
     Returns
     -------
-    k : (e,) int
-        Steps per edge.
-    offs : (e+1,) int
-        Interior points of edge i are ``first_id + offs[i] .. first_id + offs[i+1] - 1``.
-    inner : (offs[-1], d) float
-        Their poses.
-    a, b, j : (offs[-1],) int
-        Each interior point's edge ends and its index 1..k-1 along the edge.
-    src, dst : (c,) int
-        The one-step moves along the chains a -> interior... -> b (one direction).
+    SplitEdges
     """
     k = split_counts(lengths, step_len)
     n_int = k - 1
@@ -331,4 +421,4 @@ def split_edges(verts: FloatArray, edges: IntArray, lengths: FloatArray, step_le
     prev = np.where(first, a, ids - 1)
     src = np.concatenate([prev, ids[last], edges[n_int == 0, 0]])
     dst = np.concatenate([ids, b[last], edges[n_int == 0, 1]])
-    return k, offs, inner, a, b, j, src, dst
+    return SplitEdges(k, offs, inner, a, b, j, src, dst)

@@ -7,8 +7,8 @@ answer it would replace by more than ``PlanOptions.refine_max_slowdown``, is dro
 the earlier answer stands: the stages never return an invalid trajectory. Each stage
 reports what it did in a frozen report (:class:`RefineReport`, :class:`SpeedReport`) kept
 on the :class:`~gfuzzy.planner.PlanResult` (``refine_report``, ``speed_report``); their
-``to_dict()`` forms are ``PlanResult.stats["refine"]`` and ``stats["speed_layer"]``, the
-keys the trajectory file's ``stats`` has always had.
+``to_dict()`` forms are the trajectory file's ``stats["refine"]`` and ``stats["speed_layer"]``,
+the keys it has always had.
 
 The stages see the scene and its static geometry through a :class:`StageContext`, never
 the planner: data flows one way (docs/architecture.md).
@@ -20,6 +20,7 @@ import logging
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
@@ -32,6 +33,10 @@ from .settings import AMAX_PER_VMAX
 from .status import Status
 from .trajectory import Trajectory
 from .typing import FloatArray
+
+if TYPE_CHECKING:
+    from .ga import GAOptions
+    from .rules import RuleBase
 
 __all__ = ["StageContext", "RefineReport", "SpeedReport", "apply_stages", "GA_RETRY_KNOTS", "HEADING_STEP"]
 
@@ -317,10 +322,15 @@ def _refine(ctx: StageContext, traj: Trajectory, query, opts, deadline) -> tuple
     report = RefineReport(False, "", ga_opts.n_knots, res.generations, seconds, before)
     if not res.improved:
         return traj, replace(report, reason="the GA found nothing better than the corridor")
-    path = funcs[0](res.path)  # poses_of: a box robot takes the corridor's headings
-    if ctx.robot.dof == 3:  # the ends keep their exact poses
-        path[0], path[-1] = traj.poses[0], traj.poses[-1]
-    path[0, :2], path[-1, :2] = traj.poses[0, :2], traj.poses[-1, :2]
+    if ctx.robot.unicycle:  # straight segments through the via-points, turns in place
+        from .drive import turn_path
+
+        path = turn_path(traj.poses[0], res.path[1:-1], traj.poses[-1])
+    else:
+        path = funcs[0](res.path)  # poses_of: a box robot takes the corridor's headings
+        if ctx.robot.dof == 3:  # the ends keep their exact poses
+            path[0], path[-1] = traj.poses[0], traj.poses[-1]
+        path[0, :2], path[-1, :2] = traj.poses[0, :2], traj.poses[-1, :2]
     for a, b in zip(path[:-1], path[1:], strict=True):
         if not ctx.geometry.motion_free(a, b):
             return traj, replace(report, reason="a refined segment could not be certified free of static obstacles")
@@ -375,47 +385,66 @@ def _speed_figures(traj: Trajectory) -> dict:
     }
 
 
-def apply_stages(ctx: StageContext, result, start, goal, t0, opts, t_begin, hold: float = 0.0):
-    """Run the GA refinement and/or the speed layer on a solved result (the goal pose
-    parked ``hold`` seconds after the arrival, checked as well).
+class StageSettings(Protocol):
+    """What the stages read of the query's options (``gfuzzy.PlanOptions`` has all of it).
+
+    The stages depend on these attributes only, never on the planner's types: data flows
+    one way (docs/architecture.md).
+    """
+
+    refine: bool
+    speed_layer: bool
+    seed: int
+    dt: float
+    horizon: float | None
+    refine_max_slowdown: float
+    ga: GAOptions | None
+    rules: RuleBase | None
+
+
+@dataclass(frozen=True)
+class StageOutcome:
+    """The trajectory after the stages, and what each stage that ran did."""
+
+    trajectory: Trajectory
+    refine_report: RefineReport | None = None
+    speed_report: SpeedReport | None = None
+
+
+def apply_stages(
+    ctx: StageContext,
+    traj: Trajectory,
+    query: Query,
+    opts: StageSettings,
+    deadline: float,
+) -> StageOutcome:
+    """Run the GA refinement and/or the speed layer on a solved answer (the goal pose
+    parked ``query.hold`` seconds after the arrival, checked as well).
 
     Parameters
     ----------
     ctx : StageContext
-    result : PlanResult
-        Solved.
-    start, goal : (d,) float
-    t0 : float
-    opts : PlanOptions
-        ``refine``, ``speed_layer`` and their settings.
-    t_begin : float
-        ``time.perf_counter()`` when planning began (the time budget counts from there).
-    hold : float
+    traj : Trajectory
+        The search's answer to ``query``.
+    query : Query
+        Start, goal, ``t0`` and ``hold`` of the answer.
+    opts : StageSettings
+        ``refine``, ``speed_layer`` and their settings (a ``PlanOptions``).
+    deadline : float
+        ``time.perf_counter()`` value past which no stage starts more work.
 
     Returns
     -------
-    PlanResult
-        With the stages' trajectory, ``refine_report`` / ``speed_report``, and their
-        ``to_dict()`` forms in ``stats``.
+    StageOutcome
+        The stages' trajectory (``traj`` itself when no stage applied) and the reports of
+        the stages that ran.
     """
-    deadline = t_begin + opts.time_limit
-    query = Query("stage", tuple(start), tuple(goal), t0, hold=hold)
-    traj = result.trajectory
-    stats = dict(result.stats)
-    reports = {}
+    reports: dict[str, RefineReport | SpeedReport] = {}
     if opts.refine:
         traj, reports["refine_report"] = _refine(ctx, traj, query, opts, deadline)
-        stats["refine"] = reports["refine_report"].to_dict()
     if opts.speed_layer:
         traj, reports["speed_report"] = _speed_layer(ctx, traj, query, opts, deadline)
-        stats["speed_layer"] = reports["speed_report"].to_dict()
     for name, report in reports.items():
         if not report.applied:
             log.info("%s not applied: %s", "refine" if name == "refine_report" else "speed layer", report.reason)
-    return replace(
-        result,
-        trajectory=traj,
-        planning_seconds=time.perf_counter() - t_begin,
-        stats=stats,
-        **reports,
-    )
+    return StageOutcome(traj, **reports)

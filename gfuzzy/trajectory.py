@@ -12,7 +12,7 @@ import io
 import json
 import math
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
@@ -26,9 +26,12 @@ from .typing import FloatArray
 __all__ = ["Trajectory", "load_trajectory", "TrajectoryFile"]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Trajectory:
     """A timed trajectory.
+
+    Two trajectories are equal when their waypoints are equal, row for row and bit for bit,
+    and so are their circumscribed radii.
 
     Attributes
     ----------
@@ -38,8 +41,17 @@ class Trajectory:
         The robot's circumscribed radius (weights heading change in the metric).
     """
 
-    waypoints: FloatArray = field(compare=False)
+    waypoints: FloatArray
     circumradius: float = 0.0
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Trajectory):
+            return NotImplemented
+        return self.circumradius == other.circumradius and np.array_equal(
+            self.waypoints, other.waypoints
+        )
+
+    __hash__ = None  # mutable numpy contents: equal trajectories need not stay equal
 
     @property
     def times(self) -> FloatArray:
@@ -117,9 +129,12 @@ class Trajectory:
         return buf.getvalue()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class TrajectoryFile:
-    """The contents of a trajectory JSON file (any status)."""
+    """The contents of a trajectory JSON file (any status).
+
+    Equal when every field is: the waypoints row for row and the extra keys included.
+    """
 
     scene: str
     query: str
@@ -129,8 +144,21 @@ class TrajectoryFile:
     roadmap_distance: float | None
     delay_factor: float | None
     planning_seconds: float
-    waypoints: FloatArray | None = field(default=None, compare=False)
-    extra: dict = field(default_factory=dict, compare=False)
+    waypoints: FloatArray | None = None
+    extra: dict = field(default_factory=dict)
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, TrajectoryFile):
+            return NotImplemented
+        head = [f.name for f in fields(self) if f.name != "waypoints"]
+        if any(getattr(self, n) != getattr(other, n) for n in head):
+            return False
+        a, b = self.waypoints, other.waypoints
+        return (a is None and b is None) or (
+            a is not None and b is not None and np.array_equal(a, b)
+        )
+
+    __hash__ = None
 
     def to_dict(self) -> dict:
         doc = {

@@ -1,4 +1,5 @@
-"""Shared fixtures: scene files in a temporary folder, the repository root, and the CLI."""
+"""Shared fixtures: scene files in a temporary folder, the repository root, the CLI, and the
+small scenes (line, door) that several test modules plan on."""
 
 from __future__ import annotations
 
@@ -10,12 +11,17 @@ from pathlib import Path
 
 import pytest
 
+from gfuzzy.roadmap import RoadmapOptions, build_roadmap
+
 ROOT = Path(__file__).resolve().parent.parent
 TESTS = ROOT / "tests"
 BAD_SCENES = TESTS / "bad_scenes"
 
 if str(TESTS) not in sys.path:  # lets test modules import the helper `reference`
     sys.path.insert(0, str(TESTS))
+
+from helpers import scene_of as _scene  # noqa: E402
+from shared_scenes import DOOR, LINE  # noqa: E402
 
 
 def cli_present() -> bool:
@@ -84,3 +90,16 @@ def run_python(code: str, *args, cwd=None, timeout: float = 120.0) -> subprocess
 def run_cli():
     """``run_cli(*args, cwd=None)`` -> CompletedProcess of ``python -m gfuzzy ARGS``."""
     return run_cli_process
+
+
+@pytest.fixture
+def line_scene(tmp_path):
+    path = tmp_path / "line.yaml"
+    path.write_text(LINE)
+    return path
+
+
+@pytest.fixture(scope="module")
+def door():
+    scene = _scene(DOOR)
+    return scene, build_roadmap(scene, RoadmapOptions(vertices=80, seed=2))

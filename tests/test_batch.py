@@ -15,7 +15,7 @@ import pytest
 from shared_scenes import LOOP
 
 from gfuzzy import load_scene, plan
-from gfuzzy.batch import COLUMNS, BatchOptions, local_cluster, run_batch, write_table
+from gfuzzy.batch import COLUMNS, BatchOptions, local_cluster, run_batch, table_csv, write_table
 from gfuzzy.cli import main
 from gfuzzy.roadmap import load_roadmap
 
@@ -115,6 +115,9 @@ def test_a_raising_query_is_an_error_row(client, pairs, tmp_path):
     bad = [r for r in res.rows if r.status == "error"]
     assert [(r.scene, r.query) for r in bad] == [("sim-4s1m", "across")]
     assert "RuntimeError: injected failure" in bad[0].error
+    # a bug keeps its traceback (naming the frame that raised), out of the one-line table
+    assert "Traceback" in bad[0].traceback and "raise_on_across" in bad[0].traceback
+    assert "traceback" not in COLUMNS and "\n" not in table_csv(bad).split("\n", 1)[1].rstrip()
     assert len(res.rows) == n_queries(pairs[:2])
     assert all(r.status == "solved" for r in res.rows if r.query != "across")
     assert not stale.exists()  # no answer: the previous run's file is gone
@@ -161,7 +164,7 @@ def test_cli_batch_on_a_scheduler(client, tmp_path):
             assert main(["check", str(ROOT / "scenes" / f"{r['scene']}.yaml"), str(path)]) == 0
 
 
-def test_cli_exit_1_on_an_error_row(client, tmp_path, monkeypatch):
+def test_cli_exit_1_on_an_error_row(client, tmp_path, monkeypatch, capsys):
     import gfuzzy.batch as batch
 
     real = batch.run_batch
@@ -171,6 +174,9 @@ def test_cli_exit_1_on_an_error_row(client, tmp_path, monkeypatch):
                  client.scheduler.address, "-o", str(out)])  # fmt: skip
     assert code == 1
     assert {r["query"]: r["status"] for r in read_csv(out)} == {"diagonal": "solved", "across": "error"}
+    err = capsys.readouterr().err
+    assert "across: error: RuntimeError: injected failure" in err
+    assert "Traceback" in err and "raise_on_across" in err  # the bug shows where it happened
 
 
 def test_cli_interrupt_writes_a_partial_table(client, tmp_path, monkeypatch, capsys):

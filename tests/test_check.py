@@ -82,3 +82,48 @@ def test_formal_faults():
     assert "rows of" in check_trajectory(sc, np.array([[0, 1, 1, 0]])).reason
     out = check_trajectory(sc, np.array([[0, 0.1, 1], [1, 0.5, 1]]))
     assert not out.valid and "bounds" in out.reason
+
+
+def test_check_reports_the_first_collision_between_rows():
+    sc = parse_scene(
+        {
+            "version": 1,
+            "name": "two",
+            "bounds": [0, 0, 10, 3],
+            "robot": {"disc": 0.2, "vmax": 1.0},
+            "obstacles": [
+                {"disc": {"center": [3.0, 1.0], "radius": 0.1}},
+                {"disc": {"center": [5.0, 1.0], "radius": 0.1}},
+            ],
+        }
+    )
+    # two rows only: the first evaluation between them (t = 4, x = 5) lands in the second disc
+    wp = np.array([[0.0, 1.0, 1.0], [8.0, 9.0, 1.0]])
+    rep = check_trajectory(sc, wp)
+    assert not rep.valid
+    assert "[3.0, 1.0]" in rep.reason, rep.reason
+    # the robot (radius 0.2) touches the disc at x = 3 - 0.3 = 2.7, i.e. t = 1.7
+    assert rep.time is not None and 1.69 <= rep.time <= 1.75, rep.time
+
+
+def test_check_reports_the_first_collision_before_a_colliding_row():
+    doc = {
+        "version": 1,
+        "name": "two",
+        "bounds": [0, 0, 10, 3],
+        "robot": {"disc": 0.2, "vmax": 1.0},
+        "obstacles": [{"disc": {"center": [6.0, 1.0], "radius": 0.3}}],
+        # down x = 2.5, through y = 1 at t = 1.5, where the robot is then
+        "movers": [{"name": "early", "disc": 0.1, "speed": 1.0, "path": [[2.5, 2.9], [2.5, 0.1]],
+                    "mode": "once", "offset": 0.4}],
+    }
+    # rows every second: the row at t = 5 (x = 6) sits in the static disc; the mover is
+    # clear of the rows at t = 1 and t = 2 and hit between them
+    t = np.arange(0.0, 9.0)
+    wp = np.column_stack([t, 1.0 + t, np.full(t.size, 1.0)])
+    alone = check_trajectory(parse_scene({**doc, "obstacles": []}), wp)
+    assert not alone.valid and "early" in alone.reason  # the mover alone is hit
+    rep = check_trajectory(parse_scene(doc), wp)
+    assert not rep.valid
+    assert "early" in rep.reason, rep.reason
+    assert 1.0 < rep.time < 1.5

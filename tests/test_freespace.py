@@ -68,7 +68,7 @@ def test_issue_door_radius_03_clearance_005(seed, n):
     """The issue's door: 0.8 wide, radius 0.3, clearance 0.05 (5 cm of slack per side)."""
     scene = parse_scene(door_doc(0.8))
     rm = build_roadmap(scene, RoadmapOptions(vertices=n, seed=seed))
-    assert rm.info["components"] == 1
+    assert rm.info.components == 1
     assert solve(scene, rm, [1.0, 1.0], [5.0, 3.0]).status == "solved"
 
 
@@ -87,9 +87,9 @@ def test_repair_joins_what_prm_missed_and_says_so():
     scene = parse_scene(door_doc(0.74))
     plain = build_roadmap(scene, RoadmapOptions(seed=3, repair=False, sampler="uniform"))
     rm = build_roadmap(scene, RoadmapOptions(seed=3, sampler="uniform"))
-    assert plain.info["components"] == 2 and "repair" not in plain.info
-    assert rm.info["components"] == 1
-    rep = rm.info["repair"]
+    assert plain.info.components == 2 and not plain.info.repair and "repair" not in plain.info.to_dict()
+    assert rm.info.components == 1
+    rep = rm.info.repair
     assert rep["components_joined"] == 1 and rep["added_vertices"] == len(rm) - 200 > 0
     np.testing.assert_array_equal(rm.vertices[:200], plain.vertices)
     # the added edges are certified: every one passes the independent checker as a motion
@@ -107,10 +107,10 @@ def test_no_repair_is_the_old_behaviour_and_the_query_still_joins():
     """An unrepaired roadmap (or an old file) is joined per query through the free space."""
     scene = parse_scene(door_doc(0.74))
     plain = build_roadmap(scene, RoadmapOptions(seed=3, repair=False, sampler="uniform"))
-    assert plain.info["components"] == 2
+    assert plain.info.components == 2
     res = solve(scene, plain, [1.0, 1.0], [5.0, 3.0])
     assert res.status == "solved"
-    assert res.stats["roadmap_vertices"] > len(plain)
+    assert res.stats.roadmap_vertices > len(plain)
 
 
 def test_cli_roadmap_says_what_the_repair_added(tmp_path):

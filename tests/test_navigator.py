@@ -505,8 +505,9 @@ def test_the_field_answers_in_pieces_and_stops_at_the_deadline(open_square):
     pose = np.array([0.0, -4.0])
     obs = _crowd(np.random.default_rng(5), 25, np.array([0.0, 0.0]), 4.0)
     infl = nav._inflation(pose, obs)
-    pts = nav._poses[: 3 * PIECE_WORK // len(obs) + 17]  # groups of the base graph: several pieces
-    groups = nav._groups[nav._groups <= len(pts)]
+    graph, _ = nav._splice(pose)
+    pts = graph.poses[: 3 * PIECE_WORK // len(obs) + 17]  # groups of the kept graph: several pieces
+    groups = graph.groups[graph.groups <= len(pts)]
     ptr = np.unique(np.concatenate([np.arange(nav._nv + 2), groups, [len(pts)]]))
     rng = np.random.default_rng(1)
     lo = rng.integers(0, 20, len(ptr) - 1)

@@ -5,18 +5,26 @@ from __future__ import annotations
 import json
 import math
 from collections import deque
+from dataclasses import replace
 
 import numpy as np
 import pytest
 import yaml
-from conftest import run_cli_process
+from conftest import ROOT, run_cli_process
+from helpers import scene_doc as _doc
+from helpers import scene_of as _scene
 from reference import reference_violation
+from shared_scenes import CROSSING, DOOR, LINE, LOOP, PERSON
 
 from gfuzzy.check import check_trajectory
-from gfuzzy.planner import Planner, PlanOptions, Status, plan
+from gfuzzy.errors import InputError
+from gfuzzy.planner import Planner, PlanOptions, Status, plan, settle_time
 from gfuzzy.roadmap import RoadmapOptions, build_roadmap
-from gfuzzy.scene import load_scene
+from gfuzzy.scene import Query, load_scene, parse_scene
 from gfuzzy.timespace import MoverField
+
+SCENE = ROOT / "scenes" / "sim-4s1m.yaml"
+ROADMAP = ROOT / "roadmaps" / "sim-4s1m.json"
 
 CORRIDOR = """
 version: 1
@@ -184,7 +192,7 @@ queries:
     rm = build_roadmap(scene, RoadmapOptions(vertices=80, seed=2))
     res = plan(scene, rm, [1, 2], [4.5, 2], 0.0)
     assert res.status is Status.NO_PATH
-    assert res.stats.get("expansions", 0) == 0  # decided on the static graph: no space-time search
+    assert res.stats.expansions is None  # decided on the static graph: no space-time search
 
 
 def test_mover_parks_in_doorway_no_path(tmp_path):
@@ -224,7 +232,7 @@ def test_timeout(open_scene):
     # the budget is looked at every few hundred (the compiled search: 4096) expansions: a
     # search long enough that it is looked at
     full = plan(scene, rm, q.start, q.goal, 0.0, PlanOptions(dt=0.001))
-    assert full.solved and full.stats["expansions"] > 5000
+    assert full.solved and full.stats.expansions > 5000
     res = plan(scene, rm, q.start, q.goal, 0.0, PlanOptions(dt=0.001, time_limit=1e-9))
     assert res.status is Status.TIMEOUT
     assert res.trajectory is None and "budget" in res.message
@@ -439,7 +447,7 @@ def test_search_on_the_spanner_stays_near_the_whole_roadmap(corridor, open_scene
         assert whole.solved and sparse.solved
         assert sparse.roadmap_distance == pytest.approx(whole.roadmap_distance)  # the contract's
         assert check_trajectory(scene, sparse.trajectory.waypoints, q).valid
-        assert sparse.stats["graph_nodes"] < whole.stats["graph_nodes"]
+        assert sparse.stats.graph_nodes < whole.stats.graph_nodes
 
 
 def test_bad_options_and_poses_raise_input_error():
@@ -474,3 +482,289 @@ def test_a_hold_too_long_to_sample_names_the_hold(open_scene):
     q = scene.queries[0]
     with pytest.raises(LimitError, match="hold"):
         Planner(scene, rm).plan(q.start, q.goal, 0.0, hold=1e6)
+
+
+@pytest.fixture(scope="module")
+def line_roadmap(tmp_path_factory):
+    path = tmp_path_factory.mktemp("line") / "line.yaml"
+    path.write_text(LINE)
+    scene = load_scene(path)
+    return scene, build_roadmap(scene, RoadmapOptions(vertices=40, seed=2))
+
+
+@pytest.mark.parametrize(
+    "start, goal, t0, where",
+    [
+        ([1.0, 2.5, 0.0], [9.0, 2.5], 0.0, "start"),
+        ([1.0, 2.5], [9.0], 0.0, "goal"),
+        ([1.0, math.nan], [9.0, 2.5], 0.0, "start"),
+        ([1.0, 2.5], [math.inf, 2.5], 0.0, "goal"),
+        ([1.0, 2.5], [9.0, 2.5], math.nan, "t0"),
+    ],
+)
+def test_malformed_poses_are_bad_input_in_the_api(line_roadmap, start, goal, t0, where):
+    scene, rm = line_roadmap
+    with pytest.raises(ValueError, match=where):
+        plan(scene, rm, start, goal, t0)
+
+
+def test_a_well_formed_pose_in_collision_stays_an_invalid_query(line_roadmap):
+    scene, rm = line_roadmap
+    res = plan(scene, rm, [3.0, 1.0], [9.0, 2.5])
+    assert res.status is Status.INVALID_QUERY and "static" in res.message
+
+
+def _speed_change_rate(traj) -> float:
+    """Largest change of configuration speed between consecutive rows, per second."""
+    v, dt = traj.speeds(), np.diff(traj.times)
+    return float(np.max(np.abs(np.diff(v)) / (0.5 * (dt[:-1] + dt[1:])), initial=0.0))
+
+
+def test_the_answer_says_when_amax_is_not_honoured(line_roadmap):
+    scene, rm = line_roadmap
+    q = scene.queries[0]
+    res = plan(scene, rm, q.start, q.goal, q.t0)
+    assert res.solved
+    doc = res.to_file(scene.name, q.name).to_dict()
+    assert doc["amax_honoured"] is False and res.amax_honoured is False
+    assert "speed layer" in doc["amax_note"]
+    assert _speed_change_rate(res.trajectory) > scene.robot.amax  # the claim is true
+    layered = plan(scene, rm, q.start, q.goal, q.t0, PlanOptions(speed_layer=True))
+    assert layered.solved
+    applied = layered.speed_report.applied
+    doc = layered.to_file(scene.name, q.name).to_dict()
+    assert doc["amax_honoured"] is applied
+    if applied:  # and so is this one
+        assert "amax_note" not in doc
+        assert _speed_change_rate(layered.trajectory) <= scene.robot.amax * (1 + 1e-6)
+    else:
+        assert layered.speed_report.reason in doc["amax_note"]
+
+
+def test_no_amax_no_claim():
+    sc = parse_scene(
+        {"version": 1, "name": "na", "bounds": [0, 0, 4, 2], "robot": {"disc": 0.2, "vmax": 1.0},
+         "queries": [{"name": "q", "start": [0.5, 1.0], "goal": [3.5, 1.0]}]}
+    )
+    rm = build_roadmap(sc, RoadmapOptions(vertices=10, seed=1))
+    res = plan(sc, rm, [0.5, 1.0], [3.5, 1.0])
+    assert res.solved
+    assert "amax_honoured" not in res.to_file(sc.name, "q").to_dict()
+
+
+def test_the_api_refuses_a_hold_that_is_not_a_number():
+    scene = load_scene(SCENE)
+    from gfuzzy.roadmap import load_roadmap
+
+    rm = load_roadmap(ROADMAP, scene)
+    q = scene.queries[0]
+    for bad in ("5", True, -1.0, float("nan")):
+        with pytest.raises(InputError, match="hold"):
+            plan(scene, rm, q.start, q.goal, hold=bad)
+    assert plan(scene, rm, q.start, q.goal, hold=np.float64(0.5)).solved
+
+
+def test_roadmap_without_the_clearance_is_refused(door):
+    scene, rm = door
+    other = scene.with_clearances(0.0)
+    with pytest.raises(ValueError, match="other static content"):
+        Planner(other, rm)
+
+
+def test_answer_keeps_the_static_clearance_and_check_enforces_it(door):
+    scene, rm = door
+    q = scene.queries[0]
+    res = plan(scene, rm, q.start, q.goal)
+    assert res.solved
+    rep = check_trajectory(scene, res.trajectory.waypoints, q)
+    assert rep.valid, rep.reason
+    assert rep.min_clearance >= -1e-9
+    # the same answer against a larger clearance than it was planned for: the door
+    # (0.8 wide, robot 0.4) leaves at most 0.2 on each side
+    strict = scene.with_clearances(0.25)
+    bad = check_trajectory(strict, res.trajectory.waypoints, q)
+    assert not bad.valid
+    assert "robot.clearance=0.25" in bad.reason and "comes within" in bad.reason
+
+
+def test_a_clearance_wider_than_the_door_closes_it():
+    scene = _scene(DOOR, clearance=0.21)  # 0.2 + 0.21 on each side > 0.4
+    rm = build_roadmap(scene, RoadmapOptions(vertices=60, seed=2))
+    res = plan(scene, rm, [0.5, 1.5], [5.5, 1.5])
+    assert res.status is Status.NO_PATH
+
+
+def test_start_too_close_to_an_obstacle_is_invalid_query(door):
+    scene, rm = door
+    # the static disc at (1.5, 1.5) r 0.3: a robot of radius 0.2 at x = 1.0 is 0.0 away ...
+    res = plan(scene, rm, [0.97, 1.5], [5.5, 1.5])
+    assert res.status is Status.INVALID_QUERY
+    assert "closer than robot.clearance=0.05" in res.message
+    res = plan(scene, rm, [1.1, 1.5], [5.5, 1.5])
+    assert res.status is Status.INVALID_QUERY and "collides" in res.message
+    assert plan(scene, rm, [0.9, 1.5], [5.5, 1.5]).solved  # 0.1 clear: fine
+
+
+@pytest.mark.parametrize("keep", [0.0, 0.3])
+def test_answer_keeps_the_mover_clearance(keep):
+    scene = _scene(CROSSING, mover_clearance=keep)
+    rm = build_roadmap(scene, RoadmapOptions(vertices=60, seed=1))
+    q = scene.queries[0]
+    res = plan(scene, rm, q.start, q.goal)
+    assert res.solved
+    assert check_trajectory(scene, res.trajectory.waypoints, q).valid
+    if keep > 0:
+        # the clearance costs time here (the straight run at 0 passes within 0.3 of the cart)
+        loose = plan(scene.with_clearances(mover_clearance=0.0), rm, q.start, q.goal)
+        tight_check = check_trajectory(scene, loose.trajectory.waypoints, q)
+        assert not tight_check.valid and "robot.mover_clearance=0.3" in tight_check.reason
+        assert res.duration >= loose.duration - 1e-9
+
+
+def test_start_within_the_mover_clearance_is_invalid_query():
+    scene = _scene(CROSSING, mover_clearance=0.3)
+    rm = build_roadmap(scene, RoadmapOptions(vertices=40, seed=1))
+    # the cart is at (3, 0.5) at t = 0; a robot at (3, 1.2) is 0.15 from it
+    res = plan(scene, rm, [3.0, 1.2], [5.5, 3.0])
+    assert res.status is Status.INVALID_QUERY
+    assert "robot.mover_clearance" in res.message
+
+
+@pytest.fixture(scope="module")
+def loop():
+    scene = _scene(LOOP)
+    return scene, build_roadmap(scene, RoadmapOptions(vertices=60, seed=1))
+
+
+def test_without_hold_the_parked_robot_is_run_over(loop):
+    scene, rm = loop
+    q = scene.queries[0]
+    res = plan(scene, rm, q.start, q.goal)  # no hold
+    assert res.solved
+    no_hold = Query(q.name, q.start, q.goal, q.t0)
+    assert check_trajectory(scene, res.trajectory.waypoints, no_hold).valid
+    rep = check_trajectory(scene, res.trajectory.waypoints, q)  # the cart comes back
+    assert not rep.valid and "cart" in rep.reason
+
+
+def test_hold_waits_until_the_goal_stays_clear(loop):
+    scene, rm = loop
+    q = scene.queries[0]
+    res = plan(scene, rm, q.start, q.goal, hold=q.hold)
+    assert res.solved
+    rep = check_trajectory(scene, res.trajectory.waypoints, q)
+    assert rep.valid, rep.reason
+    early = plan(scene, rm, q.start, q.goal)
+    assert res.duration > early.duration  # it had to arrive later
+    # the stages keep the hold too
+    staged = plan(scene, rm, q.start, q.goal, options=PlanOptions(refine=True, speed_layer=True), hold=q.hold)
+    assert staged.solved  # (the stages filter through check_trajectory: the oracle is the reference)
+    assert reference_violation(_doc(LOOP), staged.trajectory.waypoints, hold=q.hold) == ""
+
+
+def test_hold_longer_than_the_gap_is_refused(loop):
+    scene, rm = loop
+    q = scene.queries[0]
+    # the cart passes the goal every 10 s (loop length 10): a 13 s hold is impossible
+    res = plan(scene, rm, q.start, q.goal, options=PlanOptions(horizon=60.0), hold=13.0)
+    assert res.status is Status.NO_PATH
+
+
+@pytest.fixture(scope="module")
+def person():
+    scene = _scene(PERSON)
+    return scene, build_roadmap(scene, RoadmapOptions(vertices=60, seed=1))
+
+
+def test_start_beside_a_walking_person_is_solved(person):
+    scene, rm = person
+    gap = 0.036
+    start = [2.6, 1.0 + 0.25 + 0.3 + gap]
+    q = Query("beside", tuple(start), (2.6, 5.0), 2.0)
+    field_ = MoverField(scene, 2.0, 0.07, 10, 1.0)
+    assert field_.margin[0, 0] > gap  # the margin alone refuses this start
+    res = plan(scene, rm, q.start, q.goal, q.t0)
+    assert res.solved, res.message
+    assert check_trajectory(scene, res.trajectory.waypoints, q).valid
+    # touching the person at t0 is still an invalid query
+    on = plan(scene, rm, [2.6, 1.5], [2.6, 5.0], 2.0)
+    assert on.status is Status.INVALID_QUERY
+
+
+def test_large_dt_with_nobody_near_is_solved(person):
+    scene, rm = person
+    start = [2.6, 2.05]  # 0.5 clear of the person at t0 = 2
+    q = Query("far", tuple(start), (2.6, 5.0), 2.0)
+    res = plan(scene, rm, q.start, q.goal, q.t0, options=PlanOptions(dt=1.0))
+    assert res.solved, res.message
+    assert check_trajectory(scene, res.trajectory.waypoints, q).valid
+
+
+# a person stands in the only door for 250 s, then leaves
+BLOCKED = """
+version: 1
+name: blocked
+bounds: [0, 0, 6, 3]
+robot: {disc: 0.2, vmax: 1.0}
+obstacles:
+  - box: {center: [3, 0.6], size: [0.2, 1.2]}
+  - box: {center: [3, 2.4], size: [0.2, 1.2]}
+movers:
+  - {name: blocker, disc: 0.3, trajectory: [[0, 3.0, 1.5], [250, 3.0, 1.5]]}
+queries:
+  - {name: q, start: [0.5, 1.5], goal: [5.5, 1.5]}
+"""
+
+
+@pytest.fixture(scope="module")
+def blocked():
+    scene = _scene(BLOCKED)
+    return scene, build_roadmap(scene, RoadmapOptions(vertices=60, seed=2))
+
+
+def test_door_blocked_for_250_s_is_solved_by_default(blocked):
+    scene, rm = blocked
+    assert settle_time(scene) == pytest.approx(250.0)
+    q = scene.queries[0]
+    res = plan(scene, rm, q.start, q.goal)
+    assert res.solved, res.message
+    assert res.duration > 250.0 - q.t0
+    assert check_trajectory(scene, res.trajectory.waypoints, q).valid
+
+
+def test_no_path_from_the_horizon_says_so(blocked, tmp_path):
+    scene, rm = blocked
+    q = scene.queries[0]
+    res = plan(scene, rm, q.start, q.goal, options=PlanOptions(horizon=100.0))
+    assert res.status is Status.NO_PATH
+    assert "horizon" in res.message and "--horizon" in res.message
+    path = tmp_path / "blocked.yaml"
+    path.write_text(BLOCKED)
+    r = run_cli_process("plan", path, "-n", "60", "--seed", "2", "--horizon", "100", cwd=tmp_path)
+    assert r.returncode == 1 and "--horizon" in r.stdout
+
+
+def test_settle_time_of_periodic_and_once_movers():
+    scene = _scene(LOOP)
+    assert settle_time(scene) == pytest.approx(10.0)  # one period of the loop
+    once = _scene(LOOP.replace("mode: loop, offset: 8.0", "mode: once"))
+    assert settle_time(once) == pytest.approx(9.0)  # 9 m of polyline at 1 m/s
+    assert settle_time(once, t0=4.0) == pytest.approx(5.0)
+
+
+@pytest.mark.parametrize("hold", [0.0, 2.0, 5.0, 9.5])
+@pytest.mark.parametrize("keep", [0.0, 0.2])
+def test_hold_and_mover_clearance_match_brute_force(loop, hold, keep):
+    scene, rm = loop
+    scene = scene.with_clearances(mover_clearance=keep)
+    q = scene.queries[0]
+    planner = Planner(scene, rm)
+    dt, horizon = 0.1, 15.0
+    res = planner.plan(q.start, q.goal, 0.0, PlanOptions(dt=dt, horizon=horizon, stretch=1.0), hold=hold)
+    steps = _brute_force_steps(planner, q.start, q.goal, 0.0, dt, int(math.ceil(horizon / dt)), int(math.ceil(hold / dt - 1e-9)))
+    if steps is None:
+        assert res.status is Status.NO_PATH
+    else:
+        assert res.status is Status.SOLVED, res.message
+        assert abs(res.duration - steps * dt) <= 1e-6
+        assert check_trajectory(scene, res.trajectory.waypoints, replace(q, hold=hold)).valid

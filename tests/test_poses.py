@@ -84,7 +84,8 @@ def test_the_space_time_graph_cuts_edges_by_the_same_rule():
     edges = np.array([(i, (i * 5 + 3) % 12) for i in range(12) if i != (i * 5 + 3) % 12], dtype=np.int64)
     r, step = 0.3, 0.25
     lengths = metric_distance(verts[edges[:, 0]], verts[edges[:, 1]], r)
-    k, offs, inner, a, b, j, src, dst = split_edges(verts, edges, lengths, step, len(verts))
+    cut = split_edges(verts, edges, lengths, step, len(verts))
+    k, offs, inner, src, dst = cut.k, cut.offs, cut.inner, cut.src, cut.dst
     assert np.array_equal(k, split_counts(lengths, step))
     assert np.array_equal(np.diff(offs), k - 1)
     want = np.vstack([interpolate_segment(verts[e0], verts[e1], np.arange(1, n) / n)

@@ -1,11 +1,13 @@
-"""The README's command-line examples run as written (outputs sent to a temporary folder)."""
+"""The README's examples run as written: its command-line examples (outputs sent to a
+temporary folder) and every ```python block, in order, as one program."""
 
 from __future__ import annotations
 
+import json
 import re
 import shlex
 
-from conftest import ROOT, run_cli_process
+from conftest import ROOT, run_cli_process, run_python
 
 
 def _commands() -> list[list[str]]:
@@ -33,3 +35,45 @@ def test_readme_plan_check_and_tracks_examples_run(tmp_path):
         assert proc.returncode == 0, (argv, proc.stdout, proc.stderr)
         ran += 1
     assert ran >= 4
+
+
+def python_blocks(text: str) -> list[tuple[int, str]]:
+    """Every ```python block of a Markdown text: (line of its first code line, code)."""
+    blocks = []
+    for m in re.finditer(r"^```python[ \t]*\n(.*?)^```[ \t]*$", text, re.S | re.M):
+        blocks.append((text.count("\n", 0, m.start(1)) + 1, m.group(1)))
+    return blocks
+
+
+def test_python_blocks_are_found():
+    text = "a\n```python\nx = 1\n```\n\n```sh\nls\n```\n```python\ny = x\n```\n"
+    assert python_blocks(text) == [(3, "x = 1\n"), (10, "y = x\n")]
+
+
+# Runs the blocks in one namespace, each compiled with README.md's own line numbers, so that
+# a traceback points at the README line that failed.
+RUNNER = """
+import json, sys
+blocks = json.loads(sys.argv[1])
+namespace = {"__name__": "__main__"}
+for line, code in blocks:
+    exec(compile("\\n" * (line - 1) + code, "README.md", "exec"), namespace)
+"""
+
+
+def test_readme_python_blocks_run(tmp_path):
+    """Every ```python block of README.md runs, in order, in one namespace (a later block
+    may use what an earlier one made), from a folder that holds the repository's files and
+    folders (linked), so the README's relative paths (scenes/..., roadmaps/...) work as
+    from the repository root, and whatever the code writes lands in the temporary folder."""
+    blocks = python_blocks((ROOT / "README.md").read_text(encoding="utf-8"))
+    assert blocks, "README.md has no ```python block"
+    for entry in ROOT.iterdir():
+        if not entry.name.startswith(".") and entry.name not in ("out", "build", "dist"):
+            (tmp_path / entry.name).symlink_to(entry, target_is_directory=entry.is_dir())
+    (tmp_path / "out").mkdir()
+    before = {p: sorted(q.name for q in p.iterdir()) for p in (ROOT, ROOT / "scenes", ROOT / "roadmaps")}
+    proc = run_python(RUNNER, json.dumps(blocks), cwd=tmp_path, timeout=300)
+    assert proc.returncode == 0, f"a README.md python block failed:\n{proc.stdout}\n{proc.stderr}"
+    after = {p: sorted(q.name for q in p.iterdir()) for p in before}
+    assert after == before, "the README's code wrote into the repository"

@@ -4,11 +4,14 @@ from __future__ import annotations
 
 import io
 
+import pytest
 import yaml
+from helpers import BUNDLED_SCENES as SCENES
+from helpers import bundled_setup as _setup
 
 from gfuzzy.regress import format_row, regress_scene, run_regression
 from gfuzzy.roadmap import RoadmapOptions, build_roadmap
-from gfuzzy.scene import parse_scene
+from gfuzzy.scene import load_scene, parse_scene
 
 SCENE = """
 version: 1
@@ -46,3 +49,34 @@ def test_run_regression_prints_a_table_and_the_count():
     assert ok is False
     assert len(lines) == 1 + 4 + 1
     assert lines[-1] == "2 of 4 queries met their expectations"
+
+
+def test_every_bundled_query_with_clearances_passes_check(repo_root):
+    """Clearance answers on every bundled scene: the same statuses, each answer valid
+    under the check with the clearances."""
+    from gfuzzy.regress import regress_scene
+
+    for path in sorted((repo_root / "scenes").glob("*.yaml")):
+        scene = load_scene(path).with_clearances(0.05, 0.1)
+        rm = build_roadmap(scene, RoadmapOptions())
+        for row, q in zip(regress_scene(scene, rm), scene.queries, strict=True):
+            if q.expect is not None and q.expect.status is not None:
+                assert row.status == q.expect.status, (scene.name, q.name, row.status)
+            if row.status == "solved":
+                assert row.valid, (scene.name, q.name, row.problems)
+
+
+def test_there_are_bundled_scenes():
+    names = {p.stem for p in SCENES}
+    assert {"building-floor", "sim-4s1m", "sim-6s1m", "sim-5s2m"} <= names
+    assert len(SCENES) >= 8
+
+
+@pytest.mark.parametrize("path", SCENES, ids=lambda p: p.stem)
+def test_regression(path):
+    scene, roadmap, _ = _setup(path)
+    assert scene.queries, "a bundled scene needs queries"
+    rows = regress_scene(scene, roadmap)
+    for row in rows:
+        assert row.ok, f"{row.query}: {'; '.join(row.problems)}"
+    assert all(q.expect is not None and q.expect.status for q in scene.queries)

@@ -7,10 +7,16 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from helpers import run_main as _run
+from helpers import scene_of as _scene
+from helpers import write_trajectory_file as _trajectory_file
 from matplotlib.colors import to_rgb
+from matplotlib.text import Text
 from PIL import Image
+from shared_scenes import DOOR
 
 from gfuzzy import render as R
+from gfuzzy.check import check_trajectory
 from gfuzzy.scene import load_scene
 
 SCENE = """\
@@ -67,9 +73,10 @@ def box_scene(tmp_path):
     return load_scene(path)
 
 
-def _near(img: Image.Image, color, tol: float = 12.0) -> np.ndarray:
-    """(h, w) bool: pixels within ``tol`` (0-255 RGB distance) of ``color``."""
-    rgb = np.asarray(img.convert("RGB"), dtype=float)
+def _near(img: Image.Image | np.ndarray, color, tol: float = 12.0) -> np.ndarray:
+    """(h, w) bool: pixels of an image or an (h, w, 3) array within ``tol`` (0-255 RGB
+    distance) of ``color``."""
+    rgb = np.asarray(img.convert("RGB") if isinstance(img, Image.Image) else img, dtype=float)
     want = 255 * np.asarray(to_rgb(color))
     return np.linalg.norm(rgb - want, axis=-1) <= tol
 
@@ -277,3 +284,93 @@ def test_speeds_and_waits():
     turning = BOX_WP.copy()
     turning[2, 3] = 0.3  # turning in place is not a wait
     assert R.wait_intervals(turning) == []
+
+
+def test_render_marks_the_first_violation(line_scene, tmp_path):
+    sc = load_scene(line_scene)
+    wp = np.array([[0, 1, 1], [4, 5, 1], [8, 9, 1]], float)
+    rep = check_trajectory(sc, wp)
+    plain, marked = tmp_path / "plain.png", tmp_path / "marked.png"
+    R.render_scene(sc, plain, trajectory=wp)
+    R.render_scene(sc, marked, trajectory=wp, violation=(rep.time, rep.reason))
+    a = np.asarray(Image.open(plain).convert("RGB"), float)
+    b = np.asarray(Image.open(marked).convert("RGB"), float)
+    assert _near(b, R.VIOLATION_COLOR).sum() > _near(a, R.VIOLATION_COLOR).sum() + 20
+
+
+def test_gif_colours_the_trail_by_speed(line_scene, tmp_path, capsys):
+    sc = load_scene(line_scene)
+    # full speed along y = 2.5, then a crawl at a tenth of vmax
+    wp = np.array([[0.0, 1.0, 2.5], [4.0, 5.0, 2.5], [14.0, 6.0, 2.5]])
+    fast = R.colormaps[R.SPEED_CMAP](1.0)[:3]
+    slow = R.colormaps[R.SPEED_CMAP](0.1)[:3]
+    R.render_animation(sc, wp, tmp_path / "plain.gif", fps=2, max_frames=8)
+    R.render_animation(sc, wp, tmp_path / "speed.gif", fps=2, max_frames=8, speed=True)
+    last_plain, last_speed = _frames(tmp_path / "plain.gif")[-1], _frames(tmp_path / "speed.gif")[-1]
+    assert _near(last_speed, fast, 30).sum() > 50
+    assert _near(last_speed, slow, 30).sum() > 20
+    assert _near(last_plain, fast, 30).sum() < 10
+    # the command line passes --speed on to the animation instead of dropping it
+    traj = _trajectory_file(tmp_path / "t.json", wp)
+    rc, _, err = _run(capsys, "render", line_scene, traj, "-o", tmp_path / "cli.gif", "--speed")
+    assert rc == 0, err
+    assert _near(_frames(tmp_path / "cli.gif")[-1], fast, 30).sum() > 50
+
+
+def _label_boxes(scene, wp):
+    fig, ax = R._figure(scene, 8.0, False, 3)
+    R._draw_obstacles(ax, scene)
+    R._draw_trajectory(ax, fig, scene, wp, None, 6)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    waits = [t for t in ax.texts if t.get_text().startswith("wait")]
+    stamps = [t for t in ax.texts if t.get_text().startswith("t=")]
+    # the text itself (an annotation's own extent spans its leader line too)
+    return (
+        [Text.get_window_extent(t, renderer) for t in waits],
+        [Text.get_window_extent(t, renderer) for t in stamps],
+        [t.get_text() for t in waits],
+    )
+
+
+def test_wait_labels_do_not_overlap(line_scene):
+    sc = load_scene(line_scene)
+    # four short waits close together (as the planner makes when it dodges a mover), and
+    # one long one
+    wp = np.array(
+        [
+            [0.0, 1.0, 2.5], [1.0, 2.0, 2.5], [1.5, 2.0, 2.5], [1.6, 2.1, 2.5], [2.0, 2.1, 2.5],
+            [2.1, 2.2, 2.5], [2.4, 2.2, 2.5], [2.5, 2.3, 2.4], [3.0, 2.3, 2.4], [8.0, 7.0, 2.4],
+            [11.0, 7.0, 2.4], [13.0, 9.0, 2.4],
+        ]
+    )
+    assert len(R.wait_intervals(wp)) == 5
+    waits, stamps, texts = _label_boxes(sc, wp)
+    joined = "\n".join(texts)
+    for ta, tb, _ in R.wait_intervals(wp):  # every wait is labelled, close ones may share a label
+        assert f"(t={R._fmt_time(ta)} to {R._fmt_time(tb)})" in joined
+    for i, a in enumerate(waits):
+        for b in waits[i + 1 :] + stamps:
+            assert not a.overlaps(b), (a, b)
+
+
+def test_render_draws_the_clearances(tmp_path):
+    from gfuzzy.render import _clearance_outline, render
+
+    box = _scene(DOOR.replace("disc: 0.2", "box: [0.4, 0.2]").replace("start: [0.5, 1.5], goal: [5.5, 1.5]",
+                                                                       "start: [0.5, 1.5, 0], goal: [5.5, 1.5, 0]"))  # fmt: skip
+    pose = np.array([1.0, 1.0, 0.3])
+    ring = _clearance_outline(box, pose, 0.05)
+    xy = ring.get_xy()
+    local = (xy - pose[:2]) @ np.array([[np.cos(0.3), -np.sin(0.3)], [np.sin(0.3), np.cos(0.3)]])
+    assert np.abs(local[:, 0]).max() == pytest.approx(0.25, abs=1e-6)  # half length + clearance
+    assert np.abs(local[:, 1]).max() == pytest.approx(0.15, abs=1e-6)
+    assert ring.get_linestyle() == "--" and not ring.get_fill()
+    assert _clearance_outline(box, pose, 0.0) is None
+    disc = _scene(DOOR)
+    assert _clearance_outline(disc, pose[:2], 0.05).get_radius() == pytest.approx(0.25)
+    wps = np.array([[0.0, 0.5, 1.5], [5.0, 5.5, 1.5]])
+    a, b = tmp_path / "a.png", tmp_path / "b.png"
+    render(disc, a, trajectory=wps)
+    render(disc.with_clearances(0.0), b, trajectory=wps)
+    assert a.read_bytes() != b.read_bytes()

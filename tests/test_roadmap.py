@@ -18,7 +18,8 @@ from reference import Reference, interpolate
 
 import gfuzzy.roadmap as roadmap_module
 from gfuzzy.errors import SceneError
-from gfuzzy.roadmap import RoadmapOptions, build_roadmap, load_roadmap, roadmap_digest
+from gfuzzy.geometry import StaticGeometry
+from gfuzzy.roadmap import RoadmapInfo, RoadmapOptions, build_roadmap, load_roadmap, roadmap_digest
 from gfuzzy.scene import load_scene, parse_scene
 
 ROBOTS = {"disc": {"disc": 0.15, "vmax": 1.0}, "box": {"box": [0.4, 0.2], "vmax": 1.0, "amax": 2.0}}
@@ -121,7 +122,7 @@ def test_vertex_count_is_exact(small):
         for seed in range(6):
             plain = build_roadmap(scene, RoadmapOptions(vertices=n, seed=seed, repair=False))
             rm = build_roadmap(scene, RoadmapOptions(vertices=n, seed=seed))
-            counts[n, seed] = (len(plain), len(rm) - rm.info["repair"]["added_vertices"])
+            counts[n, seed] = (len(plain), len(rm) - rm.info.repair["added_vertices"])
             np.testing.assert_array_equal(rm.vertices[:n], plain.vertices)
     assert all(c == (n, n) for (n, _), c in counts.items()), counts
 
@@ -129,7 +130,7 @@ def test_vertex_count_is_exact(small):
 def test_vertex_count_never_exceeds_the_request(small):
     for kind in ("disc", "box"):
         _, scene, rm = small[kind]
-        added = rm.info.get("repair", {}).get("added_vertices", 0)
+        added = rm.info.repair.get("added_vertices", 0)
         assert 0.8 * SIZES[kind] <= len(rm) - added <= SIZES[kind]
         assert rm.options.vertices == SIZES[kind]
 
@@ -176,11 +177,21 @@ def test_every_vertex_and_edge_is_free_under_shapely(small, kind):
     assert not bad.any(), f"{bad.sum()} of {len(samples)} edge samples collide, e.g. {samples[bad][:3]}"
 
 
-def test_info_is_plain_json(small):
-    _, _, rm = small["disc"]
-    json.dumps(rm.info)
-    assert rm.info["components"] >= 1
+def test_info_is_typed_and_plain_json_in_the_file(small, tmp_path):
+    _, scene, rm = small["disc"]
+    assert isinstance(rm.info, RoadmapInfo)
+    assert rm.info.components >= 1 and rm.info.validity_calls > 0 and rm.info.ompl_version
     assert rm.scene_hash and rm.scene_name == "small-disc"
+    rm.save(tmp_path / "rm.json")
+    doc = json.loads((tmp_path / "rm.json").read_text())
+    assert doc["info"]["components"] == rm.info.components  # the file keeps its keys
+    assert load_roadmap(tmp_path / "rm.json", scene).info == rm.info
+    # a key of another version's file survives a load and a save
+    doc["info"]["repaired_vertices"] = 7
+    (tmp_path / "rm.json").write_text(json.dumps(doc))
+    again = load_roadmap(tmp_path / "rm.json", scene)
+    assert again.info.extra == {"repaired_vertices": 7}
+    assert again.info.to_dict()["repaired_vertices"] == 7 and again.info.components == rm.info.components
 
 
 # --------------------------------------------------------------------------- files
@@ -414,3 +425,38 @@ def test_building_leaves_ompl_log_level_as_it_was():
         assert ou.getLogLevel() == ou.LogLevel.LOG_DEBUG
     finally:
         ou.setLogLevel(before)
+
+
+def test_spanner_interrupted_midway_caches_nothing_and_is_read_only(monkeypatch):
+    scene = load_scene(ROOT / "scenes" / "building-floor.yaml")
+    rm = load_roadmap(ROOT / "roadmaps" / "building-floor.json", scene)
+    fresh = load_roadmap(ROOT / "roadmaps" / "building-floor.json", scene).spanner(1.05)
+    assert not fresh.all()  # the spanner drops edges on this roadmap
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    with monkeypatch.context() as m:
+        m.setattr(np, "argsort", interrupted)
+        with pytest.raises(KeyboardInterrupt):
+            rm.spanner(1.05)
+    keep = rm.spanner(1.05)  # not the half-built mask of the interrupted call
+    np.testing.assert_array_equal(keep, fresh)
+    with pytest.raises(ValueError):
+        keep[0] = not keep[0]  # callers cannot corrupt the cache
+
+
+def test_the_roadmap_keeps_the_static_clearance(door):
+    """Every vertex and every edge of a roadmap built with a clearance keeps it."""
+    scene, rm = door
+    free = StaticGeometry(scene.with_clearances(0.0))
+
+    def to_obstacles(poses):  # the bounds are not held to the clearance
+        return min(free.obstacle_clearance(p) for p in poses)
+
+    assert to_obstacles(rm.vertices) >= 0.05 - 1e-9
+    assert to_obstacles(rm.vertices) < 0.1  # some vertex does go near the walls
+    for a, b in rm.edges[:: max(1, len(rm.edges) // 60)]:
+        f = np.linspace(0, 1, 25)
+        poses = rm.vertices[a] + f[:, None] * (rm.vertices[b] - rm.vertices[a])
+        assert to_obstacles(poses) >= 0.05 - 1e-6

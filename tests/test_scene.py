@@ -12,9 +12,11 @@ import numpy as np
 import pytest
 import yaml
 from conftest import BAD_SCENES, cli_present, needs_cli, run_cli_process
+from helpers import scene_of as _scene
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 from reference import prism_mesh
+from shared_scenes import DOOR, LOOP
 
 from gfuzzy.errors import SceneError
 from gfuzzy.scene import Box, Disc, Polygon, load_scene, parse_scene
@@ -671,3 +673,57 @@ def test_query_lookup_names_the_alternatives():
     assert scene.query("q1").goal == (1.0, 1.0)
     with pytest.raises(KeyError, match="q1"):
         scene.query("nope")
+
+
+def test_a_mover_with_both_path_and_trajectory():
+    doc = {
+        "version": 1,
+        "name": "both",
+        "bounds": [0, 0, 5, 5],
+        "robot": {"disc": 0.2, "vmax": 1.0},
+        "movers": [
+            {"name": "m", "disc": 0.3, "speed": 1.0, "path": [[1, 1], [2, 2]], "mode": "loop",
+             "trajectory": [[0, 1, 1], [1, 2, 2]]},
+        ],
+    }
+    with pytest.raises(SceneError) as exc:
+        parse_scene(doc, "both.yaml")
+    assert exc.value.place == "movers[0]"
+    assert "either path" in exc.value.message and "trajectory" in exc.value.message
+    assert "unknown key" not in exc.value.message
+    doc["movers"][0] = {"name": "m", "disc": 0.3, "path": [[1, 1], [2, 2]], "trajectory": [[0, 1, 1]]}
+    with pytest.raises(SceneError, match="either path"):
+        parse_scene(doc, "both.yaml")
+
+
+def test_clearance_keys_are_read_and_validated():
+    scene = _scene(DOOR, mover_clearance=0.3)
+    assert scene.robot.clearance == 0.05 and scene.robot.mover_clearance == 0.3
+    plain = _scene(DOOR)
+    assert plain.robot.mover_clearance == 0.0
+    assert _scene(DOOR.replace(", clearance: 0.05", "")).robot.clearance == 0.0
+    for key, value in (("clearance", -0.1), ("mover_clearance", float("inf")), ("clearance", "a")):
+        with pytest.raises(ValueError, match=f"robot.{key}"):
+            _scene(DOOR, **{key: value})
+
+
+def test_static_hash_changes_with_the_static_clearance_only():
+    a = _scene(DOOR, clearance=0.0)
+    b = _scene(DOOR, clearance=0.05)
+    c = _scene(DOOR, clearance=0.05, mover_clearance=0.4)
+    assert a.static_hash != b.static_hash
+    assert b.static_hash == c.static_hash
+    # an override gives the same hash as the file would
+    assert a.with_clearances(0.05).static_hash == b.static_hash
+    assert b.with_clearances(0.0).static_hash == a.static_hash
+
+
+def test_hold_is_read_and_validated():
+    scene = _scene(LOOP)
+    assert scene.queries[0].hold == 2.0
+    import yaml
+
+    doc = yaml.safe_load(LOOP)
+    doc["queries"][0]["hold"] = -1
+    with pytest.raises(ValueError, match=r"queries\[0\].hold"):
+        parse_scene(doc)

@@ -3,18 +3,26 @@
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 
 import numpy as np
 import pytest
 import yaml
+from conftest import ROOT
+from helpers import BUNDLED_SCENES as SCENES
+from helpers import bundled_answers as _answers
+from helpers import bundled_setup as _setup
+from helpers import scene_doc as _doc
+from helpers import scene_of as _scene
 from reference import reference_violation
+from shared_scenes import CROSSING
 
+from gfuzzy.check import check_trajectory
 from gfuzzy.geometry import StaticGeometry
-from gfuzzy.planner import Planner, PlanOptions, PlanResult
+from gfuzzy.planner import Planner, PlanOptions, plan
 from gfuzzy.roadmap import RoadmapOptions, build_roadmap
-from gfuzzy.scene import parse_scene
+from gfuzzy.scene import Query, parse_scene
 from gfuzzy.stages import RefineReport, SpeedReport, StageContext, apply_stages
-from gfuzzy.status import Status
 from gfuzzy.trajectory import Trajectory
 
 # an L-shaped hall: the search's answer turns a corner, the stages have work to do
@@ -39,6 +47,10 @@ def hall():
     return doc, scene, build_roadmap(scene, RoadmapOptions(vertices=60, seed=3))
 
 
+def _query(q):
+    return Query(q.name, tuple(q.start), tuple(q.goal), q.t0, hold=q.hold)
+
+
 def _searched(scene, rm, q):
     res = Planner(scene, rm).plan(q.start, q.goal, q.t0)
     assert res.solved
@@ -51,14 +63,16 @@ def test_both_stages_report_and_keep_a_safe_answer(hall):
     base = _searched(scene, rm, q)
     ctx = StageContext(scene, StaticGeometry(scene))
     opts = PlanOptions(refine=True, speed_layer=True, seed=2)
-    out = apply_stages(ctx, base, np.array(q.start), np.array(q.goal), q.t0, opts, time.perf_counter())
+    out = apply_stages(ctx, base.trajectory, _query(q), opts, time.perf_counter() + opts.time_limit)
     assert isinstance(out.refine_report, RefineReport) and isinstance(out.speed_report, SpeedReport)
-    # the file keeps its keys: stats holds the reports' dict forms
-    assert out.stats["refine"] == out.refine_report.to_dict()
-    assert out.stats["speed_layer"] == out.speed_report.to_dict()
+    # the file keeps its keys: its stats hold the reports' dict forms
+    file_stats = replace(base, trajectory=out.trajectory, refine_report=out.refine_report,
+                         speed_report=out.speed_report).to_file("s", "q").to_dict()["stats"]  # fmt: skip
+    assert file_stats["refine"] == out.refine_report.to_dict()
+    assert file_stats["speed_layer"] == out.speed_report.to_dict()
     assert out.speed_report.amax == 2.0  # AMAX_PER_VMAX * vmax for a robot without amax
     assert out.speed_report.applied, out.speed_report.reason
-    assert set(out.stats["speed_layer"]) >= {"applied", "amax", "profile_seconds", "stops", "before", "after"}
+    assert set(file_stats["speed_layer"]) >= {"applied", "amax", "profile_seconds", "stops", "before", "after"}
     assert reference_violation(doc, out.trajectory.waypoints) == ""
     r = out.refine_report
     assert r.applied, r.reason
@@ -70,10 +84,10 @@ def test_a_straight_answer_is_left_to_the_search(hall):
     _, scene, rm = hall
     ctx = StageContext(scene, StaticGeometry(scene))
     wps = np.array([[0.0, 5.5, 0.5], [1.0, 5.5, 1.5]])
-    res = PlanResult(Status.SOLVED, Trajectory(wps, scene.robot.radius), roadmap_distance=1.0)
-    out = apply_stages(ctx, res, wps[0, 1:], wps[-1, 1:], 0.0, PlanOptions(refine=True), time.perf_counter())
+    query = Query("q", tuple(wps[0, 1:]), tuple(wps[-1, 1:]), 0.0)
+    out = apply_stages(ctx, Trajectory(wps, scene.robot.radius), query, PlanOptions(refine=True), time.perf_counter() + 60)
     assert out.refine_report == RefineReport(False, "the path is a straight segment already")
-    assert out.stats["refine"] == {"applied": False, "reason": "the path is a straight segment already"}
+    assert out.refine_report.to_dict() == {"applied": False, "reason": "the path is a straight segment already"}
     np.testing.assert_array_equal(out.trajectory.waypoints, wps)
 
 
@@ -81,10 +95,10 @@ def test_start_is_goal_has_nothing_to_slow():
     scene = parse_scene(yaml.safe_load(HALL))
     ctx = StageContext(scene, StaticGeometry(scene))
     wps = np.array([[0.0, 5.5, 0.5]])
-    res = PlanResult(Status.SOLVED, Trajectory(wps, 0.2), roadmap_distance=0.0)
-    out = apply_stages(ctx, res, wps[0, 1:], wps[0, 1:], 0.0, PlanOptions(speed_layer=True), time.perf_counter())
+    query = Query("q", tuple(wps[0, 1:]), tuple(wps[0, 1:]), 0.0)
+    out = apply_stages(ctx, Trajectory(wps, 0.2), query, PlanOptions(speed_layer=True), time.perf_counter() + 60)
     assert out.speed_report == SpeedReport(False, 2.0, "the start is the goal")
-    assert out.stats["speed_layer"] == {"applied": False, "amax": 2.0, "reason": "the start is the goal"}
+    assert out.speed_report.to_dict() == {"applied": False, "amax": 2.0, "reason": "the start is the goal"}
 
 
 def test_the_planner_hands_the_stages_a_context(hall):
@@ -93,3 +107,87 @@ def test_the_planner_hands_the_stages_a_context(hall):
     res = Planner(scene, rm).plan(q.start, q.goal, q.t0, PlanOptions(speed_layer=True))
     assert res.speed_report is not None and res.refine_report is None
     assert res.to_file(scene.name, q.name).to_dict()["stats"]["speed_layer"]["applied"] == res.speed_report.applied
+
+
+def test_ga_and_speed_layer_keep_the_clearances():
+    scene = _scene(CROSSING, clearance=0.05, mover_clearance=0.2)
+    rm = build_roadmap(scene, RoadmapOptions(vertices=60, seed=1))
+    q = scene.queries[0]
+    res = plan(scene, rm, q.start, q.goal, options=PlanOptions(refine=True, speed_layer=True))
+    assert res.solved
+    # the stages keep only answers check_trajectory accepts: the oracle is the independent
+    # shapely reference, which shares no code with the planner or the checker
+    assert reference_violation(_doc(CROSSING, clearance=0.05, mover_clearance=0.2), res.trajectory.waypoints) == ""
+
+
+@pytest.mark.parametrize("path", SCENES, ids=lambda p: p.stem)
+def test_refined_answers_keep_the_guarantees(path):
+    scene = _setup(path)[0]
+    for (q, plain), (_, refined) in zip(_answers(path, False, False), _answers(path, True, False), strict=True):
+        assert refined.status == plain.status
+        if not refined.solved:
+            continue
+        rep = check_trajectory(scene, refined.trajectory.waypoints, q)
+        assert rep.valid, f"{q.name}: {rep.reason}"
+        info = refined.refine_report.to_dict()
+        if info["applied"]:
+            before, after = info["before"], info["after"]
+            assert after["length"] < before["length"] - 1e-9 or after["smoothness"] < before["smoothness"] - 1e-9
+            assert refined.duration <= plain.duration * 1.1 + 1e-9
+        else:
+            assert np.array_equal(refined.trajectory.waypoints, plain.trajectory.waypoints)
+
+
+def test_refinement_applies_on_most_queries():
+    applied = solved = boxes = 0
+    for path in SCENES:
+        scene = _setup(path)[0]
+        for _, r in _answers(path, True, False):
+            if r.solved:
+                solved += 1
+                applied += r.refine_report.applied
+                boxes += r.refine_report.applied and scene.robot.shape == "box"
+    assert applied >= 0.75 * solved
+    assert boxes >= 1  # box robots too, through 0.6 m doors
+
+
+def test_refinement_is_reproducible():
+    path = ROOT / "scenes" / "sim-4s1m.yaml"
+    scene, _, planner = _setup(path)
+    q = scene.queries[0]
+    a = planner.plan(q.start, q.goal, q.t0, PlanOptions(refine=True, seed=11))
+    b = planner.plan(q.start, q.goal, q.t0, PlanOptions(refine=True, seed=11))
+    assert np.array_equal(a.trajectory.waypoints, b.trajectory.waypoints)
+
+
+@pytest.mark.parametrize("path", SCENES, ids=lambda p: p.stem)
+def test_speed_layer_answers_keep_the_guarantees(path):
+    scene = _setup(path)[0]
+    robot = scene.robot
+    amax = robot.amax if robot.amax is not None else 2 * robot.vmax
+    for q, res in _answers(path, False, True):
+        if not res.solved:
+            continue
+        w = res.trajectory.waypoints
+        rep = check_trajectory(scene, w, q)
+        assert rep.valid, f"{q.name}: {rep.reason}"
+        info = res.speed_report.to_dict()
+        if not info["applied"]:
+            continue
+        # the profile respects the acceleration bound: speed changes between steps stay
+        # within amax * dt (plus the discretization of the profile onto the time grid)
+        v = res.trajectory.speeds()
+        dt = np.diff(w[:, 0])
+        moving = dt < 0.07 + 1e-9
+        dv = np.abs(np.diff(v))[moving[1:] & moving[:-1]]
+        assert dv.max(initial=0.0) <= amax * 0.07 * 1.5 + 1e-9, (q.name, dv.max())
+
+
+def test_speed_layer_applies_on_most_queries():
+    applied = total = 0
+    for path in SCENES:
+        for _, r in _answers(path, False, True):
+            if r.solved:
+                total += 1
+                applied += r.speed_report.applied
+    assert applied >= 0.6 * total

@@ -59,3 +59,25 @@ def test_bad_file_names_the_place(tmp_path):
     with pytest.raises(SceneError) as exc:
         load_trajectory(p)
     assert str(p) in str(exc.value)
+
+
+def test_trajectories_with_other_waypoints_are_not_equal():
+    a = Trajectory(np.array([[0.0, 0.0, 0.0], [1.0, 1.0, 0.0]]), circumradius=0.3)
+    same = Trajectory(a.waypoints.copy(), circumradius=0.3)
+    other = Trajectory(np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 1.0]]), circumradius=0.3)
+    assert a == same
+    assert a != other
+    assert a != Trajectory(a.waypoints.copy(), circumradius=0.5)
+
+
+def test_trajectory_files_with_other_waypoints_or_extras_are_not_equal():
+    def doc(rows, **extra):
+        return TrajectoryFile("s", "q", "solved", "", 1.0, 1.0, 1.0, 0.0, np.array(rows), extra)
+
+    rows = [[0.0, 0.0, 0.0], [1.0, 1.0, 0.0]]
+    assert doc(rows) == doc([r[:] for r in rows])
+    assert doc(rows) != doc([[0.0, 0.0, 0.0], [1.0, 0.0, 1.0]])
+    assert doc(rows) != doc(rows, replans=3)
+    no_rows = TrajectoryFile("s", "q", "no_path", "x", None, None, None, 0.0)
+    assert no_rows == TrajectoryFile("s", "q", "no_path", "x", None, None, None, 0.0)
+    assert no_rows != doc(rows)

@@ -6,6 +6,7 @@
     python tools/bench_crowd.py --episodes 0 --social 50       # a crowd that reacts (pysocialforce)
     python tools/bench_crowd.py --opt prediction_horizon=3     # any NavOptions setting
     python tools/bench_crowd.py --workers 2                    # episodes on a local Dask cluster
+    python tools/bench_crowd.py --kinematics unicycle --humans 5 20   # a differential drive, wmax 1 rad/s
 
 Protocol: CrowdNav's circle crossing (Chen et al., ICRA 2019), as implemented in
 ``gfuzzy/crowd.py``: K ORCA humans (radius 0.3, preferred speed 1) cross a circle of
@@ -22,6 +23,12 @@ Per policy and K: success / collision / timeout rates, mean time to goal (succes
 time / oracle (mean of the per-episode ratio over the episodes both solved), mean and
 smallest minimum separation, and the navigator's replan latency p50 / p95 / max over every
 replan. One 400-vertex roadmap of the empty square is built per run (seeded).
+
+With ``--kinematics unicycle`` the robot is a differential drive (``--wmax``, default
+1 rad/s; it starts and ends facing the goal, +y): the navigator's plans, fallbacks and
+evasive motions turn only in place and drive only along the heading, and every policy's
+answer is held to that (the oracle plans as a unicycle too; ORCA is holonomic, kept as the
+reference it is). Episodes run in this process.
 
 Targets (issue 10, benchmark figures): 5 humans success >= 0.99, collision <= 0.01;
 10 humans success >= 0.95, collision <= 0.03; time <= 1.15 x oracle; replan p95 <= 100 ms.
@@ -44,6 +51,24 @@ import gfuzzy  # noqa: E402
 from gfuzzy.crowd import CROWD, circle_crossing, episodes  # noqa: E402
 from gfuzzy.navigator import NavOptions  # noqa: E402
 from gfuzzy.navsim import min_separation, simulate  # noqa: E402
+
+
+def as_unicycle(scene, wmax: float):
+    """The circle-crossing scene with its robot a differential drive facing the goal (+y)."""
+    from dataclasses import replace
+
+    robot = replace(scene.robot, kinematics="unicycle", wmax=wmax)
+    queries = tuple(
+        replace(q, start=(*q.start[:2], math.pi / 2), goal=(*q.goal[:2], math.pi / 2)) for q in scene.queries
+    )
+    return replace(scene, robot=robot, queries=queries)
+
+
+def unicycle_episodes(rm, K, seeds, options, policies, wmax):
+    from gfuzzy.crowd import run_episode
+
+    return [run_episode(as_unicycle(circle_crossing(K, s, name=f"crowd-{K}-{s}"), wmax), rm, options, policies)
+            for s in seeds]  # fmt: skip
 
 
 def empty_roadmap(vertices: int, seed: int):
@@ -231,6 +256,9 @@ def main(argv=None) -> int:
     ap.add_argument("--workers", type=int, default=0,
                     help="run the circle-crossing episodes on a local Dask cluster of this many processes "
                          "(0: in this process); each episode's replan latencies are measured in its worker")  # fmt: skip
+    ap.add_argument("--kinematics", choices=["holonomic", "unicycle"], default="holonomic",
+                    help="the robot's kinematics (unicycle: a differential drive)")
+    ap.add_argument("--wmax", type=float, default=1.0, help="unicycle: bound on the turning rate, rad/s")
     args = ap.parse_args(argv)
     settings = {}
     for item in args.opt:
@@ -256,7 +284,10 @@ def main(argv=None) -> int:
             for K in args.humans:
                 t0 = time.perf_counter()
                 seeds = [args.seed + 1000 * K + i for i in range(args.episodes)]
-                results = episodes(client, rm, K, seeds, options, args.policies)
+                if args.kinematics == "unicycle":
+                    results = unicycle_episodes(rm, K, seeds, options, args.policies, args.wmax)
+                else:
+                    results = episodes(client, rm, K, seeds, options, args.policies)
                 print(header)
                 for line in summarize(K, results, args.policies):
                     print(line)

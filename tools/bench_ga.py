@@ -274,7 +274,7 @@ def bundled(seed: int, generations: int, ref=None, rev: str | None = None, repea
             if not res.solved:
                 print(f"{scene.name + '/' + q.name:<36}{'-':>8}{ms:7.0f}  ({res.status.value})")
                 continue
-            info = res.stats["refine"]
+            info = res.refine_report.to_dict()
             b = info.get("before", {})
             a = info.get("after", b)
 

@@ -81,8 +81,8 @@ def run_case(scene, start, goal, mode: str, seeds: int, n: int) -> dict:
         t = time.perf_counter()
         rm = build_roadmap(scene, RoadmapOptions(vertices=n, seed=seed, **overrides))
         times.append(time.perf_counter() - t)
-        added.append(rm.info.get("repair", {}).get("added_vertices", 0))
-        comps.append(rm.info["components"])
+        added.append(rm.info.repair.get("added_vertices", 0))
+        comps.append(rm.info.components)
         planner = Planner(scene, rm)
         if not link and hasattr(planner, "_fs"):  # no free space for the query: as before it
             planner._fs.append(None)
@@ -128,8 +128,8 @@ def picture(out: str) -> None:
     draw._draw_trajectory(ax, fig, scene, wp, None, 6)
     ax.set_title(
         f"door 0.74 m, disc r 0.3 + clearance 0.05 (2 cm per side): uniform PRM, {n} vertices, "
-        f"{plain.info['components']} components;\nthe free-space repair adds "
-        f"{rm.info['repair']['added_vertices']} vertices: 1 component, solved in {wp[-1, 0] - wp[0, 0]:.2f} s",
+        f"{plain.info.components} components;\nthe free-space repair adds "
+        f"{rm.info.repair['added_vertices']} vertices: 1 component, solved in {wp[-1, 0] - wp[0, 0]:.2f} s",
         fontsize=9,
     )
     ax.legend(loc="upper left", fontsize=7)

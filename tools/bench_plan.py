@@ -132,7 +132,7 @@ def table1(repeat: int, seed: int) -> None:
         print(
             f"{n:>8} {len(rm.edges):>6} {res.roadmap_distance:>9.2f} {dur} {df} {sec * 1000:>9.1f} "
             f"{kept * 1000:>8.1f} {ref * 1000:>7.1f} {ref / kept:>5.1f} {'yes' if same else 'NO':>4} "
-            f"{res.stats.get('expansions', 0):>10}  {PAPER.get(n, '')}"
+            f"{res.stats.expansions or 0:>10}  {PAPER.get(n, '')}"
         )
     print(f"speed-up over the reference (kept Planner): median {statistics.median(speedups):.1f}x, "
           f"min {min(speedups):.1f}x, max {max(speedups):.1f}x")  # fmt: skip
@@ -256,8 +256,8 @@ def child(scene_path: str, rm_path: str, backend: str, repeat: int = 3) -> None:
                 "seconds": statistics.median(times),
                 "first_seconds": times[0],
                 "repeat": repeat,
-                "expansions": res.stats.get("expansions"),
-                "graph_nodes": res.stats.get("graph_nodes"),
+                "expansions": res.stats.expansions,
+                "graph_nodes": res.stats.graph_nodes,
                 "loaded_mb": loaded,
                 "peak_mb": peak,
             }

@@ -57,8 +57,8 @@ def main() -> None:
         base = plain_prm_seconds(scene, n, args.seed)
         i = rm.info
         print(
-            f"{n:>8} {el:>8.3f} {i['grow_seconds']:>7.3f} {i['validity_calls']:>9} {i['certify_calls']:>8} "
-            f"{len(rm.edges):>7} {i['edges_dropped']:>7} {i['components']:>4} {base:>11.3f} {el / base:>6.2f}"
+            f"{n:>8} {el:>8.3f} {i.grow_seconds:>7.3f} {i.validity_calls:>9} {i.certify_calls:>8} "
+            f"{len(rm.edges):>7} {i.edges_dropped:>7} {i.components:>4} {base:>11.3f} {el / base:>6.2f}"
         )
 
 

@@ -1,7 +1,7 @@
 """Regenerate the pictures in docs/img with the current code (run after any change that
 alters answers or drawing).
 
-    python tools/doc_images.py
+    python tools/doc_images.py [PICTURE ...]     # all, or only these (e.g. depot.png)
 
 Runs the real command line: `gfuzzy plan` then `gfuzzy render`, with the bundled roadmaps.
 """
@@ -24,6 +24,10 @@ SCENES = ROOT / "scenes"
 PICTURES = {
     "building-floor.png": ("building-floor", [], []),
     "office-refined-speed.png": ("office-polygons", ["--refine", "--speed-layer"], ["--speed", "--no-roadmap"]),
+    # occupancy-grid maps (scenes/maps): the grid drawn at its extent, unknown gray
+    "depot.png": ("depot", ["--query", "into-rack-aisle"], []),
+    "tb3-arena.png": ("tb3-arena", ["--query", "south-to-north"], []),
+    "small-house.png": ("small-house", ["--query", "southwest-to-east"], ["--no-roadmap"]),
 }
 
 
@@ -32,9 +36,11 @@ def run(*args) -> int:
     return main([str(a) for a in args])
 
 
-def make() -> int:
+def make(only: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         for picture, (scene, plan_flags, render_flags) in PICTURES.items():
+            if only and picture not in only:
+                continue
             scene_file = SCENES / f"{scene}.yaml"
             answer = Path(tmp) / f"{scene}.json"
             roadmap = ["--roadmap", ROOT / "roadmaps" / f"{scene}.json"]
@@ -46,4 +52,4 @@ def make() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(make())
+    sys.exit(make(sys.argv[1:]))

@@ -21,7 +21,7 @@ sys.path.insert(0, str(ROOT))
 from gfuzzy.tracks import ANNOTATION_PERIOD, read_tracks  # noqa: E402
 
 #: file -> (window start, window end) in seconds of the recording; what the bundled scenes
-#: (eth-crossing, zara-crowd) and tests/test_pedestrians.py use.
+#: (eth-crossing, zara-crowd) and tests/test_tracks.py use.
 WINDOWS = {
     "biwi_eth.txt": (300.0, 345.0),
     "biwi_hotel.txt": (50.0, 80.0),

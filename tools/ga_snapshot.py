@@ -102,7 +102,7 @@ def collect(generations: int, seed: int = 0) -> dict:
                 rec = {"status": r.status.value, "ga": list(seen)}
                 if r.solved:
                     rec["waypoints"] = r.trajectory.waypoints
-                    rec["refine"] = _strip_seconds(r.stats.get("refine"))
+                    rec["refine"] = _strip_seconds(r.refine_report.to_dict() if r.refine_report else None)
                 out[f"plan/{scene.name}/{q.name}"] = rec
     finally:
         gfuzzy.ga.refine_path = original

@@ -170,6 +170,8 @@ def cmd_batch(args) -> int:
     for r in result.rows:
         if not r.ran:
             _say(f"{r.scene} {r.query}: error: {r.error}")
+            if r.traceback:  # a bug, not a bad input: show where it happened
+                _say("  " + r.traceback.rstrip().replace("\n", "\n  "))
         elif r.check == "invalid":  # a planner defect: reported, but the query did run
             _say(f"{r.scene} {r.query}: the answer fails the check (see `gfuzzy check`)")
     return EXIT_NO if result.errors else EXIT_OK

@@ -8,6 +8,7 @@ import sys
 from ..errors import InputError, LimitError
 from .common import EXIT_BAD, EXIT_OK, BadInput, _Parser, _say
 from .experiments import cmd_batch, cmd_navigate, cmd_tracks
+from .mapping import cmd_map
 from .planning import cmd_check, cmd_plan, cmd_regress, cmd_render, cmd_roadmap
 
 
@@ -169,13 +170,27 @@ def _add_batch(sub) -> None:
     b.set_defaults(func=cmd_batch, roadmap=None)
 
 
+def _add_map(sub) -> None:
+    """``gfuzzy map``."""
+    m = sub.add_parser("map", help="write a scene around an occupancy-grid map (ROS map_server / Nav2 YAML)")
+    m.add_argument("map", metavar="MAP.yaml", help="the map's YAML file (inside the scene file's folder)")
+    m.add_argument("-o", "--output", required=True, metavar="SCENE.yaml", help="the scene file to write")
+    robot = m.add_mutually_exclusive_group()
+    robot.add_argument("--robot-disc", type=float, metavar="R", help="a disc robot of radius R (default 0.2)")
+    robot.add_argument("--robot-footprint", type=float, nargs="+", metavar="X",
+                       help="a footprint robot: the polygon's x y pairs in the robot's frame (x forward)")  # fmt: skip
+    m.add_argument("--vmax", type=float, metavar="V", help="robot speed bound (default 0.5)")
+    m.add_argument("--name", help="scene name (default: the output file's stem)")
+    m.set_defaults(func=cmd_map)
+
+
 def _parser() -> argparse.ArgumentParser:
     p = _Parser(
         prog="gfuzzy",
         description="Roadmap-time-space motion planning among moving obstacles (OMPL + FCL).",
     )
     sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
-    for add in (_add_roadmap, _add_plan, _add_check, _add_render, _add_navigate, _add_regress, _add_tracks, _add_batch):
+    for add in (_add_roadmap, _add_plan, _add_check, _add_render, _add_navigate, _add_regress, _add_tracks, _add_batch, _add_map):
         add(sub)
     return p
 

@@ -42,11 +42,11 @@ def cmd_roadmap(args) -> int:
     info = rm.info
     _say(
         f"{out}: {len(rm.vertices)} vertices, {len(rm.edges)} edges, "
-        f"{info['components']} component(s), {info['seconds']:.2f} s, "
-        f"{info['validity_calls'] + info['certify_calls']} collision checks",
+        f"{info.components} component(s), {info.seconds:.2f} s, "
+        f"{info.validity_calls + info.certify_calls} collision checks",
         sys.stdout,
     )
-    rep = info.get("repair")
+    rep = info.repair
     if rep and rep["added_vertices"]:
         _say(
             f"  free-space repair: PRM missed {rep['components_joined']} passage(s); "
@@ -126,12 +126,11 @@ def cmd_plan(args) -> int:
     else:
         line += f" ({result.message})"
     _say(line, sys.stdout)
-    for key, label in (("refine", "GA refinement"), ("speed_layer", "speed layer")):
-        info = result.stats.get(key)
-        if info is not None:
-            _say(f"  {label}: {_stage_summary(info)}", sys.stdout)
+    for report, label in ((result.refine_report, "GA refinement"), (result.speed_report, "speed layer")):
+        if report is not None:
+            _say(f"  {label}: {_stage_summary(report.to_dict())}", sys.stdout)
     if result.amax_honoured is False:
-        _say(f"note: {result.stats['amax_note']}")
+        _say(f"note: {result.stats.amax_note}")
     return EXIT_OK if result.solved else EXIT_NO
 
 

@@ -1,0 +1,58 @@
+"""``gfuzzy map``: write a scene around an occupancy-grid map."""
+
+from __future__ import annotations
+
+import math
+import shlex
+import sys
+
+from ..errors import InputError, SceneError
+from .common import EXIT_OK, BadInput, _out_path, _say
+
+
+def cmd_map(args) -> int:
+    from ..atomic import write_atomic
+    from ..mapscene import map_scene
+    from ..yamldoc import _load_yaml
+
+    out = _out_path(args.output, (".yaml", ".yml"))
+    footprint = None
+    if args.robot_footprint is not None:
+        vals = args.robot_footprint
+        if len(vals) < 6 or len(vals) % 2:
+            raise BadInput("--robot-footprint: expected x y pairs of at least 3 points")
+        if not all(math.isfinite(v) for v in vals):
+            raise BadInput("--robot-footprint: numbers must be finite")
+        footprint = [vals[i : i + 2] for i in range(0, len(vals), 2)]
+        import shapely
+
+        poly = shapely.Polygon(footprint)
+        if not shapely.LinearRing(footprint).is_simple or poly.area <= 1e-12:
+            raise BadInput("--robot-footprint: not a simple polygon of positive area")
+    if args.vmax is not None and not (math.isfinite(args.vmax) and args.vmax > 0):
+        raise BadInput(f"--vmax must be a positive number, got {args.vmax}")
+    command = "gfuzzy " + " ".join(shlex.quote(a) for a in sys.argv[1:]) if sys.argv[1:] else ""
+    try:
+        made = map_scene(
+            args.map, out, robot_disc=args.robot_disc, robot_footprint=footprint,
+            vmax=args.vmax or 0.5, name=args.name, command=command,
+        )  # fmt: skip
+    except SceneError:
+        raise
+    except InputError as exc:
+        raise BadInput(f"gfuzzy map: {exc}") from None
+    # the file must load as it will be read (a footprint robot needs a gfuzzy that has them)
+    doc = _load_yaml(made.text, str(out))
+    if footprint is None or _knows_footprints():
+        from ..scene import parse_scene
+
+        parse_scene(doc, file=str(out), folder=out.resolve().parent)
+    write_atomic(out, made.text)
+    _say(f"wrote {out}", sys.stdout)
+    return EXIT_OK
+
+
+def _knows_footprints() -> bool:
+    from ..scene import Robot
+
+    return "footprint" in getattr(Robot, "__dataclass_fields__", {})

@@ -1,0 +1,62 @@
+"""Helpers that several test modules share (importable: conftest puts tests/ on the path).
+
+The in-process command line, trajectory files written by hand, scenes from YAML text with
+robot overrides, and the bundled scenes with their roadmaps and answers (cached per process).
+"""
+
+from __future__ import annotations
+
+import json
+from functools import cache
+from pathlib import Path
+
+import yaml
+
+from gfuzzy.cli import main
+from gfuzzy.planner import Planner, PlanOptions
+from gfuzzy.roadmap import load_roadmap
+from gfuzzy.scene import load_scene, parse_scene
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def run_main(capsys, *args):
+    """``gfuzzy ARGS`` in-process: (exit status, stdout, stderr)."""
+    rc = main([str(a) for a in args])
+    out, err = capsys.readouterr()
+    return rc, out, err
+
+
+def write_trajectory_file(path, waypoints, scene="line", query="", status="solved"):
+    doc = {"version": 1, "scene": scene, "query": query, "status": status, "message": ""}
+    if waypoints is not None:
+        doc["waypoints"] = [list(map(float, row)) for row in waypoints]
+    path.write_text(json.dumps(doc))
+    return path
+
+
+def scene_doc(text: str, **robot) -> dict:
+    doc = yaml.safe_load(text)
+    doc["robot"].update(robot)
+    return doc
+
+
+def scene_of(text: str, **robot):
+    return parse_scene(scene_doc(text, **robot))
+
+
+BUNDLED_SCENES = sorted((ROOT / "scenes").glob("*.yaml"))
+
+
+@cache
+def bundled_setup(path: Path):
+    scene = load_scene(path)
+    roadmap = load_roadmap(ROOT / "roadmaps" / f"{scene.name}.json", scene)
+    return scene, roadmap, Planner(scene, roadmap)
+
+
+@cache
+def bundled_answers(path: Path, refine: bool, speed_layer: bool):
+    scene, _, planner = bundled_setup(path)
+    opts = PlanOptions(refine=refine, speed_layer=speed_layer, seed=3)
+    return [(q, planner.plan(q.start, q.goal, q.t0, opts)) for q in scene.queries]

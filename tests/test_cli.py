@@ -1,0 +1,218 @@
+"""The command line's behaviour: exit statuses, one-line errors, what it writes and removes.
+
+The CLI runs in-process (``gfuzzy.cli.main``) so that its exit status, stdout and stderr are
+what a user sees, or as ``python -m gfuzzy`` in a fresh process.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import ROOT, run_cli_process
+from helpers import run_main as _run
+from helpers import write_trajectory_file as _trajectory_file
+from shared_scenes import DOOR, LOOP
+
+from gfuzzy.check import check_trajectory
+from gfuzzy.cli import main
+from gfuzzy.errors import InputError
+from gfuzzy.roadmap import RoadmapOptions
+from gfuzzy.scene import load_scene
+
+
+def test_unsolved_plan_removes_a_stale_csv_and_says_what_it_wrote(line_scene, tmp_path, capsys):
+    out = tmp_path / "x.csv"
+    out.write_text("t,x,y\n0.0,1.0,1.0\n")  # an older, solved answer's rows
+    # the start lies in the first disc: invalid_query, answered without a roadmap
+    rc, stdout, stderr = _run(capsys, "plan", line_scene, "--start", 3.0, 1.0, "--goal", 9, 2.5, "-o", out)
+    assert rc == 1
+    assert "invalid_query" in stdout
+    assert not out.exists(), "a controller would drive the stale rows"
+    doc = json.loads((tmp_path / "x.json").read_text())
+    assert doc["status"] == "invalid_query" and "waypoints" not in doc
+    assert f"removed {out}" in stderr
+    assert f"wrote {tmp_path / 'x.json'}" in stderr
+    assert not list(tmp_path.glob(".x.*"))  # no temporary left behind
+
+
+def test_unsolved_plan_replaces_an_older_json(line_scene, tmp_path, capsys):
+    out = tmp_path / "y.json"
+    _trajectory_file(out, [[0, 1, 2.5], [8, 9, 2.5]])
+    rc, _, stderr = _run(capsys, "plan", line_scene, "--start", 6.0, 1.0, "--goal", 9, 2.5, "-o", out)
+    assert rc == 1
+    doc = json.loads(out.read_text())
+    assert doc["status"] == "invalid_query" and "waypoints" not in doc
+    assert f"wrote {out}" in stderr
+
+
+def test_check_of_a_csv_gives_a_hint(line_scene, tmp_path, capsys):
+    csv = tmp_path / "x.csv"
+    csv.write_text("t,x,y\n0.0,1.0,2.5\n8.0,9.0,2.5\n")
+    rc, _, stderr = _run(capsys, "check", line_scene, csv)
+    assert rc == 2
+    lines = stderr.strip().splitlines()
+    assert len(lines) == 1, stderr
+    assert str(csv) in lines[0] and "JSON" in lines[0] and "x.json" in lines[0]
+
+
+@pytest.mark.parametrize(
+    "rows, check_rc",
+    [
+        ([[0, 1, 1], [4, 5, 1], [8, 9, 1]], 1),  # well formed, hits both discs: invalid
+        ([[0, 1, 2.5], [1, 4, 2.5]], 1),  # too fast: invalid
+        ([[0, 1, 2.5], [4, 5, 2.5], [4, 6, 2.5]], 2),  # t does not increase: not a trajectory
+        ([[0, 1, 2.5, 0], [8, 9, 2.5, 0]], 2),  # rows of a box robot: not for this scene
+    ],
+)
+def test_check_and_render_agree_on_what_is_bad_input(line_scene, tmp_path, capsys, rows, check_rc):
+    traj = _trajectory_file(tmp_path / "t.json", rows)
+    rc_check, _, err_check = _run(capsys, "check", line_scene, traj)
+    assert rc_check == check_rc, err_check
+    rc_render, _, err_render = _run(capsys, "render", line_scene, traj, "-o", tmp_path / "t.png", "--no-roadmap")
+    if check_rc == 2:  # bad input for one is bad input for the other, one line each
+        assert rc_render == 2 and len(err_render.strip().splitlines()) == 1, err_render
+        assert not (tmp_path / "t.png").exists()
+    else:  # drawn, and the user told it is invalid
+        assert rc_render == 0, err_render
+        assert (tmp_path / "t.png").exists()
+        assert "invalid" in err_render
+
+
+def test_regress_names_itself_in_option_errors(line_scene, capsys):
+    rc, out, err = _run(capsys, "regress", line_scene, "--dt", 0)
+    assert rc == 2 and out == ""
+    assert err.startswith("gfuzzy regress:"), err
+
+
+def test_regress_checks_its_arguments_before_printing(line_scene, capsys):
+    rc, out, err = _run(capsys, "regress", line_scene, "-n", 0)
+    assert rc == 2
+    assert out == "", "the table header was printed before the arguments were checked"
+    assert len(err.strip().splitlines()) == 1 and "vert" in err
+
+
+def test_the_cli_calls_a_malformed_pose_bad_input(line_scene, capsys):
+    rc, out, err = _run(capsys, "plan", line_scene, "--start", 1, 2.5, 0, "--goal", 9, 2.5)
+    assert rc == 2 and out == "" and len(err.strip().splitlines()) == 1
+
+
+def test_the_cli_notes_an_amax_it_does_not_honour(line_scene, tmp_path, capsys):
+    rc, _, err = _run(capsys, "plan", line_scene, "-n", 40, "--seed", 2, "-o", tmp_path / "a.json")
+    assert rc == 0, err
+    assert "amax" in err and "not honoured" in err
+    assert json.loads((tmp_path / "a.json").read_text())["amax_honoured"] is False
+
+
+SCENE = ROOT / "scenes" / "sim-4s1m.yaml"
+
+
+ROADMAP = ROOT / "roadmaps" / "sim-4s1m.json"
+
+
+def _one_line(err: str) -> str:
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert "Traceback" not in err
+    return lines[0]
+
+
+@pytest.mark.parametrize("command", ["plan", "render", "navigate"])
+def test_an_output_that_is_a_folder_is_bad_input(tmp_path, capsys, command):
+    out = tmp_path / ("a.png" if command == "render" else "a.json")
+    out.mkdir()
+    args = [command, str(SCENE), "-o", str(out)]
+    if command != "render":
+        args[2:2] = ["--roadmap", str(ROADMAP)]
+    assert main(args) == 2
+    line = _one_line(capsys.readouterr().err)
+    assert str(out) in line and "folder" in line
+    assert list(tmp_path.iterdir()) == [out] and not any(out.iterdir())
+
+
+@pytest.mark.parametrize(("command", "name"), [("plan", "a.json"), ("render", "a.png"), ("roadmap", "r.json")])
+def test_an_output_the_system_refuses_is_one_line(capsys, command, name):
+    # /proc refuses new files even to root, whom permission bits do not stop
+    out = Path("/proc") / name
+    args = [command, str(SCENE), "-o", str(out)]
+    if command == "roadmap":
+        args[2:2] = ["-n", "20"]
+    assert main(args) == 2
+    line = _one_line(capsys.readouterr().err)
+    assert line.startswith(f"{out}:")  # the file asked for, not a temporary one
+
+
+@pytest.mark.parametrize("seed", [-1, 2**31])
+def test_a_seed_out_of_range_is_bad_input(tmp_path, capsys, seed):
+    out = tmp_path / "r.json"
+    assert main(["roadmap", str(SCENE), "-n", "20", "--seed", str(seed), "-o", str(out)]) == 2
+    assert "seed" in _one_line(capsys.readouterr().err)
+    assert not out.exists()
+    with pytest.raises(InputError, match="seed"):
+        RoadmapOptions(seed=seed)
+
+
+def test_check_says_what_it_cannot_verify_without_the_query(tmp_path, capsys):
+    out = tmp_path / "a.json"
+    assert main(["plan", str(SCENE), "--roadmap", str(ROADMAP), "-o", str(out)]) == 0
+    capsys.readouterr()
+    doc = json.loads(out.read_text())
+    assert main(["check", str(SCENE), str(out)]) == 0
+    assert "not checked" not in capsys.readouterr().err
+    doc["query"] = "nope"
+    out.write_text(json.dumps(doc))
+    assert main(["check", str(SCENE), str(out)]) == 0  # the motion itself is valid
+    err = capsys.readouterr().err
+    assert "'nope'" in err and "not checked" in err
+
+
+def test_cli_hold_and_check(tmp_path):
+    path = tmp_path / "loop.yaml"
+    path.write_text(LOOP)
+    out = tmp_path / "a.json"
+    r = run_cli_process("plan", path, "-n", "60", "--seed", "1", "-o", out, cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert run_cli_process("check", path, out, cwd=tmp_path).returncode == 0
+    # the same start and goal as an ad-hoc query with --hold 2: it waits
+    r = run_cli_process("plan", path, "-n", "60", "--seed", "1", "--start", "1", "3", "--goal", "4", "3",
+                        "--hold", "2", "-o", out, cwd=tmp_path)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    wps = np.array(json.loads(out.read_text())["waypoints"])
+    scene = load_scene(path)
+    assert check_trajectory(scene, wps, scene.queries[0]).valid
+    assert run_cli_process("check", path, out, "--hold", "2", cwd=tmp_path).returncode == 0
+    # without the hold the ad-hoc answer arrives as early as it can, and parks in the cart's way
+    r = run_cli_process("plan", path, "-n", "60", "--seed", "1", "--start", "1", "3", "--goal", "4", "3",
+                        "-o", out, cwd=tmp_path)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert run_cli_process("check", path, out, cwd=tmp_path).returncode == 0
+    bad = run_cli_process("check", path, out, "--hold", "2", cwd=tmp_path)
+    assert bad.returncode == 1 and "cart" in bad.stderr
+    bad = run_cli_process("plan", path, "--hold", "-1", cwd=tmp_path)
+    assert bad.returncode == 2 and "--hold" in bad.stderr and len(bad.stderr.strip().splitlines()) == 1
+
+
+def test_cli_overrides_rebuild_the_roadmap_and_check_enforces_them(tmp_path):
+    """--clearance changes the roadmap (said on stderr, built with the saved options);
+    check with the same overrides accepts the answer, with a larger one refuses it."""
+    path = tmp_path / "scenes" / "door.yaml"
+    path.parent.mkdir()
+    path.write_text(DOOR.replace(", clearance: 0.05", ""))
+    r = run_cli_process("roadmap", path, "-n", "80", "--seed", "2", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    out = tmp_path / "a.json"
+    r = run_cli_process("plan", path, "--clearance", "0.05", "--mover-clearance", "0.1", "-o", out, cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert "robot.clearance=0.05" in r.stderr and "80 vertices, seed 2" in r.stderr
+    assert run_cli_process("check", path, out, "--clearance", "0.05", cwd=tmp_path).returncode == 0
+    bad = run_cli_process("check", path, out, "--clearance", "0.25", cwd=tmp_path)
+    assert bad.returncode == 1 and "robot.clearance=0.25" in bad.stderr
+    r = run_cli_process("regress", path, "--clearance", "0.05", cwd=tmp_path)
+    assert r.returncode == 0 and "valid" in r.stdout
+    for cmd in ("plan", "regress", "check"):
+        args = (path, out) if cmd == "check" else (path,)
+        bad = run_cli_process(cmd, *args, "--mover-clearance", "nan", cwd=tmp_path)
+        assert bad.returncode == 2 and "--mover-clearance" in bad.stderr
+        assert len(bad.stderr.strip().splitlines()) == 1

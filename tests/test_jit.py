@@ -1,0 +1,147 @@
+"""The precompiled kernels (gfuzzy.jit, gfuzzy.precompile): what a cold process imports,
+that they answer as numba's kernels do, that a stale or mismatched build is not used, and
+that `planning_seconds` counts the kernels' load. Each check runs in a fresh process."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from gfuzzy import jit
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+@pytest.fixture(scope="module")
+def kernel_dir(tmp_path_factory):
+    """A folder holding the fresh extension: where `make warm` put it, else built here."""
+    name = jit.module_name()
+    for folder in jit.kernel_dirs():
+        if (folder / f"{name}.json").exists():
+            return folder
+    try:
+        from gfuzzy.precompile import build
+
+        return build(tmp_path_factory.mktemp("kernels")).parent
+    except RuntimeError as exc:  # no C compiler: nothing to test here
+        pytest.skip(f"precompiled kernels cannot be built here: {exc}")
+
+
+def _run(code: str, kernel_dir, precompiled: bool = True) -> list:
+    env = dict(os.environ, PYTHONPATH=str(ROOT), MPLBACKEND="Agg", GFUZZY_KERNEL_DIR=str(kernel_dir))
+    env["GFUZZY_PRECOMPILED"] = "1" if precompiled else "0"
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+HEAVY = ("numba", "scipy.sparse.csgraph", "matplotlib", "dask", "networkx", "trimesh")
+
+PLAN = """
+import json, sys
+import gfuzzy
+from gfuzzy import jit
+from gfuzzy.roadmap import load_roadmap
+from gfuzzy.scene import load_scene
+rows = []
+for name in sys.argv[1:] or {scenes!r}:
+    s = load_scene(f"scenes/{{name}}.yaml")
+    r = gfuzzy.plan(s, load_roadmap(f"roadmaps/{{name}}.json", s), s.queries[0].start, s.queries[0].goal, s.queries[0].t0)
+    rows.append([name, r.status.value, r.trajectory.duration if r.trajectory else None,
+                 r.trajectory.waypoints.tolist() if r.trajectory else None])
+print(json.dumps([rows, jit.loaded() is not None, [m for m in {heavy!r} if m in sys.modules]]))
+"""
+
+
+def test_a_cold_query_loads_no_numba_scipy_graph_or_pictures(kernel_dir):
+    """`import gfuzzy` and compiled queries (a box robot among two movers, a disc robot)
+    run on the precompiled kernels: numba, scipy's graph module, matplotlib, dask,
+    networkx and trimesh are never imported."""
+    code = PLAN.format(scenes=["building-floor", "sim-5s2m"], heavy=HEAVY)
+    rows, precompiled, heavy = _run(code, kernel_dir)
+    assert precompiled is True
+    assert heavy == []
+    assert [r[1] for r in rows] == ["solved", "solved"]
+
+
+def test_cli_plan_loads_no_numba(kernel_dir, tmp_path):
+    """The `gfuzzy plan` command itself (parser, scene, roadmap, plan, file) imports none
+    of them either."""
+    code = (
+        "import json, sys, runpy\n"
+        f"sys.argv = ['gfuzzy', 'plan', 'scenes/building-floor.yaml', '-o', {str(tmp_path / 'x.json')!r}]\n"
+        "try:\n    runpy.run_module('gfuzzy', run_name='__main__')\n"
+        "except SystemExit as e:\n    assert not e.code, e.code\n"
+        f"print(json.dumps([m for m in {HEAVY!r} if m in sys.modules]))\n"
+    )
+    assert _run(code, kernel_dir) == []
+    assert json.loads((tmp_path / "x.json").read_text())["status"] == "solved"
+
+
+def test_precompiled_answers_are_numbas(kernel_dir):
+    """The same queries on the precompiled kernels and on numba's (GFUZZY_PRECOMPILED=0):
+    the same status, duration and waypoints; numba is loaded only in the second."""
+    scenes = ["building-floor", "sim-5s2m", "wait-corridor", "sealed-room"]
+    code = PLAN.format(scenes=scenes, heavy=("numba",))
+    fast = _run(code, kernel_dir)
+    slow = _run(code, kernel_dir, precompiled=False)
+    assert fast[1:] == [True, []] and slow[1:] == [False, ["numba"]]
+    assert fast[0] == slow[0]
+    assert {r[1] for r in fast[0]} >= {"solved"}
+
+
+def test_a_stale_extension_is_not_loaded(kernel_dir, tmp_path):
+    """An extension built from other kernel source (another key in its name) is ignored:
+    the kernels are numba's; a folder with the fresh one loads it."""
+    name = jit.module_name()
+    for f in kernel_dir.glob(f"{name}*"):
+        shutil.copy(f, tmp_path / f.name.replace(name, jit.module_name("0" * 16)))
+    code = "import json\nfrom gfuzzy import jit, search_kernel\nprint(json.dumps(jit.loaded() is not None))\n"
+    assert _run(code, tmp_path) is False
+    assert _run(code, kernel_dir) is True
+
+
+def test_other_argument_types_fall_back_to_numba(kernel_dir):
+    """A precompiled kernel called with types it was not built for (int32 arrays, a strided
+    view) runs numba's dispatcher, with the right answer, instead of reading the memory
+    wrongly; the types it was built for never load numba."""
+    code = """
+import json, sys
+import numpy as np
+from gfuzzy import search_kernel as k
+tk = np.full(8, -1, np.int64); tb = np.zeros(8, np.int64); tp = np.zeros(8, np.int64); ctr = np.zeros(7, np.int64)
+k._set(tk, tb, tp, ctr, 5, 42, -1)
+out = [k._get(tk, tb, 5, -9), k._get(tk, tb, 6, -9), "numba" in sys.modules, k._get.precompiled]
+wide = np.full(16, -1, np.int64); wide[::2] = tk; wtb = np.zeros(16, np.int64); wtb[::2] = tb
+out += [k._get(tk.astype(np.int32), tb.astype(np.int32), 5, -9), k._get(wide[::2], wtb[::2], 5, -9), "numba" in sys.modules]
+print(json.dumps(out))
+"""
+    assert _run(code, kernel_dir) == [42, -9, False, True, 42, 42, True]
+
+
+def test_planning_seconds_counts_the_kernels_load(kernel_dir):
+    """`planning_seconds` of a process's first compiled query includes loading the
+    kernels (`search_function`: the extension, or numba and its cache), whichever way
+    they load: the reported figure is at least the time measured around that load."""
+    code = """
+import json, time
+import gfuzzy, gfuzzy.planner as P
+from gfuzzy.roadmap import load_roadmap
+from gfuzzy.scene import load_scene
+spans = []
+inner = P.search_function
+def timed(backend):
+    t = time.perf_counter(); f = inner(backend); spans.append(time.perf_counter() - t); return f
+P.search_function = timed
+s = load_scene("scenes/sim-5s2m.yaml")
+r = gfuzzy.Planner(s, load_roadmap("roadmaps/sim-5s2m.json", s)).plan(s.queries[0].start, s.queries[0].goal)
+print(json.dumps([r.status.value, len(spans), r.planning_seconds >= sum(spans) > 0]))
+"""
+    for precompiled in (True, False):
+        assert _run(code, kernel_dir, precompiled) == ["solved", 1, True]

@@ -1,0 +1,419 @@
+"""Occupancy-grid ``map`` obstacles: Nav2 map_io's semantics case by case, an independent
+oracle (Pillow reads the image, shapely builds the blocked region cell by cell), Hypothesis
+on random small maps, the bad files, and ``gfuzzy map`` end to end."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+import shapely
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from PIL import Image
+
+from gfuzzy.cli.main import main
+from gfuzzy.errors import SceneError
+from gfuzzy.geometry import StaticGeometry
+from gfuzzy.scene import MapObstacle, load_scene
+
+ROOT = Path(__file__).resolve().parent.parent
+MAPS = ROOT / "scenes" / "maps"
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def write_map(folder: Path, pixels, *, name="m", fmt="png", mode=None, negate=0, occ=0.65, free=0.196,
+              resolution=0.5, origin=(0.0, 0.0, 0.0), image_name=None, extra=""):  # fmt: skip
+    """Write ``pixels`` (H, W) gray or (H, W, C) uint8 as an image and its map YAML."""
+    folder.mkdir(parents=True, exist_ok=True)
+    arr = np.asarray(pixels, dtype=np.uint8)
+    image_name = image_name or f"{name}.{fmt}"
+    Image.fromarray(arr).save(folder / image_name)
+    lines = [
+        f"image: {image_name}",
+        f"resolution: {resolution!r}",
+        f"origin: [{origin[0]!r}, {origin[1]!r}, {origin[2]!r}]",
+        f"negate: {negate}",
+        f"occupied_thresh: {occ!r}",
+        f"free_thresh: {free!r}",
+    ]
+    if mode is not None:
+        lines.append(f"mode: {mode}")
+    (folder / f"{name}.yaml").write_text("\n".join(lines) + "\n" + extra)
+    return folder / f"{name}.yaml"
+
+
+def scene_text(map_file="m.yaml", unknown=None, bounds=None, robot="disc: 0.1", queries=""):
+    spec = f"{{file: {map_file}" + (f", unknown: {unknown}" if unknown else "") + "}"
+    out = ["version: 1", "name: t", f"robot: {{{robot}, vmax: 1.0}}", f"obstacles:\n  - map: {spec}"]
+    if bounds is not None:
+        out.insert(2, f"bounds: {list(bounds)}")
+    return "\n".join(out) + "\n" + queries
+
+
+def grid_of(tmp_path, pixels, unknown=None, **kw) -> MapObstacle:
+    write_map(tmp_path, pixels, **kw)
+    (tmp_path / "s.yaml").write_text(scene_text(unknown=unknown))
+    scene = load_scene(tmp_path / "s.yaml")
+    (grid,) = scene.obstacles
+    return grid
+
+
+# --------------------------------------------------------------------------- the oracle
+
+
+def oracle_values(image_path: Path, mode="trinary", negate=0, occ=0.65, free=0.196) -> list[list[int]]:
+    """Nav2's loadMapFromFile, pixel by pixel in plain Python (Pillow's getpixel)."""
+    img = Image.open(image_path)
+    alpha = img.mode in ("RGBA", "LA")
+    rgba = img.convert("RGBA")
+    w, h = img.size
+    out = []
+    for y in range(h):
+        row = []
+        for x in range(w):
+            r, g, b, a = rgba.getpixel((x, y))
+            ch = [r * 257, g * 257, b * 257]
+            if mode == "trinary" and alpha:
+                ch.append(a * 257)
+            shade = sum(ch) / len(ch) / 65535.0
+            o = shade if negate else 1.0 - shade
+            if mode == "raw":
+                p = int(shade * 255 + 0.5)
+                row.append(p if 0 <= p <= 100 else -1)
+            elif mode == "scale" and a != 255:
+                row.append(-1)
+            elif occ < o:
+                row.append(100)
+            elif o < free:
+                row.append(0)
+            elif mode == "scale":
+                row.append(int(np.rint((o - free) / (occ - free) * 100.0)))
+            else:
+                row.append(-1)
+        out.append(row)
+    return out
+
+
+def oracle_region(values, unknown_free, resolution, origin):
+    """The blocked region, one shapely box per blocked cell, unioned."""
+    h = len(values)
+    boxes = []
+    for i, row in enumerate(values):
+        for j, val in enumerate(row):
+            if val == 100 or (val == -1 and not unknown_free):
+                x0 = origin[0] + j * resolution
+                y0 = origin[1] + (h - 1 - i) * resolution
+                boxes.append(shapely.box(x0, y0, x0 + resolution, y0 + resolution))
+    return shapely.union_all(boxes) if boxes else shapely.Polygon()
+
+
+def rects_region(grid: MapObstacle):
+    r = grid.rects
+    return shapely.union_all(shapely.box(r[:, 0], r[:, 1], r[:, 2], r[:, 3])) if len(r) else shapely.Polygon()
+
+
+# --------------------------------------------------------------------------- Nav2 semantics
+
+
+def test_trinary_default_values(tmp_path):
+    # 0 black occupied, 254 free, 205 unknown with free_thresh 0.196 (1 - 205/255 = 0.19608)
+    grid = grid_of(tmp_path, [[0, 254, 205]])
+    assert grid.values.tolist() == [[100, 0, -1]]
+    assert grid.blocked.tolist() == [[True, False, True]]
+    grid = grid_of(tmp_path, [[0, 254, 205]], free=0.25)  # the depot's threshold: 205 is free
+    assert grid.values.tolist() == [[100, 0, 0]]
+
+
+def test_thresholds_are_strict_as_in_nav2(tmp_path):
+    # negate: occ = shade; 51 -> 51*257/65535 = 0.2 exactly the double 0.2
+    grid = grid_of(tmp_path, [[50, 51, 52]], negate=1, occ=0.2, free=0.1)
+    assert grid.values.tolist() == [[-1, -1, 100]]  # 0.2 < 0.2 is false: not occupied
+    grid = grid_of(tmp_path, [[50, 51, 52]], negate=1, occ=0.9, free=0.2)
+    assert grid.values.tolist() == [[0, -1, -1]]  # 0.2 < 0.2 is false: not free
+
+
+def test_negate_flips(tmp_path):
+    grid = grid_of(tmp_path, [[0, 254, 255]], negate=1)
+    assert grid.values.tolist() == [[0, 100, 100]]
+
+
+def test_rgb_is_averaged(tmp_path):
+    px = np.array([[[255, 0, 0], [255, 255, 0], [0, 0, 0], [254, 254, 254]]], dtype=np.uint8)
+    grid = grid_of(tmp_path, px)
+    # shades 1/3 (occ 0.667 > 0.65), 2/3 (occ 0.333: unknown), 0, 254/255
+    assert grid.values.tolist() == [[100, -1, 100, 0]]
+
+
+def test_alpha_in_trinary_is_averaged_in(tmp_path):
+    # Nav2 appends alpha to the channels in trinary mode: (255, 255, 255, 0) -> shade 0.75
+    px = np.array([[[255, 255, 255, 0], [0, 0, 0, 0], [254, 254, 254, 255], [255, 255, 255, 128]]], dtype=np.uint8)
+    grid = grid_of(tmp_path, px)
+    # occ 0.25 unknown; occ 1 occupied; free; shade (765+128)/1020 = 0.8755, occ 0.1245 free
+    assert grid.values.tolist() == [[-1, 100, 0, 0]]
+
+
+def test_gray_alpha_image(tmp_path):
+    px = np.array([[[254, 255], [254, 0]]], dtype=np.uint8)  # LA: gray counts three times
+    grid = grid_of(tmp_path, px)
+    assert grid.values.tolist() == [[0, -1]]  # (3*254 + 0)/4/255 = 0.747: occ 0.253
+
+
+def test_scale_mode(tmp_path):
+    px = np.array([[[0, 0, 0, 255], [254, 254, 254, 255], [128, 128, 128, 255], [254, 254, 254, 254]]], dtype=np.uint8)
+    grid = grid_of(tmp_path, px, mode="scale", occ=0.65, free=0.25)
+    occ = 1 - 128 / 255
+    cost = int(np.rint((occ - 0.25) / 0.4 * 100))
+    assert grid.values.tolist() == [[100, 0, cost, -1]]  # alpha < 255: unknown
+    assert grid.blocked.tolist() == [[True, False, False, True]]  # a cost does not block
+
+
+def test_scale_cost_at_occupied_thresh_is_100(tmp_path):
+    # occ == occupied_thresh exactly is not occupied, but its cost rints to 100 = lethal
+    grid = grid_of(tmp_path, [[51]], mode="scale", negate=1, occ=0.2, free=0.1)
+    assert grid.values.tolist() == [[100]]
+    assert grid.blocked.tolist() == [[True]]
+
+
+def test_raw_mode(tmp_path):
+    grid = grid_of(tmp_path, [[0, 37, 100, 101, 255]], mode="raw", negate=1)  # negate plays no part
+    assert grid.values.tolist() == [[0, 37, 100, -1, -1]]
+    assert grid.blocked.tolist() == [[False, False, True, True, True]]
+    grid = grid_of(tmp_path, [[0, 37, 100, 101, 255]], mode="raw", unknown="free")
+    assert grid.blocked.tolist() == [[False, False, True, False, False]]
+
+
+def test_unknown_free_or_blocked(tmp_path):
+    assert grid_of(tmp_path, [[205, 0]]).blocked.tolist() == [[True, True]]
+    assert grid_of(tmp_path, [[205, 0]], unknown="free").blocked.tolist() == [[False, True]]
+    assert grid_of(tmp_path, [[205, 0]], unknown="blocked").blocked.tolist() == [[True, True]]
+
+
+def test_row_zero_is_the_top_and_origin_the_lower_left(tmp_path):
+    px = np.full((2, 3), 254, dtype=np.uint8)
+    px[0, 2] = 0
+    grid = grid_of(tmp_path, px, resolution=0.25, origin=(1.0, -2.0, 0.0))
+    assert grid.rects.tolist() == [[1.5, -1.75, 1.75, -1.5]]
+    assert grid.extent == (1.0, -2.0, 1.75, -1.5)
+
+
+def test_bounds_default_to_the_maps_extent(tmp_path):
+    write_map(tmp_path, np.full((4, 6), 254, np.uint8), resolution=0.5, origin=(-1.0, 2.0, 0.0))
+    (tmp_path / "s.yaml").write_text(scene_text())
+    assert load_scene(tmp_path / "s.yaml").bounds == (-1.0, 2.0, 2.0, 4.0)
+    (tmp_path / "s.yaml").write_text(scene_text(bounds=[0, 0, 1, 3]))
+    assert load_scene(tmp_path / "s.yaml").bounds == (0.0, 0.0, 1.0, 3.0)
+    (tmp_path / "n.yaml").write_text("version: 1\nname: n\nrobot: {disc: 0.1, vmax: 1}\n")
+    with pytest.raises(SceneError, match="bounds"):
+        load_scene(tmp_path / "n.yaml")
+
+
+def test_plain_pgm_p2(tmp_path):
+    (tmp_path / "p.pgm").write_text("P2\n3 1\n255\n0 254 205\n")
+    write_map(tmp_path, [[0]], image_name="unused.png")
+    (tmp_path / "m.yaml").write_text((tmp_path / "m.yaml").read_text().replace("unused.png", "p.pgm"))
+    (tmp_path / "s.yaml").write_text(scene_text())
+    (grid,) = load_scene(tmp_path / "s.yaml").obstacles
+    assert grid.values.tolist() == [[100, 0, -1]]
+
+
+# --------------------------------------------------------------------------- oracle
+
+
+@pytest.mark.parametrize("name", ["depot", "small_house", "tb3_sandbox"])
+def test_real_maps_against_the_oracle(name):
+    import yaml
+
+    meta = yaml.safe_load((MAPS / f"{name}.yaml").read_text())
+    scene = load_scene_text(scene_text(f"maps/{name}.yaml"), ROOT / "scenes")
+    (grid,) = scene.obstacles
+    want = oracle_values(MAPS / meta["image"], meta.get("mode", "trinary"), meta["negate"],
+                         meta["occupied_thresh"], meta["free_thresh"])  # fmt: skip
+    assert grid.values.tolist() == want
+    # the rectangles cover the blocked cells exactly, without overlap
+    r = grid.rects
+    area = np.sum((r[:, 2] - r[:, 0]) * (r[:, 3] - r[:, 1]))
+    assert area == pytest.approx(grid.blocked.sum() * grid.resolution**2, rel=1e-9)
+    assert rects_region(grid).area == pytest.approx(area, rel=1e-9)
+
+
+def load_scene_text(text: str, folder: Path):
+    from gfuzzy.scene import parse_scene
+    from gfuzzy.yamldoc import _load_yaml
+
+    return parse_scene(_load_yaml(text, "s.yaml"), file="s.yaml", folder=folder)
+
+
+small_maps = st.integers(1, 9).flatmap(
+    lambda h: st.integers(1, 9).flatmap(
+        lambda w: st.lists(
+            st.lists(st.sampled_from([0, 30, 100, 180, 205, 230, 254, 255]), min_size=w, max_size=w),
+            min_size=h, max_size=h,
+        )
+    )
+)  # fmt: skip
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(
+    pixels=small_maps,
+    resolution=st.sampled_from([0.05, 0.1, 0.3, 1.0]),
+    ox=st.floats(-5, 5, allow_nan=False),
+    oy=st.floats(-5, 5, allow_nan=False),
+    mode=st.sampled_from(["trinary", "scale", "raw"]),
+    negate=st.sampled_from([0, 1]),
+    unknown=st.sampled_from(["blocked", "free"]),
+    robot=st.sampled_from([("disc", 0.01), ("disc", 0.2), ("disc", 0.7), ("box", (0.5, 0.2)), ("box", (1.5, 0.4))]),
+    data=st.data(),
+)
+def test_random_maps_fcl_and_oracle_agree(tmp_path, pixels, resolution, ox, oy, mode, negate, unknown, robot, data):
+    folder = tmp_path / f"r{abs(hash((str(pixels), ox, oy, mode))) % 10**9}"
+    write_map(folder, pixels, mode=mode, negate=negate, occ=0.6, free=0.3, resolution=resolution, origin=(ox, oy, 0.0))
+    h, w = len(pixels), len(pixels[0])
+    bounds = [ox - 1, oy - 1, ox + w * resolution + 1, oy + h * resolution + 1]
+    shape, size = robot
+    radius = size if shape == "disc" else float(np.hypot(*size)) / 2
+    bounds = [bounds[0] - radius, bounds[1] - radius, bounds[2] + radius, bounds[3] + radius]
+    spec = f"disc: {size}" if shape == "disc" else f"box: [{size[0]}, {size[1]}]"
+    (folder / "s.yaml").write_text(scene_text(unknown=unknown, bounds=bounds, robot=spec))
+    scene = load_scene(folder / "s.yaml")
+    (grid,) = scene.obstacles
+    values = oracle_values(folder / "m.png", mode, negate, 0.6, 0.3)
+    assert grid.values.tolist() == values
+    region = oracle_region(values, unknown == "free", resolution, (ox, oy))
+    assert rects_region(grid).symmetric_difference(region).area == pytest.approx(0.0, abs=1e-9)
+    geo = StaticGeometry(scene)
+    unit = st.floats(0, 1)
+    pts = np.array(data.draw(st.lists(st.tuples(unit, unit, unit), min_size=20, max_size=20)))
+    lo = np.array([bounds[0], bounds[1]]) + radius + 0.01  # the body inside the bounds
+    pts[:, :2] = lo + pts[:, :2] * np.array([bounds[2] - bounds[0], bounds[3] - bounds[1]]) - 2 * (radius + 0.01) * pts[:, :2]
+    pts[:, 2] = (pts[:, 2] - 0.5) * 2 * np.pi
+    for p in pts:
+        if shape == "disc":
+            d = region.distance(shapely.Point(p[:2])) if not region.is_empty else np.inf
+            if abs(d - radius) < 1e-6:
+                continue  # touching: either answer is right
+            assert geo.is_valid(p[:2]) == (d > radius), (p, d)
+        else:
+            c, s_ = np.cos(p[2]), np.sin(p[2])
+            hl, hw = size[0] / 2, size[1] / 2
+            body = shapely.Polygon([(p[0] + c * a - s_ * b, p[1] + s_ * a + c * b) for a, b in ((hl, hw), (-hl, hw), (-hl, -hw), (hl, -hw))])
+            overlap = body.intersection(region).area if not region.is_empty else 0.0
+            gap = body.distance(region) if not region.is_empty else np.inf
+            if overlap < 1e-9 and gap < 1e-6:
+                continue  # touching
+            assert geo.is_valid(p) == (overlap < 1e-9), (p, overlap, gap)
+
+
+@settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(seed=st.integers(0, 10_000), res=st.sampled_from([0.1, 0.2]))
+def test_plans_on_random_maps_pass_check(tmp_path, seed, res):
+    rng = np.random.default_rng(seed)
+    px = np.where(rng.random((30, 30)) < 0.12, 0, 254).astype(np.uint8)
+    px[rng.random((30, 30)) < 0.05] = 205
+    px[:, :3] = 254  # a free column at each side for the start and the goal
+    px[:, -3:] = 254
+    px[14:16, :] = 254  # and a free row between them
+    folder = tmp_path / f"p{seed}-{res}"
+    write_map(folder, px, resolution=res, origin=(0.0, 0.0, 0.0))
+    side = 30 * res
+    query = f"queries:\n  - {{name: q, start: [{res}, {side / 2}], goal: [{side - res}, {side / 2}]}}\n"
+    (folder / "s.yaml").write_text(scene_text(robot=f"disc: {res * 0.4}", queries=query))
+    out = folder / "out.json"
+    code = main(["plan", str(folder / "s.yaml"), "-n", "200", "--seed", "3", "-o", str(out)])
+    assert code == 0  # the free row connects them
+    assert main(["check", str(folder / "s.yaml"), str(out)]) == 0
+
+
+# --------------------------------------------------------------------------- bad files
+
+
+def _bad(tmp_path, capsys, expect: str):
+    out = tmp_path / "out.json"
+    code = main(["plan", str(tmp_path / "s.yaml"), "-o", str(out)])
+    err = capsys.readouterr().err.strip()
+    assert code == 2
+    assert len(err.splitlines()) == 1 and expect in err, err
+    assert not out.exists()
+    return err
+
+
+def _good(tmp_path, **kw):
+    write_map(tmp_path, [[254, 254], [254, 0]], **kw)
+    (tmp_path / "s.yaml").write_text(scene_text(queries="queries:\n  - {name: q, start: [0.2, 0.8], goal: [0.8, 0.8]}\n"))
+
+
+@pytest.mark.parametrize(
+    "edit, expect",
+    [
+        (lambda d: (d / "m.yaml").unlink(), "obstacles[0].map.file"),
+        (lambda d: (d / "m.png").unlink(), "m.png"),
+        (lambda d: (d / "m.png").write_bytes((d / "m.png").read_bytes()[:40]), "m.png"),
+        (lambda d: (d / "m.png").write_text("not an image"), "not an image"),
+        (lambda d: _set(d, "resolution: 0.5", "resolution: 0"), "resolution"),
+        (lambda d: _set(d, "resolution: 0.5", "resolution: fine"), "resolution"),
+        (lambda d: _set(d, "origin: [0.0, 0.0, 0.0]", "origin: [0.0, 0.0, 0.3]"), "origin[2]"),
+        (lambda d: _set(d, "origin: [0.0, 0.0, 0.0]", "origin: [0.0, 0.0]"), "origin"),
+        (lambda d: _set(d, "negate: 0", "negate: 2"), "negate"),
+        (lambda d: _set(d, "free_thresh: 0.196", "free_thresh: 0.7"), "free_thresh"),
+        (lambda d: _set(d, "occupied_thresh: 0.65", "occupied_thresh: 1.5"), "free_thresh"),
+        (lambda d: _set(d, "free_thresh: 0.196", ""), "free_thresh"),
+        (lambda d: _set(d, "negate: 0", "negate: 0\nmode: fancy"), "mode"),
+        (lambda d: _set(d, "image: m.png", "image: ../m.png"), "leaves"),
+        (lambda d: _set(d, "image: m.png", "image: /etc/passwd"), "relative"),
+        (lambda d: (d / "m.yaml").write_text("image: [unclosed"), "m.yaml"),
+        (lambda d: (d / "s.yaml").write_text(scene_text("../m.yaml")), "leaves"),
+        (lambda d: (d / "s.yaml").write_text(scene_text(unknown="maybe")), "unknown"),
+    ],
+)
+def test_bad_map_files_give_one_line(tmp_path, capsys, edit, expect):
+    _good(tmp_path)
+    edit(tmp_path)
+    _bad(tmp_path, capsys, expect)
+
+
+def test_the_good_map_of_the_bad_cases_loads(tmp_path):
+    _good(tmp_path)
+    (grid,) = load_scene(tmp_path / "s.yaml").obstacles
+    assert grid.blocked.tolist() == [[False, False], [False, True]]
+
+
+def _set(folder: Path, old: str, new: str) -> None:
+    text = (folder / "m.yaml").read_text()
+    assert old in text
+    (folder / "m.yaml").write_text(text.replace(old, new))
+
+
+# --------------------------------------------------------------------------- gfuzzy map
+
+
+def test_gfuzzy_map_end_to_end(tmp_path, capsys):
+    for f in ("tb3_sandbox.yaml", "tb3_sandbox.pgm"):
+        shutil.copy(MAPS / f, tmp_path / "maps" / f) if (tmp_path / "maps").exists() else (
+            (tmp_path / "maps").mkdir(), shutil.copy(MAPS / f, tmp_path / "maps" / f))  # fmt: skip
+    out = tmp_path / "arena.yaml"
+    assert main(["map", str(tmp_path / "maps" / "tb3_sandbox.yaml"), "--robot-disc", "0.2", "-o", str(out)]) == 0
+    text = out.read_text()
+    assert "file: maps/tb3_sandbox.yaml" in text and text.startswith("#")
+    scene = load_scene(out)
+    start, goal = np.array(scene.queries[0].start), np.array(scene.queries[0].goal)
+    assert np.hypot(*(start - goal)) > 3.0  # far apart in a 5 m arena
+    traj = tmp_path / "t.json"
+    assert main(["plan", str(out), "-o", str(traj)]) == 0
+    assert main(["check", str(out), str(traj)]) == 0
+
+
+def test_gfuzzy_map_refuses_a_map_outside_the_folder(tmp_path, capsys):
+    write_map(tmp_path / "a", [[254, 254], [254, 254]])
+    (tmp_path / "b").mkdir()
+    out = tmp_path / "b" / "s.yaml"
+    assert main(["map", str(tmp_path / "a" / "m.yaml"), "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "inside the scene file's folder" in err
+    assert not out.exists()
+    assert main(["map", str(tmp_path / "a" / "m.yaml"), "--robot-footprint", "0", "0", "1", "-o", str(tmp_path / "a" / "s.yaml")]) == 2
+    assert not (tmp_path / "a" / "s.yaml").exists()

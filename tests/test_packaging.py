@@ -1,0 +1,99 @@
+"""What a packager gets: the sdist and the wheel hold every module, and an installed wheel works.
+
+`make` installs gfuzzy editable, which hides a wheel that lacks a subpackage; these tests build
+the sdist and the wheel from it (as `python -m build` does for a packager), compare their file
+lists with the source tree, install the wheel into a fresh virtualenv WITHOUT `-e`, and run the
+`gfuzzy` command of that install from a folder where the source tree is not importable.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import tarfile
+import zipfile
+from pathlib import Path
+
+import pytest
+from conftest import ROOT
+
+PACKAGE = ROOT / "gfuzzy"
+
+
+def _source_files() -> set[str]:
+    """Every file of the package a wheel must carry, as ``gfuzzy/...`` paths."""
+    keep = {".py", ".txt", ".json", ".typed"}
+    return {
+        p.relative_to(ROOT).as_posix()
+        for p in PACKAGE.rglob("*")
+        if p.is_file() and p.suffix in keep and "__pycache__" not in p.parts
+    }
+
+
+@pytest.fixture(scope="module")
+def dist(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("dist")
+    proc = subprocess.run(
+        [sys.executable, "-m", "build", "--outdir", str(out), str(ROOT)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    return out
+
+
+def test_wheel_and_sdist_hold_every_module_and_data_file(dist):
+    expected = _source_files()
+    assert {"gfuzzy/cli/main.py", "gfuzzy/ga/refine.py", "gfuzzy/py.typed"} <= expected
+    (wheel,) = dist.glob("gfuzzy-*.whl")
+    with zipfile.ZipFile(wheel) as zf:
+        in_wheel = {n for n in zf.namelist() if n.startswith("gfuzzy/")}
+    assert expected - in_wheel == set(), f"missing from the wheel: {sorted(expected - in_wheel)}"
+    (sdist,) = dist.glob("gfuzzy-*.tar.gz")
+    with tarfile.open(sdist) as tf:
+        in_sdist = {n.split("/", 1)[1] for n in tf.getnames() if "/" in n}
+    assert expected - in_sdist == set(), f"missing from the sdist: {sorted(expected - in_sdist)}"
+    assert {"pyproject.toml", "README.md", "LICENSE"} <= in_sdist
+
+
+def test_installed_wheel_plans_refines_and_checks(dist, tmp_path):
+    (wheel,) = dist.glob("gfuzzy-*.whl")
+    venv = tmp_path / "venv"
+    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, timeout=300)
+    bindir = venv / ("Scripts" if os.name == "nt" else "bin")
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME")}
+    env["MPLBACKEND"] = "Agg"
+    proc = subprocess.run(
+        [str(bindir / "python"), "-m", "pip", "install", "--quiet", str(wheel)],
+        capture_output=True, text=True, timeout=900, env=env,
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+
+    work = tmp_path / "elsewhere"  # no gfuzzy/ folder here: only the install can be imported
+    work.mkdir()
+    scene = ROOT / "scenes" / "building-floor.yaml"
+    out = work / "answer.json"
+
+    def gfuzzy(*args):
+        return subprocess.run(
+            [str(bindir / "gfuzzy"), *map(str, args)],
+            cwd=work, capture_output=True, text=True, timeout=600, env=env,
+        )
+
+    where = subprocess.run(
+        [str(bindir / "python"), "-c", "import gfuzzy, sys; sys.stdout.write(gfuzzy.__file__)"],
+        cwd=work, capture_output=True, text=True, timeout=120, env=env,
+    )
+    assert Path(where.stdout).is_relative_to(venv), where.stdout + where.stderr
+
+    planned = gfuzzy("plan", scene, "--refine", "--speed-layer", "-o", out)
+    assert planned.returncode == 0, planned.stdout + planned.stderr
+    answer = json.loads(out.read_text())
+    assert answer["status"] == "solved" and len(answer["waypoints"]) > 2
+    assert "speed_layer" in answer.get("stats", {}), sorted(answer)
+    checked = gfuzzy("check", scene, out)
+    assert checked.returncode == 0, checked.stdout + checked.stderr
+    assert "valid" in checked.stdout

@@ -1,0 +1,335 @@
+"""The differential drive (``kinematics: unicycle``): scenes, the checker's row rule, plans.
+
+The oracles here share no code with the planner: a breadth-first search over (place along
+the motion, time step) with its own mover positions and its own safety test, and a Dijkstra
+over (vertex, heading) with the turning time written out, on tiny cases.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+
+import numpy as np
+import pytest
+
+from gfuzzy.check import check_trajectory
+from gfuzzy.drive import turn_path
+from gfuzzy.errors import SceneError
+from gfuzzy.planner import Planner, PlanOptions
+from gfuzzy.roadmap import Roadmap
+from gfuzzy.scene import parse_scene
+
+
+def doc(robot=None, movers=(), obstacles=(), queries=(), bounds=(0, 0, 6, 4)):
+    return {
+        "version": 1,
+        "name": "u",
+        "bounds": list(bounds),
+        "robot": robot or {"disc": 0.2, "vmax": 1.0, "kinematics": "unicycle"},
+        "obstacles": list(obstacles),
+        "movers": list(movers),
+        "queries": list(queries),
+    }
+
+
+# --------------------------------------------------------------------------- scene
+
+
+def test_scene_takes_the_unicycle_keys():
+    sc = parse_scene(doc({"box": [0.6, 0.4], "vmax": 0.8, "kinematics": "unicycle", "wmax": 1.5, "reverse": True}))
+    r = sc.robot
+    assert r.unicycle and r.reverse and r.wmax == 1.5 and r.dof == 3 and r.space_dof == 3
+    assert r.turn_rate == pytest.approx(min(1.5, 0.8 / r.circumradius))
+    disc = parse_scene(doc()).robot
+    assert disc.dof == 3 and disc.space_dof == 2 and not disc.reverse
+    assert disc.turn_rate == pytest.approx(1.0 / 0.2)  # default: vmax / r
+    assert parse_scene(doc({"disc": 0.2, "vmax": 1.0})).robot.dof == 2
+
+
+@pytest.mark.parametrize(
+    "robot, place",
+    [
+        ({"disc": 0.2, "vmax": 1.0, "kinematics": "tank"}, "robot.kinematics"),
+        ({"disc": 0.2, "vmax": 1.0, "kinematics": "unicycle", "wmax": 0}, "robot.wmax"),
+        ({"disc": 0.2, "vmax": 1.0, "kinematics": "unicycle", "wmax": -1.0}, "robot.wmax"),
+        ({"disc": 0.2, "vmax": 1.0, "kinematics": "unicycle", "reverse": "yes"}, "robot.reverse"),
+        ({"disc": 0.2, "vmax": 1.0, "wmax": 1.0}, "robot.wmax"),
+    ],
+)
+def test_bad_unicycle_keys_name_their_place(robot, place):
+    with pytest.raises(SceneError) as err:
+        parse_scene(doc(robot))
+    assert place in str(err.value)
+
+
+def test_a_unicycle_pose_needs_a_heading_even_for_a_disc():
+    q = {"name": "q", "start": [1, 1], "goal": [2, 2, 0]}
+    with pytest.raises(SceneError) as err:
+        parse_scene(doc(queries=[q]))
+    assert "queries[0].start" in str(err.value)
+
+
+# --------------------------------------------------------------------------- check
+
+
+def rows(*r):
+    return np.array(r, dtype=float)
+
+
+@pytest.fixture(scope="module")
+def disc_scene():
+    return parse_scene(doc({"disc": 0.2, "vmax": 1.0, "kinematics": "unicycle", "wmax": 2.0}))
+
+
+def test_check_accepts_waits_turns_in_place_and_straight_moves(disc_scene):
+    w = rows([0, 1, 1, 0], [1, 1, 1, 0], [1.5, 1, 1, 1.0], [2.5, 1 + 0.5 * math.cos(1), 1 + 0.5 * math.sin(1), 1.0])
+    rep = check_trajectory(disc_scene, w)
+    assert rep.valid, rep.reason
+
+
+@pytest.mark.parametrize(
+    "w, words",
+    [
+        (rows([0, 1, 1, 0], [1, 1, 1.1, 0]), "slides sideways"),
+        (rows([0, 1, 1, 0], [1, 1.2, 1, 0.3]), "turns while moving"),
+        (rows([0, 1, 1, 0], [1, 0.5, 1, 0]), "drives backwards"),
+        (rows([0, 1, 1, 0], [0.1, 1, 1, 0.3]), "faster than wmax"),
+        (rows([0, 1, 1, 0], [1, 2, 1, 0], [2, 2, 1.000003, 0]), "slides sideways"),
+    ],
+)
+def test_check_rejects_what_a_differential_drive_cannot_do(disc_scene, w, words):
+    rep = check_trajectory(disc_scene, w)
+    assert not rep.valid and words in rep.reason
+
+
+def test_check_allows_backwards_only_with_reverse():
+    w = rows([0, 2, 1, 0], [1, 1.5, 1, 0])
+    fwd = parse_scene(doc({"disc": 0.2, "vmax": 1.0, "kinematics": "unicycle"}))
+    rev = parse_scene(doc({"disc": 0.2, "vmax": 1.0, "kinematics": "unicycle", "reverse": True}))
+    assert not check_trajectory(fwd, w).valid
+    assert check_trajectory(rev, w).valid
+    # the same rows for a holonomic robot with heading (a box) slide sideways legally
+    box = parse_scene(doc({"box": [0.4, 0.2], "vmax": 1.0}))
+    assert check_trajectory(box, rows([0, 2, 1, 0], [1, 2, 1.5, 0])).valid
+
+
+def test_turn_path_is_straight_moves_and_turns_in_place(disc_scene):
+    path = turn_path([1, 1, 0.0], [[2, 2], [3, 1.5]], [4, 1, 2.0])
+    t = np.arange(len(path), dtype=float) * 3.0  # slow enough for any turn
+    rep = check_trajectory(disc_scene, np.column_stack([t, path]))
+    assert rep.valid, rep.reason
+    assert np.allclose(path[0], [1, 1, 0]) and np.allclose(path[-1], [4, 1, 2.0])
+
+
+# --------------------------------------------------------------------------- planning oracles
+
+
+def _far_roadmap(scene, pts=((5.6, 3.6), (5.7, 3.6))):
+    """A roadmap far from the action: only the direct start-goal connection is useful."""
+    v = np.array(pts, dtype=float)
+    return Roadmap(v, np.array([[0, 1]]), np.array([np.hypot(*(v[1] - v[0]))]), scene.name, scene.static_hash,
+                   scene.robot.circumradius)  # fmt: skip
+
+
+def _oracle_bfs(L, turn, dt, vmax, wmax, mover, r_robot, r_mover, start_xy, t_max=400):
+    """Earliest arrival: drive L along +x from ``start_xy`` (heading 0), then turn ``turn`` rad
+    in place; wait anywhere. Every step's pose must keep the safety margin from the mover
+    (its centre at ``mover(t)``): distance - radii >= (vmax + mover speed) dt / 2.
+
+    BFS over (place along the motion, step). Returns the arrival step or None.
+    """
+    k = max(1, math.ceil(L / (vmax * dt)))
+    kt = max(1, math.ceil(abs(turn) / (wmax * dt)))
+    n_places = k + kt + 1
+
+    def xy(u):
+        return start_xy[0] + L * min(u, k) / k, start_xy[1]
+
+    def safe(u, n):
+        mx, my, speed = mover(n * dt)
+        x, y = xy(u)
+        return math.hypot(x - mx, y - my) - r_robot - r_mover >= 0.5 * (vmax + speed) * dt
+
+    reach = {0} if safe(0, 0) else set()
+    for n in range(t_max):
+        if n_places - 1 in reach:
+            return n
+        nxt = set()
+        for u in reach:
+            for w in (u, u + 1):
+                if w < n_places and safe(w, n + 1):
+                    nxt.add(w)
+        reach = nxt
+    return None
+
+
+@pytest.mark.parametrize("backend", ["compiled", "reference"])
+@pytest.mark.parametrize("cross_at", [0.6, 1.2, 3.0])
+def test_plan_equals_a_brute_force_search_with_a_crossing_mover(backend, cross_at):
+    """Start facing the goal, a mover crossing the straight line: the planner's arrival
+    equals a BFS over (place, step) written here (its own positions and safety test)."""
+    dt, vmax, wmax, r, rm = 0.1, 1.0, 1.0, 0.2, 0.25
+    L, turn = 1.95, 0.5 * math.pi
+    sy = 1.0
+    speed = 0.8
+    y0 = sy - speed * cross_at  # the mover's centre crosses y = 1 at t = cross_at
+    mover = {"name": "m", "disc": rm, "speed": speed, "path": [[2.0, y0], [2.0, y0 + 40]], "mode": "once"}
+    sc = parse_scene(doc({"disc": r, "vmax": vmax, "kinematics": "unicycle", "wmax": wmax}, movers=[mover],
+                         bounds=(0, -40, 6, 44)))  # fmt: skip
+    planner = Planner(sc, _far_roadmap(sc))
+    res = planner.plan([1.0, sy, 0.0], [1.0 + L, sy, turn], 0.0, PlanOptions(dt=dt, backend=backend))
+    assert res.solved, res.message
+    rep = check_trajectory(sc, res.trajectory.waypoints)
+    assert rep.valid, rep.reason
+
+    def where(t):
+        return 2.0, y0 + speed * t, speed
+
+    n = _oracle_bfs(L, turn, dt, vmax * (1 - 1e-9), wmax * (1 - 1e-9), where, r, rm, (1.0, sy))
+    assert n is not None
+    assert res.duration == pytest.approx(n * dt, abs=1e-9)
+    free = math.ceil(L / (vmax * dt)) + math.ceil(turn / (wmax * dt))
+    if cross_at < 2.5:  # the mover is in the way: the answer waits
+        assert n > free
+
+
+def _oracle_static(verts, edges, start, goal, vmax, w):
+    """Shortest time over (vertex, heading) with turns in place of |dh| / w and straight
+    moves along the heading (forwards): Dijkstra written out. Start and goal are
+    vertices 0 and 1 of ``verts`` with their headings."""
+    adj = {i: [] for i in range(len(verts))}
+    for a, b in edges:
+        adj[a].append(b)
+        adj[b].append(a)
+
+    def wrap(x):
+        return (x + math.pi) % (2 * math.pi) - math.pi
+
+    best = {}
+    heap = [(0.0, 0, start[2])]
+    while heap:
+        t, v, h = heapq.heappop(heap)
+        key = (v, round(h, 9))
+        if key in best:
+            continue
+        best[key] = t
+        if v == 1:
+            heapq.heappush(heap, (t + abs(wrap(goal[2] - h)) / w, -1, goal[2]))
+        if v == -1:
+            return t
+        for u in adj.get(v, []):
+            d = np.subtract(verts[u], verts[v])
+            hn = math.atan2(d[1], d[0])
+            heapq.heappush(heap, (t + abs(wrap(hn - h)) / w + math.hypot(*d) / vmax, u, hn))
+    return math.inf
+
+
+def test_static_plan_is_near_the_exact_turn_and_drive_optimum():
+    """No movers: the answer obeys the rule and its duration lies between the exact
+    optimum on the same roadmap (a Dijkstra over (vertex, heading) written here) and that
+    optimum plus one step per piece of it (each piece is cut up to a whole step)."""
+    dt, vmax, wmax = 0.05, 1.0, 1.5
+    wall = {"box": {"center": [3.0, 2.0], "size": [0.4, 2.4]}}
+    sc = parse_scene(doc({"disc": 0.2, "vmax": vmax, "kinematics": "unicycle", "wmax": wmax}, obstacles=[wall]))
+    start, goal = np.array([1.0, 2.0, math.pi]), np.array([5.0, 2.0, 0.5])
+    verts = np.array([[1.0, 2.0], [5.0, 2.0], [2.0, 0.5], [4.0, 0.5], [2.0, 3.5], [4.0, 3.5], [3.0, 0.4]])
+    edges = [(2, 6), (6, 3), (4, 5), (2, 4), (3, 5)]
+    rm = Roadmap(verts[2:], np.array(edges) - 2, np.array([np.hypot(*(verts[b] - verts[a])) for a, b in edges]),
+                 sc.name, sc.static_hash, sc.robot.circumradius)  # fmt: skip
+    res = Planner(sc, rm).plan(start, goal, 0.0, PlanOptions(dt=dt))
+    assert res.solved, res.message
+    rep = check_trajectory(sc, res.trajectory.waypoints)
+    assert rep.valid, rep.reason
+    conn = [(0, 2), (0, 4), (3, 1), (5, 1), (2, 6), (6, 3), (4, 5), (2, 4), (3, 5)]
+    best = _oracle_static(verts, conn, start, goal, vmax, wmax)
+    pieces = 2 * 4 + 3  # at most 4 lanes and turns on each side of the 3 lanes in between
+    assert best - 1e-9 <= res.duration <= best + (pieces + 2) * dt
+
+
+def test_reverse_drives_backwards_when_turning_is_slow():
+    """With a slow turn the robot backs up to a goal behind it; without reverse it must
+    turn around first, which takes longer (and the checker tells the two apart)."""
+    base = {"disc": 0.2, "vmax": 1.0, "kinematics": "unicycle", "wmax": 0.2}
+    out = {}
+    for rev in (False, True):
+        sc = parse_scene(doc(dict(base, reverse=rev)))
+        res = Planner(sc, _far_roadmap(sc)).plan([3.0, 2.0, 0.0], [2.0, 2.0, 0.0], 0.0, PlanOptions(dt=0.1))
+        assert res.solved, res.message
+        assert check_trajectory(sc, res.trajectory.waypoints).valid
+        out[rev] = (sc, res)
+    assert out[True][1].duration < out[False][1].duration
+    assert out[True][1].duration == pytest.approx(1.0 + 0.1, abs=0.11)  # about 1 m backwards
+    assert not check_trajectory(out[False][0], out[True][1].trajectory.waypoints).valid
+
+
+def test_box_unicycle_plans_on_an_se2_roadmap():
+    """A box robot's lanes come from the SE(2) roadmap's positions, certified with the
+    body held along each lane; the answer passes a gap only lengthwise."""
+    from gfuzzy.roadmap import RoadmapOptions, build_roadmap
+
+    walls = [{"box": {"center": [3.0, 0.85], "size": [0.2, 1.7]}}, {"box": {"center": [3.0, 3.15], "size": [0.2, 1.7]}}]
+    robot = {"box": [0.8, 0.4], "vmax": 1.0, "kinematics": "unicycle"}
+    sc = parse_scene(doc(robot, obstacles=walls))
+    rm = build_roadmap(sc, RoadmapOptions(vertices=150, seed=2))
+    res = Planner(sc, rm).plan([1.0, 2.0, 1.5], [5.0, 2.0, -1.5], 0.0, PlanOptions(dt=0.1))
+    assert res.solved, res.message
+    rep = check_trajectory(sc, res.trajectory.waypoints)
+    assert rep.valid, rep.reason
+    w = res.trajectory.waypoints
+    near = np.abs(w[:, 1] - 3.0) < 0.5  # in the gap (0.6 wide): the box is lengthwise
+    assert near.any() and np.all(np.abs(np.cos(w[near, 3])) > 0.9)
+
+
+# --------------------------------------------------------------------------- replanning, navigation
+
+
+def _crossing_scene(reverse=False):
+    mover = {"name": "m", "disc": 0.3, "speed": 0.7, "path": [[3.0, 0.4], [3.0, 3.6]], "mode": "bounce"}
+    wall = {"box": {"center": [3.0, 3.3], "size": [0.3, 1.4]}}
+    robot = {"disc": 0.25, "vmax": 1.0, "kinematics": "unicycle", "wmax": 2.0, "reverse": reverse}
+    return parse_scene(doc(robot, movers=[mover], obstacles=[wall]))
+
+
+@pytest.fixture(scope="module")
+def crossing():
+    from gfuzzy.roadmap import RoadmapOptions, build_roadmap
+
+    sc = _crossing_scene()
+    return sc, build_roadmap(sc, RoadmapOptions(vertices=120, seed=4))
+
+
+def test_plan_from_a_prepared_goal_arrives_with_a_fresh_plan(crossing):
+    sc, rm = crossing
+    planner = Planner(sc, rm)
+    goal = [5.2, 2.0, -2.0]
+    prepared = planner.prepare(goal, PlanOptions(dt=0.1))
+    for start, t0 in (([0.8, 2.0, 0.3], 0.0), ([1.0, 0.8, 2.5], 1.3), ([0.7, 3.2, -1.0], 4.0)):
+        fresh = planner.plan(start, goal, t0, PlanOptions(dt=0.1))
+        kept = planner.plan_from(prepared, start, t0)
+        assert fresh.solved and kept.solved
+        assert kept.duration == pytest.approx(fresh.duration, abs=1e-9)
+        assert check_trajectory(sc, kept.trajectory.waypoints).valid
+
+
+def test_the_navigator_drives_a_unicycle_by_the_rule(crossing):
+    """Every trajectory the navigator returns (plans, direct motions, evasions) turns only
+    in place and drives only along the heading; the simulated run reaches the goal."""
+    from gfuzzy.navigator import Navigator, NavOptions
+    from gfuzzy.navsim import simulate
+
+    sc, rm = crossing
+    res = simulate(sc, rm, [0.8, 2.0, 0.0], [5.2, 2.0, 0.0], 0.0, 0.25, max_time=40.0,
+                   options=NavOptions(time_budget=5.0))  # fmt: skip
+    assert res.reached
+    rep = check_trajectory(sc, res.trajectory.waypoints)
+    assert rep.valid, rep.reason
+    nav = Navigator(sc, rm, [5.2, 2.0, 0.0])
+    pose = np.array([1.5, 2.0, 0.7])
+    crowd = np.array([[1.9, 2.0, -0.8, 0.0, 0.3], [1.5, 2.6, 0.0, -0.8, 0.3]])  # about to hit it
+    evasive = nav._evasive(0.0, pose, crowd)
+    from gfuzzy.check import _unicycle_problem
+
+    assert len(evasive.waypoints) >= 2 and _unicycle_problem(sc.robot, evasive.waypoints) is None
+    direct = nav._direct(0.0, np.array([4.5, 2.0, 2.0]), np.zeros((0, 5)))
+    assert direct is not None and _unicycle_problem(sc.robot, direct.waypoints) is None
