@@ -70,10 +70,8 @@ class RoadmapOptions:
     bridge_ratio : float
         Share of bridge-test samples in the ``"passage"`` sampler.
     repair : bool
-        Disc robots: after PRM, join the roadmap components that share a region of the
-        exactly computed free space (:func:`gfuzzy.freespace.repair`), adding vertices
-        beyond ``vertices`` as needed (``info["repair"]`` says how many). Roadmap files
-        written before this option existed load with ``repair=False``.
+        Disc robots: join the components sharing a free-space region (:func:`gfuzzy.freespace.repair`),
+        adding vertices beyond ``vertices`` (``info.repair``); older files load with False.
     """
 
     vertices: int = 200
@@ -114,26 +112,12 @@ class _Derived(dict):
 class RoadmapInfo:
     """How a roadmap was built (its file's ``info``).
 
-    Attributes
-    ----------
-    ompl_version : str
-    seconds : float
-        Wall-clock time of the whole build.
-    grow_seconds : float
-        Of which OMPL's PRM growing the roadmap.
-    validity_calls, certify_calls : int
-        Collision-model calls while growing and while certifying the edges.
-    edges_dropped : int
-        PRM edges that could not be certified free.
-    components : int
-        Connected components of the roadmap.
-    repair : dict
-        Disc robots: what the free-space repair added (``added_vertices``, ``added_edges``,
-        ``free_space_regions``, ``components_joined``, ``components_unjoined``,
-        ``seconds``; :meth:`gfuzzy.freespace.Repair.to_dict`); empty without it (not
-        written then).
-    extra : dict
-        Keys of a file written by another version, kept as they were.
+    ``seconds`` is the whole build, ``grow_seconds`` OMPL's PRM growing; ``validity_calls`` and
+    ``certify_calls`` count collision-model calls while growing and while certifying edges;
+    ``edges_dropped`` PRM edges that could not be certified free; ``components`` the
+    roadmap's connected components; ``repair`` what the free-space repair of a disc robot's
+    roadmap added (:meth:`gfuzzy.freespace.Repair.to_dict` and ``seconds``; empty, and not
+    written, without it); ``extra`` keys of another version's file, kept as they were.
     """
 
     ompl_version: str = ""
