@@ -50,6 +50,9 @@ QUAD_SEGS = 64
 DELTAS = (0.02, 0.005, 0.001, 0.0002)
 #: At most this many repair paths per build (a guard against pathological scenes).
 MAX_LINKS = 2000
+#: Vertices with less clearance than this touch an obstacle: no certified motion leaves
+#: them (see :meth:`gfuzzy.geometry.StaticGeometry.motion_clearance`), so they are not joined.
+TOUCHING = 1e-9
 
 
 @dataclass
@@ -106,13 +109,17 @@ class FreeSpace:
         return out
 
     def eroded(self, region: int, delta: float) -> list:
-        """The parts of ``regions[region]`` at least ``delta`` from its boundary."""
+        """The parts of ``regions[region]`` at least about ``delta`` (never less than
+        ``delta / 2``) from its boundary."""
         key = (region, delta)
         got = self._eroded.get(key)
         if got is None:
             import shapely
 
-            shrunk = self.regions[region].buffer(-delta, quad_segs=QUAD_SEGS)
+            # arcs of 8 chords and a simplification by delta / 2 keep every point at least
+            # delta / 2 inside the region, with few vertices to triangulate (a map's blocked
+            # cells grown by the robot have thousands of rounded corners)
+            shrunk = self.regions[region].buffer(-delta, quad_segs=8).simplify(0.5 * delta)
             got = [g for g in getattr(shrunk, "geoms", [shrunk]) if not g.is_empty and g.area > 0]
             for g in got:
                 shapely.prepare(g)
@@ -253,27 +260,19 @@ class _Corridors:
         from scipy.sparse import coo_matrix
 
         self.poly = poly
-        tris = [t for t in shapely.constrained_delaunay_triangles(poly).geoms if t.area > 0]
+        tris = np.asarray(shapely.get_parts(shapely.constrained_delaunay_triangles(poly)))
+        tris = tris[shapely.area(tris) > 0]
         self.tris = tris
         self.tree = shapely.STRtree(tris)
-        edge_id: dict = {}
-        mids: list = []
-        tri_edges: list = []
-        for t in tris:
-            c = np.asarray(t.exterior.coords)[:3]
-            ids = []
-            for i in range(3):
-                p, q = c[i], c[(i + 1) % 3]
-                key = (tuple(p), tuple(q)) if tuple(p) < tuple(q) else (tuple(q), tuple(p))
-                e = edge_id.get(key)
-                if e is None:
-                    e = edge_id[key] = len(mids)
-                    mids.append(0.5 * (p + q))
-                ids.append(e)
-            tri_edges.append(ids)
-        self.mids = np.asarray(mids, dtype=float).reshape(-1, 2)
-        self.tri_edges = np.asarray(tri_edges, dtype=np.int64).reshape(-1, 3)
-        te = self.tri_edges
+        corners = shapely.get_coordinates(shapely.get_exterior_ring(tris)).reshape(-1, 4, 2)[:, :3]
+        p = corners.reshape(-1, 2)  # (3T, 2): the corners, each triangle's in a row of three
+        q = np.roll(corners, -1, axis=1).reshape(-1, 2)
+        swap = (p[:, 0] > q[:, 0]) | ((p[:, 0] == q[:, 0]) & (p[:, 1] > q[:, 1]))
+        lo, hi = np.where(swap[:, None], q, p), np.where(swap[:, None], p, q)
+        _, first, inverse = np.unique(np.hstack([lo, hi]), axis=0, return_index=True, return_inverse=True)
+        self.mids = 0.5 * (lo[first] + hi[first])
+        te = inverse.reshape(-1, 3).astype(np.int64)
+        self.tri_edges = te
         a = np.concatenate([te[:, 0], te[:, 1], te[:, 2]])
         b = np.concatenate([te[:, 1], te[:, 2], te[:, 0]])
         w = np.linalg.norm(self.mids[a] - self.mids[b], axis=1) + 1e-12
@@ -309,15 +308,31 @@ class _Corridors:
         return np.vstack([a, self.mids[chain[::-1]], b])
 
     def shortcut(self, pts: FloatArray) -> FloatArray:
-        """Greedy visibility shortcut of a polyline inside the region."""
+        """Greedy visibility shortcut of a polyline inside the region: from each kept point
+        the farthest point seen, found by galloping then bisection (O(log n) tests a step;
+        only segments tested inside are kept)."""
         import shapely
+
+        def sees(i: int, j: int) -> bool:
+            return j == i + 1 or bool(self.poly.covers(shapely.LineString([pts[i], pts[j]])))
 
         out = [0]
         i, n = 0, len(pts)
         while i < n - 1:
-            j = n - 1
-            while j > i + 1 and not self.poly.covers(shapely.LineString([pts[i], pts[j]])):
-                j -= 1
+            if sees(i, n - 1):
+                j = n - 1
+            else:
+                lo, step = i + 1, 1  # lo is seen
+                while lo + step < n - 1 and sees(i, lo + step):
+                    lo, step = lo + step, 2 * step
+                hi = min(lo + step, n - 1)  # not seen
+                while hi - lo > 1:
+                    mid = (lo + hi) // 2
+                    if sees(i, mid):
+                        lo = mid
+                    else:
+                        hi = mid
+                j = lo
             out.append(j)
             i = j
         return pts[out]
@@ -403,6 +418,9 @@ class Repair:
     unjoined : int
         Roadmap components left apart although a region holds them with others (a path
         the certification refused; 0 in every scene tried).
+    touching : int
+        Vertices left out because they touch an obstacle (clearance 0: no motion from
+        them can be certified; PRM keeps them, edgeless).
     """
 
     vertices: FloatArray
@@ -412,6 +430,7 @@ class Repair:
     regions: int
     joined: int
     unjoined: int
+    touching: int = 0
 
     def to_dict(self) -> dict:
         return {
@@ -420,6 +439,7 @@ class Repair:
             "free_space_regions": self.regions,
             "components_joined": self.joined,
             "components_unjoined": self.unjoined,
+            "touching_vertices": self.touching,
         }
 
 
@@ -497,7 +517,7 @@ def repair(
     for a, b in np.asarray(edges, dtype=np.int64).tolist():
         uf.join(a, b)
     region = fs.region_of(np.asarray(vertices, dtype=float).reshape(-1, 2)).tolist()
-    joined = unjoined = 0
+    joined = unjoined = stuck = 0
 
     def add_chain(chain, ia: int, ib: int) -> None:
         ids = [ia]
@@ -519,6 +539,12 @@ def repair(
                 region.append(k)
                 uf.add()
             continue
+        if len({uf.find(i) for i in members}) > 1:
+            # a vertex touching an obstacle (clearance 0, e.g. a bridge sample at contact)
+            # starts no certifiable motion: it is left out, not counted as a missed passage
+            touching = [i for i in members if geometry.clearance1(verts[i]) < TOUCHING]
+            members = [i for i in members if i not in set(touching)]
+            stuck += len(touching)
         for _ in range(MAX_LINKS):
             groups: dict = {}
             for i in members:
@@ -560,6 +586,7 @@ def repair(
         len(fs.regions),
         joined,
         unjoined,
+        stuck,
     )
 
 
