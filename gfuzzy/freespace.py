@@ -203,7 +203,7 @@ def blocked_points(scene: Scene, grow: float = 0.0):
     With ``grow`` the robot's inradius (plus its clearance, from the obstacles), a blocked
     point is one where the robot collides at every heading: the bridge test's ends then
     lie in C-space obstacles, and its midpoints in the gaps the robot may fit through.
-    Arcs are cut into a few chords: this only steers sampling, the validity check decides.
+    Arcs are cut into chords: this only steers sampling, the validity check decides.
     """
     import shapely
 
@@ -222,7 +222,7 @@ def blocked_points(scene: Scene, grow: float = 0.0):
         if isinstance(ob_, MapObstacle):
             continue
         if isinstance(ob_, Disc):
-            shapes.append(shapely.Point(ob_.center).buffer(ob_.radius + grow, 8))
+            shapes.append(shapely.Point(ob_.center).buffer(ob_.radius + grow, 32))
             continue
         if isinstance(ob_, Box):
             shape = shapely.Polygon(ob_.vertices())
@@ -484,6 +484,20 @@ def _wire(geometry: StaticGeometry, verts: FloatArray, n0: int, k: int, have: se
     return out
 
 
+def _join(geometry, fs: FreeSpace, region: int, verts: list, main: list, other: list):
+    """(chain, other's vertex, main's vertex) joining two roadmap components through
+    ``region``: from the 3 vertices of ``other`` nearest to ``main``; None if none certifies."""
+    from scipy.spatial import cKDTree  # only when there is something to join
+
+    dist, near = cKDTree(np.asarray([verts[i] for i in main])).query(np.asarray([verts[i] for i in other]))
+    for t in np.argsort(dist, kind="stable")[:3].tolist():
+        ia, ib = other[t], main[int(near[t])]
+        chain = _region_path(geometry, fs, region, np.asarray(verts[ia]), np.asarray(verts[ib]))
+        if chain is not None:
+            return chain, ia, ib
+    return None
+
+
 def repair(
     geometry: StaticGeometry, fs: FreeSpace, vertices: FloatArray, edges: IntArray, neighbors: int = 10
 ) -> Repair:
@@ -493,8 +507,9 @@ def repair(
     the most vertices there is joined to each other one by a path through the region (a
     triangulation of the region eroded by a margin, Dijkstra through its inner edges'
     midpoints, a greedy shortcut), its corners added as vertices and every motion
-    certified; each added vertex is then connected to its nearest vertices too. A region without any vertex gets one (a point inside it), so that a query
-    there has a vertex to reach. Deterministic: no randomness.
+    certified; each added vertex is then connected to its nearest vertices too. A region
+    without any vertex gets one (a point inside it), so that a query there has a vertex to
+    reach. Deterministic: no randomness.
 
     Parameters
     ----------
@@ -551,24 +566,13 @@ def repair(
                 groups.setdefault(uf.find(i), []).append(i)
             if len(groups) < 2:
                 break
-            from scipy.spatial import cKDTree  # only when there is something to join
-
             order = sorted(groups, key=lambda g: (-len(groups[g]), g))
-            main = np.asarray([verts[i] for i in groups[order[0]]])
-            tree = cKDTree(main)
             other = order[1]
-            pts = np.asarray([verts[i] for i in groups[other]])
-            dist, near = tree.query(pts)
-            tries = np.argsort(dist, kind="stable")[:3]
-            done = False
-            for t in tries.tolist():
-                ia, ib = groups[other][t], groups[order[0]][int(near[t])]
-                chain = _region_path(geometry, fs, k, np.asarray(verts[ia]), np.asarray(verts[ib]))
-                if chain is not None:
-                    add_chain(chain, ia, ib)
-                    joined += 1
-                    done = True
-                    break
+            found = _join(geometry, fs, k, verts, groups[order[0]], groups[other])
+            done = found is not None
+            if done:
+                add_chain(*found)
+                joined += 1
             if not done:  # give up on this component: keep it out of later rounds
                 unjoined += 1
                 log.warning("free-space repair: could not certify a path into roadmap component %d", other)

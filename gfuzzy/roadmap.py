@@ -421,7 +421,7 @@ def _make_passage_sampler(
     box = scene.robot.shape == "box"
     sigma = max(scene.robot.circumradius, 1e-3)
     valid = geometry.is_valid
-    blocked = blocked_points(scene, scene.robot.inradius + scene.robot.clearance)
+    blocked = blocked_points(scene)  # bare obstacles: grown ones, see docs/benchmarks.md
     span = 2.0 * scene.robot.circumradius
     in_free_cell = _free_cell_draw(scene, rng)
 
