@@ -196,53 +196,36 @@ def free_space(scene: Scene, grown: float | None = None) -> FreeSpace | None:
     return FreeSpace(parts, tolerance, grown)
 
 
-def blocked_points(scene: Scene, grow: float = 0.0):
-    """A vectorised test: which xy points lie within ``grow`` of a static obstacle or of
-    the outside of the bounds.
-
-    With ``grow`` the robot's inradius (plus its clearance, from the obstacles), a blocked
-    point is one where the robot collides at every heading: the bridge test's ends then
-    lie in C-space obstacles, and its midpoints in the gaps the robot may fit through.
-    Arcs are cut into chords: this only steers sampling, the validity check decides.
-    """
+def blocked_points(scene: Scene):
+    """A vectorised test: which xy points lie inside a static obstacle or outside bounds
+    (the passage sampler's bridge test, :mod:`gfuzzy.roadmap`)."""
     import shapely
 
     from .scene import MapObstacle
 
     shapes = []
-    grids = []
-    for grid in (ob_ for ob_ in scene.obstacles if isinstance(ob_, MapObstacle)):
-        cells = grid.blocked
-        if grow > 0 and cells.any() and not cells.all():  # cells near a blocked one block too
-            from scipy.ndimage import distance_transform_edt
-
-            cells = distance_transform_edt(~cells) * grid.resolution <= grow
-        grids.append((grid, cells))
+    grids = [ob_ for ob_ in scene.obstacles if isinstance(ob_, MapObstacle)]
     for ob_ in scene.obstacles:
         if isinstance(ob_, MapObstacle):
             continue
         if isinstance(ob_, Disc):
-            shapes.append(shapely.Point(ob_.center).buffer(ob_.radius + grow, 32))
-            continue
-        if isinstance(ob_, Box):
-            shape = shapely.Polygon(ob_.vertices())
+            shapes.append(shapely.Point(ob_.center).buffer(ob_.radius, 32))
+        elif isinstance(ob_, Box):
+            shapes.append(shapely.Polygon(ob_.vertices()))
         else:
-            shape = shapely.Polygon(ob_.points, list(ob_.holes))
-        shapes.append(shape.buffer(grow, 8) if grow > 0 else shape)
+            shapes.append(shapely.Polygon(ob_.points, list(ob_.holes)))
     union = shapely.union_all(shapes) if shapes else shapely.Polygon()
     shapely.prepare(union)
-    inset = scene.robot.inradius if grow > 0 else 0.0
     xmin, ymin, xmax, ymax = scene.bounds
-    xmin, ymin, xmax, ymax = xmin + inset, ymin + inset, xmax - inset, ymax - inset
 
     def blocked(xy: FloatArray) -> np.ndarray:
         x, y = xy[:, 0], xy[:, 1]
         out = (x <= xmin) | (x >= xmax) | (y <= ymin) | (y >= ymax)
         if shapes:
             out |= shapely.contains_xy(union, x, y)
-        for grid, cells in grids:
+        for grid in grids:
             rows, cols, inside = grid.cells_of(xy)
-            out |= inside & cells[rows, cols]
+            out |= inside & grid.blocked[rows, cols]
         return out
 
     return blocked

@@ -321,8 +321,8 @@ class Navigator:
         start = pose.copy()
         if self.robot.dof == 3:
             start[2] = wrap_angle(start[2])
-        if self.robot.unicycle:  # a cheap lower bound for the windows: the call's budget is short
-            ug = self._kept.kept.splice(self._planner, start, exact=False)
+        if self.robot.unicycle:
+            ug = self._kept.kept.splice(self._planner, start)
             return ug.graph, ug.s_id, ug.g_id, ug.roadmap_distance
         return self._kept.splice(self._planner, start, ahead=ahead)
 

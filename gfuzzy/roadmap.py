@@ -23,8 +23,9 @@ import numpy as np
 
 from .atomic import write_atomic
 from .errors import InputError, SceneError
-from .freespace import blocked_points
+from .freespace import blocked_points as _blocked_points
 from .geometry import StaticGeometry, metric_distance
+from .maps import free_cell_draw
 from .scene import Scene
 from .typing import FloatArray, IntArray
 
@@ -418,12 +419,12 @@ def _make_passage_sampler(
     """
     scene = geometry.scene
     xmin, ymin, xmax, ymax = scene.bounds
-    box = scene.robot.shape == "box"
+    box = scene.robot.space_dof == 3
     sigma = max(scene.robot.circumradius, 1e-3)
     valid = geometry.is_valid
-    blocked = blocked_points(scene)  # bare obstacles: grown ones, see docs/benchmarks.md
+    blocked = _blocked_points(scene)
     span = 2.0 * scene.robot.circumradius
-    in_free_cell = _free_cell_draw(scene, rng)
+    in_free_cell = free_cell_draw(scene.obstacles, scene.bounds, rng, FREE_CELL_SHARE)
 
     class PassageSampler(ob.ValidStateSampler):
         def __init__(self):
@@ -528,7 +529,7 @@ class _Builder:
         bounds.setHigh(0, xmax)
         bounds.setLow(1, ymin)
         bounds.setHigh(1, ymax)
-        self.box = scene.robot.shape == "box"
+        self.box = scene.robot.space_dof == 3
         if self.box:
             space = ob.SE2StateSpace()
             space.setBounds(bounds)
@@ -690,11 +691,9 @@ def grow_roadmaps(
     t_start = time.perf_counter()
     _seed_ompl(options.seed)
     builder = _Builder(scene, options, geometry)
-    fs = None
-    if options.repair and scene.robot.shape == "disc":
-        from .freespace import free_space
+    from .freespace import free_space
 
-        fs = free_space(scene)
+    fs = free_space(scene) if options.repair and scene.robot.shape == "disc" else None
     certified: dict = {}  # (pose a, pose b) bytes -> free: later sizes reuse the answers
     vertex_clear: dict = {}  # pose bytes -> clearance
     out = []

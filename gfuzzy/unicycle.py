@@ -114,6 +114,8 @@ class _Base:
     n_ring: int
 
     vertex_xy: FloatArray = None
+    #: Static clearances of the vertices' positions (a disc's), filled as connections need them.
+    clearance: FloatArray = None
 
     def copies_at(self, v: int) -> IntArray:
         lo, hi = np.searchsorted(self.vertex, [v, v + 1])
@@ -186,6 +188,13 @@ def lanes(roadmap, geometry, stretch: float = 1.0) -> Lanes:
         out = Lanes(xy, edges, np.ones((len(edges), 2), dtype=bool))
     else:
         out = _box_lanes(roadmap, geometry, xy)
+        if stretch > 1.0 and len(out.edges):  # as the disc's: a spanner of the lanes
+            from .roadmap import Roadmap
+
+            lens = np.hypot(*(xy[out.edges[:, 1]] - xy[out.edges[:, 0]]).T)
+            plane = Roadmap(xy, out.edges, lens, roadmap.scene_name, roadmap.scene_hash, roadmap.circumradius)
+            keep = plane.spanner(stretch)
+            out = Lanes(xy, out.edges[keep], out.ok[keep])
     roadmap._derived[key] = out
     return out
 
@@ -339,6 +348,7 @@ def _base(roadmap, geometry, stretch: float, vmax: float, step_len: float) -> _B
         ring_ok=ring_ok,
         n_ring=n_ring,
         vertex_xy=xy,
+        clearance=np.full(len(xy), np.nan),
     )
     roadmap._derived[key] = return_
     return return_
@@ -401,9 +411,10 @@ class _Extras:
         if dh != 0.0:
             self.pieces.append((a, b, float(dh), abs(dh) * self.scale))
 
-    def copy_at(self, v: int, h: float) -> int:
+    def copy_at(self, v: int, h: float, out: bool) -> int:
         """The copy of vertex v at heading h: the base's when it has one, else a new copy
-        joined by turns to the two ring points around its heading, both ways."""
+        joined by turns to the two ring points around its heading: out to them (``out``:
+        the start arrives there and turns on), else in from them (the goal leaves there)."""
         geo, base = self.geometry, self.base
         ids = base.copies_at(v)
         rel = (base.poses[ids, 2] - h) % (2 * math.pi)
@@ -416,8 +427,10 @@ class _Extras:
         step_h = 2 * math.pi / base.n_ring
         for r, arc in _brackets(h, r0, base.n_ring, step_h):
             if base.ring_ok[r] and turn_free(geo, x, y, h, arc):
-                self.turn(c, self.ring(r), arc)
-                self.turn(self.ring(r), c, -arc)
+                if out:
+                    self.turn(c, self.ring(r), arc)
+                else:
+                    self.turn(self.ring(r), c, -arc)
         return c
 
     def join(self, pose: FloatArray, node: int, connect_k: int, outward: bool, reverse: bool) -> None:
@@ -433,14 +446,23 @@ class _Extras:
         order = np.argsort(d, kind="stable")
         order = order[has[order] & (d[order] > 1e-9)]
         tried = joined = 0
+        disc = robot.shape == "disc"
+        c_p = geo.clearance1([px, py]) if disc else None
+        table = self.base.clearance if disc else None  # the vertices' (shared by every query)
         for v in order[: 4 * max(connect_k, 1)].tolist():
             if tried >= connect_k and joined:
                 break
             tried += 1
             vx, vy = float(xy[v, 0]), float(xy[v, 1])
+            c_v = None
+            if disc:
+                c_v = table[v]
+                if c_v != c_v:  # NaN: not computed yet
+                    c_v = table[v] = geo.clearance1([vx, vy])
             for back in (False, True) if reverse else (False,):
                 ax, ay, bx, by = (px, py, vx, vy) if outward else (vx, vy, px, py)
-                h = _drive(geo, robot, ax, ay, bx, by, back)
+                ca, cb = (c_p, c_v) if outward else (c_v, c_p)
+                h = _drive(geo, robot, ax, ay, bx, by, back, ca, cb)
                 if h is None:
                     continue
                 dh = pick_turn(geo, px, py, ph, h) if outward else pick_turn(geo, px, py, h, ph)
@@ -453,7 +475,7 @@ class _Extras:
                         self.turn(node, here, dh)
                     else:
                         self.turn(here, node, dh)
-                c = self.copy_at(v, h)
+                c = self.copy_at(v, h, outward)
                 if outward:
                     self.lane(here, c)
                 else:
@@ -461,11 +483,12 @@ class _Extras:
                 joined += 1
 
 
-def _drive(geo, robot, ax, ay, bx, by, back: bool):
+def _drive(geo, robot, ax, ay, bx, by, back: bool, ca=None, cb=None):
     """Heading for driving from a to b (backwards: facing away from b), or None when the
-    lane is not free for the body held at it."""
+    lane is not free for the body held at it (``ca``, ``cb``: the ends' clearances, when
+    known: a disc's do not depend on the heading)."""
     h = math.atan2(by - ay, bx - ax) + (math.pi if back else 0.0)
-    if not geo.motion_free(_xy_pose(robot, ax, ay, h), _xy_pose(robot, bx, by, h)):
+    if not geo.motion_free(_xy_pose(robot, ax, ay, h), _xy_pose(robot, bx, by, h), ca=ca, cb=cb):
         return None
     return h
 
@@ -473,14 +496,15 @@ def _drive(geo, robot, ax, ay, bx, by, back: bool):
 def _cut_pieces(nodes: FloatArray, A: IntArray, B: IntArray, DH: FloatArray, L: FloatArray, step_len: float,
                 first: int):  # fmt: skip
     """Pieces cut into one-step points (:func:`gfuzzy.poses.split_counts`): (k, offs, p_of,
-    j, inner poses, src, dst) with interior ids from ``first``."""
+    j, inner poses, src, dst) with interior ids from ``first``. ``nodes``: the poses of the
+    nodes, or a function of node ids giving them."""
     k = split_counts(L, step_len)
     n_int = k - 1
     offs = np.concatenate([[0], np.cumsum(n_int)]).astype(np.int64)
     p_of = np.repeat(np.arange(len(A)), n_int)
     j = np.arange(offs[-1]) - np.repeat(offs[:-1], n_int) + 1
     f = j / k[p_of]
-    pa, pb = nodes[A[p_of]], nodes[B[p_of]]
+    pa, pb = (nodes(A[p_of]), nodes(B[p_of])) if callable(nodes) else (nodes[A[p_of]], nodes[B[p_of]])
     inner = np.empty((len(p_of), 3))
     inner[:, :2] = pa[:, :2] + f[:, None] * (pb[:, :2] - pa[:, :2])
     inner[:, 2] = np.where(DH[p_of] != 0.0, wrap_angle(pa[:, 2] + f * DH[p_of]), pa[:, 2])
@@ -551,6 +575,8 @@ class UnicycleGoal:
     p_of, j : (N - nn,) int
         Each interior point's piece and index along it.
     step_len, scale : float
+    steps : scipy CSR (nn, nn)
+        The kept pieces at node level weighted in steps (the starts' Dijkstra extends it).
     """
 
     goal: FloatArray
@@ -573,6 +599,7 @@ class UnicycleGoal:
     step_len: float
     scale: float
     connect_k: int
+    steps: object = None
 
     def splice(self, planner, start: FloatArray, exact: bool = True) -> UnicycleGraph:
         """This graph with ``start`` (``[x, y, heading]``, heading wrapped) joined in.
@@ -583,7 +610,7 @@ class UnicycleGoal:
         """
         geo, robot = planner.geometry, planner.robot
         N = len(self.poses)
-        ex = _Extras(self.base, geo, self.scale, N, ring_at=self.nn - len(self.base.ring))
+        ex = _Extras(self.base, geo, self.scale, N, ring_at=len(self.base.poses))
         ex.kept = self.poses
         s_id = ex.node(*start)
         ex.join(start, s_id, self.connect_k, True, robot.reverse)
@@ -610,8 +637,14 @@ class UnicycleGoal:
         x = len(new)
         xp = np.asarray(ex.pieces, dtype=float).reshape(-1, 4)
         A, B = xp[:, 0].astype(np.int64), xp[:, 1].astype(np.int64)
-        nodes = np.vstack([self.poses, new])
-        k, offs, p_of, j, inner, src, dst = _cut_pieces(nodes, A, B, xp[:, 2], xp[:, 3], self.step_len, N + x)
+        def pose_of(ids):
+            out = np.empty((len(ids), 3))
+            kept = ids < N
+            out[kept] = self.poses[ids[kept]]
+            out[~kept] = new[ids[~kept] - N]
+            return out
+
+        k, offs, p_of, j, inner, src, dst = _cut_pieces(pose_of, A, B, xp[:, 2], xp[:, 3], self.step_len, N + x)
         total = N + x + int(offs[-1])
         _too_many(total)
         # steps and metres to the goal of the new nodes: the kept ones bound them (a start's
@@ -633,24 +666,33 @@ class UnicycleGoal:
                 break
         rd = float(met[s_id])
         heur = np.concatenate([self.heuristic, hop[N:], hop[B[p_of]] + k[p_of] - j])
-        poses = np.vstack([nodes, inner])
-        # adjacency: the kept lists get the start's moves out of kept nodes (rings -> new
-        # copies) at their ends; the new nodes' and points' lists follow
+        poses = np.concatenate([self.poses, new, inner])
+        # adjacency: every move of the start's is out of a new node or point (kept lists
+        # stay as they are), so the new lists follow the kept ones
         order = np.argsort(src, kind="stable")
-        s2, d2 = src[order], dst[order]
-        at = np.where(s2 < N, self.indptr[np.minimum(s2, N - 1) + 1], len(self.neighbors))
-        nbrs = np.insert(self.neighbors, at, d2)
-        indptr = np.concatenate([self.indptr, np.full(total - N, self.indptr[-1])])
-        indptr[1:] += np.cumsum(np.bincount(s2, minlength=total))
-        if exact:
-            allA = np.concatenate([self.A, A])
-            allB = np.concatenate([self.B, B])
-            allk = np.concatenate([self.k, k]).astype(float)
-            hop_s = np.rint(_dijkstra(_matrix(allA, allB, allk, N + x), s_id))
+        nbrs = np.concatenate([self.neighbors, dst[order]])
+        indptr = np.concatenate([self.indptr, self.indptr[-1] + np.cumsum(np.bincount(src - N, minlength=total - N))])
+        if exact:  # steps from the start: Dijkstra over the nodes (new ones renumbered after the kept)
+            from scipy.sparse import csr_matrix
+
+            nn = self.nn
+            a_c, b_c = A - N + nn, np.where(B >= N, B - N + nn, B)
+            o = np.lexsort((k, b_c, a_c))  # by row; parallel pieces: the shortest first
+            first = np.ones(len(o), dtype=bool)
+            first[1:] = (a_c[o][1:] != a_c[o][:-1]) | (b_c[o][1:] != b_c[o][:-1])
+            o = o[first]
+            m = self.steps
+            rows = np.cumsum(np.bincount(a_c[o] - nn, minlength=x))
+            mat = csr_matrix((np.concatenate([m.data, np.maximum(k[o], 1e-300).astype(float)]),
+                              np.concatenate([m.indices, b_c[o]]), np.concatenate([m.indptr, m.indptr[-1] + rows])),
+                             shape=(nn + x, nn + x))  # fmt: skip
+            hop_s = np.rint(_dijkstra(mat, nn))
             from_start = np.empty(total)
-            from_start[: N + x] = hop_s
+            from_start[:nn] = hop_s[:nn]
+            from_start[N : N + x] = hop_s[nn:]
             from_start[self.nn : N] = hop_s[self.A[self.p_of]] + self.j
-            from_start[N + x :] = hop_s[A[p_of]] + j
+            hs = np.concatenate([hop_s[:nn], np.zeros(N - nn), hop_s[nn:]])
+            from_start[N + x :] = hs[A[p_of]] + j
         else:
             from_start = np.floor(np.hypot(*(poses[:, :2] - start[:2]).T) / self.step_len - 1e-9)
             from_start = np.maximum(from_start, 0.0)
@@ -659,44 +701,113 @@ class UnicycleGoal:
         return UnicycleGraph(graph, s_id, self.g_id, rd)
 
 
+@dataclass
+class _BaseCut:
+    """The base's pieces cut into steps, cached with it: nodes ``[copies][rings]`` (``nn0``),
+    interior points numbered from ``nn0`` (a goal's nodes go between the two, shifting them),
+    the moves sorted by source, and node-level graphs (forward in steps; backward in steps
+    and in metres) as CSR arrays of ``nn0`` rows."""
+
+    nodes: FloatArray
+    A: IntArray
+    B: IntArray
+    k: IntArray
+    L: FloatArray
+    offs: IntArray
+    p_of: IntArray
+    j: IntArray
+    inner: FloatArray
+    src: IntArray
+    dst: IntArray
+    fwd: object
+    back_steps: object
+    back_metres: object
+
+
+def _base_cut(base: _Base, step_len: float) -> _BaseCut:
+    hit = getattr(base, "_cut", None)
+    if hit is not None and hit[0] == step_len:
+        return hit[1]
+    K = len(base.poses)
+    nodes = np.vstack([base.poses, base.ring])
+    nn0 = len(nodes)
+    A = np.where(base.a < 0, K - 1 - base.a, base.a)
+    B = np.where(base.b < 0, K - 1 - base.b, base.b)
+    k, offs, p_of, j, inner, src, dst = _cut_pieces(nodes, A, B, base.dh, base.length, step_len, nn0)
+    order = np.argsort(src, kind="stable")
+    L = np.where(base.length > 0, base.length, 0.0)
+    cut = _BaseCut(nodes, A, B, k, L, offs, p_of, j, inner, src[order], dst[order],
+                   _matrix(A, B, k.astype(float), nn0), _matrix(B, A, k.astype(float), nn0), _matrix(B, A, L, nn0))  # fmt: skip
+    base._cut = (step_len, cut)
+    return cut
+
+
+def _with_rows(mat, A, B, w, n: int):
+    """CSR ``mat`` (its rows first) grown to (n, n) with entries (A, B, w) inserted at their
+    rows' ends (parallel ones: the shortest, :func:`_matrix`)."""
+    from scipy.sparse import csr_matrix
+
+    extra = _matrix(A, B, w, n)
+    rows = np.repeat(np.arange(n), np.diff(extra.indptr))
+    m_indptr = np.concatenate([mat.indptr, np.full(n - mat.shape[0], mat.indptr[-1])])
+    at = m_indptr[rows + 1]
+    indptr = m_indptr + np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=n))])
+    return csr_matrix((np.insert(mat.data, at, extra.data), np.insert(mat.indices, at, extra.indices), indptr),
+                      shape=(n, n))  # fmt: skip
+
+
 def prepare_goal(planner, goal: FloatArray, dt: float, vplan: float, connect_k: int = 10,
                  stretch: float = 1.0) -> UnicycleGoal:  # fmt: skip
     """The kept graph of ``goal`` (``[x, y, heading]``, heading wrapped): the base's copies,
-    lanes and rings (cached on the roadmap) with the goal joined in, cut into steps, and the
-    static steps and metres to the goal."""
+    lanes and rings cut into steps (cached on the roadmap) with the goal joined in, and the
+    static steps and metres to the goal.
+
+    Numbering: the copies, the rings, the goal's nodes (the goal first), then the base's
+    interior points and the goal's pieces' ones.
+    """
     geo, robot, rm = planner.geometry, planner.robot, planner.roadmap
     step_len = vplan * dt
     base = _base(rm, geo, stretch, robot.vmax, step_len)
+    cut = _base_cut(base, step_len)
     scale = robot.vmax / robot.turn_rate
-    ex = _Extras(base, geo, scale, len(base.poses))
+    nn0 = len(cut.nodes)
+    ex = _Extras(base, geo, scale, nn0, ring_at=len(base.poses))
     g_id = ex.node(*goal)
     ex.join(goal, g_id, connect_k, False, robot.reverse)
-    first_ring = len(base.poses) + len(ex.poses)
-    nodes = np.vstack([base.poses, np.asarray(ex.poses, dtype=float).reshape(-1, 3), base.ring])
+    xg = len(ex.poses)
+    nn = nn0 + xg
+    nodes = np.vstack([cut.nodes, np.asarray(ex.poses, dtype=float).reshape(-1, 3)])
     xp = np.asarray(ex.pieces, dtype=float).reshape(-1, 4)
-    A = np.concatenate([base.a, xp[:, 0].astype(np.int64)])
-    B = np.concatenate([base.b, xp[:, 1].astype(np.int64)])
-    A = np.where(A < 0, first_ring - 1 - A, A)
-    B = np.where(B < 0, first_ring - 1 - B, B)
-    DH = np.concatenate([base.dh, xp[:, 2]])
-    L = np.concatenate([base.length, xp[:, 3]])
-    nn = len(nodes)
-    k, offs, p_of, j, inner, src, dst = _cut_pieces(nodes, A, B, DH, L, step_len, nn)
-    total = nn + int(offs[-1])
+    Ag, Bg = xp[:, 0].astype(np.int64), xp[:, 1].astype(np.int64)
+    I0 = int(cut.offs[-1])
+    kg, offg, pg, jg, innerg, srcg, dstg = _cut_pieces(nodes, Ag, Bg, xp[:, 2], xp[:, 3], step_len, nn + I0)
+    total = nn + I0 + int(offg[-1])
     _too_many(total)
-    order = np.argsort(src, kind="stable")
+    shift = np.int64(xg)
+    s0 = np.where(cut.src >= nn0, cut.src + shift, cut.src)
+    d0 = np.where(cut.dst >= nn0, cut.dst + shift, cut.dst)
+    o = np.argsort(srcg, kind="stable")
+    neighbors = np.insert(d0, np.searchsorted(s0, srcg[o], side="right"), dstg[o])
     indptr = np.zeros(total + 1, dtype=np.int64)
-    np.cumsum(np.bincount(src, minlength=total), out=indptr[1:])
-    hop = np.rint(_dijkstra(_matrix(A, B, k.astype(float), nn).T.tocsr(), g_id))
-    metres = _dijkstra(_matrix(A, B, np.where(L > 0, L, 0.0), nn).T.tocsr(), g_id)
+    np.cumsum(np.bincount(np.concatenate([s0, srcg]), minlength=total), out=indptr[1:])
+    Lg = np.where(xp[:, 3] > 0, xp[:, 3], 0.0)
+    hop = np.rint(_dijkstra(_with_rows(cut.back_steps, Bg, Ag, kg.astype(float), nn), g_id))
+    metres = _dijkstra(_with_rows(cut.back_metres, Bg, Ag, Lg, nn), g_id)
+    A, B = np.concatenate([cut.A, Ag]), np.concatenate([cut.B, Bg])
+    k = np.concatenate([cut.k, kg])
+    p_of = np.concatenate([cut.p_of, len(cut.A) + pg])
+    j = np.concatenate([cut.j, jg])
     heur = np.concatenate([hop, hop[B[p_of]] + k[p_of] - j])
-    rings = first_ring + base.n_ring * np.arange(len(base.ring) // max(base.n_ring, 1))
-    # a ring's points share a position: one group; pieces without interior points add none
-    groups = np.concatenate([rings, nn + offs[np.r_[True, np.diff(offs) > 0]]])
+    rings = len(base.poses) + base.n_ring * np.arange(len(base.ring) // max(base.n_ring, 1))
+    # a ring's points share a position: one group; the goal's nodes one each; pieces without
+    # interior points add none
+    offs = np.concatenate([cut.offs, I0 + offg[1:]])
+    groups = np.concatenate([rings, nn0 + np.arange(xg + 1), nn + offs[np.r_[True, np.diff(offs) > 0]]])
     return UnicycleGoal(
-        goal=np.asarray(goal, dtype=float), base=base, poses=np.vstack([nodes, inner]), indptr=indptr,
-        neighbors=dst[order], nn=nn, A=A, B=B, k=k, L=L, hop=hop, heuristic=heur, metres=metres,
-        groups=groups, p_of=p_of, j=j, g_id=g_id, step_len=step_len, scale=scale, connect_k=connect_k,
+        goal=np.asarray(goal, dtype=float), base=base, poses=np.vstack([nodes, cut.inner, innerg]), indptr=indptr,
+        neighbors=neighbors, nn=nn, A=A, B=B, k=k, L=np.concatenate([cut.L, Lg]), hop=hop, heuristic=heur,
+        metres=metres, groups=groups, p_of=p_of, j=j, g_id=g_id, step_len=step_len, scale=scale, connect_k=connect_k,
+        steps=_with_rows(cut.fwd, Ag, Bg, kg.astype(float), nn),
     )  # fmt: skip
 
 
