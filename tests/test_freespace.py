@@ -117,12 +117,12 @@ def test_cli_roadmap_says_what_the_repair_added(tmp_path):
     path = tmp_path / "door.yaml"
     path.write_text(yaml.safe_dump(door_doc(0.74)), encoding="utf-8")
     out = tmp_path / "rm.json"
-    p = run_cli_process("roadmap", path, "-n", "30", "--seed", "4", "-o", out)
+    p = run_cli_process("roadmap", path, "-n", "30", "--seed", "3", "-o", out)
     assert p.returncode == 0, p.stderr
-    assert "free-space repair: PRM missed 1 passage(s); 2 vertices beyond -n 30 join them" in p.stdout
+    assert "free-space repair: PRM missed 1 passage(s); 4 vertices beyond -n 30 join them" in p.stdout
     doc = json.loads(out.read_text())
-    assert len(doc["vertices"]) == 32 and doc["options"]["repair"] is True
-    p = run_cli_process("roadmap", path, "-n", "30", "--seed", "4", "--no-repair", "-o", out)
+    assert len(doc["vertices"]) == 34 and doc["options"]["repair"] is True
+    p = run_cli_process("roadmap", path, "-n", "30", "--seed", "3", "--no-repair", "-o", out)
     assert p.returncode == 0 and "free-space repair" not in p.stdout
     doc = json.loads(out.read_text())
     assert len(doc["vertices"]) == 30 and doc["options"]["repair"] is False and doc["info"]["components"] == 2
