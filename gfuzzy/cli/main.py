@@ -48,6 +48,12 @@ def _add_roadmap(sub) -> None:
     r.add_argument("-n", "--vertices", type=int, default=200, help="roadmap vertices (default 200)")
     r.add_argument("--seed", type=int, default=1, help="random seed (default 1)")
     r.add_argument("-k", "--neighbors", type=int, default=10, help="PRM nearest neighbours (default 10)")
+    r.add_argument(
+        "--no-repair",
+        action="store_true",
+        help="disc robots: do not join the roadmap's components through the free space "
+        "(the repair adds vertices beyond -n where PRM missed a passage)",
+    )
     r.add_argument("-o", "--output", help="roadmap file (default roadmaps/<scene name>.json)")
     r.set_defaults(func=cmd_roadmap)
 
