@@ -676,9 +676,6 @@ BEYOND_A_SCHEMA = {
     "path_zero_length": "a polyline's length",
     "polygon_bowtie": "self-intersection",
     "polygon_collinear": "area",
-    "footprint_bowtie": "self-intersection",
-    "footprint_collinear": "area",
-    "footprint_nan": "NaN passes every numeric keyword",
     "trajectory_backward": "increasing times compare items",
     "trajectory_equal_time": "increasing times compare items",
 }
