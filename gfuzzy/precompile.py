@@ -52,7 +52,7 @@ def _signature(sig) -> list[list]:
 
 def _build_here(folder: Path, target_cpu: str = "") -> Path:
     """Build in this process, whose kernel modules must not be imported yet."""
-    if any(f"gfuzzy.{m}" in sys.modules for m in jit.KERNEL_MODULES) and jit.loaded() is not None:
+    if any(f"{__package__}.{m}" in sys.modules for m in jit.KERNEL_MODULES) and jit.loaded() is not None:
         raise RuntimeError("the kernel modules are already loaded from an extension: build in a fresh process")
     jit.BUILDING = True
     jit._state.clear()
@@ -70,7 +70,7 @@ def _build_here(folder: Path, target_cpu: str = "") -> Path:
     cc.verbose = False
     signatures = {}
     for short in jit.KERNEL_MODULES:
-        module = importlib.import_module(f"gfuzzy.{short}")
+        module = importlib.import_module(f"{__package__}.{short}")
         for attr, value in sorted(vars(module).items()):
             if not isinstance(value, CPUDispatcher) or value.py_func.__module__ != module.__name__:
                 continue
