@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint clean bench warm experiments
+.PHONY: demo test slow lint clean bench warm experiments
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -27,6 +27,10 @@ demo: warm
 test: warm
 	$(BIN)/ruff check gfuzzy tests tools
 	$(BIN)/python -m pytest -q
+
+# the slow tests (@pytest.mark.slow, left out of `make test`): experiments over every bundled scene
+slow: warm
+	PYTHON=$(BIN)/python tools/run_slow.sh
 
 lint: $(STAMP)
 	$(BIN)/ruff check gfuzzy tests tools

@@ -304,7 +304,7 @@ class _RobotArtists:
             self.ring.set_animated(True)
             ax.add_patch(self.ring)
             self.artists.append(self.ring)
-        if scene.robot.dof == 3:  # a box, or any unicycle: its heading
+        if scene.robot.dof == 3:  # a box, a footprint, or any unicycle: its heading
             self.tick = Line2D([], [], color="white", lw=1.5, zorder=6.1, animated=True)
             ax.add_line(self.tick)
             self.artists.append(self.tick)

@@ -1,7 +1,7 @@
 """Independent verification of a trajectory against docs/formats.md section 3.
 
 This module shares no collision code with the planner: it measures with shapely (static
-obstacles, box shapes) and closed-form disc distances, and it checks *every instant*, not
+obstacles, box and footprint shapes) and closed-form disc distances, and it checks *every instant*, not
 samples. Between two evaluated times the clearance d(t) changes no faster than the speed
 of the robot's fastest point plus the fastest mover, L; an interval ``[a, b]`` with
 ``d(a) + d(b) >= L (b - a)`` therefore holds no collision, and any other interval is
@@ -109,13 +109,25 @@ class _World:
         self.static = shapely.union_all(polys) if polys else None
         if self.static is not None:
             shapely.prepare(self.static)
+        # the body's outline about the reference point: a box's corners or the footprint
+        # (a concave one is swept as the union of its triangles' swept hulls: exact)
+        self.local = self.triangles = None
+        if self.robot.shape == "box":
+            hl, hw = 0.5 * self.robot.size[0], 0.5 * self.robot.size[1]
+            self.local = np.array([[hl, hw], [-hl, hw], [-hl, -hw], [hl, -hw]])
+        elif self.robot.shape == "footprint":
+            self.local = np.array(self.robot.footprint, dtype=float)
+            outline = shapely.Polygon(self.local)
+            if not outline.is_valid:
+                raise ValueError("the robot's footprint is not a simple polygon")
+            tris = shapely.get_parts(shapely.constrained_delaunay_triangles(outline))
+            self.triangles = [np.asarray(t.exterior.coords)[:3] for t in tris]
 
     def robot_geoms(self, poses: FloatArray):
         if self.robot.shape == "disc":
             return shapely.points(poses[:, 0], poses[:, 1])
         c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
-        hl, hw = 0.5 * self.robot.size[0], 0.5 * self.robot.size[1]
-        local = np.array([[hl, hw], [-hl, hw], [-hl, -hw], [hl, -hw]])
+        local = self.local
         xs = poses[:, None, 0] + c[:, None] * local[:, 0] - s[:, None] * local[:, 1]
         ys = poses[:, None, 1] + s[:, None] * local[:, 0] + c[:, None] * local[:, 1]
         return shapely.polygons(np.stack([xs, ys], -1))
@@ -141,6 +153,14 @@ class _World:
             r = self.robot.radius
             x, y = poses[:, 0], poses[:, 1]
             return np.min([x - r - xmin, xmax - x - r, y - r - ymin, ymax - y - r], axis=0)
+        if self.robot.shape == "footprint":  # the outline's vertices, turned
+            c, s = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
+            lx, ly = self.local[:, 0], self.local[:, 1]
+            wx, wy = c * lx - s * ly, s * lx + c * ly  # (n, k)
+            x, y = poses[:, 0], poses[:, 1]
+            return np.min(
+                [x + wx.min(1) - xmin, xmax - x - wx.max(1), y + wy.min(1) - ymin, ymax - y - wy.max(1)], axis=0
+            )
         c, s = np.abs(np.cos(poses[:, 2])), np.abs(np.sin(poses[:, 2]))
         hl, hw = 0.5 * self.robot.size[0], 0.5 * self.robot.size[1]
         ex, ey = c * hl + s * hw, s * hl + c * hw
@@ -195,7 +215,7 @@ class _World:
         pa, pb : (k, 2) float
             Reference point at the interval's ends.
         heading : (k,) float or None
-            The (constant) heading of a box robot.
+            The (constant) heading of a box or footprint robot.
         ta, tb : (k,) float
 
         Returns
@@ -208,7 +228,9 @@ class _World:
         Notes
         -----
         Over a translation the robot sweeps the convex hull of its two end footprints (a
-        box) or the segment of its centre widened by its radius (a disc), and the body's
+        box), the union of those hulls for each triangle of a footprint (concave ones
+        included: the sweep of a union is the union of the sweeps) or the segment of its
+        centre widened by its radius (a disc), and the body's
         distance to anything is the distance of that swept set; a mover moving straight is
         handled in the robot's frame, where it sweeps likewise.
         """
@@ -221,12 +243,17 @@ class _World:
             centre = shapely.linestrings(np.stack([pa, pb], axis=1))
             body = None
         else:
-            hl, hw = 0.5 * self.robot.size[0], 0.5 * self.robot.size[1]
-            local = np.array([[hl, hw], [-hl, hw], [-hl, -hw], [hl, -hw]])
             c, sn = np.cos(heading), np.sin(heading)
             rot = np.stack([np.stack([c, -sn], -1), np.stack([sn, c], -1)], -2)  # (k, 2, 2)
-            corners = np.einsum("kij,mj->kmi", rot, local)  # (k, 4, 2) about the reference
-            swept = shapely.convex_hull(shapely.multipoints(np.concatenate([corners + pa[:, None], corners + pb[:, None]], 1)))
+            corners = np.einsum("kij,mj->kmi", rot, self.local)  # (k, m, 2) about the reference
+            if self.triangles is None:
+                swept = shapely.convex_hull(shapely.multipoints(np.concatenate([corners + pa[:, None], corners + pb[:, None]], 1)))
+            else:
+                swept = None
+                for tri in self.triangles:
+                    tc = np.einsum("kij,mj->kmi", rot, tri)
+                    hull = shapely.convex_hull(shapely.multipoints(np.concatenate([tc + pa[:, None], tc + pb[:, None]], 1)))
+                    swept = hull if swept is None else shapely.union(swept, hull)
             body = shapely.polygons(corners)  # at the origin, for the movers
 
         def take(d, name):
@@ -275,8 +302,8 @@ class _World:
 
 
 def _relative_swept_distance(mv, qa, qb, disc: bool, r: float, body):
-    """Distance between the robot (a disc of radius ``r`` at the origin, or the box
-    ``body`` at the origin) and mover ``mv`` translating from ``qa`` to ``qb`` relative to
+    """Distance between the robot (a disc of radius ``r`` at the origin, or the box or
+    footprint ``body`` at the origin) and mover ``mv`` translating from ``qa`` to ``qb`` relative to
     it: the mover's swept set (k,); negative where they overlap."""
     if disc and mv.shape == "disc":
         d = _segment_point_distance(qa, qb, np.zeros(2)) - r - mv.radius
@@ -405,7 +432,10 @@ def _unicycle_problem(robot, w: FloatArray, tol: float = 1e-6) -> CheckReport | 
     dt = np.diff(t)
     dx, dy = np.diff(x), np.diff(y)
     dh = _wrap(np.diff(h))
-    r = robot.radius if robot.shape == "disc" else 0.5 * math.hypot(*robot.size)
+    if robot.shape == "footprint":  # its farthest vertex from the reference point
+        r = max(math.hypot(px, py) for px, py in robot.footprint)
+    else:
+        r = robot.radius if robot.shape == "disc" else 0.5 * math.hypot(*robot.size)
     wmax = robot.wmax if robot.wmax is not None else robot.vmax / r
     still = (np.abs(dx) <= UNICYCLE_XY_TOL) & (np.abs(dy) <= UNICYCLE_XY_TOL)
     turning = np.abs(dh) > UNICYCLE_HEADING_TOL

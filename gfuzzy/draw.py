@@ -362,7 +362,7 @@ def _draw_arrows(ax, pts: FloatArray, color: str, both: bool, max_arrows: int = 
 
 
 def _footprint(scene: Scene, pose, **kw):
-    """A patch of the robot at ``pose`` (a box robot rotated by its heading)."""
+    """A patch of the robot at ``pose`` (a box or footprint robot turned by its heading)."""
     if scene.robot.shape == "disc":
         return Circle(pose[:2], scene.robot.radius, **kw)
     return PolygonPatch(scene.robot.corners(np.asarray(pose)[None, :3])[0], closed=True, **kw)
@@ -387,8 +387,14 @@ def _clearance_outline(scene: Scene, pose, margin: float, **kw):
 
 
 def _heading_tick(scene: Scene, pose) -> FloatArray:
-    """(2, 2): centre to front of a robot with a heading (a box; a unicycle disc: to its rim)."""
-    half = scene.robot.radius if scene.robot.shape == "disc" else 0.5 * scene.robot.size[0]
+    """(2, 2): reference point to the front of a robot with a heading (a box; a footprint:
+    its farthest vertex along the heading, the circumradius when none is ahead; a unicycle
+    disc: to its rim)."""
+    if scene.robot.shape == "footprint":
+        half = max(x for x, _ in scene.robot.footprint)
+        half = half if half > 0 else scene.robot.circumradius
+    else:
+        half = scene.robot.radius if scene.robot.shape == "disc" else 0.5 * scene.robot.size[0]
     front = [pose[0] + half * math.cos(pose[2]), pose[1] + half * math.sin(pose[2])]
     return np.array([pose[:2], front])
 
@@ -400,7 +406,7 @@ def _draw_queries(ax, scene: Scene) -> None:
             (q.goal, GOAL_COLOR, "*", "goal"),
         ):
             ax.add_patch(_footprint(scene, pose, fill=False, ec=color, lw=1.0, ls=":", zorder=4))
-            if scene.robot.dof == 3:  # a box, or any unicycle: its heading
+            if scene.robot.dof == 3:  # a box, a footprint, or any unicycle: its heading
                 tick = _heading_tick(scene, pose)
                 ax.plot(tick[:, 0], tick[:, 1], color=color, lw=1.0, zorder=4)
             ax.plot(

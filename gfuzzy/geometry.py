@@ -19,6 +19,8 @@ import numpy as np
 
 from .poses import metric_distance, wrap_angle
 from .scene import Box, Disc, MapObstacle, Polygon, Robot, Scene
+from .shapes import HEIGHT as _HEIGHT
+from .shapes import QUAD_EXACT, shape_of
 from .typing import FloatArray
 
 __all__ = [
@@ -26,13 +28,12 @@ __all__ = [
     "metric_distance",
     "wrap_angle",
     "mover_distance",
+    "QUAD_EXACT",
 ]
 
-_HEIGHT = 10.0  # prism height: any value > 0 works, all shapes share z = 0
 _EPS_CERT_CLEARANCE = 1e-9  # clearance below which a motion is not certified (grazing)
 _NEAR_CONTACT = 1e-4  # distances below this are decided by a collision test (0 or -1)
 _DIST_MARGIN = 1e-4  # subtracted from FCL distances (GJK overestimates; see obstacle_clearance)
-QUAD_EXACT = 2.0  # box-box distances are exact below this (see _quad_distance)
 
 
 def _yaw_transform(x: float, y: float, yaw: float = 0.0) -> fcl.Transform:
@@ -131,10 +132,15 @@ def _inner_point(robot: Robot) -> tuple[float, float]:
 
 
 def robot_geometry(robot: Robot):
-    """The FCL geometry of the robot (about its reference point)."""
-    if robot.shape == "disc":
-        return fcl.Sphere(robot.radius)  # see static_objects: exact planar distances
-    return fcl.Box(robot.size[0], robot.size[1], 2 * _HEIGHT)
+    """The FCL geometry of the robot (about its reference point): its first piece (the
+    only one of a disc, a box or a convex footprint; see :func:`robot_geometries`)."""
+    return robot_geometries(robot)[0]
+
+
+def robot_geometries(robot: Robot) -> list:
+    """The FCL geometries of the robot about its reference point, one per convex piece
+    (:meth:`gfuzzy.shapes.Shape.fcl_geometries`)."""
+    return shape_of(robot).fcl_geometries()
 
 
 class StaticGeometry:
@@ -166,9 +172,14 @@ class StaticGeometry:
         if self._objects:
             self._manager.registerObjects(self._objects)
         self._manager.setup()
-        self._robot_obj = fcl.CollisionObject(robot_geometry(scene.robot), fcl.Transform())
+        self._robot_objs = [fcl.CollisionObject(g, fcl.Transform()) for g in robot_geometries(scene.robot)]
+        self._robot_obj = self._robot_objs[0]
+        self._shape = shape_of(scene.robot)
         self._grids = [ob for ob in scene.obstacles if isinstance(ob, MapObstacle) and len(ob.rects)]
         self._inner = _inner_point(scene.robot)
+        # with maps only, a distance transform of their cells answers most validity questions
+        self._map_only = bool(self._grids) and len(self._objects) == len(self._grids)
+        self._edt: list | None = None
         self._creq = fcl.CollisionRequest()
         self._dreq = fcl.DistanceRequest()
         self.calls = 0
@@ -204,12 +215,12 @@ class StaticGeometry:
     def _place(self, pose) -> None:
         if len(pose) == 3:
             yaw = float(pose[2])
-            self._robot_obj.setTransform(
-                fcl.Transform(
-                    np.array([math.cos(0.5 * yaw), 0.0, 0.0, math.sin(0.5 * yaw)]),
-                    np.array([pose[0], pose[1], 0.0]),
-                )
+            tf = fcl.Transform(
+                np.array([math.cos(0.5 * yaw), 0.0, 0.0, math.sin(0.5 * yaw)]),
+                np.array([pose[0], pose[1], 0.0]),
             )
+            for ob in self._robot_objs:
+                ob.setTransform(tf)
         else:
             self._robot_obj.setTranslation(np.array([pose[0], pose[1], 0.0]))
 
@@ -219,6 +230,9 @@ class StaticGeometry:
         x, y = pose[0], pose[1]
         if len(pose) == 2 or self.robot.shape == "disc":
             ex = ey = self.robot.radius
+        elif self.robot.shape == "footprint":
+            x0, y0, x1, y1 = self._shape.extents(float(pose[2]))
+            return min(x + x0 - xmin, xmax - x - x1, y + y0 - ymin, ymax - y - y1)
         else:
             c, s = abs(math.cos(pose[2])), abs(math.sin(pose[2]))
             hl, hw = 0.5 * self.robot.size[0], 0.5 * self.robot.size[1]
@@ -243,15 +257,14 @@ class StaticGeometry:
             return False
         if not self._objects:
             return True
+        if self._map_only and self._map_bound(pose) > self.keep:
+            return True
         if self.keep > 0:  # a distance, not a collision test, decides the clearance
             return self.obstacle_clearance(pose) >= self.keep
         if self._grids and self._inside_map(pose):
             return False
         self._place(pose)
-        data = fcl.CollisionData(request=self._creq)
-        self._manager.collide(self._robot_obj, data, fcl.defaultCollisionCallback)
-        self.calls += 1
-        return not data.result.is_collision
+        return not self._collides()
 
     def obstacle_clearance(self, pose) -> float:
         """Distance from the robot at ``pose`` to the nearest static obstacle (<= 0 when touching)."""
@@ -260,16 +273,45 @@ class StaticGeometry:
         if self._grids and self._inside_map(pose):
             return -1.0
         self._place(pose)
-        data = fcl.DistanceData(request=self._dreq)
-        self._manager.distance(self._robot_obj, data, fcl.defaultDistanceCallback)
-        self.calls += 1
+        dist = math.inf
+        for ob in self._robot_objs:  # a footprint: the nearest of its convex pieces
+            data = fcl.DistanceData(request=self._dreq)
+            self._manager.distance(ob, data, fcl.defaultDistanceCallback)
+            self.calls += 1
+            dist = min(dist, data.result.min_distance)
         # FCL's GJK distances to convex prisms overestimate by up to ~3e-5 (measured):
         # subtract a margin so that the clearance stays a lower bound; at contact the
         # distance is unreliable altogether, so the collision test decides (0 or -1)
-        d = data.result.min_distance - _DIST_MARGIN
+        d = dist - _DIST_MARGIN
         if d <= _NEAR_CONTACT:
             return -1.0 if self._collides() else 0.0
         return d
+
+    def _map_bound(self, pose) -> float:
+        """A lower bound of the robot's distance to the maps' blocked cells (-inf off a map).
+
+        For the cell holding the reference point, e = the distance from its centre to the
+        nearest blocked cell's centre; the blocked region is at least e - res sqrt(2) from
+        the point (half a diagonal at each end) and the body at least that minus the
+        circumradius from it.
+        """
+        if self._edt is None:
+            from scipy import ndimage
+
+            self._edt = [
+                (ndimage.distance_transform_edt(~g.blocked) * g.resolution - g.resolution * math.sqrt(2.0))
+                for g in self._grids
+            ]
+        x, y = float(pose[0]), float(pose[1])
+        low = math.inf
+        for grid, edt in zip(self._grids, self._edt, strict=True):
+            h, w = edt.shape
+            j = math.floor((x - grid.origin[0]) / grid.resolution)
+            k = math.floor((y - grid.origin[1]) / grid.resolution)
+            if not (0 <= j < w and 0 <= k < h):
+                return -math.inf
+            low = min(low, float(edt[h - 1 - k, j]))
+        return low - self.r
 
     def _inside_map(self, pose) -> bool:
         """Whether a point inside the robot's body lies in a blocked map cell."""
@@ -286,10 +328,13 @@ class StaticGeometry:
         return False
 
     def _collides(self) -> bool:
-        data = fcl.CollisionData(request=self._creq)
-        self._manager.collide(self._robot_obj, data, fcl.defaultCollisionCallback)
-        self.calls += 1
-        return data.result.is_collision
+        for ob in self._robot_objs:
+            data = fcl.CollisionData(request=self._creq)
+            self._manager.collide(ob, data, fcl.defaultCollisionCallback)
+            self.calls += 1
+            if data.result.is_collision:
+                return True
+        return False
 
     # ---- batches
     def valid(self, poses: FloatArray) -> np.ndarray:
@@ -395,68 +440,6 @@ class StaticGeometry:
 # --------------------------------------------------------------------------- movers
 
 
-def _point_box_distance(p: FloatArray, half: FloatArray) -> FloatArray:
-    """Signed distance from points to a centered axis-aligned box. p (..., 2), half (..., 2)."""
-    q = np.abs(p) - half
-    outside = np.hypot(np.maximum(q[..., 0], 0), np.maximum(q[..., 1], 0))
-    inside = np.minimum(np.maximum(q[..., 0], q[..., 1]), 0)
-    return outside + inside
-
-
-def _vertex_edge_distance(P: FloatArray, Q: FloatArray) -> FloatArray:
-    """Smallest distance from the vertices of quads P to the edges of quads Q.
-
-    P, Q : (n, 4, 2) -> (n,)
-    """
-    a = Q[:, None, :, :]  # (n, 1, 4, 2) edge starts
-    ab = np.roll(Q, -1, axis=1)[:, None, :, :] - a
-    ap = P[:, :, None, :] - a  # (n, 4, 4, 2)
-    t = np.clip(
-        np.einsum("nijk,nijk->nij", ap, ab) / np.maximum(np.einsum("nijk,nijk->nij", ab, ab), 1e-300),
-        0.0,
-        1.0,
-    )
-    diff = ap - t[..., None] * ab
-    return np.sqrt(np.einsum("nijk,nijk->nij", diff, diff).min(axis=(1, 2)))
-
-
-def _quad_distance(A: FloatArray, B: FloatArray, exact: bool = True) -> FloatArray:
-    """Distance between convex quads (<= 0 when they overlap). A, B (..., 4, 2), ccw.
-
-    Exact below ``QUAD_EXACT`` metres; beyond it the (smaller) distance between the
-    quads' circumscribed circles is returned, a lower bound that callers comparing with
-    safety margins or saturating clearances never need refined. With ``exact=False`` the
-    separating-axis gap is returned instead of the exact distance: a lower bound (exact
-    when the closest features are parallel edges) at a fifth of the cost.
-    """
-    shape = np.broadcast_shapes(A.shape, B.shape)[:-2]
-    A = np.broadcast_to(A, shape + (4, 2)).reshape(-1, 4, 2)
-    B = np.broadcast_to(B, shape + (4, 2)).reshape(-1, 4, 2)
-    ca, cb = A.mean(axis=1), B.mean(axis=1)
-    ra = np.sqrt(((A - ca[:, None]) ** 2).sum(-1)).max(-1)
-    rb = np.sqrt(((B - cb[:, None]) ** 2).sum(-1)).max(-1)
-    out = np.hypot(*(ca - cb).T) - ra - rb
-    near = np.nonzero(out < QUAD_EXACT)[0]
-    if near.size:
-        A, B = A[near], B[near]
-        # separating-axis test on the edge normals of both quads (two per rectangle)
-        gap = np.full(len(near), -np.inf)
-        for P, Q in ((A, B), (B, A)):
-            for k in range(2):
-                e = P[:, k + 1] - P[:, k]
-                nrm = np.stack([-e[:, 1], e[:, 0]], -1)
-                nrm /= np.linalg.norm(nrm, axis=-1, keepdims=True)
-                pp = np.einsum("nkj,nj->nk", P, nrm)
-                qq = np.einsum("nkj,nj->nk", Q, nrm)
-                gap = np.maximum(gap, np.maximum(qq.min(-1) - pp.max(-1), pp.min(-1) - qq.max(-1)))
-        if exact:
-            d = np.minimum(_vertex_edge_distance(A, B), _vertex_edge_distance(B, A))
-            out[near] = np.where(gap > 0, d, gap)
-        else:
-            out[near] = gap
-    return out.reshape(shape)
-
-
 def mover_distance(
     robot: Robot, poses: FloatArray, shape: str, radius: float, size, xy: FloatArray, exact: bool = True
 ) -> FloatArray:
@@ -465,6 +448,7 @@ def mover_distance(
     Parameters
     ----------
     robot : Robot
+        A disc, a box or a footprint (:meth:`gfuzzy.shapes.Shape.mover_distance`).
     poses : (..., d) float
         Broadcastable against ``xy``.
     shape : {"disc", "box"}
@@ -472,7 +456,7 @@ def mover_distance(
         ``size`` ((2,) or (..., 2): w, h) for an axis-aligned box.
     xy : (..., 2) float
     exact : bool
-        False allows a cheaper lower bound for a box robot against a box mover (the
+        False allows a cheaper lower bound for a box or footprint robot against a box mover (the
         separating-axis gap); safety decisions stay sound, a little conservative.
 
     Returns
@@ -484,21 +468,4 @@ def mover_distance(
     xy = np.asarray(xy, dtype=float)
     radius = np.asarray(radius, dtype=float)
     size = np.asarray(size, dtype=float)
-    if robot.shape == "disc":
-        rel = xy - poses[..., :2]
-        if shape == "disc":
-            return np.hypot(rel[..., 0], rel[..., 1]) - robot.radius - radius
-        return _point_box_distance(rel, 0.5 * size) - robot.radius
-    # box robot
-    c, s = np.cos(poses[..., 2]), np.sin(poses[..., 2])
-    rel = xy - poses[..., :2]
-    local = np.stack([c * rel[..., 0] + s * rel[..., 1], -s * rel[..., 0] + c * rel[..., 1]], -1)
-    half_robot = 0.5 * np.asarray(robot.size)
-    if shape == "disc":
-        return _point_box_distance(local, half_robot) - radius
-    shp = np.broadcast_shapes(poses.shape[:-1], xy.shape[:-1])
-    A = robot.corners(np.broadcast_to(poses, shp + (3,)).reshape(-1, 3)).reshape(shp + (4, 2))
-    half = np.broadcast_to(0.5 * size, shp + (2,))
-    signs = np.array([[1.0, 1.0], [-1.0, 1.0], [-1.0, -1.0], [1.0, -1.0]])
-    B = np.broadcast_to(xy, shp + (2,))[..., None, :] + half[..., None, :] * signs
-    return _quad_distance(A, B, exact)
+    return shape_of(robot).mover_distance(poses, shape, radius, size, xy, exact)

@@ -134,10 +134,10 @@ def _lazy(func, options):
     """numba's dispatcher of ``func``, made (numba imported) at its first call."""
     made: list = []
 
-    def call(*args):
+    def call(*args, **kwargs):
         if not made:
             made.append(_dispatcher(func))
-        return made[0](*args)
+        return made[0](*args, **kwargs)
 
     return call
 
@@ -147,9 +147,9 @@ def _checked(func, fast, sig, options):
     arrays = tuple((i, np.dtype(dt), nd) for i, (dt, nd) in enumerate(sig) if nd)
     slow = _lazy(func, options)
 
-    def call(*args):
-        if len(args) != len(sig):
-            return slow(*args)
+    def call(*args, **kwargs):
+        if kwargs or len(args) != len(sig):
+            return slow(*args, **kwargs)
         for i, dt, nd in arrays:
             a = args[i]
             if type(a) is not np.ndarray or a.dtype != dt or a.ndim != nd or not a.flags.c_contiguous:

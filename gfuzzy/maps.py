@@ -54,6 +54,7 @@ __all__ = [
     "nav2_values",
     "blocked_rectangles",
     "load_map",
+    "free_cell_draw",
 ]
 
 MAP_MODES = ("trinary", "scale", "raw")
@@ -514,3 +515,47 @@ def load_map(spec, place: str, scene_file: str, folder: str | os.PathLike) -> Ma
         v.fail(fplace, "the map's extent is not finite")
     digest = hashlib.sha256(ydata + b"\0" + idata).hexdigest()
     return MapObstacle(spec["file"], path, info, unknown == "free", values, blocked, rects, digest)
+
+
+# --------------------------------------------------------------------------- sampling
+
+
+def free_cell_draw(obstacles, bounds, rng: np.random.Generator, share: float):
+    """A draw of points uniform over the free cells of the maps among ``obstacles``.
+
+    Parameters
+    ----------
+    obstacles : sequence
+        A scene's static obstacles; only its :class:`MapObstacle` items count.
+    bounds : (4,) float
+        Cells whose centre lies outside are left out.
+    rng : numpy.random.Generator
+        The roadmap's generator (seeded by its seed).
+    share : float
+        Returns None when the free cells cover more than this share of the bounds (uniform
+        sampling in the bounds then wastes little).
+
+    Returns
+    -------
+    callable () -> (2,) float, or None
+        None without a map.
+    """
+    xmin, ymin, xmax, ymax = bounds
+    centres, sizes = [], []
+    for grid in obstacles:
+        if isinstance(grid, MapObstacle):
+            c = grid.free_centres()
+            c = c[(c[:, 0] > xmin) & (c[:, 0] < xmax) & (c[:, 1] > ymin) & (c[:, 1] < ymax)]
+            centres.append(c)
+            sizes.append(np.full(len(c), grid.resolution))
+    if not centres:
+        return None
+    c, size = np.concatenate(centres), np.concatenate(sizes)
+    if len(c) == 0 or float(np.sum(size**2)) > share * (xmax - xmin) * (ymax - ymin):
+        return None
+
+    def draw() -> FloatArray:
+        k = int(rng.integers(len(c)))
+        return c[k] + (rng.random(2) - 0.5) * size[k]
+
+    return draw

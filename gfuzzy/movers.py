@@ -19,6 +19,7 @@ import numpy as np
 from .geometry import metric_distance, mover_distance
 from .poses import interpolate_segment
 from .scene import Robot, Scene
+from .shapes import shape_of
 from .typing import BoolArray, FloatArray, IntArray
 
 __all__ = ["MoverField", "CHUNK"]
@@ -285,13 +286,22 @@ class MoverField:
         cosp = np.cos(poses[:, 2]) if box else np.zeros(0)
         sinp = np.sin(poses[:, 2]) if box else np.zeros(0)
         half = 0.5 * np.asarray(robot.size, dtype=float) if box else np.zeros(2)
+        kind = {"disc": 0, "box": 1, "footprint": 2}[robot.shape]
+        inner = float(robot.inradius)
+        if kind == 2:
+            pieces, counts = shape_of(robot).padded()
+            if not shape_of(robot).origin_inside:  # no disc about the reference point is inside
+                inner = -math.inf
+        else:
+            pieces, counts = np.zeros((1, 1, 2)), np.zeros(1, dtype=np.int64)
         xy = np.ascontiguousarray(poses[:, :2])
         chunks = np.maximum(np.minimum(hi // CHUNK, self.nc - 1) - np.maximum(lo // CHUNK, 0) + 1, 0)
         grid = int(chunks.sum()) * len(self.movers) > DENSE_BROAD_PHASE  # many movers: a grid finds the pairs
         count = mark_unsafe(
             grid, ptr, lo, hi, xy, cosp, sinp, row_off, buf, self.present, self.xy, self.margin, self.bbox,
-            CHUNK, self._extent, self._is_disc, self._radius, self._size, self._inner, int(box),
-            float(robot.circumradius), float(robot.radius), float(half[0]), float(half[1]), float(robot.inradius),
+            CHUNK, self._extent, self._is_disc, self._radius, self._size, self._inner, kind,
+            float(robot.circumradius), float(robot.radius), float(half[0]), float(half[1]), inner,
+            pieces, counts,
         )  # fmt: skip
         self.evaluations += count
         return buf, row_off, lo_node

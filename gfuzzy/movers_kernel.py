@@ -8,9 +8,9 @@ in one bool row per point, instead of listing pairs: a list append per unsafe pa
 more than the distance itself. :func:`safe_runs` turns the rows into safe intervals (the
 gaps between unsafe steps), which is what the search consumes.
 
-numba is imported only when this module is (``MoverField`` imports it lazily, when its
-``compiled`` flag is set); ``cache=True`` keeps the machine code on disk
-(``python -m gfuzzy.search_kernel`` warms it with the search loop).
+``MoverField`` imports this module lazily, when its ``compiled`` flag is set; the kernels
+are the precompiled extension's when ``make warm`` built it (:mod:`gfuzzy.jit`), numba's
+otherwise (imported then, ``cache=True`` keeping the machine code on disk).
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ __all__ = ["mark_unsafe", "safe_runs", "merge_runs"]
 
 @njit(cache=True)
 def _box_dist(px, py, hx, hy):
-    """:func:`gfuzzy.geometry._point_box_distance` for one point (same operations)."""
+    """:func:`gfuzzy.shapes._point_box_distance` for one point (same operations)."""
     qx = abs(px) - hx
     qy = abs(py) - hy
     outside = math.hypot(max(qx, 0.0), max(qy, 0.0))
@@ -84,6 +84,85 @@ def _box_box_gap(q, px, py, cc, ss, hl, hw, qx, qy, mhx, mhy):
 
 
 @njit(cache=True)
+def footprint_distance(rx, ry, cc, ss, disc, mrad, mhx, mhy, pieces, counts):
+    """:meth:`gfuzzy.shapes.FootprintShape.mover_distance` (``exact=False``) for one pair:
+    the mover at ``(rx, ry)`` from the robot's reference point (world axes), the heading's
+    cosine and sine ``cc, ss``; a disc mover of radius ``mrad`` or an axis-aligned box of
+    half sizes ``mhx, mhy``; the footprint's convex pieces ``pieces`` (P, V, 2) with
+    ``counts`` (P,) vertices (the same operations as the numpy reference)."""
+    lx = cc * rx + ss * ry  # the mover in the robot's frame
+    ly = -ss * rx + cc * ry
+    best = np.inf
+    if not disc:  # the box's corners in the robot's frame
+        bx = np.empty(4)
+        by = np.empty(4)
+        for j in range(4):
+            sx = 1.0 if j == 0 or j == 3 else -1.0
+            sy = 1.0 if j < 2 else -1.0
+            bx[j] = (lx + (mhx * sx) * cc) + (mhy * sy) * ss
+            by[j] = (ly + (mhx * sx) * -ss) + (mhy * sy) * cc
+    for p in range(pieces.shape[0]):
+        m = counts[p]
+        if disc:  # signed distance from the point to the convex piece
+            smax = -np.inf
+            for k in range(m):
+                vx, vy = pieces[p, k, 0], pieces[p, k, 1]
+                k1 = k + 1 if k + 1 < m else 0
+                nx = pieces[p, k1, 1] - vy
+                ny = -(pieces[p, k1, 0] - vx)
+                nn = math.sqrt(nx * nx + ny * ny)
+                nx, ny = nx / nn, ny / nn
+                smax = max(smax, (lx - vx) * nx + (ly - vy) * ny)
+            if smax > 0:
+                smax = np.inf
+                for k in range(m):
+                    ax, ay = pieces[p, k, 0], pieces[p, k, 1]
+                    k1 = k + 1 if k + 1 < m else 0
+                    abx, aby = pieces[p, k1, 0] - ax, pieces[p, k1, 1] - ay
+                    apx, apy = lx - ax, ly - ay
+                    den = abx * abx + aby * aby
+                    t = min(max((apx * abx + apy * aby) / max(den, 1e-300), 0.0), 1.0)
+                    dx, dy = apx - t * abx, apy - t * aby
+                    smax = min(smax, math.sqrt(dx * dx + dy * dy))
+            best = min(best, smax - mrad)
+            continue
+        gap = -np.inf  # separating-axis gap: the piece's normals, then the box's
+        for k in range(m):
+            vx, vy = pieces[p, k, 0], pieces[p, k, 1]
+            k1 = k + 1 if k + 1 < m else 0
+            nx = pieces[p, k1, 1] - vy
+            ny = -(pieces[p, k1, 0] - vx)
+            nn = math.sqrt(nx * nx + ny * ny)
+            nx, ny = nx / nn, ny / nn
+            p_lo = r_lo = np.inf
+            p_hi = r_hi = -np.inf
+            for j in range(4):
+                pp = bx[j] * nx + by[j] * ny
+                p_lo, p_hi = min(p_lo, pp), max(p_hi, pp)
+            for j in range(m):
+                rr = pieces[p, j, 0] * nx + pieces[p, j, 1] * ny
+                r_lo, r_hi = min(r_lo, rr), max(r_hi, rr)
+            gap = max(gap, max(p_lo - r_hi, r_lo - p_hi))
+        for k in range(4):
+            k1 = k + 1 if k < 3 else 0
+            nx = by[k1] - by[k]
+            ny = -(bx[k1] - bx[k])
+            nn = math.sqrt(nx * nx + ny * ny)
+            nx, ny = nx / nn, ny / nn
+            p_lo = r_lo = np.inf
+            p_hi = r_hi = -np.inf
+            for j in range(4):
+                pp = bx[j] * nx + by[j] * ny
+                p_lo, p_hi = min(p_lo, pp), max(p_hi, pp)
+            for j in range(m):
+                rr = pieces[p, j, 0] * nx + pieces[p, j, 1] * ny
+                r_lo, r_hi = min(r_lo, rr), max(r_hi, rr)
+            gap = max(gap, max(p_lo - r_hi, r_lo - p_hi))
+        best = min(best, gap)
+    return best
+
+
+@njit(cache=True)
 def _group_geometry(xy, ptr, circ):
     """Per group: bounding box, first point, segment to the last point, 1/|seg|^2, |seg|^2,
     the points' largest deviation from the segment and the body radius around it (the
@@ -129,7 +208,7 @@ def _group_geometry(xy, ptr, circ):
 @njit(cache=True)
 def _mark_group(g, cand, c0, c1, a, n_g, lo_g, hi_g, box, p0x, p0y, sx, sy, inv_g, seg2_g, dev_g, body_g, row_off,
                 buf, present, mxy, margin_tab, bbox, chunk, xy, cosp, sinp, circ, extent, inner, is_disc, mrad,
-                msize, robot_kind, robot_r, hx_r, hy_r, robot_in, scratch):  # fmt: skip
+                msize, robot_kind, robot_r, hx_r, hy_r, robot_in, scratch, pieces, counts):  # fmt: skip
     """Phases 2 and 3 of :func:`mark_unsafe` for group ``g`` (points ``a..a+n_g-1`` near
     the segment ``p0 + t * s``): its candidates ``cand[c0:c1]``, or with none every mover
     and chunk whose box overlaps the group's ``box``. Returns the evaluations."""
@@ -191,6 +270,9 @@ def _mark_group(g, cand, c0, c1, a, n_g, lo_g, hi_g, box, p0x, p0y, sx, sy, inv_
                     # the inscribed discs are closer than the margin, so the exact distance
                     # (or the separating-axis gap) is too
                     buf[cell] = True
+                elif robot_kind == 2:  # a footprint: its convex pieces
+                    buf[cell] = footprint_distance(rx, ry, cosp[node], sinp[node], is_disc[m], mrad[m],
+                                                   0.5 * msize[m, 0], 0.5 * msize[m, 1], pieces, counts) < mg  # fmt: skip
                 elif robot_kind == 0:
                     if is_disc[m]:
                         d = hc - robot_r - mrad[m]
@@ -320,7 +402,8 @@ def grid_candidates(box, lo, hi, bbox, chunk):
 
 @njit(cache=True)
 def mark_unsafe(grid, ptr, lo, hi, xy, cosp, sinp, row_off, buf, present, mxy, margin_tab, bbox, chunk,
-                extent, is_disc, mrad, msize, inner, robot_kind, circ, robot_r, hx_r, hy_r, robot_in):  # fmt: skip
+                extent, is_disc, mrad, msize, inner, robot_kind, circ, robot_r, hx_r, hy_r, robot_in, pieces,
+                counts):  # fmt: skip
     """Mark the unsafe steps of points in groups (phases 1-3 of
     :meth:`gfuzzy.movers.MoverField.unsafe_pairs`, the same tests in the same operations).
 
@@ -332,15 +415,19 @@ def mark_unsafe(grid, ptr, lo, hi, xy, cosp, sinp, row_off, buf, present, mxy, m
     ptr : (G+1,) int ; lo, hi : (G,) int
         Groups of points and the steps examined per group (clipped to the field).
     xy : (k, 2) float ; cosp, sinp : (k,) float
-        The points, and their headings' cosine and sine for a box robot (``robot_kind`` 1).
+        The points, and their headings' cosine and sine for a box or footprint robot.
     row_off : (k+1,) int ; buf : (row_off[-1],) bool
         Point i's steps lo..hi of its group are ``buf[row_off[i]:row_off[i+1]]``: set
         where unsafe.
     present, mxy, margin_tab, bbox, chunk, extent, is_disc, mrad, msize, inner
         The field's arrays (:class:`gfuzzy.movers.MoverField`); ``inner``: the movers'
         inscribed radii.
-    robot_kind, circ, robot_r, hx_r, hy_r, robot_in : the robot (0 disc, 1 box), its
-        circumradius, disc radius, box half sizes, inscribed radius.
+    robot_kind, circ, robot_r, hx_r, hy_r, robot_in : the robot (0 disc, 1 box, 2
+        footprint), its circumradius, disc radius, box half sizes, inscribed radius (-inf
+        when the reference point is outside a footprint: no disc about it is inside).
+    pieces : (P, V, 2) float ; counts : (P,) int
+        A footprint's convex pieces (:meth:`gfuzzy.shapes.FootprintShape.padded`); unused
+        otherwise.
 
     Returns
     -------
@@ -362,7 +449,7 @@ def mark_unsafe(grid, ptr, lo, hi, xy, cosp, sinp, row_off, buf, present, mxy, m
             g, cand, bounds[g], bounds[g + 1], ptr[g], ptr[g + 1] - ptr[g], lo[g], hi[g], box[g], p0[g, 0], p0[g, 1],
             seg[g, 0], seg[g, 1], inv[g], seg2[g], dev[g], body[g], row_off, buf, present, mxy, margin_tab, bbox,
             chunk, xy, cosp, sinp, circ, extent, inner, is_disc, mrad, msize, robot_kind, robot_r, hx_r, hy_r,
-            robot_in, scratch,
+            robot_in, scratch, pieces, counts,
         )  # fmt: skip
     return count
 

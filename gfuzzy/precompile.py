@@ -88,7 +88,8 @@ def _build_here(folder: Path, target_cpu: str = "") -> Path:
         cc.compile()
         built = next(Path(tmp).glob(f"{name}*"))
         for old in folder.glob("_gfuzzy_kernels_*"):
-            old.unlink()
+            if not old.name.startswith(f"{name}."):  # other keys: older source
+                old.unlink(missing_ok=True)
         target = folder / built.name
         os.replace(built, target)
         sig_tmp = Path(tmp) / f"{name}.json"  # written last: the loader needs both files

@@ -47,7 +47,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .geometry import metric_distance
-from .roadgraph import spanner_split
+from .roadgraph import VertexGraph, spanner_split
 from .settings import SPEED_SAFETY
 from .spacetime import SpaceTimeGraph, split_edges
 from .typing import FloatArray, IntArray
@@ -79,7 +79,7 @@ class PreparedGoal:
     step_len : float
     goal_clearance : float
         The goal's static clearance (``StaticGeometry.clearance1``).
-    vgraph : scipy CSR (n, n)
+    vgraph : VertexGraph (n vertices)
         The kept vertex graph, weights in steps; the start's row is empty.
     pa, pb, pj, pk : (N - n,) int
         Per kept interior point: its edge's ends, its index along it, the edge's steps.
@@ -165,17 +165,12 @@ class PreparedGoal:
 
     def _from_start(self, ends: IntArray, k: IntArray) -> FloatArray:
         """Steps from the start to every vertex of the kept graph (Dijkstra)."""
-        from scipy.sparse import csr_matrix
-        from scipy.sparse.csgraph import dijkstra
-
         g = self.vgraph
         at = g.indptr[self.s_id]
         indptr = g.indptr.copy()
         indptr[self.s_id + 1 :] += len(ends)
-        mat = csr_matrix(
-            (np.insert(g.data, at, np.maximum(k, 1e-300)), np.insert(g.indices, at, ends), indptr), shape=g.shape
-        )
-        return np.rint(dijkstra(mat, directed=True, indices=self.s_id))
+        mat = VertexGraph(g.n, indptr, np.insert(g.indices, at, ends), np.insert(g.data, at, np.maximum(k, 1e-300)))
+        return np.rint(mat.distances(self.s_id))
 
 
 def _split_from(start, ends, edges, lengths, step_len, first_id):
@@ -199,9 +194,6 @@ def _split_from(start, ends, edges, lengths, step_len, first_id):
 
 def prepare_goal(planner, goal: FloatArray, options) -> PreparedGoal:
     """Build a :class:`PreparedGoal` (see :meth:`gfuzzy.planner.Planner.prepare`)."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import dijkstra
-
     robot = planner.robot
     rm = planner.roadmap
     goal_raw = np.asarray(goal, dtype=float).copy()
@@ -219,19 +211,15 @@ def prepare_goal(planner, goal: FloatArray, options) -> PreparedGoal:
     kept = base.splice(extra_e, extra_w, np.vstack([goal, goal]))  # the start's row: filled per call
     n = base.n
 
-    def matrix(edges_, weights):
-        w = np.maximum(weights, 1e-300)  # csgraph drops explicit zeros
-        rows = np.r_[edges_[:, 0], edges_[:, 1]]
-        cols = np.r_[edges_[:, 1], edges_[:, 0]]
-        return coo_matrix((np.r_[w, w], (rows, cols)), shape=(n, n)).tocsr()
+    def matrix(edges_, weights):  # sorted CSR, weights at least 1e-300 (csgraph drops zeros)
+        return VertexGraph.of(n, edges_, weights)
 
     def sp(mat):
-        out = dijkstra(mat, directed=True, indices=g_id)
+        out = mat.distances(g_id)
         return np.where(out < 1e-200, 0.0, out)
 
     dist = sp(matrix(np.vstack([rm.edges, extra_e]), np.concatenate([rm.lengths, extra_w])))
     vgraph = matrix(np.vstack([base.edges, extra_e]), np.concatenate([base.k, kept.k]).astype(float))
-    vgraph.sort_indices()
     hop_g = np.rint(sp(vgraph))
     heur = np.empty(len(kept.poses))
     heur[:n] = hop_g

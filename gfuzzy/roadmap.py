@@ -24,6 +24,7 @@ import numpy as np
 from .atomic import write_atomic
 from .errors import InputError, SceneError
 from .geometry import StaticGeometry, metric_distance
+from .maps import free_cell_draw
 from .scene import Scene
 from .typing import FloatArray, IntArray
 
@@ -400,35 +401,6 @@ def _blocked_points(scene: Scene):
     return blocked
 
 
-def _free_cell_draw(scene: Scene, rng: np.random.Generator):
-    """A draw of points uniform over the free cells of the scene's maps, or None.
-
-    Returns None without a map, or when the free cells cover most of the bounds anyway
-    (uniform sampling in the bounds then wastes little).
-    """
-    from .scene import MapObstacle
-
-    xmin, ymin, xmax, ymax = scene.bounds
-    centres, sizes = [], []
-    for grid in scene.obstacles:
-        if isinstance(grid, MapObstacle):
-            c = grid.free_centres()
-            c = c[(c[:, 0] > xmin) & (c[:, 0] < xmax) & (c[:, 1] > ymin) & (c[:, 1] < ymax)]
-            centres.append(c)
-            sizes.append(np.full(len(c), grid.resolution))
-    if not centres:
-        return None
-    c, size = np.concatenate(centres), np.concatenate(sizes)
-    if len(c) == 0 or float(np.sum(size**2)) > FREE_CELL_SHARE * (xmax - xmin) * (ymax - ymin):
-        return None
-
-    def draw() -> FloatArray:
-        k = int(rng.integers(len(c)))
-        return c[k] + (rng.random(2) - 0.5) * size[k]
-
-    return draw
-
-
 def _make_passage_sampler(
     ob, si, geometry: StaticGeometry, rng: np.random.Generator, ratio: float, record: list
 ):
@@ -439,12 +411,12 @@ def _make_passage_sampler(
     """
     scene = geometry.scene
     xmin, ymin, xmax, ymax = scene.bounds
-    box = scene.robot.shape == "box"
+    box = scene.robot.space_dof == 3
     sigma = max(scene.robot.circumradius, 1e-3)
     valid = geometry.is_valid
     blocked = _blocked_points(scene)
     span = 2.0 * scene.robot.circumradius
-    in_free_cell = _free_cell_draw(scene, rng)
+    in_free_cell = free_cell_draw(scene.obstacles, scene.bounds, rng, FREE_CELL_SHARE)
 
     class PassageSampler(ob.ValidStateSampler):
         def __init__(self):
@@ -549,7 +521,7 @@ class _Builder:
         bounds.setHigh(0, xmax)
         bounds.setLow(1, ymin)
         bounds.setHigh(1, ymax)
-        self.box = scene.robot.shape == "box"
+        self.box = scene.robot.space_dof == 3
         if self.box:
             space = ob.SE2StateSpace()
             space.setBounds(bounds)

@@ -49,15 +49,16 @@ STATUSES = tuple(s.value for s in Status)  # the file format spells them as stri
 
 @dataclass(frozen=True)
 class Robot:
-    """The robot: a disc (poses ``[x, y]``) or a box (poses ``[x, y, heading]``).
+    """The robot: a disc (poses ``[x, y]``), a box or a footprint polygon (poses
+    ``[x, y, heading]``). :mod:`gfuzzy.shapes` holds the geometry of each shape.
 
     Attributes
     ----------
-    shape : {"disc", "box"}
+    shape : {"disc", "box", "footprint"}
     radius : float
-        Disc radius (0 for a box).
+        Disc radius (0 otherwise).
     size : (2,) tuple
-        Box ``(length, width)``, length along the heading ((0, 0) for a disc).
+        Box ``(length, width)``, length along the heading ((0, 0) otherwise).
     vmax : float
         Bound on configuration speed (euclidean xy speed + |heading rate| * circumradius).
     amax : float or None
@@ -73,6 +74,9 @@ class Robot:
         Unicycle: bound on |turning rate| (rad/s); None: vmax / circumradius.
     reverse : bool
         Unicycle: may it drive backwards.
+    footprint : tuple of (x, y)
+        A footprint robot's simple polygon in its own frame (x forward, y left),
+        counter-clockwise; empty for a disc or a box.
     """
 
     shape: str
@@ -85,6 +89,7 @@ class Robot:
     kinematics: str = "holonomic"
     wmax: float | None = None
     reverse: bool = False
+    footprint: tuple[tuple[float, float], ...] = ()
 
     @property
     def unicycle(self) -> bool:
@@ -103,11 +108,16 @@ class Robot:
         """Radius of the smallest disc about the reference point holding the whole robot."""
         if self.shape == "disc":
             return self.radius
+        if self.shape == "footprint":
+            return max(math.hypot(x, y) for x, y in self.footprint)
         return 0.5 * math.hypot(*self.size)
 
     @property
     def inradius(self) -> float:
-        """Radius of the largest disc about the reference point inside the robot."""
+        """Radius of the largest disc about the reference point inside the robot (0 when
+        the reference point is outside a footprint)."""
+        if self.shape == "footprint":
+            return footprint_inradius(self.footprint)
         return self.radius if self.shape == "disc" else 0.5 * min(self.size)
 
     @property
@@ -122,7 +132,7 @@ class Robot:
         return 2 if self.shape == "disc" else 3
 
     def corners(self, poses: FloatArray) -> FloatArray:
-        """Corners of a box robot, counter-clockwise.
+        """Corners of a box robot (or a footprint's vertices), counter-clockwise.
 
         Parameters
         ----------
@@ -131,13 +141,32 @@ class Robot:
         Returns
         -------
         (n, 4, 2) float
+            (n, k, 2) for a footprint of k vertices.
         """
         poses = np.asarray(poses, dtype=float).reshape(-1, 3)
-        hl, hw = 0.5 * self.size[0], 0.5 * self.size[1]
-        local = np.array([[hl, hw], [-hl, hw], [-hl, -hw], [hl, -hw]])
+        if self.shape == "footprint":
+            local = np.array(self.footprint, dtype=float)
+        else:
+            hl, hw = 0.5 * self.size[0], 0.5 * self.size[1]
+            local = np.array([[hl, hw], [-hl, hw], [-hl, -hw], [hl, -hw]])
         c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
         rot = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)  # (n, 2, 2)
         return poses[:, None, :2] + np.einsum("nij,kj->nki", rot, local)
+
+
+def footprint_inradius(points) -> float:
+    """Distance from the origin to the outline of the simple polygon ``points`` (k, 2)
+    when the origin is strictly inside it, else 0 (crossing-number test)."""
+    P = np.asarray(points, dtype=float)
+    Q = np.roll(P, -1, axis=0)
+    crosses = (P[:, 1] > 0) != (Q[:, 1] > 0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x_at = P[:, 0] + (0.0 - P[:, 1]) * (Q[:, 0] - P[:, 0]) / (Q[:, 1] - P[:, 1])
+    inside = int(np.count_nonzero(crosses & (x_at > 0))) % 2 == 1
+    e = Q - P
+    t = np.clip(-(P * e).sum(1) / np.maximum((e * e).sum(1), 1e-300), 0.0, 1.0)
+    dist = float(np.hypot(*(P + t[:, None] * e).T).min())
+    return dist if inside and dist > 0 else 0.0
 
 
 @dataclass(frozen=True)
@@ -479,15 +508,21 @@ def _parse_robot(v: _V, rd) -> tuple[Robot, dict]:
         rd,
         "robot",
         required=("vmax",),
-        optional=("disc", "box", "amax", "clearance", "mover_clearance", "kinematics", "wmax", "reverse"),
+        optional=("disc", "box", "footprint", "amax", "clearance", "mover_clearance", "kinematics", "wmax", "reverse"),
     )
-    if ("disc" in rd) == ("box" in rd):
-        v.fail("robot", "give exactly one of disc or box")
+    given = [k for k in ("disc", "box", "footprint") if k in rd]
+    if len(given) != 1:
+        v.fail("robot", "give exactly one of disc, box or footprint" + (f", not {' and '.join(given)}" if given else ""))
+    footprint: tuple = ()
     if "disc" in rd:
         robot_shape, radius, size = "disc", v.number(rd["disc"], "robot.disc", positive=True), (0.0, 0.0)
-    else:
+    elif "box" in rd:
         robot_shape, radius = "box", 0.0
         size = v.vector(rd["box"], "robot.box", 2, positive=True)
+    else:
+        robot_shape, radius, size = "footprint", 0.0, (0.0, 0.0)
+        pts = _check_polygon(v, v.points(rd["footprint"], "robot.footprint", min_rows=3), "robot.footprint")
+        footprint = tuple((float(x), float(y)) for x, y in pts)
     vmax = v.number(rd["vmax"], "robot.vmax", positive=True)
     amax = v.number(rd["amax"], "robot.amax", positive=True) if "amax" in rd else None
     clear = v.number(rd.get("clearance", 0.0), "robot.clearance", nonneg=True)
@@ -502,9 +537,11 @@ def _parse_robot(v: _V, rd) -> tuple[Robot, dict]:
     reverse = rd.get("reverse", False)
     if not isinstance(reverse, bool):
         v.fail("robot.reverse", f"expected true or false, got {_kind(reverse)}")
-    robot = Robot(robot_shape, radius, size, vmax, amax, clear, mover_clear, kin, wmax, reverse)
-
-    return robot, {"shape": robot_shape, "radius": radius, "size": list(size)}
+    robot = Robot(robot_shape, radius, size, vmax, amax, clear, mover_clear, kin, wmax, reverse, footprint)
+    shape_repr = {"shape": robot_shape, "radius": radius, "size": list(size)}
+    if footprint:  # only then: the static hash of disc and box scenes is unchanged
+        shape_repr["footprint"] = [list(p) for p in footprint]
+    return robot, shape_repr
 
 
 def _parse_obstacles(v: _V, doc: dict, folder: Path, hasher) -> list:

@@ -23,10 +23,12 @@ with the same ``g``), so its pop order is the lexicographic order of the tuples 
 the heap's layout; this kernel's heap compares the same four keys in the same order, so
 both search in the same order, break ties the same way and return the same answer.
 
-numba is imported only when this module is (the reference path and ``import gfuzzy`` do not
-need it); ``cache=True`` keeps the machine code on disk (``make demo``/``make test`` warm it:
-``python -m gfuzzy.search_kernel``). Where the package folder is read-only numba falls back
-to a per-user cache folder; ``NUMBA_CACHE_DIR`` overrides both.
+The kernels are decorated with :func:`gfuzzy.jit.njit`: when ``make warm`` (``python -m
+gfuzzy.precompile``) built them ahead of time they are the precompiled extension's and numba
+is never imported; otherwise numba is imported when this module is (the reference path and
+``import gfuzzy`` do not need it) and ``cache=True`` keeps its machine code on disk. Where
+the package folder is read-only numba falls back to a per-user cache folder;
+``NUMBA_CACHE_DIR`` overrides both.
 """
 
 from __future__ import annotations

@@ -203,11 +203,11 @@ def _clearance_functions(ctx: StageContext, corridor: FloatArray):
         return np.where(mn >= 0, 0.0, -1.0), mn
 
     # The GA evaluates the mover clearance at every sample of every candidate, so the robot
-    # is first taken as its circumscribed disc (cheap, a lower bound), and a box robot, only
+    # is first taken as its circumscribed disc (cheap, a lower bound), and a box or footprint robot, only
     # where that bound is negative, as the box at the corridor's heading (the separating-axis
     # bound).
     # The re-timing afterwards decides safety with the exact shapes.
-    disc = replace(robot, shape="disc", radius=robot.circumradius, size=(0.0, 0.0))
+    disc = replace(robot, shape="disc", radius=robot.circumradius, size=(0.0, 0.0), footprint=())
 
     mover_states = _StateTable(scene.movers)  # the GA asks at the times of one grid
 

@@ -356,23 +356,24 @@ def _flow_rows(rows, indent: str, width: int = 100) -> str:
 
 
 def _static_obstacles(static: Scene, folder: Path) -> list:
-    """The static scene's obstacles, with mesh paths made relative to ``folder``."""
+    """The static scene's obstacles, with mesh and map paths made relative to ``folder``."""
     src_folder = Path(static.source).resolve().parent
     out = []
     for i, item in enumerate(static.raw.get("obstacles") or []):
         item = dict(item)
-        if "mesh" in item:
-            spec = dict(item["mesh"])
+        kind = next((k for k in ("mesh", "map") if k in item), None)
+        if kind is not None:
+            spec = dict(item[kind])
             target = (src_folder / spec["file"]).resolve()
             rel = os.path.relpath(target, folder.resolve())
             if rel.startswith(".."):
                 raise SceneError(
                     static.source,
-                    f"obstacles[{i}].mesh.file",
+                    f"obstacles[{i}].{kind}.file",
                     f"{target} would lie outside the new scene's folder {folder}; write the scene beside it",
                 )
             spec["file"] = Path(rel).as_posix()
-            item["mesh"] = spec
+            item[kind] = spec
         out.append(item)
     return out
 
@@ -430,7 +431,7 @@ def _robot_doc(options: TrackSceneOptions, static: Scene | None):
         dof, inradius = static.robot.dof, static.robot.inradius
     else:
         robot = {"disc": options.robot_radius if options.robot_radius is not None else 0.2}
-        robot.update({k: v for k, v in base.items() if k not in ("disc", "box")})
+        robot.update({k: v for k, v in base.items() if k not in ("disc", "box", "footprint")})
         dof, inradius = 2, robot["disc"]
     for key in ("vmax", "amax"):
         if getattr(options, key) is not None:

@@ -10,6 +10,7 @@ import json
 from functools import cache
 from pathlib import Path
 
+import pytest
 import yaml
 
 from gfuzzy.cli import main
@@ -46,6 +47,28 @@ def scene_of(text: str, **robot):
 
 
 BUNDLED_SCENES = sorted((ROOT / "scenes").glob("*.yaml"))
+
+#: A bundled scene whose roadmap has this many vertices or more is a slow case of the tests
+#: run on every bundled scene (the GA on it takes tens of seconds): marked slow, the smaller
+#: scenes keep guarding the same behaviour in the fast suite.
+SLOW_ROADMAP_VERTICES = 500
+
+
+def _roadmap_vertices(path: Path) -> int:
+    import json
+
+    try:
+        doc = json.loads((ROOT / "roadmaps" / f"{path.stem}.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return 0
+    return len(doc.get("vertices") or [])
+
+
+#: The bundled scenes as pytest parameters (ids: the scene names), the large ones marked slow.
+BUNDLED_PARAMS = [
+    pytest.param(p, id=p.stem, marks=[pytest.mark.slow] if _roadmap_vertices(p) >= SLOW_ROADMAP_VERTICES else [])
+    for p in BUNDLED_SCENES
+]
 
 
 @cache

@@ -1,4 +1,6 @@
-"""An independent shapely reference for the geometry, used to cross-check FCL.
+"""Independent references: a shapely model of the geometry (to cross-check FCL), the
+movers' positions, a trajectory verdict, and a brute-force time-expanded search (to
+cross-check the planner).
 
 Everything here is built from the *scene document* (the plain dict written to YAML), never
 from gfuzzy's parsed objects, so that a parsing or triangulation mistake in gfuzzy cannot
@@ -28,6 +30,8 @@ __all__ = [
     "prism_mesh",
     "mover_position",
     "reference_violation",
+    "contract_metric",
+    "brute_force_steps",
 ]
 
 
@@ -51,6 +55,18 @@ def robot_corners(size, poses, shrink: float = 0.0) -> np.ndarray:
     x = poses[:, 0:1] + c * local[:, 0] - s * local[:, 1]
     y = poses[:, 1:2] + s * local[:, 0] + c * local[:, 1]
     return np.stack([x, y], axis=-1)
+
+
+def footprint_bodies(points, poses, shrink: float = 0.0):
+    """A footprint polygon (k, 2) placed at ``poses`` (n, 3), as shapely polygons, eroded by
+    ``shrink`` (shapely's buffer)."""
+    poses = np.atleast_2d(np.asarray(poses, dtype=float))
+    local = np.asarray(points, dtype=float)
+    c, s = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
+    x = poses[:, 0:1] + c * local[:, 0] - s * local[:, 1]
+    y = poses[:, 1:2] + s * local[:, 0] + c * local[:, 1]
+    bodies = shapely.polygons(np.stack([x, y], axis=-1))
+    return shapely.buffer(bodies, -shrink, join_style="mitre") if shrink > 0 else bodies
 
 
 def interpolate(a, b, f) -> np.ndarray:
@@ -82,6 +98,9 @@ class Reference:
         robot = doc["robot"]
         if "disc" in robot:
             self.robot_kind, self.radius, self.size = "disc", float(robot["disc"]), None
+        elif "footprint" in robot:
+            self.robot_kind, self.radius, self.size = "footprint", 0.0, None
+            self.points = np.asarray(robot["footprint"], dtype=float)
         else:
             self.robot_kind, self.radius, self.size = "box", 0.0, tuple(map(float, robot["box"]))
         polys, discs = [], []
@@ -106,7 +125,10 @@ class Reference:
         if self.robot_kind == "disc":
             x, y, r = poses[:, 0], poses[:, 1], self.radius
             return np.min([x - r - xmin, xmax - x - r, y - r - ymin, ymax - y - r], axis=0)
-        c = robot_corners(self.size, poses)
+        if self.robot_kind == "footprint":
+            c = np.stack([shapely.get_coordinates(b)[:-1] for b in footprint_bodies(self.points, poses)])
+        else:
+            c = robot_corners(self.size, poses)
         return np.min(
             [
                 c[..., 0].min(-1) - xmin,
@@ -121,6 +143,8 @@ class Reference:
         """Robot bodies as shapely geometry, plus the radius still to subtract."""
         if self.robot_kind == "disc":
             return shapely.points(poses[:, :2]), self.radius - shrink
+        if self.robot_kind == "footprint":
+            return footprint_bodies(self.points, poses, shrink), 0.0
         return shapely.polygons(robot_corners(self.size, poses, shrink)), 0.0
 
     def distances_by_kind(self, poses) -> tuple[np.ndarray, np.ndarray]:
@@ -177,6 +201,8 @@ def mover_reference_distance(robot: dict, pose, mover_shape: str, mover_param, x
     """
     if "disc" in robot:
         body, r = shapely.Point(pose[0], pose[1]), float(robot["disc"])
+    elif "footprint" in robot:
+        body, r = footprint_bodies(robot["footprint"], [pose])[0], 0.0
     else:
         body, r = shapely.polygons(robot_corners(robot["box"], [pose]))[0], 0.0
     if mover_shape == "disc":
@@ -286,3 +312,166 @@ def reference_violation(doc: dict, waypoints, hold: float = 0.0, substeps: int =
             if overlap or dist < keep_movers - 1e-6:
                 return f"within {keep_movers:g} of mover {mover['name']!r} at t={t:g}"
     return ""
+
+
+def contract_metric(a, b, circumradius: float) -> np.ndarray:
+    """The contract's distance between poses (written afresh): the xy distance plus, for
+    poses with a heading, the shorter turn times the robot's circumradius. Broadcasts."""
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float)
+    d = np.hypot(b[..., 0] - a[..., 0], b[..., 1] - a[..., 1])
+    if a.shape[-1] == 3:
+        turn = np.abs(np.remainder(b[..., 2] - a[..., 2] + math.pi, 2 * math.pi) - math.pi)
+        d = d + turn * circumradius
+    return d
+
+
+def _robot_circumradius(robot: dict) -> float:
+    return float(robot["disc"]) if "disc" in robot else 0.5 * math.hypot(*robot["box"])
+
+
+def _segment_free(ref: Reference, a, b, keep: float, circumradius: float, spacing: float = 0.005) -> bool:
+    """The straight motion a -> b keeps ``keep`` from the obstacles (the bounds are not held
+    to it) and stays in bounds, judged at points ``spacing`` apart in the contract metric (an oracle, not a proof)."""
+    n = max(2, int(math.ceil(float(contract_metric(a, b, circumradius)) / spacing)) + 1)
+    poses = interpolate(a, b, np.linspace(0.0, 1.0, n))
+    if ref.robustly_colliding(poses, eps=1e-9).any() or (ref.bounds_margin(poses) < 0.0).any():
+        return False
+    return bool(np.all(ref.obstacle_distance(poses) >= keep - 1e-9))
+
+
+def _mover_distances(robot: dict, poses: np.ndarray, mover: dict, xy: np.ndarray) -> np.ndarray:
+    """Distances (n,) from the robot at ``poses`` to a mover centred at ``xy`` (<= 0: they
+    meet). Discs analytically, an axis-aligned box mover against a disc robot by the
+    clamped offset, a box robot through shapely."""
+    if "disc" in robot and "disc" in mover:
+        return np.hypot(poses[:, 0] - xy[0], poses[:, 1] - xy[1]) - float(robot["disc"]) - float(mover["disc"])
+    if "disc" in robot:
+        w, h = mover["box"]
+        dx = np.maximum(np.abs(poses[:, 0] - xy[0]) - 0.5 * w, 0.0)
+        dy = np.maximum(np.abs(poses[:, 1] - xy[1]) - 0.5 * h, 0.0)
+        return np.hypot(dx, dy) - float(robot["disc"])
+    bodies = shapely.polygons(robot_corners(robot["box"], poses))
+    if "disc" in mover:
+        return shapely.distance(bodies, shapely.Point(xy[0], xy[1])) - float(mover["disc"])
+    w, h = mover["box"]
+    box = shapely.box(xy[0] - w / 2, xy[1] - h / 2, xy[0] + w / 2, xy[1] + h / 2)
+    d = shapely.distance(bodies, box)
+    return np.where(shapely.intersection(bodies, box).area > 0, -1.0, d)
+
+
+def _mover_speed(mover: dict, t: float, half: float) -> float:
+    """The mover's largest speed within [t - half, t + half] (docs/formats.md: ``speed``
+    for a path; the fastest row-to-row segment of a ``trajectory`` overlapping the window)."""
+    if "trajectory" not in mover:
+        return float(mover.get("speed", 0.0))
+    rows = np.asarray(mover["trajectory"], dtype=float)
+    if len(rows) < 2:
+        return 0.0
+    best = 0.0
+    for a, b in zip(rows[:-1], rows[1:], strict=True):
+        if a[0] < t + half and b[0] > t - half:
+            best = max(best, math.hypot(b[1] - a[1], b[2] - a[2]) / (b[0] - a[0]))
+    return best
+
+
+def _safe_table(doc: dict, poses: np.ndarray, t0: float, dt: float, steps: int) -> np.ndarray:
+    """(len(poses), steps + 1) bool: the robot at each pose is safe at each step.
+
+    The rule of docs/formats.md section 3, written afresh: at ``t_n = t0 + n dt`` every mover
+    present at some time in ``[t_n - dt/2, t_n + dt/2]`` (a path mover always is; a
+    ``trajectory`` mover between its first and last row), taken where it is at ``t_n``
+    clamped to its rows, must be at least ``(vmax + v_mover) dt / 2 + mover_clearance`` away.
+    """
+    robot = doc["robot"]
+    vmax = float(robot["vmax"])
+    keep = float(robot.get("mover_clearance", 0.0))
+    half = 0.5 * dt
+    safe = np.ones((len(poses), steps + 1), dtype=bool)
+    for mover in doc.get("movers") or []:
+        rows = np.asarray(mover["trajectory"], dtype=float) if "trajectory" in mover else None
+        for n in range(steps + 1):
+            t = t0 + n * dt
+            if rows is not None and not (t + half >= rows[0, 0] and t - half <= rows[-1, 0]):
+                continue
+            xy, _ = mover_position(mover, float(np.clip(t, rows[0, 0], rows[-1, 0])) if rows is not None else t)
+            margin = (vmax + _mover_speed(mover, t, half)) * half + keep
+            safe[:, n] &= _mover_distances(robot, poses, mover, xy) >= margin
+    return safe
+
+
+def brute_force_steps(
+    doc: dict, vertices, edges, start, goal, t0: float, dt: float, horizon_steps: int,
+    hold_steps: int = 0, connect_k: int = 10,
+) -> int | None:
+    """The fewest steps from ``start`` to ``goal`` on the roadmap in discretized time, by a
+    breadth-first sweep of the whole time-expanded graph (no intervals, no heuristic);
+    None when the goal is not reached within ``horizon_steps``.
+
+    Built from the scene document and the roadmap's ``vertices`` (n, d) and ``edges`` (m, 2)
+    only, sharing no code with the planner (docs/planner.md, docs/formats.md section 3):
+
+    * start and goal join the free ones among their ``connect_k`` nearest vertices in the
+      contract metric (the nearest free one among the ``4 connect_k`` nearest if none of
+      those is free), and each other when the straight motion between them is free, judged
+      with :class:`Reference` keeping ``robot.clearance``;
+    * every edge is cut into ``k = ceil(length / (vmax dt (1 - 1e-9)))`` equal steps (a
+      step moves at most vmax dt; the planner's guard against rounding up the speed);
+    * one step moves to the next point of an edge or waits; a (point, step) pair must be
+      safe by :func:`_safe_table`'s rule; the goal is accepted where it stays safe
+      ``hold_steps`` more steps; the start must be safe at step 0 (the planner decides a
+      first motion from a start the margin refuses exactly: it may then do better).
+    """
+    robot = doc["robot"]
+    r = _robot_circumradius(robot)
+    vmax = float(robot["vmax"])
+    keep = float(robot.get("clearance", 0.0))
+    ref = Reference(doc)
+    V = np.asarray(vertices, dtype=float)
+    start, goal = np.asarray(start, dtype=float), np.asarray(goal, dtype=float)
+    nv = len(V)
+    s_id, g_id = nv, nv + 1
+    points = [*V, start, goal]
+    links = [(int(a), int(b)) for a, b in np.asarray(edges, dtype=int).reshape(-1, 2)]
+    for pose, node in ((start, s_id), (goal, g_id)):
+        order = np.argsort(contract_metric(V, pose, r), kind="stable")
+        joined = 0
+        for tried, i in enumerate(order[: 4 * connect_k].tolist()):
+            if tried >= connect_k and joined:
+                break
+            if _segment_free(ref, pose, V[i], keep, r):
+                links.append((node, i))
+                joined += 1
+    if _segment_free(ref, start, goal, keep, r):
+        links.append((s_id, g_id))
+    step_len = vmax * dt * (1.0 - 1e-9)
+    pairs = []
+    for a, b in links:
+        pa, pb = points[a], points[b]
+        k = max(1, int(math.ceil(float(contract_metric(pa, pb, r)) / step_len)))
+        chain = [a]
+        for j in range(1, k):
+            points.append(interpolate(pa, pb, [j / k])[0])
+            chain.append(len(points) - 1)
+        chain.append(b)
+        pairs += list(zip(chain[:-1], chain[1:], strict=True))
+    poses = np.asarray(points)
+    from scipy.sparse import coo_matrix
+
+    p = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    n = len(poses)
+    adj = coo_matrix((np.ones(2 * len(p)), (np.r_[p[:, 0], p[:, 1]], np.r_[p[:, 1], p[:, 0]])), shape=(n, n)).tocsr()
+    safe = _safe_table(doc, poses, t0, dt, horizon_steps + hold_steps)
+    if not safe[s_id, 0]:
+        return None
+    here = np.zeros(n, dtype=bool)
+    here[s_id] = True
+    for step in range(horizon_steps + 1):
+        if here[g_id] and safe[g_id, step : step + hold_steps + 1].all():
+            return step
+        if step == horizon_steps:
+            break
+        here = (here | (adj @ here.astype(float) > 0)) & safe[:, step + 1]
+        if not here.any():
+            return None
+    return None

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import json
 import math
-from collections import deque
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,7 +13,7 @@ import yaml
 from conftest import ROOT, run_cli_process
 from helpers import scene_doc as _doc
 from helpers import scene_of as _scene
-from reference import reference_violation
+from reference import brute_force_steps, contract_metric, reference_violation
 from shared_scenes import CROSSING, DOOR, LINE, LOOP, PERSON
 
 from gfuzzy.check import check_trajectory
@@ -72,34 +72,6 @@ def open_scene(tmp_path_factory):
     return scene, build_roadmap(scene, RoadmapOptions(vertices=40, seed=5))
 
 
-def _brute_force_steps(planner: Planner, start, goal, t0, dt, horizon_steps, hold_steps: int = 0):
-    """Breadth-first search over every (node, step): the time-expanded graph, no intervals;
-    the goal accepted only where it stays safe ``hold_steps`` more steps."""
-    from gfuzzy.planner import SPEED_SAFETY
-
-    vplan = planner.robot.vmax * SPEED_SAFETY
-    graph, s_id, g_id, rd = planner._graph(np.asarray(start, float), np.asarray(goal, float), dt, vplan)
-    field = MoverField(planner.scene, t0, dt, horizon_steps + hold_steps, planner.robot.vmax)
-    unsafe = field.unsafe(graph.poses)  # every node at every step: fine on tiny graphs
-    if unsafe[s_id, 0]:
-        return None
-    seen = np.zeros_like(unsafe)
-    seen[s_id, 0] = True
-    frontier = deque([(s_id, 0)])
-    while frontier:
-        u, n = frontier.popleft()
-        if u == g_id and not unsafe[g_id, n : n + hold_steps + 1].any():
-            return n
-        if n == horizon_steps:
-            continue
-        succ = list(graph.neighbors[graph.indptr[u] : graph.indptr[u + 1]]) + [u]  # move or wait
-        for v in succ:
-            if not unsafe[v, n + 1] and not seen[v, n + 1]:
-                seen[v, n + 1] = True
-                frontier.append((v, n + 1))
-    return None
-
-
 @pytest.mark.parametrize("backend", ["reference", "compiled"])
 @pytest.mark.parametrize("fixture", ["corridor", "open_scene"])
 @pytest.mark.parametrize("t0", [0.0, 1.3, 4.2])
@@ -109,7 +81,10 @@ def test_search_matches_brute_force(fixture, t0, backend, request):
     planner = Planner(scene, rm)
     dt = 0.1
     res = planner.plan(q.start, q.goal, t0, PlanOptions(dt=dt, horizon=40.0, stretch=1.0, backend=backend))
-    steps = _brute_force_steps(planner, q.start, q.goal, t0, dt, int(math.ceil(40.0 / dt)))
+    # the oracle builds its own time-expanded graph from the scene file and the roadmap's
+    # vertices and edges (tests/reference.py): no code shared with the planner
+    doc = yaml.safe_load(Path(scene.source).read_text())
+    steps = brute_force_steps(doc, rm.vertices, rm.edges, q.start, q.goal, t0, dt, int(math.ceil(40.0 / dt)))
     if steps is None:
         assert res.status is Status.NO_PATH
     else:
@@ -389,14 +364,19 @@ robot: {box: [0.8, 0.3], vmax: 1.0}
 
 def test_roadmap_distance_agrees_with_networkx(open_scene):
     """The planner's roadmap distance (scipy Dijkstra on the augmented graph) against
-    networkx on Roadmap.graph() for a query between two roadmap vertices."""
+    networkx for a query between two roadmap vertices, on a graph built here from the
+    roadmap's vertices and edges with the contract metric written afresh (and on
+    Roadmap.graph(), which must agree)."""
     import networkx as nx
 
     scene, rm = open_scene
-    g = rm.graph()
+    g = nx.Graph()
+    r = scene.robot.circumradius
+    g.add_weighted_edges_from((int(u), int(v), float(contract_metric(rm.vertices[u], rm.vertices[v], r))) for u, v in rm.edges)
     a, b = 0, int(np.argmax(np.hypot(*(rm.vertices - rm.vertices[0]).T)))
     assert nx.has_path(g, a, b)
     want = nx.shortest_path_length(g, a, b, weight="weight")
+    assert nx.shortest_path_length(rm.graph(), a, b, weight="weight") == pytest.approx(want)
     res = plan(scene, rm, rm.vertices[a], rm.vertices[b], 0.0)
     # start and goal may also join each other directly: never longer than the roadmap path
     assert res.roadmap_distance <= want + 1e-9
@@ -760,11 +740,13 @@ def test_hold_and_mover_clearance_match_brute_force(loop, hold, keep):
     q = scene.queries[0]
     planner = Planner(scene, rm)
     dt, horizon = 0.1, 15.0
-    res = planner.plan(q.start, q.goal, 0.0, PlanOptions(dt=dt, horizon=horizon, stretch=1.0), hold=hold)
-    steps = _brute_force_steps(planner, q.start, q.goal, 0.0, dt, int(math.ceil(horizon / dt)), int(math.ceil(hold / dt - 1e-9)))
-    if steps is None:
-        assert res.status is Status.NO_PATH
-    else:
-        assert res.status is Status.SOLVED, res.message
-        assert abs(res.duration - steps * dt) <= 1e-6
-        assert check_trajectory(scene, res.trajectory.waypoints, replace(q, hold=hold)).valid
+    doc = _doc(LOOP, mover_clearance=keep)  # the oracle reads the scene document, not `scene`
+    steps = brute_force_steps(doc, rm.vertices, rm.edges, q.start, q.goal, 0.0, dt, int(math.ceil(horizon / dt)), int(math.ceil(hold / dt - 1e-9)))
+    for backend in ("reference", "compiled"):
+        res = planner.plan(q.start, q.goal, 0.0, PlanOptions(dt=dt, horizon=horizon, stretch=1.0, backend=backend), hold=hold)
+        if steps is None:
+            assert res.status is Status.NO_PATH
+        else:
+            assert res.status is Status.SOLVED, res.message
+            assert abs(res.duration - steps * dt) <= 1e-6
+            assert check_trajectory(scene, res.trajectory.waypoints, replace(q, hold=hold)).valid

@@ -51,19 +51,31 @@ def test_run_regression_prints_a_table_and_the_count():
     assert lines[-1] == "2 of 4 queries met their expectations"
 
 
+def _clearance_answers_pass_check(path) -> None:
+    """A scene's queries with clearances (0.05 static, 0.1 to movers) on a roadmap built
+    for them: the statuses the scene expects, each answer valid under the check."""
+    scene = load_scene(path).with_clearances(0.05, 0.1)
+    rm = build_roadmap(scene, RoadmapOptions())
+    for row, q in zip(regress_scene(scene, rm), scene.queries, strict=True):
+        if q.expect is not None and q.expect.status is not None:
+            assert row.status == q.expect.status, (scene.name, q.name, row.status)
+        if row.status == "solved":
+            assert row.valid, (scene.name, q.name, row.problems)
+
+
+@pytest.mark.slow
 def test_every_bundled_query_with_clearances_passes_check(repo_root):
     """Clearance answers on every bundled scene: the same statuses, each answer valid
     under the check with the clearances."""
-    from gfuzzy.regress import regress_scene
-
     for path in sorted((repo_root / "scenes").glob("*.yaml")):
-        scene = load_scene(path).with_clearances(0.05, 0.1)
-        rm = build_roadmap(scene, RoadmapOptions())
-        for row, q in zip(regress_scene(scene, rm), scene.queries, strict=True):
-            if q.expect is not None and q.expect.status is not None:
-                assert row.status == q.expect.status, (scene.name, q.name, row.status)
-            if row.status == "solved":
-                assert row.valid, (scene.name, q.name, row.problems)
+        _clearance_answers_pass_check(path)
+
+
+def test_small_bundled_scenes_with_clearances_pass_check(repo_root):
+    """The fast sibling of the slow test above: three small bundled scenes (movers, a wait
+    forced by one, an unreachable goal), the same assertions."""
+    for name in ("sim-4s1m", "wait-corridor", "sealed-room"):
+        _clearance_answers_pass_check(repo_root / "scenes" / f"{name}.yaml")
 
 
 def test_there_are_bundled_scenes():

@@ -14,11 +14,12 @@ import numpy as np
 import pytest
 import yaml
 from conftest import ROOT
+from helpers import scene_doc as door_doc
 from reference import Reference, interpolate
+from shared_scenes import DOOR
 
 import gfuzzy.roadmap as roadmap_module
 from gfuzzy.errors import SceneError
-from gfuzzy.geometry import StaticGeometry
 from gfuzzy.roadmap import RoadmapInfo, RoadmapOptions, build_roadmap, load_roadmap, roadmap_digest
 from gfuzzy.scene import load_scene, parse_scene
 
@@ -445,10 +446,12 @@ def test_spanner_interrupted_midway_caches_nothing_and_is_read_only(monkeypatch)
 def test_the_roadmap_keeps_the_static_clearance(door):
     """Every vertex and every edge of a roadmap built with a clearance keeps it."""
     scene, rm = door
-    free = StaticGeometry(scene.with_clearances(0.0))
+    # the oracle: shapely on the scene document (tests/reference.py), not the geometry the
+    # roadmap was built with
+    free = Reference(door_doc(DOOR))
 
     def to_obstacles(poses):  # the bounds are not held to the clearance
-        return min(free.obstacle_clearance(p) for p in poses)
+        return float(free.obstacle_distance(np.asarray(poses)).min())
 
     assert to_obstacles(rm.vertices) >= 0.05 - 1e-9
     assert to_obstacles(rm.vertices) < 0.1  # some vertex does go near the walls

@@ -3,7 +3,7 @@
 Both must search in the same order and so return the same answer: same status, same
 (node, step) rows, same expansions. Cross-checked on every bundled scene's queries (as
 given, with a hold, with a mover clearance), on seeded random graphs among random movers,
-and against the brute-force time-expanded search of test_planner.
+and (in test_planner) against the brute-force time-expanded search of tests/reference.py.
 """
 
 from __future__ import annotations

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import yaml
 from conftest import ROOT
+from helpers import BUNDLED_PARAMS
 from helpers import BUNDLED_SCENES as SCENES
 from helpers import bundled_answers as _answers
 from helpers import bundled_setup as _setup
@@ -120,7 +121,7 @@ def test_ga_and_speed_layer_keep_the_clearances():
     assert reference_violation(_doc(CROSSING, clearance=0.05, mover_clearance=0.2), res.trajectory.waypoints) == ""
 
 
-@pytest.mark.parametrize("path", SCENES, ids=lambda p: p.stem)
+@pytest.mark.parametrize("path", BUNDLED_PARAMS)  # the large scenes: slow
 def test_refined_answers_keep_the_guarantees(path):
     scene = _setup(path)[0]
     for (q, plain), (_, refined) in zip(_answers(path, False, False), _answers(path, True, False), strict=True):
@@ -138,6 +139,7 @@ def test_refined_answers_keep_the_guarantees(path):
             assert np.array_equal(refined.trajectory.waypoints, plain.trajectory.waypoints)
 
 
+@pytest.mark.slow  # an experiment: how often the stage helps, on every bundled scene
 def test_refinement_applies_on_most_queries():
     applied = solved = boxes = 0
     for path in SCENES:
@@ -160,7 +162,7 @@ def test_refinement_is_reproducible():
     assert np.array_equal(a.trajectory.waypoints, b.trajectory.waypoints)
 
 
-@pytest.mark.parametrize("path", SCENES, ids=lambda p: p.stem)
+@pytest.mark.parametrize("path", BUNDLED_PARAMS)  # the large scenes: slow
 def test_speed_layer_answers_keep_the_guarantees(path):
     scene = _setup(path)[0]
     robot = scene.robot
@@ -183,6 +185,7 @@ def test_speed_layer_answers_keep_the_guarantees(path):
         assert dv.max(initial=0.0) <= amax * 0.07 * 1.5 + 1e-9, (q.name, dv.max())
 
 
+@pytest.mark.slow  # an experiment: how often the stage helps, on every bundled scene
 def test_speed_layer_applies_on_most_queries():
     applied = total = 0
     for path in SCENES:

@@ -28,6 +28,7 @@ PICTURES = {
     "depot.png": ("depot", ["--query", "into-rack-aisle"], []),
     "tb3-arena.png": ("tb3-arena", ["--query", "south-to-north"], []),
     "small-house.png": ("small-house", ["--query", "southwest-to-east"], ["--no-roadmap"]),
+    "footprint-office.png": ("footprint-office", ["--query", "dock", "--refine", "--speed-layer"], ["--no-roadmap"]),
 }
 
 

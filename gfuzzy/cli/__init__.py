@@ -5,7 +5,8 @@ trajectory, missed expectation), 2 bad input. Bad input prints exactly one line 
 naming the file and the place in it, and writes nothing.
 
 Modules: :mod:`.common` (bad input, shared steps), :mod:`.planning` (roadmap, plan,
-check, render, regress), :mod:`.experiments` (tracks, batch, navigate), :mod:`.main`
+check, render, regress), :mod:`.experiments` (tracks, batch, navigate), :mod:`.export`
+(export), :mod:`.main`
 (the parser and :func:`main`, the ``gfuzzy`` entry point).
 """
 

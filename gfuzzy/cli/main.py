@@ -8,6 +8,7 @@ import sys
 from ..errors import InputError, LimitError
 from .common import EXIT_BAD, EXIT_OK, BadInput, _Parser, _say
 from .experiments import cmd_batch, cmd_navigate, cmd_tracks
+from .export import add_export
 from .mapping import cmd_map
 from .planning import cmd_check, cmd_plan, cmd_regress, cmd_render, cmd_roadmap
 
@@ -184,7 +185,7 @@ def _parser() -> argparse.ArgumentParser:
         description="Roadmap-time-space motion planning among moving obstacles (OMPL + FCL).",
     )
     sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
-    for add in (_add_roadmap, _add_plan, _add_check, _add_render, _add_navigate, _add_regress, _add_tracks, _add_batch, _add_map):
+    for add in (_add_roadmap, _add_plan, _add_check, _add_render, _add_navigate, _add_regress, _add_tracks, _add_batch, _add_map, add_export):
         add(sub)
     return p
 
