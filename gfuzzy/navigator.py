@@ -32,7 +32,7 @@ from __future__ import annotations
 import logging
 import math
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -40,6 +40,7 @@ from .drive import drive_rows, evasions
 from .errors import InputError, LimitError, check_number
 from .geometry import StaticGeometry, mover_distance
 from .movers import MoverField
+from .navtypes import NavMode, NavStep
 from .planner import BACKENDS, search_function
 from .poses import metric_distance, wrap_angle
 from .roadmap import Roadmap
@@ -51,7 +52,7 @@ from .timespace import timed_rows
 from .trajectory import Trajectory
 from .typing import BoolArray, FloatArray
 
-__all__ = ["NavOptions", "NavStep", "Navigator"]
+__all__ = ["NavMode", "NavOptions", "NavStep", "Navigator"]
 
 log = logging.getLogger(__name__)
 
@@ -93,6 +94,12 @@ class NavOptions:
         Walking speed (m/s) at which the uncertainty grows at its full rate.
     safety_buffer : float
         Distance (m) kept from every predicted person on top of ``robot.mover_clearance``.
+    personal_space : float
+        Further distance (m) the first search keeps from every predicted person: the
+        robot passes people no closer than this gap (CrowdNav's discomfort distance,
+        0.2 m) whenever a plan exists that does; when none does, the relaxed search (the
+        people's discs as they are) answers, so the preference never costs a success.
+        0 turns it off.
     slice : float
         Length (s) of a piece of prediction with one radius (the inflation grows by steps).
     stationary_hold : float
@@ -126,6 +133,7 @@ class NavOptions:
     uncertainty_growth: float = 0.1
     reference_speed: float = 1.0
     safety_buffer: float = 0.05
+    personal_space: float = 0.2
     slice: float = 0.5
     stationary_hold: float = 30.0
     time_budget: float = 0.1
@@ -143,39 +151,11 @@ class NavOptions:
             raise InputError(f"backend must be one of {', '.join(BACKENDS)}, got {self.backend!r}")
         for name in ("dt", "prediction_horizon", "reference_speed", "slice", "time_budget", "plan_slack", "evasion_time", "cover"):
             check_number(name, getattr(self, name))
-        for name in ("uncertainty_growth", "safety_buffer", "stationary_hold", "goal_tolerance"):
+        for name in ("uncertainty_growth", "safety_buffer", "personal_space", "stationary_hold", "goal_tolerance"):
             check_number(name, getattr(self, name), strict=False)
         if self.connect_k < 1 or self.evasion_headings < 4:
             raise InputError("connect_k must be >= 1 and evasion_headings >= 4")
         check_number("stretch", self.stretch, 1.0, strict=False)
-
-
-@dataclass(frozen=True)
-class NavStep:
-    """What one :meth:`Navigator.step` did (``Navigator.last``).
-
-    Attributes
-    ----------
-    mode : str
-        ``"plan"`` (a fresh search), ``"relaxed"`` (a fresh search without the safety
-        buffer and the uncertainty), ``"direct"`` (straight to the goal nearby, checked
-        finely), ``"previous"`` (the last plan, still clear), ``"evasive"``, ``"goal"``.
-    seconds : float
-        Wall-clock time of the call.
-    message : str
-        Why the search did not answer, when it did not.
-    predicted : (k, 5) float
-        The observations used, ``[x, y, vx, vy, inflated radius at t]``.
-    detailed : int
-        People predicted in detail for the search: those who can come within reach of
-        where the robot can be before their prediction ends (the others cannot matter).
-    """
-
-    mode: str
-    seconds: float
-    message: str = ""
-    predicted: FloatArray = field(default_factory=lambda: np.zeros((0, 5)), compare=False)
-    detailed: int = 0
 
 
 class _OutOfTime(Exception):
@@ -363,7 +343,7 @@ class Navigator:
         # uncertainty grows with how far a person may stray from the straight walk: with
         # their speed (someone standing is where they stand; a full-speed walker may turn)
         rate = opts.uncertainty_growth * np.minimum(speed / opts.reference_speed, 1.0)
-        full = self.mover_clearance + opts.safety_buffer + rate[:, None] * tau[None, :]  # (k, S)
+        full = self.mover_clearance + opts.safety_buffer + opts.personal_space + rate[:, None] * tau[None, :]
         if relaxed:  # only what the contract asks: the robot's mover clearance
             full = np.full_like(full, self.mover_clearance)
         gap = self._gap(pose, obs)  # (k,) beyond the people's own radius
@@ -508,7 +488,7 @@ class Navigator:
         cr = self.robot.circumradius
         if float(metric_distance(pose, self.goal, cr)) <= opts.goal_tolerance:
             self.reached = True
-            self.last = NavStep("goal", self._clock() - t_begin)
+            self.last = NavStep(NavMode.GOAL, self._clock() - t_begin)
             return Trajectory(np.array([[t, *pose], [t + opts.cover, *pose]]), cr)
         deadline = t_begin + SEARCH_SHARE * opts.time_budget
         infl = self._inflation(pose, obs)
@@ -516,24 +496,24 @@ class Navigator:
         if len(obs):
             predicted[:, 4] = obs[:, 4] + infl[:, 0]
         found = self._search(t, pose, obs, infl, deadline)
-        traj, mode = found.trajectory, "plan"
+        traj, mode = found.trajectory, NavMode.PLAN
         if traj is None and len(obs) and not found.out_of_time and self._clock() < deadline:
             # blocked by the margins (someone standing beside the goal, a narrow gap): try
             # once more with the people's discs as they are, plus the mover clearance only
             traj = self._search(t, pose, obs, self._inflation(pose, obs, relaxed=True), deadline, found).trajectory
-            mode = "relaxed"
+            mode = NavMode.RELAXED
         if traj is None:
             traj = self._direct(t, pose, obs)
-            mode = "direct"
+            mode = NavMode.DIRECT
         if traj is None:
             traj = self._previous_if_clear(t, pose, obs)
-            mode = "previous"
+            mode = NavMode.PREVIOUS
             if traj is None:
                 traj = self._evasive(t, pose, obs)
-                mode = "evasive"
+                mode = NavMode.EVASIVE
         else:
             self._previous = traj
-        if mode == "evasive":
+        if mode == NavMode.EVASIVE:
             self._previous = None
         self.last = NavStep(mode, self._clock() - t_begin, found.message, predicted, found.detailed)
         return traj

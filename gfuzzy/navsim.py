@@ -1,9 +1,10 @@
 """Simulated navigation: a scene's movers are the real world, the robot only observes them.
 
 :func:`simulate` runs the loop that ``gfuzzy navigate`` and ``tools/bench_crowd.py`` share
-(CONTRACT.md section 5): every ``period`` seconds the robot observes the movers present
-within ``sense`` metres as discs ``[x, y, vx, vy, radius]`` (their true position and
-velocity at that instant; a box mover as its circumscribed disc), calls
+(CONTRACT.md sections 5 and 7): every ``period`` seconds the robot observes the movers
+present within ``sense`` metres as discs ``[x, y, vx, vy, radius]`` (a box mover as its
+circumscribed disc) through a :class:`gfuzzy.sensing.Sensor` (true or estimated velocity,
+noise, field of view, occlusion), calls
 :meth:`Navigator.step`, and follows the returned trajectory until the next call. It stops
 at the goal or at ``max_time`` after t0. What it executed is a trajectory that
 :func:`gfuzzy.check_trajectory` verifies against the real movers.
@@ -14,15 +15,17 @@ from __future__ import annotations
 import logging
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from .errors import InputError
 from .geometry import metric_distance, mover_distance
-from .navigator import Navigator, NavOptions
+from .navigator import Navigator, NavMode, NavOptions
 from .roadmap import Roadmap
 from .scene import Scene
+from .sensing import Sensor, SensorOptions
+from .socialmetrics import SocialMetrics, social_metrics
 from .status import Status
 from .trajectory import Trajectory
 from .typing import FloatArray
@@ -53,6 +56,8 @@ class NavResult:
         How many calls ended as ``plan``, ``previous``, ``evasive``, ``goal``.
     min_separation : float
         Smallest robot-mover distance over the run (inf without movers).
+    social : SocialMetrics
+        Discomfort and intrusion counts over the run's periods.
     log : list of dict
         Some replans (every ``log_every``-th): time, pose, predicted discs, planned rows.
     """
@@ -64,6 +69,7 @@ class NavResult:
     modes: dict = field(default_factory=dict)
     min_separation: float = math.inf
     log: list = field(default_factory=list, compare=False)
+    social: SocialMetrics = field(default_factory=lambda: SocialMetrics(0, 0, 0))
 
     @property
     def reached(self) -> bool:
@@ -114,6 +120,7 @@ def simulate(
     options: NavOptions | None = None,
     log_every: int = 4,
     navigator: Navigator | None = None,
+    sensor: SensorOptions | None = None,
 ) -> NavResult:
     """Drive the robot from ``start`` to ``goal`` among ``scene``'s movers, unknown to it.
 
@@ -135,15 +142,16 @@ def simulate(
         Keep every this-many-th replan in :attr:`NavResult.log` (0: none).
     navigator : Navigator, optional
         Reuse one (for the same scene, roadmap and goal).
+    sensor : SensorOptions, optional
+        How the robot observes (velocity estimated or exact, noise, field of view,
+        occlusion); its ``sense`` is replaced by ``sense``. Default: the ideal sensor of
+        section 5 (true velocities); ``gfuzzy navigate`` estimates them by default.
 
     Returns
     -------
     NavResult
     """
-    if not (period > 0 and math.isfinite(period)):
-        raise InputError(f"period must be a positive number, got {period}")
-    if not max_time > 0:
-        raise InputError(f"max_time must be positive, got {max_time}")
+    _check_run(period, max_time)
     robot = scene.robot
     cr = robot.circumradius
     goal = np.asarray(goal, dtype=float).reshape(-1)
@@ -156,28 +164,21 @@ def simulate(
     modes: dict = {}
     kept: list = []
     status = Status.TIMEOUT
+    eyes = _Eyes(scene, sense, sensor, pose, goal)
     while True:
         if float(metric_distance(pose, goal, cr)) <= nav.options.goal_tolerance:
             status = Status.SOLVED
             break
         if t >= t_stop - 1e-9:
             break
-        obs = observe(scene, t, pose, sense)
+        obs = eyes(t, pose)
         c0 = time.perf_counter()
         traj = nav.step(t, pose, obs)
         seconds.append(time.perf_counter() - c0)
-        mode = nav.last.mode if nav.last is not None else "plan"
+        mode = str(nav.last.mode if nav.last is not None else NavMode.PLAN)
         modes[mode] = modes.get(mode, 0) + 1
         if log_every and (len(seconds) - 1) % log_every == 0:
-            kept.append(
-                {
-                    "t": t,
-                    "pose": pose.tolist(),
-                    "mode": mode,
-                    "predicted": np.round(nav.last.predicted, 4).tolist() if nav.last is not None else [],
-                    "plan": np.round(_thin(traj.waypoints, 40), 4).tolist(),
-                }
-            )
+            kept.append(_log_entry(t, pose, mode, nav, traj))
         t_next = min(t + period, t_stop)
         w = traj.waypoints
         if abs(w[0, 0] - t) > 1e-9 or float(metric_distance(w[0, 1:], pose, cr)) > 1e-6:
@@ -190,6 +191,7 @@ def simulate(
         end = max(end, t + 1e-6)
         piece = _follow(traj, t, end)
         rows.extend(piece[1:])
+        eyes.moved(pose, piece[-1, 1:])
         pose = piece[-1, 1:].copy()
         if at_goal.size and abs(end - w[at_goal[0], 0]) <= 1e-9:
             pose = goal.copy()
@@ -198,7 +200,62 @@ def simulate(
     wps = _merge_rows(np.array(rows))
     executed = Trajectory(wps, cr)
     sep = min_separation(scene, wps)
-    return NavResult(status, executed, len(seconds), np.array(seconds), modes, sep, kept)
+    social = social_metrics(wps, cr, scene.movers, period)
+    return NavResult(status, executed, len(seconds), np.array(seconds), modes, sep, kept, social)
+
+
+def _check_run(period: float, max_time: float) -> None:
+    if not (period > 0 and math.isfinite(period)):
+        raise InputError(f"period must be a positive number, got {period}")
+    if not max_time > 0:
+        raise InputError(f"max_time must be positive, got {max_time}")
+
+
+def _log_entry(t: float, pose: FloatArray, mode: str, nav: Navigator, traj: Trajectory) -> dict:
+    """One replan of :attr:`NavResult.log`."""
+    return {
+        "t": t,
+        "pose": pose.tolist(),
+        "mode": mode,
+        "predicted": np.round(nav.last.predicted, 4).tolist() if nav.last is not None else [],
+        "plan": np.round(_thin(traj.waypoints, 40), 4).tolist(),
+    }
+
+
+class _Eyes:
+    """What the robot of :func:`simulate` sees: the movers' true state within ``sense``
+    (the ideal sensor of section 5), or what a :class:`Sensor` makes of it."""
+
+    def __init__(self, scene: Scene, sense: float, sensor: SensorOptions | None, pose, goal):
+        opts = replace(sensor or SensorOptions(velocity="exact"), sense=sense)
+        self.scene, self.sense = scene, sense
+        self.sensor = None if opts.ideal else Sensor(scene, opts)
+        self.heading = _initial_heading(pose, goal)
+
+    def __call__(self, t: float, pose: FloatArray) -> FloatArray:
+        if self.sensor is None:
+            return observe(self.scene, t, pose, self.sense)
+        return self.sensor.observe(t, pose, self.heading, observe(self.scene, t, pose))
+
+    def moved(self, before: FloatArray, after: FloatArray) -> None:
+        self.heading = _heading(before, after, self.heading)
+
+
+def _initial_heading(pose: FloatArray, goal: FloatArray) -> float:
+    """The robot's heading (SE(2)), else the direction to the goal."""
+    if len(pose) == 3:
+        return float(pose[2])
+    d = goal[:2] - pose[:2]
+    return float(math.atan2(d[1], d[0])) if np.hypot(*d) > 0 else 0.0
+
+
+def _heading(before: FloatArray, after: FloatArray, heading: float) -> float:
+    """The direction the field of view is centred on after a motion: the robot's heading
+    (SE(2)), else its direction of motion (kept while it stands)."""
+    if len(after) == 3:
+        return float(after[2])
+    d = after[:2] - before[:2]
+    return float(math.atan2(d[1], d[0])) if np.hypot(*d) > 1e-9 else heading
 
 
 def _thin(w: FloatArray, n: int) -> FloatArray:

@@ -300,6 +300,76 @@ class Planner:
         self.roadmap = roadmap
         self.geometry = StaticGeometry(scene)
         self.robot = scene.robot
+        self._fs: list = []  # the disc robot's free space, computed on the first no_path
+
+    # ---------------------------------------------------------------- free space
+    def _free_space(self):
+        """The disc robot's free space (:mod:`gfuzzy.freespace`), computed once; None for
+        other robots."""
+        if not self._fs:
+            from .freespace import free_space
+
+            self._fs.append(free_space(self.scene))
+        return self._fs[0]
+
+    def _not_joined(self, start, goal, prepared: bool, linked: bool) -> tuple[Planner | None, str]:
+        """The roadmap does not join start and goal: a planner to try again (see
+        :meth:`_through_free_space`), or None and the ``no_path`` message."""
+        if linked:
+            return None, (
+                "start and goal share a region of the free space, but no certified path through "
+                "it joins them on the roadmap"
+            )
+        if prepared:  # a kept goal graph (replanning) is not extended
+            return None, "start and goal are not connected on the roadmap (sealed off, or the roadmap is too sparse)"
+        return self._through_free_space(start, goal)
+
+    def _through_free_space(self, start, goal) -> tuple[Planner | None, str]:
+        """When the roadmap does not join ``start`` and ``goal``: a planner on the roadmap
+        extended through the free space, or None and the reason no way exists.
+
+        The start and the goal are linked to the nearest vertex of their free-space region
+        by certified paths, and the roadmap's components sharing a region are joined
+        (:func:`gfuzzy.freespace.repair`: an old roadmap built without it is repaired here).
+        """
+        from .freespace import link_pose, repair, separation
+
+        fs = self._free_space()
+        if fs is None:
+            return None, (
+                "start and goal are not connected on the roadmap (sealed off, or the roadmap missed "
+                "a passage: more vertices, -n, may find it)"
+            )
+        sep = separation(self.scene, fs, start, goal)
+        if sep is not None:
+            return None, sep.message()
+        rm = self.roadmap
+        verts = [np.asarray(rm.vertices, dtype=float)]
+        edges = [np.asarray(rm.edges, dtype=np.int64).reshape(-1, 2)]
+        n = len(rm.vertices)
+        for pose in (start, goal):
+            chain = link_pose(self.geometry, fs, pose, rm.vertices)
+            if chain is None:
+                continue
+            inner = [np.asarray(p, dtype=float) for p in chain[1:-1]]
+            if not inner:  # keep the pose itself out of the roadmap: a point on the way
+                inner = [0.5 * (np.asarray(chain[0], dtype=float) + np.asarray(chain[-1], dtype=float))]
+            ids = list(range(n, n + len(inner)))
+            verts.append(np.asarray(inner).reshape(-1, 2))
+            n += len(inner)
+            target = int(np.nonzero(np.all(rm.vertices == np.asarray(chain[-1]), axis=1))[0][0])
+            ids.append(target)
+            edges.append(np.asarray([(min(a, b), max(a, b)) for a, b in zip(ids[:-1], ids[1:], strict=True)]))
+        joined = repair(self.geometry, fs, np.vstack(verts), np.vstack(edges))
+        lengths = metric_distance(
+            joined.vertices[joined.edges[:, 0]], joined.vertices[joined.edges[:, 1]], self.robot.circumradius
+        )
+        planner = copy.copy(self)
+        planner.roadmap = replace(
+            rm, vertices=joined.vertices, edges=joined.edges, lengths=np.asarray(lengths, dtype=float), _spanners={}
+        )
+        log.info("query linked through the free space: %d vertices added", len(joined.vertices) - len(rm.vertices))
+        return planner, ""
 
     # ---------------------------------------------------------------- graph
     def _connect(self, pose: FloatArray, k: int, clearance: float | None = None) -> list[tuple[int, float]]:
@@ -443,6 +513,7 @@ class Planner:
     def plan(
         self, start, goal, t0: float = 0.0, options: PlanOptions | None = None, hold: float = 0.0,
         _prepared=None,
+        _linked: bool = False,
     ) -> PlanResult:
         """Answer one query.
 
@@ -498,11 +569,10 @@ class Planner:
             start[2], goal[2] = wrap_angle(start[2]), wrap_angle(goal[2])
         graph, s_id, g_id, rd = self._query_graph(start, goal, opts, _prepared)
         if not math.isfinite(rd):
-            return answer(
-                Status.NO_PATH,
-                "start and goal are not connected on the roadmap (sealed off, or the roadmap is too sparse)",
-                stats=PlanStats(nodes=len(graph.poses)),
-            )
+            linked, message = self._not_joined(start, goal, _prepared is not None, _linked)
+            if linked is not None:
+                return linked.plan(ends[0], ends[1], t0, options, hold=hold, _linked=True)
+            return answer(Status.NO_PATH, message, stats=PlanStats(nodes=len(graph.poses)))
         max_steps = self._max_steps(opts, rd, t0, hold_steps)
         run = self._search_rounds(graph, s_id, g_id, start, t0, opts, hold_steps, max_steps, deadline)
         if run.problem:

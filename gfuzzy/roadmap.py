@@ -23,6 +23,7 @@ import numpy as np
 
 from .atomic import write_atomic
 from .errors import InputError, SceneError
+from .freespace import blocked_points as _blocked_points
 from .geometry import StaticGeometry, metric_distance
 from .maps import free_cell_draw
 from .scene import Scene
@@ -69,6 +70,9 @@ class RoadmapOptions:
         a chain of aligned milestones crosses a door the robot fits through only turned.
     bridge_ratio : float
         Share of bridge-test samples in the ``"passage"`` sampler.
+    repair : bool
+        Disc robots: join the components sharing a free-space region (:func:`gfuzzy.freespace.repair`),
+        adding vertices beyond ``vertices`` (``info.repair``); older files load with False.
     """
 
     vertices: int = 200
@@ -77,6 +81,7 @@ class RoadmapOptions:
     resolution: float = 0.05
     sampler: str = "passage"
     bridge_ratio: float = 0.5
+    repair: bool = True
 
     def __post_init__(self):
         if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)) or not 0 <= self.seed < 2**31:
@@ -111,7 +116,9 @@ class RoadmapInfo:
     ``seconds`` is the whole build, ``grow_seconds`` OMPL's PRM growing; ``validity_calls`` and
     ``certify_calls`` count collision-model calls while growing and while certifying edges;
     ``edges_dropped`` PRM edges that could not be certified free; ``components`` the
-    roadmap's connected components; ``extra`` keys of another version's file, kept as they were.
+    roadmap's connected components; ``repair`` what the free-space repair of a disc robot's
+    roadmap added (:meth:`gfuzzy.freespace.Repair.to_dict` and ``seconds``; empty, and not
+    written, without it); ``extra`` keys of another version's file, kept as they were.
     """
 
     ompl_version: str = ""
@@ -121,11 +128,14 @@ class RoadmapInfo:
     certify_calls: int = 0
     edges_dropped: int = 0
     components: int = 0
+    repair: dict = field(default_factory=dict)
     extra: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         """Plain JSON: the fields, then the extra keys."""
         doc = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "extra"}
+        if not doc["repair"]:  # as files written before the repair
+            del doc["repair"]
         return {**doc, **self.extra}
 
     @classmethod
@@ -133,7 +143,7 @@ class RoadmapInfo:
         """From a roadmap file's ``info`` (anything but a mapping gives the defaults)."""
         if not isinstance(doc, dict):
             return cls()
-        casts = {"str": str, "float": float, "int": int}
+        casts = {"str": str, "float": float, "int": int, "dict": dict}
         types = {f.name: casts[f.type] for f in fields(cls) if f.name != "extra"}
         kwargs, extra = {}, {}
         for key, value in doc.items():
@@ -297,7 +307,10 @@ def load_roadmap(path: str | os.PathLike, scene: Scene | None = None) -> Roadmap
         vertices = np.asarray(doc["vertices"], dtype=float)
         raw_edges = np.asarray(doc["edges"])
         lengths = np.asarray(doc["lengths"], dtype=float)
-        opts = RoadmapOptions(**doc["options"])
+        raw_opts = doc["options"]
+        if isinstance(raw_opts, dict) and "repair" not in raw_opts:  # a file from before the repair
+            raw_opts = {**raw_opts, "repair": False}
+        opts = RoadmapOptions(**raw_opts)
         circumradius = float(doc["circumradius"])
     except (KeyError, TypeError, ValueError, OverflowError) as exc:
         raise SceneError(file, "", f"malformed roadmap: {' '.join(str(exc).split())[:80]}") from None
@@ -367,38 +380,33 @@ def _seed_ompl(seed: int) -> None:
         ou.setLogLevel(level)
 
 
-def _blocked_points(scene: Scene):
-    """A vectorised test: which xy points lie inside a static obstacle or outside bounds."""
-    import shapely
+def _free_cell_draw(scene: Scene, rng: np.random.Generator):
+    """A draw of points uniform over the free cells of the scene's maps, or None.
 
-    from .scene import Box, Disc, MapObstacle
+    Returns None without a map, or when the free cells cover most of the bounds anyway
+    (uniform sampling in the bounds then wastes little).
+    """
+    from .scene import MapObstacle
 
-    shapes = []
-    grids = [ob_ for ob_ in scene.obstacles if isinstance(ob_, MapObstacle)]
-    for ob_ in scene.obstacles:
-        if isinstance(ob_, MapObstacle):
-            continue
-        if isinstance(ob_, Disc):
-            shapes.append(shapely.Point(ob_.center).buffer(ob_.radius, 32))
-        elif isinstance(ob_, Box):
-            shapes.append(shapely.Polygon(ob_.vertices()))
-        else:
-            shapes.append(shapely.Polygon(ob_.points, list(ob_.holes)))
-    union = shapely.union_all(shapes) if shapes else shapely.Polygon()
-    shapely.prepare(union)
     xmin, ymin, xmax, ymax = scene.bounds
+    centres, sizes = [], []
+    for grid in scene.obstacles:
+        if isinstance(grid, MapObstacle):
+            c = grid.free_centres()
+            c = c[(c[:, 0] > xmin) & (c[:, 0] < xmax) & (c[:, 1] > ymin) & (c[:, 1] < ymax)]
+            centres.append(c)
+            sizes.append(np.full(len(c), grid.resolution))
+    if not centres:
+        return None
+    c, size = np.concatenate(centres), np.concatenate(sizes)
+    if len(c) == 0 or float(np.sum(size**2)) > FREE_CELL_SHARE * (xmax - xmin) * (ymax - ymin):
+        return None
 
-    def blocked(xy: FloatArray) -> np.ndarray:
-        x, y = xy[:, 0], xy[:, 1]
-        out = (x <= xmin) | (x >= xmax) | (y <= ymin) | (y >= ymax)
-        if shapes:
-            out |= shapely.contains_xy(union, x, y)
-        for grid in grids:
-            rows, cols, inside = grid.cells_of(xy)
-            out |= inside & grid.blocked[rows, cols]
-        return out
+    def draw() -> FloatArray:
+        k = int(rng.integers(len(c)))
+        return c[k] + (rng.random(2) - 0.5) * size[k]
 
-    return blocked
+    return draw
 
 
 def _make_passage_sampler(
@@ -683,6 +691,9 @@ def grow_roadmaps(
     t_start = time.perf_counter()
     _seed_ompl(options.seed)
     builder = _Builder(scene, options, geometry)
+    from .freespace import free_space
+
+    fs = free_space(scene) if options.repair and scene.robot.shape == "disc" else None
     certified: dict = {}  # (pose a, pose b) bytes -> free: later sizes reuse the answers
     vertex_clear: dict = {}  # pose bytes -> clearance
     out = []
@@ -711,6 +722,7 @@ def grow_roadmaps(
                     progress(k + 1, len(edges))
             dropped = int((~keep).sum())
             edges = edges[keep]
+            vertices, edges, repaired = _repair(geometry, fs, vertices, edges, options.neighbors)
             lengths = metric_distance(
                 vertices[edges[:, 0]], vertices[edges[:, 1]], scene.robot.circumradius
             )
@@ -724,6 +736,7 @@ def grow_roadmaps(
                 certify_calls=int(geometry.calls - calls0 - calls_grow),
                 edges_dropped=dropped,
                 components=_components(len(vertices), edges),
+                repair=repaired,
             )
             opts = RoadmapOptions(**{**asdict(options), "vertices": n})
             out.append(
@@ -741,6 +754,20 @@ def grow_roadmaps(
     finally:
         builder.close()
     return out
+
+
+def _repair(geometry: StaticGeometry, fs, vertices: FloatArray, edges: IntArray, k: int):
+    """(vertices, edges, the repair's report) after :func:`gfuzzy.freespace.repair`, or
+    as given with an empty report when ``fs`` is None (not a disc, or no repair)."""
+    if fs is None:
+        return vertices, edges, {}
+    from .freespace import repair
+
+    t = time.perf_counter()
+    rep = repair(geometry, fs, vertices, edges, k)
+    if rep.added_vertices:
+        log.info("free-space repair: %d components joined, %d vertices added", rep.joined, rep.added_vertices)
+    return rep.vertices, rep.edges, {**rep.to_dict(), "seconds": round(time.perf_counter() - t, 4)}
 
 
 def _components(n: int, edges: IntArray) -> int:

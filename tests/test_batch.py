@@ -300,19 +300,17 @@ def test_batch_keeps_each_querys_hold(client, tmp_path):
 
 
 def test_crowd_episodes_on_the_cluster_match_in_process(client):
-    from gfuzzy import build_roadmap
-    from gfuzzy.crowd import circle_crossing, episodes
-    from gfuzzy.navigator import NavOptions
-    from gfuzzy.roadmap import RoadmapOptions
+    from gfuzzy import crowd as C
 
-    rm = build_roadmap(circle_crossing(0, 1), RoadmapOptions(vertices=80, seed=1))
+    setting = C.CrowdSetting(humans=4)
+    rm = C.crowd_roadmap(setting)
     policies = ["oracle", "orca"]  # deterministic (the navigator's budget is wall-clock)
-    here = episodes(None, rm, 4, [7, 8], NavOptions(), policies)
-    there = episodes(client, rm, 4, [7, 8], NavOptions(), policies)
+    here = C.episodes(setting, rm, 7, 2, policies)
+    there = C.episodes(setting, rm, 7, 2, policies, client=client)
     assert len(there) == 2
     for a, b in zip(here, there, strict=True):
-        for p in policies:
-            assert a[p]["reached"] == b[p]["reached"] and a[p]["collision"] == b[p]["collision"]
-            assert a[p]["time"] == b[p]["time"] or (a[p]["time"] != a[p]["time"] and b[p]["time"] != b[p]["time"])
-            assert a[p]["sep"] == b[p]["sep"]
-    assert here[0]["oracle"]["time"] != here[1]["oracle"]["time"]  # two different crowds
+        for x, y in zip(a, b, strict=True):
+            assert x.policy == y.policy and x.outcome == y.outcome and x.social == y.social
+            assert x.time == y.time or (x.time != x.time and y.time != y.time)
+            assert x.min_separation == y.min_separation
+    assert here[0][0].time != here[1][0].time  # two different crowds

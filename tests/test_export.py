@@ -267,6 +267,26 @@ def test_cli_real_navigate_run(tmp_path, capsys):
     validate_all(msgs, kinds)
 
 
+def test_footprint_robot_body(tmp_path):
+    """A footprint robot's body: its polygon (top face of the right area) at each pose."""
+    scene = load_scene(SCENES / "footprint-office.yaml")
+    rows = np.array([[0.0, 1.0, 1.0, 0.0], [2.0, 2.0, 1.5, 1.2]])
+    out = tmp_path / "f.mcap"
+    export_mcap(scene, out, rows, options=ExportOptions(step=0.5, robot_height=0.3))
+    msgs, kinds = read_mcap(out)
+    fp = np.asarray(scene.robot.footprint)
+    area = 0.5 * abs(np.sum(fp[:, 0] * np.roll(fp[:, 1], -1) - np.roll(fp[:, 0], -1) * fp[:, 1]))
+    for (_, _, robot), (_, _, body) in zip(msgs["/robot"], msgs["/robot_body"], strict=True):
+        (tri,) = body["entities"][0]["triangles"]
+        assert tri["pose"] == robot["pose"]
+        pts = np.array([[p["x"], p["y"], p["z"]] for p in tri["points"]]).reshape(-1, 3, 3)
+        top = pts[np.all(pts[:, :, 2] == 0.3, axis=1)]
+        a, b, c = top[:, 0, :2], top[:, 1, :2], top[:, 2, :2]
+        got = 0.5 * np.abs((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (c[:, 0] - a[:, 0]) * (b[:, 1] - a[:, 1]))
+        assert got.sum() == pytest.approx(area, rel=1e-9)
+    validate_all(msgs, kinds)
+
+
 def test_disc_robot_faces_where_it_goes(tmp_path):
     scene = load_scene(SCENES / "office-polygons.yaml")
     rows = np.array([[0.0, 0.5, 0.5], [1.0, 0.5, 0.5], [2.0, 1.5, 0.5], [3.0, 1.5, 0.5], [4.0, 1.5, 1.5]])
@@ -643,6 +663,9 @@ BAD_SCENES = ROOT / "tests" / "bad_scenes"
 BEYOND_A_SCHEMA = {
     "duplicate_mover": "unique names",
     "duplicate_query": "unique names",
+    "footprint_bowtie": "self-intersection",
+    "footprint_collinear": "area",
+    "footprint_nan": "NaN passes every numeric keyword",
     "inverted_bounds": "xmin < xmax compares two items",
     "mesh_escape": "a relative path that leaves the folder",
     "mesh_garbage": "the file's contents",

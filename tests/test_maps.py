@@ -248,6 +248,10 @@ def load_scene_text(text: str, folder: Path):
     return parse_scene(_load_yaml(text, "s.yaml"), file="s.yaml", folder=folder)
 
 
+BUMPER = ((0.3, 0.0), (0.1, 0.2), (-0.2, 0.2), (-0.2, -0.2), (0.1, -0.2))
+# concave, its reference point (the origin) in the notch, outside the body
+NOTCHED = ((0.4, 0.3), (-0.3, 0.3), (-0.3, -0.3), (0.4, -0.3), (0.4, -0.1), (-0.1, -0.1), (-0.1, 0.1), (0.4, 0.1))
+
 small_maps = st.integers(1, 9).flatmap(
     lambda h: st.integers(1, 9).flatmap(
         lambda w: st.lists(
@@ -267,7 +271,8 @@ small_maps = st.integers(1, 9).flatmap(
     mode=st.sampled_from(["trinary", "scale", "raw"]),
     negate=st.sampled_from([0, 1]),
     unknown=st.sampled_from(["blocked", "free"]),
-    robot=st.sampled_from([("disc", 0.01), ("disc", 0.2), ("disc", 0.7), ("box", (0.5, 0.2)), ("box", (1.5, 0.4))]),
+    robot=st.sampled_from([("disc", 0.01), ("disc", 0.2), ("disc", 0.7), ("box", (0.5, 0.2)), ("box", (1.5, 0.4)),
+                           ("footprint", BUMPER), ("footprint", NOTCHED)]),  # fmt: skip
     keep=st.sampled_from([0.0, 0.0, 0.05, 0.3]),
     data=st.data(),
 )
@@ -277,9 +282,18 @@ def test_random_maps_fcl_and_oracle_agree(tmp_path, pixels, resolution, ox, oy, 
     h, w = len(pixels), len(pixels[0])
     bounds = [ox - 1, oy - 1, ox + w * resolution + 1, oy + h * resolution + 1]
     shape, size = robot
-    radius = size if shape == "disc" else float(np.hypot(*size)) / 2
+    if shape == "footprint":
+        local = np.array(size)
+        radius = float(np.max(np.hypot(local[:, 0], local[:, 1])))
+        spec = "footprint: " + str([list(p) for p in size])
+    elif shape == "box":
+        hl, hw = size[0] / 2, size[1] / 2
+        local = np.array([(hl, hw), (-hl, hw), (-hl, -hw), (hl, -hw)])
+        radius = float(np.hypot(*size)) / 2
+        spec = f"box: [{size[0]}, {size[1]}]"
+    else:
+        radius, spec = size, f"disc: {size}"
     bounds = [bounds[0] - radius, bounds[1] - radius, bounds[2] + radius, bounds[3] + radius]
-    spec = f"disc: {size}" if shape == "disc" else f"box: [{size[0]}, {size[1]}]"
     spec += f", clearance: {keep}"
     (folder / "s.yaml").write_text(scene_text(unknown=unknown, bounds=bounds, robot=spec))
     scene = load_scene(folder / "s.yaml")
@@ -303,8 +317,7 @@ def test_random_maps_fcl_and_oracle_agree(tmp_path, pixels, resolution, ox, oy, 
             assert geo.is_valid(p[:2]) == (d > radius + keep), (p, d)
         else:
             c, s_ = np.cos(p[2]), np.sin(p[2])
-            hl, hw = size[0] / 2, size[1] / 2
-            body = shapely.Polygon([(p[0] + c * a - s_ * b, p[1] + s_ * a + c * b) for a, b in ((hl, hw), (-hl, hw), (-hl, -hw), (hl, -hw))])
+            body = shapely.Polygon([(p[0] + c * a - s_ * b, p[1] + s_ * a + c * b) for a, b in local])
             overlap = body.intersection(region).area if not region.is_empty else 0.0
             gap = body.distance(region) if not region.is_empty else np.inf
             if overlap < 1e-9 and abs(gap - keep) < tol:

@@ -116,19 +116,23 @@ def test_different_seed_different_roadmap(small):
 
 
 def test_vertex_count_is_exact(small):
+    """PRM grows to exactly n; the free-space repair (disc robots) adds what it reports."""
     _, scene, _ = small["disc"]
-    counts = {
-        (n, seed): len(build_roadmap(scene, RoadmapOptions(vertices=n, seed=seed)))
-        for n in (15, 30)
-        for seed in range(6)
-    }
-    assert all(c == n for (n, _), c in counts.items()), counts
+    counts = {}
+    for n in (15, 30):
+        for seed in range(6):
+            plain = build_roadmap(scene, RoadmapOptions(vertices=n, seed=seed, repair=False))
+            rm = build_roadmap(scene, RoadmapOptions(vertices=n, seed=seed))
+            counts[n, seed] = (len(plain), len(rm) - rm.info.repair["added_vertices"])
+            np.testing.assert_array_equal(rm.vertices[:n], plain.vertices)
+    assert all(c == (n, n) for (n, _), c in counts.items()), counts
 
 
 def test_vertex_count_never_exceeds_the_request(small):
     for kind in ("disc", "box"):
         _, scene, rm = small[kind]
-        assert 0.8 * SIZES[kind] <= len(rm) <= SIZES[kind]
+        added = rm.info.repair.get("added_vertices", 0)
+        assert 0.8 * SIZES[kind] <= len(rm) - added <= SIZES[kind]
         assert rm.options.vertices == SIZES[kind]
 
 

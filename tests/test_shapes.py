@@ -540,3 +540,31 @@ def test_unicycle_footprint_docks_and_its_rows_are_unicycle_moves(dock):
     assert np.all(lateral[moved] <= 1e-6)
     turned = np.abs((d[:, 2] + np.pi) % (2 * np.pi) - np.pi) > 1e-9
     assert not np.any(moved & turned) and turned.any()
+
+
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(star_polygons(min_n=4), st.integers(0, 2**31 - 1))
+def test_random_footprints_validity_and_mover_distance_against_shapely(pts, seed):
+    """Random (often concave) footprints: FCL validity and clearance, and the distance to a
+    disc mover, against shapely on the whole polygon."""
+    if not _simple(pts):
+        return
+    obstacles = [{"box": {"center": [2, 2], "size": [0.4, 1.2], "angle": 0.4}}, {"polygon": [[3.2, 0.4], [3.9, 0.6], [3.4, 1.3]]}]
+    scene = _scene({"footprint": pts}, obstacles, bounds=(-2, -2, 6, 6))
+    geo = StaticGeometry(scene)
+    world = shapely.union_all([shapely.Polygon(scene.obstacles[0].vertices()), shapely.Polygon(scene.obstacles[1].points)])
+    rng = np.random.default_rng(seed)
+    for pose in rng.uniform([1.0, 0.0, -math.pi], [4.0, 3.0, math.pi], (40, 3)):
+        body = _body(pts, pose)
+        oracle = body.distance(world)
+        if oracle > 1e-3:
+            assert geo.is_valid(pose) and oracle - 3e-4 <= geo.obstacle_clearance(pose) <= oracle + 1e-9
+        elif body.intersection(world).area > 1e-8:
+            assert not geo.is_valid(pose)
+        q = pose[:2] + rng.uniform(-1.2, 1.2, 2)
+        d = float(mover_distance(scene.robot, pose, "disc", 0.2, (0, 0), q))
+        ref = body.distance(shapely.Point(q)) - 0.2
+        if body.distance(shapely.Point(q)) > 1e-9:
+            assert d == pytest.approx(ref, abs=1e-12)
+        else:
+            assert d <= -0.2 + 1e-12

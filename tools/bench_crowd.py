@@ -1,307 +1,123 @@
-"""Crowd benchmark: the navigator among people whose future it does not know.
+"""Crowd benchmark: the targets of issue 19, measured with ``gfuzzy crowd``'s engine.
 
-    python tools/bench_crowd.py                        # K = 5 and 10, 100 episodes each
-    python tools/bench_crowd.py --episodes 20 --humans 10 --seed 3
-    python tools/bench_crowd.py --replays scenes/eth-crossing.yaml scenes/zara-crowd.yaml
-    python tools/bench_crowd.py --episodes 0 --social 50       # a crowd that reacts (pysocialforce)
-    python tools/bench_crowd.py --opt prediction_horizon=3     # any NavOptions setting
-    python tools/bench_crowd.py --workers 2                    # episodes on a local Dask cluster
-    python tools/bench_crowd.py --kinematics unicycle --humans 5 20   # a differential drive, wmax 1 rad/s
+    python tools/bench_crowd.py                              # every setting, 100 episodes each
+    python tools/bench_crowd.py --episodes 300 --workers 2   # the run of docs/navigator.md
+    python tools/bench_crowd.py --only circle-20-visible arena --episodes 50
+    python tools/bench_crowd.py --episodes 0 --replays       # the ETH/UCY replays only
 
-Protocol: CrowdNav's circle crossing (Chen et al., ICRA 2019), as implemented in
-``gfuzzy/crowd.py``: K ORCA humans (radius 0.3, preferred speed 1) cross a circle of
-radius 4 and do not see the robot; the robot (disc 0.3, vmax 1) goes from (0, -4) to
-(0, 4) within 25 s, replanning every 0.25 s. A collision is decided exactly between
-samples (closed-form distance of linearly moving discs). Policies on the same episodes:
-
-* ``navigator``: :class:`gfuzzy.Navigator` through :func:`gfuzzy.navsim.simulate`;
-* ``oracle``: :func:`gfuzzy.plan` told the humans' true future (possible because they
-  ignore the robot): a lower bound on the time to the goal on the same roadmap;
-* ``orca``: CrowdNav's ORCA robot (it assumes the humans yield; they do not).
-
-Per policy and K: success / collision / timeout rates, mean time to goal (successes),
-time / oracle (mean of the per-episode ratio over the episodes both solved), mean and
-smallest minimum separation, and the navigator's replan latency p50 / p95 / max over every
-replan. One 400-vertex roadmap of the empty square is built per run (seeded).
-
-With ``--kinematics unicycle`` the robot is a differential drive (``--wmax``, default
-1 rad/s; it starts and ends facing the goal, +y): the navigator's plans, fallbacks and
-evasive motions turn only in place and drive only along the heading, and every policy's
-answer is held to that (the oracle plans as a unicycle too; ORCA is holonomic, kept as the
-reference it is). Episodes run in this process.
-
-Targets (issue 10, benchmark figures): 5 humans success >= 0.99, collision <= 0.01;
-10 humans success >= 0.95, collision <= 0.03; time <= 1.15 x oracle; replan p95 <= 100 ms.
+Each setting is one ``gfuzzy crowd`` command line (printed above its table), e.g.
+``gfuzzy crowd --humans 20 --visible --episodes 300 --workers 2``: CrowdNav's circle
+crossing (Chen et al. 2019) or CrowdNav++'s arena (Liu et al. 2023), see
+``gfuzzy/crowd.py``. The table per setting: success, collision and timeout rates, mean
+time to goal, discomfort frequency (gap < 0.2 m), intrusion ratio (CrowdNav++), mean
+smallest separation, replan p50 / p95 (ms, measured in the workers), then the target.
+``--replays`` adds the bundled pedestrian replays through ``gfuzzy navigate`` with
+estimated velocities, each checked with ``gfuzzy check``.
+Quote the load (``uptime``) with the figures: the replan budget is wall-clock.
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
-import math
+import json
+import os
+import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-import gfuzzy  # noqa: E402
-from gfuzzy.crowd import CROWD, circle_crossing, episodes  # noqa: E402
+from gfuzzy import crowd as C  # noqa: E402
+from gfuzzy.cli.crowds import _table  # noqa: E402
 from gfuzzy.navigator import NavOptions  # noqa: E402
-from gfuzzy.navsim import min_separation, simulate  # noqa: E402
+from gfuzzy.sensing import SensorOptions  # noqa: E402
+
+#: name: (gfuzzy crowd flags, CrowdSetting keywords, policies, the issue's target)
+SETTINGS = {
+    "circle-5-invisible": ("--humans 5", {"humans": 5}, ["navigator", "orca", "oracle"],
+                           "success >= 0.99, time <= 10.46 s, discomfort <= 0.05"),
+    "circle-5-visible": ("--humans 5 --visible", {"humans": 5, "visible": True}, ["navigator", "orca"],
+                         "success >= 0.99, discomfort <= 0.03"),
+    "circle-20-visible": ("--humans 20 --visible", {"humans": 20, "visible": True}, ["navigator", "orca"],
+                          "success >= 0.995, collision <= 0.005, discomfort <= 0.10 (ORCA robot: 0.41 success)"),
+    "circle-20-invisible": ("--humans 20", {"humans": 20}, ["navigator", "orca"],
+                            "success >= 0.99, collision <= 0.01, discomfort <= 0.10 (ORCA robot: 0.04)"),
+    "arena": ("--scenario arena", {"scenario": "arena", "humans": 20}, ["navigator", "orca"],
+              "success >= 0.95, intrusion <= 0.04 (CrowdNav++'s policy: 0.92, 4.23 %)"),
+    "circle-5-noise-fov": ("--humans 5 --noise 0.05 --fov 180", {"humans": 5, "noise": 0.05, "fov": 180.0},
+                           ["navigator"], "success >= 0.97"),
+    "circle-5-social-force-visible": ("--humans 5 --visible --crowd social-force",
+                                      {"humans": 5, "visible": True, "crowd": "social-force"},
+                                      ["navigator", "social-force"], "(no target: the reacting crowd of the second model)"),
+    "circle-5-unicycle": ("--humans 5 --kinematics unicycle", {"humans": 5, "kinematics": "unicycle"}, ["navigator"],
+                          "success >= 0.99, time <= 11 s"),
+}  # fmt: skip
 
 
-def as_unicycle(scene, wmax: float):
-    """The circle-crossing scene with its robot a differential drive facing the goal (+y)."""
-    from dataclasses import replace
-
-    robot = replace(scene.robot, kinematics="unicycle", wmax=wmax)
-    queries = tuple(
-        replace(q, start=(*q.start[:2], math.pi / 2), goal=(*q.goal[:2], math.pi / 2)) for q in scene.queries
-    )
-    return replace(scene, robot=robot, queries=queries)
+def setting_of(kw: dict, seed: int) -> C.CrowdSetting:
+    kw = dict(kw)
+    sensor = SensorOptions(noise=kw.pop("noise", 0.0), fov=kw.pop("fov", 360.0), seed=seed)
+    return C.CrowdSetting(sensor=sensor, **kw)
 
 
-def unicycle_episodes(rm, K, seeds, options, policies, wmax):
-    from gfuzzy.crowd import run_episode
-
-    return [run_episode(as_unicycle(circle_crossing(K, s, name=f"crowd-{K}-{s}"), wmax), rm, options, policies)
-            for s in seeds]  # fmt: skip
-
-
-def empty_roadmap(vertices: int, seed: int):
-    scene = circle_crossing(0, 1)
-    return gfuzzy.build_roadmap(scene, gfuzzy.RoadmapOptions(vertices=vertices, seed=seed))
-
-
-def summarize(K, results, policies):
-    lines = []
-    oracle_t = np.array([r["oracle"]["time"] if "oracle" in r else math.nan for r in results])
-    for p in policies:
-        rs = [r[p] for r in results]
-        n = len(rs)
-        coll = np.array([x["collision"] for x in rs])
-        succ = np.array([x["reached"] and not x["collision"] for x in rs])
-        tout = ~coll & ~succ
-        times = np.array([x["time"] if (x["reached"] and not x["collision"]) else math.nan for x in rs])
-        ratio = times / oracle_t
-        seps = np.array([x["sep"] for x in rs], dtype=float)
-        lat = np.concatenate([x["latency"] for x in rs]) if p == "navigator" else np.zeros(0)
-        lat_s = (
-            f"{np.quantile(lat, 0.5) * 1e3:6.1f} {np.quantile(lat, 0.95) * 1e3:6.1f} {lat.max() * 1e3:6.1f}"
-            if lat.size
-            else f"{'-':>6} {'-':>6} {'-':>6}"
-        )
-        lines.append(
-            f"{K:>2} {p:<10} {n:>4} {succ.mean():6.2f} {coll.mean():6.2f} {tout.mean():6.2f} "
-            f"{np.nanmean(times) if succ.any() else math.nan:7.2f} "
-            f"{np.nanmean(ratio) if np.isfinite(ratio).any() else math.nan:7.3f} "
-            f"{np.nanmean(seps):6.3f} {np.nanmin(seps):7.3f}  {lat_s}"
-        )
-        if p == "navigator":
-            modes: dict = {}
-            for x in rs:
-                for k, v in x["modes"].items():
-                    modes[k] = modes.get(k, 0) + v
-            lines[-1] += "   " + " ".join(f"{k}:{v}" for k, v in sorted(modes.items()))
-    return lines
+def run_setting(name, episodes, seed, client, only_policy=None):
+    flags, kw, policies, target = SETTINGS[name]
+    policies = only_policy or policies
+    print(f"\n### {name}\n$ gfuzzy crowd {flags} --episodes {episodes} --seed {seed} --policy {' '.join(policies)}"
+          f"{' --workers 2' if client is not None else ''}")
+    try:
+        setting = setting_of(kw, seed)
+    except C.InputError as exc:
+        print(f"not run: {exc}")
+        return
+    t0 = time.perf_counter()
+    rm = C.crowd_roadmap(setting)
+    runs = C.episodes(setting, rm, seed, episodes, policies, NavOptions(), client)
+    print(_table(setting, runs, policies))
+    print(f"target: {target}   ({time.perf_counter() - t0:.0f} s, load {os.getloadavg()[0]:.1f})")
+    sys.stdout.flush()
 
 
-SOCIAL_CONFIG = """
-[scene]
-enable_group = false
-agent_radius = 0.3
-step_width = 0.25
-max_speed_multiplier = 1.3
-tau = 0.5
-resolution = 10
-"""
-
-
-def social_episode(K, seed, roadmap, options):
-    """One closed-loop circle-crossing episode in which the humans react to the robot.
-
-    The humans are pysocialforce's extended social force model (Helbing & Molnar 1998,
-    Moussaid et al. 2010) with the robot as one more pedestrian, whose state is overwritten
-    every step with where the robot is and how it moves; starts and goals as in the ORCA
-    protocol. Every 0.25 s the robot observes the humans, replans, and moves; the humans
-    then move with the social force's velocity for 0.25 s, so both move linearly between
-    samples and the collision test is exact.
-    """
-    import logging
-    import os
-    import tempfile
-
-    here = os.getcwd()
-    with tempfile.TemporaryDirectory() as scratch:
-        os.chdir(scratch)  # pysocialforce writes a file.log into the current folder on import
-        try:
-            import pysocialforce as psf
-        finally:
-            os.chdir(here)
-    logging.getLogger().setLevel(logging.WARNING)  # it also turns the root logger to DEBUG
-    from gfuzzy.crowd import _starts
-    from gfuzzy.navigator import Navigator
-    from gfuzzy.rng import create_rng
-    from gfuzzy.scene import parse_scene
-
-    c = CROWD
-    dt = c["time_step"]
-    starts, goals = _starts(K, create_rng(seed))
-    d = goals - starts
-    v0 = d / np.hypot(*d.T)[:, None] * c["v_pref"]
-    start, goal = np.array(c["start"]), np.array(c["goal"])
-    state = np.vstack([np.column_stack([starts, v0, goals]), [[*start, 0.0, c["robot_vmax"], *goal]]])
-    with tempfile.NamedTemporaryFile("w", suffix=".toml", delete=False) as fh:
-        fh.write(SOCIAL_CONFIG)
-    sim = psf.Simulator(state, config_file=fh.name)
-    Path(fh.name).unlink()
-    sim.peds.step_width = dt  # the library reads it from the wrong level of its config
-    scene0 = circle_crossing(0, 1)
-    nav = Navigator(scene0, roadmap, goal, options)
-    pose = start.copy()
-    t = 0.0
-    rows = [[0.0, *pose]]
-    track = [sim.peds.pos()[:K].copy()]
-    lat = []
-    reached = False
-    while t < c["time_limit"] - 1e-9:
-        pos, vel = sim.peds.pos()[:K], sim.peds.vel()[:K]
-        obs = np.column_stack([pos, vel, np.full(K, c["human_radius"])])
-        c0 = time.perf_counter()
-        traj = nav.step(t, pose, obs)
-        lat.append(time.perf_counter() - c0)
-        w = traj.waypoints
-        inner = w[(w[:, 0] > t + 1e-9) & (w[:, 0] < t + dt - 1e-9)]
-        rows.extend(inner.tolist())
-        new = traj.at(t + dt)
-        rows.append([t + dt, *new])
-        st = sim.peds.state
-        st[K, 0:2] = pose
-        st[K, 2:4] = (new - pose) / dt
-        sim.step(1)
-        st = sim.peds.state
-        st[K, 0:2] = new  # the robot is where it went, not where the forces pushed it
-        st[K, 4:6] = goal
-        pose = new
-        t += dt
-        track.append(sim.peds.pos()[:K].copy())
-        if np.hypot(*(pose - goal)) <= nav.options.goal_tolerance:
-            reached = True
-            break
-    track = np.array(track)  # (n, K, 2)
-    times = np.arange(len(track)) * dt
-    doc = {
-        "version": 1, "name": "social", "bounds": [-20, -20, 20, 20],
-        "robot": {"disc": c["robot_radius"], "vmax": c["robot_vmax"]}, "obstacles": [],
-        "movers": [
-            {"name": f"h{i}", "disc": c["human_radius"], "trajectory": np.column_stack([times, track[:, i]]).tolist()}
-            for i in range(K)
-        ],
-        "queries": [],
-    }
-    wps = np.array(rows)
-    keep = np.r_[True, np.diff(wps[:, 0]) > 1e-9]
-    sep = min_separation(parse_scene(doc, "<social>"), wps[keep])
-    return {
-        "collision": sep < -1e-9, "reached": reached, "time": t if reached else math.nan, "sep": sep,
-        "latency": np.array(lat), "modes": {},
-    }
-
-
-def social(args, rm, options):
-    print("\nsocial-force crowd (people react to the robot; closed loop, no oracle)")
-    for K in args.humans:
-        t0 = time.perf_counter()
-        results = [{"navigator": social_episode(K, args.seed + 1000 * K + i, rm, options)} for i in range(args.social)]
-        for line in summarize(K, results, ["navigator"]):
-            print(line)
-        print(f"   ({time.perf_counter() - t0:.0f} s)")
-
-
-def replays(paths, options, vertices, seed):
-    print("\npedestrian replays through navigate (real tracks, checked with gfuzzy.check_trajectory)")
-    print(f"{'scene':<22} {'query':<12} {'status':<8} {'time':>6} {'oracle':>6} {'check':<6} {'sep':>6} {'p95 ms':>7}")
-    for path in paths:
-        scene = gfuzzy.load_scene(path)
-        default = Path(path).resolve().parents[1] / "roadmaps" / f"{scene.name}.json"
-        if default.exists():
-            rm = gfuzzy.load_roadmap(default, scene)
-        else:
-            rm = gfuzzy.build_roadmap(scene, gfuzzy.RoadmapOptions(vertices=vertices, seed=seed))
-        for q in scene.queries:
-            res = simulate(scene, rm, q.start, q.goal, q.t0, 0.25, options=options)
-            rep = gfuzzy.check_trajectory(scene, res.trajectory.waypoints, q if res.reached else None)
-            orc = gfuzzy.plan(scene, rm, q.start, q.goal, q.t0)
-            print(
-                f"{scene.name:<22} {q.name:<12} {res.status:<8} {res.duration:6.2f} "
-                f"{orc.duration if orc.solved else math.nan:6.2f} {str(rep.valid):<6} "
-                f"{res.min_separation:6.3f} {res.latency(0.95) * 1e3:7.1f}"
-            )
+def replays(seed: int) -> None:
+    print("\n### pedestrian replays through gfuzzy navigate (estimated velocities), checked")
+    for name in ("eth-crossing", "zara-crowd"):
+        with tempfile.TemporaryDirectory() as d:
+            out = Path(d) / f"{name}.json"
+            cmd = [sys.executable, "-m", "gfuzzy", "navigate", f"scenes/{name}.yaml", "--seed", str(seed), "-o", str(out)]
+            nav = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
+            chk = subprocess.run([sys.executable, "-m", "gfuzzy", "check", f"scenes/{name}.yaml", str(out)],
+                                 capture_output=True, text=True, cwd=ROOT)  # fmt: skip
+            doc = json.loads(out.read_text()) if out.exists() else {}
+            print(f"$ gfuzzy navigate scenes/{name}.yaml: {nav.stdout.strip()}")
+            print(f"  check: {chk.stdout.strip() or chk.stderr.strip()}  (discomfort {doc.get('discomfort_frequency')},"
+                  f" intrusion {doc.get('intrusion_ratio')})")
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--episodes", type=int, default=100, help="episodes per crowd size")
-    ap.add_argument("--humans", type=int, nargs="+", default=[5, 10])
-    ap.add_argument("--seed", type=int, default=1, help="first episode seed (episode i uses seed + i)")
-    ap.add_argument("--vertices", type=int, default=400)
-    ap.add_argument("--roadmap-seed", type=int, default=1)
-    ap.add_argument("--policies", nargs="+", default=["navigator", "oracle", "orca"])
-    ap.add_argument("--social", type=int, default=0, help="episodes per K of a social-force crowd (pysocialforce)")
-    ap.add_argument("--replays", nargs="*", default=None, help="scenes to replay through navigate")
-    ap.add_argument("--opt", nargs="*", default=[], metavar="NAME=VALUE", help="NavOptions settings, e.g. time_budget=0.2")
-    ap.add_argument("--workers", type=int, default=0,
-                    help="run the circle-crossing episodes on a local Dask cluster of this many processes "
-                         "(0: in this process); each episode's replan latencies are measured in its worker")  # fmt: skip
-    ap.add_argument("--kinematics", choices=["holonomic", "unicycle"], default="holonomic",
-                    help="the robot's kinematics (unicycle: a differential drive)")
-    ap.add_argument("--wmax", type=float, default=1.0, help="unicycle: bound on the turning rate, rad/s")
+    ap.add_argument("--episodes", type=int, default=100)
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--workers", type=int, default=0, help="a local Dask cluster of this many processes (0: here)")
+    ap.add_argument("--only", nargs="+", choices=sorted(SETTINGS), help="these settings only")
+    ap.add_argument("--policy", nargs="+", help="these policies only (in every setting)")
+    ap.add_argument("--replays", action="store_true", help="the ETH/UCY replays through navigate")
     args = ap.parse_args(argv)
-    settings = {}
-    for item in args.opt:
-        name, _, value = item.partition("=")
-        settings[name] = type(getattr(NavOptions(), name))(float(value))
-    options = NavOptions(**settings)
-    print(f"options: {options}")
-    t_all = time.perf_counter()
-    if args.episodes > 0:
-        rm = empty_roadmap(args.vertices, args.roadmap_seed)
-        print(f"roadmap: {len(rm.vertices)} vertices, {len(rm.edges)} edges; {args.episodes} episodes per K, seeds {args.seed}..")
-        header = (
-            f"{'K':>2} {'policy':<10} {'n':>4} {'succ':>6} {'coll':>6} {'tout':>6} {'time':>7} "
-            f"{'t/orac':>7} {'sep':>6} {'minsep':>7}  {'p50ms':>6} {'p95ms':>6} {'maxms':>6}"
-        )
-        with contextlib.ExitStack() as stack:
-            client = None
-            if args.workers > 0:
-                from gfuzzy.batch import local_cluster
+    print(f"load at start: {os.getloadavg()}")
+    with contextlib.ExitStack() as stack:
+        client = None
+        if args.workers > 0 and args.episodes > 0:
+            from gfuzzy.batch import local_cluster
 
-                client = stack.enter_context(local_cluster(args.workers))
-                print(f"on {args.workers} Dask worker process(es)")
-            for K in args.humans:
-                t0 = time.perf_counter()
-                seeds = [args.seed + 1000 * K + i for i in range(args.episodes)]
-                if args.kinematics == "unicycle":
-                    results = unicycle_episodes(rm, K, seeds, options, args.policies, args.wmax)
-                else:
-                    results = episodes(client, rm, K, seeds, options, args.policies)
-                print(header)
-                for line in summarize(K, results, args.policies):
-                    print(line)
-                print(f"   ({time.perf_counter() - t0:.0f} s)")
-                sys.stdout.flush()
-    if args.social > 0:
-        social(args, empty_roadmap(args.vertices, args.roadmap_seed), options)
-    if args.replays is not None:
-        paths = args.replays or [
-            str(p) for p in sorted((Path(__file__).resolve().parents[1] / "scenes").glob("*.yaml"))
-            if p.stem in ("eth-crossing", "zara-crowd")
-        ]
-        replays(paths, options, args.vertices, args.roadmap_seed)
-    print(f"total {time.perf_counter() - t_all:.0f} s")
+            client = stack.enter_context(local_cluster(args.workers))
+        if args.episodes > 0:
+            for name in args.only or SETTINGS:
+                run_setting(name, args.episodes, args.seed, client, args.policy)
+    if args.replays:
+        replays(args.seed)
     return 0
 
 

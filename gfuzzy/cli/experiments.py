@@ -176,6 +176,22 @@ def cmd_batch(args) -> int:
             _say(f"{r.scene} {r.query}: the answer fails the check (see `gfuzzy check`)")
     return EXIT_NO if result.errors else EXIT_OK
 
+def _sensor_options(args):
+    """The sensor of ``gfuzzy navigate`` (section 7) from its flags."""
+    from ..sensing import SensorOptions
+
+    for flag, value in (("--noise", args.noise), ("--fov", args.fov)):
+        if not math.isfinite(value):
+            raise InputError(f"{flag} must be a finite number, got {value:g}")
+    if args.noise < 0:
+        raise InputError(f"--noise must be >= 0, got {args.noise:g}")
+    if not 0 < args.fov <= 360:
+        raise InputError(f"--fov must be in (0, 360] degrees, got {args.fov:g}")
+    velocity = "exact" if args.velocity == "true" else "estimated"
+    return SensorOptions(velocity=velocity, noise=args.noise, fov=args.fov, occlusion=args.occlusion,
+                         seed=1 if args.seed is None else args.seed)  # fmt: skip
+
+
 def cmd_navigate(args) -> int:
     """Drive the robot among the scene's movers without knowing their future (section 5)."""
     import numpy as np
@@ -208,6 +224,7 @@ def cmd_navigate(args) -> int:
     out = _out_path(args.output, (".json",)) if args.output else None
     try:
         options = NavOptions(dt=args.dt, time_budget=args.time_budget, backend=args.backend)
+        sensor = _sensor_options(args)
     except InputError as exc:
         raise BadInput(f"gfuzzy navigate: {exc}") from None
     problem = query_problem(StaticGeometry(scene), query.start, query.goal) or _start_on_mover(scene, query)
@@ -221,7 +238,7 @@ def cmd_navigate(args) -> int:
     nav = Navigator(scene, roadmap, query.goal, options)
     res = simulate(
         scene, roadmap, query.start, query.goal, query.t0, args.period, sense, args.max_time,
-        navigator=nav, log_every=args.log_every,
+        navigator=nav, log_every=args.log_every, sensor=sensor,
     )
     wps = res.trajectory.waypoints
     report = check_trajectory(scene, wps, query if res.reached else None)
@@ -237,9 +254,13 @@ def cmd_navigate(args) -> int:
         "replan_seconds_p95": round(res.latency(0.95), 6),
         "replan_seconds_max": round(float(res.replan_seconds.max(initial=0.0)), 6),
         "min_separation": res.min_separation if math.isfinite(res.min_separation) else None,
+        "discomfort_frequency": round(res.social.discomfort_frequency, 6),
+        "intrusion_ratio": round(res.social.intrusion_ratio, 6),
         "check": {"valid": report.valid, "reason": report.reason},
         "modes": res.modes,
-        "navigate": {"period": args.period, "sense": None if math.isinf(sense) else sense, "max_time": args.max_time},
+        "navigate": {"period": args.period, "sense": None if math.isinf(sense) else sense, "max_time": args.max_time,
+                     "velocity": args.velocity, "noise": args.noise, "fov": args.fov, "occlusion": args.occlusion,
+                     "seed": sensor.seed},  # fmt: skip
         "replan_log": res.log,
     }
     if not solved:  # only a solved file carries waypoints (section 2): the motion goes here
@@ -265,6 +286,7 @@ def cmd_navigate(args) -> int:
     line += (
         f", {res.replans} replans (p95 {res.latency(0.95) * 1000:.0f} ms, max "
         f"{float(res.replan_seconds.max(initial=0.0)) * 1000:.0f} ms), min separation {sep}, "
+        f"discomfort {res.social.discomfort_frequency:.3f}, intrusion {res.social.intrusion_ratio:.3f}, "
         f"check {'valid' if report.valid else 'INVALID: ' + report.reason}"
     )
     _say(line, sys.stdout)

@@ -7,6 +7,7 @@ import sys
 
 from ..errors import InputError, LimitError
 from .common import EXIT_BAD, EXIT_OK, BadInput, _Parser, _say
+from .crowds import add_crowd, add_populate
 from .experiments import cmd_batch, cmd_navigate, cmd_tracks
 from .export import add_export
 from .mapping import cmd_map
@@ -47,6 +48,12 @@ def _add_roadmap(sub) -> None:
     r.add_argument("-n", "--vertices", type=int, default=200, help="roadmap vertices (default 200)")
     r.add_argument("--seed", type=int, default=1, help="random seed (default 1)")
     r.add_argument("-k", "--neighbors", type=int, default=10, help="PRM nearest neighbours (default 10)")
+    r.add_argument(
+        "--no-repair",
+        action="store_true",
+        help="disc robots: do not join the roadmap's components through the free space "
+        "(the repair adds vertices beyond -n where PRM missed a passage)",
+    )
     r.add_argument("-o", "--output", help="roadmap file (default roadmaps/<scene name>.json)")
     r.set_defaults(func=cmd_roadmap)
 
@@ -100,8 +107,14 @@ def _add_navigate(sub) -> None:
     v.add_argument("--query", metavar="NAME", help="a query of the scene (default: its first)")
     v.add_argument("--roadmap", metavar="FILE", help="roadmap file (default roadmaps/<scene name>.json)")
     v.add_argument("-n", "--vertices", type=int, help="build a roadmap of this many vertices")
-    v.add_argument("--seed", type=int, help="roadmap seed when building (default 1)")
+    v.add_argument("--seed", type=int, help="roadmap seed when building, and the sensor noise's seed (default 1)")
     v.add_argument("--period", type=float, default=0.25, help="seconds between observations and replans (default 0.25)")
+    v.add_argument("--velocity", choices=("estimated", "true"), default="estimated",
+                   help="movers' velocity: estimated from positions one period apart (default), or their true one")
+    v.add_argument("--noise", type=float, default=0.0, help="Gaussian noise (m) on observed positions (default 0)")
+    v.add_argument("--fov", type=float, default=360.0,
+                   help="field of view (degrees) about the robot's heading or direction of motion (default 360)")
+    v.add_argument("--occlusion", action="store_true", help="static obstacles hide the movers behind them")
     v.add_argument("--sense", type=float, help="range in metres within which movers are seen (default: all)")
     v.add_argument("--max-time", type=float, default=120.0, help="give up this long after t0 (default 120 s)")
     v.add_argument("--dt", type=float, default=0.1, help="time step of the replanning search (default 0.1)")
@@ -185,7 +198,8 @@ def _parser() -> argparse.ArgumentParser:
         description="Roadmap-time-space motion planning among moving obstacles (OMPL + FCL).",
     )
     sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
-    for add in (_add_roadmap, _add_plan, _add_check, _add_render, _add_navigate, _add_regress, _add_tracks, _add_batch, _add_map, add_export):
+    for add in (_add_roadmap, _add_plan, _add_check, _add_render, _add_navigate, _add_regress, _add_tracks, _add_batch,
+                _add_map, add_export, add_crowd, add_populate):
         add(sub)
     return p
 

@@ -32,7 +32,9 @@ def cmd_roadmap(args) -> int:
     scene = _load_scene(args.scene)
     out = _out_path(args.output, (".json",)) if args.output else default_roadmap_path(scene)
     try:
-        opts = RoadmapOptions(vertices=args.vertices, seed=args.seed, neighbors=args.neighbors)
+        opts = RoadmapOptions(
+            vertices=args.vertices, seed=args.seed, neighbors=args.neighbors, repair=not args.no_repair
+        )
     except InputError as exc:
         raise BadInput(f"gfuzzy roadmap: {exc}") from None
     rm = build_roadmap(scene, opts, progress=_progress("roadmap"))
@@ -44,6 +46,14 @@ def cmd_roadmap(args) -> int:
         f"{info.validity_calls + info.certify_calls} collision checks",
         sys.stdout,
     )
+    rep = info.repair
+    if rep and rep["added_vertices"]:
+        _say(
+            f"  free-space repair: PRM missed {rep['components_joined']} passage(s); "
+            f"{rep['added_vertices']} vertices beyond -n {opts.vertices} join them "
+            f"({rep['seconds']:.2f} s)",
+            sys.stdout,
+        )
     return EXIT_OK
 
 

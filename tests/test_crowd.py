@@ -1,0 +1,225 @@
+"""The crowd benchmarks (gfuzzy.crowd, gfuzzy.humans, ``gfuzzy crowd``)."""
+
+from __future__ import annotations
+
+import csv
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("pyrvo")
+
+from gfuzzy import crowd as C  # noqa: E402
+from gfuzzy.errors import InputError  # noqa: E402
+from gfuzzy.humans import OrcaCrowd, SocialForceCrowd  # noqa: E402
+from gfuzzy.socialmetrics import SocialMetrics  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _run(*args):
+    return subprocess.run([sys.executable, "-m", "gfuzzy", *args], capture_output=True, text=True, cwd=ROOT)
+
+
+# ------------------------------------------------------------------------ protocols
+
+
+def test_circle_layout_is_crowdnavs():
+    s = C.CrowdSetting("circle", humans=8)
+    lay = C.layout(s, np.random.default_rng(3))
+    np.testing.assert_array_equal(lay.start, [0, -4])
+    np.testing.assert_array_equal(lay.goal, [0, 4])
+    r = np.hypot(*lay.human_starts.T)
+    assert np.all((r > 4 - 0.71) & (r < 4 + 0.71))  # radius 4, U[-0.5, 0.5) per coordinate
+    np.testing.assert_array_equal(lay.human_goals, -lay.human_starts)
+    agents = np.vstack([lay.start, lay.human_starts])
+    d = np.hypot(*(agents[:, None] - agents[None]).transpose(2, 0, 1)) + np.eye(len(agents)) * 9
+    assert d.min() >= 0.3 + 0.3 + 0.2  # no two agents start within the discomfort distance
+    again = C.layout(s, np.random.default_rng(3))
+    np.testing.assert_array_equal(again.human_starts, lay.human_starts)
+
+
+def test_square_and_arena_layouts():
+    sq = C.layout(C.CrowdSetting("square", humans=10), np.random.default_rng(1))
+    assert np.all(np.abs(sq.human_starts) <= 5) and np.all(np.abs(sq.human_goals) <= 5)
+    # each human crosses from one side of x = 0 to the other
+    assert np.all(np.sign(sq.human_starts[:, 0]) == -np.sign(sq.human_goals[:, 0]))
+    for seed in range(5):
+        ar = C.layout(C.CrowdSetting("arena", humans=20), np.random.default_rng(seed))
+        assert np.all(np.abs(ar.start) <= 6) and np.all(np.abs(ar.goal) <= 6)
+        assert np.hypot(*(ar.start - ar.goal)) >= 8
+        r = np.hypot(*ar.human_starts.T)
+        assert np.all(np.abs(r - 6 * math.sqrt(2)) < 2 * math.sqrt(2))  # the circle, U[0, 2) per coordinate
+
+
+def test_setting_refuses_bad_values():
+    for kw in ({"scenario": "hall"}, {"crowd": "boids"}, {"kinematics": "legs"}, {"humans": -1}):
+        with pytest.raises(InputError):
+            C.CrowdSetting(**kw)
+
+
+# ------------------------------------------------------------------------ crowds
+
+
+@pytest.mark.parametrize("model", [OrcaCrowd, SocialForceCrowd])
+def test_visible_humans_avoid_the_robot_invisible_ones_do_not(model):
+    # one human walks from (0.1, -3) to (0.1, 3) through a robot standing at the origin
+    # (0.1 m off the axis: head-on symmetry is a standstill for ORCA)
+    def closest(visible):
+        crowd = model([[0.1, -3.0]], [[0.1, 3.0]], visible=visible)
+        d = []
+        for _ in range(40):
+            crowd.step(np.zeros(2), np.zeros(2))
+            d.append(float(np.hypot(*crowd.pos[0])))
+        return min(d), crowd.pos[0]
+
+    blind, end = closest(False)
+    assert blind < 0.3  # walks straight through where the robot stands
+    seeing, end = closest(True)
+    assert seeing >= 0.6 - 0.05  # keeps (about) the two radii away
+    assert end[1] > 2.0  # and still gets on toward its goal
+
+
+def test_arena_humans_change_goals():
+    s = C.CrowdSetting("arena", humans=20)
+    lay = C.layout(s, np.random.default_rng(0))
+    world = C._World(s, lay, np.random.default_rng(1), False)
+    first = world.crowd.goals.copy()
+    for _ in range(20):  # 5 s: every human draws a new goal with chance 0.5
+        world.step()
+    changed = np.any(world.crowd.goals != first, axis=1).sum()
+    assert 3 <= changed <= 17  # binomial(20, 0.5): outside this with probability < 0.003
+
+
+# ------------------------------------------------------------------------ episodes
+
+
+@pytest.fixture(scope="module")
+def roadmap():
+    return C.crowd_roadmap(C.CrowdSetting())
+
+
+def test_episodes_are_seeded_and_policies_share_the_walk(roadmap):
+    s = C.CrowdSetting(humans=4)
+    pol = ["orca", "social-force", "oracle"]
+    a = C.run_episode(s, roadmap, 5, 2, pol)
+    b = C.run_episode(s, roadmap, 5, 2, pol)
+    assert [e.policy for e in a] == pol
+    for x, y in zip(a, b, strict=True):
+        assert x.outcome == y.outcome and x.min_separation == y.min_separation and x.social == y.social
+        assert (x.time == y.time) or (math.isnan(x.time) and math.isnan(y.time))
+    other = C.run_episode(s, roadmap, 5, 3, pol)
+    assert [e.min_separation for e in other] != [e.min_separation for e in a]
+    oracle = a[2]
+    assert oracle.reached and oracle.min_separation >= -1e-9  # told the true future: never collides
+
+
+def test_an_episode_ends_at_a_collision_and_the_row_keeps_the_file_format(roadmap):
+    s = C.CrowdSetting(humans=10)
+    eps = [e for i in range(6) for e in C.run_episode(s, roadmap, 1, i, ["orca"])]
+    # CrowdNav's ORCA robot assumes people yield; they do not: it collides in some episodes
+    assert any(e.collision for e in eps)
+    for e in eps:
+        if e.collision:
+            assert e.min_separation < 0 and math.isnan(e.time)
+        row = e.row(s)
+        assert tuple(row) == C.CSV_COLUMNS
+        assert row["outcome"] == str(e.outcome) and row["steps"] == e.social.steps
+
+
+def test_navigator_episode_succeeds_among_a_few_people(roadmap):
+    s = C.CrowdSetting(humans=3, visible=True)
+    ep = C.run_episode(s, roadmap, 1, 0, ["navigator"])[0]
+    assert ep.reached and ep.min_separation >= 0
+    assert ep.time <= 25 and dict(ep.modes).get("plan", 0) > 0
+    assert len(ep.replan_seconds) == ep.social.steps
+
+
+def test_a_unicycle_robot_turns_toward_its_way_and_arrives(roadmap):
+    s = C.CrowdSetting(humans=2, kinematics="unicycle")
+    ep = C.run_episode(s, roadmap, 1, 0, ["navigator"])[0]
+    assert ep.reached and ep.min_separation >= 0
+    scene = C.crowd_scene(s, C.layout(s, np.random.default_rng([1, 0])))
+    assert scene.robot.kinematics == "unicycle" and len(scene.queries[0].start) == 3
+
+
+def test_summary_by_hand():
+    def ep(outcome, time, steps, disc, intr, sep, lat):
+        return C.Episode("p", 0, outcome, time, sep, SocialMetrics(steps, disc, intr), np.array(lat))
+
+    runs = [[ep(C.Outcome.SUCCESS, 10.0, 40, 4, 2, 0.1, [0.01, 0.02])],
+            [ep(C.Outcome.COLLISION, math.nan, 20, 0, 1, -0.2, [0.03])],
+            [ep(C.Outcome.SUCCESS, 12.0, 40, 2, 0, 0.4, [0.04])]]  # fmt: skip
+    s = C.summarize(runs, "p")
+    assert s.episodes == 3
+    assert s.success == pytest.approx(2 / 3) and s.collision == pytest.approx(1 / 3) and s.timeout == 0
+    assert s.time == pytest.approx(11.0)
+    assert s.discomfort == pytest.approx(6 / 100) and s.intrusion == pytest.approx(3 / 100)
+    assert s.min_separation == pytest.approx(0.1)
+    assert s.replan_p50 == pytest.approx(0.025)
+
+
+def test_oracle_with_visible_humans_and_other_policies_for_a_unicycle_are_refused(roadmap):
+    with pytest.raises(InputError):
+        C.run_episode(C.CrowdSetting(humans=2, visible=True), roadmap, 1, 0, ["oracle"])
+    with pytest.raises(InputError):
+        C.run_episode(C.CrowdSetting(humans=2, kinematics="unicycle"), roadmap, 1, 0, ["orca"])
+
+
+# ------------------------------------------------------------------------ command
+
+
+def _rows(path):
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+TIMING = ("replan_p50_ms", "replan_p95_ms", "replan_max_ms")
+
+
+def test_crowd_command_end_to_end_same_seed_same_csv(tmp_path):
+    a, b = tmp_path / "a.csv", tmp_path / "b.csv"
+    args = ["crowd", "--scenario", "square", "--humans", "3", "--episodes", "3", "--seed", "4",
+            "--policy", "orca", "social-force", "oracle"]  # fmt: skip
+    p = _run(*args, "-o", str(a))
+    assert p.returncode == 0, p.stderr
+    assert "square, 3 humans" in p.stdout and "social-force" in p.stdout
+    q = _run(*args, "-o", str(b))
+    assert q.returncode == 0
+    ra, rb = _rows(a), _rows(b)
+    assert len(ra) == 9 and list(ra[0]) == list(C.CSV_COLUMNS)
+    strip = [{k: v for k, v in r.items() if k not in TIMING} for r in ra]
+    assert strip == [{k: v for k, v in r.items() if k not in TIMING} for r in rb]
+    c = tmp_path / "c.csv"
+    other = ["crowd", "--scenario", "square", "--humans", "3", "--episodes", "3", "--seed", "5", "--policy", "orca"]
+    assert _run(*other, "-o", str(c)).returncode == 0
+    assert [r["min_separation"] for r in _rows(c)] != [r["min_separation"] for r in ra if r["policy"] == "orca"]
+
+
+@pytest.mark.parametrize("workers", [pytest.param(["--workers", "2"], marks=pytest.mark.slow), []])
+def test_crowd_command_navigator_visible(tmp_path, workers):
+    out = tmp_path / "n.csv"
+    p = _run("crowd", "--humans", "3", "--visible", "--episodes", "2", "--policy", "navigator", "orca",
+             *workers, "-o", str(out))  # fmt: skip
+    assert p.returncode == 0, p.stderr
+    rows = _rows(out)
+    assert [(r["policy"], r["episode"]) for r in rows] == [("navigator", "0"), ("orca", "0"), ("navigator", "1"), ("orca", "1")]
+    assert all(r["visible"] == "1" for r in rows)
+    assert "plan:" in rows[0]["modes"]
+
+
+@pytest.mark.parametrize("flags", [
+    ["--humans", "-1"], ["--episodes", "0"], ["--kinematics", "unicycle", "--policy", "orca"],
+    ["--visible", "--policy", "oracle"],
+    ["--scenario", "hall"], ["--fov", "0"], ["--noise", "-0.1"], ["--workers", "-1"], ["--time-budget", "0"],
+])  # fmt: skip
+def test_crowd_command_refuses_bad_arguments_in_one_line(tmp_path, flags):
+    out = tmp_path / "x.csv"
+    p = _run("crowd", *flags, "--episodes" if "--episodes" not in flags else "--seed", "1", "-o", str(out))
+    assert p.returncode == 2, p.stdout + p.stderr
+    assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
+    assert not out.exists()

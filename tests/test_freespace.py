@@ -1,0 +1,294 @@
+"""Roadmaps that find every passage the robot fits through (issue 17, item 3).
+
+Disc robots: the roadmap's components are joined through the exactly computed free space
+(gfuzzy.freespace), so a query is solved exactly when the free space connects its start
+and goal. The oracle here is written in the test (shapely on the scene's shapes, grown
+with fine arcs), sharing no code with gfuzzy.freespace; every solved answer goes through
+the independent checker (gfuzzy.check). Box robots: the default passage sampler takes a
+1.0 x 0.5 box through a 0.56-wide slot it must turn to enter.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+import shapely
+import yaml
+from conftest import run_cli_process
+from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import strategies as st
+
+from gfuzzy.check import check_trajectory
+from gfuzzy.freespace import free_space
+from gfuzzy.geometry import StaticGeometry
+from gfuzzy.planner import Planner
+from gfuzzy.roadgraph import connect
+from gfuzzy.roadmap import Roadmap, RoadmapOptions, build_roadmap, load_roadmap, roadmap_digest
+from gfuzzy.scene import parse_scene
+
+WALL = 0.2
+
+
+def door_doc(width: float, radius: float = 0.3, clearance: float = 0.05, size=(6.0, 4.0), door_y=None):
+    """A room split by a wall at the middle with one door of ``width`` centred at ``door_y``."""
+    w, h = size
+    yc = h / 2 if door_y is None else door_y
+    y0, y1 = yc - width / 2, yc + width / 2
+    x = w / 2
+    return {
+        "version": 1,
+        "name": "door",
+        "bounds": [0.0, 0.0, w, h],
+        "robot": {"disc": radius, "vmax": 1.0, "clearance": clearance},
+        "obstacles": [
+            {"box": {"center": [x, y0 / 2], "size": [WALL, y0]}},
+            {"box": {"center": [x, (h + y1) / 2], "size": [WALL, h - y1]}},
+        ],
+    }
+
+
+def solve(scene, roadmap, start, goal):
+    res = Planner(scene, roadmap).plan(start, goal)
+    if res.status == "solved":
+        report = check_trajectory(scene, res.trajectory.waypoints)
+        assert report.valid, report.reason
+        np.testing.assert_allclose(res.trajectory.waypoints[0, 1:], start)
+        np.testing.assert_allclose(res.trajectory.waypoints[-1, 1:], goal)
+    return res
+
+
+# --------------------------------------------------------------------------- the issue's cases
+
+
+@pytest.mark.parametrize("seed, n", [(1, 200), (2, 200), (3, 300)])
+def test_issue_door_radius_03_clearance_005(seed, n):
+    """The issue's door: 0.8 wide, radius 0.3, clearance 0.05 (5 cm of slack per side)."""
+    scene = parse_scene(door_doc(0.8))
+    rm = build_roadmap(scene, RoadmapOptions(vertices=n, seed=seed))
+    assert rm.info.components == 1
+    assert solve(scene, rm, [1.0, 1.0], [5.0, 3.0]).status == "solved"
+
+
+@pytest.mark.parametrize("width, clearance", [(0.74, 0.05), (0.64, 0.0), (0.66, 0.0)])
+def test_doors_with_2_to_3_cm_per_side_at_default_settings(width, clearance):
+    scene = parse_scene(door_doc(width, clearance=clearance))
+    for seed in range(1, 4):
+        rm = build_roadmap(scene, RoadmapOptions(seed=seed))
+        assert rm.options.vertices == 200
+        res = solve(scene, rm, [1.0, 1.0], [5.0, 3.0])
+        assert res.status == "solved", (seed, res.message)
+
+
+def test_repair_joins_what_prm_missed_and_says_so():
+    """Uniform PRM, seed 3, misses the 0.74 door (two components); the repair joins them."""
+    scene = parse_scene(door_doc(0.74))
+    plain = build_roadmap(scene, RoadmapOptions(seed=3, repair=False, sampler="uniform"))
+    rm = build_roadmap(scene, RoadmapOptions(seed=3, sampler="uniform"))
+    assert plain.info.components == 2 and not plain.info.repair and "repair" not in plain.info.to_dict()
+    assert rm.info.components == 1
+    rep = rm.info.repair
+    assert rep["components_joined"] == 1 and rep["added_vertices"] == len(rm) - 200 > 0
+    np.testing.assert_array_equal(rm.vertices[:200], plain.vertices)
+    # the added edges are certified: every one passes the independent checker as a motion
+    added = rm.edges[(rm.edges >= 200).any(axis=1)]
+    assert len(added) >= 2
+    for a, b in added:
+        rows = np.array([[0.0, *rm.vertices[a]], [10.0, *rm.vertices[b]]])
+        assert check_trajectory(scene, rows).valid
+    # reproducible: the same seed gives the same roadmap, repair included
+    again = build_roadmap(scene, RoadmapOptions(seed=3, sampler="uniform"))
+    assert roadmap_digest(again) == roadmap_digest(rm)
+
+
+def test_no_repair_is_the_old_behaviour_and_the_query_still_joins():
+    """An unrepaired roadmap (or an old file) is joined per query through the free space."""
+    scene = parse_scene(door_doc(0.74))
+    plain = build_roadmap(scene, RoadmapOptions(seed=3, repair=False, sampler="uniform"))
+    assert plain.info.components == 2
+    res = solve(scene, plain, [1.0, 1.0], [5.0, 3.0])
+    assert res.status == "solved"
+    assert res.stats.roadmap_vertices > len(plain)
+
+
+def test_cli_roadmap_says_what_the_repair_added(tmp_path):
+    path = tmp_path / "door.yaml"
+    path.write_text(yaml.safe_dump(door_doc(0.74)), encoding="utf-8")
+    out = tmp_path / "rm.json"
+    p = run_cli_process("roadmap", path, "-n", "30", "--seed", "3", "-o", out)
+    assert p.returncode == 0, p.stderr
+    assert "free-space repair: PRM missed 1 passage(s); 4 vertices beyond -n 30 join them" in p.stdout
+    doc = json.loads(out.read_text())
+    assert len(doc["vertices"]) == 34 and doc["options"]["repair"] is True
+    p = run_cli_process("roadmap", path, "-n", "30", "--seed", "3", "--no-repair", "-o", out)
+    assert p.returncode == 0 and "free-space repair" not in p.stdout
+    doc = json.loads(out.read_text())
+    assert len(doc["vertices"]) == 30 and doc["options"]["repair"] is False and doc["info"]["components"] == 2
+
+
+def test_old_roadmap_files_load_as_unrepaired(tmp_path):
+    scene = parse_scene(door_doc(0.8))
+    rm = build_roadmap(scene, RoadmapOptions(vertices=40, seed=2))
+    path = tmp_path / "rm.json"
+    rm.save(path)
+    assert load_roadmap(path, scene).options.repair is True
+    doc = json.loads(path.read_text())
+    del doc["options"]["repair"]
+    path.write_text(json.dumps(doc))
+    old = load_roadmap(path, scene)
+    assert old.options.repair is False
+    np.testing.assert_array_equal(old.vertices, rm.vertices)
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_box_turns_into_a_slot_056_wide(seed):
+    """A 1.0 x 0.5 box through a 0.56-wide slot (3 cm per side), starting across it."""
+    doc = door_doc(0.56)
+    doc["robot"] = {"box": [1.0, 0.5], "vmax": 1.0}
+    scene = parse_scene(doc)
+    rm = build_roadmap(scene, RoadmapOptions(seed=seed))
+    res = solve(scene, rm, [1.0, 1.0, math.pi / 2], [5.0, 3.0, math.pi / 2])
+    assert res.status == "solved", res.message
+    # it crossed the wall aligned with the slot: |heading| within the slot's play
+    w = res.trajectory.waypoints
+    inside = np.abs(w[:, 1] - 3.0) < 0.1
+    assert inside.any()
+    assert np.all(np.abs(np.sin(w[inside, 3])) < 0.25)  # the slot allows 0.22 rad
+
+
+# --------------------------------------------------------------------------- messages and links
+
+
+def test_disconnected_free_space_names_where():
+    scene = parse_scene(door_doc(0.69))  # needs 0.70: 1 cm too narrow
+    rm = build_roadmap(scene, RoadmapOptions(vertices=60, seed=1))
+    res = Planner(scene, rm).plan([1.0, 1.0], [5.0, 3.0])
+    assert res.status == "no_path"
+    msg = res.message
+    assert "separate parts of the free space" in msg
+    assert "(1.000, 1.000)" in msg and "(5.000, 3.000)" in msg
+    assert "near (3.000, 2.000)" in msg
+    assert "0.010 m too narrow" in msg
+
+
+def test_sealed_off_free_space_says_so():
+    doc = door_doc(0.69)
+    doc["obstacles"] = [{"box": {"center": [3.0, 2.0], "size": [WALL, 4.0]}}]
+    scene = parse_scene(doc)
+    rm = build_roadmap(scene, RoadmapOptions(vertices=40, seed=1))
+    res = Planner(scene, rm).plan([1.0, 1.0], [5.0, 3.0])
+    assert res.status == "no_path" and "sealed off" in res.message
+
+
+def test_a_start_that_sees_no_vertex_is_linked_through_the_free_space():
+    scene = parse_scene(door_doc(0.74))
+    verts = np.array([[5.0, 3.5], [5.0, 0.5]])
+    rm = Roadmap(
+        verts, np.array([[0, 1]]), np.array([3.0]), scene.name, scene.static_hash, scene.robot.circumradius,
+        RoadmapOptions(vertices=2, repair=False),
+    )
+    start = np.array([1.0, 3.5])
+    assert connect(StaticGeometry(scene), rm, start, 10) == []
+    res = solve(scene, rm, start, [5.0, 0.5])
+    assert res.status == "solved", res.message
+
+
+# --------------------------------------------------------------------------- Hypothesis
+
+
+def oracle_regions(doc: dict):
+    """The free space of the doc's disc robot, by shapely, written here: (polygons)."""
+    r = doc["robot"]["disc"]
+    grow = r + doc["robot"].get("clearance", 0.0)
+    xmin, ymin, xmax, ymax = doc["bounds"]
+    blocked = []
+    for ob in doc["obstacles"]:
+        (kind, spec), = ob.items()
+        if kind == "box":
+            (cx, cy), (sx, sy) = spec["center"], spec["size"]
+            shape = shapely.box(cx - sx / 2, cy - sy / 2, cx + sx / 2, cy + sy / 2)
+        else:
+            shape = shapely.Point(spec["center"]).buffer(spec["radius"], quad_segs=256)
+        blocked.append(shape.buffer(grow, quad_segs=256))
+    free = shapely.box(xmin + r, ymin + r, xmax - r, ymax - r).difference(shapely.union_all(blocked))
+    return list(getattr(free, "geoms", [free]))
+
+
+def oracle_region(regions, p, margin):
+    """Index of the region holding p, -1 if none, None if p lies within ``margin`` of a
+    region's boundary (too close to judge)."""
+    pt = shapely.Point(p)
+    if any(g.boundary.distance(pt) <= margin for g in regions):
+        return None
+    for k, g in enumerate(regions):
+        if g.contains(pt):
+            return k
+    return -1
+
+
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    radius=st.floats(0.15, 0.35),
+    clearance=st.sampled_from([0.0, 0.03, 0.05]),
+    slack=st.floats(-0.02, 0.03),
+    door_y=st.floats(0.3, 0.7),
+    post=st.booleans(),
+    ends=st.tuples(*[st.floats(0.05, 0.95)] * 4),
+    seed=st.integers(1, 1000),
+)
+def test_random_rooms_solved_exactly_when_the_free_space_connects(radius, clearance, slack, door_y, post, ends, seed):
+    """A query is solved exactly when the oracle's free space joins start and goal."""
+    assume(abs(slack) > 0.003)  # keep clear of the exact-fit case the arcs cannot judge
+    width = 2 * (radius + clearance) + slack
+    w, h = 5.0, 3.5
+    doc = door_doc(width, radius, clearance, size=(w, h), door_y=door_y * h)
+    if post:  # a pillar in the left room
+        doc["obstacles"].append({"disc": {"center": [1.2, h / 2], "radius": 0.3}})
+    sx, sy, gx, gy = ends
+    start = np.array([sx * (w / 2 - WALL), sy * h])
+    goal = np.array([w / 2 + WALL + gx * (w / 2 - WALL), gy * h])
+    regions = oracle_regions(doc)
+    rs, rg = oracle_region(regions, start, 0.005), oracle_region(regions, goal, 0.005)
+    assume(rs is not None and rg is not None and rs >= 0 and rg >= 0)
+    scene = parse_scene(doc)
+    rm = build_roadmap(scene, RoadmapOptions(vertices=40, seed=seed))
+    res = solve(scene, rm, start, goal)
+    if rs == rg:
+        assert res.status == "solved", res.message
+    else:
+        assert res.status == "no_path"
+        assert "separate parts of the free space" in res.message
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    radius=st.floats(0.05, 0.4),
+    clearance=st.floats(0.0, 0.1),
+    obstacles=st.lists(
+        st.tuples(st.floats(0.5, 3.5), st.floats(0.5, 2.5), st.floats(0.05, 0.6), st.floats(0.05, 0.6), st.booleans()),
+        min_size=1, max_size=5,
+    ),
+    points=st.lists(st.tuples(st.floats(0, 4), st.floats(0, 3)), min_size=20, max_size=20),
+)
+def test_free_space_regions_lie_inside_the_true_free_space(radius, clearance, obstacles, points):
+    """Every point the computed free space holds is valid under FCL (the regions are a
+    conservative subset), and points the fine oracle puts 1 mm inside are in a region."""
+    obs = [
+        {"disc": {"center": [x, y], "radius": a}} if disc else {"box": {"center": [x, y], "size": [a, b]}}
+        for x, y, a, b, disc in obstacles
+    ]
+    doc = {"version": 1, "name": "r", "bounds": [0, 0, 4, 3], "robot": {"disc": radius, "vmax": 1, "clearance": clearance}, "obstacles": obs}
+    scene = parse_scene(doc)
+    fs = free_space(scene)
+    geom = StaticGeometry(scene)
+    pts = np.asarray(points)
+    got = fs.region_of(pts, slack=0.0)
+    regions = oracle_regions(doc)
+    for p, k in zip(pts, got, strict=True):
+        if k >= 0:
+            assert geom.is_valid(p), p
+        want = oracle_region(regions, p, 1e-3)
+        if want is not None:
+            assert (k >= 0) == (want >= 0), (p, k, want)

@@ -1,0 +1,206 @@
+"""The robot's sensor (gfuzzy.sensing) and the social metrics (gfuzzy.socialmetrics):
+each against a case whose answer is known by hand."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import gfuzzy
+from gfuzzy.errors import InputError
+from gfuzzy.scene import Mover, parse_scene
+from gfuzzy.sensing import Sensor, SensorOptions, Tracker, in_fov, line_of_sight
+from gfuzzy.socialmetrics import social_metrics, step_gaps
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _scene(obstacles=()):
+    return parse_scene({
+        "version": 1, "name": "s", "bounds": [-10, -10, 10, 10], "robot": {"disc": 0.3, "vmax": 1.0},
+        "obstacles": list(obstacles), "movers": [], "queries": [],
+    })  # fmt: skip
+
+
+def _walker(name, rows, r=0.3):
+    return Mover(name, "disc", r, (0.0, 0.0), trajectory=np.asarray(rows, float))
+
+
+# ------------------------------------------------------------------ velocity estimate
+
+
+def test_tracker_velocity_is_the_difference_of_two_positions_one_period_apart():
+    tr = Tracker()
+    v = np.array([1.0, 0.5])
+    first = tr.update(0.0, [[1.0, 2.0, 0.3]])
+    assert first.shape == (1, 5)
+    np.testing.assert_array_equal(first[0], [1.0, 2.0, 0.0, 0.0, 0.3])  # one sighting: no velocity yet
+    for k in (1, 2, 3):
+        out = tr.update(0.25 * k, [[1.0 + v[0] * 0.25 * k, 2.0 + v[1] * 0.25 * k, 0.3]])
+        np.testing.assert_allclose(out[0, 2:4], v, atol=1e-12)
+    # a turn: the estimate is the last period's displacement over the period (never the future)
+    p = out[0, :2]
+    out = tr.update(1.0, [[p[0], p[1] + 0.25, 0.3]])
+    np.testing.assert_allclose(out[0, 2:4], [0.0, 1.0], atol=1e-12)
+
+
+def test_tracker_associates_unlabelled_detections():
+    tr = Tracker()
+    a0, b0 = np.array([0.0, 0.0]), np.array([0.0, 1.5])
+    va, vb = np.array([1.0, 0.0]), np.array([-1.0, 0.2])
+    for k in range(4):
+        t = 0.25 * k
+        det = [[*(b0 + vb * t), 0.25], [*(a0 + va * t), 0.3]]
+        if k % 2:
+            det = det[::-1]  # detections come in no particular order
+        out = tr.update(t, det)
+    assert len(out) == 2
+    by_radius = {round(r[4], 2): r for r in out}
+    np.testing.assert_allclose(by_radius[0.3][2:4], va, atol=1e-12)
+    np.testing.assert_allclose(by_radius[0.25][2:4], vb, atol=1e-12)
+
+
+def test_tracker_coasts_an_unseen_person_then_drops_them():
+    tr = Tracker(coast=0.5)
+    tr.update(0.0, [[0.0, 0.0, 0.3]])
+    tr.update(0.25, [[0.25, 0.0, 0.3]])
+    out = tr.update(0.5, np.zeros((0, 3)))  # unseen: walking on at the last velocity
+    np.testing.assert_allclose(out[0, :4], [0.5, 0.0, 1.0, 0.0])
+    assert len(tr.update(0.75, np.zeros((0, 3)))) == 1
+    assert len(tr.update(1.0, np.zeros((0, 3)))) == 0  # 0.75 s unseen > coast
+
+
+def test_noise_is_gaussian_with_the_given_sigma_and_seeded():
+    truth = np.array([[2.0, 1.0, 0.0, 0.0, 0.3]])
+    sensor = Sensor(_scene(), SensorOptions(velocity="exact", noise=0.1, seed=4))
+    xy = np.array([sensor.observe(0.25 * k, np.zeros(2), 0.0, truth)[0, :2] for k in range(4000)])
+    np.testing.assert_allclose(xy.mean(axis=0), [2.0, 1.0], atol=0.01)  # 4 sigma / sqrt(n) = 0.006
+    np.testing.assert_allclose(xy.std(axis=0), [0.1, 0.1], rtol=0.05)
+    again = Sensor(_scene(), SensorOptions(velocity="exact", noise=0.1, seed=4))
+    np.testing.assert_array_equal(again.observe(0.0, np.zeros(2), 0.0, truth)[0, :2], xy[0])  # same seed
+    other = Sensor(_scene(), SensorOptions(velocity="exact", noise=0.1, seed=5))
+    assert not np.array_equal(other.observe(0.0, np.zeros(2), 0.0, truth)[0, :2], xy[0])
+
+
+def test_estimated_velocity_under_noise_is_close_to_the_truth():
+    sensor = Sensor(_scene(), SensorOptions(noise=0.05, seed=1))
+    v = np.array([1.0, 0.0])
+    est = []
+    for k in range(200):
+        t = 0.25 * k
+        truth = np.array([[-5.0 + v[0] * t * 0.04, 0.0, 0.04, 0.0, 0.3]])  # slow, so it stays in view
+        est.append(sensor.observe(t, np.zeros(2), math.pi, truth)[0, 2:4])
+    est = np.array(est[20:])
+    assert abs(est[:, 0].mean() - 0.04) < 0.03
+    assert est[:, 0].std() < 0.25  # the raw difference would have 0.05 * sqrt(2) / 0.25 = 0.28
+
+
+def test_field_of_view_is_a_cone_about_the_heading():
+    pts = np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 0.9], [1.0, 1.1], [-1.0, 0.0]])
+    np.testing.assert_array_equal(in_fov(np.zeros(2), 0.0, pts, 90.0), [True, False, True, False, False])
+    np.testing.assert_array_equal(in_fov(np.zeros(2), math.pi / 2, pts, 90.0), [False, True, False, True, False])
+    assert in_fov(np.zeros(2), 0.0, pts, 360.0).all()
+    # through the sensor: a person behind a robot heading +x is not seen with a 180 degree view
+    s = Sensor(_scene(), SensorOptions(velocity="exact", fov=180.0))
+    truth = np.array([[2.0, 0.5, 0, 0, 0.3], [-2.0, 0.0, 0, 0, 0.3]])
+    np.testing.assert_array_equal(s.observe(0.0, np.zeros(2), 0.0, truth)[:, 0], [2.0])
+
+
+def test_occlusion_by_a_static_obstacle_on_the_line_of_sight():
+    scene = _scene([{"box": {"center": [2.0, 0.0], "size": [0.2, 2.0]}}])  # a wall, y in [-1, 1]
+    pts = np.array([[4.0, 0.0], [4.0, 3.0], [1.0, 0.0]])
+    # (4, 0): behind the wall; (4, 3): the line passes the wall's top at y = 1.5; (1, 0): in front
+    np.testing.assert_array_equal(line_of_sight(scene, np.zeros(2), pts), [False, True, True])
+    s = Sensor(scene, SensorOptions(velocity="exact", occlusion=True))
+    truth = np.column_stack([pts, np.zeros((3, 2)), np.full(3, 0.3)])
+    assert s.observe(0.0, np.zeros(2), 0.0, truth).shape == (2, 5)
+    assert Sensor(scene, SensorOptions(velocity="exact")).observe(0.0, np.zeros(2), 0.0, truth).shape == (3, 5)
+
+
+def test_sensor_options_refuse_bad_values():
+    for kw in ({"velocity": "future"}, {"noise": -1.0}, {"fov": 0.0}, {"fov": 400.0}, {"sense": 0.0}):
+        with pytest.raises(InputError):
+            SensorOptions(**kw)
+
+
+# ---------------------------------------------------------------------- social metrics
+
+
+def test_discomfort_and_intrusion_by_hand():
+    # the robot stands at the origin for 4 s (16 steps of 0.25 s); a person walks along
+    # y = 0.5 from x = 4 to x = 0 at 1 m/s: the centre distance is hypot(4 - t, 0.5)
+    robot = np.array([[0.0, 0.0, 0.0], [4.0, 0.0, 0.0]])
+    walker = _walker("p", [[0.0, 4.0, 0.5], [4.0, 0.0, 0.5]])
+    m = social_metrics(robot, 0.3, [walker], 0.25)
+    assert m.steps == 16
+    # gap < 0.2 <=> |4 - t| < sqrt(0.8^2 - 0.5^2) = 0.6245 <=> t > 3.3755: steps 13, 14, 15
+    assert m.discomfort_steps == 3
+    assert m.discomfort_frequency == pytest.approx(3 / 16)
+    # centre within 0.6 <=> t > 4 - sqrt(0.6^2 - 0.5^2) = 3.6683, seen from t_k when
+    # t_k + 1.25 > 3.6683 <=> t_k > 2.4183: steps 10..15
+    assert m.intrusion_steps == 6
+    assert m.intrusion_ratio == pytest.approx(6 / 16)
+    assert m.min_gap == pytest.approx(0.5 - 0.6)
+
+
+def test_step_gaps_take_the_closest_instant_within_each_step():
+    # a person passes the standing robot at t = 0.5, 0.7 m away: the closest instant is a
+    # step boundary, the steps on either side both see it
+    robot = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    walker = _walker("p", [[0.0, -2.0, 0.7], [1.0, 2.0, 0.7]])
+    g = step_gaps(robot, 0.3, [walker], 0.25)
+    np.testing.assert_allclose(g, [math.hypot(1.0, 0.7) - 0.6, 0.1, 0.1, math.hypot(1.0, 0.7) - 0.6])
+    # the same person 0.2 s later: the closest instant is inside step 2 (t = 0.7)
+    late = _walker("q", [[0.2, -2.0, 0.7], [1.2, 2.0, 0.7]])
+    g = step_gaps(robot, 0.3, [late], 0.25)
+    assert g[2] == pytest.approx(0.1)
+    assert g[0] == pytest.approx(math.hypot(2.0 - 4 * 0.05, 0.7) - 0.6)  # present from t = 0.2 only
+    assert social_metrics(robot, 0.3, [], 0.25).discomfort_steps == 0
+
+
+# ----------------------------------------------------------------------- navigate
+
+
+def _run(*args):
+    return subprocess.run([sys.executable, "-m", "gfuzzy", *args], capture_output=True, text=True, cwd=ROOT)
+
+
+@pytest.mark.parametrize("name", ["zara-crowd", "eth-crossing"])
+def test_pedestrian_replays_with_estimated_velocities_reach_the_goal_and_check(tmp_path, name):
+    out = tmp_path / f"{name}.json"
+    p = _run("navigate", f"scenes/{name}.yaml", "-o", str(out))
+    assert p.returncode == 0, p.stdout + p.stderr
+    doc = json.loads(out.read_text())
+    assert doc["status"] == "solved"
+    assert doc["navigate"]["velocity"] == "estimated"
+    assert 0.0 <= doc["discomfort_frequency"] <= 1.0 and 0.0 <= doc["intrusion_ratio"] <= 1.0
+    c = _run("check", f"scenes/{name}.yaml", str(out))
+    assert c.returncode == 0, c.stdout + c.stderr
+
+
+def test_navigate_with_a_narrow_noisy_view_stays_valid(tmp_path):
+    out = tmp_path / "z.json"
+    p = _run("navigate", "scenes/zara-crowd.yaml", "--noise", "0.05", "--fov", "180", "--occlusion",
+             "--seed", "3", "-o", str(out))  # fmt: skip
+    assert p.returncode in (0, 1), p.stderr
+    doc = json.loads(out.read_text())
+    assert doc["navigate"]["noise"] == 0.05 and doc["navigate"]["fov"] == 180.0 and doc["navigate"]["occlusion"]
+    scene = gfuzzy.load_scene(ROOT / "scenes" / "zara-crowd.yaml")
+    rows = doc["waypoints"] if doc["status"] == "solved" else doc["executed"]
+    assert gfuzzy.check_trajectory(scene, np.array(rows), None).valid
+
+
+@pytest.mark.parametrize("flags", [["--noise", "-1"], ["--fov", "0"], ["--fov", "361"], ["--noise", "nan"],
+                                   ["--velocity", "future"]])  # fmt: skip
+def test_navigate_refuses_bad_sensor_flags_in_one_line(tmp_path, flags):
+    out = tmp_path / "x.json"
+    p = _run("navigate", "scenes/zara-crowd.yaml", *flags, "-o", str(out))
+    assert p.returncode == 2
+    assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
+    assert not out.exists()
