@@ -15,10 +15,47 @@ from .poses import wrap_angle
 from .settings import SPEED_SAFETY
 from .typing import FloatArray
 
-__all__ = ["turn_path", "drive_rows", "evasions", "SAME_HEADING"]
+__all__ = ["turn_path", "drive_rows", "evasions", "turn_free", "pick_turn", "SAME_HEADING"]
+
+#: A turn's sweep is certified in arcs of at most this (rad): ``motion_free`` turns along
+#: the shorter arc.
+_ARC = 0.5 * math.pi
 
 #: Headings closer than this (rad) are the same.
 SAME_HEADING = 1e-9
+
+
+def _xy_pose(robot, x: float, y: float, h: float) -> list:
+    """A pose for the static geometry: [x, y] for a disc, [x, y, h] otherwise."""
+    return [x, y] if robot.shape == "disc" else [x, y, h]
+
+
+def turn_free(geometry, x: float, y: float, h: float, dh: float) -> bool:
+    """Whether turning in place at (x, y) from ``h`` by ``dh`` (signed, any size) is free,
+    the sweep certified (a disc: the pose alone)."""
+    robot = geometry.robot
+    if robot.shape == "disc":
+        return geometry.clearance1([x, y]) >= 0
+    n = max(1, int(math.ceil(abs(dh) / _ARC)))
+    prev = [x, y, wrap_angle(h)]
+    for i in range(1, n + 1):
+        cur = [x, y, wrap_angle(h + dh * i / n)]
+        if not geometry.motion_free(prev, cur):
+            return False
+        prev = cur
+    return True
+
+
+def pick_turn(geometry, x: float, y: float, h1: float, h2: float) -> float | None:
+    """The signed turn from ``h1`` to ``h2``: the shorter arc when its sweep is free, else
+    the longer one, else None (0 when the headings are the same)."""
+    d = float(wrap_angle(h2 - h1))
+    if abs(d) <= SAME_HEADING:
+        return 0.0
+    for dh in (d, d - math.copysign(2 * math.pi, d)):
+        if turn_free(geometry, x, y, h1, dh):
+            return dh
+    return None
 
 
 def _free(geometry, a, b) -> bool:

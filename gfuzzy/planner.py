@@ -724,7 +724,7 @@ def check_pose(pose, dof: int, label: str) -> FloatArray:
     well-formed pose that collides or lies out of bounds is a query answered
     ``invalid_query`` (see :func:`query_problem`).
     """
-    want = "[x, y] for a disc robot" if dof == 2 else "[x, y, heading] for a box robot"
+    want = "[x, y] for a disc robot" if dof == 2 else "[x, y, heading] for a box robot or a unicycle"
     try:
         arr = np.asarray(pose, dtype=float)
     except (TypeError, ValueError):

@@ -358,6 +358,8 @@ def _speed_layer(ctx: StageContext, traj: Trajectory, query, opts, deadline) -> 
     path = _dedupe(traj.poses)
     if len(path) < 2:
         return traj, SpeedReport(False, amax, "the start is the goal")
+    if robot.unicycle:  # its profile runs along the xy path: a turn in place has no length there
+        return traj, SpeedReport(False, amax, "not adapted to a differential drive (kinematics: unicycle) yet")
     rules = opts.rules if opts.rules is not None else expert_rules()
     s_xy, v_xy = speed_limit(path[:, :2], robot.vmax, amax, rules, FuzzyOptions())
     horizon = max(opts.horizon or 0.0, 3.0 * traj.duration + 30.0)

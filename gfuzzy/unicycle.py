@@ -31,28 +31,21 @@ The lanes and the query-independent pieces are kept in ``Roadmap._derived``.
 
 from __future__ import annotations
 
-import logging
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from .drive import SAME_HEADING, _xy_pose, pick_turn, turn_free
 from .poses import split_counts, wrap_angle
 from .spacetime import SpaceTimeGraph
 from .typing import FloatArray, IntArray
 
 __all__ = ["UnicycleGraph", "UnicycleGoal", "UnicyclePrepared", "prepare_goal", "build_graph", "lanes", "LANE_NEIGHBOURS", "SAME_HEADING"]
 
-log = logging.getLogger(__name__)
-
 #: For an SE(2) roadmap (box robots): how many nearest vertices in the plane each vertex
 #: tries as extra lanes, besides the roadmap's own edges.
 LANE_NEIGHBOURS = 10
-#: Headings closer than this (rad) at one vertex are one copy.
-SAME_HEADING = 1e-9
-#: A turn's sweep is certified in arcs of at most this (rad): ``motion_free`` turns along
-#: the shorter arc.
-_ARC = 0.5 * math.pi
 
 
 @dataclass
@@ -139,39 +132,6 @@ class UnicycleGraph:
     s_id: int
     g_id: int
     roadmap_distance: float
-
-
-def _xy_pose(robot, x: float, y: float, h: float) -> list:
-    """A pose for the static geometry: [x, y] for a disc, [x, y, h] otherwise."""
-    return [x, y] if robot.shape == "disc" else [x, y, h]
-
-
-def turn_free(geometry, x: float, y: float, h: float, dh: float) -> bool:
-    """Whether turning in place at (x, y) from ``h`` by ``dh`` (signed, any size) is free,
-    the sweep certified (a disc: the pose alone)."""
-    robot = geometry.robot
-    if robot.shape == "disc":
-        return geometry.clearance1([x, y]) >= 0
-    n = max(1, int(math.ceil(abs(dh) / _ARC)))
-    prev = [x, y, wrap_angle(h)]
-    for i in range(1, n + 1):
-        cur = [x, y, wrap_angle(h + dh * i / n)]
-        if not geometry.motion_free(prev, cur):
-            return False
-        prev = cur
-    return True
-
-
-def pick_turn(geometry, x: float, y: float, h1: float, h2: float) -> float | None:
-    """The signed turn from ``h1`` to ``h2``: the shorter arc when its sweep is free, else
-    the longer one, else None (0 when the headings are the same)."""
-    d = float(wrap_angle(h2 - h1))
-    if abs(d) <= SAME_HEADING:
-        return 0.0
-    for dh in (d, d - math.copysign(2 * math.pi, d)):
-        if turn_free(geometry, x, y, h1, dh):
-            return dh
-    return None
 
 
 def lanes(roadmap, geometry, stretch: float = 1.0) -> Lanes:

@@ -83,6 +83,8 @@ def test_plan_from_matches_fresh_plans_on_every_bundled_query(name):
         mid = 0.5 * (rm.vertices[e[0]] + rm.vertices[e[1]])
         if rm.dof == 3:
             mid[2] = rm.vertices[e[0], 2]
+        elif scene.robot.dof == 3:  # a unicycle disc: its poses carry a heading
+            mid = np.append(mid, q.start[2])
         for pose in (start, mid):
             again = planner.plan_from(prepared, pose, q.t0, hold=q.hold)
             fresh = planner.plan(pose, q.goal, q.t0, hold=q.hold)
