@@ -15,10 +15,10 @@ $(STAMP): pyproject.toml
 $(VENV): $(STAMP)
 
 # compiles the search kernels once (numba's on-disk cache) and builds them ahead of time
-# (gfuzzy.precompile: an extension module loaded in ~1 ms instead of numba's 0.3-0.9 s),
+# (gfuzzy.timespace.precompile: an extension module loaded in ~1 ms instead of numba's 0.3-0.9 s),
 # so no query pays for either
 warm: $(STAMP)
-	$(BIN)/python -m gfuzzy.precompile || echo "precompiled kernels not built (no C compiler?): numba's are used"
+	$(BIN)/python -m gfuzzy.timespace.precompile || echo "precompiled kernels not built (no C compiler?): numba's are used"
 	$(BIN)/python -c 'import gfuzzy.ga.refine as r; r.warm()'
 
 demo: warm

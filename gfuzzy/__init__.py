@@ -1,20 +1,20 @@
 """gfuzzy: roadmap-time-space motion planning among moving obstacles.
 
-Pipeline (one module per stage): :mod:`~gfuzzy.scene` -> :mod:`~gfuzzy.roadmap` ->
-:mod:`~gfuzzy.timespace` -> :mod:`~gfuzzy.ga` -> :mod:`~gfuzzy.fuzzy` ->
-:mod:`~gfuzzy.trajectory`; :mod:`~gfuzzy.planner` runs it, :mod:`~gfuzzy.check` verifies
+Pipeline (one module per stage): :mod:`~gfuzzy.scene.scene` -> :mod:`~gfuzzy.roadmap.roadmap` ->
+:mod:`~gfuzzy.timespace.timespace` -> :mod:`~gfuzzy.ga` -> :mod:`~gfuzzy.fuzzy.fuzzy` ->
+:mod:`~gfuzzy.trajectory`; :mod:`~gfuzzy.planner.planner` runs it, :mod:`~gfuzzy.check.check` verifies
 the answer independently.
 """
 
 import logging
 
-from .check import CheckReport, check_trajectory
+from .check.check import CheckReport, check_trajectory
 from .errors import GfuzzyError, SceneError
-from .navigator import Navigator, NavOptions, NavStep
-from .planner import Planner, PlanOptions, PlanResult, Status, plan
-from .roadmap import Roadmap, RoadmapOptions, build_roadmap, load_roadmap
-from .scene import Scene, load_scene
-from .tracks import Track, Tracks, TrackScene, TrackSceneOptions, read_tracks, tracks_scene
+from .navigation.navigator import Navigator, NavOptions, NavStep
+from .planner.planner import Planner, PlanOptions, PlanResult, Status, plan
+from .roadmap.roadmap import Roadmap, RoadmapOptions, build_roadmap, load_roadmap
+from .scene.scene import Scene, load_scene
+from .scene.tracks import Track, Tracks, TrackScene, TrackSceneOptions, read_tracks, tracks_scene
 from .trajectory import Trajectory, load_trajectory
 
 logging.getLogger(__name__).addHandler(logging.NullHandler())

@@ -4,7 +4,7 @@ A pose is ``[x, y]`` (disc robot) or ``[x, y, heading]`` (box and polygon robots
 path is an ``(n, d)`` array of poses joined by straight motions, the heading turning
 along the shorter arc. Everything that measures, interpolates or cuts such a path uses
 these functions, so the planner, the re-timing and the trajectory agree to the last bit
-on where a robot is. (:mod:`gfuzzy.check` deliberately keeps its own copies: it is the
+on where a robot is. (:mod:`gfuzzy.check.check` deliberately keeps its own copies: it is the
 independent verifier and shares no geometry with the planner.)
 
 This module imports nothing from gfuzzy: it is the bottom of the import graph.
@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .typing import FloatArray
+from .typed import FloatArray
 
 __all__ = [
     "wrap_angle",

@@ -21,7 +21,7 @@ from .atomic import write_atomic
 from .errors import SceneError
 from .poses import metric_distance, pose_at
 from .status import Status
-from .typing import FloatArray
+from .typed import FloatArray
 
 __all__ = ["Trajectory", "load_trajectory", "TrajectoryFile"]
 

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from gfuzzy.roadmap import RoadmapOptions, build_roadmap
+from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
 
 ROOT = Path(__file__).resolve().parent.parent
 TESTS = ROOT / "tests"

@@ -14,9 +14,9 @@ import pytest
 import yaml
 
 from gfuzzy.cli import main
-from gfuzzy.planner import Planner, PlanOptions
-from gfuzzy.roadmap import load_roadmap
-from gfuzzy.scene import load_scene, parse_scene
+from gfuzzy.planner.planner import Planner, PlanOptions
+from gfuzzy.roadmap.roadmap import load_roadmap
+from gfuzzy.scene.scene import load_scene, parse_scene
 
 ROOT = Path(__file__).resolve().parent.parent
 

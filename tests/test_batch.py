@@ -1,4 +1,4 @@
-"""`gfuzzy batch` and gfuzzy.batch: rows for every query on a real Dask cluster.
+"""`gfuzzy batch` and gfuzzy.runs.batch: rows for every query on a real Dask cluster.
 
 One LocalCluster of 2 worker processes serves the whole module; the CLI tests reach it
 with --scheduler, so they also cover connecting to an existing cluster.
@@ -15,9 +15,16 @@ import pytest
 from shared_scenes import LOOP
 
 from gfuzzy import load_scene, plan
-from gfuzzy.batch import COLUMNS, BatchOptions, local_cluster, run_batch, table_csv, write_table
 from gfuzzy.cli import main
-from gfuzzy.roadmap import load_roadmap
+from gfuzzy.roadmap.roadmap import load_roadmap
+from gfuzzy.runs.batch import (
+    COLUMNS,
+    BatchOptions,
+    local_cluster,
+    run_batch,
+    table_csv,
+    write_table,
+)
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = ["sim-4s1m", "sim-5s2m", "sealed-room", "wait-corridor"]
@@ -165,7 +172,7 @@ def test_cli_batch_on_a_scheduler(client, tmp_path):
 
 
 def test_cli_exit_1_on_an_error_row(client, tmp_path, monkeypatch, capsys):
-    import gfuzzy.batch as batch
+    import gfuzzy.runs.batch as batch
 
     real = batch.run_batch
     monkeypatch.setattr(batch, "run_batch", lambda *a, **k: real(*a, **k, before=raise_on_across))
@@ -241,7 +248,7 @@ def test_cli_two_scenes_of_one_name(tmp_path, capsys):
 
 def test_parquet_beside_the_csv(tmp_path):
     pa = pytest.importorskip("pyarrow.parquet")
-    from gfuzzy.batch import BatchRow
+    from gfuzzy.runs.batch import BatchRow
 
     rows = [BatchRow("s", "q", "solved", 1.5, 1.0, 1.5, 0.1, "valid"), BatchRow("s", "r", "error", error="boom")]
     written = write_table(rows, tmp_path / "rows.csv")
@@ -260,7 +267,7 @@ def test_cli_unreachable_scheduler(tmp_path, capsys):
 
 
 def test_cli_passes_the_plan_options(client, tmp_path):
-    from gfuzzy.planner import PlanOptions
+    from gfuzzy.planner.planner import PlanOptions
 
     out = tmp_path / "rows.csv"
     src = ROOT / "scenes" / "sim-5s2m.yaml"
@@ -281,8 +288,8 @@ def test_batch_keeps_each_querys_hold(client, tmp_path):
     import yaml
 
     from gfuzzy import build_roadmap, check_trajectory
-    from gfuzzy.roadmap import RoadmapOptions
-    from gfuzzy.scene import parse_scene
+    from gfuzzy.roadmap.roadmap import RoadmapOptions
+    from gfuzzy.scene.scene import parse_scene
 
     scene = parse_scene(yaml.safe_load(LOOP))
     rm = build_roadmap(scene, RoadmapOptions(vertices=60, seed=1))
@@ -300,7 +307,7 @@ def test_batch_keeps_each_querys_hold(client, tmp_path):
 
 
 def test_crowd_episodes_on_the_cluster_match_in_process(client):
-    from gfuzzy import crowd as C
+    from gfuzzy.navigation import crowd as C
 
     setting = C.CrowdSetting(humans=4)
     rm = C.crowd_roadmap(setting)

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gfuzzy.check import check_trajectory
-from gfuzzy.scene import parse_scene
+from gfuzzy.check.check import check_trajectory
+from gfuzzy.scene.scene import parse_scene
 
 
 def scene(robot, obstacles=(), movers=()):

@@ -16,11 +16,11 @@ from helpers import run_main as _run
 from helpers import write_trajectory_file as _trajectory_file
 from shared_scenes import DOOR, LOOP
 
-from gfuzzy.check import check_trajectory
+from gfuzzy.check.check import check_trajectory
 from gfuzzy.cli import main
 from gfuzzy.errors import InputError
-from gfuzzy.roadmap import RoadmapOptions
-from gfuzzy.scene import load_scene
+from gfuzzy.roadmap.roadmap import RoadmapOptions
+from gfuzzy.scene.scene import load_scene
 
 
 def test_unsolved_plan_removes_a_stale_csv_and_says_what_it_wrote(line_scene, tmp_path, capsys):

@@ -1,4 +1,4 @@
-"""The crowd benchmarks (gfuzzy.crowd, gfuzzy.humans, ``gfuzzy crowd``)."""
+"""The crowd benchmarks (gfuzzy.navigation.crowd, gfuzzy.navigation.humans, ``gfuzzy crowd``)."""
 
 from __future__ import annotations
 
@@ -13,10 +13,10 @@ import pytest
 
 pytest.importorskip("pyrvo")
 
-from gfuzzy import crowd as C  # noqa: E402
+from gfuzzy.navigation import crowd as C  # noqa: E402
 from gfuzzy.errors import InputError  # noqa: E402
-from gfuzzy.humans import OrcaCrowd, SocialForceCrowd  # noqa: E402
-from gfuzzy.socialmetrics import SocialMetrics  # noqa: E402
+from gfuzzy.navigation.humans import OrcaCrowd, SocialForceCrowd  # noqa: E402
+from gfuzzy.navigation.socialmetrics import SocialMetrics  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -11,8 +11,8 @@ ROOT = Path(__file__).resolve().parent.parent
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from gfuzzy.roadmap import load_roadmap  # noqa: E402
-from gfuzzy.scene import load_scene  # noqa: E402
+from gfuzzy.roadmap.roadmap import load_roadmap  # noqa: E402
+from gfuzzy.scene.scene import load_scene  # noqa: E402
 from tools.experiments.fig12 import BEHAVIOURS, SPEEDS, variant  # noqa: E402
 
 

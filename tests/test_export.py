@@ -19,9 +19,9 @@ from test_scene import scene_docs
 
 from gfuzzy.cli import main
 from gfuzzy.errors import InputError
-from gfuzzy.export import ExportOptions, export_mcap
-from gfuzzy.mapexport import export_nav2_map, rasterise
-from gfuzzy.scene import Box, Disc, Polygon, load_scene, parse_scene
+from gfuzzy.export.export import ExportOptions, export_mcap
+from gfuzzy.export.mapexport import export_nav2_map, rasterise
+from gfuzzy.scene.scene import Box, Disc, Polygon, load_scene, parse_scene
 from gfuzzy.trajectory import Trajectory
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -581,7 +581,7 @@ def test_map_pair_written_together_or_not_at_all(tmp_path, monkeypatch):
 
 def _read_back(tmp_path, map_yaml):
     """The exported map read by gfuzzy's own map reader, as a scene's map obstacle."""
-    from gfuzzy.maps import MapObstacle
+    from gfuzzy.scene.maps import MapObstacle
 
     scene_file = tmp_path / "back.yaml"
     scene_file.write_text(
@@ -619,7 +619,7 @@ def test_map_file_name_that_yaml_would_misread(tmp_path):
 def test_map_scene_round_trips_exactly(tmp_path):
     """A scene on a map, exported at the map's resolution on the map's own grid: the very
     same blocked cells (cells are rectangles, and the grid is aligned)."""
-    from gfuzzy.maps import MapObstacle
+    from gfuzzy.scene.maps import MapObstacle
 
     scene = load_scene(SCENES / "depot.yaml")
     (original,) = [o for o in scene.obstacles if isinstance(o, MapObstacle)]
@@ -631,7 +631,7 @@ def test_map_scene_round_trips_exactly(tmp_path):
 
 
 def test_mcap_map_scene_draws_the_blocked_cells(tmp_path):
-    from gfuzzy.maps import MapObstacle
+    from gfuzzy.scene.maps import MapObstacle
 
     scene = load_scene(SCENES / "depot.yaml")
     (i, original), = [(i, o) for i, o in enumerate(scene.obstacles) if isinstance(o, MapObstacle)]
@@ -689,7 +689,7 @@ def scene_validator():
 
 
 def _yaml_doc(path):
-    from gfuzzy.yamldoc import _load_yaml
+    from gfuzzy.scene.yamldoc import _load_yaml
 
     return _load_yaml(path.read_text(encoding="utf-8"), str(path))
 

@@ -1,10 +1,10 @@
 """Roadmaps that find every passage the robot fits through (issue 17, item 3).
 
 Disc robots: the roadmap's components are joined through the exactly computed free space
-(gfuzzy.freespace), so a query is solved exactly when the free space connects its start
+(gfuzzy.roadmap.freespace), so a query is solved exactly when the free space connects its start
 and goal. The oracle here is written in the test (shapely on the scene's shapes, grown
-with fine arcs), sharing no code with gfuzzy.freespace; every solved answer goes through
-the independent checker (gfuzzy.check). Box robots: the default passage sampler takes a
+with fine arcs), sharing no code with gfuzzy.roadmap.freespace; every solved answer goes through
+the independent checker (gfuzzy.check.check). Box robots: the default passage sampler takes a
 1.0 x 0.5 box through a 0.56-wide slot it must turn to enter.
 """
 
@@ -21,13 +21,19 @@ from conftest import run_cli_process
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from gfuzzy.check import check_trajectory
-from gfuzzy.freespace import free_space
-from gfuzzy.geometry import StaticGeometry
-from gfuzzy.planner import Planner
-from gfuzzy.roadgraph import connect
-from gfuzzy.roadmap import Roadmap, RoadmapOptions, build_roadmap, load_roadmap, roadmap_digest
-from gfuzzy.scene import parse_scene
+from gfuzzy.check.check import check_trajectory
+from gfuzzy.collision.geometry import StaticGeometry
+from gfuzzy.planner.planner import Planner
+from gfuzzy.roadmap.freespace import free_space
+from gfuzzy.roadmap.roadmap import (
+    Roadmap,
+    RoadmapOptions,
+    build_roadmap,
+    load_roadmap,
+    roadmap_digest,
+)
+from gfuzzy.scene.scene import parse_scene
+from gfuzzy.timespace.roadgraph import connect
 
 WALL = 0.2
 

@@ -9,9 +9,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from gfuzzy import fuzzy
 from gfuzzy.errors import SceneError
-from gfuzzy.fuzzy import FuzzyOptions, Partition, RuleBase
+from gfuzzy.fuzzy import fuzzy
+from gfuzzy.fuzzy.fuzzy import FuzzyOptions, Partition, RuleBase
 from gfuzzy.learning import learn
 
 P3 = Partition.uniform(3)

@@ -23,7 +23,7 @@ from gfuzzy.ga import (
 from gfuzzy.ga.operators import _SMOOTH_FRACTION, _propose_smooth
 from gfuzzy.ga.options import _EPS
 from gfuzzy.ga.refine import _keys
-from gfuzzy.typing import BoolArray, IntArray
+from gfuzzy.typed import BoolArray, IntArray
 
 ROOT = Path(__file__).resolve().parent.parent
 R_ROBOT = 0.25
@@ -304,15 +304,15 @@ def test_refine_path_compiled_equals_reference(seed, monkeypatch):
 
 @pytest.fixture(scope="module")
 def building_floor():
-    from gfuzzy.geometry import StaticGeometry
-    from gfuzzy.scene import load_scene
+    from gfuzzy.collision.geometry import StaticGeometry
+    from gfuzzy.scene.scene import load_scene
 
     scene = load_scene(ROOT / "scenes" / "building-floor.yaml")
     return scene, StaticGeometry(scene)
 
 
 def test_state_table_is_the_movers_states(building_floor):
-    from gfuzzy.stages import _StateTable
+    from gfuzzy.planner.stages import _StateTable
 
     scene, _ = building_floor
     table = _StateTable(scene.movers)
@@ -338,7 +338,7 @@ def test_state_table_is_the_movers_states(building_floor):
 
 
 def test_traced_segments_are_motion_clearance(building_floor):
-    from gfuzzy.stages import _traced
+    from gfuzzy.planner.stages import _traced
 
     scene, geometry = building_floor
     rng = np.random.default_rng(1)

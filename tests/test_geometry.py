@@ -13,14 +13,14 @@ import pytest
 import shapely
 from reference import Reference, interpolate, mover_reference_distance, prism_mesh
 
-from gfuzzy.geometry import (
+from gfuzzy.collision.geometry import (
     StaticGeometry,
     metric_distance,
     mover_distance,
     wrap_angle,
 )
 from gfuzzy.poses import interpolate_segment as interpolate_poses
-from gfuzzy.scene import parse_scene
+from gfuzzy.scene.scene import parse_scene
 
 EPS = 1e-6
 

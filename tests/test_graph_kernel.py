@@ -1,4 +1,4 @@
-"""The Dijkstra of gfuzzy.graph_kernel and the CSR graphs of gfuzzy.roadgraph against scipy
+"""The Dijkstra of gfuzzy.timespace.graph_kernel and the CSR graphs of gfuzzy.timespace.roadgraph against scipy
 (the oracle: scipy.sparse.csgraph.dijkstra and coo_matrix.tocsr share no code with them)."""
 
 from __future__ import annotations
@@ -8,9 +8,9 @@ import pytest
 from scipy.sparse import coo_matrix, csr_matrix
 from scipy.sparse.csgraph import dijkstra as scipy_dijkstra
 
-from gfuzzy import jit
-from gfuzzy.graph_kernel import dijkstra, shortest_paths
-from gfuzzy.roadgraph import VertexGraph
+from gfuzzy.timespace import jit
+from gfuzzy.timespace.graph_kernel import dijkstra, shortest_paths
+from gfuzzy.timespace.roadgraph import VertexGraph
 
 
 def _random_graph(rng, n):
@@ -62,7 +62,7 @@ def test_dijkstra_equals_scipy_to_the_bit(seed):
 def test_shortest_paths_uses_the_kernel_only_when_precompiled(monkeypatch):
     """Without precompiled kernels `shortest_paths` calls scipy (numba is not loaded for
     it); with them, the compiled Dijkstra."""
-    import gfuzzy.graph_kernel as gk
+    import gfuzzy.timespace.graph_kernel as gk
 
     calls = []
     monkeypatch.setattr(gk, "dijkstra", lambda *a: calls.append(a) or np.zeros((1, 2)))

@@ -1,4 +1,4 @@
-"""The precompiled kernels (gfuzzy.jit, gfuzzy.precompile): what a cold process imports,
+"""The precompiled kernels (gfuzzy.timespace.jit, gfuzzy.timespace.precompile): what a cold process imports,
 that they answer as numba's kernels do, that a stale or mismatched build is not used, and
 that `planning_seconds` counts the kernels' load. Each check runs in a fresh process."""
 
@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from gfuzzy import jit
+from gfuzzy.timespace import jit
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -26,7 +26,7 @@ def kernel_dir(tmp_path_factory):
         if (folder / f"{name}.json").exists():
             return folder
     try:
-        from gfuzzy.precompile import build
+        from gfuzzy.timespace.precompile import build
 
         return build(tmp_path_factory.mktemp("kernels")).parent
     except RuntimeError as exc:  # no C compiler: nothing to test here
@@ -46,9 +46,9 @@ HEAVY = ("numba", "scipy.sparse.csgraph", "matplotlib", "dask", "networkx", "tri
 PLAN = """
 import json, sys
 import gfuzzy
-from gfuzzy import jit
-from gfuzzy.roadmap import load_roadmap
-from gfuzzy.scene import load_scene
+from gfuzzy.timespace import jit
+from gfuzzy.roadmap.roadmap import load_roadmap
+from gfuzzy.scene.scene import load_scene
 rows = []
 for name in sys.argv[1:] or {scenes!r}:
     s = load_scene(f"scenes/{{name}}.yaml")
@@ -102,7 +102,7 @@ def test_a_stale_extension_is_not_loaded(kernel_dir, tmp_path):
     name = jit.module_name()
     for f in kernel_dir.glob(f"{name}*"):
         shutil.copy(f, tmp_path / f.name.replace(name, jit.module_name("0" * 16)))
-    code = "import json\nfrom gfuzzy import jit, search_kernel\nprint(json.dumps(jit.loaded() is not None))\n"
+    code = "import json\nfrom gfuzzy.timespace import jit, search_kernel\nprint(json.dumps(jit.loaded() is not None))\n"
     assert _run(code, tmp_path) is False
     assert _run(code, kernel_dir) is True
 
@@ -114,7 +114,7 @@ def test_other_argument_types_fall_back_to_numba(kernel_dir):
     code = """
 import json, sys
 import numpy as np
-from gfuzzy import search_kernel as k
+from gfuzzy.timespace import search_kernel as k
 tk = np.full(8, -1, np.int64); tb = np.zeros(8, np.int64); tp = np.zeros(8, np.int64); ctr = np.zeros(7, np.int64)
 k._set(tk, tb, tp, ctr, 5, 42, -1)
 out = [k._get(tk, tb, 5, -9), k._get(tk, tb, 6, -9), "numba" in sys.modules, k._get.precompiled]
@@ -131,9 +131,9 @@ def test_planning_seconds_counts_the_kernels_load(kernel_dir):
     they load: the reported figure is at least the time measured around that load."""
     code = """
 import json, time
-import gfuzzy, gfuzzy.planner as P
-from gfuzzy.roadmap import load_roadmap
-from gfuzzy.scene import load_scene
+import gfuzzy, gfuzzy.planner.planner as P
+from gfuzzy.roadmap.roadmap import load_roadmap
+from gfuzzy.scene.scene import load_scene
 spans = []
 inner = P.search_function
 def timed(backend):

@@ -15,9 +15,9 @@ from hypothesis import strategies as st
 from PIL import Image
 
 from gfuzzy.cli.main import main
+from gfuzzy.collision.geometry import StaticGeometry
 from gfuzzy.errors import SceneError
-from gfuzzy.geometry import StaticGeometry
-from gfuzzy.scene import MapObstacle, load_scene
+from gfuzzy.scene.scene import MapObstacle, load_scene
 
 ROOT = Path(__file__).resolve().parent.parent
 MAPS = ROOT / "scenes" / "maps"
@@ -242,8 +242,8 @@ def test_real_maps_against_the_oracle(name):
 
 
 def load_scene_text(text: str, folder: Path):
-    from gfuzzy.scene import parse_scene
-    from gfuzzy.yamldoc import _load_yaml
+    from gfuzzy.scene.scene import parse_scene
+    from gfuzzy.scene.yamldoc import _load_yaml
 
     return parse_scene(_load_yaml(text, "s.yaml"), file="s.yaml", folder=folder)
 

@@ -11,9 +11,9 @@ import pytest
 from conftest import ROOT, run_cli_process
 
 import gfuzzy
-from gfuzzy.navigator import Navigator, NavOptions
-from gfuzzy.navsim import min_separation, observe, simulate
-from gfuzzy.scene import parse_scene
+from gfuzzy.navigation.navigator import Navigator, NavOptions
+from gfuzzy.navigation.navsim import min_separation, observe, simulate
+from gfuzzy.scene.scene import parse_scene
 
 
 def _scene(movers=(), obstacles=(), bounds=(-5.0, -5.0, 5.0, 5.0), start=(0.0, -4.0), goal=(0.0, 4.0), robot=None):
@@ -258,7 +258,7 @@ def test_navigate_bad_input(tmp_path, args):
 
 def test_crowd_episodes():
     pytest.importorskip("pyrvo")
-    from gfuzzy.crowd import CROWD, circle_crossing, orca_robot
+    from gfuzzy.navigation.crowd import CROWD, circle_crossing, orca_robot
 
     scene0 = circle_crossing(0, 1)
     rm = gfuzzy.build_roadmap(scene0, gfuzzy.RoadmapOptions(vertices=250, seed=1))
@@ -285,7 +285,7 @@ def test_crowd_episodes():
 def test_render_shows_the_predictions(tmp_path):
     from PIL import Image
 
-    from gfuzzy.render import render_animation
+    from gfuzzy.render.render import render_animation
 
     scene = gfuzzy.load_scene(ROOT / "scenes" / "zara-crowd.yaml")
     rm = gfuzzy.load_roadmap(ROOT / "roadmaps" / "zara-crowd.json", scene)
@@ -360,9 +360,9 @@ def _chain_field(nav, t, pose, obs, steps, relaxed=False):
     its slice's inflation, in the stock :class:`MoverField`."""
     from dataclasses import replace
 
-    from gfuzzy.movers import MoverField
-    from gfuzzy.navigator import STILL_SPEED
-    from gfuzzy.scene import Mover
+    from gfuzzy.navigation.navigator import STILL_SPEED
+    from gfuzzy.scene.scene import Mover
+    from gfuzzy.timespace.movers import MoverField
 
     opts = nav.options
     infl = nav._inflation(pose, obs, relaxed)
@@ -499,7 +499,7 @@ def test_exhausted_budget_builds_no_prediction(open_square, monkeypatch):
 
 
 def test_the_field_answers_in_pieces_and_stops_at_the_deadline(open_square):
-    from gfuzzy.navigator import PIECE_WORK, _OutOfTime
+    from gfuzzy.navigation.navigator import PIECE_WORK, _OutOfTime
 
     scene, rm = open_square
     nav = Navigator(scene, rm, (0.0, 4.0), NavOptions(backend="reference"))
@@ -515,7 +515,7 @@ def test_the_field_answers_in_pieces_and_stops_at_the_deadline(open_square):
     hi = lo + rng.integers(0, 60, len(ptr) - 1)
     timed = nav._field(0.0, obs, infl, 80)
     whole = nav._field(0.0, obs, infl, 80)
-    whole.__class__ = gfuzzy.movers.MoverField  # the same field, answering in one piece
+    whole.__class__ = gfuzzy.timespace.movers.MoverField  # the same field, answering in one piece
     want = set(zip(*whole.unsafe_pairs(pts, ptr, lo, hi), strict=True))
     assert want
     assert set(zip(*timed.unsafe_pairs(pts, ptr, lo, hi), strict=True)) == want
@@ -556,7 +556,7 @@ def test_a_bug_in_the_search_propagates(open_square, monkeypatch, error):
     def broken(graph, field_, start, goal, **kw):
         raise error
 
-    monkeypatch.setattr("gfuzzy.navigator.search_function", lambda backend: broken)
+    monkeypatch.setattr("gfuzzy.navigation.navigator.search_function", lambda backend: broken)
     nav = Navigator(scene, rm, (0.0, 4.0))
     with pytest.raises(type(error), match="a bug"):
         nav.step(0.0, np.array([0.0, -4.0]), np.array([[0.0, 0.0, 0.0, -1.0, 0.3]]))
@@ -572,7 +572,7 @@ def test_a_refused_search_falls_back(open_square, monkeypatch, family):
     def refusing(graph, field_, start, goal, **kw):
         raise error("horizon beyond the memory bounds")
 
-    monkeypatch.setattr("gfuzzy.navigator.search_function", lambda backend: refusing)
+    monkeypatch.setattr("gfuzzy.navigation.navigator.search_function", lambda backend: refusing)
     nav = Navigator(scene, rm, (0.0, 4.0))
     traj = nav.step(0.0, np.array([0.0, -4.0]), np.array([[0.0, 0.0, 0.0, -1.0, 0.3]]))
     assert nav.last.mode in ("direct", "previous", "evasive")

@@ -16,12 +16,12 @@ from helpers import scene_of as _scene
 from reference import brute_force_steps, contract_metric, reference_violation
 from shared_scenes import CROSSING, DOOR, LINE, LOOP, PERSON
 
-from gfuzzy.check import check_trajectory
+from gfuzzy.check.check import check_trajectory
 from gfuzzy.errors import InputError
-from gfuzzy.planner import Planner, PlanOptions, Status, plan, settle_time
-from gfuzzy.roadmap import RoadmapOptions, build_roadmap
-from gfuzzy.scene import Query, load_scene, parse_scene
-from gfuzzy.timespace import MoverField
+from gfuzzy.planner.planner import Planner, PlanOptions, Status, plan, settle_time
+from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
+from gfuzzy.scene.scene import Query, load_scene, parse_scene
+from gfuzzy.timespace.timespace import MoverField
 
 SCENE = ROOT / "scenes" / "sim-4s1m.yaml"
 ROADMAP = ROOT / "roadmaps" / "sim-4s1m.json"
@@ -117,7 +117,7 @@ def test_waits_for_the_cart(corridor):
     w = res.trajectory.waypoints
     assert check_trajectory(scene, w, q).valid
     # timing the same path at full speed without waiting must collide, so the planner waited
-    from gfuzzy.retime import retime_path
+    from gfuzzy.planner.retime import retime_path
 
     free = retime_path(scene, res.trajectory.poses, 0.0, 0.07, 60.0, wait_at=[])
     same_pose = np.all(np.abs(np.diff(w[:, 1:], axis=0)) < 1e-12, axis=1)
@@ -433,8 +433,8 @@ def test_search_on_the_spanner_stays_near_the_whole_roadmap(corridor, open_scene
 def test_bad_options_and_poses_raise_input_error():
     """Bad values are InputError (the command line's exit 2), still a ValueError."""
     from gfuzzy.errors import InputError, check_number
-    from gfuzzy.navigator import NavOptions
-    from gfuzzy.planner import check_pose
+    from gfuzzy.navigation.navigator import NavOptions
+    from gfuzzy.planner.planner import check_pose
 
     for kwargs in ({"dt": 0.0}, {"dt": float("nan")}, {"weight": 0.5}, {"stretch": float("inf")},
                    {"time_limit": -1.0}, {"horizon": 0.0}, {"backend": "gpu"}):  # fmt: skip
@@ -534,7 +534,7 @@ def test_no_amax_no_claim():
 
 def test_the_api_refuses_a_hold_that_is_not_a_number():
     scene = load_scene(SCENE)
-    from gfuzzy.roadmap import load_roadmap
+    from gfuzzy.roadmap.roadmap import load_roadmap
 
     rm = load_roadmap(ROADMAP, scene)
     q = scene.queries[0]

@@ -15,8 +15,8 @@ pytest.importorskip("pyrvo")
 
 import gfuzzy  # noqa: E402
 from gfuzzy.errors import InputError  # noqa: E402
-from gfuzzy.populate import PopulateOptions, populate  # noqa: E402
-from gfuzzy.scene import parse_scene  # noqa: E402
+from gfuzzy.navigation.populate import PopulateOptions, populate  # noqa: E402
+from gfuzzy.scene.scene import parse_scene  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 

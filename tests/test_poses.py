@@ -77,7 +77,7 @@ def test_discretise_keeps_corners_and_bounds_the_step():
 def test_the_space_time_graph_cuts_edges_by_the_same_rule():
     """spacetime.split_edges (the planner's and prepared's graph) uses split_counts and
     interpolate_segment: every one-step move is at most one step long, headings wrapped."""
-    from gfuzzy.spacetime import split_edges
+    from gfuzzy.timespace.spacetime import split_edges
 
     rng = np.random.default_rng(3)
     verts = np.column_stack([rng.uniform(0, 5, 12), rng.uniform(0, 5, 12), rng.uniform(-math.pi, math.pi, 12)])

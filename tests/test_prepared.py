@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gfuzzy.check import check_trajectory
-from gfuzzy.planner import Planner, PlanOptions
-from gfuzzy.roadmap import load_roadmap
-from gfuzzy.scene import load_scene
+from gfuzzy.check.check import check_trajectory
+from gfuzzy.planner.planner import Planner, PlanOptions
+from gfuzzy.roadmap.roadmap import load_roadmap
+from gfuzzy.scene.scene import load_scene
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -1,4 +1,4 @@
-"""gfuzzy.regress: expectations met and missed, on a hand-made scene."""
+"""gfuzzy.runs.regress: expectations met and missed, on a hand-made scene."""
 
 from __future__ import annotations
 
@@ -9,9 +9,9 @@ import yaml
 from helpers import BUNDLED_SCENES as SCENES
 from helpers import bundled_setup as _setup
 
-from gfuzzy.regress import format_row, regress_scene, run_regression
-from gfuzzy.roadmap import RoadmapOptions, build_roadmap
-from gfuzzy.scene import load_scene, parse_scene
+from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
+from gfuzzy.runs.regress import format_row, regress_scene, run_regression
+from gfuzzy.scene.scene import load_scene, parse_scene
 
 SCENE = """
 version: 1

@@ -15,9 +15,9 @@ from matplotlib.text import Text
 from PIL import Image
 from shared_scenes import DOOR
 
-from gfuzzy import render as R
-from gfuzzy.check import check_trajectory
-from gfuzzy.scene import load_scene
+from gfuzzy.check.check import check_trajectory
+from gfuzzy.render import render as R
+from gfuzzy.scene.scene import load_scene
 
 SCENE = """\
 version: 1
@@ -355,7 +355,7 @@ def test_wait_labels_do_not_overlap(line_scene):
 
 
 def test_render_draws_the_clearances(tmp_path):
-    from gfuzzy.render import _clearance_outline, render
+    from gfuzzy.render.render import _clearance_outline, render
 
     box = _scene(DOOR.replace("disc: 0.2", "box: [0.4, 0.2]").replace("start: [0.5, 1.5], goal: [5.5, 1.5]",
                                                                        "start: [0.5, 1.5, 0], goal: [5.5, 1.5, 0]"))  # fmt: skip

@@ -1,4 +1,4 @@
-"""gfuzzy.retime: timing a fixed path among movers, on hand-made scenes."""
+"""gfuzzy.planner.retime: timing a fixed path among movers, on hand-made scenes."""
 
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ import pytest
 import yaml
 from reference import reference_violation
 
-from gfuzzy.retime import chain_points, retime_path, retime_profile
-from gfuzzy.scene import parse_scene
+from gfuzzy.planner.retime import chain_points, retime_path, retime_profile
+from gfuzzy.scene.scene import parse_scene
 from gfuzzy.status import Status
 
 EMPTY = """

@@ -1,4 +1,4 @@
-"""The per-query graph built from the roadmap's kept cut (gfuzzy.roadgraph) against a build
+"""The per-query graph built from the roadmap's kept cut (gfuzzy.timespace.roadgraph) against a build
 from scratch: the same arrays to the bit, adjacency order included, and the same answers."""
 
 from __future__ import annotations
@@ -9,13 +9,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gfuzzy.geometry import StaticGeometry, metric_distance
-from gfuzzy.planner import Planner, PlanOptions
-from gfuzzy.roadgraph import MAX_SPLITS, spanner_split, vertex_clearances
-from gfuzzy.roadmap import RoadmapOptions, build_roadmap, load_roadmap
-from gfuzzy.scene import load_scene, parse_scene
+from gfuzzy.collision.geometry import StaticGeometry, metric_distance
+from gfuzzy.planner.planner import Planner, PlanOptions
+from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap, load_roadmap
+from gfuzzy.scene.scene import load_scene, parse_scene
 from gfuzzy.settings import SPEED_SAFETY
-from gfuzzy.spacetime import split_edges
+from gfuzzy.timespace.roadgraph import MAX_SPLITS, spanner_split, vertex_clearances
+from gfuzzy.timespace.spacetime import split_edges
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -221,7 +221,7 @@ def test_a_cut_too_fine_is_refused_before_it_is_made():
 def test_plain_timed_rows_equal_the_loop_to_the_bit(seed):
     """The vectorised rows of a search's answer against the loop that adds rows inside
     steps (asked for none): the same times and poses, bit for bit, and the same waits."""
-    from gfuzzy.timespace import timed_rows
+    from gfuzzy.timespace.timespace import timed_rows
 
     rng = np.random.default_rng(seed)
     poses = rng.uniform(-5, 5, size=(40, 2 + seed % 2))

@@ -18,10 +18,16 @@ from helpers import scene_doc as door_doc
 from reference import Reference, interpolate
 from shared_scenes import DOOR
 
-import gfuzzy.roadmap as roadmap_module
+import gfuzzy.roadmap.roadmap as roadmap_module
 from gfuzzy.errors import SceneError
-from gfuzzy.roadmap import RoadmapInfo, RoadmapOptions, build_roadmap, load_roadmap, roadmap_digest
-from gfuzzy.scene import load_scene, parse_scene
+from gfuzzy.roadmap.roadmap import (
+    RoadmapInfo,
+    RoadmapOptions,
+    build_roadmap,
+    load_roadmap,
+    roadmap_digest,
+)
+from gfuzzy.scene.scene import load_scene, parse_scene
 
 ROBOTS = {"disc": {"disc": 0.15, "vmax": 1.0}, "box": {"box": [0.4, 0.2], "vmax": 1.0, "amax": 2.0}}
 SIZES = {"disc": 80, "box": 60}
@@ -65,8 +71,8 @@ def small(tmp_path_factory):
 
 DIGEST_SCRIPT = """
 import sys
-from gfuzzy.scene import load_scene
-from gfuzzy.roadmap import RoadmapOptions, build_roadmap, roadmap_digest
+from gfuzzy.scene.scene import load_scene
+from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap, roadmap_digest
 scene = load_scene(sys.argv[1])
 for seed in sys.argv[3:]:
     rm = build_roadmap(scene, RoadmapOptions(vertices=int(sys.argv[2]), seed=int(seed)))
@@ -415,8 +421,8 @@ def test_building_leaves_ompl_log_level_as_it_was():
     """OMPL's log level is process-wide: a build must not change it for the caller."""
     from ompl import util as ou
 
-    from gfuzzy.roadmap import RoadmapOptions, build_roadmap
-    from gfuzzy.scene import parse_scene
+    from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
+    from gfuzzy.scene.scene import parse_scene
 
     scene = parse_scene({"version": 1, "name": "e", "bounds": [0, 0, 2, 2], "robot": {"disc": 0.1, "vmax": 1.0}})
     before = ou.getLogLevel()

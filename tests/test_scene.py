@@ -19,7 +19,7 @@ from reference import prism_mesh
 from shared_scenes import DOOR, LOOP
 
 from gfuzzy.errors import SceneError
-from gfuzzy.scene import Box, Disc, Polygon, load_scene, parse_scene
+from gfuzzy.scene.scene import Box, Disc, Polygon, load_scene, parse_scene
 
 HYPO = settings(max_examples=50, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 #: A minimal valid scene document to extend.

@@ -1,4 +1,4 @@
-"""The compiled search (gfuzzy.search_kernel) against the reference (timespace.sipp).
+"""The compiled search (gfuzzy.timespace.search_kernel) against the reference (timespace.sipp).
 
 Both must search in the same order and so return the same answer: same status, same
 (node, step) rows, same expansions. Cross-checked on every bundled scene's queries (as
@@ -18,12 +18,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gfuzzy.check import check_trajectory
-from gfuzzy.planner import Planner, PlanOptions, Status
-from gfuzzy.roadmap import load_roadmap
-from gfuzzy.scene import Query, load_scene
-from gfuzzy.search_kernel import sipp_compiled
-from gfuzzy.timespace import IntervalStore, MoverField, SpaceTimeGraph, sipp, timed_rows
+from gfuzzy.check.check import check_trajectory
+from gfuzzy.planner.planner import Planner, PlanOptions, Status
+from gfuzzy.roadmap.roadmap import load_roadmap
+from gfuzzy.scene.scene import Query, load_scene
+from gfuzzy.timespace.search_kernel import sipp_compiled
+from gfuzzy.timespace.timespace import IntervalStore, MoverField, SpaceTimeGraph, sipp, timed_rows
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = sorted((ROOT / "scenes").glob("*.yaml"))
@@ -169,8 +169,8 @@ def test_compiled_intervals_match_reference(seed, broad, tmp_path, monkeypatch):
     (unsafe pairs, sorted between walls), with the kernel testing every box itself
     (dense) or taking the grid join's candidates; windows include empty ones and ones
     beyond the horizon (points that cannot matter in time)."""
-    from gfuzzy import movers
-    from gfuzzy.spacetime import _intervals_from_pairs
+    from gfuzzy.timespace import movers
+    from gfuzzy.timespace.spacetime import _intervals_from_pairs
 
     if broad == "grid":
         monkeypatch.setattr(movers, "DENSE_BROAD_PHASE", 0)
@@ -202,7 +202,7 @@ def test_compiled_intervals_match_reference(seed, broad, tmp_path, monkeypatch):
 def test_compiled_safety_kernel_same_pairs(seed, broad, tmp_path, monkeypatch):
     """unsafe_pairs: the compiled kernel against numpy, on groups of points along segments
     (the roadmap's edges) and single points, disc and box robots, disc and box movers."""
-    from gfuzzy import movers
+    from gfuzzy.timespace import movers
 
     if broad == "grid":
         monkeypatch.setattr(movers, "DENSE_BROAD_PHASE", 0)
@@ -243,8 +243,8 @@ def test_reference_path_never_imports_numba():
         "import os, sys\n"
         "os.environ['GFUZZY_PRECOMPILED'] = '0'\n"
         "import gfuzzy\n"
-        "from gfuzzy.scene import load_scene\n"
-        "from gfuzzy.roadmap import load_roadmap\n"
+        "from gfuzzy.scene.scene import load_scene\n"
+        "from gfuzzy.roadmap.roadmap import load_roadmap\n"
         "s = load_scene('scenes/sim-4s1m.yaml')\n"
         "p = gfuzzy.Planner(s, load_roadmap('roadmaps/sim-4s1m.json', s))\n"
         "q = s.queries[0]\n"
@@ -279,7 +279,7 @@ def test_cli_backend_flag(tmp_path):
 def test_compiled_search_times_out_like_the_reference():
     """A deadline already past: both searches stop with `timeout` (the kernel hands control
     back every few thousand expansions), and without a deadline both solve."""
-    from gfuzzy.scene import parse_scene
+    from gfuzzy.scene.scene import parse_scene
 
     scene = parse_scene(
         {"version": 1, "name": "empty", "bounds": [0, 0, 90, 90], "robot": {"disc": 0.1, "vmax": 1.0}}
@@ -303,10 +303,10 @@ def test_compiled_box_box_gap_is_the_reference_bit_for_bit():
     """The kernel's box robot against box mover distance equals geometry.mover_distance
     (exact=False) exactly, near (separating-axis gap, overlaps included) and far (the
     circumscribed circles' bound beyond QUAD_EXACT)."""
-    from gfuzzy.geometry import QUAD_EXACT, mover_distance
-    from gfuzzy.movers_kernel import QUAD_EXACT as KERNEL_QUAD_EXACT
-    from gfuzzy.movers_kernel import _box_box_gap
-    from gfuzzy.scene import parse_scene
+    from gfuzzy.collision.geometry import QUAD_EXACT, mover_distance
+    from gfuzzy.scene.scene import parse_scene
+    from gfuzzy.timespace.movers_kernel import QUAD_EXACT as KERNEL_QUAD_EXACT
+    from gfuzzy.timespace.movers_kernel import _box_box_gap
 
     assert KERNEL_QUAD_EXACT == QUAD_EXACT
     robot = parse_scene({"version": 1, "name": "b", "bounds": [0, 0, 9, 9], "robot": {"box": [0.9, 0.436], "vmax": 1}}).robot
@@ -328,7 +328,7 @@ def test_grid_candidates_are_every_overlapping_triple(seed):
     """The compiled grid broad phase finds exactly the (group, mover, chunk) triples whose
     boxes overlap within the group's steps (all pairs tested), sorted by group; absent
     movers (empty boxes), empty windows and windows beyond the movers' chunks included."""
-    from gfuzzy.movers_kernel import grid_candidates
+    from gfuzzy.timespace.movers_kernel import grid_candidates
 
     rng = np.random.default_rng(seed)
     G, M, nc, chunk = 150, 25, 12, 8
@@ -358,10 +358,11 @@ WARM_PROBE = """
 import sys
 from pathlib import Path
 from numba.core.registry import CPUDispatcher
-from gfuzzy import movers_kernel, search_kernel
-from gfuzzy.planner import plan
-from gfuzzy.roadmap import RoadmapOptions, build_roadmap, load_roadmap
-from gfuzzy.scene import load_scene, parse_scene
+from gfuzzy.timespace import movers_kernel
+from gfuzzy.timespace import search_kernel
+from gfuzzy.planner.planner import plan
+from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap, load_roadmap
+from gfuzzy.scene.scene import load_scene, parse_scene
 
 search_kernel.warm()
 kernels = [o for m in (movers_kernel, search_kernel) for o in vars(m).values() if isinstance(o, CPUDispatcher)]

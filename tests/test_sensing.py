@@ -1,4 +1,4 @@
-"""The robot's sensor (gfuzzy.sensing) and the social metrics (gfuzzy.socialmetrics):
+"""The robot's sensor (gfuzzy.navigation.sensing) and the social metrics (gfuzzy.navigation.socialmetrics):
 each against a case whose answer is known by hand."""
 
 from __future__ import annotations
@@ -14,9 +14,9 @@ import pytest
 
 import gfuzzy
 from gfuzzy.errors import InputError
-from gfuzzy.scene import Mover, parse_scene
-from gfuzzy.sensing import Sensor, SensorOptions, Tracker, in_fov, line_of_sight
-from gfuzzy.socialmetrics import social_metrics, step_gaps
+from gfuzzy.navigation.sensing import Sensor, SensorOptions, Tracker, in_fov, line_of_sight
+from gfuzzy.navigation.socialmetrics import social_metrics, step_gaps
+from gfuzzy.scene.scene import Mover, parse_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -1,4 +1,4 @@
-"""Footprint robots (gfuzzy.shapes): parsing, distances against independent oracles, the
+"""Footprint robots (gfuzzy.collision.shapes): parsing, distances against independent oracles, the
 compiled kernel against the numpy reference, planning a concave robot where only its exact
 shape fits, a footprint equal to a box, the navigator and render.
 
@@ -19,13 +19,13 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import gfuzzy
-from gfuzzy.check import check_trajectory
+from gfuzzy.check.check import check_trajectory
+from gfuzzy.collision.geometry import StaticGeometry, mover_distance
+from gfuzzy.collision.shapes import FootprintShape, convex_pieces, shape_of
 from gfuzzy.errors import SceneError
-from gfuzzy.geometry import StaticGeometry, mover_distance
-from gfuzzy.planner import Planner, PlanOptions, Status
-from gfuzzy.roadmap import RoadmapOptions, build_roadmap
-from gfuzzy.scene import parse_scene
-from gfuzzy.shapes import FootprintShape, convex_pieces, shape_of
+from gfuzzy.planner.planner import Planner, PlanOptions, Status
+from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
+from gfuzzy.scene.scene import parse_scene
 
 ROOT = __import__("pathlib").Path(__file__).resolve().parent.parent
 
@@ -276,7 +276,7 @@ def test_inradius_and_circumradius():
 def test_compiled_footprint_distance_is_the_reference_bit_for_bit():
     """The kernel's footprint-mover distance equals mover_distance(exact=False) exactly, on
     thousands of random cases: random concave footprints, disc and box movers."""
-    from gfuzzy.movers_kernel import footprint_distance
+    from gfuzzy.timespace.movers_kernel import footprint_distance
 
     rng = np.random.default_rng(7)
     total = {"neg": 0, "pos": 0}
@@ -304,8 +304,8 @@ def test_compiled_footprint_distance_is_the_reference_bit_for_bit():
 @pytest.mark.parametrize("broad", ["dense", "grid"])
 def test_compiled_safety_same_pairs_for_a_footprint(fp, broad, monkeypatch):
     """MoverField.unsafe_pairs: the compiled kernel against numpy for a footprint robot."""
-    from gfuzzy import movers
-    from gfuzzy.movers import MoverField
+    from gfuzzy.timespace import movers
+    from gfuzzy.timespace.movers import MoverField
 
     if broad == "grid":
         monkeypatch.setattr(movers, "DENSE_BROAD_PHASE", 0)
@@ -451,7 +451,7 @@ def test_bundled_footprint_scene_meets_its_expectations(flags):
 
 
 def test_navigator_drives_a_footprint_robot_among_people():
-    from gfuzzy.navsim import simulate
+    from gfuzzy.navigation.navsim import simulate
 
     scene = gfuzzy.load_scene(ROOT / "scenes" / "footprint-office.yaml")
     rm = gfuzzy.load_roadmap(ROOT / "roadmaps" / "footprint-office.json", scene)
@@ -477,8 +477,8 @@ def test_render_draws_the_footprint_and_its_heading(tmp_path):
     tick to its front; the PNG is written."""
     from matplotlib.patches import Polygon as PolygonPatch
 
-    from gfuzzy import draw
-    from gfuzzy.render import render_scene
+    from gfuzzy.render import draw
+    from gfuzzy.render.render import render_scene
 
     scene = _scene({"footprint": U}, DOCK["obstacles"], queries=DOCK["queries"])
     pose = np.array([2.0, 1.5, 0.7])
@@ -493,7 +493,7 @@ def test_render_draws_the_footprint_and_its_heading(tmp_path):
     assert out.stat().st_size > 10_000
     gif = tmp_path / "u.gif"
     wp = np.array([[0.0, 1.0, 2.0, 0.0], [2.0, 2.5, 2.0, 0.5], [4.0, 4.85, 2.0, 0.0]])
-    gfuzzy.render.render(scene, gif, wp)
+    gfuzzy.render.render.render(scene, gif, wp)
     assert gif.stat().st_size > 10_000
 
 

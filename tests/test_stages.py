@@ -1,4 +1,4 @@
-"""gfuzzy.stages: the GA refinement and the speed layer run on a context, not a planner."""
+"""gfuzzy.planner.stages: the GA refinement and the speed layer run on a context, not a planner."""
 
 from __future__ import annotations
 
@@ -18,12 +18,12 @@ from helpers import scene_of as _scene
 from reference import reference_violation
 from shared_scenes import CROSSING
 
-from gfuzzy.check import check_trajectory
-from gfuzzy.geometry import StaticGeometry
-from gfuzzy.planner import Planner, PlanOptions, plan
-from gfuzzy.roadmap import RoadmapOptions, build_roadmap
-from gfuzzy.scene import Query, parse_scene
-from gfuzzy.stages import RefineReport, SpeedReport, StageContext, apply_stages
+from gfuzzy.check.check import check_trajectory
+from gfuzzy.collision.geometry import StaticGeometry
+from gfuzzy.planner.planner import Planner, PlanOptions, plan
+from gfuzzy.planner.stages import RefineReport, SpeedReport, StageContext, apply_stages
+from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
+from gfuzzy.scene.scene import Query, parse_scene
 from gfuzzy.trajectory import Trajectory
 
 # an L-shaped hall: the search's answer turns a corner, the stages have work to do

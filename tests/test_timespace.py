@@ -1,4 +1,4 @@
-"""The mover field of the time-space search (``gfuzzy.timespace.MoverField``): its margins
+"""The mover field of the time-space search (``gfuzzy.timespace.timespace.MoverField``): its margins
 and its exact first motion."""
 
 from __future__ import annotations
@@ -7,7 +7,7 @@ import numpy as np
 from helpers import scene_of as _scene
 from shared_scenes import CROSSING, PERSON
 
-from gfuzzy.timespace import MoverField
+from gfuzzy.timespace.timespace import MoverField
 
 
 def test_mover_clearance_is_in_the_margin_table():

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gfuzzy import fuzzy
+from gfuzzy.fuzzy import fuzzy
 from gfuzzy.learning import tracking
 from gfuzzy.learning.tracking import TrackingOptions, UnicycleLimits
 from gfuzzy.status import Status

@@ -15,11 +15,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import gfuzzy
-from gfuzzy.check import check_trajectory
-from gfuzzy.planner import Planner, PlanOptions, Status
-from gfuzzy.roadmap import RoadmapOptions, build_roadmap
-from gfuzzy.scene import load_scene, parse_scene
-from gfuzzy.tracks import TrackSceneOptions, read_tracks, tracks_scene
+from gfuzzy.check.check import check_trajectory
+from gfuzzy.planner.planner import Planner, PlanOptions, Status
+from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
+from gfuzzy.scene.scene import load_scene, parse_scene
+from gfuzzy.scene.tracks import TrackSceneOptions, read_tracks, tracks_scene
 
 # frame step 10 (so 25 frames/s): person 1 walks +x at 2.5 m/s, person 2 appears later,
 # person 3 has velocity columns; rows of different people interleave as in the data sets

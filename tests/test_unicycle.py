@@ -13,12 +13,12 @@ import math
 import numpy as np
 import pytest
 
-from gfuzzy.check import check_trajectory
-from gfuzzy.drive import turn_path
+from gfuzzy.check.check import check_trajectory
 from gfuzzy.errors import SceneError
-from gfuzzy.planner import Planner, PlanOptions
-from gfuzzy.roadmap import Roadmap
-from gfuzzy.scene import parse_scene
+from gfuzzy.planner.drive import turn_path
+from gfuzzy.planner.planner import Planner, PlanOptions
+from gfuzzy.roadmap.roadmap import Roadmap
+from gfuzzy.scene.scene import parse_scene
 
 
 def doc(robot=None, movers=(), obstacles=(), queries=(), bounds=(0, 0, 6, 4)):
@@ -266,7 +266,7 @@ def test_reverse_drives_backwards_when_turning_is_slow():
 def test_box_unicycle_plans_on_an_se2_roadmap():
     """A box robot's lanes come from the SE(2) roadmap's positions, certified with the
     body held along each lane; the answer passes a gap only lengthwise."""
-    from gfuzzy.roadmap import RoadmapOptions, build_roadmap
+    from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
 
     walls = [{"box": {"center": [3.0, 0.85], "size": [0.2, 1.7]}}, {"box": {"center": [3.0, 3.15], "size": [0.2, 1.7]}}]
     robot = {"box": [0.8, 0.4], "vmax": 1.0, "kinematics": "unicycle"}
@@ -293,7 +293,7 @@ def _crossing_scene(reverse=False):
 
 @pytest.fixture(scope="module")
 def crossing():
-    from gfuzzy.roadmap import RoadmapOptions, build_roadmap
+    from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
 
     sc = _crossing_scene()
     return sc, build_roadmap(sc, RoadmapOptions(vertices=120, seed=4))
@@ -315,8 +315,8 @@ def test_plan_from_a_prepared_goal_arrives_with_a_fresh_plan(crossing):
 def test_the_navigator_drives_a_unicycle_by_the_rule(crossing):
     """Every trajectory the navigator returns (plans, direct motions, evasions) turns only
     in place and drives only along the heading; the simulated run reaches the goal."""
-    from gfuzzy.navigator import Navigator, NavOptions
-    from gfuzzy.navsim import simulate
+    from gfuzzy.navigation.navigator import Navigator, NavOptions
+    from gfuzzy.navigation.navsim import simulate
 
     sc, rm = crossing
     res = simulate(sc, rm, [0.8, 2.0, 0.0], [5.2, 2.0, 0.0], 0.0, 0.25, max_time=40.0,
@@ -328,7 +328,7 @@ def test_the_navigator_drives_a_unicycle_by_the_rule(crossing):
     pose = np.array([1.5, 2.0, 0.7])
     crowd = np.array([[1.9, 2.0, -0.8, 0.0, 0.3], [1.5, 2.6, 0.0, -0.8, 0.3]])  # about to hit it
     evasive = nav._evasive(0.0, pose, crowd)
-    from gfuzzy.check import _unicycle_problem
+    from gfuzzy.check.check import _unicycle_problem
 
     assert len(evasive.waypoints) >= 2 and _unicycle_problem(sc.robot, evasive.waypoints) is None
     direct = nav._direct(0.0, np.array([4.5, 2.0, 2.0]), np.zeros((0, 5)))

@@ -25,10 +25,10 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from gfuzzy.batch import BatchOptions, local_cluster, run_batch  # noqa: E402
-from gfuzzy.planner import PlanOptions  # noqa: E402
-from gfuzzy.roadmap import load_roadmap  # noqa: E402
-from gfuzzy.scene import load_scene  # noqa: E402
+from gfuzzy.planner.planner import PlanOptions  # noqa: E402
+from gfuzzy.roadmap.roadmap import load_roadmap  # noqa: E402
+from gfuzzy.runs.batch import BatchOptions, local_cluster, run_batch  # noqa: E402
+from gfuzzy.scene.scene import load_scene  # noqa: E402
 
 
 def bundled(repeat: int):
@@ -44,7 +44,7 @@ def timed(workers: int, pairs, options):
     t = time.perf_counter()
     with local_cluster(workers) as client:
         started = time.perf_counter() - t
-        client.run(lambda: __import__("gfuzzy.planner") and None)  # imports done before timing
+        client.run(lambda: __import__("gfuzzy.planner.planner") and None)  # imports done before timing
         res = run_batch(client, pairs, options)
     return started, res
 

@@ -6,7 +6,7 @@
 Options (each measured in fresh processes, one after the other in the same run):
 
 * ``precompiled``: the default when ``make warm`` built the extension
-  (:mod:`gfuzzy.jit`, ``python -m gfuzzy.precompile``): numba never imported.
+  (:mod:`gfuzzy.timespace.jit`, ``python -m gfuzzy.timespace.precompile``): numba never imported.
 * ``numba``: ``GFUZZY_PRECOMPILED=0``, numba's just-in-time dispatchers loaded from its
   on-disk cache (what every process paid before).
 * ``reference``: ``--backend reference`` (and ``GFUZZY_PRECOMPILED=0``): the pure-Python
@@ -22,7 +22,7 @@ Figures per option:
   ``Planner``, then its first query and 10 more (warm: their median), per scene;
 * kernel load: the precompiled extension's load, or numba's import and the load of the
   kernels a query calls from numba's cache (the warm-up search of
-  :func:`gfuzzy.search_kernel.warm`, which also runs a tiny search), in a fresh process,
+  :func:`gfuzzy.timespace.search_kernel.warm`, which also runs a tiny search), in a fresh process,
   with the kernels numba found in its cache.
 
 Targets (issue 20): cold CLI <= 0.6 s; first query <= 3 x a warm one; the warm figures
@@ -51,8 +51,8 @@ FIRST_WARM = r"""
 import json, statistics, sys, time
 t0 = time.perf_counter()
 import gfuzzy
-from gfuzzy.roadmap import load_roadmap
-from gfuzzy.scene import load_scene
+from gfuzzy.roadmap.roadmap import load_roadmap
+from gfuzzy.scene.scene import load_scene
 t1 = time.perf_counter()
 scene = load_scene(f"scenes/{sys.argv[1]}.yaml")
 planner = gfuzzy.Planner(scene, load_roadmap(f"roadmaps/{sys.argv[1]}.json", scene))
@@ -64,7 +64,7 @@ for _ in range(11):
     r = planner.plan(q.start, q.goal, q.t0, opts)
     times.append(time.perf_counter() - t)
     secs.append(r.planning_seconds)
-from gfuzzy import jit
+from gfuzzy.timespace import jit
 print(json.dumps({"import": t1 - t0, "first": times[0], "warm": statistics.median(times[1:]),
                   "first_reported": secs[0], "duration": r.trajectory.duration if r.trajectory else None,
                   "numba": "numba" in sys.modules, "scipy_csgraph": "scipy.sparse.csgraph" in sys.modules,
@@ -73,7 +73,7 @@ print(json.dumps({"import": t1 - t0, "first": times[0], "warm": statistics.media
 
 KERNEL_LOAD = r"""
 import json, sys, time
-from gfuzzy import jit
+from gfuzzy.timespace import jit
 out = {}
 t = time.perf_counter()
 ext = jit.loaded()
@@ -82,12 +82,12 @@ if ext is None:
     t = time.perf_counter()
     import numba
     out["import numba"] = time.perf_counter() - t
-    from gfuzzy import search_kernel
+    from gfuzzy.timespace import search_kernel
     from numba.core.registry import CPUDispatcher
     t = time.perf_counter()
     search_kernel.warm()  # the kernels a query calls, loaded from numba's cache
     out["cache load (warm-up search)"] = time.perf_counter() - t
-    for mod in (search_kernel, sys.modules["gfuzzy.movers_kernel"]):
+    for mod in (search_kernel, sys.modules["gfuzzy.timespace.movers_kernel"]):
         for name, d in sorted(vars(mod).items()):
             if isinstance(d, CPUDispatcher) and d.py_func.__module__ == mod.__name__ and d.stats.cache_hits:
                 out[f"  {mod.__name__.split('.')[-1]}.{name} (hit)"] = 0.0
@@ -147,7 +147,7 @@ def main() -> None:
         kernel_dir = None
         if option == "host":
             sys.path.insert(0, str(ROOT))
-            from gfuzzy.precompile import build
+            from gfuzzy.timespace.precompile import build
 
             kernel_dir = str(build(tmp.name, target_cpu="host").parent)
         env = _env(option, kernel_dir)

@@ -8,7 +8,7 @@
 Each setting is one ``gfuzzy crowd`` command line (printed above its table), e.g.
 ``gfuzzy crowd --humans 20 --visible --episodes 300 --workers 2``: CrowdNav's circle
 crossing (Chen et al. 2019) or CrowdNav++'s arena (Liu et al. 2023), see
-``gfuzzy/crowd.py``. The table per setting: success, collision and timeout rates, mean
+``gfuzzy/navigation/crowd.py``. The table per setting: success, collision and timeout rates, mean
 time to goal, discomfort frequency (gap < 0.2 m), intrusion ratio (CrowdNav++), mean
 smallest separation, replan p50 / p95 (ms, measured in the workers), then the target.
 ``--replays`` adds the bundled pedestrian replays through ``gfuzzy navigate`` with
@@ -31,10 +31,10 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from gfuzzy import crowd as C  # noqa: E402
+from gfuzzy.navigation import crowd as C  # noqa: E402
 from gfuzzy.cli.crowds import _table  # noqa: E402
-from gfuzzy.navigator import NavOptions  # noqa: E402
-from gfuzzy.sensing import SensorOptions  # noqa: E402
+from gfuzzy.navigation.navigator import NavOptions  # noqa: E402
+from gfuzzy.navigation.sensing import SensorOptions  # noqa: E402
 
 #: name: (gfuzzy crowd flags, CrowdSetting keywords, policies, the issue's target)
 SETTINGS = {
@@ -110,7 +110,7 @@ def main(argv=None) -> int:
     with contextlib.ExitStack() as stack:
         client = None
         if args.workers > 0 and args.episodes > 0:
-            from gfuzzy.batch import local_cluster
+            from gfuzzy.runs.batch import local_cluster
 
             client = stack.enter_context(local_cluster(args.workers))
         if args.episodes > 0:

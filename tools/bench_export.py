@@ -22,9 +22,9 @@ sys.path.insert(0, str(ROOT))
 import numpy as np  # noqa: E402
 import shapely  # noqa: E402
 
-from gfuzzy.export import ExportOptions, export_mcap  # noqa: E402
-from gfuzzy.mapexport import rasterise  # noqa: E402
-from gfuzzy.scene import Box, Disc, parse_scene  # noqa: E402
+from gfuzzy.export.export import ExportOptions, export_mcap  # noqa: E402
+from gfuzzy.export.mapexport import rasterise  # noqa: E402
+from gfuzzy.scene.scene import Box, Disc, parse_scene  # noqa: E402
 
 
 def floor(seed: int = 1):

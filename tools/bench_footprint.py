@@ -16,9 +16,9 @@ import argparse
 import time
 from pathlib import Path
 
-from gfuzzy.planner import Planner
-from gfuzzy.roadmap import RoadmapOptions, build_roadmap
-from gfuzzy.scene import load_scene, parse_scene
+from gfuzzy.planner.planner import Planner
+from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
+from gfuzzy.scene.scene import load_scene, parse_scene
 
 ROOT = Path(__file__).resolve().parent.parent
 

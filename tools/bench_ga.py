@@ -219,10 +219,10 @@ def _pair(before: dict, after: dict, key: str, fmt: str) -> str:
 
 
 def bundled(seed: int, generations: int, ref=None, rev: str | None = None, repeat: int = 1) -> None:
-    from gfuzzy.planner import Planner, PlanOptions
-    from gfuzzy.roadmap import load_roadmap
-    from gfuzzy.scene import load_scene
-    from gfuzzy.stages import _clearance_functions, _dedupe
+    from gfuzzy.planner.planner import Planner, PlanOptions
+    from gfuzzy.planner.stages import _clearance_functions, _dedupe
+    from gfuzzy.roadmap.roadmap import load_roadmap
+    from gfuzzy.scene.scene import load_scene
 
     root = Path(__file__).resolve().parent.parent
     scenes = sorted((root / "scenes").glob("*.yaml"))

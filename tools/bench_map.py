@@ -32,10 +32,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from gfuzzy.geometry import StaticGeometry  # noqa: E402
-from gfuzzy.planner import Planner, PlanOptions  # noqa: E402
-from gfuzzy.roadmap import RoadmapOptions, build_roadmap  # noqa: E402
-from gfuzzy.scene import load_scene  # noqa: E402
+from gfuzzy.collision.geometry import StaticGeometry  # noqa: E402
+from gfuzzy.planner.planner import Planner, PlanOptions  # noqa: E402
+from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap  # noqa: E402
+from gfuzzy.scene.scene import load_scene  # noqa: E402
 
 RES = 0.03
 W, H = 1000, 1700  # columns (x), rows (y)

@@ -27,7 +27,7 @@ added, and the answer through the door.
 
 Columns: solved / seeds, the mean and max roadmap build time, the vertices the repair added
 (mean), and the roadmap's components (mean). Every solved answer is checked by
-``gfuzzy.check``; a failed check is printed. Quote ``uptime`` with the figures.
+``gfuzzy.check.check``; a failed check is printed. Quote ``uptime`` with the figures.
 """
 
 from __future__ import annotations
@@ -42,10 +42,10 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from gfuzzy.check import check_trajectory  # noqa: E402
-from gfuzzy.planner import Planner  # noqa: E402
-from gfuzzy.roadmap import RoadmapOptions, build_roadmap  # noqa: E402
-from gfuzzy.scene import parse_scene  # noqa: E402
+from gfuzzy.check.check import check_trajectory  # noqa: E402
+from gfuzzy.planner.planner import Planner  # noqa: E402
+from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap  # noqa: E402
+from gfuzzy.scene.scene import parse_scene  # noqa: E402
 
 #: mode -> (RoadmapOptions overrides, queries linked through the free space)
 MODES = {
@@ -106,8 +106,8 @@ def picture(out: str) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
-    from gfuzzy import draw
-    from gfuzzy.freespace import free_space
+    from gfuzzy.render import draw
+    from gfuzzy.roadmap.freespace import free_space
 
     scene = door_scene(0.74, {"disc": 0.3, "vmax": 1.0, "clearance": 0.05})
     plain = build_roadmap(scene, RoadmapOptions(seed=3, sampler="uniform", repair=False))

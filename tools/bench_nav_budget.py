@@ -17,7 +17,7 @@ fallback (anything but a fresh plan), how many people the navigator predicted in
 and the smallest robot-person gap over the run (people bounce off the robot's disc, so a
 gap below zero means the robot drove into someone). The first step of each crowd is not
 counted (it loads what stays cached). The figures are wall-clock on a shared machine.
-``--baseline REV`` also runs ``gfuzzy/navigator.py`` as it was at git revision REV (on
+``--baseline REV`` also runs ``gfuzzy/navigation/navigator.py`` as it was at git revision REV (on
 today's other modules), on the same crowds in the same run.
 """
 
@@ -38,8 +38,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import gfuzzy  # noqa: E402
-from gfuzzy.navigator import Navigator, NavOptions  # noqa: E402
-from gfuzzy.scene import parse_scene  # noqa: E402
+from gfuzzy.navigation.navigator import Navigator, NavOptions  # noqa: E402
+from gfuzzy.scene.scene import parse_scene  # noqa: E402
 
 W, H = 10.0, 8.0
 PILLARS = [(3.0, 3.0), (7.0, 3.0), (3.0, 5.0), (7.0, 5.0)]
@@ -109,14 +109,14 @@ class Crowd:
 
 
 def baseline_navigator(rev: str):
-    """The Navigator class of ``gfuzzy/navigator.py`` at git revision ``rev``."""
+    """The Navigator class of ``gfuzzy/navigation/navigator.py`` at git revision ``rev``."""
     root = Path(__file__).resolve().parents[1]
-    src = subprocess.run(["git", "show", f"{rev}:gfuzzy/navigator.py"], cwd=root, capture_output=True, text=True, check=True).stdout
+    src = subprocess.run(["git", "show", f"{rev}:gfuzzy/navigation/navigator.py"], cwd=root, capture_output=True, text=True, check=True).stdout
     spec = importlib.util.spec_from_loader(f"gfuzzy._navigator_{rev}", loader=None)
     mod = importlib.util.module_from_spec(spec)
     mod.__package__ = "gfuzzy"
     sys.modules[spec.name] = mod  # dataclasses look their module up
-    exec(compile(src, f"{rev}:gfuzzy/navigator.py", "exec"), mod.__dict__)
+    exec(compile(src, f"{rev}:gfuzzy/navigation/navigator.py", "exec"), mod.__dict__)
     return mod.Navigator, mod.NavOptions
 
 

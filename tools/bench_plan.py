@@ -54,10 +54,10 @@ import yaml
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from gfuzzy.planner import SPEED_SAFETY, Planner, PlanOptions, plan  # noqa: E402
-from gfuzzy.roadmap import RoadmapOptions, build_roadmap, grow_roadmaps, load_roadmap  # noqa: E402
-from gfuzzy.scene import load_scene  # noqa: E402
-from gfuzzy.timespace import MoverField  # noqa: E402
+from gfuzzy.planner.planner import SPEED_SAFETY, Planner, PlanOptions, plan  # noqa: E402
+from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap, grow_roadmaps, load_roadmap  # noqa: E402
+from gfuzzy.scene.scene import load_scene  # noqa: E402
+from gfuzzy.timespace.timespace import MoverField  # noqa: E402
 
 PAPER = {100: "0.33 s", 198: "0.46 s, 35.14 / 15.82 = 2.22", 200: "(198: 0.46 s, df 2.22)", 1000: "3.90 s"}
 
@@ -237,7 +237,7 @@ def child(scene_path: str, rm_path: str, backend: str, repeat: int = 3) -> None:
     q = scene.queries[0]
     options = PlanOptions(backend=backend)
     if backend == "compiled":  # load the kernels before measuring what a query adds
-        from gfuzzy.search_kernel import warm
+        from gfuzzy.timespace.search_kernel import warm
 
         warm()
     loaded = peak_mb()
@@ -335,7 +335,7 @@ def main() -> None:
     ap.add_argument("--peer", action="store_true", help="also run the OMPL space-time peer (~1-2 min)")
     ap.add_argument("--peer-budget", type=float, default=5.0)
     args = ap.parse_args()
-    from gfuzzy.search_kernel import warm
+    from gfuzzy.timespace.search_kernel import warm
 
     warm()  # the compiled kernels load once, before anything is timed
     table1(args.repeat, args.seed)

@@ -36,9 +36,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from gfuzzy.planner import Planner  # noqa: E402
-from gfuzzy.roadmap import RoadmapOptions, build_roadmap, grow_roadmaps  # noqa: E402
-from gfuzzy.scene import load_scene  # noqa: E402
+from gfuzzy.planner.planner import Planner  # noqa: E402
+from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap, grow_roadmaps  # noqa: E402
+from gfuzzy.scene.scene import load_scene  # noqa: E402
 from gfuzzy.settings import SPEED_SAFETY  # noqa: E402
 from tools.bench_plan import hall_scene  # noqa: E402
 
@@ -106,7 +106,7 @@ def main(argv=None) -> None:
     ap.add_argument("--skip-hall", action="store_true")
     args = ap.parse_args(argv)
 
-    from gfuzzy.search_kernel import warm
+    from gfuzzy.timespace.search_kernel import warm
 
     warm()
     print(

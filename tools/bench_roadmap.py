@@ -15,9 +15,9 @@ import argparse
 import time
 from pathlib import Path
 
-from gfuzzy.geometry import StaticGeometry
-from gfuzzy.roadmap import RoadmapOptions, _Builder, _seed_ompl, build_roadmap
-from gfuzzy.scene import load_scene
+from gfuzzy.collision.geometry import StaticGeometry
+from gfuzzy.roadmap.roadmap import RoadmapOptions, _Builder, _seed_ompl, build_roadmap
+from gfuzzy.scene.scene import load_scene
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -21,9 +21,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from gfuzzy.planner import Planner, PlanOptions  # noqa: E402
-from gfuzzy.roadmap import RoadmapOptions, build_roadmap  # noqa: E402
-from gfuzzy.scene import load_scene  # noqa: E402
+from gfuzzy.planner.planner import Planner, PlanOptions  # noqa: E402
+from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap  # noqa: E402
+from gfuzzy.scene.scene import load_scene  # noqa: E402
 
 
 def query_row(planner, q, options, repeat):

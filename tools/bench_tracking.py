@@ -1,7 +1,7 @@
 """Benchmark of unicycle path tracking under three speed profiles.
 
 For each path (synthetic S-curve, zig-zag, corner, hairpin, arc; plus the paths
-planned on the bundled scenes when gfuzzy.planner and a roadmap file are there)
+planned on the bundled scenes when gfuzzy.planner.planner and a roadmap file are there)
 a unicycle tracks it with adaptive pure pursuit under:
 
 * constant vmax (ramps at both ends only),
@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gfuzzy import fuzzy
+from gfuzzy.fuzzy import fuzzy
 from gfuzzy.learning import tracking
 from gfuzzy.status import Status
 
@@ -39,9 +39,9 @@ def scene_paths(root: Path = ROOT, time_limit: float = 20.0) -> list[tuple[str, 
     if not files:
         return out
     try:
-        from gfuzzy.planner import PlanOptions, plan
-        from gfuzzy.roadmap import default_roadmap_path, load_roadmap
-        from gfuzzy.scene import load_scene
+        from gfuzzy.planner.planner import PlanOptions, plan
+        from gfuzzy.roadmap.roadmap import default_roadmap_path, load_roadmap
+        from gfuzzy.scene.scene import load_scene
     except Exception as exc:  # the planner is another stage's work; skip quietly
         print(f"(scene paths skipped: {type(exc).__name__}: {exc})")
         return out

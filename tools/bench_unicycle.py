@@ -32,10 +32,10 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from gfuzzy.check import check_trajectory  # noqa: E402
-from gfuzzy.planner import Planner, PlanOptions  # noqa: E402
-from gfuzzy.roadmap import load_roadmap  # noqa: E402
-from gfuzzy.scene import load_scene  # noqa: E402
+from gfuzzy.check.check import check_trajectory  # noqa: E402
+from gfuzzy.planner.planner import Planner, PlanOptions  # noqa: E402
+from gfuzzy.roadmap.roadmap import load_roadmap  # noqa: E402
+from gfuzzy.scene.scene import load_scene  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 

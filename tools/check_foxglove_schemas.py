@@ -1,4 +1,4 @@
-"""Compares gfuzzy's Foxglove schemas (gfuzzy/foxglove.py) with Foxglove's own JSON Schema
+"""Compares gfuzzy's Foxglove schemas (gfuzzy/export/foxglove.py) with Foxglove's own JSON Schema
 files, and validates the messages of MCAP files against Foxglove's files.
 
     python tools/check_foxglove_schemas.py SCHEMAS_DIR [FILE.mcap ...]
@@ -17,7 +17,7 @@ from pathlib import Path
 
 import jsonschema
 
-from gfuzzy.foxglove import SCHEMAS
+from gfuzzy.export.foxglove import SCHEMAS
 
 
 def fields(schema: dict, path: str = "") -> dict:

@@ -31,10 +31,10 @@ sys.path.insert(0, str(ROOT / "tools"))
 
 from experiments.fig12 import variant  # noqa: E402
 
-from gfuzzy.movers import MoverField  # noqa: E402
-from gfuzzy.planner import SPEED_SAFETY, Planner, PlanOptions  # noqa: E402
-from gfuzzy.roadmap import RoadmapOptions, grow_roadmaps, load_roadmap  # noqa: E402
-from gfuzzy.scene import load_scene  # noqa: E402
+from gfuzzy.planner.planner import SPEED_SAFETY, Planner, PlanOptions  # noqa: E402
+from gfuzzy.roadmap.roadmap import RoadmapOptions, grow_roadmaps, load_roadmap  # noqa: E402
+from gfuzzy.scene.scene import load_scene  # noqa: E402
+from gfuzzy.timespace.movers import MoverField  # noqa: E402
 
 
 def brute_force(planner: Planner, q, dt: float, horizon: int) -> int | None:

@@ -15,9 +15,9 @@ import argparse
 import numpy as np
 import shapely
 
-from gfuzzy.check import _World
-from gfuzzy.geometry import mover_distance
-from gfuzzy.scene import load_scene
+from gfuzzy.check.check import _World
+from gfuzzy.collision.geometry import mover_distance
+from gfuzzy.scene.scene import load_scene
 from gfuzzy.trajectory import load_trajectory
 
 

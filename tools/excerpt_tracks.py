@@ -18,7 +18,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from gfuzzy.tracks import ANNOTATION_PERIOD, read_tracks  # noqa: E402
+from gfuzzy.scene.tracks import ANNOTATION_PERIOD, read_tracks  # noqa: E402
 
 #: file -> (window start, window end) in seconds of the recording; what the bundled scenes
 #: (eth-crossing, zara-crowd) and tests/test_tracks.py use.

@@ -21,8 +21,8 @@ import numpy as np  # noqa: E402
 from matplotlib.patches import Circle  # noqa: E402
 from matplotlib.patches import Polygon as Patch  # noqa: E402
 
-from gfuzzy.mapexport import rasterise  # noqa: E402
-from gfuzzy.scene import Box, Disc, Polygon, load_scene  # noqa: E402
+from gfuzzy.export.mapexport import rasterise  # noqa: E402
+from gfuzzy.scene.scene import Box, Disc, Polygon, load_scene  # noqa: E402
 
 
 def main() -> int:

@@ -3,7 +3,7 @@
 Same seed, same result, bit for bit: a speed-up of the GA must not change any answer. This
 script runs the synthetic zig-zag corridor runs of ``tools/bench_ga.py``, the GA on
 building-floor's corridor (population 50 x 2000 generations, early stop off, the real FCL
-and mover clearances of :func:`gfuzzy.stages._clearance_functions`), and ``plan(refine=True)``
+and mover clearances of :func:`gfuzzy.planner.stages._clearance_functions`), and ``plan(refine=True)``
 on every bundled query, capturing every :class:`~gfuzzy.ga.GAResult` that
 ``gfuzzy.ga.refine_path`` returns and the final trajectories and reports. ``save`` pickles
 them; ``compare`` runs the same again and reports every difference (exit 1 if any).
@@ -61,10 +61,10 @@ def collect(generations: int, seed: int = 0) -> dict:
         res = gfuzzy.ga.refine_path(path, tt, bench_ga.ROBOT, bench_ga.static_clearance, mover, opts, seed=seed)
         out[f"zigzag/{name}"] = ga_record(res)
 
-    from gfuzzy.planner import Planner, PlanOptions
-    from gfuzzy.roadmap import load_roadmap
-    from gfuzzy.scene import load_scene
-    from gfuzzy.stages import StageContext, _clearance_functions, _dedupe
+    from gfuzzy.planner.planner import Planner, PlanOptions
+    from gfuzzy.planner.stages import StageContext, _clearance_functions, _dedupe
+    from gfuzzy.roadmap.roadmap import load_roadmap
+    from gfuzzy.scene.scene import load_scene
 
     def setup(p):
         scene = load_scene(p)

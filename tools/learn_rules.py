@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 from bench_tracking import scene_paths  # tools/ is on sys.path when run as a script
 
-from gfuzzy import fuzzy
+from gfuzzy.fuzzy import fuzzy
 from gfuzzy.learning import learn as sogarg
 from gfuzzy.learning import tracking
 

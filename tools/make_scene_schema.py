@@ -6,7 +6,7 @@ scene and every random valid scene passes it, and which bad scenes it rejects.
 
 import json
 
-#: Largest magnitude of a number (gfuzzy.yamldoc.MAX_MAGNITUDE): this also refuses infinities.
+#: Largest magnitude of a number (gfuzzy.scene.yamldoc.MAX_MAGNITUDE): this also refuses infinities.
 MAXMAG = 1e9
 
 

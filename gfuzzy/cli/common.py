@@ -47,14 +47,14 @@ def _progress(label: str):
 
 
 def _load_scene(path):
-    from ..scene import load_scene
+    from ..scene.scene import load_scene
 
     return load_scene(path)
 
 
 def _roadmap_for(scene, args, quiet=False):
     """The roadmap a plan/regress run uses: --roadmap, -n/--seed, or the default file."""
-    from ..roadmap import RoadmapOptions, build_roadmap, load_roadmap
+    from ..roadmap.roadmap import RoadmapOptions, build_roadmap, load_roadmap
 
     if getattr(args, "roadmap", None):
         return load_roadmap(args.roadmap, scene)
@@ -91,7 +91,7 @@ def _roadmap_for(scene, args, quiet=False):
 
 def _check_roadmap_flags(args) -> None:
     """Refuse bad -n/--seed values up front, as :func:`_roadmap_for` would later."""
-    from ..roadmap import RoadmapOptions
+    from ..roadmap.roadmap import RoadmapOptions
 
     if args.vertices is None and args.seed is None:
         return
@@ -107,7 +107,7 @@ def _check_roadmap_flags(args) -> None:
 def _roadmap_of_other_clearance(scene):
     """The options of a saved roadmap built for the same shapes with another static
     clearance (a ``--clearance`` override), or None."""
-    from ..roadmap import default_roadmap_path, load_roadmap
+    from ..roadmap.roadmap import default_roadmap_path, load_roadmap
 
     if not scene.shape_hash:
         return None
@@ -125,7 +125,7 @@ def _roadmap_of_other_clearance(scene):
 def _default_roadmap(scene, quiet=False):
     """The roadmap file built for ``scene`` in roadmaps/ (here, or beside the scene's
     folder), if there is one that matches it."""
-    from ..roadmap import default_roadmap_path, load_roadmap
+    from ..roadmap.roadmap import default_roadmap_path, load_roadmap
 
     scene_dir = Path(scene.source).resolve().parent
     for path in (default_roadmap_path(scene), default_roadmap_path(scene, scene_dir.parent / "roadmaps")):
@@ -161,7 +161,7 @@ def _apply_overrides(scene, args):
 def _clearance_only(path, scene) -> bool:
     """True when the roadmap file at ``path`` differs from ``scene`` only by the static
     clearance (said once, by :func:`_roadmap_for`)."""
-    from ..roadmap import load_roadmap
+    from ..roadmap.roadmap import load_roadmap
 
     try:
         return bool(scene.shape_hash) and load_roadmap(path).scene_hash == scene.shape_hash
@@ -170,7 +170,7 @@ def _clearance_only(path, scene) -> bool:
 
 
 def _plan_options(args):
-    from ..planner import PlanOptions
+    from ..planner.planner import PlanOptions
 
     try:
         return PlanOptions(

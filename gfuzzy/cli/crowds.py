@@ -55,9 +55,9 @@ def _progress_bar(label: str):
 
 
 def _setting(args):
-    from ..crowd import CrowdSetting
-    from ..navigator import NavOptions
-    from ..sensing import SensorOptions
+    from ..navigation.crowd import CrowdSetting
+    from ..navigation.navigator import NavOptions
+    from ..navigation.sensing import SensorOptions
 
     humans = args.humans if args.humans is not None else (20 if args.scenario == "arena" else 5)
     if humans < 0 or humans > 200:
@@ -89,7 +89,7 @@ def _setting(args):
 
 
 def _table(setting, runs, policies) -> str:
-    from ..crowd import summarize
+    from ..navigation.crowd import summarize
 
     head = (f"{'policy':<13}{'n':>5}{'success':>9}{'collide':>9}{'timeout':>9}{'time s':>8}{'discomf':>9}"
             f"{'intrus':>8}{'min sep':>9}{'p50 ms':>8}{'p95 ms':>8}")  # fmt: skip
@@ -120,7 +120,7 @@ def _write_csv(path, setting, runs) -> None:
     import io
 
     from ..atomic import write_atomic
-    from ..crowd import CSV_COLUMNS
+    from ..navigation.crowd import CSV_COLUMNS
 
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=list(CSV_COLUMNS), lineterminator="\n")
@@ -142,7 +142,7 @@ def cmd_crowd(args) -> int:
     """Run the crowd benchmark; print the table of section 7; write the CSV."""
     import contextlib
 
-    from ..crowd import crowd_roadmap, episodes
+    from ..navigation.crowd import crowd_roadmap, episodes
 
     setting, options, policies = _setting(args)
     _need_pyrvo("crowd")
@@ -150,7 +150,7 @@ def cmd_crowd(args) -> int:
     roadmap = crowd_roadmap(setting)
     bar = _progress_bar(f"crowd {setting.scenario} x{args.episodes}")
     if args.workers:
-        from ..batch import local_cluster
+        from ..runs.batch import local_cluster
 
         ctx = local_cluster(args.workers)
     else:
@@ -179,7 +179,7 @@ def add_populate(sub) -> None:
 
 def cmd_populate(args) -> int:
     """Write a copy of the scene with ``--people`` walking people as trajectory movers."""
-    from ..populate import PopulateOptions, populate, write_scene
+    from ..navigation.populate import PopulateOptions, populate, write_scene
 
     scene = _load_scene(args.scene)
     _need_pyrvo("populate")

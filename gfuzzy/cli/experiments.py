@@ -49,8 +49,8 @@ def _tracks_command(args) -> str:
 
 def cmd_tracks(args) -> int:
     from ..atomic import write_atomic
-    from ..scene import _load_yaml, parse_scene
-    from ..tracks import TrackSceneOptions, read_tracks, tracks_scene
+    from ..scene.scene import _load_yaml, parse_scene
+    from ..scene.tracks import TrackSceneOptions, read_tracks, tracks_scene
 
     out = _out_path(args.output, (".yaml", ".yml"))
     static = _load_scene(args.static) if args.static else None
@@ -114,7 +114,7 @@ def cmd_batch(args) -> int:
     import logging
     import time
 
-    from ..batch import BatchOptions, local_cluster, run_batch, write_table
+    from ..runs.batch import BatchOptions, local_cluster, run_batch, write_table
 
     if args.workers is not None and args.workers < 1:
         raise BadInput(f"--workers: must be at least 1, got {args.workers}")
@@ -178,7 +178,7 @@ def cmd_batch(args) -> int:
 
 def _sensor_options(args):
     """The sensor of ``gfuzzy navigate`` (section 7) from its flags."""
-    from ..sensing import SensorOptions
+    from ..navigation.sensing import SensorOptions
 
     for flag, value in (("--noise", args.noise), ("--fov", args.fov)):
         if not math.isfinite(value):
@@ -196,11 +196,11 @@ def cmd_navigate(args) -> int:
     """Drive the robot among the scene's movers without knowing their future (section 5)."""
     import numpy as np
 
-    from ..check import check_trajectory
-    from ..geometry import StaticGeometry
-    from ..navigator import Navigator, NavOptions
-    from ..navsim import simulate
-    from ..planner import query_problem
+    from ..check.check import check_trajectory
+    from ..collision.geometry import StaticGeometry
+    from ..navigation.navigator import Navigator, NavOptions
+    from ..navigation.navsim import simulate
+    from ..planner.planner import query_problem
     from ..trajectory import TrajectoryFile
 
     scene = _apply_overrides(_load_scene(args.scene), args)

@@ -47,7 +47,7 @@ def cmd_export(args) -> int:
 
 
 def _export_map(args) -> int:
-    from ..mapexport import export_nav2_map
+    from ..export.mapexport import export_nav2_map
 
     out = _out_path(args.map, (".yaml", ".yml"))
     scene = _load_scene(args.scene)
@@ -61,7 +61,7 @@ def _export_map(args) -> int:
 
 
 def _export_mcap(args) -> int:
-    from ..export import ExportOptions, export_mcap
+    from ..export.export import ExportOptions, export_mcap
     from ..trajectory import load_trajectory
 
     out = _out_path(args.output, (".mcap",))

@@ -12,8 +12,8 @@ from .common import EXIT_OK, BadInput, _out_path, _say
 
 def cmd_map(args) -> int:
     from ..atomic import write_atomic
-    from ..mapscene import map_scene
-    from ..yamldoc import _load_yaml
+    from ..scene.mapscene import map_scene
+    from ..scene.yamldoc import _load_yaml
 
     out = _out_path(args.output, (".yaml", ".yml"))
     footprint = None
@@ -44,7 +44,7 @@ def cmd_map(args) -> int:
     # the file must load as it will be read (a footprint robot needs a gfuzzy that has them)
     doc = _load_yaml(made.text, str(out))
     if footprint is None or _knows_footprints():
-        from ..scene import parse_scene
+        from ..scene.scene import parse_scene
 
         parse_scene(doc, file=str(out), folder=out.resolve().parent)
     write_atomic(out, made.text)
@@ -53,6 +53,6 @@ def cmd_map(args) -> int:
 
 
 def _knows_footprints() -> bool:
-    from ..scene import Robot
+    from ..scene.scene import Robot
 
     return "footprint" in getattr(Robot, "__dataclass_fields__", {})

@@ -27,7 +27,7 @@ from .common import (
 
 
 def cmd_roadmap(args) -> int:
-    from ..roadmap import RoadmapOptions, build_roadmap, default_roadmap_path
+    from ..roadmap.roadmap import RoadmapOptions, build_roadmap, default_roadmap_path
 
     scene = _load_scene(args.scene)
     out = _out_path(args.output, (".json",)) if args.output else default_roadmap_path(scene)
@@ -58,7 +58,7 @@ def cmd_roadmap(args) -> int:
 
 
 def _query_from_args(scene, args):
-    from ..scene import Query
+    from ..scene.scene import Query
 
     dof = scene.robot.dof
     start = _pose(args.start, dof, "--start")
@@ -98,8 +98,8 @@ def _hold(args, default: float) -> float:
 
 
 def cmd_plan(args) -> int:
-    from ..geometry import StaticGeometry
-    from ..planner import Planner, PlanResult, Status, query_problem
+    from ..collision.geometry import StaticGeometry
+    from ..planner.planner import Planner, PlanResult, Status, query_problem
 
     scene = _apply_overrides(_load_scene(args.scene), args)
     query = _query_from_args(scene, args)
@@ -169,7 +169,7 @@ def _stage_summary(info: dict) -> str:
 
 
 def cmd_check(args) -> int:
-    from ..check import check_trajectory
+    from ..check.check import check_trajectory
     from ..trajectory import load_trajectory
 
     scene = _apply_overrides(_load_scene(args.scene), args)
@@ -188,7 +188,7 @@ def cmd_check(args) -> int:
         )
     _rows_fit(scene, tf, args.trajectory)
     if args.hold is not None:  # park at the last row (an ad-hoc query has no hold of its own)
-        from ..scene import Query
+        from ..scene.scene import Query
 
         w = tf.waypoints
         base = query or Query("adhoc", tuple(w[0, 1:]), tuple(w[-1, 1:]), float(w[0, 0]))
@@ -232,7 +232,7 @@ def _query_of(scene, tf):
 def _violation(scene, tf, path):
     """(time, reason) of a drawn trajectory's first violation of the guarantees, told on
     stderr (render draws it anyway, `check` exits 1 on it); None when it is valid."""
-    from ..check import check_trajectory
+    from ..check.check import check_trajectory
 
     query = _query_of(scene, tf)
     rep = check_trajectory(scene, tf.waypoints, query)
@@ -243,8 +243,8 @@ def _violation(scene, tf, path):
 
 
 def cmd_render(args) -> int:
-    from ..render import render
-    from ..roadmap import load_roadmap
+    from ..render.render import render
+    from ..roadmap.roadmap import load_roadmap
     from ..trajectory import load_trajectory
 
     scene = _apply_overrides(_load_scene(args.scene), args)
@@ -292,7 +292,7 @@ def _start_on_mover(scene, query) -> str:
     """Why the start overlaps a mover present at t0 (as ``plan`` says), or ""."""
     import numpy as np
 
-    from ..geometry import mover_distance
+    from ..collision.geometry import mover_distance
 
     start = np.asarray(query.start, dtype=float)
     for mv in scene.movers:
@@ -326,7 +326,7 @@ def _navigate_extras(path) -> dict:
 
 
 def cmd_regress(args) -> int:
-    from ..regress import run_regression
+    from ..runs.regress import run_regression
 
     scenes = [_apply_overrides(_load_scene(p), args) for p in args.scenes]  # all bad input first
     options = _plan_options(args)

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..typing import ArrayLike, BoolArray, FloatArray, IntArray
+from ..typed import ArrayLike, BoolArray, FloatArray, IntArray
 from .options import REMOVED, StaticClearance, _call_static
 
 

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..typing import ArrayLike, BoolArray, FloatArray, IntArray
+from ..typed import ArrayLike, BoolArray, FloatArray, IntArray
 from . import kernels
 from .options import (
     _EPS,

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..typing import BoolArray, IntArray
+from ..typed import BoolArray, IntArray
 from .options import _EPS, REMOVED
 
 

@@ -16,7 +16,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from ..typing import BoolArray, FloatArray, IntArray
+from ..typed import BoolArray, FloatArray, IntArray
 from . import kernels
 from .coding import PathCoding
 from .fitness import Evaluation, PathEvaluator

@@ -7,7 +7,7 @@ from enum import IntEnum
 
 import numpy as np
 
-from ..typing import BoolArray, FloatArray, IntArray
+from ..typed import BoolArray, FloatArray, IntArray
 from . import kernels
 from .coding import PathCoding
 from .fitness import PathEvaluator

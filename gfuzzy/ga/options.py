@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..typing import ArrayLike, FloatArray
+from ..typed import ArrayLike, FloatArray
 
 REMOVED = -1
 """Gene value of a removed via-point."""

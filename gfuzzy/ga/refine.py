@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..rng import create_rng
-from ..typing import ArrayLike, BoolArray, FloatArray, IntArray
+from ..typed import ArrayLike, BoolArray, FloatArray, IntArray
 from . import lattice
 from .coding import PathCoding, _dedupe, _derive_steps
 from .fitness import Evaluation, FitnessParts, PathEvaluator

@@ -17,13 +17,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import InputError
-from ..fuzzy import FuzzyOptions, SpeedController, _samples, curve_ahead
-from ..profile import clean_path as _clean_path
-from ..profile import limit_acceleration
+from ..fuzzy.fuzzy import FuzzyOptions, SpeedController, _samples, curve_ahead
+from ..fuzzy.profile import clean_path as _clean_path
+from ..fuzzy.profile import limit_acceleration
+from ..fuzzy.rules import _UNIFORM5, _UNIFORM7, Partition, RuleBase
 from ..rng import create_rng
-from ..rules import _UNIFORM5, _UNIFORM7, Partition, RuleBase
 from ..status import Status
-from ..typing import ArrayLike, FloatArray
+from ..typed import ArrayLike, FloatArray
 from . import tracking
 
 logger = logging.getLogger(__name__)

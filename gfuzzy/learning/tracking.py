@@ -3,7 +3,7 @@
 A differential-drive robot (unicycle: state ``x, y, theta``, inputs ``v, omega``)
 with bounds on ``v``, ``omega``, linear and angular acceleration follows a
 polyline. The speed reference is a profile ``v(s)`` along the path (the fuzzy
-speed layer's :func:`gfuzzy.fuzzy.speed_limit`, or :func:`constant_profile`);
+speed layer's :func:`gfuzzy.fuzzy.fuzzy.speed_limit`, or :func:`constant_profile`);
 steering is adaptive pure pursuit: the look-ahead grows with speed, so a robot
 slowed for a bend also cuts it less.
 
@@ -22,9 +22,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
-from ..profile import clean_path, limit_acceleration
+from ..fuzzy.profile import clean_path, limit_acceleration
 from ..status import Status
-from ..typing import ArrayLike, FloatArray
+from ..typed import ArrayLike, FloatArray
 
 logger = logging.getLogger(__name__)
 logger.addHandler(logging.NullHandler())

@@ -4,7 +4,7 @@
     python -m tools.experiments table1 fig12    # some: out/results-partial.md and out/img/
     python -m tools.experiments --workers 2
 
-Each experiment that is a set of queries runs as a ``gfuzzy.batch`` on one LocalCluster.
+Each experiment that is a set of queries runs as a ``gfuzzy.runs.batch`` on one LocalCluster.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 from gfuzzy.atomic import write_atomic  # noqa: E402
-from gfuzzy.batch import local_cluster  # noqa: E402
+from gfuzzy.runs.batch import local_cluster  # noqa: E402
 
 from .common import DOCS, IMG, Context  # noqa: E402
 
@@ -50,10 +50,10 @@ machine's load. Ratios measured within one run (sizes against sizes) are steadie
 def _warm_up() -> None:
     import scipy.sparse.csgraph  # noqa: F401
 
-    import gfuzzy.check  # noqa: F401
+    import gfuzzy.check.check  # noqa: F401
     import gfuzzy.ga  # noqa: F401
-    import gfuzzy.planner  # noqa: F401
-    import gfuzzy.stages  # noqa: F401
+    import gfuzzy.planner.planner  # noqa: F401
+    import gfuzzy.planner.stages  # noqa: F401
 
 
 def main(argv=None) -> int:

@@ -8,8 +8,8 @@ import statistics
 from dataclasses import dataclass
 from pathlib import Path
 
-from gfuzzy.roadmap import load_roadmap
-from gfuzzy.scene import load_scene
+from gfuzzy.roadmap.roadmap import load_roadmap
+from gfuzzy.scene.scene import load_scene
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENES = ROOT / "scenes"

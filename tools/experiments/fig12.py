@@ -22,8 +22,8 @@ import math
 import numpy as np
 import yaml
 
-from gfuzzy.batch import BatchOptions, run_batch
-from gfuzzy.scene import load_scene
+from gfuzzy.runs.batch import BatchOptions, run_batch
+from gfuzzy.scene.scene import load_scene
 
 from .common import SCENES, bundled, fmt, linear_fit, md_table
 

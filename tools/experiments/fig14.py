@@ -3,17 +3,17 @@
 ``scenes/sim-4s1m.yaml`` (4 static + 1 moving obstacle), ``sim-6s1m.yaml`` (6 + 1) and
 ``sim-5s2m.yaml`` (5 + 2), every query answered twice as Dask batches: the search alone,
 and with ``--refine`` (the GA with the paper's parameters, ``gfuzzy.ga.GAOptions``
-defaults). Each refined answer of a scene's first query is drawn with ``gfuzzy.render``.
+defaults). Each refined answer of a scene's first query is drawn with ``gfuzzy.render.render``.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from gfuzzy.batch import BatchOptions, run_batch, trajectory_path
 from gfuzzy.ga import GAOptions
-from gfuzzy.planner import PlanOptions
-from gfuzzy.render import render
+from gfuzzy.planner.planner import PlanOptions
+from gfuzzy.render.render import render
+from gfuzzy.runs.batch import BatchOptions, run_batch, trajectory_path
 
 from .common import bundled, fmt, load_doc, md_table
 

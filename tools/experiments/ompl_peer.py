@@ -1,8 +1,8 @@
 """The OMPL space-time peer: RRTConnect in ``ob.SpaceTimeStateSpace`` on gfuzzy's queries.
 
 A bench-only comparison. The state is (pose, t); a state is valid when the robot at the
-pose is free of the static obstacles (FCL, :class:`gfuzzy.geometry.StaticGeometry`) and of
-every mover present at t (closed-form distances, :func:`gfuzzy.geometry.mover_distance`).
+pose is free of the static obstacles (FCL, :class:`gfuzzy.collision.geometry.StaticGeometry`) and of
+every mover present at t (closed-form distances, :func:`gfuzzy.collision.geometry.mover_distance`).
 A Python ``MotionValidator`` accepts a motion only forwards in time, within vmax (the
 contract's metric: xy distance + |heading change| x circumradius), and free at samples
 every ``resolution`` metres and at most ``dt`` seconds apart. The goal is a
@@ -11,7 +11,7 @@ possible arrival and the time bound. RRTConnect keeps the first connection it fi
 peer restarts with a time bound 10 % below its last arrival until the budget is spent
 (anytime by restarts; STRRT*, which does this inside, is not bound in OMPL 2.0.1). OMPL 2.0.1 does not bind
 STRRT*, so RRTConnect finds *a* trajectory, not the earliest; its answer is then checked
-with :func:`gfuzzy.check.check_trajectory`, which tests every instant, not samples.
+with :func:`gfuzzy.check.check.check_trajectory`, which tests every instant, not samples.
 
     from tools.experiments.ompl_peer import PeerOptions, solve_peer
     ans = solve_peer(scene, query, PeerOptions(seed=1, time_limit=5.0))
@@ -26,9 +26,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gfuzzy.check import check_trajectory
-from gfuzzy.geometry import StaticGeometry, metric_distance, mover_distance
-from gfuzzy.scene import Query, Scene
+from gfuzzy.check.check import check_trajectory
+from gfuzzy.collision.geometry import StaticGeometry, metric_distance, mover_distance
+from gfuzzy.scene.scene import Query, Scene
 
 __all__ = ["PeerOptions", "PeerAnswer", "solve_peer", "run_peer_job"]
 
@@ -102,7 +102,7 @@ def solve_peer(scene: Scene, query: Query, options: PeerOptions | None = None) -
     from ompl import geometric as og
     from ompl import util as ou
 
-    from gfuzzy.roadmap import _seed_ompl
+    from gfuzzy.roadmap.roadmap import _seed_ompl
 
     opts = options or PeerOptions()
     ou.setLogLevel(ou.LogLevel.LOG_NONE)
@@ -262,7 +262,7 @@ TIME_LIMIT = 5.0
 
 def run(ctx) -> str:
     """gfuzzy and the peer on every bundled query (a section of docs/results.md)."""
-    from gfuzzy.batch import BatchOptions, run_batch
+    from gfuzzy.runs.batch import BatchOptions, run_batch
 
     from .common import all_bundled, fmt, md_table, median
 

@@ -1,8 +1,8 @@
 """Table 1: roadmaps of 100..1000 vertices on building-floor, each extending the last.
 
-One PRM is grown through 100, 200, ... 1000 vertices (``gfuzzy.roadmap.grow_roadmaps``,
+One PRM is grown through 100, 200, ... 1000 vertices (``gfuzzy.roadmap.roadmap.grow_roadmaps``,
 as ``tools/bench_plan.py`` does), and the scene's query is answered on each roadmap as a
-batch on Dask (``gfuzzy.batch``), ``REPEAT`` times per roadmap: the running time is the
+batch on Dask (``gfuzzy.runs.batch``), ``REPEAT`` times per roadmap: the running time is the
 median planning time (``PlanResult.planning_seconds``: the search and its graph; the
 collision model is built once per worker and scene).
 """
@@ -13,8 +13,8 @@ import dataclasses
 
 import numpy as np
 
-from gfuzzy.batch import BatchOptions, run_batch, trajectory_path
-from gfuzzy.roadmap import RoadmapOptions, grow_roadmaps
+from gfuzzy.roadmap.roadmap import RoadmapOptions, grow_roadmaps
+from gfuzzy.runs.batch import BatchOptions, run_batch, trajectory_path
 
 from .common import (
     PAPER_198,

@@ -1,0 +1,11 @@
+"""The independent verifier of trajectories (shapely and closed forms; shares no code with the planner)."""
+
+
+def __getattr__(name: str):
+    # `gfuzzy.check.X` was the flat module gfuzzy/check.py: its names stay reachable,
+    # loaded on first use (so importing a sibling module never loads this one)
+    if name.startswith("__"):
+        raise AttributeError(name)
+    from importlib import import_module
+
+    return getattr(import_module(".check", __name__), name)

@@ -1,0 +1,609 @@
+"""Independent verification of a trajectory against docs/formats.md section 3.
+
+This module shares no collision code with the planner: it measures with shapely (static
+obstacles, box and footprint shapes) and closed-form disc distances, and it checks *every instant*, not
+samples. Between two evaluated times the clearance d(t) changes no faster than the speed
+of the robot's fastest point plus the fastest mover, L; an interval ``[a, b]`` with
+``d(a) + d(b) >= L (b - a)`` therefore holds no collision, and any other interval is
+bisected. Times at which a mover appears or vanishes are evaluated exactly. An interval
+still undecided below ``min_interval`` seconds is a touching contact, which the contract
+allows.
+
+Clearances: the distance to static obstacles is measured against ``robot.clearance`` and
+the distance to movers against ``robot.mover_clearance`` (the bounds without one): every
+clearance below is the distance minus the distance required, so the same argument proves
+that the required distances are kept at every instant. With a query's ``hold`` the goal
+pose is checked from the last row until ``hold`` seconds after it as a wait.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+
+from ..scene.scene import Box, Disc, MapObstacle, Query, Scene
+from ..typed import FloatArray
+
+__all__ = ["CheckReport", "check_trajectory"]
+
+
+@dataclass(frozen=True)
+class CheckReport:
+    """Result of :func:`check_trajectory`.
+
+    Attributes
+    ----------
+    valid : bool
+    reason : str
+        Why not, naming the time and what was hit; empty when valid.
+    min_clearance : float
+        Smallest clearance evaluated (to bounds, static obstacles and movers), above the
+        required distance (``robot.clearance``, ``robot.mover_clearance``) where there is one.
+    max_speed : float
+        Largest configuration speed between rows.
+    evaluations : int
+        Number of times the clearance was evaluated.
+    time : float or None
+        When the reported violation happens: the earliest one (a collision's onset, to
+        within ``exact_below``); None when valid or when the rows themselves are malformed.
+    """
+
+    valid: bool
+    reason: str = ""
+    min_clearance: float = math.inf
+    max_speed: float = 0.0
+    evaluations: int = 0
+    time: float | None = None
+
+
+def _grid_region(grid: MapObstacle):
+    """The blocked region of a map, from its cell values (not the planner's rectangles).
+
+    Nav2's values are read once (``maps.nav2_values``, tested against an oracle of its
+    own); what the checker verifies is the planner's collision model of them, so it
+    derives the region again: cell value 100, or -1 unless unknown is free, each row's
+    runs of such cells as boxes, and their union.
+    """
+    values = np.asarray(grid.values)
+    blocked = values == 100
+    if not grid.unknown_free:
+        blocked = blocked | (values == -1)
+    h, w = blocked.shape
+    res = grid.info.resolution
+    ox, oy = grid.info.origin
+    edges = np.diff(np.pad(blocked.astype(np.int8), ((0, 0), (1, 1))), axis=1)
+    rows, starts = np.nonzero(edges > 0)
+    _, stops = np.nonzero(edges < 0)
+    if len(rows) == 0:
+        return shapely.Polygon()
+    boxes = shapely.box(ox + starts * res, oy + (h - 1 - rows) * res, ox + stops * res, oy + (h - rows) * res)
+    return shapely.union_all(boxes)
+
+
+def _wrap(a):
+    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
+
+
+class _World:
+    """Shapely / closed-form model of the scene, evaluated at arrays of poses and times."""
+
+    def __init__(self, scene: Scene):
+        self.scene = scene
+        self.robot = scene.robot
+        self.keep_static = float(scene.robot.clearance)
+        self.keep_mover = float(scene.robot.mover_clearance)
+        polys = []
+        self.discs = []
+        for ob in scene.obstacles:
+            if isinstance(ob, Disc):
+                self.discs.append((np.array(ob.center, float), ob.radius))
+            elif isinstance(ob, Box):
+                polys.append(shapely.Polygon(ob.vertices()))
+            elif isinstance(ob, MapObstacle):
+                polys.append(_grid_region(ob))
+            else:
+                polys.append(shapely.Polygon(ob.points, [h for h in ob.holes]))
+        self.static = shapely.union_all(polys) if polys else None
+        if self.static is not None:
+            shapely.prepare(self.static)
+        # the body's outline about the reference point: a box's corners or the footprint
+        # (a concave one is swept as the union of its triangles' swept hulls: exact)
+        self.local = self.triangles = None
+        if self.robot.shape == "box":
+            hl, hw = 0.5 * self.robot.size[0], 0.5 * self.robot.size[1]
+            self.local = np.array([[hl, hw], [-hl, hw], [-hl, -hw], [hl, -hw]])
+        elif self.robot.shape == "footprint":
+            self.local = np.array(self.robot.footprint, dtype=float)
+            outline = shapely.Polygon(self.local)
+            if not outline.is_valid:
+                raise ValueError("the robot's footprint is not a simple polygon")
+            tris = shapely.get_parts(shapely.constrained_delaunay_triangles(outline))
+            self.triangles = [np.asarray(t.exterior.coords)[:3] for t in tris]
+
+    def robot_geoms(self, poses: FloatArray):
+        if self.robot.shape == "disc":
+            return shapely.points(poses[:, 0], poses[:, 1])
+        c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
+        local = self.local
+        xs = poses[:, None, 0] + c[:, None] * local[:, 0] - s[:, None] * local[:, 1]
+        ys = poses[:, None, 1] + s[:, None] * local[:, 0] + c[:, None] * local[:, 1]
+        return shapely.polygons(np.stack([xs, ys], -1))
+
+    def _shape_distance(self, geoms, other, area_of_overlap: bool):
+        """Signed-ish distance between robot geometries and a shapely geometry."""
+        d = shapely.distance(geoms, other)
+        if self.robot.shape == "disc":
+            inside = shapely.contains_xy(other, shapely.get_x(geoms), shapely.get_y(geoms))
+            d = np.where(inside, -1.0, d) - self.robot.radius
+            return d
+        if area_of_overlap:
+            zero = d <= 0
+            if np.any(zero):
+                area = shapely.area(shapely.intersection(geoms[zero], other))
+                d = d.copy()
+                d[zero] = np.where(area > 1e-12, -area, 0.0)
+        return d
+
+    def bounds_clearance(self, poses):
+        xmin, ymin, xmax, ymax = self.scene.bounds
+        if self.robot.shape == "disc":
+            r = self.robot.radius
+            x, y = poses[:, 0], poses[:, 1]
+            return np.min([x - r - xmin, xmax - x - r, y - r - ymin, ymax - y - r], axis=0)
+        if self.robot.shape == "footprint":  # the outline's vertices, turned
+            c, s = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
+            lx, ly = self.local[:, 0], self.local[:, 1]
+            wx, wy = c * lx - s * ly, s * lx + c * ly  # (n, k)
+            x, y = poses[:, 0], poses[:, 1]
+            return np.min(
+                [x + wx.min(1) - xmin, xmax - x - wx.max(1), y + wy.min(1) - ymin, ymax - y - wy.max(1)], axis=0
+            )
+        c, s = np.abs(np.cos(poses[:, 2])), np.abs(np.sin(poses[:, 2]))
+        hl, hw = 0.5 * self.robot.size[0], 0.5 * self.robot.size[1]
+        ex, ey = c * hl + s * hw, s * hl + c * hw
+        x, y = poses[:, 0], poses[:, 1]
+        return np.min([x - ex - xmin, xmax - x - ex, y - ey - ymin, ymax - y - ey], axis=0)
+
+    def clearance(self, poses: FloatArray, times: FloatArray) -> tuple[FloatArray, list]:
+        """Clearance at each (pose, time) and, for each, the name of the nearest thing."""
+        geoms = self.robot_geoms(poses)
+        parts = [self.bounds_clearance(poses)]
+        names = ["the bounds"]
+        if self.static is not None:
+            parts.append(self._shape_distance(geoms, self.static, True) - self.keep_static)
+            names.append("a static obstacle")
+        for center, radius in self.discs:
+            parts.append(self._shape_distance(geoms, shapely.Point(center), False) - radius - self.keep_static)
+            names.append(f"the static disc at {center.tolist()}")
+        for mv in self.scene.movers:
+            xy, present = mv.state(times)
+            if mv.shape == "disc":
+                if self.robot.shape == "disc":
+                    d = np.hypot(*(xy - poses[:, :2]).T) - self.robot.radius - mv.radius
+                else:
+                    d = shapely.distance(geoms, shapely.points(xy[:, 0], xy[:, 1]))
+                    inside = shapely.contains_xy(geoms, xy[:, 0], xy[:, 1])
+                    d = np.where(inside, -1.0, d) - mv.radius
+            else:
+                w, h = mv.size
+                boxes = shapely.box(xy[:, 0] - w / 2, xy[:, 1] - h / 2, xy[:, 0] + w / 2, xy[:, 1] + h / 2)
+                if self.robot.shape == "disc":
+                    d = shapely.distance(geoms, boxes)
+                    inside = shapely.contains_xy(boxes, poses[:, 0], poses[:, 1])
+                    d = np.where(inside, -1.0, d) - self.robot.radius
+                else:
+                    d = shapely.distance(geoms, boxes)
+                    zero = d <= 0
+                    if np.any(zero):
+                        area = shapely.area(shapely.intersection(geoms[zero], boxes[zero]))
+                        d[zero] = np.where(area > 1e-12, -area, 0.0)
+            parts.append(np.where(present, d - self.keep_mover, np.inf))
+            names.append(f"mover {mv.name!r}")
+        stack = np.vstack(parts)
+        which = np.argmin(stack, axis=0)
+        return stack[which, np.arange(stack.shape[1])], [names[i] for i in which]
+
+
+    def swept_clearance(self, pa, pb, heading, ta, tb):
+        """Exact smallest clearance over intervals in which the robot translates.
+
+        Parameters
+        ----------
+        pa, pb : (k, 2) float
+            Reference point at the interval's ends.
+        heading : (k,) float or None
+            The (constant) heading of a box or footprint robot.
+        ta, tb : (k,) float
+
+        Returns
+        -------
+        clearance : (k,) float
+            NaN where a mover does not move in a straight line over the interval (the
+            caller decides those by bisection).
+        names : list of str
+
+        Notes
+        -----
+        Over a translation the robot sweeps the convex hull of its two end footprints (a
+        box), the union of those hulls for each triangle of a footprint (concave ones
+        included: the sweep of a union is the union of the sweeps) or the segment of its
+        centre widened by its radius (a disc), and the body's
+        distance to anything is the distance of that swept set; a mover moving straight is
+        handled in the robot's frame, where it sweeps likewise.
+        """
+        k = len(pa)
+        out = np.full(k, np.inf)
+        names = ["-"] * k
+        disc = self.robot.shape == "disc"
+        r = self.robot.radius
+        if disc:
+            centre = shapely.linestrings(np.stack([pa, pb], axis=1))
+            body = None
+        else:
+            c, sn = np.cos(heading), np.sin(heading)
+            rot = np.stack([np.stack([c, -sn], -1), np.stack([sn, c], -1)], -2)  # (k, 2, 2)
+            corners = np.einsum("kij,mj->kmi", rot, self.local)  # (k, m, 2) about the reference
+            if self.triangles is None:
+                swept = shapely.convex_hull(shapely.multipoints(np.concatenate([corners + pa[:, None], corners + pb[:, None]], 1)))
+            else:
+                swept = None
+                for tri in self.triangles:
+                    tc = np.einsum("kij,mj->kmi", rot, tri)
+                    hull = shapely.convex_hull(shapely.multipoints(np.concatenate([tc + pa[:, None], tc + pb[:, None]], 1)))
+                    swept = hull if swept is None else shapely.union(swept, hull)
+            body = shapely.polygons(corners)  # at the origin, for the movers
+
+        def take(d, name):
+            better = d < out
+            out[better] = d[better]
+            for i in np.nonzero(better)[0]:
+                names[i] = name
+
+        # bounds: the clearance is linear along a translation, extreme at the ends
+        take(np.minimum(self.bounds_clearance(self._poses(pa, heading)), self.bounds_clearance(self._poses(pb, heading))), "the bounds")
+        if self.static is not None:
+            if disc:
+                d = shapely.distance(centre, self.static) - r
+            else:
+                d = shapely.distance(swept, self.static)
+                zero = d <= 0
+                if np.any(zero):
+                    area = shapely.area(shapely.intersection(swept[zero], self.static))
+                    d[zero] = np.where(area > 1e-12, -area, 0.0)
+            take(d - self.keep_static, "a static obstacle")
+        for center, radius in self.discs:
+            if disc:
+                d = _segment_point_distance(pa, pb, center) - r - radius
+            else:
+                d = shapely.distance(swept, shapely.Point(center)) - radius
+            take(d - self.keep_static, f"the static disc at {center.tolist()}")
+        for mv in self.scene.movers:
+            ma, pres_a = mv.state(ta)
+            mb, pres_b = mv.state(tb)
+            mm, pres_m = mv.state(0.5 * (ta + tb))
+            present = pres_a | pres_b | pres_m
+            if not present.any():
+                continue
+            straight = np.hypot(*(mm - 0.5 * (ma + mb)).T) <= 1e-9 * (1.0 + np.hypot(*(mb - ma).T))
+            qa, qb = ma - pa, mb - pb  # the mover relative to the robot's reference point
+            d = _relative_swept_distance(mv, qa, qb, disc, r, body)
+            d = np.where(present, d - self.keep_mover, np.inf)
+            d = np.where(straight | ~present, d, np.nan)
+            nan = np.isnan(d)
+            take(np.where(nan, np.inf, d), f"mover {mv.name!r}")
+            out[nan] = np.nan
+        return out, names
+
+    def _poses(self, p, heading):
+        return p if heading is None else np.column_stack([p, heading])
+
+
+def _relative_swept_distance(mv, qa, qb, disc: bool, r: float, body):
+    """Distance between the robot (a disc of radius ``r`` at the origin, or the box or
+    footprint ``body`` at the origin) and mover ``mv`` translating from ``qa`` to ``qb`` relative to
+    it: the mover's swept set (k,); negative where they overlap."""
+    if disc and mv.shape == "disc":
+        d = _segment_point_distance(qa, qb, np.zeros(2)) - r - mv.radius
+    elif disc:
+        w, h = mv.size
+        rel = np.concatenate([qa[:, None] + [[s1 * w / 2, s2 * h / 2] for s1, s2 in ((1, 1), (-1, 1), (-1, -1), (1, -1))],
+                              qb[:, None] + [[s1 * w / 2, s2 * h / 2] for s1, s2 in ((1, 1), (-1, 1), (-1, -1), (1, -1))]], 1)  # fmt: skip
+        hull = shapely.convex_hull(shapely.multipoints(rel))
+        d = shapely.distance(hull, shapely.Point(0.0, 0.0)) - r
+        inside = shapely.contains_xy(hull, 0.0, 0.0)
+        d = np.where(inside, -1.0, d)
+    elif mv.shape == "disc":
+        d = shapely.distance(shapely.linestrings(np.stack([qa, qb], 1)), body) - mv.radius
+    else:
+        w, h = mv.size
+        box = np.array([[w / 2, h / 2], [-w / 2, h / 2], [-w / 2, -h / 2], [w / 2, -h / 2]])
+        hull = shapely.convex_hull(shapely.multipoints(np.concatenate([qa[:, None] + box, qb[:, None] + box], 1)))
+        d = shapely.distance(hull, body)
+        zero = d <= 0
+        if np.any(zero):
+            area = shapely.area(shapely.intersection(hull[zero], body[zero]))
+            d[zero] = np.where(area > 1e-12, -area, 0.0)
+    return d
+
+
+def _segment_point_distance(a: FloatArray, b: FloatArray, c) -> FloatArray:
+    """Distance from point(s) c to segments a-b. a, b (k, 2)."""
+    ab = b - a
+    t = np.clip(np.einsum("ij,ij->i", c - a, ab) / np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300), 0.0, 1.0)
+    return np.hypot(*(a + t[:, None] * ab - c).T)
+
+
+def _pose_equal(a, b, tol=1e-6) -> bool:
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    if a.shape != b.shape:
+        return False
+    diff = b - a
+    if a.size == 3:
+        diff[2] = _wrap(diff[2])
+    return bool(np.all(np.abs(diff) <= tol))
+
+
+def check_trajectory(
+    scene: Scene,
+    waypoints: FloatArray,
+    query: Query | None = None,
+    tol: float = 1e-9,
+    min_interval: float = 1e-7,
+    max_evaluations: int = 5_000_000,
+    exact_below: float = 1e-3,
+) -> CheckReport:
+    """Check a trajectory against docs/formats.md section 3 (and ``query``'s start and goal).
+
+    Parameters
+    ----------
+    scene : Scene
+    waypoints : (n, 3) or (n, 4) float
+        Rows ``[t, x, y(, heading)]``.
+    query : Query, optional
+        When given, the first row must be its start at its t0 and the last row its goal.
+    tol : float
+        Penetration depth (metres) and relative speed excess tolerated as rounding.
+    min_interval : float
+        Undecided intervals shorter than this (seconds) count as touching.
+    exact_below : float
+        Undecided intervals shorter than this (seconds) in which the robot does not turn
+        are decided exactly (the swept footprint's distance), so a long touching contact
+        does not need endless bisection.
+
+    Returns
+    -------
+    CheckReport
+    """
+    robot = scene.robot
+    w = np.asarray(waypoints, dtype=float)
+    problem = _rows_problem(robot, w, query)
+    if problem is not None:
+        return problem
+    if query is not None:
+        hold = float(getattr(query, "hold", 0.0) or 0.0)
+        if hold > 0:  # the robot parks at the goal: the rows end with a wait of `hold`
+            w = np.vstack([w, np.r_[w[-1, 0] + hold, w[-1, 1:]]])
+    return _Checker(scene, w, tol, min_interval, exact_below).run(max_evaluations)
+
+
+def _rows_problem(robot, w: FloatArray, query) -> CheckReport | None:
+    """The rows' shape, finiteness, increasing times, and the query's ends (None: fine)."""
+    if w.ndim != 2 or w.shape[1] != robot.dof + 1 or len(w) == 0:
+        width = "[t, x, y]" if robot.dof == 2 else "[t, x, y, heading]"
+        return CheckReport(False, f"waypoints must be rows of {width} for this robot")
+    if not np.all(np.isfinite(w)):
+        return CheckReport(False, "waypoints contain a non-finite number")
+    t = w[:, 0]
+    dt = np.diff(t)
+    if np.any(dt <= 0):
+        i = int(np.nonzero(dt <= 0)[0][0]) + 1
+        return CheckReport(False, f"t does not increase strictly at row {i} (t={float(t[i])!r})", time=float(t[i]))
+    if getattr(robot, "kinematics", "holonomic") == "unicycle":
+        bad = _unicycle_problem(robot, w)
+        if bad is not None:
+            return bad
+    if query is not None:
+        if abs(t[0] - query.t0) > 1e-6:
+            return CheckReport(False, f"first row is at t={float(t[0])!r}, the query departs at t0={query.t0!r}", time=float(t[0]))
+        if not _pose_equal(w[0, 1:], query.start):
+            return CheckReport(False, f"first row {w[0, 1:].tolist()} is not the start {list(query.start)}", time=float(t[0]))
+        if not _pose_equal(w[-1, 1:], query.goal):
+            return CheckReport(False, f"last row {w[-1, 1:].tolist()} is not the goal {list(query.goal)}", time=float(t[-1]))
+    return None
+
+
+#: A unicycle's rows: a turn in place keeps x and y within this (m); a straight move keeps
+#: its heading within this (rad). The lateral bound is the contract's 1e-6 m.
+UNICYCLE_XY_TOL = 1e-9
+UNICYCLE_HEADING_TOL = 1e-9
+UNICYCLE_LATERAL_TOL = 1e-6
+
+
+def _unicycle_problem(robot, w: FloatArray, tol: float = 1e-6) -> CheckReport | None:
+    """The first pair of rows that is not a wait, a turn in place within ``wmax`` or a
+    straight move along the heading (forward unless ``robot.reverse``), or None.
+
+    Measured here from the rows alone (CONTRACT section 6), sharing nothing with the planner.
+    """
+    t, x, y, h = w[:, 0], w[:, 1], w[:, 2], w[:, 3]
+    dt = np.diff(t)
+    dx, dy = np.diff(x), np.diff(y)
+    dh = _wrap(np.diff(h))
+    if robot.shape == "footprint":  # its farthest vertex from the reference point
+        r = max(math.hypot(px, py) for px, py in robot.footprint)
+    else:
+        r = robot.radius if robot.shape == "disc" else 0.5 * math.hypot(*robot.size)
+    wmax = robot.wmax if robot.wmax is not None else robot.vmax / r
+    still = (np.abs(dx) <= UNICYCLE_XY_TOL) & (np.abs(dy) <= UNICYCLE_XY_TOL)
+    turning = np.abs(dh) > UNICYCLE_HEADING_TOL
+    c, sn = np.cos(h[:-1]), np.sin(h[:-1])
+    lateral = np.abs(-sn * dx + c * dy)
+    along = c * dx + sn * dy
+    for i in range(len(dt)):
+        when = f"between t={float(t[i])!r} and t={float(t[i + 1])!r}"
+        if still[i]:
+            if turning[i] and abs(dh[i]) / dt[i] > wmax * (1 + tol):
+                rate = abs(dh[i]) / dt[i]
+                return CheckReport(False, f"turns at {rate:.9g} rad/s, faster than wmax {wmax:g}, {when}", time=float(t[i]))
+            continue
+        if turning[i]:
+            return CheckReport(False, f"turns while moving (a unicycle turns only in place) {when}", time=float(t[i]))
+        if lateral[i] > UNICYCLE_LATERAL_TOL:
+            return CheckReport(
+                False, f"slides sideways by {lateral[i]:.3g} m (a unicycle moves along its heading) {when}", time=float(t[i])
+            )
+        if along[i] < 0 and not robot.reverse:
+            return CheckReport(False, f"drives backwards (robot.reverse is false) {when}", time=float(t[i]))
+    return None
+
+
+class _Checker:
+    """One check of well-formed rows: the speed bound, then clearance by bisection.
+
+    Every interval between samples is decided (a Lipschitz bound: the clearance changes at
+    most ``robot speed + fastest mover speed`` per second) or bisected until none is left
+    that begins before the earliest violation found so far: the report is the first
+    violation in time, not the first one met.
+    """
+
+    def __init__(self, scene: Scene, w: FloatArray, tol: float, min_interval: float, exact_below: float):
+        self.scene, self.robot = scene, scene.robot
+        self.tol, self.min_interval, self.exact_below = tol, min_interval, exact_below
+        self.t = w[:, 0]
+        self.dt = np.diff(self.t)
+        self.p = w[:, 1:]
+        p, robot = self.p, self.robot
+        seg = np.hypot(*np.diff(p[:, :2], axis=0).T)
+        if robot.dof == 3:
+            seg = seg + np.abs(_wrap(np.diff(p[:, 2]))) * robot.circumradius
+        self.speed = seg / self.dt if len(self.dt) else np.zeros(0)
+        self.vmax_seen = float(self.speed.max(initial=0.0))
+        self.first: list = [math.inf, ""]  # time and reason of the earliest violation found so far
+        self.world = _World(scene)
+        self.evaluations = 0
+        self.min_clear = math.inf
+
+    def found(self, time: float, reason: str) -> None:
+        if time < self.first[0]:
+            self.first[0], self.first[1] = float(time), reason
+
+    def hit(self, name: str, d: float, when: str) -> str:
+        """What a negative clearance means: a collision, or a required distance missed."""
+        world, tol = self.world, self.tol
+        keep = 0.0 if name == "the bounds" else world.keep_mover if name.startswith("mover") else world.keep_static
+        if keep > 0 and d + keep >= -tol:
+            which = "robot.mover_clearance" if name.startswith("mover") else "robot.clearance"
+            return f"comes within {d + keep:.3g} m of {name} {when}, closer than {which}={keep:g}"
+        return f"collides with {name} {when} (penetration {-(d + keep):.3g})"
+
+    def pose_at(self, times, seg_idx):
+        t, dt, p = self.t, self.dt, self.p
+        f = (times - t[seg_idx]) / dt[seg_idx]
+        delta = p[seg_idx + 1] - p[seg_idx]
+        if self.robot.dof == 3:
+            delta[:, 2] = _wrap(delta[:, 2])
+        return p[seg_idx] + f[:, None] * delta
+
+    def report(self, note: str = "") -> CheckReport:
+        if not self.first[1]:
+            return CheckReport(True, "", self.min_clear, self.vmax_seen, self.evaluations)
+        return CheckReport(False, self.first[1] + note, self.min_clear, self.vmax_seen, self.evaluations, self.first[0])
+
+    def run(self, max_evaluations: int) -> CheckReport:
+        t, dt, p, robot, tol = self.t, self.dt, self.p, self.robot, self.tol
+        # speed: the first segment over vmax (the report is the first violation in time, so
+        # a collision found before it below takes its place)
+        fast = np.nonzero(self.speed > robot.vmax * (1 + tol))[0]
+        if fast.size:
+            i = int(fast[0])
+            self.found(
+                t[i],
+                f"speed {self.speed[i]:.9g} exceeds vmax {robot.vmax:g} between t={float(t[i])!r} and t={float(t[i + 1])!r}",
+            )
+        if len(dt) == 0:
+            d, names = self.world.clearance(p[:1], t[:1])
+            if d[0] < -tol:
+                return CheckReport(False, self.hit(names[0], float(d[0]), f"at t={float(t[0])!r}"), float(d[0]), 0.0, 1, float(t[0]))
+            return CheckReport(True, "", float(d[0]), 0.0, 1)
+        a_t, b_t, a_d, b_d, a_s = self._initial_intervals()
+        vm = max((mv.max_speed for mv in self.scene.movers), default=0.0)
+        lip = self.speed + vm  # per segment
+        turn = np.abs(_wrap(np.diff(p[:, 2]))) if robot.dof == 3 else np.zeros(len(dt))
+        while a_t.size:
+            need = (a_d + b_d < lip[a_s] * (b_t - a_t)) & (a_t < self.first[0])
+            need &= (b_t - a_t) >= self.min_interval
+            a_t, b_t, a_d, b_d, a_s = a_t[need], b_t[need], a_d[need], b_d[need], a_s[need]
+            if a_t.size == 0:
+                break
+            # near contact, bisection would go on for ever along a touching stretch: where
+            # the robot only translates, decide the interval exactly instead
+            near = (b_t - a_t) < self.exact_below
+            if robot.dof == 3:
+                near &= turn[a_s] == 0.0
+            if near.any():
+                keep = self._decide_exactly(a_t, b_t, a_s, np.nonzero(near)[0])
+                a_t, b_t, a_d, b_d, a_s = a_t[keep], b_t[keep], a_d[keep], b_d[keep], a_s[keep]
+                if a_t.size == 0:
+                    break
+            if self.evaluations > max_evaluations:
+                if self.first[1]:
+                    return self.report(" (an earlier near-grazing contact could not be decided)")
+                return CheckReport(
+                    False, "could not decide: too many evaluations (near-grazing contact)", self.min_clear,
+                    self.vmax_seen, self.evaluations,
+                )  # fmt: skip
+            m_t = 0.5 * (a_t + b_t)
+            m_d = self._sample(m_t, a_s)
+            a_t, b_t = np.concatenate([a_t, m_t]), np.concatenate([m_t, b_t])
+            a_d, b_d = np.concatenate([a_d, m_d]), np.concatenate([m_d, b_d])
+            a_s = np.concatenate([a_s, a_s])
+        return self.report()
+
+    def _sample(self, times, seg_of) -> FloatArray:
+        """Clearances at ``times`` (sorted or not); the earliest violation among them is noted."""
+        d, names = self.world.clearance(self.pose_at(times, seg_of), times)
+        self.evaluations += len(times)
+        self.min_clear = min(self.min_clear, float(d.min()))
+        bad = np.nonzero(d < -self.tol)[0]
+        if bad.size:
+            k = int(bad[np.argmin(times[bad])])
+            self.found(times[k], self.hit(names[k], float(d[k]), f"at t={float(times[k])!r}"))
+        return d
+
+    def _initial_intervals(self):
+        """Samples at every row and every time a mover appears or vanishes; the intervals
+        between consecutive ones (each lies within one segment)."""
+        t = self.t
+        events = [t]
+        for mv in self.scene.movers:
+            ta, tb = mv.time_range
+            for te in (ta, tb):
+                if t[0] < te < t[-1]:
+                    events.append(np.array([te]))
+        times = np.unique(np.concatenate(events))
+        seg_of = np.clip(np.searchsorted(t, times, side="right") - 1, 0, len(self.dt) - 1)
+        d = self._sample(times, seg_of)
+        return times[:-1], times[1:], d[:-1], d[1:], seg_of[:-1]
+
+    def _decide_exactly(self, a_t, b_t, a_s, idx) -> np.ndarray:
+        """Decide intervals ``idx`` by the swept footprint's exact clearance; the mask of
+        the intervals still undecided."""
+        pa, pb = self.pose_at(a_t[idx], a_s[idx]), self.pose_at(b_t[idx], a_s[idx])
+        head = None if self.robot.dof == 2 else pa[:, 2]
+        ex, ex_names = self.world.swept_clearance(pa[:, :2], pb[:, :2], head, a_t[idx], b_t[idx])
+        self.evaluations += len(idx)
+        decided = ~np.isnan(ex)
+        bad = np.nonzero(decided & (ex < -self.tol))[0]
+        if bad.size:
+            k = int(bad[np.argmin(a_t[idx[bad]])])
+            self.min_clear = min(self.min_clear, float(ex[k]))
+            when = f"between t={float(a_t[idx[k]])!r} and t={float(b_t[idx[k]])!r}"
+            self.found(a_t[idx[k]], self.hit(ex_names[k], float(ex[k]), when))
+        if decided.any():
+            self.min_clear = min(self.min_clear, float(np.nanmin(ex)))
+        keep = np.ones(len(a_t), dtype=bool)
+        keep[idx[decided]] = False
+        return keep

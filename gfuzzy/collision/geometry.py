@@ -1,0 +1,471 @@
+"""Collision geometry: FCL objects for the static scene and the robot, batched validity
+and clearance, certified straight motions, and vectorised robot-vs-mover distances.
+
+The world is planar: every 2-D shape becomes a tall prism (FCL cylinder, box or convex
+prism) so that a 3-D collision query answers the 2-D question.
+
+A *certified* motion is checked with a Lipschitz argument instead of sampling: along a
+straight motion in the contract's metric (euclidean xy + |heading change| * circumradius),
+no point of the robot moves farther than the metric length, so the clearance changes at
+most that fast; an interval whose end clearances add up to at least its length is free.
+"""
+
+from __future__ import annotations
+
+import math
+
+import fcl
+import numpy as np
+
+from ..poses import metric_distance, wrap_angle
+from ..scene.scene import Box, Disc, MapObstacle, Polygon, Robot, Scene
+from ..typed import FloatArray
+from .shapes import HEIGHT as _HEIGHT
+from .shapes import QUAD_EXACT, shape_of
+
+__all__ = [
+    "StaticGeometry",
+    "metric_distance",
+    "wrap_angle",
+    "mover_distance",
+    "QUAD_EXACT",
+]
+
+_EPS_CERT_CLEARANCE = 1e-9  # clearance below which a motion is not certified (grazing)
+_NEAR_CONTACT = 1e-4  # distances below this are decided by a collision test (0 or -1)
+_DIST_MARGIN = 1e-4  # subtracted from FCL distances (GJK overestimates; see obstacle_clearance)
+
+
+def _yaw_transform(x: float, y: float, yaw: float = 0.0) -> fcl.Transform:
+    q = np.array([math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])
+    return fcl.Transform(q, np.array([x, y, 0.0]))
+
+
+def _prism(tri: FloatArray) -> fcl.Convex:
+    """A solid triangular prism (FCL convex) over a counter-clockwise triangle."""
+    h = _HEIGHT
+    verts = np.vstack([np.c_[tri, np.full(3, -h)], np.c_[tri, np.full(3, h)]])
+    faces = np.array([3, 0, 2, 1, 3, 3, 4, 5, 4, 0, 1, 4, 3, 4, 1, 2, 5, 4, 4, 2, 0, 3, 5])
+    return fcl.Convex(verts, 5, faces)
+
+
+def _triangulate(poly: Polygon) -> list[FloatArray]:
+    import shapely
+
+    shape = shapely.Polygon(poly.points, [h for h in poly.holes])
+    tris = shapely.constrained_delaunay_triangles(shape)
+    out = []
+    for t in shapely.get_parts(tris):
+        pts = np.asarray(t.exterior.coords)[:3]
+        area2 = (pts[1, 0] - pts[0, 0]) * (pts[2, 1] - pts[0, 1]) - (pts[2, 0] - pts[0, 0]) * (
+            pts[1, 1] - pts[0, 1]
+        )
+        if abs(area2) < 1e-14:
+            continue
+        out.append(pts if area2 > 0 else pts[::-1])
+    return out
+
+
+def _walls(rects: FloatArray) -> fcl.BVHModel:
+    """One FCL mesh of the side faces of the map's blocked rectangles, twice as tall as
+    the robot (so its top and bottom are never reached).
+
+    A single mesh keeps a query in FCL's C++ traversal (thousands of separate objects cost
+    a Python callback each). A mesh is only a surface: a robot wholly inside one
+    rectangle touches none of it, which :meth:`StaticGeometry._inside_map` catches.
+
+    Parameters
+    ----------
+    rects : (k, 4) float
+        ``[xmin, ymin, xmax, ymax]`` rows.
+    """
+    k = len(rects)
+    x0, y0, x1, y1 = (rects[:, i] for i in range(4))
+    corners = np.stack([np.stack([x0, y0], -1), np.stack([x1, y0], -1), np.stack([x1, y1], -1), np.stack([x0, y1], -1)], 1)
+    h = 2 * _HEIGHT
+    verts = np.concatenate([np.c_[corners.reshape(-1, 2), np.full(4 * k, -h)], np.c_[corners.reshape(-1, 2), np.full(4 * k, h)]])
+    base = (np.arange(k) * 4)[:, None]
+    lo, hi = base + np.arange(4), 4 * k + base + np.arange(4)
+    lo2, hi2 = base + (np.arange(4) + 1) % 4, 4 * k + base + (np.arange(4) + 1) % 4
+    tris = np.concatenate([np.stack([lo, lo2, hi2], -1), np.stack([lo, hi2, hi], -1)], 1).reshape(-1, 3)
+    model = fcl.BVHModel()
+    model.beginModel(len(tris), len(verts))
+    model.addSubModel(verts, tris.astype(np.int32))
+    model.endModel()
+    return model
+
+
+def static_objects(scene: Scene) -> list[fcl.CollisionObject]:
+    """FCL collision objects for every static obstacle of ``scene``."""
+    objs = []
+    for ob in scene.obstacles:
+        if isinstance(ob, Disc):
+            # a sphere at z = 0, not a cylinder: against spheres and tall prisms its distance
+            # is the planar one, and FCL computes sphere distances in closed form (its GJK
+            # distance to a cylinder overestimates small gaps)
+            objs.append(fcl.CollisionObject(fcl.Sphere(ob.radius), _yaw_transform(*ob.center)))
+        elif isinstance(ob, Box):
+            geom = fcl.Box(ob.size[0], ob.size[1], 2 * _HEIGHT)
+            objs.append(fcl.CollisionObject(geom, _yaw_transform(ob.center[0], ob.center[1], ob.angle)))
+        elif isinstance(ob, MapObstacle):
+            if len(ob.rects):
+                objs.append(fcl.CollisionObject(_walls(ob.rects), fcl.Transform()))
+        else:
+            for tri in _triangulate(ob):
+                objs.append(fcl.CollisionObject(_prism(tri), fcl.Transform()))
+    return objs
+
+
+def _inner_point(robot: Robot) -> tuple[float, float]:
+    """A point inside the robot's body, in its frame: its reference point, or for a
+    footprint that may not hold it, an interior point of the polygon."""
+    footprint = getattr(robot, "footprint", None)
+    if footprint is None or len(footprint) == 0:
+        return (0.0, 0.0)
+    import shapely
+
+    poly = shapely.Polygon(np.asarray(footprint, dtype=float))
+    if poly.contains(shapely.Point(0.0, 0.0)):
+        return (0.0, 0.0)
+    p = poly.representative_point()
+    return (float(p.x), float(p.y))
+
+
+def robot_geometry(robot: Robot):
+    """The FCL geometry of the robot (about its reference point): its first piece (the
+    only one of a disc, a box or a convex footprint; see :func:`robot_geometries`)."""
+    return robot_geometries(robot)[0]
+
+
+def robot_geometries(robot: Robot) -> list:
+    """The FCL geometries of the robot about its reference point, one per convex piece
+    (:meth:`gfuzzy.collision.shapes.Shape.fcl_geometries`)."""
+    return shape_of(robot).fcl_geometries()
+
+
+class StaticGeometry:
+    """FCL-backed collision queries against the static scene and the bounds.
+
+    Parameters
+    ----------
+    scene : Scene
+        Its ``robot.clearance`` c is kept from static obstacles: every clearance reported
+        here is the distance to the nearest obstacle minus c (the bounds are measured
+        without it), so "valid" means at least c from every obstacle, and certified
+        motions keep that distance at every pose.
+
+    Attributes
+    ----------
+    calls : int
+        Number of FCL queries made so far (validity + distance), for benchmarks.
+    checks : int
+        Number of validity questions (:meth:`is_valid`), FCL or not.
+    """
+
+    def __init__(self, scene: Scene):
+        self.scene = scene
+        self.robot = scene.robot
+        self.r = scene.robot.circumradius
+        self.keep = float(scene.robot.clearance)  # distance kept from static obstacles
+        self._objects = static_objects(scene)
+        self._manager = fcl.DynamicAABBTreeCollisionManager()
+        if self._objects:
+            self._manager.registerObjects(self._objects)
+        self._manager.setup()
+        self._robot_objs = [fcl.CollisionObject(g, fcl.Transform()) for g in robot_geometries(scene.robot)]
+        self._robot_obj = self._robot_objs[0]
+        self._shape = shape_of(scene.robot)
+        self._grids = [ob for ob in scene.obstacles if isinstance(ob, MapObstacle) and len(ob.rects)]
+        self._inner = _inner_point(scene.robot)
+        # with maps only, a distance transform of their cells answers most validity questions
+        self._map_only = bool(self._grids) and len(self._objects) == len(self._grids)
+        self._edt: list | None = None
+        self._creq = fcl.CollisionRequest()
+        self._dreq = fcl.DistanceRequest()
+        self.calls = 0
+        self.checks = 0  # every validity question, answered by FCL or by the bounds alone
+
+    # ---- bounds (analytic)
+    def bounds_clearance(self, poses: FloatArray) -> FloatArray:
+        """Distance from the robot body to the outside of the bounds (negative: outside).
+
+        Parameters
+        ----------
+        poses : (n, d) float
+
+        Returns
+        -------
+        (n,) float
+        """
+        poses = np.atleast_2d(np.asarray(poses, dtype=float))
+        xmin, ymin, xmax, ymax = self.scene.bounds
+        if self.robot.shape == "disc":
+            x, y, r = poses[:, 0], poses[:, 1], self.robot.radius
+            return np.min(np.stack([x - r - xmin, xmax - x - r, y - r - ymin, ymax - y - r]), axis=0)
+        c = self.robot.corners(poses)
+        return np.minimum.reduce(
+            [
+                c[..., 0].min(-1) - xmin,
+                xmax - c[..., 0].max(-1),
+                c[..., 1].min(-1) - ymin,
+                ymax - c[..., 1].max(-1),
+            ]
+        )
+
+    def _place(self, pose) -> None:
+        if len(pose) == 3:
+            yaw = float(pose[2])
+            tf = fcl.Transform(
+                np.array([math.cos(0.5 * yaw), 0.0, 0.0, math.sin(0.5 * yaw)]),
+                np.array([pose[0], pose[1], 0.0]),
+            )
+            for ob in self._robot_objs:
+                ob.setTransform(tf)
+        else:
+            self._robot_obj.setTranslation(np.array([pose[0], pose[1], 0.0]))
+
+    def _bounds_clearance1(self, pose) -> float:
+        """Scalar fast path of :meth:`bounds_clearance` for one pose."""
+        xmin, ymin, xmax, ymax = self.scene.bounds
+        x, y = pose[0], pose[1]
+        if len(pose) == 2 or self.robot.shape == "disc":
+            ex = ey = self.robot.radius
+        elif self.robot.shape == "footprint":
+            x0, y0, x1, y1 = self._shape.extents(float(pose[2]))
+            return min(x + x0 - xmin, xmax - x - x1, y + y0 - ymin, ymax - y - y1)
+        else:
+            c, s = abs(math.cos(pose[2])), abs(math.sin(pose[2]))
+            hl, hw = 0.5 * self.robot.size[0], 0.5 * self.robot.size[1]
+            ex, ey = c * hl + s * hw, s * hl + c * hw
+        return min(x - ex - xmin, xmax - x - ex, y - ey - ymin, ymax - y - ey)
+
+    def _inside_bounds(self, pose) -> bool:
+        return self._bounds_clearance1(pose) >= 0
+
+    def clearance1(self, pose) -> float:
+        """Clearance of one pose from static obstacles and bounds (see :meth:`clearance`)."""
+        c = self._bounds_clearance1(pose)
+        if c > 0:
+            c = min(c, self.obstacle_clearance(pose) - self.keep)
+        return c
+
+    # ---- single pose (OMPL callback path)
+    def is_valid(self, pose) -> bool:
+        """True when the robot at ``pose`` is inside bounds and touches no obstacle's interior."""
+        self.checks += 1
+        if not self._inside_bounds(pose):
+            return False
+        if not self._objects:
+            return True
+        if self._map_only and self._map_bound(pose) > self.keep:
+            return True
+        if self.keep > 0:  # a distance, not a collision test, decides the clearance
+            return self.obstacle_clearance(pose) >= self.keep
+        if self._grids and self._inside_map(pose):
+            return False
+        self._place(pose)
+        return not self._collides()
+
+    def obstacle_clearance(self, pose) -> float:
+        """Distance from the robot at ``pose`` to the nearest static obstacle (<= 0 when touching)."""
+        if not self._objects:
+            return math.inf
+        if self._grids and self._inside_map(pose):
+            return -1.0
+        self._place(pose)
+        dist = math.inf
+        for ob in self._robot_objs:  # a footprint: the nearest of its convex pieces
+            data = fcl.DistanceData(request=self._dreq)
+            self._manager.distance(ob, data, fcl.defaultDistanceCallback)
+            self.calls += 1
+            dist = min(dist, data.result.min_distance)
+        # FCL's GJK distances to convex prisms overestimate by up to ~3e-5 (measured):
+        # subtract a margin so that the clearance stays a lower bound; at contact the
+        # distance is unreliable altogether, so the collision test decides (0 or -1)
+        d = dist - _DIST_MARGIN
+        if d <= _NEAR_CONTACT:
+            return -1.0 if self._collides() else 0.0
+        return d
+
+    def _map_bound(self, pose) -> float:
+        """A lower bound of the robot's distance to the maps' blocked cells (-inf off a map).
+
+        For the cell holding the reference point, e = the distance from its centre to the
+        nearest blocked cell's centre; the blocked region is at least e - res sqrt(2) from
+        the point (half a diagonal at each end) and the body at least that minus the
+        circumradius from it.
+        """
+        if self._edt is None:
+            from scipy import ndimage
+
+            self._edt = [
+                (ndimage.distance_transform_edt(~g.blocked) * g.resolution - g.resolution * math.sqrt(2.0))
+                for g in self._grids
+            ]
+        x, y = float(pose[0]), float(pose[1])
+        low = math.inf
+        for grid, edt in zip(self._grids, self._edt, strict=True):
+            h, w = edt.shape
+            j = math.floor((x - grid.origin[0]) / grid.resolution)
+            k = math.floor((y - grid.origin[1]) / grid.resolution)
+            if not (0 <= j < w and 0 <= k < h):
+                return -math.inf
+            low = min(low, float(edt[h - 1 - k, j]))
+        return low - self.r
+
+    def _inside_map(self, pose) -> bool:
+        """Whether a point inside the robot's body lies in a blocked map cell."""
+        x, y = float(pose[0]), float(pose[1])
+        if len(pose) > 2 and self._inner != (0.0, 0.0):
+            c, s = math.cos(pose[2]), math.sin(pose[2])
+            x, y = x + c * self._inner[0] - s * self._inner[1], y + s * self._inner[0] + c * self._inner[1]
+        for grid in self._grids:
+            h, w = grid.blocked.shape
+            j = math.floor((x - grid.origin[0]) / grid.resolution)
+            k = math.floor((y - grid.origin[1]) / grid.resolution)
+            if 0 <= j < w and 0 <= k < h and grid.blocked[h - 1 - k, j]:
+                return True
+        return False
+
+    def _collides(self) -> bool:
+        for ob in self._robot_objs:
+            data = fcl.CollisionData(request=self._creq)
+            self._manager.collide(ob, data, fcl.defaultCollisionCallback)
+            self.calls += 1
+            if data.result.is_collision:
+                return True
+        return False
+
+    # ---- batches
+    def valid(self, poses: FloatArray) -> np.ndarray:
+        """Validity of many poses.
+
+        Parameters
+        ----------
+        poses : (n, d) float
+
+        Returns
+        -------
+        (n,) bool
+        """
+        poses = np.atleast_2d(np.asarray(poses, dtype=float))
+        ok = self.bounds_clearance(poses) >= 0
+        for i in np.nonzero(ok)[0]:
+            ok[i] = self.is_valid(poses[i])
+        return ok
+
+    def clearance(self, poses: FloatArray) -> FloatArray:
+        """Clearance of the robot body from static obstacles and the bounds.
+
+        Parameters
+        ----------
+        poses : (n, d) float
+
+        Returns
+        -------
+        (n,) float
+            Positive: free by that margin; 0 touching; negative: colliding or outside.
+            Obstacles count as grown by the robot's clearance (``robot.clearance``).
+        """
+        poses = np.atleast_2d(np.asarray(poses, dtype=float))
+        return np.array([self.clearance1(p) for p in poses], dtype=float)
+
+    def motion_free(self, a, b, max_steps: int = 100_000, ca=None, cb=None) -> bool:
+        """True when the straight motion a -> b is certified free (see :meth:`motion_clearance`)."""
+        return self.motion_clearance(a, b, max_steps, ca, cb) >= 0
+
+    def motion_clearance(self, a, b, max_steps: int = 100_000, ca=None, cb=None) -> float:
+        """Certify the straight motion a -> b (heading along the shorter arc) as free.
+
+        Lipschitz argument: along the motion no point of the robot moves farther than the
+        contract-metric length travelled, so a pose with clearance c proves every pose
+        within metric distance c of it free. The check advances from both ends by the
+        clearance found (sphere tracing) until the two certified stretches meet.
+
+        ca, cb : float, optional
+            The clearances of ``a`` and ``b`` when the caller knows them already (a
+            roadmap's vertices are shared by many edges).
+
+        Returns
+        -------
+        float
+            -1 when the motion is not certified free (it collides, or grazes an obstacle
+            with clearance below 1e-9 somewhere); otherwise the smallest clearance found
+            at the poses examined (>= 0; an estimate of the motion's clearance, which is
+            exact at the ends).
+        """
+        a = [float(v) for v in a]
+        b = [float(v) for v in b]
+        dx, dy = b[0] - a[0], b[1] - a[1]
+        dh = 0.0
+        if len(a) == 3:
+            dh = (b[2] - a[2] + math.pi) % (2 * math.pi) - math.pi
+        total = math.hypot(dx, dy) + abs(dh) * self.r
+        ca = self.clearance1(a) if ca is None else float(ca)
+        if ca < 0:
+            return -1.0
+        if total == 0.0:
+            return ca
+        cb = self.clearance1(b) if cb is None else float(cb)
+        if cb < 0:
+            return -1.0
+        lo = ca / total  # [0, lo] is certified
+        hi = 1.0 - cb / total  # [hi, 1] is certified
+        low = min(ca, cb)
+
+        def pose(f: float):
+            p = [a[0] + f * dx, a[1] + f * dy]
+            if len(a) == 3:
+                p.append((a[2] + f * dh + math.pi) % (2 * math.pi) - math.pi)
+            return p
+
+        for _ in range(max_steps):
+            if lo >= hi:
+                return low
+            c = self.clearance1(pose(lo))
+            if c < _EPS_CERT_CLEARANCE:
+                return -1.0
+            low = min(low, c)
+            lo += c / total
+            if lo >= hi:
+                return low
+            c = self.clearance1(pose(hi))
+            if c < _EPS_CERT_CLEARANCE:
+                return -1.0
+            low = min(low, c)
+            hi -= c / total
+        return -1.0
+
+
+# --------------------------------------------------------------------------- movers
+
+
+def mover_distance(
+    robot: Robot, poses: FloatArray, shape: str, radius: float, size, xy: FloatArray, exact: bool = True
+) -> FloatArray:
+    """Distance between the robot at ``poses`` and a mover at ``xy`` (negative: overlap).
+
+    Parameters
+    ----------
+    robot : Robot
+        A disc, a box or a footprint (:meth:`gfuzzy.collision.shapes.Shape.mover_distance`).
+    poses : (..., d) float
+        Broadcastable against ``xy``.
+    shape : {"disc", "box"}
+        The mover's shape; ``radius`` (scalar or broadcastable array) for a disc,
+        ``size`` ((2,) or (..., 2): w, h) for an axis-aligned box.
+    xy : (..., 2) float
+    exact : bool
+        False allows a cheaper lower bound for a box or footprint robot against a box mover (the
+        separating-axis gap); safety decisions stay sound, a little conservative.
+
+    Returns
+    -------
+    (...,) float
+        Exact for discs and boxes (see ``exact``); where shapes overlap the value is <= 0.
+    """
+    poses = np.asarray(poses, dtype=float)
+    xy = np.asarray(xy, dtype=float)
+    radius = np.asarray(radius, dtype=float)
+    size = np.asarray(size, dtype=float)
+    return shape_of(robot).mover_distance(poses, shape, radius, size, xy, exact)

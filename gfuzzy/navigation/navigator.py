@@ -1,0 +1,717 @@
+"""Navigation among movers whose future is unknown (CONTRACT.md section 5).
+
+The planner of :mod:`gfuzzy.planner.planner` is told every mover's whole future; a robot among
+people only sees where they are and how fast they walk now. :class:`Navigator` turns the
+roadmap-time search into a receding-horizon controller:
+
+1. **Predict.** Each observed disc ``[x, y, vx, vy, r]`` walks on at constant velocity for
+   ``prediction_horizon`` seconds (a person standing still stays ``stationary_hold``
+   longer), inflated by the robot's ``mover_clearance``, a ``safety_buffer`` and an
+   uncertainty growing with the prediction time, by steps of ``slice`` seconds. Each
+   person is one ``trajectory`` mover of the search's :class:`~gfuzzy.timespace.movers.MoverField`
+   whose growing inflation is in the field's per-step margin (the same test as a chain of
+   ever larger discs); only people who can come within reach of where the robot can be
+   are predicted in detail (:meth:`Navigator._relevant`: the others cannot matter).
+2. **Plan.** The safe-interval search runs from the robot's current pose on the roadmap's
+   split graph, built once per navigator with its exact static heuristic; each call only
+   splices the pose in. It stops at 75 % of ``time_budget``, even inside a batch of
+   safety computations.
+3. **Fall back.** No plan (the predictions block every way, or no time): the same search
+   without the buffer and the uncertainty ("relaxed"); a finely checked straight dash to
+   a nearby goal ("direct"); the previous plan if still clear ("previous"); otherwise the
+   *evasive motion*, the statically free straight motion (or standing still) with the
+   latest contact with the people walking on. The fallbacks only look at the people who
+   can come near within their look-ahead, so their cost is bounded too.
+
+``step`` never raises for a hard situation and always returns a trajectory whose first row
+is ``[t, *pose]`` and that meets the speed bound.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..collision.geometry import StaticGeometry, mover_distance
+from ..errors import InputError, LimitError, check_number
+from ..planner.drive import drive_rows, evasions
+from ..planner.planner import BACKENDS, search_function
+from ..poses import metric_distance, wrap_angle
+from ..roadmap.roadmap import Roadmap
+from ..scene.scene import Mover, Scene
+from ..settings import SPEED_SAFETY
+from ..status import Status
+from ..timespace.movers import MoverField
+from ..timespace.spacetime import IntervalStore, SpaceTimeGraph
+from ..timespace.timespace import timed_rows
+from ..trajectory import Trajectory
+from ..typed import BoolArray, FloatArray
+from .navtypes import NavMode, NavStep
+
+__all__ = ["NavMode", "NavOptions", "NavStep", "Navigator"]
+
+log = logging.getLogger(__name__)
+
+#: Below this speed (m/s) an observed person counts as standing still.
+STILL_SPEED = 0.1
+#: Share of ``time_budget`` the search may use; the rest is the fallback's.
+SEARCH_SHARE = 0.75
+#: Samples of the look-ahead in the test of who may come within reach (:meth:`Navigator._may_reach`).
+REACH_SAMPLES = 48
+#: Gaps (m) wider than this score the same in the evasive motion.
+EVASION_GAP = 0.5
+#: First guess (s) of the predictions' set-up per person (then measured per navigator).
+PERSON_SECONDS = 150e-6
+#: The predictions' field answers the search's safety questions in pieces of about this
+#: many (point, person) pairs (at least 64 points), looking at the clock between two
+#: pieces (a piece took 3-4 ms here).
+PIECE_WORK = 60_000
+#: Seconds the search's interval store takes per unsafe (point, step) pair it is given
+#: (it sorts them; 20-70 ns measured here), kept free before the deadline.
+PAIR_SECONDS = 60e-9
+
+
+@dataclass(frozen=True)
+class NavOptions:
+    """Settings of the navigator.
+
+    Attributes
+    ----------
+    dt : float
+        Time step of the search (s). Larger than the planner's 0.07: a replan must be fast,
+        and the plan is redone every period anyway.
+    prediction_horizon : float
+        How long (s) an observed person is predicted to walk on at constant velocity.
+    uncertainty_growth : float
+        Growth (m per s of prediction time) of the inflation around a predicted person
+        walking at ``reference_speed`` or faster; slower people get a proportionally
+        slower growth (someone standing still gets none).
+    reference_speed : float
+        Walking speed (m/s) at which the uncertainty grows at its full rate.
+    safety_buffer : float
+        Distance (m) kept from every predicted person on top of ``robot.mover_clearance``.
+    personal_space : float
+        Further distance (m) the first search keeps from every predicted person: the
+        robot passes people no closer than this gap (CrowdNav's discomfort distance,
+        0.2 m) whenever a plan exists that does; when none does, the relaxed search (the
+        people's discs as they are) answers, so the preference never costs a success.
+        0 turns it off.
+    slice : float
+        Length (s) of a piece of prediction with one radius (the inflation grows by steps).
+    stationary_hold : float
+        A person standing still is kept where they stand this long (s) past the prediction
+        horizon; a walking one is dropped there.
+    time_budget : float
+        Wall-clock seconds one :meth:`Navigator.step` may take; the search stops at 75 %
+        of it and the fallback answers.
+    plan_slack : float
+        Seconds beyond the static time to the goal that the search's horizon allows for
+        waiting and detours (doubled once when that is not enough and time remains).
+    connect_k : int
+        How many nearest roadmap vertices the current pose (and the goal) connect to.
+    stretch : float
+        The search runs on the roadmap's spanner of this stretch (see ``PlanOptions``).
+    evasion_headings : int
+        Directions tried by the evasive motion.
+    evasion_time : float
+        Length (s) of the evasive motion returned, and of the look-ahead that scores it.
+    cover : float
+        A fallback trajectory lasts at least this long (s).
+    goal_tolerance : float
+        The goal is reached when the pose is this close to it (contract metric).
+    backend : {"compiled", "reference"}
+        The search's implementation, as :attr:`gfuzzy.PlanOptions.backend`: the same
+        answers, the compiled one faster (so more replans finish inside the budget).
+    """
+
+    dt: float = 0.1
+    prediction_horizon: float = 5.0
+    uncertainty_growth: float = 0.1
+    reference_speed: float = 1.0
+    safety_buffer: float = 0.05
+    personal_space: float = 0.2
+    slice: float = 0.5
+    stationary_hold: float = 30.0
+    time_budget: float = 0.1
+    plan_slack: float = 8.0
+    connect_k: int = 8
+    stretch: float = 1.05
+    evasion_headings: int = 16
+    evasion_time: float = 2.0
+    cover: float = 1.0
+    goal_tolerance: float = 1e-6
+    backend: str = "compiled"
+
+    def __post_init__(self):
+        if self.backend not in BACKENDS:
+            raise InputError(f"backend must be one of {', '.join(BACKENDS)}, got {self.backend!r}")
+        for name in ("dt", "prediction_horizon", "reference_speed", "slice", "time_budget", "plan_slack", "evasion_time", "cover"):
+            check_number(name, getattr(self, name))
+        for name in ("uncertainty_growth", "safety_buffer", "personal_space", "stationary_hold", "goal_tolerance"):
+            check_number(name, getattr(self, name), strict=False)
+        if self.connect_k < 1 or self.evasion_headings < 4:
+            raise InputError("connect_k must be >= 1 and evasion_headings >= 4")
+        check_number("stretch", self.stretch, 1.0, strict=False)
+
+
+class _OutOfTime(Exception):
+    """The search's deadline passed while the safety of its points was being computed."""
+
+
+class _TimedField(MoverField):
+    """The predictions' field, answering the search's safety questions in pieces of about
+    ``PIECE_WORK`` (point, person) pairs, raising :class:`_OutOfTime` between two pieces
+    once ``deadline`` (on ``clock``) has passed. The search looks at its deadline only
+    between expansions, and the interval store asks for the safety of thousands of points
+    at once (among 100 people one such batch took 60-140 ms here). The groups are
+    independent: the pieces' answers put together are the whole batch's.
+    """
+
+    deadline: float = math.inf
+    clock = staticmethod(time.perf_counter)
+
+    def unsafe_pairs(self, poses, ptr, lo, hi):
+        nodes, steps = [np.zeros(0, dtype=np.int64)], [np.zeros(0, dtype=np.int64)]
+        pairs = [0]  # the store then sorts the pairs: time kept for it (PAIR_SECONDS each)
+        for p, sub, a, b in self._pieces(ptr, lo, hi, lambda: pairs[0] * PAIR_SECONDS):
+            n, st = super().unsafe_pairs(poses[p[0] : p[-1]], sub, a, b)
+            nodes.append(n + p[0])
+            steps.append(st)
+            pairs[0] += len(n)
+        return np.concatenate(nodes), np.concatenate(steps)
+
+    def safe_intervals(self, poses, ptr, lo, hi):  # the compiled kernel's batches (newer stores)
+        starts, ends, sps = [np.zeros(0, dtype=np.int64)], [np.zeros(0, dtype=np.int64)], [np.zeros(1, np.int64)]
+        for p, sub, a, b in self._pieces(ptr, lo, hi, lambda: 0.0):
+            gs, ge, sp = super().safe_intervals(poses[p[0] : p[-1]], sub, a, b)
+            starts.append(gs)
+            ends.append(ge)
+            sps.append(np.asarray(sp[1:], dtype=np.int64) + sps[-1][-1])
+        return np.concatenate(starts), np.concatenate(ends), np.concatenate(sps)
+
+    def _pieces(self, ptr, lo, hi, after):
+        """(point pointers, group pointers from 0, lo, hi) of consecutive groups, while
+        the clock plus ``after()`` (seconds the caller still needs) is before the deadline."""
+        ptr = np.asarray(ptr, dtype=np.int64)
+        g = len(ptr) - 1
+        lo = np.broadcast_to(np.asarray(lo, dtype=np.int64), (g,))
+        hi = np.broadcast_to(np.asarray(hi, dtype=np.int64), (g,))
+        size = max(64, PIECE_WORK // max(len(self.movers), 1))
+        a = 0
+        while a < g:
+            if self.clock() + after() > self.deadline:
+                raise _OutOfTime
+            b = min(g, max(a + 1, int(np.searchsorted(ptr, ptr[a] + size, side="right")) - 1))
+            yield ptr[a : b + 1], ptr[a : b + 1] - ptr[a], lo[a:b], hi[a:b]
+            a = b
+
+
+@dataclass(frozen=True)
+class _Searched:
+    """What one search of :meth:`Navigator.step` found (the trajectory, or why not), and the
+    spliced graph, kept for a second search from the same pose."""
+
+    trajectory: Trajectory | None
+    message: str = ""
+    detailed: int = 0
+    out_of_time: bool = False
+    graph: SpaceTimeGraph | None = None
+    start: int = -1
+
+
+class Navigator:
+    """Receding-horizon navigation to a fixed goal among observed moving discs.
+
+    Parameters
+    ----------
+    scene : Scene
+        Its bounds, robot and static obstacles are used; its movers are ignored.
+    roadmap : Roadmap
+        A roadmap of ``scene`` (see :meth:`Roadmap.check_scene`).
+    goal : (d,) float
+        The goal pose.
+    options : NavOptions, optional
+
+    Raises
+    ------
+    ValueError
+        The goal is malformed, out of bounds or in a static obstacle.
+
+    Examples
+    --------
+    >>> nav = Navigator(scene, roadmap, goal)                     # doctest: +SKIP
+    >>> traj = nav.step(0.0, start, np.array([[1, 0, -1, 0, 0.3]]))  # doctest: +SKIP
+    """
+
+    def __init__(self, scene: Scene, roadmap: Roadmap, goal, options: NavOptions | None = None):
+        roadmap.check_scene(scene)
+        self.options = opts = options or NavOptions()
+        self.scene = scene
+        self.roadmap = roadmap
+        self.robot = robot = scene.robot
+        self.geometry = StaticGeometry(scene)
+        goal = np.asarray(goal, dtype=float).reshape(-1)
+        if goal.shape != (robot.dof,) or not np.all(np.isfinite(goal)):
+            raise InputError(f"goal must be {robot.dof} finite numbers")
+        if self.geometry.bounds_clearance(goal[None])[0] < 0 or self.geometry.clearance1(goal) < 0:
+            raise InputError(f"goal {goal.tolist()} is out of bounds or collides with a static obstacle")
+        self.goal = goal
+        self._goal_wrapped = goal.copy()
+        if robot.dof == 3:
+            self._goal_wrapped[2] = wrap_angle(goal[2])
+        self.vplan = robot.vmax * SPEED_SAFETY
+        self.step_len = self.vplan * opts.dt
+        self.mover_clearance = float(getattr(robot, "mover_clearance", 0.0) or 0.0)
+        # the predicted world carries the clearance in its radii: the search's robot keeps none
+        self._pred_robot = replace(robot, mover_clearance=0.0) if hasattr(robot, "mover_clearance") else robot
+        self.reached = False
+        self.replans = 0
+        self.last: NavStep | None = None
+        self._previous: Trajectory | None = None
+        self._ahead: list = []  # (arrival time, roadmap vertex) of the last plan
+        self._clock = time.perf_counter  # the budget's clock (a test may replace it)
+        self._person_seconds = PERSON_SECONDS  # the predictions' set-up per person, measured
+        self._build_base()
+        if opts.backend == "compiled":  # load the compiled kernels now, not inside a step's budget
+            from ..timespace.search_kernel import warm
+
+            warm()
+
+    # ------------------------------------------------------------------ graph
+    def _build_base(self) -> None:
+        """The goal's graph, kept for every call: the planner's (``Planner.prepare``:
+        :class:`gfuzzy.planner.prepared.PreparedGoal`, or :class:`gfuzzy.timespace.unicycle.UnicycleGoal` for a
+        differential drive); each call splices the robot's pose in (:meth:`_splice`)."""
+        from ..planner.planner import Planner, PlanOptions
+
+        opts = self.options
+        self._planner = Planner(self.scene, self.roadmap)
+        self._planner.geometry = self.geometry
+        popts = PlanOptions(dt=opts.dt, connect_k=opts.connect_k, stretch=opts.stretch, backend=opts.backend)
+        self._kept = self._planner.prepare(self.goal, popts)
+        self._nv = 0 if self.robot.unicycle else len(self.roadmap.vertices)  # vertices "ahead"
+        self._g_id = -1
+
+    def _splice_ends(self, pose: FloatArray, ahead=()):
+        """(graph, start id, goal id, roadmap distance) of the kept graph with ``pose`` in."""
+        start = pose.copy()
+        if self.robot.dof == 3:
+            start[2] = wrap_angle(start[2])
+        if self.robot.unicycle:
+            ug = self._kept.kept.splice(self._planner, start)
+            return ug.graph, ug.s_id, ug.g_id, ug.roadmap_distance
+        return self._kept.splice(self._planner, start, ahead=ahead)
+
+    def roadmap_distance(self, pose) -> float:
+        """Shortest distance from ``pose`` to the goal on the whole roadmap (static
+        obstacles only; inf when not connected; a unicycle's: its turns included, see
+        :class:`gfuzzy.timespace.unicycle.UnicycleGraph`)."""
+        return float(self._splice_ends(np.asarray(pose, dtype=float).reshape(-1))[3])
+
+    def _splice(self, pose: FloatArray, t: float = -math.inf):
+        """The kept graph with ``pose`` spliced in: (graph, start id), or (None, reason).
+
+        The robot is usually inside an edge of its last plan: it also connects to the
+        vertices that plan was heading for (the nearest ones may all lie behind it, and
+        going back to one of them before going on would make it dither).
+        """
+        ahead = [v for ta, v in self._ahead if ta > t + 1e-9]
+        graph, s_id, g_id, rd = self._splice_ends(pose, ahead)
+        self._g_id = g_id
+        if not math.isfinite(rd):
+            return None, "the robot's pose connects to no roadmap vertex that leads to the goal"
+        return graph, s_id
+
+    # ------------------------------------------------------------- prediction
+    def _inflation(self, pose: FloatArray, obs: FloatArray, relaxed: bool = False) -> FloatArray:
+        """(k, S) inflation (m) per person and prediction slice, shrunk near the robot.
+
+        A person already closer than the full inflation (someone walked up to the robot)
+        gets an inflation that starts just inside their present gap and recovers at the
+        robot's speed, so that the robot, which stands where it stands, is not inside its
+        own predictions and the search can move it away. The inflation never decreases
+        from one slice to the next (both terms grow with the prediction time).
+        """
+        opts = self.options
+        n_slices = int(math.ceil(opts.prediction_horizon / opts.slice - 1e-9))
+        tau = np.arange(n_slices) * opts.slice
+        speed = np.hypot(obs[:, 2], obs[:, 3])
+        # uncertainty grows with how far a person may stray from the straight walk: with
+        # their speed (someone standing is where they stand; a full-speed walker may turn)
+        rate = opts.uncertainty_growth * np.minimum(speed / opts.reference_speed, 1.0)
+        full = self.mover_clearance + opts.safety_buffer + opts.personal_space + rate[:, None] * tau[None, :]
+        if relaxed:  # only what the contract asks: the robot's mover clearance
+            full = np.full_like(full, self.mover_clearance)
+        gap = self._gap(pose, obs)  # (k,) beyond the people's own radius
+        margin0 = (self.vplan + speed) * opts.dt / 2  # the search's continuous-time margin at step 0
+        allowed = np.maximum(gap - margin0 - 1e-6, 0.0)
+        return np.minimum(full, allowed[:, None] + self.vplan * tau[None, :])
+
+    def _gap(self, pose: FloatArray, obs: FloatArray) -> FloatArray:
+        if len(obs) == 0:
+            return np.zeros(0)
+        return mover_distance(self._pred_robot, pose[None, :], "disc", obs[:, 4], (0.0, 0.0), obs[:, :2])
+
+    def _walks(self, obs: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Predicted velocity (k, 2) (zero for someone standing) and presence (k,) in seconds
+        after ``t`` (the horizon; a person standing still is kept ``stationary_hold`` longer)."""
+        opts = self.options
+        still = np.hypot(obs[:, 2], obs[:, 3]) < STILL_SPEED
+        vel = np.where(still[:, None], 0.0, obs[:, 2:4])
+        hold = opts.stationary_hold if opts.stationary_hold > 0 else 0.0
+        return vel, opts.prediction_horizon + np.where(still, hold, 0.0)
+
+    def _may_reach(self, pose: FloatArray, xy: FloatArray, vel: FloatArray, walk: FloatArray,
+                   look: FloatArray, reach: FloatArray) -> BoolArray:  # fmt: skip
+        """(k,) False for each person who certainly stays farther than ``reach`` from the
+        robot's reference point during the next ``look`` seconds, whatever the robot does.
+
+        The person's centre walks at ``vel`` for ``walk`` seconds and then stands; the
+        robot's reference point stays within ``vmax * tau`` of ``pose`` at time ``tau``
+        (the speed bound every answer keeps). The distance between the two changes no faster
+        than ``|vel| + vmax``, so its smallest value over samples ``h`` apart, minus that
+        rate times ``h / 2``, bounds it from below on the whole interval.
+        """
+        k = len(xy)
+        if k == 0:
+            return np.zeros(0, dtype=bool)
+        n = REACH_SAMPLES
+        look = np.broadcast_to(np.asarray(look, dtype=float), (k,))
+        tau = look[:, None] * np.linspace(0.0, 1.0, n)[None, :]  # (k, n)
+        walked = np.minimum(tau, np.broadcast_to(np.asarray(walk, dtype=float), (k,))[:, None])
+        centre = xy[:, None, :] + walked[..., None] * vel[:, None, :]
+        vmax = float(self.robot.vmax)
+        g = np.hypot(*(centre - pose[:2]).transpose(2, 0, 1)) - vmax * tau
+        slack = (np.hypot(vel[:, 0], vel[:, 1]) + vmax) * look / (n - 1) / 2
+        return g.min(axis=1) - slack <= reach
+
+    def _relevant(self, pose: FloatArray, obs: FloatArray, infl: FloatArray, seconds: float) -> BoolArray:
+        """(k,) the people whose prediction can make a robot pose unsafe within ``seconds``.
+
+        A predicted person makes a point unsafe at a step only if the robot there is closer
+        than their inflated radius plus the search's margin, and the robot is never farther
+        than ``vmax * tau`` from where it is now at time ``tau``: a person who stays beyond
+        that reach over their predicted presence (or the search's horizon) makes no pose
+        the search can reach unsafe, and leaving them out changes no answer.
+        """
+        opts = self.options
+        vel, presence = self._walks(obs)
+        speed = np.hypot(vel[:, 0], vel[:, 1])
+        reach = obs[:, 4] + infl.max(axis=1, initial=0.0) + self.robot.circumradius + (self.vplan + speed) * opts.dt
+        look = np.minimum(presence, seconds) + opts.dt  # the field keeps a mover half a step longer
+        return self._may_reach(pose, obs[:, :2], vel, opts.prediction_horizon, look, reach + 1e-6)
+
+    def _near(self, pose: FloatArray, obs: FloatArray, look: float, gap: float) -> FloatArray:
+        """The people (rows of ``obs``) who, walking on at constant velocity, may come within
+        ``gap`` of the robot (beyond both radii and the mover clearance) within ``look``
+        seconds; the fallbacks only look at them (the others cannot change their answers)."""
+        if len(obs) == 0:
+            return obs
+        reach = obs[:, 4] + self.robot.circumradius + self.mover_clearance + gap + 1e-6
+        return obs[self._may_reach(pose, obs[:, :2], obs[:, 2:4], math.inf, look, reach)]
+
+    def _field(self, t: float, obs: FloatArray, infl: FloatArray, steps: int, deadline: float = math.inf) -> MoverField:
+        """The predicted people on the search's time grid: one trajectory mover per person.
+
+        Person i walks on (or stands) as :meth:`_walks` says; the growing inflation goes
+        into the field's margin step by step instead of into the disc. For a disc,
+        inflating the radius by ``e`` and asking ``e`` more distance are the same test,
+        so this field makes exactly the (point, step) pairs unsafe that a chain of one
+        mover per prediction slice, each with its own inflated radius, would, with one
+        mover per person instead of one per slice (the field's set-up costs per mover).
+        Each mover's disc carries the inflation of the first step (the smallest: it never
+        shrinks with time), so that the exact check of the first motions
+        (:meth:`MoverField.motion_safe`) keeps it too.
+        """
+        opts = self.options
+        k, n_s = infl.shape
+        vel, presence = self._walks(obs)
+        # the slice whose inflation holds at step n: the latest one present within half a step
+        tau = (np.arange(steps + 1) + 0.5) * opts.dt
+        s_of = np.minimum(np.floor(tau / opts.slice + 1e-9).astype(np.int64), n_s - 1)
+        first = infl[:, s_of[0]]
+        radius = obs[:, 4] + first
+        ends = obs[:, :2] + vel * opts.prediction_horizon
+        movers = tuple(
+            Mover(f"p{i}", "disc", float(radius[i]), (0.0, 0.0),
+                  trajectory=np.array([[t, obs[i, 0], obs[i, 1]], [t + presence[i], ends[i, 0], ends[i, 1]]]))
+            for i in range(k)
+        )  # fmt: skip
+        extra = float(np.max(infl[:, -1] - first, initial=0.0))
+        scene = replace(self.scene, robot=self._pred_robot, movers=movers)
+        # built with the largest extra margin, so that its broad-phase boxes hold every
+        # step's; then each step gets its own (the robot's clearance is in the radii: keep 0)
+        field_ = _TimedField(scene, t, opts.dt, steps, self.vplan, clearance=extra)
+        field_.deadline, field_.clock = deadline, self._clock
+        field_.keep = 0.0
+        field_.margin += infl[:, s_of] - first[:, None] - extra
+        field_.compiled = opts.backend == "compiled"
+        return field_
+
+    # ------------------------------------------------------------------- step
+    def step(self, t: float, pose, observations) -> Trajectory:
+        """Replan from ``pose`` at time ``t`` given what is seen now.
+
+        Parameters
+        ----------
+        t : float
+        pose : (d,) float
+            The robot's pose now (need not be a roadmap vertex).
+        observations : (k, 5) float
+            ``[x, y, vx, vy, radius]`` per moving obstacle seen at ``t`` (k may be 0).
+
+        Returns
+        -------
+        Trajectory
+            First row ``[t, *pose]``; meets the speed bound; the robot follows it until the
+            next call. Never raises for a hard situation (no plan: the evasive motion).
+
+        Raises
+        ------
+        ValueError
+            Malformed input (wrong shapes, non-finite numbers): a caller's bug.
+        """
+        t_begin = self._clock()
+        opts = self.options
+        t = float(t)
+        pose = np.asarray(pose, dtype=float).reshape(-1).copy()
+        if pose.shape != (self.robot.dof,) or not np.all(np.isfinite(pose)) or not math.isfinite(t):
+            raise InputError(f"pose must be {self.robot.dof} finite numbers and t finite")
+        obs = np.asarray(observations, dtype=float).reshape(-1, 5) if np.size(observations) else np.zeros((0, 5))
+        if not np.all(np.isfinite(obs)) or np.any(obs[:, 4] < 0):
+            raise InputError("observations must be finite rows [x, y, vx, vy, radius >= 0]")
+        self.replans += 1
+        cr = self.robot.circumradius
+        if float(metric_distance(pose, self.goal, cr)) <= opts.goal_tolerance:
+            self.reached = True
+            self.last = NavStep(NavMode.GOAL, self._clock() - t_begin)
+            return Trajectory(np.array([[t, *pose], [t + opts.cover, *pose]]), cr)
+        deadline = t_begin + SEARCH_SHARE * opts.time_budget
+        infl = self._inflation(pose, obs)
+        predicted = obs.copy()
+        if len(obs):
+            predicted[:, 4] = obs[:, 4] + infl[:, 0]
+        found = self._search(t, pose, obs, infl, deadline)
+        traj, mode = found.trajectory, NavMode.PLAN
+        if traj is None and len(obs) and not found.out_of_time and self._clock() < deadline:
+            # blocked by the margins (someone standing beside the goal, a narrow gap): try
+            # once more with the people's discs as they are, plus the mover clearance only
+            traj = self._search(t, pose, obs, self._inflation(pose, obs, relaxed=True), deadline, found).trajectory
+            mode = NavMode.RELAXED
+        if traj is None:
+            traj = self._direct(t, pose, obs)
+            mode = NavMode.DIRECT
+        if traj is None:
+            traj = self._previous_if_clear(t, pose, obs)
+            mode = NavMode.PREVIOUS
+            if traj is None:
+                traj = self._evasive(t, pose, obs)
+                mode = NavMode.EVASIVE
+        else:
+            self._previous = traj
+        if mode == NavMode.EVASIVE:
+            self._previous = None
+        self.last = NavStep(mode, self._clock() - t_begin, found.message, predicted, found.detailed)
+        return traj
+
+    def _search(self, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray, deadline: float,
+                before: _Searched | None = None) -> _Searched:  # fmt: skip
+        """The safe-interval search among the predicted people, within ``deadline``.
+
+        The predictions are built only when the time left can pay for them (their cost
+        per person is measured as the navigator runs); the search stops at ``deadline``
+        even inside a batch of safety computations (:class:`_TimedField`). A request the
+        search refuses (:class:`InputError`, :class:`LimitError`: e.g. a horizon beyond
+        the memory bounds) is a hard situation the fallback answers; any other exception
+        is a bug and propagates.
+        """
+        opts = self.options
+        try:
+            if before is not None and before.graph is not None:
+                graph, s_id = before.graph, before.start
+            else:
+                graph, s_id = self._splice(pose, t)
+            if graph is None:
+                return _Searched(None, s_id)
+            h0 = float(graph.heuristic[s_id])
+            if not math.isfinite(h0):
+                return _Searched(None, "the goal is not reachable on the roadmap", graph=graph, start=s_id)
+            store = IntervalStore(graph)
+            search = search_function(opts.backend)
+            slack = (opts.plan_slack + opts.prediction_horizon) / opts.dt
+            detailed = 0
+            for _ in range(2):
+                steps = int(math.ceil(h0 + slack))
+                keep = self._relevant(pose, obs, infl, steps * opts.dt)
+                detailed = int(keep.sum())
+                c0 = self._clock()
+                if c0 + detailed * self._person_seconds > deadline:  # the fallback answers
+                    return _Searched(None, "time budget spent before the search", detailed, True, graph, s_id)
+                field_ = self._field(t, obs[keep], infl[keep], steps, deadline)
+                if detailed >= 10:  # a cautious running estimate: up at once, down by a fifth
+                    took = (self._clock() - c0) / detailed
+                    self._person_seconds = max(took, 0.8 * self._person_seconds + 0.2 * took)
+                res = search(graph, field_, s_id, self._g_id, deadline=deadline, store=store)
+                if res.status != Status.NO_PATH or not res.horizon_hit or self._clock() > deadline:
+                    break
+                slack *= 2.0
+        except _OutOfTime:
+            return _Searched(None, "time budget spent on the predicted people's safety", detailed, True, graph, s_id)
+        except (InputError, LimitError) as exc:  # a request the search refuses: the fallback answers
+            log.warning("navigator search refused at t=%g: %s", t, exc)
+            return _Searched(None, f"search refused: {exc}")
+        if res.status != Status.SOLVED:
+            return _Searched(None, res.message, detailed, res.status == Status.TIMEOUT, graph, s_id)
+        rows, _ = timed_rows(res.nodes, res.steps, graph.poses, t, opts.dt)
+        self._ahead = [(t + st * opts.dt, nd) for nd, st in zip(res.nodes, res.steps, strict=True) if nd < self._nv]
+        rows[0, 1:] = pose
+        rows[-1, 1:] = self.goal
+        return _Searched(Trajectory(rows, self.robot.circumradius), "", detailed, False, graph, s_id)
+
+    # --------------------------------------------------------------- fallback
+    def _clearance_along(self, pts: FloatArray, times: FloatArray, obs: FloatArray) -> FloatArray:
+        """(..., k) gap between the robot at ``pts`` (..., T, d) and each person walking
+        on at constant velocity at ``times`` (T,), minus the mover clearance."""
+        pos = obs[None, :, :2] + (times - times[0])[:, None, None] * obs[None, :, 2:4]  # (T, k, 2)
+        rel = pos - pts[..., None, :2]
+        if self.robot.shape == "disc":
+            d = np.hypot(rel[..., 0], rel[..., 1]) - self.robot.radius - obs[:, 4]
+        else:
+            d = mover_distance(self._pred_robot, pts[..., None, :], "disc", obs[:, 4], (0.0, 0.0), pos)
+        return d - self.mover_clearance
+
+    def _direct(self, t: float, pose: FloatArray, obs: FloatArray) -> Trajectory | None:
+        """Straight to the goal at full speed, if it is statically free and keeps clear of
+        everyone seen now walking on at constant velocity (un-inflated) until arrival and
+        for a second after; None otherwise.
+
+        The search's own margin (half a step of motion) can close the last gap to a goal
+        beside a person standing still; this motion is checked every 0.01 s with a margin
+        of 0.02 m, which bounds the gap between the samples (it changes by at most 2 m/s).
+        """
+        cr = self.robot.circumradius
+        if self.robot.unicycle:
+            rows = drive_rows(self.geometry, t, pose, [], self.goal, self.vplan)
+            if rows is None:
+                return None
+            duration = float(rows[-1, 0] - t)
+        else:
+            if not self.geometry.motion_free(pose, self.goal):
+                return None
+            length = float(metric_distance(pose, self.goal, cr))
+            duration = length / self.vplan
+            rows = np.array([[t, *pose], [t + duration, *self.goal]])
+        if duration > self.options.prediction_horizon:
+            return None
+        traj = Trajectory(rows, cr)
+        speed = float(np.max(np.hypot(obs[:, 2], obs[:, 3]), initial=0.0))
+        tol = (self.vplan + speed) * 0.005 + 1e-3
+        obs = self._near(pose, obs, duration + 1.0 + 0.01, tol)
+        if len(obs):
+            times = np.arange(t, t + duration + 1.0 + 0.01, 0.01)
+            if np.min(self._clearance_along(traj.at(times), times, obs)) <= tol:
+                return None
+        return traj
+
+    def _previous_if_clear(self, t: float, pose: FloatArray, obs: FloatArray) -> Trajectory | None:
+        """The last plan from ``t`` on, if the robot is on it and it keeps clear of everyone
+        seen now (walking on at constant velocity, un-inflated) over the prediction horizon."""
+        prev = self._previous
+        if prev is None or prev.t_end <= t + 1e-9:
+            return None
+        if float(metric_distance(prev.at(t), pose, self.robot.circumradius)) > 1e-6:
+            return None
+        cut = _cut(prev, t, prev.t_end)
+        cut[0, 1:] = pose
+        obs = self._near(pose, obs, self.options.prediction_horizon, 0.0)
+        if len(obs):
+            times = np.linspace(t, t + self.options.prediction_horizon, 61)
+            pts = Trajectory(cut, self.robot.circumradius).at(times)
+            if np.min(self._clearance_along(pts, times, obs)) <= 0:
+                return None
+        return Trajectory(cut, self.robot.circumradius)
+
+    def _evasive(self, t: float, pose: FloatArray, obs: FloatArray) -> Trajectory:
+        """The statically free straight motion (or standing still) with the latest contact.
+
+        Candidates: ``evasion_headings`` directions at full and half speed, each going on
+        for ``evasion_time`` (or half, or a quarter of it, whichever is free of static
+        obstacles) and then standing, and standing still. Each is scored by its time to
+        contact with the people walking on at constant velocity (un-inflated, sampled every
+        0.05 s over ``evasion_time``), then by the smallest gap, then by progress to the goal.
+        """
+        opts = self.options
+        cr = self.robot.circumradius
+        T = opts.evasion_time
+        n_t = int(math.ceil(T / 0.05)) + 1
+        times = t + np.linspace(0.0, T, n_t)
+        if self.robot.unicycle:  # turn in place, then drive along the heading (drive.evasions)
+            cands = evasions(self.geometry, t, pose, T, opts.cover, opts.evasion_headings, self.vplan)
+            trajs = [Trajectory(rows, cr) for rows in cands]
+            pts = np.stack([tr.at(np.minimum(times, tr.t_end)) for tr in trajs])
+            ends = np.array([rows[-1, 1:] for rows in cands])
+            return trajs[int(np.argmax(self._evasion_scores(t, pose, obs, pts, times, ends)))]
+        ang = np.arange(opts.evasion_headings) * (2 * math.pi / opts.evasion_headings)
+        speeds = np.array([1.0, 0.5]) * self.vplan
+        dirs = np.column_stack([np.cos(ang), np.sin(ang)])
+        vel = np.vstack([np.zeros((1, 2)), (speeds[:, None, None] * dirs[None]).reshape(-1, 2)])  # (C, 2)
+        move_time = np.zeros(len(vel))
+        free = np.zeros(len(vel), dtype=bool)
+        free[0] = True
+        for c in range(1, len(vel)):
+            for frac in (1.0, 0.5, 0.25):
+                end = pose.copy()
+                end[:2] += vel[c] * T * frac
+                if self.geometry.bounds_clearance(end[None])[0] >= 0 and self.geometry.motion_free(pose, end):
+                    free[c] = True
+                    move_time[c] = T * frac
+                    break
+        ends = np.repeat(pose[None], len(vel), axis=0)
+        ends[:, :2] += vel * move_time[:, None]
+        tau = times - t
+        frac = np.clip(tau[None, :] / np.maximum(move_time[:, None], 1e-12), 0.0, 1.0)  # moves, then stands
+        pts = pose[None, None, :] + frac[:, :, None] * (ends - pose[None])[:, None, :]  # (C, T, d)
+        score = np.where(free, self._evasion_scores(t, pose, obs, pts, times, ends), -math.inf)
+        c = int(np.argmax(score))
+        if c == 0:
+            rows = np.array([[t, *pose], [t + max(T, opts.cover), *pose]])
+        else:
+            rows = np.array([[t, *pose], [t + move_time[c], *ends[c]]])
+            if opts.cover > move_time[c]:
+                rows = np.vstack([rows, [t + opts.cover, *ends[c]]])
+        return Trajectory(rows, cr)
+
+
+
+    def _evasion_scores(self, t, pose, obs, pts, times, ends) -> FloatArray:
+        """(C,) score of candidate motions ``pts`` (C, T, d) at ``times`` ending at ``ends``:
+        the latest contact first (no contact within the horizon beats any), then the widest
+        gap while close, then progress to the goal."""
+        T = times[-1] - t
+        tau = times - t
+        obs = self._near(pose, obs, T, EVASION_GAP)  # farther people change no score below
+        if len(obs):
+            gap = self._clearance_along(pts, times, obs).min(axis=-1)  # (C, T)
+            later = gap[:, 1:]  # contact: a gap <= 0 not opening up (a robot touching someone backs out)
+            hit = (later <= 0) & (later <= gap[:, :1])
+            ttc = np.where(hit.any(axis=1), tau[1:][np.argmax(hit, axis=1)], math.inf)
+            worst = later.min(axis=1)
+        else:
+            ttc = np.full(len(pts), math.inf)
+            worst = np.full(len(pts), math.inf)
+        cr = self.robot.circumradius
+        progress = metric_distance(pose, self.goal, cr) - metric_distance(ends, self.goal[None], cr)
+        return np.minimum(ttc, T + 1.0) * 100.0 + np.minimum(worst, EVASION_GAP) * 10.0 + progress
+
+def _cut(traj: Trajectory, ta: float, tb: float) -> FloatArray:
+    """Rows of ``traj`` between ``ta`` and ``tb`` (both ends interpolated), t strictly increasing."""
+    w = traj.waypoints
+    inner = w[(w[:, 0] > ta + 1e-9) & (w[:, 0] < tb - 1e-9)]
+    rows = [np.array([ta, *traj.at(ta)])[None], inner]
+    if tb > ta + 1e-9:
+        rows.append(np.array([tb, *traj.at(tb)])[None])
+    return np.vstack(rows)

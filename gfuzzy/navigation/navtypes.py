@@ -1,0 +1,54 @@
+"""What one step of the navigator did (:class:`NavStep`) and how it answered (:class:`NavMode`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import Enum
+
+import numpy as np
+
+from ..typed import FloatArray
+
+__all__ = ["NavMode", "NavStep"]
+
+
+class NavMode(str, Enum):
+    """How one :meth:`Navigator.step` answered (a ``str``: ``NavMode.PLAN == "plan"``)."""
+
+    PLAN = "plan"  # a fresh search
+    RELAXED = "relaxed"  # a fresh search without the buffer, personal space and uncertainty
+    DIRECT = "direct"  # straight to the goal nearby, checked finely
+    PREVIOUS = "previous"  # the last plan, still clear
+    EVASIVE = "evasive"  # the statically free straight motion with the latest contact
+    GOAL = "goal"  # already at the goal
+
+    def __str__(self) -> str:
+        return self.value
+
+
+@dataclass(frozen=True)
+class NavStep:
+    """What one :meth:`Navigator.step` did (``Navigator.last``).
+
+    Attributes
+    ----------
+    mode : NavMode
+        ``"plan"`` (a fresh search), ``"relaxed"`` (a fresh search without the safety
+        buffer, the personal space and the uncertainty), ``"direct"`` (straight to the goal nearby, checked
+        finely), ``"previous"`` (the last plan, still clear), ``"evasive"``, ``"goal"``.
+    seconds : float
+        Wall-clock time of the call.
+    message : str
+        Why the search did not answer, when it did not.
+    predicted : (k, 5) float
+        The observations used, ``[x, y, vx, vy, inflated radius at t]``.
+    detailed : int
+        People predicted in detail for the search: those who can come within reach of
+        where the robot can be before their prediction ends (the others cannot matter).
+    """
+
+    mode: NavMode
+    seconds: float
+    message: str = ""
+    predicted: FloatArray = field(default_factory=lambda: np.zeros((0, 5)), compare=False)
+    detailed: int = 0

@@ -1,0 +1,280 @@
+"""What a robot's sensors make of the movers around it (CONTRACT.md section 7).
+
+:class:`Sensor` turns the true state of the movers at an instant into what a robot
+observes: only the movers within range (``sense``), inside its field of view (``fov``,
+a cone about its heading) and not hidden behind a static obstacle (``occlusion``), their
+positions blurred by Gaussian ``noise``; their velocity is not measured but estimated by
+a :class:`Tracker` from positions observed one period apart (``velocity="estimated"``,
+the default), or handed over exactly (``velocity="exact"``, the old ideal sensor).
+
+The tracker is deliberately small: detections carry no identity; each is associated with
+the track whose predicted position is nearest (an optimal assignment within a gate), and
+each track runs an alpha-beta filter on position and velocity. Without noise the filter
+is the plain difference of two observations one period apart; with noise it smooths.
+A track that goes unseen (left the field of view, hidden) is reported, walking on at its
+last velocity, for ``coast`` seconds, then dropped.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import InputError
+from ..rng import create_rng
+from ..scene.scene import Box, Disc, Polygon, Scene
+from ..typed import BoolArray, FloatArray
+
+__all__ = ["VELOCITY_MODES", "SensorOptions", "Sensor", "Tracker", "line_of_sight", "in_fov"]
+
+VELOCITY_MODES = ("estimated", "exact")
+
+
+@dataclass(frozen=True)
+class SensorOptions:
+    """How the robot observes the movers.
+
+    Attributes
+    ----------
+    velocity : {"estimated", "exact"}
+        ``estimated``: from positions observed one period apart (a :class:`Tracker`);
+        ``exact``: the mover's true velocity at that instant.
+    noise : float
+        Standard deviation (m) of the Gaussian noise on each observed coordinate.
+    fov : float
+        Field of view (degrees, 0 < fov <= 360), a cone centred on the robot's heading.
+    occlusion : bool
+        A static obstacle crossing the segment between the robot's and the mover's
+        centres hides the mover.
+    sense : float
+        Range (m, gap between the robot's body and the mover's disc).
+    coast : float
+        Seconds a track that is no longer seen is still reported (walking on).
+    gate : float
+        Largest distance (m) between a track's predicted position and a detection that
+        may be associated with it (plus four times ``noise``).
+    seed : int
+        Seed of the noise.
+    """
+
+    velocity: str = "estimated"
+    noise: float = 0.0
+    fov: float = 360.0
+    occlusion: bool = False
+    sense: float = math.inf
+    coast: float = 1.0
+    gate: float = 1.0
+    seed: int = 0
+
+    def __post_init__(self):
+        if self.velocity not in VELOCITY_MODES:
+            raise InputError(f"velocity must be one of {', '.join(VELOCITY_MODES)}, got {self.velocity!r}")
+        if not (math.isfinite(self.noise) and self.noise >= 0):
+            raise InputError(f"noise must be a number >= 0, got {self.noise}")
+        if not (0 < self.fov <= 360):
+            raise InputError(f"fov must be in (0, 360] degrees, got {self.fov}")
+        if not self.sense > 0:
+            raise InputError(f"sense must be a positive number, got {self.sense}")
+        if not (math.isfinite(self.coast) and self.coast >= 0) or not (math.isfinite(self.gate) and self.gate > 0):
+            raise InputError("coast must be >= 0 and gate > 0")
+
+    @property
+    def ideal(self) -> bool:
+        """True when the sensor gives the movers' true state (the contract's section 5)."""
+        return self.velocity == "exact" and self.noise == 0 and self.fov >= 360 and not self.occlusion
+
+
+def in_fov(pose_xy: FloatArray, heading: float, points: FloatArray, fov_deg: float) -> BoolArray:
+    """(k,) True for each of ``points`` (k, 2) inside the cone of ``fov_deg`` degrees
+    about ``heading`` (radians) from ``pose_xy`` (a point at the apex counts as inside)."""
+    pts = np.asarray(points, dtype=float).reshape(-1, 2)
+    if fov_deg >= 360:
+        return np.ones(len(pts), dtype=bool)
+    rel = pts - np.asarray(pose_xy, dtype=float)[:2]
+    ang = np.arctan2(rel[:, 1], rel[:, 0]) - heading
+    ang = (ang + math.pi) % (2 * math.pi) - math.pi
+    return (np.abs(ang) <= math.radians(fov_deg) / 2 + 1e-12) | (np.hypot(rel[:, 0], rel[:, 1]) < 1e-12)
+
+
+def _obstacle_shapes(scene: Scene) -> list:
+    import shapely
+
+    shapes = []
+    for ob in scene.obstacles:
+        if isinstance(ob, Disc):
+            shapes.append(shapely.Point(ob.center).buffer(ob.radius, quad_segs=32))
+        elif isinstance(ob, Box):
+            shapes.append(shapely.Polygon(ob.vertices()))
+        elif isinstance(ob, Polygon):
+            shapes.append(shapely.Polygon(ob.points, [h for h in ob.holes]))
+        elif hasattr(ob, "points"):  # another polygonal obstacle kind
+            shapes.append(shapely.Polygon(np.asarray(ob.points)))
+    return shapes
+
+
+def line_of_sight(scene: Scene, a: FloatArray, points: FloatArray, shapes: list | None = None) -> BoolArray:
+    """(k,) True where the segment from ``a`` (2,) to each of ``points`` (k, 2) crosses no
+    static obstacle of ``scene`` (touching one's boundary hides too)."""
+    import shapely
+
+    pts = np.asarray(points, dtype=float).reshape(-1, 2)
+    shapes = _obstacle_shapes(scene) if shapes is None else shapes
+    if not shapes or len(pts) == 0:
+        return np.ones(len(pts), dtype=bool)
+    union = shapely.union_all(shapes)
+    a = np.asarray(a, dtype=float)[:2]
+    lines = shapely.linestrings(np.stack([np.broadcast_to(a, pts.shape), pts], axis=1))
+    return ~shapely.intersects(lines, union)
+
+
+class Tracker:
+    """Tracks of observed people from detections without identity.
+
+    Parameters
+    ----------
+    noise : float
+        The detections' noise (m); it sets the filter's gains and widens the gate.
+    coast : float
+        Seconds an unseen track is still reported.
+    gate : float
+        Association gate (m) on top of ``4 * noise``.
+
+    Notes
+    -----
+    Alpha-beta filter per track: prediction ``p + v dt``; residual ``r = z - p_pred``;
+    ``p = p_pred + alpha r``, ``v = v + beta r / dt``. Without noise alpha = beta = 1,
+    which makes ``v`` exactly ``(z - z_prev) / dt``, the velocity from positions observed
+    one period apart; with noise alpha = 0.5, beta = 0.2 (a steady-state compromise
+    between lag and noise for people walking at up to ~1.5 m/s, 0.25 s apart).
+    """
+
+    def __init__(self, noise: float = 0.0, coast: float = 1.0, gate: float = 1.0):
+        self.alpha, self.beta = (1.0, 1.0) if noise == 0 else (0.5, 0.2)
+        self.coast = coast
+        self.gate = gate + 4 * noise
+        self.pos = np.zeros((0, 2))
+        self.vel = np.zeros((0, 2))
+        self.radius = np.zeros(0)
+        self.seen = np.zeros(0)  # time each track was last seen
+        self.hits = np.zeros(0, dtype=np.int64)
+        self.t: float | None = None
+
+    def update(self, t: float, detections: FloatArray) -> FloatArray:
+        """Take the detections ``[x, y, radius]`` (k, 3) made at ``t``; return the tracks
+        as observations ``[x, y, vx, vy, radius]`` (m, 5) (a new track: velocity 0).
+
+        Returns
+        -------
+        (m, 5) float
+        """
+        from scipy.optimize import linear_sum_assignment
+
+        det = np.asarray(detections, dtype=float).reshape(-1, 3)
+        dt = 0.0 if self.t is None else t - self.t
+        self.t = t
+        pred = self.pos + self.vel * dt
+        matched_t = np.zeros(len(pred), dtype=bool)
+        matched_d = np.zeros(len(det), dtype=bool)
+        if len(pred) and len(det):
+            cost = np.hypot(*(pred[:, None, :] - det[None, :, :2]).transpose(2, 0, 1))
+            big = 1e6
+            rows, cols = linear_sum_assignment(np.where(cost <= self.gate, cost, big))
+            for i, j in zip(rows.tolist(), cols.tolist(), strict=True):
+                if cost[i, j] > self.gate:
+                    continue
+                r = det[j, :2] - pred[i]
+                self.pos[i] = pred[i] + self.alpha * r
+                if dt > 0:
+                    # a second sighting: the first difference, then the filter
+                    beta = 1.0 if self.hits[i] == 1 else self.beta
+                    self.vel[i] = self.vel[i] + beta * r / dt
+                self.radius[i] = det[j, 2]
+                self.seen[i] = t
+                self.hits[i] += 1
+                matched_t[i] = matched_d[j] = True
+        coasting = ~matched_t
+        self.pos[coasting] = pred[coasting]
+        keep = matched_t | (t - self.seen <= self.coast + 1e-9)
+        new = det[~matched_d]
+        self.pos = np.vstack([self.pos[keep], new[:, :2]])
+        self.vel = np.vstack([self.vel[keep], np.zeros((len(new), 2))])
+        self.radius = np.concatenate([self.radius[keep], new[:, 2]])
+        self.seen = np.concatenate([self.seen[keep], np.full(len(new), t)])
+        self.hits = np.concatenate([self.hits[keep], np.ones(len(new), dtype=np.int64)])
+        return np.column_stack([self.pos, self.vel, self.radius]).reshape(-1, 5)
+
+
+@dataclass
+class Sensor:
+    """The robot's view of the movers, one observation at a time.
+
+    Parameters
+    ----------
+    scene : Scene
+        For its static obstacles (occlusion) and robot (range).
+    options : SensorOptions, optional
+
+    Notes
+    -----
+    Call :meth:`observe` once per period, in time order: the tracker (estimated
+    velocities) remembers what it saw before.
+    """
+
+    scene: Scene
+    options: SensorOptions = field(default_factory=SensorOptions)
+
+    def __post_init__(self):
+        o = self.options
+        self._rng = create_rng(o.seed)
+        self._tracker = Tracker(o.noise, o.coast, o.gate)
+        self._shapes = _obstacle_shapes(self.scene) if o.occlusion else []
+
+    def visible(self, pose: FloatArray, heading: float, truth: FloatArray) -> BoolArray:
+        """(k,) which of the true discs ``[x, y, vx, vy, r]`` (k, 5) the robot at ``pose``
+        with ``heading`` (radians) sees (range, field of view, occlusion)."""
+        from ..collision.geometry import mover_distance
+
+        o = self.options
+        truth = np.asarray(truth, dtype=float).reshape(-1, 5)
+        pose = np.asarray(pose, dtype=float)
+        seen = np.ones(len(truth), dtype=bool)
+        if not len(truth):
+            return seen
+        if math.isfinite(o.sense):
+            gap = mover_distance(self.scene.robot, pose[None, :], "disc", truth[:, 4], (0.0, 0.0), truth[:, :2])
+            seen &= np.asarray(gap).reshape(-1) <= o.sense
+        if o.fov < 360:
+            seen &= in_fov(pose[:2], heading, truth[:, :2], o.fov)
+        if o.occlusion and seen.any():
+            idx = np.nonzero(seen)[0]
+            seen[idx] = line_of_sight(self.scene, pose[:2], truth[idx, :2], self._shapes)
+        return seen
+
+    def observe(self, t: float, pose: FloatArray, heading: float, truth: FloatArray) -> FloatArray:
+        """What the robot observes at ``t`` of the movers whose true state is ``truth``.
+
+        Parameters
+        ----------
+        t : float
+        pose : (d,) float
+        heading : float
+            Direction (radians) the field of view is centred on.
+        truth : (k, 5) float
+            ``[x, y, vx, vy, radius]`` of every mover present.
+
+        Returns
+        -------
+        (m, 5) float
+            ``[x, y, vx, vy, radius]`` per observed (or tracked) person.
+        """
+        o = self.options
+        truth = np.asarray(truth, dtype=float).reshape(-1, 5)
+        seen = truth[self.visible(pose, heading, truth)]
+        if o.noise > 0 and len(seen):
+            seen = seen.copy()
+            seen[:, :2] += self._rng.normal(0.0, o.noise, size=(len(seen), 2))
+        if o.velocity == "exact":
+            return seen
+        return self._tracker.update(t, seen[:, [0, 1, 4]])

@@ -1,0 +1,165 @@
+"""A differential drive's simple motions: paths through via-points, timed rows, evasions.
+
+Every motion here is a sequence of turns in place and straight moves along the heading
+(CONTRACT section 6): the GA's refined path (:func:`turn_path`), the navigator's direct
+motion to the goal (:func:`drive_rows`) and its evasive candidates (:func:`evasions`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..poses import wrap_angle
+from ..settings import SPEED_SAFETY
+from ..typed import FloatArray
+
+__all__ = ["turn_path", "drive_rows", "evasions", "turn_free", "pick_turn", "SAME_HEADING"]
+
+#: A turn's sweep is certified in arcs of at most this (rad): ``motion_free`` turns along
+#: the shorter arc.
+_ARC = 0.5 * math.pi
+
+#: Headings closer than this (rad) are the same.
+SAME_HEADING = 1e-9
+
+
+def _xy_pose(robot, x: float, y: float, h: float) -> list:
+    """A pose for the static geometry: [x, y] for a disc, [x, y, h] otherwise."""
+    return [x, y] if robot.shape == "disc" else [x, y, h]
+
+
+def turn_free(geometry, x: float, y: float, h: float, dh: float) -> bool:
+    """Whether turning in place at (x, y) from ``h`` by ``dh`` (signed, any size) is free,
+    the sweep certified (a disc: the pose alone)."""
+    robot = geometry.robot
+    if robot.shape == "disc":
+        return geometry.clearance1([x, y]) >= 0
+    n = max(1, int(math.ceil(abs(dh) / _ARC)))
+    prev = [x, y, wrap_angle(h)]
+    for i in range(1, n + 1):
+        cur = [x, y, wrap_angle(h + dh * i / n)]
+        if not geometry.motion_free(prev, cur):
+            return False
+        prev = cur
+    return True
+
+
+def pick_turn(geometry, x: float, y: float, h1: float, h2: float) -> float | None:
+    """The signed turn from ``h1`` to ``h2``: the shorter arc when its sweep is free, else
+    the longer one, else None (0 when the headings are the same)."""
+    d = float(wrap_angle(h2 - h1))
+    if abs(d) <= SAME_HEADING:
+        return 0.0
+    for dh in (d, d - math.copysign(2 * math.pi, d)):
+        if turn_free(geometry, x, y, h1, dh):
+            return dh
+    return None
+
+
+def _free(geometry, a, b) -> bool:
+    """Static certification of a -> b (a disc's body ignores the heading)."""
+    if geometry.robot.shape == "disc":
+        return geometry.motion_free(list(a[:2]), list(b[:2]))
+    return geometry.motion_free(list(a), list(b))
+
+
+def turn_path(start: FloatArray, via: FloatArray, goal: FloatArray, reverse: bool = False) -> FloatArray:
+    """A unicycle path through via-points: straight segments joined by turns in place.
+
+    The robot turns in place at the start towards the first via-point, drives there, turns
+    towards the next one, ..., drives to the goal's position and turns to the goal's
+    heading; every turn takes the shorter arc. (The GA moves via-points; this is the path a
+    differential drive follows through them.)
+
+    Parameters
+    ----------
+    start, goal : (3,) float
+        Poses ``[x, y, heading]``.
+    via : (m, 2) float
+    reverse : bool
+        Unused for now: the path drives forwards (allowed either way).
+
+    Returns
+    -------
+    (n, 3) float
+        Poses; consecutive ones differ only in heading (a turn) or only in position along
+        their common heading (a straight move). Repeated poses are dropped.
+    """
+    pts = np.vstack([np.asarray(start, dtype=float)[None, :2], np.asarray(via, dtype=float).reshape(-1, 2),
+                     np.asarray(goal, dtype=float)[None, :2]])  # fmt: skip
+    keep = np.ones(len(pts), dtype=bool)
+    keep[1:] = np.hypot(*np.diff(pts, axis=0).T) > 1e-12
+    pts = pts[keep]
+    out = [np.asarray(start, dtype=float)]
+    h = float(start[2])
+    for a, b in zip(pts[:-1], pts[1:], strict=True):
+        hn = math.atan2(b[1] - a[1], b[0] - a[0])
+        if abs(wrap_angle(hn - h)) > SAME_HEADING:
+            out.append(np.array([a[0], a[1], h + wrap_angle(hn - h)]))
+        h = out[-1][2] if abs(wrap_angle(hn - h)) > SAME_HEADING else h
+        out.append(np.array([b[0], b[1], h]))
+    g = np.asarray(goal, dtype=float)
+    if abs(wrap_angle(g[2] - h)) > SAME_HEADING:
+        out.append(np.array([g[0], g[1], h + wrap_angle(g[2] - h)]))
+    path = np.array(out)
+    path[-1, :2] = g[:2]
+    path[:, 2] = wrap_angle(path[:, 2])
+    return path
+
+
+def drive_rows(geometry, t: float, pose, via, goal, vplan: float) -> FloatArray | None:
+    """Rows ``[t, x, y, heading]`` of driving from ``pose`` through ``via`` to ``goal`` at
+    ``vplan``, turning in place at the robot's full turning rate (:func:`turn_path`), each
+    piece statically certified; None when one is not free."""
+    robot = geometry.robot
+    rate = robot.turn_rate * SPEED_SAFETY
+    path = turn_path(pose, np.asarray(via, dtype=float).reshape(-1, 2), goal)
+    rows = [[t, *pose]]
+    for a, b in zip(path[:-1], path[1:], strict=True):
+        if not _free(geometry, a, b):
+            return None
+        dh = abs(wrap_angle(b[2] - a[2]))
+        rows.append([rows[-1][0] + float(np.hypot(*(b[:2] - a[:2]))) / vplan + dh / rate, *b])
+    rows[-1][1:] = list(goal)
+    return np.array(rows, dtype=float)
+
+
+def evasions(geometry, t: float, pose, T: float, cover: float, headings: int, vplan: float) -> list:
+    """Evasive candidates of a differential drive: standing still, or turning in place to
+    one of ``headings`` headings and then driving straight along it (forwards; backwards too
+    with ``robot.reverse``) at full or half speed for what is left of ``T`` (or half, or a
+    quarter of it, whichever is statically free), then standing until ``cover``.
+
+    Returns
+    -------
+    list of (r, 4) float
+        Rows of each candidate, from ``[t, *pose]``; the first stands still.
+    """
+    robot = geometry.robot
+    rate = robot.turn_rate * SPEED_SAFETY
+    pose = np.asarray(pose, dtype=float)
+    out = [np.array([[t, *pose], [t + max(T, cover), *pose]])]
+    for h in (pose[2] + np.arange(headings) * (2 * math.pi / headings)).tolist():
+        dh = float(wrap_angle(h - pose[2]))
+        t_turn = abs(dh) / rate
+        turned = np.array([pose[0], pose[1], wrap_angle(pose[2] + dh)])
+        left = T - t_turn
+        if left <= 0 or (t_turn > 0 and not _free(geometry, pose, turned)):
+            continue
+        for sign in (1.0, -1.0) if robot.reverse else (1.0,):
+            for speed in (1.0, 0.5):
+                for frac in (1.0, 0.5, 0.25):
+                    move = left * frac
+                    end = turned.copy()
+                    end[:2] += sign * speed * vplan * move * np.array([math.cos(turned[2]), math.sin(turned[2])])
+                    if geometry.bounds_clearance(end[None])[0] < 0 or not _free(geometry, turned, end):
+                        continue
+                    rows = [[t, *pose]] + ([[t + t_turn, *turned]] if t_turn > 0 else [])
+                    rows.append([t + t_turn + move, *end])
+                    if cover > t_turn + move:
+                        rows.append([t + cover, *end])
+                    out.append(np.array(rows, dtype=float))
+                    break
+    return out

@@ -1,0 +1,798 @@
+"""The query API: scene + roadmap + (start, goal, t0) -> a timed trajectory.
+
+The pipeline runs one way: time-space search on the roadmap
+(:mod:`gfuzzy.timespace.timespace`), then optionally GA refinement of the corridor
+(:mod:`gfuzzy.ga`) and the fuzzy speed layer (:mod:`gfuzzy.fuzzy.fuzzy`), each re-timed among
+the movers by a path-velocity search (:mod:`gfuzzy.planner.retime`). A later stage that cannot
+produce a safe answer leaves the earlier answer in place.
+"""
+
+from __future__ import annotations
+
+import copy
+import logging
+import math
+import time
+from dataclasses import dataclass, field, fields, replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..collision.geometry import StaticGeometry, metric_distance
+from ..errors import InputError, LimitError, check_number
+from ..poses import wrap_angle
+from ..roadmap.roadmap import Roadmap
+from ..scene.scene import Query, Scene
+from ..settings import MAX_MOVER_SAMPLES, SPEED_SAFETY
+from ..status import Status
+from ..timespace.movers import MoverField
+from ..timespace.roadgraph import connect, roadmap_metres, spanner_split
+from ..timespace.spacetime import IntervalStore, SearchResult, SpaceTimeGraph
+from ..timespace.timespace import sipp, timed_rows
+from ..trajectory import Trajectory, TrajectoryFile
+from ..typed import FloatArray
+
+if TYPE_CHECKING:  # the stages' modules load only when a stage runs
+    from ..fuzzy.fuzzy import RuleBase
+    from ..ga import GAOptions
+    from .stages import RefineReport, SpeedReport
+
+__all__ = [
+    "Status",
+    "PlanOptions",
+    "PlanResult",
+    "Planner",
+    "plan",
+    "query_problem",
+    "check_pose",
+    "settle_time",
+    "search_function",
+    "BACKENDS",
+]
+
+log = logging.getLogger(__name__)
+
+#: Implementations of the search (PlanOptions.backend).
+BACKENDS = ("compiled", "reference")
+
+
+@dataclass(frozen=True)
+class PlanOptions:
+    """Settings of a query.
+
+    Attributes
+    ----------
+    dt : float
+        Time step of the search (the paper's 0.07).
+    horizon : float or None
+        Longest trajectory considered, in seconds after t0 (a query's ``hold`` comes on
+        top); None picks ``60 + 10 * roadmap distance / vmax``, plus the time until the
+        movers' behaviour stops changing (:func:`settle_time`).
+    time_limit : float
+        Planning-time budget in seconds; past it the answer is ``timeout``.
+    connect_k : int
+        How many nearest roadmap vertices start and goal try to connect to.
+    refine : bool
+        Apply the GA refinement (:mod:`gfuzzy.ga`).
+    speed_layer : bool
+        Apply the fuzzy speed layer (:mod:`gfuzzy.fuzzy.fuzzy`).
+    seed : int
+        Seed of the random steps after the search (GA, rule learning).
+    ga : object or None
+        ``gfuzzy.ga.GAOptions`` for the refinement (None: defaults).
+    rules : object or None
+        ``gfuzzy.fuzzy.fuzzy.RuleBase`` of the speed layer (None: the expert rules).
+    refine_max_slowdown : float
+        The refined answer is kept only if its duration is at most this fraction longer
+        than the unrefined one (it is shorter and smoother, but may have to wait more).
+    weight : float
+        Heuristic weight of the search: 1 finds the earliest arrival the graph and the
+        time step allow; w > 1 (weighted A*) expands far fewer states and arrives at most
+        w times later than that.
+    stretch : float
+        The search runs on the roadmap's spanner of this stretch (:meth:`Roadmap.spanner`):
+        every static route is at most this much longer than on the whole roadmap, with
+        about half the edges to search. 1 searches the whole roadmap.
+    backend : str
+        ``"compiled"`` runs the search loop in machine code (:mod:`gfuzzy.timespace.search_kernel`,
+        numba); ``"reference"`` runs the pure-Python definition
+        (:func:`gfuzzy.timespace.timespace.sipp`). Both give the same answers.
+    """
+
+    dt: float = 0.07
+    horizon: float | None = None
+    time_limit: float = 60.0
+    connect_k: int = 10
+    refine: bool = False
+    speed_layer: bool = False
+    seed: int = 0
+    ga: GAOptions | None = None
+    rules: RuleBase | None = None
+    refine_max_slowdown: float = 0.1
+    weight: float = 1.0
+    stretch: float = 1.05
+    backend: str = "compiled"
+
+    def __post_init__(self):
+        check_number("dt", self.dt)
+        if self.horizon is not None:
+            check_number("horizon", self.horizon, finite=False)
+        check_number("time_limit", self.time_limit, finite=False)
+        check_number("weight", self.weight, 1.0, strict=False)
+        check_number("stretch", self.stretch, 1.0, strict=False)
+        if self.backend not in BACKENDS:
+            raise InputError(f"backend must be one of {', '.join(BACKENDS)}, got {self.backend!r}")
+
+
+@dataclass(frozen=True)
+class PlanStats:
+    """What one query's planning did; a field is None where that step did not run.
+
+    Attributes
+    ----------
+    expansions, states : int or None
+        States the search expanded and generated.
+    graph_nodes : int or None
+        Points of the space-time graph searched.
+    roadmap_vertices : int or None
+    mover_evaluations : int or None
+        (point, step) pairs whose safety from the movers was computed.
+    horizon : float or None
+        The planning horizon (s after t0) of the last search round.
+    hold : float or None
+        The query's ``hold``, when it has one.
+    search_seconds : float or None
+        Seconds until the search's answer (before the stages).
+    nodes : int or None
+        Graph size when start and goal are not connected (no search ran).
+    amax_honoured : bool or None
+        For a robot with ``amax``: whether the answer keeps it (only the speed layer does).
+    amax_note : str or None
+        Why ``amax`` is not honoured.
+    """
+
+    expansions: int | None = None
+    states: int | None = None
+    graph_nodes: int | None = None
+    roadmap_vertices: int | None = None
+    mover_evaluations: int | None = None
+    horizon: float | None = None
+    hold: float | None = None
+    search_seconds: float | None = None
+    nodes: int | None = None
+    amax_honoured: bool | None = None
+    amax_note: str | None = None
+
+    def to_dict(self) -> dict:
+        """The trajectory file's ``stats`` form: the fields that are set, in this order."""
+        return {f.name: getattr(self, f.name) for f in fields(self) if getattr(self, f.name) is not None}
+
+
+@dataclass(frozen=True)
+class PlanResult:
+    """Answer to a query.
+
+    Attributes
+    ----------
+    status : Status
+    trajectory : Trajectory or None
+        Only for ``Status.SOLVED``.
+    message : str
+        Why, when not solved.
+    roadmap_distance : float
+        Shortest start-to-goal distance on the roadmap (inf when not connected).
+    planning_seconds : float
+    stats : PlanStats
+        What the search did (expansions, states, graph size, horizon) and whether the
+        answer honours ``robot.amax``.
+    refine_report, speed_report : gfuzzy.planner.stages.RefineReport / SpeedReport or None
+        What each stage did, when it ran.
+    """
+
+    status: Status
+    trajectory: Trajectory | None
+    message: str = ""
+    roadmap_distance: float = math.inf
+    planning_seconds: float = 0.0
+    vmax: float = 1.0
+    stats: PlanStats = field(default_factory=lambda: PlanStats())
+    refine_report: RefineReport | None = None
+    speed_report: SpeedReport | None = None
+
+    @property
+    def solved(self) -> bool:
+        return self.status is Status.SOLVED
+
+    @property
+    def duration(self) -> float | None:
+        return None if self.trajectory is None else self.trajectory.duration
+
+    @property
+    def delay_factor(self) -> float | None:
+        if self.trajectory is None:
+            return None
+        return self.trajectory.delay_factor(self.vmax, self.roadmap_distance)
+
+    @property
+    def amax_honoured(self) -> bool | None:
+        """Whether the answer keeps the robot's ``amax`` (only the speed layer does); None
+        when the robot has no ``amax`` or the query is not solved. ``stats.amax_note``
+        says why not."""
+        return self.stats.amax_honoured
+
+    def to_file(self, scene: str, query: str) -> TrajectoryFile:
+        """The contract's trajectory file for this answer.
+
+        Beyond the contract's keys it holds ``stats`` and, for a robot with ``amax``,
+        ``amax_honoured`` (and ``amax_note`` saying why not when it is false).
+        """
+        rd = self.roadmap_distance if math.isfinite(self.roadmap_distance) else None
+        stats = self.stats.to_dict()
+        extra = {key: stats.pop(key) for key in ("amax_honoured", "amax_note") if key in stats}
+        for key, report in (("refine", self.refine_report), ("speed_layer", self.speed_report)):
+            if report is not None:
+                stats[key] = report.to_dict()
+        return TrajectoryFile(
+            scene=scene,
+            query=query,
+            status=self.status.value,
+            message=self.message,
+            duration=self.duration,
+            roadmap_distance=rd,
+            delay_factor=self.delay_factor,
+            planning_seconds=round(self.planning_seconds, 6),
+            waypoints=None if self.trajectory is None else self.trajectory.waypoints,
+            extra={"stats": _jsonable(stats), **extra},
+        )
+
+
+def _amax_stats(robot, stats: PlanStats, layer: SpeedReport | None) -> PlanStats:
+    """``stats`` plus whether a solved answer honours ``robot.amax`` (when the robot has one).
+
+    Only the speed layer (its report: ``layer``) limits acceleration; the search's and the
+    GA's answers start, stop and turn at full speed. A user who set ``amax`` is told when it
+    was not applied, and why.
+    """
+    if robot.amax is None:
+        return stats
+    honoured = bool(layer is not None and layer.applied)
+    note = None
+    if layer is None:
+        note = (
+            f"robot.amax {robot.amax:g} is not honoured: only the speed layer bounds "
+            "acceleration, and it is off (PlanOptions.speed_layer, --speed-layer)"
+        )
+    elif not layer.applied:
+        note = (
+            f"robot.amax {robot.amax:g} is not honoured: the speed layer did not apply "
+            f"({layer.reason or 'no reason given'})"
+        )
+    if note:
+        log.info("%s", note)
+    return replace(stats, amax_honoured=honoured, amax_note=note)
+
+
+def _jsonable(obj):
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, (np.floating, float)):
+        return float(obj)
+    if isinstance(obj, (np.integer, int)) and not isinstance(obj, bool):
+        return int(obj)
+    return obj
+
+
+class Planner:
+    """Answers queries on one scene and roadmap, sharing the collision model.
+
+    Parameters
+    ----------
+    scene : Scene
+    roadmap : Roadmap
+        Built for ``scene`` (see :meth:`Roadmap.check_scene`).
+    """
+
+    def __init__(self, scene: Scene, roadmap: Roadmap):
+        roadmap.check_scene(scene)
+        self.scene = scene
+        self.roadmap = roadmap
+        self.geometry = StaticGeometry(scene)
+        self.robot = scene.robot
+        self._fs: list = []  # the disc robot's free space, computed on the first no_path
+
+    # ---------------------------------------------------------------- free space
+    def _free_space(self):
+        """The disc robot's free space (:mod:`gfuzzy.roadmap.freespace`), computed once; None for
+        other robots."""
+        if not self._fs:
+            from ..roadmap.freespace import free_space
+
+            self._fs.append(free_space(self.scene))
+        return self._fs[0]
+
+    def _not_joined(self, start, goal, prepared: bool, linked: bool) -> tuple[Planner | None, str]:
+        """The roadmap does not join start and goal: a planner to try again (see
+        :meth:`_through_free_space`), or None and the ``no_path`` message."""
+        if linked:
+            return None, (
+                "start and goal share a region of the free space, but no certified path through "
+                "it joins them on the roadmap"
+            )
+        if prepared:  # a kept goal graph (replanning) is not extended
+            return None, "start and goal are not connected on the roadmap (sealed off, or the roadmap is too sparse)"
+        return self._through_free_space(start, goal)
+
+    def _through_free_space(self, start, goal) -> tuple[Planner | None, str]:
+        """When the roadmap does not join ``start`` and ``goal``: a planner on the roadmap
+        extended through the free space, or None and the reason no way exists.
+
+        The start and the goal are linked to the nearest vertex of their free-space region
+        by certified paths, and the roadmap's components sharing a region are joined
+        (:func:`gfuzzy.roadmap.freespace.repair`: an old roadmap built without it is repaired here).
+        """
+        from ..roadmap.freespace import link_pose, repair, separation
+
+        fs = self._free_space()
+        if fs is None:
+            return None, (
+                "start and goal are not connected on the roadmap (sealed off, or the roadmap missed "
+                "a passage: more vertices, -n, may find it)"
+            )
+        sep = separation(self.scene, fs, start, goal)
+        if sep is not None:
+            return None, sep.message()
+        rm = self.roadmap
+        verts = [np.asarray(rm.vertices, dtype=float)]
+        edges = [np.asarray(rm.edges, dtype=np.int64).reshape(-1, 2)]
+        n = len(rm.vertices)
+        for pose in (start, goal):
+            chain = link_pose(self.geometry, fs, pose, rm.vertices)
+            if chain is None:
+                continue
+            inner = [np.asarray(p, dtype=float) for p in chain[1:-1]]
+            if not inner:  # keep the pose itself out of the roadmap: a point on the way
+                inner = [0.5 * (np.asarray(chain[0], dtype=float) + np.asarray(chain[-1], dtype=float))]
+            ids = list(range(n, n + len(inner)))
+            verts.append(np.asarray(inner).reshape(-1, 2))
+            n += len(inner)
+            target = int(np.nonzero(np.all(rm.vertices == np.asarray(chain[-1]), axis=1))[0][0])
+            ids.append(target)
+            edges.append(np.asarray([(min(a, b), max(a, b)) for a, b in zip(ids[:-1], ids[1:], strict=True)]))
+        joined = repair(self.geometry, fs, np.vstack(verts), np.vstack(edges))
+        lengths = metric_distance(
+            joined.vertices[joined.edges[:, 0]], joined.vertices[joined.edges[:, 1]], self.robot.circumradius
+        )
+        planner = copy.copy(self)
+        planner.roadmap = replace(
+            rm, vertices=joined.vertices, edges=joined.edges, lengths=np.asarray(lengths, dtype=float), _spanners={}
+        )
+        log.info("query linked through the free space: %d vertices added", len(joined.vertices) - len(rm.vertices))
+        return planner, ""
+
+    # ---------------------------------------------------------------- graph
+    def _connect(self, pose: FloatArray, k: int, clearance: float | None = None) -> list[tuple[int, float]]:
+        """Certified straight connections from ``pose`` to its nearest roadmap vertices
+        (:func:`gfuzzy.timespace.roadgraph.connect`; ``clearance``: the pose's, when known)."""
+        return connect(self.geometry, self.roadmap, pose, k, clearance)
+
+    def _graph(self, start, goal, dt, vmax, connect_k: int = 10, stretch: float = 1.0):
+        """Roadmap + start + goal, every edge split into one-step pieces; static distances.
+
+        The search runs on the roadmap's ``stretch`` spanner; the roadmap distance returned
+        (the contract's, for the delay factor) is measured on the whole roadmap. The
+        spanner's cut is kept on the roadmap (:mod:`gfuzzy.timespace.roadgraph`); only the start's
+        and the goal's connections are cut per query.
+        """
+        rm = self.roadmap
+        nv = len(rm.vertices)
+        s_id, g_id = nv, nv + 1
+        c_s, c_g = self.geometry.clearance1(start), self.geometry.clearance1(goal)
+        extra_e, extra_w = [], []
+        for pose, node, c in ((start, s_id, c_s), (goal, g_id, c_g)):
+            for v, w in self._connect(pose, connect_k, c):
+                extra_e.append((node, v))
+                extra_w.append(w)
+        direct = float(metric_distance(start, goal, self.robot.circumradius))
+        if self.geometry.motion_free(start, goal, ca=c_s, cb=c_g):
+            extra_e.append((s_id, g_id))
+            extra_w.append(direct)
+        extra_e = np.array(extra_e, dtype=np.int64).reshape(-1, 2)
+        extra_w = np.array(extra_w, dtype=float)
+        # interior points of the spanner's edges, then of the connections (ids from N0)
+        base = spanner_split(rm, vmax * dt, stretch)
+        part = base.splice(extra_e, extra_w, np.vstack([start, goal]))
+        n = base.n
+
+        # static shortest distances (Dijkstra on the roadmap): in metres for the roadmap
+        # distance, in steps (edge e costs k[e]) for the heuristic, which is exact for the
+        # static graph and so the tightest admissible one; the vertex graphs are kept, the
+        # connections added per query
+        def sp(graph, weights, indices):
+            out = graph.with_edges(extra_e, weights).distances(indices)
+            return np.where(out < 1e-200, 0.0, out)
+
+        dist = sp(roadmap_metres(rm), extra_w, g_id)
+        hops = sp(base.steps, part.k.astype(float), [g_id, s_id])
+        hop_g, hop_s = np.rint(hops[0]), np.rint(hops[1])
+
+        def along(hop):  # steps at every point: its vertices', then each edge's interior
+            out = np.empty(len(part.poses))
+            out[:n] = hop
+            out[n : base.N0] = np.minimum(hop[base.a] + base.j, hop[base.b] + base.ke - base.j)
+            ke = np.repeat(part.k, part.k - 1)
+            out[base.N0 :] = np.minimum(hop[part.a] + part.j, hop[part.b] + ke - part.j)
+            return out
+
+        groups = np.concatenate([n + base.offs, base.N0 + part.offs[1:]])
+        graph = SpaceTimeGraph(
+            part.poses, part.indptr, part.neighbors, along(hop_g), groups=groups, from_start=along(hop_s)
+        )
+        return graph, s_id, g_id, float(dist[s_id])
+
+    def _query_graph(self, start, goal, opts: PlanOptions, prepared=None):
+        """(graph, start id, goal id, roadmap distance) of a query (headings wrapped): the
+        roadmap's cut with the ends connected (:meth:`_graph`), or the prepared goal's graph
+        with the start spliced in (``prepare`` / ``plan_from``, and the navigator); for a
+        differential drive the graph of heading copies (:mod:`gfuzzy.timespace.unicycle`)."""
+        vplan = self.robot.vmax * SPEED_SAFETY
+        if self.robot.unicycle:
+            from ..timespace.unicycle import build_graph
+
+            if prepared is None:
+                ug = build_graph(self, start, goal, opts.dt, vplan, opts.connect_k, opts.stretch)
+            else:
+                ug = prepared.splice(self, start)
+            return ug.graph, ug.s_id, ug.g_id, ug.roadmap_distance
+        if prepared is None:
+            return self._graph(start, goal, opts.dt, vplan, opts.connect_k, opts.stretch)
+        return prepared.splice(self, start)
+
+    # ---------------------------------------------------------------- query
+    def prepare(self, goal, options: PlanOptions | None = None):
+        """Keep what replanning to ``goal`` reuses: the split roadmap graph and the static
+        distances to the goal (:mod:`gfuzzy.planner.prepared`).
+
+        Parameters
+        ----------
+        goal : (d,) float
+        options : PlanOptions, optional
+            Fixed for every :meth:`plan_from` on the result (dt, stretch, connect_k, backend...).
+
+        Returns
+        -------
+        gfuzzy.planner.prepared.PreparedGoal
+
+        Raises
+        ------
+        InputError
+            A malformed goal (as :meth:`plan`).
+        """
+        from .prepared import prepare_goal
+
+        opts = options or PlanOptions()
+        goal = check_pose(goal, self.robot.dof, "goal")
+        if self.robot.unicycle:  # the copies' graph is kept on the roadmap; the rest is per query
+            from ..timespace.unicycle import UnicyclePrepared
+            from ..timespace.unicycle import prepare_goal as prepare_unicycle
+
+            wrapped = goal.copy()
+            wrapped[2] = wrap_angle(wrapped[2])
+            kept = prepare_unicycle(self, wrapped, opts.dt, self.robot.vmax * SPEED_SAFETY, opts.connect_k, opts.stretch)
+            return UnicyclePrepared(goal, opts, kept)
+        return prepare_goal(self, goal, opts)
+
+    def plan_from(self, prepared, start, t0: float = 0.0, movers=None, hold: float = 0.0) -> PlanResult:
+        """Answer a query to a prepared goal from ``start`` at ``t0``: :meth:`plan` without
+        rebuilding the graph (only the start is spliced in; one Dijkstra on the vertices), same arrival.
+
+        Parameters
+        ----------
+        prepared : gfuzzy.planner.prepared.PreparedGoal
+            From :meth:`prepare` on this planner.
+        start : (d,) float
+            Any free pose (mid-edge poses connect to their nearest vertices).
+        t0 : float
+        movers : sequence of gfuzzy.scene.scene.Mover, optional
+            The movers to avoid this time (e.g. predicted from observations); None: the
+            scene's own.
+        hold : float
+
+        Returns
+        -------
+        PlanResult
+            As :meth:`plan`; durations equal a fresh ``plan(start, goal, t0)``'s.
+        """
+        planner = self
+        if movers is not None:
+            planner = copy.copy(self)
+            planner.scene = replace(self.scene, movers=tuple(movers))
+        return planner.plan(start, prepared.goal_raw, t0, prepared.options, hold=hold, _prepared=prepared)
+
+    def plan(
+        self, start, goal, t0: float = 0.0, options: PlanOptions | None = None, hold: float = 0.0,
+        _prepared=None,
+        _linked: bool = False,
+    ) -> PlanResult:
+        """Answer one query.
+
+        Parameters
+        ----------
+        start, goal : (d,) float
+            Poses ``[x, y]`` (disc robot) or ``[x, y, heading]`` (box robot, or any
+            unicycle: its answers are waits, turns in place and straight moves along the
+            heading, :mod:`gfuzzy.timespace.unicycle`).
+        t0 : float
+            Departure time.
+        options : PlanOptions, optional
+        hold : float
+            Seconds the robot then parks at the goal (a query's ``hold``): the goal pose
+            keeps the guarantees from the arrival until ``hold`` after it; the answer
+            arrives later if it must.
+
+        Returns
+        -------
+        PlanResult
+            ``invalid_query`` when a well-formed start or goal collide with a static obstacle (or lie
+            closer than ``robot.clearance`` to one), lie out of bounds, or the start is
+            closer than ``robot.mover_clearance`` to a mover at t0 (overlaps it, when 0);
+            ``no_path`` when no safe trajectory exists on the roadmap within the horizon
+            (the message says when the horizon cut the search); ``timeout`` when the
+            planning budget ran out.
+
+        Raises
+        ------
+        InputError
+            A malformed request (bad input, as the command line's exit status 2): a start
+            or goal that is not ``dof`` finite numbers, or a non-finite ``t0`` or ``hold``.
+        """
+        opts = options or PlanOptions()
+        hold = _check_hold(hold)
+        hold_steps = int(math.ceil(hold / opts.dt - 1e-9)) if hold > 0 else 0
+        t_begin = time.perf_counter()
+        deadline = t_begin + opts.time_limit
+        robot = self.robot
+        vmax = robot.vmax
+        start = check_pose(start, robot.dof, "start")
+        goal = check_pose(goal, robot.dof, "goal")
+        t0 = _check_t0(t0)
+
+        def answer(status, message="", traj=None, rd=math.inf, stats=None):
+            return PlanResult(Status(status), traj, message, rd, time.perf_counter() - t_begin, vmax, stats or PlanStats())
+
+        problem = query_problem(self.geometry, start, goal)
+        if problem:
+            return answer(Status.INVALID_QUERY, problem)
+        ends = start.copy(), goal.copy()  # the rows at the ends repeat them exactly
+        if robot.dof == 3:
+            start[2], goal[2] = wrap_angle(start[2]), wrap_angle(goal[2])
+        graph, s_id, g_id, rd = self._query_graph(start, goal, opts, _prepared)
+        if not math.isfinite(rd):
+            linked, message = self._not_joined(start, goal, _prepared is not None, _linked)
+            if linked is not None:
+                return linked.plan(ends[0], ends[1], t0, options, hold=hold, _linked=True)
+            return answer(Status.NO_PATH, message, stats=PlanStats(nodes=len(graph.poses)))
+        max_steps = self._max_steps(opts, rd, t0, hold_steps)
+        run = self._search_rounds(graph, s_id, g_id, start, t0, opts, hold_steps, max_steps, deadline)
+        if run.problem:
+            return answer(Status.INVALID_QUERY, run.problem, rd=rd)
+        res, horizon = run.result, run.horizon
+        stats = PlanStats(
+            expansions=run.expansions,
+            states=res.states,
+            graph_nodes=len(graph.poses),
+            roadmap_vertices=len(self.roadmap.vertices),
+            mover_evaluations=run.evaluations,
+            horizon=horizon,
+            hold=hold if hold_steps else None,
+        )
+        if res.status == Status.NO_PATH and res.horizon_hit:
+            res.message = (
+                f"no safe trajectory within the planning horizon of {horizon:g} s"
+                + (f" (+ the hold of {hold:g} s)" if hold_steps else "")
+                + "; the horizon cut the search: a longer one (--horizon, PlanOptions.horizon) may find one"
+            )
+        if res.status != Status.SOLVED:
+            return answer(res.status, res.message, rd=rd, stats=stats)
+        traj = Trajectory(timed_rows(res.nodes, res.steps, graph.poses, t0, opts.dt)[0], robot.circumradius)
+        stats = replace(stats, search_seconds=time.perf_counter() - t_begin)
+        result = answer(Status.SOLVED, "", traj, rd, stats=stats)
+        if opts.refine or opts.speed_layer:
+            result = self._staged(result, Query("stage", tuple(start), tuple(goal), t0, hold=hold), opts, t_begin)
+        # headings are wrapped inside; the first and last rows give the query's own numbers
+        wps = result.trajectory.waypoints.copy()
+        wps[0, 1:], wps[-1, 1:] = ends
+        return replace(result, trajectory=Trajectory(wps, robot.circumradius), stats=_amax_stats(robot, result.stats, result.speed_report))
+
+    def _staged(self, result: PlanResult, query: Query, opts: PlanOptions, t_begin: float) -> PlanResult:
+        """``result`` after the GA refinement and/or the speed layer (:mod:`gfuzzy.planner.stages`)."""
+        from .stages import StageContext, apply_stages
+
+        ctx = StageContext(self.scene, self.geometry)
+        staged = apply_stages(ctx, result.trajectory, query, opts, t_begin + opts.time_limit)
+        return replace(
+            result,
+            trajectory=staged.trajectory,
+            planning_seconds=time.perf_counter() - t_begin,
+            refine_report=staged.refine_report,
+            speed_report=staged.speed_report,
+        )
+
+    def _max_steps(self, opts: PlanOptions, rd: float, t0: float, hold_steps: int) -> int:
+        """The longest horizon searched, in steps (the parking's steps come on top)."""
+        if opts.horizon is None:
+            max_horizon = 60.0 + 10.0 * rd / self.robot.vmax + settle_time(self.scene, t0)
+            # never more than the movers can be sampled over (a default must not fail)
+            if self.scene.movers:
+                cap = (MAX_MOVER_SAMPLES // len(self.scene.movers) - 1 - hold_steps) * opts.dt
+                max_horizon = max(min(max_horizon, cap), opts.dt)
+        else:
+            max_horizon = opts.horizon
+        return int(math.ceil(max_horizon / opts.dt)) + hold_steps
+
+    def _start_problem(self, field_: MoverField, start: FloatArray, t0: float) -> str:
+        """Why the start cannot be searched from (on a mover, or within mover_clearance), or ""."""
+        hit = field_.collides_at(start, 0)
+        if hit is not None:
+            return f"start collides with mover {hit!r} at t0={t0:g}"
+        keep = self.robot.mover_clearance
+        hit = field_.collides_at(start, 0, keep) if keep > 0 else None
+        if hit is not None:
+            return f"start is closer than robot.mover_clearance={keep:g} to mover {hit!r} at t0={t0:g}"
+        return ""
+
+    def _search_rounds(self, graph, s_id, g_id, start, t0, opts, hold_steps, max_steps, deadline) -> _Rounds:
+        """The search, rerun with a doubled slack while the horizon cut it off."""
+        # Grow the horizon by doubling the slack above the static lower bound: safety is
+        # only computed for times a node can still matter at (from_start .. horizon - h),
+        # so a horizon close to the answer keeps that window, and the work, small.
+        h0 = float(graph.heuristic[s_id])
+        # First slack: with few movers the search dominates the cost and a second run
+        # would double it, so start generously; with many, the movers' safety dominates,
+        # it grows with the slack, and a rerun reuses it (IntervalStore): start tight.
+        slack = max(48.0, (0.35 if len(self.scene.movers) <= 10 else 0.15) * h0)
+        store = IntervalStore(graph)  # safety computed once, kept as the horizon grows
+        search = search_function(opts.backend)
+        expansions = evaluations = 0
+        while True:
+            steps = min(max_steps, int(math.ceil(h0 + slack)) + hold_steps)
+            horizon = (steps - hold_steps) * opts.dt
+            if len(self.scene.movers) * (steps + 1) > MAX_MOVER_SAMPLES:
+                raise LimitError(
+                    f"{len(self.scene.movers)} movers over {steps:,} time steps"
+                    + (f" (the hold's {hold_steps:,} included)" if hold_steps else "")
+                    + f" are too many to sample ({len(self.scene.movers) * (steps + 1):,} samples, at most "
+                    f"{MAX_MOVER_SAMPLES:,}); use a larger dt, a shorter horizon or hold"
+                )
+            field_ = MoverField(self.scene, t0, opts.dt, steps, self.robot.vmax)
+            field_.compiled = opts.backend == "compiled"
+            if store.H < 0:  # first round: a start on a mover is not a query to search
+                problem = self._start_problem(field_, start, t0)
+                if problem:
+                    return _Rounds(None, horizon, 0, 0, problem)
+            res = search(
+                graph, field_, s_id, g_id, deadline=deadline, weight=opts.weight, store=store, goal_hold=hold_steps
+            )
+            expansions += res.expansions
+            evaluations += field_.evaluations
+            if res.status != Status.NO_PATH or not res.horizon_hit or steps >= max_steps:
+                return _Rounds(res, horizon, expansions, evaluations)
+            slack *= 2.0
+
+
+@dataclass
+class _Rounds:
+    """What :meth:`Planner._search_rounds` found: the last search, or why none ran."""
+
+    result: SearchResult | None
+    horizon: float
+    expansions: int
+    evaluations: int
+    problem: str = ""
+
+
+def _check_hold(hold) -> float:
+    """A query's ``hold`` as a float (InputError when negative or not finite)."""
+    if isinstance(hold, bool) or not isinstance(hold, (int, float, np.number)) or not (
+        math.isfinite(hold) and hold >= 0
+    ):
+        raise InputError(f"hold must be a non-negative number, got {hold!r}")
+    return float(hold)
+
+
+def _check_t0(t0) -> float:
+    """A departure time as a float (InputError when not a finite number)."""
+    if isinstance(t0, bool) or not isinstance(t0, (int, float, np.number)) or not math.isfinite(t0):
+        raise InputError(f"t0: expected a finite number, got {t0!r}")
+    return float(t0)
+
+
+def search_function(backend: str):
+    """The search of ``backend``; numba loads only for the compiled one."""
+    if backend == "reference":
+        return sipp
+    from ..timespace.search_kernel import sipp_compiled
+
+    return sipp_compiled
+
+
+def check_pose(pose, dof: int, label: str) -> FloatArray:
+    """``pose`` as a (dof,) float array; InputError naming ``label`` when it is malformed.
+
+    A pose that is not ``dof`` finite numbers is bad input, like a bad scene file; a
+    well-formed pose that collides or lies out of bounds is a query answered
+    ``invalid_query`` (see :func:`query_problem`).
+    """
+    want = "[x, y] for a disc robot" if dof == 2 else "[x, y, heading] for a box robot or a unicycle"
+    try:
+        arr = np.asarray(pose, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{label}: expected {dof} finite numbers {want}, got {pose!r}") from None
+    if arr.ndim != 1 or arr.shape != (dof,):
+        got = f"{arr.size} numbers" if arr.ndim == 1 else f"shape {arr.shape}"
+        raise InputError(f"{label}: expected {dof} finite numbers {want}, got {got}")
+    if not np.all(np.isfinite(arr)):
+        raise InputError(f"{label}: expected {dof} finite numbers {want}, got {arr.tolist()}")
+    return arr.copy()
+
+
+def query_problem(geometry: StaticGeometry, start, goal) -> str:
+    """Why a query is ``invalid_query`` (start or goal malformed, out of bounds or in a
+    static obstacle), or "" when it is not. Needs no roadmap."""
+    dof = geometry.robot.dof
+    for label, pose in (("start", start), ("goal", goal)):
+        pose = np.asarray(pose, dtype=float).reshape(-1)
+        if pose.shape != (dof,) or not np.all(np.isfinite(pose)):
+            return f"{label} must be {dof} finite numbers"
+        if geometry.bounds_clearance(pose[None])[0] < 0:
+            return f"{label} {pose.tolist()} is out of bounds"
+        keep = geometry.robot.clearance
+        if keep > 0 and geometry.clearance1(pose) < 0:
+            if geometry.obstacle_clearance(pose) < 0:
+                return f"{label} {pose.tolist()} collides with a static obstacle"
+            return f"{label} {pose.tolist()} is closer than robot.clearance={keep:g} to a static obstacle"
+        if geometry.clearance1(pose) < 0:
+            return f"{label} {pose.tolist()} collides with a static obstacle"
+    return ""
+
+
+def settle_time(scene: Scene, t0: float = 0.0) -> float:
+    """Seconds after ``t0`` until the movers' behaviour stops changing, plus one period.
+
+    After every ``once`` mover has stopped and every ``trajectory`` mover has left, the
+    world only repeats: loop and bounce movers are periodic. A query whose answer must
+    wait for a door to clear needs a horizon past that time; one more longest period
+    covers a full cycle of each periodic mover after it.
+
+    Returns
+    -------
+    float
+        0 without movers or when nothing changes after ``t0`` but periodic motion with
+        no period (speed 0).
+    """
+    settle = 0.0
+    period = 0.0
+    for mv in scene.movers:
+        if mv.trajectory is not None:
+            settle = max(settle, float(mv.trajectory[-1, 0]) - t0)
+        elif mv.mode == "once":
+            if mv.speed > 0:
+                length = float(mv._cumlen[-1])
+                settle = max(settle, (length - mv.offset) / mv.speed - t0)
+        elif math.isfinite(mv.period):
+            period = max(period, mv.period)
+    return max(settle, 0.0) + period
+
+
+def plan(
+    scene: Scene,
+    roadmap: Roadmap,
+    start,
+    goal,
+    t0: float = 0.0,
+    options: PlanOptions | None = None,
+    hold: float = 0.0,
+) -> PlanResult:
+    """Answer one query (see :meth:`Planner.plan`); builds a :class:`Planner` each call."""
+    return Planner(scene, roadmap).plan(start, goal, t0, options, hold=hold)

@@ -1,0 +1,1 @@
+"""Many queries at once: regression runs and Dask batches."""

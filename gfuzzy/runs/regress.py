@@ -1,0 +1,117 @@
+"""Scene-file regression runs: answer every query, check every answer, test every ``expect``."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from typing import TextIO
+
+from ..check.check import check_trajectory
+from ..planner.planner import Planner, PlanOptions
+from ..scene.scene import Query, Scene
+from ..status import Status
+
+__all__ = ["RegressionRow", "regress_scene", "run_regression"]
+
+
+@dataclass(frozen=True)
+class RegressionRow:
+    """One query's outcome in a regression run."""
+
+    scene: str
+    query: str
+    status: str
+    duration: float | None
+    delay_factor: float | None
+    seconds: float
+    valid: bool | None  # None: nothing to check
+    problems: tuple[str, ...]
+
+    @property
+    def ok(self) -> bool:
+        return not self.problems
+
+
+def _expectation_problems(query: Query, status: str, duration, delay) -> list[str]:
+    out = []
+    exp = query.expect
+    if exp is None:
+        return out
+    if exp.status is not None and status != exp.status:
+        out.append(f"status {status}, expected {exp.status}")
+    if exp.max_duration is not None and status == Status.SOLVED and duration > exp.max_duration + 1e-9:
+        out.append(f"duration {duration:.3f} > max {exp.max_duration:g}")
+    if exp.max_delay_factor is not None and status == Status.SOLVED and delay > exp.max_delay_factor + 1e-9:
+        out.append(f"delay factor {delay:.3f} > max {exp.max_delay_factor:g}")
+    return out
+
+
+def regress_scene(scene: Scene, roadmap, options: PlanOptions | None = None) -> list[RegressionRow]:
+    """Answer and check every query of ``scene``.
+
+    A solved answer must pass :func:`gfuzzy.check.check.check_trajectory` (with the query's
+    start, goal and t0), and every answer must meet the query's ``expect`` block.
+    """
+    planner = Planner(scene, roadmap)
+    rows = []
+    for q in scene.queries:
+        res = planner.plan(q.start, q.goal, q.t0, options, hold=q.hold)
+        problems = []
+        valid = None
+        if res.solved:
+            rep = check_trajectory(scene, res.trajectory.waypoints, q)
+            valid = rep.valid
+            if not rep.valid:
+                problems.append(f"invalid: {rep.reason}")
+        problems += _expectation_problems(q, res.status.value, res.duration, res.delay_factor)
+        rows.append(
+            RegressionRow(
+                scene.name,
+                q.name,
+                res.status.value,
+                res.duration,
+                res.delay_factor,
+                res.planning_seconds,
+                valid,
+                tuple(problems),
+            )
+        )
+    return rows
+
+
+def format_row(row: RegressionRow) -> str:
+    def num(v, fmt):
+        return "-" if v is None or not math.isfinite(v) else format(v, fmt)
+
+    check = {True: "valid", False: "INVALID", None: "-"}[row.valid]
+    verdict = "ok" if row.ok else "FAIL: " + "; ".join(row.problems)
+    return (
+        f"{row.scene:<22} {row.query:<16} {row.status:<13} {num(row.duration, '8.2f'):>8} "
+        f"{num(row.delay_factor, '6.3f'):>6} {row.seconds * 1000:8.0f} {check:<7} {verdict}"
+    )
+
+
+HEADER = f"{'scene':<22} {'query':<16} {'status':<13} {'duration':>8} {'delay':>6} {'ms':>8} {'check':<7} verdict"
+
+
+def run_regression(
+    scenes: Iterable[Scene],
+    roadmap_for: Callable[[Scene], object],
+    options: PlanOptions | None,
+    out: TextIO,
+) -> bool:
+    """Run every scene, print one row per query to ``out``; True when all met."""
+    out.write(HEADER + "\n")
+    all_ok = True
+    n = failed = 0
+    for scene in scenes:
+        for row in regress_scene(scene, roadmap_for(scene), options):
+            out.write(format_row(row) + "\n")
+            out.flush()
+            n += 1
+            if not row.ok:
+                failed += 1
+                all_ok = False
+    out.write(f"{n - failed} of {n} queries met their expectations\n")
+    return all_ok

@@ -1,0 +1,11 @@
+"""Scene input: the scene file and its validation, occupancy-grid maps, pedestrian tracks."""
+
+
+def __getattr__(name: str):
+    # `gfuzzy.scene.X` was the flat module gfuzzy/scene.py: its names stay reachable,
+    # loaded on first use (so importing a sibling module never loads this one)
+    if name.startswith("__"):
+        raise AttributeError(name)
+    from importlib import import_module
+
+    return getattr(import_module(".scene", __name__), name)

@@ -1,0 +1,200 @@
+"""Reading YAML documents: a safe loader (duplicate keys refused, alias expansion
+bounded) and a validator whose every error is a :class:`~gfuzzy.errors.SceneError`
+naming the file and the place in it. The scene file (:mod:`gfuzzy.scene.scene`) and the
+files made from pedestrian tracks (:mod:`gfuzzy.scene.tracks`) are read with them.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import Any
+
+import numpy as np
+import yaml
+
+from ..errors import SceneError
+
+#: Names of scenes, movers and queries: letters, digits, ``_ . -``.
+NAME_RE = re.compile(r"^[A-Za-z0-9_.-]+$")
+#: Largest number of YAML nodes a scene may expand to (aliases counted each time used).
+MAX_NODES = 2_000_000
+#: Largest magnitude of any number in a scene: beyond it lengths and times overflow.
+MAX_MAGNITUDE = 1e9
+
+
+# --------------------------------------------------------------------------- YAML
+
+
+class _Loader(yaml.SafeLoader):
+    """safe_load, plus: duplicate keys are errors and alias expansion is bounded."""
+
+
+def _construct_mapping(loader: _Loader, node: yaml.MappingNode, deep: bool = False) -> dict:
+    seen = set()
+    for key_node, _ in node.value:
+        if key_node.tag == "tag:yaml.org,2002:merge":
+            continue  # `<<` merges: explicit keys may override merged ones
+        key = loader.construct_object(key_node, deep=True)
+        try:
+            hashable = key in seen
+        except TypeError as exc:
+            raise yaml.constructor.ConstructorError(
+                None, None, "unhashable mapping key", key_node.start_mark
+            ) from exc
+        if hashable:
+            raise yaml.constructor.ConstructorError(
+                None, None, f"duplicate key {key!r}", key_node.start_mark
+            )
+        seen.add(key)
+    return loader.construct_mapping(node, deep=deep)
+
+
+_Loader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
+
+
+def _expanded_size(node: yaml.Node, memo: dict) -> int:
+    key = id(node)
+    if key in memo:
+        if memo[key] < 0:
+            raise ValueError("recursive YAML alias")
+        return memo[key]
+    memo[key] = -1
+    if isinstance(node, yaml.SequenceNode):
+        size = 1 + sum(_expanded_size(n, memo) for n in node.value)
+    elif isinstance(node, yaml.MappingNode):
+        size = 1 + sum(_expanded_size(k, memo) + _expanded_size(v, memo) for k, v in node.value)
+    else:
+        size = 1
+    memo[key] = size
+    return size
+
+
+def _load_yaml(text: str, file: str) -> Any:
+    loader = None
+    try:
+        loader = _Loader(text)
+        node = loader.get_single_node()
+        if node is None:
+            raise SceneError(file, "", "the file is empty")
+        size = _expanded_size(node, {})
+        if size > MAX_NODES:
+            raise SceneError(
+                file, "", f"YAML expands to {size} nodes (aliases), more than {MAX_NODES}"
+            )
+        return loader.construct_document(node)
+    except SceneError:
+        raise
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark or exc.context_mark
+        where = f"line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        what = exc.problem or exc.context or "invalid YAML"
+        raise SceneError(file, where, f"invalid YAML: {what}") from None
+    except (yaml.YAMLError, ValueError, RecursionError) as exc:
+        raise SceneError(file, "", f"invalid YAML: {exc}") from None
+    finally:
+        if loader is not None:
+            loader.dispose()
+
+
+# --------------------------------------------------------------------------- validation
+
+
+class _V:
+    """Validation helpers bound to one file."""
+
+    def __init__(self, file: str):
+        self.file = file
+
+    def fail(self, place: str, message: str):
+        raise SceneError(self.file, place, message)
+
+    def mapping(self, value, place, required=(), optional=()):
+        if not isinstance(value, dict):
+            self.fail(place or "top level", f"expected a mapping, got {_kind(value)}")
+        for key in value:
+            if not isinstance(key, str):
+                self.fail(place or "top level", f"key {key!r} is not a string")
+            if key not in required and key not in optional:
+                allowed = ", ".join(list(required) + list(optional))
+                self.fail(_join(place, key), f"unknown key (allowed: {allowed})")
+        for key in required:
+            if key not in value:
+                self.fail(_join(place, key), "missing required key")
+        return value
+
+    def number(self, value, place, positive=False, nonneg=False):
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            self.fail(place, f"expected a number, got {_kind(value)}")
+        try:
+            value = float(value)
+        except OverflowError:
+            self.fail(place, "number too large")
+        if not math.isfinite(value):
+            self.fail(place, f"expected a finite number, got {value}")
+        if abs(value) > MAX_MAGNITUDE:
+            self.fail(place, f"number too large ({value:g}; at most {MAX_MAGNITUDE:g} in magnitude)")
+        if positive and value <= 0:
+            self.fail(place, f"must be positive, got {value:g}")
+        if nonneg and value < 0:
+            self.fail(place, f"must not be negative, got {value:g}")
+        return value
+
+    def vector(self, value, place, length, positive=False):
+        if not isinstance(value, list):
+            self.fail(place, f"expected a list of {length} numbers, got {_kind(value)}")
+        if len(value) != length:
+            self.fail(place, f"expected {length} numbers, got {len(value)}")
+        return tuple(
+            self.number(v, f"{place}[{i}]", positive=positive) for i, v in enumerate(value)
+        )
+
+    def points(self, value, place, width=2, min_rows=1):
+        if not isinstance(value, list):
+            self.fail(place, f"expected a list of points, got {_kind(value)}")
+        if len(value) < min_rows:
+            self.fail(place, f"expected at least {min_rows} rows, got {len(value)}")
+        rows = [self.vector(v, f"{place}[{i}]", width) for i, v in enumerate(value)]
+        return np.array(rows, dtype=float).reshape(-1, width)
+
+    def name(self, value, place, pattern=None):
+        if not isinstance(value, str) or not value.strip():
+            self.fail(place, f"expected a non-empty string, got {_kind(value)}")
+        if pattern is not None and not pattern.match(value):
+            self.fail(place, f"{value!r} must match [a-zA-Z0-9_.-]+")
+        if any(ord(c) < 32 for c in value):
+            self.fail(place, "control characters are not allowed")
+        return value
+
+
+def _kind(value) -> str:
+    if value is None:
+        return "nothing"
+    if isinstance(value, bool):
+        return f"a boolean ({value})"
+    if isinstance(value, (int, float)):
+        return f"a number ({value})"
+    if isinstance(value, str):
+        return f"a string ({value[:30]!r})"
+    if isinstance(value, list):
+        return "a list"
+    if isinstance(value, dict):
+        return "a mapping"
+    return type(value).__name__
+
+
+def _join(place: str, key) -> str:
+    if isinstance(key, int):
+        return f"{place}[{key}]"
+    return f"{place}.{key}" if place else str(key)
+
+
+def _one_key(v: _V, item, place, keys):
+    if not isinstance(item, dict):
+        v.fail(place, f"expected a mapping with one of {', '.join(keys)}, got {_kind(item)}")
+    if len(item) != 1:
+        v.fail(place, f"expected exactly one of {', '.join(keys)}, got {len(item)} keys")
+    key = next(iter(item))
+    if key not in keys:
+        v.fail(_join(place, key), f"unknown obstacle kind (allowed: {', '.join(keys)})")
+    return key, item[key]

@@ -1,0 +1,424 @@
+"""The space-time graph the safe-interval search runs on, its safe intervals, its result.
+
+A roadmap (plus start and goal) becomes a :class:`SpaceTimeGraph` by cutting every edge
+into ``k`` equal one-step pieces (:func:`split_edges`, with the rule of
+:func:`gfuzzy.poses.split_counts`); :class:`IntervalStore` computes the safe intervals of
+its points from a :class:`gfuzzy.timespace.movers.MoverField`, in batches, on demand; both searches
+(:func:`gfuzzy.timespace.timespace.sipp` and the compiled :func:`gfuzzy.timespace.search_kernel.sipp_compiled`)
+return a :class:`SearchResult`.
+"""
+
+from __future__ import annotations
+
+import copy
+from bisect import bisect_right
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..poses import interpolate_segment, split_counts
+from ..settings import INTERVAL_BATCH_CELLS
+from ..status import Status
+from ..typed import BoolArray, FloatArray, IntArray
+
+if TYPE_CHECKING:
+    from .movers import MoverField
+
+__all__ = ["SpaceTimeGraph", "SearchResult", "IntervalStore", "SplitEdges", "split_edges", "BAND"]
+
+#: Safety is computed for every group whose static lower bound on f lies within this many
+#: steps of the group the search asks for: the A* order will want them soon.
+BAND = 6
+
+
+@dataclass
+class SpaceTimeGraph:
+    """A graph whose every edge takes exactly one time step.
+
+    Attributes
+    ----------
+    poses : (N, d) float
+    indptr : (N+1,) int
+    neighbors : (M,) int
+        CSR adjacency: the successors of node i are ``neighbors[indptr[i]:indptr[i+1]]``.
+    heuristic : (N,) float
+        Lower bound on the number of steps to the goal (inf: goal unreachable).
+    can_wait : (N,) bool or None
+        Where the robot may wait (None: everywhere).
+    groups : (G+1,) int or None
+        Nodes ``groups[j] .. groups[j+1]-1`` lie on one roadmap edge; their safe intervals
+        are computed together. Nodes below ``groups[0]`` are computed one by one.
+    from_start : (N,) float or None
+        Lower bound on the steps from the start to each node. With the heuristic it
+        bounds the useful times of a node to ``[from_start, horizon - heuristic]``: the
+        robot cannot be there earlier, nor reach the goal in time from there later, so
+        safety is only computed inside that window.
+    """
+
+    poses: FloatArray
+    indptr: IntArray
+    neighbors: IntArray
+    heuristic: FloatArray
+    can_wait: BoolArray | None = None
+    groups: IntArray | None = None
+    from_start: FloatArray | None = None
+
+
+@dataclass
+class SearchResult:
+    """Outcome of :func:`gfuzzy.timespace.timespace.sipp` (and the compiled search): ``status`` is
+    :attr:`Status.SOLVED`, :attr:`Status.NO_PATH` or :attr:`Status.TIMEOUT`."""
+
+    status: Status
+    nodes: list = field(default_factory=list)  # node ids, one per arrival
+    steps: list = field(default_factory=list)  # arrival steps
+    message: str = ""
+    expansions: int = 0
+    states: int = 0
+    horizon_hit: bool = False
+
+
+class IntervalStore:
+    """Safe intervals of a graph's points, computed in batches on demand.
+
+    A point's safety is only computed inside its time window ``[from_start, H - h]`` (see
+    :class:`SpaceTimeGraph`); when the search's horizon H grows, the windows grow and only
+    the new steps are computed, so a search restarted with a longer horizon redoes no
+    safety work.
+
+    Two storages, chosen by the search at :meth:`set_horizon`: lists per batch, read node
+    by node (the reference search, :func:`gfuzzy.timespace.timespace.sipp`), or one pool of arrays
+    the compiled search reads directly (``pool=True``, :func:`gfuzzy.timespace.search_kernel.sipp_compiled`):
+    its batches come from the compiled kernel (:meth:`MoverField.safe_intervals`) and a
+    window grown with the horizon is merged with what was computed before in machine code.
+
+    Parameters
+    ----------
+    graph : SpaceTimeGraph
+
+    Attributes
+    ----------
+    off, ready, cap : (N,) int
+        Pool storage only: node i's intervals are ``s[off[i]:off[i] + ready[i]]`` and
+        ``e[...]`` once computed up to the current horizon (``ready[i] >= 0``; -1: not
+        yet), and ``cap[i]`` is the last step examined for it.
+    s, e : (P,) int
+        The pool (reallocated as it grows: read the attributes again after a compute).
+    """
+
+    def __init__(self, graph: SpaceTimeGraph):
+        self.graph = graph
+        n = len(graph.poses)
+        h = graph.heuristic
+        # groups whose safety is computed together: each edge's points, every other node alone
+        first = int(graph.groups[0]) if graph.groups is not None else n
+        ptr = np.arange(first + 1, dtype=np.int64)
+        if graph.groups is not None:
+            ptr = np.sort(np.concatenate([ptr, np.asarray(graph.groups, dtype=np.int64)]))
+            ptr = ptr[np.r_[True, ptr[1:] != ptr[:-1]]]  # np.unique, which imports numpy.ma (~20 ms)
+        ptr = ptr[ptr <= n]
+        if ptr[-1] != n:
+            ptr = np.append(ptr, n)
+        self.ptr = ptr
+        self._ptr_l = ptr.tolist()
+        fs = graph.from_start if graph.from_start is not None else np.zeros(n)
+        fs = np.where(np.isfinite(fs), fs, 0.0)
+        self.g_lo = np.maximum(0, np.floor(np.minimum.reduceat(fs, ptr[:-1]) + 1e-9)).astype(np.int64)
+        hmin = np.minimum.reduceat(h, ptr[:-1])
+        self._finite = np.isfinite(hmin)
+        self._hfloor = np.floor(np.where(self._finite, hmin, 0) + 1e-9).astype(np.int64)
+        self.f_lb = np.minimum.reduceat(fs + h, ptr[:-1])
+        self.done_hi = np.full(len(ptr) - 1, -1, dtype=np.int64)  # last step computed
+        self._same = _same_position_groups(graph.poses, ptr)
+        self.pool: bool | None = None  # the storage, fixed by the first set_horizon
+        self.field = None
+        self.H = -1
+
+    def set_horizon(self, field_: MoverField, pool: bool = False) -> None:
+        """Serve intervals for ``field_``'s horizon (never shorter than before), from the
+        pool of arrays (``pool``) or from lists; a store keeps the storage it started with."""
+        if field_.steps < self.H:
+            raise ValueError("the horizon of an IntervalStore only grows")
+        if self.pool is None:
+            self.pool = bool(pool)
+            self._init_storage()
+        elif self.pool != bool(pool):
+            raise ValueError("an IntervalStore serves one kind of search (reference or compiled)")
+        self.field = field_
+        self.H = field_.steps
+        self.g_hi = np.where(self._finite, self.H - self._hfloor, -1).astype(np.int64)
+        self._g_hi_l = self.g_hi.tolist()
+        self._served: dict = {}
+        if self.pool:
+            grp = self._node_group
+            self.cap = self.g_hi[grp]
+            self.ready = np.where(self.done_hi[grp] >= self.cap, np.maximum(self.cnt, 0), -1)
+
+    def _init_storage(self) -> None:
+        n = len(self.graph.poses)
+        if self.pool:
+            self._node_group = np.repeat(np.arange(len(self.ptr) - 1), np.diff(self.ptr))
+            self.off = np.zeros(n, dtype=np.int64)
+            self.cnt = np.full(n, -1, dtype=np.int64)  # -1: never computed
+            self.s = np.empty(4096, dtype=np.int64)
+            self.e = np.empty(4096, dtype=np.int64)
+            self.used = 0
+        else:  # intervals stay in their batch's lists until a search asks for them
+            self._batches: list = []  # (starts, row pointers, ends, first step examined per row)
+            self._where = np.full(n, -1, dtype=np.int64)  # batch of a node's latest computation
+            self._local = np.zeros(n, dtype=np.int64)  # its row there
+            self._older: dict = {}  # node -> (starts, ends) from computations before the latest
+
+    def group_of(self, node: int) -> int:
+        return bisect_right(self._ptr_l, node) - 1
+
+    def ensure(self, node: int) -> None:
+        """Compute ``node``'s intervals up to the current horizon (with a batch of others)."""
+        g = self.group_of(node)
+        if self.done_hi[g] < self._g_hi_l[g]:
+            self._compute(g)
+
+    def get(self, node: int) -> tuple:
+        """(interval starts, interval ends, last step examined) of a node: lists, or array
+        slices from the pool."""
+        iv = self._served.get(node)
+        if iv is not None:
+            return iv
+        g = self.group_of(node)
+        cap = self._g_hi_l[g]
+        if self.done_hi[g] < cap:
+            self._compute(g)
+        if self.pool:
+            a, c = int(self.off[node]), max(int(self.cnt[node]), 0)
+            iv = (self.s[a : a + c], self.e[a : a + c], cap)
+        else:
+            starts, ends = self._intervals(node)
+            iv = (starts, ends, cap)
+        self._served[node] = iv
+        return iv
+
+    def _intervals(self, node: int) -> tuple[list, list]:
+        b = int(self._where[node])
+        if b < 0:
+            return [], []
+        cs, sp, ce, first = self._batches[b]
+        k = int(self._local[node])
+        a, z = sp[k], sp[k + 1]
+        old = self._older.get(node)
+        if old is None or not old[0]:
+            return cs[a:z], ce[a:z]
+        starts, ends = list(old[0]), list(old[1])
+        if a < z:
+            if ends[-1] == first[k] - 1 and cs[a] == first[k]:  # the last interval goes on
+                ends[-1] = ce[a]
+                a += 1
+            starts.extend(cs[a:z])
+            ends.extend(ce[a:z])
+        return starts, ends
+
+    def _compute(self, g: int) -> None:
+        ptr, field_ = self.ptr, self.field
+        need = self.done_hi < self.g_hi
+        pending = np.nonzero(need & (self.f_lb <= self.f_lb[g] + BAND))[0]
+        pending = pending[np.argsort(self.f_lb[pending], kind="stable")]
+        budget = max(1, INTERVAL_BATCH_CELLS // (self.H + 1))  # points per batch (points x steps bools)
+        sizes = ptr[pending + 1] - ptr[pending]
+        pending = pending[np.cumsum(sizes) <= budget]
+        if not (pending == g).any():
+            pending = np.append(pending, g)
+        lo = np.maximum(self.g_lo[pending], self.done_hi[pending] + 1)
+        hi = self.g_hi[pending]
+        sizes = ptr[pending + 1] - ptr[pending]
+        sub_ptr = np.concatenate([[0], np.cumsum(sizes)])
+        nodes = np.repeat(ptr[pending], sizes) + (np.arange(sub_ptr[-1]) - np.repeat(sub_ptr[:-1], sizes))
+        lo_n = np.repeat(lo, sizes)
+        # the safety first, the bookkeeping after: a field that raises (a deadline inside
+        # the batch) leaves the store as it was
+        if self.pool:
+            compute = _pool_intervals
+        else:
+            H = self.H
+
+            def compute(f, p, pt, a, b):
+                return _intervals_from_pairs(f, p, pt, a, b, H)
+
+        gs, ge, sp = _safe_intervals_shared(field_, self.graph.poses[nodes], sub_ptr, lo, hi, self._same[pending], compute)
+        self.done_hi[pending] = hi
+        if self.pool:
+            self._pool_merge(nodes, gs, ge, sp, lo_n)
+            return
+        for nid in nodes[self._where[nodes] >= 0].tolist():  # extended windows: keep what was computed before
+            self._older[nid] = self._intervals(nid)
+        self._batches.append((gs.tolist(), sp.tolist(), ge.tolist(), lo_n.tolist()))
+        self._where[nodes] = len(self._batches) - 1
+        self._local[nodes] = np.arange(len(nodes))
+
+    def _pool_merge(self, nodes, gs, ge, sp, lo_n) -> None:
+        """Append a batch to the pool; a node computed before (a window grown with the
+        horizon) gets its older intervals first, the last one joined to the new first
+        when they meet (:func:`gfuzzy.timespace.movers_kernel.merge_runs`)."""
+        from .movers_kernel import merge_runs
+
+        room = self.used + len(gs) + int(np.maximum(self.cnt[nodes], 0).sum())
+        if room > len(self.s):
+            size = max(2 * len(self.s), room)
+            for name in ("s", "e"):
+                grown = np.empty(size, dtype=np.int64)
+                grown[: self.used] = getattr(self, name)[: self.used]
+                setattr(self, name, grown)
+        self.used = merge_runs(self.s, self.e, self.off, self.cnt, self.used, nodes, gs, ge, sp, lo_n)
+        self.ready[nodes] = self.cnt[nodes]
+
+
+def _same_position_groups(poses, ptr) -> BoolArray:
+    """(G,) bool: groups of more than one point, all at one position (a unicycle's turning
+    ring, a turn in place). A group is the points of one straight motion, so its first and
+    last points share a position only when all do."""
+    sizes = np.diff(ptr)
+    multi = np.nonzero(sizes > 1)[0]
+    out = np.zeros(len(sizes), dtype=bool)
+    out[multi] = np.all(poses[ptr[multi], :2] == poses[ptr[multi + 1] - 1, :2], axis=1)
+    return out
+
+
+def _pool_intervals(field_, poses, ptr, lo, hi):
+    return field_.safe_intervals(poses, ptr, lo, hi)
+
+
+def _turn_field(field_: MoverField) -> MoverField:
+    """``field_`` for a robot turning in place: its circumscribed disc, which holds the body
+    at every heading (the same field for a disc robot)."""
+    robot = field_.robot
+    if robot.shape == "disc":
+        return field_
+    from dataclasses import replace as _replace
+
+    body = copy.copy(field_)
+    body.robot = _replace(robot, shape="disc", radius=robot.circumradius, size=(0.0, 0.0))
+    return body
+
+
+def _safe_intervals_shared(field_: MoverField, poses, ptr, lo, hi, same, compute):
+    """Safe intervals of groups of points (``compute(field, poses, ptr, lo, hi)``, e.g.
+    :meth:`MoverField.safe_intervals`), computed once for a group whose points all share one
+    position (``same``, per group: a unicycle's turn in place) and handed to each of its
+    points. Such a group is judged with the robot's circumscribed disc (:func:`_turn_field`):
+    the body at any heading lies inside it, so every point's safety is sound, and for a disc
+    robot exact.
+
+    Returns (starts, ends, sp) as :meth:`gfuzzy.timespace.movers.MoverField.safe_intervals`.
+    """
+    sizes = np.diff(ptr)
+    n = len(poses)
+    collapse = same & (sizes > 1)
+    if n == 0 or not collapse.any():
+        return compute(field_, poses, ptr, lo, hi)
+    norm = ~collapse
+    pn = np.repeat(norm, sizes)
+    ga, ea, spa = compute(field_, poses[pn], np.concatenate([[0], np.cumsum(sizes[norm])]).astype(np.int64),
+                          lo[norm], hi[norm])  # fmt: skip
+    body = _turn_field(field_)
+    before = body.evaluations
+    firsts = ptr[:-1][collapse]
+    gb, eb, spb = compute(body, poses[firsts], np.arange(len(firsts) + 1, dtype=np.int64), lo[collapse], hi[collapse])
+    if body is not field_:
+        field_.evaluations += body.evaluations - before
+    start = np.empty(n, dtype=np.int64)
+    count = np.empty(n, dtype=np.int64)
+    start[pn], count[pn] = spa[:-1], np.diff(spa)
+    cidx = np.repeat(np.cumsum(collapse) - 1, sizes)[~pn]  # each point's collapsed group
+    start[~pn], count[~pn] = spb[:-1][cidx] + len(ga), np.diff(spb)[cidx]
+    sp = np.concatenate([[0], np.cumsum(count)]).astype(np.int64)
+    idx = np.repeat(start, count) + (np.arange(sp[-1]) - np.repeat(sp[:-1], count))
+    return np.concatenate([ga, gb])[idx], np.concatenate([ea, eb])[idx], sp
+
+
+def _intervals_from_pairs(field_: MoverField, poses, ptr, lo, hi, H: int):
+    """Safe intervals of groups of points from the field's unsafe pairs (the numpy
+    reference): the gaps between unsafe steps, with each window's ends as walls.
+
+    Returns (starts, ends, sp) as :meth:`gfuzzy.timespace.movers.MoverField.safe_intervals`.
+    """
+    sizes = np.diff(ptr)
+    # walls at lo - 1 and hi + 1, kept inside the row's keys; an empty window (lo > hi: a
+    # point that cannot matter before the horizon) gets its walls side by side, no gap
+    lo_n = np.minimum(np.repeat(lo, sizes), H + 1)
+    hi_n = np.maximum(np.repeat(hi, sizes), lo_n - 1)
+    un, us = field_.unsafe_pairs(poses, ptr, lo, hi)
+    k = len(poses)
+    span = H + 3  # steps -1 .. H + 1 fit in [0, span) once shifted by one
+    rows = np.arange(k) * span
+    keys = np.sort(np.concatenate([un * span + us + 1, rows + lo_n, rows + hi_n + 2]))
+    wn, ws = keys // span, keys % span - 1  # repeated walls leave empty gaps, dropped below
+    same = wn[1:] == wn[:-1]
+    gs, ge = ws[:-1] + 1, ws[1:] - 1
+    ok = same & (gs <= ge)
+    rn = wn[:-1][ok]
+    return gs[ok], ge[ok], np.searchsorted(rn, np.arange(k + 1))
+
+
+@dataclass(frozen=True)
+class SplitEdges:
+    """Edges cut into one-step pieces (:func:`split_edges`).
+
+    Attributes
+    ----------
+    k : (e,) int
+        Steps per edge.
+    offs : (e+1,) int
+        Interior points of edge i are ``first_id + offs[i] .. first_id + offs[i+1] - 1``.
+    inner : (offs[-1], d) float
+        Their poses.
+    a, b, j : (offs[-1],) int
+        Each interior point's edge ends and its index 1..k-1 along the edge.
+    src, dst : (c,) int
+        The one-step moves along the chains a -> interior... -> b (one direction).
+    """
+
+    k: IntArray
+    offs: IntArray
+    inner: FloatArray
+    a: IntArray
+    b: IntArray
+    j: IntArray
+    src: IntArray
+    dst: IntArray
+
+
+def split_edges(verts: FloatArray, edges: IntArray, lengths: FloatArray, step_len: float, first_id: int) -> SplitEdges:
+    """Cut edges into one-step pieces of at most ``step_len`` (:func:`gfuzzy.poses.split_counts`).
+
+    The one place the roadmap-time graph is cut: :meth:`gfuzzy.planner.planner.Planner._graph`
+    and :func:`gfuzzy.planner.prepared.prepare_goal` both call it.
+
+    Parameters
+    ----------
+    verts : (n, d) float
+    edges : (e, 2) int
+    lengths : (e,) float
+    step_len : float
+        vmax * dt.
+    first_id : int
+        Id of the first interior point.
+
+    Returns
+    -------
+    SplitEdges
+    """
+    k = split_counts(lengths, step_len)
+    n_int = k - 1
+    offs = np.concatenate([[0], np.cumsum(n_int)]).astype(np.int64)
+    e_of = np.repeat(np.arange(len(edges)), n_int)
+    j = np.arange(offs[-1]) - np.repeat(offs[:-1], n_int) + 1
+    a, b = edges[e_of, 0], edges[e_of, 1]
+    inner = interpolate_segment(verts[a], verts[b], j / k[e_of])
+    ids = np.arange(first_id, first_id + offs[-1])
+    first = np.zeros(offs[-1], dtype=bool)
+    first[offs[:-1][n_int > 0]] = True
+    last = np.zeros(offs[-1], dtype=bool)
+    last[(offs[1:] - 1)[n_int > 0]] = True
+    prev = np.where(first, a, ids - 1)
+    src = np.concatenate([prev, ids[last], edges[n_int == 0, 0]])
+    dst = np.concatenate([ids, b[last], edges[n_int == 0, 1]])
+    return SplitEdges(k, offs, inner, a, b, j, src, dst)

@@ -1,0 +1,797 @@
+"""The differential drive (``kinematics: unicycle``): a roadmap of heading copies.
+
+A unicycle moves only along its heading and turns only in place (CONTRACT section 6). The
+search graph keeps the roadmap's positions and straight edges and gives every vertex one
+*copy* per heading it can leave or arrive with:
+
+* a **lane** is a roadmap edge (u, v) driven at the heading of u -> v (forward from u to v;
+  backwards from v to u too when ``robot.reverse``), certified free for the body held at that
+  heading (:meth:`gfuzzy.collision.geometry.StaticGeometry.motion_free` with a fixed heading);
+* a **turn** joins two copies at one vertex that are neighbours in heading order, both ways
+  round; it takes ``|dh| / turn_rate`` seconds and, for a body that is not a disc, is
+  certified against walls while it sweeps (a vertex where the sweep collides loses that turn);
+* every lane and turn is a *piece* from one copy to another, cut into one-step points like
+  any motion (:func:`gfuzzy.poses.split_counts`) with a turn's length counted as
+  ``|dh| * vmax / turn_rate``: a step never exceeds ``vmax dt`` in the contract's metric nor
+  ``turn_rate dt`` in heading, so the movers' safety of :mod:`gfuzzy.timespace.movers` holds over it;
+  the robot may wait at any point.
+
+The start and the goal join through turn + straight + turn: the start turns in place towards a
+nearby vertex, drives to a new copy there (which joins its vertex's heading neighbours), and
+the goal is reached from a copy at a vertex driving straight to the goal's position, then
+turning to the goal's heading. The safe-interval search (:func:`gfuzzy.timespace.timespace.sipp` and
+its compiled twin) runs unchanged on this directed graph: the answer is time-optimal on it
+at the step dt.
+
+For a disc the lanes are the roadmap's (its spanner's) edges: a disc's body does not depend
+on its heading. For a box the lanes come from the SE(2) roadmap's vertex positions: its
+edges and each vertex's nearest neighbours in the plane, each re-certified at its heading.
+The lanes and the query-independent pieces are kept in ``Roadmap._derived``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..planner.drive import SAME_HEADING, _xy_pose, pick_turn, turn_free
+from ..poses import split_counts, wrap_angle
+from ..typed import FloatArray, IntArray
+from .spacetime import SpaceTimeGraph
+
+__all__ = ["UnicycleGraph", "UnicycleGoal", "UnicyclePrepared", "prepare_goal", "build_graph", "lanes", "LANE_NEIGHBOURS", "SAME_HEADING"]
+
+#: For an SE(2) roadmap (box robots): how many nearest vertices in the plane each vertex
+#: tries as extra lanes, besides the roadmap's own edges.
+LANE_NEIGHBOURS = 10
+
+
+@dataclass
+class Lanes:
+    """The plane roadmap of a unicycle: positions and certified lanes.
+
+    Attributes
+    ----------
+    xy : (V, 2) float
+    edges : (E, 2) int
+    ok : (E, 2) bool
+        Whether edge ``(u, v)`` is free at the heading of u -> v (column 0) and of v -> u
+        (column 1), the body held at that heading along the whole segment.
+    """
+
+    xy: FloatArray
+    edges: IntArray
+    ok: np.ndarray
+
+
+@dataclass
+class _Base:
+    """The query-independent pieces (see the module docstring).
+
+    Attributes
+    ----------
+    poses : (K, 3) float
+        The copies: a vertex's position and a heading.
+    vertex : (K,) int
+        The roadmap vertex of each copy.
+    a, b : (P,) int
+        Pieces: from copy a to copy b; a negative id -(1 + i) is ring point i.
+    dh : (P,) float
+        A turn's signed heading change; 0 for a lane.
+    length : (P,) float
+        Metres at vmax: a lane's length, ``|dh| vmax / turn_rate`` for a turn.
+    ring : (R, 3) float
+        Turning rings: every vertex with copies has ``n_ring`` points at its position, at
+        headings ``-pi + i 2 pi / n_ring`` (one turning step apart), joined in a circle both
+        ways; each copy joins the two ring points around its heading. A turn from one copy
+        to another goes copy -> ring ... ring -> copy: at most two steps longer than the
+        turn itself, however many copies the vertex has. Points where the body collides,
+        and arcs whose sweep does, are left out (``ring_ok``).
+    ring_ptr : (V,) int
+        First ring point of each vertex (-1: no ring).
+    ring_ok : (R,) bool
+    n_ring : int
+    """
+
+    poses: FloatArray
+    vertex: IntArray
+    a: IntArray
+    b: IntArray
+    dh: FloatArray
+    length: FloatArray
+    ring: FloatArray
+    ring_ptr: IntArray
+    ring_ok: np.ndarray
+    n_ring: int
+
+    vertex_xy: FloatArray = None
+    #: Static clearances of the vertices' positions (a disc's), filled as connections need them.
+    clearance: FloatArray = None
+
+    def copies_at(self, v: int) -> IntArray:
+        lo, hi = np.searchsorted(self.vertex, [v, v + 1])
+        return np.arange(lo, hi)
+
+
+@dataclass
+class UnicycleGraph:
+    """A query's graph: the search's :class:`SpaceTimeGraph` and what the planner reports.
+
+    Attributes
+    ----------
+    graph : SpaceTimeGraph
+    s_id, g_id : int
+    roadmap_distance : float
+        Shortest static start-goal time on this graph times vmax (metres at vmax: lanes'
+        lengths plus turns' ``|dh| vmax / turn_rate``); inf when not connected.
+    """
+
+    graph: SpaceTimeGraph
+    s_id: int
+    g_id: int
+    roadmap_distance: float
+
+
+def lanes(roadmap, geometry, stretch: float = 1.0) -> Lanes:
+    """The unicycle's plane roadmap of ``roadmap`` (see the module docstring), cached."""
+    robot = geometry.robot
+    key = ("unicycle-lanes", geometry.scene.static_hash, float(geometry.keep), float(stretch), robot.shape, robot.size)
+    hit = roadmap._derived.get(key)
+    if hit is not None:
+        return hit
+    xy = np.ascontiguousarray(roadmap.vertices[:, :2], dtype=float)
+    if robot.shape == "disc":
+        keep = roadmap.spanner(stretch)
+        edges = roadmap.edges[keep].astype(np.int64).reshape(-1, 2)
+        out = Lanes(xy, edges, np.ones((len(edges), 2), dtype=bool))
+    else:
+        out = _box_lanes(roadmap, geometry, xy)
+        if stretch > 1.0 and len(out.edges):  # as the disc's: a spanner of the lanes
+            from ..roadmap.roadmap import Roadmap
+
+            lens = np.hypot(*(xy[out.edges[:, 1]] - xy[out.edges[:, 0]]).T)
+            plane = Roadmap(xy, out.edges, lens, roadmap.scene_name, roadmap.scene_hash, roadmap.circumradius)
+            keep = plane.spanner(stretch)
+            out = Lanes(xy, out.edges[keep], out.ok[keep])
+    roadmap._derived[key] = out
+    return out
+
+
+def _box_lanes(roadmap, geometry, xy: FloatArray) -> Lanes:
+    from scipy.spatial import cKDTree
+
+    cand = [np.sort(roadmap.edges.astype(np.int64).reshape(-1, 2), axis=1)]
+    if len(xy) > 1:
+        k = min(LANE_NEIGHBOURS + 1, len(xy))
+        _, idx = cKDTree(xy).query(xy, k=k)
+        u = np.repeat(np.arange(len(xy)), k - 1)
+        cand.append(np.sort(np.stack([u, idx[:, 1:].reshape(-1)], axis=1), axis=1))
+    edges = np.unique(np.vstack(cand), axis=0)
+    d = np.hypot(*(xy[edges[:, 1]] - xy[edges[:, 0]]).T)
+    edges = edges[(edges[:, 0] != edges[:, 1]) & (d > 1e-9)]
+    ok = np.zeros((len(edges), 2), dtype=bool)
+    symmetric = geometry.robot.shape == "box"  # a centred box is the same body turned by pi
+    for i, (u, v) in enumerate(edges.tolist()):
+        (ux, uy), (vx, vy) = xy[u], xy[v]
+        h = math.atan2(vy - uy, vx - ux)
+        ok[i, 0] = geometry.motion_free([ux, uy, h], [vx, vy, h])
+        ok[i, 1] = ok[i, 0] if symmetric else geometry.motion_free([vx, vy, h + math.pi], [ux, uy, h + math.pi])
+    keep = ok.any(axis=1)
+    return Lanes(xy, edges[keep], ok[keep])
+
+
+def _brackets(h: float, r0: int, n_ring: int, step_h: float) -> list:
+    """The two ring points around heading ``h`` (ring of ``n_ring`` headings from -pi, its
+    first point ``r0``): [(point, signed turn to it)], the one below first."""
+    u = (h + math.pi) / step_h
+    i = int(math.floor(u)) % n_ring
+    below = -((h + math.pi - i * step_h) % (2 * math.pi))
+    above = ((i + 1) * step_h - math.pi - h) % (2 * math.pi)
+    return [(r0 + i, below), (r0 + (i + 1) % n_ring, above)]
+
+
+def _rings(geometry, xy: FloatArray, cv: IntArray, ch: FloatArray, n_ring: int):
+    """The turning rings of the vertices with copies (see :class:`_Base`) and the turns
+    joining them and the copies (ring points as ``-(1 + i)``).
+
+    Returns
+    -------
+    ring_ptr : (V,) int ; ring_v : (R,) int ; ring_h : (R,) float ; ring_ok : (R,) bool
+    ta, tb : list of int ; tdh : list of float
+        The turns: from, to, signed heading change.
+    """
+    robot = geometry.robot
+    step_h = 2 * math.pi / n_ring
+    bounds = np.searchsorted(cv, np.arange(len(xy) + 1))
+    has = np.diff(bounds) > 0
+    ring_ptr = np.full(len(xy), -1, dtype=np.int64)
+    ring_ptr[has] = np.arange(int(has.sum())) * n_ring
+    grid = -math.pi + step_h * np.arange(n_ring)
+    ring_v = np.repeat(np.nonzero(has)[0], n_ring)
+    ring_h = np.tile(grid, int(has.sum()))
+    ring_ok = np.ones(len(ring_v), dtype=bool)
+    ta, tb, tdh = [], [], []
+    disc = robot.shape == "disc"
+    for v in np.nonzero(has)[0].tolist():
+        x, y = (float(c) for c in xy[v])
+        r0 = int(ring_ptr[v])
+        if not disc:
+            for i in range(n_ring):
+                ring_ok[r0 + i] = geometry.clearance1([x, y, grid[i]]) >= 0
+        for i in range(n_ring):
+            j = (i + 1) % n_ring
+            if ring_ok[r0 + i] and ring_ok[r0 + j] and (disc or turn_free(geometry, x, y, grid[i], step_h)):
+                ta += [-(1 + r0 + i), -(1 + r0 + j)]
+                tb += [-(1 + r0 + j), -(1 + r0 + i)]
+                tdh += [step_h, -step_h]
+        for c in range(int(bounds[v]), int(bounds[v + 1])):
+            for r, arc in _brackets(ch[c], r0, n_ring, step_h):
+                if ring_ok[r] and (disc or turn_free(geometry, x, y, ch[c], arc)):
+                    ta += [c, -(1 + r)]
+                    tb += [-(1 + r), c]
+                    tdh += [arc, -arc]
+    return ring_ptr, ring_v, ring_h, ring_ok, ta, tb, tdh
+
+
+def _base(roadmap, geometry, stretch: float, vmax: float, step_len: float) -> _Base:
+    """The copies, lanes and turns of the roadmap, cached per (robot, stretch)."""
+    robot = geometry.robot
+    rate = robot.turn_rate
+    key = ("unicycle-base", geometry.scene.static_hash, float(geometry.keep), float(stretch), robot.shape,
+           robot.size, bool(robot.reverse), float(rate), float(vmax), float(step_len))  # fmt: skip
+    hit = roadmap._derived.get(key)
+    if hit is not None:
+        return hit
+    ln = lanes(roadmap, geometry, stretch)
+    xy, e = ln.xy, ln.edges
+    h_uv = np.arctan2(xy[e[:, 1], 1] - xy[e[:, 0], 1], xy[e[:, 1], 0] - xy[e[:, 0], 0])
+    h_vu = wrap_angle(h_uv + math.pi)
+    # copies: (vertex, heading) at both ends of every certified lane
+    cv, ch = [], []
+    for col, h in ((0, h_uv), (1, h_vu)):
+        m = ln.ok[:, col]
+        cv += [e[m, 0], e[m, 1]]
+        ch += [h[m], h[m]]
+    cv = np.concatenate(cv) if cv else np.zeros(0, dtype=np.int64)
+    ch = np.asarray(wrap_angle(np.concatenate(ch)), dtype=float) if ch else np.zeros(0)
+    order = np.lexsort((ch, cv))
+    cv, ch = cv[order], ch[order]
+    new = np.ones(len(cv), dtype=bool)
+    new[1:] = (cv[1:] != cv[:-1]) | (ch[1:] - ch[:-1] > SAME_HEADING)
+    cv, ch = cv[new], ch[new]
+
+    def copy_id(v, h):
+        lo, hi = np.searchsorted(cv, v), np.searchsorted(cv, v, side="right")
+        # the nearest heading among the vertex's copies (the copy made from this lane)
+        seg = ch[lo:hi] if np.ndim(v) == 0 else None
+        if seg is not None:
+            return lo + int(np.argmin(np.abs(wrap_angle(seg - h))))
+        out = np.empty(len(v), dtype=np.int64)
+        for i in range(len(v)):
+            s = ch[lo[i] : hi[i]]
+            out[i] = lo[i] + int(np.argmin(np.abs(wrap_angle(s - h[i]))))
+        return out
+
+    pa, pb, pdh, plen = [], [], [], []
+    lens = np.hypot(*(xy[e[:, 1]] - xy[e[:, 0]]).T)
+    for col, h in ((0, h_uv), (1, h_vu)):
+        m = ln.ok[:, col]
+        tail, head = (e[m, 0], e[m, 1]) if col == 0 else (e[m, 1], e[m, 0])
+        ct, chd = copy_id(tail, h[m]), copy_id(head, h[m])
+        pa.append(ct)
+        pb.append(chd)
+        plen.append(lens[m])
+        if robot.reverse:  # backwards along the same lane, the same heading
+            pa.append(chd)
+            pb.append(ct)
+            plen.append(lens[m])
+    pa = np.concatenate(pa) if pa else np.zeros(0, dtype=np.int64)
+    pb = np.concatenate(pb) if pb else np.zeros(0, dtype=np.int64)
+    plen = np.concatenate(plen) if plen else np.zeros(0)
+    pdh = np.zeros(len(pa))
+    # turns: a ring of headings per vertex, on a grid one turning step apart (see _Base)
+    scale = vmax / rate
+    n_ring = int(split_counts(np.array([2 * math.pi * scale]), step_len)[0])
+    ring_ptr, ring_v, ring_h, ring_ok, ta, tb, tdh = _rings(geometry, xy, cv, ch, n_ring)
+    tdh = np.asarray(tdh, dtype=float)
+    return_ = _Base(
+        poses=np.column_stack([xy[cv], ch]) if len(cv) else np.zeros((0, 3)),
+        vertex=cv,
+        a=np.concatenate([pa, np.asarray(ta, dtype=np.int64)]),
+        b=np.concatenate([pb, np.asarray(tb, dtype=np.int64)]),
+        dh=np.concatenate([pdh, tdh]),
+        length=np.concatenate([plen, np.abs(tdh) * scale]),
+        ring=np.column_stack([xy[ring_v], ring_h]) if len(ring_v) else np.zeros((0, 3)),
+        ring_ptr=ring_ptr,
+        ring_ok=ring_ok,
+        n_ring=n_ring,
+        vertex_xy=xy,
+        clearance=np.full(len(xy), np.nan),
+    )
+    roadmap._derived[key] = return_
+    return return_
+
+
+@dataclass(frozen=True)
+class UnicyclePrepared:
+    """:meth:`gfuzzy.planner.planner.Planner.prepare` for a unicycle: the goal's kept graph
+    (:class:`UnicycleGoal`; the roadmap's copies, lanes and rings are cached on the roadmap).
+
+    Attributes
+    ----------
+    goal_raw : (3,) float
+    options : PlanOptions
+    kept : UnicycleGoal
+    """
+
+    goal_raw: FloatArray
+    options: object
+    kept: object
+
+    def splice(self, planner, start: FloatArray) -> UnicycleGraph:
+        return self.kept.splice(planner, start)
+
+
+class _Extras:
+    """A query's own nodes and pieces (the goal's when preparing, the start's per call).
+
+    Node ids: base copies ``< n_copies``; new nodes from ``first``; ring point i is
+    ``ring_at + i`` (or the placeholder ``-(1 + i)`` while the ring's place is not known).
+    """
+
+    def __init__(self, base: _Base, geometry, scale: float, first: int, ring_at: int | None = None):
+        self.base, self.geometry, self.scale = base, geometry, scale
+        self.first = first
+        self.ring_at = ring_at
+        self.poses: list = []
+        self.pieces: list = []  # (a, b, dh, length)
+        self.kept: FloatArray | None = None  # the kept graph's poses, when splicing into one
+
+    def node(self, x: float, y: float, h: float) -> int:
+        self.poses.append((float(x), float(y), float(wrap_angle(h))))
+        return self.first + len(self.poses) - 1
+
+    def ring(self, i: int) -> int:
+        return -(1 + i) if self.ring_at is None else self.ring_at + i
+
+    def pose(self, i: int):
+        if i < 0:
+            return self.base.ring[-i - 1]
+        if i >= self.first:
+            return self.poses[i - self.first]
+        return self.base.poses[i] if self.kept is None else self.kept[i]
+
+    def lane(self, a: int, b: int) -> None:
+        pa, pb = self.pose(a), self.pose(b)
+        self.pieces.append((a, b, 0.0, math.hypot(pb[0] - pa[0], pb[1] - pa[1])))
+
+    def turn(self, a: int, b: int, dh: float) -> None:
+        if dh != 0.0:
+            self.pieces.append((a, b, float(dh), abs(dh) * self.scale))
+
+    def copy_at(self, v: int, h: float, out: bool) -> int:
+        """The copy of vertex v at heading h: the base's when it has one, else a new copy
+        joined by turns to the two ring points around its heading: out to them (``out``:
+        the start arrives there and turns on), else in from them (the goal leaves there)."""
+        geo, base = self.geometry, self.base
+        ids = base.copies_at(v)
+        rel = (base.poses[ids, 2] - h) % (2 * math.pi)
+        same = (rel <= SAME_HEADING) | (rel >= 2 * math.pi - SAME_HEADING)
+        if same.any():
+            return int(ids[np.nonzero(same)[0][0]])
+        x, y = (float(c) for c in base.poses[ids[0], :2])
+        c = self.node(x, y, h)
+        r0 = int(base.ring_ptr[v])
+        step_h = 2 * math.pi / base.n_ring
+        for r, arc in _brackets(h, r0, base.n_ring, step_h):
+            if base.ring_ok[r] and turn_free(geo, x, y, h, arc):
+                if out:
+                    self.turn(c, self.ring(r), arc)
+                else:
+                    self.turn(self.ring(r), c, -arc)
+        return c
+
+    def join(self, pose: FloatArray, node: int, connect_k: int, outward: bool, reverse: bool) -> None:
+        """Join ``node`` (at ``pose``) to its nearest vertices: turn + straight to a copy
+        there (``outward``: the start), or a copy there + straight + turn (the goal)."""
+        geo, base = self.geometry, self.base
+        robot = geo.robot
+        px, py, ph = (float(c) for c in pose)
+        xy = base.vertex_xy
+        has = np.zeros(len(xy), dtype=bool)
+        has[base.vertex] = True
+        d = np.hypot(xy[:, 0] - px, xy[:, 1] - py)
+        order = np.argsort(d, kind="stable")
+        order = order[has[order] & (d[order] > 1e-9)]
+        tried = joined = 0
+        disc = robot.shape == "disc"
+        c_p = geo.clearance1([px, py]) if disc else None
+        table = self.base.clearance if disc else None  # the vertices' (shared by every query)
+        for v in order[: 4 * max(connect_k, 1)].tolist():
+            if tried >= connect_k and joined:
+                break
+            tried += 1
+            vx, vy = float(xy[v, 0]), float(xy[v, 1])
+            c_v = None
+            if disc:
+                c_v = table[v]
+                if c_v != c_v:  # NaN: not computed yet
+                    c_v = table[v] = geo.clearance1([vx, vy])
+            for back in (False, True) if reverse else (False,):
+                ax, ay, bx, by = (px, py, vx, vy) if outward else (vx, vy, px, py)
+                ca, cb = (c_p, c_v) if outward else (c_v, c_p)
+                h = _drive(geo, robot, ax, ay, bx, by, back, ca, cb)
+                if h is None:
+                    continue
+                dh = pick_turn(geo, px, py, ph, h) if outward else pick_turn(geo, px, py, h, ph)
+                if dh is None:
+                    continue
+                here = node
+                if dh != 0.0:
+                    here = self.node(px, py, h)
+                    if outward:
+                        self.turn(node, here, dh)
+                    else:
+                        self.turn(here, node, dh)
+                c = self.copy_at(v, h, outward)
+                if outward:
+                    self.lane(here, c)
+                else:
+                    self.lane(c, here)
+                joined += 1
+
+
+def _drive(geo, robot, ax, ay, bx, by, back: bool, ca=None, cb=None):
+    """Heading for driving from a to b (backwards: facing away from b), or None when the
+    lane is not free for the body held at it (``ca``, ``cb``: the ends' clearances, when
+    known: a disc's do not depend on the heading)."""
+    h = math.atan2(by - ay, bx - ax) + (math.pi if back else 0.0)
+    if not geo.motion_free(_xy_pose(robot, ax, ay, h), _xy_pose(robot, bx, by, h), ca=ca, cb=cb):
+        return None
+    return h
+
+
+def _cut_pieces(nodes: FloatArray, A: IntArray, B: IntArray, DH: FloatArray, L: FloatArray, step_len: float,
+                first: int):  # fmt: skip
+    """Pieces cut into one-step points (:func:`gfuzzy.poses.split_counts`): (k, offs, p_of,
+    j, inner poses, src, dst) with interior ids from ``first``. ``nodes``: the poses of the
+    nodes, or a function of node ids giving them."""
+    k = split_counts(L, step_len)
+    n_int = k - 1
+    offs = np.concatenate([[0], np.cumsum(n_int)]).astype(np.int64)
+    p_of = np.repeat(np.arange(len(A)), n_int)
+    j = np.arange(offs[-1]) - np.repeat(offs[:-1], n_int) + 1
+    f = j / k[p_of]
+    pa, pb = (nodes(A[p_of]), nodes(B[p_of])) if callable(nodes) else (nodes[A[p_of]], nodes[B[p_of]])
+    inner = np.empty((len(p_of), 3))
+    inner[:, :2] = pa[:, :2] + f[:, None] * (pb[:, :2] - pa[:, :2])
+    inner[:, 2] = np.where(DH[p_of] != 0.0, wrap_angle(pa[:, 2] + f * DH[p_of]), pa[:, 2])
+    ids = first + np.arange(offs[-1])
+    is_first = np.zeros(offs[-1], dtype=bool)
+    is_first[offs[:-1][n_int > 0]] = True
+    is_last = np.zeros(offs[-1], dtype=bool)
+    is_last[(offs[1:] - 1)[n_int > 0]] = True
+    src = np.concatenate([np.where(is_first, A[p_of], ids - 1), ids[is_last], A[n_int == 0]])
+    dst = np.concatenate([ids, B[p_of][is_last], B[n_int == 0]])
+    return k, offs, p_of, j, inner, src, dst
+
+
+def _too_many(total: int):
+    from ..errors import LimitError
+    from ..settings import MAX_POINTS
+
+    if total > MAX_POINTS:
+        raise LimitError(
+            f"the time step is too fine for this roadmap: the unicycle's graph would have {total:,} points "
+            f"(at most {MAX_POINTS:,}); use a larger dt"
+        )
+
+
+def _matrix(A, B, w, n):
+    """Node-level graph (parallel pieces: the shortest), scipy CSR (n, n)."""
+    from scipy.sparse import csr_matrix
+
+    key = A * n + B
+    o = np.lexsort((w, key))
+    keep = np.ones(len(o), dtype=bool)
+    keep[1:] = key[o][1:] != key[o][:-1]
+    o = o[keep]
+    return csr_matrix((np.maximum(w[o], 1e-300), (A[o], B[o])), shape=(n, n))
+
+
+def _dijkstra(mat, index: int) -> FloatArray:
+    from scipy.sparse.csgraph import dijkstra
+
+    d = dijkstra(mat, directed=True, indices=index)
+    return np.where(d < 1e-200, 0.0, d)
+
+
+@dataclass
+class UnicycleGoal:
+    """A goal's graph kept for many starts (the one builder of a unicycle's query graph:
+    :meth:`gfuzzy.planner.planner.Planner.plan`, ``plan_from`` and the navigator use it).
+
+    Numbering: the base's copies, the goal's own nodes (the goal ``g_id`` first), the
+    rings, then the pieces' interior points; a start adds its nodes and points after these
+    (:meth:`splice`).
+
+    Attributes
+    ----------
+    goal : (3,) float
+    base : _Base
+    poses : (N, 3) float
+    indptr, neighbors : CSR one-step moves of the kept graph
+    nn : int
+        Nodes (copies, the goal's, rings) before the interior points.
+    A, B : (P,) int ; k : (P,) int ; L : (P,) float
+        The kept pieces at node level (ends, steps, metres at vmax).
+    hop : (nn,) float
+        Steps to the goal per node; ``heuristic`` (N,) per point.
+    metres : (nn,) float
+        Metres at vmax to the goal per node.
+    groups : (G,) int
+    p_of, j : (N - nn,) int
+        Each interior point's piece and index along it.
+    step_len, scale : float
+    steps : scipy CSR (nn, nn)
+        The kept pieces at node level weighted in steps (the starts' Dijkstra extends it).
+    """
+
+    goal: FloatArray
+    base: _Base
+    poses: FloatArray
+    indptr: IntArray
+    neighbors: IntArray
+    nn: int
+    A: IntArray
+    B: IntArray
+    k: IntArray
+    L: FloatArray
+    hop: FloatArray
+    heuristic: FloatArray
+    metres: FloatArray
+    groups: IntArray
+    p_of: IntArray
+    j: IntArray
+    g_id: int
+    step_len: float
+    scale: float
+    connect_k: int
+    steps: object = None
+
+    def splice(self, planner, start: FloatArray, exact: bool = True) -> UnicycleGraph:
+        """This graph with ``start`` (``[x, y, heading]``, heading wrapped) joined in.
+
+        ``exact``: the steps from the start to every point by Dijkstra (a fresh plan's
+        safety windows); otherwise the straight distance over a step's length, a cheaper
+        lower bound (the navigator's).
+        """
+        geo, robot = planner.geometry, planner.robot
+        N = len(self.poses)
+        ex = _Extras(self.base, geo, self.scale, N, ring_at=len(self.base.poses))
+        ex.kept = self.poses
+        s_id = ex.node(*start)
+        ex.join(start, s_id, self.connect_k, True, robot.reverse)
+        sx, sy, sh = (float(v) for v in start)
+        gx, gy, gh = (float(v) for v in self.goal)
+        if math.hypot(gx - sx, gy - sy) <= 1e-9:  # the same place: a turn in place
+            dh = pick_turn(geo, sx, sy, sh, gh)
+            if dh is not None:
+                ex.turn(s_id, self.g_id, dh)
+        else:
+            for back in (False, True) if robot.reverse else (False,):
+                h = _drive(geo, robot, sx, sy, gx, gy, back)
+                if h is None:
+                    continue
+                d1, d2 = pick_turn(geo, sx, sy, sh, h), pick_turn(geo, gx, gy, h, gh)
+                if d1 is None or d2 is None:
+                    continue
+                a = s_id if d1 == 0.0 else ex.node(sx, sy, h)
+                c = self.g_id if d2 == 0.0 else ex.node(gx, gy, h)
+                ex.turn(s_id, a, d1)
+                ex.turn(c, self.g_id, d2)
+                ex.lane(a, c)
+        new = np.asarray(ex.poses, dtype=float).reshape(-1, 3)
+        x = len(new)
+        xp = np.asarray(ex.pieces, dtype=float).reshape(-1, 4)
+        A, B = xp[:, 0].astype(np.int64), xp[:, 1].astype(np.int64)
+        def pose_of(ids):
+            out = np.empty((len(ids), 3))
+            kept = ids < N
+            out[kept] = self.poses[ids[kept]]
+            out[~kept] = new[ids[~kept] - N]
+            return out
+
+        k, offs, p_of, j, inner, src, dst = _cut_pieces(pose_of, A, B, xp[:, 2], xp[:, 3], self.step_len, N + x)
+        total = N + x + int(offs[-1])
+        _too_many(total)
+        # steps and metres to the goal of the new nodes: the kept ones bound them (a start's
+        # pieces lead into the kept graph, never out of it and back)
+        hop = np.concatenate([np.full(N, np.inf), np.full(x, np.inf)])
+        hop[: self.nn] = self.hop
+        met = hop.copy()
+        met[: self.nn] = self.metres
+        Lw = np.where(xp[:, 3] > 0, xp[:, 3], 0.0)
+        for _ in range(x + 1):
+            nh, nm = k + hop[B], Lw + met[B]
+            changed = False
+            for i in range(len(A)):
+                if nh[i] < hop[A[i]]:
+                    hop[A[i]], changed = nh[i], True
+                if nm[i] < met[A[i]]:
+                    met[A[i]], changed = nm[i], True
+            if not changed:
+                break
+        rd = float(met[s_id])
+        heur = np.concatenate([self.heuristic, hop[N:], hop[B[p_of]] + k[p_of] - j])
+        poses = np.concatenate([self.poses, new, inner])
+        # adjacency: every move of the start's is out of a new node or point (kept lists
+        # stay as they are), so the new lists follow the kept ones
+        order = np.argsort(src, kind="stable")
+        nbrs = np.concatenate([self.neighbors, dst[order]])
+        indptr = np.concatenate([self.indptr, self.indptr[-1] + np.cumsum(np.bincount(src - N, minlength=total - N))])
+        if exact:  # steps from the start: Dijkstra over the nodes (new ones renumbered after the kept)
+            from scipy.sparse import csr_matrix
+
+            nn = self.nn
+            a_c, b_c = A - N + nn, np.where(B >= N, B - N + nn, B)
+            o = np.lexsort((k, b_c, a_c))  # by row; parallel pieces: the shortest first
+            first = np.ones(len(o), dtype=bool)
+            first[1:] = (a_c[o][1:] != a_c[o][:-1]) | (b_c[o][1:] != b_c[o][:-1])
+            o = o[first]
+            m = self.steps
+            rows = np.cumsum(np.bincount(a_c[o] - nn, minlength=x))
+            mat = csr_matrix((np.concatenate([m.data, np.maximum(k[o], 1e-300).astype(float)]),
+                              np.concatenate([m.indices, b_c[o]]), np.concatenate([m.indptr, m.indptr[-1] + rows])),
+                             shape=(nn + x, nn + x))  # fmt: skip
+            hop_s = np.rint(_dijkstra(mat, nn))
+            from_start = np.empty(total)
+            from_start[:nn] = hop_s[:nn]
+            from_start[N : N + x] = hop_s[nn:]
+            from_start[self.nn : N] = hop_s[self.A[self.p_of]] + self.j
+            hs = np.concatenate([hop_s[:nn], np.zeros(N - nn), hop_s[nn:]])
+            from_start[N + x :] = hs[A[p_of]] + j
+        else:
+            from_start = np.floor(np.hypot(*(poses[:, :2] - start[:2]).T) / self.step_len - 1e-9)
+            from_start = np.maximum(from_start, 0.0)
+        groups = np.concatenate([self.groups, N + np.arange(x + 1), N + x + offs[1:]])
+        graph = SpaceTimeGraph(poses, indptr, nbrs, heur, groups=groups, from_start=from_start)
+        return UnicycleGraph(graph, s_id, self.g_id, rd)
+
+
+@dataclass
+class _BaseCut:
+    """The base's pieces cut into steps, cached with it: nodes ``[copies][rings]`` (``nn0``),
+    interior points numbered from ``nn0`` (a goal's nodes go between the two, shifting them),
+    the moves sorted by source, and node-level graphs (forward in steps; backward in steps
+    and in metres) as CSR arrays of ``nn0`` rows."""
+
+    nodes: FloatArray
+    A: IntArray
+    B: IntArray
+    k: IntArray
+    L: FloatArray
+    offs: IntArray
+    p_of: IntArray
+    j: IntArray
+    inner: FloatArray
+    src: IntArray
+    dst: IntArray
+    fwd: object
+    back_steps: object
+    back_metres: object
+
+
+def _base_cut(base: _Base, step_len: float) -> _BaseCut:
+    hit = getattr(base, "_cut", None)
+    if hit is not None and hit[0] == step_len:
+        return hit[1]
+    K = len(base.poses)
+    nodes = np.vstack([base.poses, base.ring])
+    nn0 = len(nodes)
+    A = np.where(base.a < 0, K - 1 - base.a, base.a)
+    B = np.where(base.b < 0, K - 1 - base.b, base.b)
+    k, offs, p_of, j, inner, src, dst = _cut_pieces(nodes, A, B, base.dh, base.length, step_len, nn0)
+    order = np.argsort(src, kind="stable")
+    L = np.where(base.length > 0, base.length, 0.0)
+    cut = _BaseCut(nodes, A, B, k, L, offs, p_of, j, inner, src[order], dst[order],
+                   _matrix(A, B, k.astype(float), nn0), _matrix(B, A, k.astype(float), nn0), _matrix(B, A, L, nn0))  # fmt: skip
+    base._cut = (step_len, cut)
+    return cut
+
+
+def _with_rows(mat, A, B, w, n: int):
+    """CSR ``mat`` (its rows first) grown to (n, n) with entries (A, B, w) inserted at their
+    rows' ends (parallel ones: the shortest, :func:`_matrix`)."""
+    from scipy.sparse import csr_matrix
+
+    extra = _matrix(A, B, w, n)
+    rows = np.repeat(np.arange(n), np.diff(extra.indptr))
+    m_indptr = np.concatenate([mat.indptr, np.full(n - mat.shape[0], mat.indptr[-1])])
+    at = m_indptr[rows + 1]
+    indptr = m_indptr + np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=n))])
+    return csr_matrix((np.insert(mat.data, at, extra.data), np.insert(mat.indices, at, extra.indices), indptr),
+                      shape=(n, n))  # fmt: skip
+
+
+def prepare_goal(planner, goal: FloatArray, dt: float, vplan: float, connect_k: int = 10,
+                 stretch: float = 1.0) -> UnicycleGoal:  # fmt: skip
+    """The kept graph of ``goal`` (``[x, y, heading]``, heading wrapped): the base's copies,
+    lanes and rings cut into steps (cached on the roadmap) with the goal joined in, and the
+    static steps and metres to the goal.
+
+    Numbering: the copies, the rings, the goal's nodes (the goal first), then the base's
+    interior points and the goal's pieces' ones.
+    """
+    geo, robot, rm = planner.geometry, planner.robot, planner.roadmap
+    step_len = vplan * dt
+    base = _base(rm, geo, stretch, robot.vmax, step_len)
+    cut = _base_cut(base, step_len)
+    scale = robot.vmax / robot.turn_rate
+    nn0 = len(cut.nodes)
+    ex = _Extras(base, geo, scale, nn0, ring_at=len(base.poses))
+    g_id = ex.node(*goal)
+    ex.join(goal, g_id, connect_k, False, robot.reverse)
+    xg = len(ex.poses)
+    nn = nn0 + xg
+    nodes = np.vstack([cut.nodes, np.asarray(ex.poses, dtype=float).reshape(-1, 3)])
+    xp = np.asarray(ex.pieces, dtype=float).reshape(-1, 4)
+    Ag, Bg = xp[:, 0].astype(np.int64), xp[:, 1].astype(np.int64)
+    I0 = int(cut.offs[-1])
+    kg, offg, pg, jg, innerg, srcg, dstg = _cut_pieces(nodes, Ag, Bg, xp[:, 2], xp[:, 3], step_len, nn + I0)
+    total = nn + I0 + int(offg[-1])
+    _too_many(total)
+    shift = np.int64(xg)
+    s0 = np.where(cut.src >= nn0, cut.src + shift, cut.src)
+    d0 = np.where(cut.dst >= nn0, cut.dst + shift, cut.dst)
+    o = np.argsort(srcg, kind="stable")
+    neighbors = np.insert(d0, np.searchsorted(s0, srcg[o], side="right"), dstg[o])
+    indptr = np.zeros(total + 1, dtype=np.int64)
+    np.cumsum(np.bincount(np.concatenate([s0, srcg]), minlength=total), out=indptr[1:])
+    Lg = np.where(xp[:, 3] > 0, xp[:, 3], 0.0)
+    hop = np.rint(_dijkstra(_with_rows(cut.back_steps, Bg, Ag, kg.astype(float), nn), g_id))
+    metres = _dijkstra(_with_rows(cut.back_metres, Bg, Ag, Lg, nn), g_id)
+    A, B = np.concatenate([cut.A, Ag]), np.concatenate([cut.B, Bg])
+    k = np.concatenate([cut.k, kg])
+    p_of = np.concatenate([cut.p_of, len(cut.A) + pg])
+    j = np.concatenate([cut.j, jg])
+    heur = np.concatenate([hop, hop[B[p_of]] + k[p_of] - j])
+    rings = len(base.poses) + base.n_ring * np.arange(len(base.ring) // max(base.n_ring, 1))
+    # a ring's points share a position: one group; the goal's nodes one each; pieces without
+    # interior points add none
+    offs = np.concatenate([cut.offs, I0 + offg[1:]])
+    groups = np.concatenate([rings, nn0 + np.arange(xg + 1), nn + offs[np.r_[True, np.diff(offs) > 0]]])
+    return UnicycleGoal(
+        goal=np.asarray(goal, dtype=float), base=base, poses=np.vstack([nodes, cut.inner, innerg]), indptr=indptr,
+        neighbors=neighbors, nn=nn, A=A, B=B, k=k, L=np.concatenate([cut.L, Lg]), hop=hop, heuristic=heur,
+        metres=metres, groups=groups, p_of=p_of, j=j, g_id=g_id, step_len=step_len, scale=scale, connect_k=connect_k,
+        steps=_with_rows(cut.fwd, Ag, Bg, kg.astype(float), nn),
+    )  # fmt: skip
+
+
+def build_graph(planner, start: FloatArray, goal: FloatArray, dt: float, vplan: float,
+                connect_k: int = 10, stretch: float = 1.0) -> UnicycleGraph:  # fmt: skip
+    """The unicycle's space-time graph of a query (see the module docstring):
+    :func:`prepare_goal` then :meth:`UnicycleGoal.splice` with exact safety windows.
+
+    Parameters
+    ----------
+    planner : gfuzzy.planner.planner.Planner
+    start, goal : (3,) float
+        ``[x, y, heading]``, headings wrapped.
+    dt : float
+    vplan : float
+        The speed the graph is cut for (``vmax * SPEED_SAFETY``).
+    connect_k : int
+        How many vertices the start and the goal try to join.
+    stretch : float
+        The disc's roadmap spanner (a box uses all its lanes).
+
+    Returns
+    -------
+    UnicycleGraph
+    """
+    return prepare_goal(planner, goal, dt, vplan, connect_k, stretch).splice(planner, start)
+
