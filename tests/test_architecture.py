@@ -158,3 +158,40 @@ def test_no_module_or_function_is_too_long():
         if problems:
             over[name] = problems
     assert over == {}
+
+
+#: The packages in pipeline order (docs/architecture.md): a module imports only from its own
+#: package and the packages before it. "base" is the flat modules of gfuzzy/.
+LAYERS = (
+    "base", "scene", "collision", "roadmap", "timespace", "ga", "fuzzy", "check", "planner",
+    "runs", "navigation", "render", "export", "learning", "cli",
+)
+#: At most this many modules stay flat in gfuzzy/ (issue 20).
+MAX_FLAT_MODULES = 10
+
+
+def _layer(module: str) -> str:
+    parts = module.split(".")
+    return "base" if len(parts) == 1 or (PACKAGE / f"{parts[1]}.py").exists() else parts[1]
+
+
+def test_packages_follow_the_pipeline_and_few_modules_stay_flat():
+    flat = sorted(p.name for p in PACKAGE.glob("*.py"))
+    assert len(flat) <= MAX_FLAT_MODULES, flat
+    packages = {p.name for p in PACKAGE.iterdir() if (p / "__init__.py").exists()}
+    assert packages == set(LAYERS) - {"base"}, packages ^ (set(LAYERS) - {"base"})
+    order = {name: i for i, name in enumerate(LAYERS)}
+    upward = sorted(
+        f"{m} -> {d}"
+        for m, deps in _graph().items()
+        if m not in ("gfuzzy", "gfuzzy.__main__")  # the public API and the entry point: the top
+        for d in deps
+        if order[_layer(d)] > order[_layer(m)]
+    )
+    assert upward == []
+
+
+def test_the_layer_rule_sees_an_upward_import():
+    assert _layer("gfuzzy.timespace.unicycle") == "timespace" and _layer("gfuzzy.poses") == "base"
+    order = {name: i for i, name in enumerate(LAYERS)}
+    assert order[_layer("gfuzzy.planner.stages")] > order[_layer("gfuzzy.timespace.drive")]

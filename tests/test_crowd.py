@@ -13,8 +13,8 @@ import pytest
 
 pytest.importorskip("pyrvo")
 
-from gfuzzy.navigation import crowd as C  # noqa: E402
 from gfuzzy.errors import InputError  # noqa: E402
+from gfuzzy.navigation import crowd as C  # noqa: E402
 from gfuzzy.navigation.humans import OrcaCrowd, SocialForceCrowd  # noqa: E402
 from gfuzzy.navigation.socialmetrics import SocialMetrics  # noqa: E402
 

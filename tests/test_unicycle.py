@@ -15,10 +15,10 @@ import pytest
 
 from gfuzzy.check.check import check_trajectory
 from gfuzzy.errors import SceneError
-from gfuzzy.planner.drive import turn_path
 from gfuzzy.planner.planner import Planner, PlanOptions
 from gfuzzy.roadmap.roadmap import Roadmap
 from gfuzzy.scene.scene import parse_scene
+from gfuzzy.timespace.drive import turn_path
 
 
 def doc(robot=None, movers=(), obstacles=(), queries=(), bounds=(0, 0, 6, 4)):

@@ -31,8 +31,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from gfuzzy.navigation import crowd as C  # noqa: E402
 from gfuzzy.cli.crowds import _table  # noqa: E402
+from gfuzzy.navigation import crowd as C  # noqa: E402
 from gfuzzy.navigation.navigator import NavOptions  # noqa: E402
 from gfuzzy.navigation.sensing import SensorOptions  # noqa: E402
 

@@ -38,13 +38,13 @@ import numpy as np
 
 from ..collision.geometry import StaticGeometry, mover_distance
 from ..errors import InputError, LimitError, check_number
-from ..planner.drive import drive_rows, evasions
 from ..planner.planner import BACKENDS, search_function
 from ..poses import metric_distance, wrap_angle
 from ..roadmap.roadmap import Roadmap
 from ..scene.scene import Mover, Scene
 from ..settings import SPEED_SAFETY
 from ..status import Status
+from ..timespace.drive import drive_rows, evasions
 from ..timespace.movers import MoverField
 from ..timespace.spacetime import IntervalStore, SpaceTimeGraph
 from ..timespace.timespace import timed_rows

@@ -323,7 +323,7 @@ def _refine(ctx: StageContext, traj: Trajectory, query, opts, deadline) -> tuple
     if not res.improved:
         return traj, replace(report, reason="the GA found nothing better than the corridor")
     if ctx.robot.unicycle:  # straight segments through the via-points, turns in place
-        from .drive import turn_path
+        from ..timespace.drive import turn_path
 
         path = turn_path(traj.poses[0], res.path[1:-1], traj.poses[-1])
     else:

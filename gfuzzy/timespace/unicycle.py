@@ -36,9 +36,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..planner.drive import SAME_HEADING, _xy_pose, pick_turn, turn_free
 from ..poses import split_counts, wrap_angle
 from ..typed import FloatArray, IntArray
+from .drive import SAME_HEADING, _xy_pose, pick_turn, turn_free
 from .spacetime import SpaceTimeGraph
 
 __all__ = ["UnicycleGraph", "UnicycleGoal", "UnicyclePrepared", "prepare_goal", "build_graph", "lanes", "LANE_NEIGHBOURS", "SAME_HEADING"]
