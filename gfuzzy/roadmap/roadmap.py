@@ -380,35 +380,6 @@ def _seed_ompl(seed: int) -> None:
         ou.setLogLevel(level)
 
 
-def _free_cell_draw(scene: Scene, rng: np.random.Generator):
-    """A draw of points uniform over the free cells of the scene's maps, or None.
-
-    Returns None without a map, or when the free cells cover most of the bounds anyway
-    (uniform sampling in the bounds then wastes little).
-    """
-    from ..scene.scene import MapObstacle
-
-    xmin, ymin, xmax, ymax = scene.bounds
-    centres, sizes = [], []
-    for grid in scene.obstacles:
-        if isinstance(grid, MapObstacle):
-            c = grid.free_centres()
-            c = c[(c[:, 0] > xmin) & (c[:, 0] < xmax) & (c[:, 1] > ymin) & (c[:, 1] < ymax)]
-            centres.append(c)
-            sizes.append(np.full(len(c), grid.resolution))
-    if not centres:
-        return None
-    c, size = np.concatenate(centres), np.concatenate(sizes)
-    if len(c) == 0 or float(np.sum(size**2)) > FREE_CELL_SHARE * (xmax - xmin) * (ymax - ymin):
-        return None
-
-    def draw() -> FloatArray:
-        k = int(rng.integers(len(c)))
-        return c[k] + (rng.random(2) - 0.5) * size[k]
-
-    return draw
-
-
 def _make_passage_sampler(
     ob, si, geometry: StaticGeometry, rng: np.random.Generator, ratio: float, record: list
 ):
