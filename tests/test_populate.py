@@ -113,3 +113,44 @@ def test_populate_refuses_bad_input(tmp_path):
         assert p.returncode == 2, flags
         assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
         assert not out.exists()
+
+
+def _wall_map(folder: Path) -> tuple[dict, np.ndarray]:
+    """ROOM's walls and pillar as a Nav2 map (0.1 m cells), written beside a scene in folder;
+    returns the scene document and the occupied mask (row 0 at the top)."""
+    from PIL import Image
+
+    h, w, res = 60, 100, 0.1
+    xs, ys = (np.arange(w) + 0.5) * res, (h - 1 - np.arange(h) + 0.5) * res
+    X, Y = np.meshgrid(xs, ys)
+    occupied = np.zeros((h, w), bool)
+    for ob in ROOM["obstacles"]:
+        (cx, cy), (sx, sy) = ob["box"]["center"], ob["box"]["size"]
+        occupied |= (np.abs(X - cx) < sx / 2) & (np.abs(Y - cy) < sy / 2)
+    Image.fromarray(np.where(occupied, 0, 254).astype(np.uint8)).save(folder / "room.pgm")
+    (folder / "room-map.yaml").write_text(
+        "image: room.pgm\nresolution: 0.1\norigin: [0.0, 0.0, 0.0]\nnegate: 0\n"
+        "occupied_thresh: 0.65\nfree_thresh: 0.196\n"
+    )
+    doc = dict(ROOM, obstacles=[{"map": {"file": "room-map.yaml"}}])
+    return doc, occupied
+
+
+def test_people_avoid_the_walls_of_a_map(tmp_path):
+    doc, occupied = _wall_map(tmp_path)
+    (tmp_path / "room.yaml").write_text(yaml.safe_dump(doc))
+    scene = gfuzzy.load_scene(tmp_path / "room.yaml")
+    res = populate(scene, PopulateOptions(people=6, seed=3, duration=30.0))
+    assert res.movers
+    for m in res.movers:  # every sampled centre lies in a free cell, a radius from any blocked one
+        rows = m.trajectory
+        for a, b in zip(rows[:-1, 1:], rows[1:, 1:], strict=True):
+            n = max(2, int(np.ceil(np.hypot(*(b - a)) / 0.02)) + 1)
+            pts = a + np.linspace(0, 1, n)[:, None] * (b - a)
+            col, row = (pts[:, 0] / 0.1).astype(int), 59 - (pts[:, 1] / 0.1).astype(int)
+            assert not occupied[row, col].any(), m.name
+            blocked = np.argwhere(occupied)
+            cx, cy = (blocked[:, 1] + 0.5) * 0.1, (59 - blocked[:, 0] + 0.5) * 0.1
+            gap = np.hypot(np.maximum(np.abs(pts[:, None, 0] - cx) - 0.05, 0),
+                           np.maximum(np.abs(pts[:, None, 1] - cy) - 0.05, 0)).min()  # fmt: skip
+            assert gap >= m.radius - 1e-6, m.name

@@ -204,3 +204,23 @@ def test_navigate_refuses_bad_sensor_flags_in_one_line(tmp_path, flags):
     assert p.returncode == 2
     assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
     assert not out.exists()
+
+
+def test_a_map_wall_hides_a_mover(tmp_path):
+    from PIL import Image
+
+    img = np.full((40, 40), 254, np.uint8)  # 0.1 m cells over [-2, 2]^2; a wall at x in [0.9, 1.1]
+    img[10:30, 29:31] = 0
+    Image.fromarray(img).save(tmp_path / "m.pgm")
+    (tmp_path / "m.yaml").write_text(
+        "image: m.pgm\nresolution: 0.1\norigin: [-2.0, -2.0, 0.0]\nnegate: 0\n"
+        "occupied_thresh: 0.65\nfree_thresh: 0.196\n"
+    )
+    (tmp_path / "s.yaml").write_text(
+        "version: 1\nname: s\nrobot: {disc: 0.1, vmax: 1.0}\n"
+        "obstacles: [{map: {file: m.yaml}}]\nmovers: []\nqueries: []\n"
+    )
+    scene = gfuzzy.load_scene(tmp_path / "s.yaml")
+    pts = np.array([[1.8, 0.0], [1.5, 1.9], [0.5, 0.0]])
+    # behind the wall (y in [-1, 1]); passing above its end (y 1.14 at x 0.9); in front of it
+    np.testing.assert_array_equal(line_of_sight(scene, np.zeros(2), pts), [False, True, True])

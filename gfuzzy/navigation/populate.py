@@ -25,7 +25,8 @@ import numpy as np
 
 from ..errors import InputError
 from ..rng import create_rng
-from ..scene.scene import Box, Disc, Mover, Polygon, Scene
+from ..roadmap.freespace import obstacle_shape
+from ..scene.scene import Mover, Scene
 from ..typed import FloatArray
 
 __all__ = ["PopulateOptions", "Populated", "populate", "write_scene", "obstacle_union"]
@@ -93,16 +94,7 @@ def obstacle_union(scene: Scene):
     """The scene's static obstacles as one shapely geometry (None without obstacles)."""
     import shapely
 
-    shapes = []
-    for ob in scene.obstacles:
-        if isinstance(ob, Disc):
-            shapes.append(shapely.Point(ob.center).buffer(ob.radius, quad_segs=16))
-        elif isinstance(ob, Box):
-            shapes.append(shapely.Polygon(ob.vertices()))
-        elif isinstance(ob, Polygon):
-            shapes.append(shapely.Polygon(ob.points, list(ob.holes)))
-        elif hasattr(ob, "points"):
-            shapes.append(shapely.Polygon(np.asarray(ob.points)))
+    shapes = [g for g in map(obstacle_shape, scene.obstacles) if g is not None]
     return shapely.union_all(shapes) if shapes else None
 
 

@@ -24,7 +24,8 @@ import numpy as np
 
 from ..errors import InputError
 from ..rng import create_rng
-from ..scene.scene import Box, Disc, Polygon, Scene
+from ..roadmap.freespace import obstacle_shape
+from ..scene.scene import Scene
 from ..typed import BoolArray, FloatArray
 
 __all__ = ["VELOCITY_MODES", "SensorOptions", "Sensor", "Tracker", "line_of_sight", "in_fov"]
@@ -99,19 +100,8 @@ def in_fov(pose_xy: FloatArray, heading: float, points: FloatArray, fov_deg: flo
 
 
 def _obstacle_shapes(scene: Scene) -> list:
-    import shapely
-
-    shapes = []
-    for ob in scene.obstacles:
-        if isinstance(ob, Disc):
-            shapes.append(shapely.Point(ob.center).buffer(ob.radius, quad_segs=32))
-        elif isinstance(ob, Box):
-            shapes.append(shapely.Polygon(ob.vertices()))
-        elif isinstance(ob, Polygon):
-            shapes.append(shapely.Polygon(ob.points, [h for h in ob.holes]))
-        elif hasattr(ob, "points"):  # another polygonal obstacle kind
-            shapes.append(shapely.Polygon(np.asarray(ob.points)))
-    return shapes
+    """The static obstacles as shapely geometries (maps included)."""
+    return [g for g in map(obstacle_shape, scene.obstacles) if g is not None]
 
 
 def line_of_sight(scene: Scene, a: FloatArray, points: FloatArray, shapes: list | None = None) -> BoolArray:

@@ -127,8 +127,11 @@ class FreeSpace:
         return got
 
 
-def _obstacle_shape(ob, grow: float):
-    """One static obstacle grown by ``grow`` as a shapely geometry (None: not supported)."""
+def obstacle_shape(ob, grow: float = 0.0):
+    """One static obstacle grown by ``grow`` as a shapely geometry (None: not supported).
+
+    The one place an obstacle of any kind (disc, box, polygon, mesh footprint, map) becomes
+    shapely: the free space here, the sensor's occlusion and ``populate``'s walls use it."""
     import shapely
 
     if isinstance(ob, Disc):
@@ -179,7 +182,7 @@ def free_space(scene: Scene, grown: float | None = None) -> FreeSpace | None:
     tolerance = 2.0 * (biggest + 1e-3) * (1.0 - math.cos(math.pi / (4 * QUAD_SEGS))) + 1e-7 * (1 + extent)
     shapes = []
     for ob in scene.obstacles:
-        s = _obstacle_shape(ob, grown + tolerance)
+        s = obstacle_shape(ob, grown + tolerance)
         if s is None:
             log.info("free space not computed: obstacle %r has no known exact shape", type(ob).__name__)
             return None
