@@ -32,7 +32,7 @@ from __future__ import annotations
 import logging
 import math
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -100,6 +100,12 @@ class NavOptions:
         0.2 m) whenever a plan exists that does; when none does, the relaxed search (the
         people's discs as they are) answers, so the preference never costs a success.
         0 turns it off.
+    personal_space_cost : float
+        What (s of arrival time) passing within ``personal_space`` of someone is worth
+        avoiding: a plan that keeps the personal space is taken unless a plan that keeps
+        only the safety buffer (and the uncertainty) arrives sooner by more than this.
+        A soft cost: the robot does not detour round a person standing in its way, or
+        wait long for a gap wide enough, to keep its distance.
     slice : float
         Length (s) of a piece of prediction with one radius (the inflation grows by steps).
     stationary_hold : float
@@ -134,6 +140,7 @@ class NavOptions:
     reference_speed: float = 1.0
     safety_buffer: float = 0.05
     personal_space: float = 0.2
+    personal_space_cost: float = 1.0
     slice: float = 0.5
     stationary_hold: float = 30.0
     time_budget: float = 0.1
@@ -151,7 +158,8 @@ class NavOptions:
             raise InputError(f"backend must be one of {', '.join(BACKENDS)}, got {self.backend!r}")
         for name in ("dt", "prediction_horizon", "reference_speed", "slice", "time_budget", "plan_slack", "evasion_time", "cover"):
             check_number(name, getattr(self, name))
-        for name in ("uncertainty_growth", "safety_buffer", "personal_space", "stationary_hold", "goal_tolerance"):
+        for name in ("uncertainty_growth", "safety_buffer", "personal_space", "personal_space_cost", "stationary_hold",
+                     "goal_tolerance"):
             check_number(name, getattr(self, name), strict=False)
         if self.connect_k < 1 or self.evasion_headings < 4:
             raise InputError("connect_k must be >= 1 and evasion_headings >= 4")
@@ -221,6 +229,7 @@ class _Searched:
     out_of_time: bool = False
     graph: SpaceTimeGraph | None = None
     start: int = -1
+    ahead: list = field(default_factory=list)
 
 
 class Navigator:
@@ -327,7 +336,7 @@ class Navigator:
         return graph, s_id
 
     # ------------------------------------------------------------- prediction
-    def _inflation(self, pose: FloatArray, obs: FloatArray, relaxed: bool = False) -> FloatArray:
+    def _inflation(self, pose: FloatArray, obs: FloatArray, relaxed: bool = False, personal: bool = True) -> FloatArray:
         """(k, S) inflation (m) per person and prediction slice, shrunk near the robot.
 
         A person already closer than the full inflation (someone walked up to the robot)
@@ -343,7 +352,8 @@ class Navigator:
         # uncertainty grows with how far a person may stray from the straight walk: with
         # their speed (someone standing is where they stand; a full-speed walker may turn)
         rate = opts.uncertainty_growth * np.minimum(speed / opts.reference_speed, 1.0)
-        full = self.mover_clearance + opts.safety_buffer + opts.personal_space + rate[:, None] * tau[None, :]
+        space = opts.personal_space if personal else 0.0
+        full = self.mover_clearance + opts.safety_buffer + space + rate[:, None] * tau[None, :]
         if relaxed:  # only what the contract asks: the robot's mover clearance
             full = np.full_like(full, self.mover_clearance)
         gap = self._gap(pose, obs)  # (k,) beyond the people's own radius
@@ -497,6 +507,8 @@ class Navigator:
             predicted[:, 4] = obs[:, 4] + infl[:, 0]
         found = self._search(t, pose, obs, infl, deadline)
         traj, mode = found.trajectory, NavMode.PLAN
+        if opts.personal_space > 0 and len(obs) and found.graph is not None and self._clock() < deadline:
+            traj, mode, found = self._closer(t, pose, obs, found, deadline)
         if traj is None and len(obs) and not found.out_of_time and self._clock() < deadline:
             # blocked by the margins (someone standing beside the goal, a narrow gap): try
             # once more with the people's discs as they are, plus the mover clearance only
@@ -517,6 +529,33 @@ class Navigator:
             self._previous = None
         self.last = NavStep(mode, self._clock() - t_begin, found.message, predicted, found.detailed)
         return traj
+
+    def _closer(self, t: float, pose: FloatArray, obs: FloatArray, found: _Searched,
+                deadline: float) -> tuple[Trajectory | None, NavMode, _Searched]:  # fmt: skip
+        """The personal space as a soft cost: the first search's plan, unless the search
+        without the personal space (the safety buffer and the uncertainty kept) arrives
+        sooner by more than ``personal_space_cost``, or the first found none.
+
+        The second search runs only when it can win: when the first found no plan, or
+        when the first's arrival is later than the static lower bound (the roadmap's
+        time to the goal) by more than the cost.
+        """
+        opts = self.options
+        first = found.trajectory
+        if first is not None:
+            bound = float(found.graph.heuristic[found.start]) * opts.dt
+            if first.t_end - t <= bound + opts.personal_space_cost + 1e-9:
+                return first, NavMode.PLAN, found
+        elif found.out_of_time:
+            return None, NavMode.PLAN, found
+        close = self._search(t, pose, obs, self._inflation(pose, obs, personal=False), deadline, found)
+        second = close.trajectory
+        if second is not None and (first is None or second.t_end < first.t_end - opts.personal_space_cost):
+            return second, NavMode.CLOSE, close
+        if first is not None:
+            self._ahead = found.ahead  # the second search replaced the plan's vertices ahead
+            return first, NavMode.PLAN, found
+        return None, NavMode.PLAN, close
 
     def _search(self, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray, deadline: float,
                 before: _Searched | None = None) -> _Searched:  # fmt: skip
@@ -570,7 +609,7 @@ class Navigator:
         self._ahead = [(t + st * opts.dt, nd) for nd, st in zip(res.nodes, res.steps, strict=True) if nd < self._nv]
         rows[0, 1:] = pose
         rows[-1, 1:] = self.goal
-        return _Searched(Trajectory(rows, self.robot.circumradius), "", detailed, False, graph, s_id)
+        return _Searched(Trajectory(rows, self.robot.circumradius), "", detailed, False, graph, s_id, self._ahead)
 
     # --------------------------------------------------------------- fallback
     def _clearance_along(self, pts: FloatArray, times: FloatArray, obs: FloatArray) -> FloatArray:
