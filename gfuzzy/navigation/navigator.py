@@ -62,6 +62,9 @@ STILL_SPEED = 0.1
 SEARCH_SHARE = 0.75
 #: Samples of the look-ahead in the test of who may come within reach (:meth:`Navigator._may_reach`).
 REACH_SAMPLES = 48
+#: Seconds between the samples at which the fallbacks test a motion against the people
+#: walking on; the gap kept at the samples covers what can happen between two of them.
+FALLBACK_SAMPLE = 0.05
 #: Gaps (m) wider than this score the same in the evasive motion.
 EVASION_GAP = 0.5
 #: First guess (s) of the predictions' set-up per person (then measured per navigator).
@@ -658,7 +661,9 @@ class Navigator:
 
     def _previous_if_clear(self, t: float, pose: FloatArray, obs: FloatArray) -> Trajectory | None:
         """The last plan from ``t`` on, if the robot is on it and it keeps clear of everyone
-        seen now (walking on at constant velocity, un-inflated) over the prediction horizon."""
+        seen now (walking on at constant velocity, un-inflated) over the prediction horizon:
+        sampled every ``FALLBACK_SAMPLE`` s, with a gap that bounds the one in between
+        (:meth:`_sample_gap`)."""
         prev = self._previous
         if prev is None or prev.t_end <= t + 1e-9:
             return None
@@ -666,13 +671,23 @@ class Navigator:
             return None
         cut = _cut(prev, t, prev.t_end)
         cut[0, 1:] = pose
-        obs = self._near(pose, obs, self.options.prediction_horizon, 0.0)
+        horizon = self.options.prediction_horizon
+        tol = self._sample_gap(obs)
+        obs = self._near(pose, obs, horizon, tol)
         if len(obs):
-            times = np.linspace(t, t + self.options.prediction_horizon, 61)
+            times = np.linspace(t, t + horizon, int(math.ceil(horizon / FALLBACK_SAMPLE)) + 1)
             pts = Trajectory(cut, self.robot.circumradius).at(times)
-            if np.min(self._clearance_along(pts, times, obs)) <= 0:
+            if np.min(self._clearance_along(pts, times, obs)) <= tol:
                 return None
         return Trajectory(cut, self.robot.circumradius)
+
+    def _sample_gap(self, obs: FloatArray) -> float:
+        """Gap (m) to keep at samples ``FALLBACK_SAMPLE`` apart so that there is none
+        between them: no point of the robot moves faster than ``vmax`` (the speed bound
+        counts turning at the circumscribed radius) nor a person faster than seen, so
+        the gap changes by at most their sum times half the sampling interval there."""
+        speed = float(np.max(np.hypot(obs[:, 2], obs[:, 3]), initial=0.0))
+        return (float(self.robot.vmax) + speed) * FALLBACK_SAMPLE / 2 + 1e-6
 
     def _evasive(self, t: float, pose: FloatArray, obs: FloatArray) -> Trajectory:
         """The statically free straight motion (or standing still) with the latest contact.
@@ -681,12 +696,13 @@ class Navigator:
         for ``evasion_time`` (or half, or a quarter of it, whichever is free of static
         obstacles) and then standing, and standing still. Each is scored by its time to
         contact with the people walking on at constant velocity (un-inflated, sampled every
-        0.05 s over ``evasion_time``), then by the smallest gap, then by progress to the goal.
+        ``FALLBACK_SAMPLE`` s over ``evasion_time``, with a bound on the gap between two
+        samples, see :meth:`_evasion_scores`), then by the smallest gap, then by progress to the goal.
         """
         opts = self.options
         cr = self.robot.circumradius
         T = opts.evasion_time
-        n_t = int(math.ceil(T / 0.05)) + 1
+        n_t = int(math.ceil(T / FALLBACK_SAMPLE)) + 1
         times = t + np.linspace(0.0, T, n_t)
         if self.robot.unicycle:  # turn in place, then drive along the heading (drive.evasions)
             cands = evasions(self.geometry, t, pose, T, opts.cover, opts.evasion_headings, self.vplan)
@@ -714,7 +730,7 @@ class Navigator:
         tau = times - t
         frac = np.clip(tau[None, :] / np.maximum(move_time[:, None], 1e-12), 0.0, 1.0)  # moves, then stands
         pts = pose[None, None, :] + frac[:, :, None] * (ends - pose[None])[:, None, :]  # (C, T, d)
-        score = np.where(free, self._evasion_scores(t, pose, obs, pts, times, ends), -math.inf)
+        score = np.where(free, self._evasion_scores(t, pose, obs, pts, times, ends, vel), -math.inf)
         c = int(np.argmax(score))
         if c == 0:
             rows = np.array([[t, *pose], [t + max(T, opts.cover), *pose]])
@@ -726,17 +742,33 @@ class Navigator:
 
 
 
-    def _evasion_scores(self, t, pose, obs, pts, times, ends) -> FloatArray:
+    def _evasion_scores(self, t, pose, obs, pts, times, ends, vel=None) -> FloatArray:
         """(C,) score of candidate motions ``pts`` (C, T, d) at ``times`` ending at ``ends``:
         the latest contact first (no contact within the horizon beats any), then the widest
-        gap while close, then progress to the goal."""
+        gap while close, then progress to the goal.
+
+        ``vel`` (C, 2): each candidate's velocity when it translates and then stands (None:
+        any motion within the speed bound). Between two samples ``h`` apart the gap to a
+        person changes no faster than their relative speed ``R`` (a point of the robot moves
+        at most ``vmax``), so it stays above ``(g_i + g_{i+1} - R h) / 2``: contact is that
+        bound at or below 0, the gap not opening up (a robot touching someone backs out).
+        """
         T = times[-1] - t
         tau = times - t
         obs = self._near(pose, obs, T, EVASION_GAP)  # farther people change no score below
         if len(obs):
-            gap = self._clearance_along(pts, times, obs).min(axis=-1)  # (C, T)
-            later = gap[:, 1:]  # contact: a gap <= 0 not opening up (a robot touching someone backs out)
-            hit = (later <= 0) & (later <= gap[:, :1])
+            each = self._clearance_along(pts, times, obs)  # (C, T, k)
+            walk = np.hypot(obs[:, 2], obs[:, 3])
+            if vel is None:
+                rate = np.broadcast_to(float(self.robot.vmax) + walk, (len(pts), len(obs)))
+            else:  # moving (relative velocity), then standing (the person's own)
+                rel = np.hypot(vel[:, None, 0] - obs[None, :, 2], vel[:, None, 1] - obs[None, :, 3])
+                rate = np.maximum(rel, walk[None, :])
+            h = np.diff(tau)[None, :, None]
+            between = ((each[:, :-1] + each[:, 1:] - rate[:, None, :] * h) / 2).min(axis=-1)  # (C, T - 1)
+            gap = each.min(axis=-1)  # (C, T)
+            later = gap[:, 1:]
+            hit = (between <= 0) & (later <= gap[:, :1])
             ttc = np.where(hit.any(axis=1), tau[1:][np.argmax(hit, axis=1)], math.inf)
             worst = later.min(axis=1)
         else:
