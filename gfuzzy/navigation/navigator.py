@@ -143,7 +143,7 @@ class NavOptions:
     reference_speed: float = 1.0
     safety_buffer: float = 0.05
     personal_space: float = 0.2
-    personal_space_cost: float = 1.0
+    personal_space_cost: float = 0.5
     slice: float = 0.5
     stationary_hold: float = 30.0
     time_budget: float = 0.1
