@@ -1,32 +1,33 @@
 """The one builder of a holonomic query's graph: the goal's part kept, the start spliced in.
 
 Every holonomic query's space-time graph is built here, in two steps: :func:`prepare_goal`
-(the roadmap's spanner cut into steps, from the roadmap's cache, with the goal connected,
-and the static distances to the goal), then :meth:`PreparedGoal.splice` (the start's
-connections, and the figures that depend on the start). A fresh :meth:`Planner.plan
-<gfuzzy.planner.planner.Planner.plan>` runs both; :meth:`~gfuzzy.planner.planner.Planner.plan_from`
-and the navigator keep the first (:meth:`~gfuzzy.planner.planner.Planner.prepare`) and run the
-second per call. So the three get the same graph for the same start and goal, under the
-same point-count limit (``settings.MAX_POINTS``, checked before anything is cut).
+(the goal's certified connections, and the static distances to the goal on the vertices),
+then :meth:`PreparedGoal.splice` (the start's connections; both ends' connections cut into
+steps and spliced into the roadmap's kept spanner cut; the figures that depend on the
+start). A fresh :meth:`Planner.plan <gfuzzy.planner.planner.Planner.plan>` runs both;
+:meth:`~gfuzzy.planner.planner.Planner.plan_from` and the navigator keep the first
+(:meth:`~gfuzzy.planner.planner.Planner.prepare`) and run the second per call. So the three
+search the same graph for the same start and goal, under the same point-count limit
+(``settings.MAX_POINTS``, checked before anything is cut).
 
 A navigator replans every fraction of a second from the robot's current pose to the same
 goal among newly predicted movers. What does not change between two calls is kept in a
-:class:`PreparedGoal` (:meth:`gfuzzy.planner.planner.Planner.prepare`):
+:class:`PreparedGoal`:
 
-* the roadmap's spanner with the goal connected, every edge split into one-step points
-  (the spanner's cut comes from the roadmap's cache, :mod:`gfuzzy.timespace.roadgraph`);
-* the static distances to the goal: in steps (the search's heuristic) and in metres (the
-  roadmap distance of the answer), by Dijkstra, once;
-* the goal's static clearance (its certified connections need it).
+* the goal's certified connections (and its static clearance);
+* the static distances to the goal: in steps (the search's heuristic; per vertex, and per
+  point of the spanner's edges) and in metres (the roadmap distance of the answer), by
+  Dijkstra, once.
 
-Per call (:meth:`gfuzzy.planner.planner.Planner.plan_from`) only the start is spliced in: its
-certified straight connections to the nearest vertices (the vertices' clearances come from
-the roadmap's cache) and to the goal directly, split into steps and appended after the
-kept points; the kept adjacency lists get the start's moves appended (one ``np.insert``,
-no sort). One Dijkstra runs per call, from the start over the kept *vertex* graph (the
-spanner's edges and the goal's connections, weighted in steps, the start's row spliced
-in), then along each edge's points: the steps from the start to every point, exact, as in
-a fresh plan. It gives both figures the search needs, exactly:
+The spanner cut into one-step points is the roadmap's (:mod:`gfuzzy.timespace.roadgraph`,
+cached per step length and stretch). Per call only the start's connections are certified
+(the vertices' clearances come from the roadmap's cache); the goal's and the start's
+connections are cut and spliced into the spanner's cut in one pass
+(:meth:`~gfuzzy.timespace.roadgraph.SplitSpanner.splice`: one ``np.insert``, no sort of the
+whole graph). One Dijkstra runs per call, from the start over the kept *vertex* graph (the
+spanner's edges and the goal's connections, weighted in steps, the start's row spliced in),
+then along each edge's points: the steps from the start to every point, exact. It gives
+both figures the search needs, exactly:
 
 * the earliest step a point can be reached (the lower end of its safety window);
 * the steps to the goal, ``min(h(x), from_start(x) + h(start))``: a shortest route from x
@@ -41,11 +42,13 @@ distances and lost more time than the Dijkstra costs; and the metric term alone 
 per call (1.4 ms at 5000 vertices, a pass over every point) than the Dijkstra.
 
 So the answer is a fresh :meth:`Planner.plan`'s from the same pose (the same graph,
-heuristic and windows: a fresh plan is this module's two steps); safety is still only
-computed where movers come near a point inside its window (the broad phase), so a call's
-cost follows the movers near the robot's reachable space-time. The graph part of a call is a handful of vectorised passes
-over the kept arrays (the search needs whole arrays: the heuristic and the windows change
-with the start), plus the start's certified connections.
+heuristic and windows: a fresh plan is this module's two steps; only a fresh plan joins
+ends the roadmap does not join through the free space, a prepared goal is not extended).
+Safety is still only computed where movers come near a point inside its window (the broad
+phase), so a call's cost follows the movers near the robot's reachable space-time. The
+graph part of a call is a handful of vectorised passes over the points (the search needs
+whole arrays: the heuristic and the windows change with the start), plus the start's
+certified connections.
 """
 
 from __future__ import annotations
