@@ -388,8 +388,9 @@ class Planner:
 
     # ---------------------------------------------------------------- query
     def prepare(self, goal, options: PlanOptions | None = None):
-        """Keep what replanning to ``goal`` reuses: the split roadmap graph and the static
-        distances to the goal (:mod:`gfuzzy.planner.prepared`).
+        """Keep what replanning to ``goal`` reuses: the goal's connections and the static
+        distances to the goal (:mod:`gfuzzy.planner.prepared`; the spanner's cut is kept on
+        the roadmap). A fresh :meth:`plan` prepares its goal so too, then splices its start in.
 
         Parameters
         ----------
@@ -399,12 +400,15 @@ class Planner:
 
         Returns
         -------
-        gfuzzy.planner.prepared.PreparedGoal
+        gfuzzy.planner.prepared.PreparedGoal or gfuzzy.timespace.unicycle.UnicyclePrepared
+            Its ``splice(planner, start)`` is a query's graph.
 
         Raises
         ------
         InputError
             A malformed goal (as :meth:`plan`).
+        LimitError
+            When the spanner's and the goal's points would exceed ``settings.MAX_POINTS``.
         """
         from .prepared import prepare_goal
 
