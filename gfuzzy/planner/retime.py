@@ -9,9 +9,11 @@ guarantee of docs/formats.md section 3 for the same reason the roadmap search do
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..fuzzy.driveprofile import drive_profile
 from ..fuzzy.profile import limit_acceleration, profile_times
 from ..poses import discretise, metric_distance, pose_at
 from ..scene.scene import Scene
@@ -21,10 +23,15 @@ from ..timespace.timespace import MoverField, SpaceTimeGraph, sipp, timed_rows
 from ..trajectory import Trajectory
 from ..typed import FloatArray
 
-__all__ = ["chain_points", "retime_path", "retime_profile", "RetimeResult"]
+if TYPE_CHECKING:
+    from ..fuzzy.rules import RuleBase
+
+__all__ = ["chain_points", "retime_path", "retime_profile", "retime_drive", "RetimeResult"]
 
 #: Nodes per group of the chain whose safety is computed together.
 GROUP = 16
+#: Nodes per group of a differential drive's chain (see :func:`_search_chain`).
+DRIVE_GROUP = 2
 #: Stops of the speed-layer timing closer than this (metres of path) are one stop.
 STOP_MERGE = 0.3
 
@@ -197,6 +204,64 @@ def retime_profile(
     vmax = robot.vmax * SPEED_SAFETY
     path = np.asarray(path, dtype=float)
     s_m, v_m, cum_m = _metric_profile(path, robot.circumradius, s_xy, v_xy, vmax, amax)
+    return _retime_rounds(scene, path, (s_m, v_m, cum_m), t0, dt, amax, horizon, deadline, max_rounds, hold)
+
+
+def retime_drive(
+    scene: Scene,
+    path: FloatArray,
+    t0: float,
+    dt: float,
+    amax: float,
+    horizon: float,
+    rulebase: RuleBase | None = None,
+    deadline: float = math.inf,
+    max_rounds: int = 5,
+    hold: float = 0.0,
+) -> ProfileRetime:
+    """Time a differential drive's path under its speed layer, among the movers.
+
+    The profile is :func:`gfuzzy.fuzzy.driveprofile.drive_profile`'s: every straight from
+    rest to rest within ``vmax`` and ``amax``, braked by the fuzzy rules ahead of the coming
+    turn; every turn in place from rest to rest within ``turn_rate`` and ``amax / r``. The
+    rounds among the movers are :func:`retime_profile`'s. Every row of the answer is a wait, a
+    turn in place or a straight move along the heading: the chain's points lie on the
+    path's segments and a row is added at each corner a step would cut.
+
+    Parameters
+    ----------
+    scene : Scene
+        Its robot a differential drive (``kinematics: unicycle``).
+    path : (n, 3) float
+        Statically free path of turns in place and straight moves, no repeated pose.
+    t0, dt, amax, horizon, deadline, max_rounds, hold
+        As :func:`retime_profile`.
+    rulebase : RuleBase, optional
+        The fuzzy rules (default the expert rules).
+
+    Returns
+    -------
+    ProfileRetime
+    """
+    robot = scene.robot
+    path = np.asarray(path, dtype=float)
+    prof = drive_profile(path, robot.circumradius, robot.vmax * SPEED_SAFETY, amax,
+                         robot.turn_rate * SPEED_SAFETY, rulebase)  # fmt: skip
+    return _retime_rounds(scene, path, (prof.s, prof.v, prof.knots), t0, dt, amax, horizon, deadline, max_rounds, hold,
+                          rest=prof.stops, drive=True)  # fmt: skip
+
+
+def _retime_rounds(
+    scene, path, profile, t0, dt, amax, horizon, deadline, max_rounds, hold, rest=(), drive=False
+) -> ProfileRetime:
+    """:func:`retime_profile`'s rounds on a profile ``(s_m, v_m, cum_m)`` along the metric arc
+    length (``cum_m``: the path poses' arc lengths). ``rest``: arc lengths where the profile
+    is at rest already (a differential drive's corners), where the robot may wait from the
+    first round. ``drive``: a differential drive's chain (groups of ``DRIVE_GROUP`` nodes, see
+    :func:`_search_chain`), whose every wait becomes a stop: it creeps behind a mover the way
+    the search found, a stop at each place it waited, rather than at one merged place."""
+    group = DRIVE_GROUP if drive else GROUP
+    s_m, v_m, cum_m = profile
     duration = float(profile_times(s_m, v_m)[-1])
     stops: list[float] = []
     message = ""
@@ -204,6 +269,8 @@ def retime_profile(
         prof_s, prof_v = s_m, v_m
         if stops:
             prof_s = np.unique(np.concatenate([s_m, stops]))
+            if drive:  # a sample between any two stops, so the robot moves between them
+                prof_s = np.unique(np.concatenate([prof_s, 0.5 * (prof_s[1:] + prof_s[:-1])]))
             cap = np.interp(prof_s, s_m, v_m)
             cap[np.isin(prof_s, stops)] = 0.0
             prof_v = limit_acceleration(prof_s, cap, amax)
@@ -212,12 +279,12 @@ def retime_profile(
         except ValueError as exc:  # a stretch the profile never crosses
             message = str(exc)
             break
-        wait_at = np.array([0.0] + stops)
+        wait_at = np.concatenate([[0.0], stops, rest])
         # near a stop the robot crawls: waiting at any point within amax dt^2 / 2 of it
         # (where it moves at most amax dt) keeps the speed changes within amax dt
         res = _search_chain(
             scene, poses, s, t0, dt, horizon, wait_at, deadline, (path, cum_m, corners, times), 0.5 * amax * dt**2,
-            hold=hold,
+            hold=hold, group=group,
         )
         if res.status is Status.SOLVED:
             return ProfileRetime(Status.SOLVED, res.trajectory, waits=stops, profile_duration=duration)
@@ -225,28 +292,39 @@ def retime_profile(
         if res.status is Status.TIMEOUT:
             break
         # where would the robot need to stop? search again allowing waits anywhere
-        free = _search_chain(scene, poses, s, t0, dt, horizon, None, deadline, (path, cum_m, corners, times), hold=hold)
+        free = _search_chain(
+            scene, poses, s, t0, dt, horizon, None, deadline, (path, cum_m, corners, times), hold=hold, group=group
+        )
         if free.status is not Status.SOLVED or not free.waits:
             message = free.message or message
             break
-        merged = list(stops)
-        for w in free.waits:  # one stop per place: a wait near a stop moves that stop there
-            if w <= 1e-9:
-                continue
-            near = [i for i, x in enumerate(merged) if abs(w - x) <= STOP_MERGE]
-            if near:
-                merged[near[0]] = max(merged[near[0]], w)
-            else:
-                merged.append(w)
-        merged = sorted(merged)
+        if drive:
+            merged = sorted(set(stops) | {w for w in free.waits if w > 1e-9})
+        else:
+            merged = _merge_stops(stops, free.waits)
         if merged == stops:
             break
         stops = merged
     return ProfileRetime(Status.NO_PATH, None, message or "no safe timing found", profile_duration=duration)
 
 
+def _merge_stops(stops: list, waits: list) -> list:
+    """Stops after a search that waited at ``waits``: one stop per place, a wait within
+    ``STOP_MERGE`` of a stop moves that stop there (the farther of the two)."""
+    merged = list(stops)
+    for w in waits:
+        if w <= 1e-9:
+            continue
+        near = [i for i, x in enumerate(merged) if abs(w - x) <= STOP_MERGE]
+        if near:
+            merged[near[0]] = max(merged[near[0]], w)
+        else:
+            merged.append(w)
+    return sorted(merged)
+
+
 def _search_chain(
-    scene, poses, s, t0, dt, horizon, wait_at, deadline, corners=None, wait_tol=0.0, hold=0.0
+    scene, poses, s, t0, dt, horizon, wait_at, deadline, corners=None, wait_tol=0.0, hold=0.0, group=GROUP
 ) -> RetimeResult:
     """The safe-interval search on a chain of points one step apart.
 
@@ -255,6 +333,11 @@ def _search_chain(
 
     ``corners`` = (path, cum_m, [[s, t]...], node times): rows are added at the path's
     corners that a step would otherwise cut (see :func:`_chain_from_profile`).
+
+    ``group``: nodes whose safety is computed together. The movers' field takes a group whose
+    points lie on one segment as evenly spaced along it (:meth:`MoverField.unsafe_pairs`);
+    a differential drive's chain is not (it brakes to rest at every corner and turns in
+    place, many nodes at one point), so its groups are pairs, which always are.
     """
     robot = scene.robot
     m = len(poses)
@@ -272,7 +355,7 @@ def _search_chain(
         for w in np.atleast_1d(wait_at):
             can_wait[int(np.argmin(np.abs(s - w)))] = True
             can_wait |= np.abs(s - w) <= wait_tol
-    groups = np.unique(np.append(np.arange(0, m, GROUP), m))
+    groups = np.unique(np.append(np.arange(0, m, group), m))
     graph = SpaceTimeGraph(
         poses, indptr, nbrs, heur, can_wait=can_wait, groups=groups, from_start=np.arange(m, dtype=float)
     )

@@ -32,7 +32,7 @@ from ..settings import AMAX_PER_VMAX
 from ..status import Status
 from ..trajectory import Trajectory
 from ..typed import FloatArray
-from .retime import retime_path, retime_profile
+from .retime import retime_drive, retime_path, retime_profile
 
 if TYPE_CHECKING:
     from ..fuzzy.rules import RuleBase
@@ -118,6 +118,10 @@ class SpeedReport:
         Stops the timing among the movers added (when applied).
     before, after : mapping or None
         ``duration``, ``max_speed``, ``mean_speed`` (when applied).
+    corners : mapping or None
+        A differential drive's: ``before``, the corners (turns in place inside the path) of
+        the answer's path, and ``after``, those of the path the layer timed (it straightens
+        the path first).
     """
 
     applied: bool
@@ -127,10 +131,12 @@ class SpeedReport:
     stops: int | None = None
     before: Mapping | None = None
     after: Mapping | None = None
+    corners: Mapping | None = None
 
     def to_dict(self) -> dict:
         """The ``stats["speed_layer"]`` form (the trajectory file's keys)."""
-        return _present(self, ("applied", "amax", "profile_seconds", "reason", "stops", "before", "after"))
+        keys = ("applied", "amax", "profile_seconds", "reason", "stops", "before", "after", "corners")
+        return _present(self, keys)
 
 
 def _present(report, keys) -> dict:
@@ -358,14 +364,16 @@ def _speed_layer(ctx: StageContext, traj: Trajectory, query, opts, deadline) -> 
     path = _dedupe(traj.poses)
     if len(path) < 2:
         return traj, SpeedReport(False, amax, "the start is the goal")
-    if robot.unicycle:  # its profile runs along the xy path: a turn in place has no length there
-        return traj, SpeedReport(False, amax, "not adapted to a differential drive (kinematics: unicycle) yet")
     rules = opts.rules if opts.rules is not None else expert_rules()
-    s_xy, v_xy = speed_limit(path[:, :2], robot.vmax, amax, rules, FuzzyOptions())
     horizon = max(opts.horizon or 0.0, 3.0 * traj.duration + 30.0)
-    rt = retime_profile(scene=ctx.scene, path=path, s_xy=s_xy, v_xy=v_xy, t0=query.t0,
-                        dt=opts.dt, amax=amax, horizon=horizon, deadline=deadline, hold=query.hold)  # fmt: skip
-    report = SpeedReport(False, amax, profile_seconds=rt.profile_duration)
+    corners = None
+    if robot.unicycle:  # straights from rest to rest, turns in place from rest to rest
+        rt, corners = _drive_layer(ctx, path, query, opts, amax, horizon, rules, deadline)
+    else:
+        s_xy, v_xy = speed_limit(path[:, :2], robot.vmax, amax, rules, FuzzyOptions())
+        rt = retime_profile(scene=ctx.scene, path=path, s_xy=s_xy, v_xy=v_xy, t0=query.t0,
+                            dt=opts.dt, amax=amax, horizon=horizon, deadline=deadline, hold=query.hold)  # fmt: skip
+    report = SpeedReport(False, amax, profile_seconds=rt.profile_duration, corners=corners)
     if rt.status is not Status.SOLVED:
         why = f"the speed-limited path could not be timed among the movers ({rt.message})"
         return traj, replace(report, reason=why)
@@ -376,6 +384,26 @@ def _speed_layer(ctx: StageContext, traj: Trajectory, query, opts, deadline) -> 
         report, applied=True, stops=len(rt.waits), before=_speed_figures(traj), after=_speed_figures(rt.trajectory)
     )
     return rt.trajectory, figures
+
+
+def _drive_layer(ctx: StageContext, path, query, opts, amax, horizon, rules, deadline):
+    """A differential drive's speed layer: its path straightened first (a stop saved at every
+    corner dropped, :func:`gfuzzy.planner.straighten.straighten`), timed among the movers; the
+    path as it was when the straightened one cannot be timed. Returns (RetimeResult,
+    ``{"before": corners of the path, "after": corners of the path timed}``)."""
+    from .straighten import corners, straighten
+
+    def count(p):
+        c = corners(p)
+        return len(c) - 2 if c is not None else len(p) - 2
+
+    straight = straighten(ctx.geometry, path)
+    tries = [straight, path] if straight is not path else [path]
+    for candidate in tries:
+        rt = retime_drive(ctx.scene, candidate, query.t0, opts.dt, amax, horizon, rules, deadline=deadline, hold=query.hold)
+        if rt.status is Status.SOLVED:
+            break
+    return rt, {"before": count(path), "after": count(candidate)}
 
 
 def _speed_figures(traj: Trajectory) -> dict:
