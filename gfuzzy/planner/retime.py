@@ -9,11 +9,9 @@ guarantee of docs/formats.md section 3 for the same reason the roadmap search do
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..fuzzy.driveprofile import drive_profile
 from ..fuzzy.profile import limit_acceleration, profile_times
 from ..poses import discretise, metric_distance, pose_at
 from ..scene.scene import Scene
@@ -23,15 +21,10 @@ from ..timespace.timespace import MoverField, SpaceTimeGraph, sipp, timed_rows
 from ..trajectory import Trajectory
 from ..typed import FloatArray
 
-if TYPE_CHECKING:
-    from ..fuzzy.rules import RuleBase
-
-__all__ = ["chain_points", "retime_path", "retime_profile", "retime_drive", "RetimeResult"]
+__all__ = ["chain_points", "retime_path", "retime_profile", "RetimeResult"]
 
 #: Nodes per group of the chain whose safety is computed together.
 GROUP = 16
-#: Nodes per group of a differential drive's chain (see :func:`_search_chain`).
-DRIVE_GROUP = 2
 #: Stops of the speed-layer timing closer than this (metres of path) are one stop.
 STOP_MERGE = 0.3
 
@@ -123,6 +116,18 @@ def _metric_profile(path, circumradius, s_xy, v_xy, vmax, amax, ds=0.02):
     return s_m, limit_acceleration(s_m, np.minimum(frac, 1.0) * vmax, amax), cum_m
 
 
+def s_at(grid: FloatArray, s_m: FloatArray, v_m: FloatArray, t: FloatArray) -> FloatArray:
+    """Arc lengths at times ``grid`` of driving profile (s_m, v_m) at its limit, ``t`` its
+    :func:`profile_times`: constant acceleration within each interval of the profile
+    (v^2 linear in s), so the speed changes between steps stay within the acceleration bound.
+    """
+    i = np.clip(np.searchsorted(t, grid, side="right") - 1, 0, len(t) - 2)
+    ds = s_m[i + 1] - s_m[i]
+    acc = np.divide(v_m[i + 1] ** 2 - v_m[i] ** 2, 2 * ds, out=np.zeros_like(ds), where=ds > 0)
+    tau = grid - t[i]
+    return np.minimum(s_m[i] + v_m[i] * tau + 0.5 * acc * tau**2, s_m[i + 1])
+
+
 def _chain_from_profile(path, cum_m, s_m, v_m, dt):
     """Points of the path at the times t = n dt of driving profile (s_m, v_m) at its limit.
 
@@ -140,13 +145,7 @@ def _chain_from_profile(path, cum_m, s_m, v_m, dt):
     t = profile_times(s_m, v_m)
     n = int(math.ceil(t[-1] / dt - 1e-9))
     grid = np.minimum(np.arange(n + 1) * dt, t[-1])
-    # constant acceleration within each interval of the profile (v^2 linear in s), so the
-    # speed changes between steps stay within the acceleration bound
-    i = np.clip(np.searchsorted(t, grid, side="right") - 1, 0, len(t) - 2)
-    ds = s_m[i + 1] - s_m[i]
-    acc = np.divide(v_m[i + 1] ** 2 - v_m[i] ** 2, 2 * ds, out=np.zeros_like(ds), where=ds > 0)
-    tau = grid - t[i]
-    s = np.minimum(s_m[i] + v_m[i] * tau + 0.5 * acc * tau**2, s_m[i + 1])
+    s = s_at(grid, s_m, v_m, t)
     s[-1] = s_m[-1]
     keep = np.concatenate([[True], np.diff(s) > 1e-12])
     s, grid = s[keep], grid[keep]
@@ -204,64 +203,6 @@ def retime_profile(
     vmax = robot.vmax * SPEED_SAFETY
     path = np.asarray(path, dtype=float)
     s_m, v_m, cum_m = _metric_profile(path, robot.circumradius, s_xy, v_xy, vmax, amax)
-    return _retime_rounds(scene, path, (s_m, v_m, cum_m), t0, dt, amax, horizon, deadline, max_rounds, hold)
-
-
-def retime_drive(
-    scene: Scene,
-    path: FloatArray,
-    t0: float,
-    dt: float,
-    amax: float,
-    horizon: float,
-    rulebase: RuleBase | None = None,
-    deadline: float = math.inf,
-    max_rounds: int = 5,
-    hold: float = 0.0,
-) -> ProfileRetime:
-    """Time a differential drive's path under its speed layer, among the movers.
-
-    The profile is :func:`gfuzzy.fuzzy.driveprofile.drive_profile`'s: every straight from
-    rest to rest within ``vmax`` and ``amax``, braked by the fuzzy rules ahead of the coming
-    turn; every turn in place from rest to rest within ``turn_rate`` and ``amax / r``. The
-    rounds among the movers are :func:`retime_profile`'s. Every row of the answer is a wait, a
-    turn in place or a straight move along the heading: the chain's points lie on the
-    path's segments and a row is added at each corner a step would cut.
-
-    Parameters
-    ----------
-    scene : Scene
-        Its robot a differential drive (``kinematics: unicycle``).
-    path : (n, 3) float
-        Statically free path of turns in place and straight moves, no repeated pose.
-    t0, dt, amax, horizon, deadline, max_rounds, hold
-        As :func:`retime_profile`.
-    rulebase : RuleBase, optional
-        The fuzzy rules (default the expert rules).
-
-    Returns
-    -------
-    ProfileRetime
-    """
-    robot = scene.robot
-    path = np.asarray(path, dtype=float)
-    prof = drive_profile(path, robot.circumradius, robot.vmax * SPEED_SAFETY, amax,
-                         robot.turn_rate * SPEED_SAFETY, rulebase)  # fmt: skip
-    return _retime_rounds(scene, path, (prof.s, prof.v, prof.knots), t0, dt, amax, horizon, deadline, max_rounds, hold,
-                          rest=prof.stops, drive=True)  # fmt: skip
-
-
-def _retime_rounds(
-    scene, path, profile, t0, dt, amax, horizon, deadline, max_rounds, hold, rest=(), drive=False
-) -> ProfileRetime:
-    """:func:`retime_profile`'s rounds on a profile ``(s_m, v_m, cum_m)`` along the metric arc
-    length (``cum_m``: the path poses' arc lengths). ``rest``: arc lengths where the profile
-    is at rest already (a differential drive's corners), where the robot may wait from the
-    first round. ``drive``: a differential drive's chain (groups of ``DRIVE_GROUP`` nodes, see
-    :func:`_search_chain`), whose every wait becomes a stop: it creeps behind a mover the way
-    the search found, a stop at each place it waited, rather than at one merged place."""
-    group = DRIVE_GROUP if drive else GROUP
-    s_m, v_m, cum_m = profile
     duration = float(profile_times(s_m, v_m)[-1])
     stops: list[float] = []
     message = ""
@@ -269,8 +210,6 @@ def _retime_rounds(
         prof_s, prof_v = s_m, v_m
         if stops:
             prof_s = np.unique(np.concatenate([s_m, stops]))
-            if drive:  # a sample between any two stops, so the robot moves between them
-                prof_s = np.unique(np.concatenate([prof_s, 0.5 * (prof_s[1:] + prof_s[:-1])]))
             cap = np.interp(prof_s, s_m, v_m)
             cap[np.isin(prof_s, stops)] = 0.0
             prof_v = limit_acceleration(prof_s, cap, amax)
@@ -279,12 +218,12 @@ def _retime_rounds(
         except ValueError as exc:  # a stretch the profile never crosses
             message = str(exc)
             break
-        wait_at = np.concatenate([[0.0], stops, rest])
+        wait_at = np.array([0.0] + stops)
         # near a stop the robot crawls: waiting at any point within amax dt^2 / 2 of it
         # (where it moves at most amax dt) keeps the speed changes within amax dt
         res = _search_chain(
             scene, poses, s, t0, dt, horizon, wait_at, deadline, (path, cum_m, corners, times), 0.5 * amax * dt**2,
-            hold=hold, group=group,
+            hold=hold,
         )
         if res.status is Status.SOLVED:
             return ProfileRetime(Status.SOLVED, res.trajectory, waits=stops, profile_duration=duration)
@@ -292,35 +231,24 @@ def _retime_rounds(
         if res.status is Status.TIMEOUT:
             break
         # where would the robot need to stop? search again allowing waits anywhere
-        free = _search_chain(
-            scene, poses, s, t0, dt, horizon, None, deadline, (path, cum_m, corners, times), hold=hold, group=group
-        )
+        free = _search_chain(scene, poses, s, t0, dt, horizon, None, deadline, (path, cum_m, corners, times), hold=hold)
         if free.status is not Status.SOLVED or not free.waits:
             message = free.message or message
             break
-        if drive:
-            merged = sorted(set(stops) | {w for w in free.waits if w > 1e-9})
-        else:
-            merged = _merge_stops(stops, free.waits)
+        merged = list(stops)
+        for w in free.waits:  # one stop per place: a wait near a stop moves that stop there
+            if w <= 1e-9:
+                continue
+            near = [i for i, x in enumerate(merged) if abs(w - x) <= STOP_MERGE]
+            if near:
+                merged[near[0]] = max(merged[near[0]], w)
+            else:
+                merged.append(w)
+        merged = sorted(merged)
         if merged == stops:
             break
         stops = merged
     return ProfileRetime(Status.NO_PATH, None, message or "no safe timing found", profile_duration=duration)
-
-
-def _merge_stops(stops: list, waits: list) -> list:
-    """Stops after a search that waited at ``waits``: one stop per place, a wait within
-    ``STOP_MERGE`` of a stop moves that stop there (the farther of the two)."""
-    merged = list(stops)
-    for w in waits:
-        if w <= 1e-9:
-            continue
-        near = [i for i, x in enumerate(merged) if abs(w - x) <= STOP_MERGE]
-        if near:
-            merged[near[0]] = max(merged[near[0]], w)
-        else:
-            merged.append(w)
-    return sorted(merged)
 
 
 def _search_chain(
@@ -336,8 +264,9 @@ def _search_chain(
 
     ``group``: nodes whose safety is computed together. The movers' field takes a group whose
     points lie on one segment as evenly spaced along it (:meth:`MoverField.unsafe_pairs`);
-    a differential drive's chain is not (it brakes to rest at every corner and turns in
-    place, many nodes at one point), so its groups are pairs, which always are.
+    a chain driven under a speed profile is not, least of all a differential drive's (it
+    brakes to rest at every corner and turns in place, many nodes at one point): its groups
+    are pairs, which always are.
     """
     robot = scene.robot
     m = len(poses)

@@ -32,7 +32,8 @@ from ..settings import AMAX_PER_VMAX
 from ..status import Status
 from ..trajectory import Trajectory
 from ..typed import FloatArray
-from .retime import retime_drive, retime_path, retime_profile
+from .driveretime import retime_drive
+from .retime import retime_path, retime_profile
 
 if TYPE_CHECKING:
     from ..fuzzy.rules import RuleBase
