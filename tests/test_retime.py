@@ -88,3 +88,17 @@ def test_profile_timing_follows_the_profile_and_stops_for_the_cart():
     crossed = retime_profile(_scene(CART), PATH, s_xy, v_xy, 0.0, 0.1, amax=2.0, horizon=60.0)
     assert crossed.status is Status.SOLVED
     assert reference_violation(yaml.safe_load(CART), crossed.trajectory.waypoints) == ""
+
+
+def test_a_differential_drive_is_timed_within_its_turning_rate():
+    # a TurtleBot-like disc: vmax / r = 4.5 rad/s, but wmax 2.84 rad/s bounds its turns
+    doc = yaml.safe_load(EMPTY)
+    doc["robot"] = {"disc": 0.11, "vmax": 0.5, "kinematics": "unicycle", "wmax": 2.84}
+    scene = parse_scene(doc)
+    path = np.array([[1.0, 2.0, 0.0], [1.0, 2.0, 2.5], [1.0 + math.cos(2.5), 2.0 + math.sin(2.5), 2.5]])
+    res = retime_path(scene, path, 0.0, 0.07, 30.0)
+    assert res.status is Status.SOLVED
+    w = res.trajectory.waypoints
+    dh = np.abs((np.diff(w[:, 3]) + math.pi) % (2 * math.pi) - math.pi)
+    assert np.max(dh / np.diff(w[:, 0])) <= 2.84 * (1 + 1e-9)
+    assert w[-1, 0] >= 2.5 / 2.84  # the turn alone takes this long

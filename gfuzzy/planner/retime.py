@@ -91,7 +91,10 @@ def retime_path(
     """
     robot = scene.robot
     step = robot.vmax * SPEED_SAFETY * dt
-    poses, s = chain_points(path, robot.circumradius, step)
+    # a differential drive turns in place at most at turn_rate: its turns are cut as if the
+    # robot's radius were vmax / turn_rate (>= r), so a step turns at most turn_rate dt
+    radius = robot.vmax / robot.turn_rate if robot.unicycle else robot.circumradius
+    poses, s = chain_points(path, radius, step)
     return _search_chain(scene, poses, s, t0, dt, horizon, wait_at, deadline, hold=hold)
 
 
