@@ -246,3 +246,35 @@ def test_gfuzzy_plan_speed_layer_applies_on_the_bundled_drive(tmp_path, capsys):
     assert rc == 0 and "speed layer: applied" in stdout, stdout
     rc, _, err = run_main(capsys, "check", ROOT / "scenes" / "tb3-arena-unicycle.yaml", out)
     assert rc == 0, err
+
+
+def test_a_drive_segment_is_certified_at_its_own_heading_and_turns():
+    from gfuzzy.planner.stages import _clearance_functions
+
+    # a long box drive; the corridor runs along x (heading 0) but the segment goes up from
+    # (2, 1): the robot turns in place there to heading pi/2, sweeping the point at
+    # (-0.32, -0.32) from it, which the box sliding up at heading 0 never touches
+    doc = {"version": 1, "name": "seg", "bounds": [0, 0, 5, 4],
+           "robot": {"box": [1.0, 0.3], "vmax": 1.0, "kinematics": "unicycle"},
+           "obstacles": [{"disc": {"center": [2.0 - 0.32, 1.0 - 0.32], "radius": 0.03}}]}  # fmt: skip
+    scene = parse_scene(doc)
+    ctx = StageContext(scene, StaticGeometry(scene))
+    corridor = np.array([[0.8, 1.0, 0.0], [4.0, 1.0, 0.0]])
+    static_segment = _clearance_functions(ctx, corridor)[2]
+    bound, clearance = static_segment(np.array([[2.0, 1.0]]), np.array([[2.0, 2.5]]))
+    assert bound[0] < 0 and clearance[0] < 0
+    holonomic = parse_scene({**doc, "robot": {"box": [1.0, 0.3], "vmax": 1.0}})
+    slide = _clearance_functions(StageContext(holonomic, StaticGeometry(holonomic)), corridor)[2]
+    assert slide(np.array([[2.0, 1.0]]), np.array([[2.0, 2.5]]))[0][0] == 0.0  # free for a box that slides
+    # along the corridor the drive's segment is free
+    assert static_segment(np.array([[1.2, 1.0]]), np.array([[3.5, 1.0]]))[0][0] == 0.0
+
+
+def test_a_refined_drive_path_keeps_the_turning_rate():
+    path = ROOT / "scenes" / "tb3-arena-unicycle.yaml"
+    scene, rm, planner = _setup(path)
+    q = scene.queries[2]
+    res = planner.plan(q.start, q.goal, q.t0, PlanOptions(refine=True, seed=1))
+    assert res.refine_report.applied, res.refine_report.reason
+    rep = check_trajectory(scene, res.trajectory.waypoints, q)
+    assert rep.valid, rep.reason

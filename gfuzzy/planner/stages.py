@@ -17,6 +17,7 @@ the planner: data flows one way (docs/architecture.md).
 from __future__ import annotations
 
 import logging
+import math
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
@@ -180,6 +181,9 @@ def _clearance_functions(ctx: StageContext, corridor: FloatArray):
     static_segment, mover_clearance)."""
     scene, robot, geometry = ctx.scene, ctx.robot, ctx.geometry
     heading = _heading_lookup(corridor) if robot.dof == 3 else None
+    # a differential drive with a body that turns (box, footprint) drives each segment at
+    # the segment's own heading and turns in place at its ends (_drive_segment)
+    drive = robot.unicycle and robot.shape != "disc"
 
     def poses_of(xy: FloatArray) -> FloatArray:
         xy = np.atleast_2d(np.asarray(xy, dtype=float))
@@ -206,7 +210,10 @@ def _clearance_functions(ctx: StageContext, corridor: FloatArray):
         will have, so narrow passages do not defeat sampling."""
         k = len(a)
         ends = poses_of(np.concatenate([a, b])).tolist()  # one heading lookup for both ends
-        mn = np.array([_traced(geometry, p, q, pose_clearance) for p, q in zip(ends[:k], ends[k:], strict=True)])
+        if drive:
+            mn = np.array([_drive_segment(geometry, p, q, pose_clearance) for p, q in zip(ends[:k], ends[k:], strict=True)])
+        else:
+            mn = np.array([_traced(geometry, p, q, pose_clearance) for p, q in zip(ends[:k], ends[k:], strict=True)])
         return np.where(mn >= 0, 0.0, -1.0), mn
 
     # The GA evaluates the mover clearance at every sample of every candidate, so the robot
@@ -278,6 +285,28 @@ def _traced(geometry: StaticGeometry, p: list, q: list, pose_clearance) -> float
     return geometry.motion_clearance(p, q, ca=ca, cb=cb)
 
 
+def _drive_segment(geometry: StaticGeometry, p: list, q: list, pose_clearance) -> float:
+    """A differential drive's segment p -> q (poses at the corridor's headings): the straight
+    at its own heading, and the turns in place at both ends between the corridor's heading
+    and the segment's; the smallest clearance, -1 when one is not certified free.
+
+    At a via-point the robot turns from the heading of the segment before to that of the
+    segment after; that arc lies within the two arcs from each to the corridor's heading
+    there, which the two segments certify: the GA's objective then agrees with what the
+    refined path's certification (turns in place included) asks of it.
+    """
+    h = math.atan2(q[1] - p[1], q[0] - p[0])
+    if p[:2] == q[:2]:
+        return _traced(geometry, p, p, pose_clearance)
+    a, b = [p[0], p[1], h], [q[0], q[1], h]
+    clear = _traced(geometry, a, b, pose_clearance)
+    for end, turned in ((p, a), (q, b)):
+        if clear < 0:
+            break
+        clear = min(clear, _traced(geometry, end, turned, pose_clearance))
+    return clear
+
+
 def _accept(ctx: StageContext, traj: Trajectory, query_like, before: Trajectory, max_slowdown: float):
     """Independent check, and not much slower than the answer it replaces."""
     rep = check_trajectory(ctx.scene, traj.waypoints, query_like)
@@ -330,9 +359,11 @@ def _refine(ctx: StageContext, traj: Trajectory, query, opts, deadline) -> tuple
     if not res.improved:
         return traj, replace(report, reason="the GA found nothing better than the corridor")
     if ctx.robot.unicycle:  # straight segments through the via-points, turns in place
-        from ..timespace.drive import turn_path
+        from .straighten import drive_path
 
-        path = turn_path(traj.poses[0], res.path[1:-1], traj.poses[-1])
+        path = drive_path(ctx.geometry, traj.poses[0], res.path[1:-1], traj.poses[-1])
+        if path is None:
+            return traj, replace(report, reason="a refined turn in place could not be certified free of static obstacles")
     else:
         path = funcs[0](res.path)  # poses_of: a box robot takes the corridor's headings
         if ctx.robot.dof == 3:  # the ends keep their exact poses

@@ -16,7 +16,7 @@ from ..poses import wrap_angle
 from ..timespace.drive import SAME_HEADING, pick_turn
 from ..typed import FloatArray
 
-__all__ = ["straighten", "corners", "LOOK_AHEAD"]
+__all__ = ["straighten", "corners", "drive_path", "LOOK_AHEAD"]
 
 #: Corners tried ahead of the current one (the farthest first).
 LOOK_AHEAD = 40
@@ -117,3 +117,42 @@ def straighten(geometry, path: FloatArray, look_ahead: int = LOOK_AHEAD) -> Floa
     straight = np.array(out)
     straight[-1] = goal
     return straight if len(corners(straight)) < len(pts) else path
+
+
+def drive_path(geometry, start: FloatArray, via: FloatArray, goal: FloatArray) -> FloatArray | None:
+    """A differential drive's path through via-points: straight moves joined by turns in
+    place, each turn along the shorter arc when its sweep is free, else the longer one.
+
+    Parameters
+    ----------
+    geometry : StaticGeometry
+    start, goal : (3,) float
+    via : (m, 2) float
+
+    Returns
+    -------
+    (n, 3) float or None
+        None when a turn in place is not free either way (the straights are left to the
+        caller's certification).
+    """
+    pts = np.vstack([np.asarray(start, dtype=float)[None, :2], np.asarray(via, dtype=float).reshape(-1, 2),
+                     np.asarray(goal, dtype=float)[None, :2]])  # fmt: skip
+    pts = pts[np.concatenate([[True], np.hypot(*np.diff(pts, axis=0).T) > 1e-12])]
+    out = [np.asarray(start, dtype=float)]
+    h = float(start[2])
+    for a, b in zip(pts[:-1], pts[1:], strict=True):
+        dh = pick_turn(geometry, float(a[0]), float(a[1]), h, math.atan2(b[1] - a[1], b[0] - a[0]))
+        if dh is None:
+            return None
+        if dh:
+            out += _turn_rows(float(a[0]), float(a[1]), h, dh)
+            h = float(out[-1][2])
+        out.append(np.array([b[0], b[1], h]))
+    g = np.asarray(goal, dtype=float)
+    dh = pick_turn(geometry, float(g[0]), float(g[1]), h, float(g[2]))
+    if dh is None:
+        return None
+    out += _turn_rows(float(g[0]), float(g[1]), h, dh) if dh else []
+    path = np.array(out)
+    path[-1] = g
+    return path
