@@ -190,3 +190,19 @@ def test_the_fuzzy_rules_brake_before_a_sharp_corner():
 def test_a_path_that_turns_while_moving_is_refused():
     with pytest.raises(InputError, match="turns while it moves"):
         drive_profile(np.array([[0.0, 0.0, 0.0], [1.0, 0.5, 0.3]]), R, VMAX, AMAX, WMAX)
+
+
+def test_a_drive_that_may_reverse_stops_where_it_changes_direction():
+    robot = {"disc": 0.2, "vmax": VMAX, "amax": AMAX, "kinematics": "unicycle", "reverse": True}
+    scene = parse_scene(scene_doc(robot=robot))
+    path = np.array([[1.0, 1.0, 0.0], [3.0, 1.0, 0.0], [2.0, 1.0, 0.0], [2.0, 1.0, 1.0]])
+    p = drive_profile(path, 0.2, VMAX, AMAX, scene.robot.turn_rate)
+    assert np.allclose(p.stops, [2.0, 3.0])  # the reversal, then the turn
+    rt = retime_drive(scene, path, 0.0, 0.07, AMAX, 30.0)
+    rows = rt.trajectory.waypoints
+    assert check_trajectory(scene, rows).valid
+    forward = np.cos(rows[:-1, 3]) * np.diff(rows[:, 1])
+    assert forward.min() < 0 < forward.max()
+    # the robot is at rest at x = 3: the rows reach it and leave it at most amax dt^2 / 2 away
+    at = np.nonzero(np.isclose(rows[:, 1], 3.0))[0]
+    assert at.size and np.all(np.abs(np.diff(rows[at[0] - 1 : at[-1] + 2, 1])) <= AMAX * 0.07**2 / 2 * (1 + 1e-6) + 1e-12)
