@@ -1,4 +1,4 @@
-"""How often the GA's refinement of a differential drive's path is kept, and why not.
+"""How often the GA's refinement (or the speed layer) of a differential drive's path is kept.
 
 For the bundled ``kinematics: unicycle`` scenes and, as unseen cases, the bundled box and
 footprint scenes driven as differential drives (``kinematics: unicycle`` added, nothing
@@ -6,7 +6,10 @@ else changed), every query is planned with ``--refine``; one row per query gives
 refinement did (applied, or its reason), and the totals count how many refined paths were
 thrown away because a segment or a turn in place could not be certified statically.
 
-    python tools/bench_drive_refine.py [--scenes A.yaml ...] [-n VERTICES] [--seed S]
+    python tools/bench_drive_refine.py [--bundled NAME ...] [--unseen NAME ...] [-n VERTICES]
+        [--seed S] [--stage refine|speed]
+
+``--stage speed`` runs ``--speed-layer`` instead and counts where it applied.
 
 Run it with another checkout first on PYTHONPATH to measure that code ("before").
 """
@@ -48,20 +51,25 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--bundled", nargs="*", default=list(BUNDLED))
     ap.add_argument("--unseen", nargs="*", default=list(UNSEEN))
+    ap.add_argument("--stage", choices=("refine", "speed"), default="refine")
     args = ap.parse_args()
+    speed = args.stage == "speed"
     counts: Counter = Counter()
-    print(f"{'scene/query':<44}{'kind':<8}{'refine':<10}{'GA s':>6}  reason")
+    print(f"{'scene/query':<44}{'kind':<8}{args.stage:<10}{'s':>6}  reason")
     for kind, scene, roadmap in _scenes(args.bundled, args.unseen):
         if roadmap is None:
             roadmap = build_roadmap(scene, RoadmapOptions(vertices=args.n, seed=args.seed))
         for q in scene.queries:
             t = time.perf_counter()
-            res = plan(scene, roadmap, q.start, q.goal, q.t0, PlanOptions(refine=True, seed=args.seed, time_limit=120))
+            opts = PlanOptions(refine=not speed, speed_layer=speed, seed=args.seed, time_limit=120)
+            res = plan(scene, roadmap, q.start, q.goal, q.t0, opts)
             if not res.solved:
                 print(f"{scene.name + '/' + q.name:<44}{kind:<8}{'unsolved':<10}{time.perf_counter() - t:>6.1f}")
                 continue
-            rep = res.refine_report
+            rep = res.speed_report if speed else res.refine_report
             reason = rep.reason
+            if speed and rep.applied:
+                reason = f"{rep.before['duration']:.2f} -> {rep.after['duration']:.2f} s, corners {rep.corners}"
             if rep.applied:
                 verdict = "applied"
             elif "certified" in reason:
@@ -71,10 +79,10 @@ def main() -> None:
             else:
                 verdict = "other"
             counts[verdict] += 1
-            ga = rep.ga_seconds or 0.0
+            ga = time.perf_counter() - t if speed else rep.ga_seconds or 0.0
             print(f"{scene.name + '/' + q.name:<44}{kind:<8}{verdict:<10}{ga:>6.1f}  {reason}")
     total = sum(counts.values())
-    print(f"\nsolved queries refined: {total}; " + ", ".join(f"{k} {v}" for k, v in sorted(counts.items())))
+    print(f"\nsolved queries ({args.stage}): {total}; " + ", ".join(f"{k} {v}" for k, v in sorted(counts.items())))
 
 
 if __name__ == "__main__":
