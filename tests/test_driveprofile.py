@@ -206,3 +206,11 @@ def test_a_drive_that_may_reverse_stops_where_it_changes_direction():
     # the robot is at rest at x = 3: the rows reach it and leave it at most amax dt^2 / 2 away
     at = np.nonzero(np.isclose(rows[:, 1], 3.0))[0]
     assert at.size and np.all(np.abs(np.diff(rows[at[0] - 1 : at[-1] + 2, 1])) <= AMAX * 0.07**2 / 2 * (1 + 1e-6) + 1e-12)
+
+
+def test_motions_of_no_length_are_dropped(empty_scene):
+    path = np.vstack([PATH[:3], PATH[2] + [1e-13, 0.0, 0.0], PATH[3:-1], PATH[-1] + [0.0, 0.0, 1e-12], PATH[-1]])
+    rt = retime_drive(empty_scene, path, 0.0, 0.07, AMAX, 60.0)
+    assert rt.status == "solved"
+    assert oracle(rt.trajectory.waypoints, PATH, VMAX, WMAX, AMAX, R) == []
+    np.testing.assert_array_equal(rt.trajectory.waypoints[-1, 1:], PATH[-1])

@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..fuzzy.driveprofile import drive_profile
+from ..fuzzy.driveprofile import SAME_HEADING, STILL_XY, drive_profile
 from ..fuzzy.profile import limit_acceleration, profile_times
 from ..poses import pose_at
 from ..scene.scene import Scene
@@ -77,6 +77,19 @@ def drive_chain(path, knots, s_p, v_p, rests, dt) -> tuple[FloatArray, FloatArra
         pieces += [inner, np.array([s_p[b]])]
     s = np.concatenate(pieces)
     return pose_at(knots, path, s), s
+
+
+def _without_null_motions(path: FloatArray) -> FloatArray:
+    """``path`` without the poses that neither move (``STILL_XY``) nor turn (``SAME_HEADING``)
+    from the one before: rounding leftovers, which would be motions of no length."""
+    d = np.diff(path[:, :2], axis=0)
+    dh = np.abs((np.diff(path[:, 2]) + math.pi) % (2 * math.pi) - math.pi)
+    null = (np.hypot(d[:, 0], d[:, 1]) <= STILL_XY) & (dh <= SAME_HEADING)
+    keep = np.concatenate([[True], ~null])
+    keep[-1] = True  # the goal pose stays exactly
+    if null[-1] and len(path) > 2:
+        keep[-2] = False
+    return path[keep]
 
 
 def _with_stops(s_m, v_m, stops, amax):
@@ -131,7 +144,7 @@ def retime_drive(
         profile's duration without the movers.
     """
     robot = scene.robot
-    path = np.asarray(path, dtype=float)
+    path = _without_null_motions(np.asarray(path, dtype=float))
     prof = drive_profile(path, robot.circumradius, robot.vmax * SPEED_SAFETY, amax,
                          robot.turn_rate * SPEED_SAFETY, rulebase)  # fmt: skip
     duration = float(profile_times(prof.s, prof.v)[-1])
