@@ -34,7 +34,7 @@ from ..scene.scene import Scene
 from ..settings import SPEED_SAFETY
 from ..status import Status
 from ..typed import FloatArray
-from .retime import ProfileRetime, _search_chain, s_at
+from .retime import PROFILE_GROUP, ProfileRetime, _search_chain, s_at
 
 if TYPE_CHECKING:
     from ..fuzzy.rules import RuleBase
@@ -43,7 +43,7 @@ __all__ = ["retime_drive", "drive_chain", "DRIVE_GROUP"]
 
 #: Nodes per group of the chain whose safety the movers' field computes together: pairs
 #: (see :func:`gfuzzy.planner.retime._search_chain`).
-DRIVE_GROUP = 2
+DRIVE_GROUP = PROFILE_GROUP
 
 
 def drive_chain(path, knots, s_p, v_p, rests, dt) -> tuple[FloatArray, FloatArray]:
