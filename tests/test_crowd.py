@@ -43,6 +43,18 @@ def test_circle_layout_is_crowdnavs():
     np.testing.assert_array_equal(again.human_starts, lay.human_starts)
 
 
+def test_a_jammed_circle_placement_starts_over():
+    # 20 humans on the circle of radius 4: seed [2, 75] places some humans that leave the
+    # rest no room (the old code gave up after 100 000 draws); the placement starts over
+    s = C.CrowdSetting("circle", humans=20)
+    lay = C.layout(s, np.random.default_rng([2, 75]))
+    assert len(lay.human_starts) == 20
+    for ends, robot in ((lay.human_starts, lay.start), (lay.human_goals, lay.goal)):
+        agents = np.vstack([robot, ends])
+        d = np.hypot(*(agents[:, None] - agents[None]).transpose(2, 0, 1)) + np.eye(len(agents)) * 9
+        assert d.min() >= 0.3 + 0.3 + 0.2
+
+
 def test_square_and_arena_layouts():
     sq = C.layout(C.CrowdSetting("square", humans=10), np.random.default_rng(1))
     assert np.all(np.abs(sq.human_starts) <= 5) and np.all(np.abs(sq.human_goals) <= 5)

@@ -395,9 +395,10 @@ def _far_enough(p, agents, r, discomfort, which) -> bool:
 def layout(setting: CrowdSetting, rng: np.random.Generator) -> Layout:
     """Draw an episode's robot and humans as the scenario's protocol does.
 
-    * ``circle`` (CrowdNav): robot (0, -4) -> (0, 4); humans on the circle of radius 4 at
-      a uniform angle, each coordinate perturbed by U[-0.5, 0.5) m, walking to the opposite
-      point; a draw within ``r + r' + 0.2`` of an earlier agent's start or goal is redrawn.
+    * ``circle`` (CrowdNav): robot (0, -4) -> (0, 4); humans on the circle of radius 4 at a
+      uniform angle, each coordinate perturbed by U[-0.5, 0.5) m, walking to the opposite point;
+      a draw within ``r + r' + 0.2`` of an earlier agent's start or goal is redrawn (all the
+      humans are, after 100 000 draws: those placed may leave no room; CrowdNav loops forever).
     * ``square`` (CrowdNav): robot as above; a human starts at ``x = U[0, 1) 5 s``,
       ``y = U[-5, 5)`` on a random side ``s`` and walks to ``x = U[0, 1) 5 (-s)``, ``y =
       U[-5, 5)``, start and goal each redrawn when near an earlier agent's start (goal).
@@ -416,11 +417,12 @@ def layout(setting: CrowdSetting, rng: np.random.Generator) -> Layout:
     else:
         start, goal = np.array(c["start"], float), np.array(c["goal"], float)
     agents = [(start, goal, c["robot_radius"])]
-    hs, hg = [], []
-    tries = 0
+    hs, hg, tries = [], [], 0
     while len(hs) < setting.humans:
         tries += 1
-        if tries > 100_000:
+        if tries % 100_001 == 0:  # jammed: start over
+            hs, hg, agents = [], [], agents[:1]
+        if tries > 1_000_000:
             raise InputError(f"cannot place {setting.humans} humans in the {setting.scenario} scenario")
         if setting.scenario == "square":
             sign = -1.0 if rng.random() > 0.5 else 1.0
@@ -441,9 +443,7 @@ def layout(setting: CrowdSetting, rng: np.random.Generator) -> Layout:
             g = -p
             if not (_far_enough(p, agents, r, disc, 0) and _far_enough(p, agents, r, disc, 1)):
                 continue
-        hs.append(p)
-        hg.append(g)
-        agents.append((p, g, r))
+        hs, hg, agents = [*hs, p], [*hg, g], [*agents, (p, g, r)]
     return Layout(start, goal, np.array(hs).reshape(-1, 2), np.array(hg).reshape(-1, 2))
 
 
