@@ -44,12 +44,13 @@ from ..roadmap.roadmap import Roadmap
 from ..scene.scene import Mover, Scene
 from ..settings import SPEED_SAFETY
 from ..status import Status
-from ..timespace.drive import drive_rows, evasions
+from ..timespace.drive import Fan, drive_rows, evasions
 from ..timespace.movers import MoverField
 from ..timespace.spacetime import IntervalStore, SpaceTimeGraph
 from ..timespace.timespace import timed_rows
 from ..trajectory import Trajectory
 from ..typed import BoolArray, FloatArray
+from .drivenav import kept_plan
 from .navtypes import NavMode, NavStep
 
 __all__ = ["NavMode", "NavOptions", "NavStep", "Navigator"]
@@ -145,13 +146,16 @@ class NavOptions:
     cover: float = 1.0
     goal_tolerance: float = 1e-6
     backend: str = "compiled"
+    commitment: float = 0.5
+    fan: bool = True
 
     def __post_init__(self):
         if self.backend not in BACKENDS:
             raise InputError(f"backend must be one of {', '.join(BACKENDS)}, got {self.backend!r}")
         for name in ("dt", "prediction_horizon", "reference_speed", "slice", "time_budget", "plan_slack", "evasion_time", "cover"):
             check_number(name, getattr(self, name))
-        for name in ("uncertainty_growth", "safety_buffer", "personal_space", "stationary_hold", "goal_tolerance"):
+        for name in ("uncertainty_growth", "safety_buffer", "personal_space", "stationary_hold", "goal_tolerance",
+                     "commitment"):
             check_number(name, getattr(self, name), strict=False)
         if self.connect_k < 1 or self.evasion_headings < 4:
             raise InputError("connect_k must be >= 1 and evasion_headings >= 4")
@@ -295,6 +299,7 @@ class Navigator:
         self._kept = self._planner.prepare(self.goal, popts)
         self._nv = 0 if self.robot.unicycle else len(self.roadmap.vertices)  # vertices "ahead"
         self._g_id = -1
+        self._fan = Fan() if self.robot.unicycle and opts.fan else None
 
     def _splice_ends(self, pose: FloatArray, ahead=()):
         """(graph, start id, goal id, roadmap distance) of the kept graph with ``pose`` in."""
@@ -302,7 +307,7 @@ class Navigator:
         if self.robot.dof == 3:
             start[2] = wrap_angle(start[2])
         if self.robot.unicycle:
-            ug = self._kept.kept.splice(self._planner, start)
+            ug = self._kept.kept.splice(self._planner, start, fan_options=self._fan)
             return ug.graph, ug.s_id, ug.g_id, ug.roadmap_distance
         return self._kept.splice(self._planner, start, ahead=ahead)
 
@@ -512,6 +517,11 @@ class Navigator:
                 traj = self._evasive(t, pose, obs)
                 mode = NavMode.EVASIVE
         else:
+            if self.robot.unicycle:  # a unicycle's change of mind costs turns: keep the last plan if as good
+                kept = kept_plan(self, t, pose, obs, infl if mode == NavMode.PLAN else self._inflation(pose, obs, True),
+                                 traj, opts.commitment)
+                if kept is not None:
+                    traj, mode = kept, NavMode.KEPT
             self._previous = traj
         if mode == NavMode.EVASIVE:
             self._previous = None

@@ -19,6 +19,7 @@ class NavMode(str, Enum):
     RELAXED = "relaxed"  # a fresh search without the buffer, personal space and uncertainty
     DIRECT = "direct"  # straight to the goal nearby, checked finely
     PREVIOUS = "previous"  # the last plan, still clear
+    KEPT = "kept"  # a fresh search answered, but the last plan (a unicycle's) was as good: kept
     EVASIVE = "evasive"  # the statically free straight motion with the latest contact
     GOAL = "goal"  # already at the goal
 

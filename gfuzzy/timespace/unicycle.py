@@ -38,7 +38,7 @@ import numpy as np
 
 from ..poses import split_counts, wrap_angle
 from ..typed import FloatArray, IntArray
-from .drive import SAME_HEADING, _xy_pose, pick_turn, turn_free
+from .drive import SAME_HEADING, _xy_pose, fan, pick_turn, turn_free
 from .spacetime import SpaceTimeGraph
 
 __all__ = ["UnicycleGraph", "UnicycleGoal", "UnicyclePrepared", "prepare_goal", "build_graph", "lanes", "LANE_NEIGHBOURS", "SAME_HEADING"]
@@ -561,12 +561,13 @@ class UnicycleGoal:
     connect_k: int
     steps: object = None
 
-    def splice(self, planner, start: FloatArray, exact: bool = True) -> UnicycleGraph:
+    def splice(self, planner, start: FloatArray, exact: bool = True, fan_options=None) -> UnicycleGraph:
         """This graph with ``start`` (``[x, y, heading]``, heading wrapped) joined in.
 
         ``exact``: the steps from the start to every point by Dijkstra (a fresh plan's
         safety windows); otherwise the straight distance over a step's length, a cheaper
-        lower bound (the navigator's).
+        lower bound (the navigator's). ``fan_options`` (:class:`gfuzzy.timespace.drive.Fan`):
+        also the two-leg motions of :func:`gfuzzy.timespace.drive.fan` (the navigator's).
         """
         geo, robot = planner.geometry, planner.robot
         N = len(self.poses)
@@ -593,6 +594,8 @@ class UnicycleGoal:
                 ex.turn(s_id, a, d1)
                 ex.turn(c, self.g_id, d2)
                 ex.lane(a, c)
+        if fan_options is not None:
+            fan(ex, geo, start, s_id, self.goal, self.g_id, fan_options)
         new = np.asarray(ex.poses, dtype=float).reshape(-1, 3)
         x = len(new)
         xp = np.asarray(ex.pieces, dtype=float).reshape(-1, 4)
@@ -614,15 +617,11 @@ class UnicycleGoal:
         met = hop.copy()
         met[: self.nn] = self.metres
         Lw = np.where(xp[:, 3] > 0, xp[:, 3], 0.0)
-        for _ in range(x + 1):
-            nh, nm = k + hop[B], Lw + met[B]
-            changed = False
-            for i in range(len(A)):
-                if nh[i] < hop[A[i]]:
-                    hop[A[i]], changed = nh[i], True
-                if nm[i] < met[A[i]]:
-                    met[A[i]], changed = nm[i], True
-            if not changed:
+        for _ in range(x + 1):  # Bellman-Ford over the new pieces (at most x rounds)
+            h0, m0 = hop.copy(), met.copy()
+            np.minimum.at(hop, A, k + hop[B])
+            np.minimum.at(met, A, Lw + met[B])
+            if np.array_equal(h0, hop) and np.array_equal(m0, met):
                 break
         rd = float(met[s_id])
         heur = np.concatenate([self.heuristic, hop[N:], hop[B[p_of]] + k[p_of] - j])
