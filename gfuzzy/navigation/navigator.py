@@ -127,6 +127,14 @@ class NavOptions:
     backend : {"compiled", "reference"}
         The search's implementation, as :attr:`gfuzzy.PlanOptions.backend`: the same
         answers, the compiled one faster (so more replans finish inside the budget).
+    commitment : float
+        A differential drive only: seconds its last plan may arrive later than a fresh one
+        and still be kept (while it keeps the fresh search's inflated gaps to everyone):
+        a plan that changes its mind every period pays every turn it undoes. 0 turns it off.
+    fan : bool
+        A differential drive only: also search the two-leg motions out of the robot's pose
+        (turn, straight, turn towards the goal, straight; :func:`gfuzzy.timespace.drive.fan`),
+        which detour with few turns where the roadmap's lanes zigzag.
     """
 
     dt: float = 0.1

@@ -36,7 +36,9 @@ class NavStep:
     mode : NavMode
         ``"plan"`` (a fresh search), ``"relaxed"`` (a fresh search without the safety
         buffer, the personal space and the uncertainty), ``"direct"`` (straight to the goal nearby, checked
-        finely), ``"previous"`` (the last plan, still clear), ``"evasive"``, ``"goal"``.
+        finely), ``"previous"`` (the last plan, still clear), ``"evasive"``, ``"goal"``,
+        ``"kept"`` (a differential drive's: a fresh search answered, and the last plan,
+        as safe and at most ``NavOptions.commitment`` seconds later, was kept).
     seconds : float
         Wall-clock time of the call.
     message : str

@@ -612,17 +612,21 @@ class UnicycleGoal:
         _too_many(total)
         # steps and metres to the goal of the new nodes: the kept ones bound them (a start's
         # pieces lead into the kept graph, never out of it and back)
-        hop = np.concatenate([np.full(N, np.inf), np.full(x, np.inf)])
-        hop[: self.nn] = self.hop
-        met = hop.copy()
-        met[: self.nn] = self.metres
         Lw = np.where(xp[:, 3] > 0, xp[:, 3], 0.0)
-        for _ in range(x + 1):  # Bellman-Ford over the new pieces (at most x rounds)
-            h0, m0 = hop.copy(), met.copy()
-            np.minimum.at(hop, A, k + hop[B])
-            np.minimum.at(met, A, Lw + met[B])
-            if np.array_equal(h0, hop) and np.array_equal(m0, met):
+        old = B < N  # pieces into the kept graph: fixed ends (beyond its nodes: no way on)
+        hk = np.where(old & (B < self.nn), self.hop[np.minimum(B, self.nn - 1)], np.inf)
+        mk = np.where(old & (B < self.nn), self.metres[np.minimum(B, self.nn - 1)], np.inf)
+        hop_x, met_x = np.full(x, np.inf), np.full(x, np.inf)
+        bx = np.where(old, 0, B - N)
+        for _ in range(x + 1):  # Bellman-Ford over the new nodes (every piece leaves one)
+            h0, m0 = hop_x.copy(), met_x.copy()
+            np.minimum.at(hop_x, A - N, k + np.where(old, hk, hop_x[bx]))
+            np.minimum.at(met_x, A - N, Lw + np.where(old, mk, met_x[bx]))
+            if np.array_equal(h0, hop_x) and np.array_equal(m0, met_x):
                 break
+        hop = np.concatenate([np.full(N, np.inf), hop_x])
+        hop[: self.nn] = self.hop
+        met = np.concatenate([np.full(N, np.inf), met_x])
         rd = float(met[s_id])
         heur = np.concatenate([self.heuristic, hop[N:], hop[B[p_of]] + k[p_of] - j])
         poses = np.concatenate([self.poses, new, inner])
