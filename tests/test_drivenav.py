@@ -52,7 +52,9 @@ def test_a_detour_obeys_the_row_rule_and_keeps_clear(open_floor, fan):
     nav = Navigator(sc, rm, GOAL, NavOptions(time_budget=5.0, fan=fan))
     person = np.array([5.0, 3.0, 0.0, 0.0, 0.3])  # standing on the straight line
     traj = nav.step(0.0, START, person[None])
-    assert nav.last.mode == NavMode.PLAN
+    # a fresh search's plan: with the personal space, or closer when that arrives sooner
+    # by more than its soft cost (NavOptions.personal_space_cost)
+    assert nav.last.mode in (NavMode.PLAN, NavMode.CLOSE)
     assert _unicycle_problem(sc.robot, traj.waypoints) is None  # the checker's own row rule
     assert _min_gap(traj, person, 0.0) >= 0.0
     np.testing.assert_allclose(traj.waypoints[-1, 1:], GOAL, atol=1e-9)
