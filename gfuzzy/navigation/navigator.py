@@ -51,6 +51,7 @@ from ..timespace.timespace import timed_rows
 from ..trajectory import Trajectory
 from ..typed import BoolArray, FloatArray
 from .drivenav import kept_plan
+from .evasion import evasion_scores
 from .navtypes import NavMode, NavStep
 
 __all__ = ["NavMode", "NavOptions", "NavStep", "Navigator"]
@@ -66,8 +67,6 @@ REACH_SAMPLES = 48
 #: Seconds between the samples at which the fallbacks test a motion against the people
 #: walking on; the gap kept at the samples covers what can happen between two of them.
 FALLBACK_SAMPLE = 0.05
-#: Gaps (m) wider than this score the same in the evasive motion.
-EVASION_GAP = 0.5
 #: First guess (s) of the predictions' set-up per person (then measured per navigator).
 PERSON_SECONDS = 150e-6
 #: The predictions' field answers the search's safety questions in pieces of about this
@@ -715,7 +714,7 @@ class Navigator:
         obstacles) and then standing, and standing still. Each is scored by its time to
         contact with the people walking on at constant velocity (un-inflated, sampled every
         ``FALLBACK_SAMPLE`` s over ``evasion_time``, with a bound on the gap between two
-        samples, see :meth:`_evasion_scores`), then by the smallest gap, then by progress to the goal.
+        samples, see :func:`.evasion.evasion_scores`), then by the smallest gap, then by progress to the goal.
         """
         opts = self.options
         cr = self.robot.circumradius
@@ -727,7 +726,7 @@ class Navigator:
             trajs = [Trajectory(rows, cr) for rows in cands]
             pts = np.stack([tr.at(np.minimum(times, tr.t_end)) for tr in trajs])
             ends = np.array([rows[-1, 1:] for rows in cands])
-            return trajs[int(np.argmax(self._evasion_scores(t, pose, obs, pts, times, ends)))]
+            return trajs[int(np.argmax(evasion_scores(self, t, pose, obs, pts, times, ends)))]
         ang = np.arange(opts.evasion_headings) * (2 * math.pi / opts.evasion_headings)
         speeds = np.array([1.0, 0.5]) * self.vplan
         dirs = np.column_stack([np.cos(ang), np.sin(ang)])
@@ -748,7 +747,7 @@ class Navigator:
         tau = times - t
         frac = np.clip(tau[None, :] / np.maximum(move_time[:, None], 1e-12), 0.0, 1.0)  # moves, then stands
         pts = pose[None, None, :] + frac[:, :, None] * (ends - pose[None])[:, None, :]  # (C, T, d)
-        score = np.where(free, self._evasion_scores(t, pose, obs, pts, times, ends, vel), -math.inf)
+        score = np.where(free, evasion_scores(self, t, pose, obs, pts, times, ends, vel), -math.inf)
         c = int(np.argmax(score))
         if c == 0:
             rows = np.array([[t, *pose], [t + max(T, opts.cover), *pose]])
@@ -758,43 +757,6 @@ class Navigator:
                 rows = np.vstack([rows, [t + opts.cover, *ends[c]]])
         return Trajectory(rows, cr)
 
-
-
-    def _evasion_scores(self, t, pose, obs, pts, times, ends, vel=None) -> FloatArray:
-        """(C,) score of candidate motions ``pts`` (C, T, d) at ``times`` ending at ``ends``:
-        the latest contact first (no contact within the horizon beats any), then the widest
-        gap while close, then progress to the goal.
-
-        ``vel`` (C, 2): each candidate's velocity when it translates and then stands (None:
-        any motion within the speed bound). Between two samples ``h`` apart the gap to a
-        person changes no faster than their relative speed ``R`` (a point of the robot moves
-        at most ``vmax``), so it stays above ``(g_i + g_{i+1} - R h) / 2``: contact is that
-        bound at or below 0, the gap not opening up (a robot touching someone backs out).
-        """
-        T = times[-1] - t
-        tau = times - t
-        obs = self._near(pose, obs, T, EVASION_GAP)  # farther people change no score below
-        if len(obs):
-            each = self._clearance_along(pts, times, obs)  # (C, T, k)
-            walk = np.hypot(obs[:, 2], obs[:, 3])
-            if vel is None:
-                rate = np.broadcast_to(float(self.robot.vmax) + walk, (len(pts), len(obs)))
-            else:  # moving (relative velocity), then standing (the person's own)
-                rel = np.hypot(vel[:, None, 0] - obs[None, :, 2], vel[:, None, 1] - obs[None, :, 3])
-                rate = np.maximum(rel, walk[None, :])
-            h = np.diff(tau)[None, :, None]
-            between = ((each[:, :-1] + each[:, 1:] - rate[:, None, :] * h) / 2).min(axis=-1)  # (C, T - 1)
-            gap = each.min(axis=-1)  # (C, T)
-            later = gap[:, 1:]
-            hit = (between <= 0) & (later <= gap[:, :1])
-            ttc = np.where(hit.any(axis=1), tau[1:][np.argmax(hit, axis=1)], math.inf)
-            worst = later.min(axis=1)
-        else:
-            ttc = np.full(len(pts), math.inf)
-            worst = np.full(len(pts), math.inf)
-        cr = self.robot.circumradius
-        progress = metric_distance(pose, self.goal, cr) - metric_distance(ends, self.goal[None], cr)
-        return np.minimum(ttc, T + 1.0) * 100.0 + np.minimum(worst, EVASION_GAP) * 10.0 + progress
 
 def _cut(traj: Trajectory, ta: float, tb: float) -> FloatArray:
     """Rows of ``traj`` between ``ta`` and ``tb`` (both ends interpolated), t strictly increasing."""

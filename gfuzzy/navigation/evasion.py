@@ -1,0 +1,62 @@
+"""The score of the navigator's evasive motions (:meth:`Navigator._evasive`).
+
+When no plan answers, the navigator takes the statically free straight motion (or
+standing still) whose contact with the people walking on comes latest; this module
+scores the candidates.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..poses import metric_distance
+from ..typed import FloatArray
+
+if TYPE_CHECKING:
+    from .navigator import Navigator
+
+__all__ = ["EVASION_GAP", "evasion_scores"]
+
+#: Gaps (m) wider than this score the same in the evasive motion.
+EVASION_GAP = 0.5
+
+
+def evasion_scores(nav: Navigator, t: float, pose: FloatArray, obs: FloatArray, pts: FloatArray,
+                   times: FloatArray, ends: FloatArray, vel: FloatArray | None = None) -> FloatArray:  # fmt: skip
+    """(C,) score of candidate motions ``pts`` (C, T, d) at ``times`` ending at ``ends``:
+    the latest contact first (no contact within the horizon beats any), then the widest
+    gap while close, then progress to the goal.
+
+    ``vel`` (C, 2): each candidate's velocity when it translates and then stands (None:
+    any motion within the speed bound). Between two samples ``h`` apart the gap to a
+    person changes no faster than their relative speed ``R`` (a point of the robot moves
+    at most ``vmax``), so it stays above ``(g_i + g_{i+1} - R h) / 2``: contact is that
+    bound at or below 0, the gap not opening up (a robot touching someone backs out).
+    """
+    T = times[-1] - t
+    tau = times - t
+    obs = nav._near(pose, obs, T, EVASION_GAP)  # farther people change no score below
+    if len(obs):
+        each = nav._clearance_along(pts, times, obs)  # (C, T, k)
+        walk = np.hypot(obs[:, 2], obs[:, 3])
+        if vel is None:
+            rate = np.broadcast_to(float(nav.robot.vmax) + walk, (len(pts), len(obs)))
+        else:  # moving (relative velocity), then standing (the person's own)
+            rel = np.hypot(vel[:, None, 0] - obs[None, :, 2], vel[:, None, 1] - obs[None, :, 3])
+            rate = np.maximum(rel, walk[None, :])
+        h = np.diff(tau)[None, :, None]
+        between = ((each[:, :-1] + each[:, 1:] - rate[:, None, :] * h) / 2).min(axis=-1)  # (C, T - 1)
+        gap = each.min(axis=-1)  # (C, T)
+        later = gap[:, 1:]
+        hit = (between <= 0) & (later <= gap[:, :1])
+        ttc = np.where(hit.any(axis=1), tau[1:][np.argmax(hit, axis=1)], math.inf)
+        worst = later.min(axis=1)
+    else:
+        ttc = np.full(len(pts), math.inf)
+        worst = np.full(len(pts), math.inf)
+    cr = nav.robot.circumradius
+    progress = metric_distance(pose, nav.goal, cr) - metric_distance(ends, nav.goal[None], cr)
+    return np.minimum(ttc, T + 1.0) * 100.0 + np.minimum(worst, EVASION_GAP) * 10.0 + progress
