@@ -142,11 +142,29 @@ def test_discomfort_and_intrusion_by_hand():
     # gap < 0.2 <=> |4 - t| < sqrt(0.8^2 - 0.5^2) = 0.6245 <=> t > 3.3755: steps 13, 14, 15
     assert m.discomfort_steps == 3
     assert m.discomfort_frequency == pytest.approx(3 / 16)
-    # centre within 0.6 <=> t > 4 - sqrt(0.6^2 - 0.5^2) = 3.6683, seen from t_k when
-    # t_k + 1.25 > 3.6683 <=> t_k > 2.4183: steps 10..15
+    # centre within 0.6 <=> t > 4 - sqrt(0.6^2 - 0.5^2) = 3.6683 (while present, t <= 4):
+    # the instants 3.75 and 4.0, seen from t_k = 3.75 - 0.25 j or 4.0 - 0.25 j (j = 1..5),
+    # t_k in 2.5 .. 3.75: steps 10..15
     assert m.intrusion_steps == 6
     assert m.intrusion_ratio == pytest.approx(6 / 16)
     assert m.min_gap == pytest.approx(0.5 - 0.6)
+
+
+def test_intrusion_looks_at_the_next_five_instants_only():
+    # CrowdNav++'s test: the robot's centre now against the person's centre 0.25, 0.5, ...
+    # 1.25 s later. A fast person passing 0.5 m from the standing robot between two of
+    # those instants (centre abreast at t = 0.625: x = 4 t - 2.5) never intrudes: at
+    # t = 0.5 and 0.75 the centre is hypot(0.5, 0.5) = 0.707 m away
+    robot = np.array([[0.0, 0.0, 0.0], [2.0, 0.0, 0.0]])
+    fast = _walker("f", [[0.0, -2.5, 0.5], [2.0, 5.5, 0.5]])
+    assert social_metrics(robot, 0.3, [fast], 0.25).intrusion_steps == 0
+    # the same person 0.125 s later is abreast at t = 0.75, an instant seen from steps 0..2
+    late = _walker("l", [[0.0, -3.0, 0.5], [2.0, 5.0, 0.5]])
+    assert social_metrics(robot, 0.3, [late], 0.25).intrusion_steps == 3
+    # someone close now but gone 0.25 s later is discomfort, not intrusion
+    brief = _walker("b", [[0.0, 0.5, 0.0], [0.2, 0.5, 0.0]])
+    m = social_metrics(robot, 0.3, [brief], 0.25)
+    assert m.intrusion_steps == 0 and m.discomfort_steps == 1
 
 
 def test_step_gaps_take_the_closest_instant_within_each_step():

@@ -365,6 +365,13 @@ class Episode:
     def collision(self) -> bool:
         return self.outcome == Outcome.COLLISION
 
+    @property
+    def intrusion_ratio(self) -> float:
+        """CrowdNav++'s intrusion ratio of the episode: intrusion steps over its steps,
+        plus one (CrowdNav++ tests arrival, collision and the time limit at the start of a
+        step, so the step that finds the episode over is counted, never as an intrusion)."""
+        return self.social.intrusion_steps / (self.social.steps + 1)
+
     def row(self, setting: CrowdSetting) -> dict:
         """The CSV row (the column names are the file format)."""
         lat = self.replan_seconds
@@ -378,7 +385,7 @@ class Episode:
             "min_separation": round(self.min_separation, 4) if math.isfinite(self.min_separation) else "",
             "steps": self.social.steps, "discomfort_steps": self.social.discomfort_steps,
             "discomfort_frequency": round(self.social.discomfort_frequency, 5),
-            "intrusion_steps": self.social.intrusion_steps, "intrusion_ratio": round(self.social.intrusion_ratio, 5),
+            "intrusion_steps": self.social.intrusion_steps, "intrusion_ratio": round(self.intrusion_ratio, 5),
             "path_length": round(self.path_length, 4), "replans": len(lat),
             "replan_p50_ms": q(0.5), "replan_p95_ms": q(0.95), "replan_max_ms": round(float(lat.max()) * 1e3, 3) if len(lat) else "",
             "modes": " ".join(f"{k}:{v}" for k, v in self.modes),
@@ -774,9 +781,11 @@ class PolicySummary:
 
 def summarize(runs: list[list[Episode]], policy: str) -> PolicySummary:
     """The table's row of ``policy``: rates over episodes, mean time to goal over the
-    successes, discomfort and intrusion as shares of all the episodes' steps (CrowdNav's
-    and CrowdNav++'s aggregation), the mean of the episodes' smallest separations, and
-    the quantiles of every decision's wall-clock time."""
+    successes, the discomfort frequency as a share of all the episodes' steps (CrowdNav's
+    aggregation), the intrusion ratio as the mean of the episodes' ratios
+    (:attr:`Episode.intrusion_ratio`, CrowdNav++'s ``rl/evaluation.py``), the mean of the
+    episodes' smallest separations, and the quantiles of every decision's wall-clock
+    time."""
     eps = [e for run in runs for e in run if e.policy == policy]
     n = len(eps)
     if n == 0:
@@ -794,7 +803,7 @@ def summarize(runs: list[list[Episode]], policy: str) -> PolicySummary:
         policy, n, sum(e.reached for e in eps) / n, sum(e.collision for e in eps) / n,
         sum(e.outcome == Outcome.TIMEOUT for e in eps) / n, float(np.mean(times)) if times else math.nan,
         sum(e.social.discomfort_steps for e in eps) / steps if steps else 0.0,
-        sum(e.social.intrusion_steps for e in eps) / steps if steps else 0.0,
+        float(np.mean([e.intrusion_ratio for e in eps])),
         float(np.mean(seps)) if seps else math.nan, q(0.5), q(0.95), float(lat.max()) if lat.size else math.nan,
         tuple(sorted(modes.items())),
     )  # fmt: skip
