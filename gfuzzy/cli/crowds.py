@@ -17,6 +17,9 @@ def add_crowd(sub) -> None:
                    help="circle or square crossing (CrowdNav), or the CrowdNav++ arena (default circle)")  # fmt: skip
     c.add_argument("--humans", type=int, metavar="K", help="number of humans (default 5; 20 in the arena)")
     c.add_argument("--visible", action="store_true", help="the humans see the robot and react to it")
+    c.add_argument("--steady-goals", action="store_true",
+                   help="arena: humans change goal only on arrival, not every 5 s at random (CrowdNav++'s "
+                        "non-randomised test)")  # fmt: skip
     c.add_argument("--crowd", choices=("orca", "social-force"), default="orca", help="how the humans move (default orca)")
     c.add_argument("--kinematics", choices=("holonomic", "unicycle"), default="holonomic",
                    help="the robot's kinematics (unicycle: a differential drive turning at most 1 rad/s, navigator only)")
@@ -74,7 +77,8 @@ def _setting(args):
     try:
         sensor = SensorOptions(velocity="exact" if args.velocity == "true" else "estimated", noise=args.noise,
                                fov=args.fov, sense=sense, seed=args.seed)  # fmt: skip
-        setting = CrowdSetting(args.scenario, humans, args.visible, args.crowd, args.kinematics, sensor)
+        setting = CrowdSetting(args.scenario, humans, args.visible, args.crowd, args.kinematics, sensor,
+                               not args.steady_goals)  # fmt: skip
         options = NavOptions(time_budget=args.time_budget, personal_space=args.personal_space)
     except InputError as exc:
         raise BadInput(f"gfuzzy crowd: {exc}") from None
@@ -96,7 +100,8 @@ def _table(setting, runs, policies) -> str:
     lines = [
         f"{setting.scenario}, {setting.humans} humans ({setting.crowd}, {'visible' if setting.visible else 'invisible'}),"
         f" {setting.kinematics} robot, velocity {setting.sensor.velocity}, noise {setting.sensor.noise:g} m,"
-        f" fov {setting.sensor.fov:g} deg, sense {setting.sense:g} m",
+        f" fov {setting.sensor.fov:g} deg, sense {setting.sense:g} m"
+        + (", goals change on arrival only" if setting.scenario == "arena" and not setting.goal_changes else ""),
         head,
     ]
     for p in policies:

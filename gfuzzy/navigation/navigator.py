@@ -32,7 +32,7 @@ from __future__ import annotations
 import logging
 import math
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -51,6 +51,7 @@ from ..timespace.timespace import timed_rows
 from ..trajectory import Trajectory
 from ..typed import BoolArray, FloatArray
 from .navtypes import NavMode, NavStep
+from .pathspace import WallCheck, ghost_window, path_ghosts, walled_off
 
 __all__ = ["NavMode", "NavOptions", "NavStep", "Navigator"]
 
@@ -100,6 +101,17 @@ class NavOptions:
         0.2 m) whenever a plan exists that does; when none does, the relaxed search (the
         people's discs as they are) answers, so the preference never costs a success.
         0 turns it off.
+    path_space : float
+        Seconds of each walking person's predicted path the first search also keeps the
+        robot's body off (:mod:`gfuzzy.navigation.pathspace`): it does not cross just in
+        front of someone or wait in their way (CrowdNav++'s intrusion, 1.25 s), whenever
+        a plan exists that does not; otherwise the relaxed search answers. 0 turns it off.
+    path_space_cost : float
+        What (s of arrival time) keeping off people's ways is worth: the plan that keeps the
+        path space is taken unless one that does not arrives sooner by more than this.
+    social_horizon : float
+        Seconds of the plan during which the path space is kept (a plan's far future is
+        replanned long before; predictions that far are too uncertain to yield to).
     slice : float
         Length (s) of a piece of prediction with one radius (the inflation grows by steps).
     stationary_hold : float
@@ -134,6 +146,9 @@ class NavOptions:
     reference_speed: float = 1.0
     safety_buffer: float = 0.05
     personal_space: float = 0.2
+    path_space: float = 1.25
+    path_space_cost: float = 1.0
+    social_horizon: float = 4.0
     slice: float = 0.5
     stationary_hold: float = 30.0
     time_budget: float = 0.1
@@ -151,7 +166,8 @@ class NavOptions:
             raise InputError(f"backend must be one of {', '.join(BACKENDS)}, got {self.backend!r}")
         for name in ("dt", "prediction_horizon", "reference_speed", "slice", "time_budget", "plan_slack", "evasion_time", "cover"):
             check_number(name, getattr(self, name))
-        for name in ("uncertainty_growth", "safety_buffer", "personal_space", "stationary_hold", "goal_tolerance"):
+        for name in ("uncertainty_growth", "safety_buffer", "personal_space", "path_space", "path_space_cost", "social_horizon", "stationary_hold",
+                     "goal_tolerance"):
             check_number(name, getattr(self, name), strict=False)
         if self.connect_k < 1 or self.evasion_headings < 4:
             raise InputError("connect_k must be >= 1 and evasion_headings >= 4")
@@ -221,6 +237,7 @@ class _Searched:
     out_of_time: bool = False
     graph: SpaceTimeGraph | None = None
     start: int = -1
+    ahead: list = field(default_factory=list)
 
 
 class Navigator:
@@ -275,6 +292,7 @@ class Navigator:
         self._ahead: list = []  # (arrival time, roadmap vertex) of the last plan
         self._clock = time.perf_counter  # the budget's clock (a test may replace it)
         self._person_seconds = PERSON_SECONDS  # the predictions' set-up per person, measured
+        self._walls = WallCheck(scene)
         self._build_base()
         if opts.backend == "compiled":  # load the compiled kernels now, not inside a step's budget
             from ..timespace.search_kernel import warm
@@ -327,14 +345,16 @@ class Navigator:
         return graph, s_id
 
     # ------------------------------------------------------------- prediction
-    def _inflation(self, pose: FloatArray, obs: FloatArray, relaxed: bool = False) -> FloatArray:
+    def _inflation(self, pose: FloatArray, obs: FloatArray, relaxed: bool = False,
+                   grow_to: FloatArray | None = None) -> FloatArray:  # fmt: skip
         """(k, S) inflation (m) per person and prediction slice, shrunk near the robot.
 
         A person already closer than the full inflation (someone walked up to the robot)
         gets an inflation that starts just inside their present gap and recovers at the
         robot's speed, so that the robot, which stands where it stands, is not inside its
         own predictions and the search can move it away. The inflation never decreases
-        from one slice to the next (both terms grow with the prediction time).
+        from one slice to the next (both terms grow with the prediction time). ``grow_to``
+        (k,): a constant full inflation per row instead (the ghosts').
         """
         opts = self.options
         n_slices = int(math.ceil(opts.prediction_horizon / opts.slice - 1e-9))
@@ -346,10 +366,31 @@ class Navigator:
         full = self.mover_clearance + opts.safety_buffer + opts.personal_space + rate[:, None] * tau[None, :]
         if relaxed:  # only what the contract asks: the robot's mover clearance
             full = np.full_like(full, self.mover_clearance)
+        if grow_to is not None:
+            full = np.repeat(np.asarray(grow_to, dtype=float).reshape(-1, 1), n_slices, axis=1)
         gap = self._gap(pose, obs)  # (k,) beyond the people's own radius
         margin0 = (self.vplan + speed) * opts.dt / 2  # the search's continuous-time margin at step 0
         allowed = np.maximum(gap - margin0 - 1e-6, 0.0)
         return np.minimum(full, allowed[:, None] + self.vplan * tau[None, :])
+
+    def _path_ghosts(self, pose: FloatArray, obs: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """The first search's ghosts (:mod:`gfuzzy.navigation.pathspace`): predicted discs
+        along each walking person's next ``path_space`` seconds, as rows ``[x, y, vx, vy,
+        radius, appear, vanish]`` (g, 7) (seconds after now), and their inflation (g, S): the
+        band's cover, plus the uncertainty of the person's prediction at the ghost's shift."""
+        opts = self.options
+        cr = self.robot.circumradius
+        gh = path_ghosts(obs, opts.path_space, cr, opts.safety_buffer, STILL_SPEED)
+        margin0 = (self.vplan + np.hypot(gh.obs[:, 2], gh.obs[:, 3])) * opts.dt / 2
+        window = ghost_window(gh, obs, pose, cr, margin0, self.vplan, opts.dt, opts.social_horizon)
+        n_slices = int(math.ceil(opts.prediction_horizon / opts.slice - 1e-9))
+        # a ghost is the person predicted s seconds further on: as uncertain as they are then
+        speed = np.hypot(gh.obs[:, 2], gh.obs[:, 3])
+        rate = opts.uncertainty_growth * np.minimum(speed / opts.reference_speed, 1.0)
+        infl = np.repeat((gh.cover + rate * gh.shift)[:, None], n_slices, axis=1)
+        # a ghost due after the social horizon, or behind a wall from its person: none
+        kept = (window[0] < window[1] - opts.dt) & ~walled_off(gh, obs, self._walls)
+        return np.column_stack([gh.obs, *window])[kept], infl[kept]
 
     def _gap(self, pose: FloatArray, obs: FloatArray) -> FloatArray:
         if len(obs) == 0:
@@ -425,7 +466,8 @@ class Navigator:
         mover per person instead of one per slice (the field's set-up costs per mover).
         Each mover's disc carries the inflation of the first step (the smallest: it never
         shrinks with time), so that the exact check of the first motions
-        (:meth:`MoverField.motion_safe`) keeps it too.
+        (:meth:`MoverField.motion_safe`) keeps it too. Rows of 7 columns (the ghosts of
+        :meth:`_path_ghosts`) are present only from ``t + appear`` to ``t + vanish``.
         """
         opts = self.options
         k, n_s = infl.shape
@@ -435,13 +477,16 @@ class Navigator:
         s_of = np.minimum(np.floor(tau / opts.slice + 1e-9).astype(np.int64), n_s - 1)
         first = infl[:, s_of[0]]
         radius = obs[:, 4] + first
-        ends = obs[:, :2] + vel * opts.prediction_horizon
+        appear = obs[:, 5] if obs.shape[1] > 5 else np.zeros(k)
+        vanish = np.minimum(presence, obs[:, 6]) if obs.shape[1] > 6 else presence
+        a = obs[:, :2] + vel * np.minimum(appear, opts.prediction_horizon)[:, None]
+        b = obs[:, :2] + vel * np.minimum(vanish, opts.prediction_horizon)[:, None]
         movers = tuple(
             Mover(f"p{i}", "disc", float(radius[i]), (0.0, 0.0),
-                  trajectory=np.array([[t, obs[i, 0], obs[i, 1]], [t + presence[i], ends[i, 0], ends[i, 1]]]))
+                  trajectory=np.array([[t + appear[i], a[i, 0], a[i, 1]], [t + vanish[i], b[i, 0], b[i, 1]]]))
             for i in range(k)
         )  # fmt: skip
-        extra = float(np.max(infl[:, -1] - first, initial=0.0))
+        extra = float(np.max(infl - first[:, None], initial=0.0))  # the ghosts' is not monotone
         scene = replace(self.scene, robot=self._pred_robot, movers=movers)
         # built with the largest extra margin, so that its broad-phase boxes hold every
         # step's; then each step gets its own (the robot's clearance is in the radii: keep 0)
@@ -495,12 +540,14 @@ class Navigator:
         predicted = obs.copy()
         if len(obs):
             predicted[:, 4] = obs[:, 4] + infl[:, 0]
-        found = self._search(t, pose, obs, infl, deadline)
+        found = self._search(t, pose, *self._with_ghosts(pose, obs, infl), deadline)
+        if opts.path_space > 0 and len(obs) and found.graph is not None and self._clock() < deadline:
+            found = self._path_space_cost(t, pose, obs, infl, found, deadline)
         traj, mode = found.trajectory, NavMode.PLAN
         if traj is None and len(obs) and not found.out_of_time and self._clock() < deadline:
             # blocked by the margins (someone standing beside the goal, a narrow gap): try
             # once more with the people's discs as they are, plus the mover clearance only
-            traj = self._search(t, pose, obs, self._inflation(pose, obs, relaxed=True), deadline, found).trajectory
+            traj = self._relaxed(t, pose, obs, found, deadline)
             mode = NavMode.RELAXED
         if traj is None:
             traj = self._direct(t, pose, obs)
@@ -517,6 +564,54 @@ class Navigator:
             self._previous = None
         self.last = NavStep(mode, self._clock() - t_begin, found.message, predicted, found.detailed)
         return traj
+
+    def _with_ghosts(self, pose: FloatArray, obs: FloatArray, infl: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """The people and their ghosts (:meth:`_path_ghosts`), when ``path_space`` is set:
+        rows ``[x, y, vx, vy, radius, appear, vanish]`` and their inflation."""
+        if self.options.path_space <= 0 or not len(obs):
+            return obs, infl
+        ghosts, g_infl = self._path_ghosts(pose, obs)
+        always = np.column_stack([obs, np.zeros(len(obs)), np.full(len(obs), math.inf)])
+        return np.vstack([always, ghosts]), np.vstack([infl, g_infl])
+
+    def _path_space_cost(self, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray, found: _Searched,
+                         deadline: float) -> _Searched:  # fmt: skip
+        """The path space as a soft cost: the plan that keeps off the people's ways, unless
+        the same search without the ghosts arrives sooner by more than
+        ``path_space_cost``, or the first found none (people who keep turning, such as
+        someone circling a room, are not where their straight walk says: their ghosts can
+        send the robot round a long way for nothing).
+
+        The second search runs only when it can win: when the first found no plan, or when
+        the first arrives later than the static lower bound (the roadmap's time to the
+        goal) by more than the cost.
+        """
+        opts = self.options
+        first = found.trajectory
+        if first is not None:
+            bound = float(found.graph.heuristic[found.start]) * opts.dt
+            if first.t_end - t <= bound + opts.path_space_cost + 1e-9:
+                return found
+        elif found.out_of_time:
+            return found
+        plain = self._search(t, pose, obs, infl, deadline, found)
+        second = plain.trajectory
+        if second is not None and (first is None or second.t_end < first.t_end - opts.path_space_cost):
+            return plain
+        self._ahead = found.ahead  # the second search replaced the plan's vertices ahead
+        return found if first is not None else plain
+
+    def _relaxed(self, t: float, pose: FloatArray, obs: FloatArray, found: _Searched, deadline: float):
+        """The relaxed search (the people's discs as they are, plus the mover clearance):
+        first still keeping off the way people are about to walk (the ghosts, which a robot
+        in someone's way must leave in time: a person walking up behind the robot or at it
+        leaves no plan that keeps the personal space, but one that steps aside), then not."""
+        infl = self._inflation(pose, obs, relaxed=True)
+        if self.options.path_space > 0:
+            again = self._search(t, pose, *self._with_ghosts(pose, obs, infl), deadline, found)
+            if again.trajectory is not None or again.out_of_time or self._clock() > deadline:
+                return again.trajectory
+        return self._search(t, pose, obs, infl, deadline, found).trajectory
 
     def _search(self, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray, deadline: float,
                 before: _Searched | None = None) -> _Searched:  # fmt: skip
@@ -570,7 +665,7 @@ class Navigator:
         self._ahead = [(t + st * opts.dt, nd) for nd, st in zip(res.nodes, res.steps, strict=True) if nd < self._nv]
         rows[0, 1:] = pose
         rows[-1, 1:] = self.goal
-        return _Searched(Trajectory(rows, self.robot.circumradius), "", detailed, False, graph, s_id)
+        return _Searched(Trajectory(rows, self.robot.circumradius), "", detailed, False, graph, s_id, self._ahead)
 
     # --------------------------------------------------------------- fallback
     def _clearance_along(self, pts: FloatArray, times: FloatArray, obs: FloatArray) -> FloatArray:
