@@ -15,6 +15,7 @@ pytest.importorskip("pyrvo")
 
 from gfuzzy.errors import InputError  # noqa: E402
 from gfuzzy.navigation import crowd as C  # noqa: E402
+from gfuzzy.navigation.crowdsummary import summarize  # noqa: E402
 from gfuzzy.navigation.humans import OrcaCrowd, SocialForceCrowd  # noqa: E402
 from gfuzzy.navigation.socialmetrics import SocialMetrics  # noqa: E402
 
@@ -154,7 +155,7 @@ def test_summary_by_hand():
     runs = [[ep(C.Outcome.SUCCESS, 10.0, 40, 4, 2, 0.1, [0.01, 0.02])],
             [ep(C.Outcome.COLLISION, math.nan, 20, 0, 1, -0.2, [0.03])],
             [ep(C.Outcome.SUCCESS, 12.0, 40, 2, 0, 0.4, [0.04])]]  # fmt: skip
-    s = C.summarize(runs, "p")
+    s = summarize(runs, "p")
     assert s.episodes == 3
     assert s.success == pytest.approx(2 / 3) and s.collision == pytest.approx(1 / 3) and s.timeout == 0
     assert s.time == pytest.approx(11.0)

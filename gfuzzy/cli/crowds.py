@@ -93,7 +93,7 @@ def _setting(args):
 
 
 def _table(setting, runs, policies) -> str:
-    from ..navigation.crowd import summarize
+    from ..navigation.crowdsummary import summarize
 
     head = (f"{'policy':<13}{'n':>5}{'success':>9}{'collide':>9}{'timeout':>9}{'time s':>8}{'discomf':>9}"
             f"{'intrus':>8}{'min sep':>9}{'p50 ms':>8}{'p95 ms':>8}")  # fmt: skip

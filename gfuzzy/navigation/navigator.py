@@ -51,14 +51,12 @@ from ..timespace.timespace import timed_rows
 from ..trajectory import Trajectory
 from ..typed import BoolArray, FloatArray
 from .navtypes import NavMode, NavStep
-from .pathspace import WallCheck, ghost_window, path_ghosts, walled_off
+from .pathspace import STILL_SPEED, PathSpace, WallCheck
 
 __all__ = ["NavMode", "NavOptions", "NavStep", "Navigator"]
 
 log = logging.getLogger(__name__)
 
-#: Below this speed (m/s) an observed person counts as standing still.
-STILL_SPEED = 0.1
 #: Share of ``time_budget`` the search may use; the rest is the fallback's.
 SEARCH_SHARE = 0.75
 #: Samples of the look-ahead in the test of who may come within reach (:meth:`Navigator._may_reach`).
@@ -240,7 +238,7 @@ class _Searched:
     ahead: list = field(default_factory=list)
 
 
-class Navigator:
+class Navigator(PathSpace):
     """Receding-horizon navigation to a fixed goal among observed moving discs.
 
     Parameters
@@ -372,25 +370,6 @@ class Navigator:
         margin0 = (self.vplan + speed) * opts.dt / 2  # the search's continuous-time margin at step 0
         allowed = np.maximum(gap - margin0 - 1e-6, 0.0)
         return np.minimum(full, allowed[:, None] + self.vplan * tau[None, :])
-
-    def _path_ghosts(self, pose: FloatArray, obs: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """The first search's ghosts (:mod:`gfuzzy.navigation.pathspace`): predicted discs
-        along each walking person's next ``path_space`` seconds, as rows ``[x, y, vx, vy,
-        radius, appear, vanish]`` (g, 7) (seconds after now), and their inflation (g, S): the
-        band's cover, plus the uncertainty of the person's prediction at the ghost's shift."""
-        opts = self.options
-        cr = self.robot.circumradius
-        gh = path_ghosts(obs, opts.path_space, cr, opts.safety_buffer, STILL_SPEED)
-        margin0 = (self.vplan + np.hypot(gh.obs[:, 2], gh.obs[:, 3])) * opts.dt / 2
-        window = ghost_window(gh, obs, pose, cr, margin0, self.vplan, opts.dt, opts.social_horizon)
-        n_slices = int(math.ceil(opts.prediction_horizon / opts.slice - 1e-9))
-        # a ghost is the person predicted s seconds further on: as uncertain as they are then
-        speed = np.hypot(gh.obs[:, 2], gh.obs[:, 3])
-        rate = opts.uncertainty_growth * np.minimum(speed / opts.reference_speed, 1.0)
-        infl = np.repeat((gh.cover + rate * gh.shift)[:, None], n_slices, axis=1)
-        # a ghost due after the social horizon, or behind a wall from its person: none
-        kept = (window[0] < window[1] - opts.dt) & ~walled_off(gh, obs, self._walls)
-        return np.column_stack([gh.obs, *window])[kept], infl[kept]
 
     def _gap(self, pose: FloatArray, obs: FloatArray) -> FloatArray:
         if len(obs) == 0:
@@ -564,54 +543,6 @@ class Navigator:
             self._previous = None
         self.last = NavStep(mode, self._clock() - t_begin, found.message, predicted, found.detailed)
         return traj
-
-    def _with_ghosts(self, pose: FloatArray, obs: FloatArray, infl: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """The people and their ghosts (:meth:`_path_ghosts`), when ``path_space`` is set:
-        rows ``[x, y, vx, vy, radius, appear, vanish]`` and their inflation."""
-        if self.options.path_space <= 0 or not len(obs):
-            return obs, infl
-        ghosts, g_infl = self._path_ghosts(pose, obs)
-        always = np.column_stack([obs, np.zeros(len(obs)), np.full(len(obs), math.inf)])
-        return np.vstack([always, ghosts]), np.vstack([infl, g_infl])
-
-    def _path_space_cost(self, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray, found: _Searched,
-                         deadline: float) -> _Searched:  # fmt: skip
-        """The path space as a soft cost: the plan that keeps off the people's ways, unless
-        the same search without the ghosts arrives sooner by more than
-        ``path_space_cost``, or the first found none (people who keep turning, such as
-        someone circling a room, are not where their straight walk says: their ghosts can
-        send the robot round a long way for nothing).
-
-        The second search runs only when it can win: when the first found no plan, or when
-        the first arrives later than the static lower bound (the roadmap's time to the
-        goal) by more than the cost.
-        """
-        opts = self.options
-        first = found.trajectory
-        if first is not None:
-            bound = float(found.graph.heuristic[found.start]) * opts.dt
-            if first.t_end - t <= bound + opts.path_space_cost + 1e-9:
-                return found
-        elif found.out_of_time:
-            return found
-        plain = self._search(t, pose, obs, infl, deadline, found)
-        second = plain.trajectory
-        if second is not None and (first is None or second.t_end < first.t_end - opts.path_space_cost):
-            return plain
-        self._ahead = found.ahead  # the second search replaced the plan's vertices ahead
-        return found if first is not None else plain
-
-    def _relaxed(self, t: float, pose: FloatArray, obs: FloatArray, found: _Searched, deadline: float):
-        """The relaxed search (the people's discs as they are, plus the mover clearance):
-        first still keeping off the way people are about to walk (the ghosts, which a robot
-        in someone's way must leave in time: a person walking up behind the robot or at it
-        leaves no plan that keeps the personal space, but one that steps aside), then not."""
-        infl = self._inflation(pose, obs, relaxed=True)
-        if self.options.path_space > 0:
-            again = self._search(t, pose, *self._with_ghosts(pose, obs, infl), deadline, found)
-            if again.trajectory is not None or again.out_of_time or self._clock() > deadline:
-                return again.trajectory
-        return self._search(t, pose, obs, infl, deadline, found).trajectory
 
     def _search(self, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray, deadline: float,
                 before: _Searched | None = None) -> _Searched:  # fmt: skip

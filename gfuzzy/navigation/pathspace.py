@@ -18,14 +18,21 @@ them, the relaxed search, with the people's discs as they are, answers as before
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..typed import BoolArray, FloatArray, IntArray
 
-__all__ = ["GHOST_SPACING", "ESCAPE_FACTOR", "Ghosts", "path_ghosts", "ghost_window", "walled_off", "WallCheck"]
+if TYPE_CHECKING:
+    from .navigator import _Searched
 
+__all__ = ["STILL_SPEED", "PathSpace", "GHOST_SPACING", "ESCAPE_FACTOR", "Ghosts", "path_ghosts", "ghost_window", "walled_off", "WallCheck"]
+
+#: Below this speed (m/s) an observed person counts as standing still.
+STILL_SPEED = 0.1
 #: Largest distance (m) between neighbouring ghosts of a person (a faster walker gets more).
 GHOST_SPACING = 0.7
 #: A robot in someone's way gets this many times the time to step sideways out of it at
@@ -187,7 +194,93 @@ class WallCheck:
         return np.asarray(shapely.intersects(lines, self.union), dtype=bool)
 
 
-def walled_off(ghosts: Ghosts, obs: FloatArray, walls: WallCheck) -> BoolArray:
+    def near(self, points: FloatArray, distance: FloatArray) -> BoolArray:
+        """(n,) True where ``points`` (n, 2) lie within ``distance`` (n,) of an obstacle."""
+        import shapely
+
+        pts = np.asarray(points, dtype=float).reshape(-1, 2)
+        if self.union is None or len(pts) == 0:
+            return np.zeros(len(pts), dtype=bool)
+        return np.asarray(shapely.dwithin(shapely.points(pts), self.union, np.asarray(distance, dtype=float)), dtype=bool)
+
+
+def walled_off(ghosts: Ghosts, obs: FloatArray, walls: WallCheck, reach: FloatArray) -> BoolArray:
     """(g,) True for each ghost that its person could only reach through a static obstacle
-    (walking straight on, they will turn or stop before it)."""
-    return walls.crossed(obs[ghosts.owner, :2], ghosts.obs[:, :2])
+    (walking straight on, they will turn or stop before it), or whose zone (``reach`` (g,)
+    about its centre) meets one: in a passage there is no stepping out of someone's way,
+    the robot and the person share it (and the person's own disc still keeps them apart)."""
+    return walls.crossed(obs[ghosts.owner, :2], ghosts.obs[:, :2]) | walls.near(ghosts.obs[:, :2], reach)
+
+
+class PathSpace:
+    """The navigator's part that keeps off people's ways (a base of
+    :class:`gfuzzy.navigation.navigator.Navigator`, whose state and searches it uses): the
+    ghosts of the first search and of the relaxed one, and the path space's soft cost."""
+
+    def _path_ghosts(self, pose: FloatArray, obs: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """The first search's ghosts (:mod:`gfuzzy.navigation.pathspace`): predicted discs
+        along each walking person's next ``path_space`` seconds, as rows ``[x, y, vx, vy,
+        radius, appear, vanish]`` (g, 7) (seconds after now), and their inflation (g, S): the
+        band's cover, plus the uncertainty of the person's prediction at the ghost's shift."""
+        opts = self.options
+        cr = self.robot.circumradius
+        gh = path_ghosts(obs, opts.path_space, cr, opts.safety_buffer, STILL_SPEED)
+        margin0 = (self.vplan + np.hypot(gh.obs[:, 2], gh.obs[:, 3])) * opts.dt / 2
+        window = ghost_window(gh, obs, pose, cr, margin0, self.vplan, opts.dt, opts.social_horizon)
+        n_slices = int(math.ceil(opts.prediction_horizon / opts.slice - 1e-9))
+        # a ghost is the person predicted s seconds further on: as uncertain as they are then
+        speed = np.hypot(gh.obs[:, 2], gh.obs[:, 3])
+        rate = opts.uncertainty_growth * np.minimum(speed / opts.reference_speed, 1.0)
+        infl = np.repeat((gh.cover + rate * gh.shift)[:, None], n_slices, axis=1)
+        # none due after the social horizon, behind a wall from its person, or in a passage
+        reach = cr + gh.obs[:, 4] + gh.cover + rate * gh.shift
+        kept = (window[0] < window[1] - opts.dt) & ~walled_off(gh, obs, self._walls, reach)
+        return np.column_stack([gh.obs, *window])[kept], infl[kept]
+
+    def _with_ghosts(self, pose: FloatArray, obs: FloatArray, infl: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """The people and their ghosts (:meth:`_path_ghosts`), when ``path_space`` is set:
+        rows ``[x, y, vx, vy, radius, appear, vanish]`` and their inflation."""
+        if self.options.path_space <= 0 or not len(obs):
+            return obs, infl
+        ghosts, g_infl = self._path_ghosts(pose, obs)
+        always = np.column_stack([obs, np.zeros(len(obs)), np.full(len(obs), math.inf)])
+        return np.vstack([always, ghosts]), np.vstack([infl, g_infl])
+
+    def _path_space_cost(self, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray, found: _Searched,
+                         deadline: float) -> _Searched:  # fmt: skip
+        """The path space as a soft cost: the plan that keeps off the people's ways, unless
+        the same search without the ghosts arrives sooner by more than
+        ``path_space_cost``, or the first found none (people who keep turning, such as
+        someone circling a room, are not where their straight walk says: their ghosts can
+        send the robot round a long way for nothing).
+
+        The second search runs only when it can win: when the first found no plan, or when
+        the first arrives later than the static lower bound (the roadmap's time to the
+        goal) by more than the cost.
+        """
+        opts = self.options
+        first = found.trajectory
+        if first is not None:
+            bound = float(found.graph.heuristic[found.start]) * opts.dt
+            if first.t_end - t <= bound + opts.path_space_cost + 1e-9:
+                return found
+        elif found.out_of_time:
+            return found
+        plain = self._search(t, pose, obs, infl, deadline, found)
+        second = plain.trajectory
+        if second is not None and (first is None or second.t_end < first.t_end - opts.path_space_cost):
+            return plain
+        self._ahead = found.ahead  # the second search replaced the plan's vertices ahead
+        return found if first is not None else plain
+
+    def _relaxed(self, t: float, pose: FloatArray, obs: FloatArray, found: _Searched, deadline: float):
+        """The relaxed search (the people's discs as they are, plus the mover clearance):
+        first still keeping off the way people are about to walk (the ghosts, which a robot
+        in someone's way must leave in time: a person walking up behind the robot or at it
+        leaves no plan that keeps the personal space, but one that steps aside), then not."""
+        infl = self._inflation(pose, obs, relaxed=True)
+        if self.options.path_space > 0:
+            again = self._search(t, pose, *self._with_ghosts(pose, obs, infl), deadline, found)
+            if again.trajectory is not None or again.out_of_time or self._clock() > deadline:
+                return again.trajectory
+        return self._search(t, pose, obs, infl, deadline, found).trajectory
