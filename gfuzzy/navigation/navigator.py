@@ -145,7 +145,7 @@ class NavOptions:
     safety_buffer: float = 0.05
     personal_space: float = 0.2
     path_space: float = 1.25
-    path_space_cost: float = 1.0
+    path_space_cost: float = 5.0
     social_horizon: float = 4.0
     slice: float = 0.5
     stationary_hold: float = 30.0
