@@ -242,3 +242,23 @@ def test_a_map_wall_hides_a_mover(tmp_path):
     pts = np.array([[1.8, 0.0], [1.5, 1.9], [0.5, 0.0]])
     # behind the wall (y in [-1, 1]); passing above its end (y 1.14 at x 0.9); in front of it
     np.testing.assert_array_equal(line_of_sight(scene, np.zeros(2), pts), [False, True, True])
+
+
+def test_an_unseen_track_walks_on_less_certain_and_is_dropped_after_the_coast():
+    from gfuzzy.navigation.sensing import Tracker
+
+    tr = Tracker(noise=0.0, coast=4.0, gate=1.0, growth=0.2)
+    tr.update(0.0, np.array([[0.0, 0.0, 0.3], [5.0, 5.0, 0.3]]))
+    tr.update(0.25, np.array([[0.25, 0.0, 0.3]]))  # the first walks +x at 1 m/s; the second is lost
+    out = tr.update(1.0, np.zeros((0, 3)))  # nobody seen
+    walker = out[np.argmin(np.abs(out[:, 1]))]
+    np.testing.assert_allclose(walker, [1.0, 0.0, 1.0, 0.0, 0.3 + 0.2 * 0.75])
+    # seen once (velocity unknown), unseen for 1 s: it may be anywhere a walker gets in 1 s
+    once = out[np.argmax(out[:, 1])]
+    np.testing.assert_allclose(once, [5.0, 5.0, 0.0, 0.0, 0.3 + 1.0])
+    # the gate grows with the time unseen before this update (0.75 s): 2 s later the walker
+    # is taken up again 1.1 m off its prediction (gate 1 + 0.2 * 0.75 = 1.15)
+    out = tr.update(3.0, np.array([[3.0, 1.1, 0.3]]))
+    assert len(out) == 2 and np.any(np.all(np.isclose(out[:, :2], [3.0, 1.1]), axis=1))
+    assert tr.update(4.3, np.zeros((0, 3))).shape[0] == 1  # the one seen once is gone (4 s)
+    assert tr.update(7.1, np.zeros((0, 3))).shape[0] == 0
