@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 from pathlib import Path
 
 import numpy as np
@@ -114,7 +115,8 @@ def test_spliced_bounds_never_exceed_the_spliced_graphs_distances(name):
         start = 0.7 * rm.vertices[e[0]] + 0.3 * rm.vertices[e[1]]
         if rm.dof == 3:
             start[2] = rm.vertices[e[0], 2]
-        graph, s_id, g_id, _ = prepared.splice(planner, start)
+        qg = prepared.splice(planner, start)
+        graph, s_id, g_id = qg.graph, qg.s_id, qg.g_id
         n = len(graph.poses)
         rows = np.repeat(np.arange(n), np.diff(graph.indptr))
         adj = csr_matrix((np.ones(len(rows)), (rows, graph.neighbors)), shape=(n, n))
@@ -123,3 +125,240 @@ def test_spliced_bounds_never_exceed_the_spliced_graphs_distances(name):
         np.testing.assert_array_equal(graph.heuristic, exact[1])
         spliced += 1
     assert spliced == 3
+
+
+# ----------------------------------------------------------------------------- the one builder
+# An independent construction of a query's graph, to test the builder against: plain Python
+# and networkx, sharing no code with gfuzzy's graph code (no split_edges, split_counts,
+# interpolate_segment, metric_distance, roadgraph caches, Dijkstra kernels). It takes from
+# gfuzzy only its inputs: the roadmap (vertices, edges, the spanner's edge mask) and the
+# collision model's verdict on a straight motion (which connections are certified). Points
+# are matched by their place in the graph, not by pose: roadmap edges may overlap (collinear
+# vertices), so two points may share a pose.
+
+
+def _wrap(a):
+    return (a + math.pi) % (2 * math.pi) - math.pi
+
+
+def _metric(p, q, r):
+    d = math.hypot(q[0] - p[0], q[1] - p[1])
+    return d + abs(_wrap(q[2] - p[2])) * r if len(p) == 3 else d
+
+
+def _pieces(length, step):
+    """Fewest equal pieces of at most ``step`` (docs/formats.md section 3)."""
+    k = max(1, math.ceil(length / step))
+    while length / k > step:
+        k += 1
+    return k
+
+
+def _oracle(planner, start, goal, dt, stretch, connect_k=10):
+    """(networkx graph on point ids, poses by id, interior point ids by label, roadmap distance).
+
+    Ids: vertices, start ``nv``, goal ``nv + 1``, then the interior points in any order;
+    an interior point's label is ``(lower end, upper end, steps from the lower end)``."""
+    import networkx as nx
+
+    rm, robot = planner.roadmap, planner.robot
+    r = robot.circumradius
+    step = robot.vmax * dt * (1.0 - 1e-9)  # the planner's guard against rounding up the speed
+    V = [tuple(float(c) for c in v) for v in rm.vertices]
+    nv = len(V)
+    s_id, g_id = nv, nv + 1
+    poses = {i: v for i, v in enumerate(V)}
+    poses[s_id], poses[g_id] = tuple(map(float, start)), tuple(map(float, goal))
+    links = []
+    for pose, node in ((goal, g_id), (start, s_id)):  # nearest first; the first connect_k tries
+        order = sorted(range(nv), key=lambda i: (_metric(poses[node], V[i], r), i))
+        tried = joined = 0
+        for i in order[: 4 * connect_k]:
+            if tried >= connect_k and joined:
+                break
+            tried += 1
+            if planner.geometry.motion_free(pose, rm.vertices[i]):
+                links.append((node, i))
+                joined += 1
+    if planner.geometry.motion_free(start, goal):
+        links.append((s_id, g_id))
+    spanner = [tuple(map(int, e)) for e in rm.edges[rm.spanner(stretch)]]
+    G = nx.Graph()
+    G.add_nodes_from(range(nv + 2))
+    labels = {}
+    for a, b in spanner + links:
+        pa, pb = poses[a], poses[b]
+        k = _pieces(_metric(pa, pb, r), step)
+        chain = [a]
+        for j in range(1, k):
+            f = j / k
+            p = [pa[0] + f * (pb[0] - pa[0]), pa[1] + f * (pb[1] - pa[1])]
+            if len(pa) == 3:
+                p.append(_wrap(pa[2] + f * _wrap(pb[2] - pa[2])))
+            pid = len(poses)
+            poses[pid] = tuple(p)
+            labels[(min(a, b), max(a, b), j if a < b else k - j)] = pid
+            chain.append(pid)
+        chain.append(b)
+        G.add_edges_from(zip(chain[:-1], chain[1:], strict=True))
+    W = nx.Graph()  # the whole roadmap in metres, with the connections
+    W.add_nodes_from(range(nv + 2))
+    for a, b in [tuple(map(int, e)) for e in rm.edges] + links:
+        W.add_edge(a, b, weight=_metric(poses[a], poses[b], r))
+    try:
+        rd = nx.dijkstra_path_length(W, s_id, g_id)
+    except nx.NetworkXNoPath:
+        rd = math.inf
+    return G, poses, labels, rd
+
+
+def _to_oracle(graph, nv, labels):
+    """The oracle's id of every built point: the fixed ids as they are; an interior point by
+    its label, read off its group (one edge's points in order) and the group's two ends."""
+    N = len(graph.poses)
+    groups = np.asarray(graph.groups)
+    assert groups[0] == nv + 2 and groups[-1] == N and np.all(np.diff(groups) >= 0)
+    out = np.arange(N)
+
+    def ends(i):
+        nb = graph.neighbors[graph.indptr[i] : graph.indptr[i + 1]]
+        return sorted(int(v) for v in nb if v < nv + 2)
+
+    for lo, hi in zip(groups[:-1].tolist(), groups[1:].tolist(), strict=True):
+        m = hi - lo
+        if m == 0:
+            continue
+        if m == 1:
+            e1, e2 = ends(lo)
+        else:
+            (e1,), (e2,) = ends(lo), ends(hi - 1)
+        for t in range(m):
+            out[lo + t] = labels[(min(e1, e2), max(e1, e2), t + 1 if e1 < e2 else m - t)]
+    return out
+
+
+def _assert_same_graph(qg, planner, start, goal, dt, stretch):
+    """The builder's graph equals the oracle's up to the interior points' numbering."""
+    import networkx as nx
+
+    G, poses, labels, rd = _oracle(planner, start, goal, dt, stretch)
+    graph = qg.graph
+    nv = len(planner.roadmap.vertices)
+    N = len(graph.poses)
+    assert (qg.s_id, qg.g_id) == (nv, nv + 1)
+    assert N == len(poses)
+    to_oracle = _to_oracle(graph, nv, labels)
+    assert len(np.unique(to_oracle)) == N
+
+    def embed(p):  # headings as points on a circle: no wrap at +-pi
+        p = np.asarray(p, dtype=float)
+        return p if p.shape[1] == 2 else np.column_stack([p[:, :2], np.cos(p[:, 2]), np.sin(p[:, 2])])
+
+    np.testing.assert_allclose(embed(graph.poses), embed([poses[int(i)] for i in to_oracle]), rtol=0, atol=1e-9)
+    # the one-step moves, both ways, as sets of (from, to) in the oracle's ids
+    rows = np.repeat(np.arange(N), np.diff(graph.indptr))
+    built = np.sort(to_oracle[rows] * N + to_oracle[graph.neighbors])
+    expect = np.sort([a * N + b for a, b in G.edges] + [b * N + a for a, b in G.edges])
+    np.testing.assert_array_equal(built, expect)
+    # the figures the search's windows rest on: exact breadth-first step counts
+    for source, got in ((nv + 1, graph.heuristic), (nv, graph.from_start)):
+        hops = nx.single_source_shortest_path_length(G, source)
+        np.testing.assert_array_equal(got, [hops.get(int(i), math.inf) for i in to_oracle])
+    if math.isfinite(rd):
+        assert qg.roadmap_distance == pytest.approx(rd, rel=1e-12)
+    else:
+        assert qg.roadmap_distance == math.inf
+
+
+def _query_poses(scene, planner):
+    """The first query's ends, a roadmap vertex, mid-edge poses (free ones only)."""
+    rm = planner.roadmap
+    q = scene.queries[0]
+    V, e = rm.vertices, rm.edges
+    mids = [0.5 * (V[e[i, 0]] + V[e[i, 1]]) for i in (0, len(e) // 3, len(e) // 2)]
+    if rm.dof == 3:  # a heading between the ends' (never across the wrap)
+        for m in mids:
+            m[2] = 0.3
+    goal = np.asarray(q.goal, float)
+    pairs = [(np.asarray(q.start, float), goal), (V[3].copy(), goal), (mids[0], mids[1]), (mids[2], goal)]
+    return [(s, g) for s, g in pairs if planner.geometry.clearance1(s) >= 0 and planner.geometry.clearance1(g) >= 0]
+
+
+@pytest.mark.parametrize(
+    "name, stretch, dt",
+    [
+        ("building-floor", 1.05, 0.07),  # a box robot: headings
+        ("building-floor", 1.0, 3.0),  # most edges one step: connections onto single-step edges
+        ("office-polygons", 1.05, 0.2),
+        ("sealed-room", 1.0, 0.07),  # a part of the roadmap the goal cannot reach: inf
+        ("warehouse-mesh", 1.05, 0.07),
+    ],
+)
+def test_the_query_graph_equals_an_independent_build(name, stretch, dt):
+    """What every holonomic query searches (a fresh plan, plan_from, the navigator): the
+    prepared goal with the start spliced in, against the plain-Python build above."""
+    scene, planner = _setup(name)
+    pairs = _query_poses(scene, planner)
+    assert len(pairs) >= 3
+    opts = PlanOptions(dt=dt, stretch=stretch)
+    for start, goal in pairs:
+        for _ in range(2):  # the second time from the roadmap's caches
+            qg = planner.prepare(goal, opts).splice(planner, start)
+            _assert_same_graph(qg, planner, start, goal, dt, stretch)
+
+
+def test_plan_plan_from_and_the_navigator_get_their_graph_from_one_builder(monkeypatch):
+    """A fresh plan, plan_from and the navigator all search the graph PreparedGoal.splice
+    builds, and for the same start and goal it is the same graph, to the bit."""
+    from gfuzzy.navigation.navigator import Navigator
+    from gfuzzy.planner.prepared import PreparedGoal
+
+    built = []
+    splice = PreparedGoal.splice
+
+    def spy(self, planner, start, ahead=()):
+        qg = splice(self, planner, start, ahead)
+        built.append((np.array(start), qg))
+        return qg
+
+    monkeypatch.setattr(PreparedGoal, "splice", spy)
+    scene, planner = _setup("building-floor")
+    q = scene.queries[0]
+    fresh = planner.plan(q.start, q.goal, q.t0)
+    assert fresh.solved and len(built) == 1
+    prepared = planner.prepare(q.goal)
+    again = planner.plan_from(prepared, q.start, q.t0)
+    assert len(built) == 2
+    assert again.trajectory == fresh.trajectory  # the same graph: the same search, the same route
+    (s1, g1), (s2, g2) = built
+    np.testing.assert_array_equal(s1, s2)
+    for field in ("poses", "indptr", "neighbors", "heuristic", "from_start", "groups"):
+        np.testing.assert_array_equal(getattr(g1.graph, field), getattr(g2.graph, field))
+    assert (g1.s_id, g1.g_id, g1.roadmap_distance) == (g2.s_id, g2.g_id, g2.roadmap_distance)
+    nav = Navigator(scene, planner.roadmap, q.goal)  # its own dt and stretch (NavOptions)
+    nav.step(q.t0, np.asarray(q.start, float), np.zeros((0, 5)))
+    assert len(built) >= 3
+    np.testing.assert_array_equal(built[2][0], s1)
+    ref = planner.prepare(q.goal, nav._kept.options).splice(planner, built[2][0])  # the start as wrapped
+    for field in ("poses", "indptr", "neighbors", "heuristic", "from_start"):
+        np.testing.assert_array_equal(getattr(built[2][1].graph, field), getattr(ref.graph, field))
+
+
+def test_the_point_limit_covers_the_starts_connections(monkeypatch):
+    """settings.MAX_POINTS bounds the whole graph: a limit the spanner and the goal's
+    connections fit under, but not the start's too, refuses a fresh plan and plan_from
+    alike (a LimitError, before the start's connections are cut)."""
+    import gfuzzy.timespace.roadgraph as roadgraph
+    from gfuzzy.errors import LimitError
+
+    scene, planner = _setup("building-floor")
+    q = scene.queries[0]
+    whole = planner.plan(q.start, q.goal, q.t0).stats.graph_nodes  # points of the whole graph
+    monkeypatch.setattr(roadgraph, "MAX_POINTS", whole - 1)
+    kept = planner.prepare(q.goal)  # the spanner and the goal's connections fit
+    with pytest.raises(LimitError, match="too fine"):
+        planner.plan_from(kept, q.start, q.t0)
+    with pytest.raises(LimitError, match="too fine"):
+        planner.plan(q.start, q.goal, q.t0)
+    monkeypatch.setattr(roadgraph, "MAX_POINTS", whole)
+    assert planner.plan_from(kept, q.start, q.t0).solved

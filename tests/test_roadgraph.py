@@ -1,5 +1,6 @@
-"""The per-query graph built from the roadmap's kept cut (gfuzzy.timespace.roadgraph) against a build
-from scratch: the same arrays to the bit, adjacency order included, and the same answers."""
+"""What queries share, kept on the roadmap (gfuzzy.timespace.roadgraph): the spanner's cut
+spliced as one cut of the whole graph lists it, the same answers from cold and warm caches,
+the vertex clearances per static clearance, the caches' bounds."""
 
 from __future__ import annotations
 
@@ -39,102 +40,44 @@ def _scratch_connect(planner, pose, k):
     return out
 
 
-def _scratch_graph(planner, start, goal, dt, vmax, connect_k, stretch):
-    """The whole graph cut and sorted in one go, as Planner._graph did before the cache:
-    (poses, indptr, neighbors, heuristic, from_start, groups, roadmap distance)."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import dijkstra
-
+def _batch_cut(planner, start, goal, dt, stretch):
+    """The whole graph of a query cut in one go (the spanner's edges, the goal's connections,
+    the start's) and its moves sorted by source, stably: (poses, indptr, neighbors)."""
     rm = planner.roadmap
     nv = len(rm.vertices)
     s_id, g_id = nv, nv + 1
     extra_e, extra_w = [], []
-    for pose, node in ((start, s_id), (goal, g_id)):
-        for v, w in _scratch_connect(planner, pose, connect_k):
+    for pose, node in ((goal, g_id), (start, s_id)):
+        for v, w in _scratch_connect(planner, pose, 10):
             extra_e.append((node, v))
             extra_w.append(w)
     if planner.geometry.motion_free(start, goal):
         extra_e.append((s_id, g_id))
         extra_w.append(float(metric_distance(start, goal, planner.robot.circumradius)))
-    extra_e = np.array(extra_e, dtype=np.int64).reshape(-1, 2)
-    extra_w = np.array(extra_w, dtype=float)
     verts = np.vstack([rm.vertices, start[None], goal[None]])
-    n = len(verts)
     keep = rm.spanner(stretch)
-    edges = np.vstack([rm.edges[keep], extra_e])
+    edges = np.vstack([rm.edges[keep], np.array(extra_e, dtype=np.int64).reshape(-1, 2)])
     lengths = np.concatenate([rm.lengths[keep], extra_w])
-    cut = split_edges(verts, edges, lengths, vmax * dt, n)
-    k, offs, inner, a, b, j, src, dst = cut.k, cut.offs, cut.inner, cut.a, cut.b, cut.j, cut.src, cut.dst
-
-    def sp(weights, edges_):
-        w = np.maximum(weights, 1e-300)
-        rows = np.r_[edges_[:, 0], edges_[:, 1]]
-        cols = np.r_[edges_[:, 1], edges_[:, 0]]
-        mat = coo_matrix((np.r_[w, w], (rows, cols)), shape=(n, n)).tocsr()
-        out = dijkstra(mat, directed=True, indices=[g_id, s_id])
-        return np.where(out < 1e-200, 0.0, out)
-
-    dist = sp(np.concatenate([rm.lengths, extra_w]), np.vstack([rm.edges, extra_e]))[0]
-    hops = sp(k.astype(float), edges)
-    ke = k[np.repeat(np.arange(len(edges)), k - 1)]
-
-    def along(h):
-        return np.concatenate([h, np.minimum(h[a] + j, h[b] + ke - j)])
-
-    s2, d2 = np.concatenate([src, dst]), np.concatenate([dst, src])
+    cut = split_edges(verts, edges, lengths, planner.robot.vmax * SPEED_SAFETY * dt, len(verts))
+    s2, d2 = np.concatenate([cut.src, cut.dst]), np.concatenate([cut.dst, cut.src])
     order = np.argsort(s2, kind="stable")
-    total = n + int(offs[-1])
+    total = len(verts) + int(cut.offs[-1])
     indptr = np.zeros(total + 1, dtype=np.int64)
     np.add.at(indptr, s2 + 1, 1)
-    heur, fs = along(np.rint(hops[0])), along(np.rint(hops[1]))
-    return np.vstack([verts, inner]), np.cumsum(indptr), d2[order], heur, fs, n + offs, float(dist[s_id])
+    return np.vstack([verts, cut.inner]), np.cumsum(indptr), d2[order]
 
 
-def _poses(scene, rm, planner):
-    """Query ends, mid-edge poses, a pose on a vertex and one beside the goal."""
-    q = scene.queries[0]
-    V = rm.vertices
-    e = rm.edges
-    mids = [0.5 * (V[e[i, 0]] + V[e[i, 1]]) for i in (0, len(e) // 3, len(e) // 2)]
-    if rm.dof == 3:  # a heading between the ends' (never across the wrap: these are tests)
-        for m in mids:
-            m[2] = 0.3
-    goal = np.asarray(q.goal, float)
-    pairs = [(np.asarray(q.start, float), goal), (V[3].copy(), goal), (mids[0], mids[1]), (mids[2], goal)]
-    return [(s, g) for s, g in pairs if planner.geometry.clearance1(s) >= 0 and planner.geometry.clearance1(g) >= 0]
-
-
-@pytest.mark.parametrize("name", ["building-floor", "warehouse-mesh", "office-polygons", "sealed-room"])
-@pytest.mark.parametrize("stretch", [1.0, 1.05])
-def test_kept_cut_gives_the_graph_a_build_from_scratch_gives(name, stretch):
-    scene, rm = _setup(name)
-    planner = Planner(scene, rm)
-    vplan = scene.robot.vmax * SPEED_SAFETY
-    pairs = _poses(scene, rm, planner)
-    assert len(pairs) >= 3
-    for dt in (0.07, 0.2):
-        for start, goal in pairs:
-            for _ in range(2):  # the second time from the caches
-                graph, s_id, g_id, rd = planner._graph(start, goal, dt, vplan, 10, stretch)
-                poses, indptr, nbrs, heur, fs, groups, rd0 = _scratch_graph(planner, start, goal, dt, vplan, 10, stretch)
-                assert (s_id, g_id) == (len(rm.vertices), len(rm.vertices) + 1)
-                np.testing.assert_array_equal(graph.poses, poses)
-                np.testing.assert_array_equal(graph.indptr, indptr)
-                np.testing.assert_array_equal(graph.neighbors, nbrs)
-                np.testing.assert_array_equal(graph.heuristic, heur)
-                np.testing.assert_array_equal(graph.from_start, fs)
-                np.testing.assert_array_equal(graph.groups, groups)
-                assert rd == rd0
-
-
-def test_a_connection_onto_single_step_edges_keeps_the_order():
-    """A start beside a vertex whose spanner edges are all one step long (dt large): the
-    connection's moves go between the vertex's own, where a full sort puts them."""
+def test_the_kept_cut_spliced_lists_moves_as_one_cut_of_the_whole_graph_does():
+    """The spanner's cut is kept and the connections are spliced into it
+    (SplitSpanner.splice); the search expands moves in list order, so the lists are those of
+    one cut of the whole graph sorted by source: same ids, poses and move order. With dt
+    large most spanner edges are one step: a connection onto such edges goes between the
+    vertex's own moves. (The graph itself is checked against an independent build in
+    tests/test_prepared.py.)"""
     scene, rm = _setup("building-floor")
     planner = Planner(scene, rm)
     vplan = scene.robot.vmax * SPEED_SAFETY
-    dt = 3.0  # most edges one step: the single-step branch of the splice, beside the other
-    split = spanner_split(rm, vplan * dt, 1.05)
+    split = spanner_split(rm, vplan * 3.0, 1.05)
     assert (split.k == 1).sum() > 0.8 * len(split.k) and (split.k > 1).any()
     goal = np.asarray(scene.queries[0].goal, float)
     tried = 0
@@ -144,11 +87,12 @@ def test_a_connection_onto_single_step_edges_keeps_the_order():
         if planner.geometry.clearance1(start) < 0:
             continue
         tried += 1
-        for dt_ in (dt, 0.5):
-            graph, *_ = planner._graph(start, goal, dt_, vplan, 10, 1.05)
-            poses, indptr, nbrs, *_ = _scratch_graph(planner, start, goal, dt_, vplan, 10, 1.05)
-            np.testing.assert_array_equal(graph.indptr, indptr)
-            np.testing.assert_array_equal(graph.neighbors, nbrs)
+        for dt in (3.0, 0.5, 0.07):
+            qg = planner.prepare(goal, PlanOptions(dt=dt)).splice(planner, start)
+            poses, indptr, nbrs = _batch_cut(planner, start, goal, dt, 1.05)
+            np.testing.assert_array_equal(qg.graph.poses, poses)
+            np.testing.assert_array_equal(qg.graph.indptr, indptr)
+            np.testing.assert_array_equal(qg.graph.neighbors, nbrs)
     assert tried >= 2
 
 

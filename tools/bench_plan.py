@@ -54,7 +54,7 @@ import yaml
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from gfuzzy.planner.planner import SPEED_SAFETY, Planner, PlanOptions, plan  # noqa: E402
+from gfuzzy.planner.planner import Planner, PlanOptions, plan  # noqa: E402
 from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap, grow_roadmaps, load_roadmap  # noqa: E402
 from gfuzzy.scene.scene import load_scene  # noqa: E402
 from gfuzzy.timespace.timespace import MoverField  # noqa: E402
@@ -88,7 +88,8 @@ def baseline_seconds(scene, rm, q, dt, horizon_steps):
     t = time.perf_counter()
     planner = Planner(scene, rm)
     start, goal = np.asarray(q.start, float), np.asarray(q.goal, float)
-    graph, s_id, g_id, _ = planner._graph(start, goal, dt, scene.robot.vmax * SPEED_SAFETY)
+    qg = planner.prepare(goal, PlanOptions(dt=dt, stretch=1.0)).splice(planner, start)  # the whole roadmap
+    graph, s_id, g_id = qg.graph, qg.s_id, qg.g_id
     field = MoverField(scene, q.t0, dt, horizon_steps, scene.robot.vmax)
     unsafe = field.unsafe(graph.poses)
     seen = np.zeros_like(unsafe)

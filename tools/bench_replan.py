@@ -12,11 +12,12 @@ differs is the graph), alternating, median of ``--repeat`` runs each. Printed pe
 
 * ``plan ms`` / ``from ms``: the medians over the starts of each start's median; ``x`` their
   ratio (fresh / plan_from), measured in the same run;
-* ``graph ms`` / ``splice ms``: the graph part alone, ``Planner._graph`` (connections, the
-  spanner's cut from the roadmap's cache, two Dijkstras) against ``PreparedGoal.splice``
-  (the start's connections, one Dijkstra on the vertices);
-* ``same``: on how many starts both give the same status and arrival (they must: the
-  arrival is optimal for both; routes may differ).
+* ``graph ms`` / ``splice ms``: the graph part alone, a fresh query's (``Planner.prepare``
+  then ``PreparedGoal.splice``: both ends' connections, the spanner's cut from the roadmap's
+  cache, three Dijkstras) against ``PreparedGoal.splice`` on the kept goal (the start's
+  connections, one Dijkstra on the vertices);
+* ``same``: on how many starts both give the same status and arrival (they must: both search
+  the same graph, the prepared goal's with the start spliced in).
 
 Setups: building-floor roadmaps grown to 200, 1000 and 5000 vertices (seed 1) and the hall of
 ``tools/bench_plan.py`` (40 m x 30 m, 24 pillars, 200 movers) with a ``--hall-vertices`` roadmap.
@@ -39,7 +40,6 @@ sys.path.insert(0, str(ROOT))
 from gfuzzy.planner.planner import Planner  # noqa: E402
 from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap, grow_roadmaps  # noqa: E402
 from gfuzzy.scene.scene import load_scene  # noqa: E402
-from gfuzzy.settings import SPEED_SAFETY  # noqa: E402
 from tools.bench_plan import hall_scene  # noqa: E402
 
 FRACTIONS = (0.1, 0.2, 0.3, 0.4)
@@ -66,7 +66,6 @@ def measure(label: str, scene, rm, repeat: int) -> dict:
     prepared = planner.prepare(q.goal)
     prepare_ms = (time.perf_counter() - t) * 1000
     goal = np.asarray(q.goal, float)
-    vplan = scene.robot.vmax * SPEED_SAFETY
     plan_ms, from_ms, graph_ms, splice_ms = [], [], [], []
     same = 0
     for frac in FRACTIONS:
@@ -80,9 +79,9 @@ def measure(label: str, scene, rm, repeat: int) -> dict:
         wrapped = pose.copy()
         if len(wrapped) == 3:
             wrapped[2] = (wrapped[2] + np.pi) % (2 * np.pi) - np.pi
-        graph_ms.append(_median_ms(lambda: planner._graph(wrapped, goal, 0.07, vplan, 10, 1.05), repeat))  # noqa: B023
+        graph_ms.append(_median_ms(lambda: planner.prepare(goal).splice(planner, wrapped), repeat))  # noqa: B023
         splice_ms.append(_median_ms(lambda: prepared.splice(planner, wrapped), repeat))  # noqa: B023
-    graph, *_ = prepared.splice(planner, first.trajectory.at(q.t0))
+    graph = prepared.splice(planner, first.trajectory.at(q.t0)).graph
     row = {
         "plan": statistics.median(plan_ms),
         "from": statistics.median(from_ms),

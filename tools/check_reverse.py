@@ -31,7 +31,7 @@ sys.path.insert(0, str(ROOT / "tools"))
 
 from experiments.fig12 import variant  # noqa: E402
 
-from gfuzzy.planner.planner import SPEED_SAFETY, Planner, PlanOptions  # noqa: E402
+from gfuzzy.planner.planner import Planner, PlanOptions  # noqa: E402
 from gfuzzy.roadmap.roadmap import RoadmapOptions, grow_roadmaps, load_roadmap  # noqa: E402
 from gfuzzy.scene.scene import load_scene  # noqa: E402
 from gfuzzy.timespace.movers import MoverField  # noqa: E402
@@ -41,8 +41,8 @@ def brute_force(planner: Planner, q, dt: float, horizon: int) -> int | None:
     """First step at which the goal is reachable (move along an edge piece or wait, every
     (point, step) safe), by frontier sets; None within ``horizon`` steps."""
     start, goal = np.asarray(q.start, float), np.asarray(q.goal, float)
-    vplan = planner.robot.vmax * SPEED_SAFETY
-    graph, s_id, g_id, _ = planner._graph(start, goal, dt, vplan, stretch=1.0)
+    qg = planner.prepare(goal, PlanOptions(dt=dt, stretch=1.0)).splice(planner, start)  # the whole roadmap
+    graph, s_id, g_id = qg.graph, qg.s_id, qg.g_id
     field = MoverField(planner.scene, q.t0, dt, horizon, planner.robot.vmax)
     field.compiled = True
     unsafe = field.unsafe(graph.poses)

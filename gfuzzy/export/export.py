@@ -34,6 +34,7 @@ import numpy as np
 
 from ..atomic import write_atomic_with
 from ..errors import InputError, check_number
+from ..render.span import default_span
 from ..scene.scene import Box, Disc, Polygon, Scene
 from ..typed import FloatArray
 from .foxglove import SCHEMAS, color, pose, timestamp, vec3
@@ -55,8 +56,6 @@ TOPICS = {
 }
 #: Most time steps one export writes (a step far too small for the span is refused).
 MAX_STEPS = 2_000_000
-#: Movers' span without a trajectory: their longest timed motion or period, within these.
-SPAN_MIN, SPAN_MAX, SPAN_DEFAULT = 1.0, 60.0, 10.0
 
 _OBSTACLE = color(0.45, 0.45, 0.5, 1.0)
 _BOUNDS = color(0.15, 0.15, 0.15, 1.0)
@@ -148,18 +147,6 @@ def step_times(t0: float, t1: float, step: float) -> FloatArray:
 
 def _ns(t: float) -> int:
     return int(round(float(t) * 1e9))
-
-
-def _default_span(scene: Scene) -> float:
-    spans = []
-    for m in scene.movers:
-        if m.trajectory is not None:
-            spans.append(m.time_range[1])
-        elif math.isfinite(m.period):
-            spans.append(m.period)
-    if not spans:
-        return SPAN_DEFAULT
-    return float(min(SPAN_MAX, max(SPAN_MIN, max(spans))))
 
 
 def _headings(rows: FloatArray, times: FloatArray) -> FloatArray:
@@ -458,7 +445,7 @@ def export_mcap(
     if rows is not None:
         times = step_times(float(rows[0, 0]), float(rows[-1, 0]), opts.step)
     else:
-        times = step_times(0.0, opts.span if opts.span is not None else _default_span(scene), opts.step)
+        times = step_times(0.0, opts.span if opts.span is not None else default_span(scene), opts.step)
     counts = {topic: 0 for topic in TOPICS}
 
     def write(tmp: str) -> None:

@@ -318,9 +318,10 @@ class Navigator(PathSpace):
         if self.robot.dof == 3:
             start[2] = wrap_angle(start[2])
         if self.robot.unicycle:
-            ug = self._kept.kept.splice(self._planner, start)
-            return ug.graph, ug.s_id, ug.g_id, ug.roadmap_distance
-        return self._kept.splice(self._planner, start, ahead=ahead)
+            qg = self._kept.kept.splice(self._planner, start)
+        else:
+            qg = self._kept.splice(self._planner, start, ahead=ahead)
+        return qg.graph, qg.s_id, qg.g_id, qg.roadmap_distance
 
     def roadmap_distance(self, pose) -> float:
         """Shortest distance from ``pose`` to the goal on the whole roadmap (static

@@ -26,8 +26,8 @@ from ..scene.scene import Query, Scene
 from ..settings import MAX_MOVER_SAMPLES, SPEED_SAFETY
 from ..status import Status
 from ..timespace.movers import MoverField
-from ..timespace.roadgraph import connect, roadmap_metres, spanner_split
-from ..timespace.spacetime import IntervalStore, SearchResult, SpaceTimeGraph
+from ..timespace.roadgraph import connect
+from ..timespace.spacetime import IntervalStore, SearchResult
 from ..timespace.timespace import sipp, timed_rows
 from ..trajectory import Trajectory, TrajectoryFile
 from ..typed import FloatArray
@@ -377,82 +377,20 @@ class Planner:
         (:func:`gfuzzy.timespace.roadgraph.connect`; ``clearance``: the pose's, when known)."""
         return connect(self.geometry, self.roadmap, pose, k, clearance)
 
-    def _graph(self, start, goal, dt, vmax, connect_k: int = 10, stretch: float = 1.0):
-        """Roadmap + start + goal, every edge split into one-step pieces; static distances.
-
-        The search runs on the roadmap's ``stretch`` spanner; the roadmap distance returned
-        (the contract's, for the delay factor) is measured on the whole roadmap. The
-        spanner's cut is kept on the roadmap (:mod:`gfuzzy.timespace.roadgraph`); only the start's
-        and the goal's connections are cut per query.
-        """
-        rm = self.roadmap
-        nv = len(rm.vertices)
-        s_id, g_id = nv, nv + 1
-        c_s, c_g = self.geometry.clearance1(start), self.geometry.clearance1(goal)
-        extra_e, extra_w = [], []
-        for pose, node, c in ((start, s_id, c_s), (goal, g_id, c_g)):
-            for v, w in self._connect(pose, connect_k, c):
-                extra_e.append((node, v))
-                extra_w.append(w)
-        direct = float(metric_distance(start, goal, self.robot.circumradius))
-        if self.geometry.motion_free(start, goal, ca=c_s, cb=c_g):
-            extra_e.append((s_id, g_id))
-            extra_w.append(direct)
-        extra_e = np.array(extra_e, dtype=np.int64).reshape(-1, 2)
-        extra_w = np.array(extra_w, dtype=float)
-        # interior points of the spanner's edges, then of the connections (ids from N0)
-        base = spanner_split(rm, vmax * dt, stretch)
-        part = base.splice(extra_e, extra_w, np.vstack([start, goal]))
-        n = base.n
-
-        # static shortest distances (Dijkstra on the roadmap): in metres for the roadmap
-        # distance, in steps (edge e costs k[e]) for the heuristic, which is exact for the
-        # static graph and so the tightest admissible one; the vertex graphs are kept, the
-        # connections added per query
-        def sp(graph, weights, indices):
-            out = graph.with_edges(extra_e, weights).distances(indices)
-            return np.where(out < 1e-200, 0.0, out)
-
-        dist = sp(roadmap_metres(rm), extra_w, g_id)
-        hops = sp(base.steps, part.k.astype(float), [g_id, s_id])
-        hop_g, hop_s = np.rint(hops[0]), np.rint(hops[1])
-
-        def along(hop):  # steps at every point: its vertices', then each edge's interior
-            out = np.empty(len(part.poses))
-            out[:n] = hop
-            out[n : base.N0] = np.minimum(hop[base.a] + base.j, hop[base.b] + base.ke - base.j)
-            ke = np.repeat(part.k, part.k - 1)
-            out[base.N0 :] = np.minimum(hop[part.a] + part.j, hop[part.b] + ke - part.j)
-            return out
-
-        groups = np.concatenate([n + base.offs, base.N0 + part.offs[1:]])
-        graph = SpaceTimeGraph(
-            part.poses, part.indptr, part.neighbors, along(hop_g), groups=groups, from_start=along(hop_s)
-        )
-        return graph, s_id, g_id, float(dist[s_id])
-
-    def _query_graph(self, start, goal, opts: PlanOptions, prepared=None):
-        """(graph, start id, goal id, roadmap distance) of a query (headings wrapped): the
-        roadmap's cut with the ends connected (:meth:`_graph`), or the prepared goal's graph
-        with the start spliced in (``prepare`` / ``plan_from``, and the navigator); for a
-        differential drive the graph of heading copies (:mod:`gfuzzy.timespace.unicycle`)."""
-        vplan = self.robot.vmax * SPEED_SAFETY
-        if self.robot.unicycle:
-            from ..timespace.unicycle import build_graph
-
-            if prepared is None:
-                ug = build_graph(self, start, goal, opts.dt, vplan, opts.connect_k, opts.stretch)
-            else:
-                ug = prepared.splice(self, start)
-            return ug.graph, ug.s_id, ug.g_id, ug.roadmap_distance
-        if prepared is None:
-            return self._graph(start, goal, opts.dt, vplan, opts.connect_k, opts.stretch)
-        return prepared.splice(self, start)
+    def _query_graph(self, start, prepared) -> tuple:
+        """(graph, start id, goal id, roadmap distance) of a query: ``prepared`` (the goal's
+        kept graph, :meth:`prepare`) with ``start`` (heading wrapped) spliced in. Every query
+        graph is built so: a fresh plan prepares its goal first; ``plan_from`` and the
+        navigator keep it (:mod:`gfuzzy.planner.prepared`; for a differential drive the graph
+        of heading copies, :mod:`gfuzzy.timespace.unicycle`)."""
+        qg = prepared.splice(self, start)
+        return qg.graph, qg.s_id, qg.g_id, qg.roadmap_distance
 
     # ---------------------------------------------------------------- query
     def prepare(self, goal, options: PlanOptions | None = None):
-        """Keep what replanning to ``goal`` reuses: the split roadmap graph and the static
-        distances to the goal (:mod:`gfuzzy.planner.prepared`).
+        """Keep what replanning to ``goal`` reuses: the goal's connections and the static
+        distances to the goal (:mod:`gfuzzy.planner.prepared`; the spanner's cut is kept on
+        the roadmap). A fresh :meth:`plan` prepares its goal so too, then splices its start in.
 
         Parameters
         ----------
@@ -462,12 +400,15 @@ class Planner:
 
         Returns
         -------
-        gfuzzy.planner.prepared.PreparedGoal
+        gfuzzy.planner.prepared.PreparedGoal or gfuzzy.timespace.unicycle.UnicyclePrepared
+            Its ``splice(planner, start)`` is a query's graph.
 
         Raises
         ------
         InputError
             A malformed goal (as :meth:`plan`).
+        LimitError
+            When the spanner's and the goal's points would exceed ``settings.MAX_POINTS``.
         """
         from .prepared import prepare_goal
 
@@ -485,7 +426,8 @@ class Planner:
 
     def plan_from(self, prepared, start, t0: float = 0.0, movers=None, hold: float = 0.0) -> PlanResult:
         """Answer a query to a prepared goal from ``start`` at ``t0``: :meth:`plan` without
-        rebuilding the graph (only the start is spliced in; one Dijkstra on the vertices), same arrival.
+        preparing the goal again (only the start is spliced in; one Dijkstra on the vertices):
+        the graph, and so the answer, of a fresh plan from ``start``.
 
         Parameters
         ----------
@@ -502,7 +444,9 @@ class Planner:
         Returns
         -------
         PlanResult
-            As :meth:`plan`; durations equal a fresh ``plan(start, goal, t0)``'s.
+            As :meth:`plan`: a fresh ``plan(start, goal, t0)``'s answer, except that a
+            start and goal the roadmap does not join are ``no_path`` (a fresh plan may
+            join them through the free space).
         """
         planner = self
         if movers is not None:
@@ -567,7 +511,8 @@ class Planner:
         ends = start.copy(), goal.copy()  # the rows at the ends repeat them exactly
         if robot.dof == 3:
             start[2], goal[2] = wrap_angle(start[2]), wrap_angle(goal[2])
-        graph, s_id, g_id, rd = self._query_graph(start, goal, opts, _prepared)
+        kept = _prepared if _prepared is not None else self.prepare(ends[1], opts)
+        graph, s_id, g_id, rd = self._query_graph(start, kept)
         if not math.isfinite(rd):
             linked, message = self._not_joined(start, goal, _prepared is not None, _linked)
             if linked is not None:

@@ -44,6 +44,7 @@ from .draw import (
     as_waypoints,
     poses_at_times,
 )
+from .span import default_span
 
 __all__ = ["render_animation"]
 
@@ -253,7 +254,7 @@ def _frame_times(scene: Scene, wp, fps: float, max_frames: int, duration) -> tup
     if wp is not None:
         t0, t1 = float(wp[0, 0]), float(wp[-1, 0])
     else:
-        t0, t1 = 0.0, _default_span(scene) if duration is None else float(duration)
+        t0, t1 = 0.0, default_span(scene) if duration is None else float(duration)
     n = max(1, min(int(max_frames), math.floor((t1 - t0) * fps + 1e-9) + 1))
     if t1 > t0:
         n = max(n, 2)
@@ -367,15 +368,3 @@ class _PredictionOverlay:
             self.plan.set_data(plan[:, 1], plan[:, 2])
         else:
             self.plan.set_data([], [])
-
-
-def _default_span(scene: Scene) -> float:
-    spans = []
-    for m in scene.movers:
-        if m.trajectory is not None:
-            spans.append(m.time_range[1])
-        elif math.isfinite(m.period):
-            spans.append(m.period)
-    if not spans:
-        return 10.0
-    return float(min(60.0, max(1.0, max(spans))))

@@ -1,14 +1,15 @@
 """The query-independent part of a query's space-time graph, kept on the roadmap.
 
-A query's graph (:meth:`gfuzzy.planner.planner.Planner._graph`) is the roadmap's spanner plus the
-start's and the goal's connections, every edge cut into one-step points
-(:func:`gfuzzy.timespace.spacetime.split_edges`). Numbered as the planner numbers it (the roadmap's
-vertices, the start, the goal, then the interior points edge by edge, the spanner's edges
-before the connections), the spanner's part never depends on the query: the same ids, the
-same poses, the same one-step moves. This module keeps that part, cut once per
-(step length, stretch), on the :class:`~gfuzzy.roadmap.roadmap.Roadmap`, and splices a query's
-connections into it, giving exactly the arrays a build from scratch gives, adjacency
-order included (so the search expands the same states in the same order).
+A query's graph (the one builder: :func:`gfuzzy.planner.prepared.prepare_goal`, then
+:meth:`gfuzzy.planner.prepared.PreparedGoal.splice`) is the roadmap's spanner plus the goal's
+and the start's connections, every edge cut into one-step points
+(:func:`gfuzzy.timespace.spacetime.split_edges`). Numbered as the planner numbers it (the
+roadmap's vertices, the start, the goal, then the interior points edge by edge: the
+spanner's edges, the goal's connections, the start's), the spanner's part never depends on
+the query: the same ids, the same poses, the same one-step moves. This module keeps that
+part, cut once per (step length, stretch), on the :class:`~gfuzzy.roadmap.roadmap.Roadmap`, and
+splices a goal's connections into it (:meth:`SplitSpanner.splice`: the arrays a build from
+scratch of the spanner and those connections gives, adjacency order included).
 
 It also keeps the roadmap vertices' static clearances, which every certified connection
 to a vertex needs (:meth:`gfuzzy.collision.geometry.StaticGeometry.motion_clearance`): computed
@@ -41,6 +42,7 @@ __all__ = [
     "roadmap_metres",
     "vertex_clearances",
     "connect",
+    "check_points",
     "MAX_SPLITS",
 ]
 
@@ -49,11 +51,19 @@ __all__ = [
 MAX_SPLITS = 4
 
 
-def _too_many(total: int) -> LimitError:
-    return LimitError(
-        f"the time step is too fine for this roadmap: its edges would be cut into "
-        f"{total:,} points (at most {MAX_POINTS:,}); use a larger dt"
-    )
+def check_points(total: int) -> None:
+    """Refuse a query graph of ``total`` points past ``settings.MAX_POINTS`` (before it is cut).
+
+    Raises
+    ------
+    LimitError
+        When ``total`` exceeds ``MAX_POINTS``.
+    """
+    if total > MAX_POINTS:
+        raise LimitError(
+            f"the time step is too fine for this roadmap: its edges would be cut into "
+            f"{total:,} points (at most {MAX_POINTS:,}); use a larger dt"
+        )
 
 
 def vertex_clearances(roadmap, geometry: StaticGeometry) -> FloatArray:
@@ -190,8 +200,8 @@ class SplitSpanner:
     lengths : (E,) float
         The spanner's edges (``roadmap.spanner(stretch)``).
     k, offs, a, b, j : as :func:`gfuzzy.timespace.spacetime.split_edges` returns them
-    ke : (N0 - n,) int
-        Each interior point's edge's steps.
+    rest : (N0 - n,) int
+        Each interior point's steps to its edge's end ``b`` (``k - j``).
     poses : (N0, d) float
     indptr : (N0 + 1,) int
     neighbors : (M0,) int
@@ -215,7 +225,7 @@ class SplitSpanner:
     a: IntArray
     b: IntArray
     j: IntArray
-    ke: IntArray
+    rest: IntArray
     poses: FloatArray
     indptr: IntArray
     neighbors: IntArray
@@ -246,8 +256,7 @@ class SplitSpanner:
         """
         kx = split_counts(lengths, self.step_len)
         total = self.N0 + int((kx - 1).sum())
-        if total > MAX_POINTS:
-            raise _too_many(total)
+        check_points(total)
         verts = self.poses[: self.n].copy()
         verts[self.nv :] = ends
         cut = split_edges(verts, edges, lengths, self.step_len, self.N0)
@@ -315,9 +324,7 @@ def spanner_split(roadmap, step_len: float, stretch: float) -> SplitSpanner:
     n = nv + 2
     keep = roadmap.spanner(stretch)
     edges, lengths = roadmap.edges[keep], roadmap.lengths[keep]
-    total = n + int((split_counts(lengths, step_len) - 1).sum())
-    if total > MAX_POINTS:
-        raise _too_many(total)
+    check_points(n + int((split_counts(lengths, step_len) - 1).sum()))
     verts = np.vstack([roadmap.vertices, np.zeros((2, roadmap.vertices.shape[1]))])
     cut = split_edges(verts, edges, lengths, step_len, n)
     k, offs, inner, a, b, j, src, dst = cut.k, cut.offs, cut.inner, cut.a, cut.b, cut.j, cut.src, cut.dst
@@ -331,7 +338,7 @@ def spanner_split(roadmap, step_len: float, stretch: float) -> SplitSpanner:
     single_ends = np.bincount(edges[k == 1, 1], minlength=nv)[:nv]
     split = SplitSpanner(
         nv=nv, n=n, N0=N0, step_len=float(step_len), edges=edges, lengths=lengths, k=k, offs=offs,
-        a=a, b=b, j=j, ke=np.repeat(k, k - 1), poses=np.vstack([verts, inner]), indptr=indptr,
+        a=a, b=b, j=j, rest=np.repeat(k, k - 1) - j, poses=np.vstack([verts, inner]), indptr=indptr,
         neighbors=d2[order], cut=counts[:nv] - single_ends, steps=VertexGraph.of(n, edges, k.astype(float)),
     )  # fmt: skip
     splits = [key_ for key_ in list(cache) if key_[0] == "split"]

@@ -25,7 +25,7 @@ from ..typed import BoolArray, FloatArray, IntArray
 if TYPE_CHECKING:
     from .movers import MoverField
 
-__all__ = ["SpaceTimeGraph", "SearchResult", "IntervalStore", "SplitEdges", "split_edges", "BAND"]
+__all__ = ["SpaceTimeGraph", "QueryGraph", "SearchResult", "IntervalStore", "SplitEdges", "split_edges", "BAND"]
 
 #: Safety is computed for every group whose static lower bound on f lies within this many
 #: steps of the group the search asks for: the A* order will want them soon.
@@ -63,6 +63,31 @@ class SpaceTimeGraph:
     can_wait: BoolArray | None = None
     groups: IntArray | None = None
     from_start: FloatArray | None = None
+
+
+@dataclass(frozen=True)
+class QueryGraph:
+    """A query's graph as the search gets it: the graph, its ends, the roadmap distance.
+
+    Built by one splice per query: :meth:`gfuzzy.planner.prepared.PreparedGoal.splice`
+    (a holonomic robot) or :meth:`gfuzzy.timespace.unicycle.UnicycleGoal.splice` (a
+    differential drive, whose :class:`~gfuzzy.timespace.unicycle.UnicycleGraph` has the
+    same fields).
+
+    Attributes
+    ----------
+    graph : SpaceTimeGraph
+    s_id, g_id : int
+        The start's and the goal's points.
+    roadmap_distance : float
+        Shortest static start-to-goal distance on the roadmap (the contract's; inf when
+        the roadmap does not join them).
+    """
+
+    graph: SpaceTimeGraph
+    s_id: int
+    g_id: int
+    roadmap_distance: float
 
 
 @dataclass
@@ -389,8 +414,10 @@ class SplitEdges:
 def split_edges(verts: FloatArray, edges: IntArray, lengths: FloatArray, step_len: float, first_id: int) -> SplitEdges:
     """Cut edges into one-step pieces of at most ``step_len`` (:func:`gfuzzy.poses.split_counts`).
 
-    The one place the roadmap-time graph is cut: :meth:`gfuzzy.planner.planner.Planner._graph`
-    and :func:`gfuzzy.planner.prepared.prepare_goal` both call it.
+    The one place the roadmap-time graph is cut: the roadmap's spanner once per (step,
+    stretch) (:func:`gfuzzy.timespace.roadgraph.spanner_split`), a goal's connections
+    (:meth:`gfuzzy.timespace.roadgraph.SplitSpanner.splice`) and a start's
+    (:meth:`gfuzzy.planner.prepared.PreparedGoal.splice`).
 
     Parameters
     ----------
