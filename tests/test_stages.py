@@ -194,3 +194,87 @@ def test_speed_layer_applies_on_most_queries():
                 total += 1
                 applied += r.speed_report.applied
     assert applied >= 0.6 * total
+
+
+# ---------------------------------------------------------------- a differential drive
+
+# the L-shaped hall with a box differential drive: the answer turns in place at corners
+HALL_DRIVE = HALL.replace("robot: {disc: 0.2, vmax: 1.0}", "robot: {box: [0.5, 0.3], vmax: 1.0, kinematics: unicycle}").replace(
+    "start: [5.5, 0.5], goal: [0.5, 5.5]", "start: [5.5, 0.5, 3.14159], goal: [0.5, 5.5, 1.5708]"
+)
+
+
+@pytest.fixture(scope="module")
+def hall_drive():
+    doc = yaml.safe_load(HALL_DRIVE)
+    scene = parse_scene(doc)
+    rm = build_roadmap(scene, RoadmapOptions(vertices=80, seed=3))
+    q = scene.queries[0]
+    return doc, scene, q, plan(scene, rm, q.start, q.goal, options=PlanOptions(speed_layer=True, seed=1))
+
+
+def test_the_speed_layer_applies_to_a_differential_drive(hall_drive):
+    from test_driveprofile import oracle
+
+    doc, scene, q, res = hall_drive
+    assert res.solved and res.speed_report.applied, res.speed_report.reason
+    w = res.trajectory.waypoints
+    rep = check_trajectory(scene, w, q)
+    assert rep.valid, rep.reason  # the row rule included
+    assert reference_violation(doc, w) == ""
+    r = scene.robot
+    path = w[np.concatenate([[True], np.any(np.abs(np.diff(w[:, 1:], axis=0)) > 0, axis=1)]), 1:]
+    assert oracle(w, path, r.vmax, r.turn_rate, 2.0 * r.vmax, r.circumradius) == []
+    info = res.speed_report.to_dict()
+    assert info["corners"]["after"] <= info["corners"]["before"]
+    # the cart stands in the way until t = 4: the layered answer still waits for it
+    assert w[-1, 0] > 4.0
+
+
+def test_the_drive_layer_reports_in_the_file(hall_drive):
+    _, scene, q, res = hall_drive
+    stats = res.to_file(scene.name, q.name).to_dict()["stats"]["speed_layer"]
+    assert stats == res.speed_report.to_dict() and stats["applied"] and "corners" in stats
+
+
+def test_gfuzzy_plan_speed_layer_applies_on_the_bundled_drive(tmp_path, capsys):
+    from helpers import run_main
+
+    out = tmp_path / "hop.json"
+    rc, stdout, _ = run_main(capsys, "plan", ROOT / "scenes" / "tb3-arena-unicycle.yaml", "--query", "lane-hop",
+                             "--speed-layer", "-o", out)  # fmt: skip
+    assert rc == 0 and "speed layer: applied" in stdout, stdout
+    rc, _, err = run_main(capsys, "check", ROOT / "scenes" / "tb3-arena-unicycle.yaml", out)
+    assert rc == 0, err
+
+
+def test_a_drive_segment_is_certified_at_its_own_heading_and_turns():
+    from gfuzzy.planner.stages import _clearance_functions
+
+    # a long box drive; the corridor runs along x (heading 0) but the segment goes up from
+    # (2, 1): the robot turns in place there to heading pi/2, sweeping the point at
+    # (-0.32, -0.32) from it, which the box sliding up at heading 0 never touches
+    doc = {"version": 1, "name": "seg", "bounds": [0, 0, 5, 4],
+           "robot": {"box": [1.0, 0.3], "vmax": 1.0, "kinematics": "unicycle"},
+           "obstacles": [{"disc": {"center": [2.0 - 0.32, 1.0 - 0.32], "radius": 0.03}}]}  # fmt: skip
+    scene = parse_scene(doc)
+    ctx = StageContext(scene, StaticGeometry(scene))
+    corridor = np.array([[0.8, 1.0, 0.0], [4.0, 1.0, 0.0]])
+    static_segment = _clearance_functions(ctx, corridor)[2]
+    bound, clearance = static_segment(np.array([[2.0, 1.0]]), np.array([[2.0, 2.5]]))
+    assert bound[0] < 0 and clearance[0] < 0
+    holonomic = parse_scene({**doc, "robot": {"box": [1.0, 0.3], "vmax": 1.0}})
+    slide = _clearance_functions(StageContext(holonomic, StaticGeometry(holonomic)), corridor)[2]
+    assert slide(np.array([[2.0, 1.0]]), np.array([[2.0, 2.5]]))[0][0] == 0.0  # free for a box that slides
+    # along the corridor the drive's segment is free
+    assert static_segment(np.array([[1.2, 1.0]]), np.array([[3.5, 1.0]]))[0][0] == 0.0
+
+
+def test_a_refined_drive_path_keeps_the_turning_rate():
+    path = ROOT / "scenes" / "tb3-arena-unicycle.yaml"
+    scene, rm, planner = _setup(path)
+    q = scene.queries[2]
+    res = planner.plan(q.start, q.goal, q.t0, PlanOptions(refine=True, seed=1))
+    assert res.refine_report.applied, res.refine_report.reason
+    rep = check_trajectory(scene, res.trajectory.waypoints, q)
+    assert rep.valid, rep.reason

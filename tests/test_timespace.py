@@ -40,3 +40,27 @@ def test_first_motion_is_decided_exactly():
             assert got
         agree += 1
     assert agree == 60
+
+
+def test_points_on_a_segment_but_not_evenly_spaced_are_all_examined():
+    """A group whose points lie on its segment but bunch up (a re-timed chain that
+    accelerates) is judged point by point: the shortcut that examines only the points
+    within reach of a mover's projection holds for evenly spaced points only. Oracle:
+    the distance of the two discs' centres from the mover's own state."""
+    scene = _scene(PERSON)
+    mv = scene.movers[0]
+    xs = np.array([0.0, 0.01, 0.02, 0.03, 2.35, 2.45, 2.55, 2.65, 2.75, 6.0])  # on y = 1, bunched
+    poses = np.column_stack([xs, np.full(len(xs), 1.0)])
+    steps = 10
+    t = 2.0 + 0.07 * np.arange(steps)
+    xy, _ = mv.state(t)
+    gap = np.hypot(xs[:, None] - xy[None, :, 0], 1.0 - xy[None, :, 1]) - 0.55  # (points, steps)
+    for compiled in (False, True):
+        field_ = MoverField(scene, 2.0, 0.07, steps, 1.0)
+        field_.compiled = compiled
+        margin = field_.margin[0, :steps]  # the motion between two steps' allowance
+        assert np.abs(gap - margin).min() > 1e-6  # no pair on the boundary
+        want = {(int(n), int(s)) for n, s in zip(*np.nonzero(gap < margin), strict=True)}
+        assert len(want) > 10
+        node, step = field_.unsafe_pairs(poses, np.array([0, len(xs)]), np.array([0]), np.array([steps - 1]))
+        assert set(zip(node.tolist(), step.tolist(), strict=True)) == want, compiled

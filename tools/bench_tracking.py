@@ -12,6 +12,12 @@ Prints max and mean lateral error, max commanded |omega|, bound violations and
 traversal time, and writes out/bench_tracking.png (paths, speed profiles, and a
 bar chart of the figures).
 
+A differential drive's plan (the bundled ``kinematics: unicycle`` scenes) turns in place at
+its corners: pure pursuit does not apply. Its section plans each query with and without the
+speed layer and tracks the timed plan with gfuzzy.learning.drivetracking (a trajectory
+tracker driving v and w within the robot's bounds): position, lateral and heading errors,
+the plan's own bound violations, arrival.
+
     python tools/bench_tracking.py [--no-scenes] [--out out/bench_tracking.png]
 """
 
@@ -48,6 +54,8 @@ def scene_paths(root: Path = ROOT, time_limit: float = 20.0) -> list[tuple[str, 
     for file in files:
         try:
             scene = load_scene(file)
+            if scene.robot.unicycle:  # turns in place: drive_rows() tracks it in time
+                continue
             rm_file = default_roadmap_path(scene, root / "roadmaps")
             if not rm_file.exists():
                 print(f"(scene {scene.name}: no roadmap file {rm_file.name}, skipped)")
@@ -66,6 +74,54 @@ def scene_paths(root: Path = ROOT, time_limit: float = 20.0) -> list[tuple[str, 
         except Exception as exc:
             print(f"(scene {file.name} skipped: {type(exc).__name__}: {exc})")
     return out
+
+
+def drive_rows(root: Path = ROOT, time_limit: float = 60.0) -> list[tuple[str, str, object, np.ndarray]]:
+    """(scene/query, plan, robot, rows) of every bundled differential drive's query, planned
+    by the search alone ("search") and with the speed layer ("layered", when it applied)."""
+    from gfuzzy.planner.planner import PlanOptions, plan
+    from gfuzzy.roadmap.roadmap import default_roadmap_path, load_roadmap
+    from gfuzzy.scene.scene import load_scene
+
+    out = []
+    for file in sorted((root / "scenes").glob("*.yaml")):
+        scene = load_scene(file)
+        rm_file = default_roadmap_path(scene, root / "roadmaps")
+        if not scene.robot.unicycle or not rm_file.exists():
+            continue
+        roadmap = load_roadmap(rm_file, scene)
+        for q in scene.queries:
+            for label, layer in (("search", False), ("layered", True)):
+                res = plan(scene, roadmap, q.start, q.goal, q.t0, PlanOptions(time_limit=time_limit, speed_layer=layer))
+                if res.trajectory is None or (layer and not res.speed_report.applied):
+                    why = res.speed_report.reason if layer and res.speed_report else res.status
+                    print(f"({scene.name}/{q.name} {label}: not tracked: {why})")
+                    continue
+                out.append((f"{scene.name}/{q.name}", label, scene.robot, res.trajectory.waypoints))
+    return out
+
+
+def drive_section() -> None:
+    """Track the differential drives' plans and print one row per plan."""
+    from gfuzzy.learning.drivetracking import DriveGains, track_drive
+    from gfuzzy.settings import AMAX_PER_VMAX
+
+    print(f"\ndifferential drive: a trajectory tracker (Kanayama) on the timed plan, dt {DriveGains().dt} s")
+    head = (f"{'query':<36}{'plan':<9}{'plan s':>7}{'arrive':>8}{'max pos':>8}{'max lat':>8}{'mean lat':>9}"
+            f"{'max head':>9}{'plan viol':>10}{'cmd viol':>9}")  # fmt: skip
+    print(head)
+    print("-" * len(head))
+    for name, label, robot, rows in drive_rows():
+        amax = robot.amax if robot.amax is not None else AMAX_PER_VMAX * robot.vmax
+        limits = tracking.UnicycleLimits(vmax=robot.vmax, omega_max=robot.turn_rate, amax=amax,
+                                         alpha_max=amax / robot.circumradius)  # fmt: skip
+        r = track_drive(rows, limits, reverse=robot.reverse)
+        arrive = f"{r.arrival_time:8.2f}" if r.status is Status.SOLVED else "   never"
+        print(
+            f"{name:<36}{label:<9}{rows[-1, 0] - rows[0, 0]:>7.2f}{arrive}{r.max_position_error:>8.3f}"
+            f"{r.max_lateral_error:>8.3f}{r.mean_lateral_error:>9.4f}{r.max_heading_error:>9.3f}"
+            f"{r.plan_violations.steps:>10d}{r.violations.steps:>9d}"
+        )
 
 
 def run(paths, limits, profiles):
@@ -125,6 +181,8 @@ def main() -> None:
         )
     plot(rows, paths, [label for label, _ in profiles], args.out)
     print(f"\nwrote {args.out}")
+    if not args.no_scenes:
+        drive_section()
 
 
 def plot(rows, paths, labels, out: Path) -> None:

@@ -25,6 +25,10 @@ __all__ = ["chain_points", "retime_path", "retime_profile", "RetimeResult"]
 
 #: Nodes per group of the chain whose safety is computed together.
 GROUP = 16
+#: Nodes per group of a chain driven under a speed profile: pairs. The movers' field takes a
+#: group's points on one segment as evenly spaced (:meth:`MoverField.unsafe_pairs`), which a
+#: chain that accelerates is not: with 16 it missed unsafe (point, step) pairs near rest.
+PROFILE_GROUP = 2
 #: Stops of the speed-layer timing closer than this (metres of path) are one stop.
 STOP_MERGE = 0.3
 
@@ -91,7 +95,10 @@ def retime_path(
     """
     robot = scene.robot
     step = robot.vmax * SPEED_SAFETY * dt
-    poses, s = chain_points(path, robot.circumradius, step)
+    # a differential drive turns in place at most at turn_rate: its turns are cut as if the
+    # robot's radius were vmax / turn_rate (>= r), so a step turns at most turn_rate dt
+    radius = robot.vmax / robot.turn_rate if robot.unicycle else robot.circumradius
+    poses, s = chain_points(path, radius, step)
     return _search_chain(scene, poses, s, t0, dt, horizon, wait_at, deadline, hold=hold)
 
 
@@ -116,6 +123,18 @@ def _metric_profile(path, circumradius, s_xy, v_xy, vmax, amax, ds=0.02):
     return s_m, limit_acceleration(s_m, np.minimum(frac, 1.0) * vmax, amax), cum_m
 
 
+def s_at(grid: FloatArray, s_m: FloatArray, v_m: FloatArray, t: FloatArray) -> FloatArray:
+    """Arc lengths at times ``grid`` of driving profile (s_m, v_m) at its limit, ``t`` its
+    :func:`profile_times`: constant acceleration within each interval of the profile
+    (v^2 linear in s), so the speed changes between steps stay within the acceleration bound.
+    """
+    i = np.clip(np.searchsorted(t, grid, side="right") - 1, 0, len(t) - 2)
+    ds = s_m[i + 1] - s_m[i]
+    acc = np.divide(v_m[i + 1] ** 2 - v_m[i] ** 2, 2 * ds, out=np.zeros_like(ds), where=ds > 0)
+    tau = grid - t[i]
+    return np.minimum(s_m[i] + v_m[i] * tau + 0.5 * acc * tau**2, s_m[i + 1])
+
+
 def _chain_from_profile(path, cum_m, s_m, v_m, dt):
     """Points of the path at the times t = n dt of driving profile (s_m, v_m) at its limit.
 
@@ -133,13 +152,7 @@ def _chain_from_profile(path, cum_m, s_m, v_m, dt):
     t = profile_times(s_m, v_m)
     n = int(math.ceil(t[-1] / dt - 1e-9))
     grid = np.minimum(np.arange(n + 1) * dt, t[-1])
-    # constant acceleration within each interval of the profile (v^2 linear in s), so the
-    # speed changes between steps stay within the acceleration bound
-    i = np.clip(np.searchsorted(t, grid, side="right") - 1, 0, len(t) - 2)
-    ds = s_m[i + 1] - s_m[i]
-    acc = np.divide(v_m[i + 1] ** 2 - v_m[i] ** 2, 2 * ds, out=np.zeros_like(ds), where=ds > 0)
-    tau = grid - t[i]
-    s = np.minimum(s_m[i] + v_m[i] * tau + 0.5 * acc * tau**2, s_m[i + 1])
+    s = s_at(grid, s_m, v_m, t)
     s[-1] = s_m[-1]
     keep = np.concatenate([[True], np.diff(s) > 1e-12])
     s, grid = s[keep], grid[keep]
@@ -217,7 +230,7 @@ def retime_profile(
         # (where it moves at most amax dt) keeps the speed changes within amax dt
         res = _search_chain(
             scene, poses, s, t0, dt, horizon, wait_at, deadline, (path, cum_m, corners, times), 0.5 * amax * dt**2,
-            hold=hold,
+            hold=hold, group=PROFILE_GROUP,
         )
         if res.status is Status.SOLVED:
             return ProfileRetime(Status.SOLVED, res.trajectory, waits=stops, profile_duration=duration)
@@ -225,7 +238,9 @@ def retime_profile(
         if res.status is Status.TIMEOUT:
             break
         # where would the robot need to stop? search again allowing waits anywhere
-        free = _search_chain(scene, poses, s, t0, dt, horizon, None, deadline, (path, cum_m, corners, times), hold=hold)
+        free = _search_chain(
+            scene, poses, s, t0, dt, horizon, None, deadline, (path, cum_m, corners, times), hold=hold, group=PROFILE_GROUP
+        )
         if free.status is not Status.SOLVED or not free.waits:
             message = free.message or message
             break
@@ -246,7 +261,7 @@ def retime_profile(
 
 
 def _search_chain(
-    scene, poses, s, t0, dt, horizon, wait_at, deadline, corners=None, wait_tol=0.0, hold=0.0
+    scene, poses, s, t0, dt, horizon, wait_at, deadline, corners=None, wait_tol=0.0, hold=0.0, group=GROUP
 ) -> RetimeResult:
     """The safe-interval search on a chain of points one step apart.
 
@@ -255,6 +270,12 @@ def _search_chain(
 
     ``corners`` = (path, cum_m, [[s, t]...], node times): rows are added at the path's
     corners that a step would otherwise cut (see :func:`_chain_from_profile`).
+
+    ``group``: nodes whose safety is computed together. The movers' field takes a group whose
+    points lie on one segment as evenly spaced along it (:meth:`MoverField.unsafe_pairs`);
+    a chain driven under a speed profile is not, least of all a differential drive's (it
+    brakes to rest at every corner and turns in place, many nodes at one point): its groups
+    are pairs, which always are.
     """
     robot = scene.robot
     m = len(poses)
@@ -272,7 +293,7 @@ def _search_chain(
         for w in np.atleast_1d(wait_at):
             can_wait[int(np.argmin(np.abs(s - w)))] = True
             can_wait |= np.abs(s - w) <= wait_tol
-    groups = np.unique(np.append(np.arange(0, m, GROUP), m))
+    groups = np.unique(np.append(np.arange(0, m, group), m))
     graph = SpaceTimeGraph(
         poses, indptr, nbrs, heur, can_wait=can_wait, groups=groups, from_start=np.arange(m, dtype=float)
     )

@@ -17,6 +17,7 @@ the planner: data flows one way (docs/architecture.md).
 from __future__ import annotations
 
 import logging
+import math
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
@@ -32,6 +33,7 @@ from ..settings import AMAX_PER_VMAX
 from ..status import Status
 from ..trajectory import Trajectory
 from ..typed import FloatArray
+from .driveretime import retime_drive
 from .retime import retime_path, retime_profile
 
 if TYPE_CHECKING:
@@ -118,6 +120,10 @@ class SpeedReport:
         Stops the timing among the movers added (when applied).
     before, after : mapping or None
         ``duration``, ``max_speed``, ``mean_speed`` (when applied).
+    corners : mapping or None
+        A differential drive's: ``before``, the corners (turns in place inside the path) of
+        the answer's path, and ``after``, those of the path the layer timed (it straightens
+        the path first).
     """
 
     applied: bool
@@ -127,10 +133,12 @@ class SpeedReport:
     stops: int | None = None
     before: Mapping | None = None
     after: Mapping | None = None
+    corners: Mapping | None = None
 
     def to_dict(self) -> dict:
         """The ``stats["speed_layer"]`` form (the trajectory file's keys)."""
-        return _present(self, ("applied", "amax", "profile_seconds", "reason", "stops", "before", "after"))
+        keys = ("applied", "amax", "profile_seconds", "reason", "stops", "before", "after", "corners")
+        return _present(self, keys)
 
 
 def _present(report, keys) -> dict:
@@ -173,6 +181,9 @@ def _clearance_functions(ctx: StageContext, corridor: FloatArray):
     static_segment, mover_clearance)."""
     scene, robot, geometry = ctx.scene, ctx.robot, ctx.geometry
     heading = _heading_lookup(corridor) if robot.dof == 3 else None
+    # a differential drive with a body that turns (box, footprint) drives each segment at
+    # the segment's own heading and turns in place at its ends (_drive_segment)
+    drive = robot.unicycle and robot.shape != "disc"
 
     def poses_of(xy: FloatArray) -> FloatArray:
         xy = np.atleast_2d(np.asarray(xy, dtype=float))
@@ -199,7 +210,10 @@ def _clearance_functions(ctx: StageContext, corridor: FloatArray):
         will have, so narrow passages do not defeat sampling."""
         k = len(a)
         ends = poses_of(np.concatenate([a, b])).tolist()  # one heading lookup for both ends
-        mn = np.array([_traced(geometry, p, q, pose_clearance) for p, q in zip(ends[:k], ends[k:], strict=True)])
+        if drive:
+            mn = np.array([_drive_segment(geometry, p, q, pose_clearance) for p, q in zip(ends[:k], ends[k:], strict=True)])
+        else:
+            mn = np.array([_traced(geometry, p, q, pose_clearance) for p, q in zip(ends[:k], ends[k:], strict=True)])
         return np.where(mn >= 0, 0.0, -1.0), mn
 
     # The GA evaluates the mover clearance at every sample of every candidate, so the robot
@@ -271,6 +285,28 @@ def _traced(geometry: StaticGeometry, p: list, q: list, pose_clearance) -> float
     return geometry.motion_clearance(p, q, ca=ca, cb=cb)
 
 
+def _drive_segment(geometry: StaticGeometry, p: list, q: list, pose_clearance) -> float:
+    """A differential drive's segment p -> q (poses at the corridor's headings): the straight
+    at its own heading, and the turns in place at both ends between the corridor's heading
+    and the segment's; the smallest clearance, -1 when one is not certified free.
+
+    At a via-point the robot turns from the heading of the segment before to that of the
+    segment after; that arc lies within the two arcs from each to the corridor's heading
+    there, which the two segments certify: the GA's objective then agrees with what the
+    refined path's certification (turns in place included) asks of it.
+    """
+    h = math.atan2(q[1] - p[1], q[0] - p[0])
+    if p[:2] == q[:2]:
+        return _traced(geometry, p, p, pose_clearance)
+    a, b = [p[0], p[1], h], [q[0], q[1], h]
+    clear = _traced(geometry, a, b, pose_clearance)
+    for end, turned in ((p, a), (q, b)):
+        if clear < 0:
+            break
+        clear = min(clear, _traced(geometry, end, turned, pose_clearance))
+    return clear
+
+
 def _accept(ctx: StageContext, traj: Trajectory, query_like, before: Trajectory, max_slowdown: float):
     """Independent check, and not much slower than the answer it replaces."""
     rep = check_trajectory(ctx.scene, traj.waypoints, query_like)
@@ -323,9 +359,11 @@ def _refine(ctx: StageContext, traj: Trajectory, query, opts, deadline) -> tuple
     if not res.improved:
         return traj, replace(report, reason="the GA found nothing better than the corridor")
     if ctx.robot.unicycle:  # straight segments through the via-points, turns in place
-        from ..timespace.drive import turn_path
+        from .straighten import drive_path
 
-        path = turn_path(traj.poses[0], res.path[1:-1], traj.poses[-1])
+        path = drive_path(ctx.geometry, traj.poses[0], res.path[1:-1], traj.poses[-1])
+        if path is None:
+            return traj, replace(report, reason="a refined turn in place could not be certified free of static obstacles")
     else:
         path = funcs[0](res.path)  # poses_of: a box robot takes the corridor's headings
         if ctx.robot.dof == 3:  # the ends keep their exact poses
@@ -358,14 +396,16 @@ def _speed_layer(ctx: StageContext, traj: Trajectory, query, opts, deadline) -> 
     path = _dedupe(traj.poses)
     if len(path) < 2:
         return traj, SpeedReport(False, amax, "the start is the goal")
-    if robot.unicycle:  # its profile runs along the xy path: a turn in place has no length there
-        return traj, SpeedReport(False, amax, "not adapted to a differential drive (kinematics: unicycle) yet")
     rules = opts.rules if opts.rules is not None else expert_rules()
-    s_xy, v_xy = speed_limit(path[:, :2], robot.vmax, amax, rules, FuzzyOptions())
     horizon = max(opts.horizon or 0.0, 3.0 * traj.duration + 30.0)
-    rt = retime_profile(scene=ctx.scene, path=path, s_xy=s_xy, v_xy=v_xy, t0=query.t0,
-                        dt=opts.dt, amax=amax, horizon=horizon, deadline=deadline, hold=query.hold)  # fmt: skip
-    report = SpeedReport(False, amax, profile_seconds=rt.profile_duration)
+    corners = None
+    if robot.unicycle:  # straights from rest to rest, turns in place from rest to rest
+        rt, corners = _drive_layer(ctx, path, query, opts, amax, horizon, rules, deadline)
+    else:
+        s_xy, v_xy = speed_limit(path[:, :2], robot.vmax, amax, rules, FuzzyOptions())
+        rt = retime_profile(scene=ctx.scene, path=path, s_xy=s_xy, v_xy=v_xy, t0=query.t0,
+                            dt=opts.dt, amax=amax, horizon=horizon, deadline=deadline, hold=query.hold)  # fmt: skip
+    report = SpeedReport(False, amax, profile_seconds=rt.profile_duration, corners=corners)
     if rt.status is not Status.SOLVED:
         why = f"the speed-limited path could not be timed among the movers ({rt.message})"
         return traj, replace(report, reason=why)
@@ -376,6 +416,26 @@ def _speed_layer(ctx: StageContext, traj: Trajectory, query, opts, deadline) -> 
         report, applied=True, stops=len(rt.waits), before=_speed_figures(traj), after=_speed_figures(rt.trajectory)
     )
     return rt.trajectory, figures
+
+
+def _drive_layer(ctx: StageContext, path, query, opts, amax, horizon, rules, deadline):
+    """A differential drive's speed layer: its path straightened first (a stop saved at every
+    corner dropped, :func:`gfuzzy.planner.straighten.straighten`), timed among the movers; the
+    path as it was when the straightened one cannot be timed. Returns (RetimeResult,
+    ``{"before": corners of the path, "after": corners of the path timed}``)."""
+    from .straighten import corners, straighten
+
+    def count(p):
+        c = corners(p)
+        return len(c) - 2 if c is not None else len(p) - 2
+
+    straight = straighten(ctx.geometry, path)
+    tries = [straight, path] if straight is not path else [path]
+    for candidate in tries:
+        rt = retime_drive(ctx.scene, candidate, query.t0, opts.dt, amax, horizon, rules, deadline=deadline, hold=query.hold)
+        if rt.status is Status.SOLVED:
+            break
+    return rt, {"before": count(path), "after": count(candidate)}
 
 
 def _speed_figures(traj: Trajectory) -> dict:

@@ -27,6 +27,11 @@ __all__ = ["MoverField", "CHUNK"]
 #: Steps per chunk of the movers' broad phase.
 CHUNK = 8
 
+#: Metres a point on a group's segment may lie from its evenly spaced place for phase 3 of
+#: :meth:`MoverField.unsafe_pairs` to examine only the points in reach of a mover (the
+#: compiled kernel keeps the same value).
+EVEN_TOL = 1e-9
+
 #: Up to this many (group, chunk, mover) box tests the compiled kernel tests them all;
 #: above, it finds the overlapping boxes through a grid (:func:`gfuzzy.timespace.movers_kernel.grid_candidates`).
 DENSE_BROAD_PHASE = 2_000_000
@@ -178,6 +183,12 @@ class MoverField:
         tt = np.clip(np.einsum("ij,ij->i", xy - p0[gid], seg[gid]) * inv[gid], 0.0, 1.0)
         dev = np.maximum.reduceat(np.hypot(*(p0[gid] + tt[:, None] * seg[gid] - xy).T), starts)
         body = self.robot.circumradius + dev
+        # phase 3's shortcut holds for points evenly spaced on the segment only (an edge's
+        # split points are; a re-timed chain that accelerates is not)
+        length = np.sqrt(seg2)
+        place = (np.arange(K) - ptr[gid]) * (length / np.maximum(sizes - 1, 1))[gid]
+        uneven = np.maximum.reduceat(np.abs(tt * length[gid] - place), starts) > EVEN_TOL
+        dev = np.where(uneven & (dev < 1e-9), np.inf, dev)
 
         # 1. broad phase: (group, mover, chunk) whose boxes overlap
         g3, m3, c3 = self._broad_phase(gmin, gmax, lo // CHUNK, hi // CHUNK)

@@ -38,6 +38,10 @@ def _box_dist(px, py, hx, hy):
 #: circles' (kept here so that numba does not import the geometry module).
 QUAD_EXACT = 2.0
 
+#: :data:`gfuzzy.timespace.movers.EVEN_TOL`: how far (m) a point on a group's segment may lie
+#: from its evenly spaced place for phase 3's shortcut (kept here so numba does not import movers).
+EVEN_TOL = 1e-9
+
 
 @njit(cache=True)
 def _box_box_gap(q, px, py, cc, ss, hl, hw, qx, qy, mhx, mhy):
@@ -165,8 +169,9 @@ def footprint_distance(rx, ry, cc, ss, disc, mrad, mhx, mhy, pieces, counts):
 @njit(cache=True)
 def _group_geometry(xy, ptr, circ):
     """Per group: bounding box, first point, segment to the last point, 1/|seg|^2, |seg|^2,
-    the points' largest deviation from the segment and the body radius around it (the
-    numpy reference's reductions, in its operations)."""
+    the points' largest deviation from the segment (infinite when the points lie on it but
+    not evenly spaced: the shortcut of phase 3 holds for evenly spaced points only) and the
+    body radius around it (the numpy reference's reductions, in its operations)."""
     G = len(ptr) - 1
     box = np.empty((G, 4))
     p0 = np.empty((G, 2))
@@ -200,8 +205,17 @@ def _group_geometry(xy, ptr, circ):
         box[g, 0], box[g, 1], box[g, 2], box[g, 3] = bx0, by0, bx1, by1
         p0[g, 0], p0[g, 1] = x0, y0
         seg[g, 0], seg[g, 1] = sx, sy
-        inv[g], seg2[g], dev[g] = iv, s2, worst
         body[g] = circ + worst
+        if worst < 1e-9 and z - a > 1 and s2 > 0:  # on the segment: evenly spaced too?
+            length = math.sqrt(s2)
+            spacing = length / (z - a - 1)
+            for i in range(a, z):
+                t = ((xy[i, 0] - x0) * sx + (xy[i, 1] - y0) * sy) * iv
+                t = min(max(t, 0.0), 1.0)
+                if abs(t * length - (i - a) * spacing) > EVEN_TOL:
+                    worst = math.inf  # not evenly spaced: no shortcut (see mark_unsafe)
+                    break
+        inv[g], seg2[g], dev[g] = iv, s2, worst
     return box, p0, seg, inv, seg2, dev, body
 
 
