@@ -37,6 +37,16 @@ EVEN_TOL = 1e-9
 DENSE_BROAD_PHASE = 2_000_000
 
 
+def _uneven(tt: FloatArray, seg2: FloatArray, ptr: IntArray, gid: IntArray, sizes: IntArray):
+    """(g,) True for each group whose points are not evenly spaced on its segment (an edge's
+    split points are; a re-timed chain that accelerates is not): phase 3's shortcut of
+    :meth:`MoverField.unsafe_pairs` holds for evenly spaced points only. ``tt`` (k,) is each
+    point's place along its group's segment (0 to 1), ``seg2`` (g,) the segments' squared lengths."""
+    length = np.sqrt(seg2)
+    place = (np.arange(len(tt)) - ptr[gid]) * (length / np.maximum(sizes - 1, 1))[gid]
+    return np.maximum.reduceat(np.abs(tt * length[gid] - place), ptr[:-1]) > EVEN_TOL
+
+
 class MoverField:
     """The movers sampled on the time grid ``t_n = t0 + n * dt``, ``n = 0..steps``.
 
@@ -183,12 +193,7 @@ class MoverField:
         tt = np.clip(np.einsum("ij,ij->i", xy - p0[gid], seg[gid]) * inv[gid], 0.0, 1.0)
         dev = np.maximum.reduceat(np.hypot(*(p0[gid] + tt[:, None] * seg[gid] - xy).T), starts)
         body = self.robot.circumradius + dev
-        # phase 3's shortcut holds for points evenly spaced on the segment only (an edge's
-        # split points are; a re-timed chain that accelerates is not)
-        length = np.sqrt(seg2)
-        place = (np.arange(K) - ptr[gid]) * (length / np.maximum(sizes - 1, 1))[gid]
-        uneven = np.maximum.reduceat(np.abs(tt * length[gid] - place), starts) > EVEN_TOL
-        dev = np.where(uneven & (dev < 1e-9), np.inf, dev)
+        dev = np.where(_uneven(tt, seg2, ptr, gid, sizes) & (dev < 1e-9), np.inf, dev)
 
         # 1. broad phase: (group, mover, chunk) whose boxes overlap
         g3, m3, c3 = self._broad_phase(gmin, gmax, lo // CHUNK, hi // CHUNK)
