@@ -102,7 +102,8 @@ def test_the_navigator_does_not_cut_in_front_of_a_walker(open_square):
     person = np.array([-2.5, -2.0, 1.0, 0.0, 0.3])
     ways, ends = {}, {}
     for ps, cost in ((0.0, 0.0), (1.25, 10.0), (1.25, 1.0)):
-        nav = Navigator(scene, rm, (0.0, 3.0), NavOptions(path_space=ps, path_space_cost=cost, time_budget=5.0))
+        opts = NavOptions(path_space=ps, path_space_cost=cost, personal_space=0.0, time_budget=5.0)
+        nav = Navigator(scene, rm, (0.0, 3.0), opts)
         traj = nav.step(0.0, pose, person[None])
         assert nav.last.mode == "plan"
         ways[ps, cost], ends[ps, cost] = _intrusions(traj, person, 0.0), traj.t_end
