@@ -127,3 +127,20 @@ def test_check_reports_the_first_collision_before_a_colliding_row():
     assert not rep.valid
     assert "early" in rep.reason, rep.reason
     assert 1.0 < rep.time < 1.5
+
+
+def test_a_collision_report_tells_how_deep_it_went():
+    """The first contact in time is reported with its depth there, which is tiny whenever
+    the robot's motion is sampled finely; the report also tells the deepest overlap seen, so
+    that a 20 cm collision does not read as a 0.1 mm graze."""
+    sc = scene(
+        {"disc": 0.25, "vmax": 1.0},
+        movers=[{"name": "P", "disc": 0.25, "trajectory": [[0.0, 5.0, 2.3], [20.0, 5.0, 2.3]]}],
+    )
+    rep = check_trajectory(sc, slide(2.0, t_end=8.0, n=801))  # passes 0.3 from P's centre: 0.2 deep
+    assert not rep.valid
+    first = float(rep.reason.split("(penetration ")[1].split(";")[0])
+    deepest = float(rep.reason.split("; ")[1].split(" deep")[0])
+    assert first < 0.05 and 0.15 <= deepest <= 0.2 + 1e-9, rep.reason
+    shallow = check_trajectory(sc, slide(1.8, t_end=8.0, n=801))  # 0.5 from P's centre: touching
+    assert shallow.valid, shallow.reason

@@ -486,7 +486,7 @@ def test_exhausted_budget_builds_no_prediction(open_square, monkeypatch):
     obs = np.array([[0.0, 0.0, 0.0, -1.0, 0.3], [2.0, 1.0, -1.0, 0.0, 0.3]])
     nav = Navigator(scene, rm, (0.0, 4.0))
     nav.step(0.0, np.array([0.0, -4.0]), obs)
-    assert calls and nav.last.mode in ("plan", "relaxed")  # with time: the predictions are built
+    assert calls and nav.last.mode in ("plan", "close", "relaxed")  # with time: the predictions are built, a search answers
     calls.clear()
     late = Navigator(scene, rm, (0.0, 4.0))
     ticks = iter([0.0] + [1.0] * 100)  # the clock: the call began, then a whole second went by
@@ -595,3 +595,50 @@ def test_evasive_motion_backs_out_of_a_contact(open_square):
     gap = np.hypot(*(traj.at(ts)[:, :2] - person).T) - 0.6
     assert gap[0] < 0  # in contact at the start
     assert np.all(np.diff(gap) >= -1e-12) and gap[-1] > 0  # the gap only opens, and is open by one period
+
+
+def _standing_row(xs, y=0.0, r=0.3):
+    return np.array([[x, y, 0.0, 0.0, r] for x in xs])
+
+
+def _gap_to_standing(traj, people, robot_radius, step=0.005):
+    """Smallest gap between the disc robot along ``traj`` and people standing still,
+    sampled finely (a standing person's gap changes by at most vmax * step / 2 in between)."""
+    times = np.arange(traj.waypoints[0, 0], traj.t_end, step)
+    xy = np.array([np.interp(times, traj.waypoints[:, 0], traj.waypoints[:, i]) for i in (1, 2)]).T
+    d = np.hypot(xy[:, None, 0] - people[None, :, 0], xy[:, None, 1] - people[None, :, 1])
+    return float((d - robot_radius - people[None, :, 4]).min())
+
+
+def test_personal_space_is_a_soft_cost(open_square):
+    """A row of people standing across the way, 0.12 m on either side of the robot in each
+    gap: keeping 0.2 m from them costs a detour round the row (over 2 s); the navigator
+    passes through a gap (keeping its safety buffer) unless the cost says the detour is worth it."""
+    scene, rm = open_square
+    people = _standing_row([-2.16, -0.72, 0.72, 2.16])
+    start = np.array([0.0, -4.0])
+    nav = Navigator(scene, rm, (0.0, 4.0), NavOptions(time_budget=5.0))
+    traj = nav.step(0.0, start, people)
+    assert nav.last.mode == "close"
+    assert traj.duration <= nav.roadmap_distance(start) / 1.0 + 1.5
+    assert _gap_to_standing(traj, people, 0.3) >= 0.0
+    patient = Navigator(scene, rm, (0.0, 4.0), NavOptions(time_budget=5.0, personal_space_cost=10.0))
+    detour = patient.step(0.0, start, people)
+    assert patient.last.mode == "plan"
+    assert detour.duration > traj.duration + 1.0
+    assert _gap_to_standing(detour, people, 0.3) >= 0.2
+
+
+def test_previous_plan_is_refused_when_it_grazes_someone_between_samples(open_square):
+    """The last plan passes 0.1 mm inside a person standing beside it, at an instant between
+    two samples of a coarse check; it must not be followed (the robot would touch them)."""
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (4.6, 0.0))
+    nav._previous = gfuzzy.Trajectory(np.array([[0.0, 0.0, 0.0], [5.0, 4.6, 0.0]]), 0.3)
+    x0 = 0.92 * (2.5 / 12)  # midway between two samples 1/12 s apart
+    for y0, clear in ((0.6 - 1e-4, False), (0.7, True)):
+        person = _standing_row([x0], y=y0)
+        traj = nav._previous_if_clear(0.0, np.array([0.0, 0.0]), person)
+        assert (traj is not None) == clear
+        if traj is not None:
+            assert _gap_to_standing(traj, person, 0.3) > 0.0

@@ -510,7 +510,12 @@ class _Checker:
     def report(self, note: str = "") -> CheckReport:
         if not self.first[1]:
             return CheckReport(True, "", self.min_clear, self.vmax_seen, self.evaluations)
-        return CheckReport(False, self.first[1] + note, self.min_clear, self.vmax_seen, self.evaluations, self.first[0])
+        reason = self.first[1]
+        first = float(reason.rsplit("(penetration ", 1)[1].rstrip(")")) if reason.startswith("collides") else math.inf
+        if -self.min_clear > 2 * first:
+            # the first contact in time is reported; a reader would take its depth there for the worst
+            reason = reason[:-1] + f"; {-self.min_clear:.3g} deep at the deepest instant sampled)"
+        return CheckReport(False, reason + note, self.min_clear, self.vmax_seen, self.evaluations, self.first[0])
 
     def run(self, max_evaluations: int) -> CheckReport:
         t, dt, p, robot, tol = self.t, self.dt, self.p, self.robot, self.tol

@@ -62,6 +62,9 @@ log = logging.getLogger(__name__)
 SEARCH_SHARE = 0.75
 #: Samples of the look-ahead in the test of who may come within reach (:meth:`Navigator._may_reach`).
 REACH_SAMPLES = 48
+#: Seconds between the samples at which the fallbacks test a motion against the people
+#: walking on; the gap kept at the samples covers what can happen between two of them.
+FALLBACK_SAMPLE = 0.05
 #: Gaps (m) wider than this score the same in the evasive motion.
 EVASION_GAP = 0.5
 #: First guess (s) of the predictions' set-up per person (then measured per navigator).
@@ -93,6 +96,12 @@ class NavOptions:
         0.2 m) whenever a plan exists that does; when none does, the relaxed search (the
         people's discs as they are) answers, so the preference never costs a success.
         0 turns it off.
+    personal_space_cost : float
+        What (s of arrival time) passing within ``personal_space`` of someone is worth
+        avoiding: a plan that keeps the personal space is taken unless a plan that keeps
+        only the safety buffer (and the uncertainty) arrives sooner by more than this.
+        A soft cost: the robot does not detour round a person standing in its way, or
+        wait long for a gap wide enough, to keep its distance.
     path_space : float
         Seconds of each walking person's predicted path the first search also keeps the
         robot's body off (:mod:`gfuzzy.navigation.pathspace`): it does not cross just in
@@ -138,6 +147,7 @@ class NavOptions:
     reference_speed: float = 1.0
     safety_buffer: float = 0.05
     personal_space: float = 0.2
+    personal_space_cost: float = 0.5
     path_space: float = 1.25
     path_space_cost: float = 5.0
     social_horizon: float = 4.0
@@ -158,7 +168,8 @@ class NavOptions:
             raise InputError(f"backend must be one of {', '.join(BACKENDS)}, got {self.backend!r}")
         for name in ("dt", "prediction_horizon", "reference_speed", "slice", "time_budget", "plan_slack", "evasion_time", "cover"):
             check_number(name, getattr(self, name))
-        for name in ("uncertainty_growth", "safety_buffer", "personal_space", "path_space", "path_space_cost", "social_horizon", "stationary_hold",
+        for name in ("uncertainty_growth", "safety_buffer", "personal_space", "personal_space_cost", "path_space",
+                     "path_space_cost", "social_horizon", "stationary_hold",
                      "goal_tolerance"):
             check_number(name, getattr(self, name), strict=False)
         if self.connect_k < 1 or self.evasion_headings < 4:
@@ -286,7 +297,7 @@ class Navigator(PathSpace):
         return graph, s_id
 
     # ------------------------------------------------------------- prediction
-    def _inflation(self, pose: FloatArray, obs: FloatArray, relaxed: bool = False,
+    def _inflation(self, pose: FloatArray, obs: FloatArray, relaxed: bool = False, personal: bool = True,
                    grow_to: FloatArray | None = None) -> FloatArray:  # fmt: skip
         """(k, S) inflation (m) per person and prediction slice, shrunk near the robot.
 
@@ -304,7 +315,8 @@ class Navigator(PathSpace):
         # uncertainty grows with how far a person may stray from the straight walk: with
         # their speed (someone standing is where they stand; a full-speed walker may turn)
         rate = opts.uncertainty_growth * np.minimum(speed / opts.reference_speed, 1.0)
-        full = self.mover_clearance + opts.safety_buffer + opts.personal_space + rate[:, None] * tau[None, :]
+        space = opts.personal_space if personal else 0.0
+        full = self.mover_clearance + opts.safety_buffer + space + rate[:, None] * tau[None, :]
         if relaxed:  # only what the contract asks: the robot's mover clearance
             full = np.full_like(full, self.mover_clearance)
         if grow_to is not None:
@@ -466,6 +478,8 @@ class Navigator(PathSpace):
         if opts.path_space > 0 and len(obs) and found.graph is not None and self._clock() < deadline:
             found = self._path_space_cost(t, pose, obs, infl, found, deadline)
         traj, mode = found.trajectory, NavMode.PLAN
+        if opts.personal_space > 0 and len(obs) and found.graph is not None and self._clock() < deadline:
+            traj, mode, found = self._closer(t, pose, obs, found, deadline)
         if traj is None and len(obs) and not found.out_of_time and self._clock() < deadline:
             # blocked by the margins (someone standing beside the goal, a narrow gap): try
             # once more with the people's discs as they are, plus the mover clearance only
@@ -486,6 +500,33 @@ class Navigator(PathSpace):
             self._previous = None
         self.last = NavStep(mode, self._clock() - t_begin, found.message, predicted, found.detailed)
         return traj
+
+    def _closer(self, t: float, pose: FloatArray, obs: FloatArray, found: _Searched,
+                deadline: float) -> tuple[Trajectory | None, NavMode, _Searched]:  # fmt: skip
+        """The personal space as a soft cost: the first search's plan, unless the search
+        without the personal space (the safety buffer and the uncertainty kept) arrives
+        sooner by more than ``personal_space_cost``, or the first found none.
+
+        The second search runs only when it can win: when the first found no plan, or
+        when the first's arrival is later than the static lower bound (the roadmap's
+        time to the goal) by more than the cost.
+        """
+        opts = self.options
+        first = found.trajectory
+        if first is not None:
+            bound = float(found.graph.heuristic[found.start]) * opts.dt
+            if first.t_end - t <= bound + opts.personal_space_cost + 1e-9:
+                return first, NavMode.PLAN, found
+        elif found.out_of_time:
+            return None, NavMode.PLAN, found
+        close = self._search(t, pose, obs, self._inflation(pose, obs, personal=False), deadline, found)
+        second = close.trajectory
+        if second is not None and (first is None or second.t_end < first.t_end - opts.personal_space_cost):
+            return second, NavMode.CLOSE, close
+        if first is not None:
+            self._ahead = found.ahead  # the second search replaced the plan's vertices ahead
+            return first, NavMode.PLAN, found
+        return None, NavMode.PLAN, close
 
     def _search(self, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray, deadline: float,
                 before: _Searched | None = None) -> _Searched:  # fmt: skip
@@ -588,7 +629,9 @@ class Navigator(PathSpace):
 
     def _previous_if_clear(self, t: float, pose: FloatArray, obs: FloatArray) -> Trajectory | None:
         """The last plan from ``t`` on, if the robot is on it and it keeps clear of everyone
-        seen now (walking on at constant velocity, un-inflated) over the prediction horizon."""
+        seen now (walking on at constant velocity, un-inflated) over the prediction horizon:
+        sampled every ``FALLBACK_SAMPLE`` s, with a gap that bounds the one in between
+        (:meth:`_sample_gap`)."""
         prev = self._previous
         if prev is None or prev.t_end <= t + 1e-9:
             return None
@@ -596,13 +639,23 @@ class Navigator(PathSpace):
             return None
         cut = _cut(prev, t, prev.t_end)
         cut[0, 1:] = pose
-        obs = self._near(pose, obs, self.options.prediction_horizon, 0.0)
+        horizon = self.options.prediction_horizon
+        tol = self._sample_gap(obs)
+        obs = self._near(pose, obs, horizon, tol)
         if len(obs):
-            times = np.linspace(t, t + self.options.prediction_horizon, 61)
+            times = np.linspace(t, t + horizon, int(math.ceil(horizon / FALLBACK_SAMPLE)) + 1)
             pts = Trajectory(cut, self.robot.circumradius).at(times)
-            if np.min(self._clearance_along(pts, times, obs)) <= 0:
+            if np.min(self._clearance_along(pts, times, obs)) <= tol:
                 return None
         return Trajectory(cut, self.robot.circumradius)
+
+    def _sample_gap(self, obs: FloatArray) -> float:
+        """Gap (m) to keep at samples ``FALLBACK_SAMPLE`` apart so that there is none
+        between them: no point of the robot moves faster than ``vmax`` (the speed bound
+        counts turning at the circumscribed radius) nor a person faster than seen, so
+        the gap changes by at most their sum times half the sampling interval there."""
+        speed = float(np.max(np.hypot(obs[:, 2], obs[:, 3]), initial=0.0))
+        return (float(self.robot.vmax) + speed) * FALLBACK_SAMPLE / 2 + 1e-6
 
     def _evasive(self, t: float, pose: FloatArray, obs: FloatArray) -> Trajectory:
         """The statically free straight motion (or standing still) with the latest contact.
@@ -611,12 +664,13 @@ class Navigator(PathSpace):
         for ``evasion_time`` (or half, or a quarter of it, whichever is free of static
         obstacles) and then standing, and standing still. Each is scored by its time to
         contact with the people walking on at constant velocity (un-inflated, sampled every
-        0.05 s over ``evasion_time``), then by the smallest gap, then by progress to the goal.
+        ``FALLBACK_SAMPLE`` s over ``evasion_time``, with a bound on the gap between two
+        samples, see :meth:`_evasion_scores`), then by the smallest gap, then by progress to the goal.
         """
         opts = self.options
         cr = self.robot.circumradius
         T = opts.evasion_time
-        n_t = int(math.ceil(T / 0.05)) + 1
+        n_t = int(math.ceil(T / FALLBACK_SAMPLE)) + 1
         times = t + np.linspace(0.0, T, n_t)
         if self.robot.unicycle:  # turn in place, then drive along the heading (drive.evasions)
             cands = evasions(self.geometry, t, pose, T, opts.cover, opts.evasion_headings, self.vplan)
@@ -644,7 +698,7 @@ class Navigator(PathSpace):
         tau = times - t
         frac = np.clip(tau[None, :] / np.maximum(move_time[:, None], 1e-12), 0.0, 1.0)  # moves, then stands
         pts = pose[None, None, :] + frac[:, :, None] * (ends - pose[None])[:, None, :]  # (C, T, d)
-        score = np.where(free, self._evasion_scores(t, pose, obs, pts, times, ends), -math.inf)
+        score = np.where(free, self._evasion_scores(t, pose, obs, pts, times, ends, vel), -math.inf)
         c = int(np.argmax(score))
         if c == 0:
             rows = np.array([[t, *pose], [t + max(T, opts.cover), *pose]])
@@ -656,17 +710,33 @@ class Navigator(PathSpace):
 
 
 
-    def _evasion_scores(self, t, pose, obs, pts, times, ends) -> FloatArray:
+    def _evasion_scores(self, t, pose, obs, pts, times, ends, vel=None) -> FloatArray:
         """(C,) score of candidate motions ``pts`` (C, T, d) at ``times`` ending at ``ends``:
         the latest contact first (no contact within the horizon beats any), then the widest
-        gap while close, then progress to the goal."""
+        gap while close, then progress to the goal.
+
+        ``vel`` (C, 2): each candidate's velocity when it translates and then stands (None:
+        any motion within the speed bound). Between two samples ``h`` apart the gap to a
+        person changes no faster than their relative speed ``R`` (a point of the robot moves
+        at most ``vmax``), so it stays above ``(g_i + g_{i+1} - R h) / 2``: contact is that
+        bound at or below 0, the gap not opening up (a robot touching someone backs out).
+        """
         T = times[-1] - t
         tau = times - t
         obs = self._near(pose, obs, T, EVASION_GAP)  # farther people change no score below
         if len(obs):
-            gap = self._clearance_along(pts, times, obs).min(axis=-1)  # (C, T)
-            later = gap[:, 1:]  # contact: a gap <= 0 not opening up (a robot touching someone backs out)
-            hit = (later <= 0) & (later <= gap[:, :1])
+            each = self._clearance_along(pts, times, obs)  # (C, T, k)
+            walk = np.hypot(obs[:, 2], obs[:, 3])
+            if vel is None:
+                rate = np.broadcast_to(float(self.robot.vmax) + walk, (len(pts), len(obs)))
+            else:  # moving (relative velocity), then standing (the person's own)
+                rel = np.hypot(vel[:, None, 0] - obs[None, :, 2], vel[:, None, 1] - obs[None, :, 3])
+                rate = np.maximum(rel, walk[None, :])
+            h = np.diff(tau)[None, :, None]
+            between = ((each[:, :-1] + each[:, 1:] - rate[:, None, :] * h) / 2).min(axis=-1)  # (C, T - 1)
+            gap = each.min(axis=-1)  # (C, T)
+            later = gap[:, 1:]
+            hit = (between <= 0) & (later <= gap[:, :1])
             ttc = np.where(hit.any(axis=1), tau[1:][np.argmax(hit, axis=1)], math.inf)
             worst = later.min(axis=1)
         else:

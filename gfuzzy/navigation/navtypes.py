@@ -16,6 +16,7 @@ class NavMode(str, Enum):
     """How one :meth:`Navigator.step` answered (a ``str``: ``NavMode.PLAN == "plan"``)."""
 
     PLAN = "plan"  # a fresh search
+    CLOSE = "close"  # a fresh search without the personal space (buffer and uncertainty kept)
     RELAXED = "relaxed"  # a fresh search without the buffer, personal space and uncertainty
     DIRECT = "direct"  # straight to the goal nearby, checked finely
     PREVIOUS = "previous"  # the last plan, still clear
@@ -33,7 +34,9 @@ class NavStep:
     Attributes
     ----------
     mode : NavMode
-        ``"plan"`` (a fresh search), ``"relaxed"`` (a fresh search without the safety
+        ``"plan"`` (a fresh search), ``"close"`` (a fresh search without the personal
+        space: it came sooner by more than ``personal_space_cost``, or the first found
+        none), ``"relaxed"`` (a fresh search without the safety
         buffer, the personal space and the uncertainty), ``"direct"`` (straight to the goal nearby, checked
         finely), ``"previous"`` (the last plan, still clear), ``"evasive"``, ``"goal"``.
     seconds : float
