@@ -44,12 +44,13 @@ from ..roadmap.roadmap import Roadmap
 from ..scene.scene import Mover, Scene
 from ..settings import SPEED_SAFETY
 from ..status import Status
-from ..timespace.drive import drive_rows, evasions
+from ..timespace.drive import Fan, drive_rows, evasions
 from ..timespace.movers import MoverField
 from ..timespace.spacetime import IntervalStore, SpaceTimeGraph
 from ..timespace.timespace import timed_rows
 from ..trajectory import Trajectory
 from ..typed import BoolArray, FloatArray
+from .drivenav import kept_plan
 from .navtypes import NavMode, NavStep
 from .pathspace import STILL_SPEED, PathSpace, WallCheck
 from .timedfield import PAIR_SECONDS, PIECE_WORK, _OutOfTime, _TimedField  # noqa: F401 (PIECE_WORK, PAIR_SECONDS: kept importable here)
@@ -139,6 +140,14 @@ class NavOptions:
     backend : {"compiled", "reference"}
         The search's implementation, as :attr:`gfuzzy.PlanOptions.backend`: the same
         answers, the compiled one faster (so more replans finish inside the budget).
+    commitment : float
+        A differential drive only: seconds its last plan may arrive later than a fresh one
+        and still be kept (while it keeps the fresh search's inflated gaps to everyone):
+        a plan that changes its mind every period pays every turn it undoes. 0 turns it off.
+    fan : bool
+        A differential drive only: also search the two-leg motions out of the robot's pose
+        (turn, straight, turn towards the goal, straight; :func:`gfuzzy.timespace.drive.fan`),
+        which detour with few turns where the roadmap's lanes zigzag.
     """
 
     dt: float = 0.1
@@ -162,6 +171,8 @@ class NavOptions:
     cover: float = 1.0
     goal_tolerance: float = 1e-6
     backend: str = "compiled"
+    commitment: float = 0.5
+    fan: bool = True
 
     def __post_init__(self):
         if self.backend not in BACKENDS:
@@ -169,8 +180,7 @@ class NavOptions:
         for name in ("dt", "prediction_horizon", "reference_speed", "slice", "time_budget", "plan_slack", "evasion_time", "cover"):
             check_number(name, getattr(self, name))
         for name in ("uncertainty_growth", "safety_buffer", "personal_space", "personal_space_cost", "path_space",
-                     "path_space_cost", "social_horizon", "stationary_hold",
-                     "goal_tolerance"):
+                     "path_space_cost", "social_horizon", "stationary_hold", "goal_tolerance", "commitment"):
             check_number(name, getattr(self, name), strict=False)
         if self.connect_k < 1 or self.evasion_headings < 4:
             raise InputError("connect_k must be >= 1 and evasion_headings >= 4")
@@ -264,6 +274,7 @@ class Navigator(PathSpace):
         self._kept = self._planner.prepare(self.goal, popts)
         self._nv = 0 if self.robot.unicycle else len(self.roadmap.vertices)  # vertices "ahead"
         self._g_id = -1
+        self._fan = Fan() if self.robot.unicycle and opts.fan else None
 
     def _splice_ends(self, pose: FloatArray, ahead=()):
         """(graph, start id, goal id, roadmap distance) of the kept graph with ``pose`` in."""
@@ -271,7 +282,7 @@ class Navigator(PathSpace):
         if self.robot.dof == 3:
             start[2] = wrap_angle(start[2])
         if self.robot.unicycle:
-            qg = self._kept.kept.splice(self._planner, start)
+            qg = self._kept.kept.splice(self._planner, start, fan_options=self._fan)
         else:
             qg = self._kept.splice(self._planner, start, ahead=ahead)
         return qg.graph, qg.s_id, qg.g_id, qg.roadmap_distance
@@ -495,6 +506,11 @@ class Navigator(PathSpace):
                 traj = self._evasive(t, pose, obs)
                 mode = NavMode.EVASIVE
         else:
+            if self.robot.unicycle:  # a unicycle's change of mind costs turns: keep the last plan if as good
+                kept = kept_plan(self, t, pose, obs, infl if mode == NavMode.PLAN else self._inflation(pose, obs, True),
+                                 traj, opts.commitment)
+                if kept is not None:
+                    traj, mode = kept, NavMode.KEPT
             self._previous = traj
         if mode == NavMode.EVASIVE:
             self._previous = None

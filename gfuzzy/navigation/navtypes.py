@@ -20,6 +20,7 @@ class NavMode(str, Enum):
     RELAXED = "relaxed"  # a fresh search without the buffer, personal space and uncertainty
     DIRECT = "direct"  # straight to the goal nearby, checked finely
     PREVIOUS = "previous"  # the last plan, still clear
+    KEPT = "kept"  # a fresh search answered, but the last plan (a unicycle's) was as good: kept
     EVASIVE = "evasive"  # the statically free straight motion with the latest contact
     GOAL = "goal"  # already at the goal
 
@@ -38,7 +39,9 @@ class NavStep:
         space: it came sooner by more than ``personal_space_cost``, or the first found
         none), ``"relaxed"`` (a fresh search without the safety
         buffer, the personal space and the uncertainty), ``"direct"`` (straight to the goal nearby, checked
-        finely), ``"previous"`` (the last plan, still clear), ``"evasive"``, ``"goal"``.
+        finely), ``"previous"`` (the last plan, still clear), ``"evasive"``, ``"goal"``,
+        ``"kept"`` (a differential drive's: a fresh search answered, and the last plan,
+        as safe and at most ``NavOptions.commitment`` seconds later, was kept).
     seconds : float
         Wall-clock time of the call.
     message : str

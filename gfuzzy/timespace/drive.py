@@ -8,6 +8,7 @@ motion to the goal (:func:`drive_rows`) and its evasive candidates (:func:`evasi
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -15,7 +16,7 @@ from ..poses import wrap_angle
 from ..settings import SPEED_SAFETY
 from ..typed import FloatArray
 
-__all__ = ["turn_path", "drive_rows", "evasions", "turn_free", "pick_turn", "SAME_HEADING"]
+__all__ = ["turn_path", "drive_rows", "evasions", "turn_free", "pick_turn", "fan", "Fan", "SAME_HEADING"]
 
 #: A turn's sweep is certified in arcs of at most this (rad): ``motion_free`` turns along
 #: the shorter arc.
@@ -163,3 +164,63 @@ def evasions(geometry, t: float, pose, T: float, cover: float, headings: int, vp
                     out.append(np.array(rows, dtype=float))
                     break
     return out
+
+
+@dataclass(frozen=True)
+class Fan:
+    """Straight lanes out of a unicycle's start (see :func:`fan`).
+
+    Attributes
+    ----------
+    offsets : tuple of float
+        Headings (rad) relative to the start's heading; 0 drives on without turning.
+    distances : tuple of float
+        Points (m) along each lane from which the robot may turn to the goal.
+    """
+
+    offsets: tuple = tuple(math.radians(a) for a in (0, 10, -10, 20, -20, 35, -35, 50, -50, 70, -70))
+    distances: tuple = (1.0, 2.0, 3.0)
+
+
+def fan(ex, geometry, start, s_id: int, goal, g_id: int, options: Fan) -> None:
+    """Join ``start`` (node ``s_id``) to ``goal`` (node ``g_id``) through two-leg motions.
+
+    For each heading ``start[2] + offset`` (the turn's sweep free) a straight lane leaves the
+    start, through points at ``options.distances`` (as far as it is statically free); from
+    each point the robot turns towards the goal's position, drives straight there and turns
+    to the goal's heading (when that lane and both turns are free). A differential drive
+    among people detours with few turns: the roadmap's lanes zigzag, each vertex a turn.
+
+    ``ex`` is the query's :class:`gfuzzy.timespace.unicycle._Extras` (``node``, ``turn``,
+    ``lane``): the pieces go into it.
+    """
+    sx, sy, sh = (float(v) for v in start)
+    gx, gy, gh = (float(v) for v in goal)
+    for off in options.offsets:
+        h = sh + off
+        if off != 0.0 and not turn_free(geometry, sx, sy, sh, off):
+            continue
+        prev, px, py = s_id, sx, sy
+        if off != 0.0:
+            prev = ex.node(sx, sy, h)
+            ex.turn(s_id, prev, off)
+        c, s = math.cos(h), math.sin(h)
+        for d in options.distances:
+            qx, qy = sx + d * c, sy + d * s
+            if not _free(geometry, (px, py, h), (qx, qy, h)):
+                break
+            node = ex.node(qx, qy, h)
+            ex.lane(prev, node)
+            prev, px, py = node, qx, qy
+            if math.hypot(gx - qx, gy - qy) <= 1e-9:
+                continue
+            hg = math.atan2(gy - qy, gx - qx)
+            d1 = pick_turn(geometry, qx, qy, h, hg)
+            d2 = pick_turn(geometry, gx, gy, hg, gh)
+            if d1 is None or d2 is None or not _free(geometry, (qx, qy, hg), (gx, gy, hg)):
+                continue
+            a = node if d1 == 0.0 else ex.node(qx, qy, hg)
+            ex.turn(node, a, d1)
+            b = g_id if d2 == 0.0 else ex.node(gx, gy, hg)
+            ex.lane(a, b)
+            ex.turn(b, g_id, d2)

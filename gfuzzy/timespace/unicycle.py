@@ -38,8 +38,9 @@ import numpy as np
 
 from ..poses import split_counts, wrap_angle
 from ..typed import FloatArray, IntArray
-from .drive import SAME_HEADING, _xy_pose, pick_turn, turn_free
+from .drive import SAME_HEADING, _xy_pose, fan, pick_turn, turn_free
 from .spacetime import SpaceTimeGraph
+from .unipaths import dijkstra, matrix, new_to_goal, with_rows
 
 __all__ = ["UnicycleGraph", "UnicycleGoal", "UnicyclePrepared", "prepare_goal", "build_graph", "lanes", "LANE_NEIGHBOURS", "SAME_HEADING"]
 
@@ -489,25 +490,6 @@ def _too_many(total: int):
         )
 
 
-def _matrix(A, B, w, n):
-    """Node-level graph (parallel pieces: the shortest), scipy CSR (n, n)."""
-    from scipy.sparse import csr_matrix
-
-    key = A * n + B
-    o = np.lexsort((w, key))
-    keep = np.ones(len(o), dtype=bool)
-    keep[1:] = key[o][1:] != key[o][:-1]
-    o = o[keep]
-    return csr_matrix((np.maximum(w[o], 1e-300), (A[o], B[o])), shape=(n, n))
-
-
-def _dijkstra(mat, index: int) -> FloatArray:
-    from scipy.sparse.csgraph import dijkstra
-
-    d = dijkstra(mat, directed=True, indices=index)
-    return np.where(d < 1e-200, 0.0, d)
-
-
 @dataclass
 class UnicycleGoal:
     """A goal's graph kept for many starts (the one builder of a unicycle's query graph:
@@ -561,12 +543,13 @@ class UnicycleGoal:
     connect_k: int
     steps: object = None
 
-    def splice(self, planner, start: FloatArray, exact: bool = True) -> UnicycleGraph:
+    def splice(self, planner, start: FloatArray, exact: bool = True, fan_options=None) -> UnicycleGraph:
         """This graph with ``start`` (``[x, y, heading]``, heading wrapped) joined in.
 
         ``exact``: the steps from the start to every point by Dijkstra (a fresh plan's
         safety windows); otherwise the straight distance over a step's length, a cheaper
-        lower bound (the navigator's).
+        lower bound (the navigator's). ``fan_options`` (:class:`gfuzzy.timespace.drive.Fan`):
+        also the two-leg motions of :func:`gfuzzy.timespace.drive.fan` (the navigator's).
         """
         geo, robot = planner.geometry, planner.robot
         N = len(self.poses)
@@ -593,6 +576,8 @@ class UnicycleGoal:
                 ex.turn(s_id, a, d1)
                 ex.turn(c, self.g_id, d2)
                 ex.lane(a, c)
+        if fan_options is not None:
+            fan(ex, geo, start, s_id, self.goal, self.g_id, fan_options)
         new = np.asarray(ex.poses, dtype=float).reshape(-1, 3)
         x = len(new)
         xp = np.asarray(ex.pieces, dtype=float).reshape(-1, 4)
@@ -609,21 +594,10 @@ class UnicycleGoal:
         _too_many(total)
         # steps and metres to the goal of the new nodes: the kept ones bound them (a start's
         # pieces lead into the kept graph, never out of it and back)
-        hop = np.concatenate([np.full(N, np.inf), np.full(x, np.inf)])
+        hop_x, met_x = new_to_goal(A, B, k, np.where(xp[:, 3] > 0, xp[:, 3], 0.0), N, x, self.hop, self.metres)
+        hop = np.concatenate([np.full(N, np.inf), hop_x])
         hop[: self.nn] = self.hop
-        met = hop.copy()
-        met[: self.nn] = self.metres
-        Lw = np.where(xp[:, 3] > 0, xp[:, 3], 0.0)
-        for _ in range(x + 1):
-            nh, nm = k + hop[B], Lw + met[B]
-            changed = False
-            for i in range(len(A)):
-                if nh[i] < hop[A[i]]:
-                    hop[A[i]], changed = nh[i], True
-                if nm[i] < met[A[i]]:
-                    met[A[i]], changed = nm[i], True
-            if not changed:
-                break
+        met = np.concatenate([np.full(N, np.inf), met_x])
         rd = float(met[s_id])
         heur = np.concatenate([self.heuristic, hop[N:], hop[B[p_of]] + k[p_of] - j])
         poses = np.concatenate([self.poses, new, inner])
@@ -646,7 +620,7 @@ class UnicycleGoal:
             mat = csr_matrix((np.concatenate([m.data, np.maximum(k[o], 1e-300).astype(float)]),
                               np.concatenate([m.indices, b_c[o]]), np.concatenate([m.indptr, m.indptr[-1] + rows])),
                              shape=(nn + x, nn + x))  # fmt: skip
-            hop_s = np.rint(_dijkstra(mat, nn))
+            hop_s = np.rint(dijkstra(mat, nn))
             from_start = np.empty(total)
             from_start[:nn] = hop_s[:nn]
             from_start[N : N + x] = hop_s[nn:]
@@ -697,23 +671,9 @@ def _base_cut(base: _Base, step_len: float) -> _BaseCut:
     order = np.argsort(src, kind="stable")
     L = np.where(base.length > 0, base.length, 0.0)
     cut = _BaseCut(nodes, A, B, k, L, offs, p_of, j, inner, src[order], dst[order],
-                   _matrix(A, B, k.astype(float), nn0), _matrix(B, A, k.astype(float), nn0), _matrix(B, A, L, nn0))  # fmt: skip
+                   matrix(A, B, k.astype(float), nn0), matrix(B, A, k.astype(float), nn0), matrix(B, A, L, nn0))  # fmt: skip
     base._cut = (step_len, cut)
     return cut
-
-
-def _with_rows(mat, A, B, w, n: int):
-    """CSR ``mat`` (its rows first) grown to (n, n) with entries (A, B, w) inserted at their
-    rows' ends (parallel ones: the shortest, :func:`_matrix`)."""
-    from scipy.sparse import csr_matrix
-
-    extra = _matrix(A, B, w, n)
-    rows = np.repeat(np.arange(n), np.diff(extra.indptr))
-    m_indptr = np.concatenate([mat.indptr, np.full(n - mat.shape[0], mat.indptr[-1])])
-    at = m_indptr[rows + 1]
-    indptr = m_indptr + np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=n))])
-    return csr_matrix((np.insert(mat.data, at, extra.data), np.insert(mat.indices, at, extra.indices), indptr),
-                      shape=(n, n))  # fmt: skip
 
 
 def prepare_goal(planner, goal: FloatArray, dt: float, vplan: float, connect_k: int = 10,
@@ -751,8 +711,8 @@ def prepare_goal(planner, goal: FloatArray, dt: float, vplan: float, connect_k: 
     indptr = np.zeros(total + 1, dtype=np.int64)
     np.cumsum(np.bincount(np.concatenate([s0, srcg]), minlength=total), out=indptr[1:])
     Lg = np.where(xp[:, 3] > 0, xp[:, 3], 0.0)
-    hop = np.rint(_dijkstra(_with_rows(cut.back_steps, Bg, Ag, kg.astype(float), nn), g_id))
-    metres = _dijkstra(_with_rows(cut.back_metres, Bg, Ag, Lg, nn), g_id)
+    hop = np.rint(dijkstra(with_rows(cut.back_steps, Bg, Ag, kg.astype(float), nn), g_id))
+    metres = dijkstra(with_rows(cut.back_metres, Bg, Ag, Lg, nn), g_id)
     A, B = np.concatenate([cut.A, Ag]), np.concatenate([cut.B, Bg])
     k = np.concatenate([cut.k, kg])
     p_of = np.concatenate([cut.p_of, len(cut.A) + pg])
@@ -767,7 +727,7 @@ def prepare_goal(planner, goal: FloatArray, dt: float, vplan: float, connect_k: 
         goal=np.asarray(goal, dtype=float), base=base, poses=np.vstack([nodes, cut.inner, innerg]), indptr=indptr,
         neighbors=neighbors, nn=nn, A=A, B=B, k=k, L=np.concatenate([cut.L, Lg]), hop=hop, heuristic=heur,
         metres=metres, groups=groups, p_of=p_of, j=j, g_id=g_id, step_len=step_len, scale=scale, connect_k=connect_k,
-        steps=_with_rows(cut.fwd, Ag, Bg, kg.astype(float), nn),
+        steps=with_rows(cut.fwd, Ag, Bg, kg.astype(float), nn),
     )  # fmt: skip
 
 

@@ -1,0 +1,91 @@
+"""The differential drive's side of the navigator (:class:`gfuzzy.navigation.navigator.Navigator`
+with ``kinematics: unicycle``).
+
+A unicycle turns in place, so a plan that changes its mind costs time: every replan that
+starts a turn the next one undoes wastes the turn (at 1 rad/s a quarter turn takes 1.6 s).
+:func:`kept_plan` keeps the last plan while it stays as safe as a fresh one would be (the
+same inflated predictions) and arrives not much later than the fresh one.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..poses import metric_distance
+from ..trajectory import Trajectory
+from ..typed import FloatArray
+
+__all__ = ["kept_plan", "cut_rows", "COMMIT_SAMPLE"]
+
+#: Seconds between the samples at which a kept plan is checked against the predictions.
+COMMIT_SAMPLE = 0.05
+
+
+def cut_rows(traj: Trajectory, ta: float, tb: float) -> FloatArray:
+    """Rows of ``traj`` between ``ta`` and ``tb`` (both ends interpolated), t strictly increasing."""
+    w = traj.waypoints
+    inner = w[(w[:, 0] > ta + 1e-9) & (w[:, 0] < tb - 1e-9)]
+    rows = [np.array([ta, *traj.at(ta)])[None], inner]
+    if tb > ta + 1e-9:
+        rows.append(np.array([tb, *traj.at(tb)])[None])
+    return np.vstack(rows)
+
+
+def kept_plan(nav, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray, fresh: Trajectory,
+              slack: float) -> Trajectory | None:  # fmt: skip
+    """The navigator's last plan from ``t`` on, when it is worth keeping instead of ``fresh``.
+
+    Kept when the robot is on it, it arrives at most ``slack`` seconds after ``fresh``, and
+    it keeps, at every sample ``COMMIT_SAMPLE`` apart over the prediction horizon, the
+    inflated gap ``infl`` (k, S) the fresh search kept from each person walking on at
+    constant velocity (plus what the gap can lose between two samples).
+
+    Parameters
+    ----------
+    nav : Navigator
+    t : float
+    pose : (3,) float
+    obs : (k, 5) float
+        ``[x, y, vx, vy, radius]`` per person seen.
+    infl : (k, S) float
+        Inflation per person and prediction slice (the fresh search's).
+    fresh : Trajectory
+        The fresh plan.
+    slack : float
+        Seconds the kept plan may arrive later than the fresh one.
+
+    Returns
+    -------
+    Trajectory or None
+    """
+    prev = nav._previous
+    if prev is None or slack <= 0 or prev.t_end <= t + 1e-9 or prev.t_end > fresh.t_end + slack:
+        return None
+    cr = nav.robot.circumradius
+    if float(metric_distance(prev.at(t), pose, cr)) > 1e-6:
+        return None
+    rows = cut_rows(prev, t, prev.t_end)
+    rows[0, 1:] = pose
+    traj = Trajectory(rows, cr)
+    opts = nav.options
+    horizon = opts.prediction_horizon
+    if len(obs) == 0:
+        return traj
+    # only the people who may come within the inflation of the robot matter
+    reach = obs[:, 4] + cr + nav.mover_clearance + float(np.max(infl, initial=0.0)) + 0.1
+    keep = nav._may_reach(pose, obs[:, :2], obs[:, 2:4], math.inf, horizon, reach)
+    if not keep.any():
+        return traj
+    near, infl = obs[keep], infl[keep]
+    times = t + np.arange(0.0, horizon + 1e-9, COMMIT_SAMPLE)
+    pts = traj.at(np.minimum(times, traj.t_end))
+    gap = nav._clearance_along(pts, times, near) + nav.mover_clearance  # (T, k)
+    s_of = np.minimum(np.floor((times - t) / opts.slice + 1e-9).astype(np.int64), infl.shape[1] - 1)
+    speed = np.hypot(near[:, 2], near[:, 3])
+    lost = (nav.vplan + speed) * COMMIT_SAMPLE / 2  # (k,) the gap's fall between two samples
+    if np.any(gap < infl[:, s_of].T + lost[None, :]):
+        return None
+    return traj
+

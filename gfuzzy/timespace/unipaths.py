@@ -1,0 +1,62 @@
+"""Shortest steps and metres on a unicycle's graph at node level (:mod:`gfuzzy.timespace.unicycle`):
+scipy CSR matrices of its pieces, Dijkstra, and the start's new nodes by Bellman-Ford."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..typed import FloatArray
+
+__all__ = ["matrix", "dijkstra", "with_rows", "new_to_goal"]
+
+
+def matrix(A, B, w, n):
+    """Node-level graph (parallel pieces: the shortest), scipy CSR (n, n)."""
+    from scipy.sparse import csr_matrix
+
+    key = A * n + B
+    o = np.lexsort((w, key))
+    keep = np.ones(len(o), dtype=bool)
+    keep[1:] = key[o][1:] != key[o][:-1]
+    o = o[keep]
+    return csr_matrix((np.maximum(w[o], 1e-300), (A[o], B[o])), shape=(n, n))
+
+
+def dijkstra(mat, index: int) -> FloatArray:
+    from scipy.sparse.csgraph import dijkstra
+
+    d = dijkstra(mat, directed=True, indices=index)
+    return np.where(d < 1e-200, 0.0, d)
+
+
+def new_to_goal(A, B, k, L, N: int, x: int, hop: FloatArray, metres: FloatArray):
+    """Steps and metres to the goal (x,) of a start's x new nodes (ids from N), by
+    Bellman-Ford over its pieces A -> B (k steps, L metres; every piece leaves a new node),
+    the kept nodes' ``hop`` / ``metres`` fixed (a start's pieces never lead out and back)."""
+    nn = len(hop)
+    old = B < N  # into the kept graph (beyond its nodes, an interior point: no way on)
+    hk = np.where(old & (B < nn), hop[np.minimum(B, nn - 1)], np.inf)
+    mk = np.where(old & (B < nn), metres[np.minimum(B, nn - 1)], np.inf)
+    hop_x, met_x = np.full(x, np.inf), np.full(x, np.inf)
+    bx = np.where(old, 0, B - N)
+    for _ in range(x + 1):
+        h0, m0 = hop_x.copy(), met_x.copy()
+        np.minimum.at(hop_x, A - N, k + np.where(old, hk, hop_x[bx]))
+        np.minimum.at(met_x, A - N, L + np.where(old, mk, met_x[bx]))
+        if np.array_equal(h0, hop_x) and np.array_equal(m0, met_x):
+            break
+    return hop_x, met_x
+
+
+def with_rows(mat, A, B, w, n: int):
+    """CSR ``mat`` (its rows first) grown to (n, n) with entries (A, B, w) inserted at their
+    rows' ends (parallel ones: the shortest, :func:`_matrix`)."""
+    from scipy.sparse import csr_matrix
+
+    extra = matrix(A, B, w, n)
+    rows = np.repeat(np.arange(n), np.diff(extra.indptr))
+    m_indptr = np.concatenate([mat.indptr, np.full(n - mat.shape[0], mat.indptr[-1])])
+    at = m_indptr[rows + 1]
+    indptr = m_indptr + np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=n))])
+    return csr_matrix((np.insert(mat.data, at, extra.data), np.insert(mat.indices, at, extra.indices), indptr),
+                      shape=(n, n))  # fmt: skip

@@ -1,0 +1,107 @@
+"""The unicycle navigator's own motions: the two-leg fan out of the start
+(:func:`gfuzzy.timespace.drive.fan`) and keeping the last plan
+(:func:`gfuzzy.navigation.drivenav.kept_plan`)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from gfuzzy.check.check import _unicycle_problem
+from gfuzzy.navigation.navigator import Navigator, NavMode, NavOptions
+from gfuzzy.scene.scene import parse_scene
+
+START = [1.0, 3.0, 0.0]
+GOAL = [9.0, 3.0, 0.0]
+
+
+@pytest.fixture(scope="module")
+def open_floor():
+    from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
+
+    doc = {
+        "version": 1, "name": "open-floor", "bounds": [0, 0, 10, 6],
+        "robot": {"disc": 0.3, "vmax": 1.0, "kinematics": "unicycle", "wmax": 1.0},
+        "obstacles": [], "movers": [], "queries": [],
+    }  # fmt: skip
+    sc = parse_scene(doc, "<open-floor>")
+    return sc, build_roadmap(sc, RoadmapOptions(vertices=150, seed=3))
+
+
+def _turns(rows: np.ndarray) -> int:
+    """Turns in place (maximal runs of rows that only change the heading), by hand."""
+    d = np.hypot(np.diff(rows[:, 1]), np.diff(rows[:, 2]))
+    dh = np.abs((np.diff(rows[:, 3]) + math.pi) % (2 * math.pi) - math.pi)
+    turning = (d <= 1e-9) & (dh > 1e-9)
+    return int(np.sum(turning[1:] & ~turning[:-1]) + turning[0])
+
+
+def _min_gap(traj, person: np.ndarray, t0: float) -> float:
+    """Smallest gap between the disc robot (0.3) and a person walking at constant velocity."""
+    times = np.linspace(t0, traj.t_end, 4000)
+    xy = traj.at(times)[:, :2]
+    at = person[:2] + (times - t0)[:, None] * person[2:4]
+    return float(np.min(np.hypot(*(xy - at).T)) - 0.3 - person[4])
+
+
+@pytest.mark.parametrize("fan", [True, False])
+def test_a_detour_obeys_the_row_rule_and_keeps_clear(open_floor, fan):
+    sc, rm = open_floor
+    nav = Navigator(sc, rm, GOAL, NavOptions(time_budget=5.0, fan=fan))
+    person = np.array([5.0, 3.0, 0.0, 0.0, 0.3])  # standing on the straight line
+    traj = nav.step(0.0, START, person[None])
+    # a fresh search's plan: with the personal space, or closer when that arrives sooner
+    # by more than its soft cost (NavOptions.personal_space_cost)
+    assert nav.last.mode in (NavMode.PLAN, NavMode.CLOSE)
+    assert _unicycle_problem(sc.robot, traj.waypoints) is None  # the checker's own row rule
+    assert _min_gap(traj, person, 0.0) >= 0.0
+    np.testing.assert_allclose(traj.waypoints[-1, 1:], GOAL, atol=1e-9)
+
+
+def test_the_fan_detours_with_few_turns_and_never_later(open_floor):
+    """The fan's graph holds the roadmap's: its time-optimal plan cannot arrive later, and
+    around one person standing in the way it turns at most three times (out, back towards
+    the goal, the goal's heading), where the roadmap's lanes zigzag."""
+    sc, rm = open_floor
+    person = np.array([[5.0, 3.0, 0.0, 0.0, 0.3]])
+    with_fan = Navigator(sc, rm, GOAL, NavOptions(time_budget=5.0)).step(0.0, START, person)
+    without = Navigator(sc, rm, GOAL, NavOptions(time_budget=5.0, fan=False)).step(0.0, START, person)
+    assert with_fan.t_end <= without.t_end + 1e-9
+    assert _turns(with_fan.waypoints) <= 3
+    assert _turns(with_fan.waypoints) < _turns(without.waypoints)
+
+
+def test_the_last_plan_is_kept_while_it_is_as_good(open_floor):
+    sc, rm = open_floor
+    walker = np.array([[5.0, 0.8, 0.0, 0.5, 0.3]])  # will cross the straight line
+    nav = Navigator(sc, rm, GOAL, NavOptions(time_budget=5.0))
+    first = nav.step(0.0, START, walker)
+    assert nav.last.mode == NavMode.PLAN
+    pose = first.at(0.25)
+    seen = walker.copy()
+    seen[0, :2] += 0.25 * seen[0, 2:4]
+    again = nav.step(0.25, pose, seen)  # the same world, a period later: the plan is kept
+    assert nav.last.mode == NavMode.KEPT
+    times = np.linspace(0.25, first.t_end, 200)
+    np.testing.assert_allclose(again.at(times), first.at(times), atol=1e-9)
+    assert _unicycle_problem(sc.robot, again.waypoints) is None
+
+    fresh = Navigator(sc, rm, GOAL, NavOptions(time_budget=5.0, commitment=0.0))
+    fresh.step(0.0, START, walker)
+    fresh.step(0.25, pose, seen)
+    assert fresh.last.mode == NavMode.PLAN
+
+
+def test_a_last_plan_someone_steps_into_is_dropped(open_floor):
+    sc, rm = open_floor
+    nav = Navigator(sc, rm, GOAL, NavOptions(time_budget=5.0))
+    first = nav.step(0.0, START, np.zeros((0, 5)))
+    pose = first.at(0.25)
+    ahead = first.at(2.0)
+    blocker = np.array([[ahead[0], ahead[1], 0.0, 0.0, 0.3]])  # standing on the plan's way
+    again = nav.step(0.25, pose, blocker)
+    assert nav.last.mode != NavMode.KEPT
+    assert _min_gap(again, blocker[0], 0.25) >= 0.0
+    assert _unicycle_problem(sc.robot, again.waypoints) is None
