@@ -219,6 +219,7 @@ def test_crowd_command_navigator_visible(tmp_path, workers):
     ["--humans", "-1"], ["--episodes", "0"], ["--kinematics", "unicycle", "--policy", "orca"],
     ["--visible", "--policy", "oracle"],
     ["--scenario", "hall"], ["--fov", "0"], ["--noise", "-0.1"], ["--workers", "-1"], ["--time-budget", "0"],
+    ["--path-space", "-1"], ["--path-space", "nan"], ["--personal-space", "inf"],
 ])  # fmt: skip
 def test_crowd_command_refuses_bad_arguments_in_one_line(tmp_path, flags):
     out = tmp_path / "x.csv"

@@ -59,6 +59,8 @@ SETTINGS = {
                                       ["navigator", "social-force"], "(no target: the reacting crowd of the second model)"),
     "circle-5-unicycle": ("--humans 5 --kinematics unicycle", {"humans": 5, "kinematics": "unicycle"}, ["navigator"],
                           "success >= 0.99, time <= 11 s"),
+    "circle-20-unicycle": ("--humans 20 --kinematics unicycle", {"humans": 20, "kinematics": "unicycle"}, ["navigator"],
+                           "success >= 0.97"),
 }  # fmt: skip
 
 

@@ -37,6 +37,9 @@ def add_crowd(sub) -> None:
     c.add_argument("--time-budget", type=float, default=0.1, help="seconds one navigator replan may take (default 0.1)")
     c.add_argument("--personal-space", type=float, default=0.2,
                    help="gap (m) the navigator keeps from people when that costs little (default 0.2, 0: off)")  # fmt: skip
+    c.add_argument("--path-space", type=float, default=1.25, metavar="SECONDS",
+                   help="how far ahead (s) the navigator keeps off the way people are about to walk, when that "
+                        "costs little (default 1.25, 0: off)")  # fmt: skip
     c.add_argument("-o", "--output", metavar="RESULTS.csv", help="one row per episode and policy")
     c.set_defaults(func=cmd_crowd)
 
@@ -70,7 +73,7 @@ def _setting(args):
     if args.workers < 0:
         raise BadInput(f"gfuzzy crowd: --workers must be >= 0, got {args.workers}")
     for flag, value in (("--noise", args.noise), ("--fov", args.fov), ("--time-budget", args.time_budget),
-                        ("--personal-space", args.personal_space)):  # fmt: skip
+                        ("--personal-space", args.personal_space), ("--path-space", args.path_space)):  # fmt: skip
         if not math.isfinite(value):
             raise BadInput(f"gfuzzy crowd: {flag} must be a finite number, got {value:g}")
     sense = math.inf if args.sense is None else args.sense
@@ -79,7 +82,8 @@ def _setting(args):
                                fov=args.fov, sense=sense, seed=args.seed)  # fmt: skip
         setting = CrowdSetting(args.scenario, humans, args.visible, args.crowd, args.kinematics, sensor,
                                not args.steady_goals)  # fmt: skip
-        options = NavOptions(time_budget=args.time_budget, personal_space=args.personal_space)
+        options = NavOptions(time_budget=args.time_budget, personal_space=args.personal_space,
+                             path_space=args.path_space)
     except InputError as exc:
         raise BadInput(f"gfuzzy crowd: {exc}") from None
     policies = args.policy or (["navigator", "orca"] + ([] if args.visible else ["oracle"]))
