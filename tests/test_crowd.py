@@ -15,6 +15,7 @@ pytest.importorskip("pyrvo")
 
 from gfuzzy.errors import InputError  # noqa: E402
 from gfuzzy.navigation import crowd as C  # noqa: E402
+from gfuzzy.navigation.crowdsummary import summarize  # noqa: E402
 from gfuzzy.navigation.humans import OrcaCrowd, SocialForceCrowd  # noqa: E402
 from gfuzzy.navigation.socialmetrics import SocialMetrics  # noqa: E402
 
@@ -166,11 +167,13 @@ def test_summary_by_hand():
     runs = [[ep(C.Outcome.SUCCESS, 10.0, 40, 4, 2, 0.1, [0.01, 0.02])],
             [ep(C.Outcome.COLLISION, math.nan, 20, 0, 1, -0.2, [0.03])],
             [ep(C.Outcome.SUCCESS, 12.0, 40, 2, 0, 0.4, [0.04])]]  # fmt: skip
-    s = C.summarize(runs, "p")
+    s = summarize(runs, "p")
     assert s.episodes == 3
     assert s.success == pytest.approx(2 / 3) and s.collision == pytest.approx(1 / 3) and s.timeout == 0
     assert s.time == pytest.approx(11.0)
-    assert s.discomfort == pytest.approx(6 / 100) and s.intrusion == pytest.approx(3 / 100)
+    # discomfort pooled over all steps (CrowdNav); intrusion the mean of the episodes'
+    # ratios, each over its steps plus the one that finds the episode over (CrowdNav++)
+    assert s.discomfort == pytest.approx(6 / 100) and s.intrusion == pytest.approx((2 / 41 + 1 / 21 + 0 / 41) / 3)
     assert s.min_separation == pytest.approx(0.1)
     assert s.replan_p50 == pytest.approx(0.025)
 
@@ -228,6 +231,7 @@ def test_crowd_command_navigator_visible(tmp_path, workers):
     ["--humans", "-1"], ["--episodes", "0"], ["--kinematics", "unicycle", "--policy", "orca"],
     ["--visible", "--policy", "oracle"],
     ["--scenario", "hall"], ["--fov", "0"], ["--noise", "-0.1"], ["--workers", "-1"], ["--time-budget", "0"],
+    ["--path-space", "-1"], ["--path-space", "nan"], ["--personal-space", "inf"],
 ])  # fmt: skip
 def test_crowd_command_refuses_bad_arguments_in_one_line(tmp_path, flags):
     out = tmp_path / "x.csv"

@@ -142,11 +142,29 @@ def test_discomfort_and_intrusion_by_hand():
     # gap < 0.2 <=> |4 - t| < sqrt(0.8^2 - 0.5^2) = 0.6245 <=> t > 3.3755: steps 13, 14, 15
     assert m.discomfort_steps == 3
     assert m.discomfort_frequency == pytest.approx(3 / 16)
-    # centre within 0.6 <=> t > 4 - sqrt(0.6^2 - 0.5^2) = 3.6683, seen from t_k when
-    # t_k + 1.25 > 3.6683 <=> t_k > 2.4183: steps 10..15
+    # centre within 0.6 <=> t > 4 - sqrt(0.6^2 - 0.5^2) = 3.6683 (while present, t <= 4):
+    # the instants 3.75 and 4.0, seen from t_k = 3.75 - 0.25 j or 4.0 - 0.25 j (j = 1..5),
+    # t_k in 2.5 .. 3.75: steps 10..15
     assert m.intrusion_steps == 6
     assert m.intrusion_ratio == pytest.approx(6 / 16)
     assert m.min_gap == pytest.approx(0.5 - 0.6)
+
+
+def test_intrusion_looks_at_the_next_five_instants_only():
+    # CrowdNav++'s test: the robot's centre now against the person's centre 0.25, 0.5, ...
+    # 1.25 s later. A fast person passing 0.5 m from the standing robot between two of
+    # those instants (centre abreast at t = 0.625: x = 4 t - 2.5) never intrudes: at
+    # t = 0.5 and 0.75 the centre is hypot(0.5, 0.5) = 0.707 m away
+    robot = np.array([[0.0, 0.0, 0.0], [2.0, 0.0, 0.0]])
+    fast = _walker("f", [[0.0, -2.5, 0.5], [2.0, 5.5, 0.5]])
+    assert social_metrics(robot, 0.3, [fast], 0.25).intrusion_steps == 0
+    # the same person 0.125 s later is abreast at t = 0.75, an instant seen from steps 0..2
+    late = _walker("l", [[0.0, -3.0, 0.5], [2.0, 5.0, 0.5]])
+    assert social_metrics(robot, 0.3, [late], 0.25).intrusion_steps == 3
+    # someone close now but gone 0.25 s later is discomfort, not intrusion
+    brief = _walker("b", [[0.0, 0.5, 0.0], [0.2, 0.5, 0.0]])
+    m = social_metrics(robot, 0.3, [brief], 0.25)
+    assert m.intrusion_steps == 0 and m.discomfort_steps == 1
 
 
 def test_step_gaps_take_the_closest_instant_within_each_step():
@@ -224,3 +242,23 @@ def test_a_map_wall_hides_a_mover(tmp_path):
     pts = np.array([[1.8, 0.0], [1.5, 1.9], [0.5, 0.0]])
     # behind the wall (y in [-1, 1]); passing above its end (y 1.14 at x 0.9); in front of it
     np.testing.assert_array_equal(line_of_sight(scene, np.zeros(2), pts), [False, True, True])
+
+
+def test_an_unseen_track_walks_on_less_certain_and_is_dropped_after_the_coast():
+    from gfuzzy.navigation.sensing import Tracker
+
+    tr = Tracker(noise=0.0, coast=4.0, gate=1.0, growth=0.2)
+    tr.update(0.0, np.array([[0.0, 0.0, 0.3], [5.0, 5.0, 0.3]]))
+    tr.update(0.25, np.array([[0.25, 0.0, 0.3]]))  # the first walks +x at 1 m/s; the second is lost
+    out = tr.update(1.0, np.zeros((0, 3)))  # nobody seen
+    walker = out[np.argmin(np.abs(out[:, 1]))]
+    np.testing.assert_allclose(walker, [1.0, 0.0, 1.0, 0.0, 0.3 + 0.2 * 0.75])
+    # seen once (velocity unknown), unseen for 1 s: it may be anywhere a walker gets in 1 s
+    once = out[np.argmax(out[:, 1])]
+    np.testing.assert_allclose(once, [5.0, 5.0, 0.0, 0.0, 0.3 + 1.0])
+    # the gate grows with the time unseen before this update (0.75 s): 2 s later the walker
+    # is taken up again 1.1 m off its prediction (gate 1 + 0.2 * 0.75 = 1.15)
+    out = tr.update(3.0, np.array([[3.0, 1.1, 0.3]]))
+    assert len(out) == 2 and np.any(np.all(np.isclose(out[:, :2], [3.0, 1.1]), axis=1))
+    assert tr.update(4.3, np.zeros((0, 3))).shape[0] == 1  # the one seen once is gone (4 s)
+    assert tr.update(7.1, np.zeros((0, 3))).shape[0] == 0

@@ -48,6 +48,10 @@ SETTINGS = {
                             "success >= 0.99, collision <= 0.01, discomfort <= 0.10 (ORCA robot: 0.04)"),
     "arena": ("--scenario arena", {"scenario": "arena", "humans": 20}, ["navigator", "orca"],
               "success >= 0.95, intrusion <= 0.04 (CrowdNav++'s policy: 0.92, 4.23 %)"),
+    "arena-steady-goals": ("--scenario arena --steady-goals", {"scenario": "arena", "humans": 20, "goal_changes": False},
+                           ["navigator", "orca"], "(CrowdNav++'s non-randomised test: its policy 0.92, 4.23 %)"),
+    "circle-5-noise": ("--humans 5 --noise 0.05", {"humans": 5, "noise": 0.05}, ["navigator"], "(noise alone)"),
+    "circle-5-fov": ("--humans 5 --fov 180", {"humans": 5, "fov": 180.0}, ["navigator"], "(the half view alone)"),
     "circle-5-noise-fov": ("--humans 5 --noise 0.05 --fov 180", {"humans": 5, "noise": 0.05, "fov": 180.0},
                            ["navigator"], "success >= 0.97"),
     "circle-5-social-force-visible": ("--humans 5 --visible --crowd social-force",
@@ -55,6 +59,8 @@ SETTINGS = {
                                       ["navigator", "social-force"], "(no target: the reacting crowd of the second model)"),
     "circle-5-unicycle": ("--humans 5 --kinematics unicycle", {"humans": 5, "kinematics": "unicycle"}, ["navigator"],
                           "success >= 0.99, time <= 11 s"),
+    "circle-20-unicycle": ("--humans 20 --kinematics unicycle", {"humans": 20, "kinematics": "unicycle"}, ["navigator"],
+                           "success >= 0.97"),
 }  # fmt: skip
 
 

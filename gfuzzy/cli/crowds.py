@@ -17,6 +17,9 @@ def add_crowd(sub) -> None:
                    help="circle or square crossing (CrowdNav), or the CrowdNav++ arena (default circle)")  # fmt: skip
     c.add_argument("--humans", type=int, metavar="K", help="number of humans (default 5; 20 in the arena)")
     c.add_argument("--visible", action="store_true", help="the humans see the robot and react to it")
+    c.add_argument("--steady-goals", action="store_true",
+                   help="arena: humans change goal only on arrival, not every 5 s at random (CrowdNav++'s "
+                        "non-randomised test)")  # fmt: skip
     c.add_argument("--crowd", choices=("orca", "social-force"), default="orca", help="how the humans move (default orca)")
     c.add_argument("--kinematics", choices=("holonomic", "unicycle"), default="holonomic",
                    help="the robot's kinematics (unicycle: a differential drive turning at most 1 rad/s, navigator only)")
@@ -34,6 +37,9 @@ def add_crowd(sub) -> None:
     c.add_argument("--time-budget", type=float, default=0.1, help="seconds one navigator replan may take (default 0.1)")
     c.add_argument("--personal-space", type=float, default=0.2,
                    help="gap (m) the navigator keeps from people when that costs little (default 0.2, 0: off)")  # fmt: skip
+    c.add_argument("--path-space", type=float, default=1.25, metavar="SECONDS",
+                   help="how far ahead (s) the navigator keeps off the way people are about to walk, when that "
+                        "costs little (default 1.25, 0: off)")  # fmt: skip
     c.add_argument("-o", "--output", metavar="RESULTS.csv", help="one row per episode and policy")
     c.set_defaults(func=cmd_crowd)
 
@@ -67,15 +73,17 @@ def _setting(args):
     if args.workers < 0:
         raise BadInput(f"gfuzzy crowd: --workers must be >= 0, got {args.workers}")
     for flag, value in (("--noise", args.noise), ("--fov", args.fov), ("--time-budget", args.time_budget),
-                        ("--personal-space", args.personal_space)):  # fmt: skip
+                        ("--personal-space", args.personal_space), ("--path-space", args.path_space)):  # fmt: skip
         if not math.isfinite(value):
             raise BadInput(f"gfuzzy crowd: {flag} must be a finite number, got {value:g}")
     sense = math.inf if args.sense is None else args.sense
     try:
         sensor = SensorOptions(velocity="exact" if args.velocity == "true" else "estimated", noise=args.noise,
                                fov=args.fov, sense=sense, seed=args.seed)  # fmt: skip
-        setting = CrowdSetting(args.scenario, humans, args.visible, args.crowd, args.kinematics, sensor)
-        options = NavOptions(time_budget=args.time_budget, personal_space=args.personal_space)
+        setting = CrowdSetting(args.scenario, humans, args.visible, args.crowd, args.kinematics, sensor,
+                               not args.steady_goals)  # fmt: skip
+        options = NavOptions(time_budget=args.time_budget, personal_space=args.personal_space,
+                             path_space=args.path_space)
     except InputError as exc:
         raise BadInput(f"gfuzzy crowd: {exc}") from None
     policies = args.policy or (["navigator", "orca"] + ([] if args.visible else ["oracle"]))
@@ -89,14 +97,15 @@ def _setting(args):
 
 
 def _table(setting, runs, policies) -> str:
-    from ..navigation.crowd import summarize
+    from ..navigation.crowdsummary import summarize
 
     head = (f"{'policy':<13}{'n':>5}{'success':>9}{'collide':>9}{'timeout':>9}{'time s':>8}{'discomf':>9}"
             f"{'intrus':>8}{'min sep':>9}{'p50 ms':>8}{'p95 ms':>8}")  # fmt: skip
     lines = [
         f"{setting.scenario}, {setting.humans} humans ({setting.crowd}, {'visible' if setting.visible else 'invisible'}),"
         f" {setting.kinematics} robot, velocity {setting.sensor.velocity}, noise {setting.sensor.noise:g} m,"
-        f" fov {setting.sensor.fov:g} deg, sense {setting.sense:g} m",
+        f" fov {setting.sensor.fov:g} deg, sense {setting.sense:g} m"
+        + (", goals change on arrival only" if setting.scenario == "arena" and not setting.goal_changes else ""),
         head,
     ]
     for p in policies:

@@ -53,13 +53,13 @@ from ..typed import BoolArray, FloatArray
 from .drivenav import kept_plan
 from .evasion import evasion_scores
 from .navtypes import NavMode, NavStep
+from .pathspace import STILL_SPEED, PathSpace, WallCheck
+from .timedfield import PAIR_SECONDS, PIECE_WORK, _OutOfTime, _TimedField  # noqa: F401 (PIECE_WORK, PAIR_SECONDS: kept importable here)
 
 __all__ = ["NavMode", "NavOptions", "NavStep", "Navigator"]
 
 log = logging.getLogger(__name__)
 
-#: Below this speed (m/s) an observed person counts as standing still.
-STILL_SPEED = 0.1
 #: Share of ``time_budget`` the search may use; the rest is the fallback's.
 SEARCH_SHARE = 0.75
 #: Samples of the look-ahead in the test of who may come within reach (:meth:`Navigator._may_reach`).
@@ -69,13 +69,6 @@ REACH_SAMPLES = 48
 FALLBACK_SAMPLE = 0.05
 #: First guess (s) of the predictions' set-up per person (then measured per navigator).
 PERSON_SECONDS = 150e-6
-#: The predictions' field answers the search's safety questions in pieces of about this
-#: many (point, person) pairs (at least 64 points), looking at the clock between two
-#: pieces (a piece took 3-4 ms here).
-PIECE_WORK = 60_000
-#: Seconds the search's interval store takes per unsafe (point, step) pair it is given
-#: (it sorts them; 20-70 ns measured here), kept free before the deadline.
-PAIR_SECONDS = 60e-9
 
 
 @dataclass(frozen=True)
@@ -109,6 +102,17 @@ class NavOptions:
         only the safety buffer (and the uncertainty) arrives sooner by more than this.
         A soft cost: the robot does not detour round a person standing in its way, or
         wait long for a gap wide enough, to keep its distance.
+    path_space : float
+        Seconds of each walking person's predicted path the first search also keeps the
+        robot's body off (:mod:`gfuzzy.navigation.pathspace`): it does not cross just in
+        front of someone or wait in their way (CrowdNav++'s intrusion, 1.25 s), whenever
+        a plan exists that does not; otherwise the relaxed search answers. 0 turns it off.
+    path_space_cost : float
+        What (s of arrival time) keeping off people's ways is worth: the plan that keeps the
+        path space is taken unless one that does not arrives sooner by more than this.
+    social_horizon : float
+        Seconds of the plan during which the path space is kept (a plan's far future is
+        replanned long before; predictions that far are too uncertain to yield to).
     slice : float
         Length (s) of a piece of prediction with one radius (the inflation grows by steps).
     stationary_hold : float
@@ -152,6 +156,9 @@ class NavOptions:
     safety_buffer: float = 0.05
     personal_space: float = 0.2
     personal_space_cost: float = 0.5
+    path_space: float = 1.25
+    path_space_cost: float = 5.0
+    social_horizon: float = 4.0
     slice: float = 0.5
     stationary_hold: float = 30.0
     time_budget: float = 0.1
@@ -171,64 +178,12 @@ class NavOptions:
             raise InputError(f"backend must be one of {', '.join(BACKENDS)}, got {self.backend!r}")
         for name in ("dt", "prediction_horizon", "reference_speed", "slice", "time_budget", "plan_slack", "evasion_time", "cover"):
             check_number(name, getattr(self, name))
-        for name in ("uncertainty_growth", "safety_buffer", "personal_space", "personal_space_cost", "stationary_hold",
-                     "goal_tolerance", "commitment"):
+        for name in ("uncertainty_growth", "safety_buffer", "personal_space", "personal_space_cost", "path_space",
+                     "path_space_cost", "social_horizon", "stationary_hold", "goal_tolerance", "commitment"):
             check_number(name, getattr(self, name), strict=False)
         if self.connect_k < 1 or self.evasion_headings < 4:
             raise InputError("connect_k must be >= 1 and evasion_headings >= 4")
         check_number("stretch", self.stretch, 1.0, strict=False)
-
-
-class _OutOfTime(Exception):
-    """The search's deadline passed while the safety of its points was being computed."""
-
-
-class _TimedField(MoverField):
-    """The predictions' field, answering the search's safety questions in pieces of about
-    ``PIECE_WORK`` (point, person) pairs, raising :class:`_OutOfTime` between two pieces
-    once ``deadline`` (on ``clock``) has passed. The search looks at its deadline only
-    between expansions, and the interval store asks for the safety of thousands of points
-    at once (among 100 people one such batch took 60-140 ms here). The groups are
-    independent: the pieces' answers put together are the whole batch's.
-    """
-
-    deadline: float = math.inf
-    clock = staticmethod(time.perf_counter)
-
-    def unsafe_pairs(self, poses, ptr, lo, hi):
-        nodes, steps = [np.zeros(0, dtype=np.int64)], [np.zeros(0, dtype=np.int64)]
-        pairs = [0]  # the store then sorts the pairs: time kept for it (PAIR_SECONDS each)
-        for p, sub, a, b in self._pieces(ptr, lo, hi, lambda: pairs[0] * PAIR_SECONDS):
-            n, st = super().unsafe_pairs(poses[p[0] : p[-1]], sub, a, b)
-            nodes.append(n + p[0])
-            steps.append(st)
-            pairs[0] += len(n)
-        return np.concatenate(nodes), np.concatenate(steps)
-
-    def safe_intervals(self, poses, ptr, lo, hi):  # the compiled kernel's batches (newer stores)
-        starts, ends, sps = [np.zeros(0, dtype=np.int64)], [np.zeros(0, dtype=np.int64)], [np.zeros(1, np.int64)]
-        for p, sub, a, b in self._pieces(ptr, lo, hi, lambda: 0.0):
-            gs, ge, sp = super().safe_intervals(poses[p[0] : p[-1]], sub, a, b)
-            starts.append(gs)
-            ends.append(ge)
-            sps.append(np.asarray(sp[1:], dtype=np.int64) + sps[-1][-1])
-        return np.concatenate(starts), np.concatenate(ends), np.concatenate(sps)
-
-    def _pieces(self, ptr, lo, hi, after):
-        """(point pointers, group pointers from 0, lo, hi) of consecutive groups, while
-        the clock plus ``after()`` (seconds the caller still needs) is before the deadline."""
-        ptr = np.asarray(ptr, dtype=np.int64)
-        g = len(ptr) - 1
-        lo = np.broadcast_to(np.asarray(lo, dtype=np.int64), (g,))
-        hi = np.broadcast_to(np.asarray(hi, dtype=np.int64), (g,))
-        size = max(64, PIECE_WORK // max(len(self.movers), 1))
-        a = 0
-        while a < g:
-            if self.clock() + after() > self.deadline:
-                raise _OutOfTime
-            b = min(g, max(a + 1, int(np.searchsorted(ptr, ptr[a] + size, side="right")) - 1))
-            yield ptr[a : b + 1], ptr[a : b + 1] - ptr[a], lo[a:b], hi[a:b]
-            a = b
 
 
 @dataclass(frozen=True)
@@ -245,7 +200,7 @@ class _Searched:
     ahead: list = field(default_factory=list)
 
 
-class Navigator:
+class Navigator(PathSpace):
     """Receding-horizon navigation to a fixed goal among observed moving discs.
 
     Parameters
@@ -297,6 +252,7 @@ class Navigator:
         self._ahead: list = []  # (arrival time, roadmap vertex) of the last plan
         self._clock = time.perf_counter  # the budget's clock (a test may replace it)
         self._person_seconds = PERSON_SECONDS  # the predictions' set-up per person, measured
+        self._walls = WallCheck(scene)
         self._build_base()
         if opts.backend == "compiled":  # load the compiled kernels now, not inside a step's budget
             from ..timespace.search_kernel import warm
@@ -351,14 +307,16 @@ class Navigator:
         return graph, s_id
 
     # ------------------------------------------------------------- prediction
-    def _inflation(self, pose: FloatArray, obs: FloatArray, relaxed: bool = False, personal: bool = True) -> FloatArray:
+    def _inflation(self, pose: FloatArray, obs: FloatArray, relaxed: bool = False, personal: bool = True,
+                   grow_to: FloatArray | None = None) -> FloatArray:  # fmt: skip
         """(k, S) inflation (m) per person and prediction slice, shrunk near the robot.
 
         A person already closer than the full inflation (someone walked up to the robot)
         gets an inflation that starts just inside their present gap and recovers at the
         robot's speed, so that the robot, which stands where it stands, is not inside its
         own predictions and the search can move it away. The inflation never decreases
-        from one slice to the next (both terms grow with the prediction time).
+        from one slice to the next (both terms grow with the prediction time). ``grow_to``
+        (k,): a constant full inflation per row instead (the ghosts').
         """
         opts = self.options
         n_slices = int(math.ceil(opts.prediction_horizon / opts.slice - 1e-9))
@@ -371,6 +329,8 @@ class Navigator:
         full = self.mover_clearance + opts.safety_buffer + space + rate[:, None] * tau[None, :]
         if relaxed:  # only what the contract asks: the robot's mover clearance
             full = np.full_like(full, self.mover_clearance)
+        if grow_to is not None:
+            full = np.repeat(np.asarray(grow_to, dtype=float).reshape(-1, 1), n_slices, axis=1)
         gap = self._gap(pose, obs)  # (k,) beyond the people's own radius
         margin0 = (self.vplan + speed) * opts.dt / 2  # the search's continuous-time margin at step 0
         allowed = np.maximum(gap - margin0 - 1e-6, 0.0)
@@ -450,7 +410,8 @@ class Navigator:
         mover per person instead of one per slice (the field's set-up costs per mover).
         Each mover's disc carries the inflation of the first step (the smallest: it never
         shrinks with time), so that the exact check of the first motions
-        (:meth:`MoverField.motion_safe`) keeps it too.
+        (:meth:`MoverField.motion_safe`) keeps it too. Rows of 7 columns (the ghosts of
+        :meth:`_path_ghosts`) are present only from ``t + appear`` to ``t + vanish``.
         """
         opts = self.options
         k, n_s = infl.shape
@@ -460,13 +421,16 @@ class Navigator:
         s_of = np.minimum(np.floor(tau / opts.slice + 1e-9).astype(np.int64), n_s - 1)
         first = infl[:, s_of[0]]
         radius = obs[:, 4] + first
-        ends = obs[:, :2] + vel * opts.prediction_horizon
+        appear = obs[:, 5] if obs.shape[1] > 5 else np.zeros(k)
+        vanish = np.minimum(presence, obs[:, 6]) if obs.shape[1] > 6 else presence
+        a = obs[:, :2] + vel * np.minimum(appear, opts.prediction_horizon)[:, None]
+        b = obs[:, :2] + vel * np.minimum(vanish, opts.prediction_horizon)[:, None]
         movers = tuple(
             Mover(f"p{i}", "disc", float(radius[i]), (0.0, 0.0),
-                  trajectory=np.array([[t, obs[i, 0], obs[i, 1]], [t + presence[i], ends[i, 0], ends[i, 1]]]))
+                  trajectory=np.array([[t + appear[i], a[i, 0], a[i, 1]], [t + vanish[i], b[i, 0], b[i, 1]]]))
             for i in range(k)
         )  # fmt: skip
-        extra = float(np.max(infl[:, -1] - first, initial=0.0))
+        extra = float(np.max(infl - first[:, None], initial=0.0))  # the ghosts' is not monotone
         scene = replace(self.scene, robot=self._pred_robot, movers=movers)
         # built with the largest extra margin, so that its broad-phase boxes hold every
         # step's; then each step gets its own (the robot's clearance is in the radii: keep 0)
@@ -520,14 +484,16 @@ class Navigator:
         predicted = obs.copy()
         if len(obs):
             predicted[:, 4] = obs[:, 4] + infl[:, 0]
-        found = self._search(t, pose, obs, infl, deadline)
+        found = self._search(t, pose, *self._with_ghosts(pose, obs, infl), deadline)
+        if opts.path_space > 0 and len(obs) and found.graph is not None and self._clock() < deadline:
+            found = self._path_space_cost(t, pose, obs, infl, found, deadline)
         traj, mode = found.trajectory, NavMode.PLAN
         if opts.personal_space > 0 and len(obs) and found.graph is not None and self._clock() < deadline:
             traj, mode, found = self._closer(t, pose, obs, found, deadline)
         if traj is None and len(obs) and not found.out_of_time and self._clock() < deadline:
             # blocked by the margins (someone standing beside the goal, a narrow gap): try
             # once more with the people's discs as they are, plus the mover clearance only
-            traj = self._search(t, pose, obs, self._inflation(pose, obs, relaxed=True), deadline, found).trajectory
+            traj = self._relaxed(t, pose, obs, found, deadline)
             mode = NavMode.RELAXED
         if traj is None:
             traj = self._direct(t, pose, obs)

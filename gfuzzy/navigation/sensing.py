@@ -12,7 +12,11 @@ the track whose predicted position is nearest (an optimal assignment within a ga
 each track runs an alpha-beta filter on position and velocity. Without noise the filter
 is the plain difference of two observations one period apart; with noise it smooths.
 A track that goes unseen (left the field of view, hidden) is reported, walking on at its
-last velocity, for ``coast`` seconds, then dropped.
+last velocity, for ``coast`` seconds, then dropped; while unseen its disc grows by
+``coast_growth`` metres per second unseen (it may have slowed down, sped up or turned), and so
+does the gate that may take it up again. A narrow field of view loses the people beside and
+behind the robot, who still walk where they were going: a track kept a few seconds stops a
+person who was seen and then left the view from becoming a surprise.
 """
 
 from __future__ import annotations
@@ -31,6 +35,10 @@ from ..typed import BoolArray, FloatArray
 __all__ = ["VELOCITY_MODES", "SensorOptions", "Sensor", "Tracker", "line_of_sight", "in_fov"]
 
 VELOCITY_MODES = ("estimated", "exact")
+#: Growth (m/s) of the radius of an unseen track whose velocity is unknown (seen once: it
+#: may walk anywhere at a walking pace), and the cap (m) on any unseen track's growth.
+UNKNOWN_GROWTH = 1.0
+UNKNOWN_CAP = 1.0
 
 
 @dataclass(frozen=True)
@@ -53,6 +61,8 @@ class SensorOptions:
         Range (m, gap between the robot's body and the mover's disc).
     coast : float
         Seconds a track that is no longer seen is still reported (walking on).
+    coast_growth : float
+        Growth (m per s unseen) of an unseen track's radius and of its association gate.
     gate : float
         Largest distance (m) between a track's predicted position and a detection that
         may be associated with it (plus four times ``noise``).
@@ -65,7 +75,8 @@ class SensorOptions:
     fov: float = 360.0
     occlusion: bool = False
     sense: float = math.inf
-    coast: float = 1.0
+    coast: float = 4.0
+    coast_growth: float = 0.2
     gate: float = 1.0
     seed: int = 0
 
@@ -80,6 +91,8 @@ class SensorOptions:
             raise InputError(f"sense must be a positive number, got {self.sense}")
         if not (math.isfinite(self.coast) and self.coast >= 0) or not (math.isfinite(self.gate) and self.gate > 0):
             raise InputError("coast must be >= 0 and gate > 0")
+        if not (math.isfinite(self.coast_growth) and self.coast_growth >= 0):
+            raise InputError(f"coast_growth must be a number >= 0, got {self.coast_growth}")
 
     @property
     def ideal(self) -> bool:
@@ -130,6 +143,8 @@ class Tracker:
         Seconds an unseen track is still reported.
     gate : float
         Association gate (m) on top of ``4 * noise``.
+    growth : float
+        Growth (m per s unseen) of an unseen track's reported radius and of its gate.
 
     Notes
     -----
@@ -140,10 +155,11 @@ class Tracker:
     between lag and noise for people walking at up to ~1.5 m/s, 0.25 s apart).
     """
 
-    def __init__(self, noise: float = 0.0, coast: float = 1.0, gate: float = 1.0):
+    def __init__(self, noise: float = 0.0, coast: float = 4.0, gate: float = 1.0, growth: float = 0.2):
         self.alpha, self.beta = (1.0, 1.0) if noise == 0 else (0.5, 0.2)
         self.coast = coast
         self.gate = gate + 4 * noise
+        self.growth = growth
         self.pos = np.zeros((0, 2))
         self.vel = np.zeros((0, 2))
         self.radius = np.zeros(0)
@@ -169,10 +185,11 @@ class Tracker:
         matched_d = np.zeros(len(det), dtype=bool)
         if len(pred) and len(det):
             cost = np.hypot(*(pred[:, None, :] - det[None, :, :2]).transpose(2, 0, 1))
+            gate = self.gate + self.growth * np.maximum(t - self.seen - dt, 0.0)  # (tracks,)
             big = 1e6
-            rows, cols = linear_sum_assignment(np.where(cost <= self.gate, cost, big))
+            rows, cols = linear_sum_assignment(np.where(cost <= gate[:, None], cost, big))
             for i, j in zip(rows.tolist(), cols.tolist(), strict=True):
-                if cost[i, j] > self.gate:
+                if cost[i, j] > gate[i]:
                     continue
                 r = det[j, :2] - pred[i]
                 self.pos[i] = pred[i] + self.alpha * r
@@ -193,7 +210,11 @@ class Tracker:
         self.radius = np.concatenate([self.radius[keep], new[:, 2]])
         self.seen = np.concatenate([self.seen[keep], np.full(len(new), t)])
         self.hits = np.concatenate([self.hits[keep], np.ones(len(new), dtype=np.int64)])
-        return np.column_stack([self.pos, self.vel, self.radius]).reshape(-1, 5)
+        # unseen tracks are less certain; one seen once has no velocity yet: it may be
+        # walking anywhere at a walking pace (capped: beyond that it is as good as gone)
+        rate = np.where(self.hits > 1, self.growth, UNKNOWN_GROWTH)
+        grown = self.radius + np.minimum(rate * (t - self.seen), UNKNOWN_CAP)
+        return np.column_stack([self.pos, self.vel, grown]).reshape(-1, 5)
 
 
 @dataclass
@@ -218,7 +239,7 @@ class Sensor:
     def __post_init__(self):
         o = self.options
         self._rng = create_rng(o.seed)
-        self._tracker = Tracker(o.noise, o.coast, o.gate)
+        self._tracker = Tracker(o.noise, o.coast, o.gate, o.coast_growth)
         self._shapes = _obstacle_shapes(self.scene) if o.occlusion else []
 
     def visible(self, pose: FloatArray, heading: float, truth: FloatArray) -> BoolArray:

@@ -4,13 +4,16 @@
   the gap between the robot's and a person's bodies falls below 0.2 m at some instant of
   the step (CrowdNav takes the closest distance over the step, not at its end).
 * **Intrusion ratio** (CrowdNav++, Liu et al. 2023): the share of time steps at whose
-  start the robot's centre lies within 0.6 m (the two radii, 0.3 + 0.3) of where a
-  person's centre really is at some instant of the next 1.25 s (the five 0.25 s steps
-  CrowdNav++ predicts).
+  start the robot's centre lies closer than 0.6 m (the two radii, 0.3 + 0.3) to where a
+  person's centre really is at one of the next five instants 0.25 s apart (1.25 s ahead:
+  CrowdNav++'s ``calc_reward`` with ``danger_zone="future"``, its ground-truth future
+  positions at ``t + 0.25 j``, j = 1..5; the person's position at ``t`` itself does not
+  count).
 
-Both are computed exactly for motions that are linear between rows (the robot's executed
-waypoints, ``trajectory`` movers); a ``path`` mover is sampled every 0.02 s. The robot
-and the movers count as discs (their circumscribed ones when they are not).
+The discomfort gaps are computed exactly for motions that are linear between rows (the
+robot's executed waypoints, ``trajectory`` movers); a ``path`` mover is sampled every
+0.02 s. The robot and the movers count as discs (their circumscribed ones when they are
+not).
 """
 
 from __future__ import annotations
@@ -23,11 +26,14 @@ import numpy as np
 from ..scene.scene import Mover
 from ..typed import FloatArray
 
-__all__ = ["DISCOMFORT_GAP", "INTRUSION_DISTANCE", "INTRUSION_HORIZON", "SocialMetrics", "social_metrics", "step_gaps"]
+__all__ = ["DISCOMFORT_GAP", "INTRUSION_DISTANCE", "INTRUSION_HORIZON", "INTRUSION_SAMPLE", "SocialMetrics", "social_metrics", "step_gaps"]
 
 DISCOMFORT_GAP = 0.2
 INTRUSION_DISTANCE = 0.6
 INTRUSION_HORIZON = 1.25
+#: CrowdNav++'s prediction step (s): the intrusion test looks at the instants
+#: ``t + INTRUSION_SAMPLE * j``, j = 1 .. INTRUSION_HORIZON / INTRUSION_SAMPLE.
+INTRUSION_SAMPLE = 0.25
 #: Sampling (s) of movers that are not given by rows.
 PATH_SAMPLE = 0.02
 
@@ -134,26 +140,18 @@ def step_gaps(waypoints: FloatArray, robot_radius: float, movers, dt: float = 0.
 
 
 def _intrusion(w: FloatArray, movers, dt: float, n: int, distance: float, horizon: float) -> np.ndarray:
-    t0 = float(w[0, 0])
-    starts = t0 + np.arange(n) * dt
+    """(n,) True for each step at whose start the robot's centre is closer than
+    ``distance`` to a present mover's centre at one of the instants
+    ``INTRUSION_SAMPLE * j`` (j = 1..) later, up to ``horizon``."""
+    starts = float(w[0, 0]) + np.arange(n) * dt
     robot = _positions(w[:, :3], starts)  # (n, 2)
+    ahead = INTRUSION_SAMPLE * np.arange(1, int(round(horizon / INTRUSION_SAMPLE)) + 1)
+    times = starts[:, None] + ahead[None, :]  # (n, J)
     hit = np.zeros(n, dtype=bool)
     for mv in movers:
-        rows = _mover_rows(mv, t0, starts[-1] + horizon if n else t0)
-        if rows is None:
-            continue
-        g = np.concatenate([rows[:, 0], starts, starts + horizon])
-        g = np.unique(g[(g >= rows[0, 0]) & (g <= rows[-1, 0])])
-        p = _positions(rows, g)  # (G, 2)
-        if len(g) == 1:
-            inside = (starts <= g[0] + 1e-12) & (g[0] <= starts + horizon + 1e-12)
-            hit |= inside & (np.hypot(*(p[0] - robot).T) < distance)
-            continue
-        a = p[None, :-1, :] - robot[:, None, :]  # (n, G - 1, 2)
-        b = p[None, 1:, :] - robot[:, None, :]
-        dmin = _segment_min(a.reshape(-1, 2), b.reshape(-1, 2)).reshape(n, -1)
-        inside = (g[None, :-1] >= starts[:, None] - 1e-12) & (g[None, 1:] <= starts[:, None] + horizon + 1e-12)
-        hit |= np.any(inside & (dmin < distance), axis=1)
+        xy, present = mv.state(times.ravel())
+        d = np.hypot(*(xy.reshape(n, -1, 2) - robot[:, None, :]).transpose(2, 0, 1))
+        hit |= np.any(present.reshape(n, -1) & (d < distance), axis=1)
     return hit
 
 
