@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -144,3 +146,26 @@ def test_a_collision_report_tells_how_deep_it_went():
     assert first < 0.05 and 0.15 <= deepest <= 0.2 + 1e-9, rep.reason
     shallow = check_trajectory(sc, slide(1.8, t_end=8.0, n=801))  # 0.5 from P's centre: touching
     assert shallow.valid, shallow.reason
+
+
+def test_the_deepest_overlap_is_the_bodies_own_with_a_mover_clearance():
+    """With ``mover_clearance`` > 0 the deepest overlap reported is how far the bodies
+    overlap (not that plus the required distance), against the object it is with."""
+    # P appears at t = 3, 0.45 from the robot's centre (0.05 deep); the robot then passes
+    # 0.3 from P's centre: 0.25 + 0.25 - 0.3 = 0.2 deep (the old report said 0.5)
+    px = 4.0 + math.sqrt(0.45**2 - 0.3**2)
+    sc = scene(
+        {"disc": 0.25, "vmax": 1.0, "mover_clearance": 0.3},
+        movers=[{"name": "P", "disc": 0.25, "trajectory": [[3.0, px, 2.3], [20.0, px, 2.3]]}],
+    )
+    w = slide(2.0, t_end=8.0, n=801)
+    rep = check_trajectory(sc, w)
+    assert not rep.valid and rep.reason.startswith("collides with mover 'P'"), rep.reason
+    # the oracle: the discs' centre distance at every row from t = 3 on
+    live = w[:, 0] >= 3.0
+    depth = 0.5 - np.hypot(w[live, 1] - px, w[live, 2] - 2.3).min()
+    first = float(rep.reason.split("(penetration ")[1].split(";")[0])
+    deepest = float(rep.reason.split("; ")[1].split(" deep")[0])
+    assert abs(first - 0.05) < 1e-3, rep.reason
+    assert abs(deepest - depth) < 1e-3 and abs(depth - 0.2) < 1e-3, rep.reason
+    assert "deep against mover 'P'" in rep.reason, rep.reason

@@ -95,6 +95,10 @@ class _World:
         self.robot = scene.robot
         self.keep_static = float(scene.robot.clearance)
         self.keep_mover = float(scene.robot.mover_clearance)
+        # after each clearance / swept_clearance: the bodies' own smallest distance per pose or
+        # interval (no required distance; negative: overlap depth, or area for two polygons)
+        # and what it is against
+        self.last_gap: tuple[FloatArray, list] = (np.zeros(0), [])
         polys = []
         self.discs = []
         for ob in scene.obstacles:
@@ -204,7 +208,16 @@ class _World:
             names.append(f"mover {mv.name!r}")
         stack = np.vstack(parts)
         which = np.argmin(stack, axis=0)
-        return stack[which, np.arange(stack.shape[1])], [names[i] for i in which]
+        cols = np.arange(stack.shape[1])
+        keeps = np.array([self.keep_of(n) for n in names])
+        gaps = stack + keeps[:, None]  # the bodies' own distance (negative: overlap)
+        deepest = np.argmin(gaps, axis=0)
+        self.last_gap = (gaps[deepest, cols], [names[i] for i in deepest])
+        return stack[which, cols], [names[i] for i in which]
+
+    def keep_of(self, name: str) -> float:
+        """The distance required from the thing called ``name``."""
+        return 0.0 if name == "the bounds" else self.keep_mover if name.startswith("mover") else self.keep_static
 
 
     def swept_clearance(self, pa, pb, heading, ta, tb):
@@ -256,11 +269,19 @@ class _World:
                     swept = hull if swept is None else shapely.union(swept, hull)
             body = shapely.polygons(corners)  # at the origin, for the movers
 
+        gap = np.full(k, np.inf)
+        gap_names = ["-"] * k
+
         def take(d, name):
             better = d < out
             out[better] = d[better]
             for i in np.nonzero(better)[0]:
                 names[i] = name
+            g = d + self.keep_of(name)
+            deeper = g < gap
+            gap[deeper] = g[deeper]
+            for i in np.nonzero(deeper)[0]:
+                gap_names[i] = name
 
         # bounds: the clearance is linear along a translation, extreme at the ends
         take(np.minimum(self.bounds_clearance(self._poses(pa, heading)), self.bounds_clearance(self._poses(pb, heading))), "the bounds")
@@ -295,6 +316,7 @@ class _World:
             nan = np.isnan(d)
             take(np.where(nan, np.inf, d), f"mover {mv.name!r}")
             out[nan] = np.nan
+        self.last_gap = (gap, gap_names)
         return out, names
 
     def _poses(self, p, heading):
@@ -481,19 +503,34 @@ class _Checker:
             seg = seg + np.abs(_wrap(np.diff(p[:, 2]))) * robot.circumradius
         self.speed = seg / self.dt if len(self.dt) else np.zeros(0)
         self.vmax_seen = float(self.speed.max(initial=0.0))
-        self.first: list = [math.inf, ""]  # time and reason of the earliest violation found so far
+        self.first: list = [math.inf, "", None]  # time, reason and overlap (depth, name) of the earliest violation
+        self.deepest: tuple[float, str, str] | None = None  # the deepest overlap: depth, against what, when
         self.world = _World(scene)
         self.evaluations = 0
         self.min_clear = math.inf
 
-    def found(self, time: float, reason: str) -> None:
+    def found(self, time: float, reason: str, overlap: tuple[float, str] | None = None) -> None:
         if time < self.first[0]:
-            self.first[0], self.first[1] = float(time), reason
+            self.first[:] = [float(time), reason, overlap]
+
+    def overlapped(self, gap: FloatArray, names: list, whens) -> None:
+        """Note the deepest overlap of the bodies among ``gap`` (the world's ``last_gap``)."""
+        if gap.size == 0:
+            return
+        k = int(np.argmin(gap))
+        depth = -float(gap[k])
+        if depth > self.tol and (self.deepest is None or depth > self.deepest[0]):
+            self.deepest = (depth, names[k], whens(k))
+
+    def contact(self, name: str, d: float, when: str, time: float) -> None:
+        """A violation found: its reason, and the bodies' overlap there (if they overlap)."""
+        depth = -(d + self.world.keep_of(name))
+        self.found(time, self.hit(name, d, when), (depth, name) if depth > self.tol else None)
 
     def hit(self, name: str, d: float, when: str) -> str:
         """What a negative clearance means: a collision, or a required distance missed."""
         world, tol = self.world, self.tol
-        keep = 0.0 if name == "the bounds" else world.keep_mover if name.startswith("mover") else world.keep_static
+        keep = world.keep_of(name)
         if keep > 0 and d + keep >= -tol:
             which = "robot.mover_clearance" if name.startswith("mover") else "robot.clearance"
             return f"comes within {d + keep:.3g} m of {name} {when}, closer than {which}={keep:g}"
@@ -510,11 +547,13 @@ class _Checker:
     def report(self, note: str = "") -> CheckReport:
         if not self.first[1]:
             return CheckReport(True, "", self.min_clear, self.vmax_seen, self.evaluations)
-        reason = self.first[1]
-        first = float(reason.rsplit("(penetration ", 1)[1].rstrip(")")) if reason.startswith("collides") else math.inf
-        if -self.min_clear > 2 * first:
-            # the first contact in time is reported; a reader would take its depth there for the worst
-            reason = reason[:-1] + f"; {-self.min_clear:.3g} deep at the deepest instant sampled)"
+        reason, overlap, deepest = self.first[1], self.first[2], self.deepest
+        contact = reason.startswith(("collides", "comes within"))
+        if contact and deepest is not None and (overlap is None or deepest[0] > 2 * overlap[0] or deepest[1] != overlap[1]):
+            # the first contact in time is reported; a reader would take its depth there for the
+            # worst: the deepest overlap of the bodies seen, and what it is against, follow
+            told = f"{deepest[0]:.3g} deep against {deepest[1]} {deepest[2]}, the deepest overlap sampled"
+            reason = reason[:-1] + f"; {told})" if reason.startswith("collides") else reason + f" ({told})"
         return CheckReport(False, reason + note, self.min_clear, self.vmax_seen, self.evaluations, self.first[0])
 
     def run(self, max_evaluations: int) -> CheckReport:
@@ -570,12 +609,13 @@ class _Checker:
     def _sample(self, times, seg_of) -> FloatArray:
         """Clearances at ``times`` (sorted or not); the earliest violation among them is noted."""
         d, names = self.world.clearance(self.pose_at(times, seg_of), times)
+        self.overlapped(*self.world.last_gap, lambda k: f"at t={float(times[k])!r}")
         self.evaluations += len(times)
         self.min_clear = min(self.min_clear, float(d.min()))
         bad = np.nonzero(d < -self.tol)[0]
         if bad.size:
             k = int(bad[np.argmin(times[bad])])
-            self.found(times[k], self.hit(names[k], float(d[k]), f"at t={float(times[k])!r}"))
+            self.contact(names[k], float(d[k]), f"at t={float(times[k])!r}", times[k])
         return d
 
     def _initial_intervals(self):
@@ -599,14 +639,19 @@ class _Checker:
         pa, pb = self.pose_at(a_t[idx], a_s[idx]), self.pose_at(b_t[idx], a_s[idx])
         head = None if self.robot.dof == 2 else pa[:, 2]
         ex, ex_names = self.world.swept_clearance(pa[:, :2], pb[:, :2], head, a_t[idx], b_t[idx])
-        self.evaluations += len(idx)
+        gap, gap_names = self.world.last_gap
         decided = ~np.isnan(ex)
+        self.overlapped(
+            np.where(decided, gap, np.inf), gap_names,
+            lambda k: f"between t={float(a_t[idx[k]])!r} and t={float(b_t[idx[k]])!r}",
+        )  # fmt: skip
+        self.evaluations += len(idx)
         bad = np.nonzero(decided & (ex < -self.tol))[0]
         if bad.size:
             k = int(bad[np.argmin(a_t[idx[bad]])])
             self.min_clear = min(self.min_clear, float(ex[k]))
             when = f"between t={float(a_t[idx[k]])!r} and t={float(b_t[idx[k]])!r}"
-            self.found(a_t[idx[k]], self.hit(ex_names[k], float(ex[k]), when))
+            self.contact(ex_names[k], float(ex[k]), when, a_t[idx[k]])
         if decided.any():
             self.min_clear = min(self.min_clear, float(np.nanmin(ex)))
         keep = np.ones(len(a_t), dtype=bool)
