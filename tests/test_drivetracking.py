@@ -64,3 +64,39 @@ def test_bad_rows_are_refused():
         track_drive(np.array([[0.0, 0.0, 0.0, 0.0]]), LIMITS)
     with pytest.raises(InputError):
         track_drive(np.array([[0.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]]), LIMITS)
+
+
+def _there_and_back(leg=1.0, a=1.0, dt=0.07):
+    """Rows driving ``leg`` m forward along x and back, each way from rest to rest at
+    acceleration ``a`` (a triangle speed profile), heading 0 throughout."""
+    half = math.sqrt(leg / a)  # accelerate for half, brake for half
+    t = np.arange(0.0, 2 * half + 1e-9, dt)
+    t[-1] = 2 * half
+    x = np.where(t <= half, 0.5 * a * t**2, leg - 0.5 * a * (2 * half - t) ** 2)
+    back = leg - x[1:]
+    tt = np.concatenate([t, 2 * half + t[1:]])
+    xx = np.concatenate([x, back])
+    return np.column_stack([tt, xx, np.zeros_like(xx), np.zeros_like(xx)])
+
+
+def test_a_reversal_is_a_rest():
+    """Forward then backward: the robot brakes to rest where its travel reverses (it reaches
+    the turning point and does not overrun it), then drives back, within the bounds."""
+    rows = _there_and_back()
+    res = track_drive(rows, LIMITS, reverse=True)
+    assert res.status == "solved"
+    g = DriveGains()
+    far = int(np.argmax(res.poses[:, 0]))
+    assert res.poses[far, 0] == pytest.approx(1.0, abs=0.03), res.poses[far]
+    assert abs(res.v[far]) <= AMAX * g.dt + 1e-12  # at rest there, to within one step's change
+    assert res.t[far] == pytest.approx(2.0, abs=0.2)  # at the plan's reversal, not before
+    assert res.v.min() < -0.5 and res.v.max() > 0.5  # it drove both ways
+    assert np.abs(res.v).max() <= VMAX + 1e-12 and np.abs(np.diff(res.v)).max() <= AMAX * g.dt + 1e-12
+    assert res.max_position_error < 0.05
+
+
+@pytest.mark.parametrize("field", ["kx", "dt", "settle", "violation_tolerance", "goal_tolerance"])
+@pytest.mark.parametrize("value", [math.inf, math.nan, -1.0])
+def test_gains_must_be_finite_with_sensible_signs(field, value):
+    with pytest.raises(InputError, match=f"DriveGains.{field}"):
+        DriveGains(**{field: value})

@@ -82,9 +82,11 @@ class DriveGains:
         for name in ("kx", "ky", "kh", "kturn", "dt", "goal_tolerance", "heading_tolerance"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
-                raise InputError(f"{name} must be positive and finite, got {value}")
-        if not (self.settle >= 0 and self.violation_tolerance >= 0):
-            raise InputError("settle and violation_tolerance must be non-negative")
+                raise InputError(f"DriveGains.{name} must be positive and finite, got {value!r}")
+        for name in ("settle", "violation_tolerance"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                raise InputError(f"DriveGains.{name} must be non-negative and finite, got {value!r}")
 
 
 @dataclass(frozen=True)
@@ -195,10 +197,13 @@ def reference_at(rows: FloatArray, t: FloatArray) -> tuple[FloatArray, FloatArra
 
 def _next_rest(rows: FloatArray) -> FloatArray:
     """For each row pair, the pose where the plan next comes to rest: the end of the run of
-    row pairs of the same kind (straight, or turn in a direction) it belongs to; (n-1, 3)."""
+    row pairs of the same kind (a straight in a direction of travel, or a turn in a
+    direction) it belongs to; (n-1, 3). A reversal of travel is a rest: the robot stops there."""
     d = np.diff(rows[:, 1:3], axis=0)
     dh = _wrap(np.diff(rows[:, 3]))
-    kind = np.where(np.hypot(d[:, 0], d[:, 1]) > 1e-12, 1, np.where(np.abs(dh) > 1e-12, 2 * np.sign(dh), 0))
+    along = np.cos(rows[:-1, 3]) * d[:, 0] + np.sin(rows[:-1, 3]) * d[:, 1]
+    straight = np.hypot(d[:, 0], d[:, 1]) > 1e-12
+    kind = np.where(straight, np.sign(along), np.where(np.abs(dh) > 1e-12, 2 * np.sign(dh), 0))
     out = np.empty((len(kind), 3))
     end = len(rows) - 1
     for k in range(len(kind) - 1, -1, -1):
@@ -282,9 +287,13 @@ def track_drive(
         eh = float(_wrap(ref[i, 2] - h))
         vc = v_ref[i] * math.cos(eh) + g.kx * ex
         # never faster than braking at amax to the plan's next rest allows (a robot that
-        # cannot reverse must not overrun the corner it turns at)
+        # cannot reverse must not overrun the corner it turns at; one that reverses stops
+        # where its travel reverses), forwards or backwards
         ahead = (rest[i, 0] - x) * c + (rest[i, 1] - y) * s
-        vc = min(vc, math.sqrt(2.0 * limits.amax * max(ahead, 0.0))) if vc > 0 else vc
+        if vc > 0:
+            vc = min(vc, math.sqrt(2.0 * limits.amax * max(ahead, 0.0)))
+        elif vc < 0:
+            vc = max(vc, -math.sqrt(2.0 * limits.amax * max(-ahead, 0.0)))
         wc = w_ref[i] + v_ref[i] * (g.ky * ey + g.kh * math.sin(eh)) + g.kturn * math.sin(eh)
         bad = (abs(vc) > limits.vmax * tol, abs(vc - v) > limits.amax * g.dt * tol,
                abs(wc) > limits.omega_max * tol, abs(wc - w) > limits.alpha_max * g.dt * tol)  # fmt: skip
