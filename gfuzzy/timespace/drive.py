@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import InputError
 from ..poses import wrap_angle
 from ..settings import SPEED_SAFETY
 from ..typed import FloatArray
@@ -175,11 +176,28 @@ class Fan:
     offsets : tuple of float
         Headings (rad) relative to the start's heading; 0 drives on without turning.
     distances : tuple of float
-        Points (m) along each lane from which the robot may turn to the goal.
+        Points (m) along each lane from which the robot may turn to the goal: positive,
+        finite and increasing (a lane runs forward from the start).
+
+    Raises
+    ------
+    InputError
+        If an offset is not finite or a distance is not positive, finite and increasing.
     """
 
     offsets: tuple = tuple(math.radians(a) for a in (0, 10, -10, 20, -20, 35, -35, 50, -50, 70, -70))
     distances: tuple = (1.0, 2.0, 3.0)
+
+    def __post_init__(self) -> None:
+        for i, off in enumerate(self.offsets):
+            if not math.isfinite(off):
+                raise InputError(f"Fan.offsets[{i}] must be finite, got {off!r}")
+        for i, d in enumerate(self.distances):
+            # a lane runs forward only: a robot that cannot reverse has no backward one
+            if not (math.isfinite(d) and d > 0):
+                raise InputError(f"Fan.distances[{i}] must be positive and finite, got {d!r}")
+            if i and not d > self.distances[i - 1]:
+                raise InputError(f"Fan.distances[{i}] must be greater than the one before, got {d!r}")
 
 
 def fan(ex, geometry, start, s_id: int, goal, g_id: int, options: Fan) -> None:
