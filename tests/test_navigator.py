@@ -13,6 +13,7 @@ from conftest import ROOT, run_cli_process
 import gfuzzy
 from gfuzzy.navigation.navigator import Navigator, NavOptions
 from gfuzzy.navigation.navsim import min_separation, observe, simulate
+from gfuzzy.navigation.navtypes import NavMode
 from gfuzzy.scene.scene import parse_scene
 
 
@@ -642,3 +643,44 @@ def test_previous_plan_is_refused_when_it_grazes_someone_between_samples(open_sq
         assert (traj is not None) == clear
         if traj is not None:
             assert _gap_to_standing(traj, person, 0.3) > 0.0
+
+
+def test_the_close_tier_keeps_off_the_ways_the_first_plan_kept_off(open_square):
+    """The path space's soft cost (5 s) is not undone by the personal space's (0.5 s): when
+    the plan kept off the people's ways (their ghosts), the search without the personal
+    space keeps off them too; only the path space's own tier may drop them."""
+    scene, rm = open_square
+    people = _standing_row([-2.16, -0.72, 0.72, 2.16])
+    people[:, 3] = -0.4  # the row walks towards the robot, slowly: they have ways to keep off
+    nav = Navigator(scene, rm, (0.0, 4.0), NavOptions(time_budget=5.0, personal_space_cost=0.0))
+    calls = []
+    search = nav._search
+
+    def spy(t, pose, obs, infl, deadline, before=None):
+        calls.append(np.asarray(obs).shape)
+        return search(t, pose, obs, infl, deadline, before)
+
+    nav._search = spy
+    nav.step(0.0, np.array([0.0, -4.0]), people)
+    assert len(calls) >= 2, calls  # the first search and the one without the personal space
+    assert calls[0][0] > len(people) and calls[0][1] == 7  # the people and their ghosts
+    assert calls[1] == calls[0]  # the close tier: the same ghosts, less inflation
+
+
+def test_a_kept_plan_keeps_the_gaps_of_the_tier_that_planned(open_square):
+    """A unicycle keeps its last plan only while it keeps the gaps of the fresh plan's
+    tier: after a 'close' plan, the safety buffer and the uncertainty (not the bare
+    mover clearance of the relaxed tier)."""
+    scene, rm = open_square
+    opts = NavOptions()
+    nav = Navigator(scene, rm, (0.0, 4.0), opts)
+    person = np.array([[3.0, 0.0, 0.0, 1.0, 0.3]])  # 3 m away, walking
+    pose = np.array([0.0, -4.0])
+    close = nav._kept_inflation(pose, person, nav._inflation(pose, person), NavMode.CLOSE)
+    n = close.shape[1]
+    tau = np.arange(n) * opts.slice
+    growth = opts.uncertainty_growth * min(1.0 / opts.reference_speed, 1.0) * tau
+    want = nav.mover_clearance + opts.safety_buffer + growth  # far away: nothing shrunk
+    np.testing.assert_allclose(close[0], want)
+    relaxed = nav._kept_inflation(pose, person, None, NavMode.RELAXED)
+    np.testing.assert_allclose(relaxed[0], nav.mover_clearance)

@@ -66,6 +66,20 @@ def test_tracker_associates_unlabelled_detections():
     np.testing.assert_allclose(by_radius[0.25][2:4], vb, atol=1e-12)
 
 
+def test_a_person_seen_once_is_found_again_where_their_disc_grew_to():
+    """Seen once (no velocity yet), then unseen for 2 s, then seen 1.8 m away: the same
+    person (their reported disc grew at a walking pace, and so did the association gate),
+    not a second track beside a phantom of the first."""
+    tr = Tracker()
+    tr.update(0.0, [[0.0, 0.0, 0.3]])
+    for k in range(1, 8):
+        grown = tr.update(0.25 * k, np.zeros((0, 3)))
+    np.testing.assert_allclose(grown[0, 4], 0.3 + 1.0)  # grew at 1 m/s, capped at 1 m
+    out = tr.update(2.0, [[1.8, 0.0, 0.3]])
+    assert len(out) == 1
+    np.testing.assert_allclose(out[0], [1.8, 0.0, 0.9, 0.0, 0.3])  # its velocity: 1.8 m over 2 s
+
+
 def test_tracker_coasts_an_unseen_person_then_drops_them():
     tr = Tracker(coast=0.5)
     tr.update(0.0, [[0.0, 0.0, 0.3]])

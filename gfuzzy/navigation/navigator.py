@@ -50,7 +50,7 @@ from ..timespace.spacetime import IntervalStore, SpaceTimeGraph
 from ..timespace.timespace import timed_rows
 from ..trajectory import Trajectory
 from ..typed import BoolArray, FloatArray
-from .drivenav import kept_plan
+from .drivenav import cut_rows, kept_plan
 from .evasion import evasion_scores
 from .navtypes import NavMode, NavStep
 from .pathspace import STILL_SPEED, PathSpace, WallCheck
@@ -307,16 +307,15 @@ class Navigator(PathSpace):
         return graph, s_id
 
     # ------------------------------------------------------------- prediction
-    def _inflation(self, pose: FloatArray, obs: FloatArray, relaxed: bool = False, personal: bool = True,
-                   grow_to: FloatArray | None = None) -> FloatArray:  # fmt: skip
+    def _inflation(self, pose: FloatArray, obs: FloatArray, relaxed: bool = False,
+                   personal: bool = True) -> FloatArray:  # fmt: skip
         """(k, S) inflation (m) per person and prediction slice, shrunk near the robot.
 
         A person already closer than the full inflation (someone walked up to the robot)
         gets an inflation that starts just inside their present gap and recovers at the
         robot's speed, so that the robot, which stands where it stands, is not inside its
         own predictions and the search can move it away. The inflation never decreases
-        from one slice to the next (both terms grow with the prediction time). ``grow_to``
-        (k,): a constant full inflation per row instead (the ghosts').
+        from one slice to the next (both terms grow with the prediction time).
         """
         opts = self.options
         n_slices = int(math.ceil(opts.prediction_horizon / opts.slice - 1e-9))
@@ -329,8 +328,6 @@ class Navigator(PathSpace):
         full = self.mover_clearance + opts.safety_buffer + space + rate[:, None] * tau[None, :]
         if relaxed:  # only what the contract asks: the robot's mover clearance
             full = np.full_like(full, self.mover_clearance)
-        if grow_to is not None:
-            full = np.repeat(np.asarray(grow_to, dtype=float).reshape(-1, 1), n_slices, axis=1)
         gap = self._gap(pose, obs)  # (k,) beyond the people's own radius
         margin0 = (self.vplan + speed) * opts.dt / 2  # the search's continuous-time margin at step 0
         allowed = np.maximum(gap - margin0 - 1e-6, 0.0)
@@ -485,11 +482,14 @@ class Navigator(PathSpace):
         if len(obs):
             predicted[:, 4] = obs[:, 4] + infl[:, 0]
         found = self._search(t, pose, *self._with_ghosts(pose, obs, infl), deadline)
-        if opts.path_space > 0 and len(obs) and found.graph is not None and self._clock() < deadline:
+        ghosts = opts.path_space > 0 and len(obs) > 0  # the plan keeps off the people's ways
+        if ghosts and found.graph is not None and self._clock() < deadline:
+            ghosted = found
             found = self._path_space_cost(t, pose, obs, infl, found, deadline)
+            ghosts = found is ghosted
         traj, mode = found.trajectory, NavMode.PLAN
         if opts.personal_space > 0 and len(obs) and found.graph is not None and self._clock() < deadline:
-            traj, mode, found = self._closer(t, pose, obs, found, deadline)
+            traj, mode, found = self._closer(t, pose, obs, found, deadline, ghosts)
         if traj is None and len(obs) and not found.out_of_time and self._clock() < deadline:
             # blocked by the margins (someone standing beside the goal, a narrow gap): try
             # once more with the people's discs as they are, plus the mover clearance only
@@ -506,8 +506,8 @@ class Navigator(PathSpace):
                 mode = NavMode.EVASIVE
         else:
             if self.robot.unicycle:  # a unicycle's change of mind costs turns: keep the last plan if as good
-                kept = kept_plan(self, t, pose, obs, infl if mode == NavMode.PLAN else self._inflation(pose, obs, True),
-                                 traj, opts.commitment)
+                kept = kept_plan(self, t, pose, obs, self._kept_inflation(pose, obs, infl, mode), traj,
+                                 opts.commitment)
                 if kept is not None:
                     traj, mode = kept, NavMode.KEPT
             self._previous = traj
@@ -516,11 +516,20 @@ class Navigator(PathSpace):
         self.last = NavStep(mode, self._clock() - t_begin, found.message, predicted, found.detailed)
         return traj
 
-    def _closer(self, t: float, pose: FloatArray, obs: FloatArray, found: _Searched,
-                deadline: float) -> tuple[Trajectory | None, NavMode, _Searched]:  # fmt: skip
+    def _kept_inflation(self, pose: FloatArray, obs: FloatArray, infl: FloatArray, mode: NavMode) -> FloatArray:
+        """(k, S) the gaps the fresh plan of ``mode`` kept: a kept plan must keep them too."""
+        if mode == NavMode.PLAN:
+            return infl
+        if mode == NavMode.CLOSE:  # the safety buffer and the uncertainty, not the personal space
+            return self._inflation(pose, obs, personal=False)
+        return self._inflation(pose, obs, relaxed=True)
+
+    def _closer(self, t: float, pose: FloatArray, obs: FloatArray, found: _Searched, deadline: float,
+                ghosts: bool = False) -> tuple[Trajectory | None, NavMode, _Searched]:  # fmt: skip
         """The personal space as a soft cost: the first search's plan, unless the search
-        without the personal space (the safety buffer and the uncertainty kept) arrives
-        sooner by more than ``personal_space_cost``, or the first found none.
+        without the personal space (the safety buffer and the uncertainty kept, and the
+        people's ways when ``ghosts``: the first kept them) arrives sooner by more than
+        ``personal_space_cost``, or the first found none.
 
         The second search runs only when it can win: when the first found no plan, or
         when the first's arrival is later than the static lower bound (the roadmap's
@@ -534,7 +543,8 @@ class Navigator(PathSpace):
                 return first, NavMode.PLAN, found
         elif found.out_of_time:
             return None, NavMode.PLAN, found
-        close = self._search(t, pose, obs, self._inflation(pose, obs, personal=False), deadline, found)
+        bare = self._inflation(pose, obs, personal=False)
+        close = self._search(t, pose, *(self._with_ghosts(pose, obs, bare) if ghosts else (obs, bare)), deadline, found)
         second = close.trajectory
         if second is not None and (first is None or second.t_end < first.t_end - opts.personal_space_cost):
             return second, NavMode.CLOSE, close
@@ -652,7 +662,7 @@ class Navigator(PathSpace):
             return None
         if float(metric_distance(prev.at(t), pose, self.robot.circumradius)) > 1e-6:
             return None
-        cut = _cut(prev, t, prev.t_end)
+        cut = cut_rows(prev, t, prev.t_end)
         cut[0, 1:] = pose
         horizon = self.options.prediction_horizon
         tol = self._sample_gap(obs)
@@ -722,13 +732,3 @@ class Navigator(PathSpace):
             if opts.cover > move_time[c]:
                 rows = np.vstack([rows, [t + opts.cover, *ends[c]]])
         return Trajectory(rows, cr)
-
-
-def _cut(traj: Trajectory, ta: float, tb: float) -> FloatArray:
-    """Rows of ``traj`` between ``ta`` and ``tb`` (both ends interpolated), t strictly increasing."""
-    w = traj.waypoints
-    inner = w[(w[:, 0] > ta + 1e-9) & (w[:, 0] < tb - 1e-9)]
-    rows = [np.array([ta, *traj.at(ta)])[None], inner]
-    if tb > ta + 1e-9:
-        rows.append(np.array([tb, *traj.at(tb)])[None])
-    return np.vstack(rows)

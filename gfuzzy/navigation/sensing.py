@@ -144,7 +144,8 @@ class Tracker:
     gate : float
         Association gate (m) on top of ``4 * noise``.
     growth : float
-        Growth (m per s unseen) of an unseen track's reported radius and of its gate.
+        Growth (m per s unseen) of an unseen track's reported radius and of its gate
+        (``UNKNOWN_GROWTH`` for a person seen once; both capped at ``UNKNOWN_CAP``).
 
     Notes
     -----
@@ -185,7 +186,10 @@ class Tracker:
         matched_d = np.zeros(len(det), dtype=bool)
         if len(pred) and len(det):
             cost = np.hypot(*(pred[:, None, :] - det[None, :, :2]).transpose(2, 0, 1))
-            gate = self.gate + self.growth * np.maximum(t - self.seen - dt, 0.0)  # (tracks,)
+            # the gate grows as the track's reported disc does (below): faster for a person
+            # seen once, whose velocity is not known yet
+            unseen = np.maximum(t - self.seen - dt, 0.0)
+            gate = self.gate + np.minimum(np.where(self.hits > 1, self.growth, UNKNOWN_GROWTH) * unseen, UNKNOWN_CAP)
             big = 1e6
             rows, cols = linear_sum_assignment(np.where(cost <= gate[:, None], cost, big))
             for i, j in zip(rows.tolist(), cols.tolist(), strict=True):
@@ -193,10 +197,11 @@ class Tracker:
                     continue
                 r = det[j, :2] - pred[i]
                 self.pos[i] = pred[i] + self.alpha * r
-                if dt > 0:
+                since = t - self.seen[i]  # the residual built up since the last sighting
+                if since > 0:
                     # a second sighting: the first difference, then the filter
                     beta = 1.0 if self.hits[i] == 1 else self.beta
-                    self.vel[i] = self.vel[i] + beta * r / dt
+                    self.vel[i] = self.vel[i] + beta * r / since
                 self.radius[i] = det[j, 2]
                 self.seen[i] = t
                 self.hits[i] += 1

@@ -65,6 +65,9 @@ class SocialMetrics:
 
     @property
     def intrusion_ratio(self) -> float:
+        """Intrusion steps over the run's steps (``gfuzzy navigate``, ``gfuzzy experiments``).
+        An episode of ``gfuzzy crowd`` divides by one step more, as CrowdNav++'s evaluation
+        does (:attr:`gfuzzy.navigation.crowd.Episode.intrusion_ratio`)."""
         return self.intrusion_steps / self.steps if self.steps else 0.0
 
 
