@@ -323,14 +323,13 @@ class Navigator(PathSpace):
         speed = np.hypot(obs[:, 2], obs[:, 3])
         # uncertainty grows with how far a person may stray from the straight walk: with
         # their speed (someone standing is where they stand; a full-speed walker may turn)
-        rate = opts.uncertainty_growth * np.minimum(speed / opts.reference_speed, 1.0)
+        rate = self._growth_rate(speed)
         space = opts.personal_space if personal else 0.0
         full = self.mover_clearance + opts.safety_buffer + space + rate[:, None] * tau[None, :]
         if relaxed:  # only what the contract asks: the robot's mover clearance
             full = np.full_like(full, self.mover_clearance)
         gap = self._gap(pose, obs)  # (k,) beyond the people's own radius
-        margin0 = (self.vplan + speed) * opts.dt / 2  # the search's continuous-time margin at step 0
-        allowed = np.maximum(gap - margin0 - 1e-6, 0.0)
+        allowed = np.maximum(gap - self._step_margin(speed) - 1e-6, 0.0)
         return np.minimum(full, allowed[:, None] + self.vplan * tau[None, :])
 
     def _gap(self, pose: FloatArray, obs: FloatArray) -> FloatArray:

@@ -217,6 +217,17 @@ class PathSpace:
     :class:`gfuzzy.navigation.navigator.Navigator`, whose state and searches it uses): the
     ghosts of the first search and of the relaxed one, and the path space's soft cost."""
 
+    def _growth_rate(self, speed: FloatArray) -> FloatArray:
+        """(k,) m/s at which the prediction of people walking at ``speed`` (k,) grows
+        uncertain: with how far they may stray from the straight walk (someone standing is
+        where they stand; a walker at the reference speed or faster may turn)."""
+        opts = self.options
+        return opts.uncertainty_growth * np.minimum(speed / opts.reference_speed, 1.0)
+
+    def _step_margin(self, speed: FloatArray) -> FloatArray:
+        """(k,) the search's continuous-time margin at step 0 against people at ``speed``."""
+        return (self.vplan + speed) * self.options.dt / 2
+
     def _path_ghosts(self, pose: FloatArray, obs: FloatArray) -> tuple[FloatArray, FloatArray]:
         """The first search's ghosts (:mod:`gfuzzy.navigation.pathspace`): predicted discs
         along each walking person's next ``path_space`` seconds, as rows ``[x, y, vx, vy,
@@ -225,12 +236,11 @@ class PathSpace:
         opts = self.options
         cr = self.robot.circumradius
         gh = path_ghosts(obs, opts.path_space, cr, opts.safety_buffer, STILL_SPEED)
-        margin0 = (self.vplan + np.hypot(gh.obs[:, 2], gh.obs[:, 3])) * opts.dt / 2
-        window = ghost_window(gh, obs, pose, cr, margin0, self.vplan, opts.dt, opts.social_horizon)
+        speed = np.hypot(gh.obs[:, 2], gh.obs[:, 3])
+        window = ghost_window(gh, obs, pose, cr, self._step_margin(speed), self.vplan, opts.dt, opts.social_horizon)
         n_slices = int(math.ceil(opts.prediction_horizon / opts.slice - 1e-9))
         # a ghost is the person predicted s seconds further on: as uncertain as they are then
-        speed = np.hypot(gh.obs[:, 2], gh.obs[:, 3])
-        rate = opts.uncertainty_growth * np.minimum(speed / opts.reference_speed, 1.0)
+        rate = self._growth_rate(speed)
         infl = np.repeat((gh.cover + rate * gh.shift)[:, None], n_slices, axis=1)
         # none due after the social horizon, behind a wall from its person, or in a passage
         reach = cr + gh.obs[:, 4] + gh.cover + rate * gh.shift
