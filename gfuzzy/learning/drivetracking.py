@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, check_number
 from ..status import Status
 from ..typed import FloatArray
 from .tracking import UnicycleLimits, Violations
@@ -80,13 +80,9 @@ class DriveGains:
 
     def __post_init__(self) -> None:
         for name in ("kx", "ky", "kh", "kturn", "dt", "goal_tolerance", "heading_tolerance"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise InputError(f"DriveGains.{name} must be positive and finite, got {value!r}")
+            check_number(f"DriveGains.{name}", getattr(self, name))
         for name in ("settle", "violation_tolerance"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0):
-                raise InputError(f"DriveGains.{name} must be non-negative and finite, got {value!r}")
+            check_number(f"DriveGains.{name}", getattr(self, name), strict=False)
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, check_number
 from ..poses import wrap_angle
 from ..settings import SPEED_SAFETY
 from ..typed import FloatArray
@@ -194,8 +194,7 @@ class Fan:
                 raise InputError(f"Fan.offsets[{i}] must be finite, got {off!r}")
         for i, d in enumerate(self.distances):
             # a lane runs forward only: a robot that cannot reverse has no backward one
-            if not (math.isfinite(d) and d > 0):
-                raise InputError(f"Fan.distances[{i}] must be positive and finite, got {d!r}")
+            check_number(f"Fan.distances[{i}]", d)
             if i and not d > self.distances[i - 1]:
                 raise InputError(f"Fan.distances[{i}] must be greater than the one before, got {d!r}")
 
