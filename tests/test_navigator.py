@@ -11,6 +11,7 @@ import pytest
 from conftest import ROOT, run_cli_process
 
 import gfuzzy
+from gfuzzy.errors import InputError
 from gfuzzy.navigation.navigator import Navigator, NavOptions
 from gfuzzy.navigation.navsim import min_separation, observe, simulate
 from gfuzzy.navigation.navtypes import NavMode
@@ -684,3 +685,26 @@ def test_a_kept_plan_keeps_the_gaps_of_the_tier_that_planned(open_square):
     np.testing.assert_allclose(close[0], want)
     relaxed = nav._kept_inflation(pose, person, None, NavMode.RELAXED)
     np.testing.assert_allclose(relaxed[0], nav.mover_clearance)
+
+
+@pytest.mark.parametrize("clock, searched", [("wall", False), ("cpu", True)])
+def test_the_budget_runs_on_the_chosen_clock(open_square, clock, searched):
+    """A pause that is not the navigator's work (a loaded machine) spends a wall-clock
+    budget, not a CPU-time one: with ``budget_clock="cpu"`` the search still answers."""
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (0.0, 4.0), NavOptions(budget_clock=clock))
+    real = Navigator._field
+
+    def field_after_a_pause(self, *args):
+        time.sleep(0.2)  # twice the budget, asleep
+        return real(self, *args)
+
+    nav._field = field_after_a_pause.__get__(nav)
+    obs = np.array([[0.0, 0.0, 0.0, -1.0, 0.3], [2.0, 1.0, -1.0, 0.0, 0.3]])
+    nav.step(0.0, np.array([0.0, -4.0]), obs)
+    assert (nav.last.mode in ("plan", "close", "relaxed", "kept")) == searched, nav.last
+
+
+def test_an_unknown_budget_clock_is_refused():
+    with pytest.raises(InputError, match="budget_clock"):
+        NavOptions(budget_clock="sundial")

@@ -70,11 +70,11 @@ def setting_of(kw: dict, seed: int) -> C.CrowdSetting:
     return C.CrowdSetting(sensor=sensor, **kw)
 
 
-def run_setting(name, episodes, seed, client, only_policy=None):
+def run_setting(name, episodes, seed, client, only_policy=None, clock="wall"):
     flags, kw, policies, target = SETTINGS[name]
     policies = only_policy or policies
     print(f"\n### {name}\n$ gfuzzy crowd {flags} --episodes {episodes} --seed {seed} --policy {' '.join(policies)}"
-          f"{' --workers 2' if client is not None else ''}")
+          f"{' --workers 2' if client is not None else ''}{' --budget-clock cpu' if clock == 'cpu' else ''}")
     try:
         setting = setting_of(kw, seed)
     except C.InputError as exc:
@@ -82,7 +82,7 @@ def run_setting(name, episodes, seed, client, only_policy=None):
         return
     t0 = time.perf_counter()
     rm = C.crowd_roadmap(setting)
-    runs = C.episodes(setting, rm, seed, episodes, policies, NavOptions(), client)
+    runs = C.episodes(setting, rm, seed, episodes, policies, NavOptions(budget_clock=clock), client)
     print(_table(setting, runs, policies))
     print(f"target: {target}   ({time.perf_counter() - t0:.0f} s, load {os.getloadavg()[0]:.1f})")
     sys.stdout.flush()
@@ -111,6 +111,8 @@ def main(argv=None) -> int:
     ap.add_argument("--only", nargs="+", choices=sorted(SETTINGS), help="these settings only")
     ap.add_argument("--policy", nargs="+", help="these policies only (in every setting)")
     ap.add_argument("--replays", action="store_true", help="the ETH/UCY replays through navigate")
+    ap.add_argument("--budget-clock", choices=("wall", "cpu"), default="wall",
+                    help="the navigator's budget on the wall clock (default) or on CPU time (figures independent of load)")
     args = ap.parse_args(argv)
     print(f"load at start: {os.getloadavg()}")
     with contextlib.ExitStack() as stack:
@@ -121,7 +123,7 @@ def main(argv=None) -> int:
             client = stack.enter_context(local_cluster(args.workers))
         if args.episodes > 0:
             for name in args.only or SETTINGS:
-                run_setting(name, args.episodes, args.seed, client, args.policy)
+                run_setting(name, args.episodes, args.seed, client, args.policy, args.budget_clock)
     if args.replays:
         replays(args.seed)
     return 0

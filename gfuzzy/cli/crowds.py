@@ -35,6 +35,9 @@ def add_crowd(sub) -> None:
     c.add_argument("--fov", type=float, default=360.0, help="field of view (degrees) about the direction of motion")
     c.add_argument("--sense", type=float, help="sensing range (m; default: all, 5 in the arena)")
     c.add_argument("--time-budget", type=float, default=0.1, help="seconds one navigator replan may take (default 0.1)")
+    c.add_argument("--budget-clock", choices=("wall", "cpu"), default="wall",
+                   help="the clock of --time-budget: wall (default, a robot's) or cpu, this process's CPU time, "
+                        "so that figures do not depend on the machine's load")  # fmt: skip
     c.add_argument("--personal-space", type=float, default=0.2,
                    help="gap (m) the navigator keeps from people when that costs little (default 0.2, 0: off)")  # fmt: skip
     c.add_argument("--path-space", type=float, default=1.25, metavar="SECONDS",
@@ -83,7 +86,7 @@ def _setting(args):
         setting = CrowdSetting(args.scenario, humans, args.visible, args.crowd, args.kinematics, sensor,
                                not args.steady_goals)  # fmt: skip
         options = NavOptions(time_budget=args.time_budget, personal_space=args.personal_space,
-                             path_space=args.path_space)
+                             path_space=args.path_space, budget_clock=args.budget_clock)
     except InputError as exc:
         raise BadInput(f"gfuzzy crowd: {exc}") from None
     policies = args.policy or (["navigator", "orca"] + ([] if args.visible else ["oracle"]))

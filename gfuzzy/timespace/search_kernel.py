@@ -286,6 +286,7 @@ def sipp_compiled(
     weight: float = 1.0,
     store=None,
     goal_hold: int = 0,
+    clock=time.perf_counter,
 ):
     """:func:`gfuzzy.timespace.timespace.sipp` with the loop compiled; same arguments, same answer."""
     H = field_.steps
@@ -347,7 +348,7 @@ def sipp_compiled(
             for v in need[: ctr[_NNEED]].tolist():
                 load(v)
         if code in (_NEED, _YIELD):
-            if time.perf_counter() > deadline:
+            if clock() > deadline:
                 return SearchResult(
                     Status.TIMEOUT,
                     message="planning time budget exhausted",

@@ -45,6 +45,7 @@ import logging
 import math
 import time
 from bisect import bisect_left
+from collections.abc import Callable
 
 import numpy as np
 
@@ -72,6 +73,7 @@ def sipp(
     weight: float = 1.0,
     store: IntervalStore | None = None,
     goal_hold: int = 0,
+    clock: Callable[[], float] = time.perf_counter,
 ) -> SearchResult:
     """Earliest-arrival search from ``start`` (at ``start_step``) to ``goal``.
 
@@ -81,7 +83,8 @@ def sipp(
     With ``goal_hold`` K > 0 the goal counts as reached only where it stays safe for K
     steps after the arrival (the robot parks there); the search arrives later if it must.
     When the start is not safe at ``start_step`` its first motions are decided exactly
-    (:meth:`MoverField.motion_safe`).
+    (:meth:`MoverField.motion_safe`). The search gives up at ``deadline`` on ``clock``
+    (wall-clock by default; the navigator may pass a CPU-time clock).
 
     Returns the arrival-optimal sequence of (node, arrival step) on the time grid: the
     robot waits at a node from its arrival until one step before the next arrival.
@@ -128,7 +131,7 @@ def sipp(
             nodes, steps = _walk_back(ukey, best, parent, stride)
             return SearchResult(Status.SOLVED, nodes, steps, expansions=expansions, states=len(best))
         expansions += 1
-        if expansions % 512 == 0 and time.perf_counter() > deadline:
+        if expansions % 512 == 0 and clock() > deadline:
             return SearchResult(
                 Status.TIMEOUT, message="planning time budget exhausted", expansions=expansions, states=len(best)
             )
