@@ -54,6 +54,7 @@ from .drivenav import cut_rows, kept_plan
 from .evasion import evasion_scores
 from .navtypes import NavMode, NavStep
 from .pathspace import STILL_SPEED, PathSpace, WallCheck
+from .swerve import swerve_rates
 from .timedfield import PAIR_SECONDS, PIECE_WORK, _OutOfTime, _TimedField  # noqa: F401 (PIECE_WORK, PAIR_SECONDS: kept importable here)
 
 __all__ = ["NavMode", "NavOptions", "NavStep", "Navigator"]
@@ -154,6 +155,10 @@ class NavOptions:
         A differential drive only: also search the two-leg motions out of the robot's pose
         (turn, straight, turn towards the goal, straight; :func:`gfuzzy.timespace.drive.fan`),
         which detour with few turns where the roadmap's lanes zigzag.
+    swerve_growth : float
+        Further growth (m per s of prediction) of the predicted disc of a person whose
+        straight walk meets someone else's within 2 s (:mod:`gfuzzy.navigation.swerve`):
+        they are about to swerve, and may swerve towards the robot. 0 turns it off.
     """
 
     dt: float = 0.1
@@ -180,6 +185,7 @@ class NavOptions:
     backend: str = "compiled"
     commitment: float = 0.5
     fan: bool = True
+    swerve_growth: float = 0.3
 
     def __post_init__(self):
         if self.budget_clock not in BUDGET_CLOCKS:
@@ -189,7 +195,8 @@ class NavOptions:
         for name in ("dt", "prediction_horizon", "reference_speed", "slice", "time_budget", "plan_slack", "evasion_time", "cover"):
             check_number(name, getattr(self, name))
         for name in ("uncertainty_growth", "safety_buffer", "personal_space", "personal_space_cost", "path_space",
-                     "path_space_cost", "social_horizon", "stationary_hold", "goal_tolerance", "commitment"):
+                     "path_space_cost", "social_horizon", "stationary_hold", "goal_tolerance", "commitment",
+                     "swerve_growth"):
             check_number(name, getattr(self, name), strict=False)
         if self.connect_k < 1 or self.evasion_headings < 4:
             raise InputError("connect_k must be >= 1 and evasion_headings >= 4")
@@ -333,7 +340,7 @@ class Navigator(PathSpace):
         speed = np.hypot(obs[:, 2], obs[:, 3])
         # uncertainty grows with how far a person may stray from the straight walk: with
         # their speed (someone standing is where they stand; a full-speed walker may turn)
-        rate = self._growth_rate(speed)
+        rate = self._growth_rate(speed) + swerve_rates(obs, opts.swerve_growth)
         space = opts.personal_space if personal else 0.0
         full = self.mover_clearance + opts.safety_buffer + space + rate[:, None] * tau[None, :]
         if relaxed:  # only what the contract asks: the robot's mover clearance
