@@ -17,7 +17,7 @@ from ..poses import metric_distance
 from ..trajectory import Trajectory
 from ..typed import FloatArray
 
-__all__ = ["kept_plan", "cut_rows", "COMMIT_SAMPLE"]
+__all__ = ["kept_plan", "sooner_plan", "cut_rows", "COMMIT_SAMPLE"]
 
 #: Seconds between the samples at which a kept plan is checked against the predictions.
 COMMIT_SAMPLE = 0.05
@@ -63,6 +63,28 @@ def kept_plan(nav, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray
     prev = nav._previous
     if prev is None or slack <= 0 or prev.t_end <= t + 1e-9 or prev.t_end > fresh.t_end + slack:
         return None
+    return _if_safe(nav, prev, t, pose, obs, infl)
+
+
+def sooner_plan(nav, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray, fresh: Trajectory,
+                gain: float) -> Trajectory | None:  # fmt: skip
+    """The navigator's last plan from ``t`` on, when it arrives more than ``gain`` seconds
+    before ``fresh`` and still keeps, as :func:`kept_plan` checks, the inflated gap ``infl``
+    (k, S) it was made with from everyone walking on at constant velocity.
+
+    A fresh search may miss a plan the last one found (its budget spent on a long detour
+    before the soft costs' second search could run, a graph spliced differently): without
+    this, a robot among people standing still went back and forth between two plans, one
+    keeping the personal space round the crowd and one passing closer, until time ran out.
+    """
+    prev = nav._previous
+    if prev is None or prev.t_end <= t + 1e-9 or prev.t_end >= fresh.t_end - gain:
+        return None
+    return _if_safe(nav, prev, t, pose, obs, infl)
+
+
+def _if_safe(nav, prev: Trajectory, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray) -> Trajectory | None:
+    """``prev`` from ``t`` on, if the robot is on it and it keeps the gaps ``infl`` (k, S)."""
     cr = nav.robot.circumradius
     if float(metric_distance(prev.at(t), pose, cr)) > 1e-6:
         return None

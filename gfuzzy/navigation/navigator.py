@@ -50,7 +50,7 @@ from ..timespace.spacetime import IntervalStore, SpaceTimeGraph
 from ..timespace.timespace import timed_rows
 from ..trajectory import Trajectory
 from ..typed import BoolArray, FloatArray
-from .drivenav import cut_rows, kept_plan
+from .drivenav import cut_rows, kept_plan, sooner_plan
 from .evasion import evasion_scores
 from .navtypes import NavMode, NavStep
 from .pathspace import STILL_SPEED, PathSpace, WallCheck
@@ -185,7 +185,7 @@ class NavOptions:
     backend: str = "compiled"
     commitment: float = 0.5
     fan: bool = True
-    swerve_growth: float = 0.3
+    swerve_growth: float = 0.0
 
     def __post_init__(self):
         if self.budget_clock not in BUDGET_CLOCKS:
@@ -266,6 +266,8 @@ class Navigator(PathSpace):
         self.replans = 0
         self.last: NavStep | None = None
         self._previous: Trajectory | None = None
+        self._previous_mode: NavMode | None = None  # the mode of the search that made it
+        self._previous_ahead: list = []  # and the roadmap vertices it heads for
         self._ahead: list = []  # (arrival time, roadmap vertex) of the last plan
         self._clock = BUDGET_CLOCKS[opts.budget_clock]  # the budget's clock (a test may replace it)
         self._person_seconds = PERSON_SECONDS  # the predictions' set-up per person, measured
@@ -526,7 +528,16 @@ class Navigator(PathSpace):
                                  opts.commitment)
                 if kept is not None:
                     traj, mode = kept, NavMode.KEPT
+            elif self._previous_mode in (NavMode.PLAN, NavMode.CLOSE) and mode != NavMode.DIRECT and len(obs):
+                # the last plan, still as safe as when it was made, arriving much sooner
+                kept = sooner_plan(self, t, pose, obs, self._kept_inflation(pose, obs, infl, self._previous_mode),
+                                   traj, opts.personal_space_cost)
+                if kept is not None:
+                    traj, mode = kept, NavMode.KEPT
+                    self._ahead = self._previous_ahead  # the vertices the kept plan heads for
             self._previous = traj
+            if mode != NavMode.KEPT:
+                self._previous_mode, self._previous_ahead = mode, self._ahead
         if mode == NavMode.EVASIVE:
             self._previous = None
         self.last = NavStep(mode, self._clock() - t_begin, found.message, predicted, found.detailed)
