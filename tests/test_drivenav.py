@@ -10,8 +10,9 @@ import numpy as np
 import pytest
 
 from gfuzzy.check.check import _unicycle_problem
-from gfuzzy.navigation.navigator import Navigator, NavMode, NavOptions
+from gfuzzy.navigation.navigator import Navigator, NavMode, NavOptions, _Searched
 from gfuzzy.scene.scene import parse_scene
+from gfuzzy.trajectory import Trajectory
 
 START = [1.0, 3.0, 0.0]
 GOAL = [9.0, 3.0, 0.0]
@@ -105,3 +106,60 @@ def test_a_last_plan_someone_steps_into_is_dropped(open_floor):
     assert nav.last.mode != NavMode.KEPT
     assert _min_gap(again, blocker[0], 0.25) >= 0.0
     assert _unicycle_problem(sc.robot, again.waypoints) is None
+
+
+@pytest.fixture(scope="module")
+def open_floor_disc():
+    from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
+
+    doc = {
+        "version": 1, "name": "open-floor-disc", "bounds": [0, 0, 10, 6],
+        "robot": {"disc": 0.3, "vmax": 1.0}, "obstacles": [], "movers": [], "queries": [],
+    }  # fmt: skip
+    sc = parse_scene(doc, "<open-floor-disc>")
+    return sc, build_roadmap(sc, RoadmapOptions(vertices=150, seed=3))
+
+
+def _detour(t0: float, start) -> Trajectory:
+    """A plan that goes round by the top edge: much later than the straight line."""
+    rows = np.array([[t0, *start], [t0 + 3.0, 2.0, 5.5], [t0 + 10.0, 9.0, 5.5], [t0 + 13.0, *GOAL[:2]]])
+    return Trajectory(rows, 0.3)
+
+
+def test_a_much_sooner_last_plan_still_clear_is_kept(open_floor_disc):
+    from gfuzzy.navigation.drivenav import sooner_plan
+
+    sc, rm = open_floor_disc
+    nav = Navigator(sc, rm, GOAL[:2], NavOptions(time_budget=5.0))
+    person = np.array([[5.0, 0.6, 0.0, 0.0, 0.3]])  # standing 2.4 m below the straight line
+    first = nav.step(0.0, START[:2], person)
+    assert nav.last.mode in (NavMode.PLAN, NavMode.CLOSE)
+    pose = first.at(0.25)
+    infl = nav._inflation(pose, person)
+    kept = sooner_plan(nav, 0.25, pose, person, infl, _detour(0.25, pose), nav.options.personal_space_cost)
+    assert kept is not None
+    times = np.linspace(0.25, first.t_end, 200)
+    np.testing.assert_allclose(kept.at(times), first.at(times), atol=1e-9)
+    # not sooner by more than the gain: the fresh plan answers
+    assert sooner_plan(nav, 0.25, pose, person, infl, first, nav.options.personal_space_cost) is None
+    # someone now standing on the last plan's way: dropped
+    ahead = first.at(3.0)
+    blocker = np.array([[ahead[0], ahead[1], 0.0, 0.0, 0.3]])
+    assert sooner_plan(nav, 0.25, pose, blocker, nav._inflation(pose, blocker), _detour(0.25, pose), 0.5) is None
+    # off the last plan (the robot was pushed elsewhere): dropped
+    off = pose + np.array([0.0, 0.3])
+    assert sooner_plan(nav, 0.25, off, person, nav._inflation(off, person), _detour(0.25, off), 0.5) is None
+
+
+def test_the_navigator_answers_with_the_sooner_last_plan(open_floor_disc, monkeypatch):
+    sc, rm = open_floor_disc
+    nav = Navigator(sc, rm, GOAL[:2], NavOptions(time_budget=5.0))
+    person = np.array([[5.0, 0.6, 0.0, 0.0, 0.3]])
+    first = nav.step(0.0, START[:2], person)
+    pose = first.at(0.25)
+    # the fresh search finds only a long detour (as when its budget ran out on one): the last plan answers
+    monkeypatch.setattr(Navigator, "_search", lambda self, t, p, *a, **k: _Searched(_detour(t, p)))
+    again = nav.step(0.25, pose, person)
+    assert nav.last.mode == NavMode.KEPT
+    assert again.t_end == pytest.approx(first.t_end)
+    assert _min_gap(again, person[0], 0.25) >= 0.2
