@@ -20,6 +20,7 @@ on the layered legs only, and the answer says which legs are hasty (``BlendRetim
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -187,8 +188,6 @@ class _Blend:
 
 def _prune(blend: _Blend, hasty, res, stops, max_rounds):
     """Give each hasty leg, last first, the layer back where the chain can still be timed."""
-    import time
-
     for g in np.flatnonzero(hasty)[::-1]:
         if time.perf_counter() > blend.deadline:
             break
@@ -240,8 +239,6 @@ def retime_blend(
         Solved with ``hasty`` all false is the layer on the whole path; not solved when even
         all legs at the search's pace find no timing (the path itself is blocked).
     """
-    import time
-
     robot = scene.robot
     path = _without_null_motions(np.asarray(path, dtype=float))
     vmax, turn_rate = robot.vmax * SPEED_SAFETY, robot.turn_rate * SPEED_SAFETY

@@ -146,7 +146,8 @@ class PlanStats:
     nodes : int or None
         Graph size when start and goal are not connected (no search ran).
     amax_honoured : bool or None
-        For a robot with ``amax``: whether the answer keeps it (only the speed layer does).
+        For a robot with ``amax``: whether the answer keeps it (only the speed layer does,
+        applied to the whole path).
     amax_note : str or None
         Why ``amax`` is not honoured.
     """
