@@ -117,6 +117,18 @@ def test_a_gate_too_early_even_for_haste_is_no_path():
     assert "search's pace" in b.message
 
 
+def test_haste_on_every_leg_is_not_a_layer():
+    # one straight, no turn: at full speed from the start the robot passes x = 3.45 at
+    # 2.95 s, under the layer (1 m/s reached after 0.5 m) at 3.45 s
+    straight = np.array([[0.5, 0.5, 0.0], [4.5, 0.5, 0.0]])
+    b = retime_blend(gate_scene(3.3), straight, 0.0, 0.07, AMAX, 30.0)
+    assert b.status is Status.NO_PATH and b.hasty.all(), b.message
+    assert "only the search's pace" in b.message
+    late = retime_blend(gate_scene(2.5), straight, 0.0, 0.07, AMAX, 30.0)
+    assert late.status is Status.NO_PATH and "not even the search's pace" in late.message
+    assert retime_blend(gate_scene(3.8), straight, 0.0, 0.07, AMAX, 30.0).status is Status.SOLVED
+
+
 def test_the_stage_reports_the_hasty_legs():
     scene = gate_scene(4.4)
     ctx = StageContext(scene, StaticGeometry(scene))

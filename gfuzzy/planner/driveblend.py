@@ -237,7 +237,8 @@ def retime_blend(
     -------
     BlendRetime
         Solved with ``hasty`` all false is the layer on the whole path; not solved when even
-        all legs at the search's pace find no timing (the path itself is blocked).
+        all legs at the search's pace find no timing (the path itself is blocked), or only
+        that does (no leg keeps the layer).
     """
     robot = scene.robot
     path = _without_null_motions(np.asarray(path, dtype=float))
@@ -253,10 +254,16 @@ def retime_blend(
         res, stops = blend.rounds(hasty, max_rounds)
         if res is not None and res.status is Status.SOLVED:
             res, stops, hasty = _prune(blend, hasty, res, stops, max_rounds)
+            if hasty.all():
+                message = "no leg of the path keeps the layer among the movers, only the search's pace"
+                break
             return BlendRetime(Status.SOLVED, res.trajectory, legs=legs, hasty=hasty, waits=tuple(stops),
                                profile_duration=duration)  # fmt: skip
         message = res.message if res is not None and res.message else message
-        if res is not None and res.status is Status.TIMEOUT or time.perf_counter() > deadline or hasty.all():
+        if hasty.all():
+            message = "not even the search's pace on every leg finds a timing of the path among the movers"
+            break
+        if res is not None and res.status is Status.TIMEOUT or time.perf_counter() > deadline:
             break
         blocked = blend.first_blocked(hasty)
         if blocked is None:  # reachable with waits anywhere: haste where the free search waits
