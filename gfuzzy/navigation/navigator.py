@@ -492,12 +492,13 @@ class Navigator(PathSpace):
             predicted[:, 4] = obs[:, 4] + infl[:, 0]
         found = self._search(t, pose, *self._with_ghosts(pose, obs, infl), deadline)
         ghosts = opts.path_space > 0 and len(obs) > 0  # the plan keeps off the people's ways
+        found, kept_infl, closed = self._ways_before_space(t, pose, obs, infl, found, deadline)
         if ghosts and found.graph is not None and self._clock() < deadline:
             ghosted = found
-            found = self._path_space_cost(t, pose, obs, infl, found, deadline)
+            found = self._path_space_cost(t, pose, obs, kept_infl, found, deadline)
             ghosts = found is ghosted
-        traj, mode = found.trajectory, NavMode.PLAN
-        if opts.personal_space > 0 and len(obs) and found.graph is not None and self._clock() < deadline:
+        traj, mode = found.trajectory, NavMode.CLOSE if closed else NavMode.PLAN
+        if opts.personal_space > 0 and len(obs) and found.graph is not None and self._clock() < deadline and not closed:
             traj, mode, found = self._closer(t, pose, obs, found, deadline, ghosts)
         if traj is None and len(obs) and not found.out_of_time and self._clock() < deadline:
             # blocked by the margins (someone standing beside the goal, a narrow gap): try

@@ -256,6 +256,29 @@ class PathSpace:
         always = np.column_stack([obs, np.zeros(len(obs)), np.full(len(obs), math.inf)])
         return np.vstack([always, ghosts]), np.vstack([infl, g_infl])
 
+    def _ways_before_space(self, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray, found: _Searched,
+                           deadline: float) -> tuple[_Searched, FloatArray, bool]:  # fmt: skip
+        """The people's ways before their personal space: when the first search (ghosts and
+        personal space) found no plan, the same search without the personal space, still
+        keeping off the ghosts, before any search that drops them.
+
+        Returns the search kept, the inflation it kept (``infl``, or the one without the
+        personal space) and whether it is the latter (a ``close`` answer). Crossing someone's
+        way is what CrowdNav++ counts as an intrusion, and a robot already in someone's way
+        (the arena's people turn, and come into its 5 m range) often has no plan that both
+        steps out of it and keeps a 0.2 m gap from everyone: dropping the ghosts there, as
+        the path space's soft cost did, sent it on along the person's way.
+        """
+        opts = self.options
+        if (opts.path_space <= 0 or opts.personal_space <= 0 or not len(obs) or found.trajectory is not None
+                or found.out_of_time or found.graph is None or self._clock() >= deadline):
+            return found, infl, False
+        bare = self._inflation(pose, obs, personal=False)
+        again = self._search(t, pose, *self._with_ghosts(pose, obs, bare), deadline, found)
+        if again.trajectory is None:
+            return (again if again.out_of_time else found), infl, False
+        return again, bare, True
+
     def _path_space_cost(self, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray, found: _Searched,
                          deadline: float) -> _Searched:  # fmt: skip
         """The path space as a soft cost: the plan that keeps off the people's ways, unless
