@@ -106,7 +106,10 @@ class NavOptions:
         Seconds of each walking person's predicted path the first search also keeps the
         robot's body off (:mod:`gfuzzy.navigation.pathspace`): it does not cross just in
         front of someone or wait in their way (CrowdNav++'s intrusion, 1.25 s), whenever
-        a plan exists that does not; otherwise the relaxed search answers. 0 turns it off.
+        a plan exists that does not. It comes before the personal space: when no plan
+        keeps both, the search without the personal space still keeps off people's ways
+        (a ``close`` answer) before any search drops them; otherwise the relaxed search
+        answers. 0 turns it off.
     path_space_cost : float
         What (s of arrival time) keeping off people's ways is worth: the plan that keeps the
         path space is taken unless one that does not arrives sooner by more than this.
