@@ -29,12 +29,15 @@ from ..typed import BoolArray, FloatArray, IntArray
 if TYPE_CHECKING:
     from .navigator import _Searched
 
-__all__ = ["STILL_SPEED", "PathSpace", "GHOST_SPACING", "ESCAPE_FACTOR", "Ghosts", "path_ghosts", "ghost_window", "walled_off", "WallCheck"]
+__all__ = ["STILL_SPEED", "PathSpace", "GHOST_SPACING", "ESCAPE_FACTOR", "WAYS_SHARE", "Ghosts", "path_ghosts", "ghost_window", "walled_off", "WallCheck"]
 
 #: Below this speed (m/s) an observed person counts as standing still.
 STILL_SPEED = 0.1
 #: Largest distance (m) between neighbouring ghosts of a person (a faster walker gets more).
 GHOST_SPACING = 0.7
+#: Share of the time left that the search keeping people's ways but not their personal
+#: space may take (:meth:`PathSpace._ways_before_space`).
+WAYS_SHARE = 0.5
 #: A robot in someone's way gets this many times the time to step sideways out of it at
 #: full speed before their ghosts count (the roadmap's directions are not exactly sideways).
 ESCAPE_FACTOR = 1.5
@@ -274,9 +277,13 @@ class PathSpace:
                 or found.out_of_time or found.graph is None or self._clock() >= deadline):
             return found, infl, False
         bare = self._inflation(pose, obs, personal=False)
-        again = self._search(t, pose, *self._with_ghosts(pose, obs, bare), deadline, found)
+        # at most half the time left: a crowd where this fails too leaves the searches
+        # that drop the ghosts the other half (spending it all here sent the robot to
+        # the evasive motion, which keeps off nobody's way)
+        now = self._clock()
+        again = self._search(t, pose, *self._with_ghosts(pose, obs, bare), now + WAYS_SHARE * (deadline - now), found)
         if again.trajectory is None:
-            return (again if again.out_of_time else found), infl, False
+            return found, infl, False
         return again, bare, True
 
     def _path_space_cost(self, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray, found: _Searched,
