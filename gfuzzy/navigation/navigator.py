@@ -493,13 +493,14 @@ class Navigator(PathSpace):
         found = self._search(t, pose, *self._with_ghosts(pose, obs, infl), deadline)
         ghosts = opts.path_space > 0 and len(obs) > 0  # the plan keeps off the people's ways
         found, kept_infl, closed = self._ways_before_space(t, pose, obs, infl, found, deadline)
-        if ghosts and found.graph is not None and self._clock() < deadline:
+        if ghosts and found.graph is not None and self._clock() < deadline and (found.trajectory is not None or not closed):
             ghosted = found
             found = self._path_space_cost(t, pose, obs, kept_infl, found, deadline)
             ghosts = found is ghosted
+        closed = closed and found.trajectory is not None  # else the searches without the ghosts
         traj, mode = found.trajectory, NavMode.CLOSE if closed else NavMode.PLAN
         if opts.personal_space > 0 and len(obs) and found.graph is not None and self._clock() < deadline and not closed:
-            traj, mode, found = self._closer(t, pose, obs, found, deadline, ghosts)
+            traj, mode, found = self._closer(t, pose, obs, found, deadline, ghosts and found.trajectory is not None)
         if traj is None and len(obs) and not found.out_of_time and self._clock() < deadline:
             # blocked by the margins (someone standing beside the goal, a narrow gap): try
             # once more with the people's discs as they are, plus the mover clearance only

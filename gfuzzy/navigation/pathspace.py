@@ -29,15 +29,12 @@ from ..typed import BoolArray, FloatArray, IntArray
 if TYPE_CHECKING:
     from .navigator import _Searched
 
-__all__ = ["STILL_SPEED", "PathSpace", "GHOST_SPACING", "ESCAPE_FACTOR", "WAYS_SHARE", "Ghosts", "path_ghosts", "ghost_window", "walled_off", "WallCheck"]
+__all__ = ["STILL_SPEED", "PathSpace", "GHOST_SPACING", "ESCAPE_FACTOR", "Ghosts", "path_ghosts", "ghost_window", "walled_off", "WallCheck"]
 
 #: Below this speed (m/s) an observed person counts as standing still.
 STILL_SPEED = 0.1
 #: Largest distance (m) between neighbouring ghosts of a person (a faster walker gets more).
 GHOST_SPACING = 0.7
-#: Share of the time left that the search keeping people's ways but not their personal
-#: space may take (:meth:`PathSpace._ways_before_space`).
-WAYS_SHARE = 0.5
 #: A robot in someone's way gets this many times the time to step sideways out of it at
 #: full speed before their ghosts count (the roadmap's directions are not exactly sideways).
 ESCAPE_FACTOR = 1.5
@@ -263,28 +260,26 @@ class PathSpace:
                            deadline: float) -> tuple[_Searched, FloatArray, bool]:  # fmt: skip
         """The people's ways before their personal space: when the first search (ghosts and
         personal space) found no plan, the same search without the personal space, still
-        keeping off the ghosts, before any search that drops them.
+        keeping off the ghosts, in place of the one that keeps the personal space without
+        the ghosts (the path space's soft cost's).
 
         Returns the search kept, the inflation it kept (``infl``, or the one without the
-        personal space) and whether it is the latter (a ``close`` answer). Crossing someone's
-        way is what CrowdNav++ counts as an intrusion, and a robot already in someone's way
-        (the arena's people turn, and come into its 5 m range) often has no plan that both
-        steps out of it and keeps a 0.2 m gap from everyone: dropping the ghosts there, as
-        the path space's soft cost did, sent it on along the person's way.
+        personal space) and whether it replaced the first (then the path space's soft cost
+        does not run, and a plan it found is a ``close`` answer; when it found none, the
+        searches that drop the ghosts follow). Crossing someone's way is what CrowdNav++
+        counts as an intrusion, and a robot already in someone's way (the arena's people
+        turn, and come into its 5 m range) often has no plan that both steps out of it
+        and keeps a 0.2 m gap from everyone: dropping the ghosts there, as the soft cost
+        did, sent it on along the person's way. A replacement, not one more search: in a
+        dense crowd, where every search fails, one more spent the time budget and left
+        the robot to the evasive motion.
         """
         opts = self.options
         if (opts.path_space <= 0 or opts.personal_space <= 0 or not len(obs) or found.trajectory is not None
                 or found.out_of_time or found.graph is None or self._clock() >= deadline):
             return found, infl, False
         bare = self._inflation(pose, obs, personal=False)
-        # at most half the time left: a crowd where this fails too leaves the searches
-        # that drop the ghosts the other half (spending it all here sent the robot to
-        # the evasive motion, which keeps off nobody's way)
-        now = self._clock()
-        again = self._search(t, pose, *self._with_ghosts(pose, obs, bare), now + WAYS_SHARE * (deadline - now), found)
-        if again.trajectory is None:
-            return found, infl, False
-        return again, bare, True
+        return self._search(t, pose, *self._with_ghosts(pose, obs, bare), deadline, found), bare, True
 
     def _path_space_cost(self, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray, found: _Searched,
                          deadline: float) -> _Searched:  # fmt: skip
