@@ -113,26 +113,3 @@ def test_the_navigator_does_not_cut_in_front_of_a_walker(open_square):
     # the robot crosses (the plan without the path space)
     assert ends[1.25, 10.0] > ends[0.0, 0.0] + 1.0
     assert ways[1.25, 1.0] == ways[0.0, 0.0] and ends[1.25, 1.0] == ends[0.0, 0.0]
-
-
-def test_the_ways_are_kept_before_the_personal_space(open_square):
-    scene, rm = open_square
-    # someone stands 0.15 m (gap) beside the goal: no plan keeps the 0.2 m personal space
-    # there; a walker crosses the robot's way as in the test above
-    pose = np.array([0.0, -3.0])
-    standing = np.array([0.75, 3.0, 0.0, 0.0, 0.3])
-    walker = np.array([-2.5, -2.0, 1.0, 0.0, 0.3])
-    obs = np.vstack([standing, walker])
-    answers = {}
-    for ps in (0.0, 1.25):
-        opts = NavOptions(path_space=ps, path_space_cost=10.0, personal_space=0.2, time_budget=5.0)
-        nav = Navigator(scene, rm, (0.0, 3.0), opts)
-        traj = nav.step(0.0, pose, obs)
-        answers[ps] = (str(nav.last.mode), _intrusions(traj, walker, 0.0), traj)
-    # both answer without the personal space (the goal is inside it) ...
-    assert answers[0.0][0] == answers[1.25][0] == "close"
-    np.testing.assert_allclose(answers[1.25][2].waypoints[-1, 1:], [0.0, 3.0])
-    # ... and with the path space the plan still lets the walker pass: dropping the
-    # personal space does not drop the people's ways
-    assert answers[0.0][1] > 0
-    assert answers[1.25][1] == 0

@@ -106,10 +106,7 @@ class NavOptions:
         Seconds of each walking person's predicted path the first search also keeps the
         robot's body off (:mod:`gfuzzy.navigation.pathspace`): it does not cross just in
         front of someone or wait in their way (CrowdNav++'s intrusion, 1.25 s), whenever
-        a plan exists that does not. It comes before the personal space: when no plan
-        keeps both, the search without the personal space still keeps off people's ways
-        (a ``close`` answer) before any search drops them; otherwise the relaxed search
-        answers. 0 turns it off.
+        a plan exists that does not; otherwise the relaxed search answers. 0 turns it off.
     path_space_cost : float
         What (s of arrival time) keeping off people's ways is worth: the plan that keeps the
         path space is taken unless one that does not arrives sooner by more than this.
@@ -492,15 +489,13 @@ class Navigator(PathSpace):
             predicted[:, 4] = obs[:, 4] + infl[:, 0]
         found = self._search(t, pose, *self._with_ghosts(pose, obs, infl), deadline)
         ghosts = opts.path_space > 0 and len(obs) > 0  # the plan keeps off the people's ways
-        found, kept_infl, closed = self._ways_before_space(t, pose, obs, infl, found, deadline)
-        if ghosts and found.graph is not None and self._clock() < deadline and (found.trajectory is not None or not closed):
+        if ghosts and found.graph is not None and self._clock() < deadline:
             ghosted = found
-            found = self._path_space_cost(t, pose, obs, kept_infl, found, deadline)
+            found = self._path_space_cost(t, pose, obs, infl, found, deadline)
             ghosts = found is ghosted
-        closed = closed and found.trajectory is not None  # else the searches without the ghosts
-        traj, mode = found.trajectory, NavMode.CLOSE if closed else NavMode.PLAN
-        if opts.personal_space > 0 and len(obs) and found.graph is not None and self._clock() < deadline and not closed:
-            traj, mode, found = self._closer(t, pose, obs, found, deadline, ghosts and found.trajectory is not None)
+        traj, mode = found.trajectory, NavMode.PLAN
+        if opts.personal_space > 0 and len(obs) and found.graph is not None and self._clock() < deadline:
+            traj, mode, found = self._closer(t, pose, obs, found, deadline, ghosts)
         if traj is None and len(obs) and not found.out_of_time and self._clock() < deadline:
             # blocked by the margins (someone standing beside the goal, a narrow gap): try
             # once more with the people's discs as they are, plus the mover clearance only

@@ -256,31 +256,6 @@ class PathSpace:
         always = np.column_stack([obs, np.zeros(len(obs)), np.full(len(obs), math.inf)])
         return np.vstack([always, ghosts]), np.vstack([infl, g_infl])
 
-    def _ways_before_space(self, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray, found: _Searched,
-                           deadline: float) -> tuple[_Searched, FloatArray, bool]:  # fmt: skip
-        """The people's ways before their personal space: when the first search (ghosts and
-        personal space) found no plan, the same search without the personal space, still
-        keeping off the ghosts, in place of the one that keeps the personal space without
-        the ghosts (the path space's soft cost's).
-
-        Returns the search kept, the inflation it kept (``infl``, or the one without the
-        personal space) and whether it replaced the first (then the path space's soft cost
-        does not run, and a plan it found is a ``close`` answer; when it found none, the
-        searches that drop the ghosts follow). Crossing someone's way is what CrowdNav++
-        counts as an intrusion, and a robot already in someone's way (the arena's people
-        turn, and come into its 5 m range) often has no plan that both steps out of it
-        and keeps a 0.2 m gap from everyone: dropping the ghosts there, as the soft cost
-        did, sent it on along the person's way. A replacement, not one more search: in a
-        dense crowd, where every search fails, one more spent the time budget and left
-        the robot to the evasive motion.
-        """
-        opts = self.options
-        if (opts.path_space <= 0 or opts.personal_space <= 0 or not len(obs) or found.trajectory is not None
-                or found.out_of_time or found.graph is None or self._clock() >= deadline):
-            return found, infl, False
-        bare = self._inflation(pose, obs, personal=False)
-        return self._search(t, pose, *self._with_ghosts(pose, obs, bare), deadline, found), bare, True
-
     def _path_space_cost(self, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray, found: _Searched,
                          deadline: float) -> _Searched:  # fmt: skip
         """The path space as a soft cost: the plan that keeps off the people's ways, unless
