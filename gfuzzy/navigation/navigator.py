@@ -44,13 +44,13 @@ from ..roadmap.roadmap import Roadmap
 from ..scene.scene import Mover, Scene
 from ..settings import SPEED_SAFETY
 from ..status import Status
-from ..timespace.drive import Fan, drive_rows, evasions
+from ..timespace.drive import Fan, drive_rows
 from ..timespace.movers import MoverField
 from ..timespace.spacetime import IntervalStore, SpaceTimeGraph
 from ..timespace.timespace import timed_rows
 from ..trajectory import Trajectory
 from ..typed import BoolArray, FloatArray
-from .drivenav import cut_rows, kept_plan
+from .drivenav import cut_rows, drive_evasion, kept_plan
 from .evasion import evasion_scores
 from .navtypes import NavMode, NavStep
 from .pathspace import STILL_SPEED, PathSpace, WallCheck
@@ -259,6 +259,7 @@ class Navigator(PathSpace):
         self.replans = 0
         self.last: NavStep | None = None
         self._previous: Trajectory | None = None
+        self._evasion: Trajectory | None = None  # a unicycle's last evasive motion
         self._ahead: list = []  # (arrival time, roadmap vertex) of the last plan
         self._clock = BUDGET_CLOCKS[opts.budget_clock]  # the budget's clock (a test may replace it)
         self._person_seconds = PERSON_SECONDS  # the predictions' set-up per person, measured
@@ -522,6 +523,8 @@ class Navigator(PathSpace):
             self._previous = traj
         if mode == NavMode.EVASIVE:
             self._previous = None
+        else:
+            self._evasion = None
         self.last = NavStep(mode, self._clock() - t_begin, found.message, predicted, found.detailed)
         return traj
 
@@ -706,12 +709,8 @@ class Navigator(PathSpace):
         T = opts.evasion_time
         n_t = int(math.ceil(T / FALLBACK_SAMPLE)) + 1
         times = t + np.linspace(0.0, T, n_t)
-        if self.robot.unicycle:  # turn in place, then drive along the heading (drive.evasions)
-            cands = evasions(self.geometry, t, pose, T, opts.cover, opts.evasion_headings, self.vplan)
-            trajs = [Trajectory(rows, cr) for rows in cands]
-            pts = np.stack([tr.at(np.minimum(times, tr.t_end)) for tr in trajs])
-            ends = np.array([rows[-1, 1:] for rows in cands])
-            return trajs[int(np.argmax(evasion_scores(self, t, pose, obs, pts, times, ends)))]
+        if self.robot.unicycle:  # turn in place, then drive along the heading (drivenav.drive_evasion)
+            return drive_evasion(self, t, pose, obs, times)
         ang = np.arange(opts.evasion_headings) * (2 * math.pi / opts.evasion_headings)
         speeds = np.array([1.0, 0.5]) * self.vplan
         dirs = np.column_stack([np.cos(ang), np.sin(ang)])
