@@ -13,8 +13,9 @@ import pytest
 
 from gfuzzy.check.check import _unicycle_problem, check_trajectory
 from gfuzzy.navigation.drivenav import drive_evasion, swerved
-from gfuzzy.navigation.navigator import FALLBACK_SAMPLE, Navigator, NavMode, NavOptions
+from gfuzzy.navigation.navigator import Navigator, NavMode, NavOptions
 from gfuzzy.navigation.navsim import simulate
+from gfuzzy.navigation.navtypes import MOTION_SAMPLE
 from gfuzzy.scene.scene import Mover, parse_scene
 
 START = [1.0, 3.0, 0.0]
@@ -136,7 +137,7 @@ def _head_on(nav, t=0.0):
     sample times: a quarter turn (1.6 s) comes too late, backing up keeps the gap."""
     person = np.array([P0[0] + 1.0, P0[1], -1.0, 0.0, 0.3])
     T = nav.options.evasion_time
-    times = t + np.linspace(0.0, T, int(math.ceil(T / FALLBACK_SAMPLE)) + 1)
+    times = t + np.linspace(0.0, T, int(math.ceil(T / MOTION_SAMPLE)) + 1)
     return person, times
 
 
