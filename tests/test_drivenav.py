@@ -1,7 +1,7 @@
 """The unicycle navigator's own motions: the two-leg fan out of the start
 (:func:`gfuzzy.timespace.drive.fan`) and keeping the last plan
 (:func:`gfuzzy.navigation.drivenav.kept_plan`), and its evasive motions
-(:func:`gfuzzy.navigation.drivenav.drive_evasion`)."""
+(:func:`gfuzzy.navigation.drivenav.drive_evasion`), backing up with ``reverse``."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from gfuzzy.check.check import _unicycle_problem, check_trajectory
-from gfuzzy.navigation.drivenav import drive_evasion, swerved
+from gfuzzy.navigation.drivenav import drive_evasion
 from gfuzzy.navigation.navigator import Navigator, NavMode, NavOptions
 from gfuzzy.navigation.navsim import simulate
 from gfuzzy.navigation.navtypes import MOTION_SAMPLE
@@ -124,14 +124,6 @@ def reversing_floor(open_floor):
     return replace(sc, robot=replace(sc.robot, reverse=True)), rm
 
 
-def test_swerved_walks_by_hand():
-    obs = np.array([[1.0, 2.0, 1.0, 0.0, 0.3]])
-    out = swerved(obs, math.pi / 2)
-    np.testing.assert_allclose(out[:, 2:4], [[1, 0], [0, 1], [0, -1]], atol=1e-12)
-    np.testing.assert_allclose(out[:, [0, 1, 4]], np.repeat(obs[:, [0, 1, 4]], 3, axis=0))
-    assert swerved(obs, 0.0) is obs
-
-
 def _head_on(nav, t=0.0):
     """Someone 1 m ahead (0.4 m gap) walking at the robot at 1 m/s, and the evasion's
     sample times: a quarter turn (1.6 s) comes too late, backing up keeps the gap."""
@@ -155,29 +147,6 @@ def test_a_robot_that_may_reverse_backs_straight_away_from_someone_head_on(rever
     fwd = Navigator(open_floor[0], rm, GOAL, NavOptions())
     w = drive_evasion(fwd, 0.0, P0, person[None], times).waypoints
     assert _unicycle_problem(open_floor[0].robot, w) is None
-
-
-def test_an_evasion_under_way_is_kept_while_the_world_is_as_seen(open_floor):
-    """Someone stands 1 m ahead and someone walks in from the left: the robot turns away
-    before it drives. A quarter of a second later, mid-turn, with the world as seen, the
-    turn goes on as begun (the fresh candidates' headings, counted from the new heading,
-    differ from it: they would start another)."""
-    sc, rm = open_floor
-    nav = Navigator(sc, rm, GOAL, NavOptions())
-    people = np.array([[P0[0] + 1.0, P0[1], 0.0, 0.0, 0.3], [P0[0], P0[1] + 2.6, 0.0, -1.0, 0.3]])
-    _, times = _head_on(nav)
-    first = drive_evasion(nav, 0.0, P0, people, times)
-    w = first.waypoints
-    assert np.allclose(w[1, 1:3], P0[:2]) and abs(w[1, 3] - P0[2]) > 0.3  # a turn first
-    t = 0.25
-    seen = people.copy()
-    seen[:, :2] += t * seen[:, 2:4]
-    again = drive_evasion(nav, t, first.at(t), seen, times + t)
-    ts = np.linspace(t, first.t_end, 100)
-    np.testing.assert_allclose(again.at(ts), first.at(ts), atol=1e-9)
-    assert _unicycle_problem(sc.robot, again.waypoints) is None
-    off = first.at(t) + np.array([0.0, 0.05, 0.0])  # not on it: a fresh evasion from there
-    assert drive_evasion(nav, t, off, seen, times + t).waypoints[0, 2] == pytest.approx(off[1])
 
 
 def test_a_reversing_robot_among_walkers_reaches_the_goal_and_passes_the_check(reversing_floor):

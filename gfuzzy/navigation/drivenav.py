@@ -20,16 +20,7 @@ from ..typed import FloatArray
 from .evasion import evasion_scores
 from .navtypes import MOTION_SAMPLE, sample_loss
 
-__all__ = ["kept_plan", "cut_rows", "drive_evasion", "swerved", "SWERVE", "EVASION_COMMIT"]
-
-#: Angle (rad) by which each person's observed walk is also turned, both ways, when a
-#: differential drive's evasions are scored: people swerve round each other, and a robot
-#: that must turn before it moves sideways cannot answer a swerve once it has begun.
-SWERVE = math.radians(25.0)
-#: Score (:func:`gfuzzy.navigation.evasion.evasion_scores`: 100 per second of time to
-#: contact) by which a new evasion must beat the last one, still under way, to replace it:
-#: an evasion that turns one way and then the other loses both turns.
-EVASION_COMMIT = 5.0
+__all__ = ["kept_plan", "cut_rows", "drive_evasion"]
 
 
 def cut_rows(traj: Trajectory, ta: float, tb: float) -> FloatArray:
@@ -100,30 +91,12 @@ def kept_plan(nav, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray
 
 
 
-def swerved(obs: FloatArray, angle: float) -> FloatArray:
-    """The people ``obs`` (k, 5), then each again with their walk turned by ``+angle`` and
-    by ``-angle``: (3k, 5) (k when ``angle`` is 0)."""
-    if angle == 0 or len(obs) == 0:
-        return obs
-    out = [obs]
-    for a in (angle, -angle):
-        c, s = math.cos(a), math.sin(a)
-        turned = obs.copy()
-        turned[:, 2] = c * obs[:, 2] - s * obs[:, 3]
-        turned[:, 3] = s * obs[:, 2] + c * obs[:, 3]
-        out.append(turned)
-    return np.vstack(out)
-
-
 def drive_evasion(nav, t: float, pose: FloatArray, obs: FloatArray, times: FloatArray) -> Trajectory:
-    """A differential drive's evasive motion (:meth:`Navigator._evasive`'s for a unicycle).
-
-    The candidates of :func:`gfuzzy.timespace.drive.evasions` (standing, or a turn in
-    place and a straight move), and the last evasion from ``t`` on when the robot is on
-    it, are scored by :func:`gfuzzy.navigation.evasion.evasion_scores` against the people
-    walking on as seen and against each walk turned by :data:`SWERVE` both ways (the
-    earliest contact counts); the last evasion is kept unless a new one scores
-    :data:`EVASION_COMMIT` more.
+    """A differential drive's evasive motion (:meth:`Navigator._evasive`'s for a unicycle):
+    the candidate of :func:`gfuzzy.timespace.drive.evasions` (standing, or a turn in place
+    and a straight move, straight back without turning too with ``robot.reverse``) that
+    :func:`gfuzzy.navigation.evasion.evasion_scores` scores best against the people
+    walking on as seen.
 
     Parameters
     ----------
@@ -142,19 +115,7 @@ def drive_evasion(nav, t: float, pose: FloatArray, obs: FloatArray, times: Float
     opts = nav.options
     cr = nav.robot.circumradius
     cands = evasions(nav.geometry, t, pose, times[-1] - t, opts.cover, opts.evasion_headings, nav.vplan)
-    prev = nav._evasion
-    on_prev = (prev is not None and prev.t_end > t + 1e-9
-               and float(metric_distance(prev.at(t), pose, cr)) <= 1e-6)  # fmt: skip
-    if on_prev:
-        rows = cut_rows(prev, t, prev.t_end)
-        rows[0, 1:] = pose
-        cands.append(rows)
     trajs = [Trajectory(rows, cr) for rows in cands]
     pts = np.stack([tr.at(np.minimum(times, tr.t_end)) for tr in trajs])
     ends = np.array([rows[-1, 1:] for rows in cands])
-    score = evasion_scores(nav, t, pose, swerved(obs, SWERVE), pts, times, ends)
-    best = int(np.argmax(score))
-    if on_prev and score[-1] >= score[best] - EVASION_COMMIT:
-        best = len(trajs) - 1
-    nav._evasion = trajs[best]
-    return trajs[best]
+    return trajs[int(np.argmax(evasion_scores(nav, t, pose, obs, pts, times, ends)))]

@@ -256,7 +256,6 @@ class Navigator(PathSpace):
         self.replans = 0
         self.last: NavStep | None = None
         self._previous: Trajectory | None = None
-        self._evasion: Trajectory | None = None  # a unicycle's last evasive motion
         self._ahead: list = []  # (arrival time, roadmap vertex) of the last plan
         self._clock = BUDGET_CLOCKS[opts.budget_clock]  # the budget's clock (a test may replace it)
         self._person_seconds = PERSON_SECONDS  # the predictions' set-up per person, measured
@@ -520,8 +519,6 @@ class Navigator(PathSpace):
             self._previous = traj
         if mode == NavMode.EVASIVE:
             self._previous = None
-        else:
-            self._evasion = None
         self.last = NavStep(mode, self._clock() - t_begin, found.message, predicted, found.detailed)
         return traj
 
