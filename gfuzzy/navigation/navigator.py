@@ -44,13 +44,13 @@ from ..roadmap.roadmap import Roadmap
 from ..scene.scene import Mover, Scene
 from ..settings import SPEED_SAFETY
 from ..status import Status
-from ..timespace.drive import Fan, drive_rows, evasions
+from ..timespace.drive import Fan, drive_rows
 from ..timespace.movers import MoverField
 from ..timespace.spacetime import IntervalStore, SpaceTimeGraph
 from ..timespace.timespace import timed_rows
 from ..trajectory import Trajectory
 from ..typed import BoolArray, FloatArray
-from .drivenav import cut_rows, kept_plan
+from .drivenav import cut_rows, drive_evasion, kept_plan
 from .evasion import evasion_scores
 from .navtypes import MOTION_SAMPLE, NavMode, NavStep, sample_loss
 from .pathspace import STILL_SPEED, PathSpace, WallCheck
@@ -703,12 +703,8 @@ class Navigator(PathSpace):
         T = opts.evasion_time
         n_t = int(math.ceil(T / MOTION_SAMPLE)) + 1
         times = t + np.linspace(0.0, T, n_t)
-        if self.robot.unicycle:  # turn in place, then drive along the heading (drive.evasions)
-            cands = evasions(self.geometry, t, pose, T, opts.cover, opts.evasion_headings, self.vplan)
-            trajs = [Trajectory(rows, cr) for rows in cands]
-            pts = np.stack([tr.at(np.minimum(times, tr.t_end)) for tr in trajs])
-            ends = np.array([rows[-1, 1:] for rows in cands])
-            return trajs[int(np.argmax(evasion_scores(self, t, pose, obs, pts, times, ends)))]
+        if self.robot.unicycle:  # turn in place, then drive along the heading (drivenav.drive_evasion)
+            return drive_evasion(self, t, pose, obs, times)
         ang = np.arange(opts.evasion_headings) * (2 * math.pi / opts.evasion_headings)
         speeds = np.array([1.0, 0.5]) * self.vplan
         dirs = np.column_stack([np.cos(ang), np.sin(ang)])
