@@ -35,6 +35,11 @@ LOOK_TIME = 0.25
 LOOK_SPEED = 0.2
 #: Seconds over which a look must stay clear of everyone seen, walking on.
 LOOK_CHECK = 1.0
+#: A side where nobody known is goes unseen this many times ``look_after`` before a look.
+EMPTY_FACTOR = 4.0
+#: Seconds within which a person known on an unseen side could reach the robot for it to
+#: look there after ``look_after``.
+LOOK_REACH = 3.0
 
 
 class Lookout:
@@ -73,10 +78,24 @@ class Lookout:
         self.pose = xy.copy()
         self.looked[self._in_view(self.heading)] = t
 
-    def direction(self, t: float) -> float | None:
-        """The direction (radians) whose view takes in the most sides unseen for longer
-        than ``look_after`` (the stalest first on ties); None when no side is stale."""
-        stale = t - self.looked > self.look_after + 1e-9
+    def direction(self, t: float, pose: FloatArray | None = None, obs: FloatArray | None = None,
+                  vmax: float = 1.0) -> float | None:  # fmt: skip
+        """The direction (radians) whose view takes in the most stale sides (the stalest
+        first on ties); None when no side is stale. A side is stale when never seen, when
+        unseen for ``look_after`` seconds while someone of ``obs`` (k, 5) (people seen
+        before, walking on unseen) is there within ``LOOK_REACH`` seconds of the robot at
+        ``pose``, or unseen for ``EMPTY_FACTOR * look_after`` seconds."""
+        age = t - self.looked
+        stale = age > EMPTY_FACTOR * self.look_after + 1e-9
+        if pose is not None and obs is not None and len(obs):
+            rel = obs[:, :2] - np.asarray(pose, dtype=float)[None, :2]
+            dist = np.hypot(rel[:, 0], rel[:, 1]) - obs[:, 4]
+            near = dist <= (np.hypot(obs[:, 2], obs[:, 3]) + vmax) * LOOK_REACH
+            width = 2 * math.pi / SECTORS
+            sector = (np.arctan2(rel[near, 1], rel[near, 0]) % (2 * math.pi) // width).astype(int) % SECTORS
+            known = np.zeros(SECTORS, dtype=bool)
+            known[sector] = True
+            stale |= known & (age > self.look_after + 1e-9)
         if not stale.any():
             return None
         age = np.minimum(t - self.looked, 1e9)
@@ -86,7 +105,7 @@ class Lookout:
     def look(self, nav: Navigator, t: float, pose: FloatArray, obs: FloatArray, planned: Trajectory) -> Trajectory | None:
         """The look to take instead of ``planned``, or None (nothing stale, the plan
         already turns the view there, or the look is not clear)."""
-        ang = self.direction(t)
+        ang = self.direction(t, pose, obs, float(nav.vplan))
         if ang is None:
             return None
         d = planned.at(t + LOOK_TIME)[:2] - pose[:2]
