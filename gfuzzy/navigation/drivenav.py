@@ -16,11 +16,9 @@ import numpy as np
 from ..poses import metric_distance
 from ..trajectory import Trajectory
 from ..typed import FloatArray
+from .navtypes import MOTION_SAMPLE, sample_loss
 
-__all__ = ["kept_plan", "cut_rows", "COMMIT_SAMPLE"]
-
-#: Seconds between the samples at which a kept plan is checked against the predictions.
-COMMIT_SAMPLE = 0.05
+__all__ = ["kept_plan", "cut_rows"]
 
 
 def cut_rows(traj: Trajectory, ta: float, tb: float) -> FloatArray:
@@ -38,7 +36,7 @@ def kept_plan(nav, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray
     """The navigator's last plan from ``t`` on, when it is worth keeping instead of ``fresh``.
 
     Kept when the robot is on it, it arrives at most ``slack`` seconds after ``fresh``, and
-    it keeps, at every sample ``COMMIT_SAMPLE`` apart over the prediction horizon, the
+    it keeps, at every sample ``MOTION_SAMPLE`` apart over the prediction horizon, the
     inflated gap ``infl`` (k, S) the fresh search kept from each person walking on at
     constant velocity (plus what the gap can lose between two samples).
 
@@ -79,12 +77,12 @@ def kept_plan(nav, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray
     if not keep.any():
         return traj
     near, infl = obs[keep], infl[keep]
-    times = t + np.arange(0.0, horizon + 1e-9, COMMIT_SAMPLE)
+    times = t + np.arange(0.0, horizon + 1e-9, MOTION_SAMPLE)
     pts = traj.at(np.minimum(times, traj.t_end))
     gap = nav._clearance_along(pts, times, near) + nav.mover_clearance  # (T, k)
     s_of = np.minimum(np.floor((times - t) / opts.slice + 1e-9).astype(np.int64), infl.shape[1] - 1)
     speed = np.hypot(near[:, 2], near[:, 3])
-    lost = (nav.vplan + speed) * COMMIT_SAMPLE / 2  # (k,) the gap's fall between two samples
+    lost = sample_loss(nav.vplan, speed)  # (k,) the gap's fall between two samples
     if np.any(gap < infl[:, s_of].T + lost[None, :]):
         return None
     return traj

@@ -21,6 +21,7 @@ import numpy as np
 
 from ..trajectory import Trajectory
 from ..typed import FloatArray
+from .navtypes import MOTION_SAMPLE
 
 if TYPE_CHECKING:
     from .navigator import Navigator
@@ -120,7 +121,7 @@ class Lookout:
         traj = Trajectory(rows, nav.robot.circumradius)
         near = nav._near(pose, obs, LOOK_CHECK, nav.options.safety_buffer + 0.5)
         if len(near):
-            times = t + np.arange(0.0, LOOK_CHECK + 1e-9, 0.05)
+            times = t + np.arange(0.0, LOOK_CHECK + 1e-9, MOTION_SAMPLE)
             pts = traj.at(times)[None]
             gap = nav._clearance_along(pts, times, near)
             if gap.min() <= nav.options.safety_buffer + nav._sample_gap(near):

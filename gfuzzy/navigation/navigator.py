@@ -53,7 +53,7 @@ from ..typed import BoolArray, FloatArray
 from .drivenav import cut_rows, kept_plan
 from .evasion import evasion_scores
 from .lookout import Lookout
-from .navtypes import NavMode, NavStep
+from .navtypes import MOTION_SAMPLE, NavMode, NavStep, sample_loss
 from .pathspace import STILL_SPEED, PathSpace, WallCheck
 from .timedfield import PAIR_SECONDS, PIECE_WORK, _OutOfTime, _TimedField  # noqa: F401 (PIECE_WORK, PAIR_SECONDS: kept importable here)
 
@@ -65,9 +65,6 @@ log = logging.getLogger(__name__)
 SEARCH_SHARE = 0.75
 #: Samples of the look-ahead in the test of who may come within reach (:meth:`Navigator._may_reach`).
 REACH_SAMPLES = 48
-#: Seconds between the samples at which the fallbacks test a motion against the people
-#: walking on; the gap kept at the samples covers what can happen between two of them.
-FALLBACK_SAMPLE = 0.05
 #: First guess (s) of the predictions' set-up per person (then measured per navigator).
 PERSON_SECONDS = 150e-6
 
@@ -683,7 +680,7 @@ class Navigator(PathSpace):
     def _previous_if_clear(self, t: float, pose: FloatArray, obs: FloatArray) -> Trajectory | None:
         """The last plan from ``t`` on, if the robot is on it and it keeps clear of everyone
         seen now (walking on at constant velocity, un-inflated) over the prediction horizon:
-        sampled every ``FALLBACK_SAMPLE`` s, with a gap that bounds the one in between
+        sampled every ``MOTION_SAMPLE`` s, with a gap that bounds the one in between
         (:meth:`_sample_gap`)."""
         prev = self._previous
         if prev is None or prev.t_end <= t + 1e-9:
@@ -696,19 +693,19 @@ class Navigator(PathSpace):
         tol = self._sample_gap(obs)
         obs = self._near(pose, obs, horizon, tol)
         if len(obs):
-            times = np.linspace(t, t + horizon, int(math.ceil(horizon / FALLBACK_SAMPLE)) + 1)
+            times = np.linspace(t, t + horizon, int(math.ceil(horizon / MOTION_SAMPLE)) + 1)
             pts = Trajectory(cut, self.robot.circumradius).at(times)
             if np.min(self._clearance_along(pts, times, obs)) <= tol:
                 return None
         return Trajectory(cut, self.robot.circumradius)
 
     def _sample_gap(self, obs: FloatArray) -> float:
-        """Gap (m) to keep at samples ``FALLBACK_SAMPLE`` apart so that there is none
+        """Gap (m) to keep at samples ``MOTION_SAMPLE`` apart so that there is none
         between them: no point of the robot moves faster than ``vmax`` (the speed bound
         counts turning at the circumscribed radius) nor a person faster than seen, so
         the gap changes by at most their sum times half the sampling interval there."""
         speed = float(np.max(np.hypot(obs[:, 2], obs[:, 3]), initial=0.0))
-        return (float(self.robot.vmax) + speed) * FALLBACK_SAMPLE / 2 + 1e-6
+        return sample_loss(float(self.robot.vmax), speed) + 1e-6
 
     def _evasive(self, t: float, pose: FloatArray, obs: FloatArray) -> Trajectory:
         """The statically free straight motion (or standing still) with the latest contact.
@@ -717,13 +714,13 @@ class Navigator(PathSpace):
         for ``evasion_time`` (or half, or a quarter of it, whichever is free of static
         obstacles) and then standing, and standing still. Each is scored by its time to
         contact with the people walking on at constant velocity (un-inflated, sampled every
-        ``FALLBACK_SAMPLE`` s over ``evasion_time``, with a bound on the gap between two
+        ``MOTION_SAMPLE`` s over ``evasion_time``, with a bound on the gap between two
         samples, see :func:`.evasion.evasion_scores`), then by the smallest gap, then by progress to the goal.
         """
         opts = self.options
         cr = self.robot.circumradius
         T = opts.evasion_time
-        n_t = int(math.ceil(T / FALLBACK_SAMPLE)) + 1
+        n_t = int(math.ceil(T / MOTION_SAMPLE)) + 1
         times = t + np.linspace(0.0, T, n_t)
         if self.robot.unicycle:  # turn in place, then drive along the heading (drive.evasions)
             cands = evasions(self.geometry, t, pose, T, opts.cover, opts.evasion_headings, self.vplan)

@@ -9,7 +9,20 @@ import numpy as np
 
 from ..typed import FloatArray
 
-__all__ = ["NavMode", "NavStep"]
+__all__ = ["NavMode", "NavStep", "MOTION_SAMPLE", "sample_loss"]
+
+#: Seconds between two samples at which a motion is checked against people walking on at
+#: constant velocity (the fallbacks, a kept plan); :func:`sample_loss` bounds the rest.
+MOTION_SAMPLE = 0.05
+
+
+def sample_loss(robot_speed, person_speed):
+    """What the gap between the robot and a person can lose between two samples
+    :data:`MOTION_SAMPLE` apart: no point of the robot moves faster than ``robot_speed``
+    (the speed bound counts turning at the circumscribed radius) nor the person faster
+    than ``person_speed``, so the gap changes by at most their sum times half the interval
+    (float or array, broadcast)."""
+    return (robot_speed + person_speed) * MOTION_SAMPLE / 2
 
 
 class NavMode(str, Enum):
