@@ -176,6 +176,9 @@ def test_speed_layer_answers_keep_the_guarantees(path):
         info = res.speed_report.to_dict()
         if not info["applied"]:
             continue
+        if info.get("hasty"):  # in part: its hasty legs break amax, and the answer says so
+            assert res.amax_honoured is not True and 0 < info["hasty"]["legs"] < info["hasty"]["of"]
+            continue
         # the profile respects the acceleration bound: speed changes between steps stay
         # within amax * dt (plus the discretization of the profile onto the time grid)
         v = res.trajectory.speeds()

@@ -9,7 +9,9 @@ thrown away because a segment or a turn in place could not be certified statical
     python tools/bench_drive_refine.py [--bundled NAME ...] [--unseen NAME ...] [-n VERTICES]
         [--seed S] [--stage refine|speed]
 
-``--stage speed`` runs ``--speed-layer`` instead and counts where it applied.
+``--stage speed`` runs ``--speed-layer`` instead and counts where it applied: to the whole
+path (``applied``) or, where no timing of the whole layered path exists among the movers,
+with some legs at the search's pace (``partial``, with their count and length).
 
 Run it with another checkout first on PYTHONPATH to measure that code ("before").
 """
@@ -70,7 +72,11 @@ def main() -> None:
             reason = rep.reason
             if speed and rep.applied:
                 reason = f"{rep.before['duration']:.2f} -> {rep.after['duration']:.2f} s, corners {rep.corners}"
-            if rep.applied:
+            if speed and rep.applied and rep.hasty:
+                h = rep.hasty
+                verdict = "partial"
+                reason += f", {h['legs']} of {h['of']} legs ({h['length']:.2f} of {h['total']:.2f} m) at the search's pace"
+            elif rep.applied:
                 verdict = "applied"
             elif "certified" in reason:
                 verdict = "rejected"

@@ -4,7 +4,9 @@ For every query of the bundled ``kinematics: unicycle`` scenes, planned by the s
 and with ``--speed-layer``: the duration, whether the layer applied (and why not), the
 corners of the path before and after it is straightened, and, measured from the rows (mean
 speeds of neighbouring row pairs), the largest linear acceleration, angular acceleration,
-speed and |w|. The same scenes without their movers are added (``/static``): the layer's
+speed and |w|. ``applied``: ``yes`` (the whole path layered), ``part`` (some legs at the
+search's pace, where no timing of the whole layered path exists among the movers: their
+rows are in the maxima), ``no``. The same scenes without their movers are added (``/static``): the layer's
 cost alone, with no waiting for movers.
 
     python tools/bench_drive_speed.py [--seed S]
@@ -69,7 +71,7 @@ def main() -> None:
                         print(f"{name:<44}{label:<9}unsolved")
                         continue
                     rep = res.speed_report
-                    applied = "-" if rep is None else ("yes" if rep.applied else "no")
+                    applied = "-" if rep is None else ("part" if rep.hasty else "yes" if rep.applied else "no")
                     prof = f"{rep.profile_seconds:8.2f}" if rep is not None and rep.profile_seconds else f"{'':8}"
                     corners = f"{rep.corners['before']}->{rep.corners['after']}" if rep is not None and rep.corners else ""
                     vm, wm, am, alm = row_figures(res.trajectory.waypoints)
@@ -77,6 +79,10 @@ def main() -> None:
                           f"{vm:>7.3f}{wm:>7.3f}{am:>8.2f}{alm:>10.2f}{secs:>7.2f}")  # fmt: skip
                     if rep is not None and not rep.applied:
                         print(f"{'':<44}  ({rep.reason})")
+                    if rep is not None and rep.hasty:
+                        h = rep.hasty
+                        print(f"{'':<44}  ({h['legs']} of {h['of']} legs, {h['length']:.2f} of {h['total']:.2f} m, "
+                              "at the search's pace: their rows break amax)")  # fmt: skip
         r = scene.robot
         amax = r.amax if r.amax is not None else 2 * r.vmax
         print(f"({scene.name}: vmax {r.vmax}, wmax {r.turn_rate:.3g}, amax {amax}, amax/r {amax / r.circumradius:.3g})")

@@ -165,7 +165,10 @@ def _stage_summary(info: dict) -> str:
             parts.append(f"{b[key]:.2f} -> {a[key]:.2f} {unit}")
     if "stops" in info:
         parts.append(f"{info['stops']} stop(s)")
-    return "applied: " + ", ".join(parts)
+    if info.get("hasty"):
+        h = info["hasty"]
+        parts.append(f"{h['legs']} of {h['of']} legs ({h['length']:.2f} of {h['total']:.2f} m) at the search's pace")
+    return ("applied in part: " if info.get("hasty") else "applied: ") + ", ".join(parts)
 
 
 def cmd_check(args) -> int:

@@ -146,7 +146,8 @@ class PlanStats:
     nodes : int or None
         Graph size when start and goal are not connected (no search ran).
     amax_honoured : bool or None
-        For a robot with ``amax``: whether the answer keeps it (only the speed layer does).
+        For a robot with ``amax``: whether the answer keeps it (only the speed layer does,
+        applied to the whole path).
     amax_note : str or None
         Why ``amax`` is not honoured.
     """
@@ -255,7 +256,7 @@ def _amax_stats(robot, stats: PlanStats, layer: SpeedReport | None) -> PlanStats
     """
     if robot.amax is None:
         return stats
-    honoured = bool(layer is not None and layer.applied)
+    honoured = bool(layer is not None and layer.whole)
     note = None
     if layer is None:
         note = (
@@ -266,6 +267,13 @@ def _amax_stats(robot, stats: PlanStats, layer: SpeedReport | None) -> PlanStats
         note = (
             f"robot.amax {robot.amax:g} is not honoured: the speed layer did not apply "
             f"({layer.reason or 'no reason given'})"
+        )
+    elif not layer.whole:
+        h = layer.hasty
+        note = (
+            f"robot.amax {robot.amax:g} is not honoured on {h['legs']} of the path's {h['of']} legs "
+            f"({h['length']:.2f} of {h['total']:.2f} m): no timing of the whole layered path exists among "
+            "the movers, and those legs keep the search's pace where a mover forces haste"
         )
     if note:
         log.info("%s", note)

@@ -33,6 +33,7 @@ from ..settings import AMAX_PER_VMAX
 from ..status import Status
 from ..trajectory import Trajectory
 from ..typed import FloatArray
+from .driveblend import BlendRetime, retime_blend
 from .driveretime import retime_drive
 from .retime import retime_path, retime_profile
 
@@ -124,6 +125,12 @@ class SpeedReport:
         A differential drive's: ``before``, the corners (turns in place inside the path) of
         the answer's path, and ``after``, those of the path the layer timed (it straightens
         the path first).
+    hasty : mapping or None
+        A differential drive's, when no timing of the whole layered path exists among the
+        movers and the layer applies to part of it (:mod:`gfuzzy.planner.driveblend`):
+        ``legs`` driven at the search's pace (no fuzzy or acceleration bound) ``of`` the
+        path's legs, their ``length`` of the path's ``total`` (metric, m). None: the layer
+        holds on the whole path.
     """
 
     applied: bool
@@ -134,10 +141,16 @@ class SpeedReport:
     before: Mapping | None = None
     after: Mapping | None = None
     corners: Mapping | None = None
+    hasty: Mapping | None = None
+
+    @property
+    def whole(self) -> bool:
+        """Applied to the whole path (every leg within the fuzzy bound and ``amax``)."""
+        return self.applied and not self.hasty
 
     def to_dict(self) -> dict:
         """The ``stats["speed_layer"]`` form (the trajectory file's keys)."""
-        keys = ("applied", "amax", "profile_seconds", "reason", "stops", "before", "after", "corners")
+        keys = ("applied", "amax", "profile_seconds", "reason", "stops", "before", "after", "corners", "hasty")
         return _present(self, keys)
 
 
@@ -415,6 +428,10 @@ def _speed_layer(ctx: StageContext, traj: Trajectory, query, opts, deadline) -> 
     figures = replace(
         report, applied=True, stops=len(rt.waits), before=_speed_figures(traj), after=_speed_figures(rt.trajectory)
     )
+    if isinstance(rt, BlendRetime) and rt.hasty is not None and rt.hasty.any():
+        total = float(rt.legs[-1])
+        hasty = {"legs": int(rt.hasty.sum()), "of": len(rt.hasty), "length": rt.hasty_length, "total": total}
+        figures = replace(figures, hasty=hasty)
     return rt.trajectory, figures
 
 
@@ -434,8 +451,13 @@ def _drive_layer(ctx: StageContext, path, query, opts, amax, horizon, rules, dea
     for candidate in tries:
         rt = retime_drive(ctx.scene, candidate, query.t0, opts.dt, amax, horizon, rules, deadline=deadline, hold=query.hold)
         if rt.status is Status.SOLVED:
-            break
-    return rt, {"before": count(path), "after": count(candidate)}
+            return rt, {"before": count(path), "after": count(candidate)}
+    # no timing of the whole layered path: the layer where it fits, haste where a mover forces it
+    for candidate in tries:
+        blend = retime_blend(ctx.scene, candidate, query.t0, opts.dt, amax, horizon, rules, deadline=deadline, hold=query.hold)
+        if blend.status is Status.SOLVED:
+            return blend, {"before": count(path), "after": count(candidate)}
+    return rt, {"before": count(path), "after": count(tries[-1])}
 
 
 def _speed_figures(traj: Trajectory) -> dict:
