@@ -611,6 +611,7 @@ def run_episode(setting: CrowdSetting, roadmap, seed: int, index: int, policies,
     """
     from ..planner.planner import PlanOptions, plan
     from .crowdpolicies import NavigatorPolicy, OraclePolicy, OrcaPolicy, SocialForcePolicy
+    from .lookout import knowing_view
     from .navigator import Navigator, NavOptions
 
     if setting.kinematics == "unicycle" and set(policies) - {"navigator"}:
@@ -633,7 +634,8 @@ def run_episode(setting: CrowdSetting, roadmap, seed: int, index: int, policies,
     for policy in policies:
         scene = crowd_scene(setting, lay, tracks, f"crowd-{setting.scenario}-{index}")
         if policy == "navigator":
-            act = NavigatorPolicy(Navigator(scene, roadmap, _poses(setting, lay)[1], options or NavOptions()))
+            nav_opts = knowing_view(options or NavOptions(), setting.sensor.fov)
+            act = NavigatorPolicy(Navigator(scene, roadmap, _poses(setting, lay)[1], nav_opts))
         elif policy == "orca":
             act = OrcaPolicy(lay.goal, CROWD)
         elif policy == "social-force":
