@@ -44,14 +44,15 @@ from ..roadmap.roadmap import Roadmap
 from ..scene.scene import Mover, Scene
 from ..settings import SPEED_SAFETY
 from ..status import Status
-from ..timespace.drive import Fan, drive_rows, evasions
+from ..timespace.drive import Fan, drive_rows
 from ..timespace.movers import MoverField
 from ..timespace.spacetime import IntervalStore, SpaceTimeGraph
 from ..timespace.timespace import timed_rows
 from ..trajectory import Trajectory
 from ..typed import BoolArray, FloatArray
-from .drivenav import cut_rows, kept_plan, sooner_plan
+from .drivenav import cut_rows, drive_evasion, kept_plan, sooner_plan
 from .evasion import evasion_scores
+from .lookout import Lookout
 from .navtypes import MOTION_SAMPLE, NavMode, NavStep, sample_loss
 from .pathspace import STILL_SPEED, PathSpace, WallCheck
 from .swerve import swerve_rates
@@ -156,6 +157,11 @@ class NavOptions:
         Further growth (m per s of prediction) of the predicted disc of a person whose
         straight walk meets someone else's within 2 s (:mod:`gfuzzy.navigation.swerve`):
         they are about to swerve, and may swerve towards the robot. 0 turns it off.
+    fov : float
+        A disc robot's field of view (degrees), centred on its direction of motion; below
+        360 it looks, now and then, where it has not looked (:mod:`gfuzzy.navigation.lookout`).
+    look_after : float
+        Seconds a side may go unseen before the robot (``fov`` < 360) looks there.
     """
 
     dt: float = 0.1
@@ -183,6 +189,8 @@ class NavOptions:
     commitment: float = 0.5
     fan: bool = True
     swerve_growth: float = 0.0
+    fov: float = 360.0
+    look_after: float = 1.0
 
     def __post_init__(self):
         if self.budget_clock not in BUDGET_CLOCKS:
@@ -198,6 +206,9 @@ class NavOptions:
         if self.connect_k < 1 or self.evasion_headings < 4:
             raise InputError("connect_k must be >= 1 and evasion_headings >= 4")
         check_number("stretch", self.stretch, 1.0, strict=False)
+        check_number("look_after", self.look_after)
+        if not 0 < self.fov <= 360:
+            raise InputError(f"fov must be in (0, 360] degrees, got {self.fov}")
 
 
 @dataclass(frozen=True)
@@ -269,6 +280,8 @@ class Navigator(PathSpace):
         self._clock = BUDGET_CLOCKS[opts.budget_clock]  # the budget's clock (a test may replace it)
         self._person_seconds = PERSON_SECONDS  # the predictions' set-up per person, measured
         self._walls = WallCheck(scene)
+        disc = robot.shape == "disc" and robot.dof == 2  # its view follows its motion
+        self._lookout = Lookout(opts.fov, opts.look_after, goal) if opts.fov < 360 and disc else None
         self._build_base()
         if opts.backend == "compiled":  # load the compiled kernels now, not inside a step's budget
             from ..timespace.search_kernel import warm
@@ -486,6 +499,8 @@ class Navigator(PathSpace):
         if not np.all(np.isfinite(obs)) or np.any(obs[:, 4] < 0):
             raise InputError("observations must be finite rows [x, y, vx, vy, radius >= 0]")
         self.replans += 1
+        if self._lookout is not None:
+            self._lookout.observe(t, pose)
         cr = self.robot.circumradius
         if float(metric_distance(pose, self.goal, cr)) <= opts.goal_tolerance:
             self.reached = True
@@ -535,6 +550,10 @@ class Navigator(PathSpace):
             self._previous = traj
             if mode != NavMode.KEPT:
                 self._previous_mode, self._previous_ahead = mode, self._ahead
+        if self._lookout is not None:
+            looked = self._lookout.look(self, t, pose, obs, traj)
+            if looked is not None:
+                traj, mode = looked, NavMode.LOOK
         if mode == NavMode.EVASIVE:
             self._previous = None
         self.last = NavStep(mode, self._clock() - t_begin, found.message, predicted, found.detailed)
@@ -721,12 +740,8 @@ class Navigator(PathSpace):
         T = opts.evasion_time
         n_t = int(math.ceil(T / MOTION_SAMPLE)) + 1
         times = t + np.linspace(0.0, T, n_t)
-        if self.robot.unicycle:  # turn in place, then drive along the heading (drive.evasions)
-            cands = evasions(self.geometry, t, pose, T, opts.cover, opts.evasion_headings, self.vplan)
-            trajs = [Trajectory(rows, cr) for rows in cands]
-            pts = np.stack([tr.at(np.minimum(times, tr.t_end)) for tr in trajs])
-            ends = np.array([rows[-1, 1:] for rows in cands])
-            return trajs[int(np.argmax(evasion_scores(self, t, pose, obs, pts, times, ends)))]
+        if self.robot.unicycle:  # turn in place, then drive along the heading (drivenav.drive_evasion)
+            return drive_evasion(self, t, pose, obs, times)
         ang = np.arange(opts.evasion_headings) * (2 * math.pi / opts.evasion_headings)
         speeds = np.array([1.0, 0.5]) * self.vplan
         dirs = np.column_stack([np.cos(ang), np.sin(ang)])
