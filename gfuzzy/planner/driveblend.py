@@ -11,8 +11,10 @@ one straight or one turn in place each) at the search's pace instead: at ``vmax`
 the turning rate) with no acceleration phase, as the time-space search's answer does. Every
 other leg keeps the layer. The legs given haste are chosen greedily: the search on the chain
 (waits allowed anywhere) finds the first rest that no timing of the chain up to it reaches;
-the latest layered leg before that rest gets haste; repeat. So haste is spent just before
-the place a mover blocks, and nowhere the layer fits. Every leg still starts and ends at a
+the latest layered leg before that rest gets haste; repeat. Then each hasty leg, last first,
+gets the layer back where the chain can still be timed. The set is minimal, not the smallest:
+no hasty leg can get the layer back alone (:func:`retime_legs` times any set), but another
+set of fewer legs may exist. Every leg still starts and ends at a
 rest and no step crosses a corner, so every row obeys the row rule exactly; ``amax`` is kept
 on the layered legs only, and the answer says which legs are hasty (``BlendRetime.hasty``).
 """
@@ -39,7 +41,7 @@ from .retime import RetimeResult
 if TYPE_CHECKING:
     from ..fuzzy.rules import RuleBase
 
-__all__ = ["BlendRetime", "retime_blend", "blend_chain"]
+__all__ = ["BlendRetime", "retime_blend", "retime_legs", "blend_chain"]
 
 
 @dataclass(frozen=True)
@@ -162,6 +164,52 @@ def _prune(blend: _Blend, hasty, res, stops, max_rounds):
     return res, stops, hasty
 
 
+def _blend_of(scene, path, t0, dt, amax, horizon, rulebase, deadline, hold) -> _Blend:
+    robot = scene.robot
+    path = _without_null_motions(np.asarray(path, dtype=float))
+    prof = drive_profile(path, robot.circumradius, robot.vmax * SPEED_SAFETY, amax,
+                         robot.turn_rate * SPEED_SAFETY, rulebase)  # fmt: skip
+    return _Blend(scene, path, prof, t0, dt, amax, horizon, deadline, hold)
+
+
+def retime_legs(
+    scene: Scene,
+    path: FloatArray,
+    hasty,
+    t0: float,
+    dt: float,
+    amax: float,
+    horizon: float,
+    rulebase: RuleBase | None = None,
+    deadline: float = math.inf,
+    max_rounds: int = 5,
+    hold: float = 0.0,
+) -> RetimeResult:
+    """Time a differential drive's path with the given legs at the search's pace.
+
+    The timing :func:`retime_blend` tries for each choice of hasty legs (the same chain and
+    rounds), for one choice given: to see whether a set of legs is enough.
+
+    Parameters
+    ----------
+    scene, path, t0, dt, amax, horizon, rulebase, deadline, max_rounds, hold
+        As for :func:`retime_blend`.
+    hasty : (n,) bool
+        For each leg (``BlendRetime.legs``), whether it is driven at the search's pace.
+
+    Returns
+    -------
+    RetimeResult
+        Solved with the trajectory, or why not.
+    """
+    blend = _blend_of(scene, path, t0, dt, amax, horizon, rulebase, deadline, hold)
+    hasty = np.asarray(hasty, dtype=bool)
+    if hasty.shape != (len(blend.legs) - 1,):
+        raise ValueError(f"hasty has {hasty.size} entries, the path has {len(blend.legs) - 1} legs")
+    res, _ = blend.rounds(hasty, max_rounds)
+    return res
+
+
 def retime_blend(
     scene: Scene,
     path: FloatArray,
@@ -174,7 +222,7 @@ def retime_blend(
     max_rounds: int = 5,
     hold: float = 0.0,
 ) -> BlendRetime:
-    """Time a differential drive's path with the speed layer on as many legs as the movers allow.
+    """Time a differential drive's path with the speed layer on the legs the movers leave it.
 
     Parameters
     ----------
@@ -203,23 +251,22 @@ def retime_blend(
         all legs at the search's pace find no timing (the path itself is blocked), or only
         that does (no leg keeps the layer).
     """
-    robot = scene.robot
-    path = _without_null_motions(np.asarray(path, dtype=float))
-    prof = drive_profile(path, robot.circumradius, robot.vmax * SPEED_SAFETY, amax,
-                         robot.turn_rate * SPEED_SAFETY, rulebase)  # fmt: skip
-    duration = float(profile_times(prof.s, prof.v)[-1])
-    blend = _Blend(scene, path, prof, t0, dt, amax, horizon, deadline, hold)
+    blend = _blend_of(scene, path, t0, dt, amax, horizon, rulebase, deadline, hold)
+    duration = float(profile_times(blend.prof.s, blend.prof.v)[-1])
     legs = blend.legs
 
     def fail(message, hasty):
-        status = Status.TIMEOUT if time.perf_counter() > deadline else Status.NO_PATH
+        if time.perf_counter() > deadline:
+            status, message = Status.TIMEOUT, "the time limit passed"
+        else:
+            status = Status.NO_PATH
         return BlendRetime(status, None, message, legs=legs, hasty=hasty, profile_duration=duration)
 
     # the fastest the path goes: every leg at the search's pace, waits anywhere
     fastest = blend.search(*blend.chain(np.ones(len(legs) - 1, dtype=bool), [])[:2], None)
     if fastest.status is not Status.SOLVED:
         why = "not even the search's pace on every leg finds a timing of the path among the movers"
-        return fail(fastest.message if fastest.status is Status.TIMEOUT else why, np.ones(len(legs) - 1, dtype=bool))
+        return fail(why, np.ones(len(legs) - 1, dtype=bool))
     hasty = np.zeros(len(legs) - 1, dtype=bool)
     message = "no safe timing found"
     while True:

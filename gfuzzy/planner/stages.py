@@ -424,7 +424,7 @@ def _speed_layer(ctx: StageContext, traj: Trajectory, query, opts, deadline) -> 
                             dt=opts.dt, amax=amax, horizon=horizon, deadline=deadline, hold=query.hold)  # fmt: skip
     report = SpeedReport(False, amax, profile_seconds=rt.profile_duration, corners=corners)
     if rt.status is Status.TIMEOUT:
-        return traj, replace(report, reason=f"the time limit passed while timing the speed-limited path ({rt.message})")
+        return traj, replace(report, reason="the time limit passed while timing the speed-limited path among the movers")
     if rt.status is not Status.SOLVED:
         why = f"the speed-limited path could not be timed among the movers ({rt.message})"
         return traj, replace(report, reason=why)
@@ -467,7 +467,7 @@ def _drive_layer(ctx: StageContext, path, query, opts, amax, horizon, rules, dea
         if rt.status is Status.SOLVED:
             return rt, {"before": count(path), "after": count(candidate)}
     if time.perf_counter() > deadline:  # the last answer's why, but the time ran out
-        rt = ProfileRetime(Status.TIMEOUT, None, rt.message or "the time limit passed", profile_duration=rt.profile_duration)
+        rt = ProfileRetime(Status.TIMEOUT, None, "the time limit passed", profile_duration=rt.profile_duration)
     return rt, {"before": count(path), "after": count(tries[-1])}
 
 
