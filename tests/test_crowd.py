@@ -6,6 +6,7 @@ import csv
 import math
 import subprocess
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -160,6 +161,16 @@ def test_a_unicycle_robot_turns_toward_its_way_and_arrives(roadmap):
     assert scene.robot.kinematics == "unicycle" and len(scene.queries[0].start) == 3
 
 
+def test_a_robot_that_may_reverse_is_a_unicycle_one(roadmap):
+    with pytest.raises(InputError):
+        C.CrowdSetting(humans=2, reverse=True)
+    s = C.CrowdSetting(humans=2, kinematics="unicycle", reverse=True)
+    assert C.crowd_scene(s).robot.reverse and not C.crowd_scene(replace(s, reverse=False)).robot.reverse
+    ep = C.run_episode(s, roadmap, 1, 0, ["navigator"])[0]
+    assert ep.reached and ep.min_separation >= 0
+    assert ep.row(s)["reverse"] == 1 and ep.row(replace(s, reverse=False))["reverse"] == 0
+
+
 def test_summary_by_hand():
     def ep(outcome, time, steps, disc, intr, sep, lat):
         return C.Episode("p", 0, outcome, time, sep, SocialMetrics(steps, disc, intr), np.array(lat))
@@ -231,7 +242,7 @@ def test_crowd_command_navigator_visible(tmp_path, workers):
     ["--humans", "-1"], ["--episodes", "0"], ["--kinematics", "unicycle", "--policy", "orca"],
     ["--visible", "--policy", "oracle"],
     ["--scenario", "hall"], ["--fov", "0"], ["--noise", "-0.1"], ["--workers", "-1"], ["--time-budget", "0"],
-    ["--path-space", "-1"], ["--path-space", "nan"], ["--personal-space", "inf"],
+    ["--path-space", "-1"], ["--path-space", "nan"], ["--personal-space", "inf"], ["--reverse"],
 ])  # fmt: skip
 def test_crowd_command_refuses_bad_arguments_in_one_line(tmp_path, flags):
     out = tmp_path / "x.csv"

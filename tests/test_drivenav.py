@@ -1,17 +1,22 @@
 """The unicycle navigator's own motions: the two-leg fan out of the start
 (:func:`gfuzzy.timespace.drive.fan`) and keeping the last plan
-(:func:`gfuzzy.navigation.drivenav.kept_plan`)."""
+(:func:`gfuzzy.navigation.drivenav.kept_plan`), and its evasive motions
+(:func:`gfuzzy.navigation.drivenav.drive_evasion`), backing up with ``reverse``."""
 
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
-from gfuzzy.check.check import _unicycle_problem
+from gfuzzy.check.check import _unicycle_problem, check_trajectory
+from gfuzzy.navigation.drivenav import drive_evasion
 from gfuzzy.navigation.navigator import Navigator, NavMode, NavOptions
-from gfuzzy.scene.scene import parse_scene
+from gfuzzy.navigation.navsim import simulate
+from gfuzzy.navigation.navtypes import MOTION_SAMPLE
+from gfuzzy.scene.scene import Mover, parse_scene
 
 START = [1.0, 3.0, 0.0]
 GOAL = [9.0, 3.0, 0.0]
@@ -105,3 +110,55 @@ def test_a_last_plan_someone_steps_into_is_dropped(open_floor):
     assert nav.last.mode != NavMode.KEPT
     assert _min_gap(again, blocker[0], 0.25) >= 0.0
     assert _unicycle_problem(sc.robot, again.waypoints) is None
+
+
+# ------------------------------------------------------------------------ evasion
+
+
+P0 = np.array([3.0, 3.0, 0.0])
+
+
+@pytest.fixture(scope="module")
+def reversing_floor(open_floor):
+    sc, rm = open_floor
+    return replace(sc, robot=replace(sc.robot, reverse=True)), rm
+
+
+def _head_on(nav, t=0.0):
+    """Someone 1 m ahead (0.4 m gap) walking at the robot at 1 m/s, and the evasion's
+    sample times: a quarter turn (1.6 s) comes too late, backing up keeps the gap."""
+    person = np.array([P0[0] + 1.0, P0[1], -1.0, 0.0, 0.3])
+    T = nav.options.evasion_time
+    times = t + np.linspace(0.0, T, int(math.ceil(T / MOTION_SAMPLE)) + 1)
+    return person, times
+
+
+def test_a_robot_that_may_reverse_backs_straight_away_from_someone_head_on(reversing_floor, open_floor):
+    sc, rm = reversing_floor
+    nav = Navigator(sc, rm, GOAL, NavOptions())
+    person, times = _head_on(nav)
+    traj = drive_evasion(nav, 0.0, P0, person[None], times)
+    w = traj.waypoints
+    # no turn first: straight back along the heading, and the gap kept (by hand)
+    assert w[1, 3] == pytest.approx(P0[2]) and w[1, 1] < P0[0] - 0.5
+    assert _min_gap(traj, person, 0.0) >= 0.0
+    assert _unicycle_problem(sc.robot, w) is None
+    assert _unicycle_problem(open_floor[0].robot, w) is not None  # the forward-only robot may not
+    fwd = Navigator(open_floor[0], rm, GOAL, NavOptions())
+    w = drive_evasion(fwd, 0.0, P0, person[None], times).waypoints
+    assert _unicycle_problem(open_floor[0].robot, w) is None
+
+
+def test_a_reversing_robot_among_walkers_reaches_the_goal_and_passes_the_check(reversing_floor):
+    """The navigator's every answer for a robot that may back up (plans over lanes driven
+    both ways, evasions) is driven and verified by the independent checker."""
+    sc, rm = reversing_floor
+    walkers = (
+        Mover("a", "disc", 0.3, (0.0, 0.0), trajectory=np.array([[0.0, 4.0, 3.0], [6.0, -2.0, 3.0]])),
+        Mover("b", "disc", 0.3, (0.0, 0.0), trajectory=np.array([[0.0, 9.0, 3.2], [9.0, 0.0, 3.2]])),
+        Mover("c", "disc", 0.3, (0.0, 0.0), trajectory=np.array([[0.0, 5.0, 0.5], [5.0, 5.0, 5.5]])),
+    )
+    scene = replace(sc, movers=walkers)
+    res = simulate(scene, rm, START, GOAL, 0.0, 0.25, max_time=40.0)
+    assert res.reached and res.min_separation >= 0.0
+    assert check_trajectory(scene, res.trajectory.waypoints).valid

@@ -276,3 +276,56 @@ def test_an_unseen_track_walks_on_less_certain_and_is_dropped_after_the_coast():
     assert len(out) == 2 and np.any(np.all(np.isclose(out[:, :2], [3.0, 1.1]), axis=1))
     assert tr.update(4.3, np.zeros((0, 3))).shape[0] == 1  # the one seen once is gone (4 s)
     assert tr.update(7.1, np.zeros((0, 3))).shape[0] == 0
+
+
+# ------------------------------------------------------------------ noisy first sightings
+
+
+def test_noisy_first_sightings_give_the_least_squares_velocity():
+    """With noise the filter's gains start as the expanding-memory filter's: at the n-th
+    sighting (n <= 5, before the steady state) its velocity is the least-squares slope
+    through the n noisy positions (numpy's polyfit as the oracle)."""
+    rng = np.random.default_rng(3)
+    tr = Tracker(noise=0.05)
+    times = 0.25 * np.arange(5)
+    z = np.column_stack([0.2 + 0.9 * times, -1.0 + 0.4 * times]) + rng.normal(0.0, 0.05, (5, 2))
+    for n in range(1, 6):
+        out = tr.update(times[n - 1], [[*z[n - 1], 0.3]])
+        if n == 1:
+            np.testing.assert_array_equal(out[0, 2:4], [0.0, 0.0])
+            continue
+        slope = [np.polyfit(times[:n], z[:n, c], 1)[0] for c in (0, 1)]
+        np.testing.assert_allclose(out[0, 2:4], slope, atol=1e-9)
+
+
+def test_velocity_sigma_matches_the_spread_of_the_estimates():
+    """velocity_sigma is the estimates' standard deviation (Monte Carlo over 1000 walks),
+    after 3 sightings and at the steady state (20 sightings)."""
+    rng = np.random.default_rng(7)
+    for n in (3, 20):
+        est, sig = [], None
+        for _ in range(1000):
+            tr = Tracker(noise=0.05)
+            for k in range(n):
+                t = 0.25 * k
+                out = tr.update(t, [[t + rng.normal(0, 0.05), rng.normal(0, 0.05), 0.3]])
+            est.append(out[0, 2:4])
+            sig = tr.velocity_sigma()[0]
+        est = np.array(est)
+        np.testing.assert_allclose(est.mean(axis=0), [1.0, 0.0], atol=4 * sig / math.sqrt(1000) + 1e-3)
+        np.testing.assert_allclose(est.std(axis=0), [sig, sig], rtol=0.08)
+
+
+def test_an_unseen_noisy_track_grows_with_its_velocity_uncertainty():
+    tr = Tracker(noise=0.05, growth=0.2)
+    for k in range(3):
+        tr.update(0.25 * k, [[0.25 * k, 0.0, 0.3]])
+    sig = tr.velocity_sigma()[0]
+    assert sig == pytest.approx(0.05 * math.sqrt(12 * 2 / (3 * 4)) / 0.5)  # least squares, 3 points over 0.5 s
+    out = tr.update(1.0, np.zeros((0, 3)))  # 0.5 s unseen
+    assert out[0, 4] == pytest.approx(0.3 + (0.2 + 3.0 * sig) * 0.5)
+    clean = Tracker(noise=0.0, growth=0.2)
+    for k in range(3):
+        clean.update(0.25 * k, [[0.25 * k, 0.0, 0.3]])
+    assert clean.velocity_sigma()[0] == 0.0
+    assert clean.update(1.0, np.zeros((0, 3)))[0, 4] == pytest.approx(0.3 + 0.2 * 0.5)

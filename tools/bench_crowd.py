@@ -61,6 +61,12 @@ SETTINGS = {
                           "success >= 0.99, time <= 11 s"),
     "circle-20-unicycle": ("--humans 20 --kinematics unicycle", {"humans": 20, "kinematics": "unicycle"}, ["navigator"],
                            "success >= 0.97"),
+    "circle-5-unicycle-reverse": ("--humans 5 --kinematics unicycle --reverse",
+                                  {"humans": 5, "kinematics": "unicycle", "reverse": True}, ["navigator"],
+                                  "(a drive that may back up; issue 18's setting says nothing of reversing)"),
+    "circle-20-unicycle-reverse": ("--humans 20 --kinematics unicycle --reverse",
+                                   {"humans": 20, "kinematics": "unicycle", "reverse": True}, ["navigator"],
+                                   "(a drive that may back up)"),
 }  # fmt: skip
 
 

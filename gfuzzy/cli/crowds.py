@@ -23,6 +23,8 @@ def add_crowd(sub) -> None:
     c.add_argument("--crowd", choices=("orca", "social-force"), default="orca", help="how the humans move (default orca)")
     c.add_argument("--kinematics", choices=("holonomic", "unicycle"), default="holonomic",
                    help="the robot's kinematics (unicycle: a differential drive turning at most 1 rad/s, navigator only)")
+    c.add_argument("--reverse", action="store_true",
+                   help="unicycle: the robot may also drive backwards (default: forwards only)")
     c.add_argument("--episodes", type=int, default=100, metavar="N", help="episodes (default 100)")
     c.add_argument("--seed", type=int, default=1, help="the run's seed: same seed, same episodes (default 1)")
     c.add_argument("--policy", nargs="+", choices=("navigator", "orca", "social-force", "oracle"),
@@ -80,11 +82,13 @@ def _setting(args):
         if not math.isfinite(value):
             raise BadInput(f"gfuzzy crowd: {flag} must be a finite number, got {value:g}")
     sense = math.inf if args.sense is None else args.sense
+    if args.reverse and args.kinematics != "unicycle":
+        raise BadInput("gfuzzy crowd: --reverse needs --kinematics unicycle")
     try:
         sensor = SensorOptions(velocity="exact" if args.velocity == "true" else "estimated", noise=args.noise,
                                fov=args.fov, sense=sense, seed=args.seed)  # fmt: skip
         setting = CrowdSetting(args.scenario, humans, args.visible, args.crowd, args.kinematics, sensor,
-                               not args.steady_goals)  # fmt: skip
+                               not args.steady_goals, args.reverse)  # fmt: skip
         options = NavOptions(time_budget=args.time_budget, personal_space=args.personal_space,
                              path_space=args.path_space, budget_clock=args.budget_clock)
     except InputError as exc:
@@ -106,7 +110,7 @@ def _table(setting, runs, policies) -> str:
             f"{'intrus':>8}{'min sep':>9}{'p50 ms':>8}{'p95 ms':>8}")  # fmt: skip
     lines = [
         f"{setting.scenario}, {setting.humans} humans ({setting.crowd}, {'visible' if setting.visible else 'invisible'}),"
-        f" {setting.kinematics} robot, velocity {setting.sensor.velocity}, noise {setting.sensor.noise:g} m,"
+        f" {setting.kinematics}{' (reverse)' if setting.reverse else ''} robot, velocity {setting.sensor.velocity}, noise {setting.sensor.noise:g} m,"
         f" fov {setting.sensor.fov:g} deg, sense {setting.sense:g} m"
         + (", goals change on arrival only" if setting.scenario == "arena" and not setting.goal_changes else ""),
         head,

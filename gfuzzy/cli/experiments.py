@@ -198,6 +198,7 @@ def cmd_navigate(args) -> int:
 
     from ..check.check import check_trajectory
     from ..collision.geometry import StaticGeometry
+    from ..navigation.lookout import knowing_view
     from ..navigation.navigator import Navigator, NavOptions
     from ..navigation.navsim import simulate
     from ..planner.planner import query_problem
@@ -235,7 +236,7 @@ def cmd_navigate(args) -> int:
         _say(f"{scene.name} {query.name}: invalid_query ({problem})", sys.stdout)
         return EXIT_NO
     roadmap = _roadmap_for(scene, args)
-    nav = Navigator(scene, roadmap, query.goal, options)
+    nav = Navigator(scene, roadmap, query.goal, knowing_view(options, sensor.fov) if sensor else options)
     res = simulate(
         scene, roadmap, query.start, query.goal, query.t0, args.period, sense, args.max_time,
         navigator=nav, log_every=args.log_every, sensor=sensor,

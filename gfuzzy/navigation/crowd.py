@@ -283,6 +283,8 @@ class CrowdSetting:
         ``random_goal_changing``, on in its default configuration); False: a human changes
         goal only on arrival (its non-randomised test, where its policy scored success
         0.92, intrusion 4.23 %).
+    reverse : bool
+        ``unicycle``: the robot may drive backwards (the scene's ``robot.reverse``).
     """
 
     scenario: str = "circle"
@@ -292,6 +294,7 @@ class CrowdSetting:
     kinematics: str = "holonomic"
     sensor: SensorOptions = field(default_factory=SensorOptions)
     goal_changes: bool = True
+    reverse: bool = False
 
     def __post_init__(self):
         if self.scenario not in SCENARIOS:
@@ -300,6 +303,8 @@ class CrowdSetting:
             raise InputError(f"crowd must be one of {', '.join(CROWD_MODELS)}, got {self.crowd!r}")
         if self.kinematics not in KINEMATICS:
             raise InputError(f"kinematics must be one of {', '.join(KINEMATICS)}, got {self.kinematics!r}")
+        if self.reverse and self.kinematics != "unicycle":
+            raise InputError("reverse is only for a unicycle robot (kinematics unicycle)")
         if not 0 <= self.humans <= 200:
             raise InputError(f"humans must be between 0 and 200, got {self.humans}")
 
@@ -384,7 +389,8 @@ class Episode:
         q = (lambda p: round(float(np.quantile(lat, p)) * 1e3, 3)) if len(lat) else (lambda p: "")
         return {
             "scenario": setting.scenario, "humans": setting.humans, "visible": int(setting.visible),
-            "crowd": setting.crowd, "kinematics": setting.kinematics, "policy": self.policy, "episode": self.seed,
+            "crowd": setting.crowd, "kinematics": setting.kinematics,
+            "reverse": int(setting.reverse), "policy": self.policy, "episode": self.seed,
             "outcome": str(self.outcome), "success": int(self.reached), "collision": int(self.collision),
             "timeout": int(self.outcome == Outcome.TIMEOUT),
             "time": "" if math.isnan(self.time) else round(self.time, 4),
@@ -523,7 +529,7 @@ def _robot_doc(setting: CrowdSetting) -> dict:
     c = CROWD
     doc = {"disc": c["robot_radius"], "vmax": c["robot_vmax"]}
     if setting.kinematics == "unicycle":
-        doc.update(kinematics="unicycle", wmax=UNICYCLE_WMAX)
+        doc.update(kinematics="unicycle", wmax=UNICYCLE_WMAX, reverse=setting.reverse)
     return doc
 
 
@@ -566,7 +572,7 @@ def crowd_roadmap(setting: CrowdSetting):
     from ..roadmap.roadmap import build_roadmap
 
     # a unicycle navigates on the roadmap of the plane too (its own graph turns in place)
-    return build_roadmap(crowd_scene(replace(setting, kinematics="holonomic")), _roadmap_options(setting))
+    return build_roadmap(crowd_scene(replace(setting, kinematics="holonomic", reverse=False)), _roadmap_options(setting))
 
 
 def run_episode(setting: CrowdSetting, roadmap, seed: int, index: int, policies, options=None) -> list[Episode]:
@@ -605,6 +611,7 @@ def run_episode(setting: CrowdSetting, roadmap, seed: int, index: int, policies,
     """
     from ..planner.planner import PlanOptions, plan
     from .crowdpolicies import NavigatorPolicy, OraclePolicy, OrcaPolicy, SocialForcePolicy
+    from .lookout import knowing_view
     from .navigator import Navigator, NavOptions
 
     if setting.kinematics == "unicycle" and set(policies) - {"navigator"}:
@@ -627,7 +634,8 @@ def run_episode(setting: CrowdSetting, roadmap, seed: int, index: int, policies,
     for policy in policies:
         scene = crowd_scene(setting, lay, tracks, f"crowd-{setting.scenario}-{index}")
         if policy == "navigator":
-            act = NavigatorPolicy(Navigator(scene, roadmap, _poses(setting, lay)[1], options or NavOptions()))
+            nav_opts = knowing_view(options or NavOptions(), setting.sensor.fov)
+            act = NavigatorPolicy(Navigator(scene, roadmap, _poses(setting, lay)[1], nav_opts))
         elif policy == "orca":
             act = OrcaPolicy(lay.goal, CROWD)
         elif policy == "social-force":

@@ -14,11 +14,13 @@ import math
 import numpy as np
 
 from ..poses import metric_distance
+from ..timespace.drive import evasions
 from ..trajectory import Trajectory
 from ..typed import FloatArray
+from .evasion import evasion_scores
 from .navtypes import MOTION_SAMPLE, sample_loss
 
-__all__ = ["kept_plan", "cut_rows"]
+__all__ = ["kept_plan", "cut_rows", "drive_evasion"]
 
 
 def cut_rows(traj: Trajectory, ta: float, tb: float) -> FloatArray:
@@ -87,3 +89,33 @@ def kept_plan(nav, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray
         return None
     return traj
 
+
+
+def drive_evasion(nav, t: float, pose: FloatArray, obs: FloatArray, times: FloatArray) -> Trajectory:
+    """A differential drive's evasive motion (:meth:`Navigator._evasive`'s for a unicycle):
+    the candidate of :func:`gfuzzy.timespace.drive.evasions` (standing, or a turn in place
+    and a straight move, straight back without turning too with ``robot.reverse``) that
+    :func:`gfuzzy.navigation.evasion.evasion_scores` scores best against the people
+    walking on as seen.
+
+    Parameters
+    ----------
+    nav : Navigator
+    t : float
+    pose : (3,) float
+    obs : (k, 5) float
+    times : (T,) float
+        Sample times from ``t`` over ``evasion_time``.
+
+    Returns
+    -------
+    Trajectory
+        Rows from ``[t, *pose]``: waits, turns in place and straight moves only.
+    """
+    opts = nav.options
+    cr = nav.robot.circumradius
+    cands = evasions(nav.geometry, t, pose, times[-1] - t, opts.cover, opts.evasion_headings, nav.vplan)
+    trajs = [Trajectory(rows, cr) for rows in cands]
+    pts = np.stack([tr.at(np.minimum(times, tr.t_end)) for tr in trajs])
+    ends = np.array([rows[-1, 1:] for rows in cands])
+    return trajs[int(np.argmax(evasion_scores(nav, t, pose, obs, pts, times, ends)))]

@@ -44,14 +44,15 @@ from ..roadmap.roadmap import Roadmap
 from ..scene.scene import Mover, Scene
 from ..settings import SPEED_SAFETY
 from ..status import Status
-from ..timespace.drive import Fan, drive_rows, evasions
+from ..timespace.drive import Fan, drive_rows
 from ..timespace.movers import MoverField
 from ..timespace.spacetime import IntervalStore, SpaceTimeGraph
 from ..timespace.timespace import timed_rows
 from ..trajectory import Trajectory
 from ..typed import BoolArray, FloatArray
-from .drivenav import cut_rows, kept_plan
+from .drivenav import cut_rows, drive_evasion, kept_plan
 from .evasion import evasion_scores
+from .lookout import Lookout
 from .navtypes import MOTION_SAMPLE, NavMode, NavStep, sample_loss
 from .pathspace import STILL_SPEED, PathSpace, WallCheck
 from .timedfield import PAIR_SECONDS, PIECE_WORK, _OutOfTime, _TimedField  # noqa: F401 (PIECE_WORK, PAIR_SECONDS: kept importable here)
@@ -151,6 +152,11 @@ class NavOptions:
         A differential drive only: also search the two-leg motions out of the robot's pose
         (turn, straight, turn towards the goal, straight; :func:`gfuzzy.timespace.drive.fan`),
         which detour with few turns where the roadmap's lanes zigzag.
+    fov : float
+        A disc robot's field of view (degrees), centred on its direction of motion; below
+        360 it looks, now and then, where it has not looked (:mod:`gfuzzy.navigation.lookout`).
+    look_after : float
+        Seconds a side may go unseen before the robot (``fov`` < 360) looks there.
     """
 
     dt: float = 0.1
@@ -177,6 +183,8 @@ class NavOptions:
     backend: str = "compiled"
     commitment: float = 0.5
     fan: bool = True
+    fov: float = 360.0
+    look_after: float = 1.0
 
     def __post_init__(self):
         if self.budget_clock not in BUDGET_CLOCKS:
@@ -191,6 +199,9 @@ class NavOptions:
         if self.connect_k < 1 or self.evasion_headings < 4:
             raise InputError("connect_k must be >= 1 and evasion_headings >= 4")
         check_number("stretch", self.stretch, 1.0, strict=False)
+        check_number("look_after", self.look_after)
+        if not 0 < self.fov <= 360:
+            raise InputError(f"fov must be in (0, 360] degrees, got {self.fov}")
 
 
 @dataclass(frozen=True)
@@ -260,6 +271,8 @@ class Navigator(PathSpace):
         self._clock = BUDGET_CLOCKS[opts.budget_clock]  # the budget's clock (a test may replace it)
         self._person_seconds = PERSON_SECONDS  # the predictions' set-up per person, measured
         self._walls = WallCheck(scene)
+        disc = robot.shape == "disc" and robot.dof == 2  # its view follows its motion
+        self._lookout = Lookout(opts.fov, opts.look_after, goal) if opts.fov < 360 and disc else None
         self._build_base()
         if opts.backend == "compiled":  # load the compiled kernels now, not inside a step's budget
             from ..timespace.search_kernel import warm
@@ -477,6 +490,8 @@ class Navigator(PathSpace):
         if not np.all(np.isfinite(obs)) or np.any(obs[:, 4] < 0):
             raise InputError("observations must be finite rows [x, y, vx, vy, radius >= 0]")
         self.replans += 1
+        if self._lookout is not None:
+            self._lookout.observe(t, pose)
         cr = self.robot.circumradius
         if float(metric_distance(pose, self.goal, cr)) <= opts.goal_tolerance:
             self.reached = True
@@ -517,6 +532,10 @@ class Navigator(PathSpace):
                 if kept is not None:
                     traj, mode = kept, NavMode.KEPT
             self._previous = traj
+        if self._lookout is not None:
+            looked = self._lookout.look(self, t, pose, obs, traj)
+            if looked is not None:
+                traj, mode = looked, NavMode.LOOK
         if mode == NavMode.EVASIVE:
             self._previous = None
         self.last = NavStep(mode, self._clock() - t_begin, found.message, predicted, found.detailed)
@@ -703,12 +722,8 @@ class Navigator(PathSpace):
         T = opts.evasion_time
         n_t = int(math.ceil(T / MOTION_SAMPLE)) + 1
         times = t + np.linspace(0.0, T, n_t)
-        if self.robot.unicycle:  # turn in place, then drive along the heading (drive.evasions)
-            cands = evasions(self.geometry, t, pose, T, opts.cover, opts.evasion_headings, self.vplan)
-            trajs = [Trajectory(rows, cr) for rows in cands]
-            pts = np.stack([tr.at(np.minimum(times, tr.t_end)) for tr in trajs])
-            ends = np.array([rows[-1, 1:] for rows in cands])
-            return trajs[int(np.argmax(evasion_scores(self, t, pose, obs, pts, times, ends)))]
+        if self.robot.unicycle:  # turn in place, then drive along the heading (drivenav.drive_evasion)
+            return drive_evasion(self, t, pose, obs, times)
         ang = np.arange(opts.evasion_headings) * (2 * math.pi / opts.evasion_headings)
         speeds = np.array([1.0, 0.5]) * self.vplan
         dirs = np.column_stack([np.cos(ang), np.sin(ang)])

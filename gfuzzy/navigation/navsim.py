@@ -26,6 +26,7 @@ from ..scene.scene import Scene
 from ..status import Status
 from ..trajectory import Trajectory
 from ..typed import FloatArray
+from .lookout import knowing_view
 from .navigator import Navigator, NavMode, NavOptions
 from .sensing import Sensor, SensorOptions
 from .socialmetrics import SocialMetrics, social_metrics
@@ -156,6 +157,8 @@ def simulate(
     cr = robot.circumradius
     goal = np.asarray(goal, dtype=float).reshape(-1)
     pose = np.asarray(start, dtype=float).reshape(-1).copy()
+    if navigator is None and sensor is not None:
+        options = knowing_view(options or NavOptions(), sensor.fov)
     nav = navigator or Navigator(scene, roadmap, goal, options)
     t = float(t0)
     t_stop = t + max_time

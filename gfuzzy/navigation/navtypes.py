@@ -36,6 +36,7 @@ class NavMode(str, Enum):
     KEPT = "kept"  # a fresh search answered, but the last plan (a unicycle's) was as good: kept
     EVASIVE = "evasive"  # the statically free straight motion with the latest contact
     GOAL = "goal"  # already at the goal
+    LOOK = "look"  # a short slow motion that turns a disc robot's view to a side it has not seen
 
     def __str__(self) -> str:
         return self.value

@@ -39,6 +39,11 @@ VELOCITY_MODES = ("estimated", "exact")
 #: may walk anywhere at a walking pace), and the cap (m) on any unseen track's growth.
 UNKNOWN_GROWTH = 1.0
 UNKNOWN_CAP = 1.0
+#: Steady-state gains (position, velocity) of the alpha-beta filter with noisy detections.
+STEADY_GAINS = (0.5, 0.2)
+#: Standard deviations of a track's velocity error its unseen disc grows by, per second
+#: unseen (3: the disc holds a person walking on with a Gaussian velocity error 99 % of the time).
+VELOCITY_SIGMAS = 3.0
 
 
 @dataclass(frozen=True)
@@ -152,12 +157,24 @@ class Tracker:
     Alpha-beta filter per track: prediction ``p + v dt``; residual ``r = z - p_pred``;
     ``p = p_pred + alpha r``, ``v = v + beta r / dt``. Without noise alpha = beta = 1,
     which makes ``v`` exactly ``(z - z_prev) / dt``, the velocity from positions observed
-    one period apart; with noise alpha = 0.5, beta = 0.2 (a steady-state compromise
-    between lag and noise for people walking at up to ~1.5 m/s, 0.25 s apart).
+    one period apart. With noise the gains start as the expanding-memory filter's,
+    ``alpha_n = 2 (2n - 1) / (n (n + 1))``, ``beta_n = 6 / (n (n + 1))`` at the n-th
+    sighting (the least-squares line through the first n positions when they are evenly
+    spaced: the first difference at n = 2, then ever less noisy), and stay at their
+    steady state alpha = 0.5, beta = 0.2 once they reach it (a compromise between lag and
+    noise for people walking at up to ~1.5 m/s, 0.25 s apart). A fixed gain from the
+    second sighting on kept the first difference's error (noise x sqrt(2) / 0.25 s per
+    coordinate: 0.28 m/s at 0.05 m) for a second or more, and a person lost from view
+    was then coasted the wrong way.
+
+    An unseen track's disc grows by ``growth`` plus ``VELOCITY_SIGMAS`` times the standard
+    deviation of its velocity estimate per second unseen: a person seen a few times
+    through noise may be walking a good deal off the estimated velocity.
     """
 
     def __init__(self, noise: float = 0.0, coast: float = 4.0, gate: float = 1.0, growth: float = 0.2):
-        self.alpha, self.beta = (1.0, 1.0) if noise == 0 else (0.5, 0.2)
+        self.noise = noise
+        self.alpha, self.beta = (1.0, 1.0) if noise == 0 else STEADY_GAINS
         self.coast = coast
         self.gate = gate + 4 * noise
         self.growth = growth
@@ -165,6 +182,7 @@ class Tracker:
         self.vel = np.zeros((0, 2))
         self.radius = np.zeros(0)
         self.seen = np.zeros(0)  # time each track was last seen
+        self.first = np.zeros(0)  # time each track was first seen
         self.hits = np.zeros(0, dtype=np.int64)
         self.t: float | None = None
 
@@ -189,18 +207,17 @@ class Tracker:
             # the gate grows as the track's reported disc does (below): faster for a person
             # seen once, whose velocity is not known yet
             unseen = np.maximum(t - self.seen - dt, 0.0)
-            gate = self.gate + np.minimum(np.where(self.hits > 1, self.growth, UNKNOWN_GROWTH) * unseen, UNKNOWN_CAP)
+            gate = self.gate + np.minimum(self._growth_rates() * unseen, UNKNOWN_CAP)
             big = 1e6
             rows, cols = linear_sum_assignment(np.where(cost <= gate[:, None], cost, big))
             for i, j in zip(rows.tolist(), cols.tolist(), strict=True):
                 if cost[i, j] > gate[i]:
                     continue
                 r = det[j, :2] - pred[i]
-                self.pos[i] = pred[i] + self.alpha * r
+                alpha, beta = self._gains(int(self.hits[i]) + 1)
+                self.pos[i] = pred[i] + alpha * r
                 since = t - self.seen[i]  # the residual built up since the last sighting
                 if since > 0:
-                    # a second sighting: the first difference, then the filter
-                    beta = 1.0 if self.hits[i] == 1 else self.beta
                     self.vel[i] = self.vel[i] + beta * r / since
                 self.radius[i] = det[j, 2]
                 self.seen[i] = t
@@ -214,12 +231,40 @@ class Tracker:
         self.vel = np.vstack([self.vel[keep], np.zeros((len(new), 2))])
         self.radius = np.concatenate([self.radius[keep], new[:, 2]])
         self.seen = np.concatenate([self.seen[keep], np.full(len(new), t)])
+        self.first = np.concatenate([self.first[keep], np.full(len(new), t)])
         self.hits = np.concatenate([self.hits[keep], np.ones(len(new), dtype=np.int64)])
         # unseen tracks are less certain; one seen once has no velocity yet: it may be
         # walking anywhere at a walking pace (capped: beyond that it is as good as gone)
-        rate = np.where(self.hits > 1, self.growth, UNKNOWN_GROWTH)
-        grown = self.radius + np.minimum(rate * (t - self.seen), UNKNOWN_CAP)
+        grown = self.radius + np.minimum(self._growth_rates() * (t - self.seen), UNKNOWN_CAP)
         return np.column_stack([self.pos, self.vel, grown]).reshape(-1, 5)
+
+    def _gains(self, n: int) -> tuple[float, float]:
+        """(alpha, beta) at a track's ``n``-th sighting: the expanding-memory filter's
+        (the least-squares line through the n positions), never below the steady state."""
+        alpha_n = 2.0 * (2 * n - 1) / (n * (n + 1))
+        beta_n = 6.0 / (n * (n + 1))
+        return max(alpha_n, self.alpha), max(beta_n, self.beta)
+
+    def velocity_sigma(self) -> FloatArray:
+        """(m,) standard deviation (m/s, per coordinate) of each track's velocity estimate
+        due to the detections' noise: the least-squares slope's through ``hits`` positions
+        spread over the track's seen span, never below the steady-state filter's
+        (``beta / sqrt(alpha (4 - 2 alpha - beta) / 2)`` noise per period); 0 without noise,
+        and for a track seen once (its velocity is unknown, not noisy)."""
+        n = self.hits.astype(float)
+        if self.noise == 0 or not len(n):
+            return np.zeros(len(n))
+        span = self.seen - self.first
+        ok = (n > 1) & (span > 0)
+        n_, span_ = np.where(ok, n, 2.0), np.where(ok, span, 1.0)
+        least = np.sqrt(12.0 * (n_ - 1) / (n_ * (n_ + 1))) / span_
+        a, b = STEADY_GAINS
+        steady = b / math.sqrt(a * (4 - 2 * a - b) / 2) / (span_ / (n_ - 1))
+        return np.where(ok, self.noise * np.maximum(least, steady), 0.0)
+
+    def _growth_rates(self) -> FloatArray:
+        """(m,) growth (m per s unseen) of each track's disc and gate."""
+        return np.where(self.hits > 1, self.growth + VELOCITY_SIGMAS * self.velocity_sigma(), UNKNOWN_GROWTH)
 
 
 @dataclass
