@@ -11,14 +11,15 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from gfuzzy.check.check import check_trajectory
 from gfuzzy.collision.geometry import StaticGeometry
-from gfuzzy.planner.driveblend import retime_blend
-from gfuzzy.planner.driveretime import retime_drive
+from gfuzzy.planner.driveblend import _blend_of, _prune, blend_chain, retime_blend, retime_legs
+from gfuzzy.planner.driveretime import drive_chain, retime_drive
 from gfuzzy.planner.planner import PlanOptions
 from gfuzzy.planner.stages import StageContext, apply_stages
 from gfuzzy.scene.scene import Query, parse_scene
@@ -85,18 +86,33 @@ def leg_oracle(rows: np.ndarray, layered: tuple[bool, bool, bool]) -> list[str]:
     return bad
 
 
+def assert_minimal_blend(scene, path, b, hold=0.0, max_rounds=5):
+    """A partial answer's properties: it checks; the layered legs keep their bounds (on
+    PATH); some leg is layered and some hasty; each hasty leg is needed (given the layer
+    back alone, the chain has no timing)."""
+    assert b.status is Status.SOLVED, b.message
+    assert b.hasty.any() and not b.hasty.all(), b.hasty
+    q = replace(scene.queries[0], hold=hold)
+    rep = check_trajectory(scene, b.trajectory.waypoints, q)
+    assert rep.valid, rep.reason
+    if path is PATH:
+        assert leg_oracle(b.trajectory.waypoints, tuple(~b.hasty)) == []
+    assert b.hasty_length == pytest.approx(float(np.sum(np.diff(b.legs)[b.hasty])))
+    for g in np.flatnonzero(b.hasty):
+        trial = b.hasty.copy()
+        trial[g] = False
+        r = retime_legs(scene, path, trial, 0.0, 0.07, AMAX, 60.0, hold=hold, max_rounds=max_rounds)
+        assert r.status is not Status.SOLVED, f"leg {g} could keep the layer"
+
+
 def test_the_layer_alone_is_too_late_and_the_blend_gives_haste_to_the_straight():
     scene = gate_scene(4.4)
     assert retime_drive(scene, PATH, 0.0, 0.07, AMAX, 60.0).status is Status.NO_PATH
     b = retime_blend(scene, PATH, 0.0, 0.07, AMAX, 60.0)
     assert b.status is Status.SOLVED, b.message
-    assert b.hasty.tolist() == [False, True, False]
-    assert b.hasty_length == pytest.approx(4.0)
+    assert_minimal_blend(scene, PATH, b)
     rows = b.trajectory.waypoints
-    rep = check_trajectory(scene, rows, scene.queries[0])
-    assert rep.valid, rep.reason
-    assert leg_oracle(rows, (True, False, True)) == []
-    # the straight really is hasty: the layered bound would fail it
+    # the hasty legs really are hasty: the layered bounds on every leg would fail them
     assert leg_oracle(rows, (True, True, True)) != []
     # the robot is past the gate (x = 3, discs 0.25 + 0.2) when it appears
     assert np.interp(4.4, rows[:, 0], rows[:, 1]) >= 3.45
@@ -129,6 +145,113 @@ def test_haste_on_every_leg_is_not_a_layer():
     assert retime_blend(gate_scene(3.8), straight, 0.0, 0.07, AMAX, 30.0).status is Status.SOLVED
 
 
+def test_when_the_first_turn_must_be_hasty_the_blend_gives_it_haste():
+    scene = gate_scene(3.8)
+    # no timing keeps the layer on the first turn, even with haste on every other leg
+    assert retime_legs(scene, PATH, [False, True, True], 0.0, 0.07, AMAX, 60.0).status is not Status.SOLVED
+    b = retime_blend(scene, PATH, 0.0, 0.07, AMAX, 60.0)
+    assert_minimal_blend(scene, PATH, b)
+    assert b.hasty[0]
+
+
+def test_a_hold_at_the_goal_does_not_block_the_rests_on_the_way():
+    # a mover sits on the start during [3, 4] s and the query holds the goal 5 s: a rest
+    # on the way is only passed, it need not stay safe for the hold
+    scene = parse_scene(
+        {
+            "version": 1,
+            "name": "gate-hold",
+            "bounds": [0, 0, 5, 2],
+            "robot": {"disc": R, "vmax": VMAX, "amax": AMAX, "kinematics": "unicycle"},
+            "movers": [
+                {"name": "gate", "disc": 0.25, "trajectory": [[3.8, 3.0, 0.5], [1000.0, 3.0, 0.5]]},
+                {"name": "sitter", "disc": 0.25, "trajectory": [[3.0, 0.5, 0.5], [4.0, 0.5, 0.5]]},
+            ],
+            "queries": [{"name": "q", "start": PATH[0].tolist(), "goal": PATH[-1].tolist(), "hold": 5.0}],
+        }
+    )
+    b = retime_blend(scene, PATH, 0.0, 0.07, AMAX, 60.0, hold=5.0)
+    assert_minimal_blend(scene, PATH, b, hold=5.0)
+
+
+def test_the_prune_gives_the_layer_back_to_a_leg_the_greedy_choice_made_hasty():
+    scene = gate_scene(4.0)
+    blend = _blend_of(scene, PATH, 0.0, 0.07, AMAX, 60.0, None, math.inf, 0.0)
+    every = np.ones(3, dtype=bool)
+    res, stops = blend.rounds(every, 5)
+    assert res.status is Status.SOLVED
+    res, stops, hasty = _prune(blend, every, res, stops, 5)
+    assert res.status is Status.SOLVED and 0 < hasty.sum() < 3, hasty
+    assert check_trajectory(scene, res.trajectory.waypoints, scene.queries[0]).valid
+    assert_minimal_blend(scene, PATH, retime_blend(scene, PATH, 0.0, 0.07, AMAX, 60.0))
+
+
+def crossing_scene():
+    """A mover bouncing across the straight at x = 2.5: the layer waits for it mid-straight."""
+    doc = {
+        "version": 1,
+        "name": "crossing",
+        "bounds": [0, 0, 5, 3],
+        "robot": {"disc": R, "vmax": VMAX, "amax": AMAX, "kinematics": "unicycle"},
+        "movers": [{"name": "m", "disc": 0.25, "speed": 0.5, "path": [[2.5, 2.9], [2.5, 0.1]], "mode": "bounce"}],
+        "queries": [{"name": "q", "start": PATH[0].tolist(), "goal": PATH[-1].tolist()}],
+    }
+    return parse_scene(doc)
+
+
+def test_reachable_rests_but_too_few_rounds_give_haste_where_the_free_search_waits():
+    scene = crossing_scene()
+    whole = retime_blend(scene, PATH, 0.0, 0.07, AMAX, 60.0)
+    assert whole.status is Status.SOLVED and not whole.hasty.any() and whole.waits
+    # one round cannot add the stops the mover needs: every rest is reachable (waits
+    # anywhere), so the leg where the free search waits mid-leg gets haste
+    b = retime_blend(scene, PATH, 0.0, 0.07, AMAX, 60.0, max_rounds=1)
+    assert_minimal_blend(scene, PATH, b, max_rounds=1)
+
+
+def test_the_layer_and_the_blend_share_one_chain_and_one_timing():
+    scene = crossing_scene()
+    drive = retime_drive(scene, PATH, 0.0, 0.07, AMAX, 60.0)
+    legs = retime_legs(scene, PATH, [False, False, False], 0.0, 0.07, AMAX, 60.0)
+    blend = retime_blend(scene, PATH, 0.0, 0.07, AMAX, 60.0)
+    assert drive.status is Status.SOLVED and drive.waits
+    np.testing.assert_array_equal(drive.trajectory.waypoints, legs.trajectory.waypoints)
+    np.testing.assert_array_equal(drive.trajectory.waypoints, blend.trajectory.waypoints)
+    assert tuple(drive.waits) == blend.waits
+    knots = np.array([0.0, 1.0, 2.0])
+    path = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]])
+    s_p, v_p = np.array([0.0, 0.5, 1.0, 1.5, 2.0]), np.array([0.0, 0.7, 0.0, 0.7, 0.0])
+    rests = np.array([0.0, 1.0, 2.0])
+    a = drive_chain(path, knots, s_p, v_p, rests, 0.07)
+    b = blend_chain(path, knots, s_p, v_p, rests, np.zeros(2), 0.07)
+    for x, y in zip(a, b, strict=True):
+        np.testing.assert_array_equal(x, y)
+
+
+def test_the_stage_keeps_the_blends_reason_when_no_blend_solves():
+    straight = np.array([[0.5, 0.5, 0.0], [4.5, 0.5, 0.0]])
+    scene = gate_scene(3.3)
+    ctx = StageContext(scene, StaticGeometry(scene))
+    searched = Trajectory(np.column_stack([[0.0, 4.0 / VMAX], straight]), R)
+    q = Query("q", tuple(straight[0]), tuple(straight[-1]), 0.0)
+    assert check_trajectory(scene, searched.waypoints, q).valid
+    out = apply_stages(ctx, searched, q, PlanOptions(speed_layer=True), time.perf_counter() + 60)
+    rep = out.speed_report
+    assert not rep.applied and "only the search's pace" in rep.reason, rep.reason
+    assert out.trajectory is searched or np.array_equal(out.trajectory.waypoints, searched.waypoints)
+
+
+def test_a_deadline_passed_is_a_timeout_in_the_blend_and_the_stage():
+    scene = gate_scene(4.4)
+    assert retime_blend(scene, PATH, 0.0, 0.07, AMAX, 60.0, deadline=time.perf_counter() - 1).status is Status.TIMEOUT
+    ctx = StageContext(scene, StaticGeometry(scene))
+    times = np.cumsum([0.0, (math.pi / 2) / WMAX, 4.0 / VMAX, (math.pi / 2) / WMAX])
+    searched = Trajectory(np.column_stack([times, PATH]), R)
+    q = Query("q", tuple(PATH[0]), tuple(PATH[-1]), 0.0)
+    out = apply_stages(ctx, searched, q, PlanOptions(speed_layer=True), time.perf_counter() - 1)
+    assert not out.speed_report.applied and "time limit passed" in out.speed_report.reason
+
+
 def test_the_stage_reports_the_hasty_legs():
     scene = gate_scene(4.4)
     ctx = StageContext(scene, StaticGeometry(scene))
@@ -143,7 +266,14 @@ def test_the_stage_reports_the_hasty_legs():
     info = rep.to_dict()["hasty"]
     assert (info["legs"], info["of"]) == (1, 3)
     assert info["length"] == pytest.approx(4.0) and info["total"] == pytest.approx(4.0 + 2 * R * math.pi / 2)
-    assert check_trajectory(scene, out.trajectory.waypoints, q).valid
+    rows = out.trajectory.waypoints
+    assert check_trajectory(scene, rows, q).valid
+    # the spans are the straight's: the robot leaves x = 0.5 at the first, reaches 4.5 at the second
+    ((t_a, t_b),) = info["spans"]
+    assert np.interp(t_a, rows[:, 0], rows[:, 1]) == pytest.approx(0.5)
+    assert np.interp(t_a + 0.07, rows[:, 0], rows[:, 1]) > 0.5
+    assert np.interp(t_b, rows[:, 0], rows[:, 1]) == pytest.approx(4.5)
+    assert np.interp(t_b - 0.07, rows[:, 0], rows[:, 1]) < 4.5
 
 
 @pytest.mark.slow

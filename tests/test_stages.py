@@ -176,15 +176,17 @@ def test_speed_layer_answers_keep_the_guarantees(path):
         info = res.speed_report.to_dict()
         if not info["applied"]:
             continue
+        dt = np.diff(w[:, 0])
+        kept = dt < 0.07 + 1e-9  # row pairs that must keep amax: steps, not long waits
         if info.get("hasty"):  # in part: its hasty legs break amax, and the answer says so
-            assert res.amax_honoured is not True and 0 < info["hasty"]["legs"] < info["hasty"]["of"]
-            continue
+            h = info["hasty"]
+            assert res.amax_honoured is not True and 0 < h["legs"] < h["of"] and len(h["spans"]) == h["legs"]
+            for a, b in h["spans"]:  # amax is kept outside the hasty legs' times
+                kept &= ~((w[1:, 0] > a + 1e-9) & (w[:-1, 0] < b - 1e-9))
         # the profile respects the acceleration bound: speed changes between steps stay
         # within amax * dt (plus the discretization of the profile onto the time grid)
         v = res.trajectory.speeds()
-        dt = np.diff(w[:, 0])
-        moving = dt < 0.07 + 1e-9
-        dv = np.abs(np.diff(v))[moving[1:] & moving[:-1]]
+        dv = np.abs(np.diff(v))[kept[1:] & kept[:-1]]
         assert dv.max(initial=0.0) <= amax * 0.07 * 1.5 + 1e-9, (q.name, dv.max())
 
 

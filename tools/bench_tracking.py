@@ -78,7 +78,8 @@ def scene_paths(root: Path = ROOT, time_limit: float = 20.0) -> list[tuple[str, 
 
 def drive_rows(root: Path = ROOT, time_limit: float = 60.0) -> list[tuple[str, str, object, np.ndarray]]:
     """(scene/query, plan, robot, rows) of every bundled differential drive's query, planned
-    by the search alone ("search") and with the speed layer ("layered", when it applied)."""
+    by the search alone ("search") and with the speed layer ("layered" when it applied to the
+    whole path, "part" when some legs keep the search's pace: their amax is not the layer's)."""
     from gfuzzy.planner.planner import PlanOptions, plan
     from gfuzzy.roadmap.roadmap import default_roadmap_path, load_roadmap
     from gfuzzy.scene.scene import load_scene
@@ -97,6 +98,8 @@ def drive_rows(root: Path = ROOT, time_limit: float = 60.0) -> list[tuple[str, s
                     why = res.speed_report.reason if layer and res.speed_report else res.status
                     print(f"({scene.name}/{q.name} {label}: not tracked: {why})")
                     continue
+                if layer and not res.speed_report.whole:
+                    label = "part"
                 out.append((f"{scene.name}/{q.name}", label, scene.robot, res.trajectory.waypoints))
     return out
 

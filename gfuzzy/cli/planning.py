@@ -167,7 +167,7 @@ def _stage_summary(info: dict) -> str:
         parts.append(f"{info['stops']} stop(s)")
     if info.get("hasty"):
         h = info["hasty"]
-        parts.append(f"{h['legs']} of {h['of']} legs ({h['length']:.2f} of {h['total']:.2f} m) at the search's pace")
+        parts.append(f"{h['legs']} of {h['of']} legs ({h['length']:.2f} of {h['total']:.2f} m metric length, turns as r*angle) at the search's pace")
     return ("applied in part: " if info.get("hasty") else "applied: ") + ", ".join(parts)
 
 

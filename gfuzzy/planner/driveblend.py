@@ -11,8 +11,10 @@ one straight or one turn in place each) at the search's pace instead: at ``vmax`
 the turning rate) with no acceleration phase, as the time-space search's answer does. Every
 other leg keeps the layer. The legs given haste are chosen greedily: the search on the chain
 (waits allowed anywhere) finds the first rest that no timing of the chain up to it reaches;
-the latest layered leg before that rest gets haste; repeat. So haste is spent just before
-the place a mover blocks, and nowhere the layer fits. Every leg still starts and ends at a
+the latest layered leg before that rest gets haste; repeat. Then each hasty leg, last first,
+gets the layer back where the chain can still be timed. The set is minimal, not the smallest:
+no hasty leg can get the layer back alone (:func:`retime_legs` times any set), but another
+set of fewer legs may exist. Every leg still starts and ends at a
 rest and no step crosses a corner, so every row obeys the row rule exactly; ``amax`` is kept
 on the layered legs only, and the answer says which legs are hasty (``BlendRetime.hasty``).
 """
@@ -26,21 +28,20 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..fuzzy.driveprofile import DriveProfile, drive_profile
+from ..fuzzy.driveprofile import drive_profile
 from ..fuzzy.profile import profile_times
-from ..poses import pose_at
 from ..scene.scene import Scene
 from ..settings import SPEED_SAFETY
 from ..status import Status
 from ..trajectory import Trajectory
 from ..typed import FloatArray
-from .driveretime import DRIVE_GROUP, _with_stops, _without_null_motions
-from .retime import _search_chain, s_at
+from .driveretime import DriveTiming, _without_null_motions, drive_chain
+from .retime import RetimeResult
 
 if TYPE_CHECKING:
     from ..fuzzy.rules import RuleBase
 
-__all__ = ["BlendRetime", "retime_blend", "blend_chain"]
+__all__ = ["BlendRetime", "retime_blend", "retime_legs", "blend_chain"]
 
 
 @dataclass(frozen=True)
@@ -57,10 +58,14 @@ class BlendRetime:
         Metric arc lengths of the legs' ends (0, the profile's rests, the length).
     hasty : (n,) bool
         Which legs are driven at the search's pace (no acceleration bound, no fuzzy bound).
-    waits : list of float
-        Stops added inside layered legs for the movers (arc lengths).
+    waits : tuple of float
+        Where the answer stops for the movers (arc lengths): the stops added inside layered
+        legs and the waits inside hasty legs.
     profile_duration : float
-        The layered profile's duration without the movers, seconds.
+        The blend's duration without the movers: the layered legs at their profile, the
+        hasty ones at the search's pace, seconds.
+    hasty_spans : tuple of (float, float)
+        For each hasty leg, the times the answer leaves its start and reaches its end.
     """
 
     status: Status
@@ -70,6 +75,7 @@ class BlendRetime:
     hasty: np.ndarray | None = None
     waits: tuple[float, ...] = ()
     profile_duration: float = math.nan
+    hasty_spans: tuple[tuple[float, float], ...] = ()
 
     @property
     def hasty_length(self) -> float:
@@ -79,111 +85,70 @@ class BlendRetime:
         return float(np.sum(np.diff(self.legs)[self.hasty]))
 
 
-def _leg_speeds(prof: DriveProfile, legs: FloatArray, vmax: float, turn_speed: float) -> FloatArray:
-    """The search's metric speed on each leg: ``vmax`` on a straight, ``r w`` in a turn."""
-    mid = 0.5 * (legs[1:] + legs[:-1])
-    seg = np.clip(np.searchsorted(prof.knots, mid) - 1, 0, len(prof.turning) - 1)
-    return np.where(np.asarray(prof.turning)[seg], turn_speed, vmax)
+def _hasty_spans(rows: FloatArray, circumradius: float, legs: FloatArray, hasty) -> tuple[tuple[float, float], ...]:
+    """(t leaving its start, t reaching its end) of each hasty leg, from the rows' metric arc length."""
+    step = np.hypot(*np.diff(rows[:, 1:3], axis=0).T)
+    if rows.shape[1] > 3:
+        step = step + circumradius * np.abs((np.diff(rows[:, 3]) + math.pi) % (2 * math.pi) - math.pi)
+    s = np.concatenate([[0.0], np.cumsum(step)])
+    tol = 1e-6 * max(1.0, float(legs[-1]))
+    spans = []
+    for g in np.flatnonzero(hasty):
+        i = max(int(np.searchsorted(s, legs[g] + tol, side="right")) - 1, 0)
+        j = min(int(np.searchsorted(s, legs[g + 1] - tol, side="left")), len(s) - 1)
+        spans.append((float(rows[i, 0]), float(rows[j, 0])))
+    return tuple(spans)
+
+
+def _solved(blend, res, stops, hasty, duration) -> BlendRetime:
+    legs = blend.legs
+    inside = [w for w in res.waits if hasty[blend.leg_of(np.array([w]), hasty)[0]] and np.min(np.abs(legs - w)) > 1e-9]
+    t = profile_times(blend.prof.s, blend.prof.v)
+    layered = np.diff(np.interp(legs, blend.prof.s, t))
+    blend_duration = float(np.sum(np.where(hasty, np.diff(legs) / blend.speeds, layered)))
+    rows = res.trajectory.waypoints
+    return BlendRetime(Status.SOLVED, res.trajectory, legs=legs, hasty=hasty, waits=tuple(sorted(set(stops) | set(inside))),
+                       profile_duration=blend_duration if hasty.any() else duration,
+                       hasty_spans=_hasty_spans(rows, blend.scene.robot.circumradius, legs, hasty))  # fmt: skip
 
 
 def blend_chain(path, knots, s_p, v_p, rests, hasty_of, dt) -> tuple[FloatArray, FloatArray]:
-    """The chain of a partly layered profile: points one time step apart, a point at every rest.
-
-    Parameters
-    ----------
-    path : (n, 3) float
-    knots : (n,) float
-        Metric arc lengths of the path's poses.
-    s_p, v_p : (k,) float
-        The layered profile; every rest is one of its samples, with speed 0.
-    rests : (r,) float
-        Increasing arc lengths where the robot is at rest, 0 and the length included.
-    hasty_of : (r - 1,) float
-        For each stretch between two rests: its metric speed when it is driven at the
-        search's pace (equal steps of at most that speed times ``dt``), or 0 to drive the
-        layered profile (its last step stretched to end at the rest).
-    dt : float
+    """The chain of a partly layered profile: :func:`gfuzzy.planner.driveretime.drive_chain`
+    with ``haste=hasty_of`` (for each stretch between two rests its metric speed at the
+    search's pace, or 0 for the layer).
 
     Returns
     -------
     poses : (m, 3) float
     s : (m,) float
-        Their arc lengths, increasing.
     """
-    t = profile_times(s_p, v_p)
-    at = np.searchsorted(s_p, rests)
-    pieces = [np.array([s_p[0]])]
-    for a, b, speed in zip(at[:-1], at[1:], hasty_of, strict=True):
-        lo, hi = s_p[a], s_p[b]
-        if speed > 0:
-            n = max(1, int(math.ceil((hi - lo) / (speed * dt) - 1e-9)))
-            inner = lo + (hi - lo) * np.arange(1, n) / n
-        else:
-            n = max(1, int(math.ceil((t[b] - t[a]) / dt - 1e-9)))
-            inner = s_at(t[a] + np.arange(1, n) * dt, s_p, v_p, t)
-            inner = inner[(inner > lo + 1e-12) & (inner < hi - 1e-12)]
-        pieces += [inner, np.array([hi])]
-    s = np.concatenate(pieces)
-    return pose_at(knots, path, s), s
+    return drive_chain(path, knots, s_p, v_p, rests, dt, hasty_of)
 
 
-class _Blend:
+class _Blend(DriveTiming):
     """The chain of one choice of hasty legs and its searches among the movers."""
 
-    def __init__(self, scene, path, prof, legs, speeds, t0, dt, amax, horizon, deadline, hold):
-        self.scene, self.path, self.prof, self.legs, self.speeds = scene, path, prof, legs, speeds
-        self.t0, self.dt, self.amax, self.horizon, self.deadline, self.hold = t0, dt, amax, horizon, deadline, hold
+    def first_blocked(self, hasty) -> tuple[int | None, RetimeResult]:
+        """The first leg end no timing of the chain reaches (waits anywhere), or None, and the
+        search of the whole chain with waits anywhere (with the query's ``hold``).
 
-    def chain(self, hasty, stops):
-        s_p, v_p = _with_stops(self.prof.s, self.prof.v, stops, self.amax)
-        rests = np.unique(np.concatenate([self.legs, stops]))
-        leg = np.searchsorted(self.legs, 0.5 * (rests[1:] + rests[:-1])) - 1
-        poses, s = blend_chain(self.path, self.prof.knots, s_p, v_p, rests, np.where(hasty[leg], self.speeds[leg], 0.0), self.dt)
-        return poses, s, rests
-
-    def search(self, poses, s, wait_at):
-        return _search_chain(self.scene, poses, s, self.t0, self.dt, self.horizon, wait_at, self.deadline,
-                             hold=self.hold, group=DRIVE_GROUP)  # fmt: skip
-
-    def hasty_points(self, s, hasty):
-        leg = np.clip(np.searchsorted(self.legs, s, side="right") - 1, 0, len(hasty) - 1)
-        return s[hasty[leg]]
-
-    def rounds(self, hasty, max_rounds):
-        """Waits at rests and anywhere on hasty legs; more rests where a free search waits."""
-        stops: list[float] = []
-        res = None
-        for _ in range(max_rounds):
-            poses, s, rests = self.chain(hasty, stops)
-            res = self.search(poses, s, np.concatenate([rests[:-1], self.hasty_points(s, hasty)]))
-            if res.status is Status.SOLVED or res.status is Status.TIMEOUT:
-                return res, stops
-            free = self.search(poses, s, None)
-            if free.status is not Status.SOLVED:
-                return free, stops
-            leg = np.clip(np.searchsorted(self.legs, free.waits, side="right") - 1, 0, len(hasty) - 1)
-            new = {w for w, g in zip(free.waits, leg, strict=True) if not hasty[g] and 1e-9 < w < self.legs[-1] - 1e-9}
-            merged = sorted(set(stops) | new)
-            if merged == stops:
-                break
-            stops = merged
-        return res, stops
-
-    def first_blocked(self, hasty) -> int | None:
-        """The first leg end no timing of the chain reaches (waits anywhere), or None."""
+        The prefixes are searched without ``hold``: the robot only passes their ends, and a
+        prefix reachable so is reachable at every earlier end too, which the bisection needs.
+        """
         poses, s, _ = self.chain(hasty, [])
+        whole = self.search(poses, s, None)
+        if whole.status is Status.SOLVED or whole.status is Status.TIMEOUT:
+            return None, whole
         ends = np.searchsorted(s, self.legs[1:])
         lo, hi = 0, len(ends) - 1  # find the first j whose prefix up to ends[j] fails
-        if self.search(poses, s, None).status is Status.SOLVED:
-            return None
         while lo < hi:
             mid = (lo + hi) // 2
             m = int(ends[mid]) + 1
-            if self.search(poses[:m], s[:m], None).status is Status.SOLVED:
+            if self.search(poses[:m], s[:m], None, hold=0.0).status is Status.SOLVED:
                 lo = mid + 1
             else:
                 hi = mid
-        return lo
+        return lo, whole
 
 
 def _prune(blend: _Blend, hasty, res, stops, max_rounds):
@@ -199,6 +164,52 @@ def _prune(blend: _Blend, hasty, res, stops, max_rounds):
     return res, stops, hasty
 
 
+def _blend_of(scene, path, t0, dt, amax, horizon, rulebase, deadline, hold) -> _Blend:
+    robot = scene.robot
+    path = _without_null_motions(np.asarray(path, dtype=float))
+    prof = drive_profile(path, robot.circumradius, robot.vmax * SPEED_SAFETY, amax,
+                         robot.turn_rate * SPEED_SAFETY, rulebase)  # fmt: skip
+    return _Blend(scene, path, prof, t0, dt, amax, horizon, deadline, hold)
+
+
+def retime_legs(
+    scene: Scene,
+    path: FloatArray,
+    hasty,
+    t0: float,
+    dt: float,
+    amax: float,
+    horizon: float,
+    rulebase: RuleBase | None = None,
+    deadline: float = math.inf,
+    max_rounds: int = 5,
+    hold: float = 0.0,
+) -> RetimeResult:
+    """Time a differential drive's path with the given legs at the search's pace.
+
+    The timing :func:`retime_blend` tries for each choice of hasty legs (the same chain and
+    rounds), for one choice given: to see whether a set of legs is enough.
+
+    Parameters
+    ----------
+    scene, path, t0, dt, amax, horizon, rulebase, deadline, max_rounds, hold
+        As for :func:`retime_blend`.
+    hasty : (n,) bool
+        For each leg (``BlendRetime.legs``), whether it is driven at the search's pace.
+
+    Returns
+    -------
+    RetimeResult
+        Solved with the trajectory, or why not.
+    """
+    blend = _blend_of(scene, path, t0, dt, amax, horizon, rulebase, deadline, hold)
+    hasty = np.asarray(hasty, dtype=bool)
+    if hasty.shape != (len(blend.legs) - 1,):
+        raise ValueError(f"hasty has {hasty.size} entries, the path has {len(blend.legs) - 1} legs")
+    res, _ = blend.rounds(hasty, max_rounds)
+    return res
+
+
 def retime_blend(
     scene: Scene,
     path: FloatArray,
@@ -211,7 +222,7 @@ def retime_blend(
     max_rounds: int = 5,
     hold: float = 0.0,
 ) -> BlendRetime:
-    """Time a differential drive's path with the speed layer on as many legs as the movers allow.
+    """Time a differential drive's path with the speed layer on the legs the movers leave it.
 
     Parameters
     ----------
@@ -240,14 +251,22 @@ def retime_blend(
         all legs at the search's pace find no timing (the path itself is blocked), or only
         that does (no leg keeps the layer).
     """
-    robot = scene.robot
-    path = _without_null_motions(np.asarray(path, dtype=float))
-    vmax, turn_rate = robot.vmax * SPEED_SAFETY, robot.turn_rate * SPEED_SAFETY
-    prof = drive_profile(path, robot.circumradius, vmax, amax, turn_rate, rulebase)
-    duration = float(profile_times(prof.s, prof.v)[-1])
-    legs = np.unique(np.concatenate([[0.0, float(prof.knots[-1])], prof.stops]))
-    speeds = _leg_speeds(prof, legs, vmax, turn_rate * robot.circumradius)
-    blend = _Blend(scene, path, prof, legs, speeds, t0, dt, amax, horizon, deadline, hold)
+    blend = _blend_of(scene, path, t0, dt, amax, horizon, rulebase, deadline, hold)
+    duration = float(profile_times(blend.prof.s, blend.prof.v)[-1])
+    legs = blend.legs
+
+    def fail(message, hasty):
+        if time.perf_counter() > deadline:
+            status, message = Status.TIMEOUT, "the time limit passed"
+        else:
+            status = Status.NO_PATH
+        return BlendRetime(status, None, message, legs=legs, hasty=hasty, profile_duration=duration)
+
+    # the fastest the path goes: every leg at the search's pace, waits anywhere
+    fastest = blend.search(*blend.chain(np.ones(len(legs) - 1, dtype=bool), [])[:2], None)
+    if fastest.status is not Status.SOLVED:
+        why = "not even the search's pace on every leg finds a timing of the path among the movers"
+        return fail(why, np.ones(len(legs) - 1, dtype=bool))
     hasty = np.zeros(len(legs) - 1, dtype=bool)
     message = "no safe timing found"
     while True:
@@ -255,23 +274,18 @@ def retime_blend(
         if res is not None and res.status is Status.SOLVED:
             res, stops, hasty = _prune(blend, hasty, res, stops, max_rounds)
             if hasty.all():
-                message = "no leg of the path keeps the layer among the movers, only the search's pace"
-                break
-            return BlendRetime(Status.SOLVED, res.trajectory, legs=legs, hasty=hasty, waits=tuple(stops),
-                               profile_duration=duration)  # fmt: skip
+                return fail("no leg of the path keeps the layer among the movers, only the search's pace", hasty)
+            return _solved(blend, res, stops, hasty, duration)
         message = res.message if res is not None and res.message else message
-        if hasty.all():
-            message = "not even the search's pace on every leg finds a timing of the path among the movers"
+        if hasty.all() or res is not None and res.status is Status.TIMEOUT or time.perf_counter() > deadline:
             break
-        if res is not None and res.status is Status.TIMEOUT or time.perf_counter() > deadline:
-            break
-        blocked = blend.first_blocked(hasty)
+        blocked, free = blend.first_blocked(hasty)
         if blocked is None:  # reachable with waits anywhere: haste where the free search waits
-            poses, s, _ = blend.chain(hasty, [])
-            waits = np.asarray(blend.search(poses, s, None).waits or [], dtype=float)
+            if free.status is not Status.SOLVED:
+                break
+            waits = np.asarray(free.waits or [], dtype=float)
             inside = waits[np.min(np.abs(waits[:, None] - legs[None, :]), axis=1) > 1e-9] if waits.size else waits
-            leg = np.clip(np.searchsorted(legs, inside, side="right") - 1, 0, len(hasty) - 1)
-            candidates = [int(g) for g in np.unique(leg) if not hasty[g]]
+            candidates = [int(g) for g in np.unique(blend.leg_of(inside, hasty)) if not hasty[g]]
             if not candidates:
                 break
             hasty = hasty.copy()
@@ -283,4 +297,4 @@ def retime_blend(
             break
         hasty = hasty.copy()
         hasty[before[-1]] = True
-    return BlendRetime(Status.NO_PATH, None, message, legs=legs, hasty=hasty, profile_duration=duration)
+    return fail(message, hasty)

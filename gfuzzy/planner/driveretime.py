@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..fuzzy.driveprofile import SAME_HEADING, STILL_XY, drive_profile
+from ..fuzzy.driveprofile import SAME_HEADING, STILL_XY, DriveProfile, drive_profile
 from ..fuzzy.profile import limit_acceleration, profile_times
 from ..poses import pose_at
 from ..scene.scene import Scene
@@ -39,14 +39,14 @@ from .retime import PROFILE_GROUP, ProfileRetime, _search_chain, s_at
 if TYPE_CHECKING:
     from ..fuzzy.rules import RuleBase
 
-__all__ = ["retime_drive", "drive_chain", "DRIVE_GROUP"]
+__all__ = ["retime_drive", "drive_chain", "DriveTiming", "leg_speeds", "DRIVE_GROUP"]
 
 #: Nodes per group of the chain whose safety the movers' field computes together: pairs
 #: (see :func:`gfuzzy.planner.retime._search_chain`).
 DRIVE_GROUP = PROFILE_GROUP
 
 
-def drive_chain(path, knots, s_p, v_p, rests, dt) -> tuple[FloatArray, FloatArray]:
+def drive_chain(path, knots, s_p, v_p, rests, dt, haste=None) -> tuple[FloatArray, FloatArray]:
     """The chain of a differential drive's profile: points one time step apart, a point at
     every rest.
 
@@ -60,6 +60,10 @@ def drive_chain(path, knots, s_p, v_p, rests, dt) -> tuple[FloatArray, FloatArra
     rests : (r,) float
         Increasing arc lengths where the profile is at rest, 0 and the length included.
     dt : float
+    haste : (r - 1,) float, optional
+        For each stretch between two rests: its metric speed when it is driven at the
+        search's pace (equal steps of at most that speed times ``dt``), or 0 to drive the
+        profile (its last step stretched to end at the rest). Default: the profile everywhere.
 
     Returns
     -------
@@ -69,14 +73,87 @@ def drive_chain(path, knots, s_p, v_p, rests, dt) -> tuple[FloatArray, FloatArra
     """
     t = profile_times(s_p, v_p)
     at = np.searchsorted(s_p, rests)
+    haste = np.zeros(len(rests) - 1) if haste is None else haste
     pieces = [np.array([s_p[0]])]
-    for a, b in zip(at[:-1], at[1:], strict=True):
-        n = max(1, int(math.ceil((t[b] - t[a]) / dt - 1e-9)))
-        inner = s_at(t[a] + np.arange(1, n) * dt, s_p, v_p, t)
-        inner = inner[(inner > s_p[a] + 1e-12) & (inner < s_p[b] - 1e-12)]
-        pieces += [inner, np.array([s_p[b]])]
+    for a, b, speed in zip(at[:-1], at[1:], haste, strict=True):
+        lo, hi = s_p[a], s_p[b]
+        if speed > 0:
+            n = max(1, int(math.ceil((hi - lo) / (speed * dt) - 1e-9)))
+            inner = lo + (hi - lo) * np.arange(1, n) / n
+        else:
+            n = max(1, int(math.ceil((t[b] - t[a]) / dt - 1e-9)))
+            inner = s_at(t[a] + np.arange(1, n) * dt, s_p, v_p, t)
+            inner = inner[(inner > lo + 1e-12) & (inner < hi - 1e-12)]
+        pieces += [inner, np.array([hi])]
     s = np.concatenate(pieces)
     return pose_at(knots, path, s), s
+
+
+def leg_speeds(prof: DriveProfile, legs: FloatArray, vmax: float, turn_speed: float) -> FloatArray:
+    """The search's metric speed on each leg: ``vmax`` on a straight, ``turn_speed`` (``r w``)
+    in a turn."""
+    mid = 0.5 * (legs[1:] + legs[:-1])
+    seg = np.clip(np.searchsorted(prof.knots, mid) - 1, 0, len(prof.turning) - 1)
+    return np.where(np.asarray(prof.turning)[seg], turn_speed, vmax)
+
+
+class DriveTiming:
+    """A differential drive's profile on its path, some of its legs (the stretches between
+    the profile's rests) driven at the search's pace, and the searches among the movers.
+
+    :func:`retime_drive` is :meth:`rounds` with no leg hasty; the partial layer
+    (:mod:`gfuzzy.planner.driveblend`) chooses the hasty legs.
+    """
+
+    def __init__(self, scene, path, prof, t0, dt, amax, horizon, deadline, hold):
+        robot = scene.robot
+        self.scene, self.path, self.prof = scene, path, prof
+        self.t0, self.dt, self.amax, self.horizon, self.deadline, self.hold = t0, dt, amax, horizon, deadline, hold
+        #: (n + 1,) float: the legs' ends (0, the profile's rests, the length)
+        self.legs = np.unique(np.concatenate([[0.0, float(prof.knots[-1])], prof.stops]))
+        turn = robot.turn_rate * SPEED_SAFETY * robot.circumradius
+        self.speeds = leg_speeds(prof, self.legs, robot.vmax * SPEED_SAFETY, turn)
+
+    def chain(self, hasty, stops):
+        """The chain with rests added at ``stops``: (poses, s, rests)."""
+        s_p, v_p = _with_stops(self.prof.s, self.prof.v, stops, self.amax)
+        rests = np.unique(np.concatenate([self.legs, stops]))
+        leg = np.searchsorted(self.legs, 0.5 * (rests[1:] + rests[:-1])) - 1
+        poses, s = drive_chain(self.path, self.prof.knots, s_p, v_p, rests, self.dt, np.where(hasty[leg], self.speeds[leg], 0.0))
+        return poses, s, rests
+
+    def search(self, poses, s, wait_at, hold=None):
+        """The safe-interval search on the chain (``hold`` default the query's)."""
+        hold = self.hold if hold is None else hold
+        return _search_chain(self.scene, poses, s, self.t0, self.dt, self.horizon, wait_at, self.deadline,
+                             hold=hold, group=DRIVE_GROUP)  # fmt: skip
+
+    def leg_of(self, s, hasty):
+        """The leg of each arc length in ``s``."""
+        return np.clip(np.searchsorted(self.legs, s, side="right") - 1, 0, len(hasty) - 1)
+
+    def rounds(self, hasty, max_rounds):
+        """Waits at rests and anywhere on hasty legs; more rests where a free search waits.
+
+        Returns the last search's result (solved, or why not) and the stops added."""
+        stops: list[float] = []
+        res = None
+        for _ in range(max_rounds):
+            poses, s, rests = self.chain(hasty, stops)
+            res = self.search(poses, s, np.concatenate([rests[:-1], s[hasty[self.leg_of(s, hasty)]]]))
+            if res.status is Status.SOLVED or res.status is Status.TIMEOUT:
+                return res, stops
+            # where would the robot need to wait? search again allowing waits anywhere
+            free = self.search(poses, s, None)
+            if free.status is not Status.SOLVED:
+                return (free if free.message else res), stops
+            leg = self.leg_of(np.asarray(free.waits, dtype=float), hasty)
+            new = {w for w, g in zip(free.waits, leg, strict=True) if not hasty[g] and 1e-9 < w < self.legs[-1] - 1e-9}
+            merged = sorted(set(stops) | new)
+            if merged == stops:
+                break
+            stops = merged
+        return res, stops
 
 
 def _without_null_motions(path: FloatArray) -> FloatArray:
@@ -148,26 +225,9 @@ def retime_drive(
     prof = drive_profile(path, robot.circumradius, robot.vmax * SPEED_SAFETY, amax,
                          robot.turn_rate * SPEED_SAFETY, rulebase)  # fmt: skip
     duration = float(profile_times(prof.s, prof.v)[-1])
-    total = float(prof.knots[-1])
-    stops: list[float] = []
-    message = ""
-    for _ in range(max_rounds):
-        s_p, v_p = _with_stops(prof.s, prof.v, stops, amax)
-        rests = np.unique(np.concatenate([[0.0, total], prof.stops, stops]))
-        poses, s = drive_chain(path, prof.knots, s_p, v_p, rests, dt)
-        res = _search_chain(scene, poses, s, t0, dt, horizon, rests[:-1], deadline, hold=hold, group=DRIVE_GROUP)
-        if res.status is Status.SOLVED:
-            return ProfileRetime(Status.SOLVED, res.trajectory, waits=stops, profile_duration=duration)
-        message = res.message
-        if res.status is Status.TIMEOUT:
-            break
-        # where would the robot need to wait? search again allowing waits anywhere
-        free = _search_chain(scene, poses, s, t0, dt, horizon, None, deadline, hold=hold, group=DRIVE_GROUP)
-        if free.status is not Status.SOLVED:
-            message = free.message or message
-            break
-        merged = sorted(set(stops) | {w for w in free.waits if 1e-9 < w < total - 1e-9})
-        if merged == stops:
-            break
-        stops = merged
-    return ProfileRetime(Status.NO_PATH, None, message or "no safe timing found", profile_duration=duration)
+    timing = DriveTiming(scene, path, prof, t0, dt, amax, horizon, deadline, hold)
+    res, stops = timing.rounds(np.zeros(len(timing.legs) - 1, dtype=bool), max_rounds)
+    if res is not None and res.status is Status.SOLVED:
+        return ProfileRetime(Status.SOLVED, res.trajectory, waits=stops, profile_duration=duration)
+    message = res.message if res is not None and res.message else "no safe timing found"
+    return ProfileRetime(Status.NO_PATH, None, message, profile_duration=duration)

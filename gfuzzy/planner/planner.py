@@ -272,7 +272,7 @@ def _amax_stats(robot, stats: PlanStats, layer: SpeedReport | None) -> PlanStats
         h = layer.hasty
         note = (
             f"robot.amax {robot.amax:g} is not honoured on {h['legs']} of the path's {h['of']} legs "
-            f"({h['length']:.2f} of {h['total']:.2f} m): no timing of the whole layered path exists among "
+            f"({h['length']:.2f} of {h['total']:.2f} m metric length, turns as r*angle): no timing of the whole layered path exists among "
             "the movers, and those legs keep the search's pace where a mover forces haste"
         )
     if note:

@@ -35,7 +35,7 @@ from ..trajectory import Trajectory
 from ..typed import FloatArray
 from .driveblend import BlendRetime, retime_blend
 from .driveretime import retime_drive
-from .retime import retime_path, retime_profile
+from .retime import ProfileRetime, retime_path, retime_profile
 
 if TYPE_CHECKING:
     from ..fuzzy.rules import RuleBase
@@ -116,9 +116,11 @@ class SpeedReport:
     reason : str
         Why not, when not applied.
     profile_seconds : float or None
-        Duration of the speed profile alone, without the movers.
+        Duration of the speed profile alone, without the movers (applied in part: of the
+        blend, its hasty legs at the search's pace).
     stops : int or None
-        Stops the timing among the movers added (when applied).
+        Stops the timing among the movers added (when applied; in part: those inside the
+        layered legs and the waits inside the hasty ones).
     before, after : mapping or None
         ``duration``, ``max_speed``, ``mean_speed`` (when applied).
     corners : mapping or None
@@ -129,8 +131,10 @@ class SpeedReport:
         A differential drive's, when no timing of the whole layered path exists among the
         movers and the layer applies to part of it (:mod:`gfuzzy.planner.driveblend`):
         ``legs`` driven at the search's pace (no fuzzy or acceleration bound) ``of`` the
-        path's legs, their ``length`` of the path's ``total`` (metric, m). None: the layer
-        holds on the whole path.
+        path's legs, their ``length`` of the path's ``total`` (metric length, a turn in place
+        counted as r * angle, m), and ``spans``, for each hasty leg the times ``[t0, t1]`` the
+        answer drives it (outside them the answer keeps ``amax``). None: the layer holds on
+        the whole path.
     """
 
     applied: bool
@@ -419,6 +423,8 @@ def _speed_layer(ctx: StageContext, traj: Trajectory, query, opts, deadline) -> 
         rt = retime_profile(scene=ctx.scene, path=path, s_xy=s_xy, v_xy=v_xy, t0=query.t0,
                             dt=opts.dt, amax=amax, horizon=horizon, deadline=deadline, hold=query.hold)  # fmt: skip
     report = SpeedReport(False, amax, profile_seconds=rt.profile_duration, corners=corners)
+    if rt.status is Status.TIMEOUT:
+        return traj, replace(report, reason="the time limit passed while timing the speed-limited path among the movers")
     if rt.status is not Status.SOLVED:
         why = f"the speed-limited path could not be timed among the movers ({rt.message})"
         return traj, replace(report, reason=why)
@@ -430,7 +436,8 @@ def _speed_layer(ctx: StageContext, traj: Trajectory, query, opts, deadline) -> 
     )
     if isinstance(rt, BlendRetime) and rt.hasty is not None and rt.hasty.any():
         total = float(rt.legs[-1])
-        hasty = {"legs": int(rt.hasty.sum()), "of": len(rt.hasty), "length": rt.hasty_length, "total": total}
+        hasty = {"legs": int(rt.hasty.sum()), "of": len(rt.hasty), "length": rt.hasty_length, "total": total,
+                 "spans": [[float(a), float(b)] for a, b in rt.hasty_spans]}  # fmt: skip
         figures = replace(figures, hasty=hasty)
     return rt.trajectory, figures
 
@@ -454,9 +461,13 @@ def _drive_layer(ctx: StageContext, path, query, opts, amax, horizon, rules, dea
             return rt, {"before": count(path), "after": count(candidate)}
     # no timing of the whole layered path: the layer where it fits, haste where a mover forces it
     for candidate in tries:
-        blend = retime_blend(ctx.scene, candidate, query.t0, opts.dt, amax, horizon, rules, deadline=deadline, hold=query.hold)
-        if blend.status is Status.SOLVED:
-            return blend, {"before": count(path), "after": count(candidate)}
+        if time.perf_counter() > deadline:
+            break
+        rt = retime_blend(ctx.scene, candidate, query.t0, opts.dt, amax, horizon, rules, deadline=deadline, hold=query.hold)
+        if rt.status is Status.SOLVED:
+            return rt, {"before": count(path), "after": count(candidate)}
+    if time.perf_counter() > deadline:  # the last answer's why, but the time ran out
+        rt = ProfileRetime(Status.TIMEOUT, None, "the time limit passed", profile_duration=rt.profile_duration)
     return rt, {"before": count(path), "after": count(tries[-1])}
 
 
