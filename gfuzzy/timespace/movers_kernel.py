@@ -88,6 +88,24 @@ def _box_box_gap(q, px, py, cc, ss, hl, hw, qx, qy, mhx, mhy):
 
 
 @njit(cache=True)
+def _axis_gap(nx, ny, bx, by, piece, m):
+    """The gap between the box (corners ``bx``, ``by``) and the convex ``piece`` (its first
+    ``m`` vertices) projected on the axis normal to an edge, ``(nx, ny)`` unnormalised:
+    positive when the axis separates them (one axis of the separating-axis test)."""
+    nn = math.sqrt(nx * nx + ny * ny)
+    nx, ny = nx / nn, ny / nn
+    p_lo = r_lo = np.inf
+    p_hi = r_hi = -np.inf
+    for j in range(4):
+        pp = bx[j] * nx + by[j] * ny
+        p_lo, p_hi = min(p_lo, pp), max(p_hi, pp)
+    for j in range(m):
+        rr = piece[j, 0] * nx + piece[j, 1] * ny
+        r_lo, r_hi = min(r_lo, rr), max(r_hi, rr)
+    return max(p_lo - r_hi, r_lo - p_hi)
+
+
+@njit(cache=True)
 def footprint_distance(rx, ry, cc, ss, disc, mrad, mhx, mhy, pieces, counts):
     """:meth:`gfuzzy.collision.shapes.FootprintShape.mover_distance` (``exact=False``) for one pair:
     the mover at ``(rx, ry)`` from the robot's reference point (world axes), the heading's
@@ -132,36 +150,12 @@ def footprint_distance(rx, ry, cc, ss, disc, mrad, mhx, mhy, pieces, counts):
             continue
         gap = -np.inf  # separating-axis gap: the piece's normals, then the box's
         for k in range(m):
-            vx, vy = pieces[p, k, 0], pieces[p, k, 1]
             k1 = k + 1 if k + 1 < m else 0
-            nx = pieces[p, k1, 1] - vy
-            ny = -(pieces[p, k1, 0] - vx)
-            nn = math.sqrt(nx * nx + ny * ny)
-            nx, ny = nx / nn, ny / nn
-            p_lo = r_lo = np.inf
-            p_hi = r_hi = -np.inf
-            for j in range(4):
-                pp = bx[j] * nx + by[j] * ny
-                p_lo, p_hi = min(p_lo, pp), max(p_hi, pp)
-            for j in range(m):
-                rr = pieces[p, j, 0] * nx + pieces[p, j, 1] * ny
-                r_lo, r_hi = min(r_lo, rr), max(r_hi, rr)
-            gap = max(gap, max(p_lo - r_hi, r_lo - p_hi))
+            ex, ey = pieces[p, k1, 0] - pieces[p, k, 0], pieces[p, k1, 1] - pieces[p, k, 1]
+            gap = max(gap, _axis_gap(ey, -ex, bx, by, pieces[p], m))
         for k in range(4):
             k1 = k + 1 if k < 3 else 0
-            nx = by[k1] - by[k]
-            ny = -(bx[k1] - bx[k])
-            nn = math.sqrt(nx * nx + ny * ny)
-            nx, ny = nx / nn, ny / nn
-            p_lo = r_lo = np.inf
-            p_hi = r_hi = -np.inf
-            for j in range(4):
-                pp = bx[j] * nx + by[j] * ny
-                p_lo, p_hi = min(p_lo, pp), max(p_hi, pp)
-            for j in range(m):
-                rr = pieces[p, j, 0] * nx + pieces[p, j, 1] * ny
-                r_lo, r_hi = min(r_lo, rr), max(r_hi, rr)
-            gap = max(gap, max(p_lo - r_hi, r_lo - p_hi))
+            gap = max(gap, _axis_gap(by[k1] - by[k], -(bx[k1] - bx[k]), bx, by, pieces[p], m))
         best = min(best, gap)
     return best
 
