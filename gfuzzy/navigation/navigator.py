@@ -543,7 +543,7 @@ class Navigator(PathSpace):
             elif self._previous_mode in (NavMode.PLAN, NavMode.CLOSE) and mode != NavMode.DIRECT and len(obs):
                 # the last plan, still as safe as when it was made, arriving much sooner
                 kept = sooner_plan(self, t, pose, obs, self._kept_inflation(pose, obs, infl, self._previous_mode),
-                                   traj, opts.personal_space_cost)
+                                   traj, self._soft_costs())
                 if kept is not None:
                     traj, mode = kept, NavMode.KEPT
                     self._ahead = self._previous_ahead  # the vertices the kept plan heads for
@@ -716,6 +716,13 @@ class Navigator(PathSpace):
             if np.min(self._clearance_along(pts, times, obs)) <= tol:
                 return None
         return Trajectory(cut, self.robot.circumradius)
+
+    def _soft_costs(self) -> float:
+        """Seconds of arrival the soft costs are worth together (the personal space's and,
+        when it is kept, the path space's): a last plan kept for arriving sooner must beat
+        the fresh one by more, or it would undo what the soft costs bought."""
+        opts = self.options
+        return opts.personal_space_cost + (opts.path_space_cost if opts.path_space > 0 else 0.0)
 
     def _sample_gap(self, obs: FloatArray) -> float:
         """Gap (m) to keep at samples ``MOTION_SAMPLE`` apart so that there is none
