@@ -5,6 +5,10 @@ A unicycle turns in place, so a plan that changes its mind costs time: every rep
 starts a turn the next one undoes wastes the turn (at 1 rad/s a quarter turn takes 1.6 s).
 :func:`kept_plan` keeps the last plan while it stays as safe as a fresh one would be (the
 same inflated predictions) and arrives not much later than the fresh one.
+
+The same test of a kept plan serves the holonomic robot too: :func:`sooner_plan` keeps
+the last plan when it arrives much sooner than the fresh one (by more than the soft costs
+together), a fresh search having missed it.
 """
 
 from __future__ import annotations
@@ -110,7 +114,6 @@ def _if_safe(nav, prev: Trajectory, t: float, pose: FloatArray, obs: FloatArray,
     if np.any(gap < infl[:, s_of].T + lost[None, :]):
         return None
     return traj
-
 
 
 def drive_evasion(nav, t: float, pose: FloatArray, obs: FloatArray, times: FloatArray) -> Trajectory:
