@@ -87,6 +87,19 @@ def test_no_look_into_a_person_walking_at_the_robot(open_square):
     assert traj.at(0.25)[1] >= -3.0 - 1e-9 or abs(traj.at(0.25)[0]) > 0.05  # not backing into them
 
 
+def test_a_look_never_replaces_a_fallback(open_square, monkeypatch):
+    """The back never seen would be looked at first (above), but when no search answers the
+    fallback's motion stands: a look is checked over a second only, the evasion over more."""
+    from gfuzzy.navigation.navigator import _Searched
+
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (0.0, 4.0), NavOptions(fov=180.0))
+    monkeypatch.setattr(Navigator, "_search", lambda self, t, p, *a, **k: _Searched(None, "exhausted"))
+    person = np.array([[2.5, -2.0, -0.2, 0.0, 0.3]])  # far enough that no fallback waits for them
+    nav.step(0.0, np.array([0.0, -4.0]), person)
+    assert nav.last.mode in (NavMode.DIRECT, NavMode.PREVIOUS, NavMode.EVASIVE)
+
+
 def test_a_navigator_with_a_full_view_never_looks(open_square):
     scene, rm = open_square
     nav = Navigator(scene, rm, (0.0, 4.0))

@@ -38,7 +38,7 @@ def add_crowd(sub) -> None:
     c.add_argument("--sense", type=float, help="sensing range (m; default: all, 5 in the arena)")
     c.add_argument("--time-budget", type=float, default=0.1, help="seconds one navigator replan may take (default 0.1)")
     c.add_argument("--budget-clock", choices=("wall", "cpu"), default="wall",
-                   help="the clock of --time-budget: wall (default, a robot's) or cpu, this process's CPU time, "
+                   help="the clock of --time-budget: wall (default, a robot's) or cpu, the navigator thread's CPU time, "
                         "so that figures do not depend on the machine's load")  # fmt: skip
     c.add_argument("--personal-space", type=float, default=0.2,
                    help="gap (m) the navigator keeps from people when that costs little (default 0.2, 0: off)")  # fmt: skip

@@ -9,7 +9,8 @@ side has gone unseen for ``NavOptions.look_after`` seconds, the navigator's answ
 replaced by a *look*: a short, slow motion toward that side, which turns the view there
 for the next observation, and then standing (the navigator replans at its next call).
 A look is taken only when it stays clear of everyone seen (walking on, un-inflated, over
-``LOOK_CHECK`` seconds) and of the static obstacles.
+``LOOK_CHECK`` seconds, or the navigator's ``cover`` if longer: the standing after the
+look too) and of the static obstacles.
 """
 
 from __future__ import annotations
@@ -119,9 +120,10 @@ class Lookout:
             return None
         rows = np.array([[t, *pose], [t + LOOK_TIME, *end], [t + max(LOOK_CHECK, nav.options.cover), *end]])
         traj = Trajectory(rows, nav.robot.circumradius)
-        near = nav._near(pose, obs, LOOK_CHECK, nav.options.safety_buffer + 0.5)
+        span = traj.t_end - t  # the look and the standing after it, all of it checked
+        near = nav._near(pose, obs, span, nav.options.safety_buffer + 0.5)
         if len(near):
-            times = t + np.arange(0.0, LOOK_CHECK + 1e-9, MOTION_SAMPLE)
+            times = t + np.arange(0.0, span + 1e-9, MOTION_SAMPLE)
             pts = traj.at(times)[None]
             gap = nav._clearance_along(pts, times, near)
             if gap.min() <= nav.options.safety_buffer + nav._sample_gap(near):

@@ -69,6 +69,11 @@ REACH_SAMPLES = 48
 #: First guess (s) of the predictions' set-up per person (then measured per navigator).
 PERSON_SECONDS = 150e-6
 
+#: The answers a look may replace (a fresh plan keeping the margins, or one kept): never
+#: the relaxed search's or a fallback's, which answer a situation the search could not (the evasive motion is scored over
+#: ``evasion_time``, a look is checked over ``lookout.LOOK_CHECK`` only).
+LOOK_OVER = (NavMode.PLAN, NavMode.CLOSE, NavMode.KEPT)
+
 #: The clocks a time budget can be measured on (``NavOptions.budget_clock``).
 BUDGET_CLOCKS = {"wall": time.perf_counter, "cpu": time.thread_time}
 
@@ -155,7 +160,7 @@ class NavOptions:
         which detour with few turns where the roadmap's lanes zigzag.
     swerve_growth : float
         Further growth (m per s of prediction) of the predicted disc of a person whose
-        straight walk meets someone else's within 2 s (:mod:`gfuzzy.navigation.swerve`):
+        straight walk meets someone else's within 3 s (:mod:`gfuzzy.navigation.swerve`):
         they are about to swerve, and may swerve towards the robot. 0 turns it off.
     fov : float
         A disc robot's field of view (degrees), centred on its direction of motion; below
@@ -550,12 +555,12 @@ class Navigator(PathSpace):
             self._previous = traj
             if mode != NavMode.KEPT:
                 self._previous_mode, self._previous_ahead = mode, self._ahead
-        if self._lookout is not None:
+        if mode == NavMode.EVASIVE:
+            self._previous = None
+        if self._lookout is not None and mode in LOOK_OVER:  # never instead of a fallback
             looked = self._lookout.look(self, t, pose, obs, traj)
             if looked is not None:
                 traj, mode = looked, NavMode.LOOK
-        if mode == NavMode.EVASIVE:
-            self._previous = None
         self.last = NavStep(mode, self._clock() - t_begin, found.message, predicted, found.detailed)
         return traj
 

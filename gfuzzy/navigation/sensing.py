@@ -160,8 +160,9 @@ class Tracker:
     one period apart. With noise the gains start as the expanding-memory filter's,
     ``alpha_n = 2 (2n - 1) / (n (n + 1))``, ``beta_n = 6 / (n (n + 1))`` at the n-th
     sighting (the least-squares line through the first n positions when they are evenly
-    spaced: the first difference at n = 2, then ever less noisy), and stay at their
-    steady state alpha = 0.5, beta = 0.2 once they reach it (a compromise between lag and
+    spaced: the first difference at n = 2, then ever less noisy), each clamped from below
+    at its steady state alpha = 0.5, beta = 0.2 (beta reaches it at n = 5, alpha at n = 7:
+    sightings 5 and 6 are a blend of the two, not least squares) (a compromise between lag and
     noise for people walking at up to ~1.5 m/s, 0.25 s apart). A fixed gain from the
     second sighting on kept the first difference's error (noise x sqrt(2) / 0.25 s per
     coordinate: 0.28 m/s at 0.05 m) for a second or more, and a person lost from view
