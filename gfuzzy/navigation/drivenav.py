@@ -24,7 +24,7 @@ from ..typed import FloatArray
 from .evasion import evasion_scores
 from .navtypes import MOTION_SAMPLE, sample_loss
 
-__all__ = ["kept_plan", "sooner_plan", "cut_rows", "drive_evasion"]
+__all__ = ["kept_plan", "sooner_plan", "cut_rows", "rest_of", "drive_evasion"]
 
 
 def cut_rows(traj: Trajectory, ta: float, tb: float) -> FloatArray:
@@ -87,14 +87,23 @@ def sooner_plan(nav, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArr
     return _if_safe(nav, prev, t, pose, obs, infl)
 
 
-def _if_safe(nav, prev: Trajectory, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray) -> Trajectory | None:
-    """``prev`` from ``t`` on, if the robot is on it and it keeps the gaps ``infl`` (k, S)."""
-    cr = nav.robot.circumradius
+def rest_of(prev: Trajectory, t: float, pose: FloatArray) -> Trajectory | None:
+    """``prev`` from ``t`` on, starting exactly at ``pose``, if the robot is on it (within
+    1e-6 in the metric of :func:`gfuzzy.poses.metric_distance`); None otherwise."""
+    cr = prev.circumradius
     if float(metric_distance(prev.at(t), pose, cr)) > 1e-6:
         return None
     rows = cut_rows(prev, t, prev.t_end)
     rows[0, 1:] = pose
-    traj = Trajectory(rows, cr)
+    return Trajectory(rows, cr)
+
+
+def _if_safe(nav, prev: Trajectory, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray) -> Trajectory | None:
+    """``prev`` from ``t`` on, if the robot is on it and it keeps the gaps ``infl`` (k, S)."""
+    traj = rest_of(prev, t, pose)
+    if traj is None:
+        return None
+    cr = nav.robot.circumradius
     opts = nav.options
     horizon = opts.prediction_horizon
     if len(obs) == 0:

@@ -50,7 +50,7 @@ from ..timespace.spacetime import IntervalStore, SpaceTimeGraph
 from ..timespace.timespace import timed_rows
 from ..trajectory import Trajectory
 from ..typed import BoolArray, FloatArray
-from .drivenav import cut_rows, drive_evasion, kept_plan, sooner_plan
+from .drivenav import drive_evasion, kept_plan, rest_of, sooner_plan
 from .evasion import evasion_scores
 from .lookout import Lookout
 from .navtypes import MOTION_SAMPLE, NavMode, NavStep, sample_loss
@@ -708,19 +708,17 @@ class Navigator(PathSpace):
         prev = self._previous
         if prev is None or prev.t_end <= t + 1e-9:
             return None
-        if float(metric_distance(prev.at(t), pose, self.robot.circumradius)) > 1e-6:
+        rest = rest_of(prev, t, pose)
+        if rest is None:
             return None
-        cut = cut_rows(prev, t, prev.t_end)
-        cut[0, 1:] = pose
         horizon = self.options.prediction_horizon
         tol = self._sample_gap(obs)
         obs = self._near(pose, obs, horizon, tol)
         if len(obs):
             times = np.linspace(t, t + horizon, int(math.ceil(horizon / MOTION_SAMPLE)) + 1)
-            pts = Trajectory(cut, self.robot.circumradius).at(times)
-            if np.min(self._clearance_along(pts, times, obs)) <= tol:
+            if np.min(self._clearance_along(rest.at(times), times, obs)) <= tol:
                 return None
-        return Trajectory(cut, self.robot.circumradius)
+        return rest
 
     def _soft_costs(self) -> float:
         """Seconds of arrival the soft costs are worth together (the personal space's and,
