@@ -58,6 +58,19 @@ def _turn_rows(x: float, y: float, h: float, dh: float) -> list:
     return [np.array([x, y, float(wrap_angle(h + dh * i / n))]) for i in range(1, n + 1)]
 
 
+def _ending(geometry, out: list, h: float, goal) -> FloatArray | None:
+    """``out`` (rows arriving at ``goal``'s position with heading ``h``) closed by the turn
+    in place to ``goal``'s heading, its last row exactly ``goal``; None when that turn is
+    not free either way."""
+    g = np.asarray(goal, dtype=float)
+    dh = pick_turn(geometry, float(g[0]), float(g[1]), h, float(g[2]))
+    if dh is None:
+        return None
+    path = np.array(out + (_turn_rows(float(g[0]), float(g[1]), h, dh) if dh else []))
+    path[-1] = g
+    return path
+
+
 def _straight_free(geometry, a: list, b: list) -> bool:
     """Static certification of a straight move (a disc's body ignores the heading)."""
     if geometry.robot.shape == "disc":
@@ -109,14 +122,8 @@ def straighten(geometry, path: FloatArray, look_ahead: int = LOOK_AHEAD) -> Floa
             out += _turn_rows(x, y, h, dh)
         out.append(np.array(end))
         i, h = j, end[2]
-    goal = path[-1]
-    dh = pick_turn(geometry, float(goal[0]), float(goal[1]), h, float(goal[2]))
-    if dh is None:
-        return path
-    out += _turn_rows(float(goal[0]), float(goal[1]), h, dh) if dh else []
-    straight = np.array(out)
-    straight[-1] = goal
-    return straight if len(corners(straight)) < len(pts) else path
+    straight = _ending(geometry, out, h, path[-1])
+    return straight if straight is not None and len(corners(straight)) < len(pts) else path
 
 
 def drive_path(geometry, start: FloatArray, via: FloatArray, goal: FloatArray) -> FloatArray | None:
@@ -148,11 +155,4 @@ def drive_path(geometry, start: FloatArray, via: FloatArray, goal: FloatArray) -
             out += _turn_rows(float(a[0]), float(a[1]), h, dh)
             h = float(out[-1][2])
         out.append(np.array([b[0], b[1], h]))
-    g = np.asarray(goal, dtype=float)
-    dh = pick_turn(geometry, float(g[0]), float(g[1]), h, float(g[2]))
-    if dh is None:
-        return None
-    out += _turn_rows(float(g[0]), float(g[1]), h, dh) if dh else []
-    path = np.array(out)
-    path[-1] = g
-    return path
+    return _ending(geometry, out, h, goal)
