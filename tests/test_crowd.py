@@ -189,6 +189,23 @@ def test_summary_by_hand():
     assert s.replan_p50 == pytest.approx(0.025)
 
 
+def test_the_oracle_drives_a_unicycle_as_it_may(roadmap):
+    """The oracle of a differential drive plans on the heading graph from the posed start:
+    its plan obeys the row rule, arrives, and is never sooner than the holonomic oracle's
+    on the same episode (every drive's path is one a holonomic robot may take)."""
+    from gfuzzy import check_trajectory, plan
+
+    s = C.CrowdSetting(humans=3, kinematics="unicycle")
+    drive, holo = (C.run_episode(k, roadmap, 1, 2, ["oracle"])[0] for k in (s, replace(s, kinematics="holonomic")))
+    assert drive.reached and holo.reached and drive.min_separation >= 0
+    assert drive.time >= holo.time - 1e-9
+    lay = C.layout(s, np.random.default_rng([1, 2]))
+    scene = C.crowd_scene(s, lay)
+    res = plan(scene, roadmap, *C._poses(s, lay), 0.0)
+    assert res.trajectory.waypoints.shape[1] == 4
+    assert check_trajectory(scene, res.trajectory.waypoints, scene.queries[0]).valid
+
+
 def test_oracle_with_visible_humans_and_other_policies_for_a_unicycle_are_refused(roadmap):
     with pytest.raises(InputError):
         C.run_episode(C.CrowdSetting(humans=2, visible=True), roadmap, 1, 0, ["oracle"])

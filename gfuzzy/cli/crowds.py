@@ -95,9 +95,9 @@ def _setting(args):
         raise BadInput(f"gfuzzy crowd: {exc}") from None
     policies = args.policy or (["navigator", "orca"] + ([] if args.visible else ["oracle"]))
     if args.kinematics == "unicycle":
-        if args.policy and set(args.policy) - {"navigator"}:
-            raise BadInput("gfuzzy crowd: with --kinematics unicycle only --policy navigator runs")
-        policies = ["navigator"]
+        if args.policy and set(args.policy) - {"navigator", "oracle"}:
+            raise BadInput("gfuzzy crowd: with --kinematics unicycle only --policy navigator and oracle run")
+        policies = args.policy or (["navigator"] + ([] if args.visible else ["oracle"]))
     if "oracle" in policies and args.visible:
         raise BadInput("gfuzzy crowd: --policy oracle needs humans who do not see the robot (drop --visible)")
     return setting, options, list(dict.fromkeys(policies))

@@ -614,9 +614,9 @@ def run_episode(setting: CrowdSetting, roadmap, seed: int, index: int, policies,
     from .lookout import knowing_view
     from .navigator import Navigator, NavOptions
 
-    if setting.kinematics == "unicycle" and set(policies) - {"navigator"}:
-        raise InputError("with a unicycle robot only the navigator policy runs (ORCA, social force and the "
-                         "oracle's plan are holonomic here)")
+    if setting.kinematics == "unicycle" and set(policies) - {"navigator", "oracle"}:
+        raise InputError("with a unicycle robot only the navigator and oracle policies run (ORCA and social "
+                         "force are holonomic here)")
     if "oracle" in policies and setting.visible:
         raise InputError("the oracle policy needs humans who ignore the robot (not --visible)")
     c = CROWD
@@ -641,7 +641,7 @@ def run_episode(setting: CrowdSetting, roadmap, seed: int, index: int, policies,
         elif policy == "social-force":
             act = SocialForcePolicy(lay.goal, CROWD)
         elif policy == "oracle":
-            res = plan(scene, roadmap, lay.start, lay.goal, 0.0, PlanOptions(horizon=limit))
+            res = plan(scene, roadmap, *_poses(setting, lay), 0.0, PlanOptions(horizon=limit))
             act = OraclePolicy(res.trajectory if res.solved else None, CROWD["robot_radius"])
         else:
             raise InputError(f"policy must be one of {', '.join(POLICIES)}, got {policy!r}")
