@@ -178,10 +178,13 @@ def open_floor_disc():
 
 
 def _detour(t0: float, start, slow: float = 2.0) -> Trajectory:
-    """A plan that goes round by the top edge, ``slow`` times the time it needs at 1 m/s
-    (16 m: much later than the straight line)."""
-    rows = np.array([[t0, *start], [t0 + 3.0 * slow, 2.0, 5.5], [t0 + 10.0 * slow, 9.0, 5.5], [t0 + 13.0 * slow, *GOAL[:2]]])
-    return Trajectory(rows, 0.3)
+    """A plan that goes round by the top edge (16 m: much later than the straight line),
+    waiting at its first corner so that it takes ``slow`` times the time it needs at 1 m/s
+    (a plan is run at full speed up to its first wait: the wait is what makes it late)."""
+    wait = 13.0 * (slow - 1.0)
+    rows = [[t0, *start], [t0 + 3.0, 2.0, 5.5]] + ([[t0 + 3.0 + wait, 2.0, 5.5]] if wait > 0 else [])
+    rows += [[t0 + 10.0 + wait, 9.0, 5.5], [t0 + 13.0 + wait, *GOAL[:2]]]
+    return Trajectory(np.array(rows), 0.3)
 
 
 def test_a_much_sooner_last_plan_still_clear_is_kept(open_floor_disc):

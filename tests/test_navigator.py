@@ -82,6 +82,23 @@ def test_mid_edge_start(open_square):
     assert gfuzzy.check_trajectory(scene, traj.waypoints).valid
 
 
+def test_the_plan_runs_at_full_speed_up_to_its_first_wait(open_square, monkeypatch):
+    # the search takes a whole number of steps per piece of edge: the straight 7.00006 m
+    # to the goal in sight took 71 steps of 0.1 s; the answer runs it at vmax when that
+    # keeps the gaps the search kept (someone standing far away), not otherwise
+    scene, rm = open_square
+    pose, goal = np.array([0.03, -3.0]), (0.0, 4.0)
+    far = np.array([[4.0, 0.0, 0.0, 0.0, 0.3]])
+    length = math.hypot(0.03, 7.0)
+    traj = Navigator(scene, rm, goal).step(0.0, pose, far)
+    assert traj.duration == pytest.approx(length / scene.robot.vmax, rel=1e-6)
+    assert _speeds_ok(traj, 1.0)
+    assert gfuzzy.check_trajectory(scene, traj.waypoints).valid
+    monkeypatch.setattr(Navigator, "_keeps_gaps", lambda *args: False)
+    slow = Navigator(scene, rm, goal).step(0.0, pose, far)
+    assert slow.duration == pytest.approx(7.1)
+
+
 def test_person_walking_straight_at_the_robot_is_dodged(open_square):
     scene0, rm = open_square
     # a person walks down the robot's straight line at 1 m/s, start to finish

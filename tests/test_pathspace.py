@@ -67,6 +67,24 @@ def test_a_robot_in_the_way_gets_time_to_step_aside():
     np.testing.assert_allclose(vanish, 4.0)
 
 
+def test_no_ghost_the_search_keeps_from_the_start_covers_the_robot(open_square):
+    # a ghost's zone in the search is its band's cover plus the uncertainty of the
+    # prediction that far ahead; a robot inside it (e.g. 0.86 m beside a walker's line:
+    # outside the cover alone, inside with the uncertainty) must get time to step out,
+    # or the search with the ghosts starts inside one and finds nothing
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (0.0, 3.0), NavOptions())
+    obs = np.array([[0.0, 0.0, 1.0, 0.0, 0.3], [0.5, -1.5, -0.3, 0.9, 0.3]])
+    rng = np.random.default_rng(5)
+    poses = np.vstack([[[1.5, 0.86]], rng.uniform(-2.5, 2.5, (300, 2))])
+    for pose in poses:
+        rows, infl = nav._path_ghosts(pose, obs)
+        speed = np.hypot(rows[:, 2], rows[:, 3])
+        zone = nav.robot.circumradius + rows[:, 4] + infl[:, 0] + nav._step_margin(speed)
+        covers = np.hypot(*(rows[:, :2] - pose).T) < zone
+        assert np.all(rows[covers, 5] > 0), pose
+
+
 def test_no_ghost_through_a_wall_or_in_a_passage():
     wall = {"box": {"center": [1.0, 0.0], "size": [0.2, 4.0]}}
     walls = WallCheck(_scene([wall]))
@@ -113,3 +131,4 @@ def test_the_navigator_does_not_cut_in_front_of_a_walker(open_square):
     # the robot crosses (the plan without the path space)
     assert ends[1.25, 10.0] > ends[0.0, 0.0] + 1.0
     assert ways[1.25, 1.0] == ways[0.0, 0.0] and ends[1.25, 1.0] == ends[0.0, 0.0]
+

@@ -116,11 +116,12 @@ def path_ghosts(obs: FloatArray, look: float, robot_radius: float, buffer: float
 
 
 def ghost_window(ghosts: Ghosts, obs: FloatArray, pose_xy: FloatArray, robot_radius: float, margin0: FloatArray,
-                 vplan: float, dt: float, horizon: float) -> tuple[FloatArray, FloatArray]:  # fmt: skip
+                 vplan: float, dt: float, horizon: float,
+                 inflation: FloatArray | None = None) -> tuple[FloatArray, FloatArray]:  # fmt: skip
     """When each ghost is kept, in seconds after now: (appear (g,), vanish (g,)).
 
     A robot already in someone's way (its centre closer to the person's line than the
-    zone's reach, ``robot_radius + radius + cover`` plus the search's first-step margin
+    zone's reach, ``robot_radius + radius + inflation`` plus the search's first-step margin
     ``margin0``) cannot keep off that person's ghosts from the start: one walking at it
     comes on faster than the robot backs away. Their ghosts appear only once the robot
     could have stepped out of the band sideways at ``ESCAPE_FACTOR`` times the time
@@ -139,6 +140,12 @@ def ghost_window(ghosts: Ghosts, obs: FloatArray, pose_xy: FloatArray, robot_rad
     margin0 : (g,) float
         The search's continuous-time margin at step 0 for each ghost.
     vplan, dt, horizon : float
+    inflation : (g,) float, optional
+        What the search inflates each ghost by (the band's ``cover`` and the uncertainty
+        of the prediction that far ahead); default ``ghosts.cover``. The reach must be the
+        zone the search keeps off: a robot inside the uncertainty's part of the zone but
+        outside ``cover`` alone would otherwise start inside a ghost that is kept from
+        the first step, and the search with the ghosts often finds nothing.
 
     Returns
     -------
@@ -150,7 +157,8 @@ def ghost_window(ghosts: Ghosts, obs: FloatArray, pose_xy: FloatArray, robot_rad
     p = np.asarray(pose_xy, dtype=float)[:2]
     rel = p - own[:, :2]
     lateral = np.abs(vel[:, 0] * rel[:, 1] - vel[:, 1] * rel[:, 0]) / speed
-    reach = robot_radius + ghosts.obs[:, 4] + ghosts.cover + np.asarray(margin0, dtype=float)
+    grown = ghosts.cover if inflation is None else np.asarray(inflation, dtype=float)
+    reach = robot_radius + ghosts.obs[:, 4] + grown + np.asarray(margin0, dtype=float)
     escape = ESCAPE_FACTOR * np.maximum(reach - lateral, 0.0) / vplan + dt
     # in the way of this ghost: it passes within reach of the robot before it could step aside
     a = ghosts.obs[:, :2] - p
@@ -237,13 +245,14 @@ class PathSpace:
         cr = self.robot.circumradius
         gh = path_ghosts(obs, opts.path_space, cr, opts.safety_buffer, STILL_SPEED)
         speed = np.hypot(gh.obs[:, 2], gh.obs[:, 3])
-        window = ghost_window(gh, obs, pose, cr, self._step_margin(speed), self.vplan, opts.dt, opts.social_horizon)
-        n_slices = int(math.ceil(opts.prediction_horizon / opts.slice - 1e-9))
         # a ghost is the person predicted s seconds further on: as uncertain as they are then
-        rate = self._growth_rate(speed)
-        infl = np.repeat((gh.cover + rate * gh.shift)[:, None], n_slices, axis=1)
+        grown = gh.cover + self._growth_rate(speed) * gh.shift
+        window = ghost_window(gh, obs, pose, cr, self._step_margin(speed), self.vplan, opts.dt, opts.social_horizon,
+                              grown)  # fmt: skip
+        n_slices = int(math.ceil(opts.prediction_horizon / opts.slice - 1e-9))
+        infl = np.repeat(grown[:, None], n_slices, axis=1)
         # none due after the social horizon, behind a wall from its person, or in a passage
-        reach = cr + gh.obs[:, 4] + gh.cover + rate * gh.shift
+        reach = cr + gh.obs[:, 4] + grown
         kept = (window[0] < window[1] - opts.dt) & ~walled_off(gh, obs, self._walls, reach)
         return np.column_stack([gh.obs, *window])[kept], infl[kept]
 
