@@ -725,3 +725,22 @@ def test_the_budget_runs_on_the_chosen_clock(open_square, clock, searched):
 def test_an_unknown_budget_clock_is_refused():
     with pytest.raises(InputError, match="budget_clock"):
         NavOptions(budget_clock="sundial")
+
+
+def test_a_goal_someone_stands_on_skips_the_search_that_cannot_reach_it(open_square):
+    """Someone standing 0.15 m from the goal: the first search (which keeps the personal
+    space) cannot end there at any step, and says so without expanding the reachable
+    space-time (among people standing round the goal that took the whole budget, so the
+    next tier never ran); the search without the personal space answers."""
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (0.0, 4.0))
+    pose = np.array([0.0, -2.0])
+    obs = np.array([[0.0, 4.75, 0.0, 0.0, 0.3]])  # 0.15 m from a robot on the goal
+    first = nav._search(0.0, pose, obs, nav._inflation(pose, obs), math.inf)
+    assert first.trajectory is None and not first.out_of_time
+    assert first.message.startswith("the goal is taken")
+    traj = nav.step(0.0, pose, obs)
+    assert nav.last.mode == "close"
+    np.testing.assert_allclose(traj.waypoints[-1, 1:], [0.0, 4.0])
+    ts = np.linspace(0.0, traj.t_end, 2001)
+    assert np.min(np.hypot(*(traj.at(ts) - obs[0, :2]).T)) - 0.6 > 0.05  # the buffer kept

@@ -46,7 +46,7 @@ from ..settings import SPEED_SAFETY
 from ..status import Status
 from ..timespace.drive import Fan, drive_rows
 from ..timespace.movers import MoverField
-from ..timespace.spacetime import IntervalStore, SpaceTimeGraph
+from ..timespace.spacetime import IntervalStore, SearchResult, SpaceTimeGraph
 from ..timespace.timespace import timed_rows
 from ..trajectory import Trajectory
 from ..typed import BoolArray, FloatArray
@@ -73,6 +73,9 @@ PERSON_SECONDS = 150e-6
 #: the relaxed search's or a fallback's, which answer a situation the search could not (the evasive motion is scored over
 #: ``evasion_time``, a look is checked over ``lookout.LOOK_CHECK`` only).
 LOOK_OVER = (NavMode.PLAN, NavMode.CLOSE, NavMode.KEPT)
+
+#: Why a search did not run: the goal is unsafe at every step it could be reached.
+GOAL_TAKEN = "the goal is taken at every step within the horizon (someone stands on it, with these margins)"
 
 #: The clocks a time budget can be measured on (``NavOptions.budget_clock``).
 BUDGET_CLOCKS = {"wall": time.perf_counter, "cpu": time.thread_time}
@@ -694,7 +697,10 @@ class Navigator(PathSpace):
                 if detailed >= 10:  # a cautious running estimate: up at once, down by a fifth
                     took = (self._clock() - c0) / detailed
                     self._person_seconds = max(took, 0.8 * self._person_seconds + 0.2 * took)
-                res = search(graph, field_, s_id, self._g_id, deadline=deadline, store=store, clock=self._clock)
+                if self._goal_taken(store, field_):  # the search would exhaust its budget to learn it
+                    res = SearchResult(Status.NO_PATH, message=GOAL_TAKEN, horizon_hit=True)
+                else:
+                    res = search(graph, field_, s_id, self._g_id, deadline=deadline, store=store, clock=self._clock)
                 if res.status != Status.NO_PATH or not res.horizon_hit or self._clock() > deadline:
                     break
                 slack *= 2.0
@@ -710,6 +716,15 @@ class Navigator(PathSpace):
         rows[0, 1:] = pose
         rows[-1, 1:] = self.goal
         return _Searched(Trajectory(rows, self.robot.circumradius), "", detailed, False, graph, s_id, self._ahead)
+
+    def _goal_taken(self, store: IntervalStore, field_: MoverField) -> bool:
+        """True when the goal is unsafe at every step the search could arrive there (its
+        window of the horizon): someone stands on it, with this search's margins. No plan
+        exists then, and the search would only learn it by expanding every reachable state
+        (among people standing round the goal that outlasts the budget, and a fallback
+        without the next tier answers); one batch of safety tells it."""
+        store.set_horizon(field_, pool=self.options.backend == "compiled")
+        return len(store.get(self._g_id)[0]) == 0
 
     # --------------------------------------------------------------- fallback
     def _clearance_along(self, pts: FloatArray, times: FloatArray, obs: FloatArray) -> FloatArray:
