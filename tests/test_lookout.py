@@ -116,3 +116,52 @@ def test_options_know_the_sensor_and_reject_a_bad_fov():
             NavOptions(fov=bad)
     with pytest.raises(InputError):
         NavOptions(look_after=0.0)
+
+
+def test_the_look_back_meets_the_first_view_with_no_seam():
+    """The look back takes in what the first view left but for half a degree (a 10-degree
+    sector's look left a 5-degree seam beside the robot, where a person standing at the
+    start walked unseen)."""
+    from gfuzzy.navigation.sensing import in_fov
+
+    for goal_x in (0.0, 0.3, -1.1):
+        look = Lookout(180.0, 1.0, np.array([goal_x, 4.0]))
+        look.observe(0.0, np.array([0.0, -4.0]))
+        back = look.direction(0.0)
+        first = math.atan2(8.0, goal_x)
+        probe = np.radians(np.arange(0.05, 360.0, 0.1))
+        pts = np.column_stack([np.cos(probe), np.sin(probe)])
+        seen = in_fov(np.zeros(2), first, pts, 180.0) | in_fov(np.zeros(2), back, pts, 180.0)
+        assert (~seen).sum() <= 5  # half a degree at most (half a sector)
+
+
+def test_someone_newly_in_view_beside_the_robot_is_seen_again():
+    """A person first seen by the look back, 0.2 m beside the robot: their velocity rests on
+    one sighting, so the robot keeps them in view at the next observation (a look their way)
+    rather than driving off with its view away from them."""
+    look = Lookout(180.0, 1.0, np.array([0.0, 4.0]))
+    look.observe(0.0, np.array([0.0, -4.0]))  # facing north
+    look.observe(0.25, np.array([0.0, -4.05]))  # the look back: the south half now in view
+    pose = np.array([0.0, -4.05])
+    beside = np.array([[-0.8, -4.15, 0.0, 0.0, 0.3]])  # first seen now, 0.2 m away (west)
+    ang = look.direction(0.25, pose, beside)
+    assert ang is not None and _angle(ang, math.pi) < math.radians(90)
+    far = np.array([[-4.0, -4.15, 0.0, 0.0, 0.3]])  # as new, but 3 m away: no hurry
+    assert look.direction(0.25, pose, far) is None
+    look.observe(0.5, np.array([-0.05, -4.05]))  # it looked west: seen twice in a row now
+    assert look.direction(0.5, pose, beside) is None
+
+
+def test_navigator_looks_again_at_someone_new_beside_it(open_square):
+    """The plan north keeps the view's centre side in view, not the person: the look is taken."""
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (0.0, 4.0), NavOptions(fov=180.0))
+    pose = np.array([0.0, -4.0])
+    traj = nav.step(0.0, pose, np.zeros((0, 5)))
+    assert nav.last.mode == NavMode.LOOK
+    pose = traj.at(0.25)
+    beside = np.array([[pose[0] - 0.8, pose[1] - 0.05, 0.0, 0.0, 0.3]])
+    traj = nav.step(0.25, pose, beside)
+    assert nav.last.mode == NavMode.LOOK
+    step = traj.at(0.5) - pose
+    assert step[0] < 0  # its way: west
