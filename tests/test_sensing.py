@@ -329,18 +329,3 @@ def test_an_unseen_noisy_track_grows_with_its_velocity_uncertainty():
         clean.update(0.25 * k, [[0.25 * k, 0.0, 0.3]])
     assert clean.velocity_sigma()[0] == 0.0
     assert clean.update(1.0, np.zeros((0, 3)))[0, 4] == pytest.approx(0.3 + 0.2 * 0.5)
-
-
-def test_a_person_seen_once_takes_no_detection_farther_than_a_fast_walk():
-    """Seen once ahead of the robot, unseen at the next period (it looked back), while
-    someone else is detected 0.9 m away: not the same person (3.6 m/s), a second track; the
-    first is coasted where it was, not given that walk as its velocity."""
-    for noise in (0.0, 0.05):
-        tr = Tracker(noise=noise)
-        tr.update(0.0, [[0.0, 0.0, 0.3]])
-        out = tr.update(0.25, [[0.0, -0.9, 0.3]])
-        assert len(out) == 2
-        np.testing.assert_allclose(out[:, 2:4], 0.0)
-        out = tr.update(0.5, [[0.0, -0.65, 0.3]])  # the second walks on at 1 m/s: theirs
-        assert len(out) == 2
-        np.testing.assert_allclose(sorted(np.hypot(out[:, 2], out[:, 3])), [0.0, 1.0], atol=0.3)

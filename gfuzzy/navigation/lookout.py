@@ -8,8 +8,6 @@ the view is centred on the last displacement, and kept while the robot stands). 
 side has gone unseen for ``NavOptions.look_after`` seconds, the navigator's answer is
 replaced by a *look*: a short, slow motion toward that side, which turns the view there
 for the next observation, and then standing (the navigator replans at its next call).
-Someone near the robot who has just come into view (a look turned it there) has a
-velocity that rests on one sighting: their side stays stale until they are seen again.
 A look is taken only when it stays clear of everyone seen (walking on, un-inflated, over
 ``LOOK_CHECK`` seconds, or the navigator's ``cover`` if longer: the standing after the
 look too) and of the static obstacles.
@@ -31,11 +29,8 @@ if TYPE_CHECKING:
 
 __all__ = ["Lookout", "knowing_view", "SECTORS", "LOOK_TIME", "LOOK_SPEED", "LOOK_CHECK"]
 
-#: Directions (equal sectors about the robot) whose last look is remembered, one a degree:
-#: a look centred on a sector leaves at most half a degree of what the view before it did
-#: not see (with 10-degree sectors the look back left a 5-degree seam beside the robot, in
-#: which people standing there at the start went unseen).
-SECTORS = 360
+#: Directions (equal sectors about the robot) whose last look is remembered.
+SECTORS = 36
 #: Seconds a look moves (then the robot stands until the navigator's next call).
 LOOK_TIME = 0.25
 #: Speed of a look, as a share of the robot's planning speed.
@@ -44,9 +39,6 @@ LOOK_SPEED = 0.2
 LOOK_CHECK = 1.0
 #: A side where nobody known is goes unseen this many times ``look_after`` before a look.
 EMPTY_FACTOR = 4.0
-#: Seconds within which a person newly in view (not in the view before: their velocity
-#: rests on one sighting) could reach the robot for it to keep them in view (look again).
-FRESH_REACH = 1.0
 #: Seconds within which a person known on an unseen side could reach the robot for it to
 #: look there after ``look_after``.
 LOOK_REACH = 3.0
@@ -73,11 +65,6 @@ class Lookout:
         self.centres = (np.arange(SECTORS) + 0.5) * (2 * math.pi / SECTORS)
         self.looked = np.full(SECTORS, -math.inf)  # when each direction was last in view
         self.pose: FloatArray | None = None
-        off = (self.centres[None, :] - self.centres[:, None] + math.pi) % (2 * math.pi) - math.pi
-        self._views = np.abs(off) <= self.half  # (view centre, sector): in that view
-        self.now = np.zeros(SECTORS, dtype=bool)  # the sectors in the last observation's view
-        self.before = np.zeros(SECTORS, dtype=bool)  # and in the one before it
-        self.stale = np.zeros(SECTORS, dtype=bool)  # the stale sectors of the last direction()
 
     def _in_view(self, heading: float) -> FloatArray:
         off = (self.centres - heading + math.pi) % (2 * math.pi) - math.pi
@@ -91,8 +78,7 @@ class Lookout:
         if math.hypot(*d) > 1e-9:
             self.heading = math.atan2(d[1], d[0])
         self.pose = xy.copy()
-        self.before, self.now = self.now, self._in_view(self.heading)
-        self.looked[self.now] = t
+        self.looked[self._in_view(self.heading)] = t
 
     def direction(self, t: float, pose: FloatArray | None = None, obs: FloatArray | None = None,
                   vmax: float = 1.0) -> float | None:  # fmt: skip
@@ -100,10 +86,7 @@ class Lookout:
         first on ties); None when no side is stale. A side is stale when never seen, when
         unseen for ``look_after`` seconds while someone of ``obs`` (k, 5) (people seen
         before, walking on unseen) is there within ``LOOK_REACH`` seconds of the robot at
-        ``pose``, when someone is there within ``FRESH_REACH`` seconds who is in the view
-        now and was not in the one before (their velocity rests on one sighting: the
-        robot keeps them in view to see them again), or unseen for ``EMPTY_FACTOR *
-        look_after`` seconds."""
+        ``pose``, or unseen for ``EMPTY_FACTOR * look_after`` seconds."""
         age = t - self.looked
         stale = age > EMPTY_FACTOR * self.look_after + 1e-9
         if pose is not None and obs is not None and len(obs):
@@ -115,28 +98,20 @@ class Lookout:
             known = np.zeros(SECTORS, dtype=bool)
             known[sector] = True
             stale |= known & (age > self.look_after + 1e-9)
-            # someone near, newly in view: their velocity rests on one sighting, see them again
-            close = dist <= (np.hypot(obs[:, 2], obs[:, 3]) + vmax) * FRESH_REACH
-            every = (np.arctan2(rel[:, 1], rel[:, 0]) % (2 * math.pi) // width).astype(int) % SECTORS
-            fresh = every[close & self.now[every] & ~self.before[every]]
-            stale[fresh] = True
-        self.stale = stale
         if not stale.any():
             return None
         age = np.minimum(t - self.looked, 1e9)
-        views = self._views @ stale.astype(float) + 1e-12 / SECTORS * (self._views @ age)
+        views = np.array([(stale & self._in_view(c)).sum() + 1e-12 * age[self._in_view(c)].sum() for c in self.centres])
         return float(self.centres[int(np.argmax(views))])
 
     def look(self, nav: Navigator, t: float, pose: FloatArray, obs: FloatArray, planned: Trajectory) -> Trajectory | None:
-        """The look to take instead of ``planned``, or None (nothing stale, the plan's
-        motion turns the view onto every stale side the look would see, or the look is not
-        clear)."""
+        """The look to take instead of ``planned``, or None (nothing stale, the plan
+        already turns the view there, or the look is not clear)."""
         ang = self.direction(t, pose, obs, float(nav.vplan))
         if ang is None:
             return None
         d = planned.at(t + LOOK_TIME)[:2] - pose[:2]
-        wanted = self.stale & self._in_view(ang)  # what the look would see
-        if math.hypot(*d) > 1e-9 and not (wanted & ~self._in_view(math.atan2(d[1], d[0]))).any():
+        if math.hypot(*d) > 1e-9 and self._in_view(math.atan2(d[1], d[0]))[int(ang // (2 * math.pi / SECTORS))]:
             return None  # the planned motion looks there itself
         step = np.array([math.cos(ang), math.sin(ang)]) * (LOOK_SPEED * nav.vplan * LOOK_TIME)
         end = pose.copy()

@@ -39,11 +39,6 @@ VELOCITY_MODES = ("estimated", "exact")
 #: may walk anywhere at a walking pace), and the cap (m) on any unseen track's growth.
 UNKNOWN_GROWTH = 1.0
 UNKNOWN_CAP = 1.0
-#: The fastest (m/s) a person seen once may have walked since, for a detection to be
-#: theirs: the gate of a track whose velocity is not known yet. With the 1 m gate a person
-#: seen once ahead of the robot, lost when it looked back, took the detection of another
-#: person 0.9 m behind it a period later (a velocity of 3.6 m/s, coasted the wrong way).
-WALK_MAX = 2.0
 #: Steady-state gains (position, velocity) of the alpha-beta filter with noisy detections.
 STEADY_GAINS = (0.5, 0.2)
 #: Standard deviations of a track's velocity error its unseen disc grows by, per second
@@ -214,8 +209,6 @@ class Tracker:
             # seen once, whose velocity is not known yet
             unseen = np.maximum(t - self.seen - dt, 0.0)
             gate = self.gate + np.minimum(self._growth_rates() * unseen, UNKNOWN_CAP)
-            once = self.hits == 1  # no velocity yet: no farther than a fast walk since
-            gate[once] = np.minimum(gate[once], 4 * self.noise + WALK_MAX * (t - self.seen[once]))
             big = 1e6
             rows, cols = linear_sum_assignment(np.where(cost <= gate[:, None], cost, big))
             for i, j in zip(rows.tolist(), cols.tolist(), strict=True):
