@@ -182,7 +182,10 @@ def sample_rows(cands: list, times: FloatArray) -> FloatArray:
     """(C, T, 3) poses of each candidate's rows (r_c, 4) at ``times`` (T,), standing after
     its last row (each row's heading reached along the shorter arc, as :func:`gfuzzy.poses.pose_at`)."""
     n = max(len(rows) for rows in cands)
-    pad = np.stack([np.vstack([rows, np.repeat(rows[-1:], n - len(rows), axis=0)]) for rows in cands])  # (C, n, 4)
+    pad = np.empty((len(cands), n, 4))  # (C, n, 4): each candidate's rows, its last repeated
+    for c, rows in enumerate(cands):
+        pad[c, : len(rows)] = rows
+        pad[c, len(rows) :] = rows[-1]
     pad[:, :, 0] = np.maximum.accumulate(pad[:, :, 0], axis=1)
     knots = pad[:, :, 0]
     i = np.clip((knots[:, None, :] <= times[None, :, None]).sum(axis=2) - 1, 0, n - 2)  # (C, T)
