@@ -128,8 +128,8 @@ def drive_rows(geometry, t: float, pose, via, goal, vplan: float) -> FloatArray 
     return np.array(rows, dtype=float)
 
 
-def evasions(geometry, t: float, pose, T: float, cover: float, headings: int, vplan: float,
-             speeds=(1.0, 0.5), stops=(), absolute: bool = False) -> list:  # fmt: skip
+def evasions(geometry, t: float, pose, T: float, cover: float, headings: int, vplan: float, speeds=(1.0, 0.5),
+             stops=()) -> list:  # fmt: skip
     """Evasive candidates of a differential drive: standing still, or turning in place to
     one of ``headings`` headings and then driving straight along it (forwards; backwards too
     with ``robot.reverse``) at each of ``speeds`` (fractions of ``vplan``) for what is left
@@ -137,11 +137,10 @@ def evasions(geometry, t: float, pose, T: float, cover: float, headings: int, vp
     until ``cover``; and, for each of ``stops`` (s) shorter than what is left, the same
     drive stopped after that long (a stop point: out of someone's way, and standing).
 
-    The headings are ``headings`` evenly spaced ones from the current heading, or, with
-    ``absolute``, from the world's x axis, plus the current one: a turn started by one call
-    then still has its target among the next call's candidates (on a grid that turns with
-    the robot a turn under way finds its target between two candidates, and the robot
-    turns back and forth in place).
+    The headings are the current one and ``headings`` evenly spaced ones from the world's
+    x axis: a turn started by one call still has its target among the next call's
+    candidates (on a grid that turned with the robot, a turn under way found its target
+    between two candidates, and the robot turned back and forth in place).
 
     Returns
     -------
@@ -153,10 +152,7 @@ def evasions(geometry, t: float, pose, T: float, cover: float, headings: int, vp
     pose = np.asarray(pose, dtype=float)
     out = [np.array([[t, *pose], [t + max(T, cover), *pose]])]
     grid = np.arange(headings) * (2 * math.pi / headings)
-    if absolute:
-        grid = np.concatenate([[pose[2]], grid[np.abs(wrap_angle(grid - pose[2])) > 1e-6]])
-    else:
-        grid = pose[2] + grid
+    grid = np.concatenate([[pose[2]], grid[np.abs(wrap_angle(grid - pose[2])) > 1e-6]])
     for h in grid.tolist():
         dh = float(wrap_angle(h - pose[2]))
         t_turn = abs(dh) / rate
