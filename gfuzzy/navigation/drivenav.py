@@ -158,8 +158,7 @@ def drive_evasion(nav, t: float, pose: FloatArray, obs: FloatArray) -> Trajector
     opts = nav.options
     T = opts.drive_lookahead
     times = t + look_times(opts.evasion_time, T)
-    cands = evasions(nav.geometry, t, pose, T, opts.cover, 2 * opts.evasion_headings, nav.vplan, EVASION_SPEEDS,
-                     EVASION_STOPS)  # fmt: skip
+    cands = evasions(nav.geometry, t, pose, T, opts.cover, opts.evasion_headings, nav.vplan, EVASION_SPEEDS, EVASION_STOPS)
     pts = sample_rows(cands, times)
     ends = np.array([rows[-1, 1:] for rows in cands])
     best = cands[int(np.argmax(evasion_scores(nav, t, pose, obs, pts, times, ends)))]

@@ -140,8 +140,8 @@ class NavOptions:
     stretch : float
         The search runs on the roadmap's spanner of this stretch (see ``PlanOptions``).
     evasion_headings : int
-        Directions tried by the evasive motion (a differential drive's tries twice as
-        many headings, on a grid fixed in the world: :func:`gfuzzy.navigation.drivenav.drive_evasion`).
+        Directions tried by the evasive motion (a differential drive's: headings on a grid
+        fixed in the world, :func:`gfuzzy.navigation.drivenav.drive_evasion`).
     evasion_time : float
         Length (s) of the evasive motion returned, and of the look-ahead that scores it.
     cover : float
