@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 
 from gfuzzy.check.check import _unicycle_problem, check_trajectory
+from gfuzzy.navigation.crowdpolicies import piece_of
 from gfuzzy.navigation.drivenav import drive_evasion
 from gfuzzy.navigation.navigator import Navigator, NavMode, NavOptions, _Searched
 from gfuzzy.navigation.navsim import simulate
-from gfuzzy.navigation.navtypes import MOTION_SAMPLE
 from gfuzzy.scene.scene import Mover, parse_scene
 from gfuzzy.trajectory import Trajectory
 
@@ -125,20 +125,13 @@ def reversing_floor(open_floor):
     return replace(sc, robot=replace(sc.robot, reverse=True)), rm
 
 
-def _head_on(nav, t=0.0):
-    """Someone 1 m ahead (0.4 m gap) walking at the robot at 1 m/s, and the evasion's
-    sample times: a quarter turn (1.6 s) comes too late, backing up keeps the gap."""
-    person = np.array([P0[0] + 1.0, P0[1], -1.0, 0.0, 0.3])
-    T = nav.options.evasion_time
-    times = t + np.linspace(0.0, T, int(math.ceil(T / MOTION_SAMPLE)) + 1)
-    return person, times
-
-
 def test_a_robot_that_may_reverse_backs_straight_away_from_someone_head_on(reversing_floor, open_floor):
+    """Someone 1 m ahead (0.4 m gap) walking at the robot at 1 m/s: a quarter turn (1.6 s)
+    comes too late, backing up keeps the gap."""
     sc, rm = reversing_floor
     nav = Navigator(sc, rm, GOAL, NavOptions())
-    person, times = _head_on(nav)
-    traj = drive_evasion(nav, 0.0, P0, person[None], times)
+    person = np.array([P0[0] + 1.0, P0[1], -1.0, 0.0, 0.3])
+    traj = drive_evasion(nav, 0.0, P0, person[None])
     w = traj.waypoints
     # no turn first: straight back along the heading, and the gap kept (by hand)
     assert w[1, 3] == pytest.approx(P0[2]) and w[1, 1] < P0[0] - 0.5
@@ -146,8 +139,62 @@ def test_a_robot_that_may_reverse_backs_straight_away_from_someone_head_on(rever
     assert _unicycle_problem(sc.robot, w) is None
     assert _unicycle_problem(open_floor[0].robot, w) is not None  # the forward-only robot may not
     fwd = Navigator(open_floor[0], rm, GOAL, NavOptions())
-    w = drive_evasion(fwd, 0.0, P0, person[None], times).waypoints
+    w = drive_evasion(fwd, 0.0, P0, person[None]).waypoints
     assert _unicycle_problem(open_floor[0].robot, w) is None
+
+
+def _evading(nav, people: np.ndarray, seconds: float, period: float = 0.25):
+    """The robot from ``P0`` following a fresh evasive motion every ``period`` among
+    ``people`` (k, 5) walking on at constant velocity: (smallest gap, the rows driven),
+    the gap sampled every 0.01 s by hand."""
+    pose, t, worst, rows = P0.copy(), 0.0, math.inf, [np.array([0.0, *P0])]
+    while t < seconds - 1e-9:
+        obs = people.copy()
+        obs[:, :2] += t * people[:, 2:4]
+        traj = drive_evasion(nav, t, pose, obs)
+        assert _unicycle_problem(nav.robot, traj.waypoints) is None
+        s = np.linspace(t, t + period, 26)
+        xy = traj.at(s)[:, :2]
+        at = people[None, :, :2] + s[:, None, None] * people[None, :, 2:4]
+        worst = min(worst, float(np.min(np.hypot(*(xy[:, None] - at).transpose(2, 0, 1)) - 0.3 - people[:, 4])))
+        rows.extend(piece_of(traj, t, t + period)[1:])
+        pose, t = traj.at(t + period), t + period
+    return worst, np.array(rows)
+
+
+def test_the_evasion_looks_far_enough_for_a_turn_to_pay(open_floor):
+    """Two people converging on the robot from behind and from its right: driving straight
+    on keeps clear for the first two seconds and then meets the second one, a turn in place
+    first costs those seconds' lead; scored over two seconds (the old look-ahead, on a grid
+    of headings that turned with the robot) the evasions, redone every 0.25 s, touched
+    someone (-0.24 m); scored over ``drive_lookahead`` they keep clear."""
+    sc, rm = open_floor
+    nav = Navigator(sc, rm, GOAL, NavOptions())
+    people = np.array([[1.5, 1.06, 0.33, 0.38, 0.3], [3.21, 1.03, 0.44, 0.82, 0.3]])
+    worst, rows = _evading(nav, people, 6.0)
+    assert worst > 0.1
+    assert _unicycle_problem(sc.robot, rows) is None
+
+
+def test_an_evasion_under_way_keeps_its_heading_target(open_floor):
+    """A turn begun by one evasion still has its target among the next call's candidates
+    (headings on a grid fixed in the world): someone 2 m ahead walking at the robot, the
+    evasions redone every 0.25 s while it turns away all aim for the same heading (on a
+    grid that turned with the robot they aimed at -67.5, -81.8, -73.6, -65.5 degrees)."""
+    sc, rm = open_floor
+    nav = Navigator(sc, rm, GOAL, NavOptions())
+    person = np.array([P0[0] + 2.0, P0[1] + 0.1, -1.0, 0.0, 0.3])
+    pose, aims = P0.copy(), []
+    for k in range(4):
+        t = 0.25 * k
+        obs = person.copy()
+        obs[:2] += t * person[2:4]
+        traj = drive_evasion(nav, t, pose, obs[None])
+        aims.append(float(traj.waypoints[1, 3]))
+        pose = traj.at(t + 0.25)
+    assert abs(aims[0]) > 0.5  # it turns away
+    assert np.allclose(aims, aims[0])
+
 
 
 def test_a_reversing_robot_among_walkers_reaches_the_goal_and_passes_the_check(reversing_floor):

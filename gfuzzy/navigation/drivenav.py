@@ -17,14 +17,20 @@ import math
 
 import numpy as np
 
-from ..poses import metric_distance
+from ..poses import metric_distance, wrap_angle
 from ..timespace.drive import evasions
 from ..trajectory import Trajectory
 from ..typed import FloatArray
 from .evasion import evasion_scores
 from .navtypes import MOTION_SAMPLE, sample_loss
 
-__all__ = ["kept_plan", "sooner_plan", "cut_rows", "rest_of", "drive_evasion"]
+__all__ = ["kept_plan", "sooner_plan", "cut_rows", "rest_of", "drive_evasion", "sample_rows", "EVASION_SPEEDS",
+           "EVASION_STOPS"]
+
+#: Speeds (fractions of the planning speed) of a differential drive's evasive candidates.
+EVASION_SPEEDS = (1.0, 0.5, 0.25)
+#: Seconds after which an evasive candidate may also stop (and stand) instead of driving on.
+EVASION_STOPS = (0.5, 1.0)
 
 
 def cut_rows(traj: Trajectory, ta: float, tb: float) -> FloatArray:
@@ -125,12 +131,17 @@ def _if_safe(nav, prev: Trajectory, t: float, pose: FloatArray, obs: FloatArray,
     return traj
 
 
-def drive_evasion(nav, t: float, pose: FloatArray, obs: FloatArray, times: FloatArray) -> Trajectory:
+def drive_evasion(nav, t: float, pose: FloatArray, obs: FloatArray) -> Trajectory:
     """A differential drive's evasive motion (:meth:`Navigator._evasive`'s for a unicycle):
     the candidate of :func:`gfuzzy.timespace.drive.evasions` (standing, or a turn in place
-    and a straight move, straight back without turning too with ``robot.reverse``) that
+    and a straight move at one of ``EVASION_SPEEDS``, going on or stopping after one of
+    ``EVASION_STOPS``; straight back without turning too with ``robot.reverse``) that
     :func:`gfuzzy.navigation.evasion.evasion_scores` scores best against the people
-    walking on as seen.
+    walking on as seen, over ``NavOptions.drive_lookahead`` seconds.
+
+    A unicycle's escape starts with a turn in place, during which it stands: a look-ahead
+    as short as a holonomic robot's (``evasion_time``) finds no contact within it for
+    driving straight on into someone's way and prefers it to a turn that avoids them.
 
     Parameters
     ----------
@@ -138,8 +149,6 @@ def drive_evasion(nav, t: float, pose: FloatArray, obs: FloatArray, times: Float
     t : float
     pose : (3,) float
     obs : (k, 5) float
-    times : (T,) float
-        Sample times from ``t`` over ``evasion_time``.
 
     Returns
     -------
@@ -147,9 +156,43 @@ def drive_evasion(nav, t: float, pose: FloatArray, obs: FloatArray, times: Float
         Rows from ``[t, *pose]``: waits, turns in place and straight moves only.
     """
     opts = nav.options
-    cr = nav.robot.circumradius
-    cands = evasions(nav.geometry, t, pose, times[-1] - t, opts.cover, opts.evasion_headings, nav.vplan)
-    trajs = [Trajectory(rows, cr) for rows in cands]
-    pts = np.stack([tr.at(np.minimum(times, tr.t_end)) for tr in trajs])
+    T = opts.drive_lookahead
+    times = t + look_times(opts.evasion_time, T)
+    cands = evasions(nav.geometry, t, pose, T, opts.cover, opts.evasion_headings, nav.vplan, EVASION_SPEEDS, EVASION_STOPS)
+    pts = sample_rows(cands, times)
     ends = np.array([rows[-1, 1:] for rows in cands])
-    return trajs[int(np.argmax(evasion_scores(nav, t, pose, obs, pts, times, ends)))]
+    best = cands[int(np.argmax(evasion_scores(nav, t, pose, obs, pts, times, ends)))]
+    return Trajectory(best, nav.robot.circumradius)
+
+
+def look_times(near: float, far: float) -> FloatArray:
+    """Sample times (s from now) of an evasion's look-ahead: every ``MOTION_SAMPLE`` over the
+    first ``near`` seconds, twice as far apart from there to ``far`` (the scores bound the
+    gap between samples whatever their spacing; far contacts need less precision)."""
+    near = min(near, far)
+    first = np.linspace(0.0, near, int(math.ceil(near / MOTION_SAMPLE)) + 1)
+    rest = far - near
+    if rest <= 1e-9:
+        return first
+    return np.concatenate([first, near + np.linspace(0.0, rest, int(math.ceil(rest / (2 * MOTION_SAMPLE))) + 1)[1:]])
+
+
+def sample_rows(cands: list, times: FloatArray) -> FloatArray:
+    """(C, T, 3) poses of each candidate's rows (r_c, 4) at ``times`` (T,), standing after
+    its last row (each row's heading reached along the shorter arc, as :func:`gfuzzy.poses.pose_at`)."""
+    n = max(len(rows) for rows in cands)
+    pad = np.empty((len(cands), n, 4))  # (C, n, 4): each candidate's rows, its last repeated
+    for c, rows in enumerate(cands):
+        pad[c, : len(rows)] = rows
+        pad[c, len(rows) :] = rows[-1]
+    pad[:, :, 0] = np.maximum.accumulate(pad[:, :, 0], axis=1)
+    knots = pad[:, :, 0]
+    i = np.clip((knots[:, None, :] <= times[None, :, None]).sum(axis=2) - 1, 0, n - 2)  # (C, T)
+    c = np.arange(len(cands))[:, None]
+    ta, tb = knots[c, i], knots[c, i + 1]
+    seg = tb - ta
+    f = np.where(seg > 0, np.clip((times[None, :] - ta) / np.where(seg > 0, seg, 1.0), 0.0, 1.0), 0.0)
+    a, b = pad[c, i, 1:], pad[c, i + 1, 1:]
+    out = a + f[..., None] * (b - a)
+    out[..., 2] = wrap_angle(a[..., 2] + f * wrap_angle(b[..., 2] - a[..., 2]))
+    return out

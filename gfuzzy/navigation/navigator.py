@@ -143,7 +143,8 @@ class NavOptions:
     stretch : float
         The search runs on the roadmap's spanner of this stretch (see ``PlanOptions``).
     evasion_headings : int
-        Directions tried by the evasive motion.
+        Directions tried by the evasive motion (a differential drive's: headings on a grid
+        fixed in the world, :func:`gfuzzy.navigation.drivenav.drive_evasion`).
     evasion_time : float
         Length (s) of the evasive motion returned, and of the look-ahead that scores it.
     cover : float
@@ -161,6 +162,10 @@ class NavOptions:
         A differential drive only: also search the two-leg motions out of the robot's pose
         (turn, straight, turn towards the goal, straight; :func:`gfuzzy.timespace.drive.fan`),
         which detour with few turns where the roadmap's lanes zigzag.
+    drive_lookahead : float
+        A differential drive only: seconds over which its evasive motions are scored (and
+        driven, :func:`gfuzzy.navigation.drivenav.drive_evasion`); its escapes start with a
+        turn in place, so contacts that a shorter look-ahead cannot see decide them.
     swerve_growth : float
         Further growth (m per s of prediction) of the predicted disc of a person whose
         straight walk meets someone else's within 3 s (:mod:`gfuzzy.navigation.swerve`):
@@ -196,6 +201,7 @@ class NavOptions:
     backend: str = "compiled"
     commitment: float = 0.5
     fan: bool = True
+    drive_lookahead: float = 4.0
     swerve_growth: float = 0.0
     fov: float = 360.0
     look_after: float = 1.0
@@ -205,7 +211,8 @@ class NavOptions:
             raise InputError(f"budget_clock must be one of {', '.join(BUDGET_CLOCKS)}, got {self.budget_clock!r}")
         if self.backend not in BACKENDS:
             raise InputError(f"backend must be one of {', '.join(BACKENDS)}, got {self.backend!r}")
-        for name in ("dt", "prediction_horizon", "reference_speed", "slice", "time_budget", "plan_slack", "evasion_time", "cover"):
+        for name in ("dt", "prediction_horizon", "reference_speed", "slice", "time_budget", "plan_slack", "evasion_time", "cover",
+                     "drive_lookahead"):
             check_number(name, getattr(self, name))
         for name in ("uncertainty_growth", "safety_buffer", "personal_space", "personal_space_cost", "path_space",
                      "path_space_cost", "social_horizon", "stationary_hold", "goal_tolerance", "commitment",
@@ -816,13 +823,13 @@ class Navigator(PathSpace):
         ``MOTION_SAMPLE`` s over ``evasion_time``, with a bound on the gap between two
         samples, see :func:`.evasion.evasion_scores`), then by the smallest gap, then by progress to the goal.
         """
+        if self.robot.unicycle:  # turn in place, then drive along the heading (drivenav.drive_evasion)
+            return drive_evasion(self, t, pose, obs)
         opts = self.options
         cr = self.robot.circumradius
         T = opts.evasion_time
         n_t = int(math.ceil(T / MOTION_SAMPLE)) + 1
         times = t + np.linspace(0.0, T, n_t)
-        if self.robot.unicycle:  # turn in place, then drive along the heading (drivenav.drive_evasion)
-            return drive_evasion(self, t, pose, obs, times)
         ang = np.arange(opts.evasion_headings) * (2 * math.pi / opts.evasion_headings)
         speeds = np.array([1.0, 0.5]) * self.vplan
         dirs = np.column_stack([np.cos(ang), np.sin(ang)])

@@ -128,11 +128,19 @@ def drive_rows(geometry, t: float, pose, via, goal, vplan: float) -> FloatArray 
     return np.array(rows, dtype=float)
 
 
-def evasions(geometry, t: float, pose, T: float, cover: float, headings: int, vplan: float) -> list:
+def evasions(geometry, t: float, pose, T: float, cover: float, headings: int, vplan: float, speeds=(1.0, 0.5),
+             stops=()) -> list:  # fmt: skip
     """Evasive candidates of a differential drive: standing still, or turning in place to
     one of ``headings`` headings and then driving straight along it (forwards; backwards too
-    with ``robot.reverse``) at full or half speed for what is left of ``T`` (or half, or a
-    quarter of it, whichever is statically free), then standing until ``cover``.
+    with ``robot.reverse``) at each of ``speeds`` (fractions of ``vplan``) for what is left
+    of ``T`` (or half, or a quarter of it, whichever is statically free), then standing
+    until ``cover``; and, for each of ``stops`` (s) shorter than what is left, the same
+    drive stopped after that long (a stop point: out of someone's way, and standing).
+
+    The headings are the current one and ``headings`` evenly spaced ones from the world's
+    x axis: a turn started by one call still has its target among the next call's
+    candidates (on a grid that turned with the robot, a turn under way found its target
+    between two candidates, and the robot turned back and forth in place).
 
     Returns
     -------
@@ -143,28 +151,38 @@ def evasions(geometry, t: float, pose, T: float, cover: float, headings: int, vp
     rate = robot.turn_rate * SPEED_SAFETY
     pose = np.asarray(pose, dtype=float)
     out = [np.array([[t, *pose], [t + max(T, cover), *pose]])]
-    for h in (pose[2] + np.arange(headings) * (2 * math.pi / headings)).tolist():
+    grid = np.arange(headings) * (2 * math.pi / headings)
+    grid = np.concatenate([[pose[2]], grid[np.abs(wrap_angle(grid - pose[2])) > 1e-6]])
+    for h in grid.tolist():
         dh = float(wrap_angle(h - pose[2]))
         t_turn = abs(dh) / rate
         turned = np.array([pose[0], pose[1], wrap_angle(pose[2] + dh)])
         left = T - t_turn
         if left <= 0 or (t_turn > 0 and not _free(geometry, pose, turned)):
             continue
+        head = [t, *pose]
         for sign in (1.0, -1.0) if robot.reverse else (1.0,):
-            for speed in (1.0, 0.5):
-                for frac in (1.0, 0.5, 0.25):
-                    move = left * frac
+            unit = sign * vplan * np.array([math.cos(turned[2]), math.sin(turned[2])])
+            for speed in speeds:
+                full = next((left * f for f in (1.0, 0.5, 0.25) if _reach(geometry, turned, unit * speed * left * f)), None)
+                if full is None:
+                    continue
+                for move in (full, *(s for s in stops if s < full - 1e-9)):
                     end = turned.copy()
-                    end[:2] += sign * speed * vplan * move * np.array([math.cos(turned[2]), math.sin(turned[2])])
-                    if geometry.bounds_clearance(end[None])[0] < 0 or not _free(geometry, turned, end):
-                        continue
-                    rows = [[t, *pose]] + ([[t + t_turn, *turned]] if t_turn > 0 else [])
+                    end[:2] += unit * speed * move
+                    rows = [head] + ([[t + t_turn, *turned]] if t_turn > 0 else [])
                     rows.append([t + t_turn + move, *end])
                     if cover > t_turn + move:
                         rows.append([t + cover, *end])
                     out.append(np.array(rows, dtype=float))
-                    break
     return out
+
+
+def _reach(geometry, turned, shift) -> bool:
+    """Whether driving from ``turned`` by ``shift`` (2,) stays in bounds and is statically free."""
+    end = turned.copy()
+    end[:2] += shift
+    return geometry.bounds_clearance(end[None])[0] >= 0 and _free(geometry, turned, end)
 
 
 @dataclass(frozen=True)
