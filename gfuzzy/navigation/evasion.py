@@ -1,8 +1,10 @@
-"""The score of the navigator's evasive motions (:meth:`Navigator._evasive`).
+"""The navigator's evasive motions (:meth:`Navigator._evasive`) and their score.
 
 When no plan answers, the navigator takes the statically free straight motion (or
-standing still) whose contact with the people walking on comes latest; this module
-scores the candidates.
+standing still) whose contact with the people walking on comes latest: this module
+scores the candidates (:func:`evasion_scores`, for a differential drive's too) and picks
+the holonomic robot's (:func:`holonomic_evasion`; a differential drive's is
+:func:`gfuzzy.navigation.drivenav.drive_evasion`).
 """
 
 from __future__ import annotations
@@ -13,12 +15,14 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..poses import metric_distance
+from ..trajectory import Trajectory
 from ..typed import FloatArray
+from .navtypes import MOTION_SAMPLE
 
 if TYPE_CHECKING:
     from .navigator import Navigator
 
-__all__ = ["EVASION_GAP", "evasion_scores"]
+__all__ = ["EVASION_GAP", "evasion_scores", "holonomic_evasion"]
 
 #: Gaps (m) wider than this score the same in the evasive motion.
 EVASION_GAP = 0.5
@@ -60,3 +64,44 @@ def evasion_scores(nav: Navigator, t: float, pose: FloatArray, obs: FloatArray, 
     cr = nav.robot.circumradius
     progress = metric_distance(pose, nav.goal, cr) - metric_distance(ends, nav.goal[None], cr)
     return np.minimum(ttc, T + 1.0) * 100.0 + np.minimum(worst, EVASION_GAP) * 10.0 + progress
+
+
+def holonomic_evasion(nav: Navigator, t: float, pose: FloatArray, obs: FloatArray) -> Trajectory:
+    """The holonomic robot's evasive motion (:meth:`Navigator._evasive`): of straight
+    motions in ``evasion_headings`` directions at full and half speed, each going on for
+    ``evasion_time`` (or half, or a quarter of it, whichever is free of static obstacles)
+    and then standing, and of standing still, the best by :func:`evasion_scores`."""
+    opts = nav.options
+    cr = nav.robot.circumradius
+    T = opts.evasion_time
+    n_t = int(math.ceil(T / MOTION_SAMPLE)) + 1
+    times = t + np.linspace(0.0, T, n_t)
+    ang = np.arange(opts.evasion_headings) * (2 * math.pi / opts.evasion_headings)
+    speeds = np.array([1.0, 0.5]) * nav.vplan
+    dirs = np.column_stack([np.cos(ang), np.sin(ang)])
+    vel = np.vstack([np.zeros((1, 2)), (speeds[:, None, None] * dirs[None]).reshape(-1, 2)])  # (C, 2)
+    move_time = np.zeros(len(vel))
+    free = np.zeros(len(vel), dtype=bool)
+    free[0] = True
+    for c in range(1, len(vel)):
+        for frac in (1.0, 0.5, 0.25):
+            end = pose.copy()
+            end[:2] += vel[c] * T * frac
+            if nav.geometry.bounds_clearance(end[None])[0] >= 0 and nav.geometry.motion_free(pose, end):
+                free[c] = True
+                move_time[c] = T * frac
+                break
+    ends = np.repeat(pose[None], len(vel), axis=0)
+    ends[:, :2] += vel * move_time[:, None]
+    tau = times - t
+    frac = np.clip(tau[None, :] / np.maximum(move_time[:, None], 1e-12), 0.0, 1.0)  # moves, then stands
+    pts = pose[None, None, :] + frac[:, :, None] * (ends - pose[None])[:, None, :]  # (C, T, d)
+    score = np.where(free, evasion_scores(nav, t, pose, obs, pts, times, ends, vel), -math.inf)
+    c = int(np.argmax(score))
+    if c == 0:
+        rows = np.array([[t, *pose], [t + max(T, opts.cover), *pose]])
+    else:
+        rows = np.array([[t, *pose], [t + move_time[c], *ends[c]]])
+        if opts.cover > move_time[c]:
+            rows = np.vstack([rows, [t + opts.cover, *ends[c]]])
+    return Trajectory(rows, cr)

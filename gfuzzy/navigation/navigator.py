@@ -50,8 +50,9 @@ from ..timespace.spacetime import IntervalStore, SearchResult, SpaceTimeGraph
 from ..timespace.timespace import timed_rows
 from ..trajectory import Trajectory
 from ..typed import BoolArray, FloatArray
+from .brisk import brisk
 from .drivenav import drive_evasion, kept_plan, rest_of, sooner_plan
-from .evasion import evasion_scores
+from .evasion import holonomic_evasion
 from .lookout import Lookout
 from .navtypes import MOTION_SAMPLE, NavMode, NavStep, sample_loss
 from .pathspace import STILL_SPEED, PathSpace, WallCheck
@@ -536,7 +537,7 @@ class Navigator(PathSpace):
         if opts.personal_space > 0 and len(obs) and found.graph is not None and self._clock() < deadline:
             traj, mode, found = self._closer(t, pose, obs, found, deadline, ghosts)
         if traj is not None and mode in (NavMode.PLAN, NavMode.CLOSE):
-            traj = self._brisk(t, pose, traj, obs, self._kept_inflation(pose, obs, infl, mode), ghosts)
+            traj = brisk(self, t, pose, traj, obs, self._kept_inflation(pose, obs, infl, mode), ghosts)
         if traj is None and len(obs) and not found.out_of_time and self._clock() < deadline:
             # blocked by the margins (someone standing beside the goal, a narrow gap): try
             # once more with the people's discs as they are, plus the mover clearance only
@@ -575,43 +576,6 @@ class Navigator(PathSpace):
                 traj, mode = looked, NavMode.LOOK
         self.last = NavStep(mode, self._clock() - t_begin, found.message, predicted, found.detailed)
         return traj
-
-    def _brisk(self, t: float, pose: FloatArray, traj: Trajectory, obs: FloatArray, infl: FloatArray,
-               ghosts: bool) -> Trajectory:  # fmt: skip
-        """``traj`` with its motion up to its first wait (or to its end) at full speed, when
-        that keeps the gaps its search kept; ``traj`` otherwise (a disc robot's plan only).
-
-        The search moves one step of ``dt`` between two points of the graph's edges, cut
-        into pieces of at most one step's length: every edge (and the robot's connection
-        into the graph, from wherever it is) takes a whole number of steps, so the robot
-        runs at ``vmax`` times its length over that rounded up, 5-10 % slower on the
-        roadmap's short edges. Along the same path at ``vmax`` the robot reaches the first
-        wait sooner and waits there until the plan goes on (at the goal: arrives sooner).
-        Checked every ``MOTION_SAMPLE`` s until the plan's own time at that point (after
-        it, the two are the same) against everyone walking on at constant velocity with
-        the inflation ``infl`` (k, S) of the plan's search and, when it kept off people's
-        ways (``ghosts``), against the ghosts it kept off.
-        """
-        w = traj.waypoints
-        if self.robot.unicycle or self.robot.dof != 2 or self.robot.shape != "disc" or len(w) < 2:
-            return traj
-        step = np.hypot(*np.diff(w[:, 1:3], axis=0).T)
-        still = np.nonzero(step <= 1e-9)[0]
-        k = int(still[0]) if len(still) else len(step)  # rows 0..k move, row k starts the wait (or ends)
-        if k < 1:
-            return traj
-        times = t + np.concatenate([[0.0], np.cumsum(step[:k])]) / self.vplan
-        if w[k, 0] - times[-1] < 1e-6:
-            return traj
-        rows = w.copy()
-        rows[: k + 1, 0] = times
-        fast = Trajectory(rows, traj.circumradius)
-        if len(obs):
-            rows_g, infl_g = self._path_ghosts(pose, obs) if ghosts and self.options.path_space > 0 else (None, None)
-            if not self._keeps_gaps(fast, t, float(w[k, 0]), obs, infl) or (
-                    rows_g is not None and len(rows_g) and not self._keeps_gaps(fast, t, float(w[k, 0]), rows_g, infl_g)):
-                return traj
-        return fast
 
     def _keeps_gaps(self, traj: Trajectory, t: float, t_end: float, obs: FloatArray, infl: FloatArray) -> bool:
         """Whether ``traj`` keeps, from ``t`` to ``t_end`` (sampled every ``MOTION_SAMPLE``
@@ -825,37 +789,4 @@ class Navigator(PathSpace):
         """
         if self.robot.unicycle:  # turn in place, then drive along the heading (drivenav.drive_evasion)
             return drive_evasion(self, t, pose, obs)
-        opts = self.options
-        cr = self.robot.circumradius
-        T = opts.evasion_time
-        n_t = int(math.ceil(T / MOTION_SAMPLE)) + 1
-        times = t + np.linspace(0.0, T, n_t)
-        ang = np.arange(opts.evasion_headings) * (2 * math.pi / opts.evasion_headings)
-        speeds = np.array([1.0, 0.5]) * self.vplan
-        dirs = np.column_stack([np.cos(ang), np.sin(ang)])
-        vel = np.vstack([np.zeros((1, 2)), (speeds[:, None, None] * dirs[None]).reshape(-1, 2)])  # (C, 2)
-        move_time = np.zeros(len(vel))
-        free = np.zeros(len(vel), dtype=bool)
-        free[0] = True
-        for c in range(1, len(vel)):
-            for frac in (1.0, 0.5, 0.25):
-                end = pose.copy()
-                end[:2] += vel[c] * T * frac
-                if self.geometry.bounds_clearance(end[None])[0] >= 0 and self.geometry.motion_free(pose, end):
-                    free[c] = True
-                    move_time[c] = T * frac
-                    break
-        ends = np.repeat(pose[None], len(vel), axis=0)
-        ends[:, :2] += vel * move_time[:, None]
-        tau = times - t
-        frac = np.clip(tau[None, :] / np.maximum(move_time[:, None], 1e-12), 0.0, 1.0)  # moves, then stands
-        pts = pose[None, None, :] + frac[:, :, None] * (ends - pose[None])[:, None, :]  # (C, T, d)
-        score = np.where(free, evasion_scores(self, t, pose, obs, pts, times, ends, vel), -math.inf)
-        c = int(np.argmax(score))
-        if c == 0:
-            rows = np.array([[t, *pose], [t + max(T, opts.cover), *pose]])
-        else:
-            rows = np.array([[t, *pose], [t + move_time[c], *ends[c]]])
-            if opts.cover > move_time[c]:
-                rows = np.vstack([rows, [t + opts.cover, *ends[c]]])
-        return Trajectory(rows, cr)
+        return holonomic_evasion(self, t, pose, obs)
