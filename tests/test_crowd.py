@@ -267,3 +267,15 @@ def test_crowd_command_refuses_bad_arguments_in_one_line(tmp_path, flags):
     assert p.returncode == 2, p.stdout + p.stderr
     assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
     assert not out.exists()
+
+
+def test_crowd_command_takes_the_navigators_full_speed_option():
+    import argparse
+
+    from gfuzzy.cli.crowds import _setting, add_crowd
+
+    parser = argparse.ArgumentParser()
+    add_crowd(parser.add_subparsers())
+    off = _setting(parser.parse_args(["crowd", "--humans", "2"]))[1]
+    on = _setting(parser.parse_args(["crowd", "--humans", "2", "--full-speed"]))[1]
+    assert not off.full_speed and on.full_speed

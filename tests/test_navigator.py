@@ -90,12 +90,14 @@ def test_the_plan_runs_at_full_speed_up_to_its_first_wait(open_square, monkeypat
     pose, goal = np.array([0.03, -3.0]), (0.0, 4.0)
     far = np.array([[4.0, 0.0, 0.0, 0.0, 0.3]])
     length = math.hypot(0.03, 7.0)
-    traj = Navigator(scene, rm, goal).step(0.0, pose, far)
+    fast = NavOptions(full_speed=True)
+    traj = Navigator(scene, rm, goal, fast).step(0.0, pose, far)
     assert traj.duration == pytest.approx(length / scene.robot.vmax, rel=1e-6)
     assert _speeds_ok(traj, 1.0)
     assert gfuzzy.check_trajectory(scene, traj.waypoints).valid
+    assert Navigator(scene, rm, goal).step(0.0, pose, far).duration == pytest.approx(7.1)  # off by default
     monkeypatch.setattr(Navigator, "_keeps_gaps", lambda *args: False)
-    slow = Navigator(scene, rm, goal).step(0.0, pose, far)
+    slow = Navigator(scene, rm, goal, fast).step(0.0, pose, far)
     assert slow.duration == pytest.approx(7.1)
 
 

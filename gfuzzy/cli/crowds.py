@@ -45,6 +45,8 @@ def add_crowd(sub) -> None:
     c.add_argument("--path-space", type=float, default=1.25, metavar="SECONDS",
                    help="how far ahead (s) the navigator keeps off the way people are about to walk, when that "
                         "costs little (default 1.25, 0: off)")  # fmt: skip
+    c.add_argument("--full-speed", action="store_true",
+                   help="the navigator runs its plans at full speed up to their first wait (NavOptions.full_speed)")
     c.add_argument("-o", "--output", metavar="RESULTS.csv", help="one row per episode and policy")
     c.set_defaults(func=cmd_crowd)
 
@@ -90,7 +92,7 @@ def _setting(args):
         setting = CrowdSetting(args.scenario, humans, args.visible, args.crowd, args.kinematics, sensor,
                                not args.steady_goals, args.reverse)  # fmt: skip
         options = NavOptions(time_budget=args.time_budget, personal_space=args.personal_space,
-                             path_space=args.path_space, budget_clock=args.budget_clock)
+                             path_space=args.path_space, budget_clock=args.budget_clock, full_speed=args.full_speed)
     except InputError as exc:
         raise BadInput(f"gfuzzy crowd: {exc}") from None
     policies = args.policy or (["navigator", "orca"] + ([] if args.visible else ["oracle"]))
