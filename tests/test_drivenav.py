@@ -196,7 +196,6 @@ def test_an_evasion_under_way_keeps_its_heading_target(open_floor):
     assert np.allclose(aims, aims[0])
 
 
-
 def test_a_reversing_robot_among_walkers_reaches_the_goal_and_passes_the_check(reversing_floor):
     """The navigator's every answer for a robot that may back up (plans over lanes driven
     both ways, evasions) is driven and verified by the independent checker."""
