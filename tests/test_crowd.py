@@ -279,3 +279,19 @@ def test_crowd_command_takes_the_navigators_full_speed_option():
     off = _setting(parser.parse_args(["crowd", "--humans", "2"]))[1]
     on = _setting(parser.parse_args(["crowd", "--humans", "2", "--full-speed"]))[1]
     assert not off.full_speed and on.full_speed
+
+
+def test_the_oracle_plans_on_the_time_step_it_is_given(roadmap, monkeypatch):
+    import gfuzzy.planner.planner as planner
+
+    seen, real = [], planner.plan
+
+    def recording(scene, rm, start, goal, t0, options):
+        seen.append(options.dt)
+        return real(scene, rm, start, goal, t0, options)
+
+    monkeypatch.setattr(planner, "plan", recording)
+    s = C.CrowdSetting(humans=2, kinematics="unicycle")
+    fine = C.run_episode(s, roadmap, 1, 0, ["oracle"], oracle_dt=0.05)[0]
+    C.run_episode(s, roadmap, 1, 0, ["oracle"])
+    assert seen == [0.05, planner.PlanOptions().dt] and fine.reached

@@ -575,7 +575,8 @@ def crowd_roadmap(setting: CrowdSetting):
     return build_roadmap(crowd_scene(replace(setting, kinematics="holonomic", reverse=False)), _roadmap_options(setting))
 
 
-def run_episode(setting: CrowdSetting, roadmap, seed: int, index: int, policies, options=None) -> list[Episode]:
+def run_episode(setting: CrowdSetting, roadmap, seed: int, index: int, policies, options=None,
+                oracle_dt: float | None = None) -> list[Episode]:  # fmt: skip
     """One episode of the benchmark under each of ``policies``.
 
     Parameters
@@ -592,6 +593,9 @@ def run_episode(setting: CrowdSetting, roadmap, seed: int, index: int, policies,
         humans' true future; only when they do not see the robot).
     options : NavOptions, optional
         The navigator's settings.
+    oracle_dt : float, optional
+        The oracle's time step (default: ``PlanOptions``'s). A differential drive's turns
+        take whole steps, so a finer step can solve an episode a coarser one cannot.
 
     Returns
     -------
@@ -641,7 +645,8 @@ def run_episode(setting: CrowdSetting, roadmap, seed: int, index: int, policies,
         elif policy == "social-force":
             act = SocialForcePolicy(lay.goal, CROWD)
         elif policy == "oracle":
-            res = plan(scene, roadmap, *_poses(setting, lay), 0.0, PlanOptions(horizon=limit))
+            plan_opts = PlanOptions(horizon=limit) if oracle_dt is None else PlanOptions(horizon=limit, dt=oracle_dt)
+            res = plan(scene, roadmap, *_poses(setting, lay), 0.0, plan_opts)
             act = OraclePolicy(res.trajectory if res.solved else None, CROWD["robot_radius"])
         else:
             raise InputError(f"policy must be one of {', '.join(POLICIES)}, got {policy!r}")
