@@ -82,6 +82,21 @@ def test_mid_edge_start(open_square):
     assert gfuzzy.check_trajectory(scene, traj.waypoints).valid
 
 
+def test_a_plan_leaves_at_full_speed(open_square):
+    # the robot follows a plan for a period and replans: the search's whole steps per
+    # piece of edge must not slow what it runs of it. The 7.00006 m to the goal take 71
+    # steps of 0.1 s either way; cut into equal pieces the robot ran 0.0986 m a step, the
+    # connection cut into whole steps runs 0.1 m a step and leaves the remainder last
+    scene, rm = open_square
+    pose = np.array([0.03, -3.0])
+    traj = Navigator(scene, rm, (0.0, 4.0)).step(0.0, pose, np.array([[4.0, 0.0, 0.0, 0.0, 0.3]]))
+    assert traj.duration == pytest.approx(7.1)
+    step = np.hypot(*np.diff(traj.waypoints[:4, 1:], axis=0).T)
+    np.testing.assert_allclose(step, 0.1, rtol=1e-6)
+    assert _speeds_ok(traj, 1.0)
+    assert gfuzzy.check_trajectory(scene, traj.waypoints).valid
+
+
 def test_the_plan_runs_at_full_speed_up_to_its_first_wait(open_square, monkeypatch):
     # the search takes a whole number of steps per piece of edge: the straight 7.00006 m
     # to the goal in sight took 71 steps of 0.1 s; the answer runs it at vmax when that

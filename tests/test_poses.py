@@ -95,3 +95,23 @@ def test_the_space_time_graph_cuts_edges_by_the_same_rule():
     poses = np.vstack([verts, inner])
     moves = metric_distance(poses[src], poses[dst], r)
     assert len(src) == int(k.sum()) and np.all(moves <= step * (1 + 1e-12))
+
+
+def test_a_leading_cut_takes_whole_steps_from_one_end():
+    """split_edges(lead=): the same steps per edge, every move at most a step, but whole
+    steps from the first end (1) or up to the second (-1), the remainder at the other."""
+    from gfuzzy.timespace.spacetime import split_edges
+
+    verts = np.array([[0.0, 0.0], [0.73, 0.0], [0.0, 0.35], [0.2, 0.0]])
+    edges = np.array([(0, 1), (0, 2), (2, 1), (0, 3)], dtype=np.int64)
+    step = 0.25
+    lengths = metric_distance(verts[edges[:, 0]], verts[edges[:, 1]], 0.3)
+    equal = split_edges(verts, edges, lengths, step, len(verts))
+    cut = split_edges(verts, edges, lengths, step, len(verts), lead=np.array([1, -1, 0, 1]))
+    for name in ("k", "offs", "a", "b", "j", "src", "dst"):
+        assert np.array_equal(getattr(cut, name), getattr(equal, name))
+    np.testing.assert_allclose(cut.inner[:2], [[0.25, 0.0], [0.5, 0.0]])  # 0.73 m: 0.25, 0.25, 0.23
+    np.testing.assert_allclose(cut.inner[2], [0.0, 0.1])  # 0.35 m: 0.1, then 0.25 up to vertex 2
+    assert np.array_equal(cut.inner[3:], equal.inner[3:])  # equal pieces where lead is 0
+    poses = np.vstack([verts, cut.inner])
+    assert np.all(metric_distance(poses[cut.src], poses[cut.dst], 0.3) <= step * (1 + 1e-12))

@@ -309,15 +309,16 @@ def test_the_query_graph_equals_an_independent_build(name, stretch, dt):
 
 def test_plan_plan_from_and_the_navigator_get_their_graph_from_one_builder(monkeypatch):
     """A fresh plan, plan_from and the navigator all search the graph PreparedGoal.splice
-    builds, and for the same start and goal it is the same graph, to the bit."""
+    builds, and for the same start and goal it is the same graph, to the bit (the
+    navigator's with its ends' connections cut leading, ``lead=True``)."""
     from gfuzzy.navigation.navigator import Navigator
     from gfuzzy.planner.prepared import PreparedGoal
 
     built = []
     splice = PreparedGoal.splice
 
-    def spy(self, planner, start, ahead=()):
-        qg = splice(self, planner, start, ahead)
+    def spy(self, planner, start, ahead=(), lead=False):
+        qg = splice(self, planner, start, ahead, lead)
         built.append((np.array(start), qg))
         return qg
 
@@ -339,7 +340,7 @@ def test_plan_plan_from_and_the_navigator_get_their_graph_from_one_builder(monke
     nav.step(q.t0, np.asarray(q.start, float), np.zeros((0, 5)))
     assert len(built) >= 3
     np.testing.assert_array_equal(built[2][0], s1)
-    ref = planner.prepare(q.goal, nav._kept.options).splice(planner, built[2][0])  # the start as wrapped
+    ref = planner.prepare(q.goal, nav._kept.options).splice(planner, built[2][0], lead=True)  # the start as wrapped
     for field in ("poses", "indptr", "neighbors", "heuristic", "from_start"):
         np.testing.assert_array_equal(getattr(built[2][1].graph, field), getattr(ref.graph, field))
 

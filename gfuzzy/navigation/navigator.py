@@ -336,7 +336,7 @@ class Navigator(PathSpace):
         if self.robot.unicycle:
             qg = self._kept.kept.splice(self._planner, start, fan_options=self._fan)
         else:
-            qg = self._kept.splice(self._planner, start, ahead=ahead)
+            qg = self._kept.splice(self._planner, start, ahead=ahead, lead=True)  # leaves at full speed
         return qg.graph, qg.s_id, qg.g_id, qg.roadmap_distance
 
     def roadmap_distance(self, pose) -> float:

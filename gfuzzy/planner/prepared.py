@@ -126,7 +126,7 @@ class PreparedGoal:
     step_len: float
     goal_clearance: float
 
-    def splice(self, planner, start: FloatArray, ahead=()) -> QueryGraph:
+    def splice(self, planner, start: FloatArray, ahead=(), lead: bool = False) -> QueryGraph:
         """The query's graph: the spanner's cut with the goal's and ``start``'s connections.
 
         Parameters
@@ -138,6 +138,12 @@ class PreparedGoal:
         ahead : sequence of int
             Roadmap vertices to try too, after the nearest (the navigator's: those its
             last plan was heading for); the first two not connected already are tried.
+        lead : bool
+            Cut the start's connections into whole steps from the start (the remainder
+            last) and the goal's into whole steps up to the goal (the remainder at the
+            goal), instead of equal pieces (:func:`split_edges`): the same steps, so the
+            same search, but a plan run for a moment and replanned (the navigator's) then
+            leaves at full speed and slows only in an edge's last step.
 
         Returns
         -------
@@ -153,9 +159,10 @@ class PreparedGoal:
         edges, lengths = self._start_edges(planner, start, ahead)
         base, n, N0 = self.base, self.g_id + 1, self.base.N0
         x = len(self.goal_edges)
-        cut = base.splice(
-            np.vstack([self.goal_edges, edges]), np.concatenate([self.goal_lengths, lengths]), np.vstack([start, self.goal])
-        )
+        both = np.vstack([self.goal_edges, edges])
+        # the goal's edges run (goal, v): whole steps up to v leave the remainder at the goal
+        lead_of = np.concatenate([np.full(x, -1), np.full(len(edges), 1)]) if lead else None
+        cut = base.splice(both, np.concatenate([self.goal_lengths, lengths]), np.vstack([start, self.goal]), lead_of)
         k = cut.k[x:]  # the start's edges' steps
         ends = edges[:, 1]
         rd = float(np.min(lengths + self.dist[ends], initial=np.inf))

@@ -232,7 +232,7 @@ class SplitSpanner:
     cut: IntArray
     steps: VertexGraph
 
-    def splice(self, edges: IntArray, lengths: FloatArray, ends: FloatArray) -> Spliced:
+    def splice(self, edges: IntArray, lengths: FloatArray, ends: FloatArray, lead: IntArray | None = None) -> Spliced:
         """The spanner with ``edges`` (each from the start or the goal) added after its own.
 
         Parameters
@@ -242,6 +242,9 @@ class SplitSpanner:
         lengths : (x,) float
         ends : (2, d) float
             The poses of the start and the goal.
+        lead : (x,) int, optional
+            Where each edge's pieces are whole steps (:func:`split_edges`); equal pieces
+            by default.
 
         Returns
         -------
@@ -259,7 +262,7 @@ class SplitSpanner:
         check_points(total)
         verts = self.poses[: self.n].copy()
         verts[self.nv :] = ends
-        cut = split_edges(verts, edges, lengths, self.step_len, self.N0)
+        cut = split_edges(verts, edges, lengths, self.step_len, self.N0, lead)
         kx, offx, inner, ax, bx, jx, srcx, dstx = cut.k, cut.offs, cut.inner, cut.a, cut.b, cut.j, cut.src, cut.dst
         poses = np.concatenate([self.poses, inner])
         poses[self.nv : self.n] = ends

@@ -25,7 +25,8 @@ from ..typed import BoolArray, FloatArray, IntArray
 if TYPE_CHECKING:
     from .movers import MoverField
 
-__all__ = ["SpaceTimeGraph", "QueryGraph", "SearchResult", "IntervalStore", "SplitEdges", "split_edges", "BAND"]
+__all__ = ["SpaceTimeGraph", "QueryGraph", "SearchResult", "IntervalStore", "SplitEdges", "split_edges", "leading_fractions",
+           "BAND"]
 
 #: Safety is computed for every group whose static lower bound on f lies within this many
 #: steps of the group the search asks for: the A* order will want them soon.
@@ -411,7 +412,22 @@ class SplitEdges:
     dst: IntArray
 
 
-def split_edges(verts: FloatArray, edges: IntArray, lengths: FloatArray, step_len: float, first_id: int) -> SplitEdges:
+def leading_fractions(frac: FloatArray, j: IntArray, k: IntArray, length: FloatArray, step_len: float,
+                      lead: IntArray) -> FloatArray:  # fmt: skip
+    """Fractions along their edges of interior points ``j`` (of ``k`` pieces, of edges of
+    ``length``) cut into whole steps of ``step_len`` from the first end (``lead`` 1) or
+    up to the second (-1), the remainder (at most a step) at the other end; ``frac`` (the
+    equal pieces' ``j / k``) where ``lead`` is 0 or whole steps would not leave a
+    remainder (the extra piece of :func:`gfuzzy.poses.split_counts`'s rounding rule).
+    Every piece stays at most ``step_len`` long."""
+    whole = (k - 1) * step_len < length * (1 - 1e-12)
+    safe = np.where(length > 0, length, 1.0)
+    out = np.where((lead > 0) & whole, j * step_len / safe, frac)
+    return np.where((lead < 0) & whole, 1.0 - (k - j) * step_len / safe, out)
+
+
+def split_edges(verts: FloatArray, edges: IntArray, lengths: FloatArray, step_len: float, first_id: int,
+                lead: IntArray | None = None) -> SplitEdges:  # fmt: skip
     """Cut edges into one-step pieces of at most ``step_len`` (:func:`gfuzzy.poses.split_counts`).
 
     The one place the roadmap-time graph is cut: the roadmap's spanner once per (step,
@@ -428,6 +444,13 @@ def split_edges(verts: FloatArray, edges: IntArray, lengths: FloatArray, step_le
         vmax * dt.
     first_id : int
         Id of the first interior point.
+    lead : (e,) int, optional
+        Per edge, where its pieces are whole steps: 0 (default) equal pieces; 1 whole
+        steps from ``edges[:, 0]``, the remainder last; -1 whole steps up to
+        ``edges[:, 1]``, the remainder first. The same steps either way (the search's
+        costs and bounds do not change), but a robot that follows a plan for a moment
+        and replans moves at full speed on a leading edge, where equal pieces run it at
+        ``len / (k step)`` of it (:func:`leading_fractions`).
 
     Returns
     -------
@@ -439,7 +462,11 @@ def split_edges(verts: FloatArray, edges: IntArray, lengths: FloatArray, step_le
     e_of = np.repeat(np.arange(len(edges)), n_int)
     j = np.arange(offs[-1]) - np.repeat(offs[:-1], n_int) + 1
     a, b = edges[e_of, 0], edges[e_of, 1]
-    inner = interpolate_segment(verts[a], verts[b], j / k[e_of])
+    frac = j / k[e_of]
+    if lead is not None and len(frac):
+        frac = leading_fractions(frac, j, k[e_of], np.asarray(lengths, dtype=float)[e_of], step_len,
+                                 np.asarray(lead)[e_of])  # fmt: skip
+    inner = interpolate_segment(verts[a], verts[b], frac)
     ids = np.arange(first_id, first_id + offs[-1])
     first = np.zeros(offs[-1], dtype=bool)
     first[offs[:-1][n_int > 0]] = True
