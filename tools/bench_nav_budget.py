@@ -170,7 +170,8 @@ def parse_opts(items):
     out = {}
     for item in items or []:
         key, _, val = item.partition("=")
-        out[key] = type(getattr(NavOptions(), key))(val)
+        default = getattr(NavOptions(), key)
+        out[key] = float(val) if default is None else type(default)(val)
     return out
 
 
