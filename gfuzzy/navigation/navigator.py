@@ -56,7 +56,6 @@ from .evasion import holonomic_evasion
 from .lookout import Lookout
 from .navtypes import MOTION_SAMPLE, NavMode, NavStep, sample_loss
 from .pathspace import STILL_SPEED, PathSpace, WallCheck
-from .rollout import Rollout
 from .swerve import swerve_rates
 from .timedfield import PAIR_SECONDS, PIECE_WORK, _OutOfTime, _TimedField  # noqa: F401 (PIECE_WORK, PAIR_SECONDS: kept importable here)
 
@@ -179,8 +178,6 @@ class NavOptions:
         Further growth (m per s of prediction) of the predicted disc of a person whose
         straight walk meets someone else's within 3 s (:mod:`gfuzzy.navigation.swerve`):
         they are about to swerve, and may swerve towards the robot. 0 turns it off.
-    interaction : bool
-        Predict people avoiding each other (:mod:`gfuzzy.navigation.rollout`), not walking straight on.
     fov : float
         A disc robot's field of view (degrees), centred on its direction of motion; below
         360 it looks, now and then, where it has not looked (:mod:`gfuzzy.navigation.lookout`).
@@ -215,7 +212,6 @@ class NavOptions:
     full_speed: bool = False
     drive_lookahead: float = 4.0
     swerve_growth: float = 0.0
-    interaction: bool = False
     fov: float = 360.0
     look_after: float = 1.0
 
@@ -253,7 +249,7 @@ class _Searched:
     ahead: list = field(default_factory=list)
 
 
-class Navigator(PathSpace, Rollout):
+class Navigator(PathSpace):
     """Receding-horizon navigation to a fixed goal among observed moving discs.
 
     Parameters
@@ -364,7 +360,8 @@ class Navigator(PathSpace, Rollout):
         return graph, s_id
 
     # ------------------------------------------------------------- prediction
-    def _inflation(self, pose: FloatArray, obs: FloatArray, relaxed: bool = False, personal: bool = True) -> FloatArray:
+    def _inflation(self, pose: FloatArray, obs: FloatArray, relaxed: bool = False,
+                   personal: bool = True) -> FloatArray:  # fmt: skip
         """(k, S) inflation (m) per person and prediction slice, shrunk near the robot.
 
         A person already closer than the full inflation (someone walked up to the robot)
@@ -402,7 +399,8 @@ class Navigator(PathSpace, Rollout):
         hold = opts.stationary_hold if opts.stationary_hold > 0 else 0.0
         return vel, opts.prediction_horizon + np.where(still, hold, 0.0)
 
-    def _may_reach(self, pose: FloatArray, xy: FloatArray, vel: FloatArray, walk: FloatArray, look: FloatArray, reach: FloatArray) -> BoolArray:
+    def _may_reach(self, pose: FloatArray, xy: FloatArray, vel: FloatArray, walk: FloatArray,
+                   look: FloatArray, reach: FloatArray) -> BoolArray:  # fmt: skip
         """(k,) False for each person who certainly stays farther than ``reach`` from the
         robot's reference point during the next ``look`` seconds, whatever the robot does.
 
@@ -439,7 +437,7 @@ class Navigator(PathSpace, Rollout):
         speed = np.hypot(vel[:, 0], vel[:, 1])
         reach = obs[:, 4] + infl.max(axis=1, initial=0.0) + self.robot.circumradius + (self.vplan + speed) * opts.dt
         look = np.minimum(presence, seconds) + opts.dt  # the field keeps a mover half a step longer
-        return self._rolled_reach(pose, obs, look, reach + 1e-6, self._may_reach(pose, obs[:, :2], vel, opts.prediction_horizon, look, reach + 1e-6))
+        return self._may_reach(pose, obs[:, :2], vel, opts.prediction_horizon, look, reach + 1e-6)
 
     def _near(self, pose: FloatArray, obs: FloatArray, look: float, gap: float) -> FloatArray:
         """The people (rows of ``obs``) who, walking on at constant velocity, may come within
@@ -450,7 +448,7 @@ class Navigator(PathSpace, Rollout):
         reach = obs[:, 4] + self.robot.circumradius + self.mover_clearance + gap + 1e-6
         return obs[self._may_reach(pose, obs[:, :2], obs[:, 2:4], math.inf, look, reach)]
 
-    def _field(self, t: float, obs: FloatArray, infl: FloatArray, steps: int, deadline: float = math.inf, rows=()) -> MoverField:
+    def _field(self, t: float, obs: FloatArray, infl: FloatArray, steps: int, deadline: float = math.inf) -> MoverField:
         """The predicted people on the search's time grid: one trajectory mover per person.
 
         Person i walks on (or stands) as :meth:`_walks` says; the growing inflation goes
@@ -476,8 +474,11 @@ class Navigator(PathSpace, Rollout):
         vanish = np.minimum(presence, obs[:, 6]) if obs.shape[1] > 6 else presence
         a = obs[:, :2] + vel * np.minimum(appear, opts.prediction_horizon)[:, None]
         b = obs[:, :2] + vel * np.minimum(vanish, opts.prediction_horizon)[:, None]
-        tracked = self._rolled_tracks(t, rows, vanish, [np.array([[t + appear[i], *a[i]], [t + vanish[i], *b[i]]]) for i in range(k)])
-        movers = tuple(Mover(f"p{i}", "disc", float(radius[i]), (0.0, 0.0), trajectory=tracked[i]) for i in range(k))
+        movers = tuple(
+            Mover(f"p{i}", "disc", float(radius[i]), (0.0, 0.0),
+                  trajectory=np.array([[t + appear[i], a[i, 0], a[i, 1]], [t + vanish[i], b[i, 0], b[i, 1]]]))
+            for i in range(k)
+        )  # fmt: skip
         extra = float(np.max(infl - first[:, None], initial=0.0))  # the ghosts' is not monotone
         scene = replace(self.scene, robot=self._pred_robot, movers=movers)
         # built with the largest extra margin, so that its broad-phase boxes hold every
@@ -531,7 +532,6 @@ class Navigator(PathSpace, Rollout):
             return Trajectory(np.array([[t, *pose], [t + opts.cover, *pose]]), cr)
         deadline = t_begin + SEARCH_SHARE * opts.time_budget
         infl = self._inflation(pose, obs)
-        self._roll(obs)  # NavOptions.interaction: the people rolled forward together
         predicted = obs.copy()
         if len(obs):
             predicted[:, 4] = obs[:, 4] + infl[:, 0]
@@ -672,7 +672,7 @@ class Navigator(PathSpace, Rollout):
                 c0 = self._clock()
                 if c0 + detailed * self._person_seconds > deadline:  # the fallback answers
                     return _Searched(None, "time budget spent before the search", detailed, True, graph, s_id)
-                field_ = self._field(t, obs[keep], infl[keep], steps, deadline, np.flatnonzero(keep))
+                field_ = self._field(t, obs[keep], infl[keep], steps, deadline)
                 if detailed >= 10:  # a cautious running estimate: up at once, down by a fifth
                     took = (self._clock() - c0) / detailed
                     self._person_seconds = max(took, 0.8 * self._person_seconds + 0.2 * took)
