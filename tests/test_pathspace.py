@@ -132,20 +132,3 @@ def test_the_navigator_does_not_cut_in_front_of_a_walker(open_square):
     assert ends[1.25, 10.0] > ends[0.0, 0.0] + 1.0
     assert ways[1.25, 1.0] == ways[0.0, 0.0] and ends[1.25, 1.0] == ends[0.0, 0.0]
 
-
-
-def test_a_trip_already_late_by_the_path_space_cost_keeps_off_nobody_s_way(open_square):
-    scene, rm = open_square
-    pose = np.array([0.0, -3.0])
-    person = np.array([-2.5, -2.0, 1.0, 0.0, 0.3])  # as above: due at the robot's way in 2.5 s
-    ways = {}
-    for trip in (False, True):
-        opts = NavOptions(path_space_cost=10.0, personal_space=0.0, time_budget=5.0, trip_cost=trip)
-        nav = Navigator(scene, rm, (0.0, 3.0), opts)
-        nav.step(0.0, pose, person[None] + [0.0, 20.0, 0.0, 0.0, 0.0])  # far away: it could arrive in 6 s
-        nav.step(12.0, pose, person[None])  # 12 s later, still at its start: 12 s lost
-        traj = nav.step(12.25, pose, person[None])  # (counted from the next call on)
-        assert nav.last.mode == "plan"
-        ways[trip] = _intrusions(traj, person, 12.25)
-    assert ways[False] == 0  # still letting the walker pass, however late
-    assert ways[True] > 0  # the trip has paid the cost: it crosses as without the path space

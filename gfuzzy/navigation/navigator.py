@@ -122,8 +122,6 @@ class NavOptions:
     path_space_cost : float
         What (s of arrival time) keeping off people's ways is worth: the plan that keeps the
         path space is taken unless one that does not arrives sooner by more than this.
-    trip_cost : bool
-        ``path_space_cost`` is for the whole trip: lost, the path space is off (:meth:`PathSpace._late`).
     social_horizon : float
         Seconds of the plan during which the path space is kept (a plan's far future is
         replanned long before; predictions that far are too uncertain to yield to).
@@ -215,7 +213,6 @@ class NavOptions:
     full_speed: bool = False
     drive_lookahead: float = 4.0
     swerve_growth: float = 0.0
-    trip_cost: bool = False
     fov: float = 360.0
     look_after: float = 1.0
 
@@ -363,7 +360,8 @@ class Navigator(PathSpace):
         return graph, s_id
 
     # ------------------------------------------------------------- prediction
-    def _inflation(self, pose: FloatArray, obs: FloatArray, relaxed: bool = False, personal: bool = True) -> FloatArray:
+    def _inflation(self, pose: FloatArray, obs: FloatArray, relaxed: bool = False,
+                   personal: bool = True) -> FloatArray:  # fmt: skip
         """(k, S) inflation (m) per person and prediction slice, shrunk near the robot.
 
         A person already closer than the full inflation (someone walked up to the robot)
@@ -401,7 +399,8 @@ class Navigator(PathSpace):
         hold = opts.stationary_hold if opts.stationary_hold > 0 else 0.0
         return vel, opts.prediction_horizon + np.where(still, hold, 0.0)
 
-    def _may_reach(self, pose: FloatArray, xy: FloatArray, vel: FloatArray, walk: FloatArray, look: FloatArray, reach: FloatArray) -> BoolArray:
+    def _may_reach(self, pose: FloatArray, xy: FloatArray, vel: FloatArray, walk: FloatArray,
+                   look: FloatArray, reach: FloatArray) -> BoolArray:  # fmt: skip
         """(k,) False for each person who certainly stays farther than ``reach`` from the
         robot's reference point during the next ``look`` seconds, whatever the robot does.
 
@@ -640,7 +639,8 @@ class Navigator(PathSpace):
             return first, NavMode.PLAN, found
         return None, NavMode.PLAN, close
 
-    def _search(self, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray, deadline: float, before: _Searched | None = None) -> _Searched:
+    def _search(self, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray, deadline: float,
+                before: _Searched | None = None) -> _Searched:  # fmt: skip
         """The safe-interval search among the predicted people, within ``deadline``.
 
         The predictions are built only when the time left can pay for them (their cost

@@ -259,7 +259,7 @@ class PathSpace:
     def _with_ghosts(self, pose: FloatArray, obs: FloatArray, infl: FloatArray) -> tuple[FloatArray, FloatArray]:
         """The people and their ghosts (:meth:`_path_ghosts`), when ``path_space`` is set:
         rows ``[x, y, vx, vy, radius, appear, vanish]`` and their inflation."""
-        if self.options.path_space <= 0 or not len(obs) or self._late():
+        if self.options.path_space <= 0 or not len(obs):
             return obs, infl
         ghosts, g_infl = self._path_ghosts(pose, obs)
         always = np.column_stack([obs, np.zeros(len(obs)), np.full(len(obs), math.inf)])
@@ -279,9 +279,6 @@ class PathSpace:
         """
         opts = self.options
         first = found.trajectory
-        self._trip(t, float(found.graph.heuristic[found.start]) * opts.dt)
-        if self._late():
-            return found
         if first is not None:
             bound = float(found.graph.heuristic[found.start]) * opts.dt
             if first.t_end - t <= bound + opts.path_space_cost + 1e-9:
@@ -294,22 +291,6 @@ class PathSpace:
             return plain
         self._ahead = found.ahead  # the second search replaced the plan's vertices ahead
         return found if first is not None else plain
-
-    def _trip(self, t: float, bound: float) -> None:
-        """Count the arrival the trip has lost by the call at ``t`` (``bound``: the roadmap's
-        time to the goal from the robot's pose then): how much later than the earliest
-        ``t + bound`` of its calls it can now arrive at best."""
-        self._earliest = min(getattr(self, "_earliest", math.inf), t + bound)
-        self._lost = t + bound - self._earliest
-
-    def _late(self) -> bool:
-        """With ``NavOptions.trip_cost``: True once the trip has lost more arrival than
-        ``path_space_cost`` (counted by the last call's :meth:`_trip`), and the path space
-        is off from then on. Each call's plan may detour by the whole cost, and call after
-        call the detours add up: among 20 people crossing, plans keeping off the ways of
-        the people in front sent the robot away from the goal and round the crowd until
-        its time ran out (docs/navigator.md, *Twenty people crossing*, fourth round)."""
-        return self.options.trip_cost and getattr(self, "_lost", 0.0) > self.options.path_space_cost
 
     def _relaxed(self, t: float, pose: FloatArray, obs: FloatArray, found: _Searched, deadline: float):
         """The relaxed search (the people's discs as they are, plus the mover clearance):
