@@ -170,7 +170,7 @@ class NavOptions:
         steps run it 2-8 % slower). Off by default: on the crowd benchmarks it arrives
         0.1-0.4 s sooner but collides more often where the predictions are poor (the noisy
         half view: 10 collisions in 200 episodes against 7; 20 people crossing: 3 in 100
-        against 2; docs/navigator.md, *The same, second pass*).
+        against 2; docs/navigator-experiments.md, *The same, second pass*).
     drive_lookahead : float
         A differential drive only: seconds over which its evasive motions are scored (and
         driven, :func:`gfuzzy.navigation.drivenav.drive_evasion`); its escapes start with a

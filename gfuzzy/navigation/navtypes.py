@@ -20,8 +20,8 @@ MOTION_SAMPLE = 0.05
 STEP = 0.1
 #: A differential drive's: every turn and every lane of its plans takes a whole number of
 #: steps, and a plan has many of them; on the crowd crossing with 5 people it arrived
-#: sooner and collided less at this step than at 0.1 (docs/navigator.md, *The unicycle's
-#: time step*).
+#: sooner and collided less at this step than at 0.1 (docs/navigator-experiments.md,
+#: *The unicycle's time step*).
 DRIVE_STEP = 0.05
 
 
