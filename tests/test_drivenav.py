@@ -302,7 +302,9 @@ def test_a_differential_drive_searches_at_its_own_finer_time_step_by_default(ope
     from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
 
     sc, rm = open_floor
-    assert Navigator(sc, rm, GOAL).options.dt == DRIVE_STEP == 0.05
+    drive = Navigator(sc, rm, GOAL)
+    assert drive.options.dt == DRIVE_STEP == 0.05
+    assert drive._kept.options.dt == DRIVE_STEP  # the graph the search runs on is cut at it
     assert Navigator(sc, rm, GOAL, NavOptions(dt=0.1)).options.dt == 0.1
     doc = {"version": 1, "name": "open-floor-disc", "bounds": [0, 0, 10, 6], "robot": {"disc": 0.3, "vmax": 1.0},
            "obstacles": [], "movers": [], "queries": []}  # fmt: skip

@@ -363,3 +363,30 @@ def test_the_point_limit_covers_the_starts_connections(monkeypatch):
         planner.plan(q.start, q.goal, q.t0)
     monkeypatch.setattr(roadgraph, "MAX_POINTS", whole)
     assert planner.plan_from(kept, q.start, q.t0).solved
+
+
+def test_a_leading_splice_cuts_whole_steps_away_from_the_start_and_up_to_the_goal():
+    """``splice(lead=True)``: on every connection of the start, interior points lie whole
+    steps from the start; on every connection of the goal, whole steps from its roadmap
+    vertex (the remainder at the goal). Flipping either direction moves them."""
+    scene, planner = _setup("building-floor")
+    q = scene.queries[0]
+    prepared = planner.prepare(q.goal)
+    start = np.asarray(q.start, float)
+    qg = prepared.splice(planner, start, lead=True)
+    poses, step = qg.graph.poses, prepared.step_len
+    inner = poses[prepared.base.N0:]  # the connections' interior points
+    edges, lengths = prepared._start_edges(planner, start, ())
+    ends = [(start, planner.roadmap.vertices[v], d) for (_, v), d in zip(edges, lengths, strict=True)]
+    ends += [(planner.roadmap.vertices[v], prepared.goal, d)
+             for (_, v), d in zip(prepared.goal_edges, prepared.goal_lengths, strict=True)]  # fmt: skip
+    checked = 0
+    for a, b, d in ends:  # whole steps from a towards b
+        k = math.ceil(d / step - 1e-9)
+        if k < 2 or (k - 1) * step >= d - 1e-9:
+            continue
+        for m in range(1, k):
+            want = a + (b - a) * (m * step / d)
+            assert np.min(np.linalg.norm(inner[:, :2] - want[:2], axis=1)) < 1e-9
+            checked += 1
+    assert checked >= 4

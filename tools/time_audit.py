@@ -11,11 +11,11 @@ and records where the robot stood at every step. The time to the goal T (whole s
     T = (d0 - r) / vmax + over + detour + slow + wait
 
 with d0 the start's distance to the goal and r the success radius (the robot's radius;
-7.7 m on the circle): ``over`` the distance run past the success circle in the last step
+d0 - r is 7.7 m on the circle): ``over`` the distance run past the success circle in the last step
 (the step is whole), ``detour`` the path's length less its progress towards the goal,
 ``slow`` the steps' shortfall from ``vmax`` while moving, ``wait`` the steps it stood
-(moved under 0.02 m). ``slow`` is also split by the first four steps (the start), the
-last four (the arrival) and the rest. ``zigzag`` is the path's length less that of its
+(moved under 0.02 m). ``start`` and ``arrival`` are the shortfall from ``vmax`` of the
+first four steps and of the last four, waits included (a wait counts a whole step). ``zigzag`` is the path's length less that of its
 positions a second apart (turns inside a second, from one plan to the next), ``turning``
 the sum of the heading changes between steps (rad). The policy is wrapped to record the
 poses (a tool, not the library's API).

@@ -141,9 +141,10 @@ class PreparedGoal:
         lead : bool
             Cut the start's connections into whole steps from the start (the remainder
             last) and the goal's into whole steps up to the goal (the remainder at the
-            goal), instead of equal pieces (:func:`split_edges`): the same steps, so the
-            same search, but a plan run for a moment and replanned (the navigator's) then
-            leaves at full speed and slows only in an edge's last step.
+            goal), instead of equal pieces (:func:`split_edges`): the same step counts, costs
+            and heuristic (the interior points move, so among movers the safety checks and
+            the answer may differ), but a plan run for a moment and replanned (the
+            navigator's) then leaves at full speed and slows only in an edge's last step.
 
         Returns
         -------
