@@ -115,3 +115,15 @@ def test_a_leading_cut_takes_whole_steps_from_one_end():
     assert np.array_equal(cut.inner[3:], equal.inner[3:])  # equal pieces where lead is 0
     poses = np.vstack([verts, cut.inner])
     assert np.all(metric_distance(poses[cut.src], poses[cut.dst], 0.3) <= step * (1 + 1e-12))
+
+
+def test_a_leading_cut_leaves_no_hair_of_a_step():
+    """An edge a hair (1e-10 m) over two whole steps keeps equal pieces: whole steps would
+    leave a last piece of 1e-10 m, a step the robot stands in."""
+    from gfuzzy.timespace.spacetime import leading_fractions
+
+    k, j = np.array([3, 3]), np.array([1, 2])
+    hair = np.full(2, 0.5 + 1e-10)
+    np.testing.assert_allclose(leading_fractions(j / k, j, k, hair, 0.25, np.ones(2)), j / k)
+    some = np.full(2, 0.52)  # a real remainder: whole steps from the first end
+    np.testing.assert_allclose(leading_fractions(j / k, j, k, some, 0.25, np.ones(2)), j * 0.25 / 0.52)

@@ -171,7 +171,12 @@ def parse_opts(items):
     for item in items or []:
         key, _, val = item.partition("=")
         default = getattr(NavOptions(), key)
-        out[key] = float(val) if default is None else type(default)(val)
+        if isinstance(default, bool):  # bool("False") is True
+            if val.lower() not in ("true", "false", "1", "0"):
+                raise SystemExit(f"--opt {item}: expected true or false")
+            out[key] = val.lower() in ("true", "1")
+        else:
+            out[key] = float(val) if default is None else type(default)(val)
     return out
 
 

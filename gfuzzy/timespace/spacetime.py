@@ -420,7 +420,9 @@ def leading_fractions(frac: FloatArray, j: IntArray, k: IntArray, length: FloatA
     equal pieces' ``j / k``) where ``lead`` is 0 or whole steps would not leave a
     remainder (the extra piece of :func:`gfuzzy.poses.split_counts`'s rounding rule).
     Every piece stays at most ``step_len`` long."""
-    whole = (k - 1) * step_len < length * (1 - 1e-12)
+    # an absolute margin: a length a hair over whole steps would leave a remainder of
+    # 1e-13 m, a step the robot does not move in (a wait to :mod:`gfuzzy.navigation.brisk`)
+    whole = (k - 1) * step_len < length - 1e-9
     safe = np.where(length > 0, length, 1.0)
     out = np.where((lead > 0) & whole, j * step_len / safe, frac)
     return np.where((lead < 0) & whole, 1.0 - (k - j) * step_len / safe, out)
