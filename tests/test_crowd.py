@@ -259,7 +259,8 @@ def test_crowd_command_navigator_visible(tmp_path, workers):
     ["--humans", "-1"], ["--episodes", "0"], ["--kinematics", "unicycle", "--policy", "orca"],
     ["--visible", "--policy", "oracle"],
     ["--scenario", "hall"], ["--fov", "0"], ["--noise", "-0.1"], ["--workers", "-1"], ["--time-budget", "0"],
-    ["--path-space", "-1"], ["--path-space", "nan"], ["--personal-space", "inf"], ["--reverse"],
+    ["--path-space", "-1"], ["--path-space", "nan"], ["--personal-space", "inf"], ["--reverse"], ["--dt", "0"],
+    ["--dt", "nan"],
 ])  # fmt: skip
 def test_crowd_command_refuses_bad_arguments_in_one_line(tmp_path, flags):
     out = tmp_path / "x.csv"
@@ -279,6 +280,17 @@ def test_crowd_command_takes_the_navigators_full_speed_option():
     off = _setting(parser.parse_args(["crowd", "--humans", "2"]))[1]
     on = _setting(parser.parse_args(["crowd", "--humans", "2", "--full-speed"]))[1]
     assert not off.full_speed and on.full_speed
+
+
+def test_crowd_command_takes_the_navigators_time_step():
+    import argparse
+
+    from gfuzzy.cli.crowds import _setting, add_crowd
+
+    parser = argparse.ArgumentParser()
+    add_crowd(parser.add_subparsers())
+    assert _setting(parser.parse_args(["crowd", "--humans", "2"]))[1].dt is None  # the robot's default
+    assert _setting(parser.parse_args(["crowd", "--humans", "2", "--dt", "0.05"]))[1].dt == 0.05
 
 
 def test_the_oracle_plans_on_the_time_step_it_is_given(roadmap, monkeypatch):

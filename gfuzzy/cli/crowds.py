@@ -45,6 +45,8 @@ def add_crowd(sub) -> None:
     c.add_argument("--path-space", type=float, default=1.25, metavar="SECONDS",
                    help="how far ahead (s) the navigator keeps off the way people are about to walk, when that "
                         "costs little (default 1.25, 0: off)")  # fmt: skip
+    c.add_argument("--dt", type=float, default=None,
+                   help="the navigator's search time step (s; default 0.1, a differential drive's 0.05)")
     c.add_argument("--full-speed", action="store_true",
                    help="the navigator runs its plans at full speed up to their first wait (NavOptions.full_speed)")
     c.add_argument("-o", "--output", metavar="RESULTS.csv", help="one row per episode and policy")
@@ -83,6 +85,8 @@ def _setting(args):
                         ("--personal-space", args.personal_space), ("--path-space", args.path_space)):  # fmt: skip
         if not math.isfinite(value):
             raise BadInput(f"gfuzzy crowd: {flag} must be a finite number, got {value:g}")
+    if args.dt is not None and not (math.isfinite(args.dt) and args.dt > 0):
+        raise BadInput(f"gfuzzy crowd: --dt must be a positive number, got {args.dt:g}")
     sense = math.inf if args.sense is None else args.sense
     if args.reverse and args.kinematics != "unicycle":
         raise BadInput("gfuzzy crowd: --reverse needs --kinematics unicycle")
@@ -92,7 +96,8 @@ def _setting(args):
         setting = CrowdSetting(args.scenario, humans, args.visible, args.crowd, args.kinematics, sensor,
                                not args.steady_goals, args.reverse)  # fmt: skip
         options = NavOptions(time_budget=args.time_budget, personal_space=args.personal_space,
-                             path_space=args.path_space, budget_clock=args.budget_clock, full_speed=args.full_speed)
+                             path_space=args.path_space, budget_clock=args.budget_clock, full_speed=args.full_speed,
+                             dt=args.dt)  # fmt: skip
     except InputError as exc:
         raise BadInput(f"gfuzzy crowd: {exc}") from None
     policies = args.policy or (["navigator", "orca"] + ([] if args.visible else ["oracle"]))
