@@ -289,7 +289,7 @@ def test_crowd_command_takes_the_navigators_time_step():
 
     parser = argparse.ArgumentParser()
     add_crowd(parser.add_subparsers())
-    assert _setting(parser.parse_args(["crowd", "--humans", "2"]))[1].dt is None  # the robot's default
+    assert _setting(parser.parse_args(["crowd", "--humans", "2"]))[1].dt == 0.1
     assert _setting(parser.parse_args(["crowd", "--humans", "2", "--dt", "0.05"]))[1].dt == 0.05
 
 

@@ -293,21 +293,3 @@ def test_a_last_plan_sooner_by_less_than_the_soft_costs_is_not_kept(open_floor_d
     # without the path space its cost is not owed: the last plan is kept
     bare.step(0.25, again.at(0.25), person)
     assert bare.last.mode == NavMode.KEPT
-
-
-def test_a_differential_drive_searches_at_its_own_finer_time_step_by_default(open_floor):
-    """Every turn and lane of a unicycle's plan takes whole steps: by default its search runs at
-    ``DRIVE_STEP`` (0.05 s), a holonomic robot's at ``STEP`` (0.1 s); a step given is kept."""
-    from gfuzzy.navigation.navtypes import DRIVE_STEP, STEP
-    from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
-
-    sc, rm = open_floor
-    drive = Navigator(sc, rm, GOAL)
-    assert drive.options.dt == DRIVE_STEP == 0.05
-    assert drive._kept.options.dt == DRIVE_STEP  # the graph the search runs on is cut at it
-    assert Navigator(sc, rm, GOAL, NavOptions(dt=0.1)).options.dt == 0.1
-    doc = {"version": 1, "name": "open-floor-disc", "bounds": [0, 0, 10, 6], "robot": {"disc": 0.3, "vmax": 1.0},
-           "obstacles": [], "movers": [], "queries": []}  # fmt: skip
-    holo = parse_scene(doc, "<open-floor-disc>")
-    nav = Navigator(holo, build_roadmap(holo, RoadmapOptions(vertices=60, seed=3)), GOAL[:2])
-    assert nav.options.dt == STEP == 0.1

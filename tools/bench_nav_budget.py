@@ -176,7 +176,7 @@ def parse_opts(items):
                 raise SystemExit(f"--opt {item}: expected true or false")
             out[key] = val.lower() in ("true", "1")
         else:
-            out[key] = float(val) if default is None else type(default)(val)
+            out[key] = type(default)(val)
     return out
 
 

@@ -45,8 +45,7 @@ def add_crowd(sub) -> None:
     c.add_argument("--path-space", type=float, default=1.25, metavar="SECONDS",
                    help="how far ahead (s) the navigator keeps off the way people are about to walk, when that "
                         "costs little (default 1.25, 0: off)")  # fmt: skip
-    c.add_argument("--dt", type=float, default=None,
-                   help="the navigator's search time step (s; default 0.1, a differential drive's 0.05)")
+    c.add_argument("--dt", type=float, default=0.1, help="the navigator's search time step (s; default 0.1)")
     c.add_argument("--full-speed", action="store_true",
                    help="the navigator runs its plans at full speed up to their first wait (NavOptions.full_speed)")
     c.add_argument("-o", "--output", metavar="RESULTS.csv", help="one row per episode and policy")
@@ -85,7 +84,7 @@ def _setting(args):
                         ("--personal-space", args.personal_space), ("--path-space", args.path_space)):  # fmt: skip
         if not math.isfinite(value):
             raise BadInput(f"gfuzzy crowd: {flag} must be a finite number, got {value:g}")
-    if args.dt is not None and not (math.isfinite(args.dt) and args.dt > 0):
+    if not (math.isfinite(args.dt) and args.dt > 0):
         raise BadInput(f"gfuzzy crowd: --dt must be a positive number, got {args.dt:g}")
     sense = math.inf if args.sense is None else args.sense
     if args.reverse and args.kinematics != "unicycle":

@@ -117,8 +117,7 @@ def _add_navigate(sub) -> None:
     v.add_argument("--occlusion", action="store_true", help="static obstacles hide the movers behind them")
     v.add_argument("--sense", type=float, help="range in metres within which movers are seen (default: all)")
     v.add_argument("--max-time", type=float, default=120.0, help="give up this long after t0 (default 120 s)")
-    v.add_argument("--dt", type=float, default=None,
-                   help="time step of the replanning search (default 0.1; 0.05 for a differential drive)")
+    v.add_argument("--dt", type=float, default=0.1, help="time step of the replanning search (default 0.1)")
     v.add_argument("--time-budget", type=float, default=0.1, help="seconds one replan may take (default 0.1)")
     v.add_argument("--log-every", type=int, default=4, help="keep every k-th replan's predictions in the file (default 4)")
     v.add_argument("--backend", choices=("compiled", "reference"), default="compiled",

@@ -54,7 +54,7 @@ from .brisk import brisk
 from .drivenav import drive_evasion, kept_plan, rest_of, sooner_plan
 from .evasion import holonomic_evasion
 from .lookout import Lookout
-from .navtypes import MOTION_SAMPLE, NavMode, NavStep, default_step, sample_loss
+from .navtypes import MOTION_SAMPLE, NavMode, NavStep, sample_loss
 from .pathspace import STILL_SPEED, PathSpace, WallCheck
 from .swerve import swerve_rates
 from .timedfield import PAIR_SECONDS, PIECE_WORK, _OutOfTime, _TimedField  # noqa: F401 (PIECE_WORK, PAIR_SECONDS: kept importable here)
@@ -88,10 +88,9 @@ class NavOptions:
 
     Attributes
     ----------
-    dt : float or None
-        Time step of the search (s); None: :func:`.navtypes.default_step` (0.1, a differential
-        drive's 0.05: its turns and lanes each take whole steps). Larger than the planner's 0.07
-        for a holonomic robot: a replan must be fast, and the plan is redone every period anyway.
+    dt : float
+        Time step of the search (s). Larger than the planner's 0.07: a replan must be fast,
+        and the plan is redone every period anyway.
     prediction_horizon : float
         How long (s) an observed person is predicted to walk on at constant velocity.
     uncertainty_growth : float
@@ -186,7 +185,7 @@ class NavOptions:
         Seconds a side may go unseen before the robot (``fov`` < 360) looks there.
     """
 
-    dt: float | None = None
+    dt: float = 0.1
     prediction_horizon: float = 5.0
     uncertainty_growth: float = 0.1
     reference_speed: float = 1.0
@@ -221,8 +220,8 @@ class NavOptions:
             raise InputError(f"budget_clock must be one of {', '.join(BUDGET_CLOCKS)}, got {self.budget_clock!r}")
         if self.backend not in BACKENDS:
             raise InputError(f"backend must be one of {', '.join(BACKENDS)}, got {self.backend!r}")
-        for name in ("prediction_horizon", "reference_speed", "slice", "time_budget", "plan_slack", "evasion_time", "cover",
-                     "drive_lookahead", *(("dt",) if self.dt is not None else ())):
+        for name in ("dt", "prediction_horizon", "reference_speed", "slice", "time_budget", "plan_slack", "evasion_time", "cover",
+                     "drive_lookahead"):
             check_number(name, getattr(self, name))
         for name in ("uncertainty_growth", "safety_buffer", "personal_space", "personal_space_cost", "path_space",
                      "path_space_cost", "social_horizon", "stationary_hold", "goal_tolerance", "commitment",
@@ -276,9 +275,10 @@ class Navigator(PathSpace):
 
     def __init__(self, scene: Scene, roadmap: Roadmap, goal, options: NavOptions | None = None):
         roadmap.check_scene(scene)
+        self.options = opts = options or NavOptions()
+        self.scene = scene
+        self.roadmap = roadmap
         self.robot = robot = scene.robot
-        self.options = opts = default_step(options or NavOptions(), robot)
-        self.scene, self.roadmap = scene, roadmap
         self.geometry = StaticGeometry(scene)
         goal = np.asarray(goal, dtype=float).reshape(-1)
         if goal.shape != (robot.dof,) or not np.all(np.isfinite(goal)):

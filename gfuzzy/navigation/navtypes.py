@@ -2,35 +2,18 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from enum import Enum
 
 import numpy as np
 
 from ..typed import FloatArray
 
-__all__ = ["NavMode", "NavStep", "MOTION_SAMPLE", "sample_loss", "default_step", "STEP", "DRIVE_STEP"]
+__all__ = ["NavMode", "NavStep", "MOTION_SAMPLE", "sample_loss"]
 
 #: Seconds between two samples at which a motion is checked against people walking on at
 #: constant velocity (the fallbacks, a kept plan); :func:`sample_loss` bounds the rest.
 MOTION_SAMPLE = 0.05
-
-
-#: The navigator's search time step (s) by default (``NavOptions.dt`` None).
-STEP = 0.1
-#: A differential drive's: every turn and every lane of its plans takes a whole number of
-#: steps, and a plan has many of them; on the crowd crossing with 5 people it arrived
-#: sooner and collided less at this step than at 0.1 (docs/navigator-experiments.md,
-#: *The unicycle's time step*).
-DRIVE_STEP = 0.05
-
-
-def default_step(options, robot):
-    """``options`` (a ``NavOptions``) with its time step set: ``options.dt``, or when None,
-    :data:`DRIVE_STEP` for a differential drive and :data:`STEP` otherwise."""
-    if options.dt is not None:
-        return options
-    return replace(options, dt=DRIVE_STEP if robot.unicycle else STEP)
 
 
 def sample_loss(robot_speed, person_speed):
