@@ -681,7 +681,7 @@ def _drive(setting, policy, index, lay, act, tracks, world, n_steps, extra) -> E
             truth = np.column_stack([here, (here - prev) / dt, radius]).reshape(-1, 5)
         obs = sensor.observe(t, pose, heading, truth)
         c0 = time.perf_counter()
-        traj = act(t, pose, obs)
+        traj = act(t, pose, obs, sensor.unknown) if hasattr(act, "nav") else act(t, pose, obs)
         seconds.append(time.perf_counter() - c0)
         if hasattr(act, "nav"):
             m = str(act.nav.last.mode)

@@ -76,8 +76,8 @@ class NavigatorPolicy:
     def __init__(self, nav):
         self.nav = nav
 
-    def __call__(self, t, pose, obs) -> Trajectory:
-        return self.nav.step(t, pose, obs)
+    def __call__(self, t, pose, obs, unknown=None) -> Trajectory:
+        return self.nav.step(t, pose, obs, unknown)
 
 
 class OraclePolicy:

@@ -58,6 +58,7 @@ from .navtypes import MOTION_SAMPLE, NavMode, NavStep, sample_loss
 from .pathspace import STILL_SPEED, PathSpace, WallCheck
 from .swerve import swerve_rates
 from .timedfield import PAIR_SECONDS, PIECE_WORK, _OutOfTime, _TimedField  # noqa: F401 (PIECE_WORK, PAIR_SECONDS: kept importable here)
+from .unknown import unknown_growth, unknown_positions
 
 __all__ = ["NavMode", "NavOptions", "NavStep", "Navigator"]
 
@@ -70,9 +71,8 @@ REACH_SAMPLES = 48
 #: First guess (s) of the predictions' set-up per person (then measured per navigator).
 PERSON_SECONDS = 150e-6
 
-#: The answers a look may replace (a fresh plan keeping the margins, or one kept): never
-#: the relaxed search's or a fallback's, which answer a situation the search could not (the evasive motion is scored over
-#: ``evasion_time``, a look is checked over ``lookout.LOOK_CHECK`` only).
+#: The answers a look may replace (a fresh plan keeping the margins, or one kept): never the relaxed search's or a
+#: fallback's, which answer what the search could not (the evasive motion is scored over ``evasion_time``, a look over ``lookout.LOOK_CHECK``).
 LOOK_OVER = (NavMode.PLAN, NavMode.CLOSE, NavMode.KEPT)
 
 #: Why a search did not run: the goal is unsafe at every step it could be reached.
@@ -306,6 +306,7 @@ class Navigator(PathSpace):
         self._walls = WallCheck(scene)
         disc = robot.shape == "disc" and robot.dof == 2  # its view follows its motion
         self._lookout = Lookout(opts.fov, opts.look_after, goal) if opts.fov < 360 and disc else None
+        self._unknown = np.zeros((0, 2))  # where the people of unknown velocity stand (this call)
         self._build_base()
         if opts.backend == "compiled":  # load the compiled kernels now, not inside a step's budget
             from ..timespace.search_kernel import warm
@@ -374,8 +375,7 @@ class Navigator(PathSpace):
         n_slices = int(math.ceil(opts.prediction_horizon / opts.slice - 1e-9))
         tau = np.arange(n_slices) * opts.slice
         speed = np.hypot(obs[:, 2], obs[:, 3])
-        # uncertainty grows with how far a person may stray from the straight walk: with
-        # their speed (someone standing is where they stand; a full-speed walker may turn)
+        # uncertainty grows with their speed (someone standing is where they stand; a walker may turn)
         rate = self._growth_rate(speed) + swerve_rates(obs, opts.swerve_growth)
         space = opts.personal_space if personal else 0.0
         full = self.mover_clearance + opts.safety_buffer + space + rate[:, None] * tau[None, :]
@@ -383,7 +383,7 @@ class Navigator(PathSpace):
             full = np.full_like(full, self.mover_clearance)
         gap = self._gap(pose, obs)  # (k,) beyond the people's own radius
         allowed = np.maximum(gap - self._step_margin(speed) - 1e-6, 0.0)
-        return np.minimum(full, allowed[:, None] + self.vplan * tau[None, :])
+        return np.minimum(full, allowed[:, None] + self.vplan * tau[None, :]) + (not relaxed) * unknown_growth(self._unknown, obs, tau).T
 
     def _gap(self, pose: FloatArray, obs: FloatArray) -> FloatArray:
         if len(obs) == 0:
@@ -474,11 +474,9 @@ class Navigator(PathSpace):
         vanish = np.minimum(presence, obs[:, 6]) if obs.shape[1] > 6 else presence
         a = obs[:, :2] + vel * np.minimum(appear, opts.prediction_horizon)[:, None]
         b = obs[:, :2] + vel * np.minimum(vanish, opts.prediction_horizon)[:, None]
-        movers = tuple(
-            Mover(f"p{i}", "disc", float(radius[i]), (0.0, 0.0),
-                  trajectory=np.array([[t + appear[i], a[i, 0], a[i, 1]], [t + vanish[i], b[i, 0], b[i, 1]]]))
-            for i in range(k)
-        )  # fmt: skip
+        movers = tuple(Mover(f"p{i}", "disc", float(radius[i]), (0.0, 0.0),
+                             trajectory=np.array([[t + appear[i], a[i, 0], a[i, 1]], [t + vanish[i], b[i, 0], b[i, 1]]]))
+                       for i in range(k))  # fmt: skip
         extra = float(np.max(infl - first[:, None], initial=0.0))  # the ghosts' is not monotone
         scene = replace(self.scene, robot=self._pred_robot, movers=movers)
         # built with the largest extra margin, so that its broad-phase boxes hold every
@@ -491,7 +489,7 @@ class Navigator(PathSpace):
         return field_
 
     # ------------------------------------------------------------------- step
-    def step(self, t: float, pose, observations) -> Trajectory:
+    def step(self, t: float, pose, observations, unknown=None) -> Trajectory:
         """Replan from ``pose`` at time ``t`` given what is seen now.
 
         Parameters
@@ -501,6 +499,8 @@ class Navigator(PathSpace):
             The robot's pose now (need not be a roadmap vertex).
         observations : (k, 5) float
             ``[x, y, vx, vy, radius]`` per moving obstacle seen at ``t`` (k may be 0).
+        unknown : (k,) bool, optional
+            Whose velocity is not known (``Sensor.unknown``): walkers of unknown direction (:mod:`.unknown`).
 
         Returns
         -------
@@ -522,6 +522,7 @@ class Navigator(PathSpace):
         obs = np.asarray(observations, dtype=float).reshape(-1, 5) if np.size(observations) else np.zeros((0, 5))
         if not np.all(np.isfinite(obs)) or np.any(obs[:, 4] < 0):
             raise InputError("observations must be finite rows [x, y, vx, vy, radius >= 0]")
+        self._unknown = unknown_positions(obs, unknown)
         self.replans += 1
         if self._lookout is not None:
             self._lookout.observe(t, pose)
@@ -547,8 +548,7 @@ class Navigator(PathSpace):
         if opts.full_speed and traj is not None and mode in (NavMode.PLAN, NavMode.CLOSE):
             traj = brisk(self, t, pose, traj, obs, self._kept_inflation(pose, obs, infl, mode), ghosts)
         if traj is None and len(obs) and not found.out_of_time and self._clock() < deadline:
-            # blocked by the margins (someone standing beside the goal, a narrow gap): try
-            # once more with the people's discs as they are, plus the mover clearance only
+            # blocked by the margins (someone beside the goal, a narrow gap): the discs as they are, the mover clearance only
             traj = self._relaxed(t, pose, obs, found, deadline)
             mode = NavMode.RELAXED
         if traj is None:
@@ -715,7 +715,7 @@ class Navigator(PathSpace):
             d = np.hypot(rel[..., 0], rel[..., 1]) - self.robot.radius - obs[:, 4]
         else:
             d = mover_distance(self._pred_robot, pts[..., None, :], "disc", obs[:, 4], (0.0, 0.0), pos)
-        return d - self.mover_clearance
+        return d - self.mover_clearance - unknown_growth(self._unknown, obs, times - times[0])
 
     def _direct(self, t: float, pose: FloatArray, obs: FloatArray) -> Trajectory | None:
         """Straight to the goal at full speed, if it is statically free and keeps clear of

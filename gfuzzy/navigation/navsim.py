@@ -176,7 +176,7 @@ def simulate(
             break
         obs = eyes(t, pose)
         c0 = time.perf_counter()
-        traj = nav.step(t, pose, obs)
+        traj = nav.step(t, pose, obs, eyes.unknown())
         seconds.append(time.perf_counter() - c0)
         mode = str(nav.last.mode if nav.last is not None else NavMode.PLAN)
         modes[mode] = modes.get(mode, 0) + 1
@@ -239,6 +239,10 @@ class _Eyes:
         if self.sensor is None:
             return observe(self.scene, t, pose, self.sense)
         return self.sensor.observe(t, pose, self.heading, observe(self.scene, t, pose))
+
+    def unknown(self):
+        """Who of the last observation has a velocity not known yet (None: the ideal sensor)."""
+        return None if self.sensor is None else self.sensor.unknown
 
     def moved(self, before: FloatArray, after: FloatArray) -> None:
         self.heading = _heading(before, after, self.heading)

@@ -239,6 +239,11 @@ class Tracker:
         grown = self.radius + np.minimum(self._growth_rates() * (t - self.seen), UNKNOWN_CAP)
         return np.column_stack([self.pos, self.vel, grown]).reshape(-1, 5)
 
+    def unknown(self) -> BoolArray:
+        """(m,) True for each track of the last :meth:`update` whose velocity is not known
+        (seen once: it is reported standing, but may walk anywhere)."""
+        return self.hits == 1
+
     def _gains(self, n: int) -> tuple[float, float]:
         """(alpha, beta) at a track's ``n``-th sighting: the expanding-memory filter's
         (the least-squares line through the n positions), never below the steady state."""
@@ -281,7 +286,9 @@ class Sensor:
     Notes
     -----
     Call :meth:`observe` once per period, in time order: the tracker (estimated
-    velocities) remembers what it saw before.
+    velocities) remembers what it saw before. After each call ``unknown`` (m,) marks the
+    people observed whose velocity is not known yet (seen once); hand it to
+    :meth:`gfuzzy.Navigator.step`.
     """
 
     scene: Scene
@@ -292,6 +299,7 @@ class Sensor:
         self._rng = create_rng(o.seed)
         self._tracker = Tracker(o.noise, o.coast, o.gate, o.coast_growth)
         self._shapes = _obstacle_shapes(self.scene) if o.occlusion else []
+        self.unknown = np.zeros(0, dtype=bool)
 
     def visible(self, pose: FloatArray, heading: float, truth: FloatArray) -> BoolArray:
         """(k,) which of the true discs ``[x, y, vx, vy, r]`` (k, 5) the robot at ``pose``
@@ -338,5 +346,8 @@ class Sensor:
             seen = seen.copy()
             seen[:, :2] += self._rng.normal(0.0, o.noise, size=(len(seen), 2))
         if o.velocity == "exact":
+            self.unknown = np.zeros(len(seen), dtype=bool)
             return seen
-        return self._tracker.update(t, seen[:, [0, 1, 4]])
+        out = self._tracker.update(t, seen[:, [0, 1, 4]])
+        self.unknown = self._tracker.unknown()
+        return out
