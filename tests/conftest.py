@@ -1,5 +1,5 @@
 """Shared fixtures: scene files in a temporary folder, the repository root, the CLI, and the
-small scenes (line, door) that several test modules plan on."""
+small scenes (line, door, the open square) that several test modules plan on."""
 
 from __future__ import annotations
 
@@ -103,3 +103,16 @@ def line_scene(tmp_path):
 def door():
     scene = _scene(DOOR)
     return scene, build_roadmap(scene, RoadmapOptions(vertices=80, seed=2))
+
+
+@pytest.fixture(scope="module")
+def open_square():
+    """A 10 x 10 m room without obstacles, a disc robot (radius 0.3, vmax 1) from (0, -4) to
+    (0, 4), and a 150-vertex roadmap: the navigator's tests' open floor."""
+    from gfuzzy.scene.scene import parse_scene
+
+    scene = parse_scene({
+        "version": 1, "name": "open-square", "bounds": [-5.0, -5.0, 5.0, 5.0], "robot": {"disc": 0.3, "vmax": 1.0},
+        "obstacles": [], "movers": [], "queries": [{"name": "q", "start": [0.0, -4.0], "goal": [0.0, 4.0]}],
+    })  # fmt: skip
+    return scene, build_roadmap(scene, RoadmapOptions(vertices=150, seed=3))

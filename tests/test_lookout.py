@@ -7,27 +7,16 @@ import math
 import numpy as np
 import pytest
 
-import gfuzzy
 from gfuzzy.errors import InputError
 from gfuzzy.navigation.lookout import EMPTY_FACTOR, LOOK_SPEED, LOOK_TIME, Lookout, knowing_view
 from gfuzzy.navigation.navigator import Navigator, NavOptions
 from gfuzzy.navigation.navtypes import NavMode
-from gfuzzy.scene.scene import parse_scene
 
 NORTH, SOUTH = math.pi / 2, -math.pi / 2
 
 
 def _angle(a: float, b: float) -> float:
     return abs((a - b + math.pi) % (2 * math.pi) - math.pi)
-
-
-@pytest.fixture(scope="module")
-def open_square():
-    scene = parse_scene({
-        "version": 1, "name": "look", "bounds": [-5.0, -5.0, 5.0, 5.0], "robot": {"disc": 0.3, "vmax": 1.0},
-        "obstacles": [], "movers": [], "queries": [{"name": "q", "start": [0.0, -4.0], "goal": [0.0, 4.0]}],
-    })  # fmt: skip
-    return scene, gfuzzy.build_roadmap(scene, gfuzzy.RoadmapOptions(vertices=150, seed=3))
 
 
 def test_the_back_never_seen_is_looked_at_first_then_only_when_stale():

@@ -33,12 +33,6 @@ def _scene(movers=(), obstacles=(), bounds=(-5.0, -5.0, 5.0, 5.0), start=(0.0, -
 
 
 @pytest.fixture(scope="module")
-def open_square():
-    scene = _scene()
-    return scene, gfuzzy.build_roadmap(scene, gfuzzy.RoadmapOptions(vertices=150, seed=3))
-
-
-@pytest.fixture(scope="module")
 def two_doors():
     """A wall across y = 0 with a door at x = 0 (on the straight line) and one at x = 3."""
     obstacles = [

@@ -6,20 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import gfuzzy
 from gfuzzy.navigation.navigator import Navigator, NavOptions
 from gfuzzy.navigation.sensing import UNKNOWN_CAP, UNKNOWN_GROWTH, Sensor, SensorOptions
 from gfuzzy.navigation.unknown import unknown_growth, unknown_positions
 from gfuzzy.scene.scene import parse_scene
-
-
-@pytest.fixture(scope="module")
-def open_square():
-    scene = parse_scene({
-        "version": 1, "name": "unknown", "bounds": [-5.0, -5.0, 5.0, 5.0], "robot": {"disc": 0.3, "vmax": 1.0},
-        "obstacles": [], "movers": [], "queries": [{"name": "q", "start": [0.0, -4.0], "goal": [0.0, 4.0]}],
-    })  # fmt: skip
-    return scene, gfuzzy.build_roadmap(scene, gfuzzy.RoadmapOptions(vertices=150, seed=3))
 
 
 def test_the_sensor_marks_who_was_seen_once():
