@@ -148,6 +148,31 @@ def test_a_collision_report_tells_how_deep_it_went():
     assert shallow.valid, shallow.reason
 
 
+@pytest.mark.parametrize(
+    "robot, mover, depth",
+    [
+        # a footprint 0.4 x 0.4 about its centre, a person of radius 0.3 whose centre passes
+        # 0.05 m from the robot's centre: 0.15 m inside its outline, 0.45 m deep
+        ({"footprint": [[0.2, 0.2], [-0.2, 0.2], [-0.2, -0.2], [0.2, -0.2]], "vmax": 1.0},
+         {"name": "P", "disc": 0.3, "trajectory": [[0.0, 6.0, 2.0], [20.0, 6.0, 2.0]]}, 0.45),
+        # a disc robot of radius 0.25 whose centre passes 0.1 m inside a 1 x 0.8 cart (its
+        # lower side at y = 1.85): 0.35 m deep
+        ({"disc": 0.25, "vmax": 1.0},
+         {"name": "P", "box": [1.0, 0.8], "trajectory": [[0.0, 6.0, 2.25], [20.0, 6.0, 2.25]]}, 0.35),
+    ],
+)
+def test_an_overlap_with_a_centre_inside_is_reported_in_metres(robot, mover, depth):
+    """A disc's centre inside the other body (a person inside a footprint, a disc robot's
+    centre inside a cart): the deepest overlap is the distance to the outline plus the
+    radius, the depth in metres (it read 1.3 for a person of radius 0.3, a sentinel)."""
+    sc = scene(robot, movers=[mover])
+    heading = 0.0 if "footprint" in robot else None
+    rep = check_trajectory(sc, slide(1.95, heading, t_end=8.0, n=801))
+    assert not rep.valid and rep.reason.startswith("collides with mover 'P'"), rep.reason
+    deepest = float(rep.reason.split("; ")[1].split(" deep")[0])
+    assert abs(deepest - depth) < 0.01, rep.reason
+
+
 def test_the_deepest_overlap_is_the_bodies_own_with_a_mover_clearance():
     """With ``mover_clearance`` > 0 the deepest overlap reported is how far the bodies
     overlap (not that plus the required distance), against the object it is with."""

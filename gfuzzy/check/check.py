@@ -140,8 +140,8 @@ class _World:
         """Signed-ish distance between robot geometries and a shapely geometry."""
         d = shapely.distance(geoms, other)
         if self.robot.shape == "disc":
-            inside = shapely.contains_xy(other, shapely.get_x(geoms), shapely.get_y(geoms))
-            d = np.where(inside, -1.0, d) - self.robot.radius
+            d = _signed(d, other, geoms, shapely.contains_xy(other, shapely.get_x(geoms), shapely.get_y(geoms)))
+            d = d - self.robot.radius
             return d
         if area_of_overlap:
             zero = d <= 0
@@ -190,14 +190,14 @@ class _World:
                 else:
                     d = shapely.distance(geoms, shapely.points(xy[:, 0], xy[:, 1]))
                     inside = shapely.contains_xy(geoms, xy[:, 0], xy[:, 1])
-                    d = np.where(inside, -1.0, d) - mv.radius
+                    d = _signed(d, geoms, shapely.points(xy[:, 0], xy[:, 1]), inside) - mv.radius
             else:
                 w, h = mv.size
                 boxes = shapely.box(xy[:, 0] - w / 2, xy[:, 1] - h / 2, xy[:, 0] + w / 2, xy[:, 1] + h / 2)
                 if self.robot.shape == "disc":
                     d = shapely.distance(geoms, boxes)
                     inside = shapely.contains_xy(boxes, poses[:, 0], poses[:, 1])
-                    d = np.where(inside, -1.0, d) - self.robot.radius
+                    d = _signed(d, boxes, geoms, inside) - self.robot.radius
                 else:
                     d = shapely.distance(geoms, boxes)
                     zero = d <= 0
@@ -336,7 +336,7 @@ def _relative_swept_distance(mv, qa, qb, disc: bool, r: float, body):
         hull = shapely.convex_hull(shapely.multipoints(rel))
         d = shapely.distance(hull, shapely.Point(0.0, 0.0)) - r
         inside = shapely.contains_xy(hull, 0.0, 0.0)
-        d = np.where(inside, -1.0, d)
+        d = _signed(d + r, hull, shapely.Point(0.0, 0.0), inside) - r
     elif mv.shape == "disc":
         d = shapely.distance(shapely.linestrings(np.stack([qa, qb], 1)), body) - mv.radius
     else:
@@ -348,6 +348,20 @@ def _relative_swept_distance(mv, qa, qb, disc: bool, r: float, body):
         if np.any(zero):
             area = shapely.area(shapely.intersection(hull[zero], body[zero]))
             d[zero] = np.where(area > 1e-12, -area, 0.0)
+    return d
+
+
+def _signed(d: FloatArray, regions, points, inside) -> FloatArray:
+    """``d`` (distances from ``points`` to ``regions``, elementwise or broadcast) with the
+    points ``inside`` their region given minus their distance to its boundary: a signed
+    distance, so that an overlap's depth (a disc centred there must move that far, plus
+    its radius, to get out) is reported in metres, not as a sentinel."""
+    d = np.array(d, dtype=float, copy=True).reshape(np.shape(inside))
+    if np.any(inside):
+        regions = np.broadcast_to(np.asarray(regions, dtype=object), d.shape)
+        points = np.broadcast_to(np.asarray(points, dtype=object), d.shape)
+        depth = shapely.distance(shapely.boundary(regions[inside]), points[inside])
+        d[inside] = -np.where(np.isnan(depth), 0.0, depth)  # a point region: no boundary
     return d
 
 
