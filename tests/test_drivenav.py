@@ -293,3 +293,29 @@ def test_a_last_plan_sooner_by_less_than_the_soft_costs_is_not_kept(open_floor_d
     # without the path space its cost is not owed: the last plan is kept
     bare.step(0.25, again.at(0.25), person)
     assert bare.last.mode == NavMode.KEPT
+
+
+def test_the_fan_stops_at_its_share_of_the_budget(open_floor):
+    """Among walls the fan's static checks cost milliseconds a heading: it adds headings
+    only until ``FAN_SHARE`` of the budget (the budget's clock), so the search keeps its
+    time; with the clock already past that, the graph is the roadmap's alone."""
+    from gfuzzy.navigation.navigator import FAN_SHARE, SEARCH_SHARE
+
+    sc, rm = open_floor
+    opts = NavOptions(time_budget=0.1)
+    nav = Navigator(sc, rm, GOAL, opts)
+    pose = np.array(START)
+    full, _ = nav._splice(pose, 0.0)  # no deadline: every heading
+    ticks = [0.0]
+
+    def clock():  # one tick per look at the clock
+        ticks[0] += 0.01
+        return ticks[0]
+
+    nav._clock = clock
+    deadline = SEARCH_SHARE * opts.time_budget  # the step began at 0: the fan's share ends at 0.03
+    some, _ = nav._splice(pose, 0.0, deadline)
+    ticks[0] = 1.0
+    none, _ = nav._splice(pose, 0.0, deadline)
+    assert FAN_SHARE < SEARCH_SHARE
+    assert len(none.poses) < len(some.poses) < len(full.poses)

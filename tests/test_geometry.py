@@ -234,6 +234,80 @@ def test_motion_free_rejects_invalid_ends(world):
     assert world.geometry.motion_free(good, good)
 
 
+# --------------------------------------------------------------------------- a SLAM map
+
+
+@pytest.fixture(scope="module")
+def house():
+    """The bundled small house (a SLAM map, the only obstacle) with its footprint robot."""
+    from helpers import ROOT
+
+    from gfuzzy.scene.scene import load_scene
+
+    return StaticGeometry(load_scene(ROOT / "scenes" / "small-house.yaml"))
+
+
+def _house_points(geo, rng, n):
+    xmin, ymin, xmax, ymax = geo.scene.bounds
+    return np.c_[rng.uniform(xmin, xmax, n), rng.uniform(ymin, ymax, n)]
+
+
+def test_a_maps_disc_bound_never_exceeds_the_clearance_at_any_heading(house, world):
+    """:meth:`StaticGeometry.disc_bound` (the map's distance transform at the circumradius)
+    is a lower bound of the footprint's clearance at every heading: a turn in place there
+    is free. Without maps it has no cheap bound (-inf)."""
+    rng = np.random.default_rng(5)
+    xy = _house_points(house, rng, 500)
+    heads = np.linspace(-math.pi, math.pi, 16, endpoint=False)
+    bound = np.array([house.disc_bound(x, y) for x, y in xy])
+    exact = np.array([[house.clearance1([x, y, h]) for h in heads] for x, y in xy]).min(axis=1)
+    useful = bound > 0
+    assert useful.sum() > 50 and (exact > 0).sum() > useful.sum()  # neither vacuous nor exact
+    assert np.all(bound[useful] <= exact[useful] + 2e-4), np.max(bound[useful] - exact[useful])
+    assert world.geometry.disc_bound(3.0, 2.0) == -math.inf  # polygons, discs and a mesh
+
+
+def test_clearance1_is_the_bounds_and_obstacles_composition(house, world):
+    """The circumradius shortcut of :meth:`StaticGeometry.clearance1` changes no value: it
+    equals min(bounds, obstacles - keep) as computed in full."""
+    rng = np.random.default_rng(6)
+    for geo, poses in ((house, np.c_[_house_points(house, rng, 300), rng.uniform(-3, 3, 300)]),
+                       (world.geometry, world.uniform(rng, 300))):  # fmt: skip
+        for p in poses:
+            full = geo._bounds_clearance1(p)
+            if full > 0:
+                full = min(full, geo.obstacle_clearance(p) - geo.keep)
+            assert geo.clearance1(p) == full, p
+
+
+def test_a_maps_motions_are_certified_as_before_with_fewer_fcl_queries(house):
+    """On a map, :meth:`motion_free` steps by the distance transform where it leaves room
+    and by FCL near the walls: the same decisions as ``motion_clearance >= 0`` (which
+    always asks FCL), every certified motion free at 200 poses along it, and fewer FCL
+    queries."""
+    rng = np.random.default_rng(7)
+    xy = _house_points(house, rng, 3000)
+    starts = np.c_[xy, rng.uniform(-math.pi, math.pi, len(xy))]
+    starts = starts[house.valid(starts)][:150]
+    step = rng.normal(size=(len(starts), 2))
+    step *= (rng.uniform(0.2, 3.0, len(starts)) / np.hypot(*step.T))[:, None]
+    ends = np.c_[starts[:, :2] + step, wrap_angle(starts[:, 2] + rng.uniform(-1.0, 1.0, len(starts)))]
+    quick = full = 0
+    certified = 0
+    for a, b in zip(starts, ends, strict=True):
+        c0 = house.calls
+        free = house.motion_free(a, b)
+        c1 = house.calls
+        assert free == (house.motion_clearance(a, b) >= 0), (a, b)
+        quick, full = quick + c1 - c0, full + house.calls - c1
+        if free:
+            certified += 1
+            on = interpolate_poses(a, b, np.linspace(0.0, 1.0, 200))
+            assert np.all(house.clearance(on) >= 0), (a, b)
+    assert 20 < certified < len(starts)
+    assert quick < 0.8 * full, (quick, full)
+
+
 # --------------------------------------------------------------------------- movers
 
 PAIRS = [("disc", "disc"), ("disc", "box"), ("box", "disc"), ("box", "box")]

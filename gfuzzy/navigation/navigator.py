@@ -66,6 +66,10 @@ log = logging.getLogger(__name__)
 
 #: Share of ``time_budget`` the search may use; the rest is the fallback's.
 SEARCH_SHARE = 0.75
+#: Share of ``time_budget`` after which a differential drive's two-leg motions
+#: (``NavOptions.fan``) are no longer added: among walls their static checks cost
+#: milliseconds a heading, and the search must still have its time.
+FAN_SHARE = 0.3
 #: First guess (s) of the predictions' set-up per person (then measured per navigator).
 PERSON_SECONDS = 150e-6
 
@@ -329,13 +333,15 @@ class Navigator(PathSpace, Prediction):
         self._g_id = -1
         self._fan = Fan() if self.robot.unicycle and opts.fan else None
 
-    def _splice_ends(self, pose: FloatArray, ahead=()):
-        """(graph, start id, goal id, roadmap distance) of the kept graph with ``pose`` in."""
+    def _splice_ends(self, pose: FloatArray, ahead=(), fan_until: float = math.inf):
+        """(graph, start id, goal id, roadmap distance) of the kept graph with ``pose`` in
+        (a differential drive's two-leg motions added until ``fan_until`` on the budget's clock)."""
         start = pose.copy()
         if self.robot.dof == 3:
             start[2] = wrap_angle(start[2])
         if self.robot.unicycle:
-            qg = self._kept.kept.splice(self._planner, start, fan_options=self._fan)
+            expired = None if fan_until == math.inf else (lambda: self._clock() > fan_until)
+            qg = self._kept.kept.splice(self._planner, start, fan_options=self._fan, expired=expired)
         else:
             qg = self._kept.splice(self._planner, start, ahead=ahead, lead=True)  # leaves at full speed
         return qg.graph, qg.s_id, qg.g_id, qg.roadmap_distance
@@ -346,15 +352,17 @@ class Navigator(PathSpace, Prediction):
         :class:`gfuzzy.timespace.unicycle.UnicycleGraph`)."""
         return float(self._splice_ends(np.asarray(pose, dtype=float).reshape(-1))[3])
 
-    def _splice(self, pose: FloatArray, t: float = -math.inf):
-        """The kept graph with ``pose`` spliced in: (graph, start id), or (None, reason).
+    def _splice(self, pose: FloatArray, t: float = -math.inf, deadline: float = math.inf):
+        """The kept graph with ``pose`` spliced in: (graph, start id), or (None, reason);
+        ``deadline``: the search's (the two-leg motions stop at ``FAN_SHARE`` of the budget).
 
         The robot is usually inside an edge of its last plan: it also connects to the
         vertices that plan was heading for (the nearest ones may all lie behind it, and
         going back to one of them before going on would make it dither).
         """
         ahead = [v for ta, v in self._ahead if ta > t + 1e-9]
-        graph, s_id, g_id, rd = self._splice_ends(pose, ahead)
+        fan_until = deadline - (SEARCH_SHARE - FAN_SHARE) * self.options.time_budget
+        graph, s_id, g_id, rd = self._splice_ends(pose, ahead, fan_until)
         self._g_id = g_id
         if not math.isfinite(rd):
             return None, "the robot's pose connects to no roadmap vertex that leads to the goal"
@@ -528,7 +536,7 @@ class Navigator(PathSpace, Prediction):
             if before is not None and before.graph is not None:
                 graph, s_id = before.graph, before.start
             else:
-                graph, s_id = self._splice(pose, t)
+                graph, s_id = self._splice(pose, t, deadline)
             if graph is None:
                 return _Searched(None, s_id)
             h0 = float(graph.heuristic[s_id])

@@ -38,6 +38,8 @@ def turn_free(geometry, x: float, y: float, h: float, dh: float) -> bool:
     robot = geometry.robot
     if robot.shape == "disc":
         return geometry.clearance1([x, y]) >= 0
+    if geometry.disc_bound(x, y) > 0:  # the circumscribed disc is free: so is every heading
+        return True
     n = max(1, int(math.ceil(abs(dh) / _ARC)))
     prev = [x, y, wrap_angle(h)]
     for i in range(1, n + 1):
@@ -217,7 +219,7 @@ class Fan:
                 raise InputError(f"Fan.distances[{i}] must be greater than the one before, got {d!r}")
 
 
-def fan(ex, geometry, start, s_id: int, goal, g_id: int, options: Fan) -> None:
+def fan(ex, geometry, start, s_id: int, goal, g_id: int, options: Fan, expired=None) -> None:
     """Join ``start`` (node ``s_id``) to ``goal`` (node ``g_id``) through two-leg motions.
 
     For each heading ``start[2] + offset`` (the turn's sweep free) a straight lane leaves the
@@ -227,11 +229,15 @@ def fan(ex, geometry, start, s_id: int, goal, g_id: int, options: Fan) -> None:
     among people detours with few turns: the roadmap's lanes zigzag, each vertex a turn.
 
     ``ex`` is the query's :class:`gfuzzy.timespace.unicycle._Extras` (``node``, ``turn``,
-    ``lane``): the pieces go into it.
+    ``lane``): the pieces go into it. ``expired`` (a callable, optional): once it returns
+    True no further heading is tried (the offsets are in order of preference, straight
+    ahead first); among walls each heading's static checks cost milliseconds.
     """
     sx, sy, sh = (float(v) for v in start)
     gx, gy, gh = (float(v) for v in goal)
     for off in options.offsets:
+        if expired is not None and expired():
+            return
         h = sh + off
         if off != 0.0 and not turn_free(geometry, sx, sy, sh, off):
             continue

@@ -543,13 +543,14 @@ class UnicycleGoal:
     connect_k: int
     steps: object = None
 
-    def splice(self, planner, start: FloatArray, exact: bool = True, fan_options=None) -> UnicycleGraph:
+    def splice(self, planner, start: FloatArray, exact: bool = True, fan_options=None, expired=None) -> UnicycleGraph:
         """This graph with ``start`` (``[x, y, heading]``, heading wrapped) joined in.
 
         ``exact``: the steps from the start to every point by Dijkstra (a fresh plan's
         safety windows); otherwise the straight distance over a step's length, a cheaper
         lower bound (the navigator's). ``fan_options`` (:class:`gfuzzy.timespace.drive.Fan`):
-        also the two-leg motions of :func:`gfuzzy.timespace.drive.fan` (the navigator's).
+        also the two-leg motions of :func:`gfuzzy.timespace.drive.fan` (the navigator's),
+        as many of them as are certified before ``expired()`` (a callable; None: all).
         """
         geo, robot = planner.geometry, planner.robot
         N = len(self.poses)
@@ -577,7 +578,7 @@ class UnicycleGoal:
                 ex.turn(c, self.g_id, d2)
                 ex.lane(a, c)
         if fan_options is not None:
-            fan(ex, geo, start, s_id, self.goal, self.g_id, fan_options)
+            fan(ex, geo, start, s_id, self.goal, self.g_id, fan_options, expired)
         new = np.asarray(ex.poses, dtype=float).reshape(-1, 3)
         x = len(new)
         xp = np.asarray(ex.pieces, dtype=float).reshape(-1, 4)
