@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..poses import metric_distance
+from ..timespace.drive import reach_fraction
 from ..trajectory import Trajectory
 from ..typed import FloatArray
 from .navtypes import MOTION_SAMPLE
@@ -84,13 +85,10 @@ def holonomic_evasion(nav: Navigator, t: float, pose: FloatArray, obs: FloatArra
     free = np.zeros(len(vel), dtype=bool)
     free[0] = True
     for c in range(1, len(vel)):
-        for frac in (1.0, 0.5, 0.25):
-            end = pose.copy()
-            end[:2] += vel[c] * T * frac
-            if nav.geometry.bounds_clearance(end[None])[0] >= 0 and nav.geometry.motion_free(pose, end):
-                free[c] = True
-                move_time[c] = T * frac
-                break
+        frac = reach_fraction(nav.geometry, pose, vel[c] * T)
+        if frac is not None:
+            free[c] = True
+            move_time[c] = T * frac
     ends = np.repeat(pose[None], len(vel), axis=0)
     ends[:, :2] += vel * move_time[:, None]
     tau = times - t

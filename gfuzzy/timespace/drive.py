@@ -17,7 +17,7 @@ from ..poses import wrap_angle
 from ..settings import SPEED_SAFETY
 from ..typed import FloatArray
 
-__all__ = ["turn_path", "drive_rows", "evasions", "turn_free", "pick_turn", "fan", "Fan", "SAME_HEADING"]
+__all__ = ["turn_path", "drive_rows", "evasions", "reach_fraction", "turn_free", "pick_turn", "fan", "Fan", "SAME_HEADING"]
 
 #: A turn's sweep is certified in arcs of at most this (rad): ``motion_free`` turns along
 #: the shorter arc.
@@ -160,15 +160,16 @@ def evasions(geometry, t: float, pose, T: float, cover: float, headings: int, vp
         t_turn = abs(dh) / rate
         turned = np.array([pose[0], pose[1], wrap_angle(pose[2] + dh)])
         left = T - t_turn
-        if left <= 0 or (t_turn > 0 and not _free(geometry, pose, turned)):
+        if left <= 0 or (t_turn > 0 and not turn_free(geometry, pose[0], pose[1], pose[2], dh)):
             continue
         head = [t, *pose]
         for sign in (1.0, -1.0) if robot.reverse else (1.0,):
             unit = sign * vplan * np.array([math.cos(turned[2]), math.sin(turned[2])])
             for speed in speeds:
-                full = next((left * f for f in (1.0, 0.5, 0.25) if _reach(geometry, turned, unit * speed * left * f)), None)
-                if full is None:
+                f = reach_fraction(geometry, turned, unit * speed * left)
+                if f is None:
                     continue
+                full = left * f
                 for move in (full, *(s for s in stops if s < full - 1e-9)):
                     end = turned.copy()
                     end[:2] += unit * speed * move
@@ -180,11 +181,17 @@ def evasions(geometry, t: float, pose, T: float, cover: float, headings: int, vp
     return out
 
 
-def _reach(geometry, turned, shift) -> bool:
-    """Whether driving from ``turned`` by ``shift`` (2,) stays in bounds and is statically free."""
-    end = turned.copy()
-    end[:2] += shift
-    return geometry.bounds_clearance(end[None])[0] >= 0 and _free(geometry, turned, end)
+def reach_fraction(geometry, pose, shift, fractions=(1.0, 0.5, 0.25)) -> float | None:
+    """The first of ``fractions`` of the straight move from ``pose`` by ``shift`` (2,) (the
+    heading kept) that stays in bounds and is statically free; None when none is. The
+    evasive motions' reach, a holonomic robot's (:func:`gfuzzy.navigation.evasion.holonomic_evasion`)
+    and a differential drive's (:func:`evasions`)."""
+    for f in fractions:
+        end = np.array(pose, dtype=float)
+        end[:2] += np.asarray(shift, dtype=float) * f
+        if geometry.bounds_clearance(end[None])[0] >= 0 and _free(geometry, pose, end):
+            return f
+    return None
 
 
 @dataclass(frozen=True)
