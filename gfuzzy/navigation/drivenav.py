@@ -116,7 +116,7 @@ def _if_safe(nav, prev: Trajectory, t: float, pose: FloatArray, obs: FloatArray,
         return traj
     # only the people who may come within the inflation of the robot matter
     reach = obs[:, 4] + cr + nav.mover_clearance + float(np.max(infl, initial=0.0)) + 0.1
-    keep = nav._rolled_reach(pose, obs, horizon, reach, nav._may_reach(pose, obs[:, :2], obs[:, 2:4], math.inf, horizon, reach))
+    keep = nav._may_reach(pose, obs[:, :2], obs[:, 2:4], math.inf, horizon, reach)
     if not keep.any():
         return traj
     near, infl = obs[keep], infl[keep]

@@ -48,8 +48,6 @@ def evasion_scores(nav: Navigator, t: float, pose: FloatArray, obs: FloatArray, 
         walk = np.hypot(obs[:, 2], obs[:, 3])
         if vel is None:
             rate = np.broadcast_to(float(nav.robot.vmax) + walk, (len(pts), len(obs)))
-        elif nav._paths is not None:  # rolled paths turn: the two speeds' sum bounds the relative one
-            rate = np.hypot(vel[:, 0], vel[:, 1])[:, None] + walk[None, :]
         else:  # moving (relative velocity), then standing (the person's own)
             rel = np.hypot(vel[:, None, 0] - obs[None, :, 2], vel[:, None, 1] - obs[None, :, 3])
             rate = np.maximum(rel, walk[None, :])

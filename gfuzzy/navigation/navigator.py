@@ -57,7 +57,6 @@ from .lookout import Lookout
 from .navtypes import MOTION_SAMPLE, NavMode, NavStep, sample_loss
 from .pathspace import STILL_SPEED, PathSpace, WallCheck  # noqa: F401 (STILL_SPEED: kept importable here)
 from .prediction import REACH_SAMPLES, Prediction  # noqa: F401 (REACH_SAMPLES: kept importable here)
-from .rollout import INTERACTIONS
 from .timedfield import PAIR_SECONDS, PIECE_WORK, _OutOfTime, _TimedField  # noqa: F401 (PIECE_WORK, PAIR_SECONDS: kept importable here)
 from .unknown import unknown_growth, unknown_positions
 
@@ -179,10 +178,6 @@ class NavOptions:
         Further growth (m per s of prediction) of the predicted disc of a person whose
         straight walk meets someone else's within 3 s (:mod:`gfuzzy.navigation.swerve`):
         they are about to swerve, and may swerve towards the robot. 0 turns it off.
-    interaction : {"none", "ttc", "orca"}
-        How people are predicted to move: walking on as seen (``none``), or avoiding each
-        other, rolled forward together by a crowd model (:mod:`gfuzzy.navigation.rollout`:
-        ``ttc``, the time-to-collision power law; ``orca``, ORCA agents).
     fov : float
         A disc robot's field of view (degrees), centred on its direction of motion; below
         360 it looks, now and then, where it has not looked (:mod:`gfuzzy.navigation.lookout`).
@@ -217,15 +212,12 @@ class NavOptions:
     full_speed: bool = False
     drive_lookahead: float = 4.0
     swerve_growth: float = 0.0
-    interaction: str = "none"
     fov: float = 360.0
     look_after: float = 1.0
 
     def __post_init__(self):
         if self.budget_clock not in BUDGET_CLOCKS:
             raise InputError(f"budget_clock must be one of {', '.join(BUDGET_CLOCKS)}, got {self.budget_clock!r}")
-        if self.interaction not in INTERACTIONS:
-            raise InputError(f"interaction must be one of {', '.join(INTERACTIONS)}, got {self.interaction!r}")
         if self.backend not in BACKENDS:
             raise InputError(f"backend must be one of {', '.join(BACKENDS)}, got {self.backend!r}")
         for name in ("dt", "prediction_horizon", "reference_speed", "slice", "time_budget", "plan_slack", "evasion_time", "cover",
@@ -413,7 +405,6 @@ class Navigator(PathSpace, Prediction):
             return Trajectory(np.array([[t, *pose], [t + opts.cover, *pose]]), cr)
         deadline = t_begin + SEARCH_SHARE * opts.time_budget
         infl = self._inflation(pose, obs)
-        self._roll(obs)  # NavOptions.interaction: the people rolled forward together
         predicted = obs.copy()
         if len(obs):
             predicted[:, 4] = obs[:, 4] + infl[:, 0]
@@ -590,9 +581,8 @@ class Navigator(PathSpace, Prediction):
     # --------------------------------------------------------------- fallback
     def _clearance_along(self, pts: FloatArray, times: FloatArray, obs: FloatArray) -> FloatArray:
         """(..., k) gap between the robot at ``pts`` (..., T, d) and each person walking
-        on at constant velocity (or along their rolled paths: ``interaction``) at ``times``
-        (T,), minus the mover clearance."""
-        pos = self._person_positions(obs, times - times[0])  # (T, k, 2)
+        on at constant velocity at ``times`` (T,), minus the mover clearance."""
+        pos = obs[None, :, :2] + (times - times[0])[:, None, None] * obs[None, :, 2:4]  # (T, k, 2)
         rel = pos - pts[..., None, :2]
         if self.robot.shape == "disc":
             d = np.hypot(rel[..., 0], rel[..., 1]) - self.robot.radius - obs[:, 4]

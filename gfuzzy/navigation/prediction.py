@@ -15,7 +15,6 @@ from ..scene.scene import Mover
 from ..timespace.movers import MoverField
 from ..typed import BoolArray, FloatArray
 from .pathspace import STILL_SPEED
-from .rollout import Rollout
 from .swerve import swerve_rates
 from .timedfield import _TimedField
 from .unknown import unknown_growth
@@ -26,10 +25,9 @@ __all__ = ["Prediction", "REACH_SAMPLES"]
 REACH_SAMPLES = 48
 
 
-class Prediction(Rollout):
+class Prediction:
     """The people predicted: the navigator's part that turns observations into the
-    inflated, timed movers its searches and checks use (walking on as seen, or, with
-    ``NavOptions.interaction``, along paths on which they avoid each other: :class:`.Rollout`)."""
+    inflated, timed movers its searches and checks use."""
 
     def _inflation(self, pose: FloatArray, obs: FloatArray, relaxed: bool = False,
                    personal: bool = True) -> FloatArray:  # fmt: skip
@@ -110,8 +108,7 @@ class Prediction(Rollout):
         speed = np.hypot(vel[:, 0], vel[:, 1])
         reach = obs[:, 4] + infl.max(axis=1, initial=0.0) + self.robot.circumradius + (self.vplan + speed) * opts.dt
         look = np.minimum(presence, seconds) + opts.dt  # the field keeps a mover half a step longer
-        keep = self._may_reach(pose, obs[:, :2], vel, opts.prediction_horizon, look, reach + 1e-6)
-        return self._rolled_reach(pose, obs, look, reach + 1e-6, keep)
+        return self._may_reach(pose, obs[:, :2], vel, opts.prediction_horizon, look, reach + 1e-6)
 
     def _near(self, pose: FloatArray, obs: FloatArray, look: float, gap: float) -> FloatArray:
         """The people (rows of ``obs``) who, walking on at constant velocity, may come within
@@ -120,8 +117,7 @@ class Prediction(Rollout):
         if len(obs) == 0:
             return obs
         reach = obs[:, 4] + self.robot.circumradius + self.mover_clearance + gap + 1e-6
-        keep = self._may_reach(pose, obs[:, :2], obs[:, 2:4], math.inf, look, reach)
-        return obs[self._rolled_reach(pose, obs, look, reach, keep)]
+        return obs[self._may_reach(pose, obs[:, :2], obs[:, 2:4], math.inf, look, reach)]
 
     def _field(self, t: float, obs: FloatArray, infl: FloatArray, steps: int, deadline: float = math.inf) -> MoverField:
         """The predicted people on the search's time grid: one trajectory mover per person.
@@ -149,9 +145,9 @@ class Prediction(Rollout):
         vanish = np.minimum(presence, obs[:, 6]) if obs.shape[1] > 6 else presence
         a = obs[:, :2] + vel * np.minimum(appear, opts.prediction_horizon)[:, None]
         b = obs[:, :2] + vel * np.minimum(vanish, opts.prediction_horizon)[:, None]
-        tracked = self._rolled_tracks(t, obs, vanish, [np.array([[t + appear[i], *a[i]], [t + vanish[i], *b[i]]])
-                                                       for i in range(k)])  # fmt: skip
-        movers = tuple(Mover(f"p{i}", "disc", float(radius[i]), (0.0, 0.0), trajectory=tracked[i]) for i in range(k))
+        movers = tuple(Mover(f"p{i}", "disc", float(radius[i]), (0.0, 0.0),
+                             trajectory=np.array([[t + appear[i], a[i, 0], a[i, 1]], [t + vanish[i], b[i, 0], b[i, 1]]]))
+                       for i in range(k))  # fmt: skip
         extra = float(np.max(infl - first[:, None], initial=0.0))  # the ghosts' is not monotone
         scene = replace(self.scene, robot=self._pred_robot, movers=movers)
         # built with the largest extra margin, so that its broad-phase boxes hold every
