@@ -105,3 +105,35 @@ def test_options_know_the_sensor_and_reject_a_bad_fov():
             NavOptions(fov=bad)
     with pytest.raises(InputError):
         NavOptions(look_after=0.0)
+
+
+def _first_look_behind(person, unknown=None) -> float:
+    """When a robot that looked south at 0.25 s, then drives north, first finds the south
+    stale with ``person`` (1, 5) behind it."""
+    look = Lookout(180.0, 1.0, np.array([0.0, 4.0]))
+    look.observe(0.0, np.array([0.0, 0.0]))
+    look.observe(0.25, np.array([0.0, -0.05]))  # a look south: everything seen by now
+    for k in range(2, 40):
+        t = 0.25 * k
+        pose = np.array([0.0, 0.25 * (k - 2)])
+        look.observe(t, pose)  # north
+        found = look.direction(t, pose, person) if unknown is None else look.direction(t, pose, person, unknown=unknown)
+        if found is not None:
+            return t
+    return math.inf
+
+
+def test_someone_standing_on_the_blind_side_waits_as_an_empty_side():
+    """A person seen standing behind the robot is not walking toward it, and the robot drives
+    where it looks: their side waits as an empty one (``EMPTY_FACTOR * look_after``), not
+    ``look_after``; among people standing about, the robot no longer looks every other step."""
+    standing = np.array([[-0.5, -2.0, 0.0, 0.0, 0.3]])
+    assert _first_look_behind(np.array([[-0.5, -2.0, 0.0, 0.5, 0.3]])) == pytest.approx(1.5)  # walking
+    assert _first_look_behind(standing) - 0.25 == pytest.approx(EMPTY_FACTOR * 1.0, abs=0.26)
+
+
+def test_someone_seen_once_on_the_blind_side_counts_as_walking():
+    """A person seen once is reported standing, but their velocity is not known: they may be
+    walking, and their side is looked at after ``look_after`` as a walker's."""
+    standing = np.array([[-0.5, -2.0, 0.0, 0.0, 0.3]])
+    assert _first_look_behind(standing, unknown=standing[:, :2]) == pytest.approx(1.5)

@@ -8,6 +8,7 @@ the view is centred on the last displacement, and kept while the robot stands). 
 side has gone unseen for ``NavOptions.look_after`` seconds, the navigator's answer is
 replaced by a *look*: a short, slow motion toward that side, which turns the view there
 for the next observation, and then standing (the navigator replans at its next call).
+A side where only people seen standing are waits as long as an empty side does.
 A look is taken only when it stays clear of everyone seen (walking on, un-inflated, over
 ``LOOK_CHECK`` seconds, or the navigator's ``cover`` if longer: the standing after the
 look too) and of the static obstacles.
@@ -23,6 +24,7 @@ import numpy as np
 from ..trajectory import Trajectory
 from ..typed import FloatArray
 from .navtypes import MOTION_SAMPLE
+from .sensing import UNKNOWN_GROWTH
 
 if TYPE_CHECKING:
     from .navigator import Navigator
@@ -42,6 +44,11 @@ EMPTY_FACTOR = 4.0
 #: Seconds within which a person known on an unseen side could reach the robot for it to
 #: look there after ``look_after``.
 LOOK_REACH = 3.0
+#: People seen standing (slower than this, m/s; not those seen once, whose velocity is
+#: unknown) make their side stale only as an empty side does: they are not walking toward
+#: the robot, and it drives where it looks (among people standing about, a 120-degree view
+#: looked every other step: *The narrow noisy view on the square crossing*).
+LOOK_STANDING = 0.25
 
 
 class Lookout:
@@ -80,24 +87,36 @@ class Lookout:
         self.pose = xy.copy()
         self.looked[self._in_view(self.heading)] = t
 
-    def direction(self, t: float, pose: FloatArray | None = None, obs: FloatArray | None = None,
-                  vmax: float = 1.0) -> float | None:  # fmt: skip
-        """The direction (radians) whose view takes in the most stale sides (the stalest
-        first on ties); None when no side is stale. A side is stale when never seen, when
-        unseen for ``look_after`` seconds while someone of ``obs`` (k, 5) (people seen
-        before, walking on unseen) is there within ``LOOK_REACH`` seconds of the robot at
-        ``pose``, or unseen for ``EMPTY_FACTOR * look_after`` seconds."""
+    def stale(self, t: float, pose: FloatArray | None = None, obs: FloatArray | None = None,
+              vmax: float = 1.0, unknown: FloatArray | None = None) -> np.ndarray:  # fmt: skip
+        """(SECTORS,) bool: the stale sides. A side is stale when never seen, when unseen
+        for ``look_after`` seconds while someone of ``obs`` (k, 5) (people seen before,
+        walking on unseen) who is not standing (slower than ``LOOK_STANDING``; a person of
+        unknown velocity, at one of the positions ``unknown`` (u, 2), counts as walking at
+        ``UNKNOWN_GROWTH``) is there within ``LOOK_REACH`` seconds of the robot at ``pose``,
+        or unseen for ``EMPTY_FACTOR * look_after`` seconds."""
         age = t - self.looked
         stale = age > EMPTY_FACTOR * self.look_after + 1e-9
         if pose is not None and obs is not None and len(obs):
-            rel = obs[:, :2] - np.asarray(pose, dtype=float)[None, :2]
-            dist = np.hypot(rel[:, 0], rel[:, 1]) - obs[:, 4]
-            near = dist <= (np.hypot(obs[:, 2], obs[:, 3]) + vmax) * LOOK_REACH
+            speed = np.hypot(obs[:, 2], obs[:, 3])
+            if unknown is not None and len(unknown):  # reported standing, but may walk
+                seen_once = np.all(obs[:, None, :2] == np.asarray(unknown)[None, :, :2], axis=2).any(axis=1)
+                speed = np.where(seen_once, np.maximum(speed, UNKNOWN_GROWTH), speed)
+            walk = speed >= LOOK_STANDING
+            rel = obs[walk, :2] - np.asarray(pose, dtype=float)[None, :2]
+            near = np.hypot(rel[:, 0], rel[:, 1]) - obs[walk, 4] <= (speed[walk] + vmax) * LOOK_REACH
             width = 2 * math.pi / SECTORS
             sector = (np.arctan2(rel[near, 1], rel[near, 0]) % (2 * math.pi) // width).astype(int) % SECTORS
             known = np.zeros(SECTORS, dtype=bool)
             known[sector] = True
             stale |= known & (age > self.look_after + 1e-9)
+        return stale
+
+    def direction(self, t: float, pose: FloatArray | None = None, obs: FloatArray | None = None,
+                  vmax: float = 1.0, unknown: FloatArray | None = None) -> float | None:  # fmt: skip
+        """The direction (radians) whose view takes in the most :meth:`stale` sides (the
+        stalest first on ties); None when no side is stale."""
+        stale = self.stale(t, pose, obs, vmax, unknown)
         if not stale.any():
             return None
         age = np.minimum(t - self.looked, 1e9)
@@ -107,7 +126,7 @@ class Lookout:
     def look(self, nav: Navigator, t: float, pose: FloatArray, obs: FloatArray, planned: Trajectory) -> Trajectory | None:
         """The look to take instead of ``planned``, or None (nothing stale, the plan
         already turns the view there, or the look is not clear)."""
-        ang = self.direction(t, pose, obs, float(nav.vplan))
+        ang = self.direction(t, pose, obs, float(nav.vplan), nav._unknown)
         if ang is None:
             return None
         d = planned.at(t + LOOK_TIME)[:2] - pose[:2]
