@@ -744,7 +744,7 @@ def test_a_goal_someone_stands_on_skips_the_search_that_cannot_reach_it(open_squ
     space-time (among people standing round the goal that took the whole budget, so the
     next tier never ran); the search without the personal space answers."""
     scene, rm = open_square
-    nav = Navigator(scene, rm, (0.0, 4.0))
+    nav = Navigator(scene, rm, (0.0, 4.0), NavOptions(time_budget=5.0))  # a loaded machine's clock decides nothing
     pose = np.array([0.0, -2.0])
     obs = np.array([[0.0, 4.75, 0.0, 0.0, 0.3]])  # 0.15 m from a robot on the goal
     first = nav._search(0.0, pose, obs, nav._inflation(pose, obs), math.inf)
