@@ -3,7 +3,6 @@
     python tools/time_audit.py --episodes 200                      # circle, 5 humans, seed 1
     python tools/time_audit.py --episodes 200 --policy navigator oracle
     python tools/time_audit.py --episodes 200 --path-space 0
-    python tools/time_audit.py --episodes 200 --policy navigator --steady-calls 3
 
 Runs ``gfuzzy crowd``'s episodes (``--budget-clock cpu``, people who ignore the robot)
 and records where the robot stood at every step. The time to the goal T (whole steps of
@@ -86,11 +85,9 @@ def main(argv=None) -> int:
     ap.add_argument("--policy", nargs="+", default=["navigator", "oracle"], choices=["navigator", "oracle"])
     ap.add_argument("--path-space", type=float, default=NavOptions.path_space)
     ap.add_argument("--personal-space", type=float, default=NavOptions.personal_space)
-    ap.add_argument("--steady-calls", type=int, default=NavOptions.steady_calls, help="NavOptions.steady_calls")
     args = ap.parse_args(argv)
     setting = C.CrowdSetting(scenario="circle", humans=args.humans)
-    opts = NavOptions(budget_clock="cpu", path_space=args.path_space, personal_space=args.personal_space,
-                      steady_calls=args.steady_calls)  # fmt: skip
+    opts = NavOptions(budget_clock="cpu", path_space=args.path_space, personal_space=args.personal_space)
     roadmap = C.crowd_roadmap(setting)
     c = C.CROWD
     store: list = []

@@ -57,7 +57,6 @@ from .lookout import Lookout
 from .navtypes import MOTION_SAMPLE, NavMode, NavStep, sample_loss
 from .pathspace import STILL_SPEED, PathSpace, WallCheck  # noqa: F401 (STILL_SPEED: kept importable here)
 from .prediction import REACH_SAMPLES, Prediction  # noqa: F401 (REACH_SAMPLES: kept importable here)
-from .steady import RecentWalks, steady_plan
 from .timedfield import PAIR_SECONDS, PIECE_WORK, _OutOfTime, _TimedField  # noqa: F401 (PIECE_WORK, PAIR_SECONDS: kept importable here)
 from .unknown import unknown_growth, unknown_positions
 
@@ -184,11 +183,6 @@ class NavOptions:
         360 it looks, now and then, where it has not looked (:mod:`gfuzzy.navigation.lookout`).
     look_after : float
         Seconds a side may go unseen before the robot (``fov`` < 360) looks there.
-    steady_calls : int
-        A disc robot only: its last plan is kept over a fresh one that arrives no sooner
-        while it keeps its gaps from everyone walking on both at their velocity now and at
-        their velocity averaged over this many calls (:mod:`gfuzzy.navigation.steady`): the
-        robot zig-zags less as the predictions wobble from period to period. 0 turns it off.
     """
 
     dt: float = 0.1
@@ -220,7 +214,6 @@ class NavOptions:
     swerve_growth: float = 0.0
     fov: float = 360.0
     look_after: float = 1.0
-    steady_calls: int = 0
 
     def __post_init__(self):
         if self.budget_clock not in BUDGET_CLOCKS:
@@ -234,8 +227,8 @@ class NavOptions:
                      "path_space_cost", "social_horizon", "stationary_hold", "goal_tolerance", "commitment",
                      "swerve_growth"):
             check_number(name, getattr(self, name), strict=False)
-        if self.connect_k < 1 or self.evasion_headings < 4 or self.steady_calls < 0:
-            raise InputError("connect_k must be >= 1, evasion_headings >= 4 and steady_calls >= 0")
+        if self.connect_k < 1 or self.evasion_headings < 4:
+            raise InputError("connect_k must be >= 1 and evasion_headings >= 4")
         check_number("stretch", self.stretch, 1.0, strict=False)
         check_number("look_after", self.look_after)
         if not 0 < self.fov <= 360:
@@ -314,7 +307,6 @@ class Navigator(PathSpace, Prediction):
         disc = robot.shape == "disc" and robot.dof == 2  # its view follows its motion
         self._lookout = Lookout(opts.fov, opts.look_after, goal) if opts.fov < 360 and disc else None
         self._unknown = np.zeros((0, 2))  # where the people of unknown velocity stand (this call)
-        self._recent = RecentWalks(opts.steady_calls)  # the people's velocities over the last calls
         self._build_base()
         if opts.backend == "compiled":  # load the compiled kernels now, not inside a step's budget
             from ..timespace.search_kernel import warm
@@ -403,7 +395,6 @@ class Navigator(PathSpace, Prediction):
         if not np.all(np.isfinite(obs)) or np.any(obs[:, 4] < 0):
             raise InputError("observations must be finite rows [x, y, vx, vy, radius >= 0]")
         self._unknown = unknown_positions(obs, unknown)
-        walks = self._recent.update(t, obs, unknown) if opts.steady_calls > 0 else None
         self.replans += 1
         if self._lookout is not None:
             self._lookout.observe(t, pose)
@@ -450,10 +441,8 @@ class Navigator(PathSpace, Prediction):
                     traj, mode = kept, NavMode.KEPT
             elif self._previous_mode in (NavMode.PLAN, NavMode.CLOSE) and mode != NavMode.DIRECT and len(obs):
                 # the last plan, still as safe as when it was made, arriving much sooner
-                kept_infl = self._kept_inflation(pose, obs, infl, self._previous_mode)
-                kept = sooner_plan(self, t, pose, obs, kept_infl, traj, self._soft_costs())
-                if kept is None and opts.steady_calls > 0:  # no sooner, but the predictions only wobbled
-                    kept = steady_plan(self, t, pose, obs, walks, kept_infl, traj)
+                kept = sooner_plan(self, t, pose, obs, self._kept_inflation(pose, obs, infl, self._previous_mode),
+                                   traj, self._soft_costs())
                 if kept is not None:
                     traj, mode = kept, NavMode.KEPT
                     self._ahead = self._previous_ahead  # the vertices the kept plan heads for
