@@ -28,3 +28,27 @@ def test_the_pieces_add_up_to_the_time():
     total = got["line"] + got["over"] + got["detour"] + got["slow"] + got["wait"]
     assert total == pytest.approx(got["time"])
     assert got["turning"] == pytest.approx(np.pi / 2 + np.pi + np.pi / 2)
+
+
+def test_the_recorder_hands_the_navigator_who_is_of_unknown_velocity(monkeypatch):
+    """The crowd loop calls the navigator's policy with ``Sensor.unknown`` too: the recorder
+    passes it on (it was taken for the wrapped call and failed with a TypeError)."""
+    from gfuzzy.navigation import crowdpolicies as CP
+    from tools.time_audit import _recorder
+
+    for cls in (CP.NavigatorPolicy, CP.OraclePolicy):
+        monkeypatch.setattr(cls, "__call__", cls.__call__)  # restored after the test
+
+    class Nav:
+        def step(self, t, pose, obs, unknown=None):
+            self.unknown = unknown
+            return "plan"
+
+    store: list = []
+    _recorder(store)
+    nav = Nav()
+    unknown = np.array([True, False])
+    assert CP.NavigatorPolicy(nav)(0.5, np.array([1.0, 2.0]), np.zeros((2, 5)), unknown) == "plan"
+    assert nav.unknown is unknown
+    assert store[0][0] == 0.5 and store[0][2] == "plan"
+    np.testing.assert_array_equal(store[0][1], [1.0, 2.0])

@@ -68,8 +68,8 @@ def _recorder(store: list):
     for cls in (CP.NavigatorPolicy, CP.OraclePolicy):
         call = cls.__call__
 
-        def wrapped(self, t, pose, obs, _call=call):
-            traj = _call(self, t, pose, obs)
+        def wrapped(self, t, pose, obs, *rest, _call=call):
+            traj = _call(self, t, pose, obs, *rest)
             store.append((float(t), np.asarray(pose, float)[:2].copy(), traj))
             return traj
 
