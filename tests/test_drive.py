@@ -55,3 +55,33 @@ def test_the_evasions_reach_the_farthest_free_fraction(robot, pose):
     assert reach_fraction(geo, pose, [2.4, 0.0]) == 0.5
     assert reach_fraction(geo, pose, [0.0, 1.0]) == 1.0  # north, inside the room
     assert reach_fraction(geo, pose, [-4.0, 0.0]) is None  # west: out of the bounds even a quarter
+
+
+def test_an_evasive_half_turn_is_checked_along_the_arc_it_turns():
+    """A half turn aimed one way may come out the other (the headings' difference wraps to
+    -pi where +pi was aimed at): each evasive candidate's turn is certified along the arc its
+    rows turn, so a stick-shaped robot beside a post never sweeps it (one candidate did)."""
+    from gfuzzy.check.check import check_trajectory
+    from gfuzzy.collision.geometry import StaticGeometry
+    from gfuzzy.poses import wrap_angle
+    from gfuzzy.scene.scene import parse_scene
+    from gfuzzy.timespace.drive import evasions
+
+    x = y = 5.0
+    heading = -1.1780972450961715  # grid heading 14 of 16 give or take an ulp, as a turn leaves it
+    a = math.radians(-157.5)
+    doc = {
+        "version": 1, "name": "half-turn", "bounds": [0, 0, 10, 10],
+        "robot": {"footprint": [[0.0, -0.05], [0.6, -0.05], [0.6, 0.05], [0.0, 0.05]], "vmax": 1.0,
+                  "kinematics": "unicycle"},
+        "obstacles": [{"disc": {"center": [x + 0.4 * math.cos(a), y + 0.4 * math.sin(a)], "radius": 0.08}}],
+    }  # fmt: skip
+    scene = parse_scene(doc)
+    aimed = 5 * (2 * math.pi / 16)
+    turned = float(wrap_angle(heading + float(wrap_angle(aimed - heading))))
+    assert float(wrap_angle(aimed - heading)) > 0 > float(wrap_angle(turned - heading))  # the case
+    cands = evasions(StaticGeometry(scene), 0.0, [x, y, heading], 3.0, 3.0, 16, 0.5)
+    assert len(cands) > 5
+    for rows in cands:
+        rep = check_trajectory(scene, rows)
+        assert rep.valid, (rows[:2], rep.reason)

@@ -275,9 +275,30 @@ def test_clearance1_is_the_bounds_and_obstacles_composition(house, world):
                        (world.geometry, world.uniform(rng, 300))):  # fmt: skip
         for p in poses:
             full = geo._bounds_clearance1(p)
-            if full > 0:
+            if full >= 0:
                 full = min(full, geo.obstacle_clearance(p) - geo.keep)
             assert geo.clearance1(p) == full, p
+
+
+def test_a_pose_touching_the_bounds_still_meets_the_obstacles():
+    """A disc exactly touching the bounds (x - r = xmin in floating point) that overlaps a
+    box: its clearance is negative, as ``is_valid`` says (it used to be 0: the obstacles
+    were only asked when the bounds left more than 0)."""
+    doc = {"version": 1, "name": "edge", "bounds": [-5, -5, 5, 5], "robot": {"disc": 0.105, "vmax": 1.0},
+           "obstacles": [{"box": {"center": [-4.8, 0.0], "size": [0.2, 0.4]}}]}  # fmt: skip
+    geo = StaticGeometry(parse_scene(doc))
+    pose = [-4.895, 0.0]
+    assert geo._bounds_clearance1(pose) == 0.0  # touching, to the last bit
+    assert not geo.is_valid(pose)
+    assert geo.clearance1(pose) < 0
+
+
+def test_a_pose_that_is_not_a_number_is_not_certified(house):
+    """A NaN or infinite pose is refused (the distance transform is not asked)."""
+    for bad in ([math.nan, 0.0, 0.0], [math.inf, 0.0, 0.0]):
+        assert not house.motion_free(bad, [0.0, 0.0, 0.0])
+        assert not house.motion_free([0.0, 0.0, 0.0], bad)
+        assert not (house.disc_bound(bad[0], bad[1]) > 0)
 
 
 def test_a_maps_motions_are_certified_as_before_with_fewer_fcl_queries(house):

@@ -249,15 +249,16 @@ class StaticGeometry:
         # the bounds at the circumradius bound the body's distance to them from below: when
         # the obstacles are nearer, the body's exact extents (costly for a footprint) are moot
         xmin, ymin, xmax, ymax = self.scene.bounds
-        x, y = pose[0], pose[1]
-        quick = min(x - xmin, xmax - x, y - ymin, ymax - y) - self.r
+        x, y, r = pose[0], pose[1], self.r
+        # (the exact clearance's own expression order, less a hair: never above it)
+        quick = min(x - r - xmin, xmax - x - r, y - r - ymin, ymax - y - r) - 1e-12
         o = None
         if quick > 0:
             o = self.obstacle_clearance(pose) - self.keep
             if o <= quick:
                 return o
         c = self._bounds_clearance1(pose)
-        if c > 0:
+        if c >= 0:  # touching the bounds exactly: the obstacles still count
             c = min(c, self.obstacle_clearance(pose) - self.keep if o is None else o)
         return c
 
@@ -400,7 +401,7 @@ class StaticGeometry:
         """
         xmin, ymin, xmax, ymax = self.scene.bounds
         c = min(x - xmin, xmax - x, y - ymin, ymax - y) - self.r
-        if not self._objects:
+        if not self._objects or not c > 0:  # (a NaN pose: NaN, as the clearance is)
             return c
         if not self._map_only:
             return -math.inf

@@ -156,9 +156,11 @@ def evasions(geometry, t: float, pose, T: float, cover: float, headings: int, vp
     grid = np.arange(headings) * (2 * math.pi / headings)
     grid = np.concatenate([[pose[2]], grid[np.abs(wrap_angle(grid - pose[2])) > 1e-6]])
     for h in grid.tolist():
-        dh = float(wrap_angle(h - pose[2]))
+        turned = np.array([pose[0], pose[1], wrap_angle(pose[2] + float(wrap_angle(h - pose[2])))])
+        # the arc the rows turn along (the shorter one between the two headings): at a half
+        # turn its sign may differ from the one aimed at, and the sweep is not symmetric
+        dh = float(wrap_angle(turned[2] - pose[2]))
         t_turn = abs(dh) / rate
-        turned = np.array([pose[0], pose[1], wrap_angle(pose[2] + dh)])
         left = T - t_turn
         if left <= 0 or (t_turn > 0 and not turn_free(geometry, pose[0], pose[1], pose[2], dh)):
             continue
