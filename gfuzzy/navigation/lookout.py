@@ -25,6 +25,7 @@ from ..trajectory import Trajectory
 from ..typed import FloatArray
 from .navtypes import MOTION_SAMPLE
 from .sensing import UNKNOWN_GROWTH
+from .unknown import at_unknown
 
 if TYPE_CHECKING:
     from .navigator import Navigator
@@ -100,8 +101,7 @@ class Lookout:
         if pose is not None and obs is not None and len(obs):
             speed = np.hypot(obs[:, 2], obs[:, 3])
             if unknown is not None and len(unknown):  # reported standing, but may walk
-                seen_once = np.all(obs[:, None, :2] == np.asarray(unknown)[None, :, :2], axis=2).any(axis=1)
-                speed = np.where(seen_once, np.maximum(speed, UNKNOWN_GROWTH), speed)
+                speed = np.where(at_unknown(unknown, obs), np.maximum(speed, UNKNOWN_GROWTH), speed)
             walk = speed >= LOOK_STANDING
             rel = obs[walk, :2] - np.asarray(pose, dtype=float)[None, :2]
             near = np.hypot(rel[:, 0], rel[:, 1]) - obs[walk, 4] <= (speed[walk] + vmax) * LOOK_REACH

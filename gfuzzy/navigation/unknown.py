@@ -18,7 +18,7 @@ import numpy as np
 from ..typed import FloatArray
 from .sensing import UNKNOWN_CAP, UNKNOWN_GROWTH
 
-__all__ = ["unknown_positions", "unknown_growth"]
+__all__ = ["unknown_positions", "at_unknown", "unknown_growth"]
 
 
 def unknown_positions(obs: FloatArray, unknown) -> FloatArray:
@@ -33,6 +33,15 @@ def unknown_positions(obs: FloatArray, unknown) -> FloatArray:
     return obs[unknown & still, :2].copy()
 
 
+def at_unknown(known: FloatArray, obs: FloatArray) -> np.ndarray:
+    """(k,) True for each row of ``obs`` (k, >=2) standing at one of the positions ``known``
+    (u, 2) of people of unknown velocity (callers pass subsets of the observations: the
+    position, not the row's index, names the person)."""
+    if not len(known) or not len(obs):
+        return np.zeros(len(obs), dtype=bool)
+    return np.all(obs[:, None, :2] == np.asarray(known)[None, :, :2], axis=2).any(axis=1)
+
+
 def unknown_growth(known: FloatArray, obs: FloatArray, tau: FloatArray) -> FloatArray:
     """(T, k) growth (m) at the times ``tau`` (T,) after now of the discs of ``obs`` (k, >=5)
     that stand at one of the positions ``known`` (u, 2) of people of unknown velocity
@@ -40,5 +49,5 @@ def unknown_growth(known: FloatArray, obs: FloatArray, tau: FloatArray) -> Float
     tau = np.asarray(tau, dtype=float).reshape(-1)
     if not len(known) or not len(obs):
         return np.zeros((len(tau), len(obs)))
-    same = np.all(obs[:, None, :2] == known[None, :, :], axis=2).any(axis=1) & np.all(obs[:, 2:4] == 0.0, axis=1)
+    same = at_unknown(known, obs) & np.all(obs[:, 2:4] == 0.0, axis=1)
     return np.minimum(np.maximum(tau, 0.0)[:, None] * (UNKNOWN_GROWTH * same)[None, :], UNKNOWN_CAP)
