@@ -248,10 +248,7 @@ class StaticGeometry:
         """Clearance of one pose from static obstacles and bounds (see :meth:`clearance`)."""
         # the bounds at the circumradius bound the body's distance to them from below: when
         # the obstacles are nearer, the body's exact extents (costly for a footprint) are moot
-        xmin, ymin, xmax, ymax = self.scene.bounds
-        x, y, r = pose[0], pose[1], self.r
-        # (the exact clearance's own expression order, less a hair: never above it)
-        quick = min(x - r - xmin, xmax - x - r, y - r - ymin, ymax - y - r) - 1e-12
+        quick = self._bounds_at_circumradius(pose[0], pose[1])
         o = None
         if quick > 0:
             o = self.obstacle_clearance(pose) - self.keep
@@ -391,6 +388,14 @@ class StaticGeometry:
         """
         return self._trace(a, b, max_steps, ca, cb, self._certifying_clearance) >= 0
 
+    def _bounds_at_circumradius(self, x: float, y: float) -> float:
+        """A lower bound of the body's clearance from the bounds at (x, y), any heading: a
+        disc of the circumradius (the exact clearance's expression order, less a hair, so
+        never above it in floating point)."""
+        xmin, ymin, xmax, ymax = self.scene.bounds
+        r = self.r
+        return min(x - r - xmin, xmax - x - r, y - r - ymin, ymax - y - r) - 1e-12
+
     def disc_bound(self, x: float, y: float) -> float:
         """A lower bound of the clearance of the robot's circumscribed disc at (x, y),
         whatever its heading (so of any turn in place there); -inf when no cheap bound
@@ -399,8 +404,7 @@ class StaticGeometry:
         The bounds at the circumradius, and the maps' distance transform
         (:meth:`_map_bound`), less ``robot.clearance``: a few microseconds, no FCL query.
         """
-        xmin, ymin, xmax, ymax = self.scene.bounds
-        c = min(x - xmin, xmax - x, y - ymin, ymax - y) - self.r
+        c = self._bounds_at_circumradius(x, y)
         if not self._objects or not c > 0:  # (a NaN pose: NaN, as the clearance is)
             return c
         if not self._map_only:
