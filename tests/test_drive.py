@@ -85,3 +85,25 @@ def test_an_evasive_half_turn_is_checked_along_the_arc_it_turns():
     for rows in cands:
         rep = check_trajectory(scene, rows)
         assert rep.valid, (rows[:2], rep.reason)
+
+
+def test_a_fan_piece_grazing_a_wall_is_left_out_within_its_steps():
+    """A lane along a wall 1 mm away takes the sphere tracing thousands of steps to
+    certify (a second of FCL queries in a depot); within the fan it is given
+    ``FAN_TRACE_STEPS`` and left out, the roadmap's graph keeping every way."""
+    from gfuzzy.collision.geometry import StaticGeometry
+    from gfuzzy.scene.scene import parse_scene
+    from gfuzzy.timespace.drive import FAN_TRACE_STEPS, _free
+
+    doc = {
+        "version": 1, "name": "graze", "bounds": [0, 0, 10, 4],
+        "robot": {"box": [0.6, 0.4], "vmax": 1.0, "kinematics": "unicycle"},
+        "obstacles": [{"box": {"center": [5.0, 2.5], "size": [8.0, 1.0]}}],  # its lower face at y = 2
+    }  # fmt: skip
+    geo = StaticGeometry(parse_scene(doc))
+    a, b = (2.0, 1.799, 0.0), (5.0, 1.799, 0.0)  # the box's upper side 1 mm below the wall, 3 m along it
+    assert _free(geo, a, b)  # free, as certified without a bound
+    c0 = geo.calls
+    assert not _free(geo, a, b, FAN_TRACE_STEPS)
+    assert geo.calls - c0 <= 2 * FAN_TRACE_STEPS + 2
+    assert _free(geo, (2.0, 1.0, 0.0), (5.0, 1.0, 0.0), FAN_TRACE_STEPS)  # 0.8 m away: within the steps

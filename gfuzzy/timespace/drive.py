@@ -25,6 +25,9 @@ _ARC = 0.5 * math.pi
 
 #: Headings closer than this (rad) are the same.
 SAME_HEADING = 1e-9
+#: Steps of the sphere tracing (two clearances each) that certify one piece of the fan
+#: (:func:`fan`) at most: about 30 ms of FCL queries.
+FAN_TRACE_STEPS = 256
 
 
 def _xy_pose(robot, x: float, y: float, h: float) -> list:
@@ -32,9 +35,9 @@ def _xy_pose(robot, x: float, y: float, h: float) -> list:
     return [x, y] if robot.shape == "disc" else [x, y, h]
 
 
-def turn_free(geometry, x: float, y: float, h: float, dh: float) -> bool:
+def turn_free(geometry, x: float, y: float, h: float, dh: float, max_steps: int = 100_000) -> bool:
     """Whether turning in place at (x, y) from ``h`` by ``dh`` (signed, any size) is free,
-    the sweep certified (a disc: the pose alone)."""
+    the sweep certified (a disc: the pose alone) within ``max_steps`` of the tracing per arc."""
     robot = geometry.robot
     if robot.shape == "disc":
         return geometry.clearance1([x, y]) >= 0
@@ -44,29 +47,30 @@ def turn_free(geometry, x: float, y: float, h: float, dh: float) -> bool:
     prev = [x, y, wrap_angle(h)]
     for i in range(1, n + 1):
         cur = [x, y, wrap_angle(h + dh * i / n)]
-        if not geometry.motion_free(prev, cur):
+        if not geometry.motion_free(prev, cur, max_steps):
             return False
         prev = cur
     return True
 
 
-def pick_turn(geometry, x: float, y: float, h1: float, h2: float) -> float | None:
+def pick_turn(geometry, x: float, y: float, h1: float, h2: float, max_steps: int = 100_000) -> float | None:
     """The signed turn from ``h1`` to ``h2``: the shorter arc when its sweep is free, else
     the longer one, else None (0 when the headings are the same)."""
     d = float(wrap_angle(h2 - h1))
     if abs(d) <= SAME_HEADING:
         return 0.0
     for dh in (d, d - math.copysign(2 * math.pi, d)):
-        if turn_free(geometry, x, y, h1, dh):
+        if turn_free(geometry, x, y, h1, dh, max_steps):
             return dh
     return None
 
 
-def _free(geometry, a, b) -> bool:
-    """Static certification of a -> b (a disc's body ignores the heading)."""
+def _free(geometry, a, b, max_steps: int = 100_000) -> bool:
+    """Static certification of a -> b (a disc's body ignores the heading) within
+    ``max_steps`` of the sphere tracing (beyond: not certified)."""
     if geometry.robot.shape == "disc":
-        return geometry.motion_free(list(a[:2]), list(b[:2]))
-    return geometry.motion_free(list(a), list(b))
+        return geometry.motion_free(list(a[:2]), list(b[:2]), max_steps)
+    return geometry.motion_free(list(a), list(b), max_steps)
 
 
 def turn_path(start: FloatArray, via: FloatArray, goal: FloatArray, reverse: bool = False) -> FloatArray:
@@ -239,16 +243,20 @@ def fan(ex, geometry, start, s_id: int, goal, g_id: int, options: Fan, expired=N
 
     ``ex`` is the query's :class:`gfuzzy.timespace.unicycle._Extras` (``node``, ``turn``,
     ``lane``): the pieces go into it. ``expired`` (a callable, optional): once it returns
-    True no further heading is tried (the offsets are in order of preference, straight
-    ahead first); among walls each heading's static checks cost milliseconds.
+    True no further heading or point is tried (the offsets are in order of preference,
+    straight ahead first); among walls each heading's static checks cost milliseconds. A
+    piece whose certification needs more than ``FAN_TRACE_STEPS`` steps of the sphere
+    tracing (a lane grazing a wall along its length: thousands of steps, a second) is left
+    out: the fan offers detours, the roadmap's graph keeps every way.
     """
+    n = FAN_TRACE_STEPS
     sx, sy, sh = (float(v) for v in start)
     gx, gy, gh = (float(v) for v in goal)
     for off in options.offsets:
         if expired is not None and expired():
             return
         h = sh + off
-        if off != 0.0 and not turn_free(geometry, sx, sy, sh, off):
+        if off != 0.0 and not turn_free(geometry, sx, sy, sh, off, n):
             continue
         prev, px, py = s_id, sx, sy
         if off != 0.0:
@@ -256,8 +264,10 @@ def fan(ex, geometry, start, s_id: int, goal, g_id: int, options: Fan, expired=N
             ex.turn(s_id, prev, off)
         c, s = math.cos(h), math.sin(h)
         for d in options.distances:
+            if expired is not None and expired():
+                return
             qx, qy = sx + d * c, sy + d * s
-            if not _free(geometry, (px, py, h), (qx, qy, h)):
+            if not _free(geometry, (px, py, h), (qx, qy, h), n):
                 break
             node = ex.node(qx, qy, h)
             ex.lane(prev, node)
@@ -265,9 +275,9 @@ def fan(ex, geometry, start, s_id: int, goal, g_id: int, options: Fan, expired=N
             if math.hypot(gx - qx, gy - qy) <= 1e-9:
                 continue
             hg = math.atan2(gy - qy, gx - qx)
-            d1 = pick_turn(geometry, qx, qy, h, hg)
-            d2 = pick_turn(geometry, gx, gy, hg, gh)
-            if d1 is None or d2 is None or not _free(geometry, (qx, qy, hg), (gx, gy, hg)):
+            d1 = pick_turn(geometry, qx, qy, h, hg, n)
+            d2 = pick_turn(geometry, gx, gy, hg, gh, n)
+            if d1 is None or d2 is None or not _free(geometry, (qx, qy, hg), (gx, gy, hg), n):
                 continue
             a = node if d1 == 0.0 else ex.node(qx, qy, hg)
             ex.turn(node, a, d1)
