@@ -298,3 +298,32 @@ def test_free_space_regions_lie_inside_the_true_free_space(radius, clearance, ob
         want = oracle_region(regions, p, 1e-3)
         if want is not None:
             assert (k >= 0) == (want >= 0), (p, k, want)
+
+
+def test_a_map_free_space_cut_into_tiles_is_the_whole_one(monkeypatch, repo_root):
+    """A map's free space is computed tile by tile (large maps took minutes and GBs at
+    once): with tiles of 10 rectangles, the tb3 arena's map plus a post and a box, for a
+    disc of radius 0.4 (which the posts cut into a dozen regions), gives the same regions
+    as the whole computation, and the tiles did split the work."""
+    import dataclasses
+
+    from gfuzzy.roadmap import freespace
+    from gfuzzy.scene.scene import Box, Disc, load_scene
+
+    scene = load_scene(repo_root / "scenes" / "tb3-arena.yaml")
+    extra = (Disc((0.4, -0.6), 0.15), Box((-1.1, 1.2), (0.5, 0.3), 0.3))
+    robot = dataclasses.replace(scene.robot, radius=0.4)
+    scene = dataclasses.replace(scene, robot=robot, obstacles=scene.obstacles + extra)
+    whole = free_space(scene)
+    grown = []
+    real = freespace._grown_cells
+    monkeypatch.setattr(freespace, "_grown_cells", lambda r, g: grown.append(len(r)) or real(r, g))
+    monkeypatch.setattr(freespace, "TILE_RECTS", 10)
+    tiled = free_space(scene)
+    n_rects = len(scene.obstacles[0].rects)
+    assert len(grown) >= 4 and max(grown) < n_rects  # tiles, each with part of the map
+    assert len(tiled.regions) == len(whole.regions) >= 2
+    for a, b in zip(tiled.regions, whole.regions, strict=True):
+        assert a.symmetric_difference(b).area < 1e-9 * max(b.area, 1.0)
+    # and the obstacles added cut the regions where they stand
+    assert not any(g.intersects(shapely.Point(0.4, -0.6).buffer(0.5)) for g in tiled.regions)

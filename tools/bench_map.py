@@ -1,6 +1,6 @@
 """Map benchmark: a warehouse-size occupancy grid against the same racks drawn as polygons.
 
-    python tools/bench_map.py [--vertices 3000] [--seed 1] [--queries 5] [--robot box|footprint]
+    python tools/bench_map.py [--vertices 3000] [--seed 1] [--queries 5] [--robot box|footprint|disc]
 
 Generates (seeded) a 1000 x 1700-pixel map at 0.03 m (30 x 51 m): outer walls, 6 x 6 rack
 blocks whose faces SLAM saw (a 2-pixel outline) and whose insides it did not (unknown, gray),
@@ -16,6 +16,13 @@ and this process's CPU time: on a loaded machine the CPU time is what the build 
 ``--vertices`` vertices, its components, and the planning time of ``--queries`` queries
 between seeded free points far apart (mean and max, after one warm-up query). Targets
 (issue 17): build <= 20 s at 3000 vertices, each query <= 0.5 s.
+
+With ``--robot disc`` (radius 0.3) the roadmap is joined through the exactly computed free
+space (:mod:`gfuzzy.roadmap.freespace`); its computation is then also timed both ways, cut
+into tiles (the default) and at once, each in a child process whose peak memory is read from
+the system, on the warehouse (whose straight racks make few rectangles) and on a real SLAM
+map made large: Nav2's depot map (``scenes/maps/depot.pgm``) repeated 3 x 4 times, 1812 x
+1228 cells (90.6 x 61.4 m), whose ragged walls make 15,932 rectangles.
 """
 
 from __future__ import annotations
@@ -93,6 +100,8 @@ def movers_yaml() -> str:
 
 
 def robot_yaml(kind: str) -> str:
+    if kind == "disc":
+        return "robot: {disc: 0.3, vmax: 1.0}\n"
     if kind == "footprint":
         return "robot: {footprint: [[0.45, 0.3], [-0.35, 0.3], [-0.35, -0.3], [0.45, -0.3]], vmax: 1.0}\n"
     return "robot: {box: [0.8, 0.6], vmax: 1.0}\n"
@@ -134,7 +143,8 @@ def queries(scene, n: int, seed: int):
         a = np.array([rng.uniform(xmin, xmax), rng.uniform(ymin, ymax), rng.uniform(-np.pi, np.pi)])
         b = np.array([rng.uniform(xmin, xmax), rng.uniform(ymin, ymax), rng.uniform(-np.pi, np.pi)])
         if np.hypot(*(a[:2] - b[:2])) >= 20 and geo.is_valid(a) and geo.is_valid(b):
-            pairs.append((tuple(a), tuple(b)))
+            dof = scene.robot.dof
+            pairs.append((tuple(a[:dof]), tuple(b[:dof])))
     return pairs
 
 
@@ -162,12 +172,61 @@ def run(path: Path, vertices: int, seed: int, n_queries: int) -> dict:
     }  # fmt: skip
 
 
+def depot_tiled(folder: Path) -> Path:
+    """A scene around the bundled depot map repeated 3 x 4 times (a disc robot of radius 0.3)."""
+    from PIL import Image
+
+    img = np.asarray(Image.open(ROOT / "scenes" / "maps" / "depot.pgm"))
+    Image.fromarray(np.tile(img, (4, 3))).save(folder / "depot12.pgm")
+    (folder / "depot12.yaml").write_text(
+        "image: depot12.pgm\nmode: trinary\nresolution: 0.05\norigin: [0.0, 0.0, 0]\nnegate: 0\n"
+        "occupied_thresh: 0.65\nfree_thresh: 0.25\n"
+    )
+    path = folder / "depot12-scene.yaml"
+    path.write_text("version: 1\nname: depot12\nrobot: {disc: 0.3, vmax: 1.0}\nobstacles:\n  - map: {file: depot12.yaml}\n")
+    return path
+
+
+def _free_space_child(path: str, tile_rects: int, out) -> None:
+    import resource
+
+    from gfuzzy.roadmap import freespace
+
+    freespace.TILE_RECTS = tile_rects
+    scene = load_scene(path)
+    cpu = time.process_time()
+    fs = freespace.free_space(scene)
+    cpu = time.process_time() - cpu
+    area = sum(g.area for g in fs.regions)
+    out.put((cpu, len(fs.regions), area, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024))
+
+
+def free_space_ways(path: Path) -> None:
+    """The map's free space cut into tiles (the default) and at once: CPU time, regions, peak memory."""
+    import multiprocessing as mp
+
+    from gfuzzy.roadmap import freespace
+
+    ctx = mp.get_context("fork")
+    rows = []
+    for name, tiles in (("tiles", freespace.TILE_RECTS), ("at once", 10**12)):
+        q = ctx.Queue()
+        p = ctx.Process(target=_free_space_child, args=(str(path), tiles, q))
+        p.start()
+        rows.append((name, *q.get()))
+        p.join()
+    for name, cpu, n, area, mb in rows:
+        print(f"free space, {name:<8} {cpu:7.2f} s CPU  {n} regions  area {area:.6f} m2  peak {mb:.0f} MB")
+    print(f"free space: tiles / at once = {rows[0][1] / rows[1][1]:.2f} of the CPU time, "
+          f"{rows[0][4] / rows[1][4]:.2f} of the peak memory")  # fmt: skip
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--vertices", type=int, default=3000)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--queries", type=int, default=5)
-    ap.add_argument("--robot", choices=("box", "footprint"), default="box")
+    ap.add_argument("--robot", choices=("box", "footprint", "disc"), default="box")
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         grid, poly, occupied = write_scenes(Path(tmp), args.seed, args.robot)
@@ -180,6 +239,11 @@ def main() -> None:
             print(f"{name:<10} {r['load']:>12.2f} {r['build']:>8.2f} {r['build_cpu']:>6.2f} {r['edges']:>7} "
                   f"{str(r['components']):>5} {r['q_mean']:>12.3f} {r['q_max']:>6.3f} {r['q_cpu']:>9.3f}  "
                   f"{' '.join(r['statuses'])}")  # fmt: skip
+        if args.robot == "disc":
+            print("the warehouse map:")
+            free_space_ways(grid)
+            print("Nav2's depot map repeated 3 x 4 (1812 x 1228 cells):")
+            free_space_ways(depot_tiled(Path(tmp)))
 
 
 if __name__ == "__main__":
