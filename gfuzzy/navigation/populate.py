@@ -208,10 +208,13 @@ def _rvo_obstacles(sim, scene: Scene, union) -> None:
     if union is not None:
         polys += list(getattr(union, "geoms", [union]))
     for poly in polys:
-        ring = shapely.geometry.polygon.orient(poly, 1.0).exterior
-        pts = [(float(x), float(y)) for x, y in list(ring.coords)[:-1]]
-        if len(pts) >= 2:
-            sim.add_obstacle(pts)
+        # exterior counter-clockwise, holes clockwise: RVO2 keeps agents out of the first and
+        # inside the second (the free rooms of a map whose walls and unknown cells enclose them)
+        poly = shapely.geometry.polygon.orient(poly, 1.0)
+        for ring in (poly.exterior, *poly.interiors):
+            pts = [(float(x), float(y)) for x, y in list(ring.coords)[:-1]]
+            if len(pts) >= 2:
+                sim.add_obstacle(pts)
     sim.process_obstacles()
 
 
