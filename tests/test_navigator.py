@@ -276,7 +276,8 @@ def test_navigate_cli_on_a_pedestrian_replay(tmp_path, backend):
 
 @pytest.mark.parametrize(
     "args",
-    [["--period", "0"], ["--period", "-1"], ["--sense", "0"], ["--max-time", "nan"], ["--query", "nope"]],
+    [["--period", "0"], ["--period", "-1"], ["--sense", "0"], ["--max-time", "nan"], ["--query", "nope"],
+     ["--path-space", "nan"], ["--personal-space", "-1"], ["--budget-clock", "gpu"]],
 )
 def test_navigate_bad_input(tmp_path, args):
     out = tmp_path / "o.json"
@@ -284,6 +285,30 @@ def test_navigate_bad_input(tmp_path, args):
     assert p.returncode == 2
     assert len(p.stderr.strip().splitlines()) == 1
     assert not out.exists()
+
+
+def test_navigate_takes_the_navigator_options_crowd_takes(monkeypatch, tmp_path):
+    """``--budget-clock``, ``--personal-space`` and ``--path-space`` reach the navigator of
+    ``gfuzzy navigate`` as they reach ``gfuzzy crowd``'s (a user measuring on a loaded
+    machine needs the CPU clock)."""
+    from gfuzzy.cli.main import main
+    from gfuzzy.navigation import navigator
+
+    seen = []
+    real = navigator.Navigator.__init__
+
+    def spy(self, scene, roadmap, goal, options=None):
+        seen.append(options)
+        real(self, scene, roadmap, goal, options)
+
+    monkeypatch.setattr(navigator.Navigator, "__init__", spy)
+    out = tmp_path / "eth.json"
+    args = ["navigate", str(ROOT / "scenes" / "eth-crossing.yaml"), "--budget-clock", "cpu",
+            "--personal-space", "0.3", "--path-space", "0", "--max-time", "2", "-o", str(out)]  # fmt: skip
+    assert main(args) in (0, 1)
+    assert out.exists()
+    (opts,) = seen
+    assert (opts.budget_clock, opts.personal_space, opts.path_space) == ("cpu", 0.3, 0.0)
 
 
 def test_crowd_episodes():

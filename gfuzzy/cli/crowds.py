@@ -7,7 +7,7 @@ import math
 import sys
 
 from ..errors import InputError
-from .common import EXIT_OK, BadInput, _load_scene, _out_path, _say
+from .common import EXIT_OK, BadInput, _load_scene, _navigator_flags, _out_path, _say
 
 
 def add_crowd(sub) -> None:
@@ -37,14 +37,7 @@ def add_crowd(sub) -> None:
     c.add_argument("--fov", type=float, default=360.0, help="field of view (degrees) about the direction of motion")
     c.add_argument("--sense", type=float, help="sensing range (m; default: all, 5 in the arena)")
     c.add_argument("--time-budget", type=float, default=0.1, help="seconds one navigator replan may take (default 0.1)")
-    c.add_argument("--budget-clock", choices=("wall", "cpu"), default="wall",
-                   help="the clock of --time-budget: wall (default, a robot's) or cpu, the navigator thread's CPU time, "
-                        "so that figures do not depend on the machine's load")  # fmt: skip
-    c.add_argument("--personal-space", type=float, default=0.2,
-                   help="gap (m) the navigator keeps from people when that costs little (default 0.2, 0: off)")  # fmt: skip
-    c.add_argument("--path-space", type=float, default=1.25, metavar="SECONDS",
-                   help="how far ahead (s) the navigator keeps off the way people are about to walk, when that "
-                        "costs little (default 1.25, 0: off)")  # fmt: skip
+    _navigator_flags(c)
     c.add_argument("--dt", type=float, default=0.1, help="the navigator's search time step (s; default 0.1)")
     c.add_argument("--full-speed", action="store_true",
                    help="the navigator runs its plans at full speed up to their first wait (NavOptions.full_speed)")

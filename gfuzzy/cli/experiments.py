@@ -208,6 +208,9 @@ def cmd_navigate(args) -> int:
     for flag, value in (("--period", args.period), ("--max-time", args.max_time), ("--time-budget", args.time_budget)):
         if not (math.isfinite(value) and value > 0):
             raise BadInput(f"gfuzzy navigate: {flag} must be a positive number, got {value:g}")
+    for flag, value in (("--personal-space", args.personal_space), ("--path-space", args.path_space)):
+        if not (math.isfinite(value) and value >= 0):
+            raise BadInput(f"gfuzzy navigate: {flag} must be a number >= 0, got {value:g}")
     if args.log_every < 0:
         raise BadInput(f"gfuzzy navigate: --log-every must be >= 0, got {args.log_every}")
     sense = math.inf if args.sense is None else args.sense
@@ -224,7 +227,9 @@ def cmd_navigate(args) -> int:
         raise BadInput(f"{scene.source}: queries: the scene has no queries to navigate")
     out = _out_path(args.output, (".json",)) if args.output else None
     try:
-        options = NavOptions(dt=args.dt, time_budget=args.time_budget, backend=args.backend)
+        options = NavOptions(dt=args.dt, time_budget=args.time_budget, backend=args.backend,
+                             budget_clock=args.budget_clock, personal_space=args.personal_space,
+                             path_space=args.path_space)  # fmt: skip
         sensor = _sensor_options(args)
     except InputError as exc:
         raise BadInput(f"gfuzzy navigate: {exc}") from None

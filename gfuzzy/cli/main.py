@@ -6,7 +6,7 @@ import argparse
 import sys
 
 from ..errors import InputError, LimitError
-from .common import EXIT_BAD, EXIT_OK, BadInput, _Parser, _say
+from .common import EXIT_BAD, EXIT_OK, BadInput, _navigator_flags, _Parser, _say
 from .crowds import add_crowd, add_populate
 from .experiments import cmd_batch, cmd_navigate, cmd_tracks
 from .export import add_export
@@ -119,6 +119,7 @@ def _add_navigate(sub) -> None:
     v.add_argument("--max-time", type=float, default=120.0, help="give up this long after t0 (default 120 s)")
     v.add_argument("--dt", type=float, default=0.1, help="time step of the replanning search (default 0.1)")
     v.add_argument("--time-budget", type=float, default=0.1, help="seconds one replan may take (default 0.1)")
+    _navigator_flags(v)
     v.add_argument("--log-every", type=int, default=4, help="keep every k-th replan's predictions in the file (default 4)")
     v.add_argument("--backend", choices=("compiled", "reference"), default="compiled",
                    help="search implementation: compiled (numba, default) or the pure-Python reference")  # fmt: skip
