@@ -188,6 +188,19 @@ def test_huge_integer_is_bad_input(tmp_scene):
     assert "robot.vmax" in str(info.value)
 
 
+def test_exponent_numbers_read_as_numbers(tmp_scene):
+    # PyYAML (YAML 1.1) read 2e-1 and 1.5e0 as strings: "robot.disc: expected a number, got
+    # a string ('2e-1')"; YAML 1.2 and JSON, the schema's editors and Nav2 read numbers
+    path = tmp_scene(
+        "version: 1\nname: e\nbounds: [0, 0, 4e0, 3]\nrobot: {disc: 2e-1, vmax: 1.5e0}\n"
+    )
+    scene = load_scene(path)
+    assert scene.robot.vmax == 1.5 and scene.bounds[2] == 4.0
+    path = tmp_scene("version: 1\nname: e\nbounds: [0, 0, 4, 3]\nrobot: {disc: 0.2, vmax: 1e300}\n")
+    with pytest.raises(SceneError, match=r"robot\.vmax: number too large"):
+        load_scene(path)
+
+
 def test_nul_in_mesh_path_is_bad_input(tmp_scene):
     path = tmp_scene(
         'version: 1\nname: nul\nbounds: [0, 0, 4, 3]\nrobot: {disc: 0.2, vmax: 1}\n'

@@ -51,6 +51,14 @@ def _construct_mapping(loader: _Loader, node: yaml.MappingNode, deep: bool = Fal
 
 
 _Loader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
+# YAML 1.1 (PyYAML) reads `1e-3`, `5e3` and `1.5e3` as strings: its floats need a dot and a
+# signed exponent. YAML 1.2 (yaml-language-server, the schema's editors; yaml-cpp, which
+# Nav2 reads map files with) and JSON read them as numbers, and so do we.
+_Loader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:\.[0-9]+|[0-9]+(?:\.[0-9]*)?)[eE][-+]?[0-9]+$"),
+    list("-+.0123456789"),
+)
 
 
 def _expanded_size(node: yaml.Node, memo: dict) -> int:
