@@ -18,9 +18,10 @@ from shared_scenes import DOOR, LOOP
 
 from gfuzzy.check.check import check_trajectory
 from gfuzzy.cli import main
-from gfuzzy.errors import InputError
+from gfuzzy.errors import InputError, LimitError
 from gfuzzy.roadmap.roadmap import RoadmapOptions
 from gfuzzy.scene.scene import load_scene
+from gfuzzy.settings import MAX_POINTS
 
 
 def test_unsolved_plan_removes_a_stale_csv_and_says_what_it_wrote(line_scene, tmp_path, capsys):
@@ -152,6 +153,19 @@ def test_a_seed_out_of_range_is_bad_input(tmp_path, capsys, seed):
     assert not out.exists()
     with pytest.raises(InputError, match="seed"):
         RoadmapOptions(seed=seed)
+
+
+@pytest.mark.parametrize("command", ["roadmap", "plan"])
+def test_a_vertex_count_no_query_could_search_is_refused_at_once(tmp_path, capsys, command):
+    # -n 1000000000000 ran OMPL's PRM for ever (no output, no end) before it was refused
+    out = tmp_path / "r.json"
+    n = MAX_POINTS + 1
+    with pytest.raises(LimitError, match="vertices"):  # first: the old code never returns below
+        RoadmapOptions(vertices=n)
+    assert main([command, str(SCENE), "-n", str(n), "--seed", "1", "-o", str(out)]) == 2
+    line = _one_line(capsys.readouterr().err)
+    assert f"{n:,} vertices" in line and line.startswith(("gfuzzy roadmap:", "-n/--seed:"))
+    assert not out.exists()
 
 
 def test_check_says_what_it_cannot_verify_without_the_query(tmp_path, capsys):

@@ -9,7 +9,7 @@ import os
 import sys
 from pathlib import Path
 
-from ..errors import InputError, SceneError
+from ..errors import InputError, LimitError, SceneError
 
 EXIT_OK, EXIT_NO, EXIT_BAD = 0, 1, 2
 
@@ -64,7 +64,7 @@ def _roadmap_for(scene, args, quiet=False):
                 vertices=args.vertices if args.vertices is not None else RoadmapOptions.vertices,
                 seed=args.seed if args.seed is not None else RoadmapOptions.seed,
             )
-        except InputError as exc:
+        except (InputError, LimitError) as exc:
             raise BadInput(f"-n/--seed: {exc}") from None
         saved = _default_roadmap(scene, quiet=True)
         if saved is not None and saved.options == opts:  # the saved file is this very roadmap
@@ -100,7 +100,7 @@ def _check_roadmap_flags(args) -> None:
             vertices=args.vertices if args.vertices is not None else RoadmapOptions.vertices,
             seed=args.seed if args.seed is not None else RoadmapOptions.seed,
         )
-    except InputError as exc:
+    except (InputError, LimitError) as exc:
         raise BadInput(f"-n/--seed: {exc}") from None
 
 

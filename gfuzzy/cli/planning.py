@@ -35,7 +35,7 @@ def cmd_roadmap(args) -> int:
         opts = RoadmapOptions(
             vertices=args.vertices, seed=args.seed, neighbors=args.neighbors, repair=not args.no_repair
         )
-    except InputError as exc:
+    except (InputError, LimitError) as exc:
         raise BadInput(f"gfuzzy roadmap: {exc}") from None
     rm = build_roadmap(scene, opts, progress=_progress("roadmap"))
     rm.save(out)
