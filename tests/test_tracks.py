@@ -261,6 +261,9 @@ def test_static_mesh_paths_follow_the_new_file(tmp_path, csv_file):
         ("order.csv", "t,id,x,y\n1,a,0,0\n1,b,0,0\n0.5,a,1,0\n", "order.csv: line 4: pedestrian a: time 0.5 does not increase"),
         ("id.csv", "t,id,x,y\n0,a b,0,0\n", "id.csv: line 2: id 'a b' must be"),
         ("nohdr.csv", "\n\n", "nohdr.csv: no header line"),
+        # a position past 1e9 was refused later, naming the scene about to be written
+        ("far.txt", "0 1 0 0\n10 1 1e300 0\n", "far.txt: line 2: x 1e+300 is too large"),
+        ("late.csv", "t,id,x,y\n0,a,0,0\n1e12,a,1,0\n", "late.csv: line 3: time 1e+12 is too large"),
     ],
 )  # fmt: skip
 def test_bad_files_are_one_line_and_exit_2(tmp_path, name, text, where):

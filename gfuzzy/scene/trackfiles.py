@@ -32,6 +32,7 @@ import numpy as np
 
 from ..errors import InputError, SceneError
 from ..typed import FloatArray
+from .yamldoc import MAX_MAGNITUDE
 
 __all__ = ["ANNOTATION_PERIOD", "FORMATS", "Track", "Tracks", "read_tracks"]
 
@@ -142,6 +143,11 @@ def _add(
     y: float,
     unit: str,
 ):
+    for name, value in ((unit, t), ("x", x), ("y", y)):
+        if abs(value) > MAX_MAGNITUDE:  # else the scene made of it is refused, naming that scene
+            raise SceneError(
+                path, f"line {lineno}", f"{name} {value:g} is too large (at most {MAX_MAGNITUDE:g} in magnitude)"
+            )
     prev = rows.setdefault(pid, [])
     if prev and t <= prev[-1][0]:
         raise SceneError(
