@@ -654,6 +654,13 @@ def test_cli_map(tmp_path, capsys):
     assert res == 0.1 and occupied.any() and not occupied.all()
 
 
+def test_cli_map_into_a_folder_that_refuses_names_the_file_asked_for(capsys):
+    # /proc refuses new files even to root; the line named the temporary '/proc/.m.x27xxq5v.pgm'
+    assert main(["export", str(SCENES / "building-floor.yaml"), "--map", "/proc/m.yaml"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("/proc/m.pgm:"), err
+
+
 # --------------------------------------------------------------------------- the scene schema
 
 SCHEMA_FILE = ROOT / "docs" / "scene.schema.json"
