@@ -100,7 +100,7 @@ def _grid(scene: Scene, resolution: float) -> tuple[int, int, float, float]:
     h = max(1, math.ceil((y1 - y0) / resolution - 1e-9))
     if w * h > MAX_MAP_CELLS:
         raise InputError(
-            f"resolution {resolution:g} m gives a {w} x {h} grid ({w * h} cells, at most {MAX_MAP_CELLS}); use a coarser resolution"
+            f"resolution {resolution:g} m gives a {w} x {h} grid ({w * h:.3g} cells, at most {MAX_MAP_CELLS:,}); use a coarser resolution"
         )
     return w, h, float(x0), float(y0)
 
