@@ -3,6 +3,8 @@ that made them (closed-form point-to-box distances, no shapely, no FCL)."""
 
 from __future__ import annotations
 
+import shlex
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -10,13 +12,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from conftest import run_cli_process
 
 pytest.importorskip("pyrvo")
 
 import gfuzzy  # noqa: E402
 from gfuzzy.errors import InputError  # noqa: E402
 from gfuzzy.navigation.populate import PopulateOptions, populate  # noqa: E402
-from gfuzzy.scene.scene import parse_scene  # noqa: E402
+from gfuzzy.scene.scene import load_scene, parse_scene  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -113,6 +116,22 @@ def test_populate_refuses_bad_input(tmp_path):
         assert p.returncode == 2, flags
         assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
         assert not out.exists()
+
+
+def test_the_readme_populate_example_runs_and_a_full_room_says_why(tmp_path):
+    # the README's example asked building-floor for 15 people of radius 0.3: its 0.6 m doors
+    # keep them in one room, which holds about 12; it exited 2 with no hint why
+    line = next(x for x in (ROOT / "README.md").read_text(encoding="utf-8").splitlines() if x.startswith("gfuzzy populate "))
+    argv = shlex.split(line, comments=True)[1:]
+    shutil.copytree(ROOT / "scenes", tmp_path / "scenes")
+    p = run_cli_process(*argv, cwd=tmp_path)
+    assert p.returncode == 0, p.stderr
+    assert load_scene(tmp_path / argv[argv.index("-o") + 1]).movers
+    out = tmp_path / "busy.yaml"
+    p = _run("populate", str(ROOT / "scenes" / "building-floor.yaml"), "--people", "15", "--seed", "1", "-o", str(out))
+    assert p.returncode == 2 and len(p.stderr.strip().splitlines()) == 1
+    assert "largest free region" in p.stderr and "gap narrower than 0.70 m" in p.stderr
+    assert not out.exists()
 
 
 def _wall_map(folder: Path) -> tuple[dict, np.ndarray]:

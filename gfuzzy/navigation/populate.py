@@ -317,7 +317,13 @@ def _place(scene: Scene, o: PopulateOptions, grid: _Grid, free_point, wps, rng):
                 starts.append(p)
                 break
         else:
-            raise InputError(f"{scene.source}: no room for {o.people} people of radius {o.radius:g} m")
+            area = float(grid.free.sum()) * grid.res**2
+            gap = 2 * (o.radius + GRID_MARGIN)
+            raise InputError(
+                f"{scene.source}: no room for {o.people} people of radius {o.radius:g} m in the largest "
+                f"free region they can walk ({area:.1f} m²; they cannot pass a gap narrower than {gap:.2f} m): "
+                f"give fewer --people or a smaller --radius"
+            )
     order: list = [None] * o.people
     goals = []
     for i in range(o.people):
