@@ -16,6 +16,7 @@ from helpers import run_main as _run
 from helpers import write_trajectory_file as _trajectory_file
 from shared_scenes import DOOR, LOOP
 
+import gfuzzy
 from gfuzzy.check.check import check_trajectory
 from gfuzzy.cli import main
 from gfuzzy.errors import InputError, LimitError
@@ -166,6 +167,21 @@ def test_a_vertex_count_no_query_could_search_is_refused_at_once(tmp_path, capsy
     line = _one_line(capsys.readouterr().err)
     assert f"{n:,} vertices" in line and line.startswith(("gfuzzy roadmap:", "-n/--seed:"))
     assert not out.exists()
+
+
+@pytest.mark.parametrize(("flag", "value"), [("--t0", "1e300"), ("--t0", "5e9"), ("--hold", "1e300")])
+def test_a_time_past_what_a_scene_allows_is_bad_input(tmp_path, capsys, flag, value):
+    # --t0 1e300 was answered "solved", exit 0, with rows all at t=1e300 (t0 + dt == t0),
+    # which check then refused; --hold 1e300 printed three 300-digit step counts
+    out = tmp_path / "a.json"
+    args = ["plan", str(SCENE), "--roadmap", str(ROADMAP), "--start", "1", "1", "--goal", "4", "4", flag, value]
+    assert main([*args, "-o", str(out)]) == 2
+    line = _one_line(capsys.readouterr().err)
+    assert line.startswith(flag) and "1e+09" in line and len(line) < 200
+    assert not out.exists()
+    scene = load_scene(SCENE)
+    with pytest.raises(InputError, match="1e\\+09"):
+        gfuzzy.plan(scene, gfuzzy.load_roadmap(ROADMAP, scene), (1, 1), (4, 4), **{flag[2:]: float(value)})
 
 
 def test_check_says_what_it_cannot_verify_without_the_query(tmp_path, capsys):
