@@ -263,6 +263,7 @@ def test_static_mesh_paths_follow_the_new_file(tmp_path, csv_file):
         ("nohdr.csv", "\n\n", "nohdr.csv: no header line"),
         # a position past 1e9 was refused later, naming the scene about to be written
         ("far.txt", "0 1 0 0\n10 1 1e300 0\n", "far.txt: line 2: x 1e+300 is too large"),
+        ("twice.csv", "t,id,x,y,X\n0,a,0,0,9\n1,a,1,0,9\n", "twice.csv: line 1: the header names column x twice"),
         ("late.csv", "t,id,x,y\n0,a,0,0\n1e12,a,1,0\n", "late.csv: line 3: time 1e+12 is too large"),
     ],
 )  # fmt: skip

@@ -211,6 +211,9 @@ def _read_csv(path: str, text: str) -> dict:
                     f"line {lineno}",
                     f"the header must name the columns t, id, x, y (missing: {', '.join(missing)})",
                 )
+            twice = [k for k in ("t", "id", "x", "y") if names.count(k) > 1]
+            if twice:  # which of the two holds the values is anyone's guess
+                raise SceneError(path, f"line {lineno}", f"the header names column {twice[0]} twice")
             header = names
             index = {k: names.index(k) for k in ("t", "id", "x", "y")}
             continue
