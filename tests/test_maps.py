@@ -392,6 +392,25 @@ def test_bad_map_files_give_one_line(tmp_path, capsys, edit, expect):
     _bad(tmp_path, capsys, expect)
 
 
+def test_a_huge_image_is_refused_in_one_line_without_pillows_warning(tmp_path, capsys):
+    # a PNG header of 10000 x 10000 pixels (no pixel data needed): Pillow warned of a
+    # "decompression bomb" on stderr (two more lines) before our own limit refused it
+    import struct
+    import warnings
+    import zlib
+
+    _good(tmp_path)
+    def chunk(kind: bytes, body: bytes) -> bytes:
+        return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
+
+    head = chunk(b"IHDR", struct.pack(">IIBBBBB", 10000, 10000, 8, 0, 0, 0, 0))
+    (tmp_path / "m.png").write_bytes(b"\x89PNG\r\n\x1a\n" + head + chunk(b"IDAT", zlib.compress(b"\0" * 64)))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        _bad(tmp_path, capsys, "image of 10000 x 10000 pixels")
+    assert not [w for w in caught if issubclass(w.category, Image.DecompressionBombWarning)]
+
+
 def test_the_good_map_of_the_bad_cases_loads(tmp_path):
     _good(tmp_path)
     (grid,) = load_scene(tmp_path / "s.yaml").obstacles
