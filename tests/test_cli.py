@@ -184,6 +184,15 @@ def test_a_time_past_what_a_scene_allows_is_bad_input(tmp_path, capsys, flag, va
         gfuzzy.plan(scene, gfuzzy.load_roadmap(ROADMAP, scene), (1, 1), (4, 4), **{flag[2:]: float(value)})
 
 
+def test_every_argument_of_every_command_has_a_help_text():
+    # `gfuzzy plan --help` listed SCENE with nothing beside it (10 arguments so)
+    from gfuzzy.cli.main import _parser
+
+    (sub,) = [a for a in _parser()._actions if a.dest == "command"]
+    bare = [(name, a.dest) for name, p in sub.choices.items() for a in p._actions if not a.help]
+    assert bare == []
+
+
 def test_check_says_what_it_cannot_verify_without_the_query(tmp_path, capsys):
     out = tmp_path / "a.json"
     assert main(["plan", str(SCENE), "--roadmap", str(ROADMAP), "-o", str(out)]) == 0

@@ -188,7 +188,7 @@ def cmd_crowd(args) -> int:
 def add_populate(sub) -> None:
     """``gfuzzy populate``."""
     p = sub.add_parser("populate", help="add walking people (ORCA among the static obstacles) to a scene")
-    p.add_argument("scene", metavar="SCENE")
+    p.add_argument("scene", metavar="SCENE", help="scene file (YAML) to add the people to")
     p.add_argument("--people", type=int, required=True, metavar="N", help="number of people")
     p.add_argument("--seed", type=int, default=1, help="seed of their starts, goals and walks (default 1)")
     p.add_argument("--duration", type=float, default=60.0, help="seconds of walking recorded (default 60)")
