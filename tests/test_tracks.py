@@ -294,6 +294,9 @@ def test_bad_files_are_one_line_and_exit_2(tmp_path, name, text, where):
         (["--format", "csv"], "the header must name the columns"),
         (["--fps", 0], "fps must be positive"),
         (["--static", "nowhere.yaml"], "nowhere.yaml: cannot read"),
+        # refused before as the numbers of the scene about to be written, naming that file
+        (["--vmax", "1e300"], "gfuzzy tracks: vmax must be at most 1e+09 in magnitude"),
+        (["--region", 0, 0, "1e12", 5], "gfuzzy tracks: region must be"),
     ],
 )
 def test_bad_requests_are_one_line_and_exit_2(tmp_path, eth_file, args, message):

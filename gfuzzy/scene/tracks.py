@@ -24,6 +24,7 @@ import yaml
 from ..errors import InputError, SceneError
 from .scene import NAME_RE, STATUSES, Scene
 from .trackfiles import ANNOTATION_PERIOD, Track, Tracks, _id_key, read_tracks
+from .yamldoc import MAX_MAGNITUDE
 
 __all__ = [
     "ANNOTATION_PERIOD",
@@ -201,6 +202,8 @@ class TrackSceneOptions:
             value = getattr(self, key)
             if value is not None and not math.isfinite(value):
                 raise InputError(f"{key} must be finite, got {value!r}")
+            if value is not None and abs(value) > MAX_MAGNITUDE:  # else refused as the written scene's number
+                raise InputError(f"{key} must be at most {MAX_MAGNITUDE:g} in magnitude, got {value:g}")
         for key in ("duration", "scale", "radius", "robot_radius", "vmax", "amax"):
             value = getattr(self, key)
             if value is not None and value <= 0:
@@ -211,11 +214,12 @@ class TrackSceneOptions:
             r = tuple(float(v) for v in self.region)
             if (
                 len(r) != 4
-                or not all(math.isfinite(v) for v in r)
+                or not all(math.isfinite(v) and abs(v) <= MAX_MAGNITUDE for v in r)
                 or not (r[0] < r[2] and r[1] < r[3])
             ):
                 raise InputError(
-                    f"region must be xmin ymin xmax ymax with xmin < xmax, ymin < ymax, got {self.region!r}"
+                    f"region must be xmin ymin xmax ymax with xmin < xmax, ymin < ymax (at most {MAX_MAGNITUDE:g} "
+                    f"in magnitude), got {self.region!r}"
                 )
             object.__setattr__(self, "region", r)
         if not NAME_RE.match(self.name):
