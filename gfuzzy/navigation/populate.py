@@ -27,6 +27,7 @@ from ..errors import InputError
 from ..rng import create_rng
 from ..roadmap.freespace import obstacle_shape
 from ..scene.scene import Mover, Scene
+from ..scene.yamldoc import MAX_MAGNITUDE
 from ..typed import FloatArray
 
 __all__ = ["PopulateOptions", "Populated", "populate", "write_scene", "obstacle_union"]
@@ -75,10 +76,12 @@ class PopulateOptions:
             raise InputError(f"people must be between 1 and 500, got {self.people}")
         for name in ("duration", "radius", "speed", "dt"):
             v = getattr(self, name)
-            if not (math.isfinite(v) and v > 0):
-                raise InputError(f"{name} must be a positive number, got {v}")
+            if not (math.isfinite(v) and 0 < v <= MAX_MAGNITUDE):  # ORCA's arithmetic overflows beyond
+                raise InputError(f"{name} must be a positive number of at most {MAX_MAGNITUDE:g}, got {v:g}")
         if self.duration / self.dt > 100_000:
             raise InputError("duration / dt must be at most 100000 samples")
+        if self.duration < self.dt:  # one sample is no walk: nobody would be written
+            raise InputError(f"duration must be at least one step of {self.dt:g} s, got {self.duration:g}")
 
 
 @dataclass(frozen=True)
