@@ -136,6 +136,15 @@ def test_the_readme_populate_example_runs_and_a_full_room_says_why(tmp_path):
     assert not out.exists()
 
 
+def test_the_command_says_how_many_people_stop_short(tmp_path):
+    # at 100 m/s ORCA takes every person into an obstacle within seconds: each walk is cut
+    # there (the mover disappears), and the command said "3 people walking for 60 s"
+    out = tmp_path / "p.yaml"
+    p = _run("populate", "scenes/sim-4s1m.yaml", "--people", "3", "--speed", "100", "-o", str(out))
+    assert p.returncode == 0, p.stderr
+    assert "3 people walking for 60 s" in p.stdout and "3 of them stop short" in p.stdout
+
+
 def _wall_map(folder: Path) -> tuple[dict, np.ndarray]:
     """ROOM's walls and pillar as a Nav2 map (0.1 m cells), written beside a scene in folder;
     returns the scene document and the occupied mask (row 0 at the top)."""

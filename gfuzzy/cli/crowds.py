@@ -221,5 +221,6 @@ def cmd_populate(args) -> int:
         raise BadInput(f"gfuzzy populate: {exc}") from None
     result = populate(scene, opts)
     write_scene(args.scene, result, out)
-    _say(f"{out}: {args.people} people walking for {args.duration:g} s added to {scene.name}", sys.stdout)
+    short = f" ({result.cut} of them stop short, where ORCA would take them into an obstacle)" if result.cut else ""
+    _say(f"{out}: {len(result.movers)} people walking for {args.duration:g} s added to {scene.name}{short}", sys.stdout)
     return EXIT_OK
