@@ -7,6 +7,7 @@ what a user sees, or as ``python -m gfuzzy`` in a fresh process.
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -19,7 +20,7 @@ from shared_scenes import DOOR, LOOP
 import gfuzzy
 from gfuzzy.check.check import check_trajectory
 from gfuzzy.cli import main
-from gfuzzy.errors import InputError, LimitError
+from gfuzzy.errors import InputError, LimitError, check_number
 from gfuzzy.roadmap.roadmap import RoadmapOptions
 from gfuzzy.scene.scene import load_scene
 from gfuzzy.settings import MAX_POINTS
@@ -182,6 +183,20 @@ def test_a_time_past_what_a_scene_allows_is_bad_input(tmp_path, capsys, flag, va
     scene = load_scene(SCENE)
     with pytest.raises(InputError, match="1e\\+09"):
         gfuzzy.plan(scene, gfuzzy.load_roadmap(ROADMAP, scene), (1, 1), (4, 4), **{flag[2:]: float(value)})
+
+
+@pytest.mark.parametrize("command", ["plan", "navigate"])
+def test_a_finite_option_past_1e9_is_bad_input(tmp_path, capsys, command):
+    # --dt 1e300: navigate (and crowd) died in an IndexError traceback, plan answered
+    # no_path "the start is too close to a mover"
+    out = tmp_path / "a.json"
+    assert main([command, str(SCENE), "--roadmap", str(ROADMAP), "--dt", "1e300", "-o", str(out)]) == 2
+    line = _one_line(capsys.readouterr().err)
+    assert line == f"gfuzzy {command}: dt must be at most 1e+09, got 1e+300"
+    assert not out.exists()
+    with pytest.raises(InputError, match="at most 1e\\+09"):
+        check_number("dt", 1e300)
+    check_number("horizon", math.inf, finite=False)  # an unbounded option stays so
 
 
 def test_every_argument_of_every_command_has_a_help_text():

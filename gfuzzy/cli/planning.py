@@ -8,7 +8,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from ..errors import InputError, LimitError
-from ..scene.yamldoc import MAX_MAGNITUDE
+from ..settings import MAX_MAGNITUDE
 from ..status import Status
 from .common import (
     EXIT_NO,

@@ -27,7 +27,7 @@ from ..errors import InputError
 from ..rng import create_rng
 from ..roadmap.freespace import obstacle_shape
 from ..scene.scene import Mover, Scene
-from ..scene.yamldoc import MAX_MAGNITUDE
+from ..settings import MAX_MAGNITUDE
 from ..typed import FloatArray
 
 __all__ = ["PopulateOptions", "Populated", "populate", "write_scene", "obstacle_union"]

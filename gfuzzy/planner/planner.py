@@ -23,8 +23,7 @@ from ..errors import InputError, LimitError, check_number
 from ..poses import wrap_angle
 from ..roadmap.roadmap import Roadmap
 from ..scene.scene import Query, Scene
-from ..scene.yamldoc import MAX_MAGNITUDE
-from ..settings import MAX_MOVER_SAMPLES, SPEED_SAFETY
+from ..settings import MAX_MAGNITUDE, MAX_MOVER_SAMPLES, SPEED_SAFETY
 from ..status import Status
 from ..timespace.movers import MoverField
 from ..timespace.roadgraph import connect

@@ -31,8 +31,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError, SceneError
+from ..settings import MAX_MAGNITUDE
 from ..typed import FloatArray
-from .yamldoc import MAX_MAGNITUDE
 
 __all__ = ["ANNOTATION_PERIOD", "FORMATS", "Track", "Tracks", "read_tracks"]
 

@@ -22,9 +22,9 @@ from pathlib import Path
 import yaml
 
 from ..errors import InputError, SceneError
+from ..settings import MAX_MAGNITUDE
 from .scene import NAME_RE, STATUSES, Scene
 from .trackfiles import ANNOTATION_PERIOD, Track, Tracks, _id_key, read_tracks
-from .yamldoc import MAX_MAGNITUDE
 
 __all__ = [
     "ANNOTATION_PERIOD",

@@ -14,13 +14,12 @@ import numpy as np
 import yaml
 
 from ..errors import SceneError
+from ..settings import MAX_MAGNITUDE
 
 #: Names of scenes, movers and queries: letters, digits, ``_ . -``.
 NAME_RE = re.compile(r"^[A-Za-z0-9_.-]+$")
 #: Largest number of YAML nodes a scene may expand to (aliases counted each time used).
 MAX_NODES = 2_000_000
-#: Largest magnitude of any number in a scene: beyond it lengths and times overflow.
-MAX_MAGNITUDE = 1e9
 
 
 # --------------------------------------------------------------------------- YAML
