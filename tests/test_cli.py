@@ -21,6 +21,7 @@ import gfuzzy
 from gfuzzy.check.check import check_trajectory
 from gfuzzy.cli import main
 from gfuzzy.errors import InputError, LimitError, check_number
+from gfuzzy.rng import create_rng
 from gfuzzy.roadmap.roadmap import RoadmapOptions
 from gfuzzy.scene.scene import load_scene
 from gfuzzy.settings import MAX_POINTS
@@ -197,6 +198,16 @@ def test_a_finite_option_past_1e9_is_bad_input(tmp_path, capsys, command):
     with pytest.raises(InputError, match="at most 1e\\+09"):
         check_number("dt", 1e300)
     check_number("horizon", math.inf, finite=False)  # an unbounded option stays so
+
+
+def test_a_negative_noise_seed_is_bad_input(tmp_path, capsys):
+    # numpy refused it where the sensor first drew noise: a traceback, exit 1
+    out = tmp_path / "a.json"
+    assert main(["navigate", str(SCENE), "--roadmap", str(ROADMAP), "--seed", "-1", "-o", str(out)]) == 2
+    assert "seed must be a whole number >= 0, got -1" in _one_line(capsys.readouterr().err)
+    assert not out.exists()
+    with pytest.raises(InputError):
+        create_rng(-1)
 
 
 def test_every_argument_of_every_command_has_a_help_text():

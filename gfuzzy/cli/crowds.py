@@ -80,6 +80,8 @@ def _setting(args):
         raise BadInput(f"gfuzzy crowd: --episodes must be >= 1, got {args.episodes}")
     if args.workers < 0:
         raise BadInput(f"gfuzzy crowd: --workers must be >= 0, got {args.workers}")
+    if args.seed < 0:  # numpy refuses it deep in the first episode
+        raise BadInput(f"gfuzzy crowd: --seed must be >= 0, got {args.seed}")
     for flag, value in (("--noise", args.noise), ("--fov", args.fov), ("--time-budget", args.time_budget),
                         ("--personal-space", args.personal_space), ("--path-space", args.path_space)):  # fmt: skip
         if not math.isfinite(value):
