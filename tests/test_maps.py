@@ -442,6 +442,17 @@ def test_gfuzzy_map_end_to_end(tmp_path, capsys):
     assert main(["check", str(out), str(traj)]) == 0
 
 
+def test_gfuzzy_map_says_when_the_robot_fits_nowhere(tmp_path, capsys):
+    # it said only "wrote ...", and `gfuzzy plan` then said "the scene has no queries"
+    _good(tmp_path)
+    out = tmp_path / "big.yaml"
+    assert main(["map", str(tmp_path / "m.yaml"), "--robot-disc", "5", "-o", str(out)]) == 0
+    captured = capsys.readouterr()
+    assert f"wrote {out}" in captured.out
+    assert captured.err.strip() == f"note: the robot fits nowhere on this map: {out} has no sample query (a smaller robot?)"
+    assert not load_scene(out).queries
+
+
 def test_gfuzzy_map_refuses_a_map_outside_the_folder(tmp_path, capsys):
     write_map(tmp_path / "a", [[254, 254], [254, 254]])
     (tmp_path / "b").mkdir()
