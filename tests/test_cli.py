@@ -210,6 +210,20 @@ def test_a_negative_noise_seed_is_bad_input(tmp_path, capsys):
         create_rng(-1)
 
 
+def test_a_saved_roadmap_that_does_not_fit_is_noted_once(tmp_path, capsys, monkeypatch):
+    # run from the scene's parent folder, roadmaps/<name>.json "here" and "beside the scene's
+    # folder" are one file: it was refused twice, then called "no roadmap file"
+    (tmp_path / "scenes").mkdir()
+    (tmp_path / "roadmaps").mkdir()
+    (tmp_path / "scenes" / "sim-4s1m.yaml").write_text(SCENE.read_text())
+    (tmp_path / "roadmaps" / "sim-4s1m.json").write_text((ROOT / "roadmaps" / "building-floor.json").read_text())
+    monkeypatch.chdir(tmp_path)
+    assert main(["plan", "scenes/sim-4s1m.yaml", "-o", "a.json"]) == 0
+    err = capsys.readouterr().err
+    assert err.count("note: not using") == 1 and "built for scene 'building-floor'" in err
+    assert "note: no roadmap file fits 'sim-4s1m'; building one" in err
+
+
 def test_every_argument_of_every_command_has_a_help_text():
     # `gfuzzy plan --help` listed SCENE with nothing beside it (10 arguments so)
     from gfuzzy.cli.main import _parser

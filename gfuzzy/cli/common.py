@@ -83,7 +83,7 @@ def _roadmap_for(scene, args, quiet=False):
         return build_roadmap(scene, same_shapes, progress=_progress("roadmap"))
     if not quiet:
         _say(
-            f"note: no roadmap file for {scene.name!r}; building one with "
+            f"note: no roadmap file fits {scene.name!r}; building one with "
             f"{RoadmapOptions.vertices} vertices (save one with `gfuzzy roadmap`)"
         )
     return build_roadmap(scene, RoadmapOptions(), progress=_progress("roadmap"))
@@ -128,7 +128,9 @@ def _default_roadmap(scene, quiet=False):
     from ..roadmap.roadmap import default_roadmap_path, load_roadmap
 
     scene_dir = Path(scene.source).resolve().parent
-    for path in (default_roadmap_path(scene), default_roadmap_path(scene, scene_dir.parent / "roadmaps")):
+    here, beside = default_roadmap_path(scene), default_roadmap_path(scene, scene_dir.parent / "roadmaps")
+    # run from the scene's parent folder, both are one file: read (and refused) once
+    for path in (here,) if here.resolve() == beside.resolve() else (here, beside):
         if path.is_file():
             try:
                 return load_roadmap(path, scene)
