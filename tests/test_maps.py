@@ -453,6 +453,15 @@ def test_gfuzzy_map_says_when_the_robot_fits_nowhere(tmp_path, capsys):
     assert not load_scene(out).queries
 
 
+@pytest.mark.parametrize("stem", ["12", "null", "1e3"])
+def test_gfuzzy_map_of_a_scene_named_like_a_number(tmp_path, capsys, stem):
+    # `-o 12.yaml` wrote "name: 12", which reads as a number: refused as it was written
+    _good(tmp_path)
+    out = tmp_path / f"{stem}.yaml"
+    assert main(["map", str(tmp_path / "m.yaml"), "--robot-disc", "0.1", "-o", str(out)]) == 0, capsys.readouterr().err
+    assert load_scene(out).name == stem
+
+
 def test_gfuzzy_map_refuses_a_map_outside_the_folder(tmp_path, capsys):
     write_map(tmp_path / "a", [[254, 254], [254, 254]])
     (tmp_path / "b").mkdir()

@@ -145,6 +145,16 @@ def test_the_command_says_how_many_people_stop_short(tmp_path):
     assert "3 people walking for 60 s" in p.stdout and "3 of them stop short" in p.stdout
 
 
+def test_a_scene_named_like_a_number_keeps_its_name(tmp_path):
+    # yaml.safe_dump wrote the name "1e3" plain, which reads back as 1000.0
+    src = tmp_path / "n.yaml"
+    src.write_text(yaml.safe_dump(dict(ROOM, name="NAME"), sort_keys=False).replace("name: NAME", 'name: "1e3"', 1))
+    out = tmp_path / "o.yaml"
+    p = _run("populate", str(src), "--people", "2", "-o", str(out))
+    assert p.returncode == 0, p.stderr
+    assert load_scene(out).name == "1e3"
+
+
 def _wall_map(folder: Path) -> tuple[dict, np.ndarray]:
     """ROOM's walls and pillar as a Nav2 map (0.1 m cells), written beside a scene in folder;
     returns the scene document and the occupied mask (row 0 at the top)."""

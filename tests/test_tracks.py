@@ -307,6 +307,17 @@ def test_bad_requests_are_one_line_and_exit_2(tmp_path, eth_file, args, message)
     assert not out.exists()
 
 
+@pytest.mark.parametrize("stem", ["12", "true", "1e3"])
+def test_a_scene_named_like_a_number_reads_back(tmp_path, eth_file, stem):
+    # the name (the output's stem) and a query name were written plain: 12, True, 1000.0 on
+    # reading, and the scene was refused as it was written ("name: expected a non-empty string")
+    out = tmp_path / f"{stem}.yaml"
+    proc = run_cli_process("tracks", eth_file, "--start", 1, 1, "--goal", 2, 2, "--query-name", "2e1", "-o", out)
+    assert proc.returncode == 0, proc.stderr
+    scene = load_scene(out)
+    assert scene.name == stem and scene.queries[0].name == "2e1"
+
+
 def test_unreadable_file_and_bad_output_name(tmp_path, eth_file):
     proc = run_cli_process("tracks", tmp_path / "missing.txt", "-o", tmp_path / "a.yaml")
     assert proc.returncode == 2 and "missing.txt: cannot read" in proc.stderr

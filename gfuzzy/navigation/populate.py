@@ -384,10 +384,10 @@ def write_scene(source: str | os.PathLike, result: Populated, out: str | os.Path
     InputError
         ``out``'s folder does not hold a file the scene refers to.
     """
-    import yaml
 
     from ..atomic import write_atomic
     from ..scene.yamldoc import _load_yaml as load_yaml
+    from ..scene.yamldoc import dump_yaml
 
     src = Path(source)
     doc = load_yaml(src.read_text(), str(src))
@@ -412,4 +412,4 @@ def write_scene(source: str | os.PathLike, result: Populated, out: str | os.Path
                        "trajectory": [[float(v) for v in row] for row in m.trajectory]})  # fmt: skip
     doc["movers"] = movers
     head = f"# {src.name} with {len(result.movers)} walking people added by gfuzzy populate\n"
-    write_atomic(out, head + yaml.safe_dump(doc, sort_keys=False, default_flow_style=None, width=120))
+    write_atomic(out, head + dump_yaml(doc, sort_keys=False, default_flow_style=None, width=120))

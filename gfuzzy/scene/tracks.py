@@ -19,12 +19,11 @@ from dataclasses import dataclass
 from itertools import pairwise
 from pathlib import Path
 
-import yaml
-
 from ..errors import InputError, SceneError
 from ..settings import MAX_MAGNITUDE
 from .scene import NAME_RE, STATUSES, Scene
 from .trackfiles import ANNOTATION_PERIOD, Track, Tracks, _id_key, read_tracks
+from .yamldoc import dump_yaml, plain_name
 
 __all__ = [
     "ANNOTATION_PERIOD",
@@ -284,7 +283,7 @@ class TrackScene:
         ]
         out = head + [
             "version: 1",
-            f"name: {doc['name']}",
+            f"name: {plain_name(doc['name'])}",
             f"bounds: {_row(doc['bounds'])}",
             "robot:",
         ]
@@ -298,7 +297,7 @@ class TrackScene:
         if doc["movers"]:
             out.append("movers:")
             for m in doc["movers"]:
-                out.append(f"  - name: {m['name']}")
+                out.append(f"  - name: {plain_name(m['name'])}")
                 out.append(f"    disc: {_num(m['disc'])}")
                 out.append("    trajectory: " + _flow_rows(m["trajectory"], "    "))
         else:
@@ -306,7 +305,7 @@ class TrackScene:
         if doc.get("queries"):
             out.append("queries:")
             for q in doc["queries"]:
-                out.append(f"  - name: {q['name']}")
+                out.append(f"  - name: {plain_name(q['name'])}")
                 out += [
                     f"    start: {_row(q['start'])}",
                     f"    goal: {_row(q['goal'])}",
@@ -341,7 +340,7 @@ def _value(v) -> str:
 
 
 def _flow(item) -> str:
-    return yaml.safe_dump(item, default_flow_style=True, width=10**9, sort_keys=False).strip()
+    return dump_yaml(item, default_flow_style=True, width=10**9, sort_keys=False).strip()
 
 
 def _flow_rows(rows, indent: str, width: int = 100) -> str:
