@@ -20,6 +20,8 @@ from __future__ import annotations
 import math
 import numbers
 
+from .settings import MAX_MAGNITUDE
+
 
 class GfuzzyError(Exception):
     """Base class of every error gfuzzy raises on purpose."""
@@ -59,7 +61,8 @@ def check_number(name: str, value, low: float = 0.0, *, strict: bool = True, fin
     """The one validation of a numeric option (``PlanOptions``, ``NavOptions``, ...).
 
     Raises :class:`InputError` naming ``name`` unless ``value`` is a real number above
-    ``low`` (at least ``low`` when not ``strict``), finite unless ``finite`` is False.
+    ``low`` (at least ``low`` when not ``strict``), finite and at most ``settings.MAX_MAGNITUDE``
+    in magnitude unless ``finite`` is False.
     """
     ok = isinstance(value, numbers.Real) and not math.isnan(value) and (not finite or math.isfinite(value))
     if ok:
@@ -70,3 +73,5 @@ def check_number(name: str, value, low: float = 0.0, *, strict: bool = True, fin
         else:
             want = f"a number {'>' if strict else '>='} {low:g}"
         raise InputError(f"{name} must be {want}, got {value!r}")
+    if finite and abs(value) > MAX_MAGNITUDE:  # as a scene file's numbers: beyond, times stop resolving
+        raise InputError(f"{name} must be at most {MAX_MAGNITUDE:g}, got {value:g}")

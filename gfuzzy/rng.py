@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .errors import InputError
+
 Seed = "int | np.random.Generator | None"
 
 
@@ -21,11 +23,15 @@ def create_rng(seed: int | np.random.Generator | None = None) -> np.random.Gener
     ------
     TypeError
         If ``seed`` is of another type.
+    InputError
+        If ``seed`` is a negative int.
     """
     if isinstance(seed, np.random.Generator):
         return seed
     if seed is None:
         return np.random.default_rng(0)
     if isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
+        if seed < 0:  # numpy's ValueError, raised where the seed is first used, was a traceback
+            raise InputError(f"seed must be a whole number >= 0, got {seed}")
         return np.random.default_rng(int(seed))
     raise TypeError(f"seed must be an int or numpy.random.Generator, not {type(seed).__name__}")

@@ -6,7 +6,7 @@ navigator) can use them without importing the planner that runs it.
 
 from __future__ import annotations
 
-__all__ = ["SPEED_SAFETY", "MAX_POINTS", "MAX_MOVER_SAMPLES", "AMAX_PER_VMAX", "INTERVAL_BATCH_CELLS"]
+__all__ = ["SPEED_SAFETY", "MAX_POINTS", "MAX_MOVER_SAMPLES", "AMAX_PER_VMAX", "INTERVAL_BATCH_CELLS", "MAX_MAGNITUDE"]
 
 #: Planning speed is vmax shrunk by this factor, so rounding never lifts a step above vmax.
 SPEED_SAFETY = 1.0 - 1e-9
@@ -22,3 +22,7 @@ AMAX_PER_VMAX = 2.0
 #: Cells (points x steps, one bool each) of the movers' safety computed in one batch by
 #: the search's interval store: about 8 MB of bools at a time, whatever the horizon.
 INTERVAL_BATCH_CELLS = 8_000_000
+
+#: Largest magnitude of a number in a scene file or a finite option: beyond it lengths and
+#: times overflow or stop resolving the time step (1e9 + 0.07 is still 1e9 + 0.07).
+MAX_MAGNITUDE = 1e9

@@ -217,7 +217,7 @@ def load_trajectory(path: str | os.PathLike) -> TrajectoryFile:
         raise SceneError(file, "", f"invalid JSON: {exc}") from None
     try:
         doc = json.loads(text)
-    except json.JSONDecodeError as exc:
+    except (json.JSONDecodeError, RecursionError) as exc:  # RecursionError: arrays nested past Python's stack
         if Path(path).suffix.lower() == ".csv" or text.lstrip().startswith("t,x,y"):
             # the CSV export is a common mix-up: it has rows but no status
             beside = Path(path).with_suffix(".json")

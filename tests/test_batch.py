@@ -68,6 +68,28 @@ def read_csv(path: Path) -> list[dict]:
         return list(csv.DictReader(fh))
 
 
+def test_a_busy_port_8787_is_not_the_users_concern():
+    # the scheduler's HTTP server took port 8787 even without a dashboard, and when another
+    # cluster held it distributed warned on stderr "Port 8787 is already in use ..."
+    import socket
+    import warnings
+
+    holder = socket.socket()
+    try:
+        holder.bind(("127.0.0.1", 8787))  # if another process holds it, so much the better
+        holder.listen()
+    except OSError:
+        pass
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            with local_cluster(1):
+                pass
+    finally:
+        holder.close()
+    assert not [w for w in caught if "already in use" in str(w.message)]
+
+
 def test_workers_run_one_blas_thread(client):
     env = client.run(lambda: {k: os.environ.get(k) for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")})
     assert len(env) == 2

@@ -7,6 +7,7 @@ what a user sees, or as ``python -m gfuzzy`` in a fresh process.
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -16,11 +17,14 @@ from helpers import run_main as _run
 from helpers import write_trajectory_file as _trajectory_file
 from shared_scenes import DOOR, LOOP
 
+import gfuzzy
 from gfuzzy.check.check import check_trajectory
 from gfuzzy.cli import main
-from gfuzzy.errors import InputError
+from gfuzzy.errors import InputError, LimitError, check_number
+from gfuzzy.rng import create_rng
 from gfuzzy.roadmap.roadmap import RoadmapOptions
 from gfuzzy.scene.scene import load_scene
+from gfuzzy.settings import MAX_POINTS
 
 
 def test_unsolved_plan_removes_a_stale_csv_and_says_what_it_wrote(line_scene, tmp_path, capsys):
@@ -152,6 +156,81 @@ def test_a_seed_out_of_range_is_bad_input(tmp_path, capsys, seed):
     assert not out.exists()
     with pytest.raises(InputError, match="seed"):
         RoadmapOptions(seed=seed)
+
+
+@pytest.mark.parametrize("command", ["roadmap", "plan"])
+def test_a_vertex_count_no_query_could_search_is_refused_at_once(tmp_path, capsys, command):
+    # -n 1000000000000 ran OMPL's PRM for ever (no output, no end) before it was refused
+    out = tmp_path / "r.json"
+    n = MAX_POINTS + 1
+    with pytest.raises(LimitError, match="vertices"):  # first: the old code never returns below
+        RoadmapOptions(vertices=n)
+    assert main([command, str(SCENE), "-n", str(n), "--seed", "1", "-o", str(out)]) == 2
+    line = _one_line(capsys.readouterr().err)
+    assert f"{n:,} vertices" in line and line.startswith(("gfuzzy roadmap:", "-n/--seed:"))
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(("flag", "value"), [("--t0", "1e300"), ("--t0", "5e9"), ("--hold", "1e300")])
+def test_a_time_past_what_a_scene_allows_is_bad_input(tmp_path, capsys, flag, value):
+    # --t0 1e300 was answered "solved", exit 0, with rows all at t=1e300 (t0 + dt == t0),
+    # which check then refused; --hold 1e300 printed three 300-digit step counts
+    out = tmp_path / "a.json"
+    args = ["plan", str(SCENE), "--roadmap", str(ROADMAP), "--start", "1", "1", "--goal", "4", "4", flag, value]
+    assert main([*args, "-o", str(out)]) == 2
+    line = _one_line(capsys.readouterr().err)
+    assert line.startswith(flag) and "1e+09" in line and len(line) < 200
+    assert not out.exists()
+    scene = load_scene(SCENE)
+    with pytest.raises(InputError, match="1e\\+09"):
+        gfuzzy.plan(scene, gfuzzy.load_roadmap(ROADMAP, scene), (1, 1), (4, 4), **{flag[2:]: float(value)})
+
+
+@pytest.mark.parametrize("command", ["plan", "navigate"])
+def test_a_finite_option_past_1e9_is_bad_input(tmp_path, capsys, command):
+    # --dt 1e300: navigate (and crowd) died in an IndexError traceback, plan answered
+    # no_path "the start is too close to a mover"
+    out = tmp_path / "a.json"
+    assert main([command, str(SCENE), "--roadmap", str(ROADMAP), "--dt", "1e300", "-o", str(out)]) == 2
+    line = _one_line(capsys.readouterr().err)
+    assert line == f"gfuzzy {command}: dt must be at most 1e+09, got 1e+300"
+    assert not out.exists()
+    with pytest.raises(InputError, match="at most 1e\\+09"):
+        check_number("dt", 1e300)
+    check_number("horizon", math.inf, finite=False)  # an unbounded option stays so
+
+
+def test_a_negative_noise_seed_is_bad_input(tmp_path, capsys):
+    # numpy refused it where the sensor first drew noise: a traceback, exit 1
+    out = tmp_path / "a.json"
+    assert main(["navigate", str(SCENE), "--roadmap", str(ROADMAP), "--seed", "-1", "-o", str(out)]) == 2
+    assert "seed must be a whole number >= 0, got -1" in _one_line(capsys.readouterr().err)
+    assert not out.exists()
+    with pytest.raises(InputError):
+        create_rng(-1)
+
+
+def test_a_saved_roadmap_that_does_not_fit_is_noted_once(tmp_path, capsys, monkeypatch):
+    # run from the scene's parent folder, roadmaps/<name>.json "here" and "beside the scene's
+    # folder" are one file: it was refused twice, then called "no roadmap file"
+    (tmp_path / "scenes").mkdir()
+    (tmp_path / "roadmaps").mkdir()
+    (tmp_path / "scenes" / "sim-4s1m.yaml").write_text(SCENE.read_text())
+    (tmp_path / "roadmaps" / "sim-4s1m.json").write_text((ROOT / "roadmaps" / "building-floor.json").read_text())
+    monkeypatch.chdir(tmp_path)
+    assert main(["plan", "scenes/sim-4s1m.yaml", "-o", "a.json"]) == 0
+    err = capsys.readouterr().err
+    assert err.count("note: not using") == 1 and "built for scene 'building-floor'" in err
+    assert "note: no roadmap file fits 'sim-4s1m'; building one" in err
+
+
+def test_every_argument_of_every_command_has_a_help_text():
+    # `gfuzzy plan --help` listed SCENE with nothing beside it (10 arguments so)
+    from gfuzzy.cli.main import _parser
+
+    (sub,) = [a for a in _parser()._actions if a.dest == "command"]
+    bare = [(name, a.dest) for name, p in sub.choices.items() for a in p._actions if not a.help]
+    assert bare == []
 
 
 def test_check_says_what_it_cannot_verify_without_the_query(tmp_path, capsys):

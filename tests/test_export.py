@@ -654,6 +654,24 @@ def test_cli_map(tmp_path, capsys):
     assert res == 0.1 and occupied.any() and not occupied.all()
 
 
+def test_cli_map_into_a_folder_that_refuses_names_the_file_asked_for(capsys):
+    # /proc refuses new files even to root; the line named the temporary '/proc/.m.x27xxq5v.pgm'
+    assert main(["export", str(SCENES / "building-floor.yaml"), "--map", "/proc/m.yaml"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("/proc/m.pgm:"), err
+
+
+def test_cli_step_count_is_written_short(tmp_path, capsys):
+    traj = tmp_path / "far.json"
+    doc = {"version": 1, "scene": "office-polygons", "query": "", "status": "solved", "message": "",
+           "waypoints": [[0.0, 0.5, 4.5], [1e300, 0.6, 4.5]]}
+    traj.write_text(json.dumps(doc), encoding="utf-8")
+    assert main(["export", str(SCENES / "office-polygons.yaml"), str(traj), "-o", str(tmp_path / "o.mcap")]) == 2
+    err = capsys.readouterr().err
+    assert "gives 1e+301 time steps" in err and len(err) < 300, err  # not a 300-digit count
+    assert list(tmp_path.iterdir()) == [traj]
+
+
 # --------------------------------------------------------------------------- the scene schema
 
 SCHEMA_FILE = ROOT / "docs" / "scene.schema.json"

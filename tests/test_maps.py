@@ -392,6 +392,25 @@ def test_bad_map_files_give_one_line(tmp_path, capsys, edit, expect):
     _bad(tmp_path, capsys, expect)
 
 
+def test_a_huge_image_is_refused_in_one_line_without_pillows_warning(tmp_path, capsys):
+    # a PNG header of 10000 x 10000 pixels (no pixel data needed): Pillow warned of a
+    # "decompression bomb" on stderr (two more lines) before our own limit refused it
+    import struct
+    import warnings
+    import zlib
+
+    _good(tmp_path)
+    def chunk(kind: bytes, body: bytes) -> bytes:
+        return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
+
+    head = chunk(b"IHDR", struct.pack(">IIBBBBB", 10000, 10000, 8, 0, 0, 0, 0))
+    (tmp_path / "m.png").write_bytes(b"\x89PNG\r\n\x1a\n" + head + chunk(b"IDAT", zlib.compress(b"\0" * 64)))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        _bad(tmp_path, capsys, "image of 10000 x 10000 pixels")
+    assert not [w for w in caught if issubclass(w.category, Image.DecompressionBombWarning)]
+
+
 def test_the_good_map_of_the_bad_cases_loads(tmp_path):
     _good(tmp_path)
     (grid,) = load_scene(tmp_path / "s.yaml").obstacles
@@ -421,6 +440,26 @@ def test_gfuzzy_map_end_to_end(tmp_path, capsys):
     traj = tmp_path / "t.json"
     assert main(["plan", str(out), "-o", str(traj)]) == 0
     assert main(["check", str(out), str(traj)]) == 0
+
+
+def test_gfuzzy_map_says_when_the_robot_fits_nowhere(tmp_path, capsys):
+    # it said only "wrote ...", and `gfuzzy plan` then said "the scene has no queries"
+    _good(tmp_path)
+    out = tmp_path / "big.yaml"
+    assert main(["map", str(tmp_path / "m.yaml"), "--robot-disc", "5", "-o", str(out)]) == 0
+    captured = capsys.readouterr()
+    assert f"wrote {out}" in captured.out
+    assert captured.err.strip() == f"note: the robot fits nowhere on this map: {out} has no sample query (a smaller robot?)"
+    assert not load_scene(out).queries
+
+
+@pytest.mark.parametrize("stem", ["12", "null", "1e3"])
+def test_gfuzzy_map_of_a_scene_named_like_a_number(tmp_path, capsys, stem):
+    # `-o 12.yaml` wrote "name: 12", which reads as a number: refused as it was written
+    _good(tmp_path)
+    out = tmp_path / f"{stem}.yaml"
+    assert main(["map", str(tmp_path / "m.yaml"), "--robot-disc", "0.1", "-o", str(out)]) == 0, capsys.readouterr().err
+    assert load_scene(out).name == stem
 
 
 def test_gfuzzy_map_refuses_a_map_outside_the_folder(tmp_path, capsys):

@@ -9,7 +9,7 @@ import pytest
 
 import gfuzzy
 from gfuzzy.navigation.navigator import Navigator, NavOptions
-from gfuzzy.navigation.pathspace import WallCheck, ghost_window, path_ghosts, walled_off
+from gfuzzy.navigation.pathspace import MAX_GHOSTS, WallCheck, ghost_window, path_ghosts, walled_off
 from gfuzzy.scene.scene import parse_scene
 
 
@@ -54,6 +54,21 @@ def test_ghost_zones_cover_the_band_the_person_sweeps(speed):
     pts = np.column_stack([1.0 + side, -2.0 + along])
     d = np.hypot(*(pts[:, None, :] - g.obs[None, :, :2]).transpose(2, 0, 1))
     assert np.all(np.min(d - (0.3 + g.obs[:, 4] + g.cover)[None, :], axis=1) <= 1e-9)
+
+
+@pytest.mark.parametrize(("speed", "look"), [(1e9, 1.25), (1.0, 1e9)])
+def test_an_absurd_velocity_or_look_gets_at_most_max_ghosts_still_covering(speed, look):
+    # `navigate --noise 1e9` estimated such velocities and path_ghosts asked for an array of
+    # 146 GiB; `crowd --path-space 1e9` had the process killed for its memory
+    obs = np.array([[1.0, -2.0, 0.0, speed, 0.3]])
+    g = path_ghosts(obs, look, 0.3, 0.05, 0.1)
+    assert len(g) == MAX_GHOSTS
+    rng = np.random.default_rng(5)
+    along = rng.uniform(g.shift.min() * speed, look * speed, 4000)
+    side = rng.uniform(-0.65, 0.65, 4000)
+    pts = np.column_stack([1.0 + side, -2.0 + along])
+    d = np.hypot(*(pts[:, None, :] - g.obs[None, :, :2]).transpose(2, 0, 1))
+    assert np.all(np.min(d - (0.3 + g.obs[:, 4] + g.cover)[None, :], axis=1) <= 1e-6)
 
 
 def test_a_robot_in_the_way_gets_time_to_step_aside():

@@ -3,6 +3,8 @@ that made them (closed-form point-to-box distances, no shapely, no FCL)."""
 
 from __future__ import annotations
 
+import shlex
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -10,13 +12,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from conftest import run_cli_process
 
 pytest.importorskip("pyrvo")
 
 import gfuzzy  # noqa: E402
 from gfuzzy.errors import InputError  # noqa: E402
 from gfuzzy.navigation.populate import PopulateOptions, populate  # noqa: E402
-from gfuzzy.scene.scene import parse_scene  # noqa: E402
+from gfuzzy.scene.scene import load_scene, parse_scene  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -108,11 +111,48 @@ def test_populate_refuses_bad_input(tmp_path):
     src.write_text(yaml.safe_dump(ROOM))
     out = tmp_path / "o.yaml"
     for flags in (["--people", "0"], ["--people", "3", "--waypoints", "1,2;x"], ["--people", "3", "--radius", "-1"],
-                  ["--people", "2", "--waypoints", "5,1;8,5"]):  # fmt: skip
+                  ["--people", "2", "--waypoints", "5,1;8,5"],
+                  # --speed 1e20 overflowed ORCA: a GEOS traceback; --duration 0.1 wrote nobody
+                  ["--people", "2", "--speed", "1e20"], ["--people", "2", "--duration", "0.1"]):  # fmt: skip
         p = _run("populate", str(src), *flags, "-o", str(out))
         assert p.returncode == 2, flags
         assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
         assert not out.exists()
+
+
+def test_the_readme_populate_example_runs_and_a_full_room_says_why(tmp_path):
+    # the README's example asked building-floor for 15 people of radius 0.3: its 0.6 m doors
+    # keep them in one room, which holds about 12; it exited 2 with no hint why
+    line = next(x for x in (ROOT / "README.md").read_text(encoding="utf-8").splitlines() if x.startswith("gfuzzy populate "))
+    argv = shlex.split(line, comments=True)[1:]
+    shutil.copytree(ROOT / "scenes", tmp_path / "scenes")
+    p = run_cli_process(*argv, cwd=tmp_path)
+    assert p.returncode == 0, p.stderr
+    assert load_scene(tmp_path / argv[argv.index("-o") + 1]).movers
+    out = tmp_path / "busy.yaml"
+    p = _run("populate", str(ROOT / "scenes" / "building-floor.yaml"), "--people", "15", "--seed", "1", "-o", str(out))
+    assert p.returncode == 2 and len(p.stderr.strip().splitlines()) == 1
+    assert "largest free region" in p.stderr and "gap narrower than 0.70 m" in p.stderr
+    assert not out.exists()
+
+
+def test_the_command_says_how_many_people_stop_short(tmp_path):
+    # at 100 m/s ORCA takes every person into an obstacle within seconds: each walk is cut
+    # there (the mover disappears), and the command said "3 people walking for 60 s"
+    out = tmp_path / "p.yaml"
+    p = _run("populate", "scenes/sim-4s1m.yaml", "--people", "3", "--speed", "100", "-o", str(out))
+    assert p.returncode == 0, p.stderr
+    assert "3 people walking for 60 s" in p.stdout and "3 of them stop short" in p.stdout
+
+
+def test_a_scene_named_like_a_number_keeps_its_name(tmp_path):
+    # yaml.safe_dump wrote the name "1e3" plain, which reads back as 1000.0
+    src = tmp_path / "n.yaml"
+    src.write_text(yaml.safe_dump(dict(ROOM, name="NAME"), sort_keys=False).replace("name: NAME", 'name: "1e3"', 1))
+    out = tmp_path / "o.yaml"
+    p = _run("populate", str(src), "--people", "2", "-o", str(out))
+    assert p.returncode == 0, p.stderr
+    assert load_scene(out).name == "1e3"
 
 
 def _wall_map(folder: Path) -> tuple[dict, np.ndarray]:

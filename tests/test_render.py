@@ -103,6 +103,20 @@ def _only(folder, name):
 # --------------------------------------------------------------------------- pictures
 
 
+def test_a_huge_time_is_written_short(line_scene, tmp_path, capsys):
+    # '.2f' wrote t = 1e300 as 301 digits in the title: matplotlib warned on stderr that the
+    # axes had collapsed, and the picture was a title with no drawing
+    import warnings
+
+    assert R._fmt_time(1e300) == "1e+300" and R._fmt_time(22.6) == "22.6"
+    traj = _trajectory_file(tmp_path / "far.json", [[0, 1, 2.5], [1e300, 1.1, 2.5]])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        rc, _, err = _run(capsys, "render", line_scene, traj, "-o", tmp_path / "far.png")
+    assert rc == 0, err
+    assert not [w for w in caught if "collapsed" in str(w.message)]
+
+
 def test_png_box_robot_with_roadmap_and_speed(box_scene, tmp_path):
     roadmap = SimpleNamespace(
         vertices=np.array([[0.5, 0.5, 0.0], [2.0, 3.5, 1.0], [5.5, 1.5, 0.0]]),

@@ -188,6 +188,36 @@ def test_huge_integer_is_bad_input(tmp_scene):
     assert "robot.vmax" in str(info.value)
 
 
+def test_exponent_numbers_read_as_numbers(tmp_scene):
+    # PyYAML (YAML 1.1) read 2e-1 and 1.5e0 as strings: "robot.disc: expected a number, got
+    # a string ('2e-1')"; YAML 1.2 and JSON, the schema's editors and Nav2 read numbers
+    path = tmp_scene(
+        "version: 1\nname: e\nbounds: [0, 0, 4e0, 3]\nrobot: {disc: 2e-1, vmax: 1.5e0}\n"
+    )
+    scene = load_scene(path)
+    assert scene.robot.vmax == 1.5 and scene.bounds[2] == 4.0
+    path = tmp_scene("version: 1\nname: e\nbounds: [0, 0, 4, 3]\nrobot: {disc: 0.2, vmax: 1e300}\n")
+    with pytest.raises(SceneError, match=r"robot\.vmax: number too large"):
+        load_scene(path)
+
+
+def test_mesh_vertex_beyond_the_scene_numbers_bound_is_bad_input(tmp_scene):
+    # the scene's own numbers stop at 1e9; a mesh vertex at 1e300 was taken (numpy's overflow
+    # warnings on stderr), and render drew it, exit 0
+    import warnings
+
+    tmp_scene("v 0 0 0\nv 1e300 0 0\nv 0 1 0\nf 1 2 3\n", name="far.obj")
+    path = tmp_scene(
+        "version: 1\nname: far\nbounds: [0, 0, 4, 3]\nrobot: {disc: 0.2, vmax: 1}\n"
+        "obstacles:\n  - mesh: {file: far.obj}\n"
+    )
+    with warnings.catch_warnings(record=True) as caught, pytest.raises(SceneError) as info:
+        warnings.simplefilter("always")
+        load_scene(path)
+    assert "obstacles[0].mesh.file" in str(info.value) and "1e+09" in str(info.value)
+    assert not [w for w in caught if issubclass(w.category, RuntimeWarning)]
+
+
 def test_nul_in_mesh_path_is_bad_input(tmp_scene):
     path = tmp_scene(
         'version: 1\nname: nul\nbounds: [0, 0, 4, 3]\nrobot: {disc: 0.2, vmax: 1}\n'

@@ -261,6 +261,10 @@ def test_static_mesh_paths_follow_the_new_file(tmp_path, csv_file):
         ("order.csv", "t,id,x,y\n1,a,0,0\n1,b,0,0\n0.5,a,1,0\n", "order.csv: line 4: pedestrian a: time 0.5 does not increase"),
         ("id.csv", "t,id,x,y\n0,a b,0,0\n", "id.csv: line 2: id 'a b' must be"),
         ("nohdr.csv", "\n\n", "nohdr.csv: no header line"),
+        # a position past 1e9 was refused later, naming the scene about to be written
+        ("far.txt", "0 1 0 0\n10 1 1e300 0\n", "far.txt: line 2: x 1e+300 is too large"),
+        ("twice.csv", "t,id,x,y,X\n0,a,0,0,9\n1,a,1,0,9\n", "twice.csv: line 1: the header names column x twice"),
+        ("late.csv", "t,id,x,y\n0,a,0,0\n1e12,a,1,0\n", "late.csv: line 3: time 1e+12 is too large"),
     ],
 )  # fmt: skip
 def test_bad_files_are_one_line_and_exit_2(tmp_path, name, text, where):
@@ -290,6 +294,9 @@ def test_bad_files_are_one_line_and_exit_2(tmp_path, name, text, where):
         (["--format", "csv"], "the header must name the columns"),
         (["--fps", 0], "fps must be positive"),
         (["--static", "nowhere.yaml"], "nowhere.yaml: cannot read"),
+        # refused before as the numbers of the scene about to be written, naming that file
+        (["--vmax", "1e300"], "gfuzzy tracks: vmax must be at most 1e+09 in magnitude"),
+        (["--region", 0, 0, "1e12", 5], "gfuzzy tracks: region must be"),
     ],
 )
 def test_bad_requests_are_one_line_and_exit_2(tmp_path, eth_file, args, message):
@@ -298,6 +305,17 @@ def test_bad_requests_are_one_line_and_exit_2(tmp_path, eth_file, args, message)
     assert proc.returncode == 2, proc.stderr
     assert proc.stderr.count("\n") == 1 and message in proc.stderr, proc.stderr
     assert not out.exists()
+
+
+@pytest.mark.parametrize("stem", ["12", "true", "1e3"])
+def test_a_scene_named_like_a_number_reads_back(tmp_path, eth_file, stem):
+    # the name (the output's stem) and a query name were written plain: 12, True, 1000.0 on
+    # reading, and the scene was refused as it was written ("name: expected a non-empty string")
+    out = tmp_path / f"{stem}.yaml"
+    proc = run_cli_process("tracks", eth_file, "--start", 1, 1, "--goal", 2, 2, "--query-name", "2e1", "-o", out)
+    assert proc.returncode == 0, proc.stderr
+    scene = load_scene(out)
+    assert scene.name == stem and scene.queries[0].name == "2e1"
 
 
 def test_unreadable_file_and_bad_output_name(tmp_path, eth_file):

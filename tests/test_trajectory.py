@@ -7,7 +7,9 @@ import math
 
 import numpy as np
 import pytest
+from conftest import ROOT
 
+from gfuzzy.cli import main
 from gfuzzy.errors import SceneError
 from gfuzzy.trajectory import Trajectory, TrajectoryFile, load_trajectory
 
@@ -59,6 +61,20 @@ def test_bad_file_names_the_place(tmp_path):
     with pytest.raises(SceneError) as exc:
         load_trajectory(p)
     assert str(p) in str(exc.value)
+
+
+@pytest.mark.parametrize("command", ["check", "render", "export"])
+def test_arrays_nested_past_pythons_stack_are_invalid_json(tmp_path, capsys, command):
+    # json raised RecursionError, not JSONDecodeError: `gfuzzy check` printed a traceback
+    path = tmp_path / "deep.json"
+    path.write_text("[" * 100_000 + "]" * 100_000)
+    with pytest.raises(SceneError, match="invalid JSON"):
+        load_trajectory(path)
+    out = {"check": [], "render": ["-o", str(tmp_path / "a.png")], "export": ["-o", str(tmp_path / "a.mcap")]}[command]
+    assert main([command, str(ROOT / "scenes" / "sim-4s1m.yaml"), str(path), *out]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith(f"{path}: invalid JSON")
+    assert list(tmp_path.iterdir()) == [path]
 
 
 def test_trajectories_with_other_waypoints_are_not_equal():

@@ -9,7 +9,7 @@ import os
 import sys
 from pathlib import Path
 
-from ..errors import InputError, SceneError
+from ..errors import InputError, LimitError, SceneError
 
 EXIT_OK, EXIT_NO, EXIT_BAD = 0, 1, 2
 
@@ -76,7 +76,7 @@ def _roadmap_for(scene, args, quiet=False):
                 vertices=args.vertices if args.vertices is not None else RoadmapOptions.vertices,
                 seed=args.seed if args.seed is not None else RoadmapOptions.seed,
             )
-        except InputError as exc:
+        except (InputError, LimitError) as exc:
             raise BadInput(f"-n/--seed: {exc}") from None
         saved = _default_roadmap(scene, quiet=True)
         if saved is not None and saved.options == opts:  # the saved file is this very roadmap
@@ -95,7 +95,7 @@ def _roadmap_for(scene, args, quiet=False):
         return build_roadmap(scene, same_shapes, progress=_progress("roadmap"))
     if not quiet:
         _say(
-            f"note: no roadmap file for {scene.name!r}; building one with "
+            f"note: no roadmap file fits {scene.name!r}; building one with "
             f"{RoadmapOptions.vertices} vertices (save one with `gfuzzy roadmap`)"
         )
     return build_roadmap(scene, RoadmapOptions(), progress=_progress("roadmap"))
@@ -112,7 +112,7 @@ def _check_roadmap_flags(args) -> None:
             vertices=args.vertices if args.vertices is not None else RoadmapOptions.vertices,
             seed=args.seed if args.seed is not None else RoadmapOptions.seed,
         )
-    except InputError as exc:
+    except (InputError, LimitError) as exc:
         raise BadInput(f"-n/--seed: {exc}") from None
 
 
@@ -140,7 +140,9 @@ def _default_roadmap(scene, quiet=False):
     from ..roadmap.roadmap import default_roadmap_path, load_roadmap
 
     scene_dir = Path(scene.source).resolve().parent
-    for path in (default_roadmap_path(scene), default_roadmap_path(scene, scene_dir.parent / "roadmaps")):
+    here, beside = default_roadmap_path(scene), default_roadmap_path(scene, scene_dir.parent / "roadmaps")
+    # run from the scene's parent folder, both are one file: read (and refused) once
+    for path in (here,) if here.resolve() == beside.resolve() else (here, beside):
         if path.is_file():
             try:
                 return load_roadmap(path, scene)

@@ -73,6 +73,8 @@ def _setting(args):
         raise BadInput(f"gfuzzy crowd: --episodes must be >= 1, got {args.episodes}")
     if args.workers < 0:
         raise BadInput(f"gfuzzy crowd: --workers must be >= 0, got {args.workers}")
+    if args.seed < 0:  # numpy refuses it deep in the first episode
+        raise BadInput(f"gfuzzy crowd: --seed must be >= 0, got {args.seed}")
     for flag, value in (("--noise", args.noise), ("--fov", args.fov), ("--time-budget", args.time_budget),
                         ("--personal-space", args.personal_space), ("--path-space", args.path_space)):  # fmt: skip
         if not math.isfinite(value):
@@ -181,7 +183,7 @@ def cmd_crowd(args) -> int:
 def add_populate(sub) -> None:
     """``gfuzzy populate``."""
     p = sub.add_parser("populate", help="add walking people (ORCA among the static obstacles) to a scene")
-    p.add_argument("scene", metavar="SCENE")
+    p.add_argument("scene", metavar="SCENE", help="scene file (YAML) to add the people to")
     p.add_argument("--people", type=int, required=True, metavar="N", help="number of people")
     p.add_argument("--seed", type=int, default=1, help="seed of their starts, goals and walks (default 1)")
     p.add_argument("--duration", type=float, default=60.0, help="seconds of walking recorded (default 60)")
@@ -214,5 +216,6 @@ def cmd_populate(args) -> int:
         raise BadInput(f"gfuzzy populate: {exc}") from None
     result = populate(scene, opts)
     write_scene(args.scene, result, out)
-    _say(f"{out}: {args.people} people walking for {args.duration:g} s added to {scene.name}", sys.stdout)
+    short = f" ({result.cut} of them stop short, where ORCA would take them into an obstacle)" if result.cut else ""
+    _say(f"{out}: {len(result.movers)} people walking for {args.duration:g} s added to {scene.name}{short}", sys.stdout)
     return EXIT_OK

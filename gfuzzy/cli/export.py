@@ -16,7 +16,7 @@ def add_export(sub) -> None:
         "export",
         help="write a scene (and a trajectory) as MCAP for Foxglove / Lichtblick, or its obstacles as a Nav2 map",
     )
-    e.add_argument("scene", metavar="SCENE")
+    e.add_argument("scene", metavar="SCENE", help="scene file (YAML)")
     e.add_argument("trajectory", metavar="TRAJ.json", nargs="?", help="a plan or navigate file (MCAP only)")
     e.add_argument("-o", "--output", metavar="OUT.mcap", help="the MCAP file to write")
     e.add_argument("--map", metavar="OUT.yaml", help="write the static obstacles as a Nav2 map: OUT.yaml and OUT.pgm")

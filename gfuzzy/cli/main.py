@@ -61,7 +61,7 @@ def _add_roadmap(sub) -> None:
 def _add_plan(sub) -> None:
     """``gfuzzy plan``."""
     q = sub.add_parser("plan", help="answer one query")
-    q.add_argument("scene", metavar="SCENE")
+    q.add_argument("scene", metavar="SCENE", help="scene file (YAML)")
     q.add_argument("--roadmap", metavar="FILE", help="roadmap file (default roadmaps/<scene name>.json)")
     _plan_flags(q)
     q.add_argument("--query", metavar="NAME", help="a query of the scene (default: its first)")
@@ -79,8 +79,8 @@ def _add_plan(sub) -> None:
 def _add_check(sub) -> None:
     """``gfuzzy check``."""
     c = sub.add_parser("check", help="check a trajectory against the contract's guarantees")
-    c.add_argument("scene", metavar="SCENE")
-    c.add_argument("trajectory", metavar="TRAJ.json")
+    c.add_argument("scene", metavar="SCENE", help="scene file (YAML)")
+    c.add_argument("trajectory", metavar="TRAJ.json", help="a trajectory file of plan or navigate (JSON; not the CSV)")
     _clearance_flags(c)
     c.add_argument("--hold", type=float, metavar="SECONDS",
                    help="the goal pose must stay safe this long after the last row (default: the query's hold)")  # fmt: skip
@@ -90,8 +90,8 @@ def _add_check(sub) -> None:
 def _add_render(sub) -> None:
     """``gfuzzy render``."""
     d = sub.add_parser("render", help="draw a scene (and a trajectory): PNG picture or GIF animation")
-    d.add_argument("scene", metavar="SCENE")
-    d.add_argument("trajectory", metavar="TRAJ.json", nargs="?")
+    d.add_argument("scene", metavar="SCENE", help="scene file (YAML)")
+    d.add_argument("trajectory", metavar="TRAJ.json", nargs="?", help="a plan or navigate file to draw on it")
     d.add_argument("-o", "--output", required=True, metavar="OUT", help="OUT.png or OUT.gif")
     d.add_argument("--roadmap", metavar="FILE", help="draw this roadmap (PNG; default: the scene's roadmaps/<name>.json if there is one)")
     d.add_argument("--no-roadmap", action="store_true", help="do not draw a roadmap")
@@ -103,7 +103,7 @@ def _add_render(sub) -> None:
 def _add_navigate(sub) -> None:
     """``gfuzzy navigate``."""
     v = sub.add_parser("navigate", help="drive to the goal among the movers without knowing their future")
-    v.add_argument("scene", metavar="SCENE")
+    v.add_argument("scene", metavar="SCENE", help="scene file (YAML); its movers are the world")
     v.add_argument("--query", metavar="NAME", help="a query of the scene (default: its first)")
     v.add_argument("--roadmap", metavar="FILE", help="roadmap file (default roadmaps/<scene name>.json)")
     v.add_argument("-n", "--vertices", type=int, help="build a roadmap of this many vertices")
@@ -131,7 +131,7 @@ def _add_navigate(sub) -> None:
 def _add_regress(sub) -> None:
     """``gfuzzy regress``."""
     g = sub.add_parser("regress", help="answer and check every query of every scene")
-    g.add_argument("scenes", metavar="SCENE", nargs="+")
+    g.add_argument("scenes", metavar="SCENE", nargs="+", help="scene files (YAML)")
     _plan_flags(g)
     g.set_defaults(func=cmd_regress, roadmap=None)
 
@@ -166,7 +166,7 @@ def _add_tracks(sub) -> None:
 def _add_batch(sub) -> None:
     """``gfuzzy batch``."""
     b = sub.add_parser("batch", help="answer every query of every scene on a Dask cluster; one CSV row per query")
-    b.add_argument("scenes", metavar="SCENE", nargs="+")
+    b.add_argument("scenes", metavar="SCENE", nargs="+", help="scene files (YAML)")
     _plan_flags(b)
     where = b.add_mutually_exclusive_group()
     where.add_argument("--workers", type=int, metavar="K", help="local worker processes (default 2)")

@@ -49,6 +49,8 @@ def cmd_map(args) -> int:
         parse_scene(doc, file=str(out), folder=out.resolve().parent)
     write_atomic(out, made.text)
     _say(f"wrote {out}", sys.stdout)
+    if made.start is None:  # else `gfuzzy plan` on it says only that it has no queries
+        _say(f"note: the robot fits nowhere on this map: {out} has no sample query (a smaller robot?)")
     return EXIT_OK
 
 

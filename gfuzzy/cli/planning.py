@@ -8,6 +8,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from ..errors import InputError, LimitError
+from ..settings import MAX_MAGNITUDE
 from ..status import Status
 from .common import (
     EXIT_NO,
@@ -35,7 +36,7 @@ def cmd_roadmap(args) -> int:
         opts = RoadmapOptions(
             vertices=args.vertices, seed=args.seed, neighbors=args.neighbors, repair=not args.no_repair
         )
-    except InputError as exc:
+    except (InputError, LimitError) as exc:
         raise BadInput(f"gfuzzy roadmap: {exc}") from None
     rm = build_roadmap(scene, opts, progress=_progress("roadmap"))
     rm.save(out)
@@ -69,8 +70,8 @@ def _query_from_args(scene, args):
         if start is None or goal is None:
             raise BadInput("gfuzzy plan: --start and --goal go together")
         t0 = args.t0 if args.t0 is not None else 0.0
-        if not math.isfinite(t0):
-            raise BadInput("--t0: must be finite")
+        if not (math.isfinite(t0) and abs(t0) <= MAX_MAGNITUDE):
+            raise BadInput(f"--t0: must be a finite number of at most {MAX_MAGNITUDE:g} in magnitude, got {t0:g}")
         return Query("cli", tuple(start), tuple(goal), t0, hold=_hold(args, 0.0))
     if args.t0 is not None:
         raise BadInput("gfuzzy plan: --t0 goes with --start/--goal (a scene query has its own t0)")
@@ -92,8 +93,8 @@ def _hold(args, default: float) -> float:
     hold = getattr(args, "hold", None)
     if hold is None:
         return default
-    if not (math.isfinite(hold) and hold >= 0):
-        raise BadInput(f"--hold: must be a non-negative finite number, got {hold:g}")
+    if not (math.isfinite(hold) and 0 <= hold <= MAX_MAGNITUDE):
+        raise BadInput(f"--hold: must be a non-negative finite number of at most {MAX_MAGNITUDE:g}, got {hold:g}")
     return float(hold)
 
 

@@ -139,7 +139,7 @@ def step_times(t0: float, t1: float, step: float) -> FloatArray:
     check_number("step", step)
     n = int(math.floor((t1 - t0) / step)) + 1 if t1 > t0 else 1
     if n > MAX_STEPS:
-        raise InputError(f"step {step:g} s gives {n} time steps over {t1 - t0:g} s (at most {MAX_STEPS}); use a larger step")
+        raise InputError(f"step {step:g} s gives {n:.3g} time steps over {t1 - t0:g} s (at most {MAX_STEPS:,}); use a larger step (--step)")
     ts = t0 + step * np.arange(n)
     ts = ts[ts < t1 - 1e-9]
     return np.append(ts, t1) if t1 > t0 or not len(ts) else ts

@@ -100,7 +100,7 @@ def _grid(scene: Scene, resolution: float) -> tuple[int, int, float, float]:
     h = max(1, math.ceil((y1 - y0) / resolution - 1e-9))
     if w * h > MAX_MAP_CELLS:
         raise InputError(
-            f"resolution {resolution:g} m gives a {w} x {h} grid ({w * h} cells, at most {MAX_MAP_CELLS}); use a coarser resolution"
+            f"resolution {resolution:g} m gives a {w} x {h} grid ({w * h:.3g} cells, at most {MAX_MAP_CELLS:,}); use a coarser resolution"
         )
     return w, h, float(x0), float(y0)
 
@@ -311,7 +311,10 @@ def export_nav2_map(scene: Scene, path, resolution: float = 0.05) -> NavMap:
     placed_image = False
     try:
         for suffix, data in ((".pgm", grid.pgm()), (".yaml", grid.yaml_text(image.name).encode())):
-            fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=suffix, dir=folder)
+            try:
+                fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=suffix, dir=folder)
+            except OSError as exc:  # name the file asked for, not the temporary one
+                raise OSError(exc.errno, exc.strerror, str(image if suffix == ".pgm" else path)) from exc
             temps.append(tmp)
             with os.fdopen(fd, "wb") as fh:
                 fh.write(data)

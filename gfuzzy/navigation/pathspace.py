@@ -29,12 +29,16 @@ from ..typed import BoolArray, FloatArray, IntArray
 if TYPE_CHECKING:
     from .navigator import _Searched
 
-__all__ = ["STILL_SPEED", "PathSpace", "GHOST_SPACING", "ESCAPE_FACTOR", "Ghosts", "path_ghosts", "ghost_window", "walled_off", "WallCheck"]
+__all__ = ["STILL_SPEED", "PathSpace", "GHOST_SPACING", "MAX_GHOSTS", "ESCAPE_FACTOR", "Ghosts", "path_ghosts", "ghost_window", "walled_off", "WallCheck"]
 
 #: Below this speed (m/s) an observed person counts as standing still.
 STILL_SPEED = 0.1
 #: Largest distance (m) between neighbouring ghosts of a person (a faster walker gets more).
 GHOST_SPACING = 0.7
+#: Most ghosts of one person: spaced GHOST_SPACING they cover 45 m of path. A faster or
+#: farther-looking person (an absurd velocity estimate) gets them farther apart, each inflated
+#: to still cover the band, instead of an array sized by the velocity (--noise 1e9: 146 GiB).
+MAX_GHOSTS = 64
 #: A robot in someone's way gets this many times the time to step sideways out of it at
 #: full speed before their ghosts count (the roadmap's directions are not exactly sideways).
 ESCAPE_FACTOR = 1.5
@@ -91,7 +95,7 @@ def path_ghosts(obs: FloatArray, look: float, robot_radius: float, buffer: float
 
     Notes
     -----
-    A person walking at speed v gets ``n = ceil(v look / GHOST_SPACING)`` ghosts at
+    A person walking at speed v gets ``n = min(ceil(v look / GHOST_SPACING), MAX_GHOSTS)`` ghosts at
     ``s_j = look j / n``, j = 1..n, spaced ``h = v look / n`` apart. A robot centre within
     ``w = robot_radius + radius + buffer`` of the path between two neighbouring ghosts is
     within ``sqrt(w^2 + (h / 2)^2)`` of one of them, so each ghost is inflated by that
@@ -103,7 +107,7 @@ def path_ghosts(obs: FloatArray, look: float, robot_radius: float, buffer: float
     walking = np.nonzero((speed >= still) & (look > 0))[0]
     if len(walking) == 0:
         return Ghosts(np.zeros((0, 5)), np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0))
-    n = np.maximum(1, np.ceil(speed[walking] * look / GHOST_SPACING - 1e-9)).astype(np.int64)
+    n = np.clip(np.ceil(speed[walking] * look / GHOST_SPACING - 1e-9), 1, MAX_GHOSTS).astype(np.int64)
     owner = np.repeat(walking, n)
     j = np.concatenate([np.arange(1, m + 1) for m in n])
     shift = look * j / np.repeat(n, n)

@@ -27,6 +27,7 @@ from ..errors import InputError
 from ..rng import create_rng
 from ..roadmap.freespace import obstacle_shape
 from ..scene.scene import Mover, Scene
+from ..settings import MAX_MAGNITUDE
 from ..typed import FloatArray
 
 __all__ = ["PopulateOptions", "Populated", "populate", "write_scene", "obstacle_union"]
@@ -75,10 +76,12 @@ class PopulateOptions:
             raise InputError(f"people must be between 1 and 500, got {self.people}")
         for name in ("duration", "radius", "speed", "dt"):
             v = getattr(self, name)
-            if not (math.isfinite(v) and v > 0):
-                raise InputError(f"{name} must be a positive number, got {v}")
+            if not (math.isfinite(v) and 0 < v <= MAX_MAGNITUDE):  # ORCA's arithmetic overflows beyond
+                raise InputError(f"{name} must be a positive number of at most {MAX_MAGNITUDE:g}, got {v:g}")
         if self.duration / self.dt > 100_000:
             raise InputError("duration / dt must be at most 100000 samples")
+        if self.duration < self.dt:  # one sample is no walk: nobody would be written
+            raise InputError(f"duration must be at least one step of {self.dt:g} s, got {self.duration:g}")
 
 
 @dataclass(frozen=True)
@@ -320,7 +323,13 @@ def _place(scene: Scene, o: PopulateOptions, grid: _Grid, free_point, wps, rng):
                 starts.append(p)
                 break
         else:
-            raise InputError(f"{scene.source}: no room for {o.people} people of radius {o.radius:g} m")
+            area = float(grid.free.sum()) * grid.res**2
+            gap = 2 * (o.radius + GRID_MARGIN)
+            raise InputError(
+                f"{scene.source}: no room for {o.people} people of radius {o.radius:g} m in the largest "
+                f"free region they can walk ({area:.1f} m²; they cannot pass a gap narrower than {gap:.2f} m): "
+                f"give fewer --people or a smaller --radius"
+            )
     order: list = [None] * o.people
     goals = []
     for i in range(o.people):
@@ -378,10 +387,10 @@ def write_scene(source: str | os.PathLike, result: Populated, out: str | os.Path
     InputError
         ``out``'s folder does not hold a file the scene refers to.
     """
-    import yaml
 
     from ..atomic import write_atomic
     from ..scene.yamldoc import _load_yaml as load_yaml
+    from ..scene.yamldoc import dump_yaml
 
     src = Path(source)
     doc = load_yaml(src.read_text(), str(src))
@@ -406,4 +415,4 @@ def write_scene(source: str | os.PathLike, result: Populated, out: str | os.Path
                        "trajectory": [[float(v) for v in row] for row in m.trajectory]})  # fmt: skip
     doc["movers"] = movers
     head = f"# {src.name} with {len(result.movers)} walking people added by gfuzzy populate\n"
-    write_atomic(out, head + yaml.safe_dump(doc, sort_keys=False, default_flow_style=None, width=120))
+    write_atomic(out, head + dump_yaml(doc, sort_keys=False, default_flow_style=None, width=120))

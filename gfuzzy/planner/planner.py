@@ -23,7 +23,7 @@ from ..errors import InputError, LimitError, check_number
 from ..poses import wrap_angle
 from ..roadmap.roadmap import Roadmap
 from ..scene.scene import Query, Scene
-from ..settings import MAX_MOVER_SAMPLES, SPEED_SAFETY
+from ..settings import MAX_MAGNITUDE, MAX_MOVER_SAMPLES, SPEED_SAFETY
 from ..status import Status
 from ..timespace.movers import MoverField
 from ..timespace.roadgraph import connect
@@ -648,9 +648,9 @@ class _Rounds:
 def _check_hold(hold) -> float:
     """A query's ``hold`` as a float (InputError when negative or not finite)."""
     if isinstance(hold, bool) or not isinstance(hold, (int, float, np.number)) or not (
-        math.isfinite(hold) and hold >= 0
+        math.isfinite(hold) and 0 <= hold <= MAX_MAGNITUDE
     ):
-        raise InputError(f"hold must be a non-negative number, got {hold!r}")
+        raise InputError(f"hold must be a non-negative number of at most {MAX_MAGNITUDE:g}, got {hold!r}")
     return float(hold)
 
 
@@ -658,6 +658,8 @@ def _check_t0(t0) -> float:
     """A departure time as a float (InputError when not a finite number)."""
     if isinstance(t0, bool) or not isinstance(t0, (int, float, np.number)) or not math.isfinite(t0):
         raise InputError(f"t0: expected a finite number, got {t0!r}")
+    if abs(t0) > MAX_MAGNITUDE:  # as in a scene file: beyond, t0 + dt == t0 and times stop increasing
+        raise InputError(f"t0: {t0:g} is too large (at most {MAX_MAGNITUDE:g} in magnitude)")
     return float(t0)
 
 

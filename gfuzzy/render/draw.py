@@ -440,6 +440,8 @@ def _nice_step(duration: float, target: int = 8) -> float:
 
 
 def _fmt_time(t: float) -> str:
+    if abs(t) >= 1e6:  # '.2f' wrote 1e300 as 301 digits: the title squeezed the axes to nothing
+        return f"{t:.3g}"
     return f"{t:.2f}".rstrip("0").rstrip(".")
 
 

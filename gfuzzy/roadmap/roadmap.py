@@ -23,9 +23,10 @@ import numpy as np
 
 from ..atomic import write_atomic
 from ..collision.geometry import StaticGeometry, metric_distance
-from ..errors import InputError, SceneError
+from ..errors import InputError, LimitError, SceneError
 from ..scene.maps import free_cell_draw
 from ..scene.scene import Scene
+from ..settings import MAX_POINTS
 from ..typed import FloatArray, IntArray
 from .freespace import blocked_points as _blocked_points
 
@@ -88,6 +89,11 @@ class RoadmapOptions:
             raise InputError(f"seed must be a whole number from 0 to {2**31 - 1}, got {self.seed!r}")
         if self.vertices < 1:
             raise InputError(f"a roadmap needs at least 1 vertex, got {self.vertices}")
+        if self.vertices > MAX_POINTS:  # every vertex is a point of the query graph: never searchable
+            raise LimitError(
+                f"a roadmap of {self.vertices:,} vertices could never be searched (a query's graph "
+                f"holds at most {MAX_POINTS:,} points); use fewer vertices"
+            )
         if self.neighbors < 1:
             raise InputError(f"neighbors must be >= 1, got {self.neighbors}")
         if not 0 < self.resolution <= 0.5:

@@ -266,6 +266,10 @@ def local_cluster(workers: int, quiet: bool = True) -> Iterator[object]:
                 processes=True,
                 dashboard_address=None,
                 host="127.0.0.1",
+                # the scheduler serves HTTP (health, metrics) even without a dashboard, on
+                # port 8787 by default: a port the system picks never warns "Port 8787 is
+                # already in use" on the user's terminal when another cluster holds it
+                scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
             )
             client = Client(cluster)
             try:

@@ -33,6 +33,7 @@ import hashlib
 import io
 import math
 import os
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -323,7 +324,10 @@ def read_image(
     if data is None:
         data = _read_bytes(v, Path(path), "", "image")
     try:
-        with Image.open(io.BytesIO(data)) as img:
+        with warnings.catch_warnings():  # its size is checked below, against our own bound
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            img = Image.open(io.BytesIO(data))
+        with img:
             w, h = img.size
             if w * h > MAX_MAP_CELLS:
                 v.fail("", f"image of {w} x {h} pixels, more than {MAX_MAP_CELLS} cells")

@@ -18,6 +18,7 @@ import numpy as np
 from ..errors import InputError
 from ..typed import FloatArray
 from .maps import UNKNOWN, MapObstacle, load_map
+from .yamldoc import plain_name
 
 __all__ = ["MapScene", "map_scene"]
 
@@ -165,7 +166,7 @@ def map_scene(
         f"# written by: {command}" if command else "# written by gfuzzy map",
         "# Edit the robot, add movers, move the query; bounds keep the robot's whole body inside.",
         "version: 1",
-        f"name: {stem}",
+        f"name: {plain_name(stem)}",
         "bounds: [" + ", ".join(_fmt(b) for b in bounds) + "]   # the map's known cells",
         "robot:",
         robot_line,

@@ -23,6 +23,7 @@ from ..errors import InputError, SceneError
 from ..status import Status
 from ..typed import FloatArray
 from .maps import MapObstacle, load_map
+from .meshes import mesh_footprint
 from .yamldoc import _V, MAX_MAGNITUDE, NAME_RE, _join, _kind, _load_yaml, _one_key
 
 __all__ = [
@@ -454,54 +455,6 @@ def _check_polygon(v: _V, pts: FloatArray, place: str) -> FloatArray:
     return pts if signed > 0 else pts[::-1].copy()
 
 
-def _mesh_footprint(v: _V, spec, place: str, folder: Path) -> tuple[list, bytes]:
-    import shapely
-    import trimesh
-
-    spec = v.mapping(spec, place, required=("file",))
-    rel = spec["file"]
-    fplace = _join(place, "file")
-    if not isinstance(rel, str) or not rel:
-        v.fail(fplace, f"expected a file name, got {_kind(rel)}")
-    if "\0" in rel:
-        v.fail(fplace, "file name contains a NUL character")
-    if os.path.isabs(rel) or rel.startswith("~"):
-        v.fail(fplace, f"mesh path {rel!r} must be relative to the scene file")
-    full = (folder / rel).resolve()
-    try:
-        full.relative_to(folder.resolve())
-    except ValueError:
-        v.fail(fplace, f"mesh path {rel!r} leaves the scene file's folder")
-    try:
-        data = full.read_bytes()
-    except OSError as exc:
-        v.fail(fplace, f"cannot read mesh {rel!r}: {exc.strerror or exc}")
-    try:
-        mesh = trimesh.load(full, force="mesh")
-        tris = np.asarray(mesh.triangles, dtype=float)
-    except Exception as exc:  # trimesh raises many kinds on a bad file
-        why = " ".join(str(exc).split()) or type(exc).__name__
-        if isinstance(exc, ImportError):  # trimesh guessing at an unknown format
-            why = "not a mesh format trimesh reads"
-        v.fail(fplace, f"cannot read mesh {rel!r}: {why}")
-    if tris.size == 0 or not np.all(np.isfinite(tris)):
-        v.fail(fplace, f"mesh {rel!r} has no usable triangles")
-    tri2 = tris[:, :, :2]
-    area = 0.5 * np.abs(
-        (tri2[:, 1, 0] - tri2[:, 0, 0]) * (tri2[:, 2, 1] - tri2[:, 0, 1])
-        - (tri2[:, 2, 0] - tri2[:, 0, 0]) * (tri2[:, 1, 1] - tri2[:, 0, 1])
-    )
-    tri2 = tri2[area > 1e-12]
-    if len(tri2) == 0:
-        v.fail(fplace, f"mesh {rel!r} has an empty xy footprint")
-    union = shapely.union_all(shapely.polygons(tri2)).buffer(0)
-    polys = [union] if union.geom_type == "Polygon" else list(getattr(union, "geoms", []))
-    polys = [p for p in polys if p.geom_type == "Polygon" and p.area > 1e-12]
-    if not polys:
-        v.fail(fplace, f"mesh {rel!r} has an empty xy footprint")
-    return polys, data
-
-
 def _parse_robot(v: _V, rd) -> tuple[Robot, dict]:
     """``robot:``: the Robot, and its shape as it enters the static hash."""
     rd = v.mapping(
@@ -579,7 +532,7 @@ def _parse_obstacles(v: _V, doc: dict, folder: Path, hasher) -> list:
             pts = _check_polygon(v, v.points(spec, kplace, 2, min_rows=3), kplace)
             obstacles.append(Polygon(pts))
         else:
-            polys, data = _mesh_footprint(v, spec, kplace, folder)
+            polys, data = mesh_footprint(v, spec, kplace, folder)
             hasher.update(hashlib.sha256(data).digest())
             for p in polys:
                 ext = np.asarray(p.exterior.coords)[:-1]

@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError, SceneError
+from ..settings import MAX_MAGNITUDE
 from ..typed import FloatArray
 
 __all__ = ["ANNOTATION_PERIOD", "FORMATS", "Track", "Tracks", "read_tracks"]
@@ -142,6 +143,11 @@ def _add(
     y: float,
     unit: str,
 ):
+    for name, value in ((unit, t), ("x", x), ("y", y)):
+        if abs(value) > MAX_MAGNITUDE:  # else the scene made of it is refused, naming that scene
+            raise SceneError(
+                path, f"line {lineno}", f"{name} {value:g} is too large (at most {MAX_MAGNITUDE:g} in magnitude)"
+            )
     prev = rows.setdefault(pid, [])
     if prev and t <= prev[-1][0]:
         raise SceneError(
@@ -205,6 +211,9 @@ def _read_csv(path: str, text: str) -> dict:
                     f"line {lineno}",
                     f"the header must name the columns t, id, x, y (missing: {', '.join(missing)})",
                 )
+            twice = [k for k in ("t", "id", "x", "y") if names.count(k) > 1]
+            if twice:  # which of the two holds the values is anyone's guess
+                raise SceneError(path, f"line {lineno}", f"the header names column {twice[0]} twice")
             header = names
             index = {k: names.index(k) for k in ("t", "id", "x", "y")}
             continue

@@ -19,11 +19,11 @@ from dataclasses import dataclass
 from itertools import pairwise
 from pathlib import Path
 
-import yaml
-
 from ..errors import InputError, SceneError
+from ..settings import MAX_MAGNITUDE
 from .scene import NAME_RE, STATUSES, Scene
 from .trackfiles import ANNOTATION_PERIOD, Track, Tracks, _id_key, read_tracks
+from .yamldoc import dump_yaml, plain_name
 
 __all__ = [
     "ANNOTATION_PERIOD",
@@ -201,6 +201,8 @@ class TrackSceneOptions:
             value = getattr(self, key)
             if value is not None and not math.isfinite(value):
                 raise InputError(f"{key} must be finite, got {value!r}")
+            if value is not None and abs(value) > MAX_MAGNITUDE:  # else refused as the written scene's number
+                raise InputError(f"{key} must be at most {MAX_MAGNITUDE:g} in magnitude, got {value:g}")
         for key in ("duration", "scale", "radius", "robot_radius", "vmax", "amax"):
             value = getattr(self, key)
             if value is not None and value <= 0:
@@ -211,11 +213,12 @@ class TrackSceneOptions:
             r = tuple(float(v) for v in self.region)
             if (
                 len(r) != 4
-                or not all(math.isfinite(v) for v in r)
+                or not all(math.isfinite(v) and abs(v) <= MAX_MAGNITUDE for v in r)
                 or not (r[0] < r[2] and r[1] < r[3])
             ):
                 raise InputError(
-                    f"region must be xmin ymin xmax ymax with xmin < xmax, ymin < ymax, got {self.region!r}"
+                    f"region must be xmin ymin xmax ymax with xmin < xmax, ymin < ymax (at most {MAX_MAGNITUDE:g} "
+                    f"in magnitude), got {self.region!r}"
                 )
             object.__setattr__(self, "region", r)
         if not NAME_RE.match(self.name):
@@ -280,7 +283,7 @@ class TrackScene:
         ]
         out = head + [
             "version: 1",
-            f"name: {doc['name']}",
+            f"name: {plain_name(doc['name'])}",
             f"bounds: {_row(doc['bounds'])}",
             "robot:",
         ]
@@ -294,7 +297,7 @@ class TrackScene:
         if doc["movers"]:
             out.append("movers:")
             for m in doc["movers"]:
-                out.append(f"  - name: {m['name']}")
+                out.append(f"  - name: {plain_name(m['name'])}")
                 out.append(f"    disc: {_num(m['disc'])}")
                 out.append("    trajectory: " + _flow_rows(m["trajectory"], "    "))
         else:
@@ -302,7 +305,7 @@ class TrackScene:
         if doc.get("queries"):
             out.append("queries:")
             for q in doc["queries"]:
-                out.append(f"  - name: {q['name']}")
+                out.append(f"  - name: {plain_name(q['name'])}")
                 out += [
                     f"    start: {_row(q['start'])}",
                     f"    goal: {_row(q['goal'])}",
@@ -337,7 +340,7 @@ def _value(v) -> str:
 
 
 def _flow(item) -> str:
-    return yaml.safe_dump(item, default_flow_style=True, width=10**9, sort_keys=False).strip()
+    return dump_yaml(item, default_flow_style=True, width=10**9, sort_keys=False).strip()
 
 
 def _flow_rows(rows, indent: str, width: int = 100) -> str:

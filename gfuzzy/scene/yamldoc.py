@@ -6,6 +6,7 @@ files made from pedestrian tracks (:mod:`gfuzzy.scene.tracks`) are read with the
 
 from __future__ import annotations
 
+import json
 import math
 import re
 from typing import Any
@@ -14,13 +15,12 @@ import numpy as np
 import yaml
 
 from ..errors import SceneError
+from ..settings import MAX_MAGNITUDE
 
 #: Names of scenes, movers and queries: letters, digits, ``_ . -``.
 NAME_RE = re.compile(r"^[A-Za-z0-9_.-]+$")
 #: Largest number of YAML nodes a scene may expand to (aliases counted each time used).
 MAX_NODES = 2_000_000
-#: Largest magnitude of any number in a scene: beyond it lengths and times overflow.
-MAX_MAGNITUDE = 1e9
 
 
 # --------------------------------------------------------------------------- YAML
@@ -51,6 +51,23 @@ def _construct_mapping(loader: _Loader, node: yaml.MappingNode, deep: bool = Fal
 
 
 _Loader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
+# YAML 1.1 (PyYAML) reads `1e-3`, `5e3` and `1.5e3` as strings: its floats need a dot and a
+# signed exponent. YAML 1.2 (yaml-language-server, the schema's editors; yaml-cpp, which
+# Nav2 reads map files with) and JSON read them as numbers, and so do we.
+_EXPONENT_FLOAT = re.compile(r"^[-+]?(?:\.[0-9]+|[0-9]+(?:\.[0-9]*)?)[eE][-+]?[0-9]+$")
+_Loader.add_implicit_resolver("tag:yaml.org,2002:float", _EXPONENT_FLOAT, list("-+.0123456789"))
+
+
+class _Dumper(yaml.SafeDumper):
+    """safe_dump that quotes a string the loader would read as a number (``"1e3"``)."""
+
+
+_Dumper.add_implicit_resolver("tag:yaml.org,2002:float", _EXPONENT_FLOAT, list("-+.0123456789"))
+
+
+def dump_yaml(data, **kwargs) -> str:
+    """``yaml.safe_dump(data, **kwargs)`` whose every string reads back as a string here."""
+    return yaml.dump(data, Dumper=_Dumper, **kwargs)
 
 
 def _expanded_size(node: yaml.Node, memo: dict) -> int:
@@ -95,6 +112,17 @@ def _load_yaml(text: str, file: str) -> Any:
     finally:
         if loader is not None:
             loader.dispose()
+
+
+def plain_name(name: str) -> str:
+    """``name`` as a YAML scalar that reads back as that string: plain when it does, else
+    double-quoted (a scene written for ``12.yaml``, ``true.yaml`` or ``1e3.yaml`` had the
+    name 12, True or 1000.0, and was refused as it was written)."""
+    try:
+        plain = _load_yaml(f"{name}\n", "<name>") == name
+    except SceneError:
+        plain = False
+    return name if plain else json.dumps(name)
 
 
 # --------------------------------------------------------------------------- validation
