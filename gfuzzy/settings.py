@@ -6,7 +6,8 @@ navigator) can use them without importing the planner that runs it.
 
 from __future__ import annotations
 
-__all__ = ["SPEED_SAFETY", "MAX_POINTS", "MAX_MOVER_SAMPLES", "AMAX_PER_VMAX", "INTERVAL_BATCH_CELLS", "MAX_MAGNITUDE"]
+__all__ = ["SPEED_SAFETY", "MAX_POINTS", "MAX_MOVER_SAMPLES", "AMAX_PER_VMAX", "INTERVAL_BATCH_CELLS", "MAX_MAGNITUDE",
+           "MAX_RECORDED_TIME"]
 
 #: Planning speed is vmax shrunk by this factor, so rounding never lifts a step above vmax.
 SPEED_SAFETY = 1.0 - 1e-9
@@ -26,3 +27,6 @@ INTERVAL_BATCH_CELLS = 8_000_000
 #: Largest magnitude of a number in a scene file or a finite option: beyond it lengths and
 #: times overflow or stop resolving the time step (1e9 + 0.07 is still 1e9 + 0.07).
 MAX_MAGNITUDE = 1e9
+#: Largest time on a recording's own clock (``gfuzzy tracks``): Unix time in seconds or in
+#: milliseconds is rebased to the window's start, which must then be within MAX_MAGNITUDE.
+MAX_RECORDED_TIME = 1e13

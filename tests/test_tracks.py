@@ -264,7 +264,8 @@ def test_static_mesh_paths_follow_the_new_file(tmp_path, csv_file):
         # a position past 1e9 was refused later, naming the scene about to be written
         ("far.txt", "0 1 0 0\n10 1 1e300 0\n", "far.txt: line 2: x 1e+300 is too large"),
         ("twice.csv", "t,id,x,y,X\n0,a,0,0,9\n1,a,1,0,9\n", "twice.csv: line 1: the header names column x twice"),
-        ("late.csv", "t,id,x,y\n0,a,0,0\n1e12,a,1,0\n", "late.csv: line 3: time 1e+12 is too large"),
+        ("late.csv", "t,id,x,y\n0,a,0,0\n1e14,a,1,0\n", "late.csv: line 3: time 1e+14 is too large"),
+        ("long.csv", "t,id,x,y\n0,a,0,0\n1e12,a,1,0\n", "long.csv: the window 0 s .. 1e+12 s is longer than 1e+09 s"),
     ],
 )  # fmt: skip
 def test_bad_files_are_one_line_and_exit_2(tmp_path, name, text, where):
@@ -492,3 +493,22 @@ def test_people_who_come_and_go_are_only_there_while_recorded(tmp_path):
     late = scene.movers[int(np.argmax(ranges[:, 0]))]
     _, present = late.state(np.array([0.0, late.time_range[0]]))
     assert not present[0] and present[1]
+
+
+def test_unix_time_stamps_are_rebased_to_the_window(tmp_path):
+    """Tracks exported from a ROS bag carry Unix times (about 1.7e9 s): the scene's times
+    start at the window's start, so they load as they did before numbers beyond 1e9 were
+    refused (a review found `gfuzzy tracks` refusing them)."""
+    t0 = 1351651349.5
+    rows = ["t,id,x,y"] + [f"{t0 + 0.1 * k:.1f},{pid},{0.5 + 0.2 * k},{y}" for k in range(30) for pid, y in (("a", 1.0), ("b", 2.0))]
+    path = tmp_path / "bag.csv"
+    path.write_text("\n".join(rows) + "\n", encoding="utf-8")
+    out = tmp_path / "bag.yaml"
+    p = run_cli_process("tracks", path, "-o", out, "--region", 0, 0, 7, 3, cwd=tmp_path)
+    assert p.returncode == 0, p.stderr
+    scene = load_scene(out)
+    assert len(scene.movers) == 2
+    assert all(m.trajectory[0, 0] == 0.0 and m.trajectory[-1, 0] == pytest.approx(2.9) for m in scene.movers)
+    p = run_cli_process("tracks", path, "-o", tmp_path / "w.yaml", "--t-start", t0 + 1, "--duration", 1, cwd=tmp_path)
+    assert p.returncode == 0, p.stderr
+    assert load_scene(tmp_path / "w.yaml").movers[0].trajectory[-1, 0] == pytest.approx(1.0)

@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError, SceneError
-from ..settings import MAX_MAGNITUDE
+from ..settings import MAX_MAGNITUDE, MAX_RECORDED_TIME
 from ..typed import FloatArray
 
 __all__ = ["ANNOTATION_PERIOD", "FORMATS", "Track", "Tracks", "read_tracks"]
@@ -143,11 +143,11 @@ def _add(
     y: float,
     unit: str,
 ):
-    for name, value in ((unit, t), ("x", x), ("y", y)):
-        if abs(value) > MAX_MAGNITUDE:  # else the scene made of it is refused, naming that scene
-            raise SceneError(
-                path, f"line {lineno}", f"{name} {value:g} is too large (at most {MAX_MAGNITUDE:g} in magnitude)"
-            )
+    # else the scene made of it is refused, naming that scene; times are rebased to the
+    # window's start (a Unix time is fine), positions are written as they are
+    for name, value, bound in ((unit, t, MAX_RECORDED_TIME), ("x", x, MAX_MAGNITUDE), ("y", y, MAX_MAGNITUDE)):
+        if abs(value) > bound:
+            raise SceneError(path, f"line {lineno}", f"{name} {value:g} is too large (at most {bound:g} in magnitude)")
     prev = rows.setdefault(pid, [])
     if prev and t <= prev[-1][0]:
         raise SceneError(

@@ -20,7 +20,7 @@ from itertools import pairwise
 from pathlib import Path
 
 from ..errors import InputError, SceneError
-from ..settings import MAX_MAGNITUDE
+from ..settings import MAX_MAGNITUDE, MAX_RECORDED_TIME
 from .scene import NAME_RE, STATUSES, Scene
 from .trackfiles import ANNOTATION_PERIOD, Track, Tracks, _id_key, read_tracks
 from .yamldoc import dump_yaml, plain_name
@@ -201,8 +201,9 @@ class TrackSceneOptions:
             value = getattr(self, key)
             if value is not None and not math.isfinite(value):
                 raise InputError(f"{key} must be finite, got {value!r}")
-            if value is not None and abs(value) > MAX_MAGNITUDE:  # else refused as the written scene's number
-                raise InputError(f"{key} must be at most {MAX_MAGNITUDE:g} in magnitude, got {value:g}")
+            bound = MAX_RECORDED_TIME if key == "t_start" else MAX_MAGNITUDE  # a recording's own clock
+            if value is not None and abs(value) > bound:  # else refused as the written scene's number
+                raise InputError(f"{key} must be at most {bound:g} in magnitude, got {value:g}")
         for key in ("duration", "scale", "radius", "robot_radius", "vmax", "amax"):
             value = getattr(self, key)
             if value is not None and value <= 0:
@@ -409,6 +410,12 @@ def _window(tracks: Tracks, options: TrackSceneOptions):
             src,
             "",
             f"the window {t_lo:g} s .. {t_hi:g} s is empty (the recording ends at {last:g} s)",
+        )
+    if t_hi - t_lo > MAX_MAGNITUDE:  # the scene's times start at the window's start
+        raise SceneError(
+            src,
+            "",
+            f"the window {t_lo:g} s .. {t_hi:g} s is longer than {MAX_MAGNITUDE:g} s: give --t-start and --duration",
         )
     scale = options.scale
     rel = {
