@@ -302,28 +302,33 @@ def test_free_space_regions_lie_inside_the_true_free_space(radius, clearance, ob
 
 def test_a_map_free_space_cut_into_tiles_is_the_whole_one(monkeypatch, repo_root):
     """A map's free space is computed tile by tile (large maps took minutes and GBs at
-    once): with tiles of 10 rectangles, the tb3 arena's map plus a post and a box, for a
-    disc of radius 0.4 (which the posts cut into a dozen regions), gives the same regions
-    as the whole computation, and the tiles did split the work."""
+    once): on Nav2's depot map with a post and a box added, for a disc of radius 0.2 (22
+    regions), tiles of 10 rectangles give the regions of the computation at once, and
+    both keep the grown distance from every blocked cell."""
     import dataclasses
 
     from gfuzzy.roadmap import freespace
     from gfuzzy.scene.scene import Box, Disc, load_scene
 
-    scene = load_scene(repo_root / "scenes" / "tb3-arena.yaml")
-    extra = (Disc((0.4, -0.6), 0.15), Box((-1.1, 1.2), (0.5, 0.3), 0.3))
-    robot = dataclasses.replace(scene.robot, radius=0.4)
+    scene = load_scene(repo_root / "scenes" / "depot.yaml")
+    extra = (Disc((16.0, 5.0), 0.15), Box((10.0, 11.0), (0.5, 0.3), 0.3))
+    robot = dataclasses.replace(scene.robot, shape="disc", radius=0.2, size=(0.0, 0.0), clearance=0.0)
     scene = dataclasses.replace(scene, robot=robot, obstacles=scene.obstacles + extra)
+    rects = np.asarray(scene.obstacles[0].rects)
+    monkeypatch.setattr(freespace, "TILE_RECTS", 10**9)
     whole = free_space(scene)
     grown = []
     real = freespace._grown_cells
     monkeypatch.setattr(freespace, "_grown_cells", lambda r, g: grown.append(len(r)) or real(r, g))
     monkeypatch.setattr(freespace, "TILE_RECTS", 10)
     tiled = free_space(scene)
-    n_rects = len(scene.obstacles[0].rects)
-    assert len(grown) >= 4 and max(grown) < n_rects  # tiles, each with part of the map
-    assert len(tiled.regions) == len(whole.regions) >= 2
-    for a, b in zip(tiled.regions, whole.regions, strict=True):
-        assert a.symmetric_difference(b).area < 1e-9 * max(b.area, 1.0)
-    # and the obstacles added cut the regions where they stand
-    assert not any(g.intersects(shapely.Point(0.4, -0.6).buffer(0.5)) for g in tiled.regions)
+    assert len(grown) > 50 and max(grown) < len(rects) / 5  # many tiles, each with a part of the map
+    assert len(tiled.regions) == len(whole.regions) >= 10
+    for a in tiled.regions:  # the same region of the whole computation (tiny ones may swap places)
+        (k,) = whole.region_of(np.asarray(a.representative_point().coords), slack=0.0)
+        assert k >= 0 and a.symmetric_difference(whole.regions[k]).area < 1e-9 * max(a.area, 1.0)
+    cells = shapely.union_all(shapely.box(*rects.T))
+    for g in tiled.regions:  # the oracle: shapely's distance to the cells, not grown
+        ring = np.asarray(g.exterior.coords)
+        assert shapely.distance(shapely.points(ring), cells).min() >= 0.2 - 1e-9
+    assert not any(g.intersects(shapely.Point(16.0, 5.0).buffer(0.34)) for g in tiled.regions)
