@@ -724,6 +724,18 @@ def test_no_path_from_the_horizon_says_so(blocked, tmp_path):
     assert r.returncode == 1 and "--horizon" in r.stdout
 
 
+def test_an_infinite_horizon_grows_until_the_search_is_not_cut(blocked):
+    """``PlanOptions(horizon=inf)`` (and ``--horizon inf``), which the options accept, ended
+    in an OverflowError; it now searches rounds until one is not cut by the horizon: the
+    door blocked for 250 s is passed after it, as with the default horizon."""
+    scene, rm = blocked
+    q = scene.queries[0]
+    res = plan(scene, rm, q.start, q.goal, options=PlanOptions(horizon=math.inf))
+    assert res.solved, res.message
+    assert res.duration > 250.0 - q.t0
+    assert check_trajectory(scene, res.trajectory.waypoints, q).valid
+
+
 def test_settle_time_of_periodic_and_once_movers():
     scene = _scene(LOOP)
     assert settle_time(scene) == pytest.approx(10.0)  # one period of the loop

@@ -582,7 +582,9 @@ class Planner:
                 max_horizon = max(min(max_horizon, cap), opts.dt)
         else:
             max_horizon = opts.horizon
-        return int(math.ceil(max_horizon / opts.dt)) + hold_steps
+        # an infinite horizon: the rounds grow until the search is not cut (or the movers'
+        # samples run out, a LimitError that says so)
+        return int(math.ceil(min(max_horizon / opts.dt, 2.0**62))) + hold_steps
 
     def _start_problem(self, field_: MoverField, start: FloatArray, t0: float) -> str:
         """Why the start cannot be searched from (on a mover, or within mover_clearance), or ""."""
