@@ -201,6 +201,15 @@ def test_exponent_numbers_read_as_numbers(tmp_scene):
         load_scene(path)
 
 
+def test_a_name_that_reads_as_a_number_says_to_quote_it(tmp_scene):
+    # with exponent numbers read as numbers, `name: 2e3` (a string before) is a number now
+    path = tmp_scene("version: 1\nname: 2e3\nbounds: [0, 0, 4, 3]\nrobot: {disc: 0.2, vmax: 1}\n")
+    with pytest.raises(SceneError, match=r"name: expected a non-empty string, got a number .*quote a name"):
+        load_scene(path)
+    path = tmp_scene("version: 1\nname: '2e3'\nbounds: [0, 0, 4, 3]\nrobot: {disc: 0.2, vmax: 1}\n")
+    assert load_scene(path).name == "2e3"
+
+
 def test_mesh_vertex_beyond_the_scene_numbers_bound_is_bad_input(tmp_scene):
     # the scene's own numbers stop at 1e9; a mesh vertex at 1e300 was taken (numpy's overflow
     # warnings on stderr), and render drew it, exit 0

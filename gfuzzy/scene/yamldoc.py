@@ -187,7 +187,9 @@ class _V:
 
     def name(self, value, place, pattern=None):
         if not isinstance(value, str) or not value.strip():
-            self.fail(place, f"expected a non-empty string, got {_kind(value)}")
+            hint = "; quote a name that reads as a number or a boolean (name: '2e3')" if isinstance(
+                value, (int, float, bool)) else ""  # fmt: skip
+            self.fail(place, f"expected a non-empty string, got {_kind(value)}{hint}")
         if pattern is not None and not pattern.match(value):
             self.fail(place, f"{value!r} must match [a-zA-Z0-9_.-]+")
         if any(ord(c) < 32 for c in value):
