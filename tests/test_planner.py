@@ -724,6 +724,14 @@ def test_no_path_from_the_horizon_says_so(blocked, tmp_path):
     assert r.returncode == 1 and "--horizon" in r.stdout
 
 
+def test_a_negative_ga_seed_is_refused_where_the_options_are_made():
+    with pytest.raises(InputError, match=r"seed \(the GA's, --ga-seed\) must be a whole number >= 0"):
+        PlanOptions(seed=-1)
+    r = run_cli_process("plan", ROOT / "scenes" / "building-floor.yaml", "--refine", "--ga-seed", "-1")
+    assert r.returncode == 2 and r.stderr.startswith("gfuzzy plan: seed (the GA's")
+    assert len(r.stderr.strip().splitlines()) == 1
+
+
 def test_an_infinite_horizon_grows_until_the_search_is_not_cut(blocked):
     """``PlanOptions(horizon=inf)`` (and ``--horizon inf``), which the options accept, ended
     in an OverflowError; it now searches rounds until one is not cut by the horizon: the

@@ -113,11 +113,14 @@ def test_populate_refuses_bad_input(tmp_path):
     for flags in (["--people", "0"], ["--people", "3", "--waypoints", "1,2;x"], ["--people", "3", "--radius", "-1"],
                   ["--people", "2", "--waypoints", "5,1;8,5"],
                   # --speed 1e20 overflowed ORCA: a GEOS traceback; --duration 0.1 wrote nobody
-                  ["--people", "2", "--speed", "1e20"], ["--people", "2", "--duration", "0.1"]):  # fmt: skip
+                  ["--people", "2", "--speed", "1e20"], ["--people", "2", "--duration", "0.1"],
+                  ["--people", "2", "--seed", "-1"]):  # fmt: skip
         p = _run("populate", str(src), *flags, "-o", str(out))
         assert p.returncode == 2, flags
         assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
         assert not out.exists()
+        if "--seed" in flags:  # named by the command (it came from deep in populate, unnamed)
+            assert p.stderr.startswith("gfuzzy populate: seed must be")
 
 
 def test_the_readme_populate_example_runs_and_a_full_room_says_why(tmp_path):

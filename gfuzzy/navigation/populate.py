@@ -80,6 +80,7 @@ class PopulateOptions:
                 raise InputError(f"{name} must be a positive number of at most {MAX_MAGNITUDE:g}, got {v:g}")
         if self.duration / self.dt > 100_000:
             raise InputError("duration / dt must be at most 100000 samples")
+        create_rng(self.seed)  # a negative seed is refused here, before the walk
         if self.duration < self.dt:  # one sample is no walk: nobody would be written
             raise InputError(f"duration must be at least one step of {self.dt:g} s, got {self.duration:g}")
 

@@ -122,6 +122,8 @@ class PlanOptions:
         check_number("stretch", self.stretch, 1.0, strict=False)
         if self.backend not in BACKENDS:
             raise InputError(f"backend must be one of {', '.join(BACKENDS)}, got {self.backend!r}")
+        if isinstance(self.seed, (int, np.integer)) and self.seed < 0:  # the GA's; numpy refuses it later
+            raise InputError(f"seed (the GA's, --ga-seed) must be a whole number >= 0, got {self.seed}")
 
 
 @dataclass(frozen=True)
