@@ -224,7 +224,7 @@ def cmd_navigate(args) -> int:
         raise BadInput(f"{scene.source}: queries: the scene has no queries to navigate")
     out = _out_path(args.output, (".json",)) if args.output else None
     try:
-        options = NavOptions(dt=args.dt, time_budget=args.time_budget, backend=args.backend)
+        options = NavOptions(dt=args.dt, time_budget=args.time_budget, backend=args.backend, budget_clock=args.budget_clock)
         sensor = _sensor_options(args)
     except InputError as exc:
         raise BadInput(f"gfuzzy navigate: {exc}") from None
@@ -261,7 +261,7 @@ def cmd_navigate(args) -> int:
         "modes": res.modes,
         "navigate": {"period": args.period, "sense": None if math.isinf(sense) else sense, "max_time": args.max_time,
                      "velocity": args.velocity, "noise": args.noise, "fov": args.fov, "occlusion": args.occlusion,
-                     "seed": sensor.seed},  # fmt: skip
+                     "seed": sensor.seed, "budget_clock": args.budget_clock},  # fmt: skip
         "replan_log": res.log,
     }
     if not solved:  # only a solved file carries waypoints (section 2): the motion goes here

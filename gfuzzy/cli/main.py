@@ -119,6 +119,9 @@ def _add_navigate(sub) -> None:
     v.add_argument("--max-time", type=float, default=120.0, help="give up this long after t0 (default 120 s)")
     v.add_argument("--dt", type=float, default=0.1, help="time step of the replanning search (default 0.1)")
     v.add_argument("--time-budget", type=float, default=0.1, help="seconds one replan may take (default 0.1)")
+    v.add_argument("--budget-clock", choices=("wall", "cpu"), default="wall",
+                   help="the clock of --time-budget and of the replan times reported: wall (default, a robot's) or "
+                        "cpu, the navigator thread's CPU time, so that runs do not depend on the machine's load")  # fmt: skip
     v.add_argument("--log-every", type=int, default=4, help="keep every k-th replan's predictions in the file (default 4)")
     v.add_argument("--backend", choices=("compiled", "reference"), default="compiled",
                    help="search implementation: compiled (numba, default) or the pure-Python reference")  # fmt: skip

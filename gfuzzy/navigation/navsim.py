@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import logging
 import math
-import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -27,7 +26,7 @@ from ..status import Status
 from ..trajectory import Trajectory
 from ..typed import FloatArray
 from .lookout import knowing_view
-from .navigator import Navigator, NavMode, NavOptions
+from .navigator import BUDGET_CLOCKS, Navigator, NavMode, NavOptions
 from .sensing import Sensor, SensorOptions
 from .socialmetrics import SocialMetrics, social_metrics
 
@@ -52,7 +51,8 @@ class NavResult:
     replans : int
         Calls to :meth:`Navigator.step`.
     replan_seconds : (replans,) float
-        Wall-clock time of each call.
+        Time of each call on the navigator's budget clock (``NavOptions.budget_clock``:
+        wall-clock, or the thread's CPU time).
     modes : dict
         How many calls ended as ``plan``, ``previous``, ``evasive``, ``goal``.
     min_separation : float
@@ -168,6 +168,7 @@ def simulate(
     kept: list = []
     status = Status.TIMEOUT
     eyes = _Eyes(scene, sense, sensor, pose, goal)
+    clock = BUDGET_CLOCKS[nav.options.budget_clock]  # replan times on the budget's own clock
     while True:
         if float(metric_distance(pose, goal, cr)) <= nav.options.goal_tolerance:
             status = Status.SOLVED
@@ -175,9 +176,9 @@ def simulate(
         if t >= t_stop - 1e-9:
             break
         obs = eyes(t, pose)
-        c0 = time.perf_counter()
+        c0 = clock()
         traj = nav.step(t, pose, obs, eyes.unknown())
-        seconds.append(time.perf_counter() - c0)
+        seconds.append(clock() - c0)
         mode = str(nav.last.mode if nav.last is not None else NavMode.PLAN)
         modes[mode] = modes.get(mode, 0) + 1
         if log_every and (len(seconds) - 1) % log_every == 0:
