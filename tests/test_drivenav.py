@@ -319,3 +319,26 @@ def test_the_fan_stops_at_its_share_of_the_budget(open_floor):
     none, _ = nav._splice(pose, 0.0, deadline)
     assert FAN_SHARE < SEARCH_SHARE
     assert len(none.poses) < len(some.poses) < len(full.poses)
+
+
+@pytest.mark.parametrize("start, goal", [((11.06, 2.5), (11.35, 8.5)), ((2.0, 1.0), (8.0, 1.29))])
+def test_a_run_within_the_goal_tolerance_ends_at_the_goal_by_a_turn_in_place(start, goal):
+    """A goal whose heading is a hair off the lane into it (a pedestrian window's crossing,
+    its heading rounded to 1e-4 rad): the run stops at the first pose within the goal
+    tolerance (1e-6 in the metric, heading weighted by the circumradius), which was either
+    overwritten by the goal's pose, a straight move that turned by 6e-7 rad, or left 2e-6
+    rad short of the goal's heading: `gfuzzy check` refused both. The rest of the turn is
+    now a row of its own, in place, and the run ends exactly at the goal."""
+    from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
+
+    doc = {"version": 1, "name": "floor", "bounds": [0, 0, 16, 12],
+           "robot": {"disc": 0.3, "vmax": 1.0, "kinematics": "unicycle", "wmax": 1.0}, "obstacles": [], "movers": []}  # fmt: skip
+    scene = parse_scene(doc, "<floor>")
+    rm = build_roadmap(scene, RoadmapOptions(vertices=150, seed=1))
+    h = round(math.atan2(goal[1] - start[1], goal[0] - start[0]), 4)
+    start, goal = np.array([*start, h]), np.array([*goal, h])
+    run = simulate(scene, rm, start, goal, max_time=20.0)
+    w = run.trajectory.waypoints
+    assert run.status.value == "solved"
+    assert _unicycle_problem(scene.robot, w) is None
+    np.testing.assert_array_equal(w[-1, 1:], goal)

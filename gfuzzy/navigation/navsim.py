@@ -23,6 +23,7 @@ from ..errors import InputError
 from ..roadmap.roadmap import Roadmap
 from ..scene.scene import Scene
 from ..status import Status
+from ..timespace.drive import settle_at
 from ..trajectory import Trajectory
 from ..typed import FloatArray
 from .lookout import knowing_view
@@ -172,6 +173,7 @@ def simulate(
     while True:
         if float(metric_distance(pose, goal, cr)) <= nav.options.goal_tolerance:
             status = Status.SOLVED
+            rows[-1:] = _settle(rows[-1], goal, robot)  # within the tolerance: the goal exactly
             break
         if t >= t_stop - 1e-9:
             break
@@ -199,7 +201,8 @@ def simulate(
         pose = piece[-1, 1:].copy()
         if at_goal.size and abs(end - w[at_goal[0], 0]) <= 1e-9:
             pose = goal.copy()
-            rows[-1] = np.array([rows[-1][0], *goal])
+            if not robot.unicycle:  # (a unicycle's last row is settled at the goal above)
+                rows[-1] = np.array([rows[-1][0], *goal])
         t = float(piece[-1, 0])
     wps = _merge_rows(np.array(rows))
     executed = Trajectory(wps, cr)
@@ -278,6 +281,23 @@ def _follow(traj: Trajectory, ta: float, tb: float) -> FloatArray:
     w = traj.waypoints
     inner = w[(w[:, 0] > ta + 1e-9) & (w[:, 0] < tb - 1e-9)]
     return np.vstack([np.array([ta, *traj.at(ta)])[None], inner, np.array([tb, *traj.at(tb)])[None]])
+
+
+def _settle(last: FloatArray, goal: FloatArray, robot) -> list:
+    """The rows that replace ``last``, a pose within the goal tolerance, so that the run
+    ends exactly at the goal (``gfuzzy check`` compares each coordinate within 1e-6, the
+    tolerance the metric's: a unicycle of circumradius 0.3 stopped 2e-6 rad short of the
+    goal's heading was refused): for a unicycle, whose rows may not turn while moving,
+    :func:`gfuzzy.timespace.drive.settle_at`'s turn in place; otherwise ``last`` and the
+    goal after it, reached within the speed bound (written over ``last``, the hair could
+    exceed it)."""
+    last = np.asarray(last, dtype=float)
+    if robot.unicycle:
+        return list(settle_at(last[None], goal, robot))
+    gap = float(metric_distance(last[1:], goal, robot.circumradius))
+    if gap == 0.0:
+        return [last]
+    return [last, np.array([last[0] + max(gap / robot.vmax, 1e-6), *goal])]
 
 
 def _merge_rows(w: FloatArray) -> FloatArray:
