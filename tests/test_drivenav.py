@@ -319,3 +319,74 @@ def test_the_fan_stops_at_its_share_of_the_budget(open_floor):
     none, _ = nav._splice(pose, 0.0, deadline)
     assert FAN_SHARE < SEARCH_SHARE
     assert len(none.poses) < len(some.poses) < len(full.poses)
+
+
+@pytest.mark.parametrize("start, goal", [((11.06, 2.5), (11.35, 8.5)), ((2.0, 1.0), (8.0, 1.29))])
+def test_a_run_within_the_goal_tolerance_ends_at_the_goal_by_a_turn_in_place(start, goal):
+    """A goal whose heading is a hair off the lane into it (a pedestrian window's crossing,
+    its heading rounded to 1e-4 rad): the run stops at the first pose within the goal
+    tolerance (1e-6 in the metric, heading weighted by the circumradius), which was either
+    overwritten by the goal's pose, a straight move that turned by 6e-7 rad, or left 2e-6
+    rad short of the goal's heading: `gfuzzy check` refused both. The rest of the turn is
+    now a row of its own, in place, and the run ends exactly at the goal."""
+    from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
+
+    doc = {"version": 1, "name": "floor", "bounds": [0, 0, 16, 12],
+           "robot": {"disc": 0.3, "vmax": 1.0, "kinematics": "unicycle", "wmax": 1.0}, "obstacles": [], "movers": []}  # fmt: skip
+    scene = parse_scene(doc, "<floor>")
+    rm = build_roadmap(scene, RoadmapOptions(vertices=150, seed=1))
+    h = round(math.atan2(goal[1] - start[1], goal[0] - start[0]), 4)
+    start, goal = np.array([*start, h]), np.array([*goal, h])
+    run = simulate(scene, rm, start, goal, max_time=20.0)
+    w = run.trajectory.waypoints
+    assert run.status.value == "solved"
+    assert _unicycle_problem(scene.robot, w) is None
+    np.testing.assert_array_equal(w[-1, 1:], goal)
+
+
+@pytest.mark.parametrize("robot", [
+    {"footprint": [[0.3, 0.0], [0.22, 0.2], [-0.2, 0.2], [-0.2, -0.2], [0.22, -0.2]], "vmax": 1.0,
+     "kinematics": "unicycle", "wmax": 1.5},
+    {"box": [0.6, 0.45], "vmax": 1.0},
+])  # fmt: skip
+def test_the_evasive_scores_compute_exact_gaps_only_where_they_count(robot, monkeypatch):
+    """A footprint's evasive motion among 60 people: exact polygon gaps over every
+    candidate, sample and person cost 75-150 ms of CPU on students001 (over the budget on
+    their own). Gaps whose circumscribed-disc bound is above both the evasion's gap cap and
+    what a gap can lose between two samples score alike: the scores are the same with that
+    bound there, for a fraction of the exact gaps."""
+    import gfuzzy.navigation.navigator as navmod
+    from gfuzzy.navigation.drivenav import look_times, sample_rows
+    from gfuzzy.navigation.evasion import evasion_scores
+    from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
+    from gfuzzy.timespace.drive import evasions
+
+    doc = {"version": 1, "name": "square", "bounds": [0, 0, 16, 14], "robot": robot, "obstacles": [], "movers": []}
+    scene = parse_scene(doc, "<square>")
+    rm = build_roadmap(scene, RoadmapOptions(vertices=80, seed=1))
+    nav = Navigator(scene, rm, (14.0, 12.0, 0.0))
+    rng = np.random.default_rng(4)
+    pose = np.array([8.0, 7.0, 0.3])
+    obs = np.column_stack([rng.uniform(3, 13, (60, 2)), rng.uniform(-1.5, 1.5, (60, 2)), np.full(60, 0.25)])
+    t, T = 0.0, nav.options.drive_lookahead
+    times = t + look_times(nav.options.evasion_time, T)
+    cands = evasions(nav.geometry, t, pose, T, nav.options.cover, nav.options.evasion_headings, nav.vplan, (1.0, 0.5), ())
+    pts = sample_rows(cands, times)
+    ends = np.array([rows[-1, 1:] for rows in cands])
+    pairs = [0]
+    exact_distance = navmod.mover_distance
+
+    def counted(robot_, poses, *args, **kwargs):
+        pairs[0] += int(np.prod(np.broadcast_shapes(np.shape(poses)[:-1], np.shape(args[3])[:-1])))
+        return exact_distance(robot_, poses, *args, **kwargs)
+
+    monkeypatch.setattr(navmod, "mover_distance", counted)
+    got = evasion_scores(nav, t, pose, obs, pts, times, ends)
+    some = pairs[0]
+    real = nav._clearance_along
+    nav._clearance_along = lambda p, tt, o, exact_below=math.inf: real(p, tt, o)  # every gap exact
+    pairs[0] = 0
+    want = evasion_scores(nav, t, pose, obs, pts, times, ends)
+    np.testing.assert_array_equal(got, want)
+    assert len(set(np.round(want, 6))) > 3  # the candidates do score differently
+    assert 0 < some < pairs[0] / 4

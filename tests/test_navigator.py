@@ -780,3 +780,58 @@ def test_a_goal_someone_stands_on_skips_the_search_that_cannot_reach_it(open_squ
     np.testing.assert_allclose(traj.waypoints[-1, 1:], [0.0, 4.0])
     ts = np.linspace(0.0, traj.t_end, 2001)
     assert np.min(np.hypot(*(traj.at(ts) - obs[0, :2]).T)) - 0.6 > 0.05  # the buffer kept
+
+
+def test_the_search_leaves_the_measured_tail_of_its_calls_free(open_square):
+    """A call that went on past the search's deadline (the last piece of safety work, the
+    evasive motion: a footprint differential drive's costs 20-28 ms of CPU) moves the next
+    calls' deadline earlier by 1.25 times that tail, so that they end within the budget
+    (on a pedestrian replay such calls ended at 92-108 ms of a 100 ms budget); a short
+    tail leaves the search its 75 %."""
+    from gfuzzy.navigation.navigator import _Searched
+
+    scene, rm = open_square
+    obs = np.array([[0.0, -3.0, 0.0, -1.0, 0.3]])
+    for tail, want in ((0.040, 0.1 - 1.25 * 0.041), (0.010, 0.075)):
+        nav = Navigator(scene, rm, (0.0, 4.0))
+        now = [0.0]
+        nav._clock = lambda now=now: now[0]
+        seen = []
+
+        def search(t, pose, o, infl, deadline, *rest, now=now, seen=seen, start=None):
+            seen.append(deadline - now[0])
+            now[0] = deadline + 0.001  # the search ran into its deadline
+            return _Searched(None, "planning time budget exhausted", 1, True)
+
+        evade = nav._evasive
+
+        def slow_evasive(*args, now=now, tail=tail, evade=evade):
+            now[0] += tail
+            return evade(*args)
+
+        nav._search, nav._evasive = search, slow_evasive
+        nav._direct = nav._previous_if_clear = lambda *args: None
+        for k in range(2):
+            now[0] = 10.0 * k
+            nav.step(0.25 * k, np.array([0.0, -4.0]), obs)
+            assert nav.last.mode == "evasive"
+        assert seen[0] == pytest.approx(0.075)
+        assert seen[-1] == pytest.approx(want)
+
+
+def test_the_exact_first_motions_stop_at_the_deadline(open_square):
+    """The first motions from a start the margin refuses are decided one by one before the
+    search's first expansion (dozens for a differential drive); each now looks at the
+    deadline first, as the field's pieces of safety work do."""
+    from gfuzzy.navigation.navigator import _OutOfTime
+
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (0.0, 4.0))
+    obs = np.array([[0.0, -3.4, 0.0, 0.0, 0.3]])
+    infl = nav._inflation(np.array([0.0, -4.0]), obs)
+    ticks = iter([0.0, 5.0])
+    field_ = nav._field(0.0, obs, infl, 40, deadline=1.0)
+    field_.clock = lambda: next(ticks)
+    assert field_.motion_safe(np.array([0.0, -4.0]), np.array([0.0, -4.05]), 0) in (True, False)
+    with pytest.raises(_OutOfTime):
+        field_.motion_safe(np.array([0.0, -4.0]), np.array([0.0, -4.05]), 0)

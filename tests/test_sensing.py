@@ -7,6 +7,7 @@ import json
 import math
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -329,3 +330,31 @@ def test_an_unseen_noisy_track_grows_with_its_velocity_uncertainty():
         clean.update(0.25 * k, [[0.25 * k, 0.0, 0.3]])
     assert clean.velocity_sigma()[0] == 0.0
     assert clean.update(1.0, np.zeros((0, 3)))[0, 4] == pytest.approx(0.3 + 0.2 * 0.5)
+
+
+def test_navigate_budget_on_cpu_time(tmp_path):
+    """`gfuzzy navigate --budget-clock cpu` (as `gfuzzy crowd` has) puts the replan budget on
+    CPU time, so that a run does not depend on the machine's load; it was missing."""
+    out = tmp_path / "z.json"
+    p = _run("navigate", "scenes/zara-crowd.yaml", "--budget-clock", "cpu", "-o", str(out))
+    assert p.returncode == 0, p.stdout + p.stderr
+    assert json.loads(out.read_text())["navigate"]["budget_clock"] == "cpu"
+    p = _run("navigate", "scenes/zara-crowd.yaml", "--budget-clock", "sundial", "-o", str(out))
+    assert p.returncode == 2 and len(p.stderr.strip().splitlines()) == 1
+
+
+def test_replan_times_are_on_the_budget_clock(monkeypatch):
+    """The replan times a run reports are on the navigator's budget clock: with the budget
+    on CPU time, a loaded machine does not make calls look over budget (they were always
+    wall-clock time)."""
+    import itertools
+
+    from gfuzzy.navigation import navsim
+
+    ticks = itertools.count(0.0, 7.0)
+    monkeypatch.setattr(navsim, "BUDGET_CLOCKS", {"wall": time.perf_counter, "cpu": lambda: next(ticks)})
+    scene = gfuzzy.load_scene(ROOT / "scenes" / "zara-crowd.yaml")
+    rm = gfuzzy.build_roadmap(scene, gfuzzy.RoadmapOptions(vertices=60, seed=1))
+    q = scene.queries[0]
+    run = navsim.simulate(scene, rm, q.start, q.goal, max_time=1.0, options=gfuzzy.NavOptions(budget_clock="cpu"))
+    assert run.replans >= 2 and np.all(run.replan_seconds == 7.0)

@@ -64,3 +64,60 @@ def test_points_on_a_segment_but_not_evenly_spaced_are_all_examined():
         assert len(want) > 10
         node, step = field_.unsafe_pairs(poses, np.array([0, len(xs)]), np.array([0]), np.array([steps - 1]))
         assert set(zip(node.tolist(), step.tolist(), strict=True)) == want, compiled
+
+
+def _crowd_scene(rng, people: int = 40) -> str:
+    """People walking straight lines over a 20 m square, some appearing or leaving inside a step."""
+    rows = []
+    for i in range(people):
+        t0 = float(rng.choice([0.0, 1.03, 2.51]))
+        t1 = float(rng.choice([6.0, 3.97, 10.0]))
+        p = rng.uniform(1, 19, 2)
+        v = rng.uniform(-1.4, 1.4, 2)
+        q = p + v * (t1 - t0)
+        rows.append(f"  - {{name: p{i}, disc: 0.25, trajectory: [[{t0}, {p[0]:.3f}, {p[1]:.3f}], [{t1}, {q[0]:.3f}, {q[1]:.3f}]]}}")
+    return "version: 1\nname: crowd\nbounds: [-20, -20, 40, 40]\nrobot: {disc: 0.25, vmax: 1.5}\nmovers:\n" + "\n".join(rows) + "\n"
+
+
+def test_first_motion_examines_only_the_people_within_reach(monkeypatch):
+    """motion_safe decides a motion among 40 people from those whose broad-phase boxes
+    meet it (on a pedestrian replay, 56 first motions among 48 people cost 170 ms of CPU
+    in one call, over the navigator's 100 ms budget), and answers as the check of every
+    person does (the boxes opened to the whole plane)."""
+    import gfuzzy.timespace.movers as movers_mod
+
+    rng = np.random.default_rng(7)
+    scene = _scene(_crowd_scene(rng))
+    dt, steps = 0.1, 60
+    field_ = MoverField(scene, 0.0, dt, steps, 1.5)
+    every = MoverField(scene, 0.0, dt, steps, 1.5)
+    every.bbox[..., :2], every.bbox[..., 2:] = -np.inf, np.inf
+    calls = {"n": 0}
+    exact = movers_mod.mover_distance
+
+    def counted(*args, **kwargs):
+        calls["n"] += 1
+        return exact(*args, **kwargs)
+
+    answers = {True: 0, False: 0}
+    filtered = examined = 0
+    for _ in range(300):
+        step = int(rng.integers(0, steps))
+        mv = scene.movers[int(rng.integers(0, len(scene.movers)))]
+        xy, _ = mv.state(np.array([step * dt]))
+        a = xy[0] + rng.uniform(-0.9, 0.9, 2)
+        d = rng.normal(size=2)
+        b = a + d / np.linalg.norm(d) * rng.uniform(0, 1.5 * dt)
+        want = every.motion_safe(a, b, step)
+        monkeypatch.setattr(movers_mod, "mover_distance", counted)
+        calls["n"] = 0
+        got = field_.motion_safe(a, b, step)
+        filtered += calls["n"]
+        calls["n"] = 0
+        every.motion_safe(a, b, step)
+        examined += calls["n"]
+        monkeypatch.setattr(movers_mod, "mover_distance", exact)
+        assert got == want
+        answers[got] += 1
+    assert answers[True] > 30 and answers[False] > 30
+    assert filtered < examined / 5

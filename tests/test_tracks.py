@@ -221,6 +221,25 @@ def test_command_takes_obstacles_and_robot_from_a_static_scene(tmp_path, eth_fil
     )
 
 
+def test_a_differential_drive_from_a_static_scene_is_written_as_yaml(tmp_path, eth_file):
+    """A robot with `kinematics: unicycle` (a string-valued key): the scene was written
+    with the scalar's document-end marker (`kinematics: unicycle` then `...`), and
+    `gfuzzy tracks` refused its own output ("invalid YAML")."""
+    static = tmp_path / "robot.yaml"
+    static.write_text(
+        "version: 1\nname: robot\nbounds: [-1, -1, 12, 8]\nobstacles: []\nrobot:\n"
+        "  footprint: [[0.3, 0.0], [-0.2, 0.2], [-0.2, -0.2]]\n  kinematics: unicycle\n  wmax: 1.5\n"
+        "  reverse: true\n  vmax: 1.0\n",
+        encoding="utf-8",
+    )
+    out = tmp_path / "drive.yaml"
+    proc = run_cli_process("tracks", eth_file, "--static", static, "--start", 0, 0, 0, "--goal", 5, 5, 1.57, "-o", out)
+    assert proc.returncode == 0, proc.stderr
+    robot = load_scene(out).robot
+    assert (robot.kinematics, robot.wmax, robot.reverse) == ("unicycle", 1.5, True)
+    assert load_scene(out).queries[0].start == (0.0, 0.0, 0.0)
+
+
 def test_static_mesh_paths_follow_the_new_file(tmp_path, csv_file):
     folder = tmp_path / "warehouse"
     shutil.copytree(ROOT / "scenes" / "meshes", folder / "meshes")

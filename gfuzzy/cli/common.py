@@ -32,8 +32,8 @@ def _say(msg: str, stream=None) -> None:
 def _navigator_flags(p) -> None:
     """The navigator's options that ``navigate`` and ``crowd`` both take (``NavOptions``)."""
     p.add_argument("--budget-clock", choices=("wall", "cpu"), default="wall",
-                   help="the clock of --time-budget: wall (default, a robot's) or cpu, the navigator thread's CPU time, "
-                        "so that figures do not depend on the machine's load")  # fmt: skip
+                   help="the clock of --time-budget and of the replan times reported: wall (default, a robot's) or "
+                        "cpu, the navigator thread's CPU time, so that runs do not depend on the machine's load")  # fmt: skip
     p.add_argument("--personal-space", type=float, default=0.2,
                    help="gap (m) the navigator keeps from people when that costs little (default 0.2, 0: off)")  # fmt: skip
     p.add_argument("--path-space", type=float, default=1.25, metavar="SECONDS",

@@ -192,19 +192,10 @@ def _sensor_options(args):
                          seed=1 if args.seed is None else args.seed)  # fmt: skip
 
 
-def cmd_navigate(args) -> int:
-    """Drive the robot among the scene's movers without knowing their future (section 5)."""
-    import numpy as np
+def _navigate_options(args):
+    """``gfuzzy navigate``'s flags checked: the navigator's options, the sensor's, the range."""
+    from ..navigation.navigator import NavOptions
 
-    from ..check.check import check_trajectory
-    from ..collision.geometry import StaticGeometry
-    from ..navigation.lookout import knowing_view
-    from ..navigation.navigator import Navigator, NavOptions
-    from ..navigation.navsim import simulate
-    from ..planner.planner import query_problem
-    from ..trajectory import TrajectoryFile
-
-    scene = _apply_overrides(_load_scene(args.scene), args)
     for flag, value in (("--period", args.period), ("--max-time", args.max_time), ("--time-budget", args.time_budget)):
         if not (math.isfinite(value) and value > 0):
             raise BadInput(f"gfuzzy navigate: {flag} must be a positive number, got {value:g}")
@@ -216,6 +207,29 @@ def cmd_navigate(args) -> int:
     sense = math.inf if args.sense is None else args.sense
     if not sense > 0:
         raise BadInput(f"gfuzzy navigate: --sense must be a positive number, got {sense:g}")
+    try:
+        options = NavOptions(dt=args.dt, time_budget=args.time_budget, backend=args.backend,
+                             budget_clock=args.budget_clock, personal_space=args.personal_space,
+                             path_space=args.path_space)  # fmt: skip
+        return options, _sensor_options(args), sense
+    except InputError as exc:
+        raise BadInput(f"gfuzzy navigate: {exc}") from None
+
+
+def cmd_navigate(args) -> int:
+    """Drive the robot among the scene's movers without knowing their future (section 5)."""
+    import numpy as np
+
+    from ..check.check import check_trajectory
+    from ..collision.geometry import StaticGeometry
+    from ..navigation.lookout import knowing_view
+    from ..navigation.navigator import Navigator
+    from ..navigation.navsim import simulate
+    from ..planner.planner import query_problem
+    from ..trajectory import TrajectoryFile
+
+    scene = _apply_overrides(_load_scene(args.scene), args)
+    options, sensor, sense = _navigate_options(args)
     if args.query:
         try:
             query = scene.query(args.query)
@@ -226,13 +240,6 @@ def cmd_navigate(args) -> int:
     else:
         raise BadInput(f"{scene.source}: queries: the scene has no queries to navigate")
     out = _out_path(args.output, (".json",)) if args.output else None
-    try:
-        options = NavOptions(dt=args.dt, time_budget=args.time_budget, backend=args.backend,
-                             budget_clock=args.budget_clock, personal_space=args.personal_space,
-                             path_space=args.path_space)  # fmt: skip
-        sensor = _sensor_options(args)
-    except InputError as exc:
-        raise BadInput(f"gfuzzy navigate: {exc}") from None
     problem = query_problem(StaticGeometry(scene), query.start, query.goal) or _start_on_mover(scene, query)
     if problem:
         tf = TrajectoryFile(scene.name, query.name, Status.INVALID_QUERY, problem, None, None, None, 0.0)
@@ -266,7 +273,8 @@ def cmd_navigate(args) -> int:
         "modes": res.modes,
         "navigate": {"period": args.period, "sense": None if math.isinf(sense) else sense, "max_time": args.max_time,
                      "velocity": args.velocity, "noise": args.noise, "fov": args.fov, "occlusion": args.occlusion,
-                     "seed": sensor.seed},  # fmt: skip
+                     "seed": sensor.seed, "budget_clock": args.budget_clock,
+                     "personal_space": args.personal_space, "path_space": args.path_space},  # fmt: skip
         "replan_log": res.log,
     }
     if not solved:  # only a solved file carries waypoints (section 2): the motion goes here

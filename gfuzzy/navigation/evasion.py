@@ -45,7 +45,6 @@ def evasion_scores(nav: Navigator, t: float, pose: FloatArray, obs: FloatArray, 
     tau = times - t
     obs = nav._near(pose, obs, T, EVASION_GAP)  # farther people change no score below
     if len(obs):
-        each = nav._clearance_along(pts, times, obs)  # (C, T, k)
         walk = np.hypot(obs[:, 2], obs[:, 3])
         if vel is None:
             rate = np.broadcast_to(float(nav.robot.vmax) + walk, (len(pts), len(obs)))
@@ -53,6 +52,10 @@ def evasion_scores(nav: Navigator, t: float, pose: FloatArray, obs: FloatArray, 
             rel = np.hypot(vel[:, None, 0] - obs[None, :, 2], vel[:, None, 1] - obs[None, :, 3])
             rate = np.maximum(rel, walk[None, :])
         h = np.diff(tau)[None, :, None]
+        # gaps above both EVASION_GAP and what the gap can lose between two samples score
+        # alike (no contact, the widest gap capped): their lower bound will do
+        alike = max(EVASION_GAP, float(rate.max(initial=0.0)) * float(h.max(initial=0.0))) + 1e-9
+        each = nav._clearance_along(pts, times, obs, exact_below=alike)  # (C, T, k)
         between = ((each[:, :-1] + each[:, 1:] - rate[:, None, :] * h) / 2).min(axis=-1)  # (C, T - 1)
         gap = each.min(axis=-1)  # (C, T)
         later = gap[:, 1:]

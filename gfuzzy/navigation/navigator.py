@@ -64,8 +64,16 @@ __all__ = ["NavMode", "NavOptions", "NavStep", "Navigator"]
 
 log = logging.getLogger(__name__)
 
-#: Share of ``time_budget`` the search may use; the rest is the fallback's.
+#: Share of ``time_budget`` the search may use; the rest is the fallback's (more when the
+#: calls have been measured to need more after the search's deadline: ``TAIL_RESERVE``).
 SEARCH_SHARE = 0.75
+#: The search's deadline is this many times the measured tail of the calls (from the
+#: deadline to the answer: the last piece of safety work, the fallbacks) before the end of
+#: the budget, when that is earlier than ``SEARCH_SHARE`` of it, but never before half of
+#: ``SEARCH_SHARE``. A footprint differential drive's evasion (its turns swept, its
+#: polygon's gaps to people sampled over 4 s) costs 20-28 ms of CPU and its safety pieces
+#: several ms each: cut at 75 %, its calls ended at 92-108 ms on a pedestrian replay.
+TAIL_RESERVE = 1.25
 #: Share of ``time_budget`` after which a differential drive's two-leg motions
 #: (``NavOptions.fan``) are no longer added: among walls their static checks cost
 #: milliseconds a heading, and the search must still have its time.
@@ -307,6 +315,7 @@ class Navigator(PathSpace, Prediction):
         self._ahead: list = []  # (arrival time, roadmap vertex) of the last plan
         self._clock = BUDGET_CLOCKS[opts.budget_clock]  # the budget's clock (a test may replace it)
         self._person_seconds = PERSON_SECONDS  # the predictions' set-up per person, measured
+        self._tail_seconds = 0.0  # from the search's deadline to the answer, measured (decaying maximum)
         self._walls = WallCheck(scene)
         disc = robot.shape == "disc" and robot.dof == 2  # its view follows its motion
         self._lookout = Lookout(opts.fov, opts.look_after, goal) if opts.fov < 360 and disc else None
@@ -361,7 +370,8 @@ class Navigator(PathSpace, Prediction):
         going back to one of them before going on would make it dither).
         """
         ahead = [v for ta, v in self._ahead if ta > t + 1e-9]
-        fan_until = deadline - (SEARCH_SHARE - FAN_SHARE) * self.options.time_budget
+        # the fan's share of the search's time, FAN_SHARE of SEARCH_SHARE (less with a reserve)
+        fan_until = deadline - (1.0 - FAN_SHARE / SEARCH_SHARE) * self._search_seconds()
         graph, s_id, g_id, rd = self._splice_ends(pose, ahead, fan_until)
         self._g_id = g_id
         if not math.isfinite(rd):
@@ -411,7 +421,7 @@ class Navigator(PathSpace, Prediction):
             self.reached = True
             self.last = NavStep(NavMode.GOAL, self._clock() - t_begin)
             return Trajectory(np.array([[t, *pose], [t + opts.cover, *pose]]), cr)
-        deadline = t_begin + SEARCH_SHARE * opts.time_budget
+        deadline = t_begin + self._search_seconds()
         infl = self._inflation(pose, obs)
         predicted = obs.copy()
         if len(obs):
@@ -463,8 +473,19 @@ class Navigator(PathSpace, Prediction):
             looked = self._lookout.look(self, t, pose, obs, traj)
             if looked is not None:
                 traj, mode = looked, NavMode.LOOK
-        self.last = NavStep(mode, self._clock() - t_begin, found.message, predicted, found.detailed)
+        t_end = self._clock()
+        if t_end > deadline:  # the call went on past the search's deadline: reserve that tail
+            self._tail_seconds = max(t_end - deadline, 0.8 * self._tail_seconds)
+        self.last = NavStep(mode, t_end - t_begin, found.message, predicted, found.detailed)
         return traj
+
+    def _search_seconds(self) -> float:
+        """The share of the budget the searches may use: ``SEARCH_SHARE``, less when the
+        calls have been measured to go on after the deadline for longer than the rest
+        (``TAIL_RESERVE`` times that tail kept free), but at least half of it."""
+        budget = self.options.time_budget
+        spare = budget - TAIL_RESERVE * self._tail_seconds
+        return max(min(SEARCH_SHARE * budget, spare), 0.5 * SEARCH_SHARE * budget)
 
     def _keeps_gaps(self, traj: Trajectory, t: float, t_end: float, obs: FloatArray, infl: FloatArray) -> bool:
         """Whether ``traj`` keeps, from ``t`` to ``t_end`` (sampled every ``MOTION_SAMPLE``
@@ -587,16 +608,31 @@ class Navigator(PathSpace, Prediction):
         return len(store.get(self._g_id)[0]) == 0
 
     # --------------------------------------------------------------- fallback
-    def _clearance_along(self, pts: FloatArray, times: FloatArray, obs: FloatArray) -> FloatArray:
+    def _clearance_along(self, pts: FloatArray, times: FloatArray, obs: FloatArray,
+                         exact_below: float = math.inf) -> FloatArray:  # fmt: skip
         """(..., k) gap between the robot at ``pts`` (..., T, d) and each person walking
-        on at constant velocity at ``times`` (T,), minus the mover clearance."""
+        on at constant velocity at ``times`` (T,), minus the mover clearance (and the
+        growth of a person of unknown velocity).
+
+        ``exact_below``: a robot that is not a disc gets its exact gap only where the gap of
+        its circumscribed disc (a lower bound) is below this; elsewhere that bound. The
+        evasive motion's scores cannot tell gaps above their threshold apart, and a
+        footprint's exact gaps to 60 people over 50 candidates and 4 s cost 75-150 ms."""
         pos = obs[None, :, :2] + (times - times[0])[:, None, None] * obs[None, :, 2:4]  # (T, k, 2)
         rel = pos - pts[..., None, :2]
+        less = self.mover_clearance + unknown_growth(self._unknown, obs, times - times[0])  # (T, k)
         if self.robot.shape == "disc":
             d = np.hypot(rel[..., 0], rel[..., 1]) - self.robot.radius - obs[:, 4]
-        else:
+        elif exact_below == math.inf:
             d = mover_distance(self._pred_robot, pts[..., None, :], "disc", obs[:, 4], (0.0, 0.0), pos)
-        return d - self.mover_clearance - unknown_growth(self._unknown, obs, times - times[0])
+        else:
+            d = np.hypot(rel[..., 0], rel[..., 1]) - self.robot.circumradius - obs[:, 4]
+            exact = d - less < exact_below
+            if exact.any():
+                at = np.broadcast_to(pts[..., None, :], (*d.shape, pts.shape[-1]))[exact]
+                d[exact] = mover_distance(self._pred_robot, at, "disc", np.broadcast_to(obs[:, 4], d.shape)[exact],
+                                          (0.0, 0.0), np.broadcast_to(pos, (*d.shape, 2))[exact])  # fmt: skip
+        return d - less
 
     def _direct(self, t: float, pose: FloatArray, obs: FloatArray) -> Trajectory | None:
         """Straight to the goal at full speed, if it is statically free and keeps clear of

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import logging
 import math
-import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -24,10 +23,11 @@ from ..errors import InputError
 from ..roadmap.roadmap import Roadmap
 from ..scene.scene import Scene
 from ..status import Status
+from ..timespace.drive import settle_at
 from ..trajectory import Trajectory
 from ..typed import FloatArray
 from .lookout import knowing_view
-from .navigator import Navigator, NavMode, NavOptions
+from .navigator import BUDGET_CLOCKS, Navigator, NavMode, NavOptions
 from .sensing import Sensor, SensorOptions
 from .socialmetrics import SocialMetrics, social_metrics
 
@@ -52,7 +52,8 @@ class NavResult:
     replans : int
         Calls to :meth:`Navigator.step`.
     replan_seconds : (replans,) float
-        Wall-clock time of each call.
+        Time of each call on the navigator's budget clock (``NavOptions.budget_clock``:
+        wall-clock, or the thread's CPU time).
     modes : dict
         How many calls ended as ``plan``, ``previous``, ``evasive``, ``goal``.
     min_separation : float
@@ -168,16 +169,18 @@ def simulate(
     kept: list = []
     status = Status.TIMEOUT
     eyes = _Eyes(scene, sense, sensor, pose, goal)
+    clock = BUDGET_CLOCKS[nav.options.budget_clock]  # replan times on the budget's own clock
     while True:
         if float(metric_distance(pose, goal, cr)) <= nav.options.goal_tolerance:
             status = Status.SOLVED
+            rows[-1:] = _settle(rows[-1], goal, robot)  # within the tolerance: the goal exactly
             break
         if t >= t_stop - 1e-9:
             break
         obs = eyes(t, pose)
-        c0 = time.perf_counter()
+        c0 = clock()
         traj = nav.step(t, pose, obs, eyes.unknown())
-        seconds.append(time.perf_counter() - c0)
+        seconds.append(clock() - c0)
         mode = str(nav.last.mode if nav.last is not None else NavMode.PLAN)
         modes[mode] = modes.get(mode, 0) + 1
         if log_every and (len(seconds) - 1) % log_every == 0:
@@ -198,7 +201,8 @@ def simulate(
         pose = piece[-1, 1:].copy()
         if at_goal.size and abs(end - w[at_goal[0], 0]) <= 1e-9:
             pose = goal.copy()
-            rows[-1] = np.array([rows[-1][0], *goal])
+            if not robot.unicycle:  # (a unicycle's last row is settled at the goal above)
+                rows[-1] = np.array([rows[-1][0], *goal])
         t = float(piece[-1, 0])
     wps = _merge_rows(np.array(rows))
     executed = Trajectory(wps, cr)
@@ -277,6 +281,23 @@ def _follow(traj: Trajectory, ta: float, tb: float) -> FloatArray:
     w = traj.waypoints
     inner = w[(w[:, 0] > ta + 1e-9) & (w[:, 0] < tb - 1e-9)]
     return np.vstack([np.array([ta, *traj.at(ta)])[None], inner, np.array([tb, *traj.at(tb)])[None]])
+
+
+def _settle(last: FloatArray, goal: FloatArray, robot) -> list:
+    """The rows that replace ``last``, a pose within the goal tolerance, so that the run
+    ends exactly at the goal (``gfuzzy check`` compares each coordinate within 1e-6, the
+    tolerance the metric's: a unicycle of circumradius 0.3 stopped 2e-6 rad short of the
+    goal's heading was refused): for a unicycle, whose rows may not turn while moving,
+    :func:`gfuzzy.timespace.drive.settle_at`'s turn in place; otherwise ``last`` and the
+    goal after it, reached within the speed bound (written over ``last``, the hair could
+    exceed it)."""
+    last = np.asarray(last, dtype=float)
+    if robot.unicycle:
+        return list(settle_at(last[None], goal, robot))
+    gap = float(metric_distance(last[1:], goal, robot.circumradius))
+    if gap == 0.0:
+        return [last]
+    return [last, np.array([last[0] + max(gap / robot.vmax, 1e-6), *goal])]
 
 
 def _merge_rows(w: FloatArray) -> FloatArray:

@@ -61,6 +61,16 @@ class _TimedField(MoverField):
             sps.append(np.asarray(sp[1:], dtype=np.int64) + sps[-1][-1])
         return np.concatenate(starts), np.concatenate(ends), np.concatenate(sps)
 
+    def motion_safe(self, a, b, step, min_interval=1e-6):
+        """:meth:`MoverField.motion_safe`, raising :class:`_OutOfTime` once the deadline has
+        passed. The search decides the first motions from a start the margin refuses one
+        by one, before its first expansion: a differential drive's start has dozens (its
+        two-leg lanes), each waited for up to 40 steps, and they ran 15-20 ms past the
+        deadline on a pedestrian replay, over the budget once the evasive motion followed."""
+        if self.clock() > self.deadline:
+            raise _OutOfTime
+        return super().motion_safe(a, b, step, min_interval)
+
     def _pieces(self, ptr, lo, hi, after):
         """(point pointers, group pointers from 0, lo, hi) of consecutive groups, while
         the clock plus ``after()`` (seconds the caller still needs) is before the deadline."""

@@ -341,7 +341,10 @@ def _value(v) -> str:
 
 
 def _flow(item) -> str:
-    return dump_yaml(item, default_flow_style=True, width=10**9, sort_keys=False).strip()
+    # dumped inside a list: a plain scalar dumped alone ends with the document-end marker
+    # ("unicycle\n...": a robot's `kinematics: unicycle` made the scene unreadable)
+    text = dump_yaml([item], default_flow_style=True, width=10**9, sort_keys=False).strip()
+    return text[1:-1]
 
 
 def _flow_rows(rows, indent: str, width: int = 100) -> str:
