@@ -819,6 +819,36 @@ def test_the_search_leaves_the_measured_tail_of_its_calls_free(open_square):
         assert seen[-1] == pytest.approx(want)
 
 
+def test_one_stalled_call_does_not_halve_the_search_for_the_rest_of_the_run(open_square):
+    """A review found the measured tail decaying only on calls that went past the deadline:
+    one stall of 0.3 s (a loaded machine), then quick calls, left every later search 37.5
+    ms of its 75. Now the stall counts for at most half the budget and the tail decays every
+    call: the search has its 75 % again within a few dozen quick calls."""
+    from gfuzzy.navigation.navigator import SEARCH_SHARE, _Searched
+
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (0.0, 4.0))
+    now = [0.0]
+    nav._clock = lambda: now[0]
+    seen, stall = [], [0.3]
+
+    def search(t, pose, o, infl, deadline, *rest, start=None):
+        seen.append(deadline - now[0])
+        now[0] += stall[0] + 0.005  # the first call stalls, the others answer in 5 ms
+        stall[0] = 0.0
+        return _Searched(None, "planning time budget exhausted", 1, True)
+
+    nav._search = search
+    nav._direct = nav._previous_if_clear = lambda *args: None
+    obs = np.array([[0.0, -3.0, 0.0, -1.0, 0.3]])
+    for k in range(60):
+        now[0] = 10.0 * k
+        nav.step(0.25 * k, np.array([0.0, -4.0]), obs)
+    assert seen[0] == pytest.approx(SEARCH_SHARE * 0.1)
+    assert seen[1] < SEARCH_SHARE * 0.1  # the stall is reserved for a while
+    assert seen[-1] == pytest.approx(SEARCH_SHARE * 0.1)  # and then forgotten
+
+
 def test_the_exact_first_motions_stop_at_the_deadline(open_square):
     """The first motions from a start the margin refuses are decided one by one before the
     search's first expansion (dozens for a differential drive); each now looks at the

@@ -74,6 +74,9 @@ SEARCH_SHARE = 0.75
 #: polygon's gaps to people sampled over 4 s) costs 20-28 ms of CPU and its safety pieces
 #: several ms each: cut at 75 %, its calls ended at 92-108 ms on a pedestrian replay.
 TAIL_RESERVE = 1.25
+#: The measured tail decays by this factor each call (half-life about 14 calls), and one
+#: call counts for at most ``TAIL_CAP`` of the budget.
+TAIL_DECAY, TAIL_CAP = 0.95, 0.5
 #: Share of ``time_budget`` after which a differential drive's two-leg motions
 #: (``NavOptions.fan``) are no longer added: among walls their static checks cost
 #: milliseconds a heading, and the search must still have its time.
@@ -474,8 +477,11 @@ class Navigator(PathSpace, Prediction):
             if looked is not None:
                 traj, mode = looked, NavMode.LOOK
         t_end = self._clock()
-        if t_end > deadline:  # the call went on past the search's deadline: reserve that tail
-            self._tail_seconds = max(t_end - deadline, 0.8 * self._tail_seconds)
+        # the call went on past the search's deadline: reserve that tail (at most half the
+        # budget: a stall of the machine is not a tail); a maximum that decays every call,
+        # so that one slow call does not halve the search's time for the rest of the run
+        over = min(max(t_end - deadline, 0.0), TAIL_CAP * self.options.time_budget)
+        self._tail_seconds = max(over, TAIL_DECAY * self._tail_seconds)
         self.last = NavStep(mode, t_end - t_begin, found.message, predicted, found.detailed)
         return traj
 
