@@ -477,13 +477,17 @@ class Navigator(PathSpace, Prediction):
             if looked is not None:
                 traj, mode = looked, NavMode.LOOK
         t_end = self._clock()
-        # the call went on past the search's deadline: reserve that tail (at most half the
-        # budget: a stall of the machine is not a tail); a maximum that decays every call,
-        # so that one slow call does not halve the search's time for the rest of the run
-        over = min(max(t_end - deadline, 0.0), TAIL_CAP * self.options.time_budget)
-        self._tail_seconds = max(over, TAIL_DECAY * self._tail_seconds)
+        self._measure_tail(t_end - deadline)
         self.last = NavStep(mode, t_end - t_begin, found.message, predicted, found.detailed)
         return traj
+
+    def _measure_tail(self, over: float) -> None:
+        """Keep the time a call went on past the search's deadline (``over``), to reserve it:
+        at most ``TAIL_CAP`` of the budget (a stall of the machine is not a tail), in a
+        maximum that decays every call (one slow call must not halve the search's time for
+        the rest of the run)."""
+        over = min(max(over, 0.0), TAIL_CAP * self.options.time_budget)
+        self._tail_seconds = max(over, TAIL_DECAY * self._tail_seconds)
 
     def _search_seconds(self) -> float:
         """The share of the budget the searches may use: ``SEARCH_SHARE``, less when the
