@@ -442,7 +442,10 @@ def layout(setting: CrowdSetting, rng: np.random.Generator) -> Layout:
         if tries % 100_001 == 0:  # jammed: start over
             hs, hg, agents = [], [], agents[:1]
         if tries > 1_000_000:
-            raise InputError(f"cannot place {setting.humans} humans in the {setting.scenario} scenario")
+            raise InputError(
+                f"cannot place {setting.humans} humans in the {setting.scenario} scenario: its protocol keeps "
+                f"each one's start and goal {2 * r + disc:g} m from the others' (give fewer --humans)"
+            )
         if setting.scenario == "square":
             sign = -1.0 if rng.random() > 0.5 else 1.0
             p = np.array([rng.random() * SQUARE_WIDTH * 0.5 * sign, (rng.random() - 0.5) * SQUARE_WIDTH])
