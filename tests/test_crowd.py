@@ -153,6 +153,25 @@ def test_navigator_episode_succeeds_among_a_few_people(roadmap):
     assert len(ep.replan_seconds) == ep.social.steps
 
 
+def test_replan_times_are_on_the_budget_clock(roadmap, monkeypatch):
+    """With ``--budget-clock cpu`` the episode's replan times are the navigator's CPU
+    times, as ``gfuzzy navigate`` reports them (they were wall-clock; a review found it):
+    a fake CPU clock that advances 1 ms per reading gives every call a whole number of ms."""
+    from gfuzzy.navigation import navigator as N
+
+    ticks = [0.0]
+
+    def fake():
+        ticks[0] += 0.001
+        return ticks[0]
+
+    monkeypatch.setitem(N.BUDGET_CLOCKS, "cpu", fake)
+    s = C.CrowdSetting(humans=0)
+    ep = C.run_episode(s, roadmap, 1, 0, ["navigator"], N.NavOptions(budget_clock="cpu"))[0]
+    ms = np.asarray(ep.replan_seconds) * 1000.0
+    assert len(ms) and np.allclose(ms, np.round(ms)) and ms.min() >= 1.0
+
+
 def test_a_unicycle_robot_turns_toward_its_way_and_arrives(roadmap):
     s = C.CrowdSetting(humans=2, kinematics="unicycle")
     ep = C.run_episode(s, roadmap, 1, 0, ["navigator"])[0]
