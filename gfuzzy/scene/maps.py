@@ -41,7 +41,7 @@ import numpy as np
 
 from ..errors import SceneError
 from ..typed import FloatArray
-from .yamldoc import _V, _join, _kind, _load_yaml
+from .yamldoc import _V, _inside, _join, _kind, _load_yaml
 
 __all__ = [
     "MAP_MODES",
@@ -177,17 +177,6 @@ class MapObstacle:
 
 
 # --------------------------------------------------------------------------- the YAML
-
-
-def _inside(v: _V, folder: Path, rel, place: str, what: str) -> Path:
-    """A relative file name that stays inside ``folder`` (resolved)."""
-    if not isinstance(rel, str) or not rel:
-        v.fail(place, f"expected a file name, got {_kind(rel)}")
-    if "\0" in rel:
-        v.fail(place, "file name contains a NUL character")
-    if os.path.isabs(rel) or rel.startswith("~"):
-        v.fail(place, f"{what} path {rel!r} must be relative")
-    return (folder / rel).resolve()
 
 
 def _read_bytes(v: _V, path: Path, place: str, what: str) -> bytes:

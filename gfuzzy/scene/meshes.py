@@ -6,13 +6,12 @@ triangles projected on xy (those of positive area), as polygons.
 
 from __future__ import annotations
 
-import os
 import warnings
 from pathlib import Path
 
 import numpy as np
 
-from .yamldoc import _V, MAX_MAGNITUDE, _join, _kind
+from .yamldoc import _V, MAX_MAGNITUDE, _inside, _join
 
 __all__ = ["mesh_footprint"]
 
@@ -32,13 +31,7 @@ def mesh_footprint(v: _V, spec, place: str, folder: Path) -> tuple[list, bytes]:
     spec = v.mapping(spec, place, required=("file",))
     rel = spec["file"]
     fplace = _join(place, "file")
-    if not isinstance(rel, str) or not rel:
-        v.fail(fplace, f"expected a file name, got {_kind(rel)}")
-    if "\0" in rel:
-        v.fail(fplace, "file name contains a NUL character")
-    if os.path.isabs(rel) or rel.startswith("~"):
-        v.fail(fplace, f"mesh path {rel!r} must be relative to the scene file")
-    full = (folder / rel).resolve()
+    full = _inside(v, folder, rel, fplace, "mesh")
     try:
         full.relative_to(folder.resolve())
     except ValueError:

@@ -8,7 +8,9 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import re
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -228,3 +230,15 @@ def _one_key(v: _V, item, place, keys):
     if key not in keys:
         v.fail(_join(place, key), f"unknown obstacle kind (allowed: {', '.join(keys)})")
     return key, item[key]
+
+
+def _inside(v: _V, folder: Path, rel, place: str, what: str) -> Path:
+    """A relative file name (a map's, a mesh's) joined to ``folder`` and resolved; refused
+    when it is not a non-empty string, holds a NUL or is absolute."""
+    if not isinstance(rel, str) or not rel:
+        v.fail(place, f"expected a file name, got {_kind(rel)}")
+    if "\0" in rel:
+        v.fail(place, "file name contains a NUL character")
+    if os.path.isabs(rel) or rel.startswith("~"):
+        v.fail(place, f"{what} path {rel!r} must be relative")
+    return (folder / rel).resolve()
