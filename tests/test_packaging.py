@@ -57,6 +57,13 @@ def test_wheel_and_sdist_hold_every_module_and_data_file(dist):
         in_sdist = {n.split("/", 1)[1] for n in tf.getnames() if "/" in n}
     assert expected - in_sdist == set(), f"missing from the sdist: {sorted(expected - in_sdist)}"
     assert {"pyproject.toml", "README.md", "LICENSE"} <= in_sdist
+    # the bundled examples (gfuzzy examples DIR): the repository's folders in the sdist, and
+    # copied by setup.py's build step into the wheel's package
+    examples = {"scenes/building-floor.yaml", "scenes/maps/depot.pgm", "roadmaps/building-floor.json",
+                "data/pedestrians/biwi_eth.txt"}  # fmt: skip
+    assert examples <= in_sdist
+    with zipfile.ZipFile(wheel) as zf:
+        assert {f"gfuzzy/examples/{name}" for name in examples} <= set(zf.namelist())
 
 
 def test_installed_wheel_plans_refines_and_checks(dist, tmp_path):
@@ -74,7 +81,6 @@ def test_installed_wheel_plans_refines_and_checks(dist, tmp_path):
 
     work = tmp_path / "elsewhere"  # no gfuzzy/ folder here: only the install can be imported
     work.mkdir()
-    scene = ROOT / "scenes" / "building-floor.yaml"
     out = work / "answer.json"
 
     def gfuzzy(*args):
@@ -88,6 +94,13 @@ def test_installed_wheel_plans_refines_and_checks(dist, tmp_path):
         cwd=work, capture_output=True, text=True, timeout=120, env=env,
     )
     assert Path(where.stdout).is_relative_to(venv), where.stdout + where.stderr
+
+    # the wheel carries the bundled examples: the README's scenes, roadmaps and data, copied out
+    copied = gfuzzy("examples", "ex")
+    assert copied.returncode == 0, copied.stdout + copied.stderr
+    scene = work / "ex" / "scenes" / "building-floor.yaml"
+    assert (work / "ex" / "roadmaps" / "building-floor.json").is_file()
+    assert (work / "ex" / "data" / "pedestrians" / "biwi_eth.txt").is_file()
 
     # a fresh install has no precompiled kernels: its first query compiles them with numba,
     # which counts against the planning budget (tens of seconds on a loaded machine)

@@ -8,6 +8,7 @@ import sys
 from ..errors import InputError, LimitError
 from .common import EXIT_BAD, EXIT_OK, BadInput, _navigator_flags, _Parser, _say
 from .crowds import add_crowd, add_populate
+from .examples import add_examples
 from .experiments import cmd_batch, cmd_navigate, cmd_tracks
 from .export import add_export
 from .mapping import cmd_map
@@ -200,7 +201,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     for add in (_add_roadmap, _add_plan, _add_check, _add_render, _add_navigate, _add_regress, _add_tracks, _add_batch,
-                _add_map, add_export, add_crowd, add_populate):
+                _add_map, add_export, add_crowd, add_populate, add_examples):
         add(sub)
     return p
 
