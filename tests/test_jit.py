@@ -145,3 +145,38 @@ print(json.dumps([r.status.value, len(spans), r.planning_seconds >= sum(spans) >
 """
     for precompiled in (True, False):
         assert _run(code, kernel_dir, precompiled) == ["solved", 1, True]
+
+
+def test_a_cold_install_says_it_compiles_before_the_first_search(monkeypatch, tmp_path):
+    """A fresh install's first query waited about 30 s in silence while numba compiled the
+    kernels (a newcomer measured it): the first search of a process now says so on a
+    terminal, when there is neither a precompiled extension nor numba's cache of the
+    search kernels; once, and never into a pipe."""
+    import io
+
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+
+    cache = tmp_path / "numba"
+    cache.mkdir()
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(cache))
+    monkeypatch.setattr(jit, "loaded", lambda: None)
+    monkeypatch.setattr(jit, "_noted", [])
+    assert jit.cold()
+    pipe, term = io.StringIO(), Terminal()
+    jit.note_cold(pipe)
+    assert pipe.getvalue() == ""
+    jit.note_cold(term)
+    jit.note_cold(term)
+    assert term.getvalue().count("note: compiling the search kernels") == 1 and "precompile" in term.getvalue()
+    (cache / "gfuzzy").mkdir()
+    (cache / "gfuzzy" / "search_kernel.astar-100.py311.nbi").write_bytes(b"")
+    assert not jit.cold()  # numba's cache holds them
+    monkeypatch.setattr(jit, "loaded", lambda: object())
+    (cache / "gfuzzy" / "search_kernel.astar-100.py311.nbi").unlink()
+    assert not jit.cold()  # the precompiled extension serves
+    monkeypatch.setattr(jit, "_noted", [])
+    term = Terminal()
+    jit.note_cold(term)
+    assert term.getvalue() == ""

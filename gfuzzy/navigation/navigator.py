@@ -325,6 +325,9 @@ class Navigator(PathSpace, Prediction):
         self._unknown = np.zeros((0, 2))  # where the people of unknown velocity stand (this call)
         self._build_base()
         if opts.backend == "compiled":  # load the compiled kernels now, not inside a step's budget
+            from ..timespace.jit import note_cold
+
+            note_cold()
             from ..timespace.search_kernel import warm
 
             warm()

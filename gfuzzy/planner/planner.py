@@ -671,6 +671,9 @@ def search_function(backend: str):
     """The search of ``backend``; numba loads only for the compiled one."""
     if backend == "reference":
         return sipp
+    from ..timespace.jit import note_cold
+
+    note_cold()
     from ..timespace.search_kernel import sipp_compiled
 
     return sipp_compiled

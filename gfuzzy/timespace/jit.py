@@ -36,7 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["KERNEL_MODULES", "kernel_dirs", "kernel_key", "loaded", "njit"]
+__all__ = ["KERNEL_MODULES", "cold", "kernel_dirs", "kernel_key", "loaded", "njit", "note_cold"]
 
 log = logging.getLogger(__name__)
 
@@ -105,6 +105,35 @@ def loaded():
         _state["ext"] = None if BUILDING else _load()
     ext = _state["ext"]
     return ext[0] if ext else None
+
+
+def cold() -> bool:
+    """True when the compiled search will be compiled now: no fresh precompiled extension,
+    and no numba cache of the search kernels where numba keeps it (``NUMBA_CACHE_DIR``, or
+    the package's ``__pycache__``). Numba's per-user fallback folder for a read-only
+    install is not looked at: there this may say True on a warm cache."""
+    if loaded() is not None:
+        return False
+    env = os.environ.get("NUMBA_CACHE_DIR")
+    folders = [Path(env)] if env else [_PACKAGE / "__pycache__"]
+    return not any(next(f.rglob("search_kernel.*.nbi"), None) for f in folders if f.is_dir())
+
+
+_noted: list = []
+
+
+def note_cold(stream=None) -> None:
+    """Before the compiled search's first use: on a terminal, say once per process that the
+    kernels are being compiled when :func:`cold` (a fresh install's first query waited
+    about 30 s in silence; a newcomer measured it). Pipes and logs get nothing."""
+    stream = stream or sys.stderr
+    isatty = getattr(stream, "isatty", None)
+    if _noted or not (isatty and isatty()) or not cold():
+        return
+    _noted.append(True)
+    stream.write("note: compiling the search kernels for this installation (once, about 20-40 s; "
+                 "`python -m gfuzzy.timespace.precompile` builds them ahead)\n")  # fmt: skip
+    stream.flush()
 
 
 def _numba_njit(func, options):
