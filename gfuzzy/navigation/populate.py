@@ -23,11 +23,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, check_number
 from ..rng import create_rng
 from ..roadmap.freespace import obstacle_shape
 from ..scene.scene import Mover, Scene
-from ..settings import MAX_MAGNITUDE
 from ..typed import FloatArray
 
 __all__ = ["PopulateOptions", "Populated", "populate", "write_scene", "obstacle_union"]
@@ -75,9 +74,7 @@ class PopulateOptions:
         if not 1 <= self.people <= 500:
             raise InputError(f"people must be between 1 and 500, got {self.people}")
         for name in ("duration", "radius", "speed", "dt"):
-            v = getattr(self, name)
-            if not (math.isfinite(v) and 0 < v <= MAX_MAGNITUDE):  # ORCA's arithmetic overflows beyond
-                raise InputError(f"{name} must be a positive number of at most {MAX_MAGNITUDE:g}, got {v:g}")
+            check_number(name, getattr(self, name))  # positive, at most 1e9: ORCA's arithmetic overflows beyond
         if self.duration / self.dt > 100_000:
             raise InputError("duration / dt must be at most 100000 samples")
         create_rng(self.seed)  # a negative seed is refused here, before the walk

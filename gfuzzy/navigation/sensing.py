@@ -26,11 +26,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, check_number
 from ..rng import create_rng
 from ..roadmap.freespace import obstacle_shape
 from ..scene.scene import Scene
-from ..settings import MAX_MAGNITUDE
 from ..typed import BoolArray, FloatArray
 
 __all__ = ["VELOCITY_MODES", "SensorOptions", "Sensor", "Tracker", "line_of_sight", "in_fov"]
@@ -89,8 +88,7 @@ class SensorOptions:
     def __post_init__(self):
         if self.velocity not in VELOCITY_MODES:
             raise InputError(f"velocity must be one of {', '.join(VELOCITY_MODES)}, got {self.velocity!r}")
-        if not (math.isfinite(self.noise) and 0 <= self.noise <= MAX_MAGNITUDE):
-            raise InputError(f"noise must be a number >= 0 and at most {MAX_MAGNITUDE:g}, got {self.noise:g}")
+        check_number("noise", self.noise, strict=False)
         if not (0 < self.fov <= 360):
             raise InputError(f"fov must be in (0, 360] degrees, got {self.fov}")
         if not self.sense > 0:
