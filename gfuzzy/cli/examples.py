@@ -9,6 +9,7 @@ way the user gets the folders the README's commands name (``scenes/``, ``roadmap
 from __future__ import annotations
 
 import os
+import shlex
 import shutil
 import sys
 import tempfile
@@ -73,7 +74,7 @@ def cmd_examples(args) -> int:
     n = sum(1 for name in EXAMPLES for p in (dest / name).rglob("*") if p.is_file())
     _say(
         f"{dest}: {n} files ({', '.join(f'{name}/' for name in EXAMPLES)}); try: "
-        f"cd {dest} && gfuzzy plan scenes/building-floor.yaml -o answer.json",
+        f"cd {shlex.quote(str(dest))} && gfuzzy plan scenes/building-floor.yaml -o answer.json",
         sys.stdout,
     )
     return EXIT_OK
