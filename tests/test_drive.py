@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 import pytest
 
 from gfuzzy.errors import InputError
@@ -108,66 +107,3 @@ def test_a_fan_piece_grazing_a_wall_is_left_out_within_its_steps():
     assert not _free(geo, a, b, FAN_TRACE_STEPS)
     assert geo.calls - c0 <= 2 * FAN_TRACE_STEPS + 2
     assert _free(geo, (2.0, 1.0, 0.0), (5.0, 1.0, 0.0), FAN_TRACE_STEPS)  # 0.8 m away: within the steps
-
-
-def _by_hand(rows, wmax: float, vmax: float, reverse: bool) -> None:
-    """Each pair of rows is a wait, a turn in place within ``wmax`` or a straight move
-    along the (unchanged) heading within ``vmax``, by hand (CONTRACT section 6)."""
-    for a, b in zip(rows[:-1], rows[1:], strict=True):
-        dt = b[0] - a[0]
-        assert dt > 0
-        dh = abs((b[3] - a[3] + math.pi) % (2 * math.pi) - math.pi)
-        dx, dy = b[1] - a[1], b[2] - a[2]
-        if dx == 0.0 and dy == 0.0:
-            assert dh / dt <= wmax * (1 + 1e-9)
-            continue
-        assert b[3] == a[3]  # the same number: no turn while moving
-        assert abs(-math.sin(a[3]) * dx + math.cos(a[3]) * dy) <= 1e-6
-        assert math.hypot(dx, dy) / dt <= vmax * (1 + 1e-9)
-        assert reverse or math.cos(a[3]) * dx + math.sin(a[3]) * dy > 0
-
-
-@pytest.mark.parametrize(
-    "robot, pose",
-    [
-        ({"disc": 0.3, "vmax": 1.0, "kinematics": "unicycle", "wmax": 1.0}, [2.0, 1.5, 0.4]),
-        ({"footprint": [[0.35, 0.25], [-0.25, 0.25], [-0.25, -0.25], [0.35, -0.25]], "vmax": 0.8,
-          "kinematics": "unicycle", "wmax": 1.5, "reverse": True}, [2.0, 1.0, 2.5]),
-    ],
-)  # fmt: skip
-def test_every_arc_evasion_is_a_zigzag_the_checker_accepts(robot, pose):
-    """The arcs of :func:`arc_evasions` turn while they drive, as a zig-zag of turns in
-    place and straight moves: every candidate obeys the row rule by hand and passes the
-    independent check (bounds, a post and a wall in the way: candidates cut short where
-    the statics block them); they do move and turn within each second, on the diamond
-    |v| / vmax + |w| / wmax <= 1."""
-    from gfuzzy.check.check import _unicycle_problem, check_trajectory
-    from gfuzzy.collision.geometry import StaticGeometry
-    from gfuzzy.scene.scene import parse_scene
-    from gfuzzy.timespace.drive import arc_evasions
-
-    doc = {
-        "version": 1, "name": "arcs", "bounds": [0, 0, 6, 4], "robot": robot,
-        "obstacles": [{"disc": {"center": [3.3, 2.4], "radius": 0.3}},
-                      {"box": {"center": [2.0, 3.8], "size": [4.0, 0.4]}}],
-    }  # fmt: skip
-    scene = parse_scene(doc)
-    geo = StaticGeometry(scene)
-    rate, vmax = scene.robot.turn_rate, scene.robot.vmax
-    cands = arc_evasions(geo, 1.0, pose, 4.0, 1.0, 16, vmax * (1 - 1e-9), (0.25, 0.5, 0.75), (0.5, 1.0))
-    assert len(cands) > 20
-    cut = both = 0
-    for rows in cands:
-        np.testing.assert_array_equal(rows[0], [1.0, *pose])
-        _by_hand(rows, rate, vmax, scene.robot.reverse)
-        assert _unicycle_problem(scene.robot, rows) is None
-        rep = check_trajectory(scene, rows)
-        assert rep.valid, rep.reason
-        first = rows[rows[:, 0] <= 2.0 + 1e-9]  # its first second
-        moved = np.sum(np.hypot(np.diff(first[:, 1]), np.diff(first[:, 2])))
-        turned = np.sum(np.abs((np.diff(first[:, 3]) + math.pi) % (2 * math.pi) - math.pi))
-        both += moved > 0.1 and turned > 0.1
-        assert moved / vmax + turned / rate <= (first[-1, 0] - 1.0) * (1 + 1e-9)
-        cut += rows[-1, 0] - 1.0 < 4.0 - 1e-6 and np.hypot(*(rows[-1, 1:3] - rows[-2, 1:3])) == 0.0
-    assert both > 0.8 * len(cands)  # turning while driving (the rest: cut short by the statics)
-    assert cut > 0  # some stop short of the look-ahead (a stop point, or cut by the statics)

@@ -390,36 +390,3 @@ def test_the_evasive_scores_compute_exact_gaps_only_where_they_count(robot, monk
     np.testing.assert_array_equal(got, want)
     assert len(set(np.round(want, 6))) > 3  # the candidates do score differently
     assert 0 < some < pairs[0] / 4
-
-
-def test_an_arc_escapes_where_no_turn_then_straight_does(open_floor):
-    """Someone walking in from behind on the left, someone walking up across the way
-    ahead: every turn in place then straight move of :func:`gfuzzy.timespace.drive.evasions`
-    (the robot standing while it turns) touches one of them within the look-ahead
-    (sampled every 5 ms by hand, so a touch is certain); driving while it turns
-    (``NavOptions.drive_arcs``, an arc as a zig-zag) the evasion keeps more than 0.1 m
-    from both over the look-ahead, and its rows obey the row rule."""
-    from gfuzzy.timespace.drive import evasions
-
-    sc, rm = open_floor
-    people = np.array([[2.66, 3.8, 0.96, -0.15, 0.3], [3.16, 1.19, 0.05, 1.09, 0.3]])
-    nav = Navigator(sc, rm, GOAL, NavOptions())
-    T = nav.options.drive_lookahead
-    old = evasions(nav.geometry, 0.0, P0, T, nav.options.cover, 16, nav.vplan, (1.0, 0.5, 0.25), (0.5, 1.0))
-    assert len(old) > 100
-    assert all(_gap_over(rows, people, T) < 0 for rows in old)
-    traj = drive_evasion(nav, 0.0, P0, people)
-    assert _unicycle_problem(sc.robot, traj.waypoints) is None
-    assert check_trajectory(sc, traj.waypoints).valid
-    assert _gap_over(traj.waypoints, people, T) > 0.1
-    without = drive_evasion(Navigator(sc, rm, GOAL, NavOptions(drive_arcs=False)), 0.0, P0, people)
-    assert _gap_over(without.waypoints, people, T) < 0
-
-
-def _gap_over(rows: np.ndarray, people: np.ndarray, T: float) -> float:
-    """Smallest gap between the disc robot (0.3) driving ``rows`` from t = 0 (standing after
-    them) and people (k, 5) walking on, sampled every 5 ms over ``T`` seconds."""
-    times = np.linspace(0.0, T, int(T / 0.005) + 1)
-    xy = Trajectory(rows, 0.3).at(np.minimum(times, rows[-1, 0]))[:, :2]
-    at = people[None, :, :2] + times[:, None, None] * people[None, :, 2:4]
-    return float(np.min(np.hypot(*(xy[:, None] - at).transpose(2, 0, 1)) - 0.3 - people[:, 4]))

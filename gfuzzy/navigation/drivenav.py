@@ -18,22 +18,19 @@ import math
 import numpy as np
 
 from ..poses import metric_distance, wrap_angle
-from ..timespace.drive import arc_evasions, evasions
+from ..timespace.drive import evasions
 from ..trajectory import Trajectory
 from ..typed import FloatArray
 from .evasion import evasion_scores
 from .navtypes import MOTION_SAMPLE, sample_loss
 
 __all__ = ["kept_plan", "sooner_plan", "cut_rows", "rest_of", "drive_evasion", "sample_rows", "EVASION_SPEEDS",
-           "EVASION_STOPS", "ARC_SHARES"]
+           "EVASION_STOPS"]
 
 #: Speeds (fractions of the planning speed) of a differential drive's evasive candidates.
 EVASION_SPEEDS = (1.0, 0.5, 0.25)
 #: Seconds after which an evasive candidate may also stop (and stand) instead of driving on.
 EVASION_STOPS = (0.5, 1.0)
-#: Shares of the turning rate of a differential drive's arcs (``NavOptions.drive_arcs``;
-#: :func:`gfuzzy.timespace.drive.arc_evasions`): the rest of its speed drives on.
-ARC_SHARES = (0.25, 0.5, 0.75)
 
 
 def cut_rows(traj: Trajectory, ta: float, tb: float) -> FloatArray:
@@ -162,9 +159,6 @@ def drive_evasion(nav, t: float, pose: FloatArray, obs: FloatArray) -> Trajector
     T = opts.drive_lookahead
     times = t + look_times(opts.evasion_time, T)
     cands = evasions(nav.geometry, t, pose, T, opts.cover, opts.evasion_headings, nav.vplan, EVASION_SPEEDS, EVASION_STOPS)
-    if opts.drive_arcs:
-        cands += arc_evasions(nav.geometry, t, pose, T, opts.cover, opts.evasion_headings, nav.vplan, ARC_SHARES,
-                              EVASION_STOPS)
     pts = sample_rows(cands, times)
     ends = np.array([rows[-1, 1:] for rows in cands])
     best = cands[int(np.argmax(evasion_scores(nav, t, pose, obs, pts, times, ends)))]

@@ -189,10 +189,6 @@ class NavOptions:
         A differential drive only: seconds over which its evasive motions are scored (and
         driven, :func:`gfuzzy.navigation.drivenav.drive_evasion`); its escapes start with a
         turn in place, so contacts that a shorter look-ahead cannot see decide them.
-    drive_arcs : bool
-        A differential drive only: its evasive candidates also turn while they drive (arcs
-        driven as a fine zig-zag of turns in place and straight moves,
-        :func:`gfuzzy.timespace.drive.arc_evasions`), instead of only standing while they turn.
     swerve_growth : float
         Further growth (m per s of prediction) of the predicted disc of a person whose
         straight walk meets someone else's within 3 s (:mod:`gfuzzy.navigation.swerve`):
@@ -230,7 +226,6 @@ class NavOptions:
     fan: bool = True
     full_speed: bool = False
     drive_lookahead: float = 4.0
-    drive_arcs: bool = True
     swerve_growth: float = 0.0
     fov: float = 360.0
     look_after: float = 1.0

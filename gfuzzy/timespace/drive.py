@@ -17,8 +17,7 @@ from ..poses import wrap_angle
 from ..settings import SPEED_SAFETY
 from ..typed import FloatArray
 
-__all__ = ["turn_path", "drive_rows", "settle_at", "evasions", "arc_evasions", "arc_rows", "reach_fraction", "turn_free",
-           "pick_turn", "fan", "Fan", "SAME_HEADING", "ARC_STEP"]
+__all__ = ["turn_path", "drive_rows", "settle_at", "evasions", "reach_fraction", "turn_free", "pick_turn", "fan", "Fan", "SAME_HEADING"]
 
 #: A turn's sweep is certified in arcs of at most this (rad): ``motion_free`` turns along
 #: the shorter arc.
@@ -29,9 +28,6 @@ SAME_HEADING = 1e-9
 #: Steps of the sphere tracing (two clearances each) that certify one piece of the fan
 #: (:func:`fan`) at most: about 30 ms of FCL queries.
 FAN_TRACE_STEPS = 256
-#: Seconds of one turn in place and one straight move of an arc driven as a zig-zag
-#: (:func:`arc_rows`).
-ARC_STEP = 0.1
 
 
 def _xy_pose(robot, x: float, y: float, h: float) -> list:
@@ -224,164 +220,6 @@ def evasions(geometry, t: float, pose, T: float, cover: float, headings: int, vp
                     if cover > t_turn + move:
                         rows.append([t + cover, *end])
                     out.append(np.array(rows, dtype=float))
-    return out
-
-
-def arc_rows(t: float, pose, v: float, w: float, rate: float, duration: float, step: float = ARC_STEP) -> FloatArray:
-    """Rows of an arc of speed ``v`` (m/s, negative: backwards) and turning rate ``w``
-    (rad/s, signed) driven for ``duration`` seconds as a zig-zag the row rule allows.
-
-    Each of ``ceil(duration / step)`` equal pieces is a turn in place at ``rate`` (the
-    robot's full turning rate) by ``w`` times the piece's length, then a straight move
-    along the new heading by ``v`` times it, each in its share of the piece: ``|w| / rate``
-    and the rest. So ``|v| / (1 - |w| / rate)`` is the straight moves' speed, which the
-    caller keeps within the speed bound: the pair (v, w) lies in a differential drive's
-    "diamond" ``|v| / vmax + |w| / wmax <= 1``, its wheels' speed limit, and the zig-zag
-    strays from the true arc by under ``|v| step`` times the turn of one piece.
-
-    Returns
-    -------
-    (2 n + 1, 4) float
-        ``[t, x, y, heading]`` from ``[t, *pose]``; the heading after the last piece is
-        exactly ``pose[2] + w duration`` (wrapped), and within a straight row the heading
-        is the same number in both rows.
-    """
-    n = max(1, int(math.ceil(duration / step - 1e-9)))
-    h = duration / n
-    share = min(abs(w) / rate, 1.0)
-    i = np.arange(1, n + 1)
-    head = wrap_angle(float(pose[2]) + w * h * i)
-    x = float(pose[0]) + np.cumsum(v * h * np.cos(head))
-    y = float(pose[1]) + np.cumsum(v * h * np.sin(head))
-    rows = np.empty((2 * n + 1, 4))
-    rows[0] = [t, *pose]
-    rows[1::2, 0] = t + h * (i - 1) + h * share  # the turns in place, at the full turning rate
-    rows[1::2, 1] = np.concatenate([[pose[0]], x[:-1]])
-    rows[1::2, 2] = np.concatenate([[pose[1]], y[:-1]])
-    rows[1::2, 3] = head
-    rows[2::2, 0] = t + h * i  # the straight moves along the heading turned to
-    rows[2::2, 1], rows[2::2, 2], rows[2::2, 3] = x, y, head
-    return rows
-
-
-def _path_length(rows: FloatArray, r: float) -> FloatArray:
-    """Cumulative length of ``rows`` in the contract's metric (turns count ``r`` per rad)."""
-    seg = np.hypot(np.diff(rows[:, 1]), np.diff(rows[:, 2])) + np.abs(wrap_angle(np.diff(rows[:, 3]))) * r
-    return np.concatenate([[0.0], np.cumsum(seg)])
-
-
-def _cut(rows: FloatArray, key: FloatArray, value: float) -> FloatArray:
-    """``rows`` up to where the non-decreasing ``key`` (one per row) reaches ``value``, the
-    last row interpolated within its piece (a turn stays a turn, a straight move straight)."""
-    j = int(np.searchsorted(key, value, side="right"))
-    if j >= len(rows):
-        return rows
-    out = rows[:j].copy()
-    a, b = rows[j - 1], rows[j]
-    f = (value - key[j - 1]) / (key[j] - key[j - 1]) if key[j] > key[j - 1] else 0.0
-    if f > 1e-12:
-        last = a.copy()
-        last[0] = a[0] + f * (b[0] - a[0])
-        if b[1] == a[1] and b[2] == a[2]:
-            last[3] = float(wrap_angle(a[3] + f * float(wrap_angle(b[3] - a[3]))))
-        else:
-            last[1:3] = a[1:3] + f * (b[1:3] - a[1:3])
-        out = np.vstack([out, last[None]])
-    return out
-
-
-def _free_length(geometry, rows: FloatArray, length: FloatArray, max_steps: int = FAN_TRACE_STEPS) -> float:
-    """How far along ``rows`` (the contract's metric, cumulative ``length`` per row) the
-    robot is certified free of static obstacles and in bounds.
-
-    Sphere tracing along the whole zig-zag: a pose with clearance c proves the poses within
-    metric length c along the path free (no point of the body moves farther), so the next
-    pose examined is c further on; it stops at a clearance below 1e-9 or after
-    ``max_steps`` poses.
-    """
-    robot = geometry.robot
-    reach, total = 0.0, float(length[-1])
-    for _ in range(max_steps):
-        j = min(int(np.searchsorted(length, reach, side="right")), len(rows) - 1)
-        a, b = rows[j - 1], rows[j]
-        f = min(max((reach - length[j - 1]) / (length[j] - length[j - 1]), 0.0), 1.0) if length[j] > length[j - 1] else 0.0
-        x, y = float(a[1] + f * (b[1] - a[1])), float(a[2] + f * (b[2] - a[2]))
-        c = geometry.disc_bound(x, y)
-        if not c > 0.02:  # no cheap bound worth stepping by: the exact clearance
-            c = geometry.clearance1(_xy_pose(robot, x, y, float(wrap_angle(a[3] + f * float(wrap_angle(b[3] - a[3]))))))
-        if c < 1e-9:
-            return reach
-        reach += c
-        if reach >= total:
-            return total
-    return reach
-
-
-def arc_evasions(geometry, t: float, pose, T: float, cover: float, headings: int, vplan: float,
-                 shares=(0.25, 0.5, 0.75), stops=(), step: float = ARC_STEP) -> list:  # fmt: skip
-    """Evasive candidates of a differential drive that turn while they drive: arcs.
-
-    For each turn share ``a`` of ``shares`` the robot drives the arc ``|w| = a wmax``,
-    ``|v| = (1 - a) vplan`` (a point of the "diamond", its wheels' speed limit) to the left
-    and to the right, forwards (and backwards with ``robot.reverse``), as a zig-zag of
-    turns in place and straight moves ``step`` seconds long (:func:`arc_rows`): the
-    turn-then-straight candidates of :func:`evasions` stand still while they turn, and a
-    quarter turn takes 1.6 s at 1 rad/s. Each arc ends at one of the ``headings`` headings
-    of :func:`evasions`' world-fixed grid at most a quarter turn away (then drives straight
-    on at ``vplan`` for what is left of ``T``, or stops after each of ``stops`` seconds of
-    it), or goes on for the whole ``T``. A candidate goes as far along as is statically
-    free (the whole, half or a quarter of it), then stands until ``cover``.
-
-    Returns
-    -------
-    list of (r, 4) float
-        Rows of each candidate, from ``[t, *pose]``: waits, turns in place within the
-        turning rate and straight moves along the heading only.
-    """
-    robot = geometry.robot
-    rate = robot.turn_rate * SPEED_SAFETY
-    r = 0.0 if robot.shape == "disc" else robot.circumradius  # a disc's turn moves no point of it
-    pose = np.asarray(pose, dtype=float)
-    grid = np.arange(headings) * (2 * math.pi / headings)
-    offsets = wrap_angle(grid - pose[2])
-    out = []
-    for a in shares:
-        for sign in (1.0, -1.0) if robot.reverse else (1.0,):
-            for side in (1.0, -1.0):
-                turns = [float(d) for d in offsets if 1e-6 < side * d <= 0.5 * math.pi + 1e-9]
-                for dh in [*sorted(turns, key=abs), None]:
-                    t_arc = T if dh is None else abs(dh) / (a * rate)
-                    if t_arc > T + 1e-9:
-                        continue
-                    w = side * a * rate if dh is None else dh / t_arc
-                    rows = arc_rows(t, pose, sign * (1 - a) * vplan, w, rate, t_arc, step)
-                    ends = [t_arc]
-                    if dh is not None and T - t_arc > 1e-9:  # then straight on along the heading reached
-                        end = rows[-1].copy()
-                        head = end[3]
-                        end[0] = t + T
-                        end[1:3] += sign * vplan * (T - t_arc) * np.array([math.cos(head), math.sin(head)])
-                        rows = np.vstack([rows, end[None]])
-                        ends = [T, *(t_arc + s for s in stops if t_arc + s < T - 1e-9)]
-                    out.extend(_arc_candidates(geometry, rows, r, ends, t, cover))
-    return out
-
-
-def _arc_candidates(geometry, rows: FloatArray, r: float, ends: list, t: float, cover: float) -> list:
-    """``rows`` cut at each of ``ends`` (s after ``t``), each as far as is statically free
-    (the whole, half or a quarter of its length), standing until ``t + cover``."""
-    length = _path_length(rows, r)
-    free = _free_length(geometry, rows, length)
-    out = []
-    for e in ends:
-        whole = float(np.interp(t + e, rows[:, 0], length))
-        f = next((f for f in (1.0, 0.5, 0.25) if whole * f <= free), None)
-        if f is None or whole * f <= 1e-9:
-            continue
-        part = _cut(rows, rows[:, 0], t + e) if f == 1.0 else _cut(rows, length, whole * f)
-        if cover > part[-1, 0] - t + 1e-9:
-            part = np.vstack([part, [t + cover, *part[-1, 1:]]])
-        out.append(part)
     return out
 
 
