@@ -155,6 +155,18 @@ def _need_pyrvo(command: str) -> None:
         raise BadInput(f"gfuzzy {command}: ORCA people need pyrvo: pip install 'gfuzzy[crowd]'") from None
 
 
+def _placeable(setting, seed: int, count: int) -> None:
+    """Draw every episode's layout before any runs (a few ms each): a count of humans
+    the protocol cannot place is refused at once, not in the middle of the run."""
+    from ..navigation.crowd import episode_layout
+
+    try:
+        for i in range(count):
+            episode_layout(setting, seed, i)
+    except InputError as exc:
+        raise BadInput(f"gfuzzy crowd: {exc}") from None
+
+
 def cmd_crowd(args) -> int:
     """Run the crowd benchmark; print the table of section 7; write the CSV."""
     import contextlib
@@ -164,6 +176,7 @@ def cmd_crowd(args) -> int:
     setting, options, policies = _setting(args)
     _need_pyrvo("crowd")
     out = _out_path(args.output, (".csv",)) if args.output else None
+    _placeable(setting, args.seed, args.episodes)
     roadmap = crowd_roadmap(setting)
     bar = _progress_bar(f"crowd {setting.scenario} x{args.episodes}")
     if args.workers:
