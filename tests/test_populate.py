@@ -210,3 +210,44 @@ def test_people_stay_inside_a_map_whose_unknown_cells_enclose_the_room():
         assert res.cut == 0
         assert len(res.movers) == 6
         assert all(m.trajectory[-1, 0] == pytest.approx(60.0) for m in res.movers)
+
+
+# a 14 m room, a 1 m wall, and beyond it a closed 11 m room (people cannot reach it: a
+# smaller free region) holding sixty small boxes: outlines that no person can come near
+TWO_ROOMS = {
+    "version": 1, "name": "two-rooms", "bounds": [0, 0, 26, 6],
+    "robot": {"disc": 0.3, "vmax": 1.0},
+    "obstacles": [
+        {"box": {"center": [14.5, 3.0], "size": [1.0, 6.0]}},
+        {"box": {"center": [5.0, 3.0], "size": [0.8, 0.8]}},
+        *({"box": {"center": [18.0 + 0.5 * (i % 12), 1.0 + 1.0 * (i // 12)], "size": [0.2, 0.2]}} for i in range(60)),
+    ],
+    "movers": [], "queries": [],
+}  # fmt: skip
+
+
+def test_orca_is_given_only_the_outlines_people_can_come_near(monkeypatch):
+    # RVO2 builds its obstacle tree in time that grows with the square of the edges (Nav2's
+    # depot map repeated 3 x 4: 56,000 vertices, 141 s for 20 people); edges far from the
+    # people's region change nothing an agent sees: they are left out, the walks stay the same
+    from gfuzzy.navigation import populate as P
+
+    scene = parse_scene(TWO_ROOMS, "<two-rooms>")
+    given = []
+    real = P._rvo_obstacles
+
+    def spy(sim, scene_, union):
+        given.append(union)
+        return real(sim, scene_, union)
+
+    monkeypatch.setattr(P, "_rvo_obstacles", spy)
+    opts = PopulateOptions(people=8, seed=2, duration=30.0)
+    near = populate(scene, opts)
+    xs = np.concatenate([np.asarray(g.exterior.coords)[:, 0] for g in given[-1].geoms])
+    assert xs.max() <= 15.0 + 1e-9  # the left room and its wall only: none of the sixty boxes
+    monkeypatch.setattr(P, "_near_walks", lambda union, grid, reach: union)  # everything, as before
+    every = populate(scene, opts)
+    assert len(near.movers) == len(every.movers) == 8 and near.cut == every.cut == 0
+    for a, b in zip(near.movers, every.movers, strict=True):
+        np.testing.assert_array_equal(a.trajectory, b.trajectory)
+    _check_people(TWO_ROOMS, [{"name": m.name, "disc": m.radius, "trajectory": m.trajectory} for m in near.movers])

@@ -39,6 +39,8 @@ GRID_MARGIN = 0.05
 WAYPOINT_REACHED = 0.5
 #: People start at least this far (m) from every query's start.
 START_KEEP = 1.0
+#: ORCA's time horizon for obstacles (s; RVO2's ``timeHorizonObst``).
+ORCA_OBSTACLE_HORIZON = 1.0
 
 
 @dataclass(frozen=True)
@@ -114,10 +116,10 @@ class _Grid:
         keep = radius + GRID_MARGIN
         free = (gx - x0 >= keep) & (x1 - gx >= keep) & (gy - y0 >= keep) & (y1 - gy >= keep)
         if union is not None and free.any():
-            d = shapely.distance(shapely.points(gx[free], gy[free]), union)
-            sub = free[free]
-            sub &= d >= keep
-            free[free] = sub
+            # a prepared geometry answers "within keep?" from an index of its edges; a plain
+            # distance walks them all, for every cell (and every line of the walk below)
+            shapely.prepare(union)
+            free[free] = ~shapely.dwithin(union, shapely.points(gx[free], gy[free]), keep)
         lab, n = ndimage.label(free)
         if n == 0:
             raise InputError(f"{scene.source}: no free space for a person of radius {radius:g} m")
@@ -180,7 +182,7 @@ class _Grid:
 
         if self.union is None:
             return True
-        return shapely.distance(shapely.LineString([a, b]), self.union) >= self.radius + GRID_MARGIN / 2
+        return not shapely.dwithin(self.union, shapely.LineString([a, b]), self.radius + GRID_MARGIN / 2)
 
     def _shorten(self, a, chain) -> list:
         out, cur, i = [], a, 0
@@ -191,6 +193,43 @@ class _Grid:
             out.append(chain[j])
             cur, i = chain[j], j + 1
         return out
+
+
+def _near_walks(union, grid: _Grid, reach: float):
+    """The obstacles ``union`` without the outlines that no free cell of the people's
+    region comes within ``reach`` of: a polygon all of whose rings are that far is left
+    out, and so is such a hole of a polygon (which fills it: nobody can get there). What
+    is kept is kept exactly, within the box of the region's cells grown by ``reach``
+    (outside it, a polygon is cut along the box, where nobody can come). None when
+    nothing is left.
+
+    RVO2 builds its obstacle tree in time that grows with the square of the edges, and an
+    agent only ever looks at the obstacles within ``time_horizon_obst * speed + radius``
+    of itself: outlines far from every free cell of the people's region (other buildings,
+    rooms they cannot enter, the ragged islands of unknown space) cost time and change
+    nothing.
+    """
+    import shapely
+
+    if union is None:
+        return None
+    iy, ix = np.nonzero(grid.free)
+    cells = shapely.multipoints(np.column_stack([grid.xs[ix], grid.ys[iy]]))
+    shapely.prepare(cells)
+    # a person may stand anywhere in a free cell: half its diagonal more
+    d = reach + grid.res * math.sqrt(0.5)
+    # and nothing outside the box of the region's cells grown by as much
+    box = shapely.box(grid.xs[ix].min() - d, grid.ys[iy].min() - d, grid.xs[ix].max() + d, grid.ys[iy].max() + d)
+    kept = []
+    for poly in shapely.get_parts(union):
+        if poly.geom_type != "Polygon":
+            continue
+        near = shapely.dwithin(cells, [poly.exterior, *poly.interiors], d)
+        if not near.any():
+            continue
+        poly = shapely.Polygon(poly.exterior, [h for h, n in zip(poly.interiors, near[1:], strict=True) if n])
+        kept += [p for p in shapely.get_parts(poly.intersection(box)) if p.geom_type == "Polygon" and not p.is_empty]
+    return shapely.MultiPolygon(kept) if kept else None
 
 
 def _rvo_obstacles(sim, scene: Scene, union) -> None:
@@ -259,9 +298,12 @@ def populate(scene: Scene, options: PopulateOptions | None = None) -> Populated:
     free_point = _FreePoints(usable, grid.res, rng)
     starts_a, goals, order = _place(scene, o, grid, free_point, wps, rng)
     pyrvo = _rvo()
-    sim = pyrvo.RVOSimulator(o.dt, 5.0, 10, 3.0, 1.0, o.radius + 0.01, o.speed)
+    sim = pyrvo.RVOSimulator(o.dt, 5.0, 10, 3.0, ORCA_OBSTACLE_HORIZON, o.radius + 0.01, o.speed)
     ids = [sim.add_agent((float(x), float(y))) for x, y in starts_a]
-    _rvo_obstacles(sim, scene, union)
+    # what an agent can see of the obstacles: ORCA's horizon at full speed, its radius,
+    # and two cells (a person is anywhere within a free cell, or pushed a little out of it)
+    reach = o.radius + 0.01 + ORCA_OBSTACLE_HORIZON * o.speed + 2 * grid.res
+    _rvo_obstacles(sim, scene, _near_walks(union, grid, reach))
     routes = [grid.path(starts_a[i], goals[i]) for i in range(o.people)]
     n = int(math.ceil(o.duration / o.dt - 1e-9)) + 1
     track = np.empty((o.people, n, 2))
@@ -354,8 +396,9 @@ def _movers(scene: Scene, o: PopulateOptions, track: FloatArray, union) -> tuple
         tr = track[i]
         segs = shapely.linestrings(np.stack([tr[:-1], tr[1:]], axis=1))
         ok = np.ones(len(tr) - 1, dtype=bool)
-        if union is not None:
-            ok &= shapely.distance(segs, union) >= o.radius
+        if union is not None:  # exact distances, for the motions the index finds close
+            close = shapely.dwithin(union, segs, o.radius)
+            ok[close] &= shapely.distance(segs[close], union) >= o.radius
         inside = (tr[:, 0] - x0 >= o.radius) & (x1 - tr[:, 0] >= o.radius) & (tr[:, 1] - y0 >= o.radius) & (
             y1 - tr[:, 1] >= o.radius)  # fmt: skip
         ok &= inside[:-1] & inside[1:]
