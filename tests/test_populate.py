@@ -114,13 +114,26 @@ def test_populate_refuses_bad_input(tmp_path):
                   ["--people", "2", "--waypoints", "5,1;8,5"],
                   # --speed 1e20 overflowed ORCA: a GEOS traceback; --duration 0.1 wrote nobody
                   ["--people", "2", "--speed", "1e20"], ["--people", "2", "--duration", "0.1"],
-                  ["--people", "2", "--seed", "-1"]):  # fmt: skip
+                  ["--people", "2", "--seed", "-1"],
+                  # a NaN waypoint reached the grid's lookup: a ValueError traceback, exit 1
+                  ["--people", "2", "--waypoints", "1,1;nan,2"], ["--people", "2", "--waypoints", "1,1;2,inf"]):  # fmt: skip
         p = _run("populate", str(src), *flags, "-o", str(out))
         assert p.returncode == 2, flags
         assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
         assert not out.exists()
         if "--seed" in flags:  # named by the command (it came from deep in populate, unnamed)
             assert p.stderr.startswith("gfuzzy populate: seed must be")
+
+
+def test_a_waypoint_outside_the_bounds_is_refused_even_where_the_grid_is_coarse():
+    # on a long floor the grid's cells are 1.2 m and its border cells are free: the lookup
+    # clamped (1000, 5) to one of them and people were sent 700 m beyond the bounds
+    doc = {"version": 1, "name": "long", "bounds": [0, 0, 300, 10], "robot": {"disc": 0.3, "vmax": 1.0},
+           "obstacles": [], "movers": [], "queries": []}  # fmt: skip
+    scene = parse_scene(doc, "<long>")
+    with pytest.raises(InputError, match=r"waypoints\[1\] \(1000, 5\) lies outside the scene's bounds"):
+        populate(scene, PopulateOptions(people=2, waypoints=((10.0, 5.0), (1000.0, 5.0)), duration=1.0))
+    populate(scene, PopulateOptions(people=2, waypoints=((10.0, 5.0), (290.0, 5.0)), duration=1.0))
 
 
 def test_the_readme_populate_example_runs_and_a_full_room_says_why(tmp_path):

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import logging
 import math
+import numbers
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -82,6 +83,9 @@ class PopulateOptions:
         create_rng(self.seed)  # a negative seed is refused here, before the walk
         if self.duration < self.dt:  # one sample is no walk: nobody would be written
             raise InputError(f"duration must be at least one step of {self.dt:g} s, got {self.duration:g}")
+        for i, p in enumerate(self.waypoints or ()):  # a NaN used to reach the grid's lookup
+            if not all(isinstance(v, numbers.Real) and math.isfinite(v) for v in p):
+                raise InputError(f"waypoints[{i}] must be two finite numbers, got {tuple(p)}")
 
 
 @dataclass(frozen=True)
@@ -291,7 +295,12 @@ def populate(scene: Scene, options: PopulateOptions | None = None) -> Populated:
     wps = None
     if o.waypoints is not None:
         wps = np.asarray(o.waypoints, dtype=float).reshape(-1, 2)
+        x0, y0, x1, y1 = scene.bounds
         for i, p in enumerate(wps):
+            # outside the bounds first: the grid's lookup clamps a point to its border cells
+            if not (x0 <= p[0] <= x1 and y0 <= p[1] <= y1):
+                raise InputError(f"waypoints[{i}] ({p[0]:g}, {p[1]:g}) lies outside the scene's bounds "
+                                 f"[{x0:g}, {y0:g}, {x1:g}, {y1:g}]")  # fmt: skip
             if not grid.free[grid.index(p)]:
                 raise InputError(f"waypoints[{i}] ({p[0]:g}, {p[1]:g}) is not free for a person of radius {o.radius:g} m")
 
