@@ -161,6 +161,18 @@ def test_the_command_says_how_many_people_stop_short(tmp_path):
     assert "3 people walking for 60 s" in p.stdout and "3 of them stop short" in p.stdout
 
 
+def test_the_command_tells_people_left_out_from_people_cut_short():
+    # Nav2's depot tiled 3 x 4, 200 people: "193 people walking ... (12 of them stop short)",
+    # when 7 of the 12 were not in the file at all
+    from gfuzzy.cli.crowds import _cut_note
+    from gfuzzy.navigation.populate import Populated
+
+    assert _cut_note(200, Populated(movers=tuple(range(193)), cut=12)) == (
+        " (5 of them stop short, where ORCA would take them into an obstacle; 7 more left out, whose first step it would)")
+    assert _cut_note(3, Populated(movers=(1, 2, 3), cut=3)) == " (3 of them stop short, where ORCA would take them into an obstacle)"
+    assert _cut_note(3, Populated(movers=(1, 2, 3), cut=0)) == ""
+
+
 def test_a_scene_named_like_a_number_keeps_its_name(tmp_path):
     # yaml.safe_dump wrote the name "1e3" plain, which reads back as 1000.0
     src = tmp_path / "n.yaml"
@@ -264,3 +276,27 @@ def test_orca_is_given_only_the_outlines_people_can_come_near(monkeypatch):
     for a, b in zip(near.movers, every.movers, strict=True):
         np.testing.assert_array_equal(a.trajectory, b.trajectory)
     _check_people(TWO_ROOMS, [{"name": m.name, "disc": m.radius, "trajectory": m.trajectory} for m in near.movers])
+
+
+# a 100 m floor of pillars: the grid's cells are 0.4 m, and a point jittered within a free
+# cell may lie closer to a pillar than a person's radius
+PILLARS = {
+    "version": 1, "name": "pillars", "bounds": [0, 0, 100, 9], "robot": {"disc": 0.3, "vmax": 1.0},
+    "obstacles": [{"box": {"center": [1.5 + 1.2 * i, 1.5 + 1.4 * j], "size": [0.4, 0.4]}}
+                  for i in range(82) for j in range(6)],
+    "movers": [], "queries": [],
+}  # fmt: skip
+
+
+def test_on_a_coarse_grid_nobody_starts_within_a_radius_of_an_obstacle():
+    # people were placed anywhere in a free cell: on coarse grids (maps wider than about
+    # 22 m) some started within their radius of a wall and were left out of the file
+    # altogether (Nav2's depot tiled 3 x 4, 200 people: 7 of them, seed 2)
+    scene = parse_scene(PILLARS, "<pillars>")
+    centers = np.array([ob["box"]["center"] for ob in PILLARS["obstacles"]])
+    for seed in (1, 2):
+        res = populate(scene, PopulateOptions(people=60, seed=seed, duration=0.5))
+        assert len(res.movers) == 60
+        starts = np.array([m.trajectory[0, 1:] for m in res.movers])
+        gaps = [_box_distance(starts[i : i + 1], c, (0.4, 0.4)).min() for i in range(60) for c in centers]
+        assert min(gaps) >= 0.3

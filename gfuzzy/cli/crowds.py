@@ -207,6 +207,19 @@ def add_populate(sub) -> None:
     p.set_defaults(func=cmd_populate)
 
 
+def _cut_note(asked: int, result) -> str:
+    """What became of the people cut short: those whose walk stops early are in the file,
+    those whose very first step was cut are not (the count of people written said nothing
+    of them)."""
+    gone = asked - len(result.movers)
+    notes = []
+    if result.cut - gone:
+        notes.append(f"{result.cut - gone} of them stop short, where ORCA would take them into an obstacle")
+    if gone:
+        notes.append(f"{gone} more left out, whose first step it would")
+    return f" ({'; '.join(notes)})" if notes else ""
+
+
 def cmd_populate(args) -> int:
     """Write a copy of the scene with ``--people`` walking people as trajectory movers."""
     from ..navigation.populate import PopulateOptions, populate, write_scene
@@ -229,6 +242,6 @@ def cmd_populate(args) -> int:
         raise BadInput(f"gfuzzy populate: {exc}") from None
     result = populate(scene, opts)
     write_scene(args.scene, result, out)
-    short = f" ({result.cut} of them stop short, where ORCA would take them into an obstacle)" if result.cut else ""
-    _say(f"{out}: {len(result.movers)} people walking for {args.duration:g} s added to {scene.name}{short}", sys.stdout)
+    _say(f"{out}: {len(result.movers)} people walking for {args.duration:g} s added to {scene.name}"
+         f"{_cut_note(args.people, result)}", sys.stdout)  # fmt: skip
     return EXIT_OK

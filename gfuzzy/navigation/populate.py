@@ -130,7 +130,7 @@ class _Grid:
         sizes = np.bincount(lab.ravel())[1:]
         self.free = lab == (int(np.argmax(sizes)) + 1)  # the largest connected region
         self.xs, self.ys, self.x0, self.y0 = xs, ys, x0, y0
-        self.union, self.radius = union, radius
+        self.union, self.radius, self.bounds = union, radius, scene.bounds
         self._graph = None
 
     def cells(self) -> FloatArray:
@@ -180,6 +180,18 @@ class _Grid:
             v = pred[v]
         chain.append(np.asarray(b, float))
         return self._shorten(np.asarray(a, float), chain)
+
+    def clear_point(self, p) -> bool:
+        """Is a person at ``p`` inside the bounds and clear of the obstacles (by half the
+        grid's margin)? A free cell's centre is; a point elsewhere in it need not be on a
+        coarse grid (cells of 0.36 m on a 90 m map)."""
+        import shapely
+
+        x0, y0, x1, y1 = self.bounds
+        keep = self.radius + GRID_MARGIN / 2
+        if not (x0 + keep <= p[0] <= x1 - keep and y0 + keep <= p[1] <= y1 - keep):
+            return False
+        return self.union is None or not shapely.dwithin(self.union, shapely.Point(p), keep)
 
     def clear_line(self, a, b) -> bool:
         import shapely
@@ -304,7 +316,7 @@ def populate(scene: Scene, options: PopulateOptions | None = None) -> Populated:
             if not grid.free[grid.index(p)]:
                 raise InputError(f"waypoints[{i}] ({p[0]:g}, {p[1]:g}) is not free for a person of radius {o.radius:g} m")
 
-    free_point = _FreePoints(usable, grid.res, rng)
+    free_point = _FreePoints(usable, grid, rng)
     starts_a, goals, order = _place(scene, o, grid, free_point, wps, rng)
     pyrvo = _rvo()
     sim = pyrvo.RVOSimulator(o.dt, 5.0, 10, 3.0, ORCA_OBSTACLE_HORIZON, o.radius + 0.01, o.speed)
@@ -351,13 +363,16 @@ def populate(scene: Scene, options: PopulateOptions | None = None) -> Populated:
 
 
 class _FreePoints:
-    """Random free points: a free cell's centre, jittered within the cell."""
+    """Random free points: a free cell's centre, jittered within the cell (the centre
+    itself when the jittered point is not clear of the obstacles)."""
 
-    def __init__(self, cells: FloatArray, res: float, rng: np.random.Generator):
-        self.cells, self.res, self.rng = cells, res, rng
+    def __init__(self, cells: FloatArray, grid: _Grid, rng: np.random.Generator):
+        self.cells, self.grid, self.rng = cells, grid, rng
 
     def __call__(self) -> FloatArray:
-        return self.cells[self.rng.integers(len(self.cells))] + self.rng.uniform(-0.4, 0.4, 2) * self.res
+        c = self.cells[self.rng.integers(len(self.cells))]
+        p = c + self.rng.uniform(-0.4, 0.4, 2) * self.grid.res
+        return p if self.grid.clear_point(p) else c
 
 
 def _place(scene: Scene, o: PopulateOptions, grid: _Grid, free_point, wps, rng):
@@ -366,7 +381,7 @@ def _place(scene: Scene, o: PopulateOptions, grid: _Grid, free_point, wps, rng):
     for _ in range(o.people):
         for _try in range(2000):
             p = free_point() if wps is None else wps[rng.integers(len(wps))] + rng.normal(0, 0.5, 2)
-            if not grid.free[grid.index(p)]:
+            if not (grid.free[grid.index(p)] and grid.clear_point(p)):
                 continue
             if all(np.hypot(*(p - q)) >= 2 * o.radius + 0.1 for q in starts):
                 starts.append(p)
