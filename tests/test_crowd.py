@@ -340,7 +340,7 @@ def test_crowd_command_navigator_visible(tmp_path, workers):
     ["--visible", "--policy", "oracle"],
     ["--scenario", "hall"], ["--fov", "0"], ["--noise", "-0.1"], ["--workers", "-1"], ["--time-budget", "0"],
     ["--path-space", "-1"], ["--path-space", "nan"], ["--personal-space", "inf"], ["--reverse"], ["--dt", "0"],
-    ["--dt", "nan"],
+    ["--dt", "nan"], ["--dt", "100"],  # a step longer than the prediction: every episode ran to its limit
     ["--seed", "-1"], ["--noise", "1e300"],  # a traceback each: numpy's seed, a 146 GiB array of ghosts
 ])  # fmt: skip
 def test_crowd_command_refuses_bad_arguments_in_one_line(tmp_path, flags):
