@@ -295,3 +295,16 @@ def test_cli_overrides_rebuild_the_roadmap_and_check_enforces_them(tmp_path):
         bad = run_cli_process(cmd, *args, "--mover-clearance", "nan", cwd=tmp_path)
         assert bad.returncode == 2 and "--mover-clearance" in bad.stderr
         assert len(bad.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.skipif(not Path("/proc/self").is_dir(), reason="needs Linux's /proc")
+def test_an_output_folder_nothing_can_be_written_in_is_refused_before_the_work(capsys):
+    # /proc: its permission bits let root write, yet no file can be made there; the old check
+    # (os.access) passed for root and `gfuzzy crowd -o /proc/x.csv` ran every episode, then
+    # lost them all at the write ("No such file or directory")
+    code = main(["crowd", "--humans", "0", "--episodes", "1", "--policy", "orca", "-o", "/proc/x.csv"])
+    err = capsys.readouterr()
+    assert code == 2 and err.out == ""
+    assert err.err.strip() == "/proc/x.csv: cannot write in folder /proc (No such file or directory)" or (
+        "is not writable" in err.err)  # fmt: skip
+    assert len(err.err.strip().splitlines()) == 1

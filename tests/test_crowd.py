@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import math
+import re
 import subprocess
 import sys
 from dataclasses import replace
@@ -68,6 +69,66 @@ def test_square_and_arena_layouts():
         assert np.hypot(*(ar.start - ar.goal)) >= 8
         r = np.hypot(*ar.human_starts.T)
         assert np.all(np.abs(r - 6 * math.sqrt(2)) < 2 * math.sqrt(2))  # the circle, U[0, 2) per coordinate
+
+
+def _one_at_a_time(scenario, K, rng):
+    """CrowdNav's placement as the one-draw-at-a-time loop (the reference; no restarts)."""
+    start, goal = np.array([0.0, -4.0]), np.array([0.0, 4.0])
+    if scenario == "arena":
+        while True:
+            p = rng.uniform(-6.0, 6.0, 4)
+            if math.hypot(p[0] - p[2], p[1] - p[3]) >= 8.0:
+                break
+        start, goal = p[:2], p[2:]
+    agents = [(start, goal, 0.3)]
+
+    def far(p, which):
+        return all(np.hypot(*(p - a[which])) >= 0.3 + a[2] + 0.2 for a in agents)
+
+    while len(agents) <= K:
+        if scenario == "square":
+            sign = -1.0 if rng.random() > 0.5 else 1.0
+            p = np.array([rng.random() * 10.0 * 0.5 * sign, (rng.random() - 0.5) * 10.0])
+            if not far(p, 0):
+                continue
+            while True:
+                g = np.array([rng.random() * 10.0 * 0.5 * -sign, (rng.random() - 0.5) * 10.0])
+                if far(g, 1):
+                    break
+        else:
+            angle = rng.random() * 2 * math.pi
+            R, noise = (6 * math.sqrt(2), rng.uniform(0.0, 2.0, 2)) if scenario == "arena" else (4.0, rng.random(2) - 0.5)
+            p = np.array([R * math.cos(angle), R * math.sin(angle)]) + noise
+            g = -p
+            if not (far(p, 0) and far(p, 1)):
+                continue
+        agents.append((p, g, 0.3))
+    return np.array([a[0] for a in agents[1:]]).reshape(-1, 2), np.array([a[1] for a in agents[1:]]).reshape(-1, 2)
+
+
+@pytest.mark.parametrize("scenario,K", [("circle", 12), ("circle", 20), ("square", 30), ("arena", 40)])
+def test_layouts_are_the_one_at_a_time_protocols(scenario, K):
+    # the block-wise placement reads the generator as CrowdNav's loop does: the same episodes
+    for seed in range(6):
+        lay = C.layout(C.CrowdSetting(scenario, humans=K), np.random.default_rng([seed, 3]))
+        starts, goals = _one_at_a_time(scenario, K, np.random.default_rng([seed, 3]))
+        np.testing.assert_array_equal(lay.human_starts, starts)
+        np.testing.assert_array_equal(lay.human_goals, goals)
+
+
+@pytest.mark.parametrize("scenario,K", [("circle", 30), ("square", 200), ("arena", 200)])
+def test_a_crowd_that_does_not_fit_is_refused_after_a_bounded_number_of_draws(scenario, K, monkeypatch):
+    # CrowdNav's loop never ends when the humans do not fit (the square's goals looped
+    # forever here, and the circle took a million draws one at a time, about 40 s):
+    # every draw, of a start or of a goal, counts, and the refusal says what fitted
+    from gfuzzy.navigation import crowdlayout
+
+    monkeypatch.setattr(crowdlayout, "RESTART_EVERY", 20_001)
+    monkeypatch.setattr(crowdlayout, "DRAW_BUDGET", 60_000)
+    with pytest.raises(InputError, match=rf"cannot place {K} humans in the {scenario} scenario: .* 3 attempts ") as err:
+        C.layout(C.CrowdSetting(scenario, humans=K), np.random.default_rng(1))
+    best = int(re.search(r"placed at most (\d+)", str(err.value)).group(1))
+    assert 0 < best < K
 
 
 def test_setting_refuses_bad_values():
@@ -279,7 +340,7 @@ def test_crowd_command_navigator_visible(tmp_path, workers):
     ["--visible", "--policy", "oracle"],
     ["--scenario", "hall"], ["--fov", "0"], ["--noise", "-0.1"], ["--workers", "-1"], ["--time-budget", "0"],
     ["--path-space", "-1"], ["--path-space", "nan"], ["--personal-space", "inf"], ["--reverse"], ["--dt", "0"],
-    ["--dt", "nan"],
+    ["--dt", "nan"], ["--dt", "100"],  # a step longer than the prediction: every episode ran to its limit
     ["--seed", "-1"], ["--noise", "1e300"],  # a traceback each: numpy's seed, a 146 GiB array of ghosts
 ])  # fmt: skip
 def test_crowd_command_refuses_bad_arguments_in_one_line(tmp_path, flags):
@@ -288,6 +349,16 @@ def test_crowd_command_refuses_bad_arguments_in_one_line(tmp_path, flags):
     assert p.returncode == 2, p.stdout + p.stderr
     assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
     assert not out.exists()
+
+
+def test_crowd_command_refuses_humans_that_do_not_fit_before_any_episode(tmp_path):
+    # every episode's layout is drawn first: the refusal names the episode and what fitted
+    out = tmp_path / "x.csv"
+    p = _run("crowd", "--humans", "30", "--episodes", "3", "--policy", "orca", "-o", str(out))
+    assert p.returncode == 2, p.stdout + p.stderr
+    assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
+    assert "episode 0: cannot place 30 humans in the circle scenario" in p.stderr and "placed at most" in p.stderr
+    assert not out.exists() and p.stdout == ""
 
 
 def test_crowd_command_takes_the_navigators_full_speed_option():

@@ -114,13 +114,26 @@ def test_populate_refuses_bad_input(tmp_path):
                   ["--people", "2", "--waypoints", "5,1;8,5"],
                   # --speed 1e20 overflowed ORCA: a GEOS traceback; --duration 0.1 wrote nobody
                   ["--people", "2", "--speed", "1e20"], ["--people", "2", "--duration", "0.1"],
-                  ["--people", "2", "--seed", "-1"]):  # fmt: skip
+                  ["--people", "2", "--seed", "-1"],
+                  # a NaN waypoint reached the grid's lookup: a ValueError traceback, exit 1
+                  ["--people", "2", "--waypoints", "1,1;nan,2"], ["--people", "2", "--waypoints", "1,1;2,inf"]):  # fmt: skip
         p = _run("populate", str(src), *flags, "-o", str(out))
         assert p.returncode == 2, flags
         assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
         assert not out.exists()
         if "--seed" in flags:  # named by the command (it came from deep in populate, unnamed)
             assert p.stderr.startswith("gfuzzy populate: seed must be")
+
+
+def test_a_waypoint_outside_the_bounds_is_refused_even_where_the_grid_is_coarse():
+    # on a long floor the grid's cells are 1.2 m and its border cells are free: the lookup
+    # clamped (1000, 5) to one of them and people were sent 700 m beyond the bounds
+    doc = {"version": 1, "name": "long", "bounds": [0, 0, 300, 10], "robot": {"disc": 0.3, "vmax": 1.0},
+           "obstacles": [], "movers": [], "queries": []}  # fmt: skip
+    scene = parse_scene(doc, "<long>")
+    with pytest.raises(InputError, match=r"waypoints\[1\] \(1000, 5\) lies outside the scene's bounds"):
+        populate(scene, PopulateOptions(people=2, waypoints=((10.0, 5.0), (1000.0, 5.0)), duration=1.0))
+    populate(scene, PopulateOptions(people=2, waypoints=((10.0, 5.0), (290.0, 5.0)), duration=1.0))
 
 
 def test_the_readme_populate_example_runs_and_a_full_room_says_why(tmp_path):
@@ -146,6 +159,18 @@ def test_the_command_says_how_many_people_stop_short(tmp_path):
     p = _run("populate", "scenes/sim-4s1m.yaml", "--people", "3", "--speed", "100", "-o", str(out))
     assert p.returncode == 0, p.stderr
     assert "3 people walking for 60 s" in p.stdout and "3 of them stop short" in p.stdout
+
+
+def test_the_command_tells_people_left_out_from_people_cut_short():
+    # Nav2's depot tiled 3 x 4, 200 people: "193 people walking ... (12 of them stop short)",
+    # when 7 of the 12 were not in the file at all
+    from gfuzzy.cli.crowds import _cut_note
+    from gfuzzy.navigation.populate import Populated
+
+    assert _cut_note(200, Populated(movers=tuple(range(193)), cut=12)) == (
+        " (5 of them stop short, where ORCA would take them into an obstacle; 7 more left out, whose first step it would)")
+    assert _cut_note(3, Populated(movers=(1, 2, 3), cut=3)) == " (3 of them stop short, where ORCA would take them into an obstacle)"
+    assert _cut_note(3, Populated(movers=(1, 2, 3), cut=0)) == ""
 
 
 def test_a_scene_named_like_a_number_keeps_its_name(tmp_path):
@@ -210,3 +235,68 @@ def test_people_stay_inside_a_map_whose_unknown_cells_enclose_the_room():
         assert res.cut == 0
         assert len(res.movers) == 6
         assert all(m.trajectory[-1, 0] == pytest.approx(60.0) for m in res.movers)
+
+
+# a 14 m room, a 1 m wall, and beyond it a closed 11 m room (people cannot reach it: a
+# smaller free region) holding sixty small boxes: outlines that no person can come near
+TWO_ROOMS = {
+    "version": 1, "name": "two-rooms", "bounds": [0, 0, 26, 6],
+    "robot": {"disc": 0.3, "vmax": 1.0},
+    "obstacles": [
+        {"box": {"center": [14.5, 3.0], "size": [1.0, 6.0]}},
+        {"box": {"center": [5.0, 3.0], "size": [0.8, 0.8]}},
+        *({"box": {"center": [18.0 + 0.5 * (i % 12), 1.0 + 1.0 * (i // 12)], "size": [0.2, 0.2]}} for i in range(60)),
+    ],
+    "movers": [], "queries": [],
+}  # fmt: skip
+
+
+def test_orca_is_given_only_the_outlines_people_can_come_near(monkeypatch):
+    # RVO2 builds its obstacle tree in time that grows with the square of the edges (Nav2's
+    # depot map repeated 3 x 4: 56,000 vertices, 141 s for 20 people); edges far from the
+    # people's region change nothing an agent sees: they are left out, the walks stay the same
+    from gfuzzy.navigation import populate as P
+
+    scene = parse_scene(TWO_ROOMS, "<two-rooms>")
+    given = []
+    real = P._rvo_obstacles
+
+    def spy(sim, scene_, union):
+        given.append(union)
+        return real(sim, scene_, union)
+
+    monkeypatch.setattr(P, "_rvo_obstacles", spy)
+    opts = PopulateOptions(people=8, seed=2, duration=30.0)
+    near = populate(scene, opts)
+    xs = np.concatenate([np.asarray(g.exterior.coords)[:, 0] for g in given[-1].geoms])
+    assert xs.max() <= 15.0 + 1e-9  # the left room and its wall only: none of the sixty boxes
+    monkeypatch.setattr(P, "_near_walks", lambda union, grid, reach: union)  # everything, as before
+    every = populate(scene, opts)
+    assert len(near.movers) == len(every.movers) == 8 and near.cut == every.cut == 0
+    for a, b in zip(near.movers, every.movers, strict=True):
+        np.testing.assert_array_equal(a.trajectory, b.trajectory)
+    _check_people(TWO_ROOMS, [{"name": m.name, "disc": m.radius, "trajectory": m.trajectory} for m in near.movers])
+
+
+# a 100 m floor of pillars: the grid's cells are 0.4 m, and a point jittered within a free
+# cell may lie closer to a pillar than a person's radius
+PILLARS = {
+    "version": 1, "name": "pillars", "bounds": [0, 0, 100, 9], "robot": {"disc": 0.3, "vmax": 1.0},
+    "obstacles": [{"box": {"center": [1.5 + 1.2 * i, 1.5 + 1.4 * j], "size": [0.4, 0.4]}}
+                  for i in range(82) for j in range(6)],
+    "movers": [], "queries": [],
+}  # fmt: skip
+
+
+def test_on_a_coarse_grid_nobody_starts_within_a_radius_of_an_obstacle():
+    # people were placed anywhere in a free cell: on coarse grids (maps wider than about
+    # 22 m) some started within their radius of a wall and were left out of the file
+    # altogether (Nav2's depot tiled 3 x 4, 200 people: 7 of them, seed 2)
+    scene = parse_scene(PILLARS, "<pillars>")
+    centers = np.array([ob["box"]["center"] for ob in PILLARS["obstacles"]])
+    for seed in (1, 2):
+        res = populate(scene, PopulateOptions(people=60, seed=seed, duration=0.5))
+        assert len(res.movers) == 60
+        starts = np.array([m.trajectory[0, 1:] for m in res.movers])
+        gaps = [_box_distance(starts[i : i + 1], c, (0.4, 0.4)).min() for i in range(60) for c in centers]
+        assert min(gaps) >= 0.3

@@ -228,6 +228,21 @@ def _out_path(path, allowed):
         raise BadInput(f"{path}: is a folder, not a file")
     if not os.access(parent, os.W_OK | os.X_OK):
         raise BadInput(f"{path}: folder {parent} is not writable")
+    _probe_write(path, parent)
     return Path(path)
+
+
+def _probe_write(path, parent: Path) -> None:
+    """Create and remove a file in ``parent``: the permission bits do not tell root (or an
+    NFS client whose root is squashed, or /proc) that nothing can be written there, and a
+    long run would then lose its results at the end."""
+    import tempfile
+
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=".gfuzzy-probe-", dir=parent)
+    except OSError as exc:
+        raise BadInput(f"{path}: cannot write in folder {parent} ({exc.strerror})") from None
+    os.close(fd)
+    os.unlink(tmp)
 
 

@@ -155,6 +155,18 @@ def _need_pyrvo(command: str) -> None:
         raise BadInput(f"gfuzzy {command}: ORCA people need pyrvo: pip install 'gfuzzy[crowd]'") from None
 
 
+def _placeable(setting, seed: int, count: int) -> None:
+    """Draw every episode's layout before any runs (a few ms each): a count of humans
+    the protocol cannot place is refused at once, not in the middle of the run."""
+    from ..navigation.crowd import episode_layout
+
+    try:
+        for i in range(count):
+            episode_layout(setting, seed, i)
+    except InputError as exc:
+        raise BadInput(f"gfuzzy crowd: {exc}") from None
+
+
 def cmd_crowd(args) -> int:
     """Run the crowd benchmark; print the table of section 7; write the CSV."""
     import contextlib
@@ -164,6 +176,7 @@ def cmd_crowd(args) -> int:
     setting, options, policies = _setting(args)
     _need_pyrvo("crowd")
     out = _out_path(args.output, (".csv",)) if args.output else None
+    _placeable(setting, args.seed, args.episodes)
     roadmap = crowd_roadmap(setting)
     bar = _progress_bar(f"crowd {setting.scenario} x{args.episodes}")
     if args.workers:
@@ -194,6 +207,19 @@ def add_populate(sub) -> None:
     p.set_defaults(func=cmd_populate)
 
 
+def _cut_note(asked: int, result) -> str:
+    """What became of the people cut short: those whose walk stops early are in the file,
+    those whose very first step was cut are not (the count of people written said nothing
+    of them)."""
+    gone = asked - len(result.movers)
+    notes = []
+    if result.cut - gone:
+        notes.append(f"{result.cut - gone} of them stop short, where ORCA would take them into an obstacle")
+    if gone:
+        notes.append(f"{gone} more left out, whose first step it would")
+    return f" ({'; '.join(notes)})" if notes else ""
+
+
 def cmd_populate(args) -> int:
     """Write a copy of the scene with ``--people`` walking people as trajectory movers."""
     from ..navigation.populate import PopulateOptions, populate, write_scene
@@ -216,6 +242,6 @@ def cmd_populate(args) -> int:
         raise BadInput(f"gfuzzy populate: {exc}") from None
     result = populate(scene, opts)
     write_scene(args.scene, result, out)
-    short = f" ({result.cut} of them stop short, where ORCA would take them into an obstacle)" if result.cut else ""
-    _say(f"{out}: {len(result.movers)} people walking for {args.duration:g} s added to {scene.name}{short}", sys.stdout)
+    _say(f"{out}: {len(result.movers)} people walking for {args.duration:g} s added to {scene.name}"
+         f"{_cut_note(args.people, result)}", sys.stdout)  # fmt: skip
     return EXIT_OK

@@ -39,35 +39,15 @@ from ..errors import InputError
 from ..rng import create_rng
 from ..scene.scene import Mover, Scene, parse_scene
 from ..typed import FloatArray
+from .crowdlayout import ARENA, CROWD, Layout, layout
 from .sensing import Sensor, SensorOptions
 from .socialmetrics import INTRUSION_HORIZON, SocialMetrics, social_metrics
 
 __all__ = [
     "CROWD", "ARENA", "SCENARIOS", "POLICIES", "CROWD_MODELS", "KINEMATICS", "CSV_COLUMNS", "Outcome",
     "CrowdSetting", "Layout", "Episode", "circle_crossing", "simulate_humans", "orca_robot",
-    "layout", "crowd_scene", "crowd_roadmap", "run_episode", "episodes",
+    "layout", "episode_layout", "crowd_scene", "crowd_roadmap", "run_episode", "episodes",
 ]  # fmt: skip
-
-#: The protocol's constants.
-CROWD = {
-    "human_radius": 0.3,
-    "v_pref": 1.0,
-    "circle_radius": 4.0,
-    "discomfort": 0.2,
-    "robot_radius": 0.3,
-    "robot_vmax": 1.0,
-    "start": (0.0, -4.0),
-    "goal": (0.0, 4.0),
-    "time_limit": 25.0,
-    "time_step": 0.25,
-    "bounds": (-6.0, -6.0, 6.0, 6.0),
-    # ORCA (CrowdNav's policy/orca.py)
-    "neighbor_dist": 10.0,
-    "max_neighbors": 10,
-    "time_horizon": 5.0,
-    "time_horizon_obst": 5.0,
-}
-
 
 def _rvo():
     try:
@@ -75,30 +55,6 @@ def _rvo():
     except ImportError as exc:  # an optional dependency: say which extra brings it
         raise ImportError("crowd episodes need pyrvo (pip install 'gfuzzy[crowd]')") from exc
     return pyrvo
-
-
-def _starts(K: int, rng: np.random.Generator) -> tuple[FloatArray, FloatArray]:
-    c = CROWD
-    r = c["human_radius"]
-    agents = [(np.array(c["start"]), np.array(c["goal"]), c["robot_radius"])]
-    starts, goals = [], []
-    while len(starts) < K:
-        angle = rng.random() * 2 * math.pi
-        p = np.array(
-            [
-                c["circle_radius"] * math.cos(angle) + (rng.random() - 0.5) * c["v_pref"],
-                c["circle_radius"] * math.sin(angle) + (rng.random() - 0.5) * c["v_pref"],
-            ]
-        )
-        if any(
-            min(np.hypot(*(p - a_start)), np.hypot(*(p - a_goal))) < r + a_r + c["discomfort"]
-            for a_start, a_goal, a_r in agents
-        ):
-            continue
-        starts.append(p)
-        goals.append(-p)
-        agents.append((p, -p, r))
-    return np.array(starts).reshape(-1, 2), np.array(goals).reshape(-1, 2)
 
 
 def simulate_humans(starts: FloatArray, goals: FloatArray, duration: float) -> FloatArray:
@@ -153,7 +109,8 @@ def circle_crossing(K: int, seed, duration: float | None = None, name: str = "cr
     """
     c = CROWD
     rng = create_rng(seed)
-    starts, goals = _starts(K, rng)
+    lay = layout(CrowdSetting("circle", K), rng)
+    starts, goals = lay.human_starts, lay.human_goals
     duration = c["time_limit"] + 5.0 if duration is None else duration
     track = simulate_humans(starts, goals, duration)
     times = np.arange(track.shape[1]) * c["time_step"]
@@ -243,15 +200,6 @@ SCENARIOS = ("circle", "square", "arena")
 POLICIES = ("navigator", "orca", "social-force", "oracle")
 CROWD_MODELS = ("orca", "social-force")
 KINEMATICS = ("holonomic", "unicycle")
-#: CrowdNav's square crossing: the square's width (m).
-SQUARE_WIDTH = 10.0
-#: CrowdNav++'s arena: half its side (m), the humans' circle, the robot's sensing range
-#: (m), time limit (s), how often (s) and how likely a human changes goal, the least
-#: distance between the robot's start and goal (m).
-ARENA = {"size": 6.0, "circle_radius": 6.0 * math.sqrt(2.0), "sense": 5.0, "time_limit": 50.0,
-         "goal_every": 5.0, "goal_chance": 0.5, "min_travel": 8.0}  # fmt: skip
-
-
 class Outcome(str, Enum):
     """How an episode ended (CrowdNav's ``ReachGoal``, ``Collision``, ``Timeout``)."""
 
@@ -322,16 +270,6 @@ class CrowdSetting:
         if math.isfinite(self.sensor.sense):
             return self.sensor.sense
         return ARENA["sense"] if self.scenario == "arena" else math.inf
-
-
-@dataclass(frozen=True)
-class Layout:
-    """Where an episode starts: the robot's start and goal, the humans' starts and goals."""
-
-    start: FloatArray
-    goal: FloatArray
-    human_starts: FloatArray
-    human_goals: FloatArray
 
 
 @dataclass(frozen=True)
@@ -407,66 +345,20 @@ class Episode:
 CSV_COLUMNS = tuple(Episode("x", 0, Outcome.TIMEOUT, math.nan, 0.0, SocialMetrics(0, 0, 0), np.zeros(0)).row(CrowdSetting()))
 
 
-def _far_enough(p, agents, r, discomfort, which) -> bool:
-    return all(np.hypot(*(p - a[which])) >= r + a[2] + discomfort for a in agents)
+def episode_layout(setting: CrowdSetting, seed: int, index: int) -> Layout:
+    """Episode ``index``'s layout in the run of ``seed`` (drawn from
+    ``numpy.random.default_rng([seed, index])``: the same in every policy and process).
 
-
-def layout(setting: CrowdSetting, rng: np.random.Generator) -> Layout:
-    """Draw an episode's robot and humans as the scenario's protocol does.
-
-    * ``circle`` (CrowdNav): robot (0, -4) -> (0, 4); humans on the circle of radius 4 at a
-      uniform angle, each coordinate perturbed by U[-0.5, 0.5) m, walking to the opposite point;
-      a draw within ``r + r' + 0.2`` of an earlier agent's start or goal is redrawn (all the
-      humans are, after 100 000 draws: those placed may leave no room; CrowdNav loops forever).
-    * ``square`` (CrowdNav): robot as above; a human starts at ``x = U[0, 1) 5 s``,
-      ``y = U[-5, 5)`` on a random side ``s`` and walks to ``x = U[0, 1) 5 (-s)``, ``y =
-      U[-5, 5)``, start and goal each redrawn when near an earlier agent's start (goal).
-    * ``arena`` (CrowdNav++): robot start and goal uniform in [-6, 6]^2, at least 8 m
-      apart; humans on the circle of radius 6 sqrt(2) (the arena's corners) perturbed by
-      U[0, 2) m per coordinate, walking to the opposite point.
+    Raises
+    ------
+    InputError
+        The scenario's protocol cannot place the setting's humans (the message names the
+        episode).
     """
-    c = CROWD
-    r, disc = c["human_radius"], c["discomfort"]
-    if setting.scenario == "arena":
-        while True:
-            p = rng.uniform(-ARENA["size"], ARENA["size"], 4)
-            if math.hypot(p[0] - p[2], p[1] - p[3]) >= ARENA["min_travel"]:
-                break
-        start, goal = p[:2], p[2:]
-    else:
-        start, goal = np.array(c["start"], float), np.array(c["goal"], float)
-    agents = [(start, goal, c["robot_radius"])]
-    hs, hg, tries = [], [], 0
-    while len(hs) < setting.humans:
-        tries += 1
-        if tries % 100_001 == 0:  # jammed: start over
-            hs, hg, agents = [], [], agents[:1]
-        if tries > 1_000_000:
-            raise InputError(
-                f"cannot place {setting.humans} humans in the {setting.scenario} scenario: its protocol keeps "
-                f"each one's start and goal {2 * r + disc:g} m from the others' (give fewer --humans)"
-            )
-        if setting.scenario == "square":
-            sign = -1.0 if rng.random() > 0.5 else 1.0
-            p = np.array([rng.random() * SQUARE_WIDTH * 0.5 * sign, (rng.random() - 0.5) * SQUARE_WIDTH])
-            if not _far_enough(p, agents, r, disc, 0):
-                continue
-            while True:
-                g = np.array([rng.random() * SQUARE_WIDTH * 0.5 * -sign, (rng.random() - 0.5) * SQUARE_WIDTH])
-                if _far_enough(g, agents, r, disc, 1):
-                    break
-        else:
-            angle = rng.random() * 2 * math.pi
-            if setting.scenario == "arena":
-                R, noise = ARENA["circle_radius"], rng.uniform(0.0, 2.0, 2)
-            else:
-                R, noise = c["circle_radius"], (rng.random(2) - 0.5) * c["v_pref"]
-            p = np.array([R * math.cos(angle), R * math.sin(angle)]) + noise
-            g = -p
-            if not (_far_enough(p, agents, r, disc, 0) and _far_enough(p, agents, r, disc, 1)):
-                continue
-        hs, hg, agents = [*hs, p], [*hg, g], [*agents, (p, g, r)]
-    return Layout(start, goal, np.array(hs).reshape(-1, 2), np.array(hg).reshape(-1, 2))
+    try:
+        return layout(setting, np.random.default_rng([seed, index]))
+    except InputError as exc:
+        raise InputError(f"episode {index}: {exc}") from None
 
 
 def _new_goal(rng: np.random.Generator) -> FloatArray:
@@ -630,7 +522,7 @@ def run_episode(setting: CrowdSetting, roadmap, seed: int, index: int, policies,
     dt, limit = c["time_step"], setting.time_limit
     n_steps = int(round(limit / dt))
     extra = int(math.ceil(INTRUSION_HORIZON / dt)) + 1
-    lay = layout(setting, np.random.default_rng([seed, index]))
+    lay = episode_layout(setting, seed, index)
     tracks = None
     if not setting.visible:  # the same walk for every policy, known in advance for the oracle
         world = _World(setting, lay, np.random.default_rng([seed, index, 1]), False)

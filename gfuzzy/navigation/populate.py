@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import logging
 import math
+import numbers
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -39,6 +40,8 @@ GRID_MARGIN = 0.05
 WAYPOINT_REACHED = 0.5
 #: People start at least this far (m) from every query's start.
 START_KEEP = 1.0
+#: ORCA's time horizon for obstacles (s; RVO2's ``timeHorizonObst``).
+ORCA_OBSTACLE_HORIZON = 1.0
 
 
 @dataclass(frozen=True)
@@ -80,6 +83,9 @@ class PopulateOptions:
         create_rng(self.seed)  # a negative seed is refused here, before the walk
         if self.duration < self.dt:  # one sample is no walk: nobody would be written
             raise InputError(f"duration must be at least one step of {self.dt:g} s, got {self.duration:g}")
+        for i, p in enumerate(self.waypoints or ()):  # a NaN used to reach the grid's lookup
+            if not all(isinstance(v, numbers.Real) and math.isfinite(v) for v in p):
+                raise InputError(f"waypoints[{i}] must be two finite numbers, got {tuple(p)}")
 
 
 @dataclass(frozen=True)
@@ -114,17 +120,17 @@ class _Grid:
         keep = radius + GRID_MARGIN
         free = (gx - x0 >= keep) & (x1 - gx >= keep) & (gy - y0 >= keep) & (y1 - gy >= keep)
         if union is not None and free.any():
-            d = shapely.distance(shapely.points(gx[free], gy[free]), union)
-            sub = free[free]
-            sub &= d >= keep
-            free[free] = sub
+            # a prepared geometry answers "within keep?" from an index of its edges; a plain
+            # distance walks them all, for every cell (and every line of the walk below)
+            shapely.prepare(union)
+            free[free] = ~shapely.dwithin(union, shapely.points(gx[free], gy[free]), keep)
         lab, n = ndimage.label(free)
         if n == 0:
             raise InputError(f"{scene.source}: no free space for a person of radius {radius:g} m")
         sizes = np.bincount(lab.ravel())[1:]
         self.free = lab == (int(np.argmax(sizes)) + 1)  # the largest connected region
         self.xs, self.ys, self.x0, self.y0 = xs, ys, x0, y0
-        self.union, self.radius = union, radius
+        self.union, self.radius, self.bounds = union, radius, scene.bounds
         self._graph = None
 
     def cells(self) -> FloatArray:
@@ -175,12 +181,24 @@ class _Grid:
         chain.append(np.asarray(b, float))
         return self._shorten(np.asarray(a, float), chain)
 
+    def clear_point(self, p) -> bool:
+        """Is a person at ``p`` inside the bounds and clear of the obstacles (by half the
+        grid's margin)? A free cell's centre is; a point elsewhere in it need not be on a
+        coarse grid (cells of 0.36 m on a 90 m map)."""
+        import shapely
+
+        x0, y0, x1, y1 = self.bounds
+        keep = self.radius + GRID_MARGIN / 2
+        if not (x0 + keep <= p[0] <= x1 - keep and y0 + keep <= p[1] <= y1 - keep):
+            return False
+        return self.union is None or not shapely.dwithin(self.union, shapely.Point(p), keep)
+
     def clear_line(self, a, b) -> bool:
         import shapely
 
         if self.union is None:
             return True
-        return shapely.distance(shapely.LineString([a, b]), self.union) >= self.radius + GRID_MARGIN / 2
+        return not shapely.dwithin(self.union, shapely.LineString([a, b]), self.radius + GRID_MARGIN / 2)
 
     def _shorten(self, a, chain) -> list:
         out, cur, i = [], a, 0
@@ -191,6 +209,43 @@ class _Grid:
             out.append(chain[j])
             cur, i = chain[j], j + 1
         return out
+
+
+def _near_walks(union, grid: _Grid, reach: float):
+    """The obstacles ``union`` without the outlines that no free cell of the people's
+    region comes within ``reach`` of: a polygon all of whose rings are that far is left
+    out, and so is such a hole of a polygon (which fills it: nobody can get there). What
+    is kept is kept exactly, within the box of the region's cells grown by ``reach``
+    (outside it, a polygon is cut along the box, where nobody can come). None when
+    nothing is left.
+
+    RVO2 builds its obstacle tree in time that grows with the square of the edges, and an
+    agent only ever looks at the obstacles within ``time_horizon_obst * speed + radius``
+    of itself: outlines far from every free cell of the people's region (other buildings,
+    rooms they cannot enter, the ragged islands of unknown space) cost time and change
+    nothing.
+    """
+    import shapely
+
+    if union is None:
+        return None
+    iy, ix = np.nonzero(grid.free)
+    cells = shapely.multipoints(np.column_stack([grid.xs[ix], grid.ys[iy]]))
+    shapely.prepare(cells)
+    # a person may stand anywhere in a free cell: half its diagonal more
+    d = reach + grid.res * math.sqrt(0.5)
+    # and nothing outside the box of the region's cells grown by as much
+    box = shapely.box(grid.xs[ix].min() - d, grid.ys[iy].min() - d, grid.xs[ix].max() + d, grid.ys[iy].max() + d)
+    kept = []
+    for poly in shapely.get_parts(union):
+        if poly.geom_type != "Polygon":
+            continue
+        near = shapely.dwithin(cells, [poly.exterior, *poly.interiors], d)
+        if not near.any():
+            continue
+        poly = shapely.Polygon(poly.exterior, [h for h, n in zip(poly.interiors, near[1:], strict=True) if n])
+        kept += [p for p in shapely.get_parts(poly.intersection(box)) if p.geom_type == "Polygon" and not p.is_empty]
+    return shapely.MultiPolygon(kept) if kept else None
 
 
 def _rvo_obstacles(sim, scene: Scene, union) -> None:
@@ -252,16 +307,24 @@ def populate(scene: Scene, options: PopulateOptions | None = None) -> Populated:
     wps = None
     if o.waypoints is not None:
         wps = np.asarray(o.waypoints, dtype=float).reshape(-1, 2)
+        x0, y0, x1, y1 = scene.bounds
         for i, p in enumerate(wps):
+            # outside the bounds first: the grid's lookup clamps a point to its border cells
+            if not (x0 <= p[0] <= x1 and y0 <= p[1] <= y1):
+                raise InputError(f"waypoints[{i}] ({p[0]:g}, {p[1]:g}) lies outside the scene's bounds "
+                                 f"[{x0:g}, {y0:g}, {x1:g}, {y1:g}]")  # fmt: skip
             if not grid.free[grid.index(p)]:
                 raise InputError(f"waypoints[{i}] ({p[0]:g}, {p[1]:g}) is not free for a person of radius {o.radius:g} m")
 
-    free_point = _FreePoints(usable, grid.res, rng)
+    free_point = _FreePoints(usable, grid, rng)
     starts_a, goals, order = _place(scene, o, grid, free_point, wps, rng)
     pyrvo = _rvo()
-    sim = pyrvo.RVOSimulator(o.dt, 5.0, 10, 3.0, 1.0, o.radius + 0.01, o.speed)
+    sim = pyrvo.RVOSimulator(o.dt, 5.0, 10, 3.0, ORCA_OBSTACLE_HORIZON, o.radius + 0.01, o.speed)
     ids = [sim.add_agent((float(x), float(y))) for x, y in starts_a]
-    _rvo_obstacles(sim, scene, union)
+    # what an agent can see of the obstacles: ORCA's horizon at full speed, its radius,
+    # and two cells (a person is anywhere within a free cell, or pushed a little out of it)
+    reach = o.radius + 0.01 + ORCA_OBSTACLE_HORIZON * o.speed + 2 * grid.res
+    _rvo_obstacles(sim, scene, _near_walks(union, grid, reach))
     routes = [grid.path(starts_a[i], goals[i]) for i in range(o.people)]
     n = int(math.ceil(o.duration / o.dt - 1e-9)) + 1
     track = np.empty((o.people, n, 2))
@@ -300,13 +363,16 @@ def populate(scene: Scene, options: PopulateOptions | None = None) -> Populated:
 
 
 class _FreePoints:
-    """Random free points: a free cell's centre, jittered within the cell."""
+    """Random free points: a free cell's centre, jittered within the cell (the centre
+    itself when the jittered point is not clear of the obstacles)."""
 
-    def __init__(self, cells: FloatArray, res: float, rng: np.random.Generator):
-        self.cells, self.res, self.rng = cells, res, rng
+    def __init__(self, cells: FloatArray, grid: _Grid, rng: np.random.Generator):
+        self.cells, self.grid, self.rng = cells, grid, rng
 
     def __call__(self) -> FloatArray:
-        return self.cells[self.rng.integers(len(self.cells))] + self.rng.uniform(-0.4, 0.4, 2) * self.res
+        c = self.cells[self.rng.integers(len(self.cells))]
+        p = c + self.rng.uniform(-0.4, 0.4, 2) * self.grid.res
+        return p if self.grid.clear_point(p) else c
 
 
 def _place(scene: Scene, o: PopulateOptions, grid: _Grid, free_point, wps, rng):
@@ -315,7 +381,7 @@ def _place(scene: Scene, o: PopulateOptions, grid: _Grid, free_point, wps, rng):
     for _ in range(o.people):
         for _try in range(2000):
             p = free_point() if wps is None else wps[rng.integers(len(wps))] + rng.normal(0, 0.5, 2)
-            if not grid.free[grid.index(p)]:
+            if not (grid.free[grid.index(p)] and grid.clear_point(p)):
                 continue
             if all(np.hypot(*(p - q)) >= 2 * o.radius + 0.1 for q in starts):
                 starts.append(p)
@@ -354,8 +420,9 @@ def _movers(scene: Scene, o: PopulateOptions, track: FloatArray, union) -> tuple
         tr = track[i]
         segs = shapely.linestrings(np.stack([tr[:-1], tr[1:]], axis=1))
         ok = np.ones(len(tr) - 1, dtype=bool)
-        if union is not None:
-            ok &= shapely.distance(segs, union) >= o.radius
+        if union is not None:  # exact distances, for the motions the index finds close
+            close = shapely.dwithin(union, segs, o.radius)
+            ok[close] &= shapely.distance(segs[close], union) >= o.radius
         inside = (tr[:, 0] - x0 >= o.radius) & (x1 - tr[:, 0] >= o.radius) & (tr[:, 1] - y0 >= o.radius) & (
             y1 - tr[:, 1] >= o.radius)  # fmt: skip
         ok &= inside[:-1] & inside[1:]
