@@ -19,6 +19,7 @@ from gfuzzy.errors import InputError  # noqa: E402
 from gfuzzy.navigation import crowd as C  # noqa: E402
 from gfuzzy.navigation.crowdsummary import summarize  # noqa: E402
 from gfuzzy.navigation.humans import OrcaCrowd, SocialForceCrowd  # noqa: E402
+from gfuzzy.navigation.sensing import SensorOptions  # noqa: E402
 from gfuzzy.navigation.socialmetrics import SocialMetrics  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -321,6 +322,18 @@ def test_crowd_command_end_to_end_same_seed_same_csv(tmp_path):
     other = ["crowd", "--scenario", "square", "--humans", "3", "--episodes", "3", "--seed", "5", "--policy", "orca"]
     assert _run(*other, "-o", str(c)).returncode == 0
     assert [r["min_separation"] for r in _rows(c)] != [r["min_separation"] for r in ra if r["policy"] == "orca"]
+    # each row says the run it came from: its seed and how the robot sensed
+    assert {(r["seed"], r["velocity"], r["noise"], r["fov"], r["sense"]) for r in ra} == {("4", "estimated", "0.0", "360.0", "")}
+    assert {r["seed"] for r in _rows(c)} == {"5"}
+
+
+def test_a_row_names_the_sensing_and_the_arena_range():
+    ep = C.Episode("navigator", 3, C.Outcome.SUCCESS, 9.0, 0.4, SocialMetrics(10, 1, 0), np.array([0.01]))
+    s = C.CrowdSetting(scenario="arena", humans=20, sensor=SensorOptions(noise=0.05, fov=180.0, occlusion=True))
+    row = ep.row(s, 7)
+    assert (row["seed"], row["episode"], row["noise"], row["fov"], row["occlusion"]) == (7, 3, 0.05, 180.0, 1)
+    assert row["sense"] == C.ARENA["sense"]  # the scenario's range when the sensor sets none
+    assert ep.row(C.CrowdSetting())["sense"] == "" and ep.row(C.CrowdSetting())["seed"] == ""
 
 
 @pytest.mark.parametrize("workers", [pytest.param(["--workers", "2"], marks=pytest.mark.slow), []])

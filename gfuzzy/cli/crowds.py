@@ -132,7 +132,7 @@ def _table(setting, runs, policies) -> str:
     return "\n".join(lines)
 
 
-def _write_csv(path, setting, runs) -> None:
+def _write_csv(path, setting, runs, seed: int) -> None:
     import csv
     import io
 
@@ -144,7 +144,7 @@ def _write_csv(path, setting, runs) -> None:
     w.writeheader()
     for run in runs:
         for e in run:
-            w.writerow(e.row(setting))
+            w.writerow(e.row(setting, seed))
     write_atomic(path, buf.getvalue())
 
 
@@ -188,7 +188,7 @@ def cmd_crowd(args) -> int:
     with ctx as client:
         runs = episodes(setting, roadmap, args.seed, args.episodes, policies, options, client, bar)
     if out is not None:
-        _write_csv(out, setting, runs)
+        _write_csv(out, setting, runs, args.seed)
     _say(_table(setting, runs, policies), sys.stdout)
     return EXIT_OK
 

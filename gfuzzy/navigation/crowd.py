@@ -321,8 +321,9 @@ class Episode:
         step, so the step that finds the episode over is counted, never as an intrusion)."""
         return self.social.intrusion_steps / (self.social.steps + 1)
 
-    def row(self, setting: CrowdSetting) -> dict:
-        """The CSV row (the column names are the file format)."""
+    def row(self, setting: CrowdSetting, run_seed: int | None = None) -> dict:
+        """The CSV row (the column names are the file format); ``run_seed``: the run's
+        ``--seed`` (episode ``i`` of seed ``s`` is the same episode in every run)."""
         lat = self.replan_seconds
         q = (lambda p: round(float(np.quantile(lat, p)) * 1e3, 3)) if len(lat) else (lambda p: "")
         return {
@@ -339,6 +340,9 @@ class Episode:
             "path_length": round(self.path_length, 4), "replans": len(lat),
             "replan_p50_ms": q(0.5), "replan_p95_ms": q(0.95), "replan_max_ms": round(float(lat.max()) * 1e3, 3) if len(lat) else "",
             "modes": " ".join(f"{k}:{v}" for k, v in self.modes),
+            "seed": "" if run_seed is None else run_seed, "velocity": setting.sensor.velocity,
+            "noise": setting.sensor.noise, "fov": setting.sensor.fov, "occlusion": int(setting.sensor.occlusion),
+            "sense": setting.sense if math.isfinite(setting.sense) else "",
         }  # fmt: skip
 
 
