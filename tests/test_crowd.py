@@ -362,6 +362,8 @@ def test_crowd_command_refuses_bad_arguments_in_one_line(tmp_path, flags):
     assert p.returncode == 2, p.stdout + p.stderr
     assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
     assert not out.exists()
+    if flags[0] in ("--fov", "--noise") and flags[1] != "1e300":  # named as the user typed it, as navigate does
+        assert f"gfuzzy crowd: {flags[0]} must be" in p.stderr
 
 
 def test_crowd_command_refuses_humans_that_do_not_fit_before_any_episode(tmp_path):

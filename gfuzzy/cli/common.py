@@ -41,6 +41,18 @@ def _navigator_flags(p) -> None:
                         "costs little (default 1.25, 0: off)")  # fmt: skip
 
 
+def _check_sensor_flags(args) -> None:
+    """``--noise`` and ``--fov`` of ``navigate`` and ``crowd``, refused by their flags' names
+    (InputError)."""
+    for flag, value in (("--noise", args.noise), ("--fov", args.fov)):
+        if not math.isfinite(value):
+            raise InputError(f"{flag} must be a finite number, got {value:g}")
+    if args.noise < 0:
+        raise InputError(f"--noise must be >= 0, got {args.noise:g}")
+    if not 0 < args.fov <= 360:
+        raise InputError(f"--fov must be in (0, 360] degrees, got {args.fov:g}")
+
+
 def _progress(label: str):
     """A progress callback that draws on stderr only when it is a terminal."""
     if not sys.stderr.isatty():

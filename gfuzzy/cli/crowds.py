@@ -7,7 +7,15 @@ import math
 import sys
 
 from ..errors import InputError
-from .common import EXIT_OK, BadInput, _load_scene, _navigator_flags, _out_path, _say
+from .common import (
+    EXIT_OK,
+    BadInput,
+    _check_sensor_flags,
+    _load_scene,
+    _navigator_flags,
+    _out_path,
+    _say,
+)
 
 
 def add_crowd(sub) -> None:
@@ -75,8 +83,12 @@ def _setting(args):
         raise BadInput(f"gfuzzy crowd: --workers must be >= 0, got {args.workers}")
     if args.seed < 0:  # numpy refuses it deep in the first episode
         raise BadInput(f"gfuzzy crowd: --seed must be >= 0, got {args.seed}")
-    for flag, value in (("--noise", args.noise), ("--fov", args.fov), ("--time-budget", args.time_budget),
-                        ("--personal-space", args.personal_space), ("--path-space", args.path_space)):  # fmt: skip
+    try:
+        _check_sensor_flags(args)
+    except InputError as exc:
+        raise BadInput(f"gfuzzy crowd: {exc}") from None
+    for flag, value in (("--time-budget", args.time_budget), ("--personal-space", args.personal_space),
+                        ("--path-space", args.path_space)):  # fmt: skip
         if not math.isfinite(value):
             raise BadInput(f"gfuzzy crowd: {flag} must be a finite number, got {value:g}")
     if not (math.isfinite(args.dt) and args.dt > 0):

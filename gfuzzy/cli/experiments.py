@@ -15,6 +15,7 @@ from .common import (
     EXIT_OK,
     BadInput,
     _apply_overrides,
+    _check_sensor_flags,
     _load_scene,
     _out_path,
     _plan_options,
@@ -180,13 +181,7 @@ def _sensor_options(args):
     """The sensor of ``gfuzzy navigate`` (section 7) from its flags."""
     from ..navigation.sensing import SensorOptions
 
-    for flag, value in (("--noise", args.noise), ("--fov", args.fov)):
-        if not math.isfinite(value):
-            raise InputError(f"{flag} must be a finite number, got {value:g}")
-    if args.noise < 0:
-        raise InputError(f"--noise must be >= 0, got {args.noise:g}")
-    if not 0 < args.fov <= 360:
-        raise InputError(f"--fov must be in (0, 360] degrees, got {args.fov:g}")
+    _check_sensor_flags(args)
     velocity = "exact" if args.velocity == "true" else "estimated"
     return SensorOptions(velocity=velocity, noise=args.noise, fov=args.fov, occlusion=args.occlusion,
                          seed=1 if args.seed is None else args.seed)  # fmt: skip
