@@ -72,8 +72,9 @@ def test_square_and_arena_layouts():
         assert np.all(np.abs(r - 6 * math.sqrt(2)) < 2 * math.sqrt(2))  # the circle, U[0, 2) per coordinate
 
 
-def _one_at_a_time(scenario, K, rng):
-    """CrowdNav's placement as the one-draw-at-a-time loop (the reference; no restarts)."""
+def _one_at_a_time(scenario, K, rng, restart_every=None):
+    """CrowdNav's placement as the one-draw-at-a-time loop (the reference), starting over
+    every ``restart_every`` draws of a start (None: never)."""
     start, goal = np.array([0.0, -4.0]), np.array([0.0, 4.0])
     if scenario == "arena":
         while True:
@@ -86,7 +87,11 @@ def _one_at_a_time(scenario, K, rng):
     def far(p, which):
         return all(np.hypot(*(p - a[which])) >= 0.3 + a[2] + 0.2 for a in agents)
 
+    tries = 0
     while len(agents) <= K:
+        tries += 1
+        if restart_every and tries % restart_every == 0:
+            del agents[1:]
         if scenario == "square":
             sign = -1.0 if rng.random() > 0.5 else 1.0
             p = np.array([rng.random() * 10.0 * 0.5 * sign, (rng.random() - 0.5) * 10.0])
@@ -117,11 +122,33 @@ def test_layouts_are_the_one_at_a_time_protocols(scenario, K):
         np.testing.assert_array_equal(lay.human_goals, goals)
 
 
+@pytest.mark.parametrize("scenario,K", [("square", 50), ("circle", 14)])
+def test_restarts_count_the_starts_drawn_as_the_loop_does(scenario, K, monkeypatch):
+    # a jammed placement starts over after the same draws as CrowdNav's loop with its
+    # restart (the square's goals drawn again do not count: counting them moved the
+    # restarts and changed dense square episodes), and leaves a caller's generator where
+    # that loop leaves it
+    from gfuzzy.navigation import crowdlayout
+
+    monkeypatch.setattr(crowdlayout, "RESTART_EVERY", 101)
+    restarted = 0
+    for seed in range(4):
+        rng, ref = np.random.default_rng([seed, 7]), np.random.default_rng([seed, 7])
+        lay = C.layout(C.CrowdSetting(scenario, humans=K), rng)
+        starts, goals = _one_at_a_time(scenario, K, ref, restart_every=101)
+        np.testing.assert_array_equal(lay.human_starts, starts)
+        np.testing.assert_array_equal(lay.human_goals, goals)
+        assert rng.random() == ref.random()
+        once = _one_at_a_time(scenario, K, np.random.default_rng([seed, 7]))[0]
+        restarted += not np.array_equal(once, starts)
+    assert restarted  # the case restarts
+
+
 @pytest.mark.parametrize("scenario,K", [("circle", 30), ("square", 200), ("arena", 200)])
 def test_a_crowd_that_does_not_fit_is_refused_after_a_bounded_number_of_draws(scenario, K, monkeypatch):
     # CrowdNav's loop never ends when the humans do not fit (the square's goals looped
     # forever here, and the circle took a million draws one at a time, about 40 s):
-    # every draw, of a start or of a goal, counts, and the refusal says what fitted
+    # the draws are bounded, and the refusal says what fitted
     from gfuzzy.navigation import crowdlayout
 
     monkeypatch.setattr(crowdlayout, "RESTART_EVERY", 20_001)

@@ -5,14 +5,16 @@ within ``r + r' + 0.2`` m of an earlier agent's (rejection sampling: CrowdNav's
 ``generate_circle_crossing_human`` and ``generate_square_crossing_human``, CrowdNav++'s
 arena). Rejection sampling can jam: the humans placed first may leave no room for the
 rest, and a count that does not fit is never placed (CrowdNav loops forever). Here every
-draw, of a start or of a goal, counts: every ``RESTART_EVERY`` draws the placement starts
-over, and after ``DRAW_BUDGET`` draws it is refused with an :class:`InputError` that
-says how many humans the attempts placed at most.
+draw of a start counts: every ``RESTART_EVERY`` of them the placement starts over, and
+after ``DRAW_BUDGET`` it is refused with an :class:`InputError` that says how many
+humans the attempts placed at most; a square's goal, drawn again until one is far
+enough, is refused after ``GOAL_DRAW_BUDGET`` draws of its own (CrowdNav's loop hangs there).
 
 The candidates are tested in blocks with numpy, reading the generator's doubles in the
 order the one-draw-at-a-time loop reads them, so a layout is the one that loop draws (the
 same seed, the same episodes as before the blocks) and a refusal takes one to five seconds
-(a million draws one at a time took about 40 s).
+(a million draws one at a time took about 40 s). The generator is left where that loop
+leaves it (a caller's generator may serve more than the layout).
 """
 
 from __future__ import annotations
@@ -25,7 +27,7 @@ import numpy as np
 from ..errors import InputError
 from ..typed import FloatArray
 
-__all__ = ["CROWD", "ARENA", "SQUARE_WIDTH", "Layout", "layout", "RESTART_EVERY", "DRAW_BUDGET"]
+__all__ = ["CROWD", "ARENA", "SQUARE_WIDTH", "Layout", "layout", "RESTART_EVERY", "DRAW_BUDGET", "GOAL_DRAW_BUDGET"]
 
 #: The protocol's constants.
 CROWD = {
@@ -58,6 +60,10 @@ ARENA = {"size": 6.0, "circle_radius": 6.0 * math.sqrt(2.0), "sense": 5.0, "time
 RESTART_EVERY = 100_001
 #: Draws after which the placement is refused.
 DRAW_BUDGET = 1_000_000
+#: Draws of one square crossing's goal after which the placement is refused (CrowdNav's
+#: loop draws on for ever; a dense square's goal took it 1.63 million draws once: the
+#: episode is kept as it was).
+GOAL_DRAW_BUDGET = 2_000_000
 #: Slack (m) of the block test: a candidate within it of a threshold is decided by the
 #: exact test of the one-at-a-time loop (numpy's vectorised sine may differ by an ulp).
 _SLACK = 1e-9
@@ -75,11 +81,21 @@ class Layout:
 
 
 class _Doubles:
-    """The generator's uniform doubles in order, drawn ahead in blocks (the layout's
-    generator serves nothing else, so reading ahead changes nothing that follows)."""
+    """The generator's uniform doubles in order, drawn ahead in blocks; :meth:`settle`
+    leaves the generator after the doubles used, as if they had been drawn one by one."""
 
     def __init__(self, rng: np.random.Generator):
         self.rng, self.buf, self.pos = rng, np.empty(0), 0
+        self.state, self.used = rng.bit_generator.state, 0
+
+    def settle(self) -> None:
+        """Put the generator back after the doubles :meth:`skip` used (none read ahead)."""
+        self.rng.bit_generator.state = self.state
+        left = self.used
+        while left:
+            n = min(left, 1 << 16)
+            self.rng.random(n)
+            left -= n
 
     def peek(self, n: int) -> FloatArray:
         if self.pos + n > len(self.buf):
@@ -90,6 +106,7 @@ class _Doubles:
     def skip(self, n: int) -> None:
         self.peek(n)
         self.pos += n
+        self.used += n
 
 
 class _Ring:
@@ -139,6 +156,7 @@ class _Placement:
         self.robot = (np.asarray(start, float), np.asarray(goal, float), robot_radius)
         self.radius, self.gap = radius, gap
         self.draws, self.best, self.attempts, self.next_restart = 0, 0, 1, RESTART_EVERY
+        self.goal_draws = 0  # the draws of a square's goal, bounded apart (they do not count toward a restart)
         self.reset()
 
     def reset(self) -> None:
@@ -149,14 +167,22 @@ class _Placement:
     def placed(self) -> int:
         return len(self.starts) - 1
 
-    def room(self) -> int:
-        """Draws left before the next restart or the refusal (0: a restart is due)."""
+    def refuse(self) -> InputError:
+        return InputError(
+            f"cannot place {self.humans} humans in the {self.scenario} scenario: its protocol keeps each one's "
+            f"start and goal {2 * self.radius + self.gap:g} m from the others', and {self.attempts} attempts of "
+            f"up to {RESTART_EVERY - 1} random draws placed at most {self.best} (give fewer --humans)"
+        )
+
+    def room(self, counted: bool = True) -> int:
+        """Draws left before the next restart or the refusal (0: a restart is due); of the
+        goals' own budget when not ``counted``."""
+        if not counted:
+            if self.goal_draws >= GOAL_DRAW_BUDGET:
+                raise self.refuse()
+            return GOAL_DRAW_BUDGET - self.goal_draws
         if self.draws >= DRAW_BUDGET:
-            raise InputError(
-                f"cannot place {self.humans} humans in the {self.scenario} scenario: its protocol keeps each one's "
-                f"start and goal {2 * self.radius + self.gap:g} m from the others', and {self.attempts} attempts of "
-                f"up to {RESTART_EVERY - 1} random draws placed at most {self.best} (give fewer --humans)"
-            )
+            raise self.refuse()
         return min(self.next_restart - 1, DRAW_BUDGET) - self.draws
 
     def restart_if_due(self) -> bool:
@@ -182,6 +208,12 @@ class _Placement:
         # the one-at-a-time loop's test, to the last bit
         return all(np.hypot(*(p - e)) >= self.radius + r + self.gap for e, r in zip(ends, self.radii, strict=True))
 
+    def spend(self, n: int, counted: bool) -> None:
+        if counted:
+            self.draws += n
+        else:
+            self.goal_draws += n
+
     def add(self, p: FloatArray, g: FloatArray) -> None:
         self.starts.append(p)
         self.goals.append(g)
@@ -189,26 +221,26 @@ class _Placement:
         self.best = max(self.best, self.placed)
 
 
-def _first(stream: _Doubles, place: _Placement, kind, ends: str) -> FloatArray | None:
+def _first(stream: _Doubles, place: _Placement, kind, ends: str, counted: bool = True) -> FloatArray | None:
     """The doubles of the first candidate of ``kind`` far enough from the agents'
     ``ends`` ("starts", "goals" or "both"), reading ``kind.width`` doubles a candidate;
     None when the draws ran out before the next restart (the stream then stands after
-    them)."""
+    them). Draws not ``counted`` (the square's goals) spend the goals' own budget."""
     block, w = 16, kind.width
     agents = {"starts": place.starts, "goals": place.goals, "both": place.starts + place.goals}[ends]
     lists = [place.starts, place.goals] if ends == "both" else [agents]
     while True:
-        room = place.room()
+        room = place.room(counted)
         if room == 0:
             return None
         n = min(block, room)
         u = stream.peek(n * w).reshape(n, w)
         for j in np.flatnonzero(place.far(kind.points(u), agents, _SLACK)):
             if all(place.exact_far(kind.point(u[j]), e) for e in lists):
-                place.draws += int(j) + 1
+                place.spend(int(j) + 1, counted)
                 stream.skip((int(j) + 1) * w)
                 return u[j].copy()
-        place.draws += n
+        place.spend(n, counted)
         stream.skip(n * w)
         block = min(2 * block, _MAX_BLOCK)
 
@@ -232,9 +264,9 @@ def _place_square(stream: _Doubles, place: _Placement, width: float) -> None:
         if u is None:
             continue
         goals = _SquareSide(width, -1.0 if u[0] > 0.5 else 1.0)
-        g = _first(stream, place, goals, "goals")
-        if g is not None:  # else no room for its goal before the restart: start over
-            place.add(starts.point(u), goals.point(g))
+        place.goal_draws = 0  # each start's goal: refused after GOAL_DRAW_BUDGET draws (CrowdNav's loop hangs)
+        g = _first(stream, place, goals, "goals", counted=False)
+        place.add(starts.point(u), goals.point(g))
 
 
 def layout(setting, rng: np.random.Generator) -> Layout:
@@ -250,15 +282,15 @@ def layout(setting, rng: np.random.Generator) -> Layout:
       apart; humans on the circle of radius 6 sqrt(2) (the arena's corners) perturbed by
       U[0, 2) m per coordinate, walking to the opposite point.
 
-    Every draw counts: every :data:`RESTART_EVERY` draws the humans are all drawn again
-    (those placed may leave the rest no room), and after :data:`DRAW_BUDGET` draws the
-    placement is refused.
+    Every :data:`RESTART_EVERY` draws of a start the humans are all drawn again (those
+    placed may leave the rest no room), and after :data:`DRAW_BUDGET` of them (or
+    :data:`GOAL_DRAW_BUDGET` draws of one square's goal) the placement is refused. The generator is left as the
+    one-at-a-time loop leaves it.
 
     Parameters
     ----------
     setting : CrowdSetting
     rng : numpy.random.Generator
-        Serves this layout only.
 
     Returns
     -------
@@ -287,5 +319,6 @@ def layout(setting, rng: np.random.Generator) -> Layout:
         _place_ring(stream, place, _Ring(ARENA["circle_radius"], 0.0, 2.0))
     else:
         _place_ring(stream, place, _Ring(c["circle_radius"], 0.5, c["v_pref"]))
+    stream.settle()
     hs, hg = place.starts[1:], place.goals[1:]
     return Layout(start, goal, np.array(hs).reshape(-1, 2), np.array(hg).reshape(-1, 2))
