@@ -136,6 +136,36 @@ def test_a_waypoint_outside_the_bounds_is_refused_even_where_the_grid_is_coarse(
     populate(scene, PopulateOptions(people=2, waypoints=((10.0, 5.0), (290.0, 5.0)), duration=1.0))
 
 
+def test_a_waypoint_whose_cell_is_free_but_itself_is_not_is_refused():
+    # on a coarse grid (1.2 m cells) a waypoint on the bounds' edge or inside a small box
+    # has a free cell: people walked to within their radius of it and stood there for
+    # the rest of the run, never arriving
+    doc = {"version": 1, "name": "long", "bounds": [0, 0, 300, 10], "robot": {"disc": 0.3, "vmax": 1.0},
+           "obstacles": [{"box": {"center": [49.2, 5.4], "size": [0.2, 0.2]}}], "movers": [], "queries": []}  # fmt: skip
+    scene = parse_scene(doc, "<long>")
+    for bad in ((0.0, 5.0), (300.0, 10.0), (49.1, 5.4)):
+        with pytest.raises(InputError, match=r"waypoints\[0\] .* is not free for a person of radius 0.3 m"):
+            populate(scene, PopulateOptions(people=2, waypoints=(bad, (20.0, 5.0)), duration=1.0))
+    populate(scene, PopulateOptions(people=2, waypoints=((0.5, 5.0), (20.0, 5.0)), duration=1.0))
+    for wps in ((), ((1.0, 2.0),), ((1.0, 2.0, 3.0), (4.0, 5.0, 6.0))):  # read as other points, or a ValueError
+        with pytest.raises(InputError, match="waypoints"):
+            PopulateOptions(people=2, waypoints=wps)
+
+
+def test_random_free_points_are_clear_of_the_obstacles_on_a_coarse_grid():
+    # a person's new goal is drawn anywhere within a free cell: on a coarse grid such a
+    # point can lie within the person's radius of a box, and they were cut short there
+    from gfuzzy.navigation.populate import _FreePoints, _Grid, obstacle_union
+
+    scene = parse_scene(PILLARS, "<pillars>")
+    grid = _Grid(scene, 0.3, obstacle_union(scene))
+    draw = _FreePoints(grid.cells(), grid, np.random.default_rng(3))
+    pts = np.array([draw() for _ in range(3000)])
+    centers = np.array([ob["box"]["center"] for ob in PILLARS["obstacles"]])
+    gaps = np.min([_box_distance(pts, c, (0.4, 0.4)) for c in centers], axis=0)
+    assert gaps.min() >= 0.3
+
+
 def test_the_readme_populate_example_runs_and_a_full_room_says_why(tmp_path):
     # the README's example asked building-floor for 15 people of radius 0.3: its 0.6 m doors
     # keep them in one room, which holds about 12; it exited 2 with no hint why

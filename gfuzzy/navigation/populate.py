@@ -83,8 +83,10 @@ class PopulateOptions:
         create_rng(self.seed)  # a negative seed is refused here, before the walk
         if self.duration < self.dt:  # one sample is no walk: nobody would be written
             raise InputError(f"duration must be at least one step of {self.dt:g} s, got {self.duration:g}")
+        if self.waypoints is not None and len(self.waypoints) < 2:
+            raise InputError(f"waypoints must be at least two points, got {len(self.waypoints)}")
         for i, p in enumerate(self.waypoints or ()):  # a NaN used to reach the grid's lookup
-            if not all(isinstance(v, numbers.Real) and math.isfinite(v) for v in p):
+            if len(p) != 2 or not all(isinstance(v, numbers.Real) and math.isfinite(v) for v in p):
                 raise InputError(f"waypoints[{i}] must be two finite numbers, got {tuple(p)}")
 
 
@@ -313,8 +315,9 @@ def populate(scene: Scene, options: PopulateOptions | None = None) -> Populated:
             if not (x0 <= p[0] <= x1 and y0 <= p[1] <= y1):
                 raise InputError(f"waypoints[{i}] ({p[0]:g}, {p[1]:g}) lies outside the scene's bounds "
                                  f"[{x0:g}, {y0:g}, {x1:g}, {y1:g}]")  # fmt: skip
-            if not grid.free[grid.index(p)]:
-                raise InputError(f"waypoints[{i}] ({p[0]:g}, {p[1]:g}) is not free for a person of radius {o.radius:g} m")
+            if not (grid.free[grid.index(p)] and grid.clear_point(p)):  # its cell's centre may be free, it not
+                raise InputError(f"waypoints[{i}] ({p[0]:g}, {p[1]:g}) is not free for a person of radius {o.radius:g} m "
+                                 f"(clear of the obstacles and the bounds by {o.radius + GRID_MARGIN / 2:g} m)")  # fmt: skip
 
     free_point = _FreePoints(usable, grid, rng)
     starts_a, goals, order = _place(scene, o, grid, free_point, wps, rng)
