@@ -361,6 +361,7 @@ def test_a_row_names_the_sensing_and_the_arena_range():
     assert (row["seed"], row["episode"], row["noise"], row["fov"], row["occlusion"]) == (7, 3, 0.05, 180.0, 1)
     assert row["sense"] == C.ARENA["sense"]  # the scenario's range when the sensor sets none
     assert ep.row(C.CrowdSetting())["sense"] == "" and ep.row(C.CrowdSetting())["seed"] == ""
+    assert row["goal_changes"] == 1 and ep.row(replace(s, goal_changes=False))["goal_changes"] == 0
 
 
 @pytest.mark.parametrize("workers", [pytest.param(["--workers", "2"], marks=pytest.mark.slow), []])
@@ -401,6 +402,11 @@ def test_crowd_command_refuses_humans_that_do_not_fit_before_any_episode(tmp_pat
     assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
     assert "episode 0: cannot place 30 humans in the circle scenario" in p.stderr and "placed at most" in p.stderr
     assert not out.exists() and p.stdout == ""
+    # 25 humans fit in episode 0 of --seed 4 but not in episode 1: refused before episode 0 runs
+    p = _run("crowd", "--humans", "25", "--seed", "4", "--episodes", "2", "--policy", "orca", "-o", str(out))
+    assert p.returncode == 2, p.stdout + p.stderr
+    assert p.stderr.startswith("gfuzzy crowd: episode 1: cannot place 25 humans") and p.stdout == ""
+    assert not out.exists()
 
 
 def test_crowd_command_takes_the_navigators_full_speed_option():

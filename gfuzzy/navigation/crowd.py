@@ -343,6 +343,7 @@ class Episode:
             "seed": "" if run_seed is None else run_seed, "velocity": setting.sensor.velocity,
             "noise": setting.sensor.noise, "fov": setting.sensor.fov, "occlusion": int(setting.sensor.occlusion),
             "sense": setting.sense if math.isfinite(setting.sense) else "",
+            "goal_changes": int(setting.goal_changes and setting.scenario == "arena"),
         }  # fmt: skip
 
 
