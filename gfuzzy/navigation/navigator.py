@@ -247,7 +247,7 @@ class NavOptions:
         check_number("stretch", self.stretch, 1.0, strict=False)
         check_number("look_after", self.look_after)
         if self.dt > self.prediction_horizon:  # no whole step to search: --dt 100 ran to its time limit
-            raise InputError(f"dt must be at most prediction_horizon ({self.prediction_horizon:g} s), got {self.dt:g}")
+            raise InputError(f"dt (--dt) must be at most the prediction horizon ({self.prediction_horizon:g} s), got {self.dt:g}")
         if not 0 < self.fov <= 360:
             raise InputError(f"fov must be in (0, 360] degrees, got {self.fov}")
 
