@@ -333,3 +333,31 @@ def test_the_navigator_drives_a_unicycle_by_the_rule(crossing):
     assert len(evasive.waypoints) >= 2 and _unicycle_problem(sc.robot, evasive.waypoints) is None
     direct = nav._direct(0.0, np.array([4.5, 2.0, 2.0]), np.zeros((0, 5)))
     assert direct is not None and _unicycle_problem(sc.robot, direct.waypoints) is None
+
+
+@pytest.mark.parametrize("v1, sy", [(0.67, 0.67), (0.675, 0.668)])
+def test_a_small_turn_in_a_tight_corridor_needs_no_ring_heading(v1, sy):
+    """A 1.2 x 0.3 box in a corridor 0.34 wide that bends by 0.02 rad: the turn at the bend
+    fits, but the turning ring's headings around it (a turning step, 0.068 rad, apart) do
+    not. Copies with no ring point between them join directly (before: no_path), the
+    roadmap's own (the lanes' headings, ``v1`` centred) and those a start's lane adds at a
+    vertex (``v1`` 5 mm off the axis: the start arrives at 0.01 rad, the lane leaves at -0.003)."""
+    d, w, length = 0.02, 0.17, 4.0
+    u, n = np.array([math.cos(d), math.sin(d)]), np.array([-math.sin(d), math.cos(d)])
+    bend = np.array([3.0, 0.67])
+    top0, top1 = bend + w * n, bend + w * n + length * u
+    bot0, bot1 = bend - w * n, bend - w * n + length * u
+    upper = [[0, 0.84], top0.tolist(), top1.tolist(), [top1[0], 1.5], [0, 1.5]]
+    lower = [[0, 0.5], [3.0, 0.5], bot0.tolist(), bot1.tolist(), [bot1[0], 0], [0, 0]]
+    robot = {"box": [1.2, 0.3], "vmax": 0.6, "kinematics": "unicycle"}
+    sc = parse_scene(doc(robot, obstacles=[{"polygon": upper}, {"polygon": lower}], bounds=(0, 0, float(top1[0]), 1.5)))
+    verts = np.array([[1.5, v1], bend, bend + 2.4 * u])
+    rm = Roadmap(verts, np.array([[0, 1], [1, 2]]), np.hypot(*np.diff(verts, axis=0).T), sc.name, sc.static_hash,
+                 sc.robot.circumradius)  # fmt: skip
+    start, goal = [0.8, sy, 0.0], [*(bend + 3.2 * u), d]
+    res = Planner(sc, rm).plan(start, goal, 0.0, PlanOptions())
+    assert res.solved, res.message
+    rep = check_trajectory(sc, res.trajectory.waypoints)
+    assert rep.valid, rep.reason
+    best = (2.2 + 3.2) / 0.6 + d / sc.robot.turn_rate  # drive, turn 0.02 rad, drive
+    assert best - 1e-9 <= res.duration <= best + 6 * 0.07

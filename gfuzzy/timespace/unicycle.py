@@ -88,7 +88,8 @@ class _Base:
         headings ``-pi + i 2 pi / n_ring`` (one turning step apart), joined in a circle both
         ways; each copy joins the two ring points around its heading. A turn from one copy
         to another goes copy -> ring ... ring -> copy: at most two steps longer than the
-        turn itself, however many copies the vertex has. Points where the body collides,
+        turn itself, however many copies the vertex has; copies with no ring point between
+        them also join directly (:func:`_same_interval`). Points where the body collides,
         and arcs whose sweep does, are left out (``ring_ok``).
     ring_ptr : (V,) int
         First ring point of each vertex (-1: no ring).
@@ -233,7 +234,31 @@ def _rings(geometry, xy: FloatArray, cv: IntArray, ch: FloatArray, n_ring: int):
                     ta += [c, -(1 + r)]
                     tb += [-(1 + r), c]
                     tdh += [arc, -arc]
+        for c, d, arc in _same_interval(ch, int(bounds[v]), int(bounds[v + 1]), step_h):
+            if disc or turn_free(geometry, x, y, ch[c], arc):
+                ta += [c, d]
+                tb += [d, c]
+                tdh += [arc, -arc]
     return ring_ptr, ring_v, ring_h, ring_ok, ta, tb, tdh
+
+
+def _same_interval(ch: FloatArray, lo: int, hi: int, step_h: float) -> list:
+    """The copies ``lo .. hi - 1`` of one vertex (headings ``ch``, sorted) that follow one
+    another counter-clockwise with no ring point between them: [(c, d, arc)], ``arc`` > 0
+    the turn from c to d.
+
+    The ring joins such copies only through a ring point outside the arc between them, up
+    to a turning step away: in a corridor with a few centimetres to spare that heading may
+    collide where the small turn itself is free, so these copies also join directly.
+    """
+    out = []
+    for c in range(lo, hi if hi - lo > 1 else lo):
+        d = c + 1 if c + 1 < hi else lo
+        arc = float((ch[d] - ch[c]) % (2 * math.pi))
+        to_ring = ((math.floor((ch[c] + math.pi) / step_h) + 1) * step_h - math.pi - ch[c]) % (2 * math.pi)
+        if 0.0 < arc < to_ring:
+            out.append((c, d, arc))
+    return out
 
 
 def _base(roadmap, geometry, stretch: float, vmax: float, step_len: float) -> _Base:
@@ -392,6 +417,18 @@ class _Extras:
                     self.turn(c, self.ring(r), arc)
                 else:
                     self.turn(self.ring(r), c, -arc)
+        # the vertex's copies next to h with no ring point between: directly (_same_interval)
+        hs = np.append(base.poses[ids, 2], h)
+        order = np.argsort(hs, kind="stable")
+        for a, b, arc in _same_interval(hs[order], 0, len(hs), step_h):
+            a, b = int(order[a]), int(order[b])
+            if len(ids) not in (a, b) or not turn_free(geo, x, y, hs[a], arc):
+                continue
+            a, b = (c if a == len(ids) else int(ids[a])), (c if b == len(ids) else int(ids[b]))
+            if (a == c) == out:
+                self.turn(a, b, arc)
+            else:
+                self.turn(b, a, -arc)
         return c
 
     def join(self, pose: FloatArray, node: int, connect_k: int, outward: bool, reverse: bool) -> None:
