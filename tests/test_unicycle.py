@@ -361,3 +361,33 @@ def test_a_small_turn_in_a_tight_corridor_needs_no_ring_heading(v1, sy):
     assert rep.valid, rep.reason
     best = (2.2 + 3.2) / 0.6 + d / sc.robot.turn_rate  # drive, turn 0.02 rad, drive
     assert best - 1e-9 <= res.duration <= best + 6 * 0.07
+
+
+def test_ring_tracing_finds_the_headings_and_arcs_each_checked_alone():
+    """A box's turning ring beside walls: sphere tracing round it (one query proves the
+    headings within clearance / r) gives the free headings and arcs that checking every
+    heading and arc gives, a heading that touches a wall exactly included (it has nothing
+    to spare, and must not stall the tracing)."""
+    from gfuzzy.collision.geometry import StaticGeometry
+    from gfuzzy.timespace.drive import turn_free
+    from gfuzzy.timespace.unilanes import _ring_free
+
+    walls = [{"box": {"center": [1.5, 0.5], "size": [0.4, 0.4], "angle": 0.3}}, {"disc": {"center": [0.4, 1.6], "radius": 0.3}}]
+    sc = parse_scene(doc({"box": [1.0, 0.5], "vmax": 1.0, "kinematics": "unicycle"}, obstacles=walls, bounds=(0, 0, 3, 3)))
+    geo = StaticGeometry(sc)
+    n = 90
+    step = 2 * math.pi / n
+    grid = step * (np.arange(n) - n // 2)  # from -pi, heading 0 exactly among them
+    sites = [(1.0, 1.2), (1.3, 1.5), (0.9, 0.9), (2.0, 1.0), (1.5, 2.45), (0.7, 0.5)]
+    sites.append((1.5, 2.75))  # heading 0: its long side touches the top bound (y = 3) exactly
+    seen = []
+    for x, y in sites:
+        ok, arcs = _ring_free(geo, x, y, grid, step)
+        want_ok = np.array([geo.clearance1([x, y, h]) >= 0 for h in grid])
+        want_arcs = np.array([want_ok[i] and want_ok[(i + 1) % n] and turn_free(geo, x, y, grid[i], grid[(i + 1) % n] - grid[i]
+                              if i + 1 < n else grid[0] + 2 * math.pi - grid[i], swept=False) for i in range(n)])  # fmt: skip
+        np.testing.assert_array_equal(ok, want_ok)
+        np.testing.assert_array_equal(arcs, want_arcs)
+        seen.append((want_ok.mean(), geo.clearance1([x, y, 0.0])))
+    assert any(0 < f < 1 for f, _ in seen)  # some rings are partly blocked
+    assert seen[-1][1] == 0.0  # the touching heading

@@ -176,6 +176,7 @@ class StaticGeometry:
         self._manager.setup()
         self._robot_objs = [fcl.CollisionObject(g, fcl.Transform()) for g in robot_geometries(scene.robot)]
         self._robot_obj = self._robot_objs[0]
+        self._disc_obj = None  # the circumscribed disc (sweep_bound), made when first needed
         self._shape = shape_of(scene.robot)
         self._grids = [ob for ob in scene.obstacles if isinstance(ob, MapObstacle) and len(ob.rects)]
         self._inner = _inner_point(scene.robot)
@@ -410,6 +411,36 @@ class StaticGeometry:
         if not self._map_only:
             return -math.inf
         return min(c, self._map_bound((x, y)) - self.keep)
+
+    def sweep_bound(self, x: float, y: float) -> float:
+        """A lower bound of the clearance of every pose at (x, y), whatever its heading (so
+        of any turn in place there): :meth:`disc_bound` when that is positive, else the FCL
+        distance of the robot's circumscribed disc (one query) less ``robot.clearance``;
+        -1 when the disc is not clear by more than FCL's margin.
+
+        A turn in place sweeps at most that disc: where it is clear, every ring heading and
+        every arc between them is free without a query per heading.
+        """
+        c = self.disc_bound(x, y)
+        quick = self._bounds_at_circumradius(x, y)
+        if c > 0 or not quick > 0:
+            return c
+        if self._grids and self._inside_map((x, y)):  # wholly inside a blocked cell: no wall met
+            return -1.0
+        if self._disc_obj is None:
+            self._disc_obj = fcl.CollisionObject(fcl.Sphere(self.r), fcl.Transform())
+        self._disc_obj.setTranslation(np.array([x, y, 0.0]))
+        data = fcl.DistanceData(request=self._dreq)
+        self._manager.distance(self._disc_obj, data, fcl.defaultDistanceCallback)
+        self.calls += 1
+        d = data.result.min_distance - _DIST_MARGIN  # as obstacle_clearance's margin
+        return min(quick, d - self.keep) if d > _NEAR_CONTACT else -1.0
+
+    def sweep_free(self, a, b, ca=None, cb=None, max_steps: int = 100_000) -> bool:
+        """True when the circumscribed disc's straight motion from ``a`` to ``b`` ((2,)
+        positions) is certified free by :meth:`sweep_bound` (``ca``, ``cb``: the ends'
+        bounds when known): so is the body's at any heading, held or turning."""
+        return self._trace(a[:2], b[:2], max_steps, ca, cb, lambda p: self.sweep_bound(p[0], p[1])) >= 0
 
     def _certifying_clearance(self, pose) -> float:
         """A lower bound of :meth:`clearance1` good enough to step by: :meth:`disc_bound`
