@@ -391,3 +391,37 @@ def test_ring_tracing_finds_the_headings_and_arcs_each_checked_alone():
         seen.append((want_ok.mean(), geo.clearance1([x, y, 0.0])))
     assert any(0 < f < 1 for f, _ in seen)  # some rings are partly blocked
     assert seen[-1][1] == 0.0  # the touching heading
+
+
+@pytest.mark.parametrize(
+    "robot, start, goal",
+    [
+        ({"disc": 0.25}, [0.25, 0.25, 0.5 * math.pi], [3.0, 2.0, 0.0]),  # in the corner, touching two sides
+        ({"box": [0.5, 0.25]}, [0.25, 1.5, 0.0], [3.0, 1.5, 0.0]),  # its back against the left side
+    ],
+)
+def test_a_start_touching_the_bounds_drives_off(robot, start, goal):
+    """Touching is allowed: a robot parked against the bounds (clearance exactly 0) drives
+    away from them. A motion that holds its heading meets the bounds exactly at its ends,
+    so only the obstacles are traced (before: no_path, no motion from clearance 0 could be
+    certified)."""
+    sc = parse_scene(doc(dict(robot, vmax=1.0, kinematics="unicycle")))
+    planner = Planner(sc, _far_roadmap(sc))
+    assert planner.geometry.clearance1(start if "box" in robot else start[:2]) == 0.0
+    res = planner.plan(start, goal, 0.0, PlanOptions(dt=0.1))
+    assert res.solved, res.message
+    rep = check_trajectory(sc, res.trajectory.waypoints)
+    assert rep.valid, rep.reason
+
+
+def test_check_decides_a_disc_turning_in_place_against_a_wall(disc_scene):
+    """A disc touching the bounds while it turns in place keeps its clearance of 0 the
+    whole turn: its body does not move, so the check decides it (before: 'could not
+    decide: too many evaluations', bisecting at the turn's configuration speed)."""
+    w = rows([0, 0.2, 0.2, 0.0], [2, 0.2, 0.2, 1.0], [3, 0.2 + 0.5 * math.cos(1.0), 0.2 + 0.5 * math.sin(1.0), 1.0])
+    rep = check_trajectory(disc_scene, w)
+    assert rep.valid, rep.reason
+    assert rep.min_clearance == 0.0
+    out = rows([0, 0.2, 0.2, 0.0], [2, 0.2, 0.2, math.pi], [3, 0.1, 0.2, math.pi])  # then into the wall: caught
+    rep = check_trajectory(disc_scene, out)
+    assert not rep.valid and rep.time == pytest.approx(2.0, abs=1e-3), rep.reason

@@ -386,8 +386,33 @@ class StaticGeometry:
 
         The same certificate, but away from obstacles on a map it steps by the map's
         distance-transform bound (:meth:`_certifying_clearance`) instead of asking FCL.
+
+        A motion that holds its heading (a translation: a disc's, a unicycle's lane) meets
+        the bounds exactly at its ends (each side's distance changes linearly along it), so
+        only the obstacles are traced: a pose touching the bounds (clearance 0, allowed)
+        starts or ends a certified motion, which the tracing alone cannot prove.
         """
+        if len(a) == 2 or float(b[2]) - float(a[2]) == 0.0:
+            ends = (self._bounds_clearance1(a), self._bounds_clearance1(b))
+            if not (ends[0] >= 0 and ends[1] >= 0):  # (NaN: not certified)
+                return False
+            # the callers' clearances count the bounds: a positive one still bounds the obstacles'
+            ca = ca if ca is not None and ca > 0 else None
+            cb = cb if cb is not None and cb > 0 else None
+            return self._trace(a, b, max_steps, ca, cb, self._obstacle_certifying) >= 0
         return self._trace(a, b, max_steps, ca, cb, self._certifying_clearance) >= 0
+
+    def _obstacle_certifying(self, pose) -> float:
+        """A lower bound of the clearance from the obstacles alone (not the bounds), less
+        ``robot.clearance``: the map's distance transform where it leaves more than
+        ``_QUICK_CLEARANCE``, else FCL's :meth:`obstacle_clearance`."""
+        if not self._objects:
+            return math.inf
+        if self._map_only:
+            c = self._map_bound(pose) - self.keep
+            if c > _QUICK_CLEARANCE:
+                return c
+        return self.obstacle_clearance(pose) - self.keep
 
     def _bounds_at_circumradius(self, x: float, y: float) -> float:
         """A lower bound of the body's clearance from the bounds at (x, y), any heading: a
