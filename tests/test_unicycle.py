@@ -425,3 +425,31 @@ def test_check_decides_a_disc_turning_in_place_against_a_wall(disc_scene):
     out = rows([0, 0.2, 0.2, 0.0], [2, 0.2, 0.2, math.pi], [3, 0.1, 0.2, math.pi])  # then into the wall: caught
     rep = check_trajectory(disc_scene, out)
     assert not rep.valid and rep.time == pytest.approx(2.0, abs=1e-3), rep.reason
+
+
+@pytest.mark.parametrize(
+    "reverse, start, goal",
+    [
+        (True, [4.6, 1.5, 0.0], [1.0, 1.0, math.pi]),  # nose against the right side: back away
+        (False, [1.0, 1.0, math.pi], [4.6, 2.0, 0.0]),  # park nose against it
+    ],
+)
+def test_an_end_that_cannot_turn_joins_along_its_heading(reverse, start, goal):
+    """A box parked nose to the bounds cannot turn there (its front corners would swing out):
+    it leaves backwards, or arrives forwards, along its own heading. The roadmap has no
+    vertex on that line; the end joins through points on it from which the robot turns
+    (before: no_path). Without reverse the first one has no way out (checked by hand: it can
+    neither turn nor back up), which stays no_path."""
+    robot = {"box": [0.8, 0.5], "vmax": 1.0, "kinematics": "unicycle", "reverse": reverse}
+    sc = parse_scene(doc(robot, bounds=(0, 0, 5, 3)))
+    verts = np.array([[2.0, 2.3], [1.5, 0.5], [3.5, 0.6]])
+    rm = Roadmap(verts, np.array([[0, 1], [1, 2], [0, 2]]), np.hypot(*(verts[[1, 2, 2]] - verts[[0, 1, 0]]).T),
+                 sc.name, sc.static_hash, sc.robot.circumradius)  # fmt: skip
+    planner = Planner(sc, rm)
+    res = planner.plan(start, goal, 0.0, PlanOptions(dt=0.1))
+    assert res.solved, res.message
+    rep = check_trajectory(sc, res.trajectory.waypoints)
+    assert rep.valid, rep.reason
+    if reverse:
+        fwd = parse_scene(doc(dict(robot, reverse=False), bounds=(0, 0, 5, 3)))
+        assert Planner(fwd, rm).plan(start, goal, 0.0, PlanOptions(dt=0.1)).status.value == "no_path"

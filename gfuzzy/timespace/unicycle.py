@@ -45,6 +45,10 @@ from .unipaths import dijkstra, matrix, new_to_goal, with_rows
 
 __all__ = ["UnicycleGraph", "UnicycleGoal", "UnicyclePrepared", "prepare_goal", "build_graph", "lanes", "LANE_NEIGHBOURS", "SAME_HEADING"]
 
+#: Points on an end's own heading line (in circumradii from it) that join it to the roadmap
+#: where it cannot turn round in place (:meth:`_Extras.along`).
+ALONG = (0.5, 1.0, 2.0, 4.0)
+
 @dataclass
 class _Base:
     """The query-independent pieces (see the module docstring).
@@ -284,6 +288,34 @@ class _Extras:
                 self.turn(b, a, -arc)
         return c
 
+    def along(self, pose: FloatArray, node: int, connect_k: int, outward: bool, reverse: bool) -> None:
+        """Where the robot cannot turn round at ``pose`` (its circumscribed disc is not
+        clear: nose to a wall, in a corridor, docked), join it through points on its own
+        heading's line: straight lanes along the heading, forwards (and backwards with
+        ``reverse``), to points ``ALONG`` circumradii away as far as they are free, each
+        point joined to the roadmap as an end is (:meth:`join`). Without them such a start
+        or goal joins only vertices that lie exactly on that line."""
+        geo = self.geometry
+        if geo.robot.shape == "disc" or geo.sweep_bound(float(pose[0]), float(pose[1])) > 0:
+            return
+        px, py, ph = (float(c) for c in pose)
+        for sign in (1.0, -1.0) if reverse else (1.0,):
+            way = sign if outward else -sign  # a goal is arrived at: its forward lane comes from behind
+            c, s = way * math.cos(ph), way * math.sin(ph)
+            prev, qx, qy = node, px, py
+            for d in ALONG:
+                d *= geo.r
+                nx, ny = px + d * c, py + d * s
+                if not geo.motion_free([qx, qy, ph], [nx, ny, ph]):
+                    break
+                q = self.node(nx, ny, ph)
+                if outward:
+                    self.lane(prev, q)
+                else:
+                    self.lane(q, prev)
+                self.join(np.array([nx, ny, ph]), q, connect_k, outward, reverse)
+                prev, qx, qy = q, nx, ny
+
     def join(self, pose: FloatArray, node: int, connect_k: int, outward: bool, reverse: bool) -> None:
         """Join ``node`` (at ``pose``) to its nearest vertices: turn + straight to a copy
         there (``outward``: the start), or a copy there + straight + turn (the goal)."""
@@ -448,6 +480,8 @@ class UnicycleGoal:
         ex.kept = self.poses
         s_id = ex.node(*start)
         ex.join(start, s_id, self.connect_k, True, robot.reverse)
+        if fan_options is None:  # (the navigator's fan drives out along the heading itself)
+            ex.along(start, s_id, self.connect_k, True, robot.reverse)
         sx, sy, sh = (float(v) for v in start)
         gx, gy, gh = (float(v) for v in self.goal)
         if math.hypot(gx - sx, gy - sy) <= 1e-9:  # the same place: a turn in place
@@ -585,6 +619,7 @@ def prepare_goal(planner, goal: FloatArray, dt: float, vplan: float, connect_k: 
     ex = _Extras(base, geo, scale, nn0, ring_at=len(base.poses))
     g_id = ex.node(*goal)
     ex.join(goal, g_id, connect_k, False, robot.reverse)
+    ex.along(goal, g_id, connect_k, False, robot.reverse)
     xg = len(ex.poses)
     nn = nn0 + xg
     nodes = np.vstack([cut.nodes, np.asarray(ex.poses, dtype=float).reshape(-1, 3)])
