@@ -49,6 +49,7 @@ __all__ = ["UnicycleGraph", "UnicycleGoal", "UnicyclePrepared", "prepare_goal", 
 #: where it cannot turn round in place (:meth:`_Extras.along`).
 ALONG = (0.5, 1.0, 2.0, 4.0)
 
+
 @dataclass
 class _Base:
     """The query-independent pieces (see the module docstring).
