@@ -453,3 +453,17 @@ def test_an_end_that_cannot_turn_joins_along_its_heading(reverse, start, goal):
     if reverse:
         fwd = parse_scene(doc(dict(robot, reverse=False), bounds=(0, 0, 5, 3)))
         assert Planner(fwd, rm).plan(start, goal, 0.0, PlanOptions(dt=0.1)).status.value == "no_path"
+
+
+def test_a_pose_out_of_bounds_by_a_rounding_says_so():
+    """A cart meant to touch the top of the bounds (y 5.4 + half-length 0.6 = 6 on paper)
+    lies 3e-16 m beyond it in floating point, by the measure the planner certifies with (its
+    corners put it inside): invalid_query, 'out of bounds' and by how much, so that a user
+    sees a rounding (before: 'collides with a static obstacle', in a scene without one)."""
+    sc = parse_scene(doc({"box": [1.2, 0.3], "vmax": 1.0, "kinematics": "unicycle"}, bounds=(0, 0, 6, 6)))
+    res = Planner(sc, _far_roadmap(sc)).plan([5.3, 5.4, 0.5 * math.pi], [3.0, 3.0, 0.0], 0.0)
+    assert res.status.value == "invalid_query"
+    assert "start [5.3, 5.4, 1.5707963267948966] is out of bounds (by 3.33e-16 m)" in res.message, res.message
+    walled = parse_scene(doc({"box": [1.2, 0.3], "vmax": 1.0}, obstacles=[{"disc": {"center": [2.0, 2.0], "radius": 0.5}}]))
+    res = Planner(walled, _far_roadmap(walled)).plan([2.2, 2.0, 0.0], [1.0, 3.5, 0.0], 0.0)
+    assert res.message == "start [2.2, 2.0, 0.0] collides with a static obstacle"  # an obstacle is still named
