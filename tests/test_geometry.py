@@ -267,6 +267,26 @@ def test_a_maps_disc_bound_never_exceeds_the_clearance_at_any_heading(house, wor
     assert world.geometry.disc_bound(3.0, 2.0) == -math.inf  # polygons, discs and a mesh
 
 
+def test_the_sweep_bound_never_exceeds_the_clearance_at_any_heading(house, world):
+    """:meth:`StaticGeometry.sweep_bound` (the circumscribed disc's FCL distance where the
+    cheap bound says nothing) is a lower bound of the clearance at every heading, among
+    boxes, discs, a concave polygon, a mesh and a map; :meth:`StaticGeometry.sweep_free`
+    certifies only straight moves that are free at every heading (checked at 16)."""
+    rng = np.random.default_rng(7)
+    heads = np.linspace(-math.pi, math.pi, 16, endpoint=False)
+    for geo, xy in ((house, _house_points(house, rng, 300)), (world.geometry, world.uniform(rng, 400)[:, :2])):
+        bound = np.array([geo.sweep_bound(x, y) for x, y in xy])
+        pose = (lambda x, y, h: [x, y]) if geo.robot.shape == "disc" else (lambda x, y, h: [x, y, h])
+        exact = np.array([[geo.clearance1(pose(x, y, h)) for h in heads] for x, y in xy]).min(axis=1)
+        useful = bound > 0
+        assert useful.sum() > 30 and (exact > 0).sum() >= useful.sum()  # not vacuous (a disc: exact)
+        assert np.all(bound[useful] <= exact[useful] + 1e-9), np.max(bound[useful] - exact[useful])
+        for (ax, ay), (bx, by) in zip(xy[:60], xy[60:120], strict=True):
+            if geo.sweep_free([ax, ay], [bx, by], max_steps=500):
+                for h in heads[::4]:
+                    assert geo.motion_free(pose(ax, ay, h), pose(bx, by, h)), (ax, ay, bx, by, h)
+
+
 def test_clearance1_is_the_bounds_and_obstacles_composition(house, world):
     """The circumradius shortcut of :meth:`StaticGeometry.clearance1` changes no value: it
     equals min(bounds, obstacles - keep) as computed in full."""

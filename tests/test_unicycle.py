@@ -333,3 +333,137 @@ def test_the_navigator_drives_a_unicycle_by_the_rule(crossing):
     assert len(evasive.waypoints) >= 2 and _unicycle_problem(sc.robot, evasive.waypoints) is None
     direct = nav._direct(0.0, np.array([4.5, 2.0, 2.0]), np.zeros((0, 5)))
     assert direct is not None and _unicycle_problem(sc.robot, direct.waypoints) is None
+
+
+@pytest.mark.parametrize("v1, sy", [(0.67, 0.67), (0.675, 0.668)])
+def test_a_small_turn_in_a_tight_corridor_needs_no_ring_heading(v1, sy):
+    """A 1.2 x 0.3 box in a corridor 0.34 wide that bends by 0.02 rad: the turn at the bend
+    fits, but the turning ring's headings around it (a turning step, 0.068 rad, apart) do
+    not. Copies with no ring point between them join directly (before: no_path), the
+    roadmap's own (the lanes' headings, ``v1`` centred) and those a start's lane adds at a
+    vertex (``v1`` 5 mm off the axis: the start arrives at 0.01 rad, the lane leaves at -0.003)."""
+    d, w, length = 0.02, 0.17, 4.0
+    u, n = np.array([math.cos(d), math.sin(d)]), np.array([-math.sin(d), math.cos(d)])
+    bend = np.array([3.0, 0.67])
+    top0, top1 = bend + w * n, bend + w * n + length * u
+    bot0, bot1 = bend - w * n, bend - w * n + length * u
+    upper = [[0, 0.84], top0.tolist(), top1.tolist(), [top1[0], 1.5], [0, 1.5]]
+    lower = [[0, 0.5], [3.0, 0.5], bot0.tolist(), bot1.tolist(), [bot1[0], 0], [0, 0]]
+    robot = {"box": [1.2, 0.3], "vmax": 0.6, "kinematics": "unicycle"}
+    sc = parse_scene(doc(robot, obstacles=[{"polygon": upper}, {"polygon": lower}], bounds=(0, 0, float(top1[0]), 1.5)))
+    verts = np.array([[1.5, v1], bend, bend + 2.4 * u])
+    rm = Roadmap(verts, np.array([[0, 1], [1, 2]]), np.hypot(*np.diff(verts, axis=0).T), sc.name, sc.static_hash,
+                 sc.robot.circumradius)  # fmt: skip
+    start, goal = [0.8, sy, 0.0], [*(bend + 3.2 * u), d]
+    res = Planner(sc, rm).plan(start, goal, 0.0, PlanOptions())
+    assert res.solved, res.message
+    rep = check_trajectory(sc, res.trajectory.waypoints)
+    assert rep.valid, rep.reason
+    best = (2.2 + 3.2) / 0.6 + d / sc.robot.turn_rate  # drive, turn 0.02 rad, drive
+    assert best - 1e-9 <= res.duration <= best + 6 * 0.07
+
+
+def test_ring_tracing_finds_the_headings_and_arcs_each_checked_alone():
+    """A box's turning ring beside walls: sphere tracing round it (one query proves the
+    headings within clearance / r) gives the free headings and arcs that checking every
+    heading and arc gives, a heading that touches a wall exactly included (it has nothing
+    to spare, and must not stall the tracing)."""
+    from gfuzzy.collision.geometry import StaticGeometry
+    from gfuzzy.timespace.drive import turn_free
+    from gfuzzy.timespace.unilanes import _ring_free
+
+    walls = [{"box": {"center": [1.5, 0.5], "size": [0.4, 0.4], "angle": 0.3}}, {"disc": {"center": [0.4, 1.6], "radius": 0.3}}]
+    sc = parse_scene(doc({"box": [1.0, 0.5], "vmax": 1.0, "kinematics": "unicycle"}, obstacles=walls, bounds=(0, 0, 3, 3)))
+    geo = StaticGeometry(sc)
+    n = 90
+    step = 2 * math.pi / n
+    grid = step * (np.arange(n) - n // 2)  # from -pi, heading 0 exactly among them
+    sites = [(1.0, 1.2), (1.3, 1.5), (0.9, 0.9), (2.0, 1.0), (1.5, 2.45), (0.7, 0.5)]
+    sites.append((1.5, 2.75))  # heading 0: its long side touches the top bound (y = 3) exactly
+    seen = []
+    for x, y in sites:
+        ok, arcs = _ring_free(geo, x, y, grid, step)
+        want_ok = np.array([geo.clearance1([x, y, h]) >= 0 for h in grid])
+        want_arcs = np.array([want_ok[i] and want_ok[(i + 1) % n] and turn_free(geo, x, y, grid[i], grid[(i + 1) % n] - grid[i]
+                              if i + 1 < n else grid[0] + 2 * math.pi - grid[i], swept=False) for i in range(n)])  # fmt: skip
+        np.testing.assert_array_equal(ok, want_ok)
+        np.testing.assert_array_equal(arcs, want_arcs)
+        seen.append((want_ok.mean(), geo.clearance1([x, y, 0.0])))
+    assert any(0 < f < 1 for f, _ in seen)  # some rings are partly blocked
+    assert seen[-1][1] == 0.0  # the touching heading
+
+
+@pytest.mark.parametrize(
+    "robot, start, goal",
+    [
+        ({"disc": 0.25}, [0.25, 0.25, 0.5 * math.pi], [3.0, 2.0, 0.0]),  # in the corner, touching two sides
+        ({"box": [0.5, 0.25]}, [0.25, 1.5, 0.0], [3.0, 1.5, 0.0]),  # its back against the left side
+    ],
+)
+def test_a_start_touching_the_bounds_drives_off(robot, start, goal):
+    """Touching is allowed: a robot parked against the bounds (clearance exactly 0) drives
+    away from them. A motion that holds its heading meets the bounds exactly at its ends,
+    so only the obstacles are traced (before: no_path, no motion from clearance 0 could be
+    certified)."""
+    sc = parse_scene(doc(dict(robot, vmax=1.0, kinematics="unicycle")))
+    planner = Planner(sc, _far_roadmap(sc))
+    assert planner.geometry.clearance1(start if "box" in robot else start[:2]) == 0.0
+    res = planner.plan(start, goal, 0.0, PlanOptions(dt=0.1))
+    assert res.solved, res.message
+    rep = check_trajectory(sc, res.trajectory.waypoints)
+    assert rep.valid, rep.reason
+
+
+def test_check_decides_a_disc_turning_in_place_against_a_wall(disc_scene):
+    """A disc touching the bounds while it turns in place keeps its clearance of 0 the
+    whole turn: its body does not move, so the check decides it (before: 'could not
+    decide: too many evaluations', bisecting at the turn's configuration speed)."""
+    w = rows([0, 0.2, 0.2, 0.0], [2, 0.2, 0.2, 1.0], [3, 0.2 + 0.5 * math.cos(1.0), 0.2 + 0.5 * math.sin(1.0), 1.0])
+    rep = check_trajectory(disc_scene, w)
+    assert rep.valid, rep.reason
+    assert rep.min_clearance == 0.0
+    out = rows([0, 0.2, 0.2, 0.0], [2, 0.2, 0.2, math.pi], [3, 0.1, 0.2, math.pi])  # then into the wall: caught
+    rep = check_trajectory(disc_scene, out)
+    assert not rep.valid and rep.time == pytest.approx(2.0, abs=1e-3), rep.reason
+
+
+@pytest.mark.parametrize(
+    "reverse, start, goal",
+    [
+        (True, [4.6, 1.5, 0.0], [1.0, 1.0, math.pi]),  # nose against the right side: back away
+        (False, [1.0, 1.0, math.pi], [4.6, 2.0, 0.0]),  # park nose against it
+    ],
+)
+def test_an_end_that_cannot_turn_joins_along_its_heading(reverse, start, goal):
+    """A box parked nose to the bounds cannot turn there (its front corners would swing out):
+    it leaves backwards, or arrives forwards, along its own heading. The roadmap has no
+    vertex on that line; the end joins through points on it from which the robot turns
+    (before: no_path). Without reverse the first one has no way out (checked by hand: it can
+    neither turn nor back up), which stays no_path."""
+    robot = {"box": [0.8, 0.5], "vmax": 1.0, "kinematics": "unicycle", "reverse": reverse}
+    sc = parse_scene(doc(robot, bounds=(0, 0, 5, 3)))
+    verts = np.array([[2.0, 2.3], [1.5, 0.5], [3.5, 0.6]])
+    rm = Roadmap(verts, np.array([[0, 1], [1, 2], [0, 2]]), np.hypot(*(verts[[1, 2, 2]] - verts[[0, 1, 0]]).T),
+                 sc.name, sc.static_hash, sc.robot.circumradius)  # fmt: skip
+    planner = Planner(sc, rm)
+    res = planner.plan(start, goal, 0.0, PlanOptions(dt=0.1))
+    assert res.solved, res.message
+    rep = check_trajectory(sc, res.trajectory.waypoints)
+    assert rep.valid, rep.reason
+    if reverse:
+        fwd = parse_scene(doc(dict(robot, reverse=False), bounds=(0, 0, 5, 3)))
+        assert Planner(fwd, rm).plan(start, goal, 0.0, PlanOptions(dt=0.1)).status.value == "no_path"
+
+
+def test_a_pose_out_of_bounds_by_a_rounding_says_so():
+    """A cart meant to touch the top of the bounds (y 5.4 + half-length 0.6 = 6 on paper)
+    lies 3e-16 m beyond it in floating point, by the measure the planner certifies with (its
+    corners put it inside): invalid_query, 'out of bounds' and by how much, so that a user
+    sees a rounding (before: 'collides with a static obstacle', in a scene without one)."""
+    sc = parse_scene(doc({"box": [1.2, 0.3], "vmax": 1.0, "kinematics": "unicycle"}, bounds=(0, 0, 6, 6)))
+    res = Planner(sc, _far_roadmap(sc)).plan([5.3, 5.4, 0.5 * math.pi], [3.0, 3.0, 0.0], 0.0)
+    assert res.status.value == "invalid_query"
+    assert "start [5.3, 5.4, 1.5707963267948966] is out of bounds (by 3.33e-16 m)" in res.message, res.message
+    walled = parse_scene(doc({"box": [1.2, 0.3], "vmax": 1.0}, obstacles=[{"disc": {"center": [2.0, 2.0], "radius": 0.5}}]))
+    res = Planner(walled, _far_roadmap(walled)).plan([2.2, 2.0, 0.0], [1.0, 3.5, 0.0], 0.0)
+    assert res.message == "start [2.2, 2.0, 0.0] collides with a static obstacle"  # an obstacle is still named

@@ -588,8 +588,12 @@ class _Checker:
             return CheckReport(True, "", float(d[0]), 0.0, 1)
         a_t, b_t, a_d, b_d, a_s = self._initial_intervals()
         vm = max((mv.max_speed for mv in self.scene.movers), default=0.0)
-        lip = self.speed + vm  # per segment
         turn = np.abs(_wrap(np.diff(p[:, 2]))) if robot.dof == 3 else np.zeros(len(dt))
+        body = self.speed  # the fastest point of the body, per segment
+        if robot.dof == 3 and robot.shape == "disc":  # a disc's turn in place moves none of it
+            body = np.hypot(*np.diff(p[:, :2], axis=0).T) / dt
+            turn = np.zeros(len(dt))
+        lip = body + vm  # per segment
         while a_t.size:
             need = (a_d + b_d < lip[a_s] * (b_t - a_t)) & (a_t < self.first[0])
             need &= (b_t - a_t) >= self.min_interval

@@ -176,6 +176,7 @@ class StaticGeometry:
         self._manager.setup()
         self._robot_objs = [fcl.CollisionObject(g, fcl.Transform()) for g in robot_geometries(scene.robot)]
         self._robot_obj = self._robot_objs[0]
+        self._disc_obj = None  # the circumscribed disc (sweep_bound), made when first needed
         self._shape = shape_of(scene.robot)
         self._grids = [ob for ob in scene.obstacles if isinstance(ob, MapObstacle) and len(ob.rects)]
         self._inner = _inner_point(scene.robot)
@@ -385,8 +386,33 @@ class StaticGeometry:
 
         The same certificate, but away from obstacles on a map it steps by the map's
         distance-transform bound (:meth:`_certifying_clearance`) instead of asking FCL.
+
+        A motion that holds its heading (a translation: a disc's, a unicycle's lane) meets
+        the bounds exactly at its ends (each side's distance changes linearly along it), so
+        only the obstacles are traced: a pose touching the bounds (clearance 0, allowed)
+        starts or ends a certified motion, which the tracing alone cannot prove.
         """
+        if len(a) == 2 or float(b[2]) - float(a[2]) == 0.0:
+            ends = (self._bounds_clearance1(a), self._bounds_clearance1(b))
+            if not (ends[0] >= 0 and ends[1] >= 0):  # (NaN: not certified)
+                return False
+            # the callers' clearances count the bounds: a positive one still bounds the obstacles'
+            ca = ca if ca is not None and ca > 0 else None
+            cb = cb if cb is not None and cb > 0 else None
+            return self._trace(a, b, max_steps, ca, cb, self._obstacle_certifying) >= 0
         return self._trace(a, b, max_steps, ca, cb, self._certifying_clearance) >= 0
+
+    def _obstacle_certifying(self, pose) -> float:
+        """A lower bound of the clearance from the obstacles alone (not the bounds), less
+        ``robot.clearance``: the map's distance transform where it leaves more than
+        ``_QUICK_CLEARANCE``, else FCL's :meth:`obstacle_clearance`."""
+        if not self._objects:
+            return math.inf
+        if self._map_only:
+            c = self._map_bound(pose) - self.keep
+            if c > _QUICK_CLEARANCE:
+                return c
+        return self.obstacle_clearance(pose) - self.keep
 
     def _bounds_at_circumradius(self, x: float, y: float) -> float:
         """A lower bound of the body's clearance from the bounds at (x, y), any heading: a
@@ -410,6 +436,36 @@ class StaticGeometry:
         if not self._map_only:
             return -math.inf
         return min(c, self._map_bound((x, y)) - self.keep)
+
+    def sweep_bound(self, x: float, y: float) -> float:
+        """A lower bound of the clearance of every pose at (x, y), whatever its heading (so
+        of any turn in place there): :meth:`disc_bound` when that is positive, else the FCL
+        distance of the robot's circumscribed disc (one query) less ``robot.clearance``;
+        -1 when the disc is not clear by more than FCL's margin.
+
+        A turn in place sweeps at most that disc: where it is clear, every ring heading and
+        every arc between them is free without a query per heading.
+        """
+        c = self.disc_bound(x, y)
+        quick = self._bounds_at_circumradius(x, y)
+        if c > 0 or not quick > 0:
+            return c
+        if self._grids and self._inside_map((x, y)):  # wholly inside a blocked cell: no wall met
+            return -1.0
+        if self._disc_obj is None:
+            self._disc_obj = fcl.CollisionObject(fcl.Sphere(self.r), fcl.Transform())
+        self._disc_obj.setTranslation(np.array([x, y, 0.0]))
+        data = fcl.DistanceData(request=self._dreq)
+        self._manager.distance(self._disc_obj, data, fcl.defaultDistanceCallback)
+        self.calls += 1
+        d = data.result.min_distance - _DIST_MARGIN  # as obstacle_clearance's margin
+        return min(quick, d - self.keep) if d > _NEAR_CONTACT else -1.0
+
+    def sweep_free(self, a, b, ca=None, cb=None, max_steps: int = 100_000) -> bool:
+        """True when the circumscribed disc's straight motion from ``a`` to ``b`` ((2,)
+        positions) is certified free by :meth:`sweep_bound` (``ca``, ``cb``: the ends'
+        bounds when known): so is the body's at any heading, held or turning."""
+        return self._trace(a[:2], b[:2], max_steps, ca, cb, lambda p: self.sweep_bound(p[0], p[1])) >= 0
 
     def _certifying_clearance(self, pose) -> float:
         """A lower bound of :meth:`clearance1` good enough to step by: :meth:`disc_bound`

@@ -707,15 +707,18 @@ def query_problem(geometry: StaticGeometry, start, goal) -> str:
         pose = np.asarray(pose, dtype=float).reshape(-1)
         if pose.shape != (dof,) or not np.all(np.isfinite(pose)):
             return f"{label} must be {dof} finite numbers"
-        if geometry.bounds_clearance(pose[None])[0] < 0:
-            return f"{label} {pose.tolist()} is out of bounds"
         keep = geometry.robot.clearance
-        if keep > 0 and geometry.clearance1(pose) < 0:
-            if geometry.obstacle_clearance(pose) < 0:
+        c = geometry.clearance1(pose)  # the bounds and the obstacles less keep
+        to_obstacles = geometry.obstacle_clearance(pose) if c < 0 else math.inf
+        # the bounds measured from the corners, or (when the obstacles are clear) as
+        # clearance1 measures them: the two can differ by a rounding
+        out = max(-float(geometry.bounds_clearance(pose[None])[0]), -c if to_obstacles - keep >= 0 else 0.0)
+        if out > 0:  # by how much: a pose meant to touch the bounds can miss by a rounding
+            return f"{label} {pose.tolist()} is out of bounds (by {out:.3g} m)"
+        if c < 0:
+            if to_obstacles < 0:
                 return f"{label} {pose.tolist()} collides with a static obstacle"
             return f"{label} {pose.tolist()} is closer than robot.clearance={keep:g} to a static obstacle"
-        if geometry.clearance1(pose) < 0:
-            return f"{label} {pose.tolist()} collides with a static obstacle"
     return ""
 
 

@@ -35,13 +35,17 @@ def _xy_pose(robot, x: float, y: float, h: float) -> list:
     return [x, y] if robot.shape == "disc" else [x, y, h]
 
 
-def turn_free(geometry, x: float, y: float, h: float, dh: float, max_steps: int = 100_000) -> bool:
+def turn_free(geometry, x: float, y: float, h: float, dh: float, max_steps: int = 100_000,
+              swept: bool | None = None) -> bool:  # fmt: skip
     """Whether turning in place at (x, y) from ``h`` by ``dh`` (signed, any size) is free,
-    the sweep certified (a disc: the pose alone) within ``max_steps`` of the tracing per arc."""
+    the sweep certified (a disc: the pose alone) within ``max_steps`` of the tracing per arc.
+    ``swept``: whether ``geometry.sweep_bound(x, y) > 0``, when the caller knows it."""
     robot = geometry.robot
     if robot.shape == "disc":
         return geometry.clearance1([x, y]) >= 0
-    if geometry.disc_bound(x, y) > 0:  # the circumscribed disc is free: so is every heading
+    if swept is None:
+        swept = geometry.sweep_bound(x, y) > 0
+    if swept:  # the circumscribed disc is free: so is every heading
         return True
     n = max(1, int(math.ceil(abs(dh) / _ARC)))
     prev = [x, y, wrap_angle(h)]

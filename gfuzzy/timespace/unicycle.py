@@ -40,31 +40,14 @@ from ..poses import split_counts, wrap_angle
 from ..typed import FloatArray, IntArray
 from .drive import SAME_HEADING, _xy_pose, fan, pick_turn, turn_free
 from .spacetime import SpaceTimeGraph
+from .unilanes import LANE_NEIGHBOURS, _brackets, _rings, _same_interval, lanes
 from .unipaths import dijkstra, matrix, new_to_goal, with_rows
 
 __all__ = ["UnicycleGraph", "UnicycleGoal", "UnicyclePrepared", "prepare_goal", "build_graph", "lanes", "LANE_NEIGHBOURS", "SAME_HEADING"]
 
-#: For an SE(2) roadmap (box robots): how many nearest vertices in the plane each vertex
-#: tries as extra lanes, besides the roadmap's own edges.
-LANE_NEIGHBOURS = 10
-
-
-@dataclass
-class Lanes:
-    """The plane roadmap of a unicycle: positions and certified lanes.
-
-    Attributes
-    ----------
-    xy : (V, 2) float
-    edges : (E, 2) int
-    ok : (E, 2) bool
-        Whether edge ``(u, v)`` is free at the heading of u -> v (column 0) and of v -> u
-        (column 1), the body held at that heading along the whole segment.
-    """
-
-    xy: FloatArray
-    edges: IntArray
-    ok: np.ndarray
+#: Points on an end's own heading line (in circumradii from it) that join it to the roadmap
+#: where it cannot turn round in place (:meth:`_Extras.along`).
+ALONG = (0.5, 1.0, 2.0, 4.0)
 
 
 @dataclass
@@ -88,7 +71,8 @@ class _Base:
         headings ``-pi + i 2 pi / n_ring`` (one turning step apart), joined in a circle both
         ways; each copy joins the two ring points around its heading. A turn from one copy
         to another goes copy -> ring ... ring -> copy: at most two steps longer than the
-        turn itself, however many copies the vertex has. Points where the body collides,
+        turn itself, however many copies the vertex has; copies with no ring point between
+        them also join directly (:func:`_same_interval`). Points where the body collides,
         and arcs whose sweep does, are left out (``ring_ok``).
     ring_ptr : (V,) int
         First ring point of each vertex (-1: no ring).
@@ -133,107 +117,6 @@ class UnicycleGraph:
     s_id: int
     g_id: int
     roadmap_distance: float
-
-
-def lanes(roadmap, geometry, stretch: float = 1.0) -> Lanes:
-    """The unicycle's plane roadmap of ``roadmap`` (see the module docstring), cached."""
-    robot = geometry.robot
-    key = ("unicycle-lanes", geometry.scene.static_hash, float(geometry.keep), float(stretch), robot.shape, robot.size)
-    hit = roadmap._derived.get(key)
-    if hit is not None:
-        return hit
-    xy = np.ascontiguousarray(roadmap.vertices[:, :2], dtype=float)
-    if robot.shape == "disc":
-        keep = roadmap.spanner(stretch)
-        edges = roadmap.edges[keep].astype(np.int64).reshape(-1, 2)
-        out = Lanes(xy, edges, np.ones((len(edges), 2), dtype=bool))
-    else:
-        out = _box_lanes(roadmap, geometry, xy)
-        if stretch > 1.0 and len(out.edges):  # as the disc's: a spanner of the lanes
-            from ..roadmap.roadmap import Roadmap
-
-            lens = np.hypot(*(xy[out.edges[:, 1]] - xy[out.edges[:, 0]]).T)
-            plane = Roadmap(xy, out.edges, lens, roadmap.scene_name, roadmap.scene_hash, roadmap.circumradius)
-            keep = plane.spanner(stretch)
-            out = Lanes(xy, out.edges[keep], out.ok[keep])
-    roadmap._derived[key] = out
-    return out
-
-
-def _box_lanes(roadmap, geometry, xy: FloatArray) -> Lanes:
-    from scipy.spatial import cKDTree
-
-    cand = [np.sort(roadmap.edges.astype(np.int64).reshape(-1, 2), axis=1)]
-    if len(xy) > 1:
-        k = min(LANE_NEIGHBOURS + 1, len(xy))
-        _, idx = cKDTree(xy).query(xy, k=k)
-        u = np.repeat(np.arange(len(xy)), k - 1)
-        cand.append(np.sort(np.stack([u, idx[:, 1:].reshape(-1)], axis=1), axis=1))
-    edges = np.unique(np.vstack(cand), axis=0)
-    d = np.hypot(*(xy[edges[:, 1]] - xy[edges[:, 0]]).T)
-    edges = edges[(edges[:, 0] != edges[:, 1]) & (d > 1e-9)]
-    ok = np.zeros((len(edges), 2), dtype=bool)
-    symmetric = geometry.robot.shape == "box"  # a centred box is the same body turned by pi
-    for i, (u, v) in enumerate(edges.tolist()):
-        (ux, uy), (vx, vy) = xy[u], xy[v]
-        h = math.atan2(vy - uy, vx - ux)
-        ok[i, 0] = geometry.motion_free([ux, uy, h], [vx, vy, h])
-        ok[i, 1] = ok[i, 0] if symmetric else geometry.motion_free([vx, vy, h + math.pi], [ux, uy, h + math.pi])
-    keep = ok.any(axis=1)
-    return Lanes(xy, edges[keep], ok[keep])
-
-
-def _brackets(h: float, r0: int, n_ring: int, step_h: float) -> list:
-    """The two ring points around heading ``h`` (ring of ``n_ring`` headings from -pi, its
-    first point ``r0``): [(point, signed turn to it)], the one below first."""
-    u = (h + math.pi) / step_h
-    i = int(math.floor(u)) % n_ring
-    below = -((h + math.pi - i * step_h) % (2 * math.pi))
-    above = ((i + 1) * step_h - math.pi - h) % (2 * math.pi)
-    return [(r0 + i, below), (r0 + (i + 1) % n_ring, above)]
-
-
-def _rings(geometry, xy: FloatArray, cv: IntArray, ch: FloatArray, n_ring: int):
-    """The turning rings of the vertices with copies (see :class:`_Base`) and the turns
-    joining them and the copies (ring points as ``-(1 + i)``).
-
-    Returns
-    -------
-    ring_ptr : (V,) int ; ring_v : (R,) int ; ring_h : (R,) float ; ring_ok : (R,) bool
-    ta, tb : list of int ; tdh : list of float
-        The turns: from, to, signed heading change.
-    """
-    robot = geometry.robot
-    step_h = 2 * math.pi / n_ring
-    bounds = np.searchsorted(cv, np.arange(len(xy) + 1))
-    has = np.diff(bounds) > 0
-    ring_ptr = np.full(len(xy), -1, dtype=np.int64)
-    ring_ptr[has] = np.arange(int(has.sum())) * n_ring
-    grid = -math.pi + step_h * np.arange(n_ring)
-    ring_v = np.repeat(np.nonzero(has)[0], n_ring)
-    ring_h = np.tile(grid, int(has.sum()))
-    ring_ok = np.ones(len(ring_v), dtype=bool)
-    ta, tb, tdh = [], [], []
-    disc = robot.shape == "disc"
-    for v in np.nonzero(has)[0].tolist():
-        x, y = (float(c) for c in xy[v])
-        r0 = int(ring_ptr[v])
-        if not disc:
-            for i in range(n_ring):
-                ring_ok[r0 + i] = geometry.clearance1([x, y, grid[i]]) >= 0
-        for i in range(n_ring):
-            j = (i + 1) % n_ring
-            if ring_ok[r0 + i] and ring_ok[r0 + j] and (disc or turn_free(geometry, x, y, grid[i], step_h)):
-                ta += [-(1 + r0 + i), -(1 + r0 + j)]
-                tb += [-(1 + r0 + j), -(1 + r0 + i)]
-                tdh += [step_h, -step_h]
-        for c in range(int(bounds[v]), int(bounds[v + 1])):
-            for r, arc in _brackets(ch[c], r0, n_ring, step_h):
-                if ring_ok[r] and (disc or turn_free(geometry, x, y, ch[c], arc)):
-                    ta += [c, -(1 + r)]
-                    tb += [-(1 + r), c]
-                    tdh += [arc, -arc]
-    return ring_ptr, ring_v, ring_h, ring_ok, ta, tb, tdh
 
 
 def _base(roadmap, geometry, stretch: float, vmax: float, step_len: float) -> _Base:
@@ -392,7 +275,47 @@ class _Extras:
                     self.turn(c, self.ring(r), arc)
                 else:
                     self.turn(self.ring(r), c, -arc)
+        # the vertex's copies next to h with no ring point between: directly (_same_interval)
+        hs = np.append(base.poses[ids, 2], h)
+        order = np.argsort(hs, kind="stable")
+        for a, b, arc in _same_interval(hs[order], 0, len(hs), step_h):
+            a, b = int(order[a]), int(order[b])
+            if len(ids) not in (a, b) or not turn_free(geo, x, y, hs[a], arc):
+                continue
+            a, b = (c if a == len(ids) else int(ids[a])), (c if b == len(ids) else int(ids[b]))
+            if (a == c) == out:
+                self.turn(a, b, arc)
+            else:
+                self.turn(b, a, -arc)
         return c
+
+    def along(self, pose: FloatArray, node: int, connect_k: int, outward: bool, reverse: bool) -> None:
+        """Where the robot cannot turn round at ``pose`` (its circumscribed disc is not
+        clear: nose to a wall, in a corridor, docked), join it through points on its own
+        heading's line: straight lanes along the heading, forwards (and backwards with
+        ``reverse``), to points ``ALONG`` circumradii away as far as they are free, each
+        point joined to the roadmap as an end is (:meth:`join`). Without them such a start
+        or goal joins only vertices that lie exactly on that line."""
+        geo = self.geometry
+        if geo.robot.shape == "disc" or geo.sweep_bound(float(pose[0]), float(pose[1])) > 0:
+            return
+        px, py, ph = (float(c) for c in pose)
+        for sign in (1.0, -1.0) if reverse else (1.0,):
+            way = sign if outward else -sign  # a goal is arrived at: its forward lane comes from behind
+            c, s = way * math.cos(ph), way * math.sin(ph)
+            prev, qx, qy = node, px, py
+            for d in ALONG:
+                d *= geo.r
+                nx, ny = px + d * c, py + d * s
+                if not geo.motion_free([qx, qy, ph], [nx, ny, ph]):
+                    break
+                q = self.node(nx, ny, ph)
+                if outward:
+                    self.lane(prev, q)
+                else:
+                    self.lane(q, prev)
+                self.join(np.array([nx, ny, ph]), q, connect_k, outward, reverse)
+                prev, qx, qy = q, nx, ny
 
     def join(self, pose: FloatArray, node: int, connect_k: int, outward: bool, reverse: bool) -> None:
         """Join ``node`` (at ``pose``) to its nearest vertices: turn + straight to a copy
@@ -558,6 +481,8 @@ class UnicycleGoal:
         ex.kept = self.poses
         s_id = ex.node(*start)
         ex.join(start, s_id, self.connect_k, True, robot.reverse)
+        if fan_options is None:  # (the navigator's fan drives out along the heading itself)
+            ex.along(start, s_id, self.connect_k, True, robot.reverse)
         sx, sy, sh = (float(v) for v in start)
         gx, gy, gh = (float(v) for v in self.goal)
         if math.hypot(gx - sx, gy - sy) <= 1e-9:  # the same place: a turn in place
@@ -695,6 +620,7 @@ def prepare_goal(planner, goal: FloatArray, dt: float, vplan: float, connect_k: 
     ex = _Extras(base, geo, scale, nn0, ring_at=len(base.poses))
     g_id = ex.node(*goal)
     ex.join(goal, g_id, connect_k, False, robot.reverse)
+    ex.along(goal, g_id, connect_k, False, robot.reverse)
     xg = len(ex.poses)
     nn = nn0 + xg
     nodes = np.vstack([cut.nodes, np.asarray(ex.poses, dtype=float).reshape(-1, 3)])
