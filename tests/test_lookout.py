@@ -155,8 +155,8 @@ def _floor(robot: dict, obstacles=()):
 DRIVE = {"disc": 0.3, "vmax": 1.0, "kinematics": "unicycle", "wmax": 1.0}
 POSE = np.array([3.0, 3.0, 0.0])  # facing east, towards the goal
 GOAL = (9.0, 3.0, 0.0)
-#: Someone known behind-left (bearing 127 degrees), walking north at 0.8 m/s: not at the robot.
-WALKER = np.array([1.8, 4.6, 0.0, 0.8, 0.3])
+#: Someone known behind-left (bearing 127 degrees), walking to pass 0.8 m behind the robot in 2 s.
+WALKER = np.array([1.8, 4.6, 0.8, -0.3, 0.3])
 
 
 def _walker_at(t: float) -> np.ndarray:
@@ -201,7 +201,7 @@ def test_a_turn_look_is_refused_when_someone_walks_at_the_robot_or_the_sweep_hit
     scene, rm = _floor(robot, [wall])
     nav = Navigator(scene, rm, GOAL, NavOptions(fov=180.0))
     nav._lookout.observe(0.0, POSE)
-    far = np.array([[0.5, 4.8, 0.0, 1.0, 0.3]])  # behind-left, beyond the wall's end
+    far = np.array([[0.5, 4.8, 0.8, -0.6, 0.3]])  # behind-left, beyond the wall's end, coming
     assert nav._lookout.turn(0.0, POSE, far) is not None
     assert nav._lookout.turn_look(nav, 0.0, POSE, far, stand) is None
 
@@ -217,7 +217,7 @@ def test_the_turn_look_reveals_a_walker_behind_then_the_robot_drives_on():
     nav = Navigator(scene, rm, GOAL, NavOptions(fov=180.0))
     pose, rows, modes, seen = POSE.copy(), [np.array([0.0, *POSE])], [], None
     assert not in_fov(pose[:2], pose[2], _walker_at(0.0)[:, :2], 180.0)[0]
-    for k in range(16):
+    for k in range(24):
         t = 0.25 * k
         if seen is None and in_fov(pose[:2], pose[2], _walker_at(t)[:, :2], 180.0)[0]:
             seen = t
@@ -227,7 +227,7 @@ def test_the_turn_look_reveals_a_walker_behind_then_the_robot_drives_on():
         rows.extend(piece[1:])
         pose = piece[-1, 1:].copy()
     assert modes[0] == NavMode.LOOK and seen is not None and seen <= 1.0
-    assert NavMode.LOOK not in modes[int(seen / 0.25) :]  # seen: no more looks at them
+    assert NavMode.LOOK not in modes[int(seen / 0.25) + 1 :]  # seen: no more looks at them
     assert pose[0] > POSE[0] + 1.0  # and on towards the goal
     w = np.array(rows)
     assert _unicycle_problem(scene.robot, w[np.r_[True, np.diff(w[:, 0]) > 1e-9]]) is None

@@ -19,7 +19,9 @@ only as far as brings the stale side into the edge of the view (``TURN_MARGIN`` 
 at its turning rate, then standing. A turn costs seconds (a quarter turn at 1 rad/s: 1.6
 s, and as much to turn back), so such a robot looks only toward someone known who could
 walk up to it (within ``LOOK_REACH`` seconds at their own speed, the robot standing),
-never at an empty side; the turn's sweep must be free of the static obstacles.
+and walking toward it or alongside (within ``APPROACH`` of it), never at an empty side;
+a side counts seen when the whole of it is in view; the turn's sweep must be free of the
+static obstacles.
 """
 
 from __future__ import annotations
@@ -41,7 +43,8 @@ from .unknown import at_unknown
 if TYPE_CHECKING:
     from .navigator import Navigator
 
-__all__ = ["Lookout", "knowing_view", "SECTORS", "LOOK_TIME", "LOOK_SPEED", "LOOK_CHECK", "TURN_MARGIN"]
+__all__ = ["Lookout", "knowing_view", "SECTORS", "LOOK_TIME", "LOOK_SPEED", "LOOK_CHECK", "TURN_MARGIN",
+           "APPROACH"]
 
 #: Directions (equal sectors about the robot) whose last look is remembered.
 SECTORS = 36
@@ -64,6 +67,9 @@ LOOK_STANDING = 0.25
 #: A robot with a heading turns until the stale side's centre is this far (rad) inside the
 #: edge of its view: a sector's whole width (the person may be anywhere in it).
 TURN_MARGIN = 2 * math.pi / SECTORS
+#: A robot with a heading looks toward someone known only when, walking on, they come
+#: within this gap (m) of it within ``LOOK_REACH`` (toward it or alongside, not away).
+APPROACH = 1.0
 
 
 class Lookout:
@@ -93,9 +99,9 @@ class Lookout:
         self.looked = np.full(SECTORS, -math.inf)  # when each direction was last in view
         self.pose: FloatArray | None = None
 
-    def _in_view(self, heading: float) -> FloatArray:
+    def _in_view(self, heading: float, inside: float = 0.0) -> FloatArray:
         off = (self.centres - heading + math.pi) % (2 * math.pi) - math.pi
-        return np.abs(off) <= self.half
+        return np.abs(off) <= self.half - inside
 
     def observe(self, t: float, pose: FloatArray) -> None:
         """Record the view of the observation made at ``t`` from ``pose`` (2,): about the
@@ -108,7 +114,8 @@ class Lookout:
         elif math.hypot(*d) > 1e-9:
             self.heading = math.atan2(d[1], d[0])
         self.pose = xy.copy()
-        self.looked[self._in_view(self.heading)] = t
+        # a turning robot's look stops at the view's edge: a side counts seen when all of it is in view
+        self.looked[self._in_view(self.heading, math.pi / SECTORS if self.turning else 0.0)] = t
 
     def stale(self, t: float, pose: FloatArray | None = None, obs: FloatArray | None = None,
               vmax: float = 1.0, unknown: FloatArray | None = None) -> np.ndarray:  # fmt: skip
@@ -117,26 +124,39 @@ class Lookout:
         walking on unseen) who is not standing (slower than ``LOOK_STANDING``; a person of
         unknown velocity, at one of the positions ``unknown`` (u, 2), counts as walking at
         ``UNKNOWN_GROWTH``) is there within ``LOOK_REACH`` seconds of the robot at ``pose``,
-        or unseen for ``EMPTY_FACTOR * look_after`` seconds. When ``turning``, only the
-        first kind counts, and a person's reach is their own walk (the robot stands to look)."""
+        or unseen for ``EMPTY_FACTOR * look_after`` seconds. When ``turning`` (:meth:`turn_look`),
+        only the second kind counts (a side is never stale for being empty, or never seen),
+        and a person counts when, walking on at their own speed, they come within
+        ``APPROACH`` of the robot standing within ``LOOK_REACH`` (or their velocity is unknown)."""
         age = t - self.looked
         stale = age > EMPTY_FACTOR * self.look_after + 1e-9
         if self.turning:
             stale[:] = False
         if pose is not None and obs is not None and len(obs):
-            speed = np.hypot(obs[:, 2], obs[:, 3])
-            if unknown is not None and len(unknown):  # reported standing, but may walk
-                speed = np.where(at_unknown(unknown, obs), np.maximum(speed, UNKNOWN_GROWTH), speed)
-            walk = speed >= LOOK_STANDING
-            rel = obs[walk, :2] - np.asarray(pose, dtype=float)[None, :2]
-            reach = speed[walk] + (0.0 if self.turning else vmax)
-            near = np.hypot(rel[:, 0], rel[:, 1]) - obs[walk, 4] <= reach * LOOK_REACH
+            rel = self._walkers(pose, obs, vmax, unknown)
             width = 2 * math.pi / SECTORS
-            sector = (np.arctan2(rel[near, 1], rel[near, 0]) % (2 * math.pi) // width).astype(int) % SECTORS
+            sector = (np.arctan2(rel[:, 1], rel[:, 0]) % (2 * math.pi) // width).astype(int) % SECTORS
             known = np.zeros(SECTORS, dtype=bool)
             known[sector] = True
             stale |= known & (age > self.look_after + 1e-9)
         return stale
+
+    def _walkers(self, pose: FloatArray, obs: FloatArray, vmax: float, unknown: FloatArray | None) -> FloatArray:
+        """(w, 2) where the people of ``obs`` who may walk up to the robot at ``pose`` are,
+        relative to it (see :meth:`stale`)."""
+        speed = np.hypot(obs[:, 2], obs[:, 3])
+        unseen = at_unknown(unknown, obs) if unknown is not None and len(unknown) else np.zeros(len(obs), dtype=bool)
+        speed = np.where(unseen, np.maximum(speed, UNKNOWN_GROWTH), speed)  # reported standing, but may walk
+        rel = obs[:, :2] - np.asarray(pose, dtype=float)[None, :2]
+        gap = np.hypot(rel[:, 0], rel[:, 1]) - obs[:, 4]
+        if not self.turning:
+            near = gap <= (speed + vmax) * LOOK_REACH
+        else:  # the robot stands to look: their own walk, toward it or alongside
+            v = obs[:, 2:4]
+            tc = np.clip(-(rel * v).sum(axis=1) / np.maximum((v * v).sum(axis=1), 1e-12), 0.0, LOOK_REACH)
+            closest = np.hypot(*(rel + tc[:, None] * v).T) - obs[:, 4]
+            near = (gap <= speed * LOOK_REACH) & ((closest <= APPROACH) | unseen)
+        return rel[(speed >= LOOK_STANDING) & near]
 
     def direction(self, t: float, pose: FloatArray | None = None, obs: FloatArray | None = None,
                   vmax: float = 1.0, unknown: FloatArray | None = None) -> float | None:  # fmt: skip
