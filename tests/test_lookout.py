@@ -1,5 +1,4 @@
-"""A robot with a field of view looks where it has not looked (gfuzzy.navigation.lookout): a disc by
-a short step, a robot with a heading by a turn in place."""
+"""A disc robot with a field of view looks where it has not looked (gfuzzy.navigation.lookout)."""
 
 from __future__ import annotations
 
@@ -12,7 +11,6 @@ from gfuzzy.errors import InputError
 from gfuzzy.navigation.lookout import EMPTY_FACTOR, LOOK_SPEED, LOOK_TIME, Lookout, knowing_view
 from gfuzzy.navigation.navigator import Navigator, NavOptions
 from gfuzzy.navigation.navtypes import NavMode
-from gfuzzy.trajectory import Trajectory
 
 NORTH, SOUTH = math.pi / 2, -math.pi / 2
 
@@ -139,95 +137,3 @@ def test_someone_seen_once_on_the_blind_side_counts_as_walking():
     walking, and their side is looked at after ``look_after`` as a walker's."""
     standing = np.array([[-0.5, -2.0, 0.0, 0.0, 0.3]])
     assert _first_look_behind(standing, unknown=standing[:, :2]) == pytest.approx(1.5)
-
-
-# ---------------------------------------------------------------- a robot with a heading
-def _floor(robot: dict, obstacles=()):
-    from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
-    from gfuzzy.scene.scene import parse_scene
-
-    doc = {"version": 1, "name": "floor", "bounds": [0, 0, 10, 10], "robot": robot, "obstacles": list(obstacles),
-           "movers": []}  # fmt: skip
-    scene = parse_scene(doc, "<floor>")
-    return scene, build_roadmap(scene, RoadmapOptions(vertices=150, seed=3))
-
-
-DRIVE = {"disc": 0.3, "vmax": 1.0, "kinematics": "unicycle", "wmax": 1.0}
-POSE = np.array([3.0, 3.0, 0.0])  # facing east, towards the goal
-GOAL = (9.0, 3.0, 0.0)
-#: Someone known behind-left (bearing 127 degrees), walking to pass 0.8 m behind the robot in 2 s.
-WALKER = np.array([1.8, 4.6, 0.8, -0.3, 0.3])
-
-
-def _walker_at(t: float) -> np.ndarray:
-    return np.array([[*(WALKER[:2] + t * WALKER[2:4]), *WALKER[2:]]])
-
-
-def test_a_differential_drive_looks_by_turning_in_place_only_as_far_as_needed():
-    """Its view is about its heading: the look is a turn in place (the row rule, at most
-    wmax), toward someone known behind it, until their side is just inside the view's edge
-    (TURN_MARGIN), then standing; nothing looks at the empty back (a turn costs seconds)."""
-    from gfuzzy.check.check import _unicycle_problem, check_trajectory
-    from gfuzzy.navigation.lookout import TURN_MARGIN
-
-    scene, rm = _floor(DRIVE)
-    nav = Navigator(scene, rm, GOAL, NavOptions(fov=180.0))
-    nobody = nav.step(0.0, POSE, np.zeros((0, 5)))
-    assert nav.last.mode != NavMode.LOOK  # the back never seen, but nobody known there
-    nav = Navigator(scene, rm, GOAL, NavOptions(fov=180.0))
-    traj = nav.step(0.0, POSE, WALKER[None])
-    assert nav.last.mode == NavMode.LOOK
-    w = traj.waypoints
-    assert _unicycle_problem(scene.robot, w) is None and check_trajectory(scene, w).valid
-    assert np.all(w[:, 1:3] == POSE[:2])  # in place
-    sector = math.radians(125.0)  # the walker's (10-degree sectors: 120-130)
-    assert w[1, 3] == pytest.approx(sector - math.pi / 2 + TURN_MARGIN)  # 45 degrees, no more
-    assert abs(w[1, 3]) / (w[1, 0] - w[0, 0]) <= 1.0 + 1e-9
-    assert nobody.at(1.0)[2] == pytest.approx(0.0)  # it drives on east
-
-
-def test_a_turn_look_is_refused_when_someone_walks_at_the_robot_or_the_sweep_hits_a_wall():
-    scene, rm = _floor(DRIVE)
-    nav = Navigator(scene, rm, GOAL, NavOptions(fov=180.0))
-    nav._lookout.observe(0.0, POSE)
-    stand = Trajectory(np.array([[0.0, *POSE], [1.0, *POSE]]), 0.3)
-    assert nav._lookout.turn_look(nav, 0.0, POSE, WALKER[None], stand) is not None
-    at_robot = np.array([[2.4, 3.8, 0.6, -0.8, 0.3]])  # same side, walking into the robot
-    assert nav._lookout.turn_look(nav, 0.0, POSE, at_robot, stand) is None
-    # a long footprint 0.2 m from a wall on its left: any turn sweeps its corners into it
-    robot = {"footprint": [[0.4, 0.15], [-0.4, 0.15], [-0.4, -0.15], [0.4, -0.15]], "vmax": 1.0,
-             "kinematics": "unicycle", "wmax": 1.0}  # fmt: skip
-    wall = {"box": {"center": [3.0, 3.7], "size": [4.0, 1.0]}}  # its south face at y = 3.2
-    scene, rm = _floor(robot, [wall])
-    nav = Navigator(scene, rm, GOAL, NavOptions(fov=180.0))
-    nav._lookout.observe(0.0, POSE)
-    far = np.array([[0.5, 4.8, 0.8, -0.6, 0.3]])  # behind-left, beyond the wall's end, coming
-    assert nav._lookout.turn(0.0, POSE, far) is not None
-    assert nav._lookout.turn_look(nav, 0.0, POSE, far, stand) is None
-
-
-def test_the_turn_look_reveals_a_walker_behind_then_the_robot_drives_on():
-    """Closed loop, 0.25 s a step: the robot turns until the walker behind-left, whom a
-    view about its heading (east) does not take in, is in view, then plans on."""
-    from gfuzzy.check.check import _unicycle_problem
-    from gfuzzy.navigation.crowdpolicies import piece_of
-    from gfuzzy.navigation.sensing import in_fov
-
-    scene, rm = _floor(DRIVE)
-    nav = Navigator(scene, rm, GOAL, NavOptions(fov=180.0))
-    pose, rows, modes, seen = POSE.copy(), [np.array([0.0, *POSE])], [], None
-    assert not in_fov(pose[:2], pose[2], _walker_at(0.0)[:, :2], 180.0)[0]
-    for k in range(24):
-        t = 0.25 * k
-        if seen is None and in_fov(pose[:2], pose[2], _walker_at(t)[:, :2], 180.0)[0]:
-            seen = t
-        traj = nav.step(t, pose, _walker_at(t))
-        modes.append(nav.last.mode)
-        piece = piece_of(traj, t, t + 0.25)
-        rows.extend(piece[1:])
-        pose = piece[-1, 1:].copy()
-    assert modes[0] == NavMode.LOOK and seen is not None and seen <= 1.0
-    assert NavMode.LOOK not in modes[int(seen / 0.25) + 1 :]  # seen: no more looks at them
-    assert pose[0] > POSE[0] + 1.0  # and on towards the goal
-    w = np.array(rows)
-    assert _unicycle_problem(scene.robot, w[np.r_[True, np.diff(w[:, 0]) > 1e-9]]) is None
