@@ -1,4 +1,4 @@
-"""Looking where the robot has not looked: a robot's blind side (``NavOptions.fov``).
+"""Looking where the robot has not looked: a disc robot's blind side (``NavOptions.fov``).
 
 A holonomic robot whose sensor looks along its direction of motion (CrowdNav++'s
 convention, CONTRACT.md section 7) sees nothing behind it while it drives on, and people
@@ -12,16 +12,6 @@ A side where only people seen standing are waits as long as an empty side does.
 A look is taken only when it stays clear of everyone seen (walking on, un-inflated, over
 ``LOOK_CHECK`` seconds, or the navigator's ``cover`` if longer: the standing after the
 look too) and of the static obstacles.
-
-A robot with a heading (a differential drive, a box) sees about its heading, whatever its
-motion, so a step cannot turn its view: its look is a *turn in place* (:meth:`Lookout.turn_look`),
-only as far as brings the stale side into the edge of the view (``TURN_MARGIN`` inside it),
-at its turning rate, then standing. A turn costs seconds (a quarter turn at 1 rad/s: 1.6
-s, and as much to turn back), so such a robot looks only toward someone known who could
-walk up to it (within ``LOOK_REACH`` seconds at their own speed, the robot standing),
-and walking toward it or alongside (within ``APPROACH`` of it), never at an empty side;
-a side counts seen when the whole of it is in view; the turn's sweep must be free of the
-static obstacles.
 """
 
 from __future__ import annotations
@@ -31,9 +21,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..poses import wrap_angle
-from ..settings import SPEED_SAFETY
-from ..timespace.drive import turn_free
 from ..trajectory import Trajectory
 from ..typed import FloatArray
 from .navtypes import MOTION_SAMPLE
@@ -43,8 +30,7 @@ from .unknown import at_unknown
 if TYPE_CHECKING:
     from .navigator import Navigator
 
-__all__ = ["Lookout", "knowing_view", "SECTORS", "LOOK_TIME", "LOOK_SPEED", "LOOK_CHECK", "TURN_MARGIN",
-           "APPROACH"]
+__all__ = ["Lookout", "knowing_view", "SECTORS", "LOOK_TIME", "LOOK_SPEED", "LOOK_CHECK"]
 
 #: Directions (equal sectors about the robot) whose last look is remembered.
 SECTORS = 36
@@ -64,36 +50,22 @@ LOOK_REACH = 3.0
 #: the robot, and it drives where it looks (among people standing about, a 120-degree view
 #: looked every other step: *The narrow noisy view on the square crossing*).
 LOOK_STANDING = 0.25
-#: A robot with a heading turns until the stale side's centre is this far (rad) inside the
-#: edge of its view: a sector's whole width (the person may be anywhere in it).
-TURN_MARGIN = 2 * math.pi / SECTORS
-#: A robot with a heading looks toward someone known only when, walking on, they come
-#: within this gap (m) of it within ``LOOK_REACH`` (toward it or alongside, not away).
-APPROACH = 1.0
-#: Variant S: a robot with a heading looks only at the sides it has never seen within this
-#: (rad) beyond the edges of its view (people who started beside or behind it).
-START_BEYOND = math.radians(45.0)
 
 
 class Lookout:
-    """The directions a robot has looked at, and the look toward the stalest side.
+    """The directions a disc robot has looked at, and the look toward the stalest side.
 
     Parameters
     ----------
     fov : float
-        The robot's field of view (degrees, < 360), centred on its direction of motion (a
-        disc), or on its heading (``turning``).
+        The robot's field of view (degrees, < 360), centred on its direction of motion.
     look_after : float
         Seconds a side may go unseen before the robot looks there.
     goal : (2,) float
         Before the robot first moves, its view is centred on the direction to the goal.
-    turning : bool
-        The view is about the pose's heading (a differential drive, a box), and a look is a
-        turn in place toward someone known only (:meth:`turn_look`).
     """
 
-    def __init__(self, fov: float, look_after: float, goal: FloatArray, turning: bool = False):
-        self.turning = turning
+    def __init__(self, fov: float, look_after: float, goal: FloatArray):
         self.half = math.radians(fov) / 2
         self.look_after = look_after
         self.goal = np.asarray(goal, dtype=float)[:2]
@@ -102,23 +74,19 @@ class Lookout:
         self.looked = np.full(SECTORS, -math.inf)  # when each direction was last in view
         self.pose: FloatArray | None = None
 
-    def _in_view(self, heading: float, inside: float = 0.0) -> FloatArray:
+    def _in_view(self, heading: float) -> FloatArray:
         off = (self.centres - heading + math.pi) % (2 * math.pi) - math.pi
-        return np.abs(off) <= self.half - inside
+        return np.abs(off) <= self.half
 
     def observe(self, t: float, pose: FloatArray) -> None:
         """Record the view of the observation made at ``t`` from ``pose`` (2,): about the
-        robot's displacement since the last call, or the last view when it stood (about
-        the heading ``pose[2]`` when ``turning``)."""
+        robot's displacement since the last call, or the last view when it stood."""
         xy = np.asarray(pose, dtype=float)[:2]
         d = xy - self.pose if self.pose is not None else self.goal - xy
-        if self.turning:
-            self.heading = float(pose[2])
-        elif math.hypot(*d) > 1e-9:
+        if math.hypot(*d) > 1e-9:
             self.heading = math.atan2(d[1], d[0])
         self.pose = xy.copy()
-        # a turning robot's look stops at the view's edge: a side counts seen when all of it is in view
-        self.looked[self._in_view(self.heading, math.pi / SECTORS if self.turning else 0.0)] = t
+        self.looked[self._in_view(self.heading)] = t
 
     def stale(self, t: float, pose: FloatArray | None = None, obs: FloatArray | None = None,
               vmax: float = 1.0, unknown: FloatArray | None = None) -> np.ndarray:  # fmt: skip
@@ -127,40 +95,22 @@ class Lookout:
         walking on unseen) who is not standing (slower than ``LOOK_STANDING``; a person of
         unknown velocity, at one of the positions ``unknown`` (u, 2), counts as walking at
         ``UNKNOWN_GROWTH``) is there within ``LOOK_REACH`` seconds of the robot at ``pose``,
-        or unseen for ``EMPTY_FACTOR * look_after`` seconds. When ``turning`` (:meth:`turn_look`),
-        only the second kind counts (a side is never stale for being empty, or never seen),
-        and a person counts when, walking on at their own speed, they come within
-        ``APPROACH`` of the robot standing within ``LOOK_REACH`` (or their velocity is unknown)."""
+        or unseen for ``EMPTY_FACTOR * look_after`` seconds."""
         age = t - self.looked
         stale = age > EMPTY_FACTOR * self.look_after + 1e-9
-        if self.turning:  # variant S: only the sides never seen within START_BEYOND of the view's edges
-            off = np.abs(wrap_angle(self.centres - self.heading))
-            return np.isinf(age) & (off <= self.half + START_BEYOND)
         if pose is not None and obs is not None and len(obs):
-            rel = self._walkers(pose, obs, vmax, unknown)
+            speed = np.hypot(obs[:, 2], obs[:, 3])
+            if unknown is not None and len(unknown):  # reported standing, but may walk
+                speed = np.where(at_unknown(unknown, obs), np.maximum(speed, UNKNOWN_GROWTH), speed)
+            walk = speed >= LOOK_STANDING
+            rel = obs[walk, :2] - np.asarray(pose, dtype=float)[None, :2]
+            near = np.hypot(rel[:, 0], rel[:, 1]) - obs[walk, 4] <= (speed[walk] + vmax) * LOOK_REACH
             width = 2 * math.pi / SECTORS
-            sector = (np.arctan2(rel[:, 1], rel[:, 0]) % (2 * math.pi) // width).astype(int) % SECTORS
+            sector = (np.arctan2(rel[near, 1], rel[near, 0]) % (2 * math.pi) // width).astype(int) % SECTORS
             known = np.zeros(SECTORS, dtype=bool)
             known[sector] = True
             stale |= known & (age > self.look_after + 1e-9)
         return stale
-
-    def _walkers(self, pose: FloatArray, obs: FloatArray, vmax: float, unknown: FloatArray | None) -> FloatArray:
-        """(w, 2) where the people of ``obs`` who may walk up to the robot at ``pose`` are,
-        relative to it (see :meth:`stale`)."""
-        speed = np.hypot(obs[:, 2], obs[:, 3])
-        unseen = at_unknown(unknown, obs) if unknown is not None and len(unknown) else np.zeros(len(obs), dtype=bool)
-        speed = np.where(unseen, np.maximum(speed, UNKNOWN_GROWTH), speed)  # reported standing, but may walk
-        rel = obs[:, :2] - np.asarray(pose, dtype=float)[None, :2]
-        gap = np.hypot(rel[:, 0], rel[:, 1]) - obs[:, 4]
-        if not self.turning:
-            near = gap <= (speed + vmax) * LOOK_REACH
-        else:  # the robot stands to look: their own walk, toward it or alongside
-            v = obs[:, 2:4]
-            tc = np.clip(-(rel * v).sum(axis=1) / np.maximum((v * v).sum(axis=1), 1e-12), 0.0, LOOK_REACH)
-            closest = np.hypot(*(rel + tc[:, None] * v).T) - obs[:, 4]
-            near = (gap <= speed * LOOK_REACH) & ((closest <= APPROACH) | unseen)
-        return rel[(speed >= LOOK_STANDING) & near]
 
     def direction(self, t: float, pose: FloatArray | None = None, obs: FloatArray | None = None,
                   vmax: float = 1.0, unknown: FloatArray | None = None) -> float | None:  # fmt: skip
@@ -176,8 +126,6 @@ class Lookout:
     def look(self, nav: Navigator, t: float, pose: FloatArray, obs: FloatArray, planned: Trajectory) -> Trajectory | None:
         """The look to take instead of ``planned``, or None (nothing stale, the plan
         already turns the view there, or the look is not clear)."""
-        if self.turning:
-            return self.turn_look(nav, t, pose, obs, planned)
         ang = self.direction(t, pose, obs, float(nav.vplan), nav._unknown)
         if ang is None:
             return None
@@ -190,55 +138,16 @@ class Lookout:
         if nav.geometry.bounds_clearance(end[None])[0] < 0 or not nav.geometry.motion_free(pose, end):
             return None
         rows = np.array([[t, *pose], [t + LOOK_TIME, *end], [t + max(LOOK_CHECK, nav.options.cover), *end]])
-        return _if_clear(nav, t, pose, obs, Trajectory(rows, nav.robot.circumradius))
-
-    def turn(self, t: float, pose: FloatArray, obs: FloatArray, vmax: float = 1.0,
-             unknown: FloatArray | None = None) -> float | None:  # fmt: skip
-        """The signed turn (rad) that brings a :meth:`stale` side ``TURN_MARGIN`` inside the
-        edge of a view about the heading ``pose[2]``: the smallest one; None when none is
-        stale."""
-        stale = self.stale(t, pose, obs, vmax, unknown)
-        if not stale.any():
-            return None
-        off = wrap_angle(self.centres[stale] - float(pose[2]))
-        need = np.sign(off) * np.maximum(np.abs(off) - self.half + TURN_MARGIN, 0.0)
-        return float(need[int(np.argmin(np.abs(need)))])
-
-    def turn_look(self, nav: Navigator, t: float, pose: FloatArray, obs: FloatArray,
-                  planned: Trajectory) -> Trajectory | None:  # fmt: skip
-        """A robot with a heading's look: the turn in place of :meth:`turn`, at its turning
-        rate, then standing; None when nothing is stale, the plan turns the view that way
-        itself (as fast as the look would), the sweep is not free of the static obstacles,
-        or the turn and the standing after it are not clear of everyone seen walking on."""
-        dh = self.turn(t, pose, obs, float(nav.vplan), nav._unknown)
-        if dh is None or abs(dh) < 1e-9:
-            return None
-        rate = nav.robot.turn_rate * SPEED_SAFETY
-        step = min(abs(dh), rate * LOOK_TIME)
-        if float(wrap_angle(planned.at(t + LOOK_TIME)[2] - pose[2])) * math.copysign(1.0, dh) >= step - 1e-9:
-            return None  # the plan turns the view there as fast as a look would
-        if not turn_free(nav.geometry, float(pose[0]), float(pose[1]), float(pose[2]), dh):
-            return None
-        end = pose.copy()
-        end[2] = pose[2] + dh
-        t_turn = abs(dh) / rate
-        rows = np.array([[t, *pose], [t + t_turn, *end], [t + max(t_turn + LOOK_TIME, LOOK_CHECK, nav.options.cover), *end]])
-        return _if_clear(nav, t, pose, obs, Trajectory(rows, nav.robot.circumradius))
-
-
-def _if_clear(nav: Navigator, t: float, pose: FloatArray, obs: FloatArray, traj: Trajectory) -> Trajectory | None:
-    """``traj`` (a look from ``pose`` at ``t``, and the standing after it) when it keeps the
-    safety buffer from everyone seen, walking on, all along (sampled ``MOTION_SAMPLE``
-    apart, with what the gap can lose in between); None otherwise."""
-    span = traj.t_end - t
-    near = nav._near(pose, obs, span, nav.options.safety_buffer + 0.5)
-    if len(near):
-        times = t + np.arange(0.0, span + 1e-9, MOTION_SAMPLE)
-        pts = traj.at(times)[None]
-        gap = nav._clearance_along(pts, times, near)
-        if gap.min() <= nav.options.safety_buffer + nav._sample_gap(near):
-            return None
-    return traj
+        traj = Trajectory(rows, nav.robot.circumradius)
+        span = traj.t_end - t  # the look and the standing after it, all of it checked
+        near = nav._near(pose, obs, span, nav.options.safety_buffer + 0.5)
+        if len(near):
+            times = t + np.arange(0.0, span + 1e-9, MOTION_SAMPLE)
+            pts = traj.at(times)[None]
+            gap = nav._clearance_along(pts, times, near)
+            if gap.min() <= nav.options.safety_buffer + nav._sample_gap(near):
+                return None
+        return traj
 
 
 def knowing_view(options, fov: float):

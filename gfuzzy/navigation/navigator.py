@@ -194,10 +194,8 @@ class NavOptions:
         straight walk meets someone else's within 3 s (:mod:`gfuzzy.navigation.swerve`):
         they are about to swerve, and may swerve towards the robot. 0 turns it off.
     fov : float
-        The robot's field of view (degrees), centred on a disc's direction of motion, or on
-        the heading of a robot with one; below 360 it looks, now and then, where it has not
-        looked (:mod:`gfuzzy.navigation.lookout`: a disc by a short step, a robot with a
-        heading by a turn in place toward someone known behind it).
+        A disc robot's field of view (degrees), centred on its direction of motion; below
+        360 it looks, now and then, where it has not looked (:mod:`gfuzzy.navigation.lookout`).
     look_after : float
         Seconds a side may go unseen before the robot (``fov`` < 360) looks there.
     """
@@ -322,8 +320,8 @@ class Navigator(PathSpace, Prediction):
         self._person_seconds = PERSON_SECONDS  # the predictions' set-up per person, measured
         self._tail_seconds = 0.0  # from the search's deadline to the answer, measured (decaying maximum)
         self._walls = WallCheck(scene)
-        turning = robot.dof == 3  # its view is about its heading: it looks by turning in place
-        self._lookout = Lookout(opts.fov, opts.look_after, goal, turning) if opts.fov < 360 else None
+        disc = robot.shape == "disc" and robot.dof == 2  # its view follows its motion
+        self._lookout = Lookout(opts.fov, opts.look_after, goal) if opts.fov < 360 and disc else None
         self._unknown = np.zeros((0, 2))  # where the people of unknown velocity stand (this call)
         self._build_base()
         if opts.backend == "compiled":  # load the compiled kernels now, not inside a step's budget
