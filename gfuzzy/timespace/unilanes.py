@@ -96,10 +96,23 @@ def _box_lanes(roadmap, geometry, xy: FloatArray) -> Lanes:
     return Lanes(xy, edges[keep], ok[keep])
 
 
+#: From this many points :func:`_nearest` asks a k-d tree (its blocks take time that grows
+#: with the square of the points: 1 s at 5,000, 15 s at 20,000).
+KDTREE_FROM = 3000
+
+
 def _nearest(xy: FloatArray, k: int, rows: int = 512) -> IntArray:
     """The ``k`` nearest other points of each point of ``xy`` (V, 2), (V, k) int in no
-    particular order: squared distances in blocks of ``rows`` (no k-d tree: importing
-    scipy.spatial cost a first query 0.25-1 s, more than the search)."""
+    particular order: squared distances in blocks of ``rows`` (no k-d tree for fewer than
+    ``KDTREE_FROM`` points: importing scipy.spatial cost a first query 0.25-1 s, more than
+    the search)."""
+    if len(xy) >= KDTREE_FROM:
+        from scipy.spatial import cKDTree
+
+        idx = cKDTree(xy).query(xy, k=k + 1)[1]  # itself among them (first, but for duplicates)
+        own = idx == np.arange(len(xy))[:, None]
+        own[~own.any(axis=1), -1] = True  # itself not among them (duplicates): drop the farthest
+        return idx[~own].reshape(len(xy), k).astype(np.int64)
     out = np.empty((len(xy), k), dtype=np.int64)
     for lo in range(0, len(xy), rows):
         d = ((xy[lo : lo + rows, None, :] - xy[None, :, :]) ** 2).sum(-1)
