@@ -336,12 +336,17 @@ def test_the_navigator_drives_a_unicycle_by_the_rule(crossing):
 
 
 @pytest.mark.parametrize("v1, sy", [(0.67, 0.67), (0.675, 0.668)])
-def test_a_small_turn_in_a_tight_corridor_needs_no_ring_heading(v1, sy):
+def test_a_small_turn_in_a_tight_corridor_needs_no_ring_heading(v1, sy, monkeypatch):
     """A 1.2 x 0.3 box in a corridor 0.34 wide that bends by 0.02 rad: the turn at the bend
     fits, but the turning ring's headings around it (a turning step, 0.068 rad, apart) do
     not. Copies with no ring point between them join directly (before: no_path), the
     roadmap's own (the lanes' headings, ``v1`` centred) and those a start's lane adds at a
-    vertex (``v1`` 5 mm off the axis: the start arrives at 0.01 rad, the lane leaves at -0.003)."""
+    vertex (``v1`` 5 mm off the axis: the start arrives at 0.01 rad, the lane leaves at -0.003).
+    The points an end adds on its own heading line (``_Extras.along``, tested apart) would
+    find this way too: they are left out, so that the direct joins are what is tested."""
+    from gfuzzy.timespace import unicycle
+
+    monkeypatch.setattr(unicycle._Extras, "along", lambda *args, **kw: None)
     d, w, length = 0.02, 0.17, 4.0
     u, n = np.array([math.cos(d), math.sin(d)]), np.array([-math.sin(d), math.cos(d)])
     bend = np.array([3.0, 0.67])
@@ -372,15 +377,18 @@ def test_ring_tracing_finds_the_headings_and_arcs_each_checked_alone():
     from gfuzzy.timespace.drive import turn_free
     from gfuzzy.timespace.unilanes import _ring_free
 
-    walls = [{"box": {"center": [1.5, 0.5], "size": [0.4, 0.4], "angle": 0.3}}, {"disc": {"center": [0.4, 1.6], "radius": 0.3}}]
+    walls = [{"box": {"center": [1.5, 0.5], "size": [0.4, 0.4], "angle": 0.3}}, {"disc": {"center": [0.4, 1.6], "radius": 0.3}},
+             # a thin post the front corner sweeps between two free headings (50 and 51) of the ring at (2.2, 1.5)
+             {"disc": {"center": [2.5679437247068657, 1.9168373968933667], "radius": 0.004}}]  # fmt: skip
     sc = parse_scene(doc({"box": [1.0, 0.5], "vmax": 1.0, "kinematics": "unicycle"}, obstacles=walls, bounds=(0, 0, 3, 3)))
     geo = StaticGeometry(sc)
     n = 90
     step = 2 * math.pi / n
     grid = step * (np.arange(n) - n // 2)  # from -pi, heading 0 exactly among them
     sites = [(1.0, 1.2), (1.3, 1.5), (0.9, 0.9), (2.0, 1.0), (1.5, 2.45), (0.7, 0.5)]
+    sites.append((2.2, 1.5))  # an arc blocked between two free headings
     sites.append((1.5, 2.75))  # heading 0: its long side touches the top bound (y = 3) exactly
-    seen = []
+    seen, blocked_between = [], 0
     for x, y in sites:
         ok, arcs = _ring_free(geo, x, y, grid, step)
         want_ok = np.array([geo.clearance1([x, y, h]) >= 0 for h in grid])
@@ -388,7 +396,9 @@ def test_ring_tracing_finds_the_headings_and_arcs_each_checked_alone():
                               if i + 1 < n else grid[0] + 2 * math.pi - grid[i], swept=False) for i in range(n)])  # fmt: skip
         np.testing.assert_array_equal(ok, want_ok)
         np.testing.assert_array_equal(arcs, want_arcs)
+        blocked_between += int(np.sum(want_ok & np.roll(want_ok, -1) & ~want_arcs))
         seen.append((want_ok.mean(), geo.clearance1([x, y, 0.0])))
+    assert blocked_between  # the post's arc: two free headings, the turn between them not
     assert any(0 < f < 1 for f, _ in seen)  # some rings are partly blocked
     assert seen[-1][1] == 0.0  # the touching heading
 
