@@ -252,15 +252,20 @@ def _house_points(geo, rng, n):
     return np.c_[rng.uniform(xmin, xmax, n), rng.uniform(ymin, ymax, n)]
 
 
+def _bound_and_clearance(geo, bound_at, xy):
+    """(n,) a heading-free bound ``bound_at(x, y)`` at each point of ``xy`` (n, 2), and the
+    footprint's least clearance over 16 headings there."""
+    heads = np.linspace(-math.pi, math.pi, 16, endpoint=False)
+    bound = np.array([bound_at(x, y) for x, y in xy])
+    return bound, np.array([[geo.clearance1([x, y, h]) for h in heads] for x, y in xy]).min(axis=1)
+
+
 def test_a_maps_disc_bound_never_exceeds_the_clearance_at_any_heading(house, world):
     """:meth:`StaticGeometry.disc_bound` (the map's distance transform at the circumradius)
     is a lower bound of the footprint's clearance at every heading: a turn in place there
     is free. Without maps it has no cheap bound (-inf)."""
     rng = np.random.default_rng(5)
-    xy = _house_points(house, rng, 500)
-    heads = np.linspace(-math.pi, math.pi, 16, endpoint=False)
-    bound = np.array([house.disc_bound(x, y) for x, y in xy])
-    exact = np.array([[house.clearance1([x, y, h]) for h in heads] for x, y in xy]).min(axis=1)
+    bound, exact = _bound_and_clearance(house, house.disc_bound, _house_points(house, rng, 500))
     useful = bound > 0
     assert useful.sum() > 50 and (exact > 0).sum() > useful.sum()  # neither vacuous nor exact
     assert np.all(bound[useful] <= exact[useful] + 2e-4), np.max(bound[useful] - exact[useful])
@@ -455,11 +460,7 @@ def test_the_sweep_bound_keeps_the_robots_clearance():
     base = load_scene(ROOT / "scenes" / "small-house.yaml")
     geo = StaticGeometry(replace(base, robot=replace(base.robot, clearance=0.05)))
     assert geo.keep == 0.05
-    rng = np.random.default_rng(8)
-    xy = _house_points(geo, rng, 300)
-    heads = np.linspace(-math.pi, math.pi, 16, endpoint=False)
-    bound = np.array([geo.sweep_bound(x, y) for x, y in xy])
-    exact = np.array([[geo.clearance1([x, y, h]) for h in heads] for x, y in xy]).min(axis=1)
+    bound, exact = _bound_and_clearance(geo, geo.sweep_bound, _house_points(geo, np.random.default_rng(8), 300))
     useful = bound > 0
     assert useful.sum() > 30
     assert np.all(bound[useful] <= exact[useful] + 1e-9), np.max(bound[useful] - exact[useful])

@@ -553,15 +553,20 @@ def test_exhausted_budget_builds_no_prediction(open_square, monkeypatch):
     np.testing.assert_allclose(traj.waypoints[0], [0.0, 0.0, -4.0])
 
 
-def test_the_field_answers_in_pieces_and_stops_at_the_deadline(open_square):
-    from gfuzzy.navigation.navigator import PIECE_WORK, _OutOfTime
-
+def _field_case(open_square, people):
+    """A navigator at (0, -4) of the open square (reference search), ``people`` seen about
+    the centre, their inflation, and the kept graph with the robot spliced in."""
     scene, rm = open_square
     nav = Navigator(scene, rm, (0.0, 4.0), NavOptions(backend="reference"))
     pose = np.array([0.0, -4.0])
-    obs = _crowd(np.random.default_rng(5), 25, np.array([0.0, 0.0]), 4.0)
-    infl = nav._inflation(pose, obs)
-    graph, _ = nav._splice(pose)
+    obs = _crowd(np.random.default_rng(5), people, np.array([0.0, 0.0]), 4.0)
+    return nav, obs, nav._inflation(pose, obs), nav._splice(pose)[0]
+
+
+def test_the_field_answers_in_pieces_and_stops_at_the_deadline(open_square):
+    from gfuzzy.navigation.navigator import PIECE_WORK, _OutOfTime
+
+    nav, obs, infl, graph = _field_case(open_square, 25)
     pts = graph.poses[: 3 * PIECE_WORK // len(obs) + 17]  # groups of the kept graph: several pieces
     groups = graph.groups[graph.groups <= len(pts)]
     ptr = np.unique(np.concatenate([np.arange(nav._nv + 2), groups, [len(pts)]]))
@@ -589,12 +594,7 @@ def test_the_field_cuts_its_pieces_by_the_steps_asked_too(open_square):
     asked 8,400 points over 280 steps among 5 people in one piece, 92 ms past its deadline)."""
     from gfuzzy.navigation.timedfield import PIECE_STEP_WORK, PIECE_WORK, _OutOfTime
 
-    scene, rm = open_square
-    nav = Navigator(scene, rm, (0.0, 4.0), NavOptions(backend="reference"))
-    pose = np.array([0.0, -4.0])
-    obs = _crowd(np.random.default_rng(5), 5, np.array([0.0, 0.0]), 4.0)
-    infl = nav._inflation(pose, obs)
-    graph, _ = nav._splice(pose)
+    nav, obs, infl, graph = _field_case(open_square, 5)
     steps = 400
     n = 3 * PIECE_STEP_WORK // (len(obs) * steps) + 7  # three pieces' worth of triples
     assert n < PIECE_WORK // len(obs)  # one piece by the points alone
