@@ -54,3 +54,26 @@ def test_the_robot_keeps_away_from_someone_of_unknown_velocity_beside_it(open_sq
         far.append(float(np.hypot(*(pts - person[0, :2]).T).min()))
     # standing, they are passed close by; walking anywhere, they are given a wide berth
     assert far[1] > far[0] + 0.25
+
+
+def test_a_script_sets_the_walking_pace_in_one_place(monkeypatch):
+    # the constants live in sensing; the prediction and the lookout read them when called,
+    # so a measurement script that patches sensing patches all three (they were imported by
+    # name, and a patch of sensing changed the tracker only)
+    from gfuzzy.navigation import sensing
+    from gfuzzy.navigation.lookout import Lookout
+
+    monkeypatch.setattr(sensing, "UNKNOWN_GROWTH", 2.0)
+    monkeypatch.setattr(sensing, "UNKNOWN_CAP", 1.5)
+    obs = np.array([[0.0, -7.3, 0.0, 0.0, 0.3]])  # seen once, 7 m behind the robot's disc
+    g = unknown_growth(obs[:, :2], obs, np.array([0.5, 5.0]))
+    assert g[:, 0].tolist() == pytest.approx([1.0, 1.5])
+    look = Lookout(180.0, 1.0, np.array([0.0, 4.0]))
+    look.observe(0.0, np.array([0.0, 0.0]))
+    look.observe(0.25, np.array([0.0, -0.05]))  # a look south
+    for k in range(2, 7):
+        look.observe(0.25 * k, np.array([0.0, 0.0]))  # facing north
+    # within reach at 2 m/s (+ 1 m/s of the robot, 3 s: 9 m), not at 1 m/s (6 m)
+    assert look.stale(1.5, np.zeros(2), obs, 1.0, obs[:, :2]).any()
+    monkeypatch.setattr(sensing, "UNKNOWN_GROWTH", 1.0)
+    assert not look.stale(1.5, np.zeros(2), obs, 1.0, obs[:, :2]).any()

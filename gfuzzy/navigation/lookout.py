@@ -23,8 +23,8 @@ import numpy as np
 
 from ..trajectory import Trajectory
 from ..typed import FloatArray
+from . import sensing
 from .navtypes import MOTION_SAMPLE
-from .sensing import UNKNOWN_GROWTH
 from .unknown import at_unknown
 
 if TYPE_CHECKING:
@@ -101,7 +101,7 @@ class Lookout:
         if pose is not None and obs is not None and len(obs):
             speed = np.hypot(obs[:, 2], obs[:, 3])
             if unknown is not None and len(unknown):  # reported standing, but may walk
-                speed = np.where(at_unknown(unknown, obs), np.maximum(speed, UNKNOWN_GROWTH), speed)
+                speed = np.where(at_unknown(unknown, obs), np.maximum(speed, sensing.UNKNOWN_GROWTH), speed)
             walk = speed >= LOOK_STANDING
             rel = obs[walk, :2] - np.asarray(pose, dtype=float)[None, :2]
             near = np.hypot(rel[:, 0], rel[:, 1]) - obs[walk, 4] <= (speed[walk] + vmax) * LOOK_REACH

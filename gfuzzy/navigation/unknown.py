@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..typed import FloatArray
-from .sensing import UNKNOWN_CAP, UNKNOWN_GROWTH
+from . import sensing
 
 __all__ = ["unknown_positions", "at_unknown", "unknown_growth"]
 
@@ -50,4 +50,6 @@ def unknown_growth(known: FloatArray, obs: FloatArray, tau: FloatArray) -> Float
     if not len(known) or not len(obs):
         return np.zeros((len(tau), len(obs)))
     same = at_unknown(known, obs) & np.all(obs[:, 2:4] == 0.0, axis=1)
-    return np.minimum(np.maximum(tau, 0.0)[:, None] * (UNKNOWN_GROWTH * same)[None, :], UNKNOWN_CAP)
+    # read at call time: the constants live in one place (sensing), where a script may set them
+    growth, cap = sensing.UNKNOWN_GROWTH, sensing.UNKNOWN_CAP
+    return np.minimum(np.maximum(tau, 0.0)[:, None] * (growth * same)[None, :], cap)
