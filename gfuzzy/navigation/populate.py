@@ -195,6 +195,10 @@ class _Grid:
             return False
         return self.union is None or not shapely.dwithin(self.union, shapely.Point(p), keep)
 
+    def walkable(self, p) -> bool:
+        """Is ``p`` in a free cell of the people's region and itself clear (:meth:`clear_point`)?"""
+        return bool(self.free[self.index(p)]) and self.clear_point(p)
+
     def clear_line(self, a, b) -> bool:
         import shapely
 
@@ -315,7 +319,7 @@ def populate(scene: Scene, options: PopulateOptions | None = None) -> Populated:
             if not (x0 <= p[0] <= x1 and y0 <= p[1] <= y1):
                 raise InputError(f"waypoints[{i}] ({p[0]:g}, {p[1]:g}) lies outside the scene's bounds "
                                  f"[{x0:g}, {y0:g}, {x1:g}, {y1:g}]")  # fmt: skip
-            if not (grid.free[grid.index(p)] and grid.clear_point(p)):  # its cell's centre may be free, it not
+            if not grid.walkable(p):  # its cell's centre may be free, it not
                 raise InputError(f"waypoints[{i}] ({p[0]:g}, {p[1]:g}) is not free for a person of radius {o.radius:g} m "
                                  f"(clear of the obstacles and the bounds by {o.radius + GRID_MARGIN / 2:g} m)")  # fmt: skip
 
@@ -384,7 +388,7 @@ def _place(scene: Scene, o: PopulateOptions, grid: _Grid, free_point, wps, rng):
     for _ in range(o.people):
         for _try in range(2000):
             p = free_point() if wps is None else wps[rng.integers(len(wps))] + rng.normal(0, 0.5, 2)
-            if not (grid.free[grid.index(p)] and grid.clear_point(p)):
+            if not grid.walkable(p):
                 continue
             if all(np.hypot(*(p - q)) >= 2 * o.radius + 0.1 for q in starts):
                 starts.append(p)
