@@ -380,7 +380,8 @@ def _good(tmp_path, **kw):
         (lambda d: _set(d, "free_thresh: 0.196", ""), "free_thresh"),
         (lambda d: _set(d, "negate: 0", "negate: 0\nmode: fancy"), "mode"),
         (lambda d: _set(d, "image: m.png", "image: ../m.png"), "leaves"),
-        (lambda d: _set(d, "image: m.png", "image: /etc/passwd"), "relative"),
+        (lambda d: _set(d, "image: m.png", "image: /etc/passwd"), "leaves"),
+        (lambda d: _set(d, "image: m.png", "image: ~/m.png"), "relative"),
         (lambda d: (d / "m.yaml").write_text("image: [unclosed"), "m.yaml"),
         (lambda d: (d / "s.yaml").write_text(scene_text("../m.yaml")), "leaves"),
         (lambda d: (d / "s.yaml").write_text(scene_text(unknown="maybe")), "unknown"),
@@ -390,6 +391,24 @@ def test_bad_map_files_give_one_line(tmp_path, capsys, edit, expect):
     _good(tmp_path)
     edit(tmp_path)
     _bad(tmp_path, capsys, expect)
+
+
+def test_an_absolute_image_path_inside_the_folder_is_read_as_nav2_reads_it(tmp_path, capsys):
+    # map YAML files often name their image by an absolute path (Nav2 takes it as written):
+    # it was refused ("must be relative") even when the image lay beside the scene
+    _good(tmp_path)
+    _set(tmp_path, "image: m.png", f"image: {(tmp_path / 'm.png').resolve()}")
+    (grid,) = load_scene(tmp_path / "s.yaml").obstacles
+    assert grid.blocked.tolist() == [[False, False], [False, True]]
+    assert grid.info.image == (tmp_path / "m.png").resolve()
+    (tmp_path / "a").mkdir()
+    shutil.move(tmp_path / "s.yaml", tmp_path / "a" / "s.yaml")
+    shutil.move(tmp_path / "m.yaml", tmp_path / "a" / "m.yaml")
+    # the image is now outside the scene's folder: refused, naming the key and what to do
+    code = main(["plan", str(tmp_path / "a" / "s.yaml"), "-o", str(tmp_path / "out.json")])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1, err
+    assert err.startswith(f"{tmp_path / 'a' / 'm.yaml'}: image: ") and "leaves the scene file's folder" in err
 
 
 def test_a_huge_image_is_refused_in_one_line_without_pillows_warning(tmp_path, capsys):

@@ -2,7 +2,9 @@
 
 A ``map`` obstacle names a map YAML file (``image``, ``resolution``, ``origin``,
 ``negate``, ``occupied_thresh``, ``free_thresh``, optional ``mode``) and the image it
-names (PGM or PNG, read with Pillow). Each pixel becomes the value Nav2's ``map_io``
+names (PGM or PNG, read with Pillow; a relative ``image`` is taken from the YAML's folder,
+an absolute one as written, as Nav2 takes them; either must lie inside the scene file's
+folder). Each pixel becomes the value Nav2's ``map_io``
 (``nav2_map_server/src/map_io.cpp``, ``loadMapFromFile``) gives it, computed the way it
 computes it:
 
@@ -71,7 +73,8 @@ class MapInfo:
     Attributes
     ----------
     image : Path
-        The image file, resolved (relative to the YAML file's folder).
+        The image file, resolved (as written when absolute, else from the YAML file's folder,
+        as Nav2 reads it).
     resolution : float
         Cell size, metres.
     origin : (2,) tuple
@@ -239,11 +242,15 @@ def read_map_yaml(
             v.fail(key, "missing required key")
     folder = path.resolve().parent
     root = Path(root).resolve() if root is not None else folder
-    image = _inside(v, folder, doc["image"], "image", "image")
+    image = _inside(v, folder, doc["image"], "image", "image", absolute=True)
     try:
         image.relative_to(root)
     except ValueError:
-        v.fail("image", f"image path {doc['image']!r} leaves the scene file's folder")
+        v.fail(
+            "image",
+            f"image path {doc['image']!r} leaves the scene file's folder {str(root)!r} "
+            "(copy the image beside the map YAML and name it relative)",
+        )
     for key in ("resolution", "occupied_thresh", "free_thresh"):
         doc[key] = _scalar(doc[key])
     if isinstance(doc["origin"], list):

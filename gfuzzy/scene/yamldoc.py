@@ -232,13 +232,15 @@ def _one_key(v: _V, item, place, keys):
     return key, item[key]
 
 
-def _inside(v: _V, folder: Path, rel, place: str, what: str) -> Path:
-    """A relative file name (a map's, a mesh's) joined to ``folder`` and resolved; refused
-    when it is not a non-empty string, holds a NUL or is absolute."""
+def _inside(v: _V, folder: Path, rel, place: str, what: str, absolute: bool = False) -> Path:
+    """A file name (a map's, a mesh's) joined to ``folder`` and resolved; refused when it
+    is not a non-empty string, holds a NUL or starts with ``~``, and when it is absolute
+    unless ``absolute`` (a map YAML's ``image``, which Nav2 takes either way). Whether the
+    result stays inside a folder is the caller's test."""
     if not isinstance(rel, str) or not rel:
         v.fail(place, f"expected a file name, got {_kind(rel)}")
     if "\0" in rel:
         v.fail(place, "file name contains a NUL character")
-    if os.path.isabs(rel) or rel.startswith("~"):
+    if (os.path.isabs(rel) and not absolute) or rel.startswith("~"):
         v.fail(place, f"{what} path {rel!r} must be relative")
     return (folder / rel).resolve()
