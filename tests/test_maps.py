@@ -481,6 +481,19 @@ def test_gfuzzy_map_of_a_scene_named_like_a_number(tmp_path, capsys, stem):
     assert load_scene(out).name == stem
 
 
+@pytest.mark.parametrize("stem", ["map,v2", "house #2", "a: b", "[x]", "{y}", "yes", "my map"])
+def test_gfuzzy_map_of_a_map_file_named_with_yaml_signs(tmp_path, capsys, stem):
+    # the map's path was written plain into `{file: ..., unknown: blocked}`: a comma, a ' #',
+    # a ': ' or brackets broke the line and `gfuzzy map` refused its own scene (exit 2)
+    write_map(tmp_path, [[254, 254], [254, 0]], name=stem, image_name="m.png")
+    out = tmp_path / "s.yaml"
+    code = main(["map", str(tmp_path / f"{stem}.yaml"), "--robot-disc", "0.1", "-o", str(out)])
+    assert code == 0, capsys.readouterr().err
+    (grid,) = load_scene(out).obstacles
+    assert grid.file == f"{stem}.yaml"
+    assert grid.blocked.tolist() == [[False, False], [False, True]]
+
+
 def test_gfuzzy_map_refuses_a_map_outside_the_folder(tmp_path, capsys):
     write_map(tmp_path / "a", [[254, 254], [254, 254]])
     (tmp_path / "b").mkdir()

@@ -172,7 +172,8 @@ def map_scene(
         robot_line,
         f"  vmax: {_fmt(vmax)}",
         "obstacles:",
-        f"  - map: {{file: {rel}, unknown: blocked}}   # unknown cells block; 'free' to let them not",
+        f"  - map: {{file: {plain_name(rel, flow=True)}, unknown: blocked}}"
+        "   # unknown cells block; 'free' to let them not",
     ]
     start = goal = None
     if pair is None:

@@ -116,12 +116,16 @@ def _load_yaml(text: str, file: str) -> Any:
             loader.dispose()
 
 
-def plain_name(name: str) -> str:
+def plain_name(name: str, flow: bool = False) -> str:
     """``name`` as a YAML scalar that reads back as that string: plain when it does, else
     double-quoted (a scene written for ``12.yaml``, ``true.yaml`` or ``1e3.yaml`` had the
-    name 12, True or 1000.0, and was refused as it was written)."""
+    name 12, True or 1000.0, and was refused as it was written). With ``flow``, plain only
+    when it also reads back inside a flow collection (``{file: NAME}``), where ``,``,
+    ``[]`` and ``{}`` end a plain scalar."""
     try:
         plain = _load_yaml(f"{name}\n", "<name>") == name
+        if plain and flow:
+            plain = _load_yaml(f"[{name}]\n", "<name>") == [name]
     except SceneError:
         plain = False
     return name if plain else json.dumps(name)
