@@ -430,6 +430,39 @@ def test_a_huge_image_is_refused_in_one_line_without_pillows_warning(tmp_path, c
     assert not [w for w in caught if issubclass(w.category, Image.DecompressionBombWarning)]
 
 
+def test_a_big_map_loads_without_full_size_float_copies(tmp_path):
+    # the image became (H, W, 4) float64 quanta, twice over, and every value step a full-size
+    # float array: 60 bytes a cell at the peak (a 4000 x 4000 SLAM map took 1 GB to load, and
+    # the 64-million-cell limit was out of reach); integer quanta and blocks of rows: 13 on it
+    import tracemalloc
+
+    px = np.tile(np.asarray(Image.open(MAPS / "small_house.pgm")), (2, 2))  # 1000 x 1000
+    write_map(tmp_path, px, resolution=0.05)
+    spec = {"file": "m.yaml"}
+    from gfuzzy.scene.maps import load_map
+
+    tracemalloc.start()
+    try:
+        grid = load_map(spec, "obstacles[0].map", "s.yaml", tmp_path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak / px.size < 36, peak / px.size  # 25 here (a quarter-million-cell block of rows)
+    assert np.array_equal(grid.values, np.where(px == 0, 100, np.where(px == 254, 0, -1)))
+
+
+@pytest.mark.parametrize("mode", ["trinary", "scale", "raw"])
+def test_values_computed_in_blocks_of_rows_match_the_oracle(tmp_path, monkeypatch, mode):
+    from gfuzzy.scene import maps
+
+    monkeypatch.setattr(maps, "_BLOCK_CELLS", 7)  # 2 rows of 5 cells a block, and a last short one
+    rng = np.random.default_rng(2)
+    px = rng.integers(0, 256, size=(9, 5, 4), dtype=np.uint8)
+    px[..., 3] = np.where(rng.random((9, 5)) < 0.3, 128, 255)
+    grid = grid_of(tmp_path, px, mode=mode)
+    assert grid.values.tolist() == oracle_values(tmp_path / "m.png", mode=mode)
+
+
 def test_the_good_map_of_the_bad_cases_loads(tmp_path):
     _good(tmp_path)
     (grid,) = load_scene(tmp_path / "s.yaml").obstacles

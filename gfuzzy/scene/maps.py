@@ -64,6 +64,7 @@ MAP_MODES = ("trinary", "scale", "raw")
 OCCUPIED, FREE, UNKNOWN = 100, 0, -1
 MAX_MAP_CELLS = 64_000_000  # a 8000 x 8000 map; beyond that the grid alone is gigabytes
 _QUANTUM = 65535.0  # GraphicsMagick's MaxRGB (16-bit quantum, as Ubuntu's ROS packages build it)
+_BLOCK_CELLS = 1 << 18  # cells per block of rows when values are computed
 
 
 @dataclass(frozen=True)
@@ -302,8 +303,9 @@ def read_image(
 
     Returns
     -------
-    quanta : (H, W, 4) float
-        Red, green, blue and alpha, each 0..65535 (an 8-bit value v is 257 v).
+    quanta : (H, W, 4) uint16
+        Red, green, blue and alpha, each 0..65535 (an 8-bit value v is 257 v); integers,
+        so that a big map costs 8 bytes a cell here, not 32.
     has_alpha : bool
         Whether the image has an alpha channel (GraphicsMagick's ``matte``).
 
@@ -344,11 +346,14 @@ def read_image(
 
 
 def _quanta(img) -> tuple[np.ndarray, bool] | None:
-    """(H, W, 4) quanta 0..65535 and whether there is alpha, or None for an odd mode."""
+    """(H, W, 4) uint16 quanta and whether there is alpha, or None for an odd mode."""
     mode = img.mode
     if mode in ("I;16", "I;16B", "I;16L", "I"):  # 16-bit gray: values are quanta already
-        g = np.clip(np.asarray(img, dtype=np.float64), 0, _QUANTUM)
-        return np.stack([g, g, g, np.full_like(g, _QUANTUM)], axis=-1), False
+        g = np.clip(np.asarray(img), 0, int(_QUANTUM)).astype(np.uint16)
+        out = np.empty(g.shape + (4,), dtype=np.uint16)
+        out[..., :3] = g[..., None]
+        out[..., 3] = int(_QUANTUM)
+        return out, False
     has_alpha = mode in ("LA", "La", "RGBA", "RGBa", "PA") or (
         mode == "P" and "transparency" in img.info
     )
@@ -356,7 +361,8 @@ def _quanta(img) -> tuple[np.ndarray, bool] | None:
         has_alpha = True
     if mode not in ("1", "L", "LA", "P", "PA", "RGB", "RGBA", "CMYK", "YCbCr"):
         return None
-    rgba = np.asarray(img.convert("RGBA"), dtype=np.float64) * 257.0
+    rgba = np.asarray(img.convert("RGBA"), dtype=np.uint16)
+    rgba *= 257  # 255 * 257 = 65535: no overflow
     return rgba, has_alpha
 
 
@@ -365,7 +371,7 @@ def nav2_values(quanta: np.ndarray, has_alpha: bool, info: MapInfo) -> np.ndarra
 
     Parameters
     ----------
-    quanta : (H, W, 4) float
+    quanta : (H, W, 4) uint16 or float
         From :func:`read_image`.
     has_alpha : bool
     info : MapInfo
@@ -374,7 +380,19 @@ def nav2_values(quanta: np.ndarray, has_alpha: bool, info: MapInfo) -> np.ndarra
     -------
     (H, W) int8
         100 occupied, 0 free, -1 unknown, other values costs (scale, raw); row 0 the top.
+        Computed a block of rows at a time (about 260,000 cells), in double precision as
+        Nav2 computes it, so that a big map needs no full-size float arrays.
     """
+    h, w = quanta.shape[:2]
+    out = np.empty((h, w), dtype=np.int8)
+    step = max(1, _BLOCK_CELLS // max(w, 1))
+    for r in range(0, h, step):
+        out[r : r + step] = _block_values(quanta[r : r + step].astype(np.float64), has_alpha, info)
+    return out
+
+
+def _block_values(quanta: np.ndarray, has_alpha: bool, info: MapInfo) -> np.ndarray:
+    """:func:`nav2_values` of some rows, their quanta as float."""
     rgb_sum = quanta[..., 0] + quanta[..., 1] + quanta[..., 2]
     alpha = quanta[..., 3]
     if info.mode == "trinary" and has_alpha:
