@@ -501,7 +501,9 @@ def test_gfuzzy_map_says_when_the_robot_fits_nowhere(tmp_path, capsys):
     assert main(["map", str(tmp_path / "m.yaml"), "--robot-disc", "5", "-o", str(out)]) == 0
     captured = capsys.readouterr()
     assert f"wrote {out}" in captured.out
-    assert captured.err.strip() == f"note: the robot fits nowhere on this map: {out} has no sample query (a smaller robot?)"
+    assert captured.err.strip() == (
+        f"note: the robot fits nowhere on this map (a disc of radius 5): {out} has no sample query (a smaller robot?)"
+    )
     assert not load_scene(out).queries
 
 
@@ -552,10 +554,84 @@ def test_gfuzzy_map_with_a_footprint_writes_the_contract_key(tmp_path):
     assert "disc" not in doc["robot"] and "box" not in doc["robot"]
     q = doc["queries"][0]
     assert len(q["start"]) == 3 and len(q["goal"]) == 3
-    # the robot's circumscribed disc (radius 0.1803) fits at both ends
-    geo = StaticGeometry(load_scene_text(scene_text("tb3_sandbox.yaml", robot="disc: 0.1803"), tmp_path))
+    # the footprint fits at both ends
+    geo = StaticGeometry(load_scene(out))
     for pose in (q["start"], q["goal"]):
-        assert geo.is_valid(pose[:2]), pose
+        assert geo.is_valid(pose), pose
+
+
+CART = ["0.7", "0.25", "-0.1", "0.25", "-0.1", "-0.25", "0.7", "-0.25"]  # 0.8 x 0.5, off-centre
+
+
+def test_gfuzzy_map_finds_room_for_an_off_centre_cart(tmp_path, capsys):
+    # the fit was the circumscribed disc (radius 0.74 about the reference point, 1.5 m
+    # across): "the robot fits nowhere" in the tb3 arena, where the 0.8 x 0.5 cart drives
+    # between the posts and the wall; now its footprint at heading 0, which it can translate
+    for f in ("tb3_sandbox.yaml", "tb3_sandbox.pgm"):
+        shutil.copy(MAPS / f, tmp_path / f)
+    out = tmp_path / "cart.yaml"
+    assert main(["map", str(tmp_path / "tb3_sandbox.yaml"), "--robot-footprint", *CART, "-o", str(out)]) == 0
+    assert "fits nowhere" not in capsys.readouterr().err
+    scene = load_scene(out)
+    (q,) = scene.queries
+    geo = StaticGeometry(scene)
+    assert q.start[2] == 0.0 and q.goal[2] == 0.0
+    assert geo.is_valid(q.start) and geo.is_valid(q.goal)
+    assert np.hypot(q.goal[0] - q.start[0], q.goal[1] - q.start[1]) > 1.0
+    traj = tmp_path / "t.json"
+    assert main(["plan", str(out), "-o", str(traj)]) == 0
+    assert main(["check", str(out), str(traj)]) == 0
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_box_fit_against_shapely(tmp_path, seed):
+    # every cell said to fit keeps the grown box clear of every blocked cell and inside the
+    # bounds; every cell whose box grown by one more cell is clear is said to fit
+    from gfuzzy.scene.mapscene import _box_fits
+
+    rng = np.random.default_rng(seed)
+    px = np.where(rng.random((14, 17)) < 0.12, 0, 254).astype(np.uint8)
+    grid = grid_of(tmp_path, px, resolution=0.5, origin=(-1.0, 2.0, 0.0))
+    x0, x1 = sorted(rng.uniform(-1.5, 1.5, 2))
+    y0, y1 = sorted(rng.uniform(-1.0, 1.0, 2))
+    grow, res = 0.1, 0.5
+    bounds = (-0.5, 2.5, 7.0, 8.5)
+    fits = _box_fits(grid, bounds, (x0, y0, x1, y1), grow)
+    cells = shapely.union_all([shapely.box(*r) for r in grid.rects])
+    h, w = px.shape
+    for i in range(h):
+        for j in range(w):
+            cx, cy = -1.0 + (j + 0.5) * res, 2.0 + (h - 1 - i + 0.5) * res
+
+            def clear(g, cx=cx, cy=cy):
+                box = shapely.box(cx + x0 - g, cy + y0 - g, cx + x1 + g, cy + y1 + g)
+                return box.within(shapely.box(*bounds)) and box.intersection(cells).area == 0.0
+            if fits[i, j]:
+                assert clear(grow), (i, j)
+            else:
+                assert not clear(grow + res), (i, j)
+    assert 0 < fits.sum() < fits.size
+
+
+def test_gfuzzy_map_writes_a_differential_drive(tmp_path, capsys):
+    # a newcomer with a differential drive had to edit the scene (kinematics, and a heading
+    # in every pose of a disc robot) before the first plan
+    for f in ("tb3_sandbox.yaml", "tb3_sandbox.pgm"):
+        shutil.copy(MAPS / f, tmp_path / f)
+    out = tmp_path / "tb3.yaml"
+    argv = ["map", str(tmp_path / "tb3_sandbox.yaml"), "--robot-disc", "0.11", "--kinematics", "unicycle"]
+    assert main([*argv, "-o", str(out)]) == 0
+    scene = load_scene(out)
+    assert scene.robot.kinematics == "unicycle"
+    assert len(scene.queries[0].start) == 3 and len(scene.queries[0].goal) == 3
+    traj = tmp_path / "t.json"
+    assert main(["plan", str(out), "-o", str(traj)]) == 0
+    assert main(["check", str(out), str(traj)]) == 0
+    # the cart as a differential drive must turn in place: its circumscribed disc does not fit
+    cart = tmp_path / "cart.yaml"
+    argv = ["map", str(tmp_path / "tb3_sandbox.yaml"), "--robot-footprint", *CART, "--kinematics", "unicycle"]
+    assert main([*argv, "-o", str(cart)]) == 0
+    assert "(its circumscribed disc, radius 0.743303, to turn in place)" in capsys.readouterr().err
 
 
 def test_render_draws_the_grid_at_its_place(tmp_path):
