@@ -559,21 +559,36 @@ def free_cell_draw(obstacles, bounds, rng: np.random.Generator, share: float):
         None without a map.
     """
     xmin, ymin, xmax, ymax = bounds
-    centres, sizes = [], []
+    grids, cells = [], []  # the maps, and the flat indices of their free cells in the bounds
     for grid in obstacles:
         if isinstance(grid, MapObstacle):
-            c = grid.free_centres()
-            c = c[(c[:, 0] > xmin) & (c[:, 0] < xmax) & (c[:, 1] > ymin) & (c[:, 1] < ymax)]
-            centres.append(c)
-            sizes.append(np.full(len(c), grid.resolution))
-    if not centres:
+            h, w = grid.shape
+            ox, oy = grid.origin
+            res = grid.resolution
+            cx = ox + (np.arange(w) + 0.5) * res
+            cy = oy + (h - 1 - np.arange(h) + 0.5) * res  # row 0 is the top
+            keep = ~np.asarray(grid.blocked)
+            keep &= ((cy > ymin) & (cy < ymax))[:, None]
+            keep &= ((cx > xmin) & (cx < xmax))[None, :]
+            grids.append(grid)
+            cells.append(np.flatnonzero(keep))
+    if not grids:
         return None
-    c, size = np.concatenate(centres), np.concatenate(sizes)
-    if len(c) == 0 or float(np.sum(size**2)) > share * (xmax - xmin) * (ymax - ymin):
+    counts = np.array([len(c) for c in cells])
+    area = sum(int(n) * g.resolution**2 for n, g in zip(counts, grids, strict=True))
+    if counts.sum() == 0 or area > share * (xmax - xmin) * (ymax - ymin):
         return None
+    ends = np.cumsum(counts)
 
     def draw() -> FloatArray:
-        k = int(rng.integers(len(c)))
-        return c[k] + (rng.random(2) - 0.5) * size[k]
+        k = int(rng.integers(int(ends[-1])))
+        g = int(np.searchsorted(ends, k, side="right"))
+        grid = grids[g]
+        h, w = grid.shape
+        ox, oy = grid.origin
+        res = grid.resolution
+        i, j = divmod(int(cells[g][k - (int(ends[g - 1]) if g else 0)]), w)
+        centre = np.array([ox + (j + 0.5) * res, oy + (h - 1 - i + 0.5) * res])
+        return centre + (rng.random(2) - 0.5) * res
 
     return draw
