@@ -560,6 +560,20 @@ def test_gfuzzy_map_of_a_map_file_named_with_yaml_signs(tmp_path, capsys, stem):
     assert grid.blocked.tolist() == [[False, False], [False, True]]
 
 
+@pytest.mark.parametrize("fmt", ["png", "pgm", "pgm-plain"])
+def test_gfuzzy_map_given_the_image_says_so(tmp_path, capsys, fmt):
+    # `gfuzzy map house.pgm` said only "not UTF-8 text (byte 52)" (a plain P2 PGM: "expected
+    # a mapping, got a string")
+    write_map(tmp_path, [[254, 254], [254, 0]], fmt="png" if fmt == "pgm-plain" else fmt)
+    if fmt == "pgm-plain":
+        (tmp_path / "m.pgm-plain").write_text("P2\n2 2\n255\n254 254\n254 0\n")
+    assert main(["map", str(tmp_path / f"m.{fmt}"), "-o", str(tmp_path / "s.yaml")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and err.startswith(str(tmp_path / f"m.{fmt}")), err
+    assert "an image? name the map's YAML file" in err
+    assert not (tmp_path / "s.yaml").exists()
+
+
 def test_gfuzzy_map_refuses_a_map_outside_the_folder(tmp_path, capsys):
     write_map(tmp_path / "a", [[254, 254], [254, 254]])
     (tmp_path / "b").mkdir()

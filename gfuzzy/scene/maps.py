@@ -191,6 +191,14 @@ def _read_bytes(v: _V, path: Path, place: str, what: str) -> bytes:
     raise AssertionError  # unreachable: fail raises
 
 
+def _image_hint(data: bytes) -> str:
+    """A hint when ``data`` starts as a PGM/PPM, PNG, BMP, JPEG or TIFF file does, else ''."""
+    image = data[:2] in (b"P2", b"P3", b"P5", b"P6", b"BM", b"\xff\xd8", b"II", b"MM")
+    if image or data[:8] == b"\x89PNG\r\n\x1a\n":
+        return " (an image? name the map's YAML file, which names its image)"
+    return ""
+
+
 def _scalar(value):
     """A number written as YAML 1.1 reads it as a string (``1e-07``) is a number to
     yaml-cpp, which Nav2 reads these files with."""
@@ -234,10 +242,15 @@ def read_map_yaml(
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
-        v.fail("", f"not UTF-8 text (byte {exc.start})")
-    doc = _load_yaml(text, file)
+        v.fail("", f"not UTF-8 text (byte {exc.start}){_image_hint(data)}")
+    try:
+        doc = _load_yaml(text, file)
+    except SceneError:
+        if _image_hint(data):
+            v.fail("", f"not a map YAML file{_image_hint(data)}")
+        raise
     if not isinstance(doc, dict):
-        v.fail("top level", f"expected a mapping, got {_kind(doc)}")
+        v.fail("top level", f"expected a mapping, got {_kind(doc)}{_image_hint(data)}")
     for key in ("image", "resolution", "origin", "negate", "occupied_thresh", "free_thresh"):
         if key not in doc:
             v.fail(key, "missing required key")
