@@ -93,7 +93,9 @@ def _disc_fits(grid: MapObstacle, bounds, radius: float) -> np.ndarray:
     return fits
 
 
-def _box_fits(grid: MapObstacle, bounds, box: tuple[float, float, float, float], grow: float) -> np.ndarray:
+def _box_fits(
+    grid: MapObstacle, bounds, box: tuple[float, float, float, float], grow: float
+) -> np.ndarray:
     """(H, W) bool: cells whose centre, as the robot's reference point at heading 0, keeps
     the box ``(x0, y0, x1, y1)`` of its footprint grown by ``grow`` clear of every blocked
     cell and inside ``bounds``.
@@ -144,6 +146,36 @@ def _far_apart(grid: MapObstacle, fits: np.ndarray) -> tuple[FloatArray, FloatAr
     b = pts[np.argmax(np.sum((pts - a) ** 2, axis=1))]
     a = pts[np.argmax(np.sum((pts - b) ** 2, axis=1))]
     return a, b
+
+
+def _robot(robot_disc, robot_footprint) -> tuple[FloatArray | None, float, str]:
+    """The footprint (or None), the circumscribed radius and the scene's robot line."""
+    if robot_footprint is not None:
+        fp = np.asarray(robot_footprint, dtype=float).reshape(-1, 2)
+        radius = float(np.max(np.hypot(fp[:, 0], fp[:, 1])))
+        pts = ", ".join(f"[{_fmt(x)}, {_fmt(y)}]" for x, y in fp)
+        return fp, radius, f"  footprint: [{pts}]   # x forward, y left; poses are [x, y, heading]"
+    radius = DEFAULT_DISC if robot_disc is None else float(robot_disc)
+    if not (math.isfinite(radius) and radius > 0):
+        raise InputError(f"--robot-disc must be a positive number, got {robot_disc!r}")
+    return (
+        None,
+        radius,
+        f"  disc: {_fmt(radius)}   # or box: [length, width], or footprint: [[x, y], ...]",
+    )
+
+
+def _fits(grid: MapObstacle, bounds, fp, radius: float, kinematics: str) -> tuple[np.ndarray, str]:
+    """Where the sample query's robot fits (``map_scene``'s Notes), and what had to fit."""
+    if fp is not None and kinematics == "holonomic":
+        box = (*fp.min(axis=0), *fp.max(axis=0))
+        return _box_fits(
+            grid, bounds, box, grow=radius * 0.1 + grid.resolution
+        ), "its footprint at heading 0"
+    fits = _disc_fits(grid, bounds, radius)
+    if fp is not None:
+        return fits, f"its circumscribed disc, radius {_fmt(radius)}, to turn in place"
+    return fits, f"a disc of radius {_fmt(radius)}"
 
 
 def map_scene(
@@ -203,28 +235,9 @@ def map_scene(
     if kinematics not in ("holonomic", "unicycle"):
         raise InputError(f"--kinematics: expected holonomic or unicycle, got {kinematics!r}")
     grid = load_map({"file": rel}, "map", str(map_yaml), folder)
-    if robot_footprint is not None:
-        fp = np.asarray(robot_footprint, dtype=float).reshape(-1, 2)
-        radius = float(np.max(np.hypot(fp[:, 0], fp[:, 1])))
-        pts = ", ".join(f"[{_fmt(x)}, {_fmt(y)}]" for x, y in fp)
-        robot_line = f"  footprint: [{pts}]   # x forward, y left; poses are [x, y, heading]"
-    else:
-        radius = DEFAULT_DISC if robot_disc is None else float(robot_disc)
-        if not (math.isfinite(radius) and radius > 0):
-            raise InputError(f"--robot-disc must be a positive number, got {robot_disc!r}")
-        robot_line = (
-            f"  disc: {_fmt(radius)}   # or box: [length, width], or footprint: [[x, y], ...]"
-        )
+    fp, radius, robot_line = _robot(robot_disc, robot_footprint)
     bounds = _bounds(grid)
-    if robot_footprint is not None and kinematics == "holonomic":
-        box = (*fp.min(axis=0), *fp.max(axis=0))
-        fits = _box_fits(grid, bounds, box, grow=radius * 0.1 + grid.resolution)
-        fit = "its footprint at heading 0"
-    else:
-        fits = _disc_fits(grid, bounds, radius)
-        fit = f"a disc of radius {_fmt(radius)}"
-        if robot_footprint is not None:
-            fit = f"its circumscribed disc, radius {_fmt(radius)}, to turn in place"
+    fits, fit = _fits(grid, bounds, fp, radius, kinematics)
     pair = _far_apart(grid, fits)
     stem = name or re.sub(r"[^A-Za-z0-9_.-]", "-", scene_path.stem) or "map"
     lines = [
@@ -237,8 +250,11 @@ def map_scene(
         "robot:",
         robot_line,
         f"  vmax: {_fmt(vmax)}",
-        *(["  kinematics: unicycle   # a differential drive: turns in place, straight moves"]
-          if kinematics == "unicycle" else []),
+        *(
+            ["  kinematics: unicycle   # a differential drive: turns in place, straight moves"]
+            if kinematics == "unicycle"
+            else []
+        ),
         "obstacles:",
         f"  - map: {{file: {plain_name(rel, flow=True)}, unknown: blocked}}"
         "   # unknown cells block; 'free' to let them not",
