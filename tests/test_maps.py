@@ -574,6 +574,26 @@ def test_gfuzzy_map_given_the_image_says_so(tmp_path, capsys, fmt):
     assert not (tmp_path / "s.yaml").exists()
 
 
+def test_gfuzzy_map_of_a_map_far_from_the_origin(tmp_path, capsys):
+    # numbers were written with 6 significant digits: a map at UTM-like coordinates got
+    # bounds and a query ten metres off (5678123.25 -> 5.67813e+06): invalid_query
+    for f in ("tb3_sandbox.yaml", "tb3_sandbox.pgm"):
+        shutil.copy(MAPS / f, tmp_path / f)
+    (tmp_path / "tb3_sandbox.yaml").write_text(
+        (tmp_path / "tb3_sandbox.yaml").read_text().replace("origin: [-10.000000, -10.000000, 0.000000]", "origin: [351234.5, 5678123.25, 0]")
+    )
+    out = tmp_path / "far.yaml"
+    assert main(["map", str(tmp_path / "tb3_sandbox.yaml"), "--robot-disc", "0.2", "-o", str(out)]) == 0
+    scene = load_scene(out)
+    (grid,) = scene.obstacles
+    assert grid.origin == (351234.5, 5678123.25)
+    x0, y0, x1, y1 = scene.bounds
+    assert 351234.5 <= x0 < x1 <= 351234.5 + 19.2 and 5678123.25 <= y0 < y1 <= 5678123.25 + 19.2
+    traj = tmp_path / "t.json"
+    assert main(["plan", str(out), "-o", str(traj)]) == 0, capsys.readouterr().err
+    assert main(["check", str(out), str(traj)]) == 0
+
+
 def test_gfuzzy_map_refuses_a_map_outside_the_folder(tmp_path, capsys):
     write_map(tmp_path / "a", [[254, 254], [254, 254]])
     (tmp_path / "b").mkdir()
@@ -676,7 +696,7 @@ def test_gfuzzy_map_writes_a_differential_drive(tmp_path, capsys):
     cart = tmp_path / "cart.yaml"
     argv = ["map", str(tmp_path / "tb3_sandbox.yaml"), "--robot-footprint", *CART, "--kinematics", "unicycle"]
     assert main([*argv, "-o", str(cart)]) == 0
-    assert "(its circumscribed disc, radius 0.743303, to turn in place)" in capsys.readouterr().err
+    assert "(its circumscribed disc, radius 0.7433, to turn in place)" in capsys.readouterr().err
 
 
 def test_render_draws_the_grid_at_its_place(tmp_path):

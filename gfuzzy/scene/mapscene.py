@@ -49,7 +49,9 @@ class MapScene:
 
 
 def _fmt(x: float) -> str:
-    return f"{x:.6g}"
+    """12 significant digits: a map far from the origin (UTM coordinates, 5,678,123.25 m)
+    keeps its centimetres (6 digits wrote 5.67813e+06, ten metres off)."""
+    return f"{x:.12g}"
 
 
 def _bounds(grid: MapObstacle) -> tuple[float, float, float, float]:
@@ -174,8 +176,8 @@ def _fits(grid: MapObstacle, bounds, fp, radius: float, kinematics: str) -> tupl
         ), "its footprint at heading 0"
     fits = _disc_fits(grid, bounds, radius)
     if fp is not None:
-        return fits, f"its circumscribed disc, radius {_fmt(radius)}, to turn in place"
-    return fits, f"a disc of radius {_fmt(radius)}"
+        return fits, f"its circumscribed disc, radius {radius:.4g}, to turn in place"
+    return fits, f"a disc of radius {radius:.4g}"
 
 
 def map_scene(
