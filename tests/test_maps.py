@@ -380,7 +380,8 @@ def _good(tmp_path, **kw):
         (lambda d: _set(d, "free_thresh: 0.196", ""), "free_thresh"),
         (lambda d: _set(d, "negate: 0", "negate: 0\nmode: fancy"), "mode"),
         (lambda d: _set(d, "image: m.png", "image: ../m.png"), "leaves"),
-        (lambda d: _set(d, "image: m.png", "image: /etc/passwd"), "relative"),
+        (lambda d: _set(d, "image: m.png", "image: /etc/passwd"), "leaves"),
+        (lambda d: _set(d, "image: m.png", "image: ~/m.png"), "relative"),
         (lambda d: (d / "m.yaml").write_text("image: [unclosed"), "m.yaml"),
         (lambda d: (d / "s.yaml").write_text(scene_text("../m.yaml")), "leaves"),
         (lambda d: (d / "s.yaml").write_text(scene_text(unknown="maybe")), "unknown"),
@@ -390,6 +391,24 @@ def test_bad_map_files_give_one_line(tmp_path, capsys, edit, expect):
     _good(tmp_path)
     edit(tmp_path)
     _bad(tmp_path, capsys, expect)
+
+
+def test_an_absolute_image_path_inside_the_folder_is_read_as_nav2_reads_it(tmp_path, capsys):
+    # map YAML files often name their image by an absolute path (Nav2 takes it as written):
+    # it was refused ("must be relative") even when the image lay beside the scene
+    _good(tmp_path)
+    _set(tmp_path, "image: m.png", f"image: {(tmp_path / 'm.png').resolve()}")
+    (grid,) = load_scene(tmp_path / "s.yaml").obstacles
+    assert grid.blocked.tolist() == [[False, False], [False, True]]
+    assert grid.info.image == (tmp_path / "m.png").resolve()
+    (tmp_path / "a").mkdir()
+    shutil.move(tmp_path / "s.yaml", tmp_path / "a" / "s.yaml")
+    shutil.move(tmp_path / "m.yaml", tmp_path / "a" / "m.yaml")
+    # the image is now outside the scene's folder: refused, naming the key and what to do
+    code = main(["plan", str(tmp_path / "a" / "s.yaml"), "-o", str(tmp_path / "out.json")])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1, err
+    assert err.startswith(f"{tmp_path / 'a' / 'm.yaml'}: image: ") and "leaves the scene file's folder" in err
 
 
 def test_a_huge_image_is_refused_in_one_line_without_pillows_warning(tmp_path, capsys):
@@ -409,6 +428,70 @@ def test_a_huge_image_is_refused_in_one_line_without_pillows_warning(tmp_path, c
         warnings.simplefilter("always")
         _bad(tmp_path, capsys, "image of 10000 x 10000 pixels")
     assert not [w for w in caught if issubclass(w.category, Image.DecompressionBombWarning)]
+
+
+def test_a_big_map_loads_without_full_size_float_copies(tmp_path):
+    # the image became (H, W, 4) float64 quanta, twice over, and every value step a full-size
+    # float array: 60 bytes a cell at the peak (a 4000 x 4000 SLAM map took 1 GB to load, and
+    # the 64-million-cell limit was out of reach); integer quanta and blocks of rows: 13 on it
+    import tracemalloc
+
+    px = np.tile(np.asarray(Image.open(MAPS / "small_house.pgm")), (2, 2))  # 1000 x 1000
+    write_map(tmp_path, px, resolution=0.05)
+    spec = {"file": "m.yaml"}
+    from gfuzzy.scene.maps import load_map
+
+    tracemalloc.start()
+    try:
+        grid = load_map(spec, "obstacles[0].map", "s.yaml", tmp_path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak / px.size < 36, peak / px.size  # 25 here (a quarter-million-cell block of rows)
+    assert np.array_equal(grid.values, np.where(px == 0, 100, np.where(px == 254, 0, -1)))
+
+
+@pytest.mark.parametrize("mode", ["trinary", "scale", "raw"])
+def test_values_computed_in_blocks_of_rows_match_the_oracle(tmp_path, monkeypatch, mode):
+    from gfuzzy.scene import maps
+
+    monkeypatch.setattr(maps, "_BLOCK_CELLS", 7)  # 2 rows of 5 cells a block, and a last short one
+    rng = np.random.default_rng(2)
+    px = rng.integers(0, 256, size=(9, 5, 4), dtype=np.uint8)
+    px[..., 3] = np.where(rng.random((9, 5)) < 0.3, 128, 255)
+    grid = grid_of(tmp_path, px, mode=mode)
+    assert grid.values.tolist() == oracle_values(tmp_path / "m.png", mode=mode)
+
+
+def _old_free_cell_draw(grid, bounds, rng):
+    """The draw as it was first written: every free centre in the bounds, then one of them."""
+    c = grid.free_centres()
+    xmin, ymin, xmax, ymax = bounds
+    c = c[(c[:, 0] > xmin) & (c[:, 0] < xmax) & (c[:, 1] > ymin) & (c[:, 1] < ymax)]
+    return lambda: c[int(rng.integers(len(c)))] + (rng.random(2) - 0.5) * grid.resolution
+
+
+def test_free_cell_draw_keeps_indices_not_centres(tmp_path):
+    # it held every free cell's centre (and built it twice, with the row and column
+    # indices): 216 MB at the peak on a 4000 x 4000 map, kept while the roadmap grows;
+    # now one flat index per free cell, and the same points for the same seed
+    import tracemalloc
+
+    from gfuzzy.scene.maps import free_cell_draw
+
+    px = np.tile(np.asarray(Image.open(MAPS / "small_house.pgm")), (2, 2))  # 1000 x 1000
+    grid = grid_of(tmp_path, px, resolution=0.05, origin=(-3.0, 1.0, 0.0))
+    bounds = (-1.0, 2.0, 40.0, 45.0)
+    tracemalloc.start()
+    try:
+        draw = free_cell_draw([grid], bounds, np.random.default_rng(7), share=1.0)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak / px.size < 6, peak / px.size  # bytes per cell of the map: 13.5 before, 3.5 now
+    old = _old_free_cell_draw(grid, bounds, np.random.default_rng(7))
+    for _ in range(200):
+        assert np.array_equal(draw(), old())
 
 
 def test_the_good_map_of_the_bad_cases_loads(tmp_path):
@@ -449,7 +532,9 @@ def test_gfuzzy_map_says_when_the_robot_fits_nowhere(tmp_path, capsys):
     assert main(["map", str(tmp_path / "m.yaml"), "--robot-disc", "5", "-o", str(out)]) == 0
     captured = capsys.readouterr()
     assert f"wrote {out}" in captured.out
-    assert captured.err.strip() == f"note: the robot fits nowhere on this map: {out} has no sample query (a smaller robot?)"
+    assert captured.err.strip() == (
+        f"note: the robot fits nowhere on this map (a disc of radius 5): {out} has no sample query (a smaller robot?)"
+    )
     assert not load_scene(out).queries
 
 
@@ -460,6 +545,53 @@ def test_gfuzzy_map_of_a_scene_named_like_a_number(tmp_path, capsys, stem):
     out = tmp_path / f"{stem}.yaml"
     assert main(["map", str(tmp_path / "m.yaml"), "--robot-disc", "0.1", "-o", str(out)]) == 0, capsys.readouterr().err
     assert load_scene(out).name == stem
+
+
+@pytest.mark.parametrize("stem", ["map,v2", "house #2", "a: b", "[x]", "{y}", "yes", "my map"])
+def test_gfuzzy_map_of_a_map_file_named_with_yaml_signs(tmp_path, capsys, stem):
+    # the map's path was written plain into `{file: ..., unknown: blocked}`: a comma, a ' #',
+    # a ': ' or brackets broke the line and `gfuzzy map` refused its own scene (exit 2)
+    write_map(tmp_path, [[254, 254], [254, 0]], name=stem, image_name="m.png")
+    out = tmp_path / "s.yaml"
+    code = main(["map", str(tmp_path / f"{stem}.yaml"), "--robot-disc", "0.1", "-o", str(out)])
+    assert code == 0, capsys.readouterr().err
+    (grid,) = load_scene(out).obstacles
+    assert grid.file == f"{stem}.yaml"
+    assert grid.blocked.tolist() == [[False, False], [False, True]]
+
+
+@pytest.mark.parametrize("fmt", ["png", "pgm", "pgm-plain"])
+def test_gfuzzy_map_given_the_image_says_so(tmp_path, capsys, fmt):
+    # `gfuzzy map house.pgm` said only "not UTF-8 text (byte 52)" (a plain P2 PGM: "expected
+    # a mapping, got a string")
+    write_map(tmp_path, [[254, 254], [254, 0]], fmt="png" if fmt == "pgm-plain" else fmt)
+    if fmt == "pgm-plain":
+        (tmp_path / "m.pgm-plain").write_text("P2\n2 2\n255\n254 254\n254 0\n")
+    assert main(["map", str(tmp_path / f"m.{fmt}"), "-o", str(tmp_path / "s.yaml")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and err.startswith(str(tmp_path / f"m.{fmt}")), err
+    assert "an image? name the map's YAML file" in err
+    assert not (tmp_path / "s.yaml").exists()
+
+
+def test_gfuzzy_map_of_a_map_far_from_the_origin(tmp_path, capsys):
+    # numbers were written with 6 significant digits: a map at UTM-like coordinates got
+    # bounds and a query ten metres off (5678123.25 -> 5.67813e+06): invalid_query
+    for f in ("tb3_sandbox.yaml", "tb3_sandbox.pgm"):
+        shutil.copy(MAPS / f, tmp_path / f)
+    (tmp_path / "tb3_sandbox.yaml").write_text(
+        (tmp_path / "tb3_sandbox.yaml").read_text().replace("origin: [-10.000000, -10.000000, 0.000000]", "origin: [351234.5, 5678123.25, 0]")
+    )
+    out = tmp_path / "far.yaml"
+    assert main(["map", str(tmp_path / "tb3_sandbox.yaml"), "--robot-disc", "0.2", "-o", str(out)]) == 0
+    scene = load_scene(out)
+    (grid,) = scene.obstacles
+    assert grid.origin == (351234.5, 5678123.25)
+    x0, y0, x1, y1 = scene.bounds
+    assert 351234.5 <= x0 < x1 <= 351234.5 + 19.2 and 5678123.25 <= y0 < y1 <= 5678123.25 + 19.2
+    traj = tmp_path / "t.json"
+    assert main(["plan", str(out), "-o", str(traj)]) == 0, capsys.readouterr().err
+    assert main(["check", str(out), str(traj)]) == 0
 
 
 def test_gfuzzy_map_refuses_a_map_outside_the_folder(tmp_path, capsys):
@@ -487,10 +619,84 @@ def test_gfuzzy_map_with_a_footprint_writes_the_contract_key(tmp_path):
     assert "disc" not in doc["robot"] and "box" not in doc["robot"]
     q = doc["queries"][0]
     assert len(q["start"]) == 3 and len(q["goal"]) == 3
-    # the robot's circumscribed disc (radius 0.1803) fits at both ends
-    geo = StaticGeometry(load_scene_text(scene_text("tb3_sandbox.yaml", robot="disc: 0.1803"), tmp_path))
+    # the footprint fits at both ends
+    geo = StaticGeometry(load_scene(out))
     for pose in (q["start"], q["goal"]):
-        assert geo.is_valid(pose[:2]), pose
+        assert geo.is_valid(pose), pose
+
+
+CART = ["0.7", "0.25", "-0.1", "0.25", "-0.1", "-0.25", "0.7", "-0.25"]  # 0.8 x 0.5, off-centre
+
+
+def test_gfuzzy_map_finds_room_for_an_off_centre_cart(tmp_path, capsys):
+    # the fit was the circumscribed disc (radius 0.74 about the reference point, 1.5 m
+    # across): "the robot fits nowhere" in the tb3 arena, where the 0.8 x 0.5 cart drives
+    # between the posts and the wall; now its footprint at heading 0, which it can translate
+    for f in ("tb3_sandbox.yaml", "tb3_sandbox.pgm"):
+        shutil.copy(MAPS / f, tmp_path / f)
+    out = tmp_path / "cart.yaml"
+    assert main(["map", str(tmp_path / "tb3_sandbox.yaml"), "--robot-footprint", *CART, "-o", str(out)]) == 0
+    assert "fits nowhere" not in capsys.readouterr().err
+    scene = load_scene(out)
+    (q,) = scene.queries
+    geo = StaticGeometry(scene)
+    assert q.start[2] == 0.0 and q.goal[2] == 0.0
+    assert geo.is_valid(q.start) and geo.is_valid(q.goal)
+    assert np.hypot(q.goal[0] - q.start[0], q.goal[1] - q.start[1]) > 1.0
+    traj = tmp_path / "t.json"
+    assert main(["plan", str(out), "-o", str(traj)]) == 0
+    assert main(["check", str(out), str(traj)]) == 0
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_box_fit_against_shapely(tmp_path, seed):
+    # every cell said to fit keeps the grown box clear of every blocked cell and inside the
+    # bounds; every cell whose box grown by one more cell is clear is said to fit
+    from gfuzzy.scene.mapscene import _box_fits
+
+    rng = np.random.default_rng(seed)
+    px = np.where(rng.random((14, 17)) < 0.12, 0, 254).astype(np.uint8)
+    grid = grid_of(tmp_path, px, resolution=0.5, origin=(-1.0, 2.0, 0.0))
+    x0, x1 = sorted(rng.uniform(-1.5, 1.5, 2))
+    y0, y1 = sorted(rng.uniform(-1.0, 1.0, 2))
+    grow, res = 0.1, 0.5
+    bounds = (-0.5, 2.5, 7.0, 8.5)
+    fits = _box_fits(grid, bounds, (x0, y0, x1, y1), grow)
+    cells = shapely.union_all([shapely.box(*r) for r in grid.rects])
+    h, w = px.shape
+    for i in range(h):
+        for j in range(w):
+            cx, cy = -1.0 + (j + 0.5) * res, 2.0 + (h - 1 - i + 0.5) * res
+
+            def clear(g, cx=cx, cy=cy):
+                box = shapely.box(cx + x0 - g, cy + y0 - g, cx + x1 + g, cy + y1 + g)
+                return box.within(shapely.box(*bounds)) and box.intersection(cells).area == 0.0
+            if fits[i, j]:
+                assert clear(grow), (i, j)
+            else:
+                assert not clear(grow + res), (i, j)
+    assert 0 < fits.sum() < fits.size
+
+
+def test_gfuzzy_map_writes_a_differential_drive(tmp_path, capsys):
+    # a newcomer with a differential drive had to edit the scene (kinematics, and a heading
+    # in every pose of a disc robot) before the first plan
+    for f in ("tb3_sandbox.yaml", "tb3_sandbox.pgm"):
+        shutil.copy(MAPS / f, tmp_path / f)
+    out = tmp_path / "tb3.yaml"
+    argv = ["map", str(tmp_path / "tb3_sandbox.yaml"), "--robot-disc", "0.11", "--kinematics", "unicycle"]
+    assert main([*argv, "-o", str(out)]) == 0
+    scene = load_scene(out)
+    assert scene.robot.kinematics == "unicycle"
+    assert len(scene.queries[0].start) == 3 and len(scene.queries[0].goal) == 3
+    traj = tmp_path / "t.json"
+    assert main(["plan", str(out), "-o", str(traj)]) == 0
+    assert main(["check", str(out), str(traj)]) == 0
+    # the cart as a differential drive must turn in place: its circumscribed disc does not fit
+    cart = tmp_path / "cart.yaml"
+    argv = ["map", str(tmp_path / "tb3_sandbox.yaml"), "--robot-footprint", *CART, "--kinematics", "unicycle"]
+    assert main([*argv, "-o", str(cart)]) == 0
+    assert "(its circumscribed disc, radius 0.7433, to turn in place)" in capsys.readouterr().err
 
 
 def test_render_draws_the_grid_at_its_place(tmp_path):
@@ -510,6 +716,22 @@ def test_render_draws_the_grid_at_its_place(tmp_path):
     assert west > 10 * max(east, 1)  # unknown cells drawn gray, on the west side only
     grow = np.nonzero(gray[:, : img.shape[1] // 2].any(axis=1))[0]  # the map's rows on the picture
     assert rows.mean() < 0.5 * (grow.min() + grow.max())  # the block in the north half
+
+
+def test_render_draws_a_map_in_single_precision(tmp_path):
+    # the grid's picture was an (H, W, 4) float64 array: 32 bytes a cell, 512 MB of a
+    # 4000 x 4000 map (render peaked at 1.6 GB); float32 draws the same pixels
+    from matplotlib.figure import Figure
+
+    from gfuzzy.render.draw import _draw_map
+
+    px = np.full((20, 40), 254, dtype=np.uint8)
+    px[:, :20] = 205
+    grid = grid_of(tmp_path, px)
+    ax = Figure().add_subplot()
+    _draw_map(ax, grid, (0.0, 0.0, 20.0, 10.0))
+    (image,) = ax.get_images()
+    assert image.get_array().dtype == np.float32
 
 
 def test_tracks_on_a_map_scene_rewrite_the_map_path(tmp_path):

@@ -35,7 +35,7 @@ def cmd_map(args) -> int:
     try:
         made = map_scene(
             args.map, out, robot_disc=args.robot_disc, robot_footprint=footprint,
-            vmax=args.vmax or 0.5, name=args.name, command=command,
+            vmax=args.vmax or 0.5, name=args.name, command=command, kinematics=args.kinematics,
         )  # fmt: skip
     except SceneError:
         raise
@@ -50,7 +50,10 @@ def cmd_map(args) -> int:
     write_atomic(out, made.text)
     _say(f"wrote {out}", sys.stdout)
     if made.start is None:  # else `gfuzzy plan` on it says only that it has no queries
-        _say(f"note: the robot fits nowhere on this map: {out} has no sample query (a smaller robot?)")
+        _say(
+            f"note: the robot fits nowhere on this map ({made.fit}): {out} has no sample query "
+            "(a smaller robot?)"
+        )
     return EXIT_OK
 
 

@@ -116,21 +116,32 @@ def in_fov(pose_xy: FloatArray, heading: float, points: FloatArray, fov_deg: flo
     return (np.abs(ang) <= math.radians(fov_deg) / 2 + 1e-12) | (np.hypot(rel[:, 0], rel[:, 1]) < 1e-12)
 
 
-def _obstacle_shapes(scene: Scene) -> list:
-    """The static obstacles as shapely geometries (maps included)."""
-    return [g for g in map(obstacle_shape, scene.obstacles) if g is not None]
+def occluders(scene: Scene):
+    """The static obstacles (maps included) as one prepared shapely geometry, or None.
+
+    Built once per sensor: on a SLAM map of thousands of cell rectangles the union costs
+    a good fraction of a second, and it was built again at every look.
+    """
+    import shapely
+
+    shapes = [g for g in map(obstacle_shape, scene.obstacles) if g is not None]
+    if not shapes:
+        return None
+    union = shapely.union_all(shapes)
+    shapely.prepare(union)
+    return union
 
 
-def line_of_sight(scene: Scene, a: FloatArray, points: FloatArray, shapes: list | None = None) -> BoolArray:
+def line_of_sight(scene: Scene, a: FloatArray, points: FloatArray, union=None) -> BoolArray:
     """(k,) True where the segment from ``a`` (2,) to each of ``points`` (k, 2) crosses no
-    static obstacle of ``scene`` (touching one's boundary hides too)."""
+    static obstacle of ``scene`` (touching one's boundary hides too); ``union``: the
+    scene's :func:`occluders`, when already built."""
     import shapely
 
     pts = np.asarray(points, dtype=float).reshape(-1, 2)
-    shapes = _obstacle_shapes(scene) if shapes is None else shapes
-    if not shapes or len(pts) == 0:
+    union = occluders(scene) if union is None else union
+    if union is None or len(pts) == 0:
         return np.ones(len(pts), dtype=bool)
-    union = shapely.union_all(shapes)
     a = np.asarray(a, dtype=float)[:2]
     lines = shapely.linestrings(np.stack([np.broadcast_to(a, pts.shape), pts], axis=1))
     return ~shapely.intersects(lines, union)
@@ -297,7 +308,7 @@ class Sensor:
         o = self.options
         self._rng = create_rng(o.seed)
         self._tracker = Tracker(o.noise, o.coast, o.gate, o.coast_growth)
-        self._shapes = _obstacle_shapes(self.scene) if o.occlusion else []
+        self._occluders = occluders(self.scene) if o.occlusion else None
         self.unknown = np.zeros(0, dtype=bool)
 
     def visible(self, pose: FloatArray, heading: float, truth: FloatArray) -> BoolArray:
@@ -318,7 +329,7 @@ class Sensor:
             seen &= in_fov(pose[:2], heading, truth[:, :2], o.fov)
         if o.occlusion and seen.any():
             idx = np.nonzero(seen)[0]
-            seen[idx] = line_of_sight(self.scene, pose[:2], truth[idx, :2], self._shapes)
+            seen[idx] = line_of_sight(self.scene, pose[:2], truth[idx, :2], self._occluders)
         return seen
 
     def observe(self, t: float, pose: FloatArray, heading: float, truth: FloatArray) -> FloatArray:

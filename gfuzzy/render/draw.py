@@ -253,7 +253,7 @@ def _draw_map(ax, grid: MapObstacle, bounds) -> None:
     if c0 >= c1 or k0 >= k1:
         return
     values = np.asarray(grid.values)[h - k1 : h - k0, c0:c1]
-    rgba = np.zeros(values.shape + (4,))
+    rgba = np.zeros(values.shape + (4,), dtype=np.float32)  # half the bytes of a big map
     cost = (values > 0) & (values < 100)
     rgba[cost] = (0.3, 0.3, 0.3, 0.0)
     rgba[cost, 3] = 0.6 * values[cost] / 100.0

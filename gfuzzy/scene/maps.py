@@ -2,7 +2,9 @@
 
 A ``map`` obstacle names a map YAML file (``image``, ``resolution``, ``origin``,
 ``negate``, ``occupied_thresh``, ``free_thresh``, optional ``mode``) and the image it
-names (PGM or PNG, read with Pillow). Each pixel becomes the value Nav2's ``map_io``
+names (PGM or PNG, read with Pillow; a relative ``image`` is taken from the YAML's folder,
+an absolute one as written, as Nav2 takes them; either must lie inside the scene file's
+folder). Each pixel becomes the value Nav2's ``map_io``
 (``nav2_map_server/src/map_io.cpp``, ``loadMapFromFile``) gives it, computed the way it
 computes it:
 
@@ -62,6 +64,7 @@ MAP_MODES = ("trinary", "scale", "raw")
 OCCUPIED, FREE, UNKNOWN = 100, 0, -1
 MAX_MAP_CELLS = 64_000_000  # a 8000 x 8000 map; beyond that the grid alone is gigabytes
 _QUANTUM = 65535.0  # GraphicsMagick's MaxRGB (16-bit quantum, as Ubuntu's ROS packages build it)
+_BLOCK_CELLS = 1 << 18  # cells per block of rows when values are computed
 
 
 @dataclass(frozen=True)
@@ -71,7 +74,8 @@ class MapInfo:
     Attributes
     ----------
     image : Path
-        The image file, resolved (relative to the YAML file's folder).
+        The image file, resolved (as written when absolute, else from the YAML file's folder,
+        as Nav2 reads it).
     resolution : float
         Cell size, metres.
     origin : (2,) tuple
@@ -187,6 +191,14 @@ def _read_bytes(v: _V, path: Path, place: str, what: str) -> bytes:
     raise AssertionError  # unreachable: fail raises
 
 
+def _image_hint(data: bytes) -> str:
+    """A hint when ``data`` starts as a PGM/PPM, PNG, BMP, JPEG or TIFF file does, else ''."""
+    image = data[:2] in (b"P2", b"P3", b"P5", b"P6", b"BM", b"\xff\xd8", b"II", b"MM")
+    if image or data[:8] == b"\x89PNG\r\n\x1a\n":
+        return " (an image? name the map's YAML file, which names its image)"
+    return ""
+
+
 def _scalar(value):
     """A number written as YAML 1.1 reads it as a string (``1e-07``) is a number to
     yaml-cpp, which Nav2 reads these files with."""
@@ -230,20 +242,29 @@ def read_map_yaml(
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
-        v.fail("", f"not UTF-8 text (byte {exc.start})")
-    doc = _load_yaml(text, file)
+        v.fail("", f"not UTF-8 text (byte {exc.start}){_image_hint(data)}")
+    try:
+        doc = _load_yaml(text, file)
+    except SceneError:
+        if _image_hint(data):
+            v.fail("", f"not a map YAML file{_image_hint(data)}")
+        raise
     if not isinstance(doc, dict):
-        v.fail("top level", f"expected a mapping, got {_kind(doc)}")
+        v.fail("top level", f"expected a mapping, got {_kind(doc)}{_image_hint(data)}")
     for key in ("image", "resolution", "origin", "negate", "occupied_thresh", "free_thresh"):
         if key not in doc:
             v.fail(key, "missing required key")
     folder = path.resolve().parent
     root = Path(root).resolve() if root is not None else folder
-    image = _inside(v, folder, doc["image"], "image", "image")
+    image = _inside(v, folder, doc["image"], "image", "image", absolute=True)
     try:
         image.relative_to(root)
     except ValueError:
-        v.fail("image", f"image path {doc['image']!r} leaves the scene file's folder")
+        v.fail(
+            "image",
+            f"image path {doc['image']!r} leaves the scene file's folder {str(root)!r} "
+            "(copy the image beside the map YAML and name it relative)",
+        )
     for key in ("resolution", "occupied_thresh", "free_thresh"):
         doc[key] = _scalar(doc[key])
     if isinstance(doc["origin"], list):
@@ -295,8 +316,9 @@ def read_image(
 
     Returns
     -------
-    quanta : (H, W, 4) float
-        Red, green, blue and alpha, each 0..65535 (an 8-bit value v is 257 v).
+    quanta : (H, W, 4) uint16
+        Red, green, blue and alpha, each 0..65535 (an 8-bit value v is 257 v); integers,
+        so that a big map costs 8 bytes a cell here, not 32.
     has_alpha : bool
         Whether the image has an alpha channel (GraphicsMagick's ``matte``).
 
@@ -337,11 +359,14 @@ def read_image(
 
 
 def _quanta(img) -> tuple[np.ndarray, bool] | None:
-    """(H, W, 4) quanta 0..65535 and whether there is alpha, or None for an odd mode."""
+    """(H, W, 4) uint16 quanta and whether there is alpha, or None for an odd mode."""
     mode = img.mode
     if mode in ("I;16", "I;16B", "I;16L", "I"):  # 16-bit gray: values are quanta already
-        g = np.clip(np.asarray(img, dtype=np.float64), 0, _QUANTUM)
-        return np.stack([g, g, g, np.full_like(g, _QUANTUM)], axis=-1), False
+        g = np.clip(np.asarray(img), 0, int(_QUANTUM)).astype(np.uint16)
+        out = np.empty(g.shape + (4,), dtype=np.uint16)
+        out[..., :3] = g[..., None]
+        out[..., 3] = int(_QUANTUM)
+        return out, False
     has_alpha = mode in ("LA", "La", "RGBA", "RGBa", "PA") or (
         mode == "P" and "transparency" in img.info
     )
@@ -349,7 +374,8 @@ def _quanta(img) -> tuple[np.ndarray, bool] | None:
         has_alpha = True
     if mode not in ("1", "L", "LA", "P", "PA", "RGB", "RGBA", "CMYK", "YCbCr"):
         return None
-    rgba = np.asarray(img.convert("RGBA"), dtype=np.float64) * 257.0
+    rgba = np.asarray(img.convert("RGBA"), dtype=np.uint16)
+    rgba *= 257  # 255 * 257 = 65535: no overflow
     return rgba, has_alpha
 
 
@@ -358,7 +384,7 @@ def nav2_values(quanta: np.ndarray, has_alpha: bool, info: MapInfo) -> np.ndarra
 
     Parameters
     ----------
-    quanta : (H, W, 4) float
+    quanta : (H, W, 4) uint16 or float
         From :func:`read_image`.
     has_alpha : bool
     info : MapInfo
@@ -367,7 +393,19 @@ def nav2_values(quanta: np.ndarray, has_alpha: bool, info: MapInfo) -> np.ndarra
     -------
     (H, W) int8
         100 occupied, 0 free, -1 unknown, other values costs (scale, raw); row 0 the top.
+        Computed a block of rows at a time (about 260,000 cells), in double precision as
+        Nav2 computes it, so that a big map needs no full-size float arrays.
     """
+    h, w = quanta.shape[:2]
+    out = np.empty((h, w), dtype=np.int8)
+    step = max(1, _BLOCK_CELLS // max(w, 1))
+    for r in range(0, h, step):
+        out[r : r + step] = _block_values(quanta[r : r + step].astype(np.float64), has_alpha, info)
+    return out
+
+
+def _block_values(quanta: np.ndarray, has_alpha: bool, info: MapInfo) -> np.ndarray:
+    """:func:`nav2_values` of some rows, their quanta as float."""
     rgb_sum = quanta[..., 0] + quanta[..., 1] + quanta[..., 2]
     alpha = quanta[..., 3]
     if info.mode == "trinary" and has_alpha:
@@ -534,21 +572,36 @@ def free_cell_draw(obstacles, bounds, rng: np.random.Generator, share: float):
         None without a map.
     """
     xmin, ymin, xmax, ymax = bounds
-    centres, sizes = [], []
+    grids, cells = [], []  # the maps, and the flat indices of their free cells in the bounds
     for grid in obstacles:
         if isinstance(grid, MapObstacle):
-            c = grid.free_centres()
-            c = c[(c[:, 0] > xmin) & (c[:, 0] < xmax) & (c[:, 1] > ymin) & (c[:, 1] < ymax)]
-            centres.append(c)
-            sizes.append(np.full(len(c), grid.resolution))
-    if not centres:
+            h, w = grid.shape
+            ox, oy = grid.origin
+            res = grid.resolution
+            cx = ox + (np.arange(w) + 0.5) * res
+            cy = oy + (h - 1 - np.arange(h) + 0.5) * res  # row 0 is the top
+            keep = ~np.asarray(grid.blocked)
+            keep &= ((cy > ymin) & (cy < ymax))[:, None]
+            keep &= ((cx > xmin) & (cx < xmax))[None, :]
+            grids.append(grid)
+            cells.append(np.flatnonzero(keep))
+    if not grids:
         return None
-    c, size = np.concatenate(centres), np.concatenate(sizes)
-    if len(c) == 0 or float(np.sum(size**2)) > share * (xmax - xmin) * (ymax - ymin):
+    counts = np.array([len(c) for c in cells])
+    area = sum(int(n) * g.resolution**2 for n, g in zip(counts, grids, strict=True))
+    if counts.sum() == 0 or area > share * (xmax - xmin) * (ymax - ymin):
         return None
+    ends = np.cumsum(counts)
 
     def draw() -> FloatArray:
-        k = int(rng.integers(len(c)))
-        return c[k] + (rng.random(2) - 0.5) * size[k]
+        k = int(rng.integers(int(ends[-1])))
+        g = int(np.searchsorted(ends, k, side="right"))
+        grid = grids[g]
+        h, w = grid.shape
+        ox, oy = grid.origin
+        res = grid.resolution
+        i, j = divmod(int(cells[g][k - (int(ends[g - 1]) if g else 0)]), w)
+        centre = np.array([ox + (j + 0.5) * res, oy + (h - 1 - i + 0.5) * res])
+        return centre + (rng.random(2) - 0.5) * res
 
     return draw

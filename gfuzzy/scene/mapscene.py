@@ -37,16 +37,21 @@ class MapScene:
     bounds : (4,) tuple
     start, goal : tuple
         The sample query's poses (``None`` when the robot fits nowhere).
+    fit : str
+        What had to fit for the query (e.g. "its footprint at heading 0").
     """
 
     text: str
     bounds: tuple[float, float, float, float]
     start: tuple | None
     goal: tuple | None
+    fit: str = ""
 
 
 def _fmt(x: float) -> str:
-    return f"{x:.6g}"
+    """12 significant digits: a map far from the origin (UTM coordinates, 5,678,123.25 m)
+    keeps its centimetres (6 digits wrote 5.67813e+06, ten metres off)."""
+    return f"{x:.12g}"
 
 
 def _bounds(grid: MapObstacle) -> tuple[float, float, float, float]:
@@ -66,8 +71,8 @@ def _bounds(grid: MapObstacle) -> tuple[float, float, float, float]:
     return (bx0, by0, bx1, by1)
 
 
-def _far_apart(grid: MapObstacle, bounds, radius: float) -> tuple[FloatArray, FloatArray] | None:
-    """Two far-apart cell centres of the largest region where a disc of ``radius`` fits."""
+def _disc_fits(grid: MapObstacle, bounds, radius: float) -> np.ndarray:
+    """(H, W) bool: free cells whose centre holds a disc of ``radius`` with a margin."""
     from scipy import ndimage
 
     blocked = np.asarray(grid.blocked)
@@ -87,6 +92,49 @@ def _far_apart(grid: MapObstacle, bounds, radius: float) -> tuple[FloatArray, Fl
         & (ymax - centres[:, 1] >= margin)
     )
     fits[i, j] = inside & (dist[i, j] >= margin)
+    return fits
+
+
+def _box_fits(
+    grid: MapObstacle, bounds, box: tuple[float, float, float, float], grow: float
+) -> np.ndarray:
+    """(H, W) bool: cells whose centre, as the robot's reference point at heading 0, keeps
+    the box ``(x0, y0, x1, y1)`` of its footprint grown by ``grow`` clear of every blocked
+    cell and inside ``bounds``.
+
+    Every blocked cell the grown box could reach is counted (a window of cells at fixed
+    offsets, summed with an integral image); cells beyond the grid count as blocked.
+    """
+    blocked = np.asarray(grid.blocked)
+    h, w = blocked.shape
+    res = grid.resolution
+    x0, y0, x1, y1 = box
+    # columns j + dj0 .. j + dj1 and rows (counted from the bottom) k + dk0 .. k + dk1
+    dj0, dj1 = math.floor(0.5 + (x0 - grow) / res), math.floor(0.5 + (x1 + grow) / res)
+    dk0, dk1 = math.floor(0.5 + (y0 - grow) / res), math.floor(0.5 + (y1 + grow) / res)
+    up = blocked[::-1].astype(np.int32)  # row k from the bottom
+    pl, pr, pb, pt = max(0, -dj0), max(0, dj1), max(0, -dk0), max(0, dk1)
+    padded = np.pad(up, ((pb, pt), (pl, pr)), constant_values=1)
+    s = np.zeros((padded.shape[0] + 1, padded.shape[1] + 1), dtype=np.int64)
+    s[1:, 1:] = padded.cumsum(axis=0).cumsum(axis=1)
+    k, j = np.arange(h)[:, None] + pb, np.arange(w)[None, :] + pl
+    ka, kb, ja, jb = k + dk0, k + dk1 + 1, j + dj0, j + dj1 + 1
+    count = s[kb, jb] - s[ka, jb] - s[kb, ja] + s[ka, ja]
+    ox, oy = grid.origin
+    cx = ox + (np.arange(w) + 0.5) * res
+    cy = oy + (np.arange(h) + 0.5) * res
+    xmin, ymin, xmax, ymax = bounds
+    in_x = (cx + x0 - grow >= xmin) & (cx + x1 + grow <= xmax)
+    in_y = (cy + y0 - grow >= ymin) & (cy + y1 + grow <= ymax)
+    fits_up = (count == 0) & in_y[:, None] & in_x[None, :]
+    return fits_up[::-1]
+
+
+def _far_apart(grid: MapObstacle, fits: np.ndarray) -> tuple[FloatArray, FloatArray] | None:
+    """Two far-apart cell centres of the largest connected region of ``fits``."""
+    from scipy import ndimage
+
+    res = grid.resolution
     labels, count = ndimage.label(fits)
     if count == 0:
         return None
@@ -102,6 +150,36 @@ def _far_apart(grid: MapObstacle, bounds, radius: float) -> tuple[FloatArray, Fl
     return a, b
 
 
+def _robot(robot_disc, robot_footprint) -> tuple[FloatArray | None, float, str]:
+    """The footprint (or None), the circumscribed radius and the scene's robot line."""
+    if robot_footprint is not None:
+        fp = np.asarray(robot_footprint, dtype=float).reshape(-1, 2)
+        radius = float(np.max(np.hypot(fp[:, 0], fp[:, 1])))
+        pts = ", ".join(f"[{_fmt(x)}, {_fmt(y)}]" for x, y in fp)
+        return fp, radius, f"  footprint: [{pts}]   # x forward, y left; poses are [x, y, heading]"
+    radius = DEFAULT_DISC if robot_disc is None else float(robot_disc)
+    if not (math.isfinite(radius) and radius > 0):
+        raise InputError(f"--robot-disc must be a positive number, got {robot_disc!r}")
+    return (
+        None,
+        radius,
+        f"  disc: {_fmt(radius)}   # or box: [length, width], or footprint: [[x, y], ...]",
+    )
+
+
+def _fits(grid: MapObstacle, bounds, fp, radius: float, kinematics: str) -> tuple[np.ndarray, str]:
+    """Where the sample query's robot fits (``map_scene``'s Notes), and what had to fit."""
+    if fp is not None and kinematics == "holonomic":
+        box = (*fp.min(axis=0), *fp.max(axis=0))
+        return _box_fits(
+            grid, bounds, box, grow=radius * 0.1 + grid.resolution
+        ), "its footprint at heading 0"
+    fits = _disc_fits(grid, bounds, radius)
+    if fp is not None:
+        return fits, f"its circumscribed disc, radius {radius:.4g}, to turn in place"
+    return fits, f"a disc of radius {radius:.4g}"
+
+
 def map_scene(
     map_yaml: str | os.PathLike,
     scene_path: str | os.PathLike,
@@ -110,6 +188,7 @@ def map_scene(
     vmax: float = DEFAULT_VMAX,
     name: str | None = None,
     command: str = "",
+    kinematics: str = "holonomic",
 ) -> MapScene:
     """Write-ready scene text around a map.
 
@@ -128,6 +207,16 @@ def map_scene(
         Scene name (default: the scene file's stem).
     command : str
         The command line, quoted in the file's first comment.
+    kinematics : {"holonomic", "unicycle"}
+        A differential drive gets ``kinematics: unicycle`` and poses with a heading (a disc
+        included).
+
+    Notes
+    -----
+    The sample query joins two far-apart points of the largest connected region of cells
+    where the robot fits with a margin: a disc robot's disc; a footprint robot's footprint
+    at heading 0, as the bounding box of the polygon (it can translate through that region
+    without turning); a differential drive's circumscribed disc (it turns in place).
 
     Raises
     ------
@@ -145,21 +234,13 @@ def map_scene(
             "write the scene beside the map or in a folder above it"
         )
     rel = Path(rel).as_posix()
+    if kinematics not in ("holonomic", "unicycle"):
+        raise InputError(f"--kinematics: expected holonomic or unicycle, got {kinematics!r}")
     grid = load_map({"file": rel}, "map", str(map_yaml), folder)
-    if robot_footprint is not None:
-        fp = np.asarray(robot_footprint, dtype=float).reshape(-1, 2)
-        radius = float(np.max(np.hypot(fp[:, 0], fp[:, 1])))
-        pts = ", ".join(f"[{_fmt(x)}, {_fmt(y)}]" for x, y in fp)
-        robot_line = f"  footprint: [{pts}]   # x forward, y left; poses are [x, y, heading]"
-    else:
-        radius = DEFAULT_DISC if robot_disc is None else float(robot_disc)
-        if not (math.isfinite(radius) and radius > 0):
-            raise InputError(f"--robot-disc must be a positive number, got {robot_disc!r}")
-        robot_line = (
-            f"  disc: {_fmt(radius)}   # or box: [length, width], or footprint: [[x, y], ...]"
-        )
+    fp, radius, robot_line = _robot(robot_disc, robot_footprint)
     bounds = _bounds(grid)
-    pair = _far_apart(grid, bounds, radius)
+    fits, fit = _fits(grid, bounds, fp, radius, kinematics)
+    pair = _far_apart(grid, fits)
     stem = name or re.sub(r"[^A-Za-z0-9_.-]", "-", scene_path.stem) or "map"
     lines = [
         f"# A scene around the map {rel} ({grid.shape[1]} x {grid.shape[0]} cells at {_fmt(grid.resolution)} m),",
@@ -171,15 +252,21 @@ def map_scene(
         "robot:",
         robot_line,
         f"  vmax: {_fmt(vmax)}",
+        *(
+            ["  kinematics: unicycle   # a differential drive: turns in place, straight moves"]
+            if kinematics == "unicycle"
+            else []
+        ),
         "obstacles:",
-        f"  - map: {{file: {rel}, unknown: blocked}}   # unknown cells block; 'free' to let them not",
+        f"  - map: {{file: {plain_name(rel, flow=True)}, unknown: blocked}}"
+        "   # unknown cells block; 'free' to let them not",
     ]
     start = goal = None
     if pair is None:
         lines.append("# the robot fits nowhere on this map: no sample query")
     else:
         a, b = pair
-        head = [0.0] if robot_footprint is not None else []
+        head = [0.0] if robot_footprint is not None or kinematics == "unicycle" else []
         start = tuple(float(v) for v in a) + tuple(head)
         goal = tuple(float(v) for v in b) + tuple(head)
         lines += [
@@ -188,4 +275,4 @@ def map_scene(
             "    start: [" + ", ".join(_fmt(v) for v in start) + "]",
             "    goal: [" + ", ".join(_fmt(v) for v in goal) + "]",
         ]
-    return MapScene("\n".join(lines) + "\n", bounds, start, goal)
+    return MapScene("\n".join(lines) + "\n", bounds, start, goal, fit)

@@ -116,12 +116,16 @@ def _load_yaml(text: str, file: str) -> Any:
             loader.dispose()
 
 
-def plain_name(name: str) -> str:
+def plain_name(name: str, flow: bool = False) -> str:
     """``name`` as a YAML scalar that reads back as that string: plain when it does, else
     double-quoted (a scene written for ``12.yaml``, ``true.yaml`` or ``1e3.yaml`` had the
-    name 12, True or 1000.0, and was refused as it was written)."""
+    name 12, True or 1000.0, and was refused as it was written). With ``flow``, plain only
+    when it also reads back inside a flow collection (``{file: NAME}``), where ``,``,
+    ``[]`` and ``{}`` end a plain scalar."""
     try:
         plain = _load_yaml(f"{name}\n", "<name>") == name
+        if plain and flow:
+            plain = _load_yaml(f"[{name}]\n", "<name>") == [name]
     except SceneError:
         plain = False
     return name if plain else json.dumps(name)
@@ -232,13 +236,15 @@ def _one_key(v: _V, item, place, keys):
     return key, item[key]
 
 
-def _inside(v: _V, folder: Path, rel, place: str, what: str) -> Path:
-    """A relative file name (a map's, a mesh's) joined to ``folder`` and resolved; refused
-    when it is not a non-empty string, holds a NUL or is absolute."""
+def _inside(v: _V, folder: Path, rel, place: str, what: str, absolute: bool = False) -> Path:
+    """A file name (a map's, a mesh's) joined to ``folder`` and resolved; refused when it
+    is not a non-empty string, holds a NUL or starts with ``~``, and when it is absolute
+    unless ``absolute`` (a map YAML's ``image``, which Nav2 takes either way). Whether the
+    result stays inside a folder is the caller's test."""
     if not isinstance(rel, str) or not rel:
         v.fail(place, f"expected a file name, got {_kind(rel)}")
     if "\0" in rel:
         v.fail(place, "file name contains a NUL character")
-    if os.path.isabs(rel) or rel.startswith("~"):
+    if (os.path.isabs(rel) and not absolute) or rel.startswith("~"):
         v.fail(place, f"{what} path {rel!r} must be relative")
     return (folder / rel).resolve()
