@@ -455,7 +455,7 @@ def test_a_big_map_loads_without_full_size_float_copies(tmp_path):
 def test_values_computed_in_blocks_of_rows_match_the_oracle(tmp_path, monkeypatch, mode):
     from gfuzzy.scene import maps
 
-    monkeypatch.setattr(maps, "_BLOCK_CELLS", 7)  # 2 rows of 5 cells a block, and a last short one
+    monkeypatch.setattr(maps, "_BLOCK_CELLS", 10)  # 2 rows of 5 cells a block, and a last short one
     rng = np.random.default_rng(2)
     px = rng.integers(0, 256, size=(9, 5, 4), dtype=np.uint8)
     px[..., 3] = np.where(rng.random((9, 5)) < 0.3, 128, 255)
@@ -547,10 +547,13 @@ def test_gfuzzy_map_of_a_scene_named_like_a_number(tmp_path, capsys, stem):
     assert load_scene(out).name == stem
 
 
-@pytest.mark.parametrize("stem", ["map,v2", "house #2", "a: b", "[x]", "{y}", "yes", "my map"])
+@pytest.mark.parametrize(
+    "stem", ["map,v2", "house #2", "a: b", "[x]", "{y}", "a]b", "p{q}", "x, y", "..m", "line\nbreak", "a\u2028b"]
+)
 def test_gfuzzy_map_of_a_map_file_named_with_yaml_signs(tmp_path, capsys, stem):
     # the map's path was written plain into `{file: ..., unknown: blocked}`: a comma, a ' #',
-    # a ': ' or brackets broke the line and `gfuzzy map` refused its own scene (exit 2)
+    # a ': ' or brackets broke the line and `gfuzzy map` refused its own scene (exit 2); a
+    # line break in the name broke the comments that quote it; "..m.yaml" was "outside"
     write_map(tmp_path, [[254, 254], [254, 0]], name=stem, image_name="m.png")
     out = tmp_path / "s.yaml"
     code = main(["map", str(tmp_path / f"{stem}.yaml"), "--robot-disc", "0.1", "-o", str(out)])
@@ -646,6 +649,32 @@ def test_gfuzzy_map_finds_room_for_an_off_centre_cart(tmp_path, capsys):
     traj = tmp_path / "t.json"
     assert main(["plan", str(out), "-o", str(traj)]) == 0
     assert main(["check", str(out), str(traj)]) == 0
+
+
+def test_box_fit_keeps_its_margin_and_refuses_a_footprint_bigger_than_the_map(tmp_path):
+    # the footprint's box must fit with a margin (a tenth of its radius and a cell): a
+    # corridor it fits only exactly offers no sample query; and a footprint typed in
+    # millimetres padded the grid by its size (8 GB on the tb3 map) instead of fitting nowhere
+    import tracemalloc
+
+    from gfuzzy.scene.mapscene import _box_fits, _fits
+
+    fp = np.array([[0.1, 0.25], [-0.1, 0.25], [-0.1, -0.25], [0.1, -0.25]])
+    r = float(np.hypot(0.1, 0.25))
+    for free_rows, fits_somewhere in ((6, False), (9, True)):
+        px = np.full((6 + free_rows, 40), 254, np.uint8)
+        px[:3], px[-3:] = 0, 0
+        grid = grid_of(tmp_path, px, resolution=0.1)
+        fits, _ = _fits(grid, (0.0, 0.0, 4.0, 0.1 * len(px)), fp, r, "holonomic")
+        assert fits.any() == fits_somewhere, free_rows
+    tracemalloc.start()
+    try:
+        fits = _box_fits(grid, (0.0, 0.0, 4.0, 1.5), (-100.0, -250.0, 700.0, 250.0), 74.0)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert fits.shape == px.shape and not fits.any()
+    assert peak < 1_000_000, peak
 
 
 @pytest.mark.parametrize("seed", range(6))

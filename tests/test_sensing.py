@@ -153,6 +153,23 @@ def test_occlusion_unites_the_obstacles_once_per_sensor(monkeypatch):
         seen = s.observe(0.25 * k, np.zeros(2), 0.0, truth)
         assert seen[:, :2].tolist() == [[4.0, 3.0]]  # behind the wall and behind the disc: hidden
     assert len(calls) == 1
+    # a sensor handed another scene looks through that scene's obstacles, not the first's
+    s.scene = _scene([{"box": {"center": [2.0, 1.5], "size": [0.2, 0.4]}}])  # hides only (4, 3)
+    seen = s.observe(5.0, np.zeros(2), 0.0, truth)
+    assert sorted(seen[:, :2].tolist()) == [[0.0, 5.0], [4.0, 0.0]]
+
+
+def test_line_of_sight_still_takes_a_list_of_shapes():
+    # the fourth argument was a list of shapes; shapely would pair a list with the lines
+    # one by one and answer wrongly
+    import shapely
+
+    scene = _scene([])
+    wall = shapely.box(1.9, -1.0, 2.1, 1.0)
+    pts = np.array([[4.0, 0.0], [4.0, 3.0]])
+    for shapes in ([wall], [shapely.box(50, 50, 51, 51), wall]):
+        np.testing.assert_array_equal(line_of_sight(scene, np.zeros(2), pts, shapes), [False, True])
+        np.testing.assert_array_equal(line_of_sight(scene, np.zeros(2), pts[::-1], shapes), [True, False])
 
 
 def test_sensor_options_refuse_bad_values():

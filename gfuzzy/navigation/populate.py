@@ -462,7 +462,7 @@ def write_scene(source: str | os.PathLike, result: Populated, out: str | os.Path
 
     from ..atomic import write_atomic
     from ..scene.yamldoc import _load_yaml as load_yaml
-    from ..scene.yamldoc import dump_yaml
+    from ..scene.yamldoc import dump_yaml, leaves_folder
 
     src = Path(source)
     doc = load_yaml(src.read_text(), str(src))
@@ -475,7 +475,7 @@ def write_scene(source: str | os.PathLike, result: Populated, out: str | os.Path
                         f = spec.get(key)
                         if isinstance(f, str) and not os.path.isabs(f):
                             rel = os.path.relpath(here / f, there)
-                            if rel.startswith(".."):  # the loader keeps a scene's files in its folder
+                            if leaves_folder(rel):  # the loader keeps a scene's files in its folder
                                 raise InputError(
                                     f"{out}: the scene refers to {f}, which would lie outside the new file's "
                                     f"folder: write it in {here} or a folder above {f}"

@@ -135,11 +135,15 @@ def occluders(scene: Scene):
 def line_of_sight(scene: Scene, a: FloatArray, points: FloatArray, union=None) -> BoolArray:
     """(k,) True where the segment from ``a`` (2,) to each of ``points`` (k, 2) crosses no
     static obstacle of ``scene`` (touching one's boundary hides too); ``union``: the
-    scene's :func:`occluders`, when already built."""
+    scene's :func:`occluders`, when already built (a list of shapes, as before, is united
+    here)."""
     import shapely
 
     pts = np.asarray(points, dtype=float).reshape(-1, 2)
-    union = occluders(scene) if union is None else union
+    if union is None:
+        union = occluders(scene)
+    elif isinstance(union, (list, tuple)):
+        union = shapely.union_all(union) if len(union) else None
     if union is None or len(pts) == 0:
         return np.ones(len(pts), dtype=bool)
     a = np.asarray(a, dtype=float)[:2]
@@ -308,7 +312,7 @@ class Sensor:
         o = self.options
         self._rng = create_rng(o.seed)
         self._tracker = Tracker(o.noise, o.coast, o.gate, o.coast_growth)
-        self._occluders = occluders(self.scene) if o.occlusion else None
+        self._occluders = (None, None)  # (scene, its occluders), built at the first look
         self.unknown = np.zeros(0, dtype=bool)
 
     def visible(self, pose: FloatArray, heading: float, truth: FloatArray) -> BoolArray:
@@ -329,7 +333,9 @@ class Sensor:
             seen &= in_fov(pose[:2], heading, truth[:, :2], o.fov)
         if o.occlusion and seen.any():
             idx = np.nonzero(seen)[0]
-            seen[idx] = line_of_sight(self.scene, pose[:2], truth[idx, :2], self._occluders)
+            if self._occluders[0] is not self.scene:  # a new scene (the field is mutable)
+                self._occluders = (self.scene, occluders(self.scene))
+            seen[idx] = line_of_sight(self.scene, pose[:2], truth[idx, :2], self._occluders[1])
         return seen
 
     def observe(self, t: float, pose: FloatArray, heading: float, truth: FloatArray) -> FloatArray:

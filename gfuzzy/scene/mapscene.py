@@ -18,7 +18,7 @@ import numpy as np
 from ..errors import InputError
 from ..typed import FloatArray
 from .maps import UNKNOWN, MapObstacle, load_map
-from .yamldoc import plain_name
+from .yamldoc import leaves_folder, plain_name
 
 __all__ = ["MapScene", "map_scene"]
 
@@ -95,6 +95,12 @@ def _disc_fits(grid: MapObstacle, bounds, radius: float) -> np.ndarray:
     return fits
 
 
+def _printable(text: str) -> str:
+    """``text`` for a YAML comment: characters that would end the line or cannot be
+    written (a line break, U+2028, DEL, an undecodable byte) written as escapes."""
+    return "".join(c if c.isprintable() else ascii(c)[1:-1] for c in text)
+
+
 def _box_fits(
     grid: MapObstacle, bounds, box: tuple[float, float, float, float], grow: float
 ) -> np.ndarray:
@@ -112,6 +118,8 @@ def _box_fits(
     # columns j + dj0 .. j + dj1 and rows (counted from the bottom) k + dk0 .. k + dk1
     dj0, dj1 = math.floor(0.5 + (x0 - grow) / res), math.floor(0.5 + (x1 + grow) / res)
     dk0, dk1 = math.floor(0.5 + (y0 - grow) / res), math.floor(0.5 + (y1 + grow) / res)
+    if dj1 - dj0 >= w or dk1 - dk0 >= h:  # wider or taller than the whole grid
+        return np.zeros((h, w), dtype=bool)
     up = blocked[::-1].astype(np.int32)  # row k from the bottom
     pl, pr, pb, pt = max(0, -dj0), max(0, dj1), max(0, -dk0), max(0, dk1)
     padded = np.pad(up, ((pb, pt), (pl, pr)), constant_values=1)
@@ -228,7 +236,7 @@ def map_scene(
     scene_path = Path(scene_path)
     folder = scene_path.resolve().parent
     rel = os.path.relpath(Path(map_yaml).resolve(), folder)
-    if rel.startswith(".."):
+    if leaves_folder(rel):
         raise InputError(
             f"{map_yaml}: the map must lie inside the scene file's folder ({folder}); "
             "write the scene beside the map or in a folder above it"
@@ -243,8 +251,8 @@ def map_scene(
     pair = _far_apart(grid, fits)
     stem = name or re.sub(r"[^A-Za-z0-9_.-]", "-", scene_path.stem) or "map"
     lines = [
-        f"# A scene around the map {rel} ({grid.shape[1]} x {grid.shape[0]} cells at {_fmt(grid.resolution)} m),",
-        f"# written by: {command}" if command else "# written by gfuzzy map",
+        f"# A scene around the map {_printable(rel)} ({grid.shape[1]} x {grid.shape[0]} cells at {_fmt(grid.resolution)} m),",
+        f"# written by: {_printable(command)}" if command else "# written by gfuzzy map",
         "# Edit the robot, add movers, move the query; bounds keep the robot's whole body inside.",
         "version: 1",
         f"name: {plain_name(stem)}",

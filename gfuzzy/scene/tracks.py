@@ -23,7 +23,7 @@ from ..errors import InputError, SceneError
 from ..settings import MAX_MAGNITUDE, MAX_RECORDED_TIME
 from .scene import NAME_RE, STATUSES, Scene
 from .trackfiles import ANNOTATION_PERIOD, Track, Tracks, _id_key, read_tracks
-from .yamldoc import dump_yaml, plain_name
+from .yamldoc import dump_yaml, leaves_folder, plain_name
 
 __all__ = [
     "ANNOTATION_PERIOD",
@@ -373,7 +373,7 @@ def _static_obstacles(static: Scene, folder: Path) -> list:
             spec = dict(item[kind])
             target = (src_folder / spec["file"]).resolve()
             rel = os.path.relpath(target, folder.resolve())
-            if rel.startswith(".."):
+            if leaves_folder(rel):
                 raise SceneError(
                     static.source,
                     f"obstacles[{i}].{kind}.file",

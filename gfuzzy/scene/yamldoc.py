@@ -236,6 +236,12 @@ def _one_key(v: _V, item, place, keys):
     return key, item[key]
 
 
+def leaves_folder(rel: str) -> bool:
+    """Whether a relative path (``os.path.relpath``'s answer) climbs out of its folder:
+    its first part is ``..`` (a file named ``..map.yaml`` stays inside)."""
+    return Path(rel).parts[:1] == ("..",)
+
+
 def _inside(v: _V, folder: Path, rel, place: str, what: str, absolute: bool = False) -> Path:
     """A file name (a map's, a mesh's) joined to ``folder`` and resolved; refused when it
     is not a non-empty string, holds a NUL or starts with ``~``, and when it is absolute
