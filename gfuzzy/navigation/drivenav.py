@@ -4,7 +4,9 @@ with ``kinematics: unicycle``).
 A unicycle turns in place, so a plan that changes its mind costs time: every replan that
 starts a turn the next one undoes wastes the turn (at 1 rad/s a quarter turn takes 1.6 s).
 :func:`kept_plan` keeps the last plan while it stays as safe as a fresh one would be (the
-same inflated predictions) and arrives not much later than the fresh one.
+same inflated predictions) and arrives not much later than the fresh one; for the same
+reason :func:`drive_evasion` does not undo the turn of the evasion under way unless a
+candidate turning back meets people ``EVASION_COMMITMENT`` seconds later.
 
 The same test of a kept plan serves the holonomic robot too: :func:`sooner_plan` keeps
 the last plan when it arrives much sooner than the fresh one (by more than the soft costs
