@@ -196,6 +196,48 @@ def test_an_evasion_under_way_keeps_its_heading_target(open_floor):
     assert np.allclose(aims, aims[0])
 
 
+def _turn_reversals(rows: np.ndarray) -> int:
+    """How often a turn in place goes the other way than the one before it, the robot not
+    having moved in between, by hand (rows driven, one a period)."""
+    d = np.hypot(np.diff(rows[:, 1]), np.diff(rows[:, 2]))
+    dh = (np.diff(rows[:, 3]) + math.pi) % (2 * math.pi) - math.pi
+    count, last = 0, 0.0
+    for moved, turned in zip(d, dh, strict=True):
+        if moved > 1e-6:
+            last = 0.0
+        elif abs(turned) > 1e-6:
+            count += last * turned < 0
+            last = turned
+    return count
+
+
+def test_evasions_in_a_row_do_not_undo_their_turns(open_floor, monkeypatch):
+    """Every search finding nothing, the navigator answers with an evasion every 0.25 s
+    while two people walk up from behind on its left. Decided afresh each time (all the
+    candidates keep clear over 4 s, and the gap and progress terms of their scores flip with
+    every step of the turn) the evasions turned back and forth in place four times in 4 s
+    and kept 0.71 m; a candidate that turns against the turn under way must now win by
+    ``EVASION_COMMITMENT`` of time to contact: no turn is undone, and the gap is wider."""
+    sc, rm = open_floor
+    monkeypatch.setattr(Navigator, "_search", lambda self, t, p, *a, **k: _Searched(None, "exhausted"))
+    monkeypatch.setattr(Navigator, "_direct", lambda self, *a: None)
+    nav = Navigator(sc, rm, GOAL, NavOptions())
+    people = np.array([[1.13, 3.81, 0.8, -0.83, 0.3], [0.36, 2.43, 1.08, -0.05, 0.3]])
+    pose, t, rows, worst = P0.copy(), 0.0, [np.array([0.0, *P0])], math.inf
+    while t < 4.0 - 1e-9:
+        obs = people.copy()
+        obs[:, :2] += t * people[:, 2:4]
+        traj = nav.step(t, pose, obs)
+        assert nav.last.mode == NavMode.EVASIVE
+        worst = min(worst, *(_min_gap(Trajectory(piece_of(traj, t, t + 0.25), 0.3), p, t) for p in obs))
+        pose, t = traj.at(t + 0.25), t + 0.25
+        rows.append(np.array([t, *pose]))
+    rows = np.array(rows)
+    assert _turns(rows) >= 1  # it does turn away
+    assert _turn_reversals(rows) == 0
+    assert worst > 1.0
+
+
 def test_a_reversing_robot_among_walkers_reaches_the_goal_and_passes_the_check(reversing_floor):
     """The navigator's every answer for a robot that may back up (plans over lanes driven
     both ways, evasions) is driven and verified by the independent checker."""

@@ -4,7 +4,9 @@ with ``kinematics: unicycle``).
 A unicycle turns in place, so a plan that changes its mind costs time: every replan that
 starts a turn the next one undoes wastes the turn (at 1 rad/s a quarter turn takes 1.6 s).
 :func:`kept_plan` keeps the last plan while it stays as safe as a fresh one would be (the
-same inflated predictions) and arrives not much later than the fresh one.
+same inflated predictions) and arrives not much later than the fresh one; for the same
+reason :func:`drive_evasion` does not undo the turn of the evasion under way unless a
+candidate turning back meets people ``EVASION_COMMITMENT`` seconds later.
 
 The same test of a kept plan serves the holonomic robot too: :func:`sooner_plan` keeps
 the last plan when it arrives much sooner than the fresh one (by more than the soft costs
@@ -21,16 +23,22 @@ from ..poses import metric_distance, wrap_angle
 from ..timespace.drive import evasions
 from ..trajectory import Trajectory
 from ..typed import FloatArray
-from .evasion import evasion_scores
+from .evasion import TTC_POINTS, evasion_scores
 from .navtypes import MOTION_SAMPLE, sample_loss
 
-__all__ = ["kept_plan", "sooner_plan", "cut_rows", "rest_of", "drive_evasion", "sample_rows", "EVASION_SPEEDS",
-           "EVASION_STOPS"]
+__all__ = ["kept_plan", "sooner_plan", "cut_rows", "rest_of", "drive_evasion", "sample_rows", "turn_under_way",
+           "EVASION_SPEEDS", "EVASION_STOPS", "EVASION_COMMITMENT"]
 
 #: Speeds (fractions of the planning speed) of a differential drive's evasive candidates.
 EVASION_SPEEDS = (1.0, 0.5, 0.25)
 #: Seconds after which an evasive candidate may also stop (and stand) instead of driving on.
 EVASION_STOPS = (0.5, 1.0)
+#: Seconds of time to contact an evasive candidate that turns against the turn in place of
+#: the evasion under way must gain to be taken: among candidates that all keep clear (or
+#: touch within a tenth of a second of each other), the gap and progress terms of the
+#: score flip with every step of the turn, and a robot re-deciding every period turned
+#: back and forth in place while someone walked into it.
+EVASION_COMMITMENT = 0.1
 
 
 def cut_rows(traj: Trajectory, ta: float, tb: float) -> FloatArray:
@@ -131,7 +139,7 @@ def _if_safe(nav, prev: Trajectory, t: float, pose: FloatArray, obs: FloatArray,
     return traj
 
 
-def drive_evasion(nav, t: float, pose: FloatArray, obs: FloatArray) -> Trajectory:
+def drive_evasion(nav, t: float, pose: FloatArray, obs: FloatArray, under_way: Trajectory | None = None) -> Trajectory:
     """A differential drive's evasive motion (:meth:`Navigator._evasive`'s for a unicycle):
     the candidate of :func:`gfuzzy.timespace.drive.evasions` (standing, or a turn in place
     and a straight move at one of ``EVASION_SPEEDS``, going on or stopping after one of
@@ -143,12 +151,18 @@ def drive_evasion(nav, t: float, pose: FloatArray, obs: FloatArray) -> Trajector
     as short as a holonomic robot's (``evasion_time``) finds no contact within it for
     driving straight on into someone's way and prefers it to a turn that avoids them.
 
+    A candidate that turns against the turn in place of ``under_way`` (the last answer, an
+    evasion, still turning at ``t``) loses ``EVASION_COMMITMENT`` seconds of its time to
+    contact: a turn undone is a turn wasted.
+
     Parameters
     ----------
     nav : Navigator
     t : float
     pose : (3,) float
     obs : (k, 5) float
+    under_way : Trajectory, optional
+        The evasion the robot is following (None: none).
 
     Returns
     -------
@@ -161,8 +175,30 @@ def drive_evasion(nav, t: float, pose: FloatArray, obs: FloatArray) -> Trajector
     cands = evasions(nav.geometry, t, pose, T, opts.cover, opts.evasion_headings, nav.vplan, EVASION_SPEEDS, EVASION_STOPS)
     pts = sample_rows(cands, times)
     ends = np.array([rows[-1, 1:] for rows in cands])
-    best = cands[int(np.argmax(evasion_scores(nav, t, pose, obs, pts, times, ends)))]
+    score = evasion_scores(nav, t, pose, obs, pts, times, ends)
+    turn = turn_under_way(under_way, t, pose)
+    if turn != 0.0:
+        back = np.array([_first_turn(rows) for rows in cands]) * turn < 0.0
+        score = np.where(back, score - EVASION_COMMITMENT * TTC_POINTS, score)
+    best = cands[int(np.argmax(score))]
     return Trajectory(best, nav.robot.circumradius)
+
+
+def turn_under_way(prev: Trajectory | None, t: float, pose: FloatArray) -> float:
+    """The signed turn in place (rad) left of ``prev`` at ``t``, when the robot is on it at
+    ``pose`` and turning there; 0 otherwise (no ``prev``, off it, driving or standing)."""
+    if prev is None or prev.t_end <= t + 1e-9:
+        return 0.0
+    rest = rest_of(prev, t, pose)
+    return 0.0 if rest is None else _first_turn(rest.waypoints)
+
+
+def _first_turn(rows: FloatArray) -> float:
+    """The signed heading change (rad) of the first row step of ``rows`` (r, 4) when it turns
+    in place; 0 when it moves or stands."""
+    if len(rows) < 2 or float(np.hypot(*(rows[1, 1:3] - rows[0, 1:3]))) > 1e-9:
+        return 0.0
+    return float(wrap_angle(rows[1, 3] - rows[0, 3]))
 
 
 def look_times(near: float, far: float) -> FloatArray:

@@ -23,10 +23,13 @@ from .navtypes import MOTION_SAMPLE
 if TYPE_CHECKING:
     from .navigator import Navigator
 
-__all__ = ["EVASION_GAP", "evasion_scores", "holonomic_evasion"]
+__all__ = ["EVASION_GAP", "TTC_POINTS", "evasion_scores", "holonomic_evasion"]
 
 #: Gaps (m) wider than this score the same in the evasive motion.
 EVASION_GAP = 0.5
+#: Points of an evasive candidate's score per second of its time to contact (a gap's
+#: metre is worth 10, a metre of progress 1).
+TTC_POINTS = 100.0
 
 
 def evasion_scores(nav: Navigator, t: float, pose: FloatArray, obs: FloatArray, pts: FloatArray,
@@ -67,7 +70,7 @@ def evasion_scores(nav: Navigator, t: float, pose: FloatArray, obs: FloatArray, 
         worst = np.full(len(pts), math.inf)
     cr = nav.robot.circumradius
     progress = metric_distance(pose, nav.goal, cr) - metric_distance(ends, nav.goal[None], cr)
-    return np.minimum(ttc, T + 1.0) * 100.0 + np.minimum(worst, EVASION_GAP) * 10.0 + progress
+    return np.minimum(ttc, T + 1.0) * TTC_POINTS + np.minimum(worst, EVASION_GAP) * 10.0 + progress
 
 
 def holonomic_evasion(nav: Navigator, t: float, pose: FloatArray, obs: FloatArray) -> Trajectory:

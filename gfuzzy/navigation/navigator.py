@@ -317,6 +317,7 @@ class Navigator(PathSpace, Prediction):
         self._previous: Trajectory | None = None
         self._previous_mode: NavMode | None = None  # the mode of the search that made it
         self._previous_ahead: list = []  # and the roadmap vertices it heads for
+        self._evading: Trajectory | None = None  # the last answer when it was an evasion
         self._ahead: list = []  # (arrival time, roadmap vertex) of the last plan
         self._clock = BUDGET_CLOCKS[opts.budget_clock]  # the budget's clock (a test may replace it)
         self._person_seconds = PERSON_SECONDS  # the predictions' set-up per person, measured
@@ -477,6 +478,7 @@ class Navigator(PathSpace, Prediction):
                 self._previous_mode, self._previous_ahead = mode, self._ahead
         if mode == NavMode.EVASIVE:
             self._previous = None
+        self._evading = traj if mode == NavMode.EVASIVE else None
         if self._lookout is not None and mode in LOOK_OVER:  # never instead of a fallback
             looked = self._lookout.look(self, t, pose, obs, traj)
             if looked is not None:
@@ -728,5 +730,5 @@ class Navigator(PathSpace, Prediction):
         samples, see :func:`.evasion.evasion_scores`), then by the smallest gap, then by progress to the goal.
         """
         if self.robot.unicycle:  # turn in place, then drive along the heading (drivenav.drive_evasion)
-            return drive_evasion(self, t, pose, obs)
+            return drive_evasion(self, t, pose, obs, self._evading)
         return holonomic_evasion(self, t, pose, obs)
