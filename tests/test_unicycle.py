@@ -528,3 +528,31 @@ def test_the_nearest_points_are_the_same_by_blocks_and_by_a_tree(monkeypatch):
     assert tree.shape == blocks.shape and not (tree == np.arange(len(xy))[:, None]).any()
     d = lambda idx: np.sort(np.hypot(*(xy[idx] - xy[:, None, :]).transpose(2, 0, 1)), axis=1)  # noqa: E731
     np.testing.assert_allclose(d(tree), d(blocks))  # the same distances (ties may pick others)
+
+
+def test_a_lane_joins_copies_whose_headings_the_check_calls_the_same():
+    """Lanes into one vertex at headings 0.7e-9 rad apart (nearly collinear vertices, as a
+    roadmap's passage chains make): the copies they share are measured from their group's
+    first heading. Before, each was merged with the previous one, so a chain of three shared
+    a copy 1.4e-9 from the third lane's heading, and an answer driving that lane turned while
+    moving (``gfuzzy check``: "turns while moving" on two unseen scenes' answers)."""
+    from gfuzzy.timespace.drive import SAME_HEADING
+    from gfuzzy.timespace.unicycle import _base
+
+    robot = {"box": [0.6, 0.4], "vmax": 1.0, "kinematics": "unicycle"}
+    sc = parse_scene(doc(robot))
+    verts = np.array([[2.0, 1.0], [2.0 - 0.7e-9, 1.0], [2.0 - 1.4e-9, 1.0], [2.0, 2.0], [2.0, 3.0]])
+    edges = np.array([[0, 3], [1, 3], [2, 3], [3, 4]])
+    rm = Roadmap(verts, edges, np.hypot(*(verts[edges[:, 1]] - verts[edges[:, 0]]).T), sc.name, sc.static_hash,
+                 sc.robot.circumradius)  # fmt: skip
+    planner = Planner(sc, rm)
+    base = _base(rm, planner.geometry, 1.0, 1.0, 0.07)
+    lane = (base.dh == 0.0) & (base.a >= 0) & (base.b >= 0)
+    assert lane.sum() >= 4
+    gap = np.abs(np.angle(np.exp(1j * (base.poses[base.a[lane], 2] - base.poses[base.b[lane], 2]))))
+    assert gap.max() <= SAME_HEADING, gap.max()
+    for a in (0, 1, 2):  # drive each lane in, then on north
+        res = planner.plan([*verts[a], math.pi / 2], [2.0, 3.5, math.pi / 2], 0.0, PlanOptions())
+        assert res.solved, res.message
+        rep = check_trajectory(sc, res.trajectory.waypoints)
+        assert rep.valid, rep.reason

@@ -48,6 +48,9 @@ __all__ = ["UnicycleGraph", "UnicycleGoal", "UnicyclePrepared", "prepare_goal", 
 #: Points on an end's own heading line (in circumradii from it) that join it to the roadmap
 #: where it cannot turn round in place (:meth:`_Extras.along`).
 ALONG = (0.5, 1.0, 2.0, 4.0)
+#: Lane headings at one vertex this close to the first of their group share a copy (rad):
+#: below half of ``SAME_HEADING``, so the two copies a lane joins differ by at most that.
+MERGE_HEADING = 0.4 * SAME_HEADING
 
 
 @dataclass
@@ -142,8 +145,7 @@ def _base(roadmap, geometry, stretch: float, vmax: float, step_len: float) -> _B
     ch = np.asarray(wrap_angle(np.concatenate(ch)), dtype=float) if ch else np.zeros(0)
     order = np.lexsort((ch, cv))
     cv, ch = cv[order], ch[order]
-    new = np.ones(len(cv), dtype=bool)
-    new[1:] = (cv[1:] != cv[:-1]) | (ch[1:] - ch[:-1] > SAME_HEADING)
+    new = _merged(cv, ch)
     cv, ch = cv[new], ch[new]
 
     def copy_id(v, h):
@@ -365,6 +367,24 @@ class _Extras:
                 else:
                     self.lane(c, here)
                 joined += 1
+
+
+def _merged(cv: IntArray, ch: FloatArray) -> np.ndarray:
+    """Which copies (sorted by vertex, then heading) start a new copy: a heading within
+    ``MERGE_HEADING`` of its group's *first* heading at the same vertex joins that group.
+
+    Measured from the group's first heading, not the previous one: a chain of lanes each
+    within the tolerance of the next (nearly collinear vertices) would otherwise gather
+    headings farther apart than ``SAME_HEADING``, and a lane driven from one such copy to
+    another would turn while moving (``gfuzzy check``: 1.4e-9 rad on an answer)."""
+    new = np.ones(len(cv), dtype=bool)
+    first_h, first_v = math.nan, -1
+    for i, (v, h) in enumerate(zip(cv.tolist(), ch.tolist(), strict=True)):
+        if v == first_v and h - first_h <= MERGE_HEADING:
+            new[i] = False
+        else:
+            first_h, first_v = h, v
+    return new
 
 
 def _drive(geo, robot, ax, ay, bx, by, back: bool, ca=None, cb=None):
