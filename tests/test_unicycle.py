@@ -582,3 +582,29 @@ def test_an_l_footprint_drives_through_a_door_with_2_5_cm_per_side(seed):
     rep = check_trajectory(sc, res.trajectory.waypoints)
     assert rep.valid, rep.reason
 
+
+@pytest.mark.parametrize(
+    "reverse, start, goal",
+    [
+        (True, [4.0, 3.0, 0.0], [0.42, 0.27, math.pi]),  # park nose into the corner, beside the wall
+        (True, [0.42, 0.27, math.pi], [4.0, 3.0, 0.0]),  # and leave it (backwards first)
+        (False, [4.0, 1.0, math.pi], [4.73, 3.58, math.pi / 2]),  # park nose up in the other corner
+    ],
+)
+def test_parking_beside_a_wall_with_2_cm_to_spare_tilts_in_small_turns(reverse, start, goal):
+    """A 0.8 x 0.5 box parked in a room's corner, 2 cm from both walls: on the line beside
+    the wall it can turn by at most 0.05 rad, so it gets there in a chain of small turns
+    (coming down at 0.3 rad, then 0.04, then straight: a witness built by hand passes
+    ``gfuzzy check``). The end tilts by part of the turn its walls leave it and follows the
+    new heading's line (``_Extras.along``); before, only the end's own line was tried and
+    all three were no_path (the unseen scene ``corner-park``, issue 18's review)."""
+    robot = {"box": [0.8, 0.5], "vmax": 1.0, "kinematics": "unicycle", "reverse": reverse}
+    sc = parse_scene(doc(robot, bounds=(0, 0, 5, 4)))
+    verts = np.array([[2.0, 2.3], [1.5, 1.0], [3.5, 1.2], [3.8, 2.8]])
+    edges = np.array([[0, 1], [1, 2], [0, 2], [2, 3], [0, 3]])
+    rm = Roadmap(verts, edges, np.hypot(*(verts[edges[:, 1]] - verts[edges[:, 0]]).T), sc.name, sc.static_hash,
+                 sc.robot.circumradius)  # fmt: skip
+    res = Planner(sc, rm).plan(start, goal, 0.0, PlanOptions(dt=0.1))
+    assert res.solved, res.message
+    rep = check_trajectory(sc, res.trajectory.waypoints)
+    assert rep.valid, rep.reason

@@ -48,6 +48,12 @@ __all__ = ["UnicycleGraph", "UnicycleGoal", "UnicyclePrepared", "prepare_goal", 
 #: Points on an end's own heading line (in circumradii from it) that join it to the roadmap
 #: where it cannot turn round in place (:meth:`_Extras.along`).
 ALONG = (0.5, 1.0, 2.0, 4.0)
+#: Tilts (:meth:`_Extras.along`): the share of the largest free turn taken, the smallest
+#: tilt tried (rad), how many tilts in a row and how many heading lines per end at most.
+TILT_SHARE = 0.75
+MIN_TILT = 1e-3
+TILT_DEPTH = 3
+TILT_LINES = 24
 #: Lane headings at one vertex this close to the first of their group share a copy (rad):
 #: below half of ``SAME_HEADING``, so the two copies a lane joins differ by at most that.
 MERGE_HEADING = 0.4 * SAME_HEADING
@@ -293,15 +299,40 @@ class _Extras:
 
     def along(self, pose: FloatArray, node: int, connect_k: int, outward: bool, reverse: bool) -> None:
         """Where the robot cannot turn round at ``pose`` (its circumscribed disc is not
-        clear: nose to a wall, in a corridor, docked), join it through points on its own
-        heading's line: straight lanes along the heading, forwards (and backwards with
-        ``reverse``), to points ``ALONG`` circumradii away as far as they are free, each
-        point joined to the roadmap as an end is (:meth:`join`). Without them such a start
-        or goal joins only vertices that lie exactly on that line."""
+        clear: nose to a wall, in a corridor, docked, parked beside a wall), join it through
+        points on its own heading's line: straight lanes along the heading, forwards (and
+        backwards with ``reverse``), to points ``ALONG`` circumradii away as far as they are
+        free, each point joined to the roadmap as an end is (:meth:`join`). Without them
+        such a start or goal joins only vertices that lie exactly on that line.
+
+        Where a point of a line (or the end itself) cannot turn round either, the robot
+        *tilts* there: it turns by ``TILT_SHARE`` of the largest turn its walls leave it each
+        way (:func:`_free_arc`) and follows the new heading's line the same way, up to
+        ``TILT_DEPTH`` tilts and ``TILT_LINES`` lines per end (breadth first): the chain of
+        small turns that parks a box beside a wall with a few centimetres to spare, where
+        no turn in place fits on the wall's line itself."""
         geo = self.geometry
         if geo.robot.shape == "disc" or geo.sweep_bound(float(pose[0]), float(pose[1])) > 0:
             return
+        todo, lines = [(np.asarray(pose, dtype=float), node, 0)], 0
+        while todo and lines < TILT_LINES:
+            here, n_here, depth = todo.pop(0)
+            lines += 1
+            points = self._line(here, n_here, connect_k, outward, reverse)
+            if depth == 0:  # the end itself tilts too (a tilted line's start is its turn)
+                points.insert(0, (here, n_here))
+            if depth >= TILT_DEPTH:
+                continue
+            for q, n_q in points:
+                if geo.sweep_bound(float(q[0]), float(q[1])) > 0:
+                    continue  # turns round there: joined to the roadmap already
+                todo += self._tilts(q, n_q, outward, depth + 1)
+
+    def _line(self, pose: FloatArray, node: int, connect_k: int, outward: bool, reverse: bool) -> list:
+        """The points of :meth:`along` on ``pose``'s heading line, joined: [(pose, node)]."""
+        geo = self.geometry
         px, py, ph = (float(c) for c in pose)
+        out = []
         for sign in (1.0, -1.0) if reverse else (1.0,):
             way = sign if outward else -sign  # a goal is arrived at: its forward lane comes from behind
             c, s = way * math.cos(ph), way * math.sin(ph)
@@ -317,7 +348,27 @@ class _Extras:
                 else:
                     self.lane(q, prev)
                 self.join(np.array([nx, ny, ph]), q, connect_k, outward, reverse)
+                out.append((np.array([nx, ny, ph]), q))
                 prev, qx, qy = q, nx, ny
+        return out
+
+    def _tilts(self, pose: FloatArray, node: int, outward: bool, depth: int) -> list:
+        """New nodes at ``pose``'s place, turned each way by ``TILT_SHARE`` of the free arc
+        (at least ``MIN_TILT``), joined by the turn: [(pose, node, depth)]."""
+        geo = self.geometry
+        x, y, h = (float(c) for c in pose)
+        out = []
+        for side in (1.0, -1.0):
+            dh = side * TILT_SHARE * _free_arc(geo, x, y, h, side)
+            if abs(dh) < MIN_TILT or not turn_free(geo, x, y, h, dh, swept=False):
+                continue
+            t = self.node(x, y, h + dh)
+            if outward:
+                self.turn(node, t, dh)
+            else:  # arrives tilted, then turns to the heading it goes on with
+                self.turn(t, node, -dh)
+            out.append((np.array([x, y, float(wrap_angle(h + dh))]), t, depth))
+        return out
 
     def join(self, pose: FloatArray, node: int, connect_k: int, outward: bool, reverse: bool) -> None:
         """Join ``node`` (at ``pose``) to its nearest vertices: turn + straight to a copy
@@ -367,6 +418,21 @@ class _Extras:
                 else:
                     self.lane(c, here)
                 joined += 1
+
+
+def _free_arc(geo, x: float, y: float, h: float, side: float, steps: int = 12) -> float:
+    """The largest turn in place at (x, y) from ``h`` towards ``side`` (+1 counter-clockwise)
+    whose sweep is free, up to pi, by bisection to pi / 2**steps (0: none)."""
+    if turn_free(geo, x, y, h, side * math.pi, swept=False):
+        return math.pi
+    lo, hi = 0.0, math.pi
+    for _ in range(steps):
+        mid = 0.5 * (lo + hi)
+        if turn_free(geo, x, y, h, side * mid, swept=False):
+            lo = mid
+        else:
+            hi = mid
+    return lo
 
 
 def _merged(cv: IntArray, ch: FloatArray) -> np.ndarray:
