@@ -233,8 +233,10 @@ class _Extras:
     ``ring_at + i`` (or the placeholder ``-(1 + i)`` while the ring's place is not known).
     """
 
-    def __init__(self, base: _Base, geometry, scale: float, first: int, ring_at: int | None = None):
+    def __init__(self, base: _Base, geometry, scale: float, first: int, ring_at: int | None = None,
+                 tilts: bool = False):  # fmt: skip
         self.base, self.geometry, self.scale = base, geometry, scale
+        self.tilts = tilts  # whether :meth:`along` tilts (see there)
         self.first = first
         self.ring_at = ring_at
         self.poses: list = []
@@ -310,7 +312,9 @@ class _Extras:
         way (:func:`_free_arc`) and follows the new heading's line the same way, up to
         ``TILT_DEPTH`` tilts and ``TILT_LINES`` lines per end (breadth first): the chain of
         small turns that parks a box beside a wall with a few centimetres to spare, where
-        no turn in place fits on the wall's line itself."""
+        no turn in place fits on the wall's line itself. Only with ``tilts`` (the planner
+        asks for them when the query's graph does not join its ends without them: they cost
+        up to a second per end, joining each line's points to the roadmap)."""
         geo = self.geometry
         if geo.robot.shape == "disc" or geo.sweep_bound(float(pose[0]), float(pose[1])) > 0:
             return
@@ -321,7 +325,7 @@ class _Extras:
             points = self._line(here, n_here, connect_k, outward, reverse)
             if depth == 0:  # the end itself tilts too (a tilted line's start is its turn)
                 points.insert(0, (here, n_here))
-            if depth >= TILT_DEPTH:
+            if depth >= (TILT_DEPTH if self.tilts else 0):
                 continue
             for q, n_q in points:
                 if geo.sweep_bound(float(q[0]), float(q[1])) > 0:
@@ -551,6 +555,8 @@ class UnicycleGoal:
     scale: float
     connect_k: int
     steps: object = None
+    #: Whether the ends tilt where they cannot turn round (:meth:`_Extras.along`).
+    tilts: bool = False
 
     def splice(self, planner, start: FloatArray, exact: bool = True, fan_options=None, expired=None) -> UnicycleGraph:
         """This graph with ``start`` (``[x, y, heading]``, heading wrapped) joined in.
@@ -563,7 +569,7 @@ class UnicycleGoal:
         """
         geo, robot = planner.geometry, planner.robot
         N = len(self.poses)
-        ex = _Extras(self.base, geo, self.scale, N, ring_at=len(self.base.poses))
+        ex = _Extras(self.base, geo, self.scale, N, ring_at=len(self.base.poses), tilts=self.tilts)
         ex.kept = self.poses
         s_id = ex.node(*start)
         ex.join(start, s_id, self.connect_k, True, robot.reverse)
@@ -689,7 +695,7 @@ def _base_cut(base: _Base, step_len: float) -> _BaseCut:
 
 
 def prepare_goal(planner, goal: FloatArray, dt: float, vplan: float, connect_k: int = 10,
-                 stretch: float = 1.0) -> UnicycleGoal:  # fmt: skip
+                 stretch: float = 1.0, tilts: bool = False) -> UnicycleGoal:  # fmt: skip
     """The kept graph of ``goal`` (``[x, y, heading]``, heading wrapped): the base's copies,
     lanes and rings cut into steps (cached on the roadmap) with the goal joined in, and the
     static steps and metres to the goal.
@@ -703,7 +709,7 @@ def prepare_goal(planner, goal: FloatArray, dt: float, vplan: float, connect_k: 
     cut = _base_cut(base, step_len)
     scale = robot.vmax / robot.turn_rate
     nn0 = len(cut.nodes)
-    ex = _Extras(base, geo, scale, nn0, ring_at=len(base.poses))
+    ex = _Extras(base, geo, scale, nn0, ring_at=len(base.poses), tilts=tilts)
     g_id = ex.node(*goal)
     ex.join(goal, g_id, connect_k, False, robot.reverse)
     ex.along(goal, g_id, connect_k, False, robot.reverse)
@@ -740,7 +746,7 @@ def prepare_goal(planner, goal: FloatArray, dt: float, vplan: float, connect_k: 
         goal=np.asarray(goal, dtype=float), base=base, poses=np.vstack([nodes, cut.inner, innerg]), indptr=indptr,
         neighbors=neighbors, nn=nn, A=A, B=B, k=k, L=np.concatenate([cut.L, Lg]), hop=hop, heuristic=heur,
         metres=metres, groups=groups, p_of=p_of, j=j, g_id=g_id, step_len=step_len, scale=scale, connect_k=connect_k,
-        steps=with_rows(cut.fwd, Ag, Bg, kg.astype(float), nn),
+        steps=with_rows(cut.fwd, Ag, Bg, kg.astype(float), nn), tilts=tilts,
     )  # fmt: skip
 
 
