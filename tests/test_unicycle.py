@@ -608,3 +608,29 @@ def test_parking_beside_a_wall_with_2_cm_to_spare_tilts_in_small_turns(reverse, 
     assert res.solved, res.message
     rep = check_trajectory(sc, res.trajectory.waypoints)
     assert rep.valid, rep.reason
+
+
+def test_every_move_of_a_query_graph_keeps_its_heading_within_the_checks_tolerance():
+    """A start at heading 0 whose lane to a vertex runs at -7e-10 rad, where the vertex's
+    copy (from its lane on) is at -1.15e-9: every one-step move of the query's graph that
+    changes position keeps its heading within the 1e-9 rad ``gfuzzy check`` allows. Before,
+    the start drove that lane without turning (7e-10 counted as no turn) into that copy (its
+    heading within 1e-9 of the lane's), 1.15e-9 off its own: two unseen answers (a corridor,
+    a dead end, roadmap seed 1) "turned while moving"."""
+    from gfuzzy.timespace.unicycle import build_graph
+
+    robot = {"box": [0.6, 0.4], "vmax": 1.0, "kinematics": "unicycle"}
+    sc = parse_scene(doc(robot))
+    verts = np.array([[2.0, 2.0 - 7e-10], [3.0, 2.0 - 7e-10 - 1.15e-9], [4.0, 2.0]])
+    edges = np.array([[0, 1], [1, 2]])
+    rm = Roadmap(verts, edges, np.hypot(*(verts[edges[:, 1]] - verts[edges[:, 0]]).T), sc.name, sc.static_hash,
+                 sc.robot.circumradius)  # fmt: skip
+    planner = Planner(sc, rm)
+    g = build_graph(planner, np.array([1.0, 2.0, 0.0]), np.array([5.0, 2.5, 0.5]), 0.07, 1.0).graph
+    src = np.repeat(np.arange(len(g.indptr) - 1), np.diff(g.indptr))
+    dst = np.asarray(g.neighbors)
+    p = np.asarray(g.poses)
+    moves = np.hypot(*(p[dst, :2] - p[src, :2]).T) > 1e-9
+    dh = np.abs(np.angle(np.exp(1j * (p[dst, 2] - p[src, 2]))))[moves]
+    assert moves.sum() > 100
+    assert dh.max() <= 1e-9, dh.max()

@@ -272,7 +272,7 @@ class _Extras:
         geo, base = self.geometry, self.base
         ids = base.copies_at(v)
         rel = (base.poses[ids, 2] - h) % (2 * math.pi)
-        same = (rel <= SAME_HEADING) | (rel >= 2 * math.pi - SAME_HEADING)
+        same = (rel <= MERGE_HEADING) | (rel >= 2 * math.pi - MERGE_HEADING)
         if same.any():
             return int(ids[np.nonzero(same)[0][0]])
         x, y = (float(c) for c in base.poses[ids[0], :2])
@@ -406,7 +406,7 @@ class _Extras:
                 h = _drive(geo, robot, ax, ay, bx, by, back, ca, cb)
                 if h is None:
                     continue
-                dh = pick_turn(geo, px, py, ph, h) if outward else pick_turn(geo, px, py, h, ph)
+                dh = _turn(geo, px, py, ph, h) if outward else _turn(geo, px, py, h, ph)
                 if dh is None:
                     continue
                 here = node
@@ -422,6 +422,19 @@ class _Extras:
                 else:
                     self.lane(c, here)
                 joined += 1
+
+
+def _turn(geo, x: float, y: float, h1: float, h2: float) -> float | None:
+    """:func:`gfuzzy.timespace.drive.pick_turn` at the copies' tolerance: headings more
+    than ``MERGE_HEADING`` apart need a turn (a lane's ends then differ by less than the
+    check's 1e-9 rad; counted from ``SAME_HEADING`` they differed by up to twice it, and two
+    unseen answers turned 1.2e-9 and 1.8e-9 rad while moving off their start)."""
+    dh = pick_turn(geo, x, y, h1, h2)
+    if dh == 0.0:
+        d = float(wrap_angle(h2 - h1))
+        if abs(d) > MERGE_HEADING:
+            return d if turn_free(geo, x, y, h1, d) else None
+    return dh
 
 
 def _free_arc(geo, x: float, y: float, h: float, side: float, steps: int = 12) -> float:
@@ -586,7 +599,7 @@ class UnicycleGoal:
                 h = _drive(geo, robot, sx, sy, gx, gy, back)
                 if h is None:
                     continue
-                d1, d2 = pick_turn(geo, sx, sy, sh, h), pick_turn(geo, gx, gy, h, gh)
+                d1, d2 = _turn(geo, sx, sy, sh, h), _turn(geo, gx, gy, h, gh)
                 if d1 is None or d2 is None:
                     continue
                 a = s_id if d1 == 0.0 else ex.node(sx, sy, h)
