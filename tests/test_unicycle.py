@@ -634,3 +634,33 @@ def test_every_move_of_a_query_graph_keeps_its_heading_within_the_checks_toleran
     dh = np.abs(np.angle(np.exp(1j * (p[dst, 2] - p[src, 2]))))[moves]
     assert moves.sum() > 100
     assert dh.max() <= 1e-9, dh.max()
+
+
+@pytest.mark.parametrize("kinematics", ["unicycle", "holonomic"])
+def test_a_disc_touching_a_wall_by_a_rounding_drives_off(kinematics):
+    """A disc of radius 0.2 at x = 1.6 touches a wall whose face is at 1.8 on paper, and lies
+    a few 1e-17 m into it in floating point: ``gfuzzy check`` (1e-9 tolerance) accepts the
+    pose, so the planner takes it for touching (its distance measured exactly at contact,
+    not by FCL's collision test) and drives off it, the motion away measured exactly too.
+    Before: ``invalid_query`` ("collides with a static obstacle"; the unseen scene
+    ``disc-uturn``). A motion into the wall from there, or a start 1e-6 m into it, is still
+    refused."""
+    from gfuzzy.collision.geometry import StaticGeometry
+
+    robot = {"disc": 0.2, "vmax": 0.5, "kinematics": kinematics, **({"wmax": 0.3} if kinematics == "unicycle" else {})}
+    sc = parse_scene(doc(robot, obstacles=[{"box": {"center": [2.0, 2.5], "size": [0.4, 1.0]}}], bounds=(0, 0, 4, 3)))
+    geo = StaticGeometry(sc)
+    start, goal = ([1.6, 2.5, math.pi], [0.8, 2.5, math.pi]) if kinematics == "unicycle" else ([1.6, 2.5], [0.8, 2.5])
+    verts = np.array([[1.0, 1.0], [3.0, 1.0], [0.5, 2.0]])
+    rm = Roadmap(verts, np.array([[0, 1], [0, 2]]), np.hypot(*(verts[[1, 2]] - verts[0]).T), sc.name, sc.static_hash,
+                 sc.robot.circumradius)  # fmt: skip
+    res = Planner(sc, rm).plan(start, goal, 0.0, PlanOptions())
+    assert res.solved, res.message
+    rep = check_trajectory(sc, res.trajectory.waypoints)
+    assert rep.valid, rep.reason
+    assert geo.clearance1([1.6, 2.5]) == 0.0
+    assert not geo.motion_free([1.6, 2.5], [1.7, 2.5])  # into the wall
+    assert geo.motion_free([1.6, 2.5], [1.6, 2.2])  # along it, touching: allowed
+    assert not geo.motion_free([1.6, 2.5], [1.65, 2.2])  # along it, but into it
+    deep = Planner(sc, rm).plan([1.600001, 2.5, math.pi] if kinematics == "unicycle" else [1.600001, 2.5], goal)
+    assert deep.status.value == "invalid_query"
