@@ -528,3 +528,139 @@ def test_the_nearest_points_are_the_same_by_blocks_and_by_a_tree(monkeypatch):
     assert tree.shape == blocks.shape and not (tree == np.arange(len(xy))[:, None]).any()
     d = lambda idx: np.sort(np.hypot(*(xy[idx] - xy[:, None, :]).transpose(2, 0, 1)), axis=1)  # noqa: E731
     np.testing.assert_allclose(d(tree), d(blocks))  # the same distances (ties may pick others)
+
+
+def test_a_lane_joins_copies_whose_headings_the_check_calls_the_same():
+    """Lanes into one vertex at headings 0.7e-9 rad apart (nearly collinear vertices, as a
+    roadmap's passage chains make): the copies they share are measured from their group's
+    first heading. Before, each was merged with the previous one, so a chain of three shared
+    a copy 1.4e-9 from the third lane's heading, and an answer driving that lane turned while
+    moving (``gfuzzy check``: "turns while moving" on two unseen scenes' answers)."""
+    from gfuzzy.timespace.drive import SAME_HEADING
+    from gfuzzy.timespace.unicycle import _base
+
+    robot = {"box": [0.6, 0.4], "vmax": 1.0, "kinematics": "unicycle"}
+    sc = parse_scene(doc(robot))
+    verts = np.array([[2.0, 1.0], [2.0 - 0.7e-9, 1.0], [2.0 - 1.4e-9, 1.0], [2.0, 2.0], [2.0, 3.0]])
+    edges = np.array([[0, 3], [1, 3], [2, 3], [3, 4]])
+    rm = Roadmap(verts, edges, np.hypot(*(verts[edges[:, 1]] - verts[edges[:, 0]]).T), sc.name, sc.static_hash,
+                 sc.robot.circumradius)  # fmt: skip
+    planner = Planner(sc, rm)
+    base = _base(rm, planner.geometry, 1.0, 1.0, 0.07)
+    lane = (base.dh == 0.0) & (base.a >= 0) & (base.b >= 0)
+    assert lane.sum() >= 4
+    gap = np.abs(np.angle(np.exp(1j * (base.poses[base.a[lane], 2] - base.poses[base.b[lane], 2]))))
+    assert gap.max() <= SAME_HEADING, gap.max()
+    for a in (0, 1, 2):  # drive each lane in, then on north
+        res = planner.plan([*verts[a], math.pi / 2], [2.0, 3.5, math.pi / 2], 0.0, PlanOptions())
+        assert res.solved, res.message
+        rep = check_trajectory(sc, res.trajectory.waypoints)
+        assert rep.valid, rep.reason
+
+
+LFOOT = [[0.5, -0.2], [0.5, 0.2], [0.1, 0.2], [0.1, 0.5], [-0.2, 0.5], [-0.2, -0.2]]
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_an_l_footprint_drives_through_a_door_with_2_5_cm_per_side(seed):
+    """An L footprint (an arm on its left) as a differential drive without reverse, through
+    a 0.75 door in a 0.3 wall (2.5 cm per side when it crosses square to the wall): it needs
+    lanes on the door's middle line *facing east*, reaching places beyond the wall where it
+    turns round. The roadmap's chains cross the door both ways for a footprint that is not
+    the same body turned by pi (``gfuzzy.roadmap.passage.Chains``); before, the door was
+    missed on seeds 1 and 2 (the unseen scene ``lfoot``, issue 18's review)."""
+    from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
+
+    robot = {"footprint": LFOOT, "vmax": 0.8, "kinematics": "unicycle", "wmax": 1.0}
+    walls = [{"box": {"center": [3.5, 0.8], "size": [0.3, 1.6]}}, {"box": {"center": [3.5, 3.175], "size": [0.3, 1.65]}},
+             {"disc": {"center": [1.5, 2.8], "radius": 0.4}},
+             {"polygon": [[5, 1], [6, 1], [6, 1.3], [5.3, 1.3], [5.3, 2.2], [5, 2.2]]}]  # fmt: skip
+    sc = parse_scene(doc(robot, obstacles=walls, bounds=(0, 0, 7, 4)))
+    rm = build_roadmap(sc, RoadmapOptions(seed=seed))
+    res = Planner(sc, rm).plan([1.0, 1.0, 0.0], [5.5, 3.0, math.pi], 0.0, PlanOptions())
+    assert res.solved, res.message
+    rep = check_trajectory(sc, res.trajectory.waypoints)
+    assert rep.valid, rep.reason
+
+
+@pytest.mark.parametrize(
+    "reverse, start, goal",
+    [
+        (True, [4.0, 3.0, 0.0], [0.42, 0.27, math.pi]),  # park nose into the corner, beside the wall
+        (True, [0.42, 0.27, math.pi], [4.0, 3.0, 0.0]),  # and leave it (backwards first)
+        (False, [4.0, 1.0, math.pi], [4.73, 3.58, math.pi / 2]),  # park nose up in the other corner
+    ],
+)
+def test_parking_beside_a_wall_with_2_cm_to_spare_tilts_in_small_turns(reverse, start, goal):
+    """A 0.8 x 0.5 box parked in a room's corner, 2 cm from both walls: on the line beside
+    the wall it can turn by at most 0.05 rad, so it gets there in a chain of small turns
+    (coming down at 0.3 rad, then 0.04, then straight: a witness built by hand passes
+    ``gfuzzy check``). The end tilts by part of the turn its walls leave it and follows the
+    new heading's line (``_Extras.along``); before, only the end's own line was tried and
+    all three were no_path (the unseen scene ``corner-park``, issue 18's review)."""
+    robot = {"box": [0.8, 0.5], "vmax": 1.0, "kinematics": "unicycle", "reverse": reverse}
+    sc = parse_scene(doc(robot, bounds=(0, 0, 5, 4)))
+    verts = np.array([[2.0, 2.3], [1.5, 1.0], [3.5, 1.2], [3.8, 2.8]])
+    edges = np.array([[0, 1], [1, 2], [0, 2], [2, 3], [0, 3]])
+    rm = Roadmap(verts, edges, np.hypot(*(verts[edges[:, 1]] - verts[edges[:, 0]]).T), sc.name, sc.static_hash,
+                 sc.robot.circumradius)  # fmt: skip
+    res = Planner(sc, rm).plan(start, goal, 0.0, PlanOptions(dt=0.1))
+    assert res.solved, res.message
+    rep = check_trajectory(sc, res.trajectory.waypoints)
+    assert rep.valid, rep.reason
+
+
+def test_every_move_of_a_query_graph_keeps_its_heading_within_the_checks_tolerance():
+    """A start at heading 0 whose lane to a vertex runs at -7e-10 rad, where the vertex's
+    copy (from its lane on) is at -1.15e-9: every one-step move of the query's graph that
+    changes position keeps its heading within the 1e-9 rad ``gfuzzy check`` allows. Before,
+    the start drove that lane without turning (7e-10 counted as no turn) into that copy (its
+    heading within 1e-9 of the lane's), 1.15e-9 off its own: two unseen answers (a corridor,
+    a dead end, roadmap seed 1) "turned while moving"."""
+    from gfuzzy.timespace.unicycle import build_graph
+
+    robot = {"box": [0.6, 0.4], "vmax": 1.0, "kinematics": "unicycle"}
+    sc = parse_scene(doc(robot))
+    verts = np.array([[2.0, 2.0 - 7e-10], [3.0, 2.0 - 7e-10 - 1.15e-9], [4.0, 2.0]])
+    edges = np.array([[0, 1], [1, 2]])
+    rm = Roadmap(verts, edges, np.hypot(*(verts[edges[:, 1]] - verts[edges[:, 0]]).T), sc.name, sc.static_hash,
+                 sc.robot.circumradius)  # fmt: skip
+    planner = Planner(sc, rm)
+    g = build_graph(planner, np.array([1.0, 2.0, 0.0]), np.array([5.0, 2.5, 0.5]), 0.07, 1.0).graph
+    src = np.repeat(np.arange(len(g.indptr) - 1), np.diff(g.indptr))
+    dst = np.asarray(g.neighbors)
+    p = np.asarray(g.poses)
+    moves = np.hypot(*(p[dst, :2] - p[src, :2]).T) > 1e-9
+    dh = np.abs(np.angle(np.exp(1j * (p[dst, 2] - p[src, 2]))))[moves]
+    assert moves.sum() > 100
+    assert dh.max() <= 1e-9, dh.max()
+
+
+@pytest.mark.parametrize("kinematics", ["unicycle", "holonomic"])
+def test_a_disc_touching_a_wall_by_a_rounding_drives_off(kinematics):
+    """A disc of radius 0.2 at x = 1.6 touches a wall whose face is at 1.8 on paper, and lies
+    a few 1e-17 m into it in floating point: ``gfuzzy check`` (1e-9 tolerance) accepts the
+    pose, so the planner takes it for touching (its distance measured exactly at contact,
+    not by FCL's collision test) and drives off it, the motion away measured exactly too.
+    Before: ``invalid_query`` ("collides with a static obstacle"; the unseen scene
+    ``disc-uturn``). A motion into the wall from there, or a start 1e-6 m into it, is still
+    refused."""
+    from gfuzzy.collision.geometry import StaticGeometry
+
+    robot = {"disc": 0.2, "vmax": 0.5, "kinematics": kinematics, **({"wmax": 0.3} if kinematics == "unicycle" else {})}
+    sc = parse_scene(doc(robot, obstacles=[{"box": {"center": [2.0, 2.5], "size": [0.4, 1.0]}}], bounds=(0, 0, 4, 3)))
+    geo = StaticGeometry(sc)
+    start, goal = ([1.6, 2.5, math.pi], [0.8, 2.5, math.pi]) if kinematics == "unicycle" else ([1.6, 2.5], [0.8, 2.5])
+    verts = np.array([[1.0, 1.0], [3.0, 1.0], [0.5, 2.0]])
+    rm = Roadmap(verts, np.array([[0, 1], [0, 2]]), np.hypot(*(verts[[1, 2]] - verts[0]).T), sc.name, sc.static_hash,
+                 sc.robot.circumradius)  # fmt: skip
+    res = Planner(sc, rm).plan(start, goal, 0.0, PlanOptions())
+    assert res.solved, res.message
+    rep = check_trajectory(sc, res.trajectory.waypoints)
+    assert rep.valid, rep.reason
+    assert geo.clearance1([1.6, 2.5]) == 0.0
+    assert not geo.motion_free([1.6, 2.5], [1.7, 2.5])  # into the wall
+    assert geo.motion_free([1.6, 2.5], [1.6, 2.2])  # along it, touching: allowed
+    assert not geo.motion_free([1.6, 2.5], [1.65, 2.2])  # along it, but into it
+    deep = Planner(sc, rm).plan([1.600001, 2.5, math.pi] if kinematics == "unicycle" else [1.600001, 2.5], goal)
+    assert deep.status.value == "invalid_query"

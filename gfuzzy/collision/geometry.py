@@ -36,6 +36,9 @@ _NEAR_CONTACT = 1e-4  # distances below this are decided by a collision test (0 
 _DIST_MARGIN = 1e-4  # subtracted from FCL distances (GJK overestimates; see obstacle_clearance)
 #: A map's distance-transform bound above this (m) certifies a motion's step without FCL.
 _QUICK_CLEARANCE = 0.02
+#: A disc robot this far into an obstacle or less (m) touches it: the overlap ``gfuzzy
+#: check`` tolerates as rounding (its ``tol``), measured exactly (:class:`_ExactDisc`).
+TOUCH_TOL = 1e-9
 
 
 def _yaw_transform(x: float, y: float, yaw: float = 0.0) -> fcl.Transform:
@@ -177,6 +180,8 @@ class StaticGeometry:
         self._robot_objs = [fcl.CollisionObject(g, fcl.Transform()) for g in robot_geometries(scene.robot)]
         self._robot_obj = self._robot_objs[0]
         self._disc_obj = None  # the circumscribed disc (sweep_bound), made when first needed
+        # a disc touching obstacles (robot.clearance 0): exact distances at contact
+        self._exact = _ExactDisc(scene) if scene.robot.shape == "disc" and self.keep == 0 else None
         self._shape = shape_of(scene.robot)
         self._grids = [ob for ob in scene.obstacles if isinstance(ob, MapObstacle) and len(ob.rects)]
         self._inner = _inner_point(scene.robot)
@@ -295,7 +300,11 @@ class StaticGeometry:
         # distance is unreliable altogether, so the collision test decides (0 or -1)
         d = dist - _DIST_MARGIN
         if d <= _NEAR_CONTACT:
-            return -1.0 if self._collides() else 0.0
+            if not self._collides():
+                return 0.0
+            # a disc a rounding into an obstacle (a pose meant to touch it) touches it, as
+            # the check says: measured exactly
+            return 0.0 if self._exact is not None and self._exact.gap(pose, pose) >= -TOUCH_TOL else -1.0
         return d
 
     def _map_bound(self, pose) -> float:
@@ -399,7 +408,12 @@ class StaticGeometry:
             # the callers' clearances count the bounds: a positive one still bounds the obstacles'
             ca = ca if ca is not None and ca > 0 else None
             cb = cb if cb is not None and cb > 0 else None
-            return self._trace(a, b, max_steps, ca, cb, self._obstacle_certifying) >= 0
+            if self._trace(a, b, max_steps, ca, cb, self._obstacle_certifying) >= 0:
+                return True
+            # a disc touching an obstacle at an end starts or ends no traced motion (the
+            # steps are its clearance): its straight motion is measured exactly instead
+            return bool(self._exact is not None and min(self._obstacle_certifying(a), self._obstacle_certifying(b)) == 0.0
+                        and self._exact.gap(a, b) >= -TOUCH_TOL)  # fmt: skip
         return self._trace(a, b, max_steps, ca, cb, self._certifying_clearance) >= 0
 
     def _obstacle_certifying(self, pose) -> float:
@@ -539,6 +553,44 @@ class StaticGeometry:
             low = min(low, c)
             hi -= c / total
         return -1.0
+
+
+class _ExactDisc:
+    """Exact distances of a disc robot's straight motions to the static obstacles (discs in
+    closed form, boxes, polygons and maps' blocked rectangles with shapely), for poses at
+    contact, where FCL's distances are not to be trusted (see :meth:`StaticGeometry.motion_free`)."""
+
+    def __init__(self, scene: Scene):
+        import shapely
+
+        self.r = float(scene.robot.radius)
+        self.discs = np.array([[*ob.center, ob.radius] for ob in scene.obstacles if isinstance(ob, Disc)]).reshape(-1, 3)
+        polys = [shapely.Polygon(ob.vertices()) for ob in scene.obstacles if isinstance(ob, Box)]
+        polys += [shapely.Polygon(ob.points, list(ob.holes)) for ob in scene.obstacles if isinstance(ob, Polygon)]
+        for ob in scene.obstacles:
+            if isinstance(ob, MapObstacle) and len(ob.rects):
+                polys += list(shapely.box(*np.asarray(ob.rects, dtype=float).T))
+        self.polys = shapely.STRtree(polys) if polys else None
+        self._geoms = polys
+
+    def gap(self, a, b) -> float:
+        """The least distance of the disc moving straight from ``a`` to ``b`` ((2,) or more:
+        the position first) to the obstacles, less its radius (negative: into one)."""
+        import shapely
+
+        p, q = np.asarray(a[:2], dtype=float), np.asarray(b[:2], dtype=float)
+        out = math.inf
+        if len(self.discs):
+            d = q - p
+            c = self.discs[:, :2]
+            t = np.clip(((c - p) @ d) / max(float(d @ d), 1e-300), 0.0, 1.0)
+            out = float(np.min(np.hypot(*(p + t[:, None] * d - c).T) - self.discs[:, 2]))
+        if self.polys is not None:
+            seg = shapely.LineString([p, q]) if np.any(p != q) else shapely.Point(p)
+            near = self.polys.query(seg.buffer(self.r + 1e-6))
+            for i in near.tolist():
+                out = min(out, float(self._geoms[i].distance(seg)))
+        return out - self.r
 
 
 # --------------------------------------------------------------------------- movers

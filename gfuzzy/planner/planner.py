@@ -397,7 +397,7 @@ class Planner:
         return qg.graph, qg.s_id, qg.g_id, qg.roadmap_distance
 
     # ---------------------------------------------------------------- query
-    def prepare(self, goal, options: PlanOptions | None = None):
+    def prepare(self, goal, options: PlanOptions | None = None, _tilts: bool = False):
         """Keep what replanning to ``goal`` reuses: the goal's connections and the static
         distances to the goal (:mod:`gfuzzy.planner.prepared`; the spanner's cut is kept on
         the roadmap). A fresh :meth:`plan` prepares its goal so too, then splices its start in.
@@ -430,7 +430,8 @@ class Planner:
 
             wrapped = goal.copy()
             wrapped[2] = wrap_angle(wrapped[2])
-            kept = prepare_unicycle(self, wrapped, opts.dt, self.robot.vmax * SPEED_SAFETY, opts.connect_k, opts.stretch)
+            kept = prepare_unicycle(self, wrapped, opts.dt, self.robot.vmax * SPEED_SAFETY, opts.connect_k, opts.stretch,
+                                    _tilts)  # fmt: skip
             return UnicyclePrepared(goal, opts, kept)
         return prepare_goal(self, goal, opts)
 
@@ -523,6 +524,8 @@ class Planner:
             start[2], goal[2] = wrap_angle(start[2]), wrap_angle(goal[2])
         kept = _prepared if _prepared is not None else self.prepare(ends[1], opts)
         graph, s_id, g_id, rd = self._query_graph(start, kept)
+        if not math.isfinite(rd) and robot.unicycle and _prepared is None:  # ends that may tilt
+            graph, s_id, g_id, rd = self._query_graph(start, self.prepare(ends[1], opts, _tilts=True))
         if not math.isfinite(rd):
             linked, message = self._not_joined(start, goal, _prepared is not None, _linked)
             if linked is not None:

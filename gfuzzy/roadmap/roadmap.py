@@ -29,6 +29,7 @@ from ..scene.scene import Scene
 from ..settings import MAX_POINTS
 from ..typed import FloatArray, IntArray
 from .freespace import blocked_points as _blocked_points
+from .passage import Chains
 
 __all__ = [
     "RoadmapOptions",
@@ -400,8 +401,8 @@ def _make_passage_sampler(
     sigma = max(scene.robot.circumradius, 1e-3)
     valid = geometry.is_valid
     blocked = _blocked_points(scene)
-    span = 2.0 * scene.robot.circumradius
     in_free_cell = free_cell_draw(scene.obstacles, scene.bounds, rng, FREE_CELL_SHARE)
+    chains = Chains(valid, geometry.clearance1, blocked, scene.robot) if box else None
 
     class PassageSampler(ob.ValidStateSampler):
         def __init__(self):
@@ -443,24 +444,23 @@ def _make_passage_sampler(
                         continue
                     self.dry = 0
                 m = self.bridges.pop()
-                q = m if box else m[:2]
-                if box:
-                    q[2] = (q[2] + math.pi) % (2 * math.pi) - math.pi
-                if not valid(q):
+                if not box:
+                    if valid(m[:2]):
+                        return m[:2]
                     continue
-                if box:
-                    d = np.array([math.cos(q[2]), math.sin(q[2]), 0.0])
-                    for shift in (0.35, -0.35, 0.7, -0.7, 1.05, -1.05):
-                        qq = q + shift * span * d
-                        if valid(qq):
-                            self.queue.append(qq)
-                return q
+                m[2] = (m[2] + math.pi) % (2 * math.pi) - math.pi
+                if chains.exhausted:  # every passage met has its chain
+                    return None
+                poses = chains.make(m)
+                if poses is not None:
+                    self.queue += poses[:0:-1]  # popped from the end: the chain in order
+                    return poses[0]
             return None
 
         def _draw(self):
             for _ in range(1000):
-                if rng.random() < ratio:
-                    q = self._bridge()
+                if rng.random() < ratio:  # a chain's samples count as bridge samples too
+                    q = self.queue.pop() if self.queue else self._bridge()
                     if q is not None:
                         return q
                 q = self._uniform()
@@ -469,7 +469,7 @@ def _make_passage_sampler(
             return None
 
         def sample(self, state):
-            q = self.queue.pop() if self.queue else self._draw()
+            q = self._draw()
             if q is None:
                 return False
             record.append(tuple(float(v) for v in q))

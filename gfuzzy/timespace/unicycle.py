@@ -48,6 +48,15 @@ __all__ = ["UnicycleGraph", "UnicycleGoal", "UnicyclePrepared", "prepare_goal", 
 #: Points on an end's own heading line (in circumradii from it) that join it to the roadmap
 #: where it cannot turn round in place (:meth:`_Extras.along`).
 ALONG = (0.5, 1.0, 2.0, 4.0)
+#: Tilts (:meth:`_Extras.along`): the share of the largest free turn taken, the smallest
+#: tilt tried (rad), how many tilts in a row and how many heading lines per end at most.
+TILT_SHARE = 0.75
+MIN_TILT = 1e-3
+TILT_DEPTH = 3
+TILT_LINES = 24
+#: Lane headings at one vertex this close to the first of their group share a copy (rad):
+#: below half of ``SAME_HEADING``, so the two copies a lane joins differ by at most that.
+MERGE_HEADING = 0.4 * SAME_HEADING
 
 
 @dataclass
@@ -142,8 +151,7 @@ def _base(roadmap, geometry, stretch: float, vmax: float, step_len: float) -> _B
     ch = np.asarray(wrap_angle(np.concatenate(ch)), dtype=float) if ch else np.zeros(0)
     order = np.lexsort((ch, cv))
     cv, ch = cv[order], ch[order]
-    new = np.ones(len(cv), dtype=bool)
-    new[1:] = (cv[1:] != cv[:-1]) | (ch[1:] - ch[:-1] > SAME_HEADING)
+    new = _merged(cv, ch)
     cv, ch = cv[new], ch[new]
 
     def copy_id(v, h):
@@ -225,8 +233,10 @@ class _Extras:
     ``ring_at + i`` (or the placeholder ``-(1 + i)`` while the ring's place is not known).
     """
 
-    def __init__(self, base: _Base, geometry, scale: float, first: int, ring_at: int | None = None):
+    def __init__(self, base: _Base, geometry, scale: float, first: int, ring_at: int | None = None,
+                 tilts: bool = False):  # fmt: skip
         self.base, self.geometry, self.scale = base, geometry, scale
+        self.tilts = tilts  # whether :meth:`along` tilts (see there)
         self.first = first
         self.ring_at = ring_at
         self.poses: list = []
@@ -262,7 +272,7 @@ class _Extras:
         geo, base = self.geometry, self.base
         ids = base.copies_at(v)
         rel = (base.poses[ids, 2] - h) % (2 * math.pi)
-        same = (rel <= SAME_HEADING) | (rel >= 2 * math.pi - SAME_HEADING)
+        same = (rel <= MERGE_HEADING) | (rel >= 2 * math.pi - MERGE_HEADING)
         if same.any():
             return int(ids[np.nonzero(same)[0][0]])
         x, y = (float(c) for c in base.poses[ids[0], :2])
@@ -291,15 +301,42 @@ class _Extras:
 
     def along(self, pose: FloatArray, node: int, connect_k: int, outward: bool, reverse: bool) -> None:
         """Where the robot cannot turn round at ``pose`` (its circumscribed disc is not
-        clear: nose to a wall, in a corridor, docked), join it through points on its own
-        heading's line: straight lanes along the heading, forwards (and backwards with
-        ``reverse``), to points ``ALONG`` circumradii away as far as they are free, each
-        point joined to the roadmap as an end is (:meth:`join`). Without them such a start
-        or goal joins only vertices that lie exactly on that line."""
+        clear: nose to a wall, in a corridor, docked, parked beside a wall), join it through
+        points on its own heading's line: straight lanes along the heading, forwards (and
+        backwards with ``reverse``), to points ``ALONG`` circumradii away as far as they are
+        free, each point joined to the roadmap as an end is (:meth:`join`). Without them
+        such a start or goal joins only vertices that lie exactly on that line.
+
+        Where a point of a line (or the end itself) cannot turn round either, the robot
+        *tilts* there: it turns by ``TILT_SHARE`` of the largest turn its walls leave it each
+        way (:func:`_free_arc`) and follows the new heading's line the same way, up to
+        ``TILT_DEPTH`` tilts and ``TILT_LINES`` lines per end (breadth first): the chain of
+        small turns that parks a box beside a wall with a few centimetres to spare, where
+        no turn in place fits on the wall's line itself. Only with ``tilts`` (the planner
+        asks for them when the query's graph does not join its ends without them: they cost
+        up to a second per end, joining each line's points to the roadmap)."""
         geo = self.geometry
         if geo.robot.shape == "disc" or geo.sweep_bound(float(pose[0]), float(pose[1])) > 0:
             return
+        todo, lines = [(np.asarray(pose, dtype=float), node, 0)], 0
+        while todo and lines < TILT_LINES:
+            here, n_here, depth = todo.pop(0)
+            lines += 1
+            points = self._line(here, n_here, connect_k, outward, reverse)
+            if depth == 0:  # the end itself tilts too (a tilted line's start is its turn)
+                points.insert(0, (here, n_here))
+            if depth >= (TILT_DEPTH if self.tilts else 0):
+                continue
+            for q, n_q in points:
+                if geo.sweep_bound(float(q[0]), float(q[1])) > 0:
+                    continue  # turns round there: joined to the roadmap already
+                todo += self._tilts(q, n_q, outward, depth + 1)
+
+    def _line(self, pose: FloatArray, node: int, connect_k: int, outward: bool, reverse: bool) -> list:
+        """The points of :meth:`along` on ``pose``'s heading line, joined: [(pose, node)]."""
+        geo = self.geometry
         px, py, ph = (float(c) for c in pose)
+        out = []
         for sign in (1.0, -1.0) if reverse else (1.0,):
             way = sign if outward else -sign  # a goal is arrived at: its forward lane comes from behind
             c, s = way * math.cos(ph), way * math.sin(ph)
@@ -315,7 +352,27 @@ class _Extras:
                 else:
                     self.lane(q, prev)
                 self.join(np.array([nx, ny, ph]), q, connect_k, outward, reverse)
+                out.append((np.array([nx, ny, ph]), q))
                 prev, qx, qy = q, nx, ny
+        return out
+
+    def _tilts(self, pose: FloatArray, node: int, outward: bool, depth: int) -> list:
+        """New nodes at ``pose``'s place, turned each way by ``TILT_SHARE`` of the free arc
+        (at least ``MIN_TILT``), joined by the turn: [(pose, node, depth)]."""
+        geo = self.geometry
+        x, y, h = (float(c) for c in pose)
+        out = []
+        for side in (1.0, -1.0):
+            dh = side * TILT_SHARE * _free_arc(geo, x, y, h, side)
+            if abs(dh) < MIN_TILT or not turn_free(geo, x, y, h, dh, swept=False):
+                continue
+            t = self.node(x, y, h + dh)
+            if outward:
+                self.turn(node, t, dh)
+            else:  # arrives tilted, then turns to the heading it goes on with
+                self.turn(t, node, -dh)
+            out.append((np.array([x, y, float(wrap_angle(h + dh))]), t, depth))
+        return out
 
     def join(self, pose: FloatArray, node: int, connect_k: int, outward: bool, reverse: bool) -> None:
         """Join ``node`` (at ``pose``) to its nearest vertices: turn + straight to a copy
@@ -349,7 +406,7 @@ class _Extras:
                 h = _drive(geo, robot, ax, ay, bx, by, back, ca, cb)
                 if h is None:
                     continue
-                dh = pick_turn(geo, px, py, ph, h) if outward else pick_turn(geo, px, py, h, ph)
+                dh = _turn(geo, px, py, ph, h) if outward else _turn(geo, px, py, h, ph)
                 if dh is None:
                     continue
                 here = node
@@ -365,6 +422,52 @@ class _Extras:
                 else:
                     self.lane(c, here)
                 joined += 1
+
+
+def _turn(geo, x: float, y: float, h1: float, h2: float) -> float | None:
+    """:func:`gfuzzy.timespace.drive.pick_turn` at the copies' tolerance: headings more
+    than ``MERGE_HEADING`` apart need a turn (a lane's ends then differ by less than the
+    check's 1e-9 rad; counted from ``SAME_HEADING`` they differed by up to twice it, and two
+    unseen answers turned 1.2e-9 and 1.8e-9 rad while moving off their start)."""
+    dh = pick_turn(geo, x, y, h1, h2)
+    if dh == 0.0:
+        d = float(wrap_angle(h2 - h1))
+        if abs(d) > MERGE_HEADING:
+            return d if turn_free(geo, x, y, h1, d) else None
+    return dh
+
+
+def _free_arc(geo, x: float, y: float, h: float, side: float, steps: int = 12) -> float:
+    """The largest turn in place at (x, y) from ``h`` towards ``side`` (+1 counter-clockwise)
+    whose sweep is free, up to pi, by bisection to pi / 2**steps (0: none)."""
+    if turn_free(geo, x, y, h, side * math.pi, swept=False):
+        return math.pi
+    lo, hi = 0.0, math.pi
+    for _ in range(steps):
+        mid = 0.5 * (lo + hi)
+        if turn_free(geo, x, y, h, side * mid, swept=False):
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+def _merged(cv: IntArray, ch: FloatArray) -> np.ndarray:
+    """Which copies (sorted by vertex, then heading) start a new copy: a heading within
+    ``MERGE_HEADING`` of its group's *first* heading at the same vertex joins that group.
+
+    Measured from the group's first heading, not the previous one: a chain of lanes each
+    within the tolerance of the next (nearly collinear vertices) would otherwise gather
+    headings farther apart than ``SAME_HEADING``, and a lane driven from one such copy to
+    another would turn while moving (``gfuzzy check``: 1.4e-9 rad on an answer)."""
+    new = np.ones(len(cv), dtype=bool)
+    first_h, first_v = math.nan, -1
+    for i, (v, h) in enumerate(zip(cv.tolist(), ch.tolist(), strict=True)):
+        if v == first_v and h - first_h <= MERGE_HEADING:
+            new[i] = False
+        else:
+            first_h, first_v = h, v
+    return new
 
 
 def _drive(geo, robot, ax, ay, bx, by, back: bool, ca=None, cb=None):
@@ -465,6 +568,8 @@ class UnicycleGoal:
     scale: float
     connect_k: int
     steps: object = None
+    #: Whether the ends tilt where they cannot turn round (:meth:`_Extras.along`).
+    tilts: bool = False
 
     def splice(self, planner, start: FloatArray, exact: bool = True, fan_options=None, expired=None) -> UnicycleGraph:
         """This graph with ``start`` (``[x, y, heading]``, heading wrapped) joined in.
@@ -477,7 +582,7 @@ class UnicycleGoal:
         """
         geo, robot = planner.geometry, planner.robot
         N = len(self.poses)
-        ex = _Extras(self.base, geo, self.scale, N, ring_at=len(self.base.poses))
+        ex = _Extras(self.base, geo, self.scale, N, ring_at=len(self.base.poses), tilts=self.tilts)
         ex.kept = self.poses
         s_id = ex.node(*start)
         ex.join(start, s_id, self.connect_k, True, robot.reverse)
@@ -494,7 +599,7 @@ class UnicycleGoal:
                 h = _drive(geo, robot, sx, sy, gx, gy, back)
                 if h is None:
                     continue
-                d1, d2 = pick_turn(geo, sx, sy, sh, h), pick_turn(geo, gx, gy, h, gh)
+                d1, d2 = _turn(geo, sx, sy, sh, h), _turn(geo, gx, gy, h, gh)
                 if d1 is None or d2 is None:
                     continue
                 a = s_id if d1 == 0.0 else ex.node(sx, sy, h)
@@ -603,7 +708,7 @@ def _base_cut(base: _Base, step_len: float) -> _BaseCut:
 
 
 def prepare_goal(planner, goal: FloatArray, dt: float, vplan: float, connect_k: int = 10,
-                 stretch: float = 1.0) -> UnicycleGoal:  # fmt: skip
+                 stretch: float = 1.0, tilts: bool = False) -> UnicycleGoal:  # fmt: skip
     """The kept graph of ``goal`` (``[x, y, heading]``, heading wrapped): the base's copies,
     lanes and rings cut into steps (cached on the roadmap) with the goal joined in, and the
     static steps and metres to the goal.
@@ -617,7 +722,7 @@ def prepare_goal(planner, goal: FloatArray, dt: float, vplan: float, connect_k: 
     cut = _base_cut(base, step_len)
     scale = robot.vmax / robot.turn_rate
     nn0 = len(cut.nodes)
-    ex = _Extras(base, geo, scale, nn0, ring_at=len(base.poses))
+    ex = _Extras(base, geo, scale, nn0, ring_at=len(base.poses), tilts=tilts)
     g_id = ex.node(*goal)
     ex.join(goal, g_id, connect_k, False, robot.reverse)
     ex.along(goal, g_id, connect_k, False, robot.reverse)
@@ -654,7 +759,7 @@ def prepare_goal(planner, goal: FloatArray, dt: float, vplan: float, connect_k: 
         goal=np.asarray(goal, dtype=float), base=base, poses=np.vstack([nodes, cut.inner, innerg]), indptr=indptr,
         neighbors=neighbors, nn=nn, A=A, B=B, k=k, L=np.concatenate([cut.L, Lg]), hop=hop, heuristic=heur,
         metres=metres, groups=groups, p_of=p_of, j=j, g_id=g_id, step_len=step_len, scale=scale, connect_k=connect_k,
-        steps=with_rows(cut.fwd, Ag, Bg, kg.astype(float), nn),
+        steps=with_rows(cut.fwd, Ag, Bg, kg.astype(float), nn), tilts=tilts,
     )  # fmt: skip
 
 

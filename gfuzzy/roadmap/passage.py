@@ -1,0 +1,201 @@
+"""Bridge samples put where a rigid robot fits: across a passage, on its middle line.
+
+The passage sampler's bridge test (:mod:`gfuzzy.roadmap.roadmap`) finds points inside narrow
+passages, each with a heading along the passage drawn from the bridge's direction. In a door
+with a few centimetres to spare that pose is almost never valid: the bridge's midpoint lies
+anywhere across the door, its heading is off by the bridge's random tilt, and a footprint
+whose reference point is not its body's middle (a cart pulled by its axle, an L) is placed
+with the reference point, not the body, in the door's middle. :func:`centre_bridge` measures
+the passage instead: the walls' faces on both sides (points where a ray leaves the free
+space, found by bisection), the heading along them, and the pose whose body's lateral middle
+lies on the passage's middle line.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..typed import FloatArray
+
+__all__ = ["Chains", "centre_bridge", "lateral_middle"]
+
+#: Bisection steps of a ray's exit from the free space (2**-24 of a 64th of the reach).
+_BISECT = 24
+#: Metres along the passage between the two rays that measure a wall face's direction.
+_FACE_BASE = 0.02
+
+
+def lateral_middle(robot) -> float:
+    """The middle of the robot's body across its heading (robot frame y): 0 for a disc or a
+    box, the middle of a footprint's extent in y (an L with its arm left: left of 0)."""
+    if robot.shape != "footprint":
+        return 0.0
+    ys = [p[1] for p in robot.footprint]
+    return 0.5 * (min(ys) + max(ys))
+
+
+def _exits(blocked, origins: FloatArray, dirs: FloatArray, reach: float) -> FloatArray:
+    """Distances along ``dirs`` from free ``origins`` to the first blocked point within
+    ``reach`` (bisection between a free and a blocked sample; NaN: none within reach).
+
+    Rays are sampled at steps of reach / 64 before the bisection, so a wall thinner than
+    that may be stepped over; passages are what is measured, the validity test decides."""
+    n = len(origins)
+    steps = np.linspace(0.0, reach, 65)
+    pts = origins[:, None, :] + steps[None, :, None] * dirs[:, None, :]
+    hit = blocked(pts.reshape(-1, 2)).reshape(n, len(steps))
+    first = np.where(hit.any(axis=1), hit.argmax(axis=1), -1)
+    out = np.full(n, np.nan)
+    ok = first > 0
+    if not ok.any():
+        return out
+    lo, hi = steps[first[ok] - 1], steps[first[ok]]
+    o, d = origins[ok], dirs[ok]
+    for _ in range(_BISECT):
+        mid = 0.5 * (lo + hi)
+        b = blocked(o + mid[:, None] * d)
+        hi = np.where(b, mid, hi)
+        lo = np.where(b, lo, mid)
+    out[ok] = lo
+    return out
+
+
+def centre_bridge(blocked, m: FloatArray, heading: float, reach: float, y_mid: float) -> FloatArray | None:
+    """A pose ``[x, y, heading]`` in the passage through the free point ``m``: the heading
+    along the passage's walls, the body's lateral middle on the passage's middle line.
+
+    Parameters
+    ----------
+    blocked : callable
+        (n, 2) points -> (n,) bool, inside an obstacle or out of bounds.
+    m : (2,) float
+        A free point in the passage (a bridge's midpoint).
+    heading : float
+        Roughly along the passage (the bridge turned by a right angle); the answer keeps
+        its sense.
+    reach : float
+        How far across to look for the walls on each side (the robot's diameter).
+    y_mid : float
+        :func:`lateral_middle` of the robot.
+
+    Returns
+    -------
+    (3,) float, or None
+        None where a side has no wall within ``reach`` (not a passage) or the walls are
+        not found on both rays of a side.
+    """
+    left = np.array([-math.sin(heading), math.cos(heading)])
+    at_m = _exits(blocked, np.stack([m, m]), np.stack([left, -left]), reach)
+    if not np.all(np.isfinite(at_m)):
+        return None
+    h = _along_faces(blocked, m, heading, reach)
+    if h is not None:  # the middle line across the walls' heading, when they meet it
+        left_h = np.array([-math.sin(h), math.cos(h)])
+        t = _exits(blocked, np.stack([m, m]), np.stack([left_h, -left_h]), reach)
+        if np.all(np.isfinite(t)):
+            heading, left, at_m = h, left_h, t
+    middle = m + 0.5 * (at_m[0] - at_m[1]) * left
+    x, y = middle - y_mid * left
+    return np.array([x, y, heading])
+
+
+def _along_faces(blocked, m: FloatArray, heading: float, reach: float) -> float | None:
+    """The heading along the walls on both sides of ``m`` (the mean of each side's face
+    direction, measured between rays ``_FACE_BASE`` apart), or None where a ray meets no
+    wall or the two faces differ by more than 0.3 rad (a corner, not a passage's walls)."""
+    along = np.array([math.cos(heading), math.sin(heading)])
+    left = np.array([-along[1], along[0]])
+    origins = np.repeat(m[None, :] + np.array([-_FACE_BASE, _FACE_BASE])[:, None] * along[None, :], 2, axis=0)
+    if blocked(origins).any():
+        return None
+    dirs = np.tile(np.stack([left, -left]), (2, 1))
+    t = _exits(blocked, origins, dirs, reach)
+    if not np.all(np.isfinite(t)):
+        return None
+    hits = origins + t[:, None] * dirs  # rows: (left, right) behind m, then ahead of it
+    faces = [hits[2] - hits[0], hits[3] - hits[1]]
+    units = [f / np.hypot(*f) for f in faces]
+    if abs(math.atan2(units[0][0] * units[1][1] - units[0][1] * units[1][0], float(units[0] @ units[1]))) > 0.3:
+        return None
+    mean = units[0] + units[1]
+    return math.atan2(mean[1], mean[0])
+
+
+#: Bridge samples in a row that make no new chain (each one centred in vain) after which the
+#: sampler stops looking for passages (every passage it meets has its chain).
+MAX_MISSES = 256
+#: A bridge sample that fits with a clearance of at least this share of the robot's span
+#: (twice its circumradius) is not in a narrow passage: it makes no chain.
+NARROW = 0.05
+#: Samples of a chain, in robot spans (twice the circumradius) along the heading from its
+#: bridge pose.
+CHAIN_SHIFTS = (0.35, -0.35, 0.7, -0.7, 1.05, -1.05)
+
+
+class Chains:
+    """The passage sampler's chains for a box or footprint robot.
+
+    A bridge sample (a free point between two obstacles, a heading along the passage) is a
+    milestone as it is when the robot fits there with room to spare (``NARROW`` of its span:
+    the passage is not narrow for it); else it becomes a pose in the passage
+    (:func:`centre_bridge`, or itself when that fails and it fits) and a *chain* of valid poses
+    shifted along its heading (``CHAIN_SHIFTS``): aligned milestones that cross a door the robot passes only turned, and that a differential drive drives
+    straight through. A footprint that is not the same body turned by pi also gets the chain
+    facing the other way (without ``reverse`` a unicycle crosses only forwards). A bridge
+    near a chain already made (half a span, a heading within 0.2 rad either way) is skipped:
+    the bridges go to other passages.
+
+    Parameters
+    ----------
+    valid, clearance, blocked : callable
+        A pose's validity and clearance; which points lie in obstacles or out of bounds.
+    robot : gfuzzy.scene.scene.Robot
+    """
+
+    def __init__(self, valid, clearance, blocked, robot):
+        self.valid, self.clearance, self.blocked = valid, clearance, blocked
+        self.span = 2.0 * robot.circumradius
+        self.y_mid = lateral_middle(robot)
+        self.both_ways = robot.shape == "footprint"
+        self.made: list = []  # bridge poses chains were made along
+        self.misses = 0
+
+    @property
+    def exhausted(self) -> bool:
+        return self.misses >= MAX_MISSES
+
+    def _near(self, q, poses, radius: float) -> bool:
+        for c in poses:
+            if math.hypot(q[0] - c[0], q[1] - c[1]) < radius and abs(math.sin(q[2] - c[2])) < 0.2:
+                return True
+        return False
+
+    def make(self, m: FloatArray) -> list | None:
+        """The milestones of bridge sample ``m`` (``[x, y, heading]``): its pose first, then
+        its chain; None when it is skipped or gives no valid pose."""
+        half = 0.5 * self.span
+        if self._near(m, self.made, half):
+            return None
+        fits = self.valid(m)
+        if fits and self.clearance(m) >= NARROW * self.span:  # not narrow for the robot: no chain
+            return [m]
+        q = centre_bridge(self.blocked, m[:2], float(m[2]), self.span, self.y_mid)
+        if (q is None or not self.valid(q)) and fits:
+            q = m
+        if q is None or not self.valid(q) or self._near(q, self.made, half):
+            self.misses += 1
+            return None
+        self.misses = 0
+        out = [q]
+        if self.both_ways:
+            back = centre_bridge(self.blocked, m[:2], float(q[2]) + math.pi, self.span, self.y_mid)
+            if back is not None and self.valid(back):
+                out.append(back)
+        for p in list(out):
+            p[2] = (p[2] + math.pi) % (2 * math.pi) - math.pi
+            self.made.append(p)
+            d = np.array([math.cos(p[2]), math.sin(p[2]), 0.0])
+            out += [qq for qq in (p + s * self.span * d for s in CHAIN_SHIFTS) if self.valid(qq)]
+        return out
