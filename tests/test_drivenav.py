@@ -211,20 +211,14 @@ def _turn_reversals(rows: np.ndarray) -> int:
     return count
 
 
-def test_evasions_in_a_row_do_not_undo_their_turns(open_floor, monkeypatch):
-    """Every search finding nothing, the navigator answers with an evasion every 0.25 s
-    while two people walk up from behind on its left. Decided afresh each time (all the
-    candidates keep clear over 4 s, and the gap and progress terms of their scores flip with
-    every step of the turn) the evasions turned back and forth in place four times in 4 s
-    and kept 0.71 m; a candidate that turns against the turn under way must now win by
-    ``EVASION_COMMITMENT`` of time to contact: no turn is undone, and the gap is wider."""
-    sc, rm = open_floor
+def _evasions_only(sc, rm, p0, people, monkeypatch, seconds=4.0):
+    """Rows every 0.25 s and the smallest gap of a navigator whose searches all find
+    nothing (every answer an evasion), among ``people`` walking straight on."""
     monkeypatch.setattr(Navigator, "_search", lambda self, t, p, *a, **k: _Searched(None, "exhausted"))
     monkeypatch.setattr(Navigator, "_direct", lambda self, *a: None)
     nav = Navigator(sc, rm, GOAL, NavOptions())
-    people = np.array([[1.13, 3.81, 0.8, -0.83, 0.3], [0.36, 2.43, 1.08, -0.05, 0.3]])
-    pose, t, rows, worst = P0.copy(), 0.0, [np.array([0.0, *P0])], math.inf
-    while t < 4.0 - 1e-9:
+    pose, t, rows, worst = np.array(p0, float), 0.0, [np.array([0.0, *p0])], math.inf
+    while t < seconds - 1e-9:
         obs = people.copy()
         obs[:, :2] += t * people[:, 2:4]
         traj = nav.step(t, pose, obs)
@@ -232,10 +226,49 @@ def test_evasions_in_a_row_do_not_undo_their_turns(open_floor, monkeypatch):
         worst = min(worst, *(_min_gap(Trajectory(piece_of(traj, t, t + 0.25), 0.3), p, t) for p in obs))
         pose, t = traj.at(t + 0.25), t + 0.25
         rows.append(np.array([t, *pose]))
-    rows = np.array(rows)
+    return np.array(rows), worst
+
+
+def test_evasions_in_a_row_do_not_undo_their_turns(open_floor, monkeypatch):
+    """Every search finding nothing, the navigator answers with an evasion every 0.25 s
+    while two people walk up from behind on its left. Decided afresh each time (all the
+    candidates keep clear over 4 s, and the gap and progress terms of their scores flip with
+    every step of the turn) the evasions turned back and forth in place four times in 4 s
+    and kept 0.71 m; a candidate that turns against the turn under way must now win by
+    ``EVASION_COMMITMENT`` of time to contact: no turn is undone, and the gap is wider."""
+    people = np.array([[1.13, 3.81, 0.8, -0.83, 0.3], [0.36, 2.43, 1.08, -0.05, 0.3]])
+    rows, worst = _evasions_only(*open_floor, P0, people, monkeypatch)
     assert _turns(rows) >= 1  # it does turn away
     assert _turn_reversals(rows) == 0
     assert worst > 1.0
+
+
+def test_the_commitment_leaves_contacts_to_the_time_to_contact(open_floor, monkeypatch):
+    """Three people walk at the robot and every candidate meets one within the look-ahead:
+    the turn under way was still preferred (the commitment's points outweighing what the
+    sampled times to contact left to the gap and progress terms), and the robot drove into
+    someone 0.52 m deep; it turns back and keeps clear (a reviewer's random sweep)."""
+    p0 = [2.7716239269287692, 3.737411106342617, 1.3820795650498177]
+    people = np.array([
+        [4.952156751649621, 4.324310975389096, -0.7724280933035104, -0.2607374114652339, 0.3],
+        [3.9842456757405538, 4.921971552859872, -1.020872413453967, -0.41623567065140393, 0.3],
+        [0.3823335687505214, 5.733267060742783, 0.4087563308046987, -0.5183886772368607, 0.3],
+    ])  # fmt: skip
+    rows, worst = _evasions_only(*open_floor, p0, people, monkeypatch)
+    assert worst > 0.0
+
+
+def test_the_turn_under_way(open_floor):
+    """``turn_under_way`` by hand: the turn left across pi keeps its sign; none when the
+    robot is off the evasion, driving, past its end, or has none."""
+    from gfuzzy.navigation.drivenav import turn_under_way
+
+    ev = Trajectory(np.array([[0, 1, 1, 3.0], [0.5, 1, 1, 3.5 - 2 * math.pi], [2.0, 2.0, 1.0, 3.5 - 2 * math.pi]]), 0.3)
+    assert turn_under_way(ev, 0.1, ev.at(0.1)) == pytest.approx(0.4)  # 3.1 -> 3.5 across pi
+    assert turn_under_way(ev, 0.25, ev.at(0.25) + [0.1, 0, 0]) == 0.0
+    assert turn_under_way(ev, 1.0, ev.at(1.0)) == 0.0
+    assert turn_under_way(ev, 2.5, ev.at(2.0)) == 0.0
+    assert turn_under_way(None, 0.0, np.zeros(3)) == 0.0
 
 
 def test_a_reversing_robot_among_walkers_reaches_the_goal_and_passes_the_check(reversing_floor):

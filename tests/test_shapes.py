@@ -568,3 +568,17 @@ def test_random_footprints_validity_and_mover_distance_against_shapely(pts, seed
             assert d == pytest.approx(ref, abs=1e-12)
         else:
             assert d <= -0.2 + 1e-12
+
+
+def test_half_turn_symmetric_robots():
+    """The same body turned by pi (the passage sampler's one-way chains, the lanes' one
+    check for both directions): a disc, a box, a centred rectangle; not an off-centre cart
+    or an L."""
+    rect = [[0.3, 0.15], [-0.3, 0.15], [-0.3, -0.15], [0.3, -0.15]]
+    cart = [[0.5, 0.15], [-0.1, 0.15], [-0.1, -0.15], [0.5, -0.15]]
+    ell = [[0.3, -0.2], [0.3, 0.0], [0.0, 0.0], [0.0, 0.2], [-0.3, 0.2], [-0.3, -0.2]]
+    robots = ({"disc": 0.3}, {"box": [0.6, 0.3]}, {"footprint": rect})
+    got = [_scene(r).robot.half_turn_symmetric for r in robots]
+    assert got == [True, True, True]
+    assert not _scene({"footprint": cart}).robot.half_turn_symmetric
+    assert not _scene({"footprint": ell}).robot.half_turn_symmetric

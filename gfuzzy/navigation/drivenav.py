@@ -27,18 +27,21 @@ from .evasion import TTC_POINTS, evasion_scores
 from .navtypes import MOTION_SAMPLE, sample_loss
 
 __all__ = ["kept_plan", "sooner_plan", "cut_rows", "rest_of", "drive_evasion", "sample_rows", "turn_under_way",
-           "EVASION_SPEEDS", "EVASION_STOPS", "EVASION_COMMITMENT"]
+           "EVASION_SPEEDS", "EVASION_STOPS", "EVASION_COMMITMENT", "COMMITTED_TURN"]
 
 #: Speeds (fractions of the planning speed) of a differential drive's evasive candidates.
 EVASION_SPEEDS = (1.0, 0.5, 0.25)
 #: Seconds after which an evasive candidate may also stop (and stand) instead of driving on.
 EVASION_STOPS = (0.5, 1.0)
-#: Seconds of time to contact an evasive candidate that turns against the turn in place of
-#: the evasion under way must gain to be taken: among candidates that all keep clear (or
-#: touch within a tenth of a second of each other), the gap and progress terms of the
-#: score flip with every step of the turn, and a robot re-deciding every period turned
-#: back and forth in place while someone walked into it.
+#: Points (in seconds of time to contact, ``TTC_POINTS`` each) an evasive candidate that
+#: keeps clear over the look-ahead and turns against the turn in place of the evasion under
+#: way loses: among candidates that all keep clear the gap and progress terms of the score
+#: flip with every step of the turn, and a robot re-deciding every period turned back and
+#: forth in place while someone walked into it. Candidates predicted to touch someone are
+#: left to their time to contact.
 EVASION_COMMITMENT = 0.1
+#: A turn under way smaller than this (rad) is done: it commits to nothing.
+COMMITTED_TURN = 1e-3
 
 
 def cut_rows(traj: Trajectory, ta: float, tb: float) -> FloatArray:
@@ -151,9 +154,10 @@ def drive_evasion(nav, t: float, pose: FloatArray, obs: FloatArray, under_way: T
     as short as a holonomic robot's (``evasion_time``) finds no contact within it for
     driving straight on into someone's way and prefers it to a turn that avoids them.
 
-    A candidate that turns against the turn in place of ``under_way`` (the last answer, an
-    evasion, still turning at ``t``) loses ``EVASION_COMMITMENT`` seconds of its time to
-    contact: a turn undone is a turn wasted.
+    A candidate that keeps clear over the look-ahead and turns against the turn in place of
+    ``under_way`` (the last answer, an evasion, still turning at ``t`` by more than
+    ``COMMITTED_TURN``) loses ``EVASION_COMMITMENT`` seconds' worth of score: a turn undone
+    is a turn wasted. Where contact is predicted, the time to contact decides alone.
 
     Parameters
     ----------
@@ -175,10 +179,13 @@ def drive_evasion(nav, t: float, pose: FloatArray, obs: FloatArray, under_way: T
     cands = evasions(nav.geometry, t, pose, T, opts.cover, opts.evasion_headings, nav.vplan, EVASION_SPEEDS, EVASION_STOPS)
     pts = sample_rows(cands, times)
     ends = np.array([rows[-1, 1:] for rows in cands])
-    score = evasion_scores(nav, t, pose, obs, pts, times, ends)
+    score, ttc = evasion_scores(nav, t, pose, obs, pts, times, ends, with_ttc=True)
     turn = turn_under_way(under_way, t, pose)
-    if turn != 0.0:
-        back = np.array([_first_turn(rows) for rows in cands]) * turn < 0.0
+    if abs(turn) > COMMITTED_TURN:
+        # only among candidates that keep clear over the whole look-ahead: where contact is
+        # predicted the time to contact, sampled, must decide (committing there drove a
+        # robot into someone it would have escaped by turning back)
+        back = (np.array([_first_turn(rows) for rows in cands]) * turn < 0.0) & np.isinf(ttc)
         score = np.where(back, score - EVASION_COMMITMENT * TTC_POINTS, score)
     best = cands[int(np.argmax(score))]
     return Trajectory(best, nav.robot.circumradius)

@@ -33,10 +33,12 @@ TTC_POINTS = 100.0
 
 
 def evasion_scores(nav: Navigator, t: float, pose: FloatArray, obs: FloatArray, pts: FloatArray,
-                   times: FloatArray, ends: FloatArray, vel: FloatArray | None = None) -> FloatArray:  # fmt: skip
+                   times: FloatArray, ends: FloatArray, vel: FloatArray | None = None,
+                   with_ttc: bool = False) -> FloatArray | tuple[FloatArray, FloatArray]:  # fmt: skip
     """(C,) score of candidate motions ``pts`` (C, T, d) at ``times`` ending at ``ends``:
     the latest contact first (no contact within the horizon beats any), then the widest
-    gap while close, then progress to the goal.
+    gap while close, then progress to the goal; ``with_ttc``: also each one's time to
+    contact (s from ``t``, inf: none within the horizon).
 
     ``vel`` (C, 2): each candidate's velocity when it translates and then stands (None:
     any motion within the speed bound). Between two samples ``h`` apart the gap to a
@@ -70,7 +72,8 @@ def evasion_scores(nav: Navigator, t: float, pose: FloatArray, obs: FloatArray, 
         worst = np.full(len(pts), math.inf)
     cr = nav.robot.circumradius
     progress = metric_distance(pose, nav.goal, cr) - metric_distance(ends, nav.goal[None], cr)
-    return np.minimum(ttc, T + 1.0) * TTC_POINTS + np.minimum(worst, EVASION_GAP) * 10.0 + progress
+    score = np.minimum(ttc, T + 1.0) * TTC_POINTS + np.minimum(worst, EVASION_GAP) * 10.0 + progress
+    return (score, ttc) if with_ttc else score
 
 
 def holonomic_evasion(nav: Navigator, t: float, pose: FloatArray, obs: FloatArray) -> Trajectory:

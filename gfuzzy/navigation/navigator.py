@@ -428,6 +428,7 @@ class Navigator(PathSpace, Prediction):
         cr = self.robot.circumradius
         if float(metric_distance(pose, self.goal, cr)) <= opts.goal_tolerance:
             self.reached = True
+            self._evading = None
             self.last = NavStep(NavMode.GOAL, self._clock() - t_begin)
             return Trajectory(np.array([[t, *pose], [t + opts.cover, *pose]]), cr)
         deadline = t_begin + self._search_seconds()
@@ -478,7 +479,7 @@ class Navigator(PathSpace, Prediction):
                 self._previous_mode, self._previous_ahead = mode, self._ahead
         if mode == NavMode.EVASIVE:
             self._previous = None
-        self._evading = traj if mode == NavMode.EVASIVE else None
+        self._evading = traj if mode == NavMode.EVASIVE and self.robot.unicycle else None
         if self._lookout is not None and mode in LOOK_OVER:  # never instead of a fallback
             looked = self._lookout.look(self, t, pose, obs, traj)
             if looked is not None:

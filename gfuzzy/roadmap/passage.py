@@ -158,7 +158,7 @@ class Chains:
         self.valid, self.clearance, self.blocked = valid, clearance, blocked
         self.span = 2.0 * robot.circumradius
         self.y_mid = lateral_middle(robot)
-        self.both_ways = robot.shape == "footprint"
+        self.both_ways = not robot.half_turn_symmetric
         self.made: list = []  # bridge poses chains were made along
         self.misses = 0
 

@@ -114,6 +114,14 @@ class Robot:
         return 0.5 * math.hypot(*self.size)
 
     @property
+    def half_turn_symmetric(self) -> bool:
+        """Whether the robot is the same body turned by pi about its reference point: a
+        disc, a box, a footprint whose vertices negated are its vertices (exactly)."""
+        if self.shape != "footprint":
+            return True
+        return sorted(self.footprint) == sorted((-x + 0.0, -y + 0.0) for x, y in self.footprint)
+
+    @property
     def inradius(self) -> float:
         """Radius of the largest disc about the reference point inside the robot (0 when
         the reference point is outside a footprint)."""

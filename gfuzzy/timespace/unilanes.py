@@ -79,7 +79,7 @@ def _box_lanes(roadmap, geometry, xy: FloatArray) -> Lanes:
     d = np.hypot(*(xy[edges[:, 1]] - xy[edges[:, 0]]).T)
     edges = edges[(edges[:, 0] != edges[:, 1]) & (d > 1e-9)]
     ok = np.zeros((len(edges), 2), dtype=bool)
-    symmetric = geometry.robot.shape == "box"  # a centred box is the same body turned by pi
+    symmetric = geometry.robot.half_turn_symmetric  # the same body turned by pi
     # the circumscribed disc's clearance at each position bounds every heading's there: a
     # lane the disc drives clear is free at both headings (one trace for the two, its ends
     # shared by every lane of a vertex); else the body at the lane's heading decides
