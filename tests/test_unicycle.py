@@ -530,19 +530,21 @@ def test_the_nearest_points_are_the_same_by_blocks_and_by_a_tree(monkeypatch):
     np.testing.assert_allclose(d(tree), d(blocks))  # the same distances (ties may pick others)
 
 
-def test_a_lane_joins_copies_whose_headings_the_check_calls_the_same():
-    """Lanes into one vertex at headings 0.7e-9 rad apart (nearly collinear vertices, as a
-    roadmap's passage chains make): the copies they share are measured from their group's
+@pytest.mark.parametrize("spacing, count", [(0.7e-9, 3), (0.35e-9, 5)])
+def test_a_lane_joins_copies_whose_headings_the_check_calls_the_same(spacing, count):
+    """Lanes into one vertex at headings ``spacing`` rad apart (nearly collinear vertices, as
+    a roadmap's passage chains make): the copies they share are measured from their group's
     first heading. Before, each was merged with the previous one, so a chain of three shared
     a copy 1.4e-9 from the third lane's heading, and an answer driving that lane turned while
-    moving (``gfuzzy check``: "turns while moving" on two unseen scenes' answers)."""
+    moving (``gfuzzy check``: "turns while moving" on two unseen scenes' answers); five
+    lanes 0.35e-9 apart (each within the merge tolerance of the previous) did the same."""
     from gfuzzy.timespace.drive import SAME_HEADING
     from gfuzzy.timespace.unicycle import _base
 
     robot = {"box": [0.6, 0.4], "vmax": 1.0, "kinematics": "unicycle"}
     sc = parse_scene(doc(robot))
-    verts = np.array([[2.0, 1.0], [2.0 - 0.7e-9, 1.0], [2.0 - 1.4e-9, 1.0], [2.0, 2.0], [2.0, 3.0]])
-    edges = np.array([[0, 3], [1, 3], [2, 3], [3, 4]])
+    verts = np.array([[2.0 - i * spacing, 1.0] for i in range(count)] + [[2.0, 2.0], [2.0, 3.0]])
+    edges = np.array([[i, count] for i in range(count)] + [[count, count + 1]])
     rm = Roadmap(verts, edges, np.hypot(*(verts[edges[:, 1]] - verts[edges[:, 0]]).T), sc.name, sc.static_hash,
                  sc.robot.circumradius)  # fmt: skip
     planner = Planner(sc, rm)
@@ -551,7 +553,7 @@ def test_a_lane_joins_copies_whose_headings_the_check_calls_the_same():
     assert lane.sum() >= 4
     gap = np.abs(np.angle(np.exp(1j * (base.poses[base.a[lane], 2] - base.poses[base.b[lane], 2]))))
     assert gap.max() <= SAME_HEADING, gap.max()
-    for a in (0, 1, 2):  # drive each lane in, then on north
+    for a in range(count):  # drive each lane in, then on north
         res = planner.plan([*verts[a], math.pi / 2], [2.0, 3.5, math.pi / 2], 0.0, PlanOptions())
         assert res.solved, res.message
         rep = check_trajectory(sc, res.trajectory.waypoints)
@@ -664,3 +666,80 @@ def test_a_disc_touching_a_wall_by_a_rounding_drives_off(kinematics):
     assert not geo.motion_free([1.6, 2.5], [1.65, 2.2])  # along it, but into it
     deep = Planner(sc, rm).plan([1.600001, 2.5, math.pi] if kinematics == "unicycle" else [1.600001, 2.5], goal)
     assert deep.status.value == "invalid_query"
+
+
+@pytest.mark.parametrize("kinematics", ["holonomic", "unicycle"])
+def test_a_disc_a_little_into_a_polygon_is_not_a_start(kinematics):
+    """A disc 3e-9 to 3e-7 m into a polygon's face: FCL's collision test misses such
+    penetrations, and the exact measure queried the obstacles with a buffer's polygon (inside
+    the segment's round ends: the polygon was not returned, the gap read +1.51 m), so the
+    planner certified motions off the start and answered trajectories `gfuzzy check`
+    rejects (a reviewer's scene). Measured exactly at contact, the start is refused, and
+    every answer from a start within the tolerance passes the check."""
+    robot = {"disc": 0.2, "vmax": 0.5, "kinematics": kinematics, **({"wmax": 0.3} if kinematics == "unicycle" else {})}
+    poly = [[4.5, 2.5], [5.6, 2.5], [5.6, 3.6], [5.2, 3.6], [5.2, 2.9], [4.5, 2.9]]
+    sc = parse_scene(doc(robot, obstacles=[{"polygon": poly}], bounds=(0, 0, 6, 4)))
+    verts = np.array([[4.0, 1.0], [2.0, 1.0], [1.0, 3.0]])
+    rm = Roadmap(verts, np.array([[0, 1], [1, 2]]), np.hypot(*(verts[[1, 2]] - verts[[0, 1]]).T), sc.name,
+                 sc.static_hash, sc.robot.circumradius)  # fmt: skip
+    goal = [1.0, 3.0, 0.0] if kinematics == "unicycle" else [1.0, 3.0]
+    for depth in (0.0, 3e-9, 3e-8, 1e-7, 3e-7):
+        s = [5.329434871600707, 2.3 + depth]
+        start = [*s, math.atan2(1.0 - s[1], 4.0 - s[0])] if kinematics == "unicycle" else s
+        res = Planner(sc, rm).plan(start, goal, 0.0, PlanOptions())
+        if depth:
+            assert res.status.value == "invalid_query", (depth, res.status)
+        else:
+            assert res.solved, res.message
+            assert check_trajectory(sc, res.trajectory.waypoints).valid
+
+
+def test_the_exact_disc_gap_against_every_obstacle():
+    """``_ExactDisc.gap`` of straight motions near a polygon's faces and corners against the
+    distance to every obstacle (no spatial index): the index was asked with the buffer of
+    the motion, a polygon inside its round ends, and left out obstacles the disc reaches."""
+    import shapely
+
+    from gfuzzy.collision.geometry import _ExactDisc
+
+    poly = [[4.5, 2.5], [5.6, 2.5], [5.6, 3.6], [5.2, 3.6], [5.2, 2.9], [4.5, 2.9]]
+    sc = parse_scene(doc({"disc": 0.2, "vmax": 0.5}, obstacles=[{"polygon": poly}, {"box": {"center": [2.0, 2.0], "size": [0.4, 1.0]}}], bounds=(0, 0, 6, 4)))  # fmt: skip
+    exact = _ExactDisc(sc)
+    shapes = [shapely.Polygon(poly), shapely.box(1.8, 1.5, 2.2, 2.5)]
+    rng = np.random.default_rng(5)
+    corners = np.array(poly + [[1.8, 1.5], [2.2, 2.5], [1.8, 2.5], [2.2, 1.5]], float)
+    starts = []
+    for _ in range(200):  # the disc a little into a corner, the motion leaving it
+        c = corners[rng.integers(len(corners))]
+        u = np.array([math.cos(phi := rng.uniform(-math.pi, math.pi)), math.sin(phi)])
+        starts.append((c + u * (0.2 - 10.0 ** rng.uniform(-9, -3.5)), u))
+    for _ in range(200):  # a little into the polygon's lower face, leaving it at a slant
+        u = np.array([math.cos(phi := rng.uniform(-2.8, -0.35)), math.sin(phi)])
+        starts.append((np.array([rng.uniform(4.6, 5.5), 2.3 + 10.0 ** rng.uniform(-9, -4)]), u))
+    for a, u in starts:
+        b = a + u * rng.uniform(0.0, 2.0) * rng.integers(0, 2)
+        seg = shapely.LineString([a, b]) if np.any(a != b) else shapely.Point(a)
+        want = min(s.distance(seg) for s in shapes) - 0.2
+        assert want < 0.0
+        assert exact.gap(a, b) == pytest.approx(want, abs=1e-12), (a, b)
+
+
+def test_the_fan_turns_where_headings_differ_beyond_the_merge():
+    """The navigator's fan (straight moves from the robot, then a turn and a lane to the
+    goal) took headings within 1e-9 rad for the same, and a lane on to a goal 1.4e-9 rad off
+    its own heading turned while moving by that much (`gfuzzy check` rejects it)."""
+    from gfuzzy.timespace.drive import Fan
+    from gfuzzy.timespace.unicycle import prepare_goal
+
+    sc = parse_scene(doc({"box": [0.6, 0.4], "vmax": 1.0, "kinematics": "unicycle"}))
+    verts = np.array([[5.0, 3.5], [5.5, 3.5]])
+    rm = Roadmap(verts, np.array([[0, 1]]), np.array([0.5]), sc.name, sc.static_hash, sc.robot.circumradius)
+    pl = Planner(sc, rm)
+    kept = prepare_goal(pl, np.array([3.0, 2.0 + 0.7e-9, 1.4e-9]), 0.07, 1.0)
+    g = kept.splice(pl, np.array([1.0, 2.0, 0.0]), fan_options=Fan(offsets=(0.0,), distances=(1.0,))).graph
+    src = np.repeat(np.arange(len(g.indptr) - 1), np.diff(g.indptr))
+    dst, p = np.asarray(g.neighbors), np.asarray(g.poses)
+    moves = np.hypot(*(p[dst, :2] - p[src, :2]).T) > 1e-9
+    assert moves.sum() > 0
+    dh = np.abs(np.angle(np.exp(1j * (p[dst, 2] - p[src, 2]))))[moves]
+    assert dh.max() <= 0.5e-9, dh.max()

@@ -36,9 +36,10 @@ _NEAR_CONTACT = 1e-4  # distances below this are decided by a collision test (0 
 _DIST_MARGIN = 1e-4  # subtracted from FCL distances (GJK overestimates; see obstacle_clearance)
 #: A map's distance-transform bound above this (m) certifies a motion's step without FCL.
 _QUICK_CLEARANCE = 0.02
-#: A disc robot this far into an obstacle or less (m) touches it: the overlap ``gfuzzy
-#: check`` tolerates as rounding (its ``tol``), measured exactly (:class:`_ExactDisc`).
-TOUCH_TOL = 1e-9
+#: A disc robot this far into an obstacle or less (m) touches it: half the overlap ``gfuzzy
+#: check`` tolerates as rounding (its ``tol``, 1e-9; the half leaves room for the two
+#: measurements' own roundings), measured exactly (:class:`_ExactDisc`).
+TOUCH_TOL = 0.5e-9
 
 
 def _yaw_transform(x: float, y: float, yaw: float = 0.0) -> fcl.Transform:
@@ -181,7 +182,9 @@ class StaticGeometry:
         self._robot_obj = self._robot_objs[0]
         self._disc_obj = None  # the circumscribed disc (sweep_bound), made when first needed
         # a disc touching obstacles (robot.clearance 0): exact distances at contact
-        self._exact = _ExactDisc(scene) if scene.robot.shape == "disc" and self.keep == 0 else None
+        exact = scene.robot.shape == "disc" and self.keep == 0
+        exact = exact and all(isinstance(ob, (Disc, Box, Polygon, MapObstacle)) for ob in scene.obstacles)
+        self._exact = _ExactDisc(scene) if exact else None
         self._shape = shape_of(scene.robot)
         self._grids = [ob for ob in scene.obstacles if isinstance(ob, MapObstacle) and len(ob.rects)]
         self._inner = _inner_point(scene.robot)
@@ -300,11 +303,12 @@ class StaticGeometry:
         # distance is unreliable altogether, so the collision test decides (0 or -1)
         d = dist - _DIST_MARGIN
         if d <= _NEAR_CONTACT:
-            if not self._collides():
-                return 0.0
-            # a disc a rounding into an obstacle (a pose meant to touch it) touches it, as
-            # the check says: measured exactly
-            return 0.0 if self._exact is not None and self._exact.gap(pose, pose) >= -TOUCH_TOL else -1.0
+            if self._exact is not None:
+                # a disc at contact is measured exactly: a rounding into an obstacle (a pose
+                # meant to touch it) touches it, as the check says, and a penetration FCL's
+                # collision test misses (up to ~3e-7 m) is one
+                return 0.0 if self._exact.gap(pose, pose) >= -TOUCH_TOL else -1.0
+            return -1.0 if self._collides() else 0.0
         return d
 
     def _map_bound(self, pose) -> float:
@@ -587,7 +591,9 @@ class _ExactDisc:
             out = float(np.min(np.hypot(*(p + t[:, None] * d - c).T) - self.discs[:, 2]))
         if self.polys is not None:
             seg = shapely.LineString([p, q]) if np.any(p != q) else shapely.Point(p)
-            near = self.polys.query(seg.buffer(self.r + 1e-6))
+            # not a buffer's box: the buffer's polygon lies inside the round ends and missed
+            # obstacles the disc reaches
+            near = self.polys.query(seg, predicate="dwithin", distance=self.r + 1e-6)
             for i in near.tolist():
                 out = min(out, float(self._geoms[i].distance(seg)))
         return out - self.r

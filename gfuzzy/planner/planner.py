@@ -524,7 +524,8 @@ class Planner:
             start[2], goal[2] = wrap_angle(start[2]), wrap_angle(goal[2])
         kept = _prepared if _prepared is not None else self.prepare(ends[1], opts)
         graph, s_id, g_id, rd = self._query_graph(start, kept)
-        if not math.isfinite(rd) and robot.unicycle and _prepared is None:  # ends that may tilt
+        # ends that may tilt (a disc turns round wherever it stands: it never tilts)
+        if not math.isfinite(rd) and robot.unicycle and robot.shape != "disc" and _prepared is None:
             graph, s_id, g_id, rd = self._query_graph(start, self.prepare(ends[1], opts, _tilts=True))
         if not math.isfinite(rd):
             linked, message = self._not_joined(start, goal, _prepared is not None, _linked)

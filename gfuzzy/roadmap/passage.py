@@ -172,6 +172,15 @@ class Chains:
                 return True
         return False
 
+    def plain(self, m: FloatArray) -> list | None:
+        """Bridge sample ``m`` as it is, when the robot fits there, and its shifts along its
+        heading that fit (no centring: once centring has failed ``MAX_MISSES`` times in a row,
+        bridges still find passages at their random tilts, as cheaply as before it)."""
+        if not self.valid(m):
+            return None
+        d = np.array([math.cos(m[2]), math.sin(m[2]), 0.0])
+        return [m] + [q for q in (m + s * self.span * d for s in CHAIN_SHIFTS) if self.valid(q)]
+
     def make(self, m: FloatArray) -> list | None:
         """The milestones of bridge sample ``m`` (``[x, y, heading]``): its pose first, then
         its chain; None when it is skipped or gives no valid pose."""

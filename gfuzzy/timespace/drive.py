@@ -17,7 +17,7 @@ from ..poses import wrap_angle
 from ..settings import SPEED_SAFETY
 from ..typed import FloatArray
 
-__all__ = ["turn_path", "drive_rows", "settle_at", "evasions", "reach_fraction", "turn_free", "pick_turn", "fan", "Fan", "SAME_HEADING"]
+__all__ = ["turn_path", "drive_rows", "settle_at", "evasions", "reach_fraction", "turn_free", "pick_turn", "lane_turn", "fan", "Fan", "SAME_HEADING", "MERGE_HEADING"]
 
 #: A turn's sweep is certified in arcs of at most this (rad): ``motion_free`` turns along
 #: the shorter arc.
@@ -25,6 +25,10 @@ _ARC = 0.5 * math.pi
 
 #: Headings closer than this (rad) are the same.
 SAME_HEADING = 1e-9
+#: Headings within this (rad) share a copy at a vertex, or need no turn before a lane:
+#: below half of ``SAME_HEADING``, so the two ends of a lane joined after it differ by less
+#: than the check's 1e-9 rad.
+MERGE_HEADING = 0.4 * SAME_HEADING
 #: Steps of the sphere tracing (two clearances each) that certify one piece of the fan
 #: (:func:`fan`) at most: about 30 ms of FCL queries.
 FAN_TRACE_STEPS = 256
@@ -57,16 +61,26 @@ def turn_free(geometry, x: float, y: float, h: float, dh: float, max_steps: int 
     return True
 
 
-def pick_turn(geometry, x: float, y: float, h1: float, h2: float, max_steps: int = 100_000) -> float | None:
+def pick_turn(geometry, x: float, y: float, h1: float, h2: float, max_steps: int = 100_000,
+              same: float = SAME_HEADING) -> float | None:  # fmt: skip
     """The signed turn from ``h1`` to ``h2``: the shorter arc when its sweep is free, else
-    the longer one, else None (0 when the headings are the same)."""
+    the longer one, else None (0 when the headings are within ``same``; a lane joined after
+    it, whose ends differ by up to ``same`` more, wants ``MERGE_HEADING``)."""
     d = float(wrap_angle(h2 - h1))
-    if abs(d) <= SAME_HEADING:
+    if abs(d) <= same:
         return 0.0
     for dh in (d, d - math.copysign(2 * math.pi, d)):
         if turn_free(geometry, x, y, h1, dh, max_steps):
             return dh
     return None
+
+
+def lane_turn(geometry, x: float, y: float, h1: float, h2: float, max_steps: int = 100_000) -> float | None:
+    """:func:`pick_turn` before a lane or after it: headings more than ``MERGE_HEADING``
+    apart need a turn, so the lane's two ends differ by less than the check's 1e-9 rad
+    (counted from ``SAME_HEADING`` they differed by up to twice it, and answers turned
+    1.2e-9 to 1.8e-9 rad while moving)."""
+    return pick_turn(geometry, x, y, h1, h2, max_steps, same=MERGE_HEADING)
 
 
 def _free(geometry, a, b, max_steps: int = 100_000) -> bool:
@@ -315,8 +329,8 @@ def fan(ex, geometry, start, s_id: int, goal, g_id: int, options: Fan, expired=N
             if math.hypot(gx - qx, gy - qy) <= 1e-9:
                 continue
             hg = math.atan2(gy - qy, gx - qx)
-            d1 = pick_turn(geometry, qx, qy, h, hg, n)
-            d2 = pick_turn(geometry, gx, gy, hg, gh, n)
+            d1 = lane_turn(geometry, qx, qy, h, hg, n)
+            d2 = lane_turn(geometry, gx, gy, hg, gh, n)
             if d1 is None or d2 is None or not _free(geometry, (qx, qy, hg), (gx, gy, hg), n):
                 continue
             a = node if d1 == 0.0 else ex.node(qx, qy, hg)

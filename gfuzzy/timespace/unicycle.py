@@ -38,7 +38,7 @@ import numpy as np
 
 from ..poses import split_counts, wrap_angle
 from ..typed import FloatArray, IntArray
-from .drive import SAME_HEADING, _xy_pose, fan, pick_turn, turn_free
+from .drive import MERGE_HEADING, SAME_HEADING, _xy_pose, fan, lane_turn, pick_turn, turn_free
 from .spacetime import SpaceTimeGraph
 from .unilanes import LANE_NEIGHBOURS, _brackets, _rings, _same_interval, lanes
 from .unipaths import dijkstra, matrix, new_to_goal, with_rows
@@ -54,9 +54,6 @@ TILT_SHARE = 0.75
 MIN_TILT = 1e-3
 TILT_DEPTH = 3
 TILT_LINES = 24
-#: Lane headings at one vertex this close to the first of their group share a copy (rad):
-#: below half of ``SAME_HEADING``, so the two copies a lane joins differ by at most that.
-MERGE_HEADING = 0.4 * SAME_HEADING
 
 
 @dataclass
@@ -406,7 +403,7 @@ class _Extras:
                 h = _drive(geo, robot, ax, ay, bx, by, back, ca, cb)
                 if h is None:
                     continue
-                dh = _turn(geo, px, py, ph, h) if outward else _turn(geo, px, py, h, ph)
+                dh = lane_turn(geo, px, py, ph, h) if outward else lane_turn(geo, px, py, h, ph)
                 if dh is None:
                     continue
                 here = node
@@ -422,19 +419,6 @@ class _Extras:
                 else:
                     self.lane(c, here)
                 joined += 1
-
-
-def _turn(geo, x: float, y: float, h1: float, h2: float) -> float | None:
-    """:func:`gfuzzy.timespace.drive.pick_turn` at the copies' tolerance: headings more
-    than ``MERGE_HEADING`` apart need a turn (a lane's ends then differ by less than the
-    check's 1e-9 rad; counted from ``SAME_HEADING`` they differed by up to twice it, and two
-    unseen answers turned 1.2e-9 and 1.8e-9 rad while moving off their start)."""
-    dh = pick_turn(geo, x, y, h1, h2)
-    if dh == 0.0:
-        d = float(wrap_angle(h2 - h1))
-        if abs(d) > MERGE_HEADING:
-            return d if turn_free(geo, x, y, h1, d) else None
-    return dh
 
 
 def _free_arc(geo, x: float, y: float, h: float, side: float, steps: int = 12) -> float:
@@ -599,7 +583,7 @@ class UnicycleGoal:
                 h = _drive(geo, robot, sx, sy, gx, gy, back)
                 if h is None:
                     continue
-                d1, d2 = _turn(geo, sx, sy, sh, h), _turn(geo, gx, gy, h, gh)
+                d1, d2 = lane_turn(geo, sx, sy, sh, h), lane_turn(geo, gx, gy, h, gh)
                 if d1 is None or d2 is None:
                     continue
                 a = s_id if d1 == 0.0 else ex.node(sx, sy, h)
