@@ -582,3 +582,13 @@ def test_half_turn_symmetric_robots():
     assert got == [True, True, True]
     assert not _scene({"footprint": cart}).robot.half_turn_symmetric
     assert not _scene({"footprint": ell}).robot.half_turn_symmetric
+    # the same vertices negated, in another order: another polygon (a reviewer's lane was
+    # certified one way and copied to the other, where it collides)
+    star = [[0.4, 0.0], [0.1, 0.06], [0.0, 0.2], [-0.4, 0.0], [0.0, -0.2], [-0.1, -0.06]]
+    bow = [[-0.3081, -0.2855], [0.043, -0.3164], [0.0972, 0.1204], [0.3362, -0.3498],
+           [0.3081, 0.2855], [-0.3362, 0.3498], [-0.043, 0.3164], [-0.0972, -0.1204]]  # fmt: skip
+    for fp in (star, bow):
+        robot = _scene({"footprint": fp}).robot
+        body = shapely.Polygon(robot.footprint)
+        assert shapely.affinity.rotate(body, 180, origin=(0, 0)).symmetric_difference(body).area > 1e-3
+        assert not robot.half_turn_symmetric

@@ -270,7 +270,10 @@ class StaticGeometry:
 
     # ---- single pose (OMPL callback path)
     def is_valid(self, pose) -> bool:
-        """True when the robot at ``pose`` is inside bounds and touches no obstacle's interior."""
+        """True when the robot at ``pose`` is inside bounds and FCL's collision test finds it
+        in no obstacle (the sampler's fast test: it misses penetrations of up to ~3e-7 m,
+        which :meth:`clearance1` measures, for a disc exactly; no motion is certified from
+        such a pose, so it stays an isolated vertex)."""
         self.checks += 1
         if not self._inside_bounds(pose):
             return False

@@ -116,10 +116,13 @@ class Robot:
     @property
     def half_turn_symmetric(self) -> bool:
         """Whether the robot is the same body turned by pi about its reference point: a
-        disc, a box, a footprint whose vertices negated are its vertices (exactly)."""
+        disc, a box, a footprint whose vertices negated are its vertices in the same cyclic
+        order (exactly; the same vertex set in another order is another polygon)."""
         if self.shape != "footprint":
             return True
-        return sorted(self.footprint) == sorted((-x + 0.0, -y + 0.0) for x, y in self.footprint)
+        fp = [tuple(p) for p in self.footprint]
+        neg = [(-x + 0.0, -y + 0.0) for x, y in fp]
+        return any(neg == fp[k:] + fp[:k] for k in range(len(fp)))
 
     @property
     def inradius(self) -> float:
