@@ -830,7 +830,7 @@ def test_the_search_leaves_the_measured_tail_of_its_calls_free(open_square):
         nav._clock = lambda now=now: now[0]
         seen = []
 
-        def search(t, pose, o, infl, deadline, *rest, now=now, seen=seen, start=None):
+        def search(t, pose, o, infl, deadline, *rest, now=now, seen=seen, start=None, stop=None):
             seen.append(deadline - now[0])
             now[0] = deadline + 0.001  # the search ran into its deadline
             return _Searched(None, "planning time budget exhausted", 1, True)
@@ -864,8 +864,9 @@ def test_one_stalled_call_does_not_halve_the_search_for_the_rest_of_the_run(open
     nav._clock = lambda: now[0]
     seen, stall = [], [0.3]
 
-    def search(t, pose, o, infl, deadline, *rest, start=None):
-        seen.append(deadline - now[0])
+    def search(t, pose, o, infl, deadline, *rest, start=None, stop=None):
+        if not rest:  # the first search's (the relaxed search passes the first's graph)
+            seen.append(deadline - now[0])
         now[0] += stall[0] + 0.005  # the first call stalls, the others answer in 5 ms
         stall[0] = 0.0
         return _Searched(None, "planning time budget exhausted", 1, True)
@@ -897,3 +898,33 @@ def test_the_exact_first_motions_stop_at_the_deadline(open_square):
     assert field_.motion_safe(np.array([0.0, -4.0]), np.array([0.0, -4.05]), 0) in (True, False)
     with pytest.raises(_OutOfTime):
         field_.motion_safe(np.array([0.0, -4.0]), np.array([0.0, -4.05]), 0)
+
+
+def test_a_first_search_cut_at_its_share_leaves_the_relaxed_search_time(open_square):
+    """The tiers before the relaxed search (here the first search: the ghosts, the
+    personal space) may use only ``FIRST_SHARE`` of the searches' time when people are
+    seen: cut there, the relaxed search still answers within the rest. A differential
+    drive in a house ended *evasive* call after call: the personal space's second search
+    ran into the searches' deadline, so the relaxed search never ran."""
+    from gfuzzy.navigation.navigator import FIRST_SHARE, SEARCH_SHARE
+
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (0.0, 4.0))
+    obs = np.array([[0.0, 0.0, 0.0, -1.0, 0.3], [2.0, 1.0, -1.0, 0.0, 0.3]])
+    now, cuts = [0.0], []
+    nav._clock = lambda: now[0]  # frozen: only the first search's safety runs out of time
+    real = Navigator._field
+
+    def field_then_late(self, t, o, infl, steps, deadline):
+        field_ = real(self, t, o, infl, steps, deadline)
+        if not cuts:  # the first search's safety: the clock passes its deadline
+            cuts.append(deadline)
+            now[0] = deadline + 1e-6
+        return field_
+
+    nav._field = field_then_late.__get__(nav)
+    traj = nav.step(0.0, np.array([0.0, -4.0]), obs)
+    assert nav.last.mode == "relaxed"
+    assert cuts[0] == pytest.approx(FIRST_SHARE * SEARCH_SHARE * 0.1)
+    np.testing.assert_allclose(traj.waypoints[-1, 1:], [0.0, 4.0])
+    assert _speeds_ok(traj, 1.0)

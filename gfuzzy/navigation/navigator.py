@@ -77,6 +77,10 @@ TAIL_RESERVE = 1.25
 #: The measured tail decays by this factor each call (half-life about 14 calls), and one
 #: call counts for at most ``TAIL_CAP`` of the budget.
 TAIL_DECAY, TAIL_CAP = 0.95, 0.5
+#: Share of the searches' time the tiers before the relaxed search (the first search, the
+#: path space's and the personal space's second ones) may use when people are seen: cut
+#: there, they leave the rest to the relaxed search instead of a fallback.
+FIRST_SHARE = 0.65
 #: Share of ``time_budget`` after which a differential drive's two-leg motions
 #: (``NavOptions.fan``) are no longer added: among walls their static checks cost
 #: milliseconds a heading, and the search must still have its time.
@@ -436,18 +440,19 @@ class Navigator(PathSpace, Prediction):
         predicted = obs.copy()
         if len(obs):
             predicted[:, 4] = obs[:, 4] + infl[:, 0]
-        found = self._search(t, pose, *self._with_ghosts(pose, obs, infl), deadline)
+        stop = deadline - (1.0 - FIRST_SHARE) * self._search_seconds() if len(obs) else deadline
+        found = self._search(t, pose, *self._with_ghosts(pose, obs, infl), deadline, stop=stop)
         ghosts = opts.path_space > 0 and len(obs) > 0  # the plan keeps off the people's ways
-        if ghosts and found.graph is not None and self._clock() < deadline:
+        if ghosts and found.graph is not None and self._clock() < stop:
             ghosted = found
-            found = self._path_space_cost(t, pose, obs, infl, found, deadline)
+            found = self._path_space_cost(t, pose, obs, infl, found, stop)
             ghosts = found is ghosted
         traj, mode = found.trajectory, NavMode.PLAN
-        if opts.personal_space > 0 and len(obs) and found.graph is not None and self._clock() < deadline:
-            traj, mode, found = self._closer(t, pose, obs, found, deadline, ghosts)
+        if opts.personal_space > 0 and len(obs) and found.graph is not None and self._clock() < stop:
+            traj, mode, found = self._closer(t, pose, obs, found, stop, ghosts)
         if opts.full_speed and traj is not None and mode in (NavMode.PLAN, NavMode.CLOSE):
             traj = brisk(self, t, pose, traj, obs, self._kept_inflation(pose, obs, infl, mode), ghosts)
-        if traj is None and len(obs) and not found.out_of_time and self._clock() < deadline:
+        if traj is None and len(obs) and self._clock() < deadline:
             # blocked by the margins (someone standing beside the goal, a narrow gap): try
             # once more with the people's discs as they are, plus the mover clearance only
             traj = self._relaxed(t, pose, obs, found, deadline)
@@ -560,8 +565,10 @@ class Navigator(PathSpace, Prediction):
         return None, NavMode.PLAN, close
 
     def _search(self, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray, deadline: float,
-                before: _Searched | None = None) -> _Searched:  # fmt: skip
-        """The safe-interval search among the predicted people, within ``deadline``.
+                before: _Searched | None = None, stop: float | None = None) -> _Searched:  # fmt: skip
+        """The safe-interval search among the predicted people, within ``deadline``
+        (``stop``, when given: this search's own, earlier one; the graph's splice is still
+        timed by ``deadline``, the tiers').
 
         The predictions are built only when the time left can pay for them (their cost
         per person is measured as the navigator runs); the search stops at ``deadline``
@@ -576,6 +583,7 @@ class Navigator(PathSpace, Prediction):
                 graph, s_id = before.graph, before.start
             else:
                 graph, s_id = self._splice(pose, t, deadline)
+            deadline = deadline if stop is None else stop
             if graph is None:
                 return _Searched(None, s_id)
             h0 = float(graph.heuristic[s_id])
