@@ -742,9 +742,9 @@ def test_the_close_tier_keeps_off_the_ways_the_first_plan_kept_off(open_square):
     calls = []
     search = nav._search
 
-    def spy(t, pose, obs, infl, deadline, before=None):
+    def spy(t, pose, obs, infl, deadline, before=None, stop=None):
         calls.append(np.asarray(obs).shape)
-        return search(t, pose, obs, infl, deadline, before)
+        return search(t, pose, obs, infl, deadline, before, stop)
 
     nav._search = spy
     nav.step(0.0, np.array([0.0, -4.0]), people)
@@ -900,13 +900,15 @@ def test_the_exact_first_motions_stop_at_the_deadline(open_square):
         field_.motion_safe(np.array([0.0, -4.0]), np.array([0.0, -4.05]), 0)
 
 
-def test_a_first_search_cut_at_its_share_leaves_the_relaxed_search_time(open_square):
-    """The tiers before the relaxed search (here the first search: the ghosts, the
-    personal space) may use only ``FIRST_SHARE`` of the searches' time when people are
-    seen: cut there, the relaxed search still answers within the rest. A differential
-    drive in a house ended *evasive* call after call: the personal space's second search
-    ran into the searches' deadline, so the relaxed search never ran."""
-    from gfuzzy.navigation.navigator import FIRST_SHARE, SEARCH_SHARE
+def test_after_a_call_whose_searches_ran_out_of_time_the_relaxed_search_gets_a_share(open_square):
+    """When a call's tiers before the relaxed search (the first search: the ghosts, the
+    personal space; the path space's and the personal space's second ones) ran out of
+    time finding nothing, the next call's stop at ``TIERS_SHARE`` of the searches' time
+    and leave the rest to the relaxed search, which answers. A differential drive in a house
+    ended *evasive* call after call: the personal space's second search ran into the
+    searches' deadline every time, so the relaxed search never ran. A call after one that
+    found a plan keeps the whole deadline."""
+    from gfuzzy.navigation.navigator import SEARCH_SHARE, TIERS_SHARE
 
     scene, rm = open_square
     nav = Navigator(scene, rm, (0.0, 4.0))
@@ -917,14 +919,18 @@ def test_a_first_search_cut_at_its_share_leaves_the_relaxed_search_time(open_squ
 
     def field_then_late(self, t, o, infl, steps, deadline):
         field_ = real(self, t, o, infl, steps, deadline)
-        if not cuts:  # the first search's safety: the clock passes its deadline
-            cuts.append(deadline)
+        if len(cuts) < k[0]:  # the call's first search: the clock passes its deadline
+            cuts.append(deadline - begin[0])
             now[0] = deadline + 1e-6
         return field_
 
     nav._field = field_then_late.__get__(nav)
-    traj = nav.step(0.0, np.array([0.0, -4.0]), obs)
-    assert nav.last.mode == "relaxed"
-    assert cuts[0] == pytest.approx(FIRST_SHARE * SEARCH_SHARE * 0.1)
+    modes = []
+    for k, begin in (([1], [0.0]), ([2], [10.0])):
+        now[0] = begin[0]
+        traj = nav.step(0.25 * (k[0] - 1), np.array([0.0, -4.0]), obs)
+        modes.append(str(nav.last.mode))
+    assert modes[0] in ("direct", "previous", "evasive") and modes[1] == "relaxed"
+    assert cuts == pytest.approx([SEARCH_SHARE * 0.1, TIERS_SHARE * SEARCH_SHARE * 0.1])
     np.testing.assert_allclose(traj.waypoints[-1, 1:], [0.0, 4.0])
     assert _speeds_ok(traj, 1.0)
