@@ -742,9 +742,9 @@ def test_the_close_tier_keeps_off_the_ways_the_first_plan_kept_off(open_square):
     calls = []
     search = nav._search
 
-    def spy(t, pose, obs, infl, deadline, before=None, stop=None):
+    def spy(t, pose, obs, infl, deadline, before=None):
         calls.append(np.asarray(obs).shape)
-        return search(t, pose, obs, infl, deadline, before, stop)
+        return search(t, pose, obs, infl, deadline, before)
 
     nav._search = spy
     nav.step(0.0, np.array([0.0, -4.0]), people)
@@ -830,7 +830,7 @@ def test_the_search_leaves_the_measured_tail_of_its_calls_free(open_square):
         nav._clock = lambda now=now: now[0]
         seen = []
 
-        def search(t, pose, o, infl, deadline, *rest, now=now, seen=seen, start=None, stop=None):
+        def search(t, pose, o, infl, deadline, *rest, now=now, seen=seen, start=None):
             seen.append(deadline - now[0])
             now[0] = deadline + 0.001  # the search ran into its deadline
             return _Searched(None, "planning time budget exhausted", 1, True)
@@ -864,9 +864,8 @@ def test_one_stalled_call_does_not_halve_the_search_for_the_rest_of_the_run(open
     nav._clock = lambda: now[0]
     seen, stall = [], [0.3]
 
-    def search(t, pose, o, infl, deadline, *rest, start=None, stop=None):
-        if not rest:  # the first search's (the relaxed search passes the first's graph)
-            seen.append(deadline - now[0])
+    def search(t, pose, o, infl, deadline, *rest, start=None):
+        seen.append(deadline - now[0])
         now[0] += stall[0] + 0.005  # the first call stalls, the others answer in 5 ms
         stall[0] = 0.0
         return _Searched(None, "planning time budget exhausted", 1, True)
@@ -898,39 +897,3 @@ def test_the_exact_first_motions_stop_at_the_deadline(open_square):
     assert field_.motion_safe(np.array([0.0, -4.0]), np.array([0.0, -4.05]), 0) in (True, False)
     with pytest.raises(_OutOfTime):
         field_.motion_safe(np.array([0.0, -4.0]), np.array([0.0, -4.05]), 0)
-
-
-def test_after_a_call_whose_searches_ran_out_of_time_the_relaxed_search_gets_a_share(open_square):
-    """When a call's tiers before the relaxed search (the first search: the ghosts, the
-    personal space; the path space's and the personal space's second ones) ran out of
-    time finding nothing, the next call's stop at ``TIERS_SHARE`` of the searches' time
-    and leave the rest to the relaxed search, which answers. A differential drive in a house
-    ended *evasive* call after call: the personal space's second search ran into the
-    searches' deadline every time, so the relaxed search never ran. A call after one that
-    found a plan keeps the whole deadline."""
-    from gfuzzy.navigation.navigator import SEARCH_SHARE, TIERS_SHARE
-
-    scene, rm = open_square
-    nav = Navigator(scene, rm, (0.0, 4.0))
-    obs = np.array([[0.0, 0.0, 0.0, -1.0, 0.3], [2.0, 1.0, -1.0, 0.0, 0.3]])
-    now, cuts = [0.0], []
-    nav._clock = lambda: now[0]  # frozen: only the first search's safety runs out of time
-    real = Navigator._field
-
-    def field_then_late(self, t, o, infl, steps, deadline):
-        field_ = real(self, t, o, infl, steps, deadline)
-        if len(cuts) < k[0]:  # the call's first search: the clock passes its deadline
-            cuts.append(deadline - begin[0])
-            now[0] = deadline + 1e-6
-        return field_
-
-    nav._field = field_then_late.__get__(nav)
-    modes = []
-    for k, begin in (([1], [0.0]), ([2], [10.0])):
-        now[0] = begin[0]
-        traj = nav.step(0.25 * (k[0] - 1), np.array([0.0, -4.0]), obs)
-        modes.append(str(nav.last.mode))
-    assert modes[0] in ("direct", "previous", "evasive") and modes[1] == "relaxed"
-    assert cuts == pytest.approx([SEARCH_SHARE * 0.1, TIERS_SHARE * SEARCH_SHARE * 0.1])
-    np.testing.assert_allclose(traj.waypoints[-1, 1:], [0.0, 4.0])
-    assert _speeds_ok(traj, 1.0)

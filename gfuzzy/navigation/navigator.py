@@ -77,12 +77,6 @@ TAIL_RESERVE = 1.25
 #: The measured tail decays by this factor each call (half-life about 14 calls), and one
 #: call counts for at most ``TAIL_CAP`` of the budget.
 TAIL_DECAY, TAIL_CAP = 0.95, 0.5
-#: Share of the searches' time the tiers before the relaxed search (the first search, the
-#: path space's and the personal space's second ones) may use after a call in which they
-#: ran out of time finding nothing: cut there, they leave the rest to the relaxed search
-#: instead of a fallback (with the whole time they would spend it again; cut on every
-#: call, the crowd lost more plans that keep the buffer than the relaxed search found).
-TIERS_SHARE = 0.65
 #: Share of ``time_budget`` after which a differential drive's two-leg motions
 #: (``NavOptions.fan``) are no longer added: among walls their static checks cost
 #: milliseconds a heading, and the search must still have its time.
@@ -328,7 +322,6 @@ class Navigator(PathSpace, Prediction):
         self._clock = BUDGET_CLOCKS[opts.budget_clock]  # the budget's clock (a test may replace it)
         self._person_seconds = PERSON_SECONDS  # the predictions' set-up per person, measured
         self._tail_seconds = 0.0  # from the search's deadline to the answer, measured (decaying maximum)
-        self._starved = False  # the last call's tiers before the relaxed search ran out of time, finding nothing
         self._walls = WallCheck(scene)
         disc = robot.shape == "disc" and robot.dof == 2  # its view follows its motion
         self._lookout = Lookout(opts.fov, opts.look_after, goal) if opts.fov < 360 and disc else None
@@ -443,10 +436,18 @@ class Navigator(PathSpace, Prediction):
         predicted = obs.copy()
         if len(obs):
             predicted[:, 4] = obs[:, 4] + infl[:, 0]
-        traj, mode, found, ghosts = self._tiers(t, pose, obs, infl, deadline)
+        found = self._search(t, pose, *self._with_ghosts(pose, obs, infl), deadline)
+        ghosts = opts.path_space > 0 and len(obs) > 0  # the plan keeps off the people's ways
+        if ghosts and found.graph is not None and self._clock() < deadline:
+            ghosted = found
+            found = self._path_space_cost(t, pose, obs, infl, found, deadline)
+            ghosts = found is ghosted
+        traj, mode = found.trajectory, NavMode.PLAN
+        if opts.personal_space > 0 and len(obs) and found.graph is not None and self._clock() < deadline:
+            traj, mode, found = self._closer(t, pose, obs, found, deadline, ghosts)
         if opts.full_speed and traj is not None and mode in (NavMode.PLAN, NavMode.CLOSE):
             traj = brisk(self, t, pose, traj, obs, self._kept_inflation(pose, obs, infl, mode), ghosts)
-        if traj is None and len(obs) and self._clock() < deadline:
+        if traj is None and len(obs) and not found.out_of_time and self._clock() < deadline:
             # blocked by the margins (someone standing beside the goal, a narrow gap): try
             # once more with the people's discs as they are, plus the mover clearance only
             traj = self._relaxed(t, pose, obs, found, deadline)
@@ -487,32 +488,6 @@ class Navigator(PathSpace, Prediction):
         self._measure_tail(t_end - deadline)
         self.last = NavStep(mode, t_end - t_begin, found.message, predicted, found.detailed)
         return traj
-
-    def _tiers(self, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray,
-               deadline: float) -> tuple[Trajectory | None, NavMode, _Searched, bool]:  # fmt: skip
-        """The searches before the relaxed one: the first (the ghosts, the personal space),
-        the path space's and the personal space's soft costs; (plan or None, its mode, the
-        search it came from, whether it keeps off the people's ways).
-
-        They stop at ``deadline``, or at ``TIERS_SHARE`` of the searches' time when people
-        are seen and the last call's ran out of time finding nothing (the relaxed search
-        then has the rest: with the whole time they would most likely spend it again).
-        """
-        opts = self.options
-        stop = deadline
-        if self._starved and len(obs):
-            stop = deadline - (1.0 - TIERS_SHARE) * self._search_seconds()
-        found = self._search(t, pose, *self._with_ghosts(pose, obs, infl), deadline, stop=stop)
-        ghosts = opts.path_space > 0 and len(obs) > 0  # the plan keeps off the people's ways
-        if ghosts and found.graph is not None and self._clock() < stop:
-            ghosted = found
-            found = self._path_space_cost(t, pose, obs, infl, found, stop)
-            ghosts = found is ghosted
-        traj, mode = found.trajectory, NavMode.PLAN
-        if opts.personal_space > 0 and len(obs) and found.graph is not None and self._clock() < stop:
-            traj, mode, found = self._closer(t, pose, obs, found, stop, ghosts)
-        self._starved = traj is None and found.out_of_time
-        return traj, mode, found, ghosts
 
     def _measure_tail(self, over: float) -> None:
         """Keep the time a call went on past the search's deadline (``over``), to reserve it:
@@ -585,10 +560,8 @@ class Navigator(PathSpace, Prediction):
         return None, NavMode.PLAN, close
 
     def _search(self, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray, deadline: float,
-                before: _Searched | None = None, stop: float | None = None) -> _Searched:  # fmt: skip
-        """The safe-interval search among the predicted people, within ``deadline``
-        (``stop``, when given: this search's own, earlier one; the graph's splice is still
-        timed by ``deadline``, the tiers').
+                before: _Searched | None = None) -> _Searched:  # fmt: skip
+        """The safe-interval search among the predicted people, within ``deadline``.
 
         The predictions are built only when the time left can pay for them (their cost
         per person is measured as the navigator runs); the search stops at ``deadline``
@@ -603,7 +576,6 @@ class Navigator(PathSpace, Prediction):
                 graph, s_id = before.graph, before.start
             else:
                 graph, s_id = self._splice(pose, t, deadline)
-            deadline = deadline if stop is None else stop
             if graph is None:
                 return _Searched(None, s_id)
             h0 = float(graph.heuristic[s_id])
