@@ -124,7 +124,7 @@ def _along_faces(blocked, m: FloatArray, heading: float, reach: float) -> float 
 
 
 #: Bridge samples in a row that make no new chain (each one centred in vain) after which the
-#: sampler stops looking for passages (every passage it meets has its chain).
+#: sampler stops centring: bridges are then taken as they come (:meth:`Chains.plain`).
 MAX_MISSES = 256
 #: A bridge sample that fits with a clearance of at least this share of the robot's span
 #: (twice its circumradius) is not in a narrow passage: it makes no chain.
