@@ -176,10 +176,12 @@ class Chains:
         """Bridge sample ``m`` as it is, when the robot fits there, and its shifts along its
         heading that fit (no centring: once centring has failed ``MAX_MISSES`` times in a row,
         bridges still find passages at their random tilts, as cheaply as before it)."""
-        if not self.valid(m):
-            return None
-        d = np.array([math.cos(m[2]), math.sin(m[2]), 0.0])
-        return [m] + [q for q in (m + s * self.span * d for s in CHAIN_SHIFTS) if self.valid(q)]
+        return [m, *self._shifts(m)] if self.valid(m) else None
+
+    def _shifts(self, p: FloatArray) -> list:
+        """The valid poses ``CHAIN_SHIFTS`` spans from ``p`` along its heading."""
+        d = np.array([math.cos(p[2]), math.sin(p[2]), 0.0])
+        return [q for q in (p + s * self.span * d for s in CHAIN_SHIFTS) if self.valid(q)]
 
     def make(self, m: FloatArray) -> list | None:
         """The milestones of bridge sample ``m`` (``[x, y, heading]``): its pose first, then
@@ -205,6 +207,5 @@ class Chains:
         for p in list(out):
             p[2] = (p[2] + math.pi) % (2 * math.pi) - math.pi
             self.made.append(p)
-            d = np.array([math.cos(p[2]), math.sin(p[2]), 0.0])
-            out += [qq for qq in (p + s * self.span * d for s in CHAIN_SHIFTS) if self.valid(qq)]
+            out += self._shifts(p)
         return out

@@ -171,13 +171,18 @@ class MapObstacle:
         inside = (j >= 0) & (j < w) & (k >= 0) & (k < h)
         return np.clip(h - 1 - k, 0, h - 1), np.clip(j, 0, w - 1), inside
 
-    def free_centres(self) -> FloatArray:
-        """(m, 2) float: centres of the cells that do not block."""
-        h, _ = self.values.shape
+    def centre_axes(self) -> tuple[FloatArray, FloatArray]:
+        """The cells' centres: x by column (W,) and y by row (H,), row 0 the top."""
+        h, w = self.values.shape
         ox, oy = self.info.origin
         res = self.info.resolution
+        return ox + (np.arange(w) + 0.5) * res, oy + (h - 1 - np.arange(h) + 0.5) * res
+
+    def free_centres(self) -> FloatArray:
+        """(m, 2) float: centres of the cells that do not block."""
+        cx, cy = self.centre_axes()
         i, j = np.nonzero(~self.blocked)
-        return np.stack([ox + (j + 0.5) * res, oy + (h - 1 - i + 0.5) * res], axis=1)
+        return np.stack([cx[j], cy[i]], axis=1)
 
 
 # --------------------------------------------------------------------------- the YAML
@@ -572,18 +577,15 @@ def free_cell_draw(obstacles, bounds, rng: np.random.Generator, share: float):
         None without a map.
     """
     xmin, ymin, xmax, ymax = bounds
-    grids, cells = [], []  # the maps, and the flat indices of their free cells in the bounds
+    grids, axes, cells = [], [], []  # the maps, their centres' axes, their free cells' flat indices
     for grid in obstacles:
         if isinstance(grid, MapObstacle):
-            h, w = grid.shape
-            ox, oy = grid.origin
-            res = grid.resolution
-            cx = ox + (np.arange(w) + 0.5) * res
-            cy = oy + (h - 1 - np.arange(h) + 0.5) * res  # row 0 is the top
+            cx, cy = grid.centre_axes()
             keep = ~np.asarray(grid.blocked)
             keep &= ((cy > ymin) & (cy < ymax))[:, None]
             keep &= ((cx > xmin) & (cx < xmax))[None, :]
             grids.append(grid)
+            axes.append((cx, cy))
             cells.append(np.flatnonzero(keep))
     if not grids:
         return None
@@ -596,12 +598,8 @@ def free_cell_draw(obstacles, bounds, rng: np.random.Generator, share: float):
     def draw() -> FloatArray:
         k = int(rng.integers(int(ends[-1])))
         g = int(np.searchsorted(ends, k, side="right"))
-        grid = grids[g]
-        h, w = grid.shape
-        ox, oy = grid.origin
-        res = grid.resolution
-        i, j = divmod(int(cells[g][k - (int(ends[g - 1]) if g else 0)]), w)
-        centre = np.array([ox + (j + 0.5) * res, oy + (h - 1 - i + 0.5) * res])
-        return centre + (rng.random(2) - 0.5) * res
+        (cx, cy), res = axes[g], grids[g].resolution
+        i, j = divmod(int(cells[g][k - (int(ends[g - 1]) if g else 0)]), len(cx))
+        return np.array([cx[j], cy[i]]) + (rng.random(2) - 0.5) * res
 
     return draw

@@ -128,9 +128,8 @@ def _box_fits(
     k, j = np.arange(h)[:, None] + pb, np.arange(w)[None, :] + pl
     ka, kb, ja, jb = k + dk0, k + dk1 + 1, j + dj0, j + dj1 + 1
     count = s[kb, jb] - s[ka, jb] - s[kb, ja] + s[ka, ja]
-    ox, oy = grid.origin
-    cx = ox + (np.arange(w) + 0.5) * res
-    cy = oy + (np.arange(h) + 0.5) * res
+    cx, cy = grid.centre_axes()
+    cy = cy[::-1]  # rows from the bottom
     xmin, ymin, xmax, ymax = bounds
     in_x = (cx + x0 - grow >= xmin) & (cx + x1 + grow <= xmax)
     in_y = (cy + y0 - grow >= ymin) & (cy + y1 + grow <= ymax)
@@ -142,16 +141,13 @@ def _far_apart(grid: MapObstacle, fits: np.ndarray) -> tuple[FloatArray, FloatAr
     """Two far-apart cell centres of the largest connected region of ``fits``."""
     from scipy import ndimage
 
-    res = grid.resolution
     labels, count = ndimage.label(fits)
     if count == 0:
         return None
     sizes = np.bincount(labels.ravel())[1:]
-    keep = labels == (int(np.argmax(sizes)) + 1)
-    h, _ = keep.shape
-    ox, oy = grid.origin
-    ki, kj = np.nonzero(keep)
-    pts = np.stack([ox + (kj + 0.5) * res, oy + (h - 1 - ki + 0.5) * res], axis=1)
+    ki, kj = np.nonzero(labels == (int(np.argmax(sizes)) + 1))
+    cx, cy = grid.centre_axes()
+    pts = np.stack([cx[kj], cy[ki]], axis=1)
     a = pts[np.argmax(np.sum((pts - pts.mean(axis=0)) ** 2, axis=1))]
     b = pts[np.argmax(np.sum((pts - a) ** 2, axis=1))]
     a = pts[np.argmax(np.sum((pts - b) ** 2, axis=1))]
