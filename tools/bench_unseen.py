@@ -464,12 +464,12 @@ BUILDERS = {"door": scenario_door, "door-movers": scenario_door, "blocked": scen
 # --------------------------------------------------------------------------- cases
 
 
-def make_case(seed: int, index: int, kinds=KINDS, kinematics=KINEMATICS) -> dict:
+def make_case(seed: int, index: int, kinds=KINDS, kinematics=KINEMATICS, scenarios=tuple(SCENARIOS)) -> dict:
     """Case ``index`` of ``seed``: its scene document, query, witness rows (or None) and
-    roadmap seed. The same (seed, index, kinds, kinematics) give the same case."""
+    roadmap seed. The same arguments give the same case."""
     rng = np.random.default_rng([seed, index])
     kind, kin = kinds[index % len(kinds)], kinematics[(index // len(kinds)) % len(kinematics)]
-    names = list(SCENARIOS)
+    names = list(scenarios)
     weights = np.array([SCENARIOS[s] for s in names])
     scenario = str(rng.choice(names, p=weights / weights.sum()))
     for attempt in range(TRIES):
@@ -586,9 +586,9 @@ def dump(folder: Path, case: dict, row: dict, vertices: int) -> None:
 
 
 def _one(args) -> tuple[dict, dict]:
-    seed, index, kinds, kinematics, vertices = args
+    seed, index, kinds, kinematics, scenarios, vertices = args
     try:
-        case = make_case(seed, index, kinds, kinematics)
+        case = make_case(seed, index, kinds, kinematics, scenarios)
     except Exception as exc:  # noqa: BLE001
         row = {"index": index, "kind": kinds[index % len(kinds)], "kinematics": kinematics[(index // len(kinds)) % len(kinematics)],
                "scenario": "?", "roadmap_seed": "", "witness": False, "status": "", "outcome": "error",
@@ -605,6 +605,7 @@ def main(argv=None) -> int:
     ap.add_argument("-n", "--vertices", type=int, default=200)
     ap.add_argument("--kinds", nargs="+", choices=KINDS, default=list(KINDS))
     ap.add_argument("--kinematics", nargs="+", choices=KINEMATICS, default=list(KINEMATICS))
+    ap.add_argument("--scenarios", nargs="+", choices=list(SCENARIOS), default=list(SCENARIOS))
     ap.add_argument("--only", type=int, nargs="+", help="run only these case indices")
     ap.add_argument("--workers", type=int, default=0, help="processes (0: this one, sequentially)")
     ap.add_argument("-o", "--output", help="CSV, one row per case (written atomically)")
@@ -614,7 +615,7 @@ def main(argv=None) -> int:
         print("bench_unseen: --cases must be >= 1 and --workers >= 0", file=sys.stderr)
         return 2
     indices = a.only if a.only else range(a.cases)
-    jobs = [(a.seed, i, tuple(a.kinds), tuple(a.kinematics), a.vertices) for i in indices]
+    jobs = [(a.seed, i, tuple(a.kinds), tuple(a.kinematics), tuple(a.scenarios), a.vertices) for i in indices]
     rows = []
     t0 = time.perf_counter()
     results = _results(jobs, a.workers)
