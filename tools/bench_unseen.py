@@ -168,6 +168,11 @@ def box(center, size, angle: float) -> dict:
     return {"box": {"center": [float(center[0]), float(center[1])], "size": [float(size[0]), float(size[1])], "angle": float(angle)}}
 
 
+def polygon(shape) -> dict:
+    """A shapely polygon (no holes) as a scene obstacle entry."""
+    return {"polygon": [[float(x), float(y)] for x, y in list(shape.exterior.coords)[:-1]]}
+
+
 def shape_of(ob: dict):
     """A scene obstacle entry as a shapely polygon."""
     if "box" in ob:
@@ -303,8 +308,11 @@ def _door(room: Room, blocked: bool):
     width = body.lateral + (-2 * slack if blocked else 2 * slack)
     s = rng.uniform(-1.0, 1.0)
     big = 2 * math.hypot(room.W, room.H)
-    for sign in (1, -1):
-        room.add(box(c0 + (s + sign * (width / 2 + big / 2)) * u, [thick, big], phi))
+    inside = shapely.box(0, 0, room.W, room.H)
+    for sign in (1, -1):  # the wall's two pieces, cut at the bounds
+        piece = shape_of(box(c0 + (s + sign * (width / 2 + big / 2)) * u, [thick, big], phi)).intersection(inside)
+        if piece.geom_type == "Polygon" and piece.area > 1e-6:
+            room.add(polygon(piece))
     return c0 + s * u, n, thick
 
 
@@ -413,7 +421,7 @@ def scenario_corridor(room: Room, _kind: str):
             continue
         if len(poly.interiors):
             return None
-        room.add({"polygon": [[float(x), float(y)] for x, y in list(poly.exterior.coords)[:-1]]})
+        room.add(polygon(poly))
     start = np.r_[bend - rng.uniform(body.R + 0.3, 2.5) * d1, h1]
     backed = rng.random() < 0.3
     goal = np.r_[bend + rng.uniform(body.R + 0.3, 2.5) * d2, h2 + (math.pi if backed else 0.0)]
