@@ -583,7 +583,7 @@ def dump(folder: Path, case: dict, row: dict, vertices: int) -> None:
             f"{row['outcome']} ({row['message'][:120]})\n"
             f"# python -m gfuzzy roadmap {scene_path} -n {vertices} --seed {case['roadmap_seed']} -o {folder / stem}.rm.json\n"
             f"# python -m gfuzzy plan {scene_path} --roadmap {folder / stem}.rm.json --query q -o {folder / stem}.plan.json\n")
-    write_atomic(scene_path, head + yaml.safe_dump(case["doc"], sort_keys=False))
+    write_atomic(scene_path, head + yaml.safe_dump(case["doc"], sort_keys=False, default_flow_style=None, width=200))
     if case["witness"] is not None:
         import json
 
