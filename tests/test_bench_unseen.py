@@ -9,6 +9,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+import shapely
 import yaml
 from conftest import ROOT
 
@@ -53,8 +54,8 @@ def test_a_blocked_door_has_no_witness_and_its_no_path_is_not_a_miss():
     case = make_case(1, 0, kinds=("box",), kinematics=("holonomic",), scenarios=("blocked",))
     assert case["witness"] is None
     width = case["doc"]["robot"]["box"][1]
-    pieces = [o["box"] for o in case["doc"]["obstacles"]]
-    gap = np.hypot(*np.subtract(pieces[0]["center"], pieces[1]["center"])) - pieces[0]["size"][1]
+    pieces = [shapely.Polygon(o["polygon"]) for o in case["doc"]["obstacles"]]
+    gap = pieces[0].distance(pieces[1])
     assert gap < width - 0.02  # the door is narrower than the box across its heading
     row = run_case(case, vertices=100)
     assert (row["status"], row["outcome"]) == ("no_path", "no_path"), row
