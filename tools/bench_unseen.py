@@ -637,7 +637,8 @@ def main(argv=None) -> int:
             dump(Path(a.dump), case, row, a.vertices)
     rows.sort(key=lambda r: r["index"])
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
-    print(f"# tools/bench_unseen.py --cases {a.cases} --seed {a.seed} -n {a.vertices}: {len(rows)} cases "
+    which = f"--only {' '.join(map(str, a.only))}" if a.only else f"--cases {a.cases}"
+    print(f"# tools/bench_unseen.py {which} --seed {a.seed} -n {a.vertices}: {len(rows)} cases "
           f"in {time.perf_counter() - t0:.0f} s, load average {load:.2f}; times: CPU seconds")
     print(table(rows, lambda r: f"{r['kind']} {r['kinematics']}"))
     print()
