@@ -215,6 +215,7 @@ class StaticGeometry:
         self._edt: list | None = None
         self._creq = fcl.CollisionRequest()
         self._dreq = fcl.DistanceRequest()
+        self._trace_ends = (math.nan, math.nan)  # the last _trace's ends' clearances
         self.calls = 0
         self.checks = 0  # every validity question, answered by FCL or by the bounds alone
 
@@ -457,8 +458,7 @@ class StaticGeometry:
                 return True
             # a robot touching an obstacle at an end starts or ends no traced motion (the
             # steps are its clearance): its translation is measured exactly instead
-            return bool(self._exact is not None and min(self._obstacle_certifying(a), self._obstacle_certifying(b)) == 0.0
-                        and self._exact.gap(a, b) >= -TOUCH_TOL)  # fmt: skip
+            return bool(self._exact is not None and min(self._trace_ends) == 0.0 and self._exact.gap(a, b) >= -TOUCH_TOL)
         return self._trace(a, b, max_steps, ca, cb, self._certifying_clearance) >= 0
 
     def _obstacle_certifying(self, pose) -> float:
@@ -565,11 +565,13 @@ class StaticGeometry:
             dh = (b[2] - a[2] + math.pi) % (2 * math.pi) - math.pi
         total = math.hypot(dx, dy) + abs(dh) * self.r
         ca = clear(a) if ca is None else float(ca)
+        self._trace_ends = (ca, math.nan)  # the ends' clearances, for motion_free's contact
         if ca < 0:
             return -1.0
         if total == 0.0:
             return ca
         cb = clear(b) if cb is None else float(cb)
+        self._trace_ends = (ca, cb)
         if cb < 0:
             return -1.0
         lo = ca / total  # [0, lo] is certified
