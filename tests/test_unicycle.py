@@ -767,3 +767,26 @@ def test_the_fan_turns_where_headings_differ_beyond_the_merge():
     assert moves.sum() > 0
     dh = np.abs(np.angle(np.exp(1j * (p[dst, 2] - p[src, 2]))))[moves]
     assert dh.max() <= 0.5e-9, dh.max()
+
+
+@pytest.mark.parametrize("robot, tilts", [({"disc": 0.2}, False), ({"box": [0.6, 0.4]}, True)])
+def test_a_disc_never_asks_for_tilts(robot, tilts, monkeypatch):
+    """A query whose ends are not joined asks again with tilts for a box (or footprint)
+    unicycle, never for a disc: a disc turns round wherever it stands, so its goal would
+    be prepared a second time for nothing (``Planner.plan``)."""
+    from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
+
+    wall = {"box": {"center": [3.0, 2.0], "size": [0.4, 4.0]}}  # from bound to bound: sealed off
+    sc = parse_scene(doc({**robot, "vmax": 1.0, "kinematics": "unicycle"}, obstacles=[wall]))
+    rm = build_roadmap(sc, RoadmapOptions(vertices=60, seed=1))
+    asked = []
+    prepare = Planner.prepare
+
+    def spy(self, goal, options=None, _tilts=False):
+        asked.append(_tilts)
+        return prepare(self, goal, options, _tilts)
+
+    monkeypatch.setattr(Planner, "prepare", spy)
+    res = Planner(sc, rm).plan([1.0, 2.0, 0.0], [5.0, 2.0, 0.0], 0.0, PlanOptions())
+    assert res.status.value == "no_path"
+    assert asked == ([False, True] if tilts else [False])
