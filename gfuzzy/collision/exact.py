@@ -55,14 +55,29 @@ class _Obstacles:
         return [self._geoms[i] for i in self.polys.query(geom, predicate="dwithin", distance=distance).tolist()]
 
 
-class ExactDisc:
+class _Measure:
+    """The obstacles, indexed when first needed (most geometries never meet contact, and a
+    large map's cells take a while to index)."""
+
+    def __init__(self, scene: Scene):
+        self._scene = scene
+        self._obstacles: _Obstacles | None = None
+
+    @property
+    def obstacles(self) -> _Obstacles:
+        if self._obstacles is None:
+            self._obstacles = _Obstacles(self._scene)
+        return self._obstacles
+
+
+class ExactDisc(_Measure):
     """Exact distances of a disc robot's straight motions to the static obstacles (discs in
     closed form, boxes, polygons and maps' blocked rectangles with shapely), for poses at
     contact (see :meth:`gfuzzy.collision.geometry.StaticGeometry.motion_free`)."""
 
     def __init__(self, scene: Scene):
+        super().__init__(scene)
         self.r = float(scene.robot.radius)
-        self.obstacles = _Obstacles(scene)
 
     def gap(self, a, b) -> float:
         """The least distance of the disc moving straight from ``a`` to ``b`` ((2,) or more:
@@ -83,12 +98,13 @@ class ExactDisc:
         return out - self.r
 
 
-class ExactBody:
+class ExactBody(_Measure):
     """Exact overlaps of a box or footprint robot's translations (and poses) with the static
     obstacles, measured with shapely as ``gfuzzy check`` measures them: the body swept
     along a translation is the union of its convex pieces' hulls at the two ends."""
 
     def __init__(self, scene: Scene):
+        super().__init__(scene)
         self.robot: Robot = scene.robot
         from .shapes import shape_of
 
@@ -97,7 +113,6 @@ class ExactBody:
         if self.pieces is None:  # a box: one piece, its corners about the reference point
             hl, hw = 0.5 * scene.robot.size[0], 0.5 * scene.robot.size[1]
             self.pieces = [np.array([[hl, hw], [-hl, hw], [-hl, -hw], [hl, -hw]])]
-        self.obstacles = _Obstacles(scene)
 
     def swept(self, a, b):
         """The region the body covers moving straight from pose ``a`` to pose ``b`` (the
