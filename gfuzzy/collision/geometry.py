@@ -216,6 +216,7 @@ class StaticGeometry:
         self._creq = fcl.CollisionRequest()
         self._dreq = fcl.DistanceRequest()
         self._trace_ends = (math.nan, math.nan)  # the last _trace's ends' clearances
+        self._placed = fcl.Transform()  # the last pose's transform (_place)
         self.calls = 0
         self.checks = 0  # every validity question, answered by FCL or by the bounds alone
 
@@ -255,6 +256,7 @@ class StaticGeometry:
             )
             for ob in self._robot_objs:
                 ob.setTransform(tf)
+            self._placed = tf
         else:
             self._robot_obj.setTranslation(np.array([pose[0], pose[1], 0.0]))
 
@@ -334,7 +336,7 @@ class StaticGeometry:
                 # exact): a rounding into an obstacle (a pose meant to touch it) touches it,
                 # as the check says, and a penetration FCL's collision test misses (up to
                 # ~3e-7 m) is one
-                if self._core_objs and self._core_collides(pose):
+                if self._core_objs and self._core_collides():
                     return -1.0
                 return 0.0 if self._exact.gap(pose, pose) >= -TOUCH_TOL else -1.0
             return -1.0 if self._collides() else 0.0
@@ -380,10 +382,10 @@ class StaticGeometry:
                 return True
         return False
 
-    def _core_collides(self, pose) -> bool:
-        """Whether FCL finds the robot's core (see ``_core_geometries``) at ``pose`` in an
-        obstacle: the body then overlaps it by far more than a rounding."""
-        tf = _yaw_transform(float(pose[0]), float(pose[1]), float(pose[2]))
+    def _core_collides(self) -> bool:
+        """Whether FCL finds the robot's core (see ``_core_geometries``) at the pose last
+        placed in an obstacle: the body then overlaps it by far more than a rounding."""
+        tf = self._placed
         for ob in self._core_objs:
             ob.setTransform(tf)
             data = fcl.CollisionData(request=self._creq)
