@@ -166,3 +166,15 @@ def test_a_start_flush_with_a_rotated_wall_by_a_rounding_is_planned_from(robot, 
         start[1] += s * 1e-6
         assert Planner(scene, rm).plan(start, [3.5, 4.5, 0.0]).status.value == "invalid_query"
     assert solved >= 5, solved
+
+
+def test_a_footprint_touching_a_polygons_face_at_a_vertex_is_valid():
+    """The L footprint's vertex on the polygon's face x = 5.6 (4e-17 m into it): valid, as
+    the check says. Its core (1e-5 m inside the body) was a prism as tall as the obstacles',
+    their caps in one plane, and FCL's collision test found it 1.4e-5 m off the face in
+    collision (so "collides with a static obstacle"; 2 of 12000 poses of a brute force)."""
+    scene = _scene(ROBOTS[1])
+    pose = np.array([5.959954863428175, 2.503238010925636, -0.6457138723069202])
+    assert _overlap(scene, pose) == 0.0
+    assert query_problem(StaticGeometry(scene), pose, pose) == ""
+    assert check_trajectory(scene, np.array([[0.0, *pose]])).valid
