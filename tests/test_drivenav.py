@@ -465,3 +465,53 @@ def test_the_evasive_scores_compute_exact_gaps_only_where_they_count(robot, monk
     np.testing.assert_array_equal(got, want)
     assert len(set(np.round(want, 6))) > 3  # the candidates do score differently
     assert 0 < some < pairs[0] / 4
+
+
+def test_a_turn_under_way_below_committed_turn_commits_to_nothing(open_floor):
+    """Heading 1 rad left of the goal's direction, the best evasion turns right, towards
+    the goal. An evasion under way that turns left by 5e-4 rad (under ``COMMITTED_TURN``:
+    a rounding, not a turn) leaves the choice as without one; by 2e-3 rad it commits, and
+    turning right loses ``EVASION_COMMITMENT``: the robot drives straight on instead."""
+    from gfuzzy.navigation.drivenav import COMMITTED_TURN, _first_turn
+
+    sc, rm = open_floor
+    nav = Navigator(sc, rm, GOAL, NavOptions())
+    pose = np.array([5.0, 3.0, 1.0])
+    people = np.array([[5.0, 5.5, 0.0, 0.0, 0.3]])
+
+    def under_way(turn):
+        rows = [[0.0, *pose], [abs(turn) + 0.01, 5.0, 3.0, 1.0 + turn], [3.0, 5.0, 3.0, 1.0 + turn]]
+        return Trajectory(np.array(rows), 0.3)
+
+    free = drive_evasion(nav, 0.0, pose, people, None).waypoints
+    assert _first_turn(free) < 0.0  # right, towards the goal
+    assert 5e-4 < COMMITTED_TURN < 2e-3
+    np.testing.assert_array_equal(drive_evasion(nav, 0.0, pose, people, under_way(5e-4)).waypoints, free)
+    committed = drive_evasion(nav, 0.0, pose, people, under_way(2e-3)).waypoints
+    assert _first_turn(committed) >= 0.0
+
+
+def test_the_navigator_forgets_its_evasion_at_the_goal(open_floor, monkeypatch):
+    """An evasion turning left, then the goal reached: the next evasion (the robot off the
+    goal again, on the old evasion's turn, nobody about) is the one a fresh navigator
+    chooses, towards the goal. Kept past the goal, the old turn committed it to go on
+    left: it drove straight on instead of turning right."""
+    from gfuzzy.navigation.drivenav import _first_turn
+
+    monkeypatch.setattr(Navigator, "_search", lambda self, t, p, *a, **k: _Searched(None, "exhausted"))
+    monkeypatch.setattr(Navigator, "_direct", lambda self, *a: None)
+    sc, rm = open_floor
+    pose = np.array([5.0, 3.0, 1.0])
+    person = np.array([[6.5485538795638885, 3.302379760030929, -0.5077890853650948, -0.2090487775658575, 0.3]])
+    nav = Navigator(sc, rm, GOAL, NavOptions())
+    first = nav.step(0.0, pose, person)
+    assert nav.last.mode == NavMode.EVASIVE and _first_turn(first.waypoints) > 0.0
+    nav.step(0.1, np.array(GOAL), np.zeros((0, 5)))
+    assert nav.last.mode == NavMode.GOAL
+    there = first.at(0.25)
+    again = nav.step(0.25, there, np.zeros((0, 5)))
+    fresh = Navigator(sc, rm, GOAL, NavOptions())
+    want = fresh.step(0.25, there, np.zeros((0, 5)))
+    assert nav.last.mode == fresh.last.mode == NavMode.EVASIVE
+    np.testing.assert_array_equal(again.waypoints, want.waypoints)
+    assert _first_turn(want.waypoints) < 0.0

@@ -330,3 +330,22 @@ def test_on_a_coarse_grid_nobody_starts_within_a_radius_of_an_obstacle():
         starts = np.array([m.trajectory[0, 1:] for m in res.movers])
         gaps = [_box_distance(starts[i : i + 1], c, (0.4, 0.4)).min() for i in range(60) for c in centers]
         assert min(gaps) >= 0.3
+
+
+def test_a_file_named_like_dot_dot_stays_in_the_folder(tmp_path):
+    """``write_scene`` keeps a scene's map file in the new file's folder: a map named
+    ``..room-map.yaml`` beside the scene is inside it (``leaves_folder``: the path's first
+    part is ``..``, not its first two characters; before, refused as "outside the new
+    file's folder"), and writing one folder down from it is refused."""
+    from gfuzzy.navigation.populate import Populated, write_scene
+
+    doc, _ = _wall_map(tmp_path)
+    (tmp_path / "room-map.yaml").rename(tmp_path / "..room-map.yaml")
+    doc["obstacles"] = [{"map": {"file": "..room-map.yaml"}}]
+    (tmp_path / "room.yaml").write_text(yaml.safe_dump(doc))
+    write_scene(tmp_path / "room.yaml", Populated(()), tmp_path / "people.yaml")
+    assert load_scene(tmp_path / "people.yaml").static_hash == load_scene(tmp_path / "room.yaml").static_hash
+    (tmp_path / "sub").mkdir()
+    with pytest.raises(InputError, match="outside the new file's folder"):
+        write_scene(tmp_path / "room.yaml", Populated(()), tmp_path / "sub" / "people.yaml")
+    assert not (tmp_path / "sub" / "people.yaml").exists()

@@ -531,3 +531,22 @@ def test_unix_time_stamps_are_rebased_to_the_window(tmp_path):
     p = run_cli_process("tracks", path, "-o", tmp_path / "w.yaml", "--t-start", t0 + 1, "--duration", 1, cwd=tmp_path)
     assert p.returncode == 0, p.stderr
     assert load_scene(tmp_path / "w.yaml").movers[0].trajectory[-1, 0] == pytest.approx(1.0)
+
+
+def test_a_mesh_folder_named_like_dot_dot_stays_in_the_folder(tmp_path):
+    """The static scene's mesh paths follow the new file: ``..meshes/`` beside it is inside
+    its folder (``leaves_folder``: the path's first part is ``..``, not its first two
+    characters; before, refused as outside), ``../`` is not."""
+    from gfuzzy.errors import SceneError
+    from gfuzzy.scene.tracks import _static_obstacles
+
+    folder = tmp_path / "warehouse"
+    shutil.copytree(ROOT / "scenes" / "meshes", folder / "..meshes")
+    text = (ROOT / "scenes" / "warehouse-mesh.yaml").read_text().replace("file: meshes/", "file: ..meshes/")
+    (folder / "warehouse-mesh.yaml").write_text(text)
+    static = load_scene(folder / "warehouse-mesh.yaml")
+    obstacles = _static_obstacles(static, folder)
+    assert obstacles[0]["mesh"]["file"].startswith("..meshes/")
+    (folder / "sub").mkdir()
+    with pytest.raises(SceneError, match=r"obstacles\[0\]\.mesh\.file"):
+        _static_obstacles(static, folder / "sub")

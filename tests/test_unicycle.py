@@ -563,6 +563,16 @@ def test_a_lane_joins_copies_whose_headings_the_check_calls_the_same(spacing, co
 LFOOT = [[0.5, -0.2], [0.5, 0.2], [0.1, 0.2], [0.1, 0.5], [-0.2, 0.5], [-0.2, -0.2]]
 
 
+def _lfoot_scene():
+    """The unseen scene ``lfoot``: an L footprint, two rooms joined by a 0.75 door in a 0.3
+    wall, a disc, and an L obstacle in the east room."""
+    robot = {"footprint": LFOOT, "vmax": 0.8, "kinematics": "unicycle", "wmax": 1.0}
+    walls = [{"box": {"center": [3.5, 0.8], "size": [0.3, 1.6]}}, {"box": {"center": [3.5, 3.175], "size": [0.3, 1.65]}},
+             {"disc": {"center": [1.5, 2.8], "radius": 0.4}},
+             {"polygon": [[5, 1], [6, 1], [6, 1.3], [5.3, 1.3], [5.3, 2.2], [5, 2.2]]}]  # fmt: skip
+    return parse_scene(doc(robot, obstacles=walls, bounds=(0, 0, 7, 4)))
+
+
 @pytest.mark.parametrize("seed", [1, 2])
 def test_an_l_footprint_drives_through_a_door_with_2_5_cm_per_side(seed):
     """An L footprint (an arm on its left) as a differential drive without reverse, through
@@ -573,13 +583,27 @@ def test_an_l_footprint_drives_through_a_door_with_2_5_cm_per_side(seed):
     missed on seeds 1 and 2 (the unseen scene ``lfoot``, issue 18's review)."""
     from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
 
-    robot = {"footprint": LFOOT, "vmax": 0.8, "kinematics": "unicycle", "wmax": 1.0}
-    walls = [{"box": {"center": [3.5, 0.8], "size": [0.3, 1.6]}}, {"box": {"center": [3.5, 3.175], "size": [0.3, 1.65]}},
-             {"disc": {"center": [1.5, 2.8], "radius": 0.4}},
-             {"polygon": [[5, 1], [6, 1], [6, 1.3], [5.3, 1.3], [5.3, 2.2], [5, 2.2]]}]  # fmt: skip
-    sc = parse_scene(doc(robot, obstacles=walls, bounds=(0, 0, 7, 4)))
+    sc = _lfoot_scene()
     rm = build_roadmap(sc, RoadmapOptions(seed=seed))
     res = Planner(sc, rm).plan([1.0, 1.0, 0.0], [5.5, 3.0, math.pi], 0.0, PlanOptions())
+    assert res.solved, res.message
+    rep = check_trajectory(sc, res.trajectory.waypoints)
+    assert rep.valid, rep.reason
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_an_l_footprint_works_its_arm_into_an_l_obstacles_corner(seed):
+    """The L footprint parked in the inner corner of the L obstacle, its arm 5 cm from the
+    obstacle's upright, heading north: it arrives heading about 318 degrees and turns 132
+    degrees in place, nearly all of the 136.6 its walls leave it there (an independent
+    brute force found that way; a witness passes ``gfuzzy check``). The goal's tilts took
+    3/4 of the free turn and never reached that heading: ``no_path`` on seeds 1-3 (the
+    unseen scene ``lfoot``, query ``into-the-l``); 0.99 of it (``TILT_SHARES``) finds it."""
+    from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
+
+    sc = _lfoot_scene()
+    rm = build_roadmap(sc, RoadmapOptions(seed=seed))
+    res = Planner(sc, rm).plan([1.0, 1.0, 0.0], [5.85, 1.75, math.pi / 2], 0.0, PlanOptions())
     assert res.solved, res.message
     rep = check_trajectory(sc, res.trajectory.waypoints)
     assert rep.valid, rep.reason
@@ -743,3 +767,26 @@ def test_the_fan_turns_where_headings_differ_beyond_the_merge():
     assert moves.sum() > 0
     dh = np.abs(np.angle(np.exp(1j * (p[dst, 2] - p[src, 2]))))[moves]
     assert dh.max() <= 0.5e-9, dh.max()
+
+
+@pytest.mark.parametrize("robot, tilts", [({"disc": 0.2}, False), ({"box": [0.6, 0.4]}, True)])
+def test_a_disc_never_asks_for_tilts(robot, tilts, monkeypatch):
+    """A query whose ends are not joined asks again with tilts for a box (or footprint)
+    unicycle, never for a disc: a disc turns round wherever it stands, so its goal would
+    be prepared a second time for nothing (``Planner.plan``)."""
+    from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
+
+    wall = {"box": {"center": [3.0, 2.0], "size": [0.4, 4.0]}}  # from bound to bound: sealed off
+    sc = parse_scene(doc({**robot, "vmax": 1.0, "kinematics": "unicycle"}, obstacles=[wall]))
+    rm = build_roadmap(sc, RoadmapOptions(vertices=60, seed=1))
+    asked = []
+    prepare = Planner.prepare
+
+    def spy(self, goal, options=None, _tilts=False):
+        asked.append(_tilts)
+        return prepare(self, goal, options, _tilts)
+
+    monkeypatch.setattr(Planner, "prepare", spy)
+    res = Planner(sc, rm).plan([1.0, 2.0, 0.0], [5.0, 2.0, 0.0], 0.0, PlanOptions())
+    assert res.status.value == "no_path"
+    assert asked == ([False, True] if tilts else [False])

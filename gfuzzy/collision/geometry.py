@@ -20,8 +20,11 @@ import numpy as np
 from ..poses import metric_distance, wrap_angle
 from ..scene.scene import Box, Disc, MapObstacle, Polygon, Robot, Scene
 from ..typed import FloatArray
+from .exact import TOUCH_TOL, exact_measure
+from .exact import ExactDisc as _ExactDisc  # noqa: F401  (its tests' name)
 from .shapes import HEIGHT as _HEIGHT
-from .shapes import QUAD_EXACT, shape_of
+from .shapes import QUAD_EXACT, convex_prism, shape_of
+from .shapes import _ccw as ccw
 
 __all__ = [
     "StaticGeometry",
@@ -34,12 +37,11 @@ __all__ = [
 _EPS_CERT_CLEARANCE = 1e-9  # clearance below which a motion is not certified (grazing)
 _NEAR_CONTACT = 1e-4  # distances below this are decided by a collision test (0 or -1)
 _DIST_MARGIN = 1e-4  # subtracted from FCL distances (GJK overestimates; see obstacle_clearance)
+#: How far inside a box or footprint robot's outline its core lies (m): the core in an
+#: obstacle is a collision FCL's test does not miss, the body then far into it.
+_CORE_MARGIN = 1e-5
 #: A map's distance-transform bound above this (m) certifies a motion's step without FCL.
 _QUICK_CLEARANCE = 0.02
-#: A disc robot this far into an obstacle or less (m) touches it: half the overlap ``gfuzzy
-#: check`` tolerates as rounding (its ``tol``, 1e-9; the half leaves room for the two
-#: measurements' own roundings), measured exactly (:class:`_ExactDisc`).
-TOUCH_TOL = 0.5e-9
 
 
 def _yaw_transform(x: float, y: float, yaw: float = 0.0) -> fcl.Transform:
@@ -149,6 +151,27 @@ def robot_geometries(robot: Robot) -> list:
     return shape_of(robot).fcl_geometries()
 
 
+def _core_geometries(robot: Robot) -> list:
+    """FCL geometries of a box or footprint robot's body less ``_CORE_MARGIN`` all round
+    (a footprint's convex pieces each shrunk: their union lies inside the body), or none
+    for a disc. Half as tall as the body: caps in the obstacles' cap planes made FCL
+    report a footprint's core 1.4e-4 m off a polygon's face in collision."""
+    m = _CORE_MARGIN
+    if robot.shape == "box":
+        return [fcl.Box(robot.size[0] - 2 * m, robot.size[1] - 2 * m, _HEIGHT)]
+    if robot.shape != "footprint":
+        return []
+    import shapely
+
+    out = []
+    for piece in shape_of(robot).pieces:
+        core = shapely.Polygon(piece).buffer(-m, join_style="mitre")
+        if not core.is_empty and core.geom_type == "Polygon":
+            ring = ccw(np.asarray(core.exterior.coords)[:-1])
+            out.append(convex_prism(ring, 0.5 * _HEIGHT))
+    return out
+
+
 class StaticGeometry:
     """FCL-backed collision queries against the static scene and the bounds.
 
@@ -181,10 +204,11 @@ class StaticGeometry:
         self._robot_objs = [fcl.CollisionObject(g, fcl.Transform()) for g in robot_geometries(scene.robot)]
         self._robot_obj = self._robot_objs[0]
         self._disc_obj = None  # the circumscribed disc (sweep_bound), made when first needed
-        # a disc touching obstacles (robot.clearance 0): exact distances at contact
-        exact = scene.robot.shape == "disc" and self.keep == 0
-        exact = exact and all(isinstance(ob, (Disc, Box, Polygon, MapObstacle)) for ob in scene.obstacles)
-        self._exact = _ExactDisc(scene) if exact else None
+        # a robot allowed to touch obstacles (robot.clearance 0): exact distances at contact
+        self._exact = exact_measure(scene)
+        # a box or footprint at contact: its core (the body less _CORE_MARGIN all round) in an
+        # obstacle collides deep enough for FCL's test to decide, without the exact measure
+        self._core_objs = [fcl.CollisionObject(g, fcl.Transform()) for g in _core_geometries(scene.robot)]
         self._shape = shape_of(scene.robot)
         self._grids = [ob for ob in scene.obstacles if isinstance(ob, MapObstacle) and len(ob.rects)]
         self._inner = _inner_point(scene.robot)
@@ -193,6 +217,8 @@ class StaticGeometry:
         self._edt: list | None = None
         self._creq = fcl.CollisionRequest()
         self._dreq = fcl.DistanceRequest()
+        self._trace_ends = (math.nan, math.nan)  # the last _trace's ends' clearances
+        self._placed = fcl.Transform()  # the last pose's transform (_place)
         self.calls = 0
         self.checks = 0  # every validity question, answered by FCL or by the bounds alone
 
@@ -232,6 +258,7 @@ class StaticGeometry:
             )
             for ob in self._robot_objs:
                 ob.setTransform(tf)
+            self._placed = tf
         else:
             self._robot_obj.setTranslation(np.array([pose[0], pose[1], 0.0]))
 
@@ -307,9 +334,12 @@ class StaticGeometry:
         d = dist - _DIST_MARGIN
         if d <= _NEAR_CONTACT:
             if self._exact is not None:
-                # a disc at contact is measured exactly: a rounding into an obstacle (a pose
-                # meant to touch it) touches it, as the check says, and a penetration FCL's
-                # collision test misses (up to ~3e-7 m) is one
+                # a robot allowed to touch is measured exactly at contact (gfuzzy.collision.
+                # exact): a rounding into an obstacle (a pose meant to touch it) touches it,
+                # as the check says, and a penetration FCL's collision test misses (up to
+                # ~3e-7 m) is one
+                if self._core_objs and self._core_collides():
+                    return -1.0
                 return 0.0 if self._exact.gap(pose, pose) >= -TOUCH_TOL else -1.0
             return -1.0 if self._collides() else 0.0
         return d
@@ -351,6 +381,19 @@ class StaticGeometry:
             j = math.floor((x - grid.origin[0]) / grid.resolution)
             k = math.floor((y - grid.origin[1]) / grid.resolution)
             if 0 <= j < w and 0 <= k < h and grid.blocked[h - 1 - k, j]:
+                return True
+        return False
+
+    def _core_collides(self) -> bool:
+        """Whether FCL finds the robot's core (see ``_core_geometries``) at the pose last
+        placed in an obstacle: the body then overlaps it by far more than a rounding."""
+        tf = self._placed
+        for ob in self._core_objs:
+            ob.setTransform(tf)
+            data = fcl.CollisionData(request=self._creq)
+            self._manager.collide(ob, data, fcl.defaultCollisionCallback)
+            self.calls += 1
+            if data.result.is_collision:
                 return True
         return False
 
@@ -417,10 +460,9 @@ class StaticGeometry:
             cb = cb if cb is not None and cb > 0 else None
             if self._trace(a, b, max_steps, ca, cb, self._obstacle_certifying) >= 0:
                 return True
-            # a disc touching an obstacle at an end starts or ends no traced motion (the
-            # steps are its clearance): its straight motion is measured exactly instead
-            return bool(self._exact is not None and min(self._obstacle_certifying(a), self._obstacle_certifying(b)) == 0.0
-                        and self._exact.gap(a, b) >= -TOUCH_TOL)  # fmt: skip
+            # a robot touching an obstacle at an end starts or ends no traced motion (the
+            # steps are its clearance): its translation is measured exactly instead
+            return bool(self._exact is not None and min(self._trace_ends) == 0.0 and self._exact.gap(a, b) >= -TOUCH_TOL)
         return self._trace(a, b, max_steps, ca, cb, self._certifying_clearance) >= 0
 
     def _obstacle_certifying(self, pose) -> float:
@@ -527,11 +569,13 @@ class StaticGeometry:
             dh = (b[2] - a[2] + math.pi) % (2 * math.pi) - math.pi
         total = math.hypot(dx, dy) + abs(dh) * self.r
         ca = clear(a) if ca is None else float(ca)
+        self._trace_ends = (ca, math.nan)  # the ends' clearances, for motion_free's contact
         if ca < 0:
             return -1.0
         if total == 0.0:
             return ca
         cb = clear(b) if cb is None else float(cb)
+        self._trace_ends = (ca, cb)
         if cb < 0:
             return -1.0
         lo = ca / total  # [0, lo] is certified
@@ -560,46 +604,6 @@ class StaticGeometry:
             low = min(low, c)
             hi -= c / total
         return -1.0
-
-
-class _ExactDisc:
-    """Exact distances of a disc robot's straight motions to the static obstacles (discs in
-    closed form, boxes, polygons and maps' blocked rectangles with shapely), for poses at
-    contact, where FCL's distances are not to be trusted (see :meth:`StaticGeometry.motion_free`)."""
-
-    def __init__(self, scene: Scene):
-        import shapely
-
-        self.r = float(scene.robot.radius)
-        self.discs = np.array([[*ob.center, ob.radius] for ob in scene.obstacles if isinstance(ob, Disc)]).reshape(-1, 3)
-        polys = [shapely.Polygon(ob.vertices()) for ob in scene.obstacles if isinstance(ob, Box)]
-        polys += [shapely.Polygon(ob.points, list(ob.holes)) for ob in scene.obstacles if isinstance(ob, Polygon)]
-        for ob in scene.obstacles:
-            if isinstance(ob, MapObstacle) and len(ob.rects):
-                polys += list(shapely.box(*np.asarray(ob.rects, dtype=float).T))
-        self.polys = shapely.STRtree(polys) if polys else None
-        self._geoms = polys
-
-    def gap(self, a, b) -> float:
-        """The least distance of the disc moving straight from ``a`` to ``b`` ((2,) or more:
-        the position first) to the obstacles, less its radius (negative: into one)."""
-        import shapely
-
-        p, q = np.asarray(a[:2], dtype=float), np.asarray(b[:2], dtype=float)
-        out = math.inf
-        if len(self.discs):
-            d = q - p
-            c = self.discs[:, :2]
-            t = np.clip(((c - p) @ d) / max(float(d @ d), 1e-300), 0.0, 1.0)
-            out = float(np.min(np.hypot(*(p + t[:, None] * d - c).T) - self.discs[:, 2]))
-        if self.polys is not None:
-            seg = shapely.LineString([p, q]) if np.any(p != q) else shapely.Point(p)
-            # not a buffer's box: the buffer's polygon lies inside the round ends and missed
-            # obstacles the disc reaches
-            near = self.polys.query(seg, predicate="dwithin", distance=self.r + 1e-6)
-            for i in near.tolist():
-                out = min(out, float(self._geoms[i].distance(seg)))
-        return out - self.r
 
 
 # --------------------------------------------------------------------------- movers

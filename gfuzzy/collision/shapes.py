@@ -287,10 +287,11 @@ def _ccw(pts: FloatArray) -> FloatArray:
     return pts if signed > 0 else pts[::-1].copy()
 
 
-def convex_prism(ring: FloatArray) -> fcl.Convex:
-    """A solid prism (FCL convex) over a convex counter-clockwise polygon (m, 2)."""
+def convex_prism(ring: FloatArray, height: float = HEIGHT) -> fcl.Convex:
+    """A solid prism (FCL convex) over a convex counter-clockwise polygon (m, 2), from
+    -``height`` to ``height``."""
     m = len(ring)
-    verts = np.vstack([np.c_[ring, np.full(m, -HEIGHT)], np.c_[ring, np.full(m, HEIGHT)]])
+    verts = np.vstack([np.c_[ring, np.full(m, -height)], np.c_[ring, np.full(m, height)]])
     faces = [m, *range(m - 1, -1, -1), m, *range(m, 2 * m)]  # bottom (facing down), top
     for i in range(m):
         j = (i + 1) % m

@@ -48,9 +48,13 @@ __all__ = ["UnicycleGraph", "UnicycleGoal", "UnicyclePrepared", "prepare_goal", 
 #: Points on an end's own heading line (in circumradii from it) that join it to the roadmap
 #: where it cannot turn round in place (:meth:`_Extras.along`).
 ALONG = (0.5, 1.0, 2.0, 4.0)
-#: Tilts (:meth:`_Extras.along`): the share of the largest free turn taken, the smallest
+#: Tilts (:meth:`_Extras.along`): the shares of the largest free turn taken, the smallest
 #: tilt tried (rad), how many tilts in a row and how many heading lines per end at most.
-TILT_SHARE = 0.75
+#: Nearly all of the free turn: its heading's line is the farthest from the one the end is
+#: stuck on (3/4 missed the L footprint's way into an L's inner corner, which needs 0.99 of
+#: it at the goal, and arrived later on parking in a corner; two shares spend the lines
+#: before the third tilt that parking nose up needs).
+TILT_SHARES = (0.99,)
 MIN_TILT = 1e-3
 TILT_DEPTH = 3
 TILT_LINES = 24
@@ -305,7 +309,7 @@ class _Extras:
         such a start or goal joins only vertices that lie exactly on that line.
 
         Where a point of a line (or the end itself) cannot turn round either, the robot
-        *tilts* there: it turns by ``TILT_SHARE`` of the largest turn its walls leave it each
+        *tilts* there: it turns by ``TILT_SHARES`` of the largest turn its walls leave it each
         way (:func:`_free_arc`) and follows the new heading's line the same way, up to
         ``TILT_DEPTH`` tilts and ``TILT_LINES`` lines per end (breadth first): the chain of
         small turns that parks a box beside a wall with a few centimetres to spare, where
@@ -354,21 +358,23 @@ class _Extras:
         return out
 
     def _tilts(self, pose: FloatArray, node: int, outward: bool, depth: int) -> list:
-        """New nodes at ``pose``'s place, turned each way by ``TILT_SHARE`` of the free arc
+        """New nodes at ``pose``'s place, turned each way by ``TILT_SHARES`` of the free arc
         (at least ``MIN_TILT``), joined by the turn: [(pose, node, depth)]."""
         geo = self.geometry
         x, y, h = (float(c) for c in pose)
         out = []
         for side in (1.0, -1.0):
-            dh = side * TILT_SHARE * _free_arc(geo, x, y, h, side)
-            if abs(dh) < MIN_TILT or not turn_free(geo, x, y, h, dh, swept=False):
-                continue
-            t = self.node(x, y, h + dh)
-            if outward:
-                self.turn(node, t, dh)
-            else:  # arrives tilted, then turns to the heading it goes on with
-                self.turn(t, node, -dh)
-            out.append((np.array([x, y, float(wrap_angle(h + dh))]), t, depth))
+            arc = _free_arc(geo, x, y, h, side)
+            for share in TILT_SHARES:
+                dh = side * share * arc
+                if abs(dh) < MIN_TILT or not turn_free(geo, x, y, h, dh, swept=False):
+                    continue
+                t = self.node(x, y, h + dh)
+                if outward:
+                    self.turn(node, t, dh)
+                else:  # arrives tilted, then turns to the heading it goes on with
+                    self.turn(t, node, -dh)
+                out.append((np.array([x, y, float(wrap_angle(h + dh))]), t, depth))
         return out
 
     def join(self, pose: FloatArray, node: int, connect_k: int, outward: bool, reverse: bool) -> None:
