@@ -897,3 +897,14 @@ def test_the_exact_first_motions_stop_at_the_deadline(open_square):
     assert field_.motion_safe(np.array([0.0, -4.0]), np.array([0.0, -4.05]), 0) in (True, False)
     with pytest.raises(_OutOfTime):
         field_.motion_safe(np.array([0.0, -4.0]), np.array([0.0, -4.05]), 0)
+
+
+@pytest.mark.parametrize("seen", [np.zeros((5, 2)), np.zeros((2, 4)), np.zeros(10), np.zeros((1, 1, 5))])
+def test_observations_of_another_shape_are_refused_not_reshaped(open_square, seen):
+    # a transposed (5, k) array was read as k other people, a row of 4 numbers raised numpy's error
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (0.0, 4.0))
+    with pytest.raises(InputError, match=r"shape \(k, 5\)"):
+        nav.step(0.0, np.array([0.0, -4.0]), seen)
+    one = np.array([3.0, 0.0, -1.0, 0.0, 0.3])  # a single row alone is one person, as before
+    assert nav.step(0.0, np.array([0.0, -4.0]), one).duration > 0
