@@ -69,6 +69,8 @@ def cmd_tracks(args) -> int:
             amax=args.amax,
         )
         tracks = read_tracks(args.file, args.format, args.fps)
+        if args.start is None and args.query_name != "cross":
+            raise InputError("--query-name names the query of --start and --goal: give them too")
         dof = static.robot.dof if static is not None and args.robot_radius is None else 2
         start = _pose(args.start, dof, "--start")
         goal = _pose(args.goal, dof, "--goal")
