@@ -79,3 +79,17 @@ def test_readme_python_blocks_run(tmp_path):
     assert proc.returncode == 0, f"a README.md python block failed:\n{proc.stdout}\n{proc.stderr}"
     after = {p: sorted(q.name for q in p.iterdir()) for p in before}
     assert after == before, "the README's code wrote into the repository"
+
+
+def test_no_documented_populate_writes_among_the_bundled_scenes():
+    # its copy keeps the scene's name and expectations: in scenes/, the README's own
+    # `gfuzzy batch scenes/*.yaml` refused two scenes of one name and `regress` FAILed
+    texts = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+    found = 0
+    for path in texts:
+        for line in path.read_text(encoding="utf-8").splitlines():
+            if line.startswith("gfuzzy populate "):
+                argv = shlex.split(line, comments=True)
+                assert not argv[argv.index("-o") + 1].startswith("scenes/"), (path.name, line)
+                found += 1
+    assert found >= 2
