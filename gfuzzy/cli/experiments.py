@@ -53,7 +53,7 @@ def cmd_tracks(args) -> int:
     from ..scene.scene import _load_yaml, parse_scene
     from ..scene.tracks import TrackSceneOptions, read_tracks, tracks_scene
 
-    out = _out_path(args.output, (".yaml", ".yml"))
+    out = _out_path(args.output, (".yaml", ".yml"), ((args.static, "--static scene"), (args.file, "tracks file")))
     static = _load_scene(args.static) if args.static else None
     try:
         options = TrackSceneOptions(
@@ -236,7 +236,7 @@ def cmd_navigate(args) -> int:
         query = scene.queries[0]
     else:
         raise BadInput(f"{scene.source}: queries: the scene has no queries to navigate")
-    out = _out_path(args.output, (".json",)) if args.output else None
+    out = _out_path(args.output, (".json",), ((args.roadmap, "roadmap"),)) if args.output else None
     problem = query_problem(StaticGeometry(scene), query.start, query.goal) or _start_on_mover(scene, query)
     if problem:
         tf = TrajectoryFile(scene.name, query.name, Status.INVALID_QUERY, problem, None, None, None, 0.0)
