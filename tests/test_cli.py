@@ -233,6 +233,14 @@ def test_every_argument_of_every_command_has_a_help_text():
     assert bare == []
 
 
+def test_plan_help_says_which_robots_give_a_heading(capsys):
+    # it said "X Y (disc) or X Y H (box)": a footprint, and a unicycle disc, need H too
+    with pytest.raises(SystemExit):
+        main(["plan", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "footprint" in text and "unicycle" in text
+
+
 def test_check_says_what_it_cannot_verify_without_the_query(tmp_path, capsys):
     out = tmp_path / "a.json"
     assert main(["plan", str(SCENE), "--roadmap", str(ROADMAP), "-o", str(out)]) == 0
