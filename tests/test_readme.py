@@ -93,3 +93,20 @@ def test_no_documented_populate_writes_among_the_bundled_scenes():
                 assert not argv[argv.index("-o") + 1].startswith("scenes/"), (path.name, line)
                 found += 1
     assert found >= 2
+
+
+def test_the_docs_python_imports_resolve():
+    # docs/speed-layer.md said `from gfuzzy import tracking` (ImportError): the module is
+    # gfuzzy.learning.tracking; the docs' blocks are fragments, but their imports must run
+    lines = sorted(
+        {
+            line.strip()
+            for path in sorted((ROOT / "docs").glob("*.md"))
+            for _, code in python_blocks(path.read_text(encoding="utf-8"))
+            for line in code.splitlines()
+            if re.match(r"\s*(from gfuzzy[\w.]* import [\w, ]+$|import gfuzzy[\w.]*$)", line)
+        }
+    )
+    assert len(lines) >= 3, lines
+    proc = run_python("\n".join(lines), cwd=ROOT)
+    assert proc.returncode == 0, proc.stderr
