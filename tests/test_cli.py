@@ -233,6 +233,14 @@ def test_every_argument_of_every_command_has_a_help_text():
     assert bare == []
 
 
+def test_plan_help_says_which_robots_give_a_heading(capsys):
+    # it said "X Y (disc) or X Y H (box)": a footprint, and a unicycle disc, need H too
+    with pytest.raises(SystemExit):
+        main(["plan", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "footprint" in text and "unicycle" in text
+
+
 def test_check_says_what_it_cannot_verify_without_the_query(tmp_path, capsys):
     out = tmp_path / "a.json"
     assert main(["plan", str(SCENE), "--roadmap", str(ROADMAP), "-o", str(out)]) == 0
@@ -308,3 +316,36 @@ def test_an_output_folder_nothing_can_be_written_in_is_refused_before_the_work(c
     assert err.err.strip() == "/proc/x.csv: cannot write in folder /proc (No such file or directory)" or (
         "is not writable" in err.err)  # fmt: skip
     assert len(err.err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize(
+    "argv, victim",
+    [
+        (["plan", "{scene}", "--roadmap", "{roadmap}", "-o", "{roadmap}"], "{roadmap}"),
+        (["plan", "{scene}", "--roadmap", "{roadmap}", "-o", "{roadmap_csv}"], "{roadmap}"),  # its JSON beside
+        (["navigate", "{scene}", "--roadmap", "{roadmap}", "-o", "{roadmap}"], "{roadmap}"),
+        (["map", "{map}", "-o", "{map}"], "{map}"),
+        (["export", "{scene}", "--map", "{scene}"], "{scene}"),
+        (["tracks", "{tracks}", "--static", "{scene}", "-o", "{scene}"], "{scene}"),
+    ],
+)
+def test_an_output_that_is_an_input_is_bad_input(tmp_path, capsys, argv, victim):
+    # each of these replaced the file it was reading: a roadmap by a trajectory, a map's
+    # YAML by a scene naming itself as its map, a scene by a Nav2 map
+    names = {
+        "scene": tmp_path / "s.yaml",
+        "roadmap": tmp_path / "rm.json",
+        "roadmap_csv": tmp_path / "rm.csv",
+        "map": tmp_path / "tb3_sandbox.yaml",
+        "tracks": tmp_path / "walk.csv",
+    }
+    names["scene"].write_text((ROOT / "scenes" / "sim-4s1m.yaml").read_text())
+    names["roadmap"].write_text((ROOT / "roadmaps" / "sim-4s1m.json").read_text())
+    for f in ("tb3_sandbox.yaml", "tb3_sandbox.pgm"):
+        (tmp_path / f).write_bytes((ROOT / "scenes" / "maps" / f).read_bytes())
+    names["tracks"].write_text("t,id,x,y\n0,a,1,1\n1,a,2,2\n")
+    before = {p: p.read_bytes() for p in names.values() if p.exists()}
+    rc, _, err = _run(capsys, *[a.format(**names) for a in argv])
+    assert rc == 2, err
+    assert err.count("\n") == 1 and f"would overwrite {victim.format(**names)}" in err, err
+    assert {p: p.read_bytes() for p in names.values() if p.exists()} == before

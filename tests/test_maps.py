@@ -609,6 +609,16 @@ def test_gfuzzy_map_refuses_a_map_outside_the_folder(tmp_path, capsys):
     assert not (tmp_path / "a" / "s.yaml").exists()
 
 
+def test_gfuzzy_map_blames_a_bad_name_on_the_option(tmp_path, capsys):
+    # it was the written scene's `name:` (s.yaml: name: ...), a key the user never wrote
+    write_map(tmp_path, [[254, 254], [254, 254]])
+    out = tmp_path / "s.yaml"
+    assert main(["map", str(tmp_path / "m.yaml"), "--name", "a b", "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == "gfuzzy map: name must be letters, digits, _ . - (got 'a b')"
+    assert not out.exists()
+
+
 def test_gfuzzy_map_with_a_footprint_writes_the_contract_key(tmp_path):
     for f in ("tb3_sandbox.yaml", "tb3_sandbox.pgm"):
         shutil.copy(MAPS / f, tmp_path / f)

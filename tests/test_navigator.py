@@ -359,14 +359,29 @@ def test_render_shows_the_predictions(tmp_path):
 
 
 def test_navigate_timeout_still_writes_the_executed_motion(tmp_path):
-    out = tmp_path / "sealed.json"
-    p = run_cli_process("navigate", ROOT / "scenes" / "sealed-room.yaml", "--max-time", "3", "-o", out)
+    out = tmp_path / "open.json"  # the open room, 5.3 s away
+    p = run_cli_process(
+        "navigate", ROOT / "scenes" / "sealed-room.yaml", "--query", "into-open-room", "--max-time", "3", "-o", out
+    )
     assert p.returncode == 1, p.stdout + p.stderr
     doc = json.loads(out.read_text())
     assert doc["status"] == "timeout" and "waypoints" not in doc
     rows = np.array(doc["executed"])
     assert rows[0, 0] == 0.0 and rows[-1, 0] == pytest.approx(3.0)
     assert doc["replans"] == 12
+
+
+def test_navigate_into_a_sealed_room_is_no_path_at_once(tmp_path):
+    # it replanned until --max-time (with 1e6: for hours) and said only "timeout": no mover
+    # can open a way the free space does not have, as plan says
+    out = tmp_path / "sealed.json"
+    p = run_cli_process(
+        "navigate", ROOT / "scenes" / "sealed-room.yaml", "--query", "into-sealed-room", "--max-time", "30", "-o", out
+    )
+    assert p.returncode == 1, p.stdout + p.stderr
+    doc = json.loads(out.read_text())
+    assert doc["status"] == "no_path" and "separate parts of the free space" in doc["message"]
+    assert "waypoints" not in doc and "replans" not in doc
 
 
 def test_navigate_start_on_a_person_is_an_invalid_query(tmp_path, tmp_scene):
@@ -897,3 +912,14 @@ def test_the_exact_first_motions_stop_at_the_deadline(open_square):
     assert field_.motion_safe(np.array([0.0, -4.0]), np.array([0.0, -4.05]), 0) in (True, False)
     with pytest.raises(_OutOfTime):
         field_.motion_safe(np.array([0.0, -4.0]), np.array([0.0, -4.05]), 0)
+
+
+@pytest.mark.parametrize("seen", [np.zeros((5, 2)), np.zeros((2, 4)), np.zeros(10), np.zeros((1, 1, 5))])
+def test_observations_of_another_shape_are_refused_not_reshaped(open_square, seen):
+    # a transposed (5, k) array was read as k other people, a row of 4 numbers raised numpy's error
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (0.0, 4.0))
+    with pytest.raises(InputError, match=r"shape \(k, 5\)"):
+        nav.step(0.0, np.array([0.0, -4.0]), seen)
+    one = np.array([3.0, 0.0, -1.0, 0.0, 0.3])  # a single row alone is one person, as before
+    assert nav.step(0.0, np.array([0.0, -4.0]), one).duration > 0

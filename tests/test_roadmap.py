@@ -485,3 +485,30 @@ def test_the_building_floor_roadmap_joins_its_rooms(seed):
     v, e = len(rm.vertices), np.asarray(rm.edges)
     _, labels = connected_components(coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(v, v)), directed=False)
     assert np.bincount(labels).max() >= v - 2
+
+
+@pytest.mark.parametrize(
+    "kind, change, place",
+    [
+        ("disc", {"options": "x"}, "options"),
+        ("disc", {"options": {"vertices": 3, "colour": "red"}}, "options.colour"),
+        ("disc", {"options": {"vertices": 3, "seed": -1}}, "options"),
+        ("disc", {"circumradius": -1.0}, "circumradius"),
+        ("box", {"circumradius": 5.0}, "circumradius"),
+        ("box", {"vertices": "2d"}, "vertices"),
+    ],
+)
+def test_a_broken_roadmap_names_the_key_that_is_wrong(small, tmp_path, kind, change, place):
+    # not a Python error of the loader, and not lengths[k], which only follow from the change
+    _, scene, rm = small[kind]
+    doc = rm.to_dict()
+    if change.get("vertices") == "2d":  # the headings dropped from a box robot's roadmap
+        doc["vertices"] = [v[:2] for v in doc["vertices"]]
+    else:
+        doc.update(change)
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(doc))
+    with pytest.raises(SceneError) as info:
+        load_roadmap(bad, scene)
+    assert str(info.value).startswith(f"{bad}: {place}: "), str(info.value)
+    assert "RoadmapOptions" not in str(info.value)

@@ -317,6 +317,10 @@ def test_bad_files_are_one_line_and_exit_2(tmp_path, name, text, where):
         # refused before as the numbers of the scene about to be written, naming that file
         (["--vmax", "1e300"], "gfuzzy tracks: vmax must be at most 1e+09 in magnitude"),
         (["--region", 0, 0, "1e12", 5], "gfuzzy tracks: region must be"),
+        # a query's details without its --start/--goal were dropped without a word
+        (["--expect", "solved"], "gfuzzy tracks: expect (--expect, --max-duration) fills in the query"),
+        (["--max-duration", 9], "gfuzzy tracks: expect (--expect, --max-duration) fills in the query"),
+        (["--query-name", "across"], "gfuzzy tracks: --query-name names the query of --start and --goal"),
     ],
 )
 def test_bad_requests_are_one_line_and_exit_2(tmp_path, eth_file, args, message):

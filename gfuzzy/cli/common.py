@@ -229,10 +229,18 @@ def _pose(values, dof, flag):
     return out
 
 
-def _out_path(path, allowed):
+def _out_path(path, allowed, reads=()):
+    """``path`` checked as an output: its suffix one of ``allowed``, its folder writable, and
+    none of the files the command ``reads`` (given as ``(path or None, what)``; a CSV's
+    companion JSON included): writing there destroyed the input, e.g. a roadmap given as
+    both ``--roadmap`` and ``-o``, or a map YAML as both the map and the scene."""
     suffix = Path(path).suffix.lower()
     if suffix not in allowed:
         raise BadInput(f"{path}: output must end in {' or '.join(allowed)}")
+    writes = [Path(path)] + ([Path(path).with_suffix(".json")] if suffix == ".csv" else [])
+    for source, what in reads:
+        if source is not None and any(_same_file(w, source) for w in writes):
+            raise BadInput(f"{path}: would overwrite {source}, the {what} this command reads; write it elsewhere")
     parent = Path(path).resolve().parent
     if not parent.is_dir():
         raise BadInput(f"{path}: folder {parent} does not exist")
@@ -242,6 +250,14 @@ def _out_path(path, allowed):
         raise BadInput(f"{path}: folder {parent} is not writable")
     _probe_write(path, parent)
     return Path(path)
+
+
+def _same_file(a, b) -> bool:
+    """Whether the paths name one file (through links too); False when either is absent."""
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return False
 
 
 def _probe_write(path, parent: Path) -> None:

@@ -53,7 +53,7 @@ def cmd_tracks(args) -> int:
     from ..scene.scene import _load_yaml, parse_scene
     from ..scene.tracks import TrackSceneOptions, read_tracks, tracks_scene
 
-    out = _out_path(args.output, (".yaml", ".yml"))
+    out = _out_path(args.output, (".yaml", ".yml"), ((args.static, "--static scene"), (args.file, "tracks file")))
     static = _load_scene(args.static) if args.static else None
     try:
         options = TrackSceneOptions(
@@ -69,6 +69,8 @@ def cmd_tracks(args) -> int:
             amax=args.amax,
         )
         tracks = read_tracks(args.file, args.format, args.fps)
+        if args.start is None and args.query_name != "cross":
+            raise InputError("--query-name names the query of --start and --goal: give them too")
         dof = static.robot.dof if static is not None and args.robot_radius is None else 2
         start = _pose(args.start, dof, "--start")
         goal = _pose(args.goal, dof, "--goal")
@@ -91,6 +93,20 @@ def cmd_tracks(args) -> int:
     write_atomic(out, text)
     _say(f"{out}: {made.movers} movers, bounds {list(made.region)}", sys.stdout)
     return EXIT_OK
+
+
+def _sealed_off(scene, query) -> str:
+    """Why no way joins the query's start and goal among the static obstacles (a disc robot's
+    free space holds them in separate regions: ``plan``'s no_path message), or ""."""
+    import numpy as np
+
+    from ..roadmap.freespace import free_space, separation
+
+    fs = free_space(scene)
+    if fs is None:  # not a disc robot: the roadmap's gap proves nothing
+        return ""
+    sep = separation(scene, fs, np.asarray(query.start, dtype=float), np.asarray(query.goal, dtype=float))
+    return "" if sep is None else sep.message()
 
 
 def _writable_folder(path: Path, flag: str) -> None:
@@ -234,7 +250,7 @@ def cmd_navigate(args) -> int:
         query = scene.queries[0]
     else:
         raise BadInput(f"{scene.source}: queries: the scene has no queries to navigate")
-    out = _out_path(args.output, (".json",)) if args.output else None
+    out = _out_path(args.output, (".json",), ((args.roadmap, "roadmap"),)) if args.output else None
     problem = query_problem(StaticGeometry(scene), query.start, query.goal) or _start_on_mover(scene, query)
     if problem:
         tf = TrajectoryFile(scene.name, query.name, Status.INVALID_QUERY, problem, None, None, None, 0.0)
@@ -244,13 +260,20 @@ def cmd_navigate(args) -> int:
         return EXIT_NO
     roadmap = _roadmap_for(scene, args)
     nav = Navigator(scene, roadmap, query.goal, knowing_view(options, sensor.fov) if sensor else options)
+    rd = nav.roadmap_distance(np.asarray(query.start, dtype=float))
+    sealed = "" if math.isfinite(rd) else _sealed_off(scene, query)
+    if sealed:  # no mover opens a way: replanning until --max-time (1e6 s: hours) changes nothing
+        tf = TrajectoryFile(scene.name, query.name, Status.NO_PATH, sealed, None, None, None, 0.0)
+        if out is not None:
+            tf.save(out)
+        _say(f"{scene.name} {query.name}: no_path ({sealed})", sys.stdout)
+        return EXIT_NO
     res = simulate(
         scene, roadmap, query.start, query.goal, query.t0, args.period, sense, args.max_time,
         navigator=nav, log_every=args.log_every, sensor=sensor,
     )
     wps = res.trajectory.waypoints
     report = check_trajectory(scene, wps, query if res.reached else None)
-    rd = nav.roadmap_distance(np.asarray(query.start, dtype=float))
     rd_ok = math.isfinite(rd)
     solved = res.reached
     message = "" if solved else f"the goal was not reached within {args.max_time:g} s"

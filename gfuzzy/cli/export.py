@@ -49,7 +49,7 @@ def cmd_export(args) -> int:
 def _export_map(args) -> int:
     from ..export.mapexport import export_nav2_map
 
-    out = _out_path(args.map, (".yaml", ".yml"))
+    out = _out_path(args.map, (".yaml", ".yml"), ((args.scene, "scene"),))
     scene = _load_scene(args.scene)
     try:
         grid = export_nav2_map(scene, out, args.resolution if args.resolution is not None else 0.05)

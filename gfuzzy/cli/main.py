@@ -66,7 +66,7 @@ def _add_plan(sub) -> None:
     q.add_argument("--roadmap", metavar="FILE", help="roadmap file (default roadmaps/<scene name>.json)")
     _plan_flags(q)
     q.add_argument("--query", metavar="NAME", help="a query of the scene (default: its first)")
-    q.add_argument("--start", nargs="+", metavar="X", help="start pose: X Y (disc) or X Y H (box)")
+    q.add_argument("--start", nargs="+", metavar="X", help="start pose: X Y (a disc) or X Y H (a box, a footprint, or any kinematics: unicycle robot)")
     q.add_argument("--goal", nargs="+", metavar="X", help="goal pose")
     q.add_argument("--t0", type=float, help="departure time with --start/--goal (default 0)")
     q.add_argument("--hold", type=float, metavar="SECONDS",

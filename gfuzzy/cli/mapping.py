@@ -15,7 +15,7 @@ def cmd_map(args) -> int:
     from ..scene.mapscene import map_scene
     from ..scene.yamldoc import _load_yaml
 
-    out = _out_path(args.output, (".yaml", ".yml"))
+    out = _out_path(args.output, (".yaml", ".yml"), ((args.map, "map"),))
     footprint = None
     if args.robot_footprint is not None:
         vals = args.robot_footprint

@@ -104,7 +104,8 @@ def cmd_plan(args) -> int:
 
     scene = _apply_overrides(_load_scene(args.scene), args)
     query = _query_from_args(scene, args)
-    out = _out_path(args.output, (".json", ".csv")) if args.output else None
+    reads = ((args.scene, "scene"), (args.roadmap, "roadmap"))
+    out = _out_path(args.output, (".json", ".csv"), reads) if args.output else None
     options = _plan_options(args)
     problem = query_problem(StaticGeometry(scene), query.start, query.goal)
     if problem:  # answered without a roadmap (the robot may fit nowhere at all)

@@ -252,6 +252,19 @@ class NavOptions:
             raise InputError(f"fov must be in (0, 360] degrees, got {self.fov}")
 
 
+def _observation_rows(observations) -> np.ndarray:
+    """``Navigator.step``'s observations as a (k, 5) array: rows ``[x, y, vx, vy, radius]``, or one
+    such row alone; any other shape (a transposed array, a row of 4) is refused, never reshaped."""
+    obs = np.asarray(observations, dtype=float)
+    if obs.size == 0:
+        return np.zeros((0, 5))
+    if obs.shape == (5,):
+        return obs[None, :]
+    if obs.ndim != 2 or obs.shape[1] != 5:
+        raise InputError(f"observations must be an array of shape (k, 5), rows [x, y, vx, vy, radius]; got shape {obs.shape}")
+    return obs
+
+
 @dataclass(frozen=True)
 class _Searched:
     """What one search of :meth:`Navigator.step` found (the trajectory, or why not), and the
@@ -418,7 +431,7 @@ class Navigator(PathSpace, Prediction):
         pose = np.asarray(pose, dtype=float).reshape(-1).copy()
         if pose.shape != (self.robot.dof,) or not np.all(np.isfinite(pose)) or not math.isfinite(t):
             raise InputError(f"pose must be {self.robot.dof} finite numbers and t finite")
-        obs = np.asarray(observations, dtype=float).reshape(-1, 5) if np.size(observations) else np.zeros((0, 5))
+        obs = _observation_rows(observations)
         if not np.all(np.isfinite(obs)) or np.any(obs[:, 4] < 0):
             raise InputError("observations must be finite rows [x, y, vx, vy, radius >= 0]")
         self._unknown = unknown_positions(obs, unknown)

@@ -314,13 +314,12 @@ def load_roadmap(path: str | os.PathLike, scene: Scene | None = None) -> Roadmap
         vertices = np.asarray(doc["vertices"], dtype=float)
         raw_edges = np.asarray(doc["edges"])
         lengths = np.asarray(doc["lengths"], dtype=float)
-        raw_opts = doc["options"]
-        if isinstance(raw_opts, dict) and "repair" not in raw_opts:  # a file from before the repair
-            raw_opts = {**raw_opts, "repair": False}
-        opts = RoadmapOptions(**raw_opts)
         circumradius = float(doc["circumradius"])
     except (KeyError, TypeError, ValueError, OverflowError) as exc:
         raise SceneError(file, "", f"malformed roadmap: {' '.join(str(exc).split())[:80]}") from None
+    opts = _options_from(file, doc["options"])
+    if not (math.isfinite(circumradius) and circumradius > 0):
+        raise SceneError(file, "circumradius", f"expected a positive finite number, got {circumradius}")
     if vertices.ndim != 2 or vertices.shape[1] not in (2, 3) or not np.all(np.isfinite(vertices)):
         raise SceneError(file, "vertices", "expected rows of 2 or 3 finite numbers")
     if raw_edges.size == 0:
@@ -335,11 +334,6 @@ def load_roadmap(path: str | os.PathLike, scene: Scene | None = None) -> Roadmap
         raise SceneError(file, f"edges[{k}]", "edges must list the smaller vertex index first (no self-loops)")
     if lengths.shape != (len(edges),) or not np.all(np.isfinite(lengths)) or np.any(lengths < 0):
         raise SceneError(file, "lengths", "expected one finite, non-negative length per edge")
-    if edges.size:
-        want = metric_distance(vertices[edges[:, 0]], vertices[edges[:, 1]], circumradius)
-        bad = np.nonzero(np.abs(want - lengths) > 1e-9 * (1 + want))[0]
-        if bad.size:
-            raise SceneError(file, f"lengths[{int(bad[0])}]", "does not match the distance between its vertices")
     rm = Roadmap(
         vertices,
         edges,
@@ -356,7 +350,26 @@ def load_roadmap(path: str | os.PathLike, scene: Scene | None = None) -> Roadmap
             raise SceneError(file, "vertices", "roadmap poses do not match the robot kind")
         if abs(circumradius - scene.robot.circumradius) > 1e-12:
             raise SceneError(file, "circumradius", "does not match the scene's robot")
+    if edges.size:  # after the scene's checks: a roadmap of another robot is named as such
+        want = metric_distance(vertices[edges[:, 0]], vertices[edges[:, 1]], circumradius)
+        bad = np.nonzero(np.abs(want - lengths) > 1e-9 * (1 + want))[0]
+        if bad.size:
+            raise SceneError(file, f"lengths[{int(bad[0])}]", "does not match the distance between its vertices")
     return rm
+
+
+def _options_from(file: str, raw) -> RoadmapOptions:
+    """A roadmap file's ``options``; a file from before the repair loads as ``repair: false``."""
+    if not isinstance(raw, dict):
+        raise SceneError(file, "options", f"expected a mapping, got {type(raw).__name__}")
+    known = {f.name for f in fields(RoadmapOptions)}
+    for key in raw:
+        if key not in known:
+            raise SceneError(file, f"options.{key}", f"unknown key (allowed: {', '.join(sorted(known))})")
+    try:
+        return RoadmapOptions(**{"repair": False, **raw})
+    except (TypeError, ValueError) as exc:
+        raise SceneError(file, "options", " ".join(str(exc).split())[:120]) from None
 
 
 def default_roadmap_path(scene: Scene, folder: str | os.PathLike = "roadmaps") -> Path:

@@ -18,7 +18,7 @@ import numpy as np
 from ..errors import InputError
 from ..typed import FloatArray
 from .maps import UNKNOWN, MapObstacle, load_map
-from .yamldoc import leaves_folder, plain_name
+from .yamldoc import NAME_RE, leaves_folder, plain_name
 
 __all__ = ["MapScene", "map_scene"]
 
@@ -240,6 +240,8 @@ def map_scene(
     rel = Path(rel).as_posix()
     if kinematics not in ("holonomic", "unicycle"):
         raise InputError(f"--kinematics: expected holonomic or unicycle, got {kinematics!r}")
+    if name is not None and not NAME_RE.match(name):  # before the map is read, and as gfuzzy tracks says it
+        raise InputError(f"name must be letters, digits, _ . - (got {name!r})")
     grid = load_map({"file": rel}, "map", str(map_yaml), folder)
     fp, radius, robot_line = _robot(robot_disc, robot_footprint)
     bounds = _bounds(grid)

@@ -462,6 +462,8 @@ def _query_docs(start, goal, query_name, expect, dof, inradius, region, src) -> 
     queries = []
     if (start is None) != (goal is None):
         raise InputError("start and goal go together")
+    if start is None and expect:  # else dropped without a word: there is no query to fill in
+        raise InputError("expect (--expect, --max-duration) fills in the query of start and goal (--start, --goal): give them too")
     if start is not None:
         if not NAME_RE.match(query_name):
             raise InputError(f"query name must be letters, digits, _ . - (got {query_name!r})")
