@@ -178,3 +178,37 @@ def test_a_footprint_touching_a_polygons_face_at_a_vertex_is_valid():
     assert _overlap(scene, pose) == 0.0
     assert query_problem(StaticGeometry(scene), pose, pose) == ""
     assert check_trajectory(scene, np.array([[0.0, *pose]])).valid
+
+
+
+
+@pytest.mark.parametrize("robot", [{"box": [0.4, 0.2], "vmax": 1.0}, {"footprint": LFOOT, "vmax": 1.0}], ids=["box", "footprint"])
+def test_a_body_touching_the_bounds_by_a_rounding_is_inside_them(robot):
+    """The bounds' distance is closed-form: a body placed at decimal coordinates to touch a
+    side (a box 0.4 long at x = 4.8 in bounds 5 wide) is out of it by a rounding (up to
+    4e-16 m here), which counts as touching, as the check says; 1e-6 m out is still out,
+    and the query says by how much."""
+    scene = _scene(robot)
+    geometry = StaticGeometry(scene)
+    goal = np.array([3.5, 4.5, 0.0])
+    rounded = 0
+    for heading in (0.0, math.pi / 2, math.pi, -math.pi / 2):
+        c = scene.robot.corners(np.array([[0.0, 0.0, heading]]))[0]
+        for k in range(20):
+            y = round(1.0 + 0.13 * k, 2)
+            for pose in (
+                np.array([round(7.0 - c[:, 0].max(), 6), y, heading]),
+                np.array([round(-c[:, 0].min(), 6), y, heading]),
+                np.array([y + 3.0, round(5.0 - c[:, 1].max(), 6), heading]),  # clear of the wall
+                np.array([y + 3.0, round(-c[:, 1].min(), 6), heading]),
+            ):
+                body = scene.robot.corners(pose[None])[0]
+                raw = min(body[:, 0].min(), 7.0 - body[:, 0].max(), body[:, 1].min(), 5.0 - body[:, 1].max())
+                rounded += raw < 0  # out of the bounds by a rounding
+                assert float(geometry.bounds_clearance(pose[None])[0]) >= 0.0, pose
+                assert geometry._bounds_clearance1(pose) >= 0.0, pose
+                assert query_problem(geometry, pose, goal) == "", pose
+    assert rounded > 0  # the case is met
+    out = np.array([7.0 - c[:, 0].max() + 1e-6, 2.5, -math.pi / 2])
+    assert float(geometry.bounds_clearance(out[None])[0]) < 0
+    assert "out of bounds (by 1e-06 m)" in query_problem(geometry, out, goal)

@@ -44,6 +44,11 @@ _CORE_MARGIN = 1e-5
 _QUICK_CLEARANCE = 0.02
 
 
+def _touching(d: float) -> float:
+    """A distance to the bounds, with a rounding out (up to ``TOUCH_TOL``) taken as 0."""
+    return 0.0 if -TOUCH_TOL <= d < 0 else d
+
+
 def _yaw_transform(x: float, y: float, yaw: float = 0.0) -> fcl.Transform:
     q = np.array([math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])
     return fcl.Transform(q, np.array([x, y, 0.0]))
@@ -226,6 +231,11 @@ class StaticGeometry:
     def bounds_clearance(self, poses: FloatArray) -> FloatArray:
         """Distance from the robot body to the outside of the bounds (negative: outside).
 
+        The bounds are measured in closed form, so a body meant to touch them is off only by
+        a rounding: up to ``TOUCH_TOL`` out counts as touching (0), as the check, which
+        tolerates 1e-9 m, says. A translation's distance to each side changes linearly, so
+        its ends bound it; a turn is certified only with room (see :meth:`motion_free`).
+
         Parameters
         ----------
         poses : (n, d) float
@@ -238,9 +248,10 @@ class StaticGeometry:
         xmin, ymin, xmax, ymax = self.scene.bounds
         if self.robot.shape == "disc":
             x, y, r = poses[:, 0], poses[:, 1], self.robot.radius
-            return np.min(np.stack([x - r - xmin, xmax - x - r, y - r - ymin, ymax - y - r]), axis=0)
+            d = np.min(np.stack([x - r - xmin, xmax - x - r, y - r - ymin, ymax - y - r]), axis=0)
+            return np.where((d < 0) & (d >= -TOUCH_TOL), 0.0, d)
         c = self.robot.corners(poses)
-        return np.minimum.reduce(
+        d = np.minimum.reduce(
             [
                 c[..., 0].min(-1) - xmin,
                 xmax - c[..., 0].max(-1),
@@ -248,6 +259,7 @@ class StaticGeometry:
                 ymax - c[..., 1].max(-1),
             ]
         )
+        return np.where((d < 0) & (d >= -TOUCH_TOL), 0.0, d)
 
     def _place(self, pose) -> None:
         if len(pose) == 3:
@@ -270,12 +282,12 @@ class StaticGeometry:
             ex = ey = self.robot.radius
         elif self.robot.shape == "footprint":
             x0, y0, x1, y1 = self._shape.extents(float(pose[2]))
-            return min(x + x0 - xmin, xmax - x - x1, y + y0 - ymin, ymax - y - y1)
+            return _touching(min(x + x0 - xmin, xmax - x - x1, y + y0 - ymin, ymax - y - y1))
         else:
             c, s = abs(math.cos(pose[2])), abs(math.sin(pose[2]))
             hl, hw = 0.5 * self.robot.size[0], 0.5 * self.robot.size[1]
             ex, ey = c * hl + s * hw, s * hl + c * hw
-        return min(x - ex - xmin, xmax - x - ex, y - ey - ymin, ymax - y - ey)
+        return _touching(min(x - ex - xmin, xmax - x - ex, y - ey - ymin, ymax - y - ey))
 
     def _inside_bounds(self, pose) -> bool:
         return self._bounds_clearance1(pose) >= 0
