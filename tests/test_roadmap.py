@@ -512,3 +512,31 @@ def test_a_broken_roadmap_names_the_key_that_is_wrong(small, tmp_path, kind, cha
         load_roadmap(bad, scene)
     assert str(info.value).startswith(f"{bad}: {place}: "), str(info.value)
     assert "RoadmapOptions" not in str(info.value)
+
+
+@pytest.mark.parametrize("kind", ["disc", "box"])
+def test_a_roadmap_edited_after_it_was_built_is_refused(small, tmp_path, kind):
+    """Every edge is certified free as built: a file whose vertices were moved (here one
+    vertex by 0.3 m, its lengths made to agree, the scene's hash kept) would give answers
+    the check rejects, so its digest refuses it; a file written before the digest was
+    kept (none) still loads, as does the file as written."""
+    from gfuzzy.roadmap.roadmap import metric_distance
+
+    _, scene, rm = small[kind]
+    doc = json.loads(json.dumps(rm.to_dict()))
+    good = tmp_path / "good.json"
+    good.write_text(json.dumps(doc))
+    assert roadmap_digest(load_roadmap(good, scene)) == roadmap_digest(rm)
+    old = dict(doc)
+    del old["digest"]
+    (tmp_path / "old.json").write_text(json.dumps(old))
+    assert roadmap_digest(load_roadmap(tmp_path / "old.json", scene)) == roadmap_digest(rm)
+    v = np.asarray(doc["vertices"], dtype=float)
+    v[0, 0] += 0.3
+    e = np.asarray(doc["edges"])
+    doc["vertices"], doc["lengths"] = v.tolist(), metric_distance(v[e[:, 0]], v[e[:, 1]], rm.circumradius).tolist()
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(doc))
+    with pytest.raises(SceneError) as info:
+        load_roadmap(bad, scene)
+    assert str(info.value).startswith(f"{bad}: digest: the vertices or edges were edited"), str(info.value)

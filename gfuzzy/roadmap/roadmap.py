@@ -278,6 +278,7 @@ class Roadmap:
             "circumradius": self.circumradius,
             "options": asdict(self.options),
             "info": self.info.to_dict(),
+            "digest": roadmap_digest(self),
             "vertices": self.vertices.tolist(),
             "edges": self.edges.tolist(),
             "lengths": self.lengths.tolist(),
@@ -350,6 +351,7 @@ def load_roadmap(path: str | os.PathLike, scene: Scene | None = None) -> Roadmap
             raise SceneError(file, "vertices", "roadmap poses do not match the robot kind")
         if abs(circumradius - scene.robot.circumradius) > 1e-12:
             raise SceneError(file, "circumradius", "does not match the scene's robot")
+    _check_digest(file, doc.get("digest"), vertices, edges)  # after the scene's checks, as the lengths'
     if edges.size:  # after the scene's checks: a roadmap of another robot is named as such
         want = metric_distance(vertices[edges[:, 0]], vertices[edges[:, 1]], circumradius)
         bad = np.nonzero(np.abs(want - lengths) > 1e-9 * (1 + want))[0]
@@ -779,7 +781,18 @@ def _components(n: int, edges: IntArray) -> int:
 
 def roadmap_digest(rm: Roadmap) -> str:
     """SHA-256 over vertices and edges: equal digests mean identical roadmaps."""
-    h = hashlib.sha256()
-    h.update(np.ascontiguousarray(rm.vertices).tobytes())
-    h.update(np.ascontiguousarray(rm.edges).tobytes())
+    return _digest(rm.vertices, rm.edges)
+
+
+def _digest(vertices: FloatArray, edges: IntArray) -> str:
+    h = hashlib.sha256(np.ascontiguousarray(vertices, dtype="<f8").tobytes())
+    h.update(np.ascontiguousarray(edges, dtype="<i8").tobytes())
     return h.hexdigest()
+
+
+def _check_digest(file: str, digest, vertices: FloatArray, edges: IntArray) -> None:
+    """Refuse a file whose vertices or edges were edited: its edges are certified free only
+    as built (a file without ``digest``, written before it was kept, is taken as it is)."""
+    if digest is not None and digest != _digest(vertices, edges):
+        why = "edited after the roadmap was built (its edges are certified free only as built)"
+        raise SceneError(file, "digest", f"the vertices or edges were {why}; rebuild it with `gfuzzy roadmap`")
