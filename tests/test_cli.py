@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from pathlib import Path
 
 import numpy as np
@@ -327,9 +328,12 @@ def test_an_output_folder_nothing_can_be_written_in_is_refused_before_the_work(c
         (["map", "{map}", "-o", "{map}"], "{map}"),
         (["export", "{scene}", "--map", "{scene}"], "{scene}"),
         (["tracks", "{tracks}", "--static", "{scene}", "-o", "{scene}"], "{scene}"),
+        (["populate", "{scene}", "--people", "2", "-o", "{scene}"], "{scene}"),
+        (["plan", "{scene}", "-o", "{default_roadmap}"], "{default_roadmap}"),  # no --roadmap: read by default
+        (["navigate", "{scene}", "-o", "{default_roadmap}"], "{default_roadmap}"),
     ],
 )
-def test_an_output_that_is_an_input_is_bad_input(tmp_path, capsys, argv, victim):
+def test_an_output_that_is_an_input_is_bad_input(tmp_path, capsys, monkeypatch, argv, victim):
     # each of these replaced the file it was reading: a roadmap by a trajectory, a map's
     # YAML by a scene naming itself as its map, a scene by a Nav2 map
     names = {
@@ -338,7 +342,11 @@ def test_an_output_that_is_an_input_is_bad_input(tmp_path, capsys, argv, victim)
         "roadmap_csv": tmp_path / "rm.csv",
         "map": tmp_path / "tb3_sandbox.yaml",
         "tracks": tmp_path / "walk.csv",
+        "default_roadmap": tmp_path / "roadmaps" / "sim-4s1m.json",  # roadmaps/ in the folder run from
     }
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "roadmaps").mkdir()
+    names["default_roadmap"].write_text((ROOT / "roadmaps" / "sim-4s1m.json").read_text())
     names["scene"].write_text((ROOT / "scenes" / "sim-4s1m.yaml").read_text())
     names["roadmap"].write_text((ROOT / "roadmaps" / "sim-4s1m.json").read_text())
     for f in ("tb3_sandbox.yaml", "tb3_sandbox.pgm"):
@@ -347,5 +355,6 @@ def test_an_output_that_is_an_input_is_bad_input(tmp_path, capsys, argv, victim)
     before = {p: p.read_bytes() for p in names.values() if p.exists()}
     rc, _, err = _run(capsys, *[a.format(**names) for a in argv])
     assert rc == 2, err
-    assert err.count("\n") == 1 and f"would overwrite {victim.format(**names)}" in err, err
+    named = victim.format(**names)  # the default roadmap is named as the command finds it
+    assert err.count("\n") == 1 and f"would overwrite {os.path.relpath(named) if 'roadmaps' in named else named}" in err, err
     assert {p: p.read_bytes() for p in names.values() if p.exists()} == before

@@ -146,6 +146,17 @@ def _roadmap_of_other_clearance(scene):
     return None
 
 
+def _roadmap_reads(scene, args) -> tuple:
+    """The roadmap files a command may read, as ``_out_path``'s ``reads``: ``--roadmap``,
+    or without it the default files :func:`_default_roadmap` looks for."""
+    if getattr(args, "roadmap", None):
+        return ((args.roadmap, "roadmap"),)
+    from ..roadmap.roadmap import default_roadmap_path
+
+    beside = Path(scene.source).resolve().parent.parent / "roadmaps"
+    return tuple((p, "default roadmap") for p in (default_roadmap_path(scene), default_roadmap_path(scene, beside)))
+
+
 def _default_roadmap(scene, quiet=False):
     """The roadmap file built for ``scene`` in roadmaps/ (here, or beside the scene's
     folder), if there is one that matches it."""

@@ -238,7 +238,7 @@ def cmd_populate(args) -> int:
 
     scene = _load_scene(args.scene)
     _need_pyrvo("populate")
-    out = _out_path(args.output, (".yaml", ".yml"))
+    out = _out_path(args.output, (".yaml", ".yml"), ((args.scene, "scene"),))
     waypoints = None
     if args.waypoints:
         try:

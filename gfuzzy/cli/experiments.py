@@ -22,6 +22,7 @@ from .common import (
     _pose,
     _progress,
     _roadmap_for,
+    _roadmap_reads,
     _say,
 )
 from .planning import _start_on_mover
@@ -250,7 +251,7 @@ def cmd_navigate(args) -> int:
         query = scene.queries[0]
     else:
         raise BadInput(f"{scene.source}: queries: the scene has no queries to navigate")
-    out = _out_path(args.output, (".json",), ((args.roadmap, "roadmap"),)) if args.output else None
+    out = _out_path(args.output, (".json",), _roadmap_reads(scene, args)) if args.output else None
     problem = query_problem(StaticGeometry(scene), query.start, query.goal) or _start_on_mover(scene, query)
     if problem:
         tf = TrajectoryFile(scene.name, query.name, Status.INVALID_QUERY, problem, None, None, None, 0.0)

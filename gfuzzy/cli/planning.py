@@ -23,6 +23,7 @@ from .common import (
     _pose,
     _progress,
     _roadmap_for,
+    _roadmap_reads,
     _say,
 )
 
@@ -104,7 +105,7 @@ def cmd_plan(args) -> int:
 
     scene = _apply_overrides(_load_scene(args.scene), args)
     query = _query_from_args(scene, args)
-    reads = ((args.scene, "scene"), (args.roadmap, "roadmap"))
+    reads = ((args.scene, "scene"), *_roadmap_reads(scene, args))
     out = _out_path(args.output, (".json", ".csv"), reads) if args.output else None
     options = _plan_options(args)
     problem = query_problem(StaticGeometry(scene), query.start, query.goal)
