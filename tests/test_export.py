@@ -810,3 +810,17 @@ def test_cli_says_in_one_line_when_mcap_is_missing(tmp_path, capsys, monkeypatch
     err = capsys.readouterr().err
     assert rc == 2 and "pip install 'gfuzzy[export]'" in err and err.count("\n") == 1
     assert list(tmp_path.iterdir()) == []
+
+
+def test_cli_export_of_an_invalid_trajectory_says_so(tmp_path, capsys):
+    """As render does: a trajectory `gfuzzy check` rejects (here one that drives through the
+    office's walls far faster than vmax) is exported, with a note naming why."""
+    from helpers import write_trajectory_file
+
+    scene = SCENES / "office-polygons.yaml"
+    bad = write_trajectory_file(tmp_path / "bad.json", [[0.0, 0.5, 0.5], [1.0, 11.5, 7.5]], scene="office-polygons")
+    out = tmp_path / "bad.mcap"
+    assert main(["export", str(scene), str(bad), "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert f"note: {bad}: invalid: " in err and "exporting it anyway" in err, err
+    assert out.exists()

@@ -7,7 +7,7 @@ import sys
 
 from ..errors import InputError
 from .common import EXIT_OK, BadInput, _load_scene, _out_path, _say
-from .planning import _navigate_extras, _rows_fit
+from .planning import _navigate_extras, _rows_fit, _violation
 
 
 def add_export(sub) -> None:
@@ -73,6 +73,7 @@ def _export_mcap(args) -> int:
         extras = _navigate_extras(args.trajectory)
         if tf.waypoints is not None:
             rows = tf.waypoints
+            _violation(scene, tf, args.trajectory, "exporting it anyway")
         elif extras.get("executed") is not None:  # a navigate run that did not arrive
             rows = extras["executed"]
             if len(rows[0]) != scene.robot.dof + 1:

@@ -235,16 +235,16 @@ def _query_of(scene, tf):
         return None
 
 
-def _violation(scene, tf, path):
-    """(time, reason) of a drawn trajectory's first violation of the guarantees, told on
-    stderr (render draws it anyway, `check` exits 1 on it); None when it is valid."""
+def _violation(scene, tf, path, anyway="drawing it anyway"):
+    """(time, reason) of a drawn or exported trajectory's first violation of the guarantees,
+    told on stderr (render and export go on, `check` exits 1 on it); None when it is valid."""
     from ..check.check import check_trajectory
 
     query = _query_of(scene, tf)
     rep = check_trajectory(scene, tf.waypoints, query)
     if rep.valid:
         return None
-    _say(f"note: {path}: invalid: {rep.reason} (`gfuzzy check` exits 1); drawing it anyway")
+    _say(f"note: {path}: invalid: {rep.reason} (`gfuzzy check` exits 1); {anyway}")
     return None if rep.time is None else (rep.time, rep.reason)
 
 
