@@ -37,7 +37,7 @@ import numpy as np
 from ..collision.geometry import StaticGeometry, metric_distance
 from ..typed import FloatArray, IntArray
 
-__all__ = ["bridge", "bridged_roadmap", "components", "RAYS", "REACH", "STUCK", "MAX_POSES", "TRIES"]
+__all__ = ["bridge", "bridged_roadmap", "bridged_planner", "components", "RAYS", "REACH", "STUCK", "MAX_POSES", "TRIES"]
 
 log = logging.getLogger(__name__)
 
@@ -181,9 +181,10 @@ def _chain(geometry: StaticGeometry, tree: list, parent: list, last: int, v: int
     return poses, v
 
 
-def bridged_roadmap(planner, start: FloatArray, goal: FloatArray, k: int):
-    """A copy of ``planner.roadmap`` with bridges from the ends that miss the component
-    to join, or None when none is needed or none is found (see the module docstring).
+def bridged_roadmap(planner, ends: list, k: int):
+    """A copy of ``planner.roadmap`` with bridges from the ``ends`` (a query's start and goal,
+    or a goal alone) that miss the component to join, or None when none is needed or one is
+    not found (see the module docstring).
 
     ``k``: the query's ``connect_k`` (the ends' own connections tell the components they reach).
     """
@@ -191,16 +192,16 @@ def bridged_roadmap(planner, start: FloatArray, goal: FloatArray, k: int):
     if len(rm.vertices) == 0:
         return None
     labels = components(rm)
-    reached = [{int(labels[v]) for v, _ in planner._connect(e, k)} for e in (start, goal)]
-    if reached[0] & reached[1]:
+    reached = [{int(labels[v]) for v, _ in planner._connect(e, k)} for e in ends]
+    if set.intersection(*reached) if len(ends) > 1 else reached[0]:
         return None
     sizes = np.bincount(labels, minlength=len(labels))
-    touched = sorted(reached[0] | reached[1], key=lambda c: (-sizes[c], c))
+    touched = sorted(set.union(*reached), key=lambda c: (-sizes[c], c))
     main = touched[0] if touched else int(np.argmax(sizes))
     targets = np.flatnonzero(labels == main)
     verts, edges = [rm.vertices], [rm.edges.reshape(-1, 2)]
     n = len(rm.vertices)
-    for end, got in zip((start, goal), reached, strict=True):
+    for end, got in zip(ends, reached, strict=True):
         if main in got:
             continue
         found = bridge(planner.geometry, rm, end, targets)
@@ -215,3 +216,15 @@ def bridged_roadmap(planner, start: FloatArray, goal: FloatArray, k: int):
     lengths = metric_distance(vertices[pairs[:, 0]], vertices[pairs[:, 1]], rm.circumradius)
     log.info("query ends bridged to the roadmap: %d poses added", n - len(rm.vertices))
     return replace(rm, vertices=vertices, edges=pairs, lengths=np.asarray(lengths, dtype=float), _spanners={})
+
+
+def bridged_planner(planner, ends: list, k: int):
+    """A copy of ``planner`` on :func:`bridged_roadmap`'s copy, or None (the same)."""
+    import copy
+
+    rm = bridged_roadmap(planner, ends, k)
+    if rm is None:
+        return None
+    out = copy.copy(planner)
+    out.roadmap = rm
+    return out

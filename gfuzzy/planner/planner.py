@@ -347,14 +347,12 @@ class Planner:
         (:func:`gfuzzy.roadmap.freespace.repair`: an old roadmap built without it is repaired here).
         """
         from ..roadmap.freespace import link_pose, repair, separation
-        from .bridge import bridged_roadmap
+        from .bridge import bridged_planner
 
         fs = self._free_space()
-        bridged = bridged_roadmap(self, start, goal, k) if fs is None and not self.robot.unicycle else None
+        bridged = bridged_planner(self, [start, goal], k) if fs is None and not self.robot.unicycle else None
         if bridged is not None:
-            planner = copy.copy(self)
-            planner.roadmap = bridged
-            return planner, ""
+            return bridged, ""
         if fs is None:
             return None, (
                 "start and goal are not connected on the roadmap (sealed off, or the roadmap missed "

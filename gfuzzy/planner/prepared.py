@@ -225,7 +225,7 @@ def _along(at_vertices: FloatArray, a: IntArray, j: IntArray, b: IntArray, rest:
     np.minimum(out, other, out=out)
 
 
-def prepare_goal(planner, goal: FloatArray, options) -> PreparedGoal:
+def prepare_goal(planner, goal: FloatArray, options, bridge: bool = True) -> PreparedGoal:
     """The goal's part of every query graph to ``goal`` (the module docstring's first step).
 
     Parameters
@@ -236,6 +236,11 @@ def prepare_goal(planner, goal: FloatArray, options) -> PreparedGoal:
         ``goal`` as given).
     options : PlanOptions
         Its ``dt``, ``stretch`` and ``connect_k`` shape the graph.
+    bridge : bool
+        A goal with no certified connection is bridged to the roadmap
+        (:mod:`gfuzzy.planner.bridge`): the result is then prepared on a copy of the roadmap
+        with the bridge's poses appended (its ``base`` and ids are the copy's; ``splice``
+        still takes the planner on the roadmap, whose vertices keep their ids).
 
     Returns
     -------
@@ -256,6 +261,12 @@ def prepare_goal(planner, goal: FloatArray, options) -> PreparedGoal:
     s_id, g_id = nv, nv + 1
     c_g = planner.geometry.clearance1(goal)
     conn = planner._connect(goal, options.connect_k, c_g)
+    if not conn and bridge:  # deep in a dead end: only the goal's graph gets the bridge
+        from .bridge import bridged_planner
+
+        bridged = bridged_planner(planner, [goal], options.connect_k)
+        if bridged is not None:
+            return prepare_goal(bridged, goal_raw, options, bridge=False)
     edges = np.array([(g_id, v) for v, _ in conn], dtype=np.int64).reshape(-1, 2)
     lengths = np.array([d for _, d in conn], dtype=float)
     step_len = robot.vmax * SPEED_SAFETY * options.dt
