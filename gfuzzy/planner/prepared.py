@@ -43,7 +43,8 @@ per call (1.4 ms at 5000 vertices, a pass over every point) than the Dijkstra.
 
 So the answer is a fresh :meth:`Planner.plan`'s from the same pose (the same graph,
 heuristic and windows: a fresh plan is this module's two steps; only a fresh plan joins
-ends the roadmap does not join through the free space, a prepared goal is not extended).
+ends the roadmap does not join through the free space or bridges its start; a prepared goal
+with no certified connection is bridged here, :mod:`gfuzzy.planner.bridge`).
 Safety is still only computed where movers come near a point inside its window (the broad
 phase), so a call's cost follows the movers near the robot's reachable space-time. The
 graph part of a call is a handful of vectorised passes over the points (the search needs
