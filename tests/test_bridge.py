@@ -103,3 +103,16 @@ def test_a_prepared_goal_deep_in_the_alcove_is_bridged_for_replanning(seed):
         res = planner.plan_from(kept, start)
         assert res.solved, res.message
         assert check_trajectory(scene, res.trajectory.waypoints, Query("q", tuple(start), tuple(DEEP))).valid
+
+
+def test_a_navigator_docks_deep_in_the_alcove():
+    """The navigator keeps the bridged goal and splices the robot's pose on the bridge too
+    (a pose on its way along the bridge connects to its poses, not back to the roadmap)."""
+    from gfuzzy.navigation.navigator import NavOptions
+    from gfuzzy.navigation.navsim import simulate
+
+    scene = _scene(OUT, DEEP)
+    rm = _roadmap(scene, 1)
+    res = simulate(scene, rm, OUT, DEEP, 0.0, 0.25, max_time=30.0, options=NavOptions(budget_clock="cpu"))
+    assert res.reached
+    assert check_trajectory(scene, res.trajectory.waypoints, scene.query("q")).valid

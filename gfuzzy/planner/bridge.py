@@ -126,9 +126,8 @@ def bridge(geometry: StaticGeometry, roadmap, pose: FloatArray, targets: IntArra
     Returns
     -------
     (poses, vertex) or None
-        ``poses``: the chain after ``pose`` (its first pose at most ``STUCK`` ... a few cm
-        from ``pose``, so the end's own nearest connections find it), each motion
-        certified; ``vertex``: the target it is linked to. None when no chain of at most
+        ``poses``: the chain after ``pose`` (its first pose ``2 STUCK`` from ``pose`` on
+        the way out, so the end's own nearest connections find it), each motion certified; ``vertex``: the target it is linked to. None when no chain of at most
         ``MAX_POSES`` poses is found.
     """
     reach = REACH * geometry.r

@@ -54,7 +54,7 @@ certified connections.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -110,6 +110,10 @@ class PreparedGoal:
         ``vmax * SPEED_SAFETY * dt``: the longest step.
     goal_clearance : float
         The goal's static clearance (``StaticGeometry.clearance1``).
+    bridged : Planner or None
+        The planner on the roadmap with the goal's bridge (:mod:`gfuzzy.planner.bridge`)
+        when the goal was bridged: every start is then spliced on it (a start on the way
+        along the bridge connects to its poses).
     """
 
     goal: FloatArray
@@ -126,6 +130,7 @@ class PreparedGoal:
     vgraph: VertexGraph
     step_len: float
     goal_clearance: float
+    bridged: object = None
 
     def splice(self, planner, start: FloatArray, ahead=(), lead: bool = False) -> QueryGraph:
         """The query's graph: the spanner's cut with the goal's and ``start``'s connections.
@@ -158,6 +163,7 @@ class PreparedGoal:
             When the graph would exceed ``settings.MAX_POINTS`` points (checked before
             the connections are cut).
         """
+        planner = planner if self.bridged is None else self.bridged
         edges, lengths = self._start_edges(planner, start, ahead)
         base, n, N0 = self.base, self.g_id + 1, self.base.N0
         x = len(self.goal_edges)
@@ -267,7 +273,7 @@ def prepare_goal(planner, goal: FloatArray, options, bridge: bool = True) -> Pre
 
         bridged = bridged_planner(planner, [goal], options.connect_k)
         if bridged is not None:
-            return prepare_goal(bridged, goal_raw, options, bridge=False)
+            return replace(prepare_goal(bridged, goal_raw, options, bridge=False), bridged=bridged)
     edges = np.array([(g_id, v) for v, _ in conn], dtype=np.int64).reshape(-1, 2)
     lengths = np.array([d for _, d in conn], dtype=float)
     step_len = robot.vmax * SPEED_SAFETY * options.dt
