@@ -23,8 +23,13 @@ through it passes ``gfuzzy check`` as any other.
 component the other end (or, failing that, the largest component) lies in, and returns a
 copy of the roadmap with the bridges' poses and edges appended: the query's graph only
 (the planner plans once more on the copy); the roadmap and its file never change. It runs
-only when a fresh plan finds the ends not joined on the roadmap, so other queries pay
-nothing. Same roadmap, same query: the same bridges.
+only where needed: for a goal with no certified connection when its graph is prepared
+(:func:`gfuzzy.planner.prepared.prepare_goal`, so the navigator's kept goal too), and when
+a fresh plan finds its ends not joined on the roadmap; other queries pay nothing. Same
+roadmap, same query: the same bridges.
+
+The rays advance by :meth:`StaticGeometry.clearance1`, which already leaves out
+``robot.clearance``: they keep it, as every certified motion does.
 """
 
 from __future__ import annotations
