@@ -360,7 +360,7 @@ class Navigator(PathSpace, Prediction):
         self._planner.geometry = self.geometry
         popts = PlanOptions(dt=opts.dt, connect_k=opts.connect_k, stretch=opts.stretch, backend=opts.backend)
         self._kept = self._planner.prepare(self.goal, popts)
-        self._nv = 0 if self.robot.unicycle else len(self.roadmap.vertices)  # vertices "ahead"
+        self._nv = 0 if self.robot.unicycle else self._kept.s_id  # vertices "ahead" (a goal's bridge's too)
         self._g_id = -1
         self._fan = Fan() if self.robot.unicycle and opts.fan else None
 

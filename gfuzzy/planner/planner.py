@@ -322,29 +322,37 @@ class Planner:
             self._fs.append(free_space(self.scene))
         return self._fs[0]
 
-    def _not_joined(self, start, goal, prepared: bool, linked: bool) -> tuple[Planner | None, str]:
+    def _not_joined(self, start, goal, prepared: bool, linked: bool, k: int) -> tuple[Planner | None, str]:
         """The roadmap does not join start and goal: a planner to try again (see
         :meth:`_through_free_space`), or None and the ``no_path`` message."""
         if linked:
             return None, (
                 "start and goal share a region of the free space, but no certified path through "
-                "it joins them on the roadmap"
-            )
+                "it joins them on the roadmap" if self._fs[0] is not None else
+                "start and goal were bridged to the roadmap, but no certified path joins them on it"
+            )  # fmt: skip
         if prepared:  # a kept goal graph (replanning) is not extended
             return None, "start and goal are not connected on the roadmap (sealed off, or the roadmap is too sparse)"
-        return self._through_free_space(start, goal)
+        return self._through_free_space(start, goal, k)
 
-    def _through_free_space(self, start, goal) -> tuple[Planner | None, str]:
+    def _through_free_space(self, start, goal, k: int) -> tuple[Planner | None, str]:
         """When the roadmap does not join ``start`` and ``goal``: a planner on the roadmap
         extended through the free space, or None and the reason no way exists.
+
+        Other holonomic robots (no free space computed) bridge the end the roadmap does not
+        reach to it (:mod:`gfuzzy.planner.bridge`; ``k``: the query's ``connect_k``).
 
         The start and the goal are linked to the nearest vertex of their free-space region
         by certified paths, and the roadmap's components sharing a region are joined
         (:func:`gfuzzy.roadmap.freespace.repair`: an old roadmap built without it is repaired here).
         """
         from ..roadmap.freespace import link_pose, repair, separation
+        from .bridge import bridged_planner
 
         fs = self._free_space()
+        bridged = bridged_planner(self, [start, goal], k) if fs is None and not self.robot.unicycle else None
+        if bridged is not None:
+            return bridged, ""
         if fs is None:
             return None, (
                 "start and goal are not connected on the roadmap (sealed off, or the roadmap missed "
@@ -528,7 +536,7 @@ class Planner:
         if not math.isfinite(rd) and robot.unicycle and robot.shape != "disc" and _prepared is None:
             graph, s_id, g_id, rd = self._query_graph(start, self.prepare(ends[1], opts, _tilts=True))
         if not math.isfinite(rd):
-            linked, message = self._not_joined(start, goal, _prepared is not None, _linked)
+            linked, message = self._not_joined(start, goal, _prepared is not None, _linked, opts.connect_k)
             if linked is not None:
                 return linked.plan(ends[0], ends[1], t0, options, hold=hold, _linked=True)
             return answer(Status.NO_PATH, message, stats=PlanStats(nodes=len(graph.poses)))

@@ -43,7 +43,8 @@ per call (1.4 ms at 5000 vertices, a pass over every point) than the Dijkstra.
 
 So the answer is a fresh :meth:`Planner.plan`'s from the same pose (the same graph,
 heuristic and windows: a fresh plan is this module's two steps; only a fresh plan joins
-ends the roadmap does not join through the free space, a prepared goal is not extended).
+ends the roadmap does not join through the free space or bridges its start; a prepared goal
+with no certified connection is bridged here, :mod:`gfuzzy.planner.bridge`).
 Safety is still only computed where movers come near a point inside its window (the broad
 phase), so a call's cost follows the movers near the robot's reachable space-time. The
 graph part of a call is a handful of vectorised passes over the points (the search needs
@@ -53,7 +54,7 @@ certified connections.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -109,6 +110,10 @@ class PreparedGoal:
         ``vmax * SPEED_SAFETY * dt``: the longest step.
     goal_clearance : float
         The goal's static clearance (``StaticGeometry.clearance1``).
+    bridged : Planner or None
+        The planner on the roadmap with the goal's bridge (:mod:`gfuzzy.planner.bridge`)
+        when the goal was bridged: every start is then spliced on it (a start on the way
+        along the bridge connects to its poses).
     """
 
     goal: FloatArray
@@ -125,6 +130,7 @@ class PreparedGoal:
     vgraph: VertexGraph
     step_len: float
     goal_clearance: float
+    bridged: object = None
 
     def splice(self, planner, start: FloatArray, ahead=(), lead: bool = False) -> QueryGraph:
         """The query's graph: the spanner's cut with the goal's and ``start``'s connections.
@@ -157,6 +163,7 @@ class PreparedGoal:
             When the graph would exceed ``settings.MAX_POINTS`` points (checked before
             the connections are cut).
         """
+        planner = planner if self.bridged is None else self.bridged
         edges, lengths = self._start_edges(planner, start, ahead)
         base, n, N0 = self.base, self.g_id + 1, self.base.N0
         x = len(self.goal_edges)
@@ -225,7 +232,7 @@ def _along(at_vertices: FloatArray, a: IntArray, j: IntArray, b: IntArray, rest:
     np.minimum(out, other, out=out)
 
 
-def prepare_goal(planner, goal: FloatArray, options) -> PreparedGoal:
+def prepare_goal(planner, goal: FloatArray, options, bridge: bool = True) -> PreparedGoal:
     """The goal's part of every query graph to ``goal`` (the module docstring's first step).
 
     Parameters
@@ -236,6 +243,11 @@ def prepare_goal(planner, goal: FloatArray, options) -> PreparedGoal:
         ``goal`` as given).
     options : PlanOptions
         Its ``dt``, ``stretch`` and ``connect_k`` shape the graph.
+    bridge : bool
+        A goal with no certified connection is bridged to the roadmap
+        (:mod:`gfuzzy.planner.bridge`): the result is then prepared on a copy of the roadmap
+        with the bridge's poses appended (its ``base`` and ids are the copy's; ``splice``
+        still takes the planner on the roadmap, whose vertices keep their ids).
 
     Returns
     -------
@@ -256,6 +268,12 @@ def prepare_goal(planner, goal: FloatArray, options) -> PreparedGoal:
     s_id, g_id = nv, nv + 1
     c_g = planner.geometry.clearance1(goal)
     conn = planner._connect(goal, options.connect_k, c_g)
+    if not conn and bridge:  # deep in a dead end: only the goal's graph gets the bridge
+        from .bridge import bridged_planner
+
+        bridged = bridged_planner(planner, [goal], options.connect_k)
+        if bridged is not None:
+            return replace(prepare_goal(bridged, goal_raw, options, bridge=False), bridged=bridged)
     edges = np.array([(g_id, v) for v, _ in conn], dtype=np.int64).reshape(-1, 2)
     lengths = np.array([d for _, d in conn], dtype=float)
     step_len = robot.vmax * SPEED_SAFETY * options.dt

@@ -1,0 +1,234 @@
+"""Bridges from a query end the roadmap does not reach to the roadmap (holonomic robots).
+
+A start or a goal deep in a dead end barely wider than the robot (an alcove, a dock 1-2 cm
+wider than the body) may have no certified straight motion to any of its nearest roadmap
+vertices: each of them turns or slides the body into the walls on the way out, and the
+PRM, sampling uniformly, seldom puts a vertex inside so tight a dead end. The only
+motions that leave it are translations that keep the heading, along its axis.
+
+:func:`bridge` searches from such an end a small tree of those translations,
+breadth first and without sampling: from the end and from every pose it reaches, a ray
+in each of ``RAYS`` directions of the plane and the robot's four own (ahead, behind, left,
+right: a dead end's axis is one of them when the body fits it closely), followed by
+conservative advancement (each step as long as the pose's static clearance: the body
+cannot meet anything within it) until the clearance falls below ``STUCK`` or the ray
+reaches ``REACH`` circumradii. The middle of each ray and its far end (backed off from
+what stopped it) are new poses; each tries certified straight motions to its nearest
+roadmap vertices in the component the end must join, and the first that connects ends
+the search. Every edge of the bridge is certified again
+(:meth:`~gfuzzy.collision.geometry.StaticGeometry.motion_free`), so a query's answer
+through it passes ``gfuzzy check`` as any other.
+
+:func:`bridged_roadmap` runs it for every end of a query that misses the roadmap's
+component the other end (or, failing that, the largest component) lies in, and returns a
+copy of the roadmap with the bridges' poses and edges appended: the query's graph only
+(the planner plans once more on the copy); the roadmap and its file never change. It runs
+only where needed: for a goal with no certified connection when its graph is prepared
+(:func:`gfuzzy.planner.prepared.prepare_goal`, so the navigator's kept goal too), and when
+a fresh plan finds its ends not joined on the roadmap; other queries pay nothing. Same
+roadmap, same query: the same bridges.
+
+The rays advance by :meth:`StaticGeometry.clearance1`, which already leaves out
+``robot.clearance``: they keep it, as every certified motion does.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import replace
+
+import numpy as np
+
+from ..collision.geometry import StaticGeometry, metric_distance
+from ..typed import FloatArray, IntArray
+
+__all__ = ["bridge", "bridged_roadmap", "bridged_planner", "components", "RAYS", "REACH", "STUCK", "MAX_POSES", "TRIES"]
+
+log = logging.getLogger(__name__)
+
+#: Directions of the plane a ray is cast in from every pose of the tree (plus the robot's four).
+RAYS = 16
+#: A ray's longest reach, in circumradii.
+REACH = 4.0
+#: A ray stops where the pose's clearance falls below this (m).
+STUCK = 2e-3
+#: Poses of one bridge's tree at most (its root, the end, included).
+MAX_POSES = 40
+#: Nearest vertices of the target component a new pose tries to connect to.
+TRIES = 6
+#: Advancement steps per ray at most.
+MAX_STEPS = 400
+
+
+def components(roadmap) -> IntArray:
+    """Connected component label of every roadmap vertex, cached on the roadmap."""
+    hit = roadmap._derived.get(("components",))
+    if hit is None:
+        n = len(roadmap.vertices)
+        parent = np.arange(n)
+
+        def find(i: int) -> int:
+            while parent[i] != i:
+                parent[i] = parent[parent[i]]
+                i = parent[i]
+            return i
+
+        for a, b in np.asarray(roadmap.edges, dtype=np.int64).reshape(-1, 2).tolist():
+            ra, rb = find(a), find(b)
+            if ra != rb:
+                parent[max(ra, rb)] = min(ra, rb)
+        hit = roadmap._derived[("components",)] = np.array([find(i) for i in range(n)], dtype=np.int64)
+    return hit
+
+
+def _directions(pose: FloatArray) -> FloatArray:
+    """Unit ray directions from ``pose``: the robot's own four (with a heading), then the plane's."""
+    ang = 2.0 * np.pi * np.arange(RAYS) / RAYS
+    if len(pose) == 3:
+        ang = np.r_[float(pose[2]) + 0.5 * np.pi * np.arange(4), ang]
+    return np.c_[np.cos(ang), np.sin(ang)]
+
+
+def _ray(geometry: StaticGeometry, pose: FloatArray, d: FloatArray, reach: float) -> float:
+    """How far ``pose`` translates along ``d`` (same heading) before it gets stuck (conservative
+    advancement on the static clearance), at most ``reach``."""
+    t = 0.0
+    p = pose.copy()
+    for _ in range(MAX_STEPS):
+        p[:2] = pose[:2] + t * d
+        c = geometry.clearance1(p)
+        if not c >= STUCK:
+            break
+        t = min(t + c, reach)
+        if t >= reach:
+            break
+    return t
+
+
+def _link(geometry: StaticGeometry, roadmap, pose: FloatArray, targets: IntArray) -> int | None:
+    """The first of the ``TRIES`` nearest ``targets`` vertices a certified motion from ``pose`` reaches."""
+    V = roadmap.vertices[targets]
+    d = metric_distance(V, pose[None, :], geometry.r)
+    c = geometry.clearance1(pose)
+    for i in np.argsort(d, kind="stable")[:TRIES].tolist():
+        if geometry.motion_free(pose, V[i], ca=c):
+            return int(targets[i])
+    return None
+
+
+def bridge(geometry: StaticGeometry, roadmap, pose: FloatArray, targets: IntArray) -> tuple[list, int] | None:
+    """A chain of certified translations from ``pose`` to a pose linked to one of ``targets``.
+
+    Parameters
+    ----------
+    geometry : StaticGeometry
+    roadmap : Roadmap
+    pose : (d,) float
+        A free query end (heading wrapped for a box robot).
+    targets : (m,) int
+        Roadmap vertices the chain may end at.
+
+    Returns
+    -------
+    (poses, vertex) or None
+        ``poses``: the chain after ``pose`` (its first pose ``2 STUCK`` from ``pose`` on
+        the way out, so the end's own nearest connections find it), each motion certified; ``vertex``: the target it is linked to. None when no chain of at most
+        ``MAX_POSES`` poses is found.
+    """
+    reach = REACH * geometry.r
+    tree = [np.asarray(pose, dtype=float)]
+    parent = [-1]
+    sep = max(4.0 * STUCK, 0.02 * geometry.r)  # poses nearer than this to a tree pose are not added
+    i = 0
+    while i < len(tree) and len(tree) < MAX_POSES:
+        node = tree[i]
+        for d in _directions(node):
+            length = _ray(geometry, node, d, reach)
+            if length < 2.0 * sep:
+                continue
+            for t in (0.5 * length, length - min(0.25 * length, 0.05 * geometry.r)):
+                child = node.copy()
+                child[:2] = node[:2] + t * d
+                near = metric_distance(np.asarray(tree), child[None, :], geometry.r)
+                if float(np.min(near)) < sep or not geometry.motion_free(node, child):
+                    continue
+                tree.append(child)
+                parent.append(i)
+                v = _link(geometry, roadmap, child, targets)
+                if v is not None:
+                    return _chain(geometry, tree, parent, len(tree) - 1, v, roadmap)
+                if len(tree) >= MAX_POSES:
+                    return None
+        i += 1
+    return None
+
+
+def _chain(geometry: StaticGeometry, tree: list, parent: list, last: int, v: int, roadmap) -> tuple[list, int] | None:
+    """The poses from the root's first child to ``last``, a pose a step from the root first
+    (the end's own connections meet it before any roadmap vertex)."""
+    path = []
+    j = last
+    while j > 0:
+        path.append(tree[j])
+        j = parent[j]
+    path.reverse()
+    root = tree[0]
+    step = path[0] - root
+    gap = float(np.hypot(step[0], step[1]))
+    near = root + step * min(0.5, 2.0 * STUCK / gap) if gap > 0 else None
+    poses = ([near] if near is not None else []) + path
+    prev = root
+    for p in [*poses, roadmap.vertices[v]]:  # certified again, end to end
+        if not geometry.motion_free(prev, p):
+            return None
+        prev = p
+    return poses, v
+
+
+def bridged_roadmap(planner, ends: list, k: int):
+    """A copy of ``planner.roadmap`` with bridges from the ``ends`` (a query's start and goal,
+    or a goal alone) that miss the component to join, or None when none is needed or one is
+    not found (see the module docstring).
+
+    ``k``: the query's ``connect_k`` (the ends' own connections tell the components they reach).
+    """
+    rm = planner.roadmap
+    if len(rm.vertices) == 0:
+        return None
+    labels = components(rm)
+    reached = [{int(labels[v]) for v, _ in planner._connect(e, k)} for e in ends]
+    if set.intersection(*reached) if len(ends) > 1 else reached[0]:
+        return None
+    sizes = np.bincount(labels, minlength=len(labels))
+    touched = sorted(set.union(*reached), key=lambda c: (-sizes[c], c))
+    main = touched[0] if touched else int(np.argmax(sizes))
+    targets = np.flatnonzero(labels == main)
+    verts, edges = [rm.vertices], [rm.edges.reshape(-1, 2)]
+    n = len(rm.vertices)
+    for end, got in zip(ends, reached, strict=True):
+        if main in got:
+            continue
+        found = bridge(planner.geometry, rm, end, targets)
+        if found is None:
+            return None
+        poses, v = found
+        ids = list(range(n, n + len(poses)))
+        verts.append(np.asarray(poses).reshape(len(poses), -1))
+        n += len(poses)
+        edges.append(np.asarray([(min(a, b), max(a, b)) for a, b in zip(ids, [*ids[1:], v], strict=True)], dtype=np.int64))
+    vertices, pairs = np.vstack(verts), np.vstack(edges)
+    lengths = metric_distance(vertices[pairs[:, 0]], vertices[pairs[:, 1]], rm.circumradius)
+    log.info("query ends bridged to the roadmap: %d poses added", n - len(rm.vertices))
+    return replace(rm, vertices=vertices, edges=pairs, lengths=np.asarray(lengths, dtype=float), _spanners={})
+
+
+def bridged_planner(planner, ends: list, k: int):
+    """A copy of ``planner`` on :func:`bridged_roadmap`'s copy, or None (the same)."""
+    import copy
+
+    rm = bridged_roadmap(planner, ends, k)
+    if rm is None:
+        return None
+    out = copy.copy(planner)
+    out.roadmap = rm
+    return out

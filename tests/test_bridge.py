@@ -1,0 +1,118 @@
+"""Query ends deep in a dead end barely wider than the robot (gfuzzy.planner.bridge).
+
+A holonomic cart whose goal (or start) lies deep in an alcove 1.5 cm per side wider than
+its body: no certified straight motion joins that pose to any nearby roadmap vertex, so
+the plan used to be ``no_path`` although the robot backs out along the alcove's axis.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gfuzzy.check.check import check_trajectory
+from gfuzzy.planner.planner import Planner, PlanOptions
+from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
+from gfuzzy.scene.scene import Query, parse_scene
+
+#: the cart: a rectangle 0.94 x 0.44 m pulled 0.14 m from its rear
+FOOTPRINT = [[-0.14, -0.26], [0.80, -0.26], [0.80, 0.18], [-0.14, 0.18]]
+#: the alcove's left side and width (the body is 0.44 wide: 1.5 cm per side)
+LEFT, WIDTH = 2.72, 0.47
+DEEP = [LEFT + 0.015 + 0.18, 2.83, np.pi / 2]  # nose first (its left side is the footprint's y = 0.18)
+OUT = [1.98, 1.55, 2.3]
+
+
+def _scene(start, goal, kinematics: str = "holonomic"):
+    """A 5.1 x 3.6 m room whose top wall (0.95 m thick) has the alcove."""
+    top, thick = 3.65, 0.95
+    right = LEFT + WIDTH
+    robot = {"footprint": FOOTPRINT, "vmax": 0.8}
+    if kinematics != "holonomic":
+        robot["kinematics"] = kinematics
+    return parse_scene({
+        "version": 1, "name": "alcove", "bounds": [0.0, 0.0, 5.1, top], "robot": robot,
+        "obstacles": [
+            {"box": {"center": [LEFT / 2, top - thick / 2], "size": [LEFT, thick], "angle": 0.0}},
+            {"box": {"center": [(right + 5.1) / 2, top - thick / 2], "size": [5.1 - right, thick], "angle": 0.0}},
+        ],
+        "queries": [{"name": "q", "start": list(start), "goal": list(goal)}],
+    })  # fmt: skip
+
+
+#: roadmap seeds whose 100 vertices miss the alcove's end (no_path before the bridges)
+SEEDS = [1, 2]
+
+
+def _roadmap(scene, seed):
+    return build_roadmap(scene, RoadmapOptions(vertices=100, seed=seed))
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+@pytest.mark.parametrize("into", [True, False], ids=["goal-deep", "start-deep"])
+def test_an_end_deep_in_a_tight_alcove_is_bridged_and_checked(seed, into):
+    start, goal = (OUT, DEEP) if into else (DEEP, OUT)
+    scene = _scene(start, goal)
+    rm = _roadmap(scene, seed)
+    planner = Planner(scene, rm)
+    assert planner._connect(np.array(DEEP), PlanOptions().connect_k) == []  # the case: not joined
+    res = planner.plan(start, goal)
+    assert res.solved, res.message
+    q = scene.query("q")
+    assert check_trajectory(scene, res.trajectory.waypoints, q).valid
+    # the roadmap itself is unchanged: the bridge is the query's
+    assert len(planner.roadmap.vertices) == len(rm.vertices) and planner.roadmap is rm
+
+
+def test_the_bridge_is_the_same_for_the_same_query_and_every_motion_is_certified():
+    from gfuzzy.planner.bridge import bridge, components
+
+    scene = _scene(OUT, DEEP)
+    rm = _roadmap(scene, 1)
+    planner = Planner(scene, rm)
+    labels = components(rm)
+    targets = np.flatnonzero(labels == np.bincount(labels).argmax())
+    runs = [bridge(planner.geometry, rm, np.array(DEEP), targets) for _ in range(2)]
+    assert runs[0] is not None
+    (poses, v), (again, w) = runs
+    assert v == w and np.array_equal(np.asarray(poses), np.asarray(again))
+    chain = [np.array(DEEP), *poses, rm.vertices[v]]
+    assert all(planner.geometry.motion_free(a, b) for a, b in zip(chain[:-1], chain[1:], strict=True))
+    # translations only, out of the alcove: the heading is the end's until the roadmap vertex
+    assert all(p[2] == DEEP[2] for p in poses)
+    first = planner.plan(OUT, DEEP)
+    assert np.array_equal(first.trajectory.waypoints, planner.plan(OUT, DEEP).trajectory.waypoints)
+
+
+def test_ends_the_roadmap_joins_are_not_bridged():
+    from gfuzzy.planner.bridge import bridged_roadmap
+
+    scene = _scene(OUT, [1.0, 1.0, 0.0])
+    planner = Planner(scene, _roadmap(scene, 1))
+    assert bridged_roadmap(planner, [np.array(OUT), np.array([1.0, 1.0, 0.0])], PlanOptions().connect_k) is None
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_a_prepared_goal_deep_in_the_alcove_is_bridged_for_replanning(seed):
+    """The navigator's kept goal graph (Planner.prepare, then plan_from per call) gets the bridge too."""
+    scene = _scene(OUT, DEEP)
+    planner = Planner(scene, _roadmap(scene, seed))
+    kept = planner.prepare(DEEP)
+    assert len(kept.goal_edges) > 0
+    for start in (OUT, [1.0, 1.0, 0.0]):
+        res = planner.plan_from(kept, start)
+        assert res.solved, res.message
+        assert check_trajectory(scene, res.trajectory.waypoints, Query("q", tuple(start), tuple(DEEP))).valid
+
+
+def test_a_navigator_docks_deep_in_the_alcove():
+    """The navigator keeps the bridged goal and splices the robot's pose on the bridge too
+    (a pose on its way along the bridge connects to its poses, not back to the roadmap)."""
+    from gfuzzy.navigation.navigator import NavOptions
+    from gfuzzy.navigation.navsim import simulate
+
+    scene = _scene(OUT, DEEP)
+    rm = _roadmap(scene, 1)
+    res = simulate(scene, rm, OUT, DEEP, 0.0, 0.25, max_time=30.0, options=NavOptions(budget_clock="cpu"))
+    assert res.reached
+    assert check_trajectory(scene, res.trajectory.waypoints, scene.query("q")).valid
