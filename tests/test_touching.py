@@ -212,3 +212,23 @@ def test_a_body_touching_the_bounds_by_a_rounding_is_inside_them(robot):
     out = np.array([7.0 - c[:, 0].max() + 1e-6, 2.5, -math.pi / 2])
     assert float(geometry.bounds_clearance(out[None])[0]) < 0
     assert "out of bounds (by 1e-06 m)" in query_problem(geometry, out, goal)
+
+
+@pytest.mark.parametrize("robot", [{"box": [0.4, 0.2], "vmax": 1.0}, {"footprint": LFOOT, "vmax": 1.0}], ids=["box", "footprint"])
+def test_a_holonomic_end_touching_the_bounds_in_a_corner_is_bridged_to_the_roadmap(robot):
+    """A body in a corner of the bounds, touching two sides by a rounding (the user's decimal
+    pose), turns nowhere and meets no roadmap vertex at its own heading: the bridge's rays
+    start with a step certified from contact (they advanced by the clearance, 0 there, and
+    so never left), and the answer passes the check (before: ``no_path``)."""
+    from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
+
+    scene = _scene(robot)
+    rm = build_roadmap(scene, RoadmapOptions(vertices=100, seed=1))
+    c = scene.robot.corners(np.array([[0.0, 0.0, 0.0]]))[0]
+    corner = np.array([round(7.0 - c[:, 0].max(), 6), round(5.0 - c[:, 1].max(), 6), 0.0])  # top right
+    assert StaticGeometry(scene).bounds_clearance(corner[None])[0] == 0.0
+    for start, goal in ((corner, np.array([2.0, 2.5, 0.3])), (np.array([2.0, 2.5, 0.3]), corner)):
+        res = Planner(scene, rm).plan(start, goal, 0.0, PlanOptions())
+        assert res.solved, res.message
+        rep = check_trajectory(scene, res.trajectory.waypoints)
+        assert rep.valid, rep.reason

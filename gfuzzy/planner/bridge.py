@@ -91,9 +91,15 @@ def _directions(pose: FloatArray) -> FloatArray:
 
 def _ray(geometry: StaticGeometry, pose: FloatArray, d: FloatArray, reach: float) -> float:
     """How far ``pose`` translates along ``d`` (same heading) before it gets stuck (conservative
-    advancement on the static clearance), at most ``reach``."""
+    advancement on the static clearance), at most ``reach``. A pose touching a wall or the
+    bounds (clearance 0: allowed) first takes a step of ``2 STUCK`` certified from contact."""
     t = 0.0
     p = pose.copy()
+    if not geometry.clearance1(p) >= STUCK:
+        p[:2] = pose[:2] + 2.0 * STUCK * d
+        if not geometry.motion_free(pose, p):
+            return 0.0
+        t = 2.0 * STUCK
     for _ in range(MAX_STEPS):
         p[:2] = pose[:2] + t * d
         c = geometry.clearance1(p)
