@@ -782,9 +782,9 @@ def test_a_disc_never_asks_for_tilts(robot, tilts, monkeypatch):
     asked = []
     prepare = Planner.prepare
 
-    def spy(self, goal, options=None, _tilts=False):
+    def spy(self, goal, options=None, _tilts=False, **kw):
         asked.append(_tilts)
-        return prepare(self, goal, options, _tilts)
+        return prepare(self, goal, options, _tilts, **kw)
 
     monkeypatch.setattr(Planner, "prepare", spy)
     res = Planner(sc, rm).plan([1.0, 2.0, 0.0], [5.0, 2.0, 0.0], 0.0, PlanOptions())

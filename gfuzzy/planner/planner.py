@@ -29,6 +29,7 @@ from ..timespace.movers import MoverField
 from ..timespace.roadgraph import connect
 from ..timespace.spacetime import IntervalStore, SearchResult
 from ..timespace.timespace import sipp, timed_rows
+from ..timespace.unilanes import OutOfTime
 from ..trajectory import Trajectory, TrajectoryFile
 from ..typed import FloatArray
 
@@ -397,7 +398,7 @@ class Planner:
         return qg.graph, qg.s_id, qg.g_id, qg.roadmap_distance
 
     # ---------------------------------------------------------------- query
-    def prepare(self, goal, options: PlanOptions | None = None, _tilts: bool = False):
+    def prepare(self, goal, options: PlanOptions | None = None, _tilts: bool = False, _deadline: float = math.inf):
         """Keep what replanning to ``goal`` reuses: the goal's connections and the static
         distances to the goal (:mod:`gfuzzy.planner.prepared`; the spanner's cut is kept on
         the roadmap). A fresh :meth:`plan` prepares its goal so too, then splices its start in.
@@ -431,7 +432,7 @@ class Planner:
             wrapped = goal.copy()
             wrapped[2] = wrap_angle(wrapped[2])
             kept = prepare_unicycle(self, wrapped, opts.dt, self.robot.vmax * SPEED_SAFETY, opts.connect_k, opts.stretch,
-                                    _tilts)  # fmt: skip
+                                    _tilts, _deadline)  # fmt: skip
             return UnicyclePrepared(goal, opts, kept)
         return prepare_goal(self, goal, opts)
 
@@ -514,7 +515,8 @@ class Planner:
         t0 = _check_t0(t0)
 
         def answer(status, message="", traj=None, rd=math.inf, stats=None):
-            return PlanResult(Status(status), traj, message, rd, time.perf_counter() - t_begin, vmax, stats or PlanStats())
+            status, message = _in_time(Status(status), message, opts.time_limit, deadline)
+            return PlanResult(status, traj, message, rd, time.perf_counter() - t_begin, vmax, stats or PlanStats())
 
         problem = query_problem(self.geometry, start, goal)
         if problem:
@@ -522,15 +524,15 @@ class Planner:
         ends = start.copy(), goal.copy()  # the rows at the ends repeat them exactly
         if robot.dof == 3:
             start[2], goal[2] = wrap_angle(start[2]), wrap_angle(goal[2])
-        kept = _prepared if _prepared is not None else self.prepare(ends[1], opts)
-        graph, s_id, g_id, rd = self._query_graph(start, kept)
-        # ends that may tilt (a disc turns round wherever it stands: it never tilts)
-        if not math.isfinite(rd) and robot.unicycle and robot.shape != "disc" and _prepared is None:
-            graph, s_id, g_id, rd = self._query_graph(start, self.prepare(ends[1], opts, _tilts=True))
+        try:
+            graph, s_id, g_id, rd = self._graph(start, ends[1], opts, _prepared, deadline)
+        except OutOfTime:
+            return answer(Status.TIMEOUT, _late(opts.time_limit, "building the search graph"))
         if not math.isfinite(rd):
             linked, message = self._not_joined(start, goal, _prepared is not None, _linked)
-            if linked is not None:
-                return linked.plan(ends[0], ends[1], t0, options, hold=hold, _linked=True)
+            if linked is not None:  # in the budget left
+                left = replace(opts, time_limit=max(deadline - time.perf_counter(), 1e-9))
+                return linked.plan(ends[0], ends[1], t0, left, hold=hold, _linked=True)
             return answer(Status.NO_PATH, message, stats=PlanStats(nodes=len(graph.poses)))
         max_steps = self._max_steps(opts, rd, t0, hold_steps)
         run = self._search_rounds(graph, s_id, g_id, start, t0, opts, hold_steps, max_steps, deadline)
@@ -563,6 +565,18 @@ class Planner:
         wps = result.trajectory.waypoints.copy()
         wps[0, 1:], wps[-1, 1:] = ends
         return replace(result, trajectory=Trajectory(wps, robot.circumradius), stats=_amax_stats(robot, result.stats, result.speed_report))
+
+    def _graph(self, start, goal, opts: PlanOptions, prepared, deadline: float) -> tuple:
+        """(graph, start id, goal id, roadmap distance) of a query (:meth:`_query_graph`) from
+        ``prepared`` or a goal prepared now; a differential drive's ends that cannot turn
+        round tilt when the first graph does not join them (a disc turns round wherever it
+        stands: it never tilts). OutOfTime past ``deadline``."""
+        kept = prepared if prepared is not None else self.prepare(goal, opts, _deadline=deadline)
+        graph, s_id, g_id, rd = self._query_graph(start, kept)
+        robot = self.robot
+        if not math.isfinite(rd) and robot.unicycle and robot.shape != "disc" and prepared is None:
+            graph, s_id, g_id, rd = self._query_graph(start, self.prepare(goal, opts, _tilts=True, _deadline=deadline))
+        return graph, s_id, g_id, rd
 
     def _staged(self, result: PlanResult, query: Query, opts: PlanOptions, t_begin: float) -> PlanResult:
         """``result`` after the GA refinement and/or the speed layer (:mod:`gfuzzy.planner.stages`)."""
@@ -651,6 +665,19 @@ class _Rounds:
     expansions: int
     evaluations: int
     problem: str = ""
+
+
+def _late(limit: float, doing: str) -> str:
+    return f"the planning budget of {limit:g} s (PlanOptions.time_limit, --time-limit) ran out {doing}"
+
+
+def _in_time(status: Status, message: str, limit: float, deadline: float) -> tuple[Status, str]:
+    """An answer found past ``deadline`` is not given: ``timeout`` instead of a late
+    ``solved`` or ``no_path`` (the search, the stages and the differential drive's lanes
+    stop at the deadline; this catches what runs on past it)."""
+    if status in (Status.SOLVED, Status.NO_PATH) and time.perf_counter() > deadline:
+        return Status.TIMEOUT, _late(limit, "before the answer was complete")
+    return status, message
 
 
 def _check_hold(hold) -> float:
