@@ -790,3 +790,23 @@ def test_a_disc_never_asks_for_tilts(robot, tilts, monkeypatch):
     res = Planner(sc, rm).plan([1.0, 2.0, 0.0], [5.0, 2.0, 0.0], 0.0, PlanOptions())
     assert res.status.value == "no_path"
     assert asked == ([False, True] if tilts else [False])
+
+
+def test_the_time_limit_bounds_the_lanes_too():
+    """``PlanOptions.time_limit`` bounds the whole plan: a box unicycle's lanes and rings,
+    built before the search, stop at the deadline and the answer is ``timeout``, never a
+    late ``no_path`` (the unseen bent corridor answered ``no_path`` after 68.8 s against a
+    limit of 60: its lanes alone took 46 s). Nothing half-built is kept: the next plan
+    answers as a fresh one."""
+    from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
+
+    wall = {"box": {"center": [3.0, 2.0], "size": [0.4, 4.0]}}  # sealed off: no_path
+    sc = parse_scene(doc({"box": [0.6, 0.4], "vmax": 1.0, "kinematics": "unicycle"}, obstacles=[wall]))
+    rm = build_roadmap(sc, RoadmapOptions(vertices=60, seed=1))
+    pl = Planner(sc, rm)
+    res = pl.plan([1.0, 2.0, 0.0], [5.0, 2.0, 0.0], 0.0, PlanOptions(time_limit=1e-6))
+    assert res.status.value == "timeout", res.status
+    assert "time_limit" in res.message
+    assert not any(k[0].startswith("unicycle") for k in rm._derived if isinstance(k, tuple))
+    res = pl.plan([1.0, 2.0, 0.0], [5.0, 2.0, 0.0], 0.0, PlanOptions())
+    assert res.status.value == "no_path"

@@ -16,11 +16,12 @@ import math
 
 import fcl
 import numpy as np
+import shapely
 
 from ..poses import metric_distance, wrap_angle
 from ..scene.scene import Box, Disc, MapObstacle, Polygon, Robot, Scene
 from ..typed import FloatArray
-from .exact import TOUCH_TOL, exact_measure
+from .exact import TOUCH_TOL, ExactBody, exact_measure
 from .exact import ExactDisc as _ExactDisc  # noqa: F401  (its tests' name)
 from .shapes import HEIGHT as _HEIGHT
 from .shapes import QUAD_EXACT, convex_prism, shape_of
@@ -261,6 +262,9 @@ class StaticGeometry:
         self._trace_ends = (math.nan, math.nan)  # the last _trace's ends' clearances
         # a box or footprint's pieces and cores (translations' swept hulls, _swept_distance)
         self._pieces = (_pieces(scene.robot), _pieces(scene.robot, _CORE_MARGIN)) if self._objects else ([], [])
+        self._kept_measure = None  # with a clearance kept: shapely's measure of translations
+        if self._pieces[0] and self.keep > 0 and all(isinstance(ob, (Disc, Box, Polygon, MapObstacle)) for ob in scene.obstacles):
+            self._kept_measure = ExactBody(scene)
         self._placed = fcl.Transform()  # the last pose's transform (_place)
         self.calls = 0
         self.checks = 0  # every validity question, answered by FCL or by the bounds alone
@@ -534,12 +538,29 @@ class StaticGeometry:
             return True
         if self.keep > 0 and d < self.keep:
             return False
-        if self.keep > 0 or self._exact is None:
+        if self.keep > 0:  # within the margin: shapely's distance, exact, decides
+            return None if self._kept_measure is None else bool(self._kept_gap(a, b) >= self.keep + _EPS_CERT_CLEARANCE)
+        if self._exact is None:
             return None
         if d <= 0 and cores and self._hull_distance(cores, a, b) <= -1.0:
             return False
         # touching allowed, within the margin: measured exactly (as at a touching end)
         return bool(self._exact.gap(a, b) >= -TOUCH_TOL)
+
+    def _kept_gap(self, a, b) -> float:
+        """Shapely's distance from the body translating from pose ``a`` to ``b`` to the
+        obstacles within ``robot.clearance`` + ``_SWEPT_MARGIN`` of it (inf: none), for a
+        robot that keeps a clearance (:meth:`_swept_verdict`)."""
+        measure = self._kept_measure
+        body = measure.swept(a, b)
+        reach = self.keep + 2 * _SWEPT_MARGIN
+        out = math.inf
+        discs = measure.obstacles.discs
+        if len(discs):
+            out = float(np.min(shapely.distance(body, shapely.points(discs[:, :2])) - discs[:, 2]))
+        for poly in measure.obstacles.near(body, reach):
+            out = min(out, float(poly.distance(body)) if not poly.intersects(body) else -1.0)
+        return out
 
     def _hull_distance(self, pieces: list, a, b) -> float:
         """FCL's distance from the pieces' hulls swept from pose ``a`` to ``b`` (heading
