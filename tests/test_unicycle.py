@@ -810,3 +810,26 @@ def test_the_time_limit_bounds_the_lanes_too():
     assert not any(k[0].startswith("unicycle") for k in rm._derived if isinstance(k, tuple))
     res = pl.plan([1.0, 2.0, 0.0], [5.0, 2.0, 0.0], 0.0, PlanOptions())
     assert res.status.value == "no_path"
+
+
+@pytest.mark.parametrize("backend", ["compiled", "reference"])
+def test_a_turn_in_place_is_judged_with_the_body_where_the_disc_is_not_safe(backend):
+    """A turn in place was judged against movers with the robot's circumscribed disc: a cart
+    whose reference point is at its rear (circumradius 1.07 m) could not turn while a mover
+    passed 0.7 m behind it, where its body never goes (the unseen door scene with a mover
+    looping over the goal: ``no_path`` within a 600 s horizon, a witness waiting 6 s passes
+    ``check``). Where the disc is not safe all through, the turn's points are judged one by
+    one with the body: it turns at once, as without the mover."""
+    robot = {"footprint": [[-0.05, -0.2], [1.0, -0.2], [1.0, 0.2], [-0.05, 0.2]], "vmax": 0.5,
+             "kinematics": "unicycle", "wmax": 0.45}  # fmt: skip
+    mover = {"name": "m", "disc": 0.1, "speed": 0.3, "path": [[0.3, 0.8], [0.3, 3.9]], "mode": "once"}
+    start, goal = [1.0, 2.0, 0.0], [1.0, 2.0, 0.5 * math.pi]
+    answers = []
+    for movers in ([], [mover]):
+        sc = parse_scene(doc(robot, movers=movers))
+        res = Planner(sc, _far_roadmap(sc)).plan(start, goal, 0.0, PlanOptions(backend=backend))
+        assert res.solved, res.message
+        rep = check_trajectory(sc, res.trajectory.waypoints)
+        assert rep.valid, rep.reason
+        answers.append(res.duration)
+    assert answers[1] == pytest.approx(answers[0], abs=1e-9)
