@@ -15,7 +15,7 @@ import pytest
 
 from gfuzzy.check.check import check_trajectory
 from gfuzzy.errors import SceneError
-from gfuzzy.planner.planner import Planner, PlanOptions
+from gfuzzy.planner.planner import Planner, PlanOptions, query_problem
 from gfuzzy.roadmap.roadmap import Roadmap
 from gfuzzy.scene.scene import parse_scene
 from gfuzzy.timespace.drive import turn_path
@@ -465,15 +465,18 @@ def test_an_end_that_cannot_turn_joins_along_its_heading(reverse, start, goal):
         assert Planner(fwd, rm).plan(start, goal, 0.0, PlanOptions(dt=0.1)).status.value == "no_path"
 
 
-def test_a_pose_out_of_bounds_by_a_rounding_says_so():
+def test_a_pose_out_of_bounds_says_by_how_much():
     """A cart meant to touch the top of the bounds (y 5.4 + half-length 0.6 = 6 on paper)
-    lies 3e-16 m beyond it in floating point, by the measure the planner certifies with (its
-    corners put it inside): invalid_query, 'out of bounds' and by how much, so that a user
-    sees a rounding (before: 'collides with a static obstacle', in a scene without one)."""
+    lies 3e-16 m beyond it in floating point: a rounding, so it touches (as the check says;
+    it was 'out of bounds (by 3.33e-16 m)'). A micrometre beyond is out: invalid_query,
+    'out of bounds' and by how much (before: 'collides with a static obstacle', in a scene
+    without one)."""
     sc = parse_scene(doc({"box": [1.2, 0.3], "vmax": 1.0, "kinematics": "unicycle"}, bounds=(0, 0, 6, 6)))
-    res = Planner(sc, _far_roadmap(sc)).plan([5.3, 5.4, 0.5 * math.pi], [3.0, 3.0, 0.0], 0.0)
+    planner = Planner(sc, _far_roadmap(sc))
+    assert query_problem(planner.geometry, [5.3, 5.4, 0.5 * math.pi], [3.0, 3.0, 0.0]) == ""
+    res = planner.plan([5.3, 5.400001, 0.5 * math.pi], [3.0, 3.0, 0.0], 0.0)
     assert res.status.value == "invalid_query"
-    assert "start [5.3, 5.4, 1.5707963267948966] is out of bounds (by 3.33e-16 m)" in res.message, res.message
+    assert "start [5.3, 5.400001, 1.5707963267948966] is out of bounds (by 1e-06 m)" in res.message, res.message
     walled = parse_scene(doc({"box": [1.2, 0.3], "vmax": 1.0}, obstacles=[{"disc": {"center": [2.0, 2.0], "radius": 0.5}}]))
     res = Planner(walled, _far_roadmap(walled)).plan([2.2, 2.0, 0.0], [1.0, 3.5, 0.0], 0.0)
     assert res.message == "start [2.2, 2.0, 0.0] collides with a static obstacle"  # an obstacle is still named
@@ -782,11 +785,54 @@ def test_a_disc_never_asks_for_tilts(robot, tilts, monkeypatch):
     asked = []
     prepare = Planner.prepare
 
-    def spy(self, goal, options=None, _tilts=False):
+    def spy(self, goal, options=None, _tilts=False, **kw):
         asked.append(_tilts)
-        return prepare(self, goal, options, _tilts)
+        return prepare(self, goal, options, _tilts, **kw)
 
     monkeypatch.setattr(Planner, "prepare", spy)
     res = Planner(sc, rm).plan([1.0, 2.0, 0.0], [5.0, 2.0, 0.0], 0.0, PlanOptions())
     assert res.status.value == "no_path"
     assert asked == ([False, True] if tilts else [False])
+
+
+def test_the_time_limit_bounds_the_lanes_too():
+    """``PlanOptions.time_limit`` bounds the whole plan: a box unicycle's lanes and rings,
+    built before the search, stop at the deadline and the answer is ``timeout``, never a
+    late ``no_path`` (the unseen bent corridor answered ``no_path`` after 68.8 s against a
+    limit of 60: its lanes alone took 46 s). Nothing half-built is kept: the next plan
+    answers as a fresh one."""
+    from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
+
+    wall = {"box": {"center": [3.0, 2.0], "size": [0.4, 4.0]}}  # sealed off: no_path
+    sc = parse_scene(doc({"box": [0.6, 0.4], "vmax": 1.0, "kinematics": "unicycle"}, obstacles=[wall]))
+    rm = build_roadmap(sc, RoadmapOptions(vertices=60, seed=1))
+    pl = Planner(sc, rm)
+    res = pl.plan([1.0, 2.0, 0.0], [5.0, 2.0, 0.0], 0.0, PlanOptions(time_limit=1e-6))
+    assert res.status.value == "timeout", res.status
+    assert "time_limit" in res.message
+    assert not any(k[0].startswith("unicycle") for k in rm._derived if isinstance(k, tuple))
+    res = pl.plan([1.0, 2.0, 0.0], [5.0, 2.0, 0.0], 0.0, PlanOptions())
+    assert res.status.value == "no_path"
+
+
+@pytest.mark.parametrize("backend", ["compiled", "reference"])
+def test_a_turn_in_place_is_judged_with_the_body_where_the_disc_is_not_safe(backend):
+    """A turn in place was judged against movers with the robot's circumscribed disc: a cart
+    whose reference point is at its rear (circumradius 1.07 m) could not turn while a mover
+    passed 0.7 m behind it, where its body never goes (the unseen door scene with a mover
+    looping over the goal: ``no_path`` within a 600 s horizon, a witness waiting 6 s passes
+    ``check``). Where the disc is not safe all through, the turn's points are judged one by
+    one with the body: it turns at once, as without the mover."""
+    robot = {"footprint": [[-0.05, -0.2], [1.0, -0.2], [1.0, 0.2], [-0.05, 0.2]], "vmax": 0.5,
+             "kinematics": "unicycle", "wmax": 0.45}  # fmt: skip
+    mover = {"name": "m", "disc": 0.1, "speed": 0.3, "path": [[0.3, 0.8], [0.3, 3.9]], "mode": "once"}
+    start, goal = [1.0, 2.0, 0.0], [1.0, 2.0, 0.5 * math.pi]
+    answers = []
+    for movers in ([], [mover]):
+        sc = parse_scene(doc(robot, movers=movers))
+        res = Planner(sc, _far_roadmap(sc)).plan(start, goal, 0.0, PlanOptions(backend=backend))
+        assert res.solved, res.message
+        rep = check_trajectory(sc, res.trajectory.waypoints)
+        assert rep.valid, rep.reason
+        answers.append(res.duration)
+    assert answers[1] == pytest.approx(answers[0], abs=1e-9)

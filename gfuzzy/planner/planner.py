@@ -29,8 +29,10 @@ from ..timespace.movers import MoverField
 from ..timespace.roadgraph import connect
 from ..timespace.spacetime import IntervalStore, SearchResult
 from ..timespace.timespace import sipp, timed_rows
+from ..timespace.unilanes import OutOfTime
 from ..trajectory import Trajectory, TrajectoryFile
 from ..typed import FloatArray
+from .queries import check_pose, query_problem
 
 if TYPE_CHECKING:  # the stages' modules load only when a stage runs
     from ..fuzzy.fuzzy import RuleBase
@@ -405,7 +407,7 @@ class Planner:
         return qg.graph, qg.s_id, qg.g_id, qg.roadmap_distance
 
     # ---------------------------------------------------------------- query
-    def prepare(self, goal, options: PlanOptions | None = None, _tilts: bool = False):
+    def prepare(self, goal, options: PlanOptions | None = None, _tilts: bool = False, _deadline: float = math.inf):
         """Keep what replanning to ``goal`` reuses: the goal's connections and the static
         distances to the goal (:mod:`gfuzzy.planner.prepared`; the spanner's cut is kept on
         the roadmap). A fresh :meth:`plan` prepares its goal so too, then splices its start in.
@@ -439,7 +441,7 @@ class Planner:
             wrapped = goal.copy()
             wrapped[2] = wrap_angle(wrapped[2])
             kept = prepare_unicycle(self, wrapped, opts.dt, self.robot.vmax * SPEED_SAFETY, opts.connect_k, opts.stretch,
-                                    _tilts)  # fmt: skip
+                                    _tilts, _deadline)  # fmt: skip
             return UnicyclePrepared(goal, opts, kept)
         return prepare_goal(self, goal, opts)
 
@@ -522,7 +524,8 @@ class Planner:
         t0 = _check_t0(t0)
 
         def answer(status, message="", traj=None, rd=math.inf, stats=None):
-            return PlanResult(Status(status), traj, message, rd, time.perf_counter() - t_begin, vmax, stats or PlanStats())
+            status, message = _in_time(Status(status), message, opts.time_limit, deadline)
+            return PlanResult(status, traj, message, rd, time.perf_counter() - t_begin, vmax, stats or PlanStats())
 
         problem = query_problem(self.geometry, start, goal)
         if problem:
@@ -530,15 +533,15 @@ class Planner:
         ends = start.copy(), goal.copy()  # the rows at the ends repeat them exactly
         if robot.dof == 3:
             start[2], goal[2] = wrap_angle(start[2]), wrap_angle(goal[2])
-        kept = _prepared if _prepared is not None else self.prepare(ends[1], opts)
-        graph, s_id, g_id, rd = self._query_graph(start, kept)
-        # ends that may tilt (a disc turns round wherever it stands: it never tilts)
-        if not math.isfinite(rd) and robot.unicycle and robot.shape != "disc" and _prepared is None:
-            graph, s_id, g_id, rd = self._query_graph(start, self.prepare(ends[1], opts, _tilts=True))
+        try:
+            graph, s_id, g_id, rd = self._graph(start, ends[1], opts, _prepared, deadline)
+        except OutOfTime:
+            return answer(Status.TIMEOUT, _late(opts.time_limit, "building the search graph"))
         if not math.isfinite(rd):
             linked, message = self._not_joined(start, goal, _prepared is not None, _linked, opts.connect_k)
-            if linked is not None:
-                return linked.plan(ends[0], ends[1], t0, options, hold=hold, _linked=True)
+            if linked is not None:  # in the budget left
+                left = replace(opts, time_limit=max(deadline - time.perf_counter(), 1e-9))
+                return linked.plan(ends[0], ends[1], t0, left, hold=hold, _linked=True)
             return answer(Status.NO_PATH, message, stats=PlanStats(nodes=len(graph.poses)))
         max_steps = self._max_steps(opts, rd, t0, hold_steps)
         run = self._search_rounds(graph, s_id, g_id, start, t0, opts, hold_steps, max_steps, deadline)
@@ -571,6 +574,18 @@ class Planner:
         wps = result.trajectory.waypoints.copy()
         wps[0, 1:], wps[-1, 1:] = ends
         return replace(result, trajectory=Trajectory(wps, robot.circumradius), stats=_amax_stats(robot, result.stats, result.speed_report))
+
+    def _graph(self, start, goal, opts: PlanOptions, prepared, deadline: float) -> tuple:
+        """(graph, start id, goal id, roadmap distance) of a query (:meth:`_query_graph`) from
+        ``prepared`` or a goal prepared now; a differential drive's ends that cannot turn
+        round tilt when the first graph does not join them (a disc turns round wherever it
+        stands: it never tilts). OutOfTime past ``deadline``."""
+        kept = prepared if prepared is not None else self.prepare(goal, opts, _deadline=deadline)
+        graph, s_id, g_id, rd = self._query_graph(start, kept)
+        robot = self.robot
+        if not math.isfinite(rd) and robot.unicycle and robot.shape != "disc" and prepared is None:
+            graph, s_id, g_id, rd = self._query_graph(start, self.prepare(goal, opts, _tilts=True, _deadline=deadline))
+        return graph, s_id, g_id, rd
 
     def _staged(self, result: PlanResult, query: Query, opts: PlanOptions, t_begin: float) -> PlanResult:
         """``result`` after the GA refinement and/or the speed layer (:mod:`gfuzzy.planner.stages`)."""
@@ -661,6 +676,19 @@ class _Rounds:
     problem: str = ""
 
 
+def _late(limit: float, doing: str) -> str:
+    return f"the planning budget of {limit:g} s (PlanOptions.time_limit, --time-limit) ran out {doing}"
+
+
+def _in_time(status: Status, message: str, limit: float, deadline: float) -> tuple[Status, str]:
+    """An answer found past ``deadline`` is not given: ``timeout`` instead of a late
+    ``solved`` or ``no_path`` (the search, the stages and the differential drive's lanes
+    stop at the deadline; this catches what runs on past it)."""
+    if status in (Status.SOLVED, Status.NO_PATH) and time.perf_counter() > deadline:
+        return Status.TIMEOUT, _late(limit, "before the answer was complete")
+    return status, message
+
+
 def _check_hold(hold) -> float:
     """A query's ``hold`` as a float (InputError when negative or not finite)."""
     if isinstance(hold, bool) or not isinstance(hold, (int, float, np.number)) or not (
@@ -689,49 +717,6 @@ def search_function(backend: str):
     from ..timespace.search_kernel import sipp_compiled
 
     return sipp_compiled
-
-
-def check_pose(pose, dof: int, label: str) -> FloatArray:
-    """``pose`` as a (dof,) float array; InputError naming ``label`` when it is malformed.
-
-    A pose that is not ``dof`` finite numbers is bad input, like a bad scene file; a
-    well-formed pose that collides or lies out of bounds is a query answered
-    ``invalid_query`` (see :func:`query_problem`).
-    """
-    want = "[x, y] for a disc robot" if dof == 2 else "[x, y, heading] for a box robot or a unicycle"
-    try:
-        arr = np.asarray(pose, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(f"{label}: expected {dof} finite numbers {want}, got {pose!r}") from None
-    if arr.ndim != 1 or arr.shape != (dof,):
-        got = f"{arr.size} numbers" if arr.ndim == 1 else f"shape {arr.shape}"
-        raise InputError(f"{label}: expected {dof} finite numbers {want}, got {got}")
-    if not np.all(np.isfinite(arr)):
-        raise InputError(f"{label}: expected {dof} finite numbers {want}, got {arr.tolist()}")
-    return arr.copy()
-
-
-def query_problem(geometry: StaticGeometry, start, goal) -> str:
-    """Why a query is ``invalid_query`` (start or goal malformed, out of bounds or in a
-    static obstacle), or "" when it is not. Needs no roadmap."""
-    dof = geometry.robot.dof
-    for label, pose in (("start", start), ("goal", goal)):
-        pose = np.asarray(pose, dtype=float).reshape(-1)
-        if pose.shape != (dof,) or not np.all(np.isfinite(pose)):
-            return f"{label} must be {dof} finite numbers"
-        keep = geometry.robot.clearance
-        c = geometry.clearance1(pose)  # the bounds and the obstacles less keep
-        to_obstacles = geometry.obstacle_clearance(pose) if c < 0 else math.inf
-        # the bounds measured from the corners, or (when the obstacles are clear) as
-        # clearance1 measures them: the two can differ by a rounding
-        out = max(-float(geometry.bounds_clearance(pose[None])[0]), -c if to_obstacles - keep >= 0 else 0.0)
-        if out > 0:  # by how much: a pose meant to touch the bounds can miss by a rounding
-            return f"{label} {pose.tolist()} is out of bounds (by {out:.3g} m)"
-        if c < 0:
-            if to_obstacles < 0:
-                return f"{label} {pose.tolist()} collides with a static obstacle"
-            return f"{label} {pose.tolist()} is closer than robot.clearance={keep:g} to a static obstacle"
-    return ""
 
 
 def settle_time(scene: Scene, t0: float = 0.0) -> float:

@@ -325,6 +325,40 @@ def _turn_field(field_: MoverField) -> MoverField:
     return body
 
 
+def _whole(starts, ends, sp, lo, hi) -> BoolArray:
+    """Per point of intervals ``(starts, ends, sp)``: safe all through its window ``lo..hi``
+    (one interval covering it, or an empty window)."""
+    one = np.diff(sp) == 1
+    k = np.where(one, sp[:-1], 0)
+    if not len(starts):
+        return hi < lo
+    return (one & (starts[k] <= lo) & (ends[k] >= hi)) | (hi < lo)
+
+
+def _refined(field_, poses, ptr, lo, hi, collapse, norm_iv, disc_iv, refine, compute):
+    """:func:`_safe_intervals_shared`'s answer when some same-position groups (``refine``,
+    indices among the collapsed ones) are judged point by point with the body: every
+    point's intervals, in its order."""
+    sizes = np.diff(ptr)
+    n = len(poses)
+    cgroups = np.nonzero(collapse)[0]
+    rg = cgroups[refine]  # the refined groups, as indices of all groups
+    rpts = np.concatenate([np.arange(ptr[g], ptr[g + 1]) for g in rg.tolist()])
+    gr, er, spr = compute(field_, poses[rpts], np.concatenate([[0], np.cumsum(sizes[rg])]).astype(np.int64), lo[rg], hi[rg])
+    ga, ea, spa = norm_iv
+    gb, eb, spb = disc_iv
+    start = np.empty(n, dtype=np.int64)
+    count = np.empty(n, dtype=np.int64)
+    pn = np.repeat(~collapse, sizes)
+    start[pn], count[pn] = spa[:-1], np.diff(spa)
+    cidx = np.repeat(np.cumsum(collapse) - 1, sizes)[~pn]
+    start[~pn], count[~pn] = spb[:-1][cidx] + len(ga), np.diff(spb)[cidx]
+    start[rpts], count[rpts] = spr[:-1] + len(ga) + len(gb), np.diff(spr)
+    sp = np.concatenate([[0], np.cumsum(count)]).astype(np.int64)
+    idx = np.repeat(start, count) + (np.arange(sp[-1]) - np.repeat(sp[:-1], count))
+    return np.concatenate([ga, gb, gr])[idx], np.concatenate([ea, eb, er])[idx], sp
+
+
 def _safe_intervals_shared(field_: MoverField, poses, ptr, lo, hi, same, compute):
     """Safe intervals of groups of points (``compute(field, poses, ptr, lo, hi)``, e.g.
     :meth:`MoverField.safe_intervals`), computed once for a group whose points all share one
@@ -350,6 +384,12 @@ def _safe_intervals_shared(field_: MoverField, poses, ptr, lo, hi, same, compute
     gb, eb, spb = compute(body, poses[firsts], np.arange(len(firsts) + 1, dtype=np.int64), lo[collapse], hi[collapse])
     if body is not field_:
         field_.evaluations += body.evaluations - before
+        # where the disc is not safe all through a group's window, its points are judged
+        # one by one with the body at their headings (sound as any point's judgement: a
+        # turn's step moves no point of the body farther than vmax dt)
+        refine = np.nonzero(~_whole(gb, eb, spb, np.clip(lo[collapse], 0, None), np.minimum(hi[collapse], field_.steps)))[0]
+        if len(refine):
+            return _refined(field_, poses, ptr, lo, hi, collapse, (ga, ea, spa), (gb, eb, spb), refine, compute)
     start = np.empty(n, dtype=np.int64)
     count = np.empty(n, dtype=np.int64)
     start[pn], count[pn] = spa[:-1], np.diff(spa)

@@ -129,8 +129,9 @@ class UnicycleGraph:
     roadmap_distance: float
 
 
-def _base(roadmap, geometry, stretch: float, vmax: float, step_len: float) -> _Base:
-    """The copies, lanes and turns of the roadmap, cached per (robot, stretch)."""
+def _base(roadmap, geometry, stretch: float, vmax: float, step_len: float, deadline: float = math.inf) -> _Base:
+    """The copies, lanes and turns of the roadmap, cached per (robot, stretch); OutOfTime
+    past ``deadline`` (:func:`gfuzzy.timespace.unilanes.on_time`)."""
     robot = geometry.robot
     rate = robot.turn_rate
     key = ("unicycle-base", geometry.scene.static_hash, float(geometry.keep), float(stretch), robot.shape,
@@ -138,7 +139,7 @@ def _base(roadmap, geometry, stretch: float, vmax: float, step_len: float) -> _B
     hit = roadmap._derived.get(key)
     if hit is not None:
         return hit
-    ln = lanes(roadmap, geometry, stretch)
+    ln = lanes(roadmap, geometry, stretch, deadline)
     xy, e = ln.xy, ln.edges
     h_uv = np.arctan2(xy[e[:, 1], 1] - xy[e[:, 0], 1], xy[e[:, 1], 0] - xy[e[:, 0], 0])
     h_vu = wrap_angle(h_uv + math.pi)
@@ -187,7 +188,7 @@ def _base(roadmap, geometry, stretch: float, vmax: float, step_len: float) -> _B
     # turns: a ring of headings per vertex, on a grid one turning step apart (see _Base)
     scale = vmax / rate
     n_ring = int(split_counts(np.array([2 * math.pi * scale]), step_len)[0])
-    ring_ptr, ring_v, ring_h, ring_ok, ta, tb, tdh = _rings(geometry, xy, cv, ch, n_ring)
+    ring_ptr, ring_v, ring_h, ring_ok, ta, tb, tdh = _rings(geometry, xy, cv, ch, n_ring, deadline)
     tdh = np.asarray(tdh, dtype=float)
     return_ = _Base(
         poses=np.column_stack([xy[cv], ch]) if len(cv) else np.zeros((0, 3)),
@@ -698,17 +699,18 @@ def _base_cut(base: _Base, step_len: float) -> _BaseCut:
 
 
 def prepare_goal(planner, goal: FloatArray, dt: float, vplan: float, connect_k: int = 10,
-                 stretch: float = 1.0, tilts: bool = False) -> UnicycleGoal:  # fmt: skip
+                 stretch: float = 1.0, tilts: bool = False, deadline: float = math.inf) -> UnicycleGoal:  # fmt: skip
     """The kept graph of ``goal`` (``[x, y, heading]``, heading wrapped): the base's copies,
     lanes and rings cut into steps (cached on the roadmap) with the goal joined in, and the
     static steps and metres to the goal.
 
     Numbering: the copies, the rings, the goal's nodes (the goal first), then the base's
-    interior points and the goal's pieces' ones.
+    interior points and the goal's pieces' ones. OutOfTime past ``deadline`` while the
+    base is built.
     """
     geo, robot, rm = planner.geometry, planner.robot, planner.roadmap
     step_len = vplan * dt
-    base = _base(rm, geo, stretch, robot.vmax, step_len)
+    base = _base(rm, geo, stretch, robot.vmax, step_len, deadline)
     cut = _base_cut(base, step_len)
     scale = robot.vmax / robot.turn_rate
     nn0 = len(cut.nodes)

@@ -9,6 +9,7 @@ part of its search graph, cached on the roadmap by :func:`gfuzzy.timespace.unicy
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -16,7 +17,7 @@ import numpy as np
 from ..typed import FloatArray, IntArray
 from .drive import turn_free
 
-__all__ = ["Lanes", "lanes", "LANE_NEIGHBOURS", "DISC_TRACE_STEPS"]
+__all__ = ["Lanes", "lanes", "LANE_NEIGHBOURS", "DISC_TRACE_STEPS", "OutOfTime", "on_time"]
 
 #: For an SE(2) roadmap (box robots): how many nearest vertices in the plane each vertex
 #: tries as extra lanes, besides the roadmap's own edges.
@@ -24,6 +25,16 @@ LANE_NEIGHBOURS = 10
 #: Steps of the circumscribed disc's sphere tracing along a lane at most (beyond: the body
 #: at the lane's heading is traced instead, as near walls).
 DISC_TRACE_STEPS = 64
+
+
+class OutOfTime(Exception):
+    """The planning budget ran out while the graph was being built (nothing is cached)."""
+
+
+def on_time(deadline: float) -> None:
+    """Raise :class:`OutOfTime` past ``deadline`` (``time.perf_counter()`` seconds)."""
+    if time.perf_counter() > deadline:
+        raise OutOfTime
 
 
 @dataclass
@@ -44,8 +55,9 @@ class Lanes:
     ok: np.ndarray
 
 
-def lanes(roadmap, geometry, stretch: float = 1.0) -> Lanes:
-    """The unicycle's plane roadmap of ``roadmap`` (see the module docstring), cached."""
+def lanes(roadmap, geometry, stretch: float = 1.0, deadline: float = math.inf) -> Lanes:
+    """The unicycle's plane roadmap of ``roadmap`` (see the module docstring), cached;
+    :class:`OutOfTime` past ``deadline`` (``time.perf_counter()`` seconds)."""
     robot = geometry.robot
     key = ("unicycle-lanes", geometry.scene.static_hash, float(geometry.keep), float(stretch), robot.shape, robot.size)
     hit = roadmap._derived.get(key)
@@ -57,7 +69,7 @@ def lanes(roadmap, geometry, stretch: float = 1.0) -> Lanes:
         edges = roadmap.edges[keep].astype(np.int64).reshape(-1, 2)
         out = Lanes(xy, edges, np.ones((len(edges), 2), dtype=bool))
     else:
-        out = _box_lanes(roadmap, geometry, xy)
+        out = _box_lanes(roadmap, geometry, xy, deadline)
         if stretch > 1.0 and len(out.edges):  # as the disc's: a spanner of the lanes
             from ..roadmap.roadmap import Roadmap
 
@@ -69,7 +81,7 @@ def lanes(roadmap, geometry, stretch: float = 1.0) -> Lanes:
     return out
 
 
-def _box_lanes(roadmap, geometry, xy: FloatArray) -> Lanes:
+def _box_lanes(roadmap, geometry, xy: FloatArray, deadline: float = math.inf) -> Lanes:
     cand = [np.sort(roadmap.edges.astype(np.int64).reshape(-1, 2), axis=1)]
     if len(xy) > 1:
         k = min(LANE_NEIGHBOURS, len(xy) - 1)
@@ -85,6 +97,8 @@ def _box_lanes(roadmap, geometry, xy: FloatArray) -> Lanes:
     # shared by every lane of a vertex); else the body at the lane's heading decides
     swept = np.array([geometry.sweep_bound(float(x), float(y)) for x, y in xy])
     for i, (u, v) in enumerate(edges.tolist()):
+        if i % 64 == 0:
+            on_time(deadline)
         (ux, uy), (vx, vy) = xy[u], xy[v]
         if swept[u] > 0 and swept[v] > 0 and geometry.sweep_free([ux, uy], [vx, vy], swept[u], swept[v], DISC_TRACE_STEPS):
             ok[i] = True
@@ -131,9 +145,10 @@ def _brackets(h: float, r0: int, n_ring: int, step_h: float) -> list:
     return [(r0 + i, below), (r0 + (i + 1) % n_ring, above)]
 
 
-def _rings(geometry, xy: FloatArray, cv: IntArray, ch: FloatArray, n_ring: int):
+def _rings(geometry, xy: FloatArray, cv: IntArray, ch: FloatArray, n_ring: int, deadline: float = math.inf):
     """The turning rings of the vertices with copies (see :class:`_Base`) and the turns
-    joining them and the copies (ring points as ``-(1 + i)``).
+    joining them and the copies (ring points as ``-(1 + i)``); :class:`OutOfTime` past
+    ``deadline``.
 
     Returns
     -------
@@ -154,6 +169,7 @@ def _rings(geometry, xy: FloatArray, cv: IntArray, ch: FloatArray, n_ring: int):
     ta, tb, tdh = [], [], []
     disc = robot.shape == "disc"
     for v in np.nonzero(has)[0].tolist():
+        on_time(deadline)
         x, y = (float(c) for c in xy[v])
         r0 = int(ring_ptr[v])
         # the circumscribed disc clear: every heading and arc is (one query, not two per point)

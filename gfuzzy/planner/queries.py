@@ -1,0 +1,58 @@
+"""A query's ends checked before any roadmap or search: malformed poses are bad input
+(:func:`check_pose`), poses out of bounds or in an obstacle make an ``invalid_query``
+(:func:`query_problem`). Both are re-exported by :mod:`gfuzzy.planner.planner`."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..collision.geometry import StaticGeometry
+from ..errors import InputError
+from ..typed import FloatArray
+
+__all__ = ["check_pose", "query_problem"]
+
+
+def check_pose(pose, dof: int, label: str) -> FloatArray:
+    """``pose`` as a (dof,) float array; InputError naming ``label`` when it is malformed.
+
+    A pose that is not ``dof`` finite numbers is bad input, like a bad scene file; a
+    well-formed pose that collides or lies out of bounds is a query answered
+    ``invalid_query`` (see :func:`query_problem`).
+    """
+    want = "[x, y] for a disc robot" if dof == 2 else "[x, y, heading] for a box robot or a unicycle"
+    try:
+        arr = np.asarray(pose, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{label}: expected {dof} finite numbers {want}, got {pose!r}") from None
+    if arr.ndim != 1 or arr.shape != (dof,):
+        got = f"{arr.size} numbers" if arr.ndim == 1 else f"shape {arr.shape}"
+        raise InputError(f"{label}: expected {dof} finite numbers {want}, got {got}")
+    if not np.all(np.isfinite(arr)):
+        raise InputError(f"{label}: expected {dof} finite numbers {want}, got {arr.tolist()}")
+    return arr.copy()
+
+
+def query_problem(geometry: StaticGeometry, start, goal) -> str:
+    """Why a query is ``invalid_query`` (start or goal malformed, out of bounds or in a
+    static obstacle), or "" when it is not. Needs no roadmap."""
+    dof = geometry.robot.dof
+    for label, pose in (("start", start), ("goal", goal)):
+        pose = np.asarray(pose, dtype=float).reshape(-1)
+        if pose.shape != (dof,) or not np.all(np.isfinite(pose)):
+            return f"{label} must be {dof} finite numbers"
+        keep = geometry.robot.clearance
+        c = geometry.clearance1(pose)  # the bounds and the obstacles less keep
+        to_obstacles = geometry.obstacle_clearance(pose) if c < 0 else math.inf
+        # the bounds measured from the corners, or (when the obstacles are clear) as
+        # clearance1 measures them: the two can differ by a rounding
+        out = max(-float(geometry.bounds_clearance(pose[None])[0]), -c if to_obstacles - keep >= 0 else 0.0)
+        if out > 0:  # by how much: a pose meant to touch the bounds can miss by a rounding
+            return f"{label} {pose.tolist()} is out of bounds (by {out:.3g} m)"
+        if c < 0:
+            if to_obstacles < 0:
+                return f"{label} {pose.tolist()} collides with a static obstacle"
+            return f"{label} {pose.tolist()} is closer than robot.clearance={keep:g} to a static obstacle"
+    return ""
