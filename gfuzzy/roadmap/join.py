@@ -1,0 +1,373 @@
+"""Join the components of a box or footprint robot's roadmap (SE(2)).
+
+A disc robot's roadmap is repaired through its exactly computed free space
+(:func:`gfuzzy.roadmap.freespace.repair`); a rigid robot's free space is three-dimensional and
+is not computed. PRM and the passage sampler can leave its roadmap in pieces although the
+robot fits between them (a door with a few centimetres to spare, a bent corridor it passes
+only turned). :func:`join_components` spends a bounded number of collision checks joining
+them: first the closest vertex pairs of two components, directly and by a turn in place and a
+translation (the motions a rigid robot fits through a door with); then a bidirectional RRT
+(RRT-Connect, Kuffner and LaValle 2000) between a component and the rest of the roadmap,
+whose every step is a straight motion certified by
+:meth:`gfuzzy.collision.geometry.StaticGeometry.motion_free`, as the roadmap's other edges.
+The poses of a found path become vertices, its motions edges. A sealed room stays two
+components: the join gives up when its budget (``CHECKS_PER_VERTEX`` checks per roadmap
+vertex) is spent. Seeded: the same roadmap and seed give the same join.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..collision.geometry import StaticGeometry, metric_distance
+from ..typed import FloatArray, IntArray
+
+__all__ = ["Join", "join_components", "count_components"]
+
+log = logging.getLogger(__name__)
+
+#: Collision checks (pose validity and certified motions) the join may spend per roadmap vertex.
+CHECKS_PER_VERTEX = 10
+#: Closest cross-component vertex pairs tried directly, per component, before the RRT.
+CLOSEST_PAIRS = 12
+#: RRT step, in robot spans (twice the circumradius), in the contract's metric.
+STEP = 0.5
+#: Share of RRT samples drawn in the box around the two trees' closest vertices.
+FOCUS = 0.6
+
+
+@dataclass
+class Join:
+    """What :func:`join_components` did.
+
+    Attributes
+    ----------
+    vertices : (V, 3) float
+    edges : (E, 2) int
+        The roadmap's, then the added ones (``edges[:, 0] < edges[:, 1]``).
+    before, after : int
+        Connected components before and after.
+    added_vertices, added_edges : int
+    checks, budget : int
+        Collision checks spent, and allowed.
+    """
+
+    vertices: FloatArray
+    edges: IntArray
+    before: int
+    after: int
+    added_vertices: int = 0
+    added_edges: int = 0
+    checks: int = 0
+    budget: int = 0
+
+    def to_dict(self) -> dict:
+        """The report kept in a roadmap file's ``info.join`` (with ``seconds``)."""
+        return {
+            "components_before": self.before,
+            "components_after": self.after,
+            "added_vertices": self.added_vertices,
+            "added_edges": self.added_edges,
+            "checks": self.checks,
+            "budget": self.budget,
+        }
+
+
+def _labels(n: int, edges) -> np.ndarray:
+    """A component label per vertex (the smallest vertex index of its component)."""
+    parent = list(range(n))
+
+    def find(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for a, b in np.asarray(edges, dtype=np.int64).reshape(-1, 2).tolist():
+        ra, rb = find(a), find(b)
+        if ra != rb:
+            parent[max(ra, rb)] = min(ra, rb)
+    return np.array([find(i) for i in range(n)], dtype=np.int64)
+
+
+def count_components(n: int, edges) -> int:
+    """Connected components of a graph of ``n`` vertices."""
+    return int(len(np.unique(_labels(n, edges)))) if n else 0
+
+
+def _wrap(a):
+    return (a + math.pi) % (2 * math.pi) - math.pi
+
+
+class _Search:
+    """The join's state: the growing vertex list, new edges, the checks spent."""
+
+    def __init__(self, geometry: StaticGeometry, vertices: FloatArray, edges: IntArray, budget: int, seed: int):
+        self.geometry = geometry
+        self.r = geometry.scene.robot.circumradius
+        self.step = STEP * 2.0 * self.r
+        self.verts = [np.asarray(v, dtype=float) for v in vertices]
+        self.edges: list = []
+        self.labels = _labels(len(vertices), edges)
+        self.budget = budget
+        self.checks = 0
+        self.rng = np.random.default_rng([int(seed), 0x6A6F696E])  # "join": apart from PRM's draws
+        self.bounds = geometry.scene.bounds
+
+    @property
+    def spent(self) -> bool:
+        return self.checks >= self.budget
+
+    def valid(self, q) -> bool:
+        self.checks += 1
+        return bool(self.geometry.is_valid(q))
+
+    def free(self, a, b) -> bool:
+        self.checks += 1
+        return bool(self.geometry.motion_free(a, b))
+
+    def add_path(self, poses: list, ia: int, ib: int) -> None:
+        """Add the inner ``poses`` of a certified path from vertex ``ia`` to vertex ``ib``."""
+        ids = [ia]
+        for p in poses:
+            self.verts.append(np.asarray(p, dtype=float))
+            ids.append(len(self.verts) - 1)
+        ids.append(ib)
+        for u, w in zip(ids[:-1], ids[1:], strict=True):
+            self.edges.append((min(u, w), max(u, w)))
+        la, lb = self.labels[ia], self.labels[ib]
+        keep = min(la, lb)
+        self.labels[self.labels == max(la, lb)] = keep
+        self.labels = np.concatenate([self.labels, np.full(len(poses), keep, dtype=np.int64)])
+
+    # ----------------------------------------------------------------- direct joins
+
+    def direct(self, a: int, b: int) -> bool:
+        """Join vertices ``a`` and ``b``: straight, or turning in place at either end and
+        translating at the other's heading; True when joined (the path added)."""
+        pa, pb = self.verts[a], self.verts[b]
+        if self.free(pa, pb):
+            self.add_path([], a, b)
+            return True
+        for mid in (np.array([pa[0], pa[1], pb[2]]), np.array([pb[0], pb[1], pa[2]])):
+            if self.spent:
+                return False
+            if self.valid(mid) and self.free(pa, mid) and self.free(mid, pb):
+                self.add_path([mid], a, b)
+                return True
+        return False
+
+    def closest_pairs(self, comp: int, limit: int) -> list:
+        """The ``limit`` closest (metric) vertex pairs between component ``comp`` and the rest."""
+        V = np.array(self.verts)
+        inside = np.nonzero(self.labels == comp)[0]
+        outside = np.nonzero(self.labels != comp)[0]
+        if not len(inside) or not len(outside):
+            return []
+        d = metric_distance(V[inside][:, None, :], V[outside][None, :, :], self.r)
+        order = np.argsort(d, axis=None, kind="stable")[:limit]
+        return [(int(inside[i // len(outside)]), int(outside[i % len(outside)])) for i in order]
+
+    # ----------------------------------------------------------------- RRT-Connect
+
+    def _steer(self, a: FloatArray, q: FloatArray) -> FloatArray:
+        d = float(metric_distance(a, q, self.r))
+        if d <= self.step:
+            return q.copy()
+        t = self.step / d
+        delta = q - a
+        delta[2] = _wrap(delta[2])
+        out = a + t * delta
+        out[2] = _wrap(out[2])
+        return out
+
+    def _sample(self, focus: tuple) -> FloatArray:
+        xmin, ymin, xmax, ymax = self.bounds
+        if self.rng.random() < FOCUS:
+            lo, hi = focus
+            x, y = self.rng.uniform(lo, hi)
+        else:
+            x, y = self.rng.uniform(xmin, xmax), self.rng.uniform(ymin, ymax)
+        return np.array([x, y, self.rng.uniform(-math.pi, math.pi)])
+
+    def rrt(self, comp: int, share: int) -> bool:
+        """Grow a tree from component ``comp``'s vertices and one from the rest of the
+        roadmap towards each other (RRT-Connect) for at most ``share`` checks."""
+        stop = min(self.budget, self.checks + share)
+        V = np.array(self.verts)
+        trees = [_Tree(V, self.labels == comp), _Tree(V, self.labels != comp)]
+        pa, pb = self.closest_pairs(comp, 1)[0]
+        lo = np.minimum(V[pa, :2], V[pb, :2]) - 2 * self.r
+        hi = np.maximum(V[pa, :2], V[pb, :2]) + 2 * self.r
+        xmin, ymin, xmax, ymax = self.bounds
+        focus = (np.maximum(lo, [xmin, ymin]), np.minimum(hi, [xmax, ymax]))
+        while self.checks < stop:
+            grow, other = trees
+            q = self._sample(focus)
+            new = self._extend(grow, q)
+            if new is not None:
+                reached = self._connect(other, grow.poses[new], stop)
+                if reached is not None:
+                    self._add_trees(grow, new, other, reached)
+                    return True
+            trees.reverse()
+        return False
+
+    def _extend(self, tree: _Tree, q: FloatArray) -> int | None:
+        near = tree.nearest(q, self.r)
+        new = self._steer(tree.poses[near], q)
+        if self.valid(new) and self.free(tree.poses[near], new):
+            return tree.add(new, near)
+        return None
+
+    def _connect(self, tree: _Tree, q: FloatArray, stop: int) -> int | None:
+        """Extend ``tree`` towards ``q`` until it reaches it (the node's index) or is blocked."""
+        near = tree.nearest(q, self.r)
+        while self.checks < stop:
+            new = self._steer(tree.poses[near], q)
+            if not (self.valid(new) and self.free(tree.poses[near], new)):
+                return None
+            near = tree.add(new, near)
+            if np.array_equal(new, q):
+                return near
+        return None
+
+    def _add_trees(self, grow: _Tree, new: int, other: _Tree, reached: int) -> None:
+        """Add the path from ``grow``'s root through ``new`` = ``reached`` to ``other``'s root."""
+        first = grow.branch(new)  # root (a roadmap vertex) ... new
+        second = other.branch(reached)[::-1]  # reached (the same pose as new) ... root
+        ia, ib = grow.vertex[first[0]], other.vertex[second[-1]]
+        poses = [grow.poses[i] for i in first[1:]] + [other.poses[i] for i in second[1:-1]]
+        self.add_path(poses, ia, ib)
+
+
+class _Tree:
+    """An RRT rooted at many roadmap vertices (a component, or the rest of the roadmap)."""
+
+    def __init__(self, V: FloatArray, mask: np.ndarray):
+        idx = np.nonzero(mask)[0]
+        self.poses = [V[i] for i in idx]
+        self.parent = [-1] * len(idx)
+        self.vertex = {k: int(i) for k, i in enumerate(idx)}  # node -> roadmap vertex (roots)
+        self.arr = np.array(self.poses).reshape(-1, 3)
+
+    def nearest(self, q: FloatArray, r: float) -> int:
+        return int(np.argmin(metric_distance(self.arr, q[None, :], r)))
+
+    def add(self, q: FloatArray, parent: int) -> int:
+        self.poses.append(q)
+        self.parent.append(parent)
+        self.arr = np.vstack([self.arr, q[None, :]])
+        return len(self.poses) - 1
+
+    def branch(self, node: int) -> list:
+        """Nodes from the root down to ``node``."""
+        out = [node]
+        while self.parent[out[-1]] >= 0:
+            out.append(self.parent[out[-1]])
+        return out[::-1]
+
+
+def join_components(
+    geometry: StaticGeometry, vertices: FloatArray, edges: IntArray, seed: int, budget: int | None = None
+) -> Join:
+    """Join the components of an SE(2) roadmap within a budget of collision checks.
+
+    Components are taken largest first after the largest; each is joined to the rest of the
+    roadmap by its ``CLOSEST_PAIRS`` closest vertex pairs (straight, or a turn in place and a
+    translation), then by RRT-Connect for an equal share of what is left of the budget.
+
+    Parameters
+    ----------
+    geometry : StaticGeometry
+        Of the box or footprint robot's scene.
+    vertices : (V, 3) float
+    edges : (E, 2) int
+    seed : int
+        The roadmap's seed (the RRT's draws).
+    budget : int, optional
+        Collision checks to spend at most (default ``CHECKS_PER_VERTEX`` per vertex).
+
+    Returns
+    -------
+    Join
+    """
+    vertices = np.asarray(vertices, dtype=float).reshape(-1, 3)
+    edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    budget = CHECKS_PER_VERTEX * len(vertices) if budget is None else int(budget)
+    s = _Search(geometry, vertices, edges, budget, seed)
+    before = len(np.unique(s.labels))
+    comps = _by_size(s.labels)[1:]
+    for k, comp in enumerate(comps):
+        if s.spent:
+            break
+        comp = int(s.labels[comp])  # its label now (an earlier join may have relabelled it)
+        if len(np.unique(s.labels)) == 1:
+            break
+        if not _join_one(s, comp, len(comps) - k):
+            log.debug("join: component of vertex %d not joined (%d of %d checks)", comp, s.checks, budget)
+    added = np.array(s.edges, dtype=np.int64).reshape(-1, 2)
+    out_edges = np.vstack([edges, added])  # joined ends lay in two components: no duplicates
+    return Join(
+        np.array(s.verts, dtype=float).reshape(-1, 3),
+        out_edges,
+        before,
+        len(np.unique(s.labels)),
+        len(s.verts) - len(vertices),
+        len(out_edges) - len(edges),
+        s.checks,
+        budget,
+    )
+
+
+def _by_size(labels: np.ndarray) -> list:
+    """A vertex of each component, largest component first (ties: smallest label)."""
+    ids, counts = np.unique(labels, return_counts=True)
+    order = np.lexsort((ids, -counts))
+    return [int(ids[i]) for i in order]
+
+
+def _join_one(s: _Search, comp: int, left: int) -> bool:
+    """Join component ``comp`` to the rest: closest pairs, then RRT-Connect with a ``1/left``
+    share of the remaining budget."""
+    for a, b in s.closest_pairs(comp, CLOSEST_PAIRS):
+        if s.spent:
+            return False
+        if s.labels[a] != s.labels[b] and s.direct(a, b):
+            return True
+    share = (s.budget - s.checks) // max(left, 1)
+    return share > 0 and s.rrt(comp, share)
+
+
+def repair_roadmap(geometry: StaticGeometry, fs, vertices: FloatArray, edges: IntArray, k: int):
+    """(vertices, edges, the repair's report) after :func:`gfuzzy.roadmap.freespace.repair`, or
+    as given with an empty report when ``fs`` is None (not a disc, or no repair)."""
+    if fs is None:
+        return vertices, edges, {}
+    from .freespace import repair
+
+    t = time.perf_counter()
+    rep = repair(geometry, fs, vertices, edges, k)
+    if rep.added_vertices:
+        log.info("free-space repair: %d components joined, %d vertices added", rep.joined, rep.added_vertices)
+    return rep.vertices, rep.edges, {**rep.to_dict(), "seconds": round(time.perf_counter() - t, 4)}
+
+
+def join_roadmap(geometry: StaticGeometry, vertices: FloatArray, edges: IntArray, options):
+    """(vertices, edges, the join's report) after :func:`join_components` for a box or
+    footprint robot's roadmap in pieces with ``options.join``; else as given with an empty
+    report (nothing written)."""
+    if not options.join or vertices.shape[1] != 3 or count_components(len(vertices), edges) < 2:
+        return vertices, edges, {}
+    t = time.perf_counter()
+    j = join_components(geometry, vertices, edges, options.seed)
+    log.info(
+        "component join: %d -> %d components, %d vertices and %d edges added, %d of %d checks",
+        j.before, j.after, j.added_vertices, j.added_edges, j.checks, j.budget,
+    )
+    return j.vertices, j.edges, {**j.to_dict(), "seconds": round(time.perf_counter() - t, 4)}
