@@ -26,6 +26,8 @@ import numpy as np
 
 from ..collision.geometry import StaticGeometry, metric_distance
 from ..typed import FloatArray, IntArray
+from .freespace import blocked_points
+from .passage import centre_bridge, lateral_middle
 
 __all__ = ["Join", "join_components", "count_components"]
 
@@ -118,6 +120,8 @@ class _Search:
         self.checks = 0
         self.rng = np.random.default_rng([int(seed), 0x6A6F696E])  # "join": apart from PRM's draws
         self.bounds = geometry.scene.bounds
+        self.blocked = blocked_points(geometry.scene)
+        self.y_mid = lateral_middle(geometry.scene.robot)
 
     @property
     def spent(self) -> bool:
@@ -186,14 +190,33 @@ class _Search:
         out[2] = _wrap(out[2])
         return out
 
-    def _sample(self, focus: tuple) -> FloatArray:
+    def _sample(self, focus: tuple) -> tuple[FloatArray, bool]:
+        """A pose to grow towards, and whether it is a passage's (a bridge sample)."""
         xmin, ymin, xmax, ymax = self.bounds
         if self.rng.random() < FOCUS:
             lo, hi = focus
+            if self.rng.random() < 0.5:
+                q = self._bridge(lo, hi)
+                if q is not None:
+                    return q, True
             x, y = self.rng.uniform(lo, hi)
         else:
             x, y = self.rng.uniform(xmin, xmax), self.rng.uniform(ymin, ymax)
-        return np.array([x, y, self.rng.uniform(-math.pi, math.pi)])
+        return np.array([x, y, self.rng.uniform(-math.pi, math.pi)]), False
+
+    def _bridge(self, lo: FloatArray, hi: FloatArray) -> FloatArray | None:
+        """A pose in a passage between ``lo`` and ``hi``: a bridge test (two blocked points,
+        the middle free) centred across the passage (:func:`gfuzzy.roadmap.passage.centre_bridge`)."""
+        a = self.rng.uniform(lo, hi, (16, 2))
+        b = a + self.rng.normal(0.0, self.r, (16, 2))
+        ok = self.blocked(a) & self.blocked(b)
+        ok[ok] = ~self.blocked(0.5 * (a[ok] + b[ok]))
+        if not ok.any():
+            return None
+        i = int(np.argmax(ok))
+        d = b[i] - a[i]
+        heading = math.atan2(d[1], d[0]) + 0.5 * math.pi + (math.pi if self.rng.random() < 0.5 else 0.0)
+        return centre_bridge(self.blocked, 0.5 * (a[i] + b[i]), _wrap(heading), 2.0 * self.r, self.y_mid)
 
     def rrt(self, comp: int, share: int) -> bool:
         """Grow a tree from component ``comp``'s vertices and one from the rest of the
@@ -208,7 +231,14 @@ class _Search:
         focus = (np.maximum(lo, [xmin, ymin]), np.minimum(hi, [xmax, ymax]))
         while self.checks < stop:
             grow, other = trees
-            q = self._sample(focus)
+            q, passage = self._sample(focus)
+            if passage and self.valid(q):  # in a door: both trees straight to it
+                a = self._reach(grow, q)
+                b = self._reach(other, q) if a is not None else None
+                if b is not None:
+                    self._add_trees(grow, a, other, b)
+                    return True
+                continue
             new = self._extend(grow, q)
             if new is not None:
                 reached = self._connect(other, grow.poses[new], stop)
@@ -223,6 +253,30 @@ class _Search:
         new = self._steer(tree.poses[near], q)
         if self.valid(new) and self.free(tree.poses[near], new):
             return tree.add(new, near)
+        return None
+
+    def _reach(self, tree: _Tree, q: FloatArray) -> int | None:
+        """Join a passage pose ``q`` to ``tree`` along the passage: from one of its 3 nearest
+        nodes (in the plane), a turn in place to ``q``'s heading, a translation to the pose a
+        span before ``q`` on its axis (on the node's side), a translation to ``q``; the node
+        of ``q`` added, or None."""
+        d = np.array([math.cos(q[2]), math.sin(q[2]), 0.0]) * 2.0 * self.r
+        for near in tree.nearest_xy(q, 3):
+            p = tree.poses[near]
+            pre = q - d if float(np.dot(p[:2] - q[:2], d[:2])) < 0 else q + d
+            turned = np.array([p[0], p[1], q[2]])
+            legs = [turned, pre, q]
+            at, ok = p, True
+            for leg in legs:
+                if self.spent or not (self.valid(leg) and self.free(at, leg)):
+                    ok = False
+                    break
+                at = leg
+            if ok:
+                node = near
+                for leg in legs:
+                    node = tree.add(leg, node)
+                return node
         return None
 
     def _connect(self, tree: _Tree, q: FloatArray, stop: int) -> int | None:
@@ -258,6 +312,10 @@ class _Tree:
 
     def nearest(self, q: FloatArray, r: float) -> int:
         return int(np.argmin(metric_distance(self.arr, q[None, :], r)))
+
+    def nearest_xy(self, q: FloatArray, k: int) -> list:
+        d = np.hypot(self.arr[:, 0] - q[0], self.arr[:, 1] - q[1])
+        return [int(i) for i in np.argsort(d, kind="stable")[:k]]
 
     def add(self, q: FloatArray, parent: int) -> int:
         self.poses.append(q)
