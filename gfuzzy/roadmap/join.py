@@ -41,6 +41,9 @@ CLOSEST_PAIRS = 12
 STEP = 0.5
 #: Share of RRT samples drawn in the box around the two trees' closest vertices.
 FOCUS = 0.6
+#: Doors (gaps between obstacle corners less than a robot span apart) tried per component,
+#: nearest the two pieces first, before the RRT.
+DOORS = 8
 
 
 @dataclass
@@ -121,17 +124,27 @@ class _Search:
         self.rng = np.random.default_rng([int(seed), 0x6A6F696E])  # "join": apart from PRM's draws
         self.bounds = geometry.scene.bounds
         self.blocked = blocked_points(geometry.scene)
-        self.y_mid = lateral_middle(geometry.scene.robot)
+        robot = geometry.scene.robot
+        self.y_mid = lateral_middle(robot)
+        fp = np.asarray(robot.footprint, dtype=float) if robot.shape == "footprint" else np.zeros((1, 2))
+        self.body_mid = 0.5 * (fp.min(axis=0) + fp.max(axis=0))
+        self.door_list: FloatArray | None = None  # computed when first needed
 
     @property
     def spent(self) -> bool:
         return self.checks >= self.budget
 
     def valid(self, q) -> bool:
+        """Pose validity, one check of the budget (False, unchecked, once it is spent)."""
+        if self.spent:
+            return False
         self.checks += 1
         return bool(self.geometry.is_valid(q))
 
     def free(self, a, b) -> bool:
+        """A certified straight motion, one check of the budget (False once it is spent)."""
+        if self.spent:
+            return False
         self.checks += 1
         return bool(self.geometry.motion_free(a, b))
 
@@ -217,6 +230,39 @@ class _Search:
         d = b[i] - a[i]
         heading = math.atan2(d[1], d[0]) + 0.5 * math.pi + (math.pi if self.rng.random() < 0.5 else 0.0)
         return centre_bridge(self.blocked, 0.5 * (a[i] + b[i]), _wrap(heading), 2.0 * self.r, self.y_mid)
+
+    def doors(self, comp: int, limit: int) -> bool:
+        """Join component ``comp`` to the rest through one of the ``limit`` doors nearest
+        both (:func:`_doors`): the pose centred in the door, reached from each side by a
+        turn in place and translations along the door's axis (:meth:`_reach`)."""
+        if self.door_list is None:
+            self.door_list = _doors(self.geometry.scene, self.blocked, 2.0 * self.r)
+        if not len(self.door_list):
+            return False
+        V = np.array(self.verts)
+        trees = _Tree(V, self.labels == comp), _Tree(V, self.labels != comp)
+        mids = self.door_list[:, :2]
+        score = sum(np.min(np.hypot(*(mids[:, None, :] - t.arr[None, :, :2]).transpose(2, 0, 1)), axis=1) for t in trees)
+        for i in np.argsort(score, kind="stable")[:limit].tolist():
+            m, heading = self.door_list[i, :2], float(self.door_list[i, 2])
+            for h in (heading, heading + math.pi):
+                q = self._in_door(m, _wrap(h))
+                if self.spent:
+                    return False
+                if q is None or not self.valid(q):
+                    continue
+                a = self._reach(trees[0], q)
+                b = self._reach(trees[1], q) if a is not None else None
+                if b is not None:
+                    self._add_trees(trees[0], a, trees[1], b)
+                    return True
+        return False
+
+    def _in_door(self, m: FloatArray, heading: float) -> FloatArray:
+        """The pose at ``heading`` whose body's middle (of its extents) is the point ``m``."""
+        c, s = math.cos(heading), math.sin(heading)
+        bx, by = self.body_mid
+        return np.array([m[0] - c * bx + s * by, m[1] - s * bx - c * by, heading])
 
     def rrt(self, comp: int, share: int) -> bool:
         """Grow a tree from component ``comp``'s vertices and one from the rest of the
@@ -398,6 +444,8 @@ def _join_one(s: _Search, comp: int, left: int) -> bool:
             return False
         if s.labels[a] != s.labels[b] and s.direct(a, b):
             return True
+    if s.doors(comp, DOORS):
+        return True
     share = (s.budget - s.checks) // max(left, 1)
     return share > 0 and s.rrt(comp, share)
 
@@ -429,3 +477,40 @@ def join_roadmap(geometry: StaticGeometry, vertices: FloatArray, edges: IntArray
         j.before, j.after, j.added_vertices, j.added_edges, j.checks, j.budget,
     )
     return j.vertices, j.edges, {**j.to_dict(), "seconds": round(time.perf_counter() - t, 4)}
+
+
+def _corners(scene) -> FloatArray:
+    """The corners of the scene's polygon and box obstacles (discs and maps have none)."""
+    pts = []
+    for ob in scene.obstacles:
+        if hasattr(ob, "vertices"):
+            pts += [tuple(p) for p in ob.vertices()]
+        elif hasattr(ob, "points"):
+            pts += [tuple(p) for p in ob.points]
+            for hole in getattr(ob, "holes", ()):
+                pts += [tuple(p) for p in hole]
+    return np.array(pts, dtype=float).reshape(-1, 2)
+
+
+def _doors(scene, blocked, span: float) -> FloatArray:
+    """Rows ``[x, y, heading]``: the free midpoints of obstacle corners (or a corner and
+    its nearest point on the bounds) less than ``span`` apart, the heading across the gap."""
+    from scipy.spatial import cKDTree
+
+    c = _corners(scene)
+    if not len(c):
+        return np.zeros((0, 3))
+    xmin, ymin, xmax, ymax = scene.bounds
+    wall = np.concatenate([c, c, c, c])  # each corner's foot on the four sides of the bounds
+    n = len(c)
+    wall[:n, 0], wall[n : 2 * n, 0], wall[2 * n : 3 * n, 1], wall[3 * n :, 1] = xmin, xmax, ymin, ymax
+    pairs = np.array(sorted(cKDTree(c).query_pairs(span)), dtype=np.int64).reshape(-1, 2)
+    a = np.concatenate([c[pairs[:, 0]], np.tile(c, (4, 1))])
+    b = np.concatenate([c[pairs[:, 1]], wall])
+    gap = np.hypot(*(b - a).T)
+    keep = (gap > 1e-9) & (gap < span)
+    a, b = a[keep], b[keep]
+    mid = 0.5 * (a + b)
+    free = ~blocked(mid)
+    d = (b - a)[free]
+    return np.column_stack([mid[free], np.arctan2(d[:, 1], d[:, 0]) + 0.5 * math.pi])
