@@ -171,9 +171,9 @@ class _Search:
         if self.free(pa, pb):
             self.add_path([], a, b)
             return True
+        if pa[2] == pb[2] or (pa[0] == pb[0] and pa[1] == pb[1]):
+            return False  # a translation or a turn: no other way with one turn
         for mid in (np.array([pa[0], pa[1], pb[2]]), np.array([pb[0], pb[1], pa[2]])):
-            if self.spent:
-                return False
             if self.valid(mid) and self.free(pa, mid) and self.free(mid, pb):
                 self.add_path([mid], a, b)
                 return True
@@ -181,14 +181,20 @@ class _Search:
 
     def closest_pairs(self, comp: int, limit: int) -> list:
         """The ``limit`` closest (metric) vertex pairs between component ``comp`` and the rest."""
+        from scipy.spatial import cKDTree
+
         V = np.array(self.verts)
         inside = np.nonzero(self.labels == comp)[0]
         outside = np.nonzero(self.labels != comp)[0]
         if not len(inside) or not len(outside):
             return []
-        d = metric_distance(V[inside][:, None, :], V[outside][None, :, :], self.r)
-        order = np.argsort(d, axis=None, kind="stable")[:limit]
-        return [(int(inside[i // len(outside)]), int(outside[i % len(outside)])) for i in order]
+        k = min(limit, len(outside))  # each inside vertex's k nearest outside in the plane
+        _, near = cKDTree(V[outside, :2]).query(V[inside, :2], k=k)
+        near = outside[np.asarray(near).reshape(len(inside), k)]
+        a = np.repeat(inside, k)
+        b = near.reshape(-1)
+        order = np.argsort(metric_distance(V[a], V[b], self.r), kind="stable")[:limit]
+        return [(int(a[i]), int(b[i])) for i in order]
 
     # ----------------------------------------------------------------- RRT-Connect
 
@@ -241,8 +247,10 @@ class _Search:
             return False
         V = np.array(self.verts)
         trees = _Tree(V, self.labels == comp), _Tree(V, self.labels != comp)
+        from scipy.spatial import cKDTree
+
         mids = self.door_list[:, :2]
-        score = sum(np.min(np.hypot(*(mids[:, None, :] - t.arr[None, :, :2]).transpose(2, 0, 1)), axis=1) for t in trees)
+        score = sum(cKDTree(t.arr[:, :2]).query(mids)[0] for t in trees)
         for i in np.argsort(score, kind="stable")[:limit].tolist():
             m, heading = self.door_list[i, :2], float(self.door_list[i, 2])
             for h in (heading, heading + math.pi):
@@ -311,10 +319,10 @@ class _Search:
             p = tree.poses[near]
             pre = q - d if float(np.dot(p[:2] - q[:2], d[:2])) < 0 else q + d
             turned = np.array([p[0], p[1], q[2]])
-            legs = [turned, pre, q]
+            legs = [leg for leg in (turned, pre, q) if not np.array_equal(leg, p)]
             at, ok = p, True
             for leg in legs:
-                if self.spent or not (self.valid(leg) and self.free(at, leg)):
+                if not (self.valid(leg) and self.free(at, leg)):
                     ok = False
                     break
                 at = leg
@@ -354,20 +362,28 @@ class _Tree:
         self.poses = [V[i] for i in idx]
         self.parent = [-1] * len(idx)
         self.vertex = {k: int(i) for k, i in enumerate(idx)}  # node -> roadmap vertex (roots)
-        self.arr = np.array(self.poses).reshape(-1, 3)
+        self._arr = np.array(self.poses).reshape(-1, 3)  # room to grow: rows beyond the nodes unused
+
+    @property
+    def arr(self) -> FloatArray:
+        return self._arr[: len(self.poses)]
 
     def nearest(self, q: FloatArray, r: float) -> int:
         return int(np.argmin(metric_distance(self.arr, q[None, :], r)))
 
     def nearest_xy(self, q: FloatArray, k: int) -> list:
-        d = np.hypot(self.arr[:, 0] - q[0], self.arr[:, 1] - q[1])
+        arr = self.arr
+        d = np.hypot(arr[:, 0] - q[0], arr[:, 1] - q[1])
         return [int(i) for i in np.argsort(d, kind="stable")[:k]]
 
     def add(self, q: FloatArray, parent: int) -> int:
+        n = len(self.poses)
+        if n == len(self._arr):
+            self._arr = np.concatenate([self._arr, np.empty((max(n, 16), 3))])
+        self._arr[n] = q
         self.poses.append(q)
         self.parent.append(parent)
-        self.arr = np.vstack([self.arr, q[None, :]])
-        return len(self.poses) - 1
+        return n
 
     def branch(self, node: int) -> list:
         """Nodes from the root down to ``node``."""
