@@ -19,7 +19,8 @@ from conftest import run_cli_process
 from shapely import affinity
 
 from gfuzzy.check.check import check_trajectory
-from gfuzzy.roadmap.join import CHECKS_PER_VERTEX
+from gfuzzy.collision.geometry import StaticGeometry
+from gfuzzy.roadmap.join import CHECKS_PER_VERTEX, join_components
 from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap, load_roadmap, roadmap_digest
 from gfuzzy.scene.scene import parse_scene
 
@@ -113,14 +114,26 @@ def test_join_makes_a_box_roadmap_in_pieces_whole_with_certified_edges():
     assert roadmap_digest(again) == roadmap_digest(rm) and again.info.join["checks"] == rep["checks"]
 
 
-def test_join_gives_up_in_a_sealed_room_within_its_budget():
-    scene = parse_scene(sealed_doc())
-    for n in (40, 60):  # seed 2: vertices inside the room and out
-        rm = build_roadmap(scene, RoadmapOptions(vertices=n, seed=2))
+def test_join_gives_up_in_a_sealed_room_without_a_check():
+    """The robot's inscribed disc cannot leave the room: the pieces are proven apart."""
+    offset = [[0.1, -0.2], [0.9, -0.2], [0.9, 0.2], [0.1, 0.2]]  # the reference point outside the body
+    for robot, n in (({"box": list(BOX), "vmax": 1.0}, 40), ({"box": list(BOX), "vmax": 1.0}, 60), ({"footprint": offset, "vmax": 1.0}, 40)):
+        doc = sealed_doc()
+        doc["robot"] = robot
+        rm = build_roadmap(parse_scene(doc), RoadmapOptions(vertices=n, seed=2))  # seed 2: vertices in and out
         rep = rm.info.join
         assert rm.info.components == rep["components_before"] == rep["components_after"] == 2
+        assert rep["components_apart"] == 1 and rep["checks"] == 0 and rep["budget"] == CHECKS_PER_VERTEX * n
         assert rep["added_vertices"] == rep["added_edges"] == 0 and len(rm) == n
-        assert rep["checks"] == rep["budget"] == CHECKS_PER_VERTEX * n  # all spent, none more
+
+
+def test_join_spends_at_most_its_budget():
+    """Seed 1's pieces share the door (not proven apart) and are not joined in 50 checks."""
+    scene = parse_scene(door_doc())
+    plain = build_roadmap(scene, RoadmapOptions(vertices=30, seed=1, sampler="uniform", join=False))
+    j = join_components(StaticGeometry(scene), plain.vertices, plain.edges, seed=1, budget=50)
+    assert (j.before, j.after, j.checks, j.budget, j.apart) == (2, 2, 50, 50, 0)
+    assert j.added_vertices == j.added_edges == 0 and len(j.edges) == len(plain.edges)
 
 
 def test_old_files_load_without_the_join_and_the_cli_reports_it(tmp_path):
@@ -137,7 +150,8 @@ def test_old_files_load_without_the_join_and_the_cli_reports_it(tmp_path):
     path.write_text(yaml.safe_dump(sealed_doc()), encoding="utf-8")
     p = run_cli_process("roadmap", path, "-n", "40", "--seed", "2", "-o", out)
     assert p.returncode == 0, p.stderr
-    assert "component join: 2 -> 2 component(s), 0 vertices beyond -n 40 (400 of 400 collision checks" in p.stdout
+    assert "component join: 2 -> 2 component(s), 0 vertices beyond -n 40 (0 of 400 collision checks; "
+        "1 proven apart: the robot's inscribed disc cannot get out; " in p.stdout
     assert json.loads(out.read_text())["info"]["join"]["components_after"] == 2
     p = run_cli_process("roadmap", path, "-n", "40", "--seed", "2", "--no-join", "-o", out)
     assert p.returncode == 0 and "component join" not in p.stdout

@@ -62,10 +62,12 @@ def cmd_roadmap(args) -> int:
         )
     join = info.join
     if join:
+        apart = join.get("components_apart", 0)
+        why = f"; {apart} proven apart: the robot's inscribed disc cannot get out" if apart else ""
         _say(
             f"  component join: {join['components_before']} -> {join['components_after']} component(s), "
             f"{join['added_vertices']} vertices beyond -n {opts.vertices} "
-            f"({join['checks']} of {join['budget']} collision checks, {join['seconds']:.2f} s)",
+            f"({join['checks']} of {join['budget']} collision checks{why}; {join['seconds']:.2f} s)",
             sys.stdout,
         )
     return EXIT_OK

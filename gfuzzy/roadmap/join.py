@@ -26,7 +26,7 @@ import numpy as np
 
 from ..collision.geometry import StaticGeometry, metric_distance
 from ..typed import FloatArray, IntArray
-from .freespace import blocked_points
+from .freespace import TOUCHING, blocked_points
 from .passage import centre_bridge, lateral_middle
 
 __all__ = ["Join", "join_components", "count_components"]
@@ -60,6 +60,12 @@ class Join:
     added_vertices, added_edges : int
     checks, budget : int
         Collision checks spent, and allowed.
+    apart : int
+        Components proven apart from the rest (no region of the inscribed disc's free space
+        shared: :func:`_disc_regions`), given up without a check.
+    touching : int
+        Components of vertices touching an obstacle, left after the direct joins (a turn
+        from contact is never certified).
     """
 
     vertices: FloatArray
@@ -70,6 +76,8 @@ class Join:
     added_edges: int = 0
     checks: int = 0
     budget: int = 0
+    apart: int = 0
+    touching: int = 0
 
     def to_dict(self) -> dict:
         """The report kept in a roadmap file's ``info.join`` (with ``seconds``)."""
@@ -80,6 +88,8 @@ class Join:
             "added_edges": self.added_edges,
             "checks": self.checks,
             "budget": self.budget,
+            "components_apart": self.apart,
+            "components_touching": self.touching,
         }
 
 
@@ -121,6 +131,8 @@ class _Search:
         self.labels = _labels(len(vertices), edges)
         self.budget = budget
         self.checks = 0
+        self.apart = 0  # components proven apart by the inscribed disc's free space
+        self.stuck = 0  # components of vertices touching obstacles, left after the direct joins
         self.rng = np.random.default_rng([int(seed), 0x6A6F696E])  # "join": apart from PRM's draws
         self.bounds = geometry.scene.bounds
         self.blocked = blocked_points(geometry.scene)
@@ -129,6 +141,25 @@ class _Search:
         fp = np.asarray(robot.footprint, dtype=float) if robot.shape == "footprint" else np.zeros((1, 2))
         self.body_mid = 0.5 * (fp.min(axis=0) + fp.max(axis=0))
         self.door_list: FloatArray | None = None  # computed when first needed
+        self.region = _disc_regions(geometry.scene, vertices)
+
+    def rest(self, comp: int) -> np.ndarray:
+        """The vertices component ``comp`` may be joined to: the others in its regions of the
+        inscribed disc's free space (all the others without it)."""
+        out = self.labels != comp
+        if self.region is not None:
+            out &= np.isin(self.region, self.region[self.labels == comp])
+        return out
+
+    def touching(self, comp: int) -> bool:
+        """True when every vertex of component ``comp`` touches an obstacle (a stray at
+        contact: only its translations are certified, :meth:`direct` tried them)."""
+        inside = np.nonzero(self.labels == comp)[0]
+        return all(self.geometry.clearance1(self.verts[i]) < TOUCHING for i in inside)
+
+    def separated(self, comp: int) -> bool:
+        """True when no other vertex shares a region with component ``comp``: proven apart."""
+        return self.region is not None and not self.rest(comp).any()
 
     @property
     def spent(self) -> bool:
@@ -161,6 +192,8 @@ class _Search:
         keep = min(la, lb)
         self.labels[self.labels == max(la, lb)] = keep
         self.labels = np.concatenate([self.labels, np.full(len(poses), keep, dtype=np.int64)])
+        if self.region is not None:  # a free path: the inscribed disc stays in its region
+            self.region = np.concatenate([self.region, np.full(len(poses), self.region[ia], dtype=np.int64)])
 
     # ----------------------------------------------------------------- direct joins
 
@@ -181,18 +214,20 @@ class _Search:
 
     def closest_pairs(self, comp: int, limit: int) -> list:
         """The ``limit`` closest (metric) vertex pairs between component ``comp`` and the rest."""
-        from scipy.spatial import cKDTree
-
         V = np.array(self.verts)
         inside = np.nonzero(self.labels == comp)[0]
-        outside = np.nonzero(self.labels != comp)[0]
+        outside = np.nonzero(self.rest(comp))[0]
         if not len(inside) or not len(outside):
             return []
         k = min(limit, len(outside))  # each inside vertex's k nearest outside in the plane
-        _, near = cKDTree(V[outside, :2]).query(V[inside, :2], k=k)
-        near = outside[np.asarray(near).reshape(len(inside), k)]
-        a = np.repeat(inside, k)
-        b = near.reshape(-1)
+        a, b = [], []
+        for lo in range(0, len(inside), _CHUNK):
+            rows = inside[lo : lo + _CHUNK]
+            d = _xy_distances(V[rows, :2], V[outside, :2])
+            near = np.argsort(d, axis=1, kind="stable")[:, :k]
+            a.append(np.repeat(rows, k))
+            b.append(outside[near].reshape(-1))
+        a, b = np.concatenate(a), np.concatenate(b)
         order = np.argsort(metric_distance(V[a], V[b], self.r), kind="stable")[:limit]
         return [(int(a[i]), int(b[i])) for i in order]
 
@@ -246,11 +281,9 @@ class _Search:
         if not len(self.door_list):
             return False
         V = np.array(self.verts)
-        trees = _Tree(V, self.labels == comp), _Tree(V, self.labels != comp)
-        from scipy.spatial import cKDTree
-
+        trees = _Tree(V, self.labels == comp), _Tree(V, self.rest(comp))
         mids = self.door_list[:, :2]
-        score = sum(cKDTree(t.arr[:, :2]).query(mids)[0] for t in trees)
+        score = sum(_nearest_distance(mids, t.arr[:, :2]) for t in trees)
         for i in np.argsort(score, kind="stable")[:limit].tolist():
             m, heading = self.door_list[i, :2], float(self.door_list[i, 2])
             for h in (heading, heading + math.pi):
@@ -277,7 +310,7 @@ class _Search:
         roadmap towards each other (RRT-Connect) for at most ``share`` checks."""
         stop = min(self.budget, self.checks + share)
         V = np.array(self.verts)
-        trees = [_Tree(V, self.labels == comp), _Tree(V, self.labels != comp)]
+        trees = [_Tree(V, self.labels == comp), _Tree(V, self.rest(comp))]
         pa, pb = self.closest_pairs(comp, 1)[0]
         lo = np.minimum(V[pa, :2], V[pb, :2]) - 2 * self.r
         hi = np.maximum(V[pa, :2], V[pb, :2]) + 2 * self.r
@@ -442,6 +475,8 @@ def join_components(
         len(out_edges) - len(edges),
         s.checks,
         budget,
+        s.apart,
+        s.stuck,
     )
 
 
@@ -454,12 +489,18 @@ def _by_size(labels: np.ndarray) -> list:
 
 def _join_one(s: _Search, comp: int, left: int) -> bool:
     """Join component ``comp`` to the rest: closest pairs, then RRT-Connect with a ``1/left``
-    share of the remaining budget."""
+    share of the remaining budget; nothing spent on a component proven apart."""
+    if s.separated(comp):
+        s.apart += 1
+        return False
     for a, b in s.closest_pairs(comp, CLOSEST_PAIRS):
         if s.spent:
             return False
         if s.labels[a] != s.labels[b] and s.direct(a, b):
             return True
+    if s.touching(comp):  # no turn leaves it, and the RRT's steps turn
+        s.stuck += 1
+        return False
     if s.doors(comp, DOORS):
         return True
     share = (s.budget - s.checks) // max(left, 1)
@@ -495,6 +536,20 @@ def join_roadmap(geometry: StaticGeometry, vertices: FloatArray, edges: IntArray
     return j.vertices, j.edges, {**j.to_dict(), "seconds": round(time.perf_counter() - t, 4)}
 
 
+#: Rows of a distance matrix computed at once (memory: this many times the other side).
+_CHUNK = 256
+
+
+def _xy_distances(a: FloatArray, b: FloatArray) -> FloatArray:
+    """(len(a), len(b)) distances between points."""
+    return np.hypot(a[:, None, 0] - b[None, :, 0], a[:, None, 1] - b[None, :, 1])
+
+
+def _nearest_distance(a: FloatArray, b: FloatArray) -> FloatArray:
+    """Each point of ``a``'s distance to the nearest point of ``b``."""
+    return np.concatenate([_xy_distances(a[lo : lo + _CHUNK], b).min(axis=1) for lo in range(0, len(a), _CHUNK)])
+
+
 def _corners(scene) -> FloatArray:
     """The corners of the scene's polygon and box obstacles (discs and maps have none)."""
     pts = []
@@ -511,8 +566,6 @@ def _corners(scene) -> FloatArray:
 def _doors(scene, blocked, span: float) -> FloatArray:
     """Rows ``[x, y, heading]``: the free midpoints of obstacle corners (or a corner and
     its nearest point on the bounds) less than ``span`` apart, the heading across the gap."""
-    from scipy.spatial import cKDTree
-
     c = _corners(scene)
     if not len(c):
         return np.zeros((0, 3))
@@ -520,7 +573,12 @@ def _doors(scene, blocked, span: float) -> FloatArray:
     wall = np.concatenate([c, c, c, c])  # each corner's foot on the four sides of the bounds
     n = len(c)
     wall[:n, 0], wall[n : 2 * n, 0], wall[2 * n : 3 * n, 1], wall[3 * n :, 1] = xmin, xmax, ymin, ymax
-    pairs = np.array(sorted(cKDTree(c).query_pairs(span)), dtype=np.int64).reshape(-1, 2)
+    pairs = []
+    for lo in range(0, len(c), _CHUNK):
+        i, j = np.nonzero(_xy_distances(c[lo : lo + _CHUNK], c) < span)
+        i = i + lo
+        pairs.append(np.column_stack([i, j])[i < j])
+    pairs = np.concatenate(pairs)
     a = np.concatenate([c[pairs[:, 0]], np.tile(c, (4, 1))])
     b = np.concatenate([c[pairs[:, 1]], wall])
     gap = np.hypot(*(b - a).T)
@@ -530,3 +588,51 @@ def _doors(scene, blocked, span: float) -> FloatArray:
     free = ~blocked(mid)
     d = (b - a)[free]
     return np.column_stack([mid[free], np.arctan2(d[:, 1], d[:, 0]) + 0.5 * math.pi])
+
+
+#: Metres the robot's inscribed disc is shrunk by before its free space proves pieces apart:
+#: more than shapely's chord tolerance, so the computed free space holds the true one.
+SEPARATION_MARGIN = 2e-3
+
+
+def _inscribed(robot) -> tuple[FloatArray, float]:
+    """A disc inside the robot's body: its centre in the robot's frame and its radius (a
+    box's inscribed disc; a footprint's largest, found by ``polylabel`` to 0.1 mm)."""
+    if robot.shape != "footprint":
+        return np.zeros(2), robot.inradius
+    import shapely
+    from shapely.ops import polylabel
+
+    body = shapely.Polygon(robot.footprint)
+    c = polylabel(body, 1e-4)
+    return np.array([c.x, c.y]), float(body.exterior.distance(c))
+
+
+def _disc_regions(scene, vertices: FloatArray) -> IntArray | None:
+    """The region of each vertex's inscribed disc (:func:`_inscribed`) in that disc's free
+    space, or None where it cannot prove anything.
+
+    The disc lies inside the body, so wherever the robot moves the disc moves free too: two
+    vertices whose discs lie in different regions are never joined by any motion. The disc
+    is shrunk by ``SEPARATION_MARGIN`` (the computed free space, with shapely's chords, then
+    holds the true one); None for a disc smaller than that, obstacles without an exact
+    shape, or a vertex whose disc is found in no region.
+    """
+    from types import SimpleNamespace
+
+    from .freespace import free_space
+
+    robot = scene.robot
+    centre, radius = _inscribed(robot)
+    r = radius - SEPARATION_MARGIN
+    if r <= 0:
+        return None
+    disc = SimpleNamespace(shape="disc", radius=r, clearance=robot.clearance)
+    fs = free_space(SimpleNamespace(robot=disc, bounds=scene.bounds, obstacles=scene.obstacles))
+    if fs is None or fs.tolerance >= SEPARATION_MARGIN:
+        return None
+    v = np.asarray(vertices, dtype=float)
+    cos, sin = np.cos(v[:, 2]), np.sin(v[:, 2])
+    xy = v[:, :2] + np.column_stack([cos * centre[0] - sin * centre[1], sin * centre[0] + cos * centre[1]])
+    region = fs.region_of(xy)
+    return None if (region < 0).any() else region
