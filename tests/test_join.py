@@ -150,8 +150,8 @@ def test_old_files_load_without_the_join_and_the_cli_reports_it(tmp_path):
     path.write_text(yaml.safe_dump(sealed_doc()), encoding="utf-8")
     p = run_cli_process("roadmap", path, "-n", "40", "--seed", "2", "-o", out)
     assert p.returncode == 0, p.stderr
-    assert "component join: 2 -> 2 component(s), 0 vertices beyond -n 40 (0 of 400 collision checks; "
-        "1 proven apart: the robot's inscribed disc cannot get out; " in p.stdout
+    said = "component join: 2 -> 2 component(s), 0 vertices beyond -n 40 (0 of 400 collision checks; "
+    assert said + "1 proven apart: the robot's inscribed disc cannot get out; " in p.stdout
     assert json.loads(out.read_text())["info"]["join"]["components_after"] == 2
     p = run_cli_process("roadmap", path, "-n", "40", "--seed", "2", "--no-join", "-o", out)
     assert p.returncode == 0 and "component join" not in p.stdout
