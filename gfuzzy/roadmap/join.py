@@ -6,13 +6,16 @@ is not computed. PRM and the passage sampler can leave its roadmap in pieces alt
 robot fits between them (a door with a few centimetres to spare, a bent corridor it passes
 only turned). :func:`join_components` spends a bounded number of collision checks joining
 them: first the closest vertex pairs of two components, directly and by a turn in place and a
-translation (the motions a rigid robot fits through a door with); then a bidirectional RRT
-(RRT-Connect, Kuffner and LaValle 2000) between a component and the rest of the roadmap,
-whose every step is a straight motion certified by
-:meth:`gfuzzy.collision.geometry.StaticGeometry.motion_free`, as the roadmap's other edges.
-The poses of a found path become vertices, its motions edges. A sealed room stays two
-components: the join gives up when its budget (``CHECKS_PER_VERTEX`` checks per roadmap
-vertex) is spent. Seeded: the same roadmap and seed give the same join.
+translation (the motions a rigid robot fits through a door with); then the doors between
+them (gaps between obstacle corners: the body centred in the gap, reached along its axis);
+then a bidirectional RRT (RRT-Connect, Kuffner and LaValle 2000) between a component and the
+rest of the roadmap. Every pose is checked and every motion certified by
+:meth:`gfuzzy.collision.geometry.StaticGeometry.motion_free`, as the roadmap's other edges;
+the poses of a found path become vertices, its motions edges. The join gives up when its
+budget (``CHECKS_PER_VERTEX`` checks per roadmap vertex) is spent, and at once, without a
+check, on a component proven apart: a disc inside the body that cannot pass between the
+pieces (:func:`_disc_regions`; a sealed room). Seeded: the same roadmap and seed give the
+same join.
 """
 
 from __future__ import annotations
@@ -290,7 +293,7 @@ class _Search:
                 q = self._in_door(m, _wrap(h))
                 if self.spent:
                     return False
-                if q is None or not self.valid(q):
+                if not self.valid(q):
                     continue
                 a = self._reach(trees[0], q)
                 b = self._reach(trees[1], q) if a is not None else None
