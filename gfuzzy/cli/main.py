@@ -55,6 +55,12 @@ def _add_roadmap(sub) -> None:
         help="disc robots: do not join the roadmap's components through the free space "
         "(the repair adds vertices beyond -n where PRM missed a passage)",
     )
+    r.add_argument(
+        "--no-join",
+        action="store_true",
+        help="box and footprint robots: do not try to join the roadmap's components (the join "
+        "spends a bounded number of collision checks and adds vertices beyond -n where it finds a way)",
+    )
     r.add_argument("-o", "--output", help="roadmap file (default roadmaps/<scene name>.json)")
     r.set_defaults(func=cmd_roadmap)
 

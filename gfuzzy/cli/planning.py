@@ -35,7 +35,11 @@ def cmd_roadmap(args) -> int:
     out = _out_path(args.output, (".json",)) if args.output else default_roadmap_path(scene)
     try:
         opts = RoadmapOptions(
-            vertices=args.vertices, seed=args.seed, neighbors=args.neighbors, repair=not args.no_repair
+            vertices=args.vertices,
+            seed=args.seed,
+            neighbors=args.neighbors,
+            repair=not args.no_repair,
+            join=not args.no_join,
         )
     except (InputError, LimitError) as exc:
         raise BadInput(f"gfuzzy roadmap: {exc}") from None
@@ -54,6 +58,16 @@ def cmd_roadmap(args) -> int:
             f"  free-space repair: PRM missed {rep['components_joined']} passage(s); "
             f"{rep['added_vertices']} vertices beyond -n {opts.vertices} join them "
             f"({rep['seconds']:.2f} s)",
+            sys.stdout,
+        )
+    join = info.join
+    if join:
+        apart = join.get("components_apart", 0)
+        why = f"; {apart} proven apart: the robot's inscribed disc cannot get out" if apart else ""
+        _say(
+            f"  component join: {join['components_before']} -> {join['components_after']} component(s), "
+            f"{join['added_vertices']} vertices beyond -n {opts.vertices} "
+            f"({join['checks']} of {join['budget']} collision checks{why}; {join['seconds']:.2f} s)",
             sys.stdout,
         )
     return EXIT_OK

@@ -29,6 +29,7 @@ from ..scene.scene import Scene
 from ..settings import MAX_POINTS
 from ..typed import FloatArray, IntArray
 from .freespace import blocked_points as _blocked_points
+from .join import count_components, join_roadmap, repair_roadmap
 from .passage import Chains
 
 __all__ = [
@@ -75,6 +76,10 @@ class RoadmapOptions:
     repair : bool
         Disc robots: join the components sharing a free-space region (:func:`gfuzzy.roadmap.freespace.repair`),
         adding vertices beyond ``vertices`` (``info.repair``); older files load with False.
+    join : bool
+        Box and footprint robots: join the components within a budget of collision checks
+        (:func:`gfuzzy.roadmap.join.join_components`), adding vertices beyond ``vertices``
+        (``info.join``); older files load with False.
     """
 
     vertices: int = 200
@@ -84,6 +89,7 @@ class RoadmapOptions:
     sampler: str = "passage"
     bridge_ratio: float = 0.5
     repair: bool = True
+    join: bool = True
 
     def __post_init__(self):
         if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)) or not 0 <= self.seed < 2**31:
@@ -125,7 +131,9 @@ class RoadmapInfo:
     ``edges_dropped`` PRM edges that could not be certified free; ``components`` the
     roadmap's connected components; ``repair`` what the free-space repair of a disc robot's
     roadmap added (:meth:`gfuzzy.roadmap.freespace.Repair.to_dict` and ``seconds``; empty, and not
-    written, without it); ``extra`` keys of another version's file, kept as they were.
+    written, without it); ``join`` what the component join of a box or footprint robot's
+    roadmap did (:meth:`gfuzzy.roadmap.join.Join.to_dict` and ``seconds``; the same);
+    ``extra`` keys of another version's file, kept as they were.
     """
 
     ompl_version: str = ""
@@ -136,13 +144,15 @@ class RoadmapInfo:
     edges_dropped: int = 0
     components: int = 0
     repair: dict = field(default_factory=dict)
+    join: dict = field(default_factory=dict)
     extra: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         """Plain JSON: the fields, then the extra keys."""
         doc = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "extra"}
-        if not doc["repair"]:  # as files written before the repair
-            del doc["repair"]
+        for key in ("repair", "join"):  # as files written before them
+            if not doc[key]:
+                del doc[key]
         return {**doc, **self.extra}
 
     @classmethod
@@ -361,7 +371,8 @@ def load_roadmap(path: str | os.PathLike, scene: Scene | None = None) -> Roadmap
 
 
 def _options_from(file: str, raw) -> RoadmapOptions:
-    """A roadmap file's ``options``; a file from before the repair loads as ``repair: false``."""
+    """A roadmap file's ``options``; a file from before the repair (the join) loads as
+    ``repair: false`` (``join: false``)."""
     if not isinstance(raw, dict):
         raise SceneError(file, "options", f"expected a mapping, got {type(raw).__name__}")
     known = {f.name for f in fields(RoadmapOptions)}
@@ -369,7 +380,7 @@ def _options_from(file: str, raw) -> RoadmapOptions:
         if key not in known:
             raise SceneError(file, f"options.{key}", f"unknown key (allowed: {', '.join(sorted(known))})")
     try:
-        return RoadmapOptions(**{"repair": False, **raw})
+        return RoadmapOptions(**{"repair": False, "join": False, **raw})
     except (TypeError, ValueError) as exc:
         raise SceneError(file, "options", " ".join(str(exc).split())[:120]) from None
 
@@ -715,7 +726,8 @@ def grow_roadmaps(
                     progress(k + 1, len(edges))
             dropped = int((~keep).sum())
             edges = edges[keep]
-            vertices, edges, repaired = _repair(geometry, fs, vertices, edges, options.neighbors)
+            vertices, edges, repaired = repair_roadmap(geometry, fs, vertices, edges, options.neighbors)
+            vertices, edges, joined = join_roadmap(geometry, vertices, edges, options)
             lengths = metric_distance(
                 vertices[edges[:, 0]], vertices[edges[:, 1]], scene.robot.circumradius
             )
@@ -728,8 +740,9 @@ def grow_roadmaps(
                 validity_calls=int(calls_grow),
                 certify_calls=int(geometry.calls - calls0 - calls_grow),
                 edges_dropped=dropped,
-                components=_components(len(vertices), edges),
+                components=count_components(len(vertices), edges),
                 repair=repaired,
+                join=joined,
             )
             opts = RoadmapOptions(**{**asdict(options), "vertices": n})
             out.append(
@@ -747,36 +760,6 @@ def grow_roadmaps(
     finally:
         builder.close()
     return out
-
-
-def _repair(geometry: StaticGeometry, fs, vertices: FloatArray, edges: IntArray, k: int):
-    """(vertices, edges, the repair's report) after :func:`gfuzzy.roadmap.freespace.repair`, or
-    as given with an empty report when ``fs`` is None (not a disc, or no repair)."""
-    if fs is None:
-        return vertices, edges, {}
-    from .freespace import repair
-
-    t = time.perf_counter()
-    rep = repair(geometry, fs, vertices, edges, k)
-    if rep.added_vertices:
-        log.info("free-space repair: %d components joined, %d vertices added", rep.joined, rep.added_vertices)
-    return rep.vertices, rep.edges, {**rep.to_dict(), "seconds": round(time.perf_counter() - t, 4)}
-
-
-def _components(n: int, edges: IntArray) -> int:
-    parent = np.arange(n)
-
-    def find(i):
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
-    for a, b in edges:
-        ra, rb = find(a), find(b)
-        if ra != rb:
-            parent[ra] = rb
-    return len({find(i) for i in range(n)})
 
 
 def roadmap_digest(rm: Roadmap) -> str:

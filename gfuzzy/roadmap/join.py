@@ -1,0 +1,641 @@
+"""Join the components of a box or footprint robot's roadmap (SE(2)).
+
+A disc robot's roadmap is repaired through its exactly computed free space
+(:func:`gfuzzy.roadmap.freespace.repair`); a rigid robot's free space is three-dimensional and
+is not computed. PRM and the passage sampler can leave its roadmap in pieces although the
+robot fits between them (a door with a few centimetres to spare, a bent corridor it passes
+only turned). :func:`join_components` spends a bounded number of collision checks joining
+them: first the closest vertex pairs of two components, directly and by a turn in place and a
+translation (the motions a rigid robot fits through a door with); then the doors between
+them (gaps between obstacle corners: the body centred in the gap, reached along its axis);
+then a bidirectional RRT (RRT-Connect, Kuffner and LaValle 2000) between a component and the
+rest of the roadmap. Every pose is checked and every motion certified by
+:meth:`gfuzzy.collision.geometry.StaticGeometry.motion_free`, as the roadmap's other edges;
+the poses of a found path become vertices, its motions edges. The join gives up when its
+budget (``CHECKS_PER_VERTEX`` checks per roadmap vertex) is spent, and at once, without a
+check, on a component proven apart: a disc inside the body that cannot pass between the
+pieces (:func:`_disc_regions`; a sealed room). Seeded: the same roadmap and seed give the
+same join.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..collision.geometry import StaticGeometry, metric_distance
+from ..typed import FloatArray, IntArray
+from .freespace import TOUCHING, blocked_points
+from .passage import centre_bridge, lateral_middle
+
+__all__ = ["Join", "join_components", "count_components"]
+
+log = logging.getLogger(__name__)
+
+#: Collision checks (pose validity and certified motions) the join may spend per roadmap vertex.
+CHECKS_PER_VERTEX = 10
+#: Closest cross-component vertex pairs tried directly, per component, before the RRT.
+CLOSEST_PAIRS = 12
+#: RRT step, in robot spans (twice the circumradius), in the contract's metric.
+STEP = 0.5
+#: Share of RRT samples drawn in the box around the two trees' closest vertices.
+FOCUS = 0.6
+#: Doors (gaps between obstacle corners less than a robot span apart) tried per component,
+#: nearest the two pieces first, before the RRT.
+DOORS = 8
+
+
+@dataclass
+class Join:
+    """What :func:`join_components` did.
+
+    Attributes
+    ----------
+    vertices : (V, 3) float
+    edges : (E, 2) int
+        The roadmap's, then the added ones (``edges[:, 0] < edges[:, 1]``).
+    before, after : int
+        Connected components before and after.
+    added_vertices, added_edges : int
+    checks, budget : int
+        Collision checks spent, and allowed.
+    apart : int
+        Components proven apart from the rest (no region of the inscribed disc's free space
+        shared: :func:`_disc_regions`), given up without a check.
+    touching : int
+        Components of vertices touching an obstacle, left after the direct joins (a turn
+        from contact is never certified).
+    """
+
+    vertices: FloatArray
+    edges: IntArray
+    before: int
+    after: int
+    added_vertices: int = 0
+    added_edges: int = 0
+    checks: int = 0
+    budget: int = 0
+    apart: int = 0
+    touching: int = 0
+
+    def to_dict(self) -> dict:
+        """The report kept in a roadmap file's ``info.join`` (with ``seconds``)."""
+        return {
+            "components_before": self.before,
+            "components_after": self.after,
+            "added_vertices": self.added_vertices,
+            "added_edges": self.added_edges,
+            "checks": self.checks,
+            "budget": self.budget,
+            "components_apart": self.apart,
+            "components_touching": self.touching,
+        }
+
+
+def _labels(n: int, edges) -> np.ndarray:
+    """A component label per vertex (the smallest vertex index of its component)."""
+    parent = list(range(n))
+
+    def find(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for a, b in np.asarray(edges, dtype=np.int64).reshape(-1, 2).tolist():
+        ra, rb = find(a), find(b)
+        if ra != rb:
+            parent[max(ra, rb)] = min(ra, rb)
+    return np.array([find(i) for i in range(n)], dtype=np.int64)
+
+
+def count_components(n: int, edges) -> int:
+    """Connected components of a graph of ``n`` vertices."""
+    return int(len(np.unique(_labels(n, edges)))) if n else 0
+
+
+def _wrap(a):
+    return (a + math.pi) % (2 * math.pi) - math.pi
+
+
+class _Search:
+    """The join's state: the growing vertex list, new edges, the checks spent."""
+
+    def __init__(self, geometry: StaticGeometry, vertices: FloatArray, edges: IntArray, budget: int, seed: int):
+        self.geometry = geometry
+        self.r = geometry.scene.robot.circumradius
+        self.step = STEP * 2.0 * self.r
+        self.verts = [np.asarray(v, dtype=float) for v in vertices]
+        self.edges: list = []
+        self.labels = _labels(len(vertices), edges)
+        self.budget = budget
+        self.checks = 0
+        self.apart = 0  # components proven apart by the inscribed disc's free space
+        self.stuck = 0  # components of vertices touching obstacles, left after the direct joins
+        self.rng = np.random.default_rng([int(seed), 0x6A6F696E])  # "join": apart from PRM's draws
+        self.bounds = geometry.scene.bounds
+        self.blocked = blocked_points(geometry.scene)
+        robot = geometry.scene.robot
+        self.y_mid = lateral_middle(robot)
+        fp = np.asarray(robot.footprint, dtype=float) if robot.shape == "footprint" else np.zeros((1, 2))
+        self.body_mid = 0.5 * (fp.min(axis=0) + fp.max(axis=0))
+        self.door_list: FloatArray | None = None  # computed when first needed
+        self.region = _disc_regions(geometry.scene, vertices)
+
+    def rest(self, comp: int) -> np.ndarray:
+        """The vertices component ``comp`` may be joined to: the others in its regions of the
+        inscribed disc's free space (all the others without it)."""
+        out = self.labels != comp
+        if self.region is not None:
+            out &= np.isin(self.region, self.region[self.labels == comp])
+        return out
+
+    def touching(self, comp: int) -> bool:
+        """True when every vertex of component ``comp`` touches an obstacle (a stray at
+        contact: only its translations are certified, :meth:`direct` tried them)."""
+        inside = np.nonzero(self.labels == comp)[0]
+        return all(self.geometry.clearance1(self.verts[i]) < TOUCHING for i in inside)
+
+    def separated(self, comp: int) -> bool:
+        """True when no other vertex shares a region with component ``comp``: proven apart."""
+        return self.region is not None and not self.rest(comp).any()
+
+    @property
+    def spent(self) -> bool:
+        return self.checks >= self.budget
+
+    def valid(self, q) -> bool:
+        """Pose validity, one check of the budget (False, unchecked, once it is spent)."""
+        if self.spent:
+            return False
+        self.checks += 1
+        return bool(self.geometry.is_valid(q))
+
+    def free(self, a, b) -> bool:
+        """A certified straight motion, one check of the budget (False once it is spent)."""
+        if self.spent:
+            return False
+        self.checks += 1
+        return bool(self.geometry.motion_free(a, b))
+
+    def add_path(self, poses: list, ia: int, ib: int) -> None:
+        """Add the inner ``poses`` of a certified path from vertex ``ia`` to vertex ``ib``."""
+        ids = [ia]
+        for p in poses:
+            self.verts.append(np.asarray(p, dtype=float))
+            ids.append(len(self.verts) - 1)
+        ids.append(ib)
+        for u, w in zip(ids[:-1], ids[1:], strict=True):
+            self.edges.append((min(u, w), max(u, w)))
+        la, lb = self.labels[ia], self.labels[ib]
+        keep = min(la, lb)
+        self.labels[self.labels == max(la, lb)] = keep
+        self.labels = np.concatenate([self.labels, np.full(len(poses), keep, dtype=np.int64)])
+        if self.region is not None:  # a free path: the inscribed disc stays in its region
+            self.region = np.concatenate([self.region, np.full(len(poses), self.region[ia], dtype=np.int64)])
+
+    # ----------------------------------------------------------------- direct joins
+
+    def direct(self, a: int, b: int) -> bool:
+        """Join vertices ``a`` and ``b``: straight, or turning in place at either end and
+        translating at the other's heading; True when joined (the path added)."""
+        pa, pb = self.verts[a], self.verts[b]
+        if self.free(pa, pb):
+            self.add_path([], a, b)
+            return True
+        if pa[2] == pb[2] or (pa[0] == pb[0] and pa[1] == pb[1]):
+            return False  # a translation or a turn: no other way with one turn
+        for mid in (np.array([pa[0], pa[1], pb[2]]), np.array([pb[0], pb[1], pa[2]])):
+            if self.valid(mid) and self.free(pa, mid) and self.free(mid, pb):
+                self.add_path([mid], a, b)
+                return True
+        return False
+
+    def closest_pairs(self, comp: int, limit: int) -> list:
+        """The ``limit`` closest (metric) vertex pairs between component ``comp`` and the rest."""
+        V = np.array(self.verts)
+        inside = np.nonzero(self.labels == comp)[0]
+        outside = np.nonzero(self.rest(comp))[0]
+        if not len(inside) or not len(outside):
+            return []
+        k = min(limit, len(outside))  # each inside vertex's k nearest outside in the plane
+        a, b = [], []
+        for lo in range(0, len(inside), _CHUNK):
+            rows = inside[lo : lo + _CHUNK]
+            d = _xy_distances(V[rows, :2], V[outside, :2])
+            near = np.argsort(d, axis=1, kind="stable")[:, :k]
+            a.append(np.repeat(rows, k))
+            b.append(outside[near].reshape(-1))
+        a, b = np.concatenate(a), np.concatenate(b)
+        order = np.argsort(metric_distance(V[a], V[b], self.r), kind="stable")[:limit]
+        return [(int(a[i]), int(b[i])) for i in order]
+
+    # ----------------------------------------------------------------- RRT-Connect
+
+    def _steer(self, a: FloatArray, q: FloatArray) -> FloatArray:
+        d = float(metric_distance(a, q, self.r))
+        if d <= self.step:
+            return q.copy()
+        t = self.step / d
+        delta = q - a
+        delta[2] = _wrap(delta[2])
+        out = a + t * delta
+        out[2] = _wrap(out[2])
+        return out
+
+    def _sample(self, focus: tuple) -> tuple[FloatArray, bool]:
+        """A pose to grow towards, and whether it is a passage's (a bridge sample)."""
+        xmin, ymin, xmax, ymax = self.bounds
+        if self.rng.random() < FOCUS:
+            lo, hi = focus
+            if self.rng.random() < 0.5:
+                q = self._bridge(lo, hi)
+                if q is not None:
+                    return q, True
+            x, y = self.rng.uniform(lo, hi)
+        else:
+            x, y = self.rng.uniform(xmin, xmax), self.rng.uniform(ymin, ymax)
+        return np.array([x, y, self.rng.uniform(-math.pi, math.pi)]), False
+
+    def _bridge(self, lo: FloatArray, hi: FloatArray) -> FloatArray | None:
+        """A pose in a passage between ``lo`` and ``hi``: a bridge test (two blocked points,
+        the middle free) centred across the passage (:func:`gfuzzy.roadmap.passage.centre_bridge`)."""
+        a = self.rng.uniform(lo, hi, (16, 2))
+        b = a + self.rng.normal(0.0, self.r, (16, 2))
+        ok = self.blocked(a) & self.blocked(b)
+        ok[ok] = ~self.blocked(0.5 * (a[ok] + b[ok]))
+        if not ok.any():
+            return None
+        i = int(np.argmax(ok))
+        d = b[i] - a[i]
+        heading = math.atan2(d[1], d[0]) + 0.5 * math.pi + (math.pi if self.rng.random() < 0.5 else 0.0)
+        return centre_bridge(self.blocked, 0.5 * (a[i] + b[i]), _wrap(heading), 2.0 * self.r, self.y_mid)
+
+    def doors(self, comp: int, limit: int) -> bool:
+        """Join component ``comp`` to the rest through one of the ``limit`` doors nearest
+        both (:func:`_doors`): the pose centred in the door, reached from each side by a
+        turn in place and translations along the door's axis (:meth:`_reach`)."""
+        if self.door_list is None:
+            self.door_list = _doors(self.geometry.scene, self.blocked, 2.0 * self.r)
+        if not len(self.door_list):
+            return False
+        V = np.array(self.verts)
+        trees = _Tree(V, self.labels == comp), _Tree(V, self.rest(comp))
+        mids = self.door_list[:, :2]
+        score = sum(_nearest_distance(mids, t.arr[:, :2]) for t in trees)
+        for i in np.argsort(score, kind="stable")[:limit].tolist():
+            m, heading = self.door_list[i, :2], float(self.door_list[i, 2])
+            for h in (heading, heading + math.pi):
+                q = self._in_door(m, _wrap(h))
+                if self.spent:
+                    return False
+                if not self.valid(q):
+                    continue
+                a = self._reach(trees[0], q)
+                b = self._reach(trees[1], q) if a is not None else None
+                if b is not None:
+                    self._add_trees(trees[0], a, trees[1], b)
+                    return True
+        return False
+
+    def _in_door(self, m: FloatArray, heading: float) -> FloatArray:
+        """The pose at ``heading`` whose body's middle (of its extents) is the point ``m``."""
+        c, s = math.cos(heading), math.sin(heading)
+        bx, by = self.body_mid
+        return np.array([m[0] - c * bx + s * by, m[1] - s * bx - c * by, heading])
+
+    def rrt(self, comp: int, share: int) -> bool:
+        """Grow a tree from component ``comp``'s vertices and one from the rest of the
+        roadmap towards each other (RRT-Connect) for at most ``share`` checks."""
+        stop = min(self.budget, self.checks + share)
+        V = np.array(self.verts)
+        trees = [_Tree(V, self.labels == comp), _Tree(V, self.rest(comp))]
+        pa, pb = self.closest_pairs(comp, 1)[0]
+        lo = np.minimum(V[pa, :2], V[pb, :2]) - 2 * self.r
+        hi = np.maximum(V[pa, :2], V[pb, :2]) + 2 * self.r
+        xmin, ymin, xmax, ymax = self.bounds
+        focus = (np.maximum(lo, [xmin, ymin]), np.minimum(hi, [xmax, ymax]))
+        while self.checks < stop:
+            grow, other = trees
+            q, passage = self._sample(focus)
+            if passage and self.valid(q):  # in a door: both trees straight to it
+                a = self._reach(grow, q)
+                b = self._reach(other, q) if a is not None else None
+                if b is not None:
+                    self._add_trees(grow, a, other, b)
+                    return True
+                continue
+            new = self._extend(grow, q)
+            if new is not None:
+                reached = self._connect(other, grow.poses[new], stop)
+                if reached is not None:
+                    self._add_trees(grow, new, other, reached)
+                    return True
+            trees.reverse()
+        return False
+
+    def _extend(self, tree: _Tree, q: FloatArray) -> int | None:
+        near = tree.nearest(q, self.r)
+        new = self._steer(tree.poses[near], q)
+        if self.valid(new) and self.free(tree.poses[near], new):
+            return tree.add(new, near)
+        return None
+
+    def _reach(self, tree: _Tree, q: FloatArray) -> int | None:
+        """Join a passage pose ``q`` to ``tree`` along the passage: from one of its 3 nearest
+        nodes (in the plane), a turn in place to ``q``'s heading, a translation to the pose a
+        span before ``q`` on its axis (on the node's side), a translation to ``q``; the node
+        of ``q`` added, or None."""
+        d = np.array([math.cos(q[2]), math.sin(q[2]), 0.0]) * 2.0 * self.r
+        for near in tree.nearest_xy(q, 3):
+            p = tree.poses[near]
+            pre = q - d if float(np.dot(p[:2] - q[:2], d[:2])) < 0 else q + d
+            turned = np.array([p[0], p[1], q[2]])
+            legs = [leg for leg in (turned, pre, q) if not np.array_equal(leg, p)]
+            at, ok = p, True
+            for leg in legs:
+                if not (self.valid(leg) and self.free(at, leg)):
+                    ok = False
+                    break
+                at = leg
+            if ok:
+                node = near
+                for leg in legs:
+                    node = tree.add(leg, node)
+                return node
+        return None
+
+    def _connect(self, tree: _Tree, q: FloatArray, stop: int) -> int | None:
+        """Extend ``tree`` towards ``q`` until it reaches it (the node's index) or is blocked."""
+        near = tree.nearest(q, self.r)
+        while self.checks < stop:
+            new = self._steer(tree.poses[near], q)
+            if not (self.valid(new) and self.free(tree.poses[near], new)):
+                return None
+            near = tree.add(new, near)
+            if np.array_equal(new, q):
+                return near
+        return None
+
+    def _add_trees(self, grow: _Tree, new: int, other: _Tree, reached: int) -> None:
+        """Add the path from ``grow``'s root through ``new`` = ``reached`` to ``other``'s root."""
+        first = grow.branch(new)  # root (a roadmap vertex) ... new
+        second = other.branch(reached)[::-1]  # reached (the same pose as new) ... root
+        ia, ib = grow.vertex[first[0]], other.vertex[second[-1]]
+        poses = [grow.poses[i] for i in first[1:]] + [other.poses[i] for i in second[1:-1]]
+        self.add_path(poses, ia, ib)
+
+
+class _Tree:
+    """An RRT rooted at many roadmap vertices (a component, or the rest of the roadmap)."""
+
+    def __init__(self, V: FloatArray, mask: np.ndarray):
+        idx = np.nonzero(mask)[0]
+        self.poses = [V[i] for i in idx]
+        self.parent = [-1] * len(idx)
+        self.vertex = {k: int(i) for k, i in enumerate(idx)}  # node -> roadmap vertex (roots)
+        self._arr = np.array(self.poses).reshape(-1, 3)  # room to grow: rows beyond the nodes unused
+
+    @property
+    def arr(self) -> FloatArray:
+        return self._arr[: len(self.poses)]
+
+    def nearest(self, q: FloatArray, r: float) -> int:
+        return int(np.argmin(metric_distance(self.arr, q[None, :], r)))
+
+    def nearest_xy(self, q: FloatArray, k: int) -> list:
+        arr = self.arr
+        d = np.hypot(arr[:, 0] - q[0], arr[:, 1] - q[1])
+        return [int(i) for i in np.argsort(d, kind="stable")[:k]]
+
+    def add(self, q: FloatArray, parent: int) -> int:
+        n = len(self.poses)
+        if n == len(self._arr):
+            self._arr = np.concatenate([self._arr, np.empty((max(n, 16), 3))])
+        self._arr[n] = q
+        self.poses.append(q)
+        self.parent.append(parent)
+        return n
+
+    def branch(self, node: int) -> list:
+        """Nodes from the root down to ``node``."""
+        out = [node]
+        while self.parent[out[-1]] >= 0:
+            out.append(self.parent[out[-1]])
+        return out[::-1]
+
+
+def join_components(
+    geometry: StaticGeometry, vertices: FloatArray, edges: IntArray, seed: int, budget: int | None = None
+) -> Join:
+    """Join the components of an SE(2) roadmap within a budget of collision checks.
+
+    Components are taken largest first after the largest; each is joined to the rest of the
+    roadmap by its ``CLOSEST_PAIRS`` closest vertex pairs (straight, or a turn in place and a
+    translation), then by RRT-Connect for an equal share of what is left of the budget.
+
+    Parameters
+    ----------
+    geometry : StaticGeometry
+        Of the box or footprint robot's scene.
+    vertices : (V, 3) float
+    edges : (E, 2) int
+    seed : int
+        The roadmap's seed (the RRT's draws).
+    budget : int, optional
+        Collision checks to spend at most (default ``CHECKS_PER_VERTEX`` per vertex).
+
+    Returns
+    -------
+    Join
+    """
+    vertices = np.asarray(vertices, dtype=float).reshape(-1, 3)
+    edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    budget = CHECKS_PER_VERTEX * len(vertices) if budget is None else int(budget)
+    s = _Search(geometry, vertices, edges, budget, seed)
+    before = len(np.unique(s.labels))
+    comps = _by_size(s.labels)[1:]
+    for k, comp in enumerate(comps):
+        if s.spent:
+            break
+        comp = int(s.labels[comp])  # its label now (an earlier join may have relabelled it)
+        if len(np.unique(s.labels)) == 1:
+            break
+        if not _join_one(s, comp, len(comps) - k):
+            log.debug("join: component of vertex %d not joined (%d of %d checks)", comp, s.checks, budget)
+    added = np.array(s.edges, dtype=np.int64).reshape(-1, 2)
+    out_edges = np.vstack([edges, added])  # joined ends lay in two components: no duplicates
+    return Join(
+        np.array(s.verts, dtype=float).reshape(-1, 3),
+        out_edges,
+        before,
+        len(np.unique(s.labels)),
+        len(s.verts) - len(vertices),
+        len(out_edges) - len(edges),
+        s.checks,
+        budget,
+        s.apart,
+        s.stuck,
+    )
+
+
+def _by_size(labels: np.ndarray) -> list:
+    """A vertex of each component, largest component first (ties: smallest label)."""
+    ids, counts = np.unique(labels, return_counts=True)
+    order = np.lexsort((ids, -counts))
+    return [int(ids[i]) for i in order]
+
+
+def _join_one(s: _Search, comp: int, left: int) -> bool:
+    """Join component ``comp`` to the rest: closest pairs, then RRT-Connect with a ``1/left``
+    share of the remaining budget; nothing spent on a component proven apart."""
+    if s.separated(comp):
+        s.apart += 1
+        return False
+    for a, b in s.closest_pairs(comp, CLOSEST_PAIRS):
+        if s.spent:
+            return False
+        if s.labels[a] != s.labels[b] and s.direct(a, b):
+            return True
+    if s.touching(comp):  # no turn leaves it, and the RRT's steps turn
+        s.stuck += 1
+        return False
+    if s.doors(comp, DOORS):
+        return True
+    share = (s.budget - s.checks) // max(left, 1)
+    return share > 0 and s.rrt(comp, share)
+
+
+def repair_roadmap(geometry: StaticGeometry, fs, vertices: FloatArray, edges: IntArray, k: int):
+    """(vertices, edges, the repair's report) after :func:`gfuzzy.roadmap.freespace.repair`, or
+    as given with an empty report when ``fs`` is None (not a disc, or no repair)."""
+    if fs is None:
+        return vertices, edges, {}
+    from .freespace import repair
+
+    t = time.perf_counter()
+    rep = repair(geometry, fs, vertices, edges, k)
+    if rep.added_vertices:
+        log.info("free-space repair: %d components joined, %d vertices added", rep.joined, rep.added_vertices)
+    return rep.vertices, rep.edges, {**rep.to_dict(), "seconds": round(time.perf_counter() - t, 4)}
+
+
+def join_roadmap(geometry: StaticGeometry, vertices: FloatArray, edges: IntArray, options):
+    """(vertices, edges, the join's report) after :func:`join_components` for a box or
+    footprint robot's roadmap in pieces with ``options.join``; else as given with an empty
+    report (nothing written)."""
+    if not options.join or vertices.shape[1] != 3 or count_components(len(vertices), edges) < 2:
+        return vertices, edges, {}
+    t = time.perf_counter()
+    j = join_components(geometry, vertices, edges, options.seed)
+    log.info(
+        "component join: %d -> %d components, %d vertices and %d edges added, %d of %d checks",
+        j.before, j.after, j.added_vertices, j.added_edges, j.checks, j.budget,
+    )
+    return j.vertices, j.edges, {**j.to_dict(), "seconds": round(time.perf_counter() - t, 4)}
+
+
+#: Rows of a distance matrix computed at once (memory: this many times the other side).
+_CHUNK = 256
+
+
+def _xy_distances(a: FloatArray, b: FloatArray) -> FloatArray:
+    """(len(a), len(b)) distances between points."""
+    return np.hypot(a[:, None, 0] - b[None, :, 0], a[:, None, 1] - b[None, :, 1])
+
+
+def _nearest_distance(a: FloatArray, b: FloatArray) -> FloatArray:
+    """Each point of ``a``'s distance to the nearest point of ``b``."""
+    return np.concatenate([_xy_distances(a[lo : lo + _CHUNK], b).min(axis=1) for lo in range(0, len(a), _CHUNK)])
+
+
+def _corners(scene) -> FloatArray:
+    """The corners of the scene's polygon and box obstacles (discs and maps have none)."""
+    pts = []
+    for ob in scene.obstacles:
+        if hasattr(ob, "vertices"):
+            pts += [tuple(p) for p in ob.vertices()]
+        elif hasattr(ob, "points"):
+            pts += [tuple(p) for p in ob.points]
+            for hole in getattr(ob, "holes", ()):
+                pts += [tuple(p) for p in hole]
+    return np.array(pts, dtype=float).reshape(-1, 2)
+
+
+def _doors(scene, blocked, span: float) -> FloatArray:
+    """Rows ``[x, y, heading]``: the free midpoints of obstacle corners (or a corner and
+    its nearest point on the bounds) less than ``span`` apart, the heading across the gap."""
+    c = _corners(scene)
+    if not len(c):
+        return np.zeros((0, 3))
+    xmin, ymin, xmax, ymax = scene.bounds
+    wall = np.concatenate([c, c, c, c])  # each corner's foot on the four sides of the bounds
+    n = len(c)
+    wall[:n, 0], wall[n : 2 * n, 0], wall[2 * n : 3 * n, 1], wall[3 * n :, 1] = xmin, xmax, ymin, ymax
+    pairs = []
+    for lo in range(0, len(c), _CHUNK):
+        i, j = np.nonzero(_xy_distances(c[lo : lo + _CHUNK], c) < span)
+        i = i + lo
+        pairs.append(np.column_stack([i, j])[i < j])
+    pairs = np.concatenate(pairs)
+    a = np.concatenate([c[pairs[:, 0]], np.tile(c, (4, 1))])
+    b = np.concatenate([c[pairs[:, 1]], wall])
+    gap = np.hypot(*(b - a).T)
+    keep = (gap > 1e-9) & (gap < span)
+    a, b = a[keep], b[keep]
+    mid = 0.5 * (a + b)
+    free = ~blocked(mid)
+    d = (b - a)[free]
+    return np.column_stack([mid[free], np.arctan2(d[:, 1], d[:, 0]) + 0.5 * math.pi])
+
+
+#: Metres the robot's inscribed disc is shrunk by before its free space proves pieces apart:
+#: more than shapely's chord tolerance, so the computed free space holds the true one.
+SEPARATION_MARGIN = 2e-3
+
+
+def _inscribed(robot) -> tuple[FloatArray, float]:
+    """A disc inside the robot's body: its centre in the robot's frame and its radius (a
+    box's inscribed disc; a footprint's largest, found by ``polylabel`` to 0.1 mm)."""
+    if robot.shape != "footprint":
+        return np.zeros(2), robot.inradius
+    import shapely
+    from shapely.ops import polylabel
+
+    body = shapely.Polygon(robot.footprint)
+    c = polylabel(body, 1e-4)
+    return np.array([c.x, c.y]), float(body.exterior.distance(c))
+
+
+def _disc_regions(scene, vertices: FloatArray) -> IntArray | None:
+    """The region of each vertex's inscribed disc (:func:`_inscribed`) in that disc's free
+    space, or None where it cannot prove anything.
+
+    The disc lies inside the body, so wherever the robot moves the disc moves free too: two
+    vertices whose discs lie in different regions are never joined by any motion. The disc
+    is shrunk by ``SEPARATION_MARGIN`` (the computed free space, with shapely's chords, then
+    holds the true one); None for a disc smaller than that, obstacles without an exact
+    shape, or a vertex whose disc is found in no region.
+    """
+    from types import SimpleNamespace
+
+    from .freespace import free_space
+
+    robot = scene.robot
+    centre, radius = _inscribed(robot)
+    r = radius - SEPARATION_MARGIN
+    if r <= 0:
+        return None
+    disc = SimpleNamespace(shape="disc", radius=r, clearance=robot.clearance)
+    fs = free_space(SimpleNamespace(robot=disc, bounds=scene.bounds, obstacles=scene.obstacles))
+    if fs is None or fs.tolerance >= SEPARATION_MARGIN:
+        return None
+    v = np.asarray(vertices, dtype=float)
+    cos, sin = np.cos(v[:, 2]), np.sin(v[:, 2])
+    xy = v[:, :2] + np.column_stack([cos * centre[0] - sin * centre[1], sin * centre[0] + cos * centre[1]])
+    region = fs.region_of(xy)
+    return None if (region < 0).any() else region

@@ -1,0 +1,159 @@
+"""The component join of a box or footprint robot's roadmap (gfuzzy.roadmap.join).
+
+A PRM of a box robot can come out in pieces although the robot fits between them (a door
+with 3 cm per side). The join adds certified vertices and edges between the pieces within a
+budget of collision checks; in a sealed room it gives up within that budget. The oracle of the
+added edges is written here: the box's rectangle at fine steps along each edge, against the
+walls' rectangles with shapely, and the independent checker (gfuzzy.check.check).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import shapely
+import yaml
+from conftest import run_cli_process
+from shapely import affinity
+
+from gfuzzy.check.check import check_trajectory
+from gfuzzy.collision.geometry import StaticGeometry
+from gfuzzy.roadmap.join import CHECKS_PER_VERTEX, join_components
+from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap, load_roadmap, roadmap_digest
+from gfuzzy.scene.scene import parse_scene
+
+BOX = (0.8, 0.4)
+
+
+def _wall(cx, cy, w, h) -> dict:
+    return {"box": {"center": [cx, cy], "size": [w, h], "angle": 0.0}}
+
+
+def door_doc(door: float = 0.46) -> dict:
+    """A 6 x 4 floor split by a wall at x = 3 with a door ``door`` wide (the box: 0.4)."""
+    y0 = 2.0 - door / 2
+    walls = [_wall(3.0, y0 / 2, 0.1, y0), _wall(3.0, 4 - y0 / 2, 0.1, y0)]
+    return {
+        "version": 1,
+        "name": "box-door",
+        "bounds": [0, 0, 6, 4],
+        "robot": {"box": list(BOX), "vmax": 1.0},
+        "obstacles": walls,
+    }
+
+
+def sealed_doc() -> dict:
+    """The door closed: a room 2 x 2 inside the floor with no way in."""
+    doc = door_doc()
+    doc["name"] = "box-sealed"
+    doc["obstacles"] = [
+        _wall(4.0, 1.0, 2.1, 0.1),
+        _wall(4.0, 3.0, 2.1, 0.1),
+        _wall(3.0, 2.0, 0.1, 2.1),
+        _wall(5.0, 2.0, 0.1, 2.1),
+    ]
+    return doc
+
+
+def _walls(doc) -> list:
+    out = []
+    for ob in doc["obstacles"]:
+        (cx, cy), (w, h) = ob["box"]["center"], ob["box"]["size"]
+        out.append(shapely.box(cx - w / 2, cy - h / 2, cx + w / 2, cy + h / 2))
+    return out
+
+
+def _body(pose) -> shapely.Polygon:
+    w, h = BOX
+    body = shapely.box(-w / 2, -h / 2, w / 2, h / 2)
+    return affinity.translate(affinity.rotate(body, pose[2], origin=(0, 0), use_radians=True), pose[0], pose[1])
+
+
+def _free_along(doc, a, b, steps: int = 200) -> bool:
+    """The box is inside the bounds and overlaps no wall at ``steps`` poses along a -> b."""
+    walls = _walls(doc)
+    x0, y0, x1, y1 = doc["bounds"]
+    inside = shapely.box(x0, y0, x1, y1).buffer(1e-9)
+    turn = math.remainder(b[2] - a[2], 2 * math.pi)
+    for f in np.linspace(0.0, 1.0, steps):
+        pose = (a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1]), a[2] + f * turn)
+        body = _body(pose)
+        if not inside.contains(body) or any(body.intersection(w).area > 1e-9 for w in walls):
+            return False
+    return True
+
+
+def test_join_makes_a_box_roadmap_in_pieces_whole_with_certified_edges():
+    """Uniform PRM, 30 vertices, seed 6: two pieces either side of the door; the join
+    makes one, and every added edge is free (shapely, the checker)."""
+    doc = door_doc()
+    scene = parse_scene(doc)
+    opts = {"vertices": 30, "seed": 6, "sampler": "uniform"}
+    plain = build_roadmap(scene, RoadmapOptions(**opts, join=False))
+    rm = build_roadmap(scene, RoadmapOptions(**opts))
+    assert plain.info.components == 2 and not plain.info.join and "join" not in plain.info.to_dict()
+    assert rm.info.components == 1
+    rep = rm.info.join
+    assert rep["components_before"] == 2 and rep["components_after"] == 1
+    assert rep["added_vertices"] == len(rm) - 30 > 0 and rep["added_edges"] == len(rm.edges) - len(plain.edges)
+    assert rep["checks"] <= rep["budget"] == CHECKS_PER_VERTEX * 30
+    np.testing.assert_array_equal(rm.vertices[:30], plain.vertices)
+    np.testing.assert_array_equal(rm.edges[: len(plain.edges)], plain.edges)
+    added = rm.edges[len(plain.edges) :]
+    crosses = 0
+    for a, b in added:
+        pa, pb = rm.vertices[a], rm.vertices[b]
+        assert _free_along(doc, pa, pb), (pa, pb)
+        rows = np.array([[0.0, *pa], [10.0, *pb]])
+        assert check_trajectory(scene, rows).valid
+        crosses += (pa[0] - 3.0) * (pb[0] - 3.0) <= 0
+    assert crosses >= 1  # the added path goes through the door
+    again = build_roadmap(scene, RoadmapOptions(**opts))  # same seed, same roadmap
+    assert roadmap_digest(again) == roadmap_digest(rm) and again.info.join["checks"] == rep["checks"]
+
+
+def test_join_gives_up_in_a_sealed_room_without_a_check():
+    """The robot's inscribed disc cannot leave the room: the pieces are proven apart."""
+    offset = [[0.1, -0.2], [0.9, -0.2], [0.9, 0.2], [0.1, 0.2]]  # the reference point outside the body
+    for robot, n in (({"box": list(BOX), "vmax": 1.0}, 40), ({"box": list(BOX), "vmax": 1.0}, 60), ({"footprint": offset, "vmax": 1.0}, 40)):
+        doc = sealed_doc()
+        doc["robot"] = robot
+        rm = build_roadmap(parse_scene(doc), RoadmapOptions(vertices=n, seed=2))  # seed 2: vertices in and out
+        rep = rm.info.join
+        assert rm.info.components == rep["components_before"] == rep["components_after"] == 2
+        assert rep["components_apart"] == 1 and rep["checks"] == 0 and rep["budget"] == CHECKS_PER_VERTEX * n
+        assert rep["added_vertices"] == rep["added_edges"] == 0 and len(rm) == n
+
+
+def test_join_spends_at_most_its_budget():
+    """Seed 1's pieces share the door (not proven apart) and are not joined in 50 checks."""
+    scene = parse_scene(door_doc())
+    plain = build_roadmap(scene, RoadmapOptions(vertices=30, seed=1, sampler="uniform", join=False))
+    j = join_components(StaticGeometry(scene), plain.vertices, plain.edges, seed=1, budget=50)
+    assert (j.before, j.after, j.checks, j.budget, j.apart) == (2, 2, 50, 50, 0)
+    assert j.added_vertices == j.added_edges == 0 and len(j.edges) == len(plain.edges)
+
+
+def test_old_files_load_without_the_join_and_the_cli_reports_it(tmp_path):
+    scene = parse_scene(door_doc())
+    rm = build_roadmap(scene, RoadmapOptions(vertices=30, seed=6, sampler="uniform"))
+    out = tmp_path / "rm.json"
+    rm.save(out)
+    assert load_roadmap(out, scene).options.join is True
+    doc = json.loads(out.read_text())
+    del doc["options"]["join"]
+    out.write_text(json.dumps(doc))
+    assert load_roadmap(out, scene).options.join is False  # as built before the join
+    path = tmp_path / "sealed.yaml"
+    path.write_text(yaml.safe_dump(sealed_doc()), encoding="utf-8")
+    p = run_cli_process("roadmap", path, "-n", "40", "--seed", "2", "-o", out)
+    assert p.returncode == 0, p.stderr
+    said = "component join: 2 -> 2 component(s), 0 vertices beyond -n 40 (0 of 400 collision checks; "
+    assert said + "1 proven apart: the robot's inscribed disc cannot get out; " in p.stdout
+    assert json.loads(out.read_text())["info"]["join"]["components_after"] == 2
+    p = run_cli_process("roadmap", path, "-n", "40", "--seed", "2", "--no-join", "-o", out)
+    assert p.returncode == 0 and "component join" not in p.stdout
+    doc = json.loads(out.read_text())
+    assert doc["options"]["join"] is False and "join" not in doc["info"]
