@@ -23,10 +23,10 @@ DEEP = [LEFT + 0.015 + 0.18, 2.83, np.pi / 2]  # nose first (its left side is th
 OUT = [1.98, 1.55, 2.3]
 
 
-def _scene(start, goal, kinematics: str = "holonomic"):
+def _scene(start, goal, kinematics: str = "holonomic", width: float = WIDTH):
     """A 5.1 x 3.6 m room whose top wall (0.95 m thick) has the alcove."""
     top, thick = 3.65, 0.95
-    right = LEFT + WIDTH
+    right = LEFT + width
     robot = {"footprint": FOOTPRINT, "vmax": 0.8}
     if kinematics != "holonomic":
         robot["kinematics"] = kinematics
@@ -116,3 +116,37 @@ def test_a_navigator_docks_deep_in_the_alcove():
     res = simulate(scene, rm, OUT, DEEP, 0.0, 0.25, max_time=30.0, options=NavOptions(budget_clock="cpu"))
     assert res.reached
     assert check_trajectory(scene, res.trajectory.waypoints, scene.query("q")).valid
+
+
+@pytest.mark.parametrize("side", [0.0, 0.016], ids=["flush-left", "flush-right"])
+@pytest.mark.parametrize("into", [True, False], ids=["goal-deep", "start-deep"])
+def test_an_end_flush_with_a_side_wall_of_the_alcove_is_bridged(side, into):
+    """8 mm per side, the cart against one side wall: after the 2 mm step from contact its
+    clearance is still 0 (it slides along the wall), so the rays stopped at 4 mm and were
+    dropped; a slide along the wall certified whole now leaves (a reviewer's brute force:
+    64 -> 78 of 80 dead ends)."""
+    deep = [LEFT + side + 0.18, 2.84, np.pi / 2]
+    start, goal = (OUT, deep) if into else (deep, OUT)
+    scene = _scene(start, goal, width=0.456)
+    for seed in SEEDS:
+        res = Planner(scene, _roadmap(scene, seed)).plan(start, goal)
+        assert res.solved, (seed, res.message)
+        assert check_trajectory(scene, res.trajectory.waypoints, scene.query("q")).valid
+
+
+def test_the_bridge_stops_at_the_deadline():
+    """The bridge runs inside a plan's ``time_limit``: past its deadline it casts no ray
+    (a sealed dead end cost up to 0.5 s of rays after the limit)."""
+    import time
+
+    from gfuzzy.planner.bridge import bridge, components
+
+    scene = _scene(OUT, DEEP)
+    rm = _roadmap(scene, SEEDS[0])
+    planner = Planner(scene, rm)
+    labels = components(rm)
+    targets = np.flatnonzero(labels == np.bincount(labels).argmax())
+    calls = planner.geometry.calls
+    assert bridge(planner.geometry, rm, np.array(DEEP), targets, deadline=time.perf_counter() - 1.0) is None
+    assert planner.geometry.calls == calls
+    assert bridge(planner.geometry, rm, np.array(DEEP), targets) is not None  # in time, it is found

@@ -87,10 +87,11 @@ def test_an_evasive_half_turn_is_checked_along_the_arc_it_turns():
         assert rep.valid, (rows[:2], rep.reason)
 
 
-def test_a_fan_piece_grazing_a_wall_is_left_out_within_its_steps():
-    """A lane along a wall 1 mm away takes the sphere tracing thousands of steps to
-    certify (a second of FCL queries in a depot); within the fan it is given
-    ``FAN_TRACE_STEPS`` and left out, the roadmap's graph keeping every way."""
+def test_a_fan_piece_grazing_a_wall_is_decided_within_its_steps():
+    """A lane along a wall 1 mm away took the sphere tracing thousands of steps to certify
+    (a second of FCL queries in a depot); within the fan it is given ``FAN_TRACE_STEPS``,
+    and its swept body (a box's translation sweeps the hull of its two ends) now certifies
+    it within them (it was left out)."""
     from gfuzzy.collision.geometry import StaticGeometry
     from gfuzzy.scene.scene import parse_scene
     from gfuzzy.timespace.drive import FAN_TRACE_STEPS, _free
@@ -104,6 +105,7 @@ def test_a_fan_piece_grazing_a_wall_is_left_out_within_its_steps():
     a, b = (2.0, 1.799, 0.0), (5.0, 1.799, 0.0)  # the box's upper side 1 mm below the wall, 3 m along it
     assert _free(geo, a, b)  # free, as certified without a bound
     c0 = geo.calls
-    assert not _free(geo, a, b, FAN_TRACE_STEPS)
+    assert _free(geo, a, b, FAN_TRACE_STEPS)
     assert geo.calls - c0 <= 2 * FAN_TRACE_STEPS + 2
+    assert not _free(geo, a, (5.0, 1.801, 0.0), FAN_TRACE_STEPS)  # 1 mm into the wall at its end
     assert _free(geo, (2.0, 1.0, 0.0), (5.0, 1.0, 0.0), FAN_TRACE_STEPS)  # 0.8 m away: within the steps

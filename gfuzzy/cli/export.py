@@ -73,7 +73,6 @@ def _export_mcap(args) -> int:
         extras = _navigate_extras(args.trajectory)
         if tf.waypoints is not None:
             rows = tf.waypoints
-            _violation(scene, tf, args.trajectory, "exporting it anyway")
         elif extras.get("executed") is not None:  # a navigate run that did not arrive
             rows = extras["executed"]
             if len(rows[0]) != scene.robot.dof + 1:
@@ -88,6 +87,8 @@ def _export_mcap(args) -> int:
         raise BadInput(str(exc)) from None
     except InputError as exc:
         raise BadInput(f"{args.trajectory or args.scene}: {exc}") from None
+    if rows is not None and rows is tf.waypoints:  # exported: told when check rejects it
+        _violation(scene, tf, args.trajectory, "exported anyway")
     counts = ", ".join(f"{topic} {n}" for topic, n in report.counts.items())
     _say(f"wrote {out} ({counts} messages, t {report.t_start:g}-{report.t_end:g} s)", sys.stdout)
     return EXIT_OK

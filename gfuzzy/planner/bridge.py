@@ -35,6 +35,8 @@ The rays advance by :meth:`StaticGeometry.clearance1`, which already leaves out
 from __future__ import annotations
 
 import logging
+import math
+import time
 from dataclasses import replace
 
 import numpy as np
@@ -92,10 +94,15 @@ def _directions(pose: FloatArray) -> FloatArray:
 def _ray(geometry: StaticGeometry, pose: FloatArray, d: FloatArray, reach: float) -> float:
     """How far ``pose`` translates along ``d`` (same heading) before it gets stuck (conservative
     advancement on the static clearance), at most ``reach``. A pose touching a wall or the
-    bounds (clearance 0: allowed) first takes a step of ``2 STUCK`` certified from contact."""
+    bounds (clearance 0: allowed), or flush with a wall, is first tried a slide of the whole
+    ``reach`` (or 1/2, 1/4, 1/8 of it) certified from contact, then a step of ``2 STUCK``."""
     t = 0.0
     p = pose.copy()
     if not geometry.clearance1(p) >= STUCK:
+        for f in (1.0, 0.5, 0.25, 0.125):  # flush with a wall: a slide along it, certified whole
+            p[:2] = pose[:2] + f * reach * d
+            if geometry.motion_free(pose, p):
+                return f * reach
         p[:2] = pose[:2] + 2.0 * STUCK * d
         if not geometry.motion_free(pose, p):
             return 0.0
@@ -122,7 +129,9 @@ def _link(geometry: StaticGeometry, roadmap, pose: FloatArray, targets: IntArray
     return None
 
 
-def bridge(geometry: StaticGeometry, roadmap, pose: FloatArray, targets: IntArray) -> tuple[list, int] | None:
+def bridge(
+    geometry: StaticGeometry, roadmap, pose: FloatArray, targets: IntArray, deadline: float = math.inf
+) -> tuple[list, int] | None:
     """A chain of certified translations from ``pose`` to a pose linked to one of ``targets``.
 
     Parameters
@@ -139,14 +148,14 @@ def bridge(geometry: StaticGeometry, roadmap, pose: FloatArray, targets: IntArra
     (poses, vertex) or None
         ``poses``: the chain after ``pose`` (its first pose ``2 STUCK`` from ``pose`` on
         the way out, so the end's own nearest connections find it), each motion certified; ``vertex``: the target it is linked to. None when no chain of at most
-        ``MAX_POSES`` poses is found.
+        ``MAX_POSES`` poses is found, or none by ``deadline`` (``time.perf_counter()``).
     """
     reach = REACH * geometry.r
     tree = [np.asarray(pose, dtype=float)]
     parent = [-1]
     sep = max(4.0 * STUCK, 0.02 * geometry.r)  # poses nearer than this to a tree pose are not added
     i = 0
-    while i < len(tree) and len(tree) < MAX_POSES:
+    while i < len(tree) and len(tree) < MAX_POSES and time.perf_counter() <= deadline:
         node = tree[i]
         for d in _directions(node):
             length = _ray(geometry, node, d, reach)
@@ -191,7 +200,7 @@ def _chain(geometry: StaticGeometry, tree: list, parent: list, last: int, v: int
     return poses, v
 
 
-def bridged_roadmap(planner, ends: list, k: int):
+def bridged_roadmap(planner, ends: list, k: int, deadline: float = math.inf):
     """A copy of ``planner.roadmap`` with bridges from the ``ends`` (a query's start and goal,
     or a goal alone) that miss the component to join, or None when none is needed or one is
     not found (see the module docstring).
@@ -214,7 +223,7 @@ def bridged_roadmap(planner, ends: list, k: int):
     for end, got in zip(ends, reached, strict=True):
         if main in got:
             continue
-        found = bridge(planner.geometry, rm, end, targets)
+        found = bridge(planner.geometry, rm, end, targets, deadline)
         if found is None:
             return None
         poses, v = found
@@ -228,11 +237,11 @@ def bridged_roadmap(planner, ends: list, k: int):
     return replace(rm, vertices=vertices, edges=pairs, lengths=np.asarray(lengths, dtype=float), _spanners={})
 
 
-def bridged_planner(planner, ends: list, k: int):
+def bridged_planner(planner, ends: list, k: int, deadline: float = math.inf):
     """A copy of ``planner`` on :func:`bridged_roadmap`'s copy, or None (the same)."""
     import copy
 
-    rm = bridged_roadmap(planner, ends, k)
+    rm = bridged_roadmap(planner, ends, k, deadline)
     if rm is None:
         return None
     out = copy.copy(planner)

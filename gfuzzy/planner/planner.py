@@ -324,7 +324,7 @@ class Planner:
             self._fs.append(free_space(self.scene))
         return self._fs[0]
 
-    def _not_joined(self, start, goal, prepared: bool, linked: bool, k: int) -> tuple[Planner | None, str]:
+    def _not_joined(self, start, goal, prepared: bool, linked: bool, k: int, deadline: float) -> tuple[Planner | None, str]:
         """The roadmap does not join start and goal: a planner to try again (see
         :meth:`_through_free_space`), or None and the ``no_path`` message."""
         if linked:
@@ -335,9 +335,9 @@ class Planner:
             )  # fmt: skip
         if prepared:  # a kept goal graph (replanning) is not extended
             return None, "start and goal are not connected on the roadmap (sealed off, or the roadmap is too sparse)"
-        return self._through_free_space(start, goal, k)
+        return self._through_free_space(start, goal, k, deadline)
 
-    def _through_free_space(self, start, goal, k: int) -> tuple[Planner | None, str]:
+    def _through_free_space(self, start, goal, k: int, deadline: float = math.inf) -> tuple[Planner | None, str]:
         """When the roadmap does not join ``start`` and ``goal``: a planner on the roadmap
         extended through the free space, or None and the reason no way exists.
 
@@ -352,7 +352,7 @@ class Planner:
         from .bridge import bridged_planner
 
         fs = self._free_space()
-        bridged = bridged_planner(self, [start, goal], k) if fs is None and not self.robot.unicycle else None
+        bridged = bridged_planner(self, [start, goal], k, deadline) if fs is None and not self.robot.unicycle else None
         if bridged is not None:
             return bridged, ""
         if fs is None:
@@ -443,7 +443,7 @@ class Planner:
             kept = prepare_unicycle(self, wrapped, opts.dt, self.robot.vmax * SPEED_SAFETY, opts.connect_k, opts.stretch,
                                     _tilts, _deadline)  # fmt: skip
             return UnicyclePrepared(goal, opts, kept)
-        return prepare_goal(self, goal, opts)
+        return prepare_goal(self, goal, opts, deadline=_deadline)
 
     def plan_from(self, prepared, start, t0: float = 0.0, movers=None, hold: float = 0.0) -> PlanResult:
         """Answer a query to a prepared goal from ``start`` at ``t0``: :meth:`plan` without
@@ -538,7 +538,7 @@ class Planner:
         except OutOfTime:
             return answer(Status.TIMEOUT, _late(opts.time_limit, "building the search graph"))
         if not math.isfinite(rd):
-            linked, message = self._not_joined(start, goal, _prepared is not None, _linked, opts.connect_k)
+            linked, message = self._not_joined(start, goal, _prepared is not None, _linked, opts.connect_k, deadline)
             if linked is not None:  # in the budget left
                 left = replace(opts, time_limit=max(deadline - time.perf_counter(), 1e-9))
                 return linked.plan(ends[0], ends[1], t0, left, hold=hold, _linked=True)

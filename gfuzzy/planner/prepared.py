@@ -54,6 +54,7 @@ certified connections.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -232,7 +233,7 @@ def _along(at_vertices: FloatArray, a: IntArray, j: IntArray, b: IntArray, rest:
     np.minimum(out, other, out=out)
 
 
-def prepare_goal(planner, goal: FloatArray, options, bridge: bool = True) -> PreparedGoal:
+def prepare_goal(planner, goal: FloatArray, options, bridge: bool = True, deadline: float = math.inf) -> PreparedGoal:
     """The goal's part of every query graph to ``goal`` (the module docstring's first step).
 
     Parameters
@@ -271,7 +272,7 @@ def prepare_goal(planner, goal: FloatArray, options, bridge: bool = True) -> Pre
     if not conn and bridge:  # deep in a dead end: only the goal's graph gets the bridge
         from .bridge import bridged_planner
 
-        bridged = bridged_planner(planner, [goal], options.connect_k)
+        bridged = bridged_planner(planner, [goal], options.connect_k, deadline)
         if bridged is not None:
             return replace(prepare_goal(bridged, goal_raw, options, bridge=False), bridged=bridged)
     edges = np.array([(g_id, v) for v, _ in conn], dtype=np.int64).reshape(-1, 2)
