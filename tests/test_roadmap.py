@@ -540,3 +540,7 @@ def test_a_roadmap_edited_after_it_was_built_is_refused(small, tmp_path, kind):
     with pytest.raises(SceneError) as info:
         load_roadmap(bad, scene)
     assert str(info.value).startswith(f"{bad}: digest: the vertices or edges were edited"), str(info.value)
+    doc["digest"] = 123
+    bad.write_text(json.dumps(doc))
+    with pytest.raises(SceneError, match="digest: expected the SHA-256 string written with the roadmap, got 123"):
+        load_roadmap(bad, scene)

@@ -776,6 +776,8 @@ def _digest(vertices: FloatArray, edges: IntArray) -> str:
 def _check_digest(file: str, digest, vertices: FloatArray, edges: IntArray) -> None:
     """Refuse a file whose vertices or edges were edited: its edges are certified free only
     as built (a file without ``digest``, written before it was kept, is taken as it is)."""
+    if digest is not None and not isinstance(digest, str):
+        raise SceneError(file, "digest", f"expected the SHA-256 string written with the roadmap, got {digest!r:.40}")
     if digest is not None and digest != _digest(vertices, edges):
         why = "edited after the roadmap was built (its edges are certified free only as built)"
         raise SceneError(file, "digest", f"the vertices or edges were {why}; rebuild it with `gfuzzy roadmap`")
