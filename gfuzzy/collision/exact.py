@@ -3,8 +3,9 @@ obstacle by a rounding is measured with shapely (and discs in closed form), so t
 planner's "touching" is what ``gfuzzy check`` tolerates and never more.
 
 FCL's collision test misses penetrations of up to ~3e-7 m and its distances overestimate
-small gaps; :class:`gfuzzy.collision.geometry.StaticGeometry` asks these measures whenever
-FCL puts the robot within ``_NEAR_CONTACT`` of an obstacle.
+small gaps; :class:`gfuzzy.collision.geometry.StaticGeometry` asks these measures when
+FCL's distance puts the robot within ``_NEAR_CONTACT + _DIST_MARGIN`` of an obstacle and
+FCL's collision test of the body's core (deep collisions) finds it in none.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ import math
 import numpy as np
 import shapely
 
-from ..scene.scene import Box, Disc, MapObstacle, Polygon, Robot, Scene
+from ..scene.scene import Box, Disc, MapObstacle, Polygon, Scene
 
 #: A robot this far into an obstacle or less (m) touches it: half the overlap ``gfuzzy
 #: check`` tolerates as rounding (its ``tol``, 1e-9; the half leaves room for the two
@@ -104,7 +105,6 @@ class ExactBody(_Measure):
 
     def __init__(self, scene: Scene):
         super().__init__(scene)
-        self.robot: Robot = scene.robot
         from .shapes import shape_of
 
         shape = shape_of(scene.robot)
