@@ -131,8 +131,8 @@ def overlap_depth(bodies, others, tol: float, other_edges: Edges | None = None) 
     outline near the body's). A rounding of two touching shapes is a sliver about its size
     deep however long it is. Along each edge of an overlap's outline the distance is
     bounded exactly (see :meth:`Edges.along`), the edge split until it is within
-    ``tol`` or a point deeper is found: the depth returned is exact at the vertices,
-    a bound within ``tol`` or a point found deeper. ``other_edges`` indexes the outline of
+    ``tol`` or a point deeper is found: the depth returned is the deepest point found
+    (the vertices' exact), and more than ``tol`` only where one is. ``other_edges`` indexes the outline of
     a single large ``others`` (a map).
     """
     bodies = np.asarray(bodies, dtype=object)
@@ -165,7 +165,6 @@ def overlap_depth(bodies, others, tol: float, other_edges: Edges | None = None) 
         if level == _DEPTH_HALVINGS:
             np.maximum.at(depth, at, bound)
             break
-        np.maximum.at(depth, at, np.where(bound <= tol, bound, 0.0))
         open_ = (bound > tol) & (depth[at] <= tol)  # neither bounded nor already too deep
         if not open_.any():
             break

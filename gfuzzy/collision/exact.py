@@ -164,8 +164,8 @@ def overlap_depth(body, obstacle, within: float = TOUCH_TOL) -> float:
     long; a corner a micrometre in is a micrometre deep. Each edge of the overlap's outline
     is bounded by the larger of its ends' distances to one segment of the outline measured
     (a point's distance to a segment is convex along an edge), and halved while that bound
-    is more than ``within`` and no point is found deeper: exact at the vertices, at most
-    ``within`` where bounded. ``gfuzzy check`` measures an overlap so, with its own code.
+    is more than ``within`` and no point is found deeper: the deepest point found (the
+    vertices' exact), more than ``within`` only where one is. ``gfuzzy check`` measures an overlap so, with its own code.
     """
     inter = shapely.intersection(body, obstacle)
     pieces = [g for g in shapely.get_parts(inter) if g.area > 0.0]
@@ -186,8 +186,6 @@ def overlap_depth(body, obstacle, within: float = TOUCH_TOL) -> float:
         if level == _HALVINGS:
             return max(depth, float(bound.max()))
         done = bound <= within
-        if done.any():
-            depth = max(depth, float(bound[done].max()))
         if depth > within or done.all():
             return depth
         p, q = p[~done], q[~done]
