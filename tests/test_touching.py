@@ -232,3 +232,165 @@ def test_a_holonomic_end_touching_the_bounds_in_a_corner_is_bridged_to_the_roadm
         assert res.solved, res.message
         rep = check_trajectory(scene, res.trajectory.waypoints)
         assert rep.valid, rep.reason
+
+
+# ---- the overlap's depth (gfuzzy check and the planner's exact measure)
+
+SPIKE_HALF = 0.45 * math.tan(math.radians(0.5))  # a 1-degree spike 0.45 long in front
+SPIKE = [[0.6, 0.0], [0.15, SPIKE_HALF], [0.15, 0.2], [-0.2, 0.2], [-0.2, -0.2], [0.15, -0.2], [0.15, -SPIKE_HALF]]
+BOX, LONG = {"box": [0.6, 0.4], "vmax": 0.5}, {"box": [2.5, 0.4], "vmax": 0.5}
+REACH = 0.3 * math.cos(math.pi / 4) + 0.2 * math.sin(math.pi / 4)  # the 45-degree box's corner
+
+
+def _walls(robot):
+    """A long wall (top face y = 1) and a block (left face x = 10.5)."""
+    return parse_scene({
+        "version": 1, "name": "depth", "bounds": [0, 0, 12, 4], "robot": robot, "movers": [], "queries": [],
+        "obstacles": [{"box": {"center": [6.0, 0.5], "size": [10.0, 1.0]}}, {"box": {"center": [11.0, 2.5], "size": [1.0, 3.0]}}],
+    })  # fmt: skip
+
+
+DEPTH_CASES = {  # name: (robot, rows [t, x, y, heading], valid)
+    "corner 1e-6 m in": (BOX, [[0.0, 10.5 - REACH + 1e-6, 2.0, math.pi / 4]], False),
+    "corner 3e-5 m in": (BOX, [[0.0, 10.5 - REACH + 3e-5, 2.0, math.pi / 4]], False),
+    "spike's tip 1e-7 m in": ({"footprint": SPIKE, "vmax": 0.5}, [[0.0, 9.9 + 1e-7, 2.0, 0.0]], False),
+    "spike's tip 5e-8 m in": ({"footprint": SPIKE, "vmax": 0.5}, [[0.0, 9.9 + 5e-8, 2.0, 0.0]], False),
+    "2.5 m face 1e-17 m in": (LONG, [[0.0, 3.0, 1.2 - 1e-17, 0.0]], True),
+    "2.5 m face 4.5e-10 m in": (LONG, [[0.0, 3.0, 1.2 - 4.5e-10, 0.0]], True),
+    "2.5 m face 2e-9 m in": (LONG, [[0.0, 3.0, 1.2 - 2e-9, 0.0]], False),
+    "5 m slide 1e-10 m in": (LONG, [[0.0, 2.0, 1.2 - 1e-10, 0.0], [10.0, 7.0, 1.2 - 1e-10, 0.0]], True),
+    "5 m slide 4.5e-10 m in": (LONG, [[0.0, 2.0, 1.2 - 4.5e-10, 0.0], [10.0, 7.0, 1.2 - 4.5e-10, 0.0]], True),
+}
+
+
+@pytest.mark.parametrize("case", list(DEPTH_CASES))
+def test_check_measures_an_overlap_by_its_depth(case):
+    """``gfuzzy check`` measures a box's or footprint's overlap with a polygon by its depth:
+    a corner or a spike's tip a micrometre in is a collision, a face a rounding in touches
+    however long it is. Before: by its area (in m², against the 1e-9 m tolerance), so a
+    corner 3e-5 m in and a spike's tip 1e-6 m in were valid, and a 2.5 m box flush 4.5e-10
+    m in (area 1.1e-9) was not."""
+    robot, rows, valid = DEPTH_CASES[case]
+    rep = check_trajectory(_walls(robot), np.array(rows))
+    assert rep.valid == valid, rep.reason
+
+
+@pytest.mark.parametrize("case", list(DEPTH_CASES))
+def test_the_planner_measures_an_overlap_by_its_depth(case):
+    """The planner's exact measure is the check's: the same poses and slides are valid
+    (``clearance1`` >= 0, ``motion_free``). Before: a slide 1e-10 m into a wall was
+    refused beyond ~5 m (the overlaps' area summed over the sweep), a 2.5 m face 4.5e-10
+    m in was refused, and a 1-degree spike's tip 5e-8 m in was accepted (its overlap's
+    thickness, 2A/P, is not its depth)."""
+    robot, rows, valid = DEPTH_CASES[case]
+    geo = StaticGeometry(_walls(robot))
+    poses = np.array(rows)[:, 1:]
+    ok = all(geo.clearance1(p) >= 0 for p in poses)
+    if len(poses) == 2:
+        ok = ok and geo.motion_free(poses[0], poses[1])
+    assert ok == valid
+
+
+def test_a_thin_obstacle_across_the_body_is_a_collision():
+    """A polygon 1.5e-9 m thick across the box: no corner of either lies inside the other
+    and the overlap is 1.5e-9 m thick, but the wall runs 0.2 m deep through the body. Before:
+    valid (its area, 9e-10 m², under the tolerance)."""
+    robot = {"box": [0.6, 0.4], "vmax": 0.5}
+    scene = parse_scene({
+        "version": 1, "name": "thin", "bounds": [0, 0, 6, 2], "robot": robot, "movers": [], "queries": [],
+        "obstacles": [{"polygon": [[2, 0.5], [4, 0.5], [4, 0.5 + 1.5e-9], [2, 0.5 + 1.5e-9]]}],
+    })  # fmt: skip
+    pose = np.array([3.0, 0.5, 0.3])
+    rep = check_trajectory(scene, np.array([[0.0, *pose]]))
+    assert not rep.valid and "penetration 0.2" in rep.reason, rep.reason
+    assert StaticGeometry(scene).clearance1(pose) < 0
+
+
+def _depth_oracle(body, obstacle) -> float:
+    """Independently: the deepest of the points sampled every 1e-4 m along each outline
+    (and its vertices) inside the other shape, from that shape's outline."""
+    import shapely
+
+    def inside(a, b):
+        xy = shapely.get_coordinates(shapely.segmentize(a.boundary, 1e-4))
+        xy = xy[shapely.contains_xy(b, xy[:, 0], xy[:, 1])]
+        return float(np.max(shapely.distance(shapely.points(xy), b.boundary), initial=0.0))
+
+    return max(inside(body, obstacle), inside(obstacle, body))
+
+
+@pytest.mark.parametrize("robot", [ROBOTS[0], ROBOTS[1], {"footprint": SPIKE, "vmax": 0.5}], ids=["box", "L", "spike"])
+def test_check_and_the_planner_agree_with_a_depth_oracle_near_contact(robot):
+    """Brute force, near-contact poses (a face, a corner, an obstacle's corner; 1e-12 to
+    1e-6 m in or out): ``gfuzzy check`` calls a pose more than 2e-9 m deep (by an oracle
+    sampling both outlines) a collision and one less than 0.3e-9 m deep valid; whatever the
+    planner accepts the check accepts."""
+    import shapely
+
+    scene = _scene(robot)
+    geo = StaticGeometry(scene)
+    walls = shapely.union_all([shapely.Polygon(scene.obstacles[0].vertices()), shapely.Polygon(POLY)])
+    rng = np.random.default_rng(5)
+    deep = shallow = 0
+    for pose, _ in _near_contact(scene, rng, 240):
+        if geo._bounds_clearance1(pose) < 0:
+            continue
+        body = shapely.Polygon(scene.robot.corners(pose[None])[0])
+        if body.distance(shapely.Point(1.5, 3.5)) < 0.3 + 1e-6:
+            continue  # the disc: measured by distance, as before
+        truth = _depth_oracle(body, walls)
+        rep = check_trajectory(scene, np.array([[0.0, *pose]]))
+        if truth > 2e-9:
+            deep += 1
+            assert not rep.valid, (pose.tolist(), truth)
+        elif truth < 0.3e-9:
+            shallow += 1
+            assert rep.valid, (pose.tolist(), truth, rep.reason)
+        if geo.clearance1(pose) >= 0:
+            assert rep.valid, (pose.tolist(), truth, rep.reason)
+    assert deep > 30 and shallow > 30, (deep, shallow)
+
+
+def test_a_spike_at_the_seam_of_two_map_rectangles_is_measured_in_their_union(tmp_path):
+    """A map's blocked cells are rectangles to the planner; a 1-degree spike's tip 1e-7 m
+    into the blocked region exactly on the line between two of them lies on each one's
+    outline (0 deep in either). Measured against their union, it is 1e-7 m deep: refused,
+    as the check refuses it. Before: accepted."""
+    from PIL import Image
+
+    from gfuzzy.scene.scene import load_scene
+
+    px = np.full((2, 3), 254, np.uint8)
+    px[0, :] = 0  # the top row blocked across, the bottom one in its first two cells
+    px[1, :2] = 0
+    Image.fromarray(px).save(tmp_path / "m.png")
+    (tmp_path / "m.yaml").write_text("image: m.png\nresolution: 0.5\norigin: [2.0, 1.0, 0.0]\nnegate: 0\n"
+                                     "occupied_thresh: 0.65\nfree_thresh: 0.196\n")  # fmt: skip
+    import yaml
+
+    doc = {"version": 1, "name": "seam", "bounds": [0, 0, 6, 3], "robot": {"footprint": SPIKE, "vmax": 0.5},
+           "movers": [], "queries": [], "obstacles": [{"map": {"file": "m.yaml"}}]}  # fmt: skip
+    (tmp_path / "seam.yaml").write_text(yaml.safe_dump(doc))
+    scene = load_scene(tmp_path / "seam.yaml")
+    assert len(scene.obstacles[0].rects) == 2
+    geo = StaticGeometry(scene)
+    for depth, valid in ((1e-7, False), (1e-17, True)):
+        pose = np.array([2.0 - 0.6 + depth, 1.5, 0.0])  # the tip at y = 1.5, between the rows
+        assert (geo.clearance1(pose) >= 0) == valid, depth
+        assert check_trajectory(scene, np.array([[0.0, *pose]])).valid == valid, depth
+
+
+def test_a_deep_pose_is_decided_by_the_core_without_the_exact_measure(monkeypatch):
+    """A box 0.1 m into the wall is refused by FCL's test of its core at that pose, before
+    any exact measure (made to fail here): the core is placed at the pose asked (after a
+    pose elsewhere), not left where it was."""
+    geo = StaticGeometry(_walls(BOX))
+    assert geo.clearance1(np.array([5.0, 2.5, 0.3])) > 0
+    assert geo.clearance1(np.array([5.0, 1.2 + 1e-5, 0.0])) >= 0  # near contact: measured exactly
+
+    def refuse(a, b):
+        raise AssertionError("the exact measure was asked")
+
+    monkeypatch.setattr(geo._exact, "gap", refuse)
+    assert geo.clearance1(np.array([5.0, 1.1, 0.0])) < 0
+    assert geo.clearance1(np.array([10.5 - REACH + 0.05, 2.0, math.pi / 4])) < 0

@@ -727,7 +727,7 @@ def test_the_exact_disc_gap_against_every_obstacle():
     the motion, a polygon inside its round ends, and left out obstacles the disc reaches."""
     import shapely
 
-    from gfuzzy.collision.geometry import _ExactDisc
+    from gfuzzy.collision.exact import ExactDisc as _ExactDisc
 
     poly = [[4.5, 2.5], [5.6, 2.5], [5.6, 3.6], [5.2, 3.6], [5.2, 2.9], [4.5, 2.9]]
     sc = parse_scene(doc({"disc": 0.2, "vmax": 0.5}, obstacles=[{"polygon": poly}, {"box": {"center": [2.0, 2.0], "size": [0.4, 1.0]}}], bounds=(0, 0, 6, 4)))  # fmt: skip

@@ -26,6 +26,7 @@ import shapely
 
 from ..scene.scene import Box, Disc, MapObstacle, Query, Scene
 from ..typed import FloatArray
+from .depth import Edges, overlap_depth
 
 __all__ = ["CheckReport", "check_trajectory"]
 
@@ -90,13 +91,14 @@ def _wrap(a):
 class _World:
     """Shapely / closed-form model of the scene, evaluated at arrays of poses and times."""
 
-    def __init__(self, scene: Scene):
+    def __init__(self, scene: Scene, tol: float = 1e-9):
         self.scene = scene
         self.robot = scene.robot
+        self.tol = tol  # an overlap's depth is measured to within it (see depth.overlap_depth)
         self.keep_static = float(scene.robot.clearance)
         self.keep_mover = float(scene.robot.mover_clearance)
         # after each clearance / swept_clearance: the bodies' own smallest distance per pose or
-        # interval (no required distance; negative: overlap depth, or area for two polygons)
+        # interval (no required distance; negative: the overlap's depth, see depth.overlap_depth)
         # and what it is against
         self.last_gap: tuple[FloatArray, list] = (np.zeros(0), [])
         polys = []
@@ -111,6 +113,7 @@ class _World:
             else:
                 polys.append(shapely.Polygon(ob.points, [h for h in ob.holes]))
         self.static = shapely.union_all(polys) if polys else None
+        self._static_edges: Edges | None = None
         if self.static is not None:
             shapely.prepare(self.static)
         # the body's outline about the reference point: a box's corners or the footprint
@@ -127,6 +130,13 @@ class _World:
             tris = shapely.get_parts(shapely.constrained_delaunay_triangles(outline))
             self.triangles = [np.asarray(t.exterior.coords)[:3] for t in tris]
 
+    @property
+    def static_edges(self) -> Edges:
+        """The static obstacles' outline, indexed when an overlap is first measured."""
+        if self._static_edges is None:
+            self._static_edges = Edges(self.static)
+        return self._static_edges
+
     def robot_geoms(self, poses: FloatArray):
         if self.robot.shape == "disc":
             return shapely.points(poses[:, 0], poses[:, 1])
@@ -136,19 +146,18 @@ class _World:
         ys = poses[:, None, 1] + s[:, None] * local[:, 0] + c[:, None] * local[:, 1]
         return shapely.polygons(np.stack([xs, ys], -1))
 
-    def _shape_distance(self, geoms, other, area_of_overlap: bool):
+    def _shape_distance(self, geoms, other, measure_depth: bool):
         """Signed-ish distance between robot geometries and a shapely geometry."""
         d = shapely.distance(geoms, other)
         if self.robot.shape == "disc":
             d = _signed(d, other, geoms, shapely.contains_xy(other, shapely.get_x(geoms), shapely.get_y(geoms)))
             d = d - self.robot.radius
             return d
-        if area_of_overlap:
+        if measure_depth:
             zero = d <= 0
             if np.any(zero):
-                area = shapely.area(shapely.intersection(geoms[zero], other))
                 d = d.copy()
-                d[zero] = np.where(area > 1e-12, -area, 0.0)
+                d[zero] = -overlap_depth(geoms[zero], other, self.tol, self.static_edges)
         return d
 
     def bounds_clearance(self, poses):
@@ -202,8 +211,7 @@ class _World:
                     d = shapely.distance(geoms, boxes)
                     zero = d <= 0
                     if np.any(zero):
-                        area = shapely.area(shapely.intersection(geoms[zero], boxes[zero]))
-                        d[zero] = np.where(area > 1e-12, -area, 0.0)
+                        d[zero] = -overlap_depth(geoms[zero], boxes[zero], self.tol)
             parts.append(np.where(present, d - self.keep_mover, np.inf))
             names.append(f"mover {mv.name!r}")
         stack = np.vstack(parts)
@@ -292,8 +300,7 @@ class _World:
                 d = shapely.distance(swept, self.static)
                 zero = d <= 0
                 if np.any(zero):
-                    area = shapely.area(shapely.intersection(swept[zero], self.static))
-                    d[zero] = np.where(area > 1e-12, -area, 0.0)
+                    d[zero] = -overlap_depth(swept[zero], self.static, self.tol, self.static_edges)
             take(d - self.keep_static, "a static obstacle")
         for center, radius in self.discs:
             if disc:
@@ -310,7 +317,7 @@ class _World:
                 continue
             straight = np.hypot(*(mm - 0.5 * (ma + mb)).T) <= 1e-9 * (1.0 + np.hypot(*(mb - ma).T))
             qa, qb = ma - pa, mb - pb  # the mover relative to the robot's reference point
-            d = _relative_swept_distance(mv, qa, qb, disc, r, body)
+            d = _relative_swept_distance(mv, qa, qb, disc, r, body, self.tol)
             d = np.where(present, d - self.keep_mover, np.inf)
             d = np.where(straight | ~present, d, np.nan)
             nan = np.isnan(d)
@@ -323,7 +330,7 @@ class _World:
         return p if heading is None else np.column_stack([p, heading])
 
 
-def _relative_swept_distance(mv, qa, qb, disc: bool, r: float, body):
+def _relative_swept_distance(mv, qa, qb, disc: bool, r: float, body, tol: float):
     """Distance between the robot (a disc of radius ``r`` at the origin, or the box or
     footprint ``body`` at the origin) and mover ``mv`` translating from ``qa`` to ``qb`` relative to
     it: the mover's swept set (k,); negative where they overlap."""
@@ -346,8 +353,7 @@ def _relative_swept_distance(mv, qa, qb, disc: bool, r: float, body):
         d = shapely.distance(hull, body)
         zero = d <= 0
         if np.any(zero):
-            area = shapely.area(shapely.intersection(hull[zero], body[zero]))
-            d[zero] = np.where(area > 1e-12, -area, 0.0)
+            d[zero] = -overlap_depth(body[zero], hull[zero], tol)
     return d
 
 
@@ -519,7 +525,7 @@ class _Checker:
         self.vmax_seen = float(self.speed.max(initial=0.0))
         self.first: list = [math.inf, "", None]  # time, reason and overlap (depth, name) of the earliest violation
         self.deepest: tuple[float, str, str] | None = None  # the deepest overlap: depth, against what, when
-        self.world = _World(scene)
+        self.world = _World(scene, tol)
         self.evaluations = 0
         self.min_clear = math.inf
 

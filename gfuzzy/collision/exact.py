@@ -3,8 +3,9 @@ obstacle by a rounding is measured with shapely (and discs in closed form), so t
 planner's "touching" is what ``gfuzzy check`` tolerates and never more.
 
 FCL's collision test misses penetrations of up to ~3e-7 m and its distances overestimate
-small gaps; :class:`gfuzzy.collision.geometry.StaticGeometry` asks these measures whenever
-FCL puts the robot within ``_NEAR_CONTACT`` of an obstacle.
+small gaps; :class:`gfuzzy.collision.geometry.StaticGeometry` asks these measures when
+FCL's distance puts the robot within ``_NEAR_CONTACT + _DIST_MARGIN`` of an obstacle and
+FCL's collision test of the body's core (deep collisions) finds it in none.
 """
 
 from __future__ import annotations
@@ -14,13 +15,12 @@ import math
 import numpy as np
 import shapely
 
-from ..scene.scene import Box, Disc, MapObstacle, Polygon, Robot, Scene
+from ..scene.scene import Box, Disc, MapObstacle, Polygon, Scene
 
 #: A robot this far into an obstacle or less (m) touches it: half the overlap ``gfuzzy
 #: check`` tolerates as rounding (its ``tol``, 1e-9; the half leaves room for the two
-#: measurements' own roundings). For a box or a footprint the overlap with the obstacles
-#: (polygons) is also held to TOUCH_TOL square metres in all: the check measures such an
-#: overlap by its area.
+#: measurements' own roundings). A box's or a footprint's overlap with polygons is
+#: measured by its depth (:func:`overlap_depth`), as the check measures it.
 TOUCH_TOL = 0.5e-9
 
 
@@ -105,7 +105,6 @@ class ExactBody(_Measure):
 
     def __init__(self, scene: Scene):
         super().__init__(scene)
-        self.robot: Robot = scene.robot
         from .shapes import shape_of
 
         shape = shape_of(scene.robot)
@@ -128,12 +127,9 @@ class ExactBody(_Measure):
 
     def gap(self, a, b) -> float:
         """The least distance of the body translating from pose ``a`` to ``b`` to the
-        obstacles (negative: into one).
+        obstacles (negative: into one, by the overlap's depth: :func:`overlap_depth`).
 
-        Into a polygon, the overlap counts by its thickness (twice its area over its
-        perimeter: the depth of a sliver along a face, less than a corner's) or, when that
-        is more, by the overlaps' total area in square metres: what ``gfuzzy check``
-        measures. Into a disc, by how far its centre is within its radius of the body.
+        Into a disc, by how far its centre is within its radius of the body.
         """
         body = self.swept(a, b)
         out = math.inf
@@ -141,17 +137,79 @@ class ExactBody(_Measure):
         if len(discs):
             d = shapely.distance(body, shapely.points(discs[:, :2])) - discs[:, 2]
             out = float(np.min(d))
-        area = 0.0
+        touching = []
         for poly in self.obstacles.near(body, 1e-6):
             d = float(poly.distance(body))
             if d > 0.0:
                 out = min(out, d)
-                continue
-            part = poly.intersection(body)
-            a2 = float(part.area)
-            area += a2
-            if a2 > 0.0:
-                out = min(out, -2.0 * a2 / max(float(part.length), 1e-300))
             else:
-                out = min(out, 0.0)
-        return min(out, -area) if area > 0.0 else out
+                touching.append(poly)
+        if touching:
+            # measured against their union: a body at the seam of two map cells is as deep
+            # in the blocked region as the check measures it (every polygon that meets the
+            # body is here, so the overlap is the whole of it)
+            out = min(out, -overlap_depth(body, shapely.union_all(touching)))
+        return out
+
+
+def overlap_depth(body, obstacle, within: float = TOUCH_TOL) -> float:
+    """How deep ``body`` and ``obstacle`` (shapely polygons) overlap (m; 0 when they only
+    touch).
+
+    The largest distance of a point of the overlap's outline from the outline of the shape
+    it lies inside (the body's corners, a spike's tip, its edge across a thin wall, in the
+    obstacle, from the obstacle's outline; the obstacle's inside the body, from the body's),
+    or, when more, a piece's thickness (twice its area over its perimeter: an obstacle held
+    inside the body). A rounding of touching shapes is a sliver about its size deep however
+    long; a corner a micrometre in is a micrometre deep. Each edge of the overlap's outline
+    is bounded by the larger of its ends' distances to one segment of the outline measured
+    (a point's distance to a segment is convex along an edge), and halved while that bound
+    is more than ``within`` and no point is found deeper: the deepest point found (the
+    vertices' exact), more than ``within`` only where one is. ``gfuzzy check`` measures an overlap so, with its own code.
+    """
+    inter = shapely.intersection(body, obstacle)
+    pieces = [g for g in shapely.get_parts(inter) if g.area > 0.0]
+    if not pieces:
+        return 0.0
+    depth = max(2.0 * g.area / max(g.length, 1e-300) for g in pieces)
+    outlines = [(seg[:, 0], seg[:, 1]) for seg in (_segments(body), _segments(obstacle))]
+    edges = np.concatenate([_segments(g) for g in pieces])
+    p, q = edges[:, 0], edges[:, 1]
+    for level in range(_HALVINGS + 1):
+        far = np.zeros(len(p))
+        bound = np.zeros(len(p))
+        for a, b in outlines:
+            dp, dq = _to_segments(p, a, b), _to_segments(q, a, b)
+            far = np.maximum(far, np.maximum(dp.min(1), dq.min(1)))
+            bound = np.maximum(bound, np.maximum(dp, dq).min(1))
+        depth = max(depth, float(far.max()))
+        if level == _HALVINGS:
+            return max(depth, float(bound.max()))
+        done = bound <= within
+        if depth > within or done.all():
+            return depth
+        p, q = p[~done], q[~done]
+        m = 0.5 * (p + q)
+        p, q = np.concatenate([p, m]), np.concatenate([m, q])
+    return depth
+
+
+#: Halvings of an overlap's edge not yet bounded (then its bound counts).
+_HALVINGS = 40
+
+
+def _segments(geom) -> np.ndarray:
+    """The segments of a polygon's (or several polygons') rings, (n, 2, 2)."""
+    out = []
+    for ring in shapely.get_rings(shapely.get_parts(geom)):
+        xy = shapely.get_coordinates(ring)
+        out.append(np.stack([xy[:-1], xy[1:]], axis=1))
+    return np.concatenate(out) if out else np.zeros((0, 2, 2))
+
+
+def _to_segments(points, a, b) -> np.ndarray:
+    """Distances (k, n) of points (k, 2) to segments a-b ((n, 2) each)."""
+    d = b - a
+    rel = points[:, None, :] - a[None]
+    t = np.clip(np.einsum("knj,nj->kn", rel, d) / np.maximum(np.einsum("nj,nj->n", d, d), 1e-300), 0.0, 1.0)
+    return np.hypot(*np.moveaxis(rel - t[..., None] * d[None], -1, 0))

@@ -22,7 +22,6 @@ from ..poses import metric_distance, wrap_angle
 from ..scene.scene import Box, Disc, MapObstacle, Polygon, Robot, Scene
 from ..typed import FloatArray
 from .exact import TOUCH_TOL, ExactBody, exact_measure
-from .exact import ExactDisc as _ExactDisc  # noqa: F401  (its tests' name)
 from .shapes import HEIGHT as _HEIGHT
 from .shapes import QUAD_EXACT, convex_prism, shape_of
 from .shapes import _ccw as ccw
@@ -362,7 +361,7 @@ class StaticGeometry:
     def is_valid(self, pose) -> bool:
         """True when the robot at ``pose`` is inside bounds and FCL's collision test finds it
         in no obstacle (the sampler's fast test: it misses penetrations of up to ~3e-7 m,
-        which :meth:`clearance1` measures, for a disc exactly; no motion is certified from
+        which :meth:`clearance1` measures exactly; no motion is certified from
         such a pose, so it stays an isolated vertex)."""
         self.checks += 1
         if not self._inside_bounds(pose):
