@@ -385,8 +385,9 @@ def _safe_intervals_shared(field_: MoverField, poses, ptr, lo, hi, same, compute
     if body is not field_:
         field_.evaluations += body.evaluations - before
         # where the disc is not safe all through a group's window, its points are judged
-        # one by one with the body at their headings (sound as any point's judgement: a
-        # turn's step moves no point of the body farther than vmax dt)
+        # one by one with the body at their headings (sound as any point's judgement: the
+        # turning rate is capped at vmax / circumradius (Robot.turn_rate), so a turn's step
+        # moves no point of the body farther than vmax dt, the margin's bound)
         refine = np.nonzero(~_whole(gb, eb, spb, np.clip(lo[collapse], 0, None), np.minimum(hi[collapse], field_.steps)))[0]
         if len(refine):
             return _refined(field_, poses, ptr, lo, hi, collapse, (ga, ea, spa), (gb, eb, spb), refine, compute)
