@@ -358,3 +358,13 @@ def test_an_output_that_is_an_input_is_bad_input(tmp_path, capsys, monkeypatch, 
     named = victim.format(**names)  # the default roadmap is named as the command finds it
     assert err.count("\n") == 1 and f"would overwrite {os.path.relpath(named) if 'roadmaps' in named else named}" in err, err
     assert {p: p.read_bytes() for p in names.values() if p.exists()} == before
+
+
+def test_check_says_a_body_touching_by_a_rounding_has_clearance_0(tmp_path, capsys):
+    """A box sliding along a side of the bounds at decimal coordinates (x 4.8 + half-length
+    0.2 = 5) is 3.6e-16 m out of them: valid, and its clearance is 0.0000, not -0.0000."""
+    scene = tmp_path / "touch.yaml"
+    scene.write_text("version: 1\nname: touch\nbounds: [0, 0, 5, 5]\nrobot: {box: [0.4, 0.2], vmax: 1}\n")
+    traj = _trajectory_file(tmp_path / "t.json", [[0.0, 4.8, 4.9, 0.0], [3.0, 4.8, 2.0, 0.0]], scene="touch")
+    rc, out, _ = _run(capsys, "check", str(scene), str(traj))
+    assert rc == 0 and "valid (min clearance 0.0000," in out, out

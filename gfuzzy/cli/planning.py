@@ -222,8 +222,9 @@ def cmd_check(args) -> int:
     if not rep.valid:
         _say(f"{args.trajectory}: invalid: {rep.reason}")
         return EXIT_NO
+    clear = max(rep.min_clearance, 0.0)  # valid: within the check's tolerance of touching is touching
     _say(
-        f"{args.trajectory}: valid (min clearance {rep.min_clearance:.4f}, "
+        f"{args.trajectory}: valid (min clearance {clear:.4f}, "
         f"max speed {rep.max_speed:.4f}, {rep.evaluations} evaluations)",
         sys.stdout,
     )
