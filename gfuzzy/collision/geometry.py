@@ -449,18 +449,14 @@ class StaticGeometry:
     def _core_collides(self) -> bool:
         """Whether FCL finds the robot's core (see ``_core_geometries``) at the pose last
         placed in an obstacle: the body then overlaps it by far more than a rounding."""
-        tf = self._placed
-        for ob in self._core_objs:
-            ob.setTransform(tf)
-            data = fcl.CollisionData(request=self._creq)
-            self._manager.collide(ob, data, fcl.defaultCollisionCallback)
-            self.calls += 1
-            if data.result.is_collision:
-                return True
-        return False
+        return self._collides(self._core_objs, self._placed)
 
-    def _collides(self) -> bool:
-        for ob in self._robot_objs:
+    def _collides(self, objs=None, tf=None) -> bool:
+        """Whether FCL's collision test finds one of ``objs`` (default: the robot's pieces, as
+        last placed; with ``tf``, placed there first) in an obstacle."""
+        for ob in self._robot_objs if objs is None else objs:
+            if tf is not None:
+                ob.setTransform(tf)
             data = fcl.CollisionData(request=self._creq)
             self._manager.collide(ob, data, fcl.defaultCollisionCallback)
             self.calls += 1
