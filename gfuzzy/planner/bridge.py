@@ -42,6 +42,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..collision.geometry import StaticGeometry, metric_distance
+from ..roadmap.join import component_labels
 from ..typed import FloatArray, IntArray
 
 __all__ = ["bridge", "bridged_roadmap", "bridged_planner", "components", "RAYS", "REACH", "STUCK", "MAX_POSES", "TRIES"]
@@ -66,20 +67,7 @@ def components(roadmap) -> IntArray:
     """Connected component label of every roadmap vertex, cached on the roadmap."""
     hit = roadmap._derived.get(("components",))
     if hit is None:
-        n = len(roadmap.vertices)
-        parent = np.arange(n)
-
-        def find(i: int) -> int:
-            while parent[i] != i:
-                parent[i] = parent[parent[i]]
-                i = parent[i]
-            return i
-
-        for a, b in np.asarray(roadmap.edges, dtype=np.int64).reshape(-1, 2).tolist():
-            ra, rb = find(a), find(b)
-            if ra != rb:
-                parent[max(ra, rb)] = min(ra, rb)
-        hit = roadmap._derived[("components",)] = np.array([find(i) for i in range(n)], dtype=np.int64)
+        hit = roadmap._derived[("components",)] = component_labels(len(roadmap.vertices), roadmap.edges)
     return hit
 
 

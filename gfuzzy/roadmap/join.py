@@ -32,7 +32,7 @@ from ..typed import FloatArray, IntArray
 from .freespace import TOUCHING, blocked_points
 from .passage import centre_bridge, lateral_middle
 
-__all__ = ["Join", "join_components", "count_components"]
+__all__ = ["Join", "join_components", "count_components", "component_labels"]
 
 log = logging.getLogger(__name__)
 
@@ -96,7 +96,7 @@ class Join:
         }
 
 
-def _labels(n: int, edges) -> np.ndarray:
+def component_labels(n: int, edges) -> np.ndarray:
     """A component label per vertex (the smallest vertex index of its component)."""
     parent = list(range(n))
 
@@ -115,7 +115,7 @@ def _labels(n: int, edges) -> np.ndarray:
 
 def count_components(n: int, edges) -> int:
     """Connected components of a graph of ``n`` vertices."""
-    return int(len(np.unique(_labels(n, edges)))) if n else 0
+    return int(len(np.unique(component_labels(n, edges)))) if n else 0
 
 
 def _wrap(a):
@@ -131,7 +131,7 @@ class _Search:
         self.step = STEP * 2.0 * self.r
         self.verts = [np.asarray(v, dtype=float) for v in vertices]
         self.edges: list = []
-        self.labels = _labels(len(vertices), edges)
+        self.labels = component_labels(len(vertices), edges)
         self.budget = budget
         self.checks = 0
         self.apart = 0  # components proven apart by the inscribed disc's free space
