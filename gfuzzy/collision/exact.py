@@ -105,13 +105,9 @@ class ExactBody(_Measure):
 
     def __init__(self, scene: Scene):
         super().__init__(scene)
-        from .shapes import shape_of
+        from .shapes import body_pieces
 
-        shape = shape_of(scene.robot)
-        self.pieces = getattr(shape, "pieces", None)
-        if self.pieces is None:  # a box: one piece, its corners about the reference point
-            hl, hw = 0.5 * scene.robot.size[0], 0.5 * scene.robot.size[1]
-            self.pieces = [np.array([[hl, hw], [-hl, hw], [-hl, -hw], [hl, -hw]])]
+        self.pieces = body_pieces(scene.robot)  # a box: one piece, its corners about the reference point
 
     def swept(self, a, b):
         """The region the body covers moving straight from pose ``a`` to pose ``b`` (the

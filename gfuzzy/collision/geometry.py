@@ -23,8 +23,7 @@ from ..scene.scene import Box, Disc, MapObstacle, Polygon, Robot, Scene
 from ..typed import FloatArray
 from .exact import TOUCH_TOL, ExactBody, exact_measure
 from .shapes import HEIGHT as _HEIGHT
-from .shapes import QUAD_EXACT, convex_prism, shape_of
-from .shapes import _ccw as ccw
+from .shapes import QUAD_EXACT, body_pieces, convex_prism, shape_of
 
 __all__ = [
     "StaticGeometry",
@@ -179,27 +178,6 @@ def _hull(points: FloatArray) -> FloatArray:
     return np.array(half(pts) + half(pts[::-1]), dtype=float)
 
 
-def _pieces(robot: Robot, margin: float = 0.0) -> list[FloatArray]:
-    """A box or footprint robot's convex pieces about its reference point, each shrunk by
-    ``margin`` (their union is then inside the body), counter-clockwise; none for a disc."""
-    if robot.shape == "box":
-        hl, hw = 0.5 * robot.size[0] - margin, 0.5 * robot.size[1] - margin
-        return [np.array([[hl, -hw], [hl, hw], [-hl, hw], [-hl, -hw]])]
-    if robot.shape != "footprint":
-        return []
-    pieces = [np.asarray(p, dtype=float) for p in shape_of(robot).pieces]
-    if margin == 0.0:
-        return [ccw(p) for p in pieces]
-    import shapely
-
-    out = []
-    for piece in pieces:
-        core = shapely.Polygon(piece).buffer(-margin, join_style="mitre")
-        if not core.is_empty and core.geom_type == "Polygon":
-            out.append(ccw(np.asarray(core.exterior.coords)[:-1]))
-    return out
-
-
 def _core_geometries(robot: Robot) -> list:
     """FCL geometries of a box or footprint robot's body less ``_CORE_MARGIN`` all round
     (a footprint's convex pieces each shrunk: their union lies inside the body), or none
@@ -208,17 +186,7 @@ def _core_geometries(robot: Robot) -> list:
     m = _CORE_MARGIN
     if robot.shape == "box":
         return [fcl.Box(robot.size[0] - 2 * m, robot.size[1] - 2 * m, _HEIGHT)]
-    if robot.shape != "footprint":
-        return []
-    import shapely
-
-    out = []
-    for piece in shape_of(robot).pieces:
-        core = shapely.Polygon(piece).buffer(-m, join_style="mitre")
-        if not core.is_empty and core.geom_type == "Polygon":
-            ring = ccw(np.asarray(core.exterior.coords)[:-1])
-            out.append(convex_prism(ring, 0.5 * _HEIGHT))
-    return out
+    return [convex_prism(ring, 0.5 * _HEIGHT) for ring in body_pieces(robot, m)]
 
 
 class StaticGeometry:
@@ -269,7 +237,7 @@ class StaticGeometry:
         self._trace_ends = (math.nan, math.nan)  # the last _trace's ends' clearances
         self._trace_ran_out = False  # whether the last _trace stopped at its steps' limit
         # a box or footprint's pieces and cores (translations' swept hulls, _swept_distance)
-        self._pieces = (_pieces(scene.robot), _pieces(scene.robot, _CORE_MARGIN)) if self._objects else ([], [])
+        self._pieces = (body_pieces(scene.robot), body_pieces(scene.robot, _CORE_MARGIN)) if self._objects else ([], [])
         self._kept_measure = None  # with a clearance kept: shapely's measure of translations
         if self._pieces[0] and self.keep > 0 and all(isinstance(ob, (Disc, Box, Polygon, MapObstacle)) for ob in scene.obstacles):
             self._kept_measure = ExactBody(scene)

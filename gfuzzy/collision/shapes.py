@@ -27,7 +27,7 @@ import numpy as np
 from ..scene.scene import Robot, footprint_inradius
 from ..typed import FloatArray
 
-__all__ = ["Shape", "DiscShape", "BoxShape", "FootprintShape", "shape_of", "convex_pieces", "HEIGHT", "QUAD_EXACT"]
+__all__ = ["Shape", "DiscShape", "BoxShape", "FootprintShape", "shape_of", "body_pieces", "convex_pieces", "HEIGHT", "QUAD_EXACT"]
 
 HEIGHT = 10.0  # prism half height: any value > 0 works, all shapes share z = 0
 QUAD_EXACT = 2.0  # box-box distances are exact below this (see _quad_distance)
@@ -472,3 +472,25 @@ def shape_of(robot: Robot) -> Shape:
     if robot.shape == "box":
         return BoxShape(robot)
     return FootprintShape.of(robot.footprint)
+
+
+def body_pieces(robot: Robot, margin: float = 0.0) -> list[FloatArray]:
+    """A box or footprint robot's convex pieces about its reference point (a box: one),
+    counter-clockwise, each shrunk by ``margin`` (their union then lies inside the body);
+    none for a disc."""
+    if robot.shape == "box":
+        hl, hw = 0.5 * robot.size[0] - margin, 0.5 * robot.size[1] - margin
+        return [np.array([[hl, -hw], [hl, hw], [-hl, hw], [-hl, -hw]])]
+    if robot.shape != "footprint":
+        return []
+    pieces = [np.asarray(p, dtype=float) for p in shape_of(robot).pieces]
+    if margin == 0.0:
+        return [_ccw(p) for p in pieces]
+    import shapely
+
+    out = []
+    for piece in pieces:
+        core = shapely.Polygon(piece).buffer(-margin, join_style="mitre")
+        if not core.is_empty and core.geom_type == "Polygon":
+            out.append(_ccw(np.asarray(core.exterior.coords)[:-1]))
+    return out
