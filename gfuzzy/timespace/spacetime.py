@@ -335,28 +335,13 @@ def _whole(starts, ends, sp, lo, hi) -> BoolArray:
     return (one & (starts[k] <= lo) & (ends[k] >= hi)) | (hi < lo)
 
 
-def _refined(field_, poses, ptr, lo, hi, collapse, norm_iv, disc_iv, refine, compute):
-    """:func:`_safe_intervals_shared`'s answer when some same-position groups (``refine``,
-    indices among the collapsed ones) are judged point by point with the body: every
-    point's intervals, in its order."""
+def _refined(field_, poses, ptr, lo, hi, collapse, refine, compute):
+    """(points, intervals) of the same-position groups ``refine`` (indices among the
+    collapsed ones) judged point by point with the body, for :func:`_safe_intervals_shared`."""
     sizes = np.diff(ptr)
-    n = len(poses)
-    cgroups = np.nonzero(collapse)[0]
-    rg = cgroups[refine]  # the refined groups, as indices of all groups
+    rg = np.nonzero(collapse)[0][refine]  # the refined groups, as indices of all groups
     rpts = np.concatenate([np.arange(ptr[g], ptr[g + 1]) for g in rg.tolist()])
-    gr, er, spr = compute(field_, poses[rpts], np.concatenate([[0], np.cumsum(sizes[rg])]).astype(np.int64), lo[rg], hi[rg])
-    ga, ea, spa = norm_iv
-    gb, eb, spb = disc_iv
-    start = np.empty(n, dtype=np.int64)
-    count = np.empty(n, dtype=np.int64)
-    pn = np.repeat(~collapse, sizes)
-    start[pn], count[pn] = spa[:-1], np.diff(spa)
-    cidx = np.repeat(np.cumsum(collapse) - 1, sizes)[~pn]
-    start[~pn], count[~pn] = spb[:-1][cidx] + len(ga), np.diff(spb)[cidx]
-    start[rpts], count[rpts] = spr[:-1] + len(ga) + len(gb), np.diff(spr)
-    sp = np.concatenate([[0], np.cumsum(count)]).astype(np.int64)
-    idx = np.repeat(start, count) + (np.arange(sp[-1]) - np.repeat(sp[:-1], count))
-    return np.concatenate([ga, gb, gr])[idx], np.concatenate([ea, eb, er])[idx], sp
+    return rpts, compute(field_, poses[rpts], np.concatenate([[0], np.cumsum(sizes[rg])]).astype(np.int64), lo[rg], hi[rg])
 
 
 def _safe_intervals_shared(field_: MoverField, poses, ptr, lo, hi, same, compute):
@@ -389,16 +374,22 @@ def _safe_intervals_shared(field_: MoverField, poses, ptr, lo, hi, same, compute
         # turning rate is capped at vmax / circumradius (Robot.turn_rate), so a turn's step
         # moves no point of the body farther than vmax dt, the margin's bound)
         refine = np.nonzero(~_whole(gb, eb, spb, np.clip(lo[collapse], 0, None), np.minimum(hi[collapse], field_.steps)))[0]
-        if len(refine):
-            return _refined(field_, poses, ptr, lo, hi, collapse, (ga, ea, spa), (gb, eb, spb), refine, compute)
+    else:
+        refine = np.zeros(0, dtype=np.int64)
     start = np.empty(n, dtype=np.int64)
     count = np.empty(n, dtype=np.int64)
     start[pn], count[pn] = spa[:-1], np.diff(spa)
     cidx = np.repeat(np.cumsum(collapse) - 1, sizes)[~pn]  # each point's collapsed group
     start[~pn], count[~pn] = spb[:-1][cidx] + len(ga), np.diff(spb)[cidx]
+    starts, ends = [ga, gb], [ea, eb]
+    if len(refine):
+        rpts, (gr, er, spr) = _refined(field_, poses, ptr, lo, hi, collapse, refine, compute)
+        start[rpts], count[rpts] = spr[:-1] + len(ga) + len(gb), np.diff(spr)
+        starts.append(gr)
+        ends.append(er)
     sp = np.concatenate([[0], np.cumsum(count)]).astype(np.int64)
     idx = np.repeat(start, count) + (np.arange(sp[-1]) - np.repeat(sp[:-1], count))
-    return np.concatenate([ga, gb])[idx], np.concatenate([ea, eb])[idx], sp
+    return np.concatenate(starts)[idx], np.concatenate(ends)[idx], sp
 
 
 def _intervals_from_pairs(field_: MoverField, poses, ptr, lo, hi, H: int):
