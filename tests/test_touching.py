@@ -306,6 +306,22 @@ def test_a_thin_obstacle_across_the_body_is_a_collision():
     assert StaticGeometry(scene).clearance1(pose) < 0
 
 
+@pytest.mark.parametrize("thickness", [0.01, 0.3])
+def test_an_overlap_deeper_than_the_tolerance_reports_its_depth_not_a_lower_bound(thickness):
+    """A wall 1 cm (or 30 cm) thick across the box: the overlap's vertices are on both
+    outlines (0 deep) and its thickness is about the wall's, but the wall's face runs
+    0.2 m deep through the body; the check reports 0.2, as for a wall 1.5e-9 m thick.
+    Before: the edges were split only until a point deeper than the tolerance was found,
+    so the report read the piece's thickness (penetration 0.00984 for 1 cm)."""
+    robot = {"box": [0.6, 0.4], "vmax": 0.5}
+    scene = parse_scene({
+        "version": 1, "name": "thick", "bounds": [0, 0, 6, 2], "robot": robot, "movers": [], "queries": [],
+        "obstacles": [{"polygon": [[2, 0.5], [4, 0.5], [4, 0.5 + thickness], [2, 0.5 + thickness]]}],
+    })  # fmt: skip
+    rep = check_trajectory(scene, np.array([[0.0, 3.0, 0.5, 0.3]]))
+    assert not rep.valid and "penetration 0.2)" in rep.reason, rep.reason
+
+
 def _depth_oracle(body, obstacle) -> float:
     """Independently: the deepest of the points sampled every 1e-4 m along each outline
     (and its vertices) inside the other shape, from that shape's outline."""

@@ -118,6 +118,10 @@ def _point_segment_distance(p: FloatArray, a: FloatArray, b: FloatArray) -> Floa
 #: length of tol is called one).
 _DEPTH_HALVINGS = 40
 
+#: An overlap deeper than ``tol`` is measured to within this fraction of its depth (the
+#: number a report prints), not left at the first point found deeper than ``tol``.
+DEPTH_RELATIVE = 1e-6
+
 
 def overlap_depth(bodies, others, tol: float, other_edges: Edges | None = None) -> FloatArray:
     """How deep bodies and obstacles overlap (m; 0 where they only touch), pairwise
@@ -131,9 +135,10 @@ def overlap_depth(bodies, others, tol: float, other_edges: Edges | None = None) 
     outline near the body's). A rounding of two touching shapes is a sliver about its size
     deep however long it is. Along each edge of an overlap's outline the distance is
     bounded exactly (see :meth:`Edges.along`), the edge split until it is within
-    ``tol`` or a point deeper is found: the depth returned is the deepest point found
-    (the vertices' exact), and more than ``tol`` only where one is. ``other_edges`` indexes the outline of
-    a single large ``others`` (a map).
+    ``tol`` or, where the overlap is deeper than ``tol``, within ``DEPTH_RELATIVE`` of the
+    deepest point found: the depth returned is the deepest point found (the vertices'
+    exact; the true depth is at most ``DEPTH_RELATIVE`` more), and more than ``tol`` only
+    where one is. ``other_edges`` indexes the outline of a single large ``others`` (a map).
     """
     bodies = np.asarray(bodies, dtype=object)
     others = np.broadcast_to(np.asarray(others, dtype=object), bodies.shape)
@@ -165,7 +170,8 @@ def overlap_depth(bodies, others, tol: float, other_edges: Edges | None = None) 
         if level == _DEPTH_HALVINGS:
             np.maximum.at(depth, at, bound)
             break
-        open_ = (bound > tol) & (depth[at] <= tol)  # neither bounded nor already too deep
+        # open: not bounded by tol, nor (an overlap already too deep) by its depth so far
+        open_ = bound > np.maximum(tol, depth[at] * (1.0 + DEPTH_RELATIVE))
         if not open_.any():
             break
         # halved, and cut where a segment of the other's outline ends (past a seam at once)
