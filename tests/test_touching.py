@@ -322,6 +322,37 @@ def test_an_overlap_deeper_than_the_tolerance_reports_its_depth_not_a_lower_boun
     assert not rep.valid and "penetration 0.2)" in rep.reason, rep.reason
 
 
+def _penetration(reason: str) -> float:
+    """The penetration a collision's reason reports (the deepest, or at least that)."""
+    return float(reason.split("(penetration ")[1].removeprefix("at least ").split(" ")[0].rstrip(";)"))
+
+
+NEEDLE_X = 10.5 - 0.6 + 7e-4  # the spike's tip 7e-4 m into the block at heading 0
+
+
+@pytest.mark.parametrize(
+    "rows, certain",
+    [
+        ([[0.0, NEEDLE_X, 2.0, -0.5], [7.0, NEEDLE_X, 2.0, 0.2]], True),  # a turn: deepest at heading 0
+        ([[0.0, NEEDLE_X, 2.0, -0.5], [7.0, NEEDLE_X, 2.0, 0.2], [8.0, NEEDLE_X - 0.3, 2.0, 0.2]], True),
+        # sliding onto the long wall's top, the tip 7e-4 m into it the rest of the way (an even depth:
+        # the search stops at its budget, "at least")
+        ([[0.0, 0.5, 1.6 - 7e-4, -math.pi / 2], [18.0, 9.5, 1.6 - 7e-4, -math.pi / 2]], False),
+    ],
+    ids=["turn", "turn-and-back", "slide"],
+)
+def test_a_needle_7e_4_m_into_a_wall_reads_7e_4(rows, certain):
+    """A spike's tip swept 7e-4 m into a wall: the first contact in time is found at its onset
+    (1.1e-9 deep); the penetration reported is the deepest overlap over the trajectory, 7e-4,
+    searched, not the onset's nor the deepest of the instants the bisection happened to
+    sample. Before: "penetration 1.08e-09; 0.000595 deep ..., the deepest overlap sampled"."""
+    rep = check_trajectory(_walls({"footprint": SPIKE, "vmax": 0.5}), np.array(rows))
+    assert not rep.valid
+    assert abs(_penetration(rep.reason) - 7e-4) < 1e-6, rep.reason
+    assert ("at least" not in rep.reason) == certain, rep.reason
+    assert check_trajectory(_walls({"footprint": SPIKE, "vmax": 0.5}), np.array(rows), deepest=False).valid is False
+
+
 def _depth_oracle(body, obstacle) -> float:
     """Independently: the deepest of the points sampled every 1e-4 m along each outline
     (and its vertices) inside the other shape, from that shape's outline."""
