@@ -353,6 +353,51 @@ def test_a_needle_7e_4_m_into_a_wall_reads_7e_4(rows, certain):
     assert check_trajectory(_walls({"footprint": SPIKE, "vmax": 0.5}), np.array(rows), deepest=False).valid is False
 
 
+def test_a_box_proven_touching_is_not_measured_and_the_verdicts_are_the_same():
+    """A box (or its swept hull) whose core, the body less a band 0.3e-9 m wide, misses the
+    obstacles overlaps them at most 1e-9 deep: ``overlap_depth(convex=True)`` reads 0 for
+    it without measuring (a slide along 100 abutting boxes 1e-12 m in: 10.4 s -> 0.7 s,
+    tools/bench_check.py). Brute force near contact (poses and short slides 1e-12 to 1e-6
+    m in or out, thin walls 0.5e-9 to 3e-9 m thick across the body, box movers): the same
+    overlaps are deeper than the tolerance, measured the same, and most are proven."""
+    import shapely
+
+    from gfuzzy.check.check import _World
+    from gfuzzy.check.depth import overlap_depth
+
+    tol = 1e-9
+    scene = _scene(BOX)
+    world = _World(scene, tol)
+    rng = np.random.default_rng(7)
+    poses = np.array([pose for pose, _ in _near_contact(scene, rng, 400)])
+    bodies = world.robot_geoms(poses)
+    step = rng.normal(size=(len(poses), 2)) * 1e-3
+    corners = scene.robot.corners(poses)
+    swept = shapely.convex_hull(shapely.multipoints(np.concatenate([corners, corners + step[:, None]], 1)))
+    thin = []
+    for w in (0.5e-9, 1.5e-9, 3e-9):
+        for _ in range(5):
+            y = 0.5 + rng.uniform(-0.1, 0.1)
+            thin.append(shapely.box(2.0, y, 4.0, y + w))
+    across = world.robot_geoms(np.array([[3.0, 0.5, rng.uniform(-1, 1)] for _ in thin]))
+    mover = shapely.box(1.0, 0.4, 1.6, 0.8)  # a box mover above the box, its top 0.4 + d
+    under = world.robot_geoms(np.array([[1.3 + rng.uniform(-0.5, 0.5), 0.2 + d, 0.0] for d in _depths(rng, 40)]))
+    cases = [(bodies, world.static, world.static_edges), (swept, world.static, world.static_edges),
+             (across, np.array(thin, dtype=object), None), (under, mover, None)]  # fmt: skip
+    proven = deep = 0
+    for geoms, others, edges in cases:
+        zero = shapely.distance(geoms, others) <= 0
+        them = others if edges is not None else np.broadcast_to(np.asarray(others, dtype=object), zero.shape)[zero]
+        fast = overlap_depth(geoms[zero], them, tol, edges, convex=True)
+        full = overlap_depth(geoms[zero], them, tol, edges)
+        assert np.array_equal(fast > tol, full > tol)
+        measured = fast > 0
+        assert np.array_equal(fast[measured], full[measured])
+        assert np.all(full[~measured] <= tol)
+        proven, deep = proven + int(np.sum(~measured)), deep + int(np.sum(full > tol))
+    assert proven > 50 and deep > 50, (proven, deep)
+
+
 def _depth_oracle(body, obstacle) -> float:
     """Independently: the deepest of the points sampled every 1e-4 m along each outline
     (and its vertices) inside the other shape, from that shape's outline."""

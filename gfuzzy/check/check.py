@@ -129,6 +129,9 @@ class _World:
                 raise ValueError("the robot's footprint is not a simple polygon")
             tris = shapely.get_parts(shapely.constrained_delaunay_triangles(outline))
             self.triangles = [np.asarray(t.exterior.coords)[:3] for t in tris]
+        # a box and its swept hulls are convex: an overlap by a rounding is proven without
+        # measuring it (depth.overlap_depth)
+        self.convex = self.robot.shape == "box"
 
     @property
     def static_edges(self) -> Edges:
@@ -157,7 +160,7 @@ class _World:
             zero = d <= 0
             if np.any(zero):
                 d = d.copy()
-                d[zero] = -overlap_depth(geoms[zero], other, self.tol, self.static_edges)
+                d[zero] = -overlap_depth(geoms[zero], other, self.tol, self.static_edges, self.convex)
         return d
 
     def bounds_clearance(self, poses):
@@ -211,7 +214,7 @@ class _World:
                     d = shapely.distance(geoms, boxes)
                     zero = d <= 0
                     if np.any(zero):
-                        d[zero] = -overlap_depth(geoms[zero], boxes[zero], self.tol)
+                        d[zero] = -overlap_depth(geoms[zero], boxes[zero], self.tol, convex=self.convex)
             parts.append(np.where(present, d - self.keep_mover, np.inf))
             names.append(f"mover {mv.name!r}")
         stack = np.vstack(parts)
@@ -300,7 +303,7 @@ class _World:
                 d = shapely.distance(swept, self.static)
                 zero = d <= 0
                 if np.any(zero):
-                    d[zero] = -overlap_depth(swept[zero], self.static, self.tol, self.static_edges)
+                    d[zero] = -overlap_depth(swept[zero], self.static, self.tol, self.static_edges, self.convex)
             take(d - self.keep_static, "a static obstacle")
         for center, radius in self.discs:
             if disc:
@@ -317,7 +320,7 @@ class _World:
                 continue
             straight = np.hypot(*(mm - 0.5 * (ma + mb)).T) <= 1e-9 * (1.0 + np.hypot(*(mb - ma).T))
             qa, qb = ma - pa, mb - pb  # the mover relative to the robot's reference point
-            d = _relative_swept_distance(mv, qa, qb, disc, r, body, self.tol)
+            d = _relative_swept_distance(mv, qa, qb, disc, r, body, self.tol, self.convex)
             d = np.where(present, d - self.keep_mover, np.inf)
             d = np.where(straight | ~present, d, np.nan)
             nan = np.isnan(d)
@@ -330,7 +333,7 @@ class _World:
         return p if heading is None else np.column_stack([p, heading])
 
 
-def _relative_swept_distance(mv, qa, qb, disc: bool, r: float, body, tol: float):
+def _relative_swept_distance(mv, qa, qb, disc: bool, r: float, body, tol: float, convex: bool = False):
     """Distance between the robot (a disc of radius ``r`` at the origin, or the box or
     footprint ``body`` at the origin) and mover ``mv`` translating from ``qa`` to ``qb`` relative to
     it: the mover's swept set (k,); negative where they overlap."""
@@ -353,7 +356,7 @@ def _relative_swept_distance(mv, qa, qb, disc: bool, r: float, body, tol: float)
         d = shapely.distance(hull, body)
         zero = d <= 0
         if np.any(zero):
-            d[zero] = -overlap_depth(body[zero], hull[zero], tol)
+            d[zero] = -overlap_depth(body[zero], hull[zero], tol, convex=convex)
     return d
 
 
