@@ -20,6 +20,7 @@ from gfuzzy.roadmap.roadmap import load_roadmap
 from gfuzzy.runs.batch import (
     COLUMNS,
     BatchOptions,
+    BatchResult,
     local_cluster,
     run_batch,
     table_csv,
@@ -286,6 +287,49 @@ def test_cli_unreachable_scheduler(tmp_path, capsys):
     assert code == 2
     assert err.startswith("--scheduler tcp://127.0.0.1:1: cannot connect") and len(err.splitlines()) == 1
     assert list(tmp_path.iterdir()) == []
+
+
+class _RecordingClient:
+    """A test double of ``distributed.Client``: notes the connection in ``events``, or
+    refuses it like an unreachable scheduler."""
+
+    def __init__(self, events: list, reachable: bool):
+        self.events, self.reachable = events, reachable
+
+    def __call__(self, address, timeout=None):
+        self.events.append("connect")
+        if not self.reachable:
+            raise OSError(f"Timed out trying to connect to {address} after {timeout} s")
+        return self
+
+    def close(self):
+        self.events.append("close")
+
+
+@pytest.mark.parametrize("reachable", [False, True], ids=["unreachable", "reachable"])
+def test_cli_connects_to_the_scheduler_before_any_roadmap(tmp_path, capsys, monkeypatch, reachable):
+    """``--scheduler`` is connected to before a roadmap is built or loaded: an unreachable one
+    is one line naming the option and exit 2, with no roadmap work. Before: every scene's
+    roadmap was built first (a scene without a roadmap file: 3 s of building, then the
+    refusal)."""
+    import distributed
+
+    import gfuzzy.cli.experiments as experiments
+    import gfuzzy.runs.batch as batch
+
+    events: list = []
+    monkeypatch.setattr(distributed, "Client", _RecordingClient(events, reachable))
+    monkeypatch.setattr(experiments, "_roadmap_for", lambda sc, args: events.append("roadmap"))
+    monkeypatch.setattr(batch, "run_batch", lambda client, pairs, *a, **k: events.append("run") or BatchResult([], 0))
+    code = main(["batch", str(ROOT / "scenes" / "sim-4s1m.yaml"), "--scheduler", "tcp://10.255.255.1:8786",
+                 "-o", str(tmp_path / "rows.csv")])  # fmt: skip
+    err = capsys.readouterr().err.strip()
+    if reachable:
+        assert code == 0 and events == ["connect", "roadmap", "run", "close"], (events, err)
+    else:
+        assert code == 2 and events == ["connect"], events
+        assert err.startswith("--scheduler tcp://10.255.255.1:8786: cannot connect") and len(err.splitlines()) == 1
+        assert list(tmp_path.iterdir()) == []
 
 
 def test_cli_passes_the_plan_options(client, tmp_path):

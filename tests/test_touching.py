@@ -306,6 +306,98 @@ def test_a_thin_obstacle_across_the_body_is_a_collision():
     assert StaticGeometry(scene).clearance1(pose) < 0
 
 
+@pytest.mark.parametrize("thickness", [0.01, 0.3])
+def test_an_overlap_deeper_than_the_tolerance_reports_its_depth_not_a_lower_bound(thickness):
+    """A wall 1 cm (or 30 cm) thick across the box: the overlap's vertices are on both
+    outlines (0 deep) and its thickness is about the wall's, but the wall's face runs
+    0.2 m deep through the body; the check reports 0.2, as for a wall 1.5e-9 m thick.
+    Before: the edges were split only until a point deeper than the tolerance was found,
+    so the report read the piece's thickness (penetration 0.00984 for 1 cm)."""
+    robot = {"box": [0.6, 0.4], "vmax": 0.5}
+    scene = parse_scene({
+        "version": 1, "name": "thick", "bounds": [0, 0, 6, 2], "robot": robot, "movers": [], "queries": [],
+        "obstacles": [{"polygon": [[2, 0.5], [4, 0.5], [4, 0.5 + thickness], [2, 0.5 + thickness]]}],
+    })  # fmt: skip
+    rep = check_trajectory(scene, np.array([[0.0, 3.0, 0.5, 0.3]]))
+    assert not rep.valid and "penetration 0.2)" in rep.reason, rep.reason
+
+
+def _penetration(reason: str) -> float:
+    """The penetration a collision's reason reports (the deepest, or at least that)."""
+    return float(reason.split("(penetration ")[1].removeprefix("at least ").split(" ")[0].rstrip(";)"))
+
+
+NEEDLE_X = 10.5 - 0.6 + 7e-4  # the spike's tip 7e-4 m into the block at heading 0
+
+
+@pytest.mark.parametrize(
+    "rows, certain",
+    [
+        ([[0.0, NEEDLE_X, 2.0, -0.5], [7.0, NEEDLE_X, 2.0, 0.2]], True),  # a turn: deepest at heading 0
+        ([[0.0, NEEDLE_X, 2.0, -0.5], [7.0, NEEDLE_X, 2.0, 0.2], [8.0, NEEDLE_X - 0.3, 2.0, 0.2]], True),
+        # sliding onto the long wall's top, the tip 7e-4 m into it the rest of the way (an even depth:
+        # the search stops at its budget, "at least")
+        ([[0.0, 0.5, 1.6 - 7e-4, -math.pi / 2], [18.0, 9.5, 1.6 - 7e-4, -math.pi / 2]], False),
+    ],
+    ids=["turn", "turn-and-back", "slide"],
+)
+def test_a_needle_7e_4_m_into_a_wall_reads_7e_4(rows, certain):
+    """A spike's tip swept 7e-4 m into a wall: the first contact in time is found at its onset
+    (1.1e-9 deep); the penetration reported is the deepest overlap over the trajectory, 7e-4,
+    searched, not the onset's nor the deepest of the instants the bisection happened to
+    sample. Before: "penetration 1.08e-09; 0.000595 deep ..., the deepest overlap sampled"."""
+    rep = check_trajectory(_walls({"footprint": SPIKE, "vmax": 0.5}), np.array(rows))
+    assert not rep.valid
+    assert abs(_penetration(rep.reason) - 7e-4) < 1e-6, rep.reason
+    assert ("at least" not in rep.reason) == certain, rep.reason
+    assert check_trajectory(_walls({"footprint": SPIKE, "vmax": 0.5}), np.array(rows), deepest=False).valid is False
+
+
+def test_a_box_proven_touching_is_not_measured_and_the_verdicts_are_the_same():
+    """A box (or its swept hull) whose core, the body less a band 0.3e-9 m wide, misses the
+    obstacles overlaps them at most 1e-9 deep: ``overlap_depth(convex=True)`` reads 0 for
+    it without measuring (a slide along 100 abutting boxes 1e-12 m in: 10.4 s -> 0.7 s,
+    tools/bench_check.py). Brute force near contact (poses and short slides 1e-12 to 1e-6
+    m in or out, thin walls 0.5e-9 to 3e-9 m thick across the body, box movers): the same
+    overlaps are deeper than the tolerance, measured the same, and most are proven."""
+    import shapely
+
+    from gfuzzy.check.check import _World
+    from gfuzzy.check.depth import overlap_depth
+
+    tol = 1e-9
+    scene = _scene(BOX)
+    world = _World(scene, tol)
+    rng = np.random.default_rng(7)
+    poses = np.array([pose for pose, _ in _near_contact(scene, rng, 400)])
+    bodies = world.robot_geoms(poses)
+    step = rng.normal(size=(len(poses), 2)) * 1e-3
+    corners = scene.robot.corners(poses)
+    swept = shapely.convex_hull(shapely.multipoints(np.concatenate([corners, corners + step[:, None]], 1)))
+    thin = []
+    for w in (0.5e-9, 1.5e-9, 3e-9):
+        for _ in range(5):
+            y = 0.5 + rng.uniform(-0.1, 0.1)
+            thin.append(shapely.box(2.0, y, 4.0, y + w))
+    across = world.robot_geoms(np.array([[3.0, 0.5, rng.uniform(-1, 1)] for _ in thin]))
+    mover = shapely.box(1.0, 0.4, 1.6, 0.8)  # a box mover above the box, its top 0.4 + d
+    under = world.robot_geoms(np.array([[1.3 + rng.uniform(-0.5, 0.5), 0.2 + d, 0.0] for d in _depths(rng, 40)]))
+    cases = [(bodies, world.static, world.static_edges), (swept, world.static, world.static_edges),
+             (across, np.array(thin, dtype=object), None), (under, mover, None)]  # fmt: skip
+    proven = deep = 0
+    for geoms, others, edges in cases:
+        zero = shapely.distance(geoms, others) <= 0
+        them = others if edges is not None else np.broadcast_to(np.asarray(others, dtype=object), zero.shape)[zero]
+        fast = overlap_depth(geoms[zero], them, tol, edges, convex=True)
+        full = overlap_depth(geoms[zero], them, tol, edges)
+        assert np.array_equal(fast > tol, full > tol)
+        measured = fast > 0
+        assert np.array_equal(fast[measured], full[measured])
+        assert np.all(full[~measured] <= tol)
+        proven, deep = proven + int(np.sum(~measured)), deep + int(np.sum(full > tol))
+    assert proven > 50 and deep > 50, (proven, deep)
+
+
 def _depth_oracle(body, obstacle) -> float:
     """Independently: the deepest of the points sampled every 1e-4 m along each outline
     (and its vertices) inside the other shape, from that shape's outline."""

@@ -129,6 +129,9 @@ class _World:
                 raise ValueError("the robot's footprint is not a simple polygon")
             tris = shapely.get_parts(shapely.constrained_delaunay_triangles(outline))
             self.triangles = [np.asarray(t.exterior.coords)[:3] for t in tris]
+        # a box and its swept hulls are convex: an overlap by a rounding is proven without
+        # measuring it (depth.overlap_depth)
+        self.convex = self.robot.shape == "box"
 
     @property
     def static_edges(self) -> Edges:
@@ -157,7 +160,7 @@ class _World:
             zero = d <= 0
             if np.any(zero):
                 d = d.copy()
-                d[zero] = -overlap_depth(geoms[zero], other, self.tol, self.static_edges)
+                d[zero] = -overlap_depth(geoms[zero], other, self.tol, self.static_edges, self.convex)
         return d
 
     def bounds_clearance(self, poses):
@@ -211,7 +214,7 @@ class _World:
                     d = shapely.distance(geoms, boxes)
                     zero = d <= 0
                     if np.any(zero):
-                        d[zero] = -overlap_depth(geoms[zero], boxes[zero], self.tol)
+                        d[zero] = -overlap_depth(geoms[zero], boxes[zero], self.tol, convex=self.convex)
             parts.append(np.where(present, d - self.keep_mover, np.inf))
             names.append(f"mover {mv.name!r}")
         stack = np.vstack(parts)
@@ -300,7 +303,7 @@ class _World:
                 d = shapely.distance(swept, self.static)
                 zero = d <= 0
                 if np.any(zero):
-                    d[zero] = -overlap_depth(swept[zero], self.static, self.tol, self.static_edges)
+                    d[zero] = -overlap_depth(swept[zero], self.static, self.tol, self.static_edges, self.convex)
             take(d - self.keep_static, "a static obstacle")
         for center, radius in self.discs:
             if disc:
@@ -317,7 +320,7 @@ class _World:
                 continue
             straight = np.hypot(*(mm - 0.5 * (ma + mb)).T) <= 1e-9 * (1.0 + np.hypot(*(mb - ma).T))
             qa, qb = ma - pa, mb - pb  # the mover relative to the robot's reference point
-            d = _relative_swept_distance(mv, qa, qb, disc, r, body, self.tol)
+            d = _relative_swept_distance(mv, qa, qb, disc, r, body, self.tol, self.convex)
             d = np.where(present, d - self.keep_mover, np.inf)
             d = np.where(straight | ~present, d, np.nan)
             nan = np.isnan(d)
@@ -330,7 +333,7 @@ class _World:
         return p if heading is None else np.column_stack([p, heading])
 
 
-def _relative_swept_distance(mv, qa, qb, disc: bool, r: float, body, tol: float):
+def _relative_swept_distance(mv, qa, qb, disc: bool, r: float, body, tol: float, convex: bool = False):
     """Distance between the robot (a disc of radius ``r`` at the origin, or the box or
     footprint ``body`` at the origin) and mover ``mv`` translating from ``qa`` to ``qb`` relative to
     it: the mover's swept set (k,); negative where they overlap."""
@@ -353,7 +356,7 @@ def _relative_swept_distance(mv, qa, qb, disc: bool, r: float, body, tol: float)
         d = shapely.distance(hull, body)
         zero = d <= 0
         if np.any(zero):
-            d[zero] = -overlap_depth(body[zero], hull[zero], tol)
+            d[zero] = -overlap_depth(body[zero], hull[zero], tol, convex=convex)
     return d
 
 
@@ -396,6 +399,7 @@ def check_trajectory(
     min_interval: float = 1e-7,
     max_evaluations: int = 5_000_000,
     exact_below: float = 1e-3,
+    deepest: bool = True,
 ) -> CheckReport:
     """Check a trajectory against docs/formats.md section 3 (and ``query``'s start and goal).
 
@@ -414,6 +418,10 @@ def check_trajectory(
         Undecided intervals shorter than this (seconds) in which the robot does not turn
         are decided exactly (the swept footprint's distance), so a long touching contact
         does not need endless bisection.
+    deepest : bool
+        For an invalid trajectory, search it for the bodies' deepest overlap (up to
+        ``DEEPEST_EVALUATIONS`` more evaluations), which the reason reports; the verdict is
+        the same without it (the planner's own stages, which need only the verdict).
 
     Returns
     -------
@@ -428,7 +436,7 @@ def check_trajectory(
         hold = float(getattr(query, "hold", 0.0) or 0.0)
         if hold > 0:  # the robot parks at the goal: the rows end with a wait of `hold`
             w = np.vstack([w, np.r_[w[-1, 0] + hold, w[-1, 1:]]])
-    return _Checker(scene, w, tol, min_interval, exact_below).run(max_evaluations)
+    return _Checker(scene, w, tol, min_interval, exact_below).run(max_evaluations, deepest)
 
 
 def _rows_problem(robot, w: FloatArray, query) -> CheckReport | None:
@@ -502,6 +510,30 @@ def _unicycle_problem(robot, w: FloatArray, tol: float = 1e-6) -> CheckReport | 
     return None
 
 
+#: The deepest overlap of a trajectory found invalid is searched to within this fraction of
+#: its depth, or until this many evaluations of the clearance are spent (a long slide at an
+#: even depth: then the report says the depth is the deepest found).
+DEEPEST_RELATIVE = 1e-3
+DEEPEST_EVALUATIONS = 20_000
+
+
+def _with_deepest(reason: str, overlap, deepest: tuple[float, str, str], searched) -> str:
+    """A contact's ``reason`` with the bodies' deepest overlap: a collision's penetration is
+    the deepest overlap with what it hits (its depth at the onset, where the first contact is
+    found, follows) or, when something else overlaps deeper, that follows it. Unless the
+    search finished, the depth is the deepest found: "at least"."""
+    depth, name, when = deepest
+    certain = searched is not None and searched[0]
+    told, which = (f"{depth:.3g}", "the deepest") if certain else (f"at least {depth:.3g}", "the deepest found")
+    if reason.startswith("collides") and overlap is not None and name == overlap[1]:
+        if f"{depth:.3g}" == f"{overlap[0]:.3g}":
+            return reason
+        head = reason[: reason.rindex("(penetration ")]
+        return head + f"(penetration {told} {when}, {which}; {overlap[0]:.3g} at the onset)"
+    told = f"{told} deep against {name} {when}, {which} overlap"
+    return reason[:-1] + f"; {told})" if reason.startswith("collides") else reason + f" ({told})"
+
+
 class _Checker:
     """One check of well-formed rows: the speed bound, then clearance by bisection.
 
@@ -525,6 +557,7 @@ class _Checker:
         self.vmax_seen = float(self.speed.max(initial=0.0))
         self.first: list = [math.inf, "", None]  # time, reason and overlap (depth, name) of the earliest violation
         self.deepest: tuple[float, str, str] | None = None  # the deepest overlap: depth, against what, when
+        self.searched: tuple[bool, int] | None = None  # the search of the deepest: finished, evaluations
         self.world = _World(scene, tol)
         self.evaluations = 0
         self.min_clear = math.inf
@@ -568,15 +601,44 @@ class _Checker:
         if not self.first[1]:
             return CheckReport(True, "", self.min_clear, self.vmax_seen, self.evaluations)
         reason, overlap, deepest = self.first[1], self.first[2], self.deepest
-        contact = reason.startswith(("collides", "comes within"))
-        if contact and deepest is not None and (overlap is None or deepest[0] > 2 * overlap[0] or deepest[1] != overlap[1]):
-            # the first contact in time is reported; a reader would take its depth there for the
-            # worst: the deepest overlap of the bodies seen, and what it is against, follow
-            told = f"{deepest[0]:.3g} deep against {deepest[1]} {deepest[2]}, the deepest overlap sampled"
-            reason = reason[:-1] + f"; {told})" if reason.startswith("collides") else reason + f" ({told})"
+        if reason.startswith(("collides", "comes within")) and deepest is not None:
+            reason = _with_deepest(reason, overlap, deepest, self.searched)
         return CheckReport(False, reason + note, self.min_clear, self.vmax_seen, self.evaluations, self.first[0])
 
-    def run(self, max_evaluations: int) -> CheckReport:
+    def search_deepest(self, lip: FloatArray, budget: int = DEEPEST_EVALUATIONS) -> None:
+        """Search the whole trajectory for the bodies' deepest overlap (for the report: the
+        first contact in time is found at its onset, a tiny depth, and the bisection looks no
+        further). Branch and bound on the Lipschitz bound ``lip`` (per segment): an interval
+        ``[a, b]`` overlaps at most ``(g(a) + g(b)) / 2 + lip (b - a) / 2`` deep; intervals
+        that could hold one more than ``DEEPEST_RELATIVE`` deeper than the deepest found are
+        halved, until none is left (``searched`` True) or ``budget`` evaluations are spent."""
+        times, seg = self._event_times()
+        g = self._overlaps(times, seg)
+        a_t, b_t, a_g, b_g, a_s = times[:-1], times[1:], g[:-1], g[1:], seg[:-1]
+        spent = len(times)
+        while a_t.size:
+            best = max(self.tol, self.deepest[0] if self.deepest is not None else 0.0)
+            bound = 0.5 * (a_g + b_g) + 0.5 * lip[a_s] * (b_t - a_t)
+            need = (bound > best * (1.0 + DEEPEST_RELATIVE)) & ((b_t - a_t) >= self.min_interval)
+            a_t, b_t, a_g, b_g, a_s = a_t[need], b_t[need], a_g[need], b_g[need], a_s[need]
+            if spent + a_t.size > budget:
+                break
+            m_t = 0.5 * (a_t + b_t)
+            m_g = self._overlaps(m_t, a_s) if a_t.size else m_t
+            spent += a_t.size
+            a_t, b_t = np.concatenate([a_t, m_t]), np.concatenate([m_t, b_t])
+            a_g, b_g = np.concatenate([a_g, m_g]), np.concatenate([m_g, b_g])
+            a_s = np.concatenate([a_s, a_s])
+        self.searched = (a_t.size == 0, spent)
+        self.evaluations += spent
+
+    def _overlaps(self, times, seg_of) -> FloatArray:
+        """The bodies' deepest overlap at ``times`` (negative: apart), noted in ``deepest``."""
+        self.world.clearance(self.pose_at(times, seg_of), times)
+        self.overlapped(*self.world.last_gap, lambda k: f"at t={float(times[k])!r}")
+        return -self.world.last_gap[0]
+
+    def run(self, max_evaluations: int, deepest: bool = True) -> CheckReport:
         t, dt, p, robot, tol = self.t, self.dt, self.p, self.robot, self.tol
         # speed: the first segment over vmax (the report is the first violation in time, so
         # a collision found before it below takes its place)
@@ -628,6 +690,8 @@ class _Checker:
             a_t, b_t = np.concatenate([a_t, m_t]), np.concatenate([m_t, b_t])
             a_d, b_d = np.concatenate([a_d, m_d]), np.concatenate([m_d, b_d])
             a_s = np.concatenate([a_s, a_s])
+        if deepest and self.first[1].startswith(("collides", "comes within")):
+            self.search_deepest(lip)
         return self.report()
 
     def _sample(self, times, seg_of) -> FloatArray:
@@ -645,6 +709,13 @@ class _Checker:
     def _initial_intervals(self):
         """Samples at every row and every time a mover appears or vanishes; the intervals
         between consecutive ones (each lies within one segment)."""
+        times, seg_of = self._event_times()
+        d = self._sample(times, seg_of)
+        return times[:-1], times[1:], d[:-1], d[1:], seg_of[:-1]
+
+    def _event_times(self) -> tuple[FloatArray, np.ndarray]:
+        """Every row's time and every time a mover appears or vanishes, sorted, with the
+        segment each lies in."""
         t = self.t
         events = [t]
         for mv in self.scene.movers:
@@ -653,9 +724,7 @@ class _Checker:
                 if t[0] < te < t[-1]:
                     events.append(np.array([te]))
         times = np.unique(np.concatenate(events))
-        seg_of = np.clip(np.searchsorted(t, times, side="right") - 1, 0, len(self.dt) - 1)
-        d = self._sample(times, seg_of)
-        return times[:-1], times[1:], d[:-1], d[1:], seg_of[:-1]
+        return times, np.clip(np.searchsorted(t, times, side="right") - 1, 0, len(self.dt) - 1)
 
     def _decide_exactly(self, a_t, b_t, a_s, idx) -> np.ndarray:
         """Decide intervals ``idx`` by the swept footprint's exact clearance; the mask of

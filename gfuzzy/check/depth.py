@@ -118,8 +118,39 @@ def _point_segment_distance(p: FloatArray, a: FloatArray, b: FloatArray) -> Floa
 #: length of tol is called one).
 _DEPTH_HALVINGS = 40
 
+#: An overlap deeper than ``tol`` is measured to within this fraction of its depth (the
+#: number a report prints), not left at the first point found deeper than ``tol``.
+DEPTH_RELATIVE = 1e-6
 
-def overlap_depth(bodies, others, tol: float, other_edges: Edges | None = None) -> FloatArray:
+
+#: A convex body's core: the body less a band this many ``tol`` wide along its outline.
+_CORE_BAND = 0.3
+
+
+def _within_tol(bodies, others, tol: float) -> np.ndarray:
+    """Which convex ``bodies`` overlap ``others`` at most ``tol`` deep, proven without
+    measuring the overlap: the body's core C (the body less a band ``0.3 tol`` wide along
+    its outline) misses the obstacle, and every vertex of the body is within
+    ``h = 0.45 tol`` of C (the Hausdorff distance, checked: a body too thin or too sharp
+    for such a core is measured).
+
+    Why: let B be the body and O the obstacle. A point y of B outside C is within h of B's
+    outline (a line separates y from the convex C; B's vertex farthest beyond it is within h
+    of C, and y is no deeper in B than that vertex is beyond y). So a point of O's outline
+    inside B, not in C, is within h of B's outline; a point x of B's outline inside O more
+    than tol from O's outline has a disc of radius tol about it inside O, holding a point of
+    C (within h of x): C would meet O. A piece R of the overlap lies in the band of points
+    within h of B's outline; each curve at distance t < h inside B's outline meets R in at
+    most the length of R's outline (the projection onto the convex set of points t inside
+    B, which shortens no curve, maps R's outline onto it), so R's area is at most h times
+    its perimeter: its thickness, 2A/P, at most 2h < tol.
+    """
+    core = shapely.buffer(bodies, -_CORE_BAND * tol, join_style="mitre")
+    near = shapely.hausdorff_distance(bodies, core) <= 0.45 * tol  # NaN (an empty core): False
+    return near & ~shapely.intersects(core, others)
+
+
+def overlap_depth(bodies, others, tol: float, other_edges: Edges | None = None, convex: bool = False) -> FloatArray:
     """How deep bodies and obstacles overlap (m; 0 where they only touch), pairwise
     (``others`` one geometry or one per body).
 
@@ -131,12 +162,23 @@ def overlap_depth(bodies, others, tol: float, other_edges: Edges | None = None) 
     outline near the body's). A rounding of two touching shapes is a sliver about its size
     deep however long it is. Along each edge of an overlap's outline the distance is
     bounded exactly (see :meth:`Edges.along`), the edge split until it is within
-    ``tol`` or a point deeper is found: the depth returned is the deepest point found
-    (the vertices' exact), and more than ``tol`` only where one is. ``other_edges`` indexes the outline of
-    a single large ``others`` (a map).
+    ``tol`` or, where the overlap is deeper than ``tol``, within ``DEPTH_RELATIVE`` of the
+    deepest point found: the depth returned is the deepest point found (the vertices'
+    exact; the true depth is at most ``DEPTH_RELATIVE`` more), and more than ``tol`` only
+    where one is. ``other_edges`` indexes the outline of a single large ``others`` (a map).
+
+    ``convex`` bodies (a box, its swept hull) whose overlap is proven at most ``tol`` deep
+    by :func:`_within_tol` (a body sliding along a wall by a rounding) are not measured:
+    their depth reads 0, touching.
     """
     bodies = np.asarray(bodies, dtype=object)
     others = np.broadcast_to(np.asarray(others, dtype=object), bodies.shape)
+    if convex:
+        measure = ~_within_tol(bodies, others, tol)
+        depth = np.zeros(len(bodies))
+        if measure.any():
+            depth[measure] = overlap_depth(bodies[measure], others[measure], tol, other_edges)
+        return depth
     parts, owner = shapely.get_parts(shapely.intersection(bodies, others), return_index=True)
     area = shapely.area(parts)
     solid = area > 0.0
@@ -165,7 +207,8 @@ def overlap_depth(bodies, others, tol: float, other_edges: Edges | None = None) 
         if level == _DEPTH_HALVINGS:
             np.maximum.at(depth, at, bound)
             break
-        open_ = (bound > tol) & (depth[at] <= tol)  # neither bounded nor already too deep
+        # open: not bounded by tol, nor (an overlap already too deep) by its depth so far
+        open_ = bound > np.maximum(tol, depth[at] * (1.0 + DEPTH_RELATIVE))
         if not open_.any():
             break
         # halved, and cut where a segment of the other's outline ends (past a seam at once)

@@ -127,6 +127,16 @@ def _writable_folder(path: Path, flag: str) -> None:
         raise BadInput(f"{flag} {path}: folder {parent} is not writable")
 
 
+def _connect(address: str, timeout: float):
+    """A Dask client of the scheduler at ``address`` (bad input when it cannot connect)."""
+    from distributed import Client
+
+    try:
+        return Client(address, timeout=timeout)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise BadInput(f"--scheduler {address}: cannot connect: {' '.join(str(exc).split())[:120]}") from None
+
+
 def cmd_batch(args) -> int:
     """Every query of every scene on Dask; exit 0 all ran, 1 any error row, 130 interrupted."""
     import logging
@@ -147,26 +157,20 @@ def cmd_batch(args) -> int:
             raise BadInput(f"{path}: name: scene name {sc.name!r} repeats that of {seen[sc.name]}")
         seen[sc.name] = path
     options = BatchOptions(plan=_plan_options(args), trajectories=args.trajectories)
-    pairs = [(sc, _roadmap_for(sc, args)) for sc in scenes]  # once per scene, in the client
     quiet = not args.verbose
     if quiet:  # Dask's own INFO/WARNING lines (a worker restarting) are not ours to show
         for name in ("distributed", "tornado"):
             logging.getLogger(name).setLevel(logging.ERROR)
-    t = time.perf_counter()
-    if args.scheduler:
-        from distributed import Client
-
-        try:
-            client = Client(args.scheduler, timeout=args.connect_timeout)
-        except (OSError, TimeoutError, ValueError) as exc:
-            raise BadInput(f"--scheduler {args.scheduler}: cannot connect: {' '.join(str(exc).split())[:120]}") from None
-        where = f"the cluster at {args.scheduler}"
-        ctx = contextlib.closing(client)
-    else:
-        workers = args.workers or 2
-        where = f"{workers} local worker(s)"
-        ctx = local_cluster(workers, quiet=quiet)
-    with ctx as client:
+    with contextlib.ExitStack() as stack:
+        if args.scheduler:  # connected, or refused, before any roadmap is built or loaded
+            client = stack.enter_context(contextlib.closing(_connect(args.scheduler, args.connect_timeout)))
+            where = f"the cluster at {args.scheduler}"
+        pairs = [(sc, _roadmap_for(sc, args)) for sc in scenes]  # once per scene, in the client
+        t = time.perf_counter()
+        if not args.scheduler:
+            workers = args.workers or 2
+            where = f"{workers} local worker(s)"
+            client = stack.enter_context(local_cluster(workers, quiet=quiet))
         result = run_batch(client, pairs, options, progress=_progress("queries"))
     written = write_table(result.rows, out)
     counts: dict = {}

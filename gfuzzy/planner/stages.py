@@ -326,7 +326,7 @@ def _drive_segment(geometry: StaticGeometry, p: list, q: list, pose_clearance) -
 
 def _accept(ctx: StageContext, traj: Trajectory, query_like, before: Trajectory, max_slowdown: float):
     """Independent check, and not much slower than the answer it replaces."""
-    rep = check_trajectory(ctx.scene, traj.waypoints, query_like)
+    rep = check_trajectory(ctx.scene, traj.waypoints, query_like, deepest=False)
     if not rep.valid:
         return False, f"failed the independent check ({rep.reason})"
     limit = before.duration * (1.0 + max_slowdown) + 1e-9
@@ -428,7 +428,7 @@ def _speed_layer(ctx: StageContext, traj: Trajectory, query, opts, deadline) -> 
     if rt.status is not Status.SOLVED:
         why = f"the speed-limited path could not be timed among the movers ({rt.message})"
         return traj, replace(report, reason=why)
-    rep = check_trajectory(ctx.scene, rt.trajectory.waypoints, query)
+    rep = check_trajectory(ctx.scene, rt.trajectory.waypoints, query, deepest=False)
     if not rep.valid:
         return traj, replace(report, reason=f"failed the independent check ({rep.reason})")
     figures = replace(

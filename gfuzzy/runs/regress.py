@@ -101,11 +101,15 @@ def run_regression(
     options: PlanOptions | None,
     out: TextIO,
 ) -> bool:
-    """Run every scene, print one row per query to ``out``; True when all met."""
+    """Run every scene, print one row per query to ``out``; True when all met. A scene
+    without queries gets one line saying so, and no roadmap (``roadmap_for`` is not asked)."""
     out.write(HEADER + "\n")
     all_ok = True
     n = failed = 0
     for scene in scenes:
+        if not scene.queries:
+            out.write(f"{scene.name:<22} (no queries: nothing answered, no roadmap built or loaded)\n")
+            continue
         for row in regress_scene(scene, roadmap_for(scene), options):
             out.write(format_row(row) + "\n")
             out.flush()
