@@ -54,7 +54,9 @@ certified connections.
 
 from __future__ import annotations
 
+import copy
 import math
+import time
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -193,6 +195,27 @@ class PreparedGoal:
         groups = np.concatenate([n + base.offs, N0 + cut.offs[1:]])
         graph = SpaceTimeGraph(cut.poses, cut.indptr, cut.neighbors, heur, groups=groups, from_start=from_start)
         return QueryGraph(graph, self.s_id, self.g_id, rd)
+
+    def bridged_from(self, planner, start: FloatArray, deadline: float = math.inf, clock=time.perf_counter):
+        """This goal's graph again on a copy of its roadmap with a bridge from ``start`` to the
+        vertices that lead to the goal (:func:`gfuzzy.planner.bridge.bridge`), or None when
+        none is found (by ``deadline`` on ``clock``).
+
+        The navigator's, for a robot deep in a dead end. The copy is a superset of this graph
+        (the same vertices and edges, the bridge's after them: vertex ids keep their meaning),
+        so it answers every start this one does.
+        """
+        from .bridge import bridge, with_chains
+
+        base = planner if self.bridged is None else self.bridged
+        rm = base.roadmap
+        targets = np.flatnonzero(np.isfinite(self.dist[: len(rm.vertices)]))
+        found = bridge(base.geometry, rm, np.asarray(start, dtype=float), targets, deadline, clock) if len(targets) else None
+        if found is None:
+            return None
+        out = copy.copy(base)
+        out.roadmap = with_chains(rm, [found])
+        return replace(prepare_goal(out, self.goal_raw, self.options, bridge=False), bridged=out)
 
     def _start_edges(self, planner, start: FloatArray, ahead) -> tuple[IntArray, FloatArray]:
         """The start's certified connections: (x, 2) int edges from ``s_id``, (x,) metres."""
