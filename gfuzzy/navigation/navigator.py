@@ -395,11 +395,12 @@ class Navigator(PathSpace, Prediction):
         if self._no_exit is not None and np.array_equal(self._no_exit, start):
             return qg
         found = self._kept.bridged_from(self._planner, start, deadline, self._clock)
-        if found is None:
+        out = None if found is None else found.splice(self._planner, start, ahead=ahead, lead=True)
+        if out is None or not math.isfinite(out.roadmap_distance):
             self._no_exit = start if self._clock() <= deadline else None
             return qg
         self._exit, self._no_exit = found, None
-        return found.splice(self._planner, start, ahead=ahead, lead=True)
+        return out
 
     def roadmap_distance(self, pose) -> float:
         """Shortest distance from ``pose`` to the goal on the whole roadmap (static

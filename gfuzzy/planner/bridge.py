@@ -45,7 +45,7 @@ from ..collision.geometry import StaticGeometry, metric_distance
 from ..roadmap.join import component_labels
 from ..typed import FloatArray, IntArray
 
-__all__ = ["bridge", "bridged_roadmap", "bridged_planner", "with_chains", "components", "RAYS", "REACH", "STUCK", "MAX_POSES", "TRIES"]
+__all__ = ["bridge", "bridged_roadmap", "bridged_planner", "with_chains", "extended", "components", "RAYS", "REACH", "STUCK", "MAX_POSES", "TRIES"]
 
 log = logging.getLogger(__name__)
 
@@ -235,15 +235,22 @@ def with_chains(rm, chains: list):
         verts.append(np.asarray(poses).reshape(len(poses), -1))
         n += len(poses)
         edges.append(np.asarray([(min(a, b), max(a, b)) for a, b in zip(ids, [*ids[1:], v], strict=True)], dtype=np.int64))
-    vertices, pairs = np.vstack(verts), np.vstack(edges)
-    lengths = metric_distance(vertices[pairs[:, 0]], vertices[pairs[:, 1]], rm.circumradius)
-    added = len(pairs) - len(rm.edges)
+    log.info("query ends bridged to the roadmap: %d poses added", n - len(rm.vertices))
+    return extended(rm, np.vstack(verts), np.vstack(edges))
+
+
+def extended(rm, vertices: FloatArray, edges: IntArray):
+    """A copy of the roadmap ``rm`` with ``vertices`` and ``edges`` (its own first, in order,
+    then the added ones), whose spanners are the roadmap's with every added edge kept: still
+    a spanner of each stretch (a path within the stretch for every edge), without running
+    the greedy test again over every edge (0.06 s at 3000 vertices). For bridges
+    (:func:`with_chains`) exactly the greedy test's answer on the copy."""
+    lengths = metric_distance(vertices[edges[:, 0]], vertices[edges[:, 1]], rm.circumradius)
     spanners = {}
     for stretch, keep in rm._spanners.items():
-        spanners[stretch] = np.concatenate([keep, np.ones(added, dtype=bool)])
+        spanners[stretch] = np.concatenate([keep, np.ones(len(edges) - len(rm.edges), dtype=bool)])
         spanners[stretch].flags.writeable = False
-    log.info("query ends bridged to the roadmap: %d poses added", n - len(rm.vertices))
-    return replace(rm, vertices=vertices, edges=pairs, lengths=np.asarray(lengths, dtype=float), _spanners=spanners)
+    return replace(rm, vertices=vertices, edges=edges, lengths=np.asarray(lengths, dtype=float), _spanners=spanners)
 
 
 def bridged_planner(planner, ends: list, k: int, deadline: float = math.inf):
