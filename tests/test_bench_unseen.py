@@ -82,3 +82,14 @@ def test_one_small_case_is_solved_and_checked_end_to_end(tmp_path, capsys):
     assert (rows[0]["status"], rows[0]["outcome"]) == ("solved", "solved"), rows[0]
     table = capsys.readouterr().out
     assert "| disc holonomic | 1 | 1 | 1 | 0 | 0 | 0 | 0 | 0 | 0 |" in table, table
+
+
+def test_an_l_through_a_door_a_mover_walks_through_is_solved():
+    """Seed 1 case 51 (an L footprint, holonomic; a box mover bouncing through the door): its
+    roadmap's two pieces are joined by the component join through the door, and that join
+    went out a span beyond the vertex beside the door and back (2 m more in the mover's
+    lane): ``no_path`` at the horizon, although a witness exists. Solved and checked now."""
+    case = make_case(1, 51)
+    assert (case["kind"], case["kinematics"], case["scenario"]) == ("lfoot", "holonomic", "door-movers")
+    row = run_case(case, vertices=200)
+    assert (row["status"], row["outcome"]) == ("solved", "solved"), row

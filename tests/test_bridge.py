@@ -7,6 +7,8 @@ the plan used to be ``no_path`` although the robot backs out along the alcove's 
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -150,3 +152,107 @@ def test_the_bridge_stops_at_the_deadline():
     assert bridge(planner.geometry, rm, np.array(DEEP), targets, deadline=time.perf_counter() - 1.0) is None
     assert planner.geometry.calls == calls
     assert bridge(planner.geometry, rm, np.array(DEEP), targets) is not None  # in time, it is found
+
+
+def _tilted_alcove(start, goal, robot: dict, tilt: float = 0.35, aw: float = 0.43, depth: float = 0.61):
+    """An open 6 x 5 m room with an alcove of three walls 0.1 thick, ``aw`` wide (1.5 cm per
+    side wider than the box 0.6 x 0.4) and ``depth`` deep, its mouth's middle at (3, 2.5) and
+    its axis ``tilt`` from the x axis: no evasive heading of the navigator's runs along it."""
+    thick = 0.1
+    u, n = np.array([np.cos(tilt), np.sin(tilt)]), np.array([-np.sin(tilt), np.cos(tilt)])
+    at = lambda a, b: (np.array([3.0, 2.5]) + a * u + b * n).tolist()  # noqa: E731 (from the mouth's centre)
+    walls = [(at(depth / 2, s * (aw + thick) / 2), [depth + thick, thick]) for s in (1, -1)]
+    walls.append((at(depth + thick / 2, 0.0), [thick, aw + 2 * thick]))
+    return parse_scene({
+        "version": 1, "name": "tilted-alcove", "bounds": [0.0, 0.0, 6.0, 5.0], "robot": robot,
+        "obstacles": [{"box": {"center": c, "size": s, "angle": tilt}} for c, s in walls],
+        "queries": [{"name": "q", "start": list(start), "goal": list(goal)}],
+    })  # fmt: skip
+
+
+TILTED_DEEP = [3.0 + 0.3 * np.cos(0.35), 2.5 + 0.3 * np.sin(0.35), 0.35]  # the box's centre 1 cm from the end wall
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_a_navigator_starting_deep_in_a_tilted_alcove_drives_out(seed):
+    """``gfuzzy plan`` leaves the alcove only by its bridge; the navigator replanned from the
+    same pose without one (no time in a period for it, it was said) until ``max_time``: no
+    vertex connects, and no evasive straight motion runs along the tilted axis. It now
+    bridges once, keeps the bridge, and reaches the goal; every edge certified."""
+    from gfuzzy.navigation.navigator import NavOptions
+    from gfuzzy.navigation.navsim import simulate
+
+    out = [1.0, 0.8, 0.3]
+    scene = _tilted_alcove(TILTED_DEEP, out, {"box": [0.6, 0.4], "vmax": 0.8})
+    rm = _roadmap(scene, seed)
+    planner = Planner(scene, rm)
+    assert planner._connect(np.array(TILTED_DEEP), PlanOptions().connect_k) == []  # the case: not joined
+    assert planner.plan(TILTED_DEEP, out).solved
+    res = simulate(scene, rm, TILTED_DEEP, out, 0.0, 0.25, max_time=20.0, options=NavOptions(budget_clock="cpu"))
+    assert res.reached, res.status
+    assert check_trajectory(scene, res.trajectory.waypoints, scene.query("q")).valid
+
+
+def test_a_bridged_copy_keeps_the_spanner_the_greedy_test_gives_on_it():
+    """with_chains carries the roadmap's spanners over, every chain edge kept, instead of
+    running the greedy two-edge test again: the same edges it keeps on the copy."""
+    from dataclasses import replace
+
+    from gfuzzy.planner.bridge import bridge, components, with_chains
+
+    scene = _scene(OUT, DEEP)
+    rm = _roadmap(scene, 1)
+    labels = components(rm)
+    targets = np.flatnonzero(labels == np.bincount(labels).argmax())
+    found = bridge(Planner(scene, rm).geometry, rm, np.array(DEEP), targets)
+    for stretch in (1.0, 1.05, 1.5):
+        rm.spanner(stretch)
+    copy = with_chains(rm, [found])
+    assert len(copy.vertices) == len(rm.vertices) + len(found[0])
+    for stretch in (1.0, 1.05, 1.5):
+        fresh = replace(copy, _spanners={}).spanner(stretch)
+        assert np.array_equal(copy._spanners[stretch], fresh), stretch
+
+
+#: a disc of radius 0.2 deep in the tilted alcove 3 mm wider than it (0.403), 3 mm from its end
+DISC_DEEP = [3.0 + 0.4 * np.cos(0.35), 2.5 + 0.4 * np.sin(0.35)]
+DISC_OUT = [1.0, 0.8]
+
+
+def _disc_alcove(start, goal):
+    return _tilted_alcove(start, goal, {"disc": 0.2, "vmax": 0.8}, aw=0.403, depth=0.603)
+
+
+@pytest.mark.parametrize("into", [True, False], ids=["goal-deep", "start-deep"])
+def test_a_disc_deep_in_a_3_mm_dead_end_leaves_it_by_the_short_way(into):
+    """A disc has no heading to cast the bridge's rays along, and none of the plane's 16
+    runs along the tilted axis: no bridge. Its ends are linked through the free space, to
+    the region's nearest vertex in the plane, which lies behind the alcove's end wall: the
+    answer went out and round (roadmap distance 7.4-11.9 m on three roadmaps, 3.1 m
+    straight, checked valid). The link's poses now join their nearest vertices too."""
+    start, goal = (DISC_OUT, DISC_DEEP) if into else (DISC_DEEP, DISC_OUT)
+    scene = _disc_alcove(start, goal)
+    for seed in (1, 2, 3):
+        rm = build_roadmap(scene, RoadmapOptions(vertices=200, seed=seed))
+        planner = Planner(scene, rm)
+        assert planner._connect(np.array(DISC_DEEP), PlanOptions().connect_k) == []  # the case: not joined
+        res = planner.plan(start, goal)
+        assert res.solved, res.message
+        assert check_trajectory(scene, res.trajectory.waypoints, scene.query("q")).valid
+        assert res.roadmap_distance < 1.2 * math.dist(DISC_DEEP, DISC_OUT), (seed, res.roadmap_distance)
+
+
+@pytest.mark.parametrize("into", [True, False], ids=["goal-deep", "start-deep"])
+def test_a_navigator_leaves_or_reaches_a_discs_3_mm_dead_end(into):
+    """The navigator's bridge finds no way out for the disc either: its goal's kept graph
+    and the pose it stands on are now linked through the free space as a plan's ends are
+    (timeout after 20 s, 80 replans, both ways before)."""
+    from gfuzzy.navigation.navigator import NavOptions
+    from gfuzzy.navigation.navsim import simulate
+
+    start, goal = (DISC_OUT, DISC_DEEP) if into else (DISC_DEEP, DISC_OUT)
+    scene = _disc_alcove(start, goal)
+    rm = build_roadmap(scene, RoadmapOptions(vertices=200, seed=1))
+    res = simulate(scene, rm, start, goal, 0.0, 0.25, max_time=20.0, options=NavOptions(budget_clock="cpu"))
+    assert res.reached, res.status
+    assert check_trajectory(scene, res.trajectory.waypoints, scene.query("q")).valid

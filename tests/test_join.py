@@ -157,3 +157,24 @@ def test_old_files_load_without_the_join_and_the_cli_reports_it(tmp_path):
     assert p.returncode == 0 and "component join" not in p.stdout
     doc = json.loads(out.read_text())
     assert doc["options"]["join"] is False and "join" not in doc["info"]
+
+
+def test_a_door_is_reached_from_a_node_beside_it_without_going_out_and_back():
+    """``_reach`` joins a door pose to a tree node by a turn, a translation onto the door's
+    axis and one along it. The pose on the axis was always a span (two circumradii) before
+    the door, beyond a node nearer than that: the path went out there and back (unseen room
+    seed 1 case 51: an L crossing a door a mover walks through, 2 m longer, missed among
+    the mover). It is now abreast of the node when that is certified."""
+    from gfuzzy.roadmap.join import _Search, _Tree
+
+    scene = parse_scene(door_doc())
+    geometry = StaticGeometry(scene)
+    node = np.array([2.4, 1.6, 0.0])  # 0.6 m before the door's middle along its axis, 0.4 m aside
+    search = _Search(geometry, node[None, :], np.zeros((0, 2), dtype=np.int64), budget=100, seed=1)
+    tree = _Tree(np.array(search.verts), np.array([True]))
+    door = np.array([3.0, 2.0, 0.0])
+    got = search._reach(tree, door)
+    assert got is not None and np.array_equal(tree.poses[got], door)
+    path = [np.asarray(p) for p in tree.poses]
+    assert min(p[0] for p in path) >= node[0] - 1e-12  # never farther from the door than the node
+    assert all(geometry.motion_free(tree.poses[tree.parent[i]], tree.poses[i]) for i in range(1, len(path)))

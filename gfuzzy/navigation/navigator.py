@@ -361,12 +361,14 @@ class Navigator(PathSpace, Prediction):
         popts = PlanOptions(dt=opts.dt, connect_k=opts.connect_k, stretch=opts.stretch, backend=opts.backend)
         self._kept = self._planner.prepare(self.goal, popts)
         self._nv = 0 if self.robot.unicycle else self._kept.s_id  # vertices "ahead" (a goal's bridge's too)
+        self._exit = self._no_exit = None  # a bridge out of a dead end the robot stood in (_holonomic_splice)
         self._g_id = -1
         self._fan = Fan() if self.robot.unicycle and opts.fan else None
 
-    def _splice_ends(self, pose: FloatArray, ahead=(), fan_until: float = math.inf):
+    def _splice_ends(self, pose: FloatArray, ahead=(), fan_until: float = math.inf, deadline: float = math.inf):
         """(graph, start id, goal id, roadmap distance) of the kept graph with ``pose`` in
-        (a differential drive's two-leg motions added until ``fan_until`` on the budget's clock)."""
+        (a differential drive's two-leg motions added until ``fan_until`` on the budget's
+        clock; a holonomic robot's bridge out of a dead end sought until ``deadline``)."""
         start = pose.copy()
         if self.robot.dof == 3:
             start[2] = wrap_angle(start[2])
@@ -374,8 +376,31 @@ class Navigator(PathSpace, Prediction):
             expired = None if fan_until == math.inf else (lambda: self._clock() > fan_until)
             qg = self._kept.kept.splice(self._planner, start, fan_options=self._fan, expired=expired)
         else:
-            qg = self._kept.splice(self._planner, start, ahead=ahead, lead=True)  # leaves at full speed
+            qg = self._holonomic_splice(start, ahead, deadline)
         return qg.graph, qg.s_id, qg.g_id, qg.roadmap_distance
+
+    def _holonomic_splice(self, start: FloatArray, ahead, deadline: float):
+        """The kept graph with ``start`` in (its connections leave at full speed). From deep in
+        a dead end that no certified motion leaves to the roadmap, the kept graph with a
+        bridge from there (:meth:`~gfuzzy.planner.prepared.PreparedGoal.bridged_from`, sought until
+        ``deadline``), kept from then on: a superset of the goal's, it answers wherever that
+        does, and along the bridge on the way out. A pose whose bridge was not found (none
+        there, not for lack of time) is not bridged again while the robot stands there."""
+        qg = None
+        for kept in (self._exit, self._kept):
+            if kept is not None:
+                qg = kept.splice(self._planner, start, ahead=ahead, lead=True)
+                if math.isfinite(qg.roadmap_distance):
+                    return qg
+        if self._no_exit is not None and np.array_equal(self._no_exit, start):
+            return qg
+        found = self._kept.bridged_from(self._planner, start, deadline, self._clock)
+        out = None if found is None else found.splice(self._planner, start, ahead=ahead, lead=True)
+        if out is None or not math.isfinite(out.roadmap_distance):
+            self._no_exit = start if self._clock() <= deadline else None
+            return qg
+        self._exit, self._no_exit = found, None
+        return out
 
     def roadmap_distance(self, pose) -> float:
         """Shortest distance from ``pose`` to the goal on the whole roadmap (static
@@ -394,7 +419,7 @@ class Navigator(PathSpace, Prediction):
         ahead = [v for ta, v in self._ahead if ta > t + 1e-9]
         # the fan's share of the search's time, FAN_SHARE of SEARCH_SHARE (less with a reserve)
         fan_until = deadline - (1.0 - FAN_SHARE / SEARCH_SHARE) * self._search_seconds()
-        graph, s_id, g_id, rd = self._splice_ends(pose, ahead, fan_until)
+        graph, s_id, g_id, rd = self._splice_ends(pose, ahead, fan_until, deadline)
         self._g_id = g_id
         if not math.isfinite(rd):
             return None, "the robot's pose connects to no roadmap vertex that leads to the goal"

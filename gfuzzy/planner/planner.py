@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..collision.geometry import StaticGeometry, metric_distance
+from ..collision.geometry import StaticGeometry
 from ..errors import InputError, LimitError, check_number
 from ..poses import wrap_angle
 from ..roadmap.roadmap import Roadmap
@@ -344,11 +344,9 @@ class Planner:
         Other holonomic robots (no free space computed) bridge the end the roadmap does not
         reach to it (:mod:`gfuzzy.planner.bridge`; ``k``: the query's ``connect_k``).
 
-        The start and the goal are linked to the nearest vertex of their free-space region
-        by certified paths, and the roadmap's components sharing a region are joined
-        (:func:`gfuzzy.roadmap.freespace.repair`: an old roadmap built without it is repaired here).
+        A disc robot's start and goal are linked through the free space (:meth:`_linked`).
         """
-        from ..roadmap.freespace import link_pose, repair, separation
+        from ..roadmap.freespace import separation
         from .bridge import bridged_planner
 
         fs = self._free_space()
@@ -363,11 +361,27 @@ class Planner:
         sep = separation(self.scene, fs, start, goal)
         if sep is not None:
             return None, sep.message()
+        return self._linked([start, goal], k), ""
+
+    def _linked(self, poses: list, k: int, join: bool = True) -> Planner | None:
+        """A disc robot's planner on the roadmap with ``poses`` linked to the nearest vertex of
+        their free-space region by certified paths (:func:`gfuzzy.roadmap.freespace.link_pose`),
+        each pose of a link joined to its ``k`` nearest vertices too (the region's nearest
+        vertex in the plane may lie behind a wall: round it), and the components sharing a
+        region joined (:func:`gfuzzy.roadmap.freespace.repair`: an old roadmap built without
+        it is repaired here; not with ``join`` False) and the spanners keeping every added
+        edge (:func:`gfuzzy.planner.bridge.extended`); None for other robots."""
+        from ..roadmap.freespace import link_pose, repair
+        from .bridge import extended
+
+        fs = self._free_space()
+        if fs is None:
+            return None
         rm = self.roadmap
         verts = [np.asarray(rm.vertices, dtype=float)]
         edges = [np.asarray(rm.edges, dtype=np.int64).reshape(-1, 2)]
         n = len(rm.vertices)
-        for pose in (start, goal):
+        for pose in poses:
             chain = link_pose(self.geometry, fs, pose, rm.vertices)
             if chain is None:
                 continue
@@ -379,17 +393,19 @@ class Planner:
             n += len(inner)
             target = int(np.nonzero(np.all(rm.vertices == np.asarray(chain[-1]), axis=1))[0][0])
             ids.append(target)
-            edges.append(np.asarray([(min(a, b), max(a, b)) for a, b in zip(ids[:-1], ids[1:], strict=True)]))
-        joined = repair(self.geometry, fs, np.vstack(verts), np.vstack(edges))
-        lengths = metric_distance(
-            joined.vertices[joined.edges[:, 0]], joined.vertices[joined.edges[:, 1]], self.robot.circumradius
-        )
+            pairs = {(min(a, b), max(a, b)) for a, b in zip(ids[:-1], ids[1:], strict=True)}
+            # each pose of the link joins its nearest vertices too: the link ends at the region's
+            # nearest vertex in the plane, which may lie behind a wall, round it
+            pairs |= {(v, i) for i, p in zip(ids[:-1], inner, strict=True) for v, _ in self._connect(p, k)}
+            edges.append(np.asarray(sorted(pairs), dtype=np.int64))
+        verts, edges = np.vstack(verts), np.vstack(edges)
+        if join:
+            joined = repair(self.geometry, fs, verts, edges)
+            verts, edges = joined.vertices, joined.edges
         planner = copy.copy(self)
-        planner.roadmap = replace(
-            rm, vertices=joined.vertices, edges=joined.edges, lengths=np.asarray(lengths, dtype=float), _spanners={}
-        )
-        log.info("query linked through the free space: %d vertices added", len(joined.vertices) - len(rm.vertices))
-        return planner, ""
+        planner.roadmap = extended(rm, verts, edges)
+        log.info("query linked through the free space: %d vertices added", len(verts) - len(rm.vertices))
+        return planner
 
     # ---------------------------------------------------------------- graph
     def _connect(self, pose: FloatArray, k: int, clearance: float | None = None) -> list[tuple[int, float]]:

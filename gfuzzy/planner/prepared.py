@@ -54,7 +54,9 @@ certified connections.
 
 from __future__ import annotations
 
+import copy
 import math
+import time
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -194,6 +196,32 @@ class PreparedGoal:
         graph = SpaceTimeGraph(cut.poses, cut.indptr, cut.neighbors, heur, groups=groups, from_start=from_start)
         return QueryGraph(graph, self.s_id, self.g_id, rd)
 
+    def bridged_from(self, planner, start: FloatArray, deadline: float = math.inf, clock=time.perf_counter):
+        """This goal's graph again on a copy of its roadmap with a bridge from ``start`` to the
+        vertices that lead to the goal (:func:`gfuzzy.planner.bridge.bridge`; for a disc robot
+        that finds none, its link through the free space,
+        :meth:`~gfuzzy.planner.planner.Planner._linked`), or None when none is found (the
+        bridge by ``deadline`` on ``clock``).
+
+        The navigator's, for a robot deep in a dead end. The copy is a superset of this graph
+        (the same vertices and edges, the bridge's after them: vertex ids keep their meaning),
+        so it answers every start this one does.
+        """
+        from .bridge import bridge, with_chains
+
+        base = planner if self.bridged is None else self.bridged
+        rm = base.roadmap
+        targets = np.flatnonzero(np.isfinite(self.dist[: len(rm.vertices)]))
+        found = bridge(base.geometry, rm, np.asarray(start, dtype=float), targets, deadline, clock) if len(targets) else None
+        if found is not None:
+            out = copy.copy(base)
+            out.roadmap = with_chains(rm, [found])
+        else:  # a disc's way out by the free space (a dead end along none of the rays)
+            out = base._linked([start], self.options.connect_k, join=False)  # as the kept graph: not repaired
+            if out is None:
+                return None
+        return replace(prepare_goal(out, self.goal_raw, self.options, bridge=False), bridged=out)
+
     def _start_edges(self, planner, start: FloatArray, ahead) -> tuple[IntArray, FloatArray]:
         """The start's certified connections: (x, 2) int edges from ``s_id``, (x,) metres."""
         robot = planner.robot
@@ -246,7 +274,8 @@ def prepare_goal(planner, goal: FloatArray, options, bridge: bool = True, deadli
         Its ``dt``, ``stretch`` and ``connect_k`` shape the graph.
     bridge : bool
         A goal with no certified connection is bridged to the roadmap
-        (:mod:`gfuzzy.planner.bridge`): the result is then prepared on a copy of the roadmap
+        (:mod:`gfuzzy.planner.bridge`; a disc robot's that finds no bridge is linked
+        through the free space, :meth:`~gfuzzy.planner.planner.Planner._linked`): the result is then prepared on a copy of the roadmap
         with the bridge's poses appended (its ``base`` and ids are the copy's; ``splice``
         still takes the planner on the roadmap, whose vertices keep their ids).
 
@@ -272,7 +301,7 @@ def prepare_goal(planner, goal: FloatArray, options, bridge: bool = True, deadli
     if not conn and bridge:  # deep in a dead end: only the goal's graph gets the bridge
         from .bridge import bridged_planner
 
-        bridged = bridged_planner(planner, [goal], options.connect_k, deadline)
+        bridged = bridged_planner(planner, [goal], options.connect_k, deadline) or planner._linked([goal], options.connect_k)
         if bridged is not None:
             return replace(prepare_goal(bridged, goal_raw, options, bridge=False), bridged=bridged)
     edges = np.array([(g_id, v) for v, _ in conn], dtype=np.int64).reshape(-1, 2)

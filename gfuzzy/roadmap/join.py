@@ -347,27 +347,39 @@ class _Search:
 
     def _reach(self, tree: _Tree, q: FloatArray) -> int | None:
         """Join a passage pose ``q`` to ``tree`` along the passage: from one of its 3 nearest
-        nodes (in the plane), a turn in place to ``q``'s heading, a translation to the pose a
-        span before ``q`` on its axis (on the node's side), a translation to ``q``; the node
-        of ``q`` added, or None."""
-        d = np.array([math.cos(q[2]), math.sin(q[2]), 0.0]) * 2.0 * self.r
+        nodes (in the plane), a turn in place to ``q``'s heading, a translation to a pose on
+        ``q``'s axis (on the node's side), a translation to ``q``; the node of ``q`` added,
+        or None. The pose on the axis is first the one abreast of the node, when the node
+        is less than a span from ``q`` along the axis, then the one a span before ``q``:
+        from a node beside the door, that one lies beyond the node, and the path went out
+        there and back (a mover's lane through the door held such a crossing too long)."""
+        d = np.array([math.cos(q[2]), math.sin(q[2]), 0.0])
+        span = 2.0 * self.r
         for near in tree.nearest_xy(q, 3):
             p = tree.poses[near]
-            pre = q - d if float(np.dot(p[:2] - q[:2], d[:2])) < 0 else q + d
+            along = float(np.dot(p[:2] - q[:2], d[:2]))
             turned = np.array([p[0], p[1], q[2]])
-            legs = [leg for leg in (turned, pre, q) if not np.array_equal(leg, p)]
-            at, ok = p, True
-            for leg in legs:
-                if not (self.valid(leg) and self.free(at, leg)):
-                    ok = False
-                    break
-                at = leg
-            if ok:
-                node = near
-                for leg in legs:
-                    node = tree.add(leg, node)
-                return node
+            for back in dict.fromkeys((min(abs(along), span), span)):  # abreast, then a span
+                legs = self._legs(p, [turned, q + math.copysign(back, along) * d, q])
+                if legs is not None:
+                    node = near
+                    for leg in legs:
+                        node = tree.add(leg, node)
+                    return node
         return None
+
+    def _legs(self, p: FloatArray, poses: list) -> list | None:
+        """``poses`` (those equal to the one before left out) if each is valid and the
+        motions from ``p`` through them certified, else None."""
+        legs, at = [], p
+        for leg in poses:
+            if np.array_equal(leg, at):
+                continue
+            if not (self.valid(leg) and self.free(at, leg)):
+                return None
+            legs.append(leg)
+            at = leg
+        return legs
 
     def _connect(self, tree: _Tree, q: FloatArray, stop: int) -> int | None:
         """Extend ``tree`` towards ``q`` until it reaches it (the node's index) or is blocked."""
