@@ -13,6 +13,7 @@ import json
 import math
 
 import numpy as np
+import pytest
 import shapely
 import yaml
 from conftest import run_cli_process
@@ -20,7 +21,8 @@ from shapely import affinity
 
 from gfuzzy.check.check import check_trajectory
 from gfuzzy.collision.geometry import StaticGeometry
-from gfuzzy.roadmap.join import CHECKS_PER_VERTEX, join_components
+from gfuzzy.planner.planner import Planner, PlanOptions
+from gfuzzy.roadmap.join import CHECKS_PER_VERTEX, door_headings, join_components
 from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap, load_roadmap, roadmap_digest
 from gfuzzy.scene.scene import parse_scene
 
@@ -157,3 +159,57 @@ def test_old_files_load_without_the_join_and_the_cli_reports_it(tmp_path):
     assert p.returncode == 0 and "component join" not in p.stdout
     doc = json.loads(out.read_text())
     assert doc["options"]["join"] is False and "join" not in doc["info"]
+
+
+#: A U opening forward, 0.8 long and 0.9 wide: through a 0.9 door only sideways (5 cm per side).
+U = [[0.4, -0.45], [0.4, -0.25], [-0.1, -0.25], [-0.1, 0.25], [0.4, 0.25], [0.4, 0.45], [-0.4, 0.45], [-0.4, -0.45]]
+
+
+def test_door_headings_narrowest_across_first_and_none_too_wide():
+    body = np.array(U)
+    wrapped = lambda hs: sorted((round(math.cos(h), 9) + 0.0, round(math.sin(h), 9) + 0.0) for h in hs)  # noqa: E731
+    # the door's axis north: along it the U is 0.9 wide (no room in a 0.9 door); sideways 0.8
+    assert wrapped(door_headings(body, math.pi / 2, 0.9, 4)) == wrapped([0.0, math.pi])
+    wide = door_headings(body, math.pi / 2, 0.95, 4)
+    assert wrapped(wide[:2]) == wrapped([0.0, math.pi]) and wrapped(wide[2:]) == wrapped([math.pi / 2, -math.pi / 2])
+    drive = door_headings(body, math.pi / 2, 0.95, 4, drive=True)  # a differential drive: along the axis first
+    assert wrapped(drive[:2]) == wrapped([math.pi / 2, -math.pi / 2]) and wrapped(drive[2:]) == wrapped([0.0, math.pi])
+    assert door_headings(body, 0.0, 0.8, 4) == []  # 0.8 wide at best
+
+
+def _plan_and_check(scene, rm, start, goal):
+    res = Planner(scene, rm).plan(start, goal, 0.0, PlanOptions())
+    assert res.solved, res.message
+    rep = check_trajectory(scene, res.trajectory.waypoints)
+    assert rep.valid, rep.reason
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_join_takes_a_u_footprint_sideways_through_a_door_with_5_cm_per_side(seed):
+    """The U crosses the 0.9 door only sideways (its heading across the door's axis): the
+    doors step tried the headings along the axis alone and the join spent its whole budget
+    in vain (seeds 1-3: 2 components, no_path; the scene ``rooms-u-holonomic-static``: 5
+    rooms left apart). It tries the body's narrowest headings across the door, centred."""
+    doc = door_doc(0.9)
+    doc["robot"] = {"footprint": U, "vmax": 1.0}
+    scene = parse_scene(doc)
+    rm = build_roadmap(scene, RoadmapOptions(vertices=60, seed=seed, sampler="uniform"))
+    assert rm.info.join["components_before"] == 2 and rm.info.components == 1
+    assert rm.info.join["checks"] < rm.info.join["budget"] // 2
+    _plan_and_check(scene, rm, [1.0, 1.0, 0.0], [5.0, 3.0, 0.0])
+
+
+@pytest.mark.parametrize("seed", [1, 3, 4])
+def test_join_crosses_a_door_both_ways_for_an_off_centre_differential_drive(seed):
+    """A differential drive without reverse whose body is off its reference point (0.5 x
+    0.6, its middle 0.2 m to the left) through a 0.7 door (5 cm per side): it drives through
+    on the door's middle line for its heading, which is another line facing east than facing
+    west. The doors step crossed facing one way only (seeds 1, 3, 4: one component, yet
+    no_path eastwards); it adds the crossing facing the other way too."""
+    doc = door_doc(0.7)
+    doc["robot"] = {"footprint": [[0.4, -0.1], [0.4, 0.5], [-0.1, 0.5], [-0.1, -0.1]], "vmax": 1.0,
+                    "kinematics": "unicycle"}  # fmt: skip
+    scene = parse_scene(doc)
+    rm = build_roadmap(scene, RoadmapOptions(vertices=60, seed=seed, sampler="uniform"))
+    assert rm.info.join["components_before"] == 2 and rm.info.components == 1
+    _plan_and_check(scene, rm, [1.0, 1.0, 0.0], [5.0, 3.0, 0.0])

@@ -7,8 +7,10 @@ robot fits between them (a door with a few centimetres to spare, a bent corridor
 only turned). :func:`join_components` spends a bounded number of collision checks joining
 them: first the closest vertex pairs of two components, directly and by a turn in place and a
 translation (the motions a rigid robot fits through a door with); then the doors between
-them (gaps between obstacle corners: the body centred in the gap, reached along its axis);
-then a bidirectional RRT (RRT-Connect, Kuffner and LaValle 2000) between a component and the
+them (gaps between obstacle corners: the body centred in the gap at the headings it is
+narrowest across it, :func:`door_headings`, reached along the gap's axis; a differential
+drive's heading along the axis first, and crossing both ways when its body turned by pi is
+another); then a bidirectional RRT (RRT-Connect, Kuffner and LaValle 2000) between a component and the
 rest of the roadmap. Every pose is checked and every motion certified by
 :meth:`gfuzzy.collision.geometry.StaticGeometry.motion_free`, as the roadmap's other edges;
 the poses of a found path become vertices, its motions edges. The join gives up when its
@@ -47,6 +49,8 @@ FOCUS = 0.6
 #: Doors (gaps between obstacle corners less than a robot span apart) tried per component,
 #: nearest the two pieces first, before the RRT.
 DOORS = 8
+#: Headings tried per door, the body's narrowest across the door first (:func:`door_headings`).
+DOOR_HEADINGS = 4
 
 
 @dataclass
@@ -141,8 +145,9 @@ class _Search:
         self.blocked = blocked_points(geometry.scene)
         robot = geometry.scene.robot
         self.y_mid = lateral_middle(robot)
-        fp = np.asarray(robot.footprint, dtype=float) if robot.shape == "footprint" else np.zeros((1, 2))
-        self.body_mid = 0.5 * (fp.min(axis=0) + fp.max(axis=0))
+        self.body = robot.corners(np.zeros(3))[0]  # the outline's vertices in the robot's frame
+        self.drive = robot.unicycle  # a differential drive crosses a door along its heading
+        self.both_ways = self.drive and not robot.half_turn_symmetric
         self.door_list: FloatArray | None = None  # computed when first needed
         self.region = _disc_regions(geometry.scene, vertices)
 
@@ -277,8 +282,9 @@ class _Search:
 
     def doors(self, comp: int, limit: int) -> bool:
         """Join component ``comp`` to the rest through one of the ``limit`` doors nearest
-        both (:func:`_doors`): the pose centred in the door, reached from each side by a
-        turn in place and translations along the door's axis (:meth:`_reach`)."""
+        both (:func:`_doors`): the body centred in the door at one of its headings that may
+        cross it (:func:`door_headings`), reached from each side by a turn in place and
+        translations along the door's axis (:meth:`_reach`)."""
         if self.door_list is None:
             self.door_list = _doors(self.geometry.scene, self.blocked, 2.0 * self.r)
         if not len(self.door_list):
@@ -288,25 +294,45 @@ class _Search:
         mids = self.door_list[:, :2]
         score = sum(_nearest_distance(mids, t.arr[:, :2]) for t in trees)
         for i in np.argsort(score, kind="stable")[:limit].tolist():
-            m, heading = self.door_list[i, :2], float(self.door_list[i, 2])
-            for h in (heading, heading + math.pi):
-                q = self._in_door(m, _wrap(h))
+            m, axis, gap = self.door_list[i, :2], float(self.door_list[i, 2]), float(self.door_list[i, 3])
+            for h in door_headings(self.body, axis, gap, DOOR_HEADINGS, self.drive):
                 if self.spent:
                     return False
-                if not self.valid(q):
-                    continue
-                a = self._reach(trees[0], q)
-                b = self._reach(trees[1], q) if a is not None else None
-                if b is not None:
-                    self._add_trees(trees[0], a, trees[1], b)
+                if self._through(trees, self._in_door(m, h, axis), axis):
+                    if self.both_ways and abs(math.sin(h - axis)) < 1e-9:
+                        self._other_way(m, h, axis)
                     return True
         return False
 
-    def _in_door(self, m: FloatArray, heading: float) -> FloatArray:
-        """The pose at ``heading`` whose body's middle (of its extents) is the point ``m``."""
+    def _through(self, trees: tuple, q: FloatArray, axis: float) -> bool:
+        """Add a path from ``trees[0]`` through the door pose ``q`` to ``trees[1]`` (:meth:`_reach`
+        from each); False, nothing added, when ``q`` is not valid or a tree does not reach it."""
+        if not self.valid(q):
+            return False
+        a = self._reach(trees[0], q, axis)
+        b = self._reach(trees[1], q, axis) if a is not None else None
+        if b is None:
+            return False
+        self._add_trees(trees[0], a, trees[1], b)
+        return True
+
+    def _other_way(self, m: FloatArray, heading: float, axis: float) -> None:
+        """After a differential drive crossed the door at ``m`` along its ``axis``: the crossing
+        facing the other way, when the body turned by pi is another (its middle line is
+        elsewhere, and without ``reverse`` it drives through only forwards), joined to the
+        vertices on either side of the door a circumradius or more from it (as the passage
+        sampler's chains both ways; the first crossing's pose in the door cannot turn)."""
+        V = np.array(self.verts)
+        side = (V[:, :2] - m) @ np.array([math.cos(axis), math.sin(axis)])
+        trees = _Tree(V, side <= -self.r), _Tree(V, side >= self.r)
+        self._through(trees, self._in_door(m, _wrap(heading + math.pi), axis), axis)
+
+    def _in_door(self, m: FloatArray, heading: float, axis: float) -> FloatArray:
+        """The pose at ``heading`` whose body's middle (of its extents along the door's
+        ``axis`` and across it) is the point ``m``."""
+        ox, oy = _door_middle(self.body, heading, axis)
         c, s = math.cos(heading), math.sin(heading)
-        bx, by = self.body_mid
-        return np.array([m[0] - c * bx + s * by, m[1] - s * bx - c * by, heading])
+        return np.array([m[0] - c * ox + s * oy, m[1] - s * ox - c * oy, heading])
 
     def rrt(self, comp: int, share: int) -> bool:
         """Grow a tree from component ``comp``'s vertices and one from the rest of the
@@ -345,12 +371,13 @@ class _Search:
             return tree.add(new, near)
         return None
 
-    def _reach(self, tree: _Tree, q: FloatArray) -> int | None:
+    def _reach(self, tree: _Tree, q: FloatArray, axis: float | None = None) -> int | None:
         """Join a passage pose ``q`` to ``tree`` along the passage: from one of its 3 nearest
         nodes (in the plane), a turn in place to ``q``'s heading, a translation to the pose a
-        span before ``q`` on its axis (on the node's side), a translation to ``q``; the node
-        of ``q`` added, or None."""
-        d = np.array([math.cos(q[2]), math.sin(q[2]), 0.0]) * 2.0 * self.r
+        span before ``q`` on the passage's ``axis`` (default ``q``'s heading; on the node's
+        side), a translation to ``q``; the node of ``q`` added, or None."""
+        axis = float(q[2]) if axis is None else axis
+        d = np.array([math.cos(axis), math.sin(axis), 0.0]) * 2.0 * self.r
         for near in tree.nearest_xy(q, 3):
             p = tree.poses[near]
             pre = q - d if float(np.dot(p[:2] - q[:2], d[:2])) < 0 else q + d
@@ -567,11 +594,12 @@ def _corners(scene) -> FloatArray:
 
 
 def _doors(scene, blocked, span: float) -> FloatArray:
-    """Rows ``[x, y, heading]``: the free midpoints of obstacle corners (or a corner and
-    its nearest point on the bounds) less than ``span`` apart, the heading across the gap."""
+    """Rows ``[x, y, heading, gap]``: the free midpoints of obstacle corners (or a corner and
+    its nearest point on the bounds) less than ``span`` apart, the heading across the gap (the
+    door's axis), the gap's width."""
     c = _corners(scene)
     if not len(c):
-        return np.zeros((0, 3))
+        return np.zeros((0, 4))
     xmin, ymin, xmax, ymax = scene.bounds
     wall = np.concatenate([c, c, c, c])  # each corner's foot on the four sides of the bounds
     n = len(c)
@@ -586,11 +614,75 @@ def _doors(scene, blocked, span: float) -> FloatArray:
     b = np.concatenate([c[pairs[:, 1]], wall])
     gap = np.hypot(*(b - a).T)
     keep = (gap > 1e-9) & (gap < span)
-    a, b = a[keep], b[keep]
+    a, b, gap = a[keep], b[keep], gap[keep]
     mid = 0.5 * (a + b)
     free = ~blocked(mid)
     d = (b - a)[free]
-    return np.column_stack([mid[free], np.arctan2(d[:, 1], d[:, 0]) + 0.5 * math.pi])
+    return np.column_stack([mid[free], np.arctan2(d[:, 1], d[:, 0]) + 0.5 * math.pi, gap[free]])
+
+
+def door_headings(body: FloatArray, axis: float, gap: float, limit: int, drive: bool = False) -> list:
+    """Headings at which a body may cross a door along ``axis``, narrowest across it first.
+
+    The candidates are the heading along the axis and each outline edge laid along the axis
+    (where a convex body is narrowest across, by the rotating calipers), each either way
+    round; those at which the body is at least ``gap`` wide across the axis are left out (its
+    translation through the door would meet a corner). A U or a box crossing sideways, a
+    footprint longer than wide: the heading a door with a few centimetres to spare needs is
+    one of these. Ties keep the heading along the axis first; a differential drive
+    (``drive``) has it first whatever its width: it crosses only along its heading, and its
+    lanes through the door join the positions centred for that heading.
+
+    Parameters
+    ----------
+    body : (k, 2) float
+        The outline's vertices in the robot's frame.
+    axis : float
+        The door's axis (across the gap between its corners).
+    gap : float
+        The door's width.
+    limit : int
+        Headings returned at most.
+    drive : bool
+        The heading along the axis (either way round) first.
+
+    Returns
+    -------
+    list of float
+    """
+    edges = np.roll(body, -1, axis=0) - body
+    rel = np.concatenate([[0.0, math.pi], np.arctan2(edges[:, 1], edges[:, 0])])  # heading = axis - rel
+    rel = np.concatenate([rel[:2], rel[2:], rel[2:] + math.pi])
+    out, seen = [], set()
+    widths = [_width_across(body, float(r)) for r in rel]
+    order = np.argsort(widths, kind="stable").tolist()
+    if drive:
+        order = [0, 1] + [k for k in order if k > 1]
+    for k in order:
+        key = (round(math.cos(rel[k]), 9), round(math.sin(rel[k]), 9))
+        if widths[k] >= gap or key in seen:
+            continue
+        seen.add(key)
+        out.append(float(_wrap(axis - rel[k])))
+        if len(out) == limit:
+            break
+    return out
+
+
+def _width_across(body: FloatArray, rel: float) -> float:
+    """The body's width across a door whose axis is at ``rel`` in the robot's frame."""
+    return float(np.ptp(body @ np.array([-math.sin(rel), math.cos(rel)])))
+
+
+def _door_middle(body: FloatArray, heading: float, axis: float) -> tuple[float, float]:
+    """The middle of the body's extents along a door's ``axis`` and across it, in the robot's
+    frame at ``heading`` (the middle of its extents in x and y when the two agree)."""
+    rel = axis - heading
+    along = np.array([math.cos(rel), math.sin(rel)])
+    across = np.array([-along[1], along[0]])
+    pt, pu = body @ along, body @ across
+    mt, mu = 0.5 * (pt.min() + pt.max()), 0.5 * (pu.min() + pu.max())
+    return float(mt * along[0] + mu * across[0]), float(mt * along[1] + mu * across[1])
 
 
 #: Metres the robot's inscribed disc is shrunk by before its free space proves pieces apart:
