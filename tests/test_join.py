@@ -22,7 +22,13 @@ from shapely import affinity
 from gfuzzy.check.check import check_trajectory
 from gfuzzy.collision.geometry import StaticGeometry
 from gfuzzy.planner.planner import Planner, PlanOptions
-from gfuzzy.roadmap.join import CHECKS_PER_VERTEX, door_headings, join_components
+from gfuzzy.roadmap.join import (
+    CHECKS_PER_VERTEX,
+    CLOSEST_PAIRS,
+    PIECE_CHECKS_PER_VERTEX,
+    door_headings,
+    join_components,
+)
 from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap, load_roadmap, roadmap_digest
 from gfuzzy.scene.scene import parse_scene
 
@@ -213,3 +219,31 @@ def test_join_crosses_a_door_both_ways_for_an_off_centre_differential_drive(seed
     rm = build_roadmap(scene, RoadmapOptions(vertices=60, seed=seed, sampler="uniform"))
     assert rm.info.join["components_before"] == 2 and rm.info.components == 1
     _plan_and_check(scene, rm, [1.0, 1.0, 0.0], [5.0, 3.0, 0.0])
+
+
+def cage_doc() -> dict:
+    """The floor without its wall, and a cage 0.9 x 0.5 inside with a 0.45 gap in its top and
+    bottom sides: the box (0.8 x 0.4) inside cannot turn by more than 0.12 rad nor pass a
+    gap, but its inscribed disc (0.4 across) can: the cage is not proven apart."""
+    doc = door_doc()
+    doc["name"] = "box-cage"
+    side = [_wall(4.0 + 0.275 / 2, y, 0.275, 0.05) for y in (1.725, 2.275)]
+    side += [_wall(5.0 - 0.275 / 2, y, 0.275, 0.05) for y in (1.725, 2.275)]
+    doc["obstacles"] = [_wall(4.025, 2.0, 0.05, 0.6), _wall(4.975, 2.0, 0.05, 0.6), *side]
+    return doc
+
+
+def test_join_gives_a_stray_vertex_in_a_cage_a_small_share_of_the_budget():
+    """A vertex in the cage (as PRM leaves one among a table's legs: small-house, -n 600,
+    seed 1, where the join spent 5929 of its 6000 checks on one) gets its closest pairs and
+    ``PIECE_CHECKS_PER_VERTEX`` checks, not the whole budget."""
+    scene = parse_scene(cage_doc())
+    plain = build_roadmap(scene, RoadmapOptions(vertices=60, seed=1, sampler="uniform", join=False))
+    assert plain.info.components == 1
+    geometry = StaticGeometry(scene)
+    stray = np.array([4.5, 2.0, 0.0])
+    assert geometry.is_valid(stray)
+    vertices = np.vstack([plain.vertices, stray])
+    j = join_components(geometry, vertices, plain.edges, seed=1)
+    assert (j.before, j.after, j.apart, j.budget) == (2, 2, 0, CHECKS_PER_VERTEX * 61)
+    assert j.checks <= 5 * CLOSEST_PAIRS + PIECE_CHECKS_PER_VERTEX < j.budget  # a direct join: 5 checks at most

@@ -10,12 +10,14 @@ translation (the motions a rigid robot fits through a door with); then the doors
 them (gaps between obstacle corners: the body centred in the gap at the headings it is
 narrowest across it, :func:`door_headings`, reached along the gap's axis; a differential
 drive's heading along the axis first, and crossing both ways when its body turned by pi is
-another); then a bidirectional RRT (RRT-Connect, Kuffner and LaValle 2000) between a component and the
-rest of the roadmap. Every pose is checked and every motion certified by
+another); then a bidirectional RRT (RRT-Connect, Kuffner and LaValle 2000) between a
+component and the rest of the roadmap. Every pose is checked and every motion certified by
 :meth:`gfuzzy.collision.geometry.StaticGeometry.motion_free`, as the roadmap's other edges;
 the poses of a found path become vertices, its motions edges. The join gives up when its
-budget (``CHECKS_PER_VERTEX`` checks per roadmap vertex) is spent, and at once, without a
-check, on a component proven apart: a disc inside the body that cannot pass between the
+budget (``CHECKS_PER_VERTEX`` checks per roadmap vertex) is spent; on a piece when its share
+is (doors and RRT: ``PIECE_CHECKS_PER_VERTEX`` per vertex of the piece at most, so a stray
+vertex in a pocket does not take the budget), and at once, without a check, on a component
+proven apart: a disc inside the body that cannot pass between the
 pieces (:func:`_disc_regions`; a sealed room). Seeded: the same roadmap and seed give the
 same join.
 """
@@ -49,6 +51,10 @@ FOCUS = 0.6
 #: Doors (gaps between obstacle corners less than a robot span apart) tried per component,
 #: nearest the two pieces first, before the RRT.
 DOORS = 8
+#: Checks a piece may spend after its closest pairs (its doors, then RRT-Connect) per vertex
+#: of its own, at most: a stray vertex or two that PRM left in a pocket the robot cannot leave
+#: (among a table's legs) gets a small share, a room behind a door a large one.
+PIECE_CHECKS_PER_VERTEX = 200
 #: Headings tried per door, the body's narrowest across the door first (:func:`door_headings`).
 DOOR_HEADINGS = 4
 
@@ -137,6 +143,7 @@ class _Search:
         self.edges: list = []
         self.labels = component_labels(len(vertices), edges)
         self.budget = budget
+        self.limit = budget  # checks allowed for the piece being joined (:func:`_join_one`)
         self.checks = 0
         self.apart = 0  # components proven apart by the inscribed disc's free space
         self.stuck = 0  # components of vertices touching obstacles, left after the direct joins
@@ -171,7 +178,7 @@ class _Search:
 
     @property
     def spent(self) -> bool:
-        return self.checks >= self.budget
+        return self.checks >= self.limit
 
     def valid(self, q) -> bool:
         """Pose validity, one check of the budget (False, unchecked, once it is spent)."""
@@ -334,10 +341,9 @@ class _Search:
         c, s = math.cos(heading), math.sin(heading)
         return np.array([m[0] - c * ox + s * oy, m[1] - s * ox - c * oy, heading])
 
-    def rrt(self, comp: int, share: int) -> bool:
+    def rrt(self, comp: int) -> bool:
         """Grow a tree from component ``comp``'s vertices and one from the rest of the
-        roadmap towards each other (RRT-Connect) for at most ``share`` checks."""
-        stop = min(self.budget, self.checks + share)
+        roadmap towards each other (RRT-Connect) until the checks allowed are spent."""
         V = np.array(self.verts)
         trees = [_Tree(V, self.labels == comp), _Tree(V, self.rest(comp))]
         pa, pb = self.closest_pairs(comp, 1)[0]
@@ -345,7 +351,7 @@ class _Search:
         hi = np.maximum(V[pa, :2], V[pb, :2]) + 2 * self.r
         xmin, ymin, xmax, ymax = self.bounds
         focus = (np.maximum(lo, [xmin, ymin]), np.minimum(hi, [xmax, ymax]))
-        while self.checks < stop:
+        while not self.spent:
             grow, other = trees
             q, passage = self._sample(focus)
             if passage and self.valid(q):  # in a door: both trees straight to it
@@ -357,7 +363,7 @@ class _Search:
                 continue
             new = self._extend(grow, q)
             if new is not None:
-                reached = self._connect(other, grow.poses[new], stop)
+                reached = self._connect(other, grow.poses[new])
                 if reached is not None:
                     self._add_trees(grow, new, other, reached)
                     return True
@@ -396,10 +402,10 @@ class _Search:
                 return node
         return None
 
-    def _connect(self, tree: _Tree, q: FloatArray, stop: int) -> int | None:
+    def _connect(self, tree: _Tree, q: FloatArray) -> int | None:
         """Extend ``tree`` towards ``q`` until it reaches it (the node's index) or is blocked."""
         near = tree.nearest(q, self.r)
-        while self.checks < stop:
+        while not self.spent:
             new = self._steer(tree.poses[near], q)
             if not (self.valid(new) and self.free(tree.poses[near], new)):
                 return None
@@ -463,7 +469,8 @@ def join_components(
 
     Components are taken largest first after the largest; each is joined to the rest of the
     roadmap by its ``CLOSEST_PAIRS`` closest vertex pairs (straight, or a turn in place and a
-    translation), then by RRT-Connect for an equal share of what is left of the budget.
+    translation), then through doors and by RRT-Connect for an equal share of what is left of
+    the budget, at most ``PIECE_CHECKS_PER_VERTEX`` per vertex of the piece.
 
     Parameters
     ----------
@@ -518,8 +525,9 @@ def _by_size(labels: np.ndarray) -> list:
 
 
 def _join_one(s: _Search, comp: int, left: int) -> bool:
-    """Join component ``comp`` to the rest: closest pairs, then RRT-Connect with a ``1/left``
-    share of the remaining budget; nothing spent on a component proven apart."""
+    """Join component ``comp`` to the rest: closest pairs, then doors and RRT-Connect with a
+    ``1/left`` share of the remaining budget, at most ``PIECE_CHECKS_PER_VERTEX`` per vertex
+    of the piece; nothing spent on a component proven apart."""
     if s.separated(comp):
         s.apart += 1
         return False
@@ -531,10 +539,13 @@ def _join_one(s: _Search, comp: int, left: int) -> bool:
     if s.touching(comp):  # no turn leaves it, and the RRT's steps turn
         s.stuck += 1
         return False
-    if s.doors(comp, DOORS):
-        return True
-    share = (s.budget - s.checks) // max(left, 1)
-    return share > 0 and s.rrt(comp, share)
+    size = int(np.count_nonzero(s.labels == comp))
+    share = min((s.budget - s.checks) // max(left, 1), PIECE_CHECKS_PER_VERTEX * size)
+    s.limit = s.checks + share
+    try:
+        return share > 0 and (s.doors(comp, DOORS) or s.rrt(comp))
+    finally:
+        s.limit = s.budget
 
 
 def repair_roadmap(geometry: StaticGeometry, fs, vertices: FloatArray, edges: IntArray, k: int):
