@@ -7,18 +7,19 @@ robot fits between them (a door with a few centimetres to spare, a bent corridor
 only turned). :func:`join_components` spends a bounded number of collision checks joining
 them: first the closest vertex pairs of two components, directly and by a turn in place and a
 translation (the motions a rigid robot fits through a door with); then the doors between
-them (gaps between obstacle corners: the body centred in the gap at the headings it is
-narrowest across it, :func:`door_headings`, reached along the gap's axis; a differential
-drive's heading along the axis first, and crossing both ways when its body turned by pi is
-another); then a bidirectional RRT (RRT-Connect, Kuffner and LaValle 2000) between a
-component and the rest of the roadmap. Every pose is checked and every motion certified by
+them (gaps between obstacle corners, a map's cells' outer corners included: the body
+centred in the gap at the headings it is narrowest across it, :func:`door_headings`,
+reached along the gap's axis; a differential drive's heading along the axis first, and
+crossing both ways when its body turned by pi is another); then a bidirectional RRT
+(RRT-Connect, Kuffner and LaValle 2000) between a component and the rest of the roadmap.
+Every pose is checked and every motion certified by
 :meth:`gfuzzy.collision.geometry.StaticGeometry.motion_free`, as the roadmap's other edges;
 the poses of a found path become vertices, its motions edges. The join gives up when its
 budget (``CHECKS_PER_VERTEX`` checks per roadmap vertex) is spent; on a piece when its share
 is (doors and RRT: ``PIECE_CHECKS_PER_VERTEX`` per vertex of the piece at most, so a stray
-vertex in a pocket does not take the budget), and at once, without a check, on a component
-proven apart: a disc inside the body that cannot pass between the
-pieces (:func:`_disc_regions`; a sealed room). Seeded: the same roadmap and seed give the
+vertex in a pocket does not take the budget); and at once, without a check, on a component
+proven apart: a disc inside the body that cannot pass between the pieces
+(:func:`_disc_regions`; a sealed room). Seeded: the same roadmap and seed give the
 same join.
 """
 
@@ -579,6 +580,8 @@ def join_roadmap(geometry: StaticGeometry, vertices: FloatArray, edges: IntArray
 
 #: Rows of a distance matrix computed at once (memory: this many times the other side).
 _CHUNK = 256
+#: Point pairs up to which nearest distances are computed by brute force, not a k-d tree.
+_BRUTE = 4_000_000
 
 
 def _xy_distances(a: FloatArray, b: FloatArray) -> FloatArray:
@@ -587,15 +590,25 @@ def _xy_distances(a: FloatArray, b: FloatArray) -> FloatArray:
 
 
 def _nearest_distance(a: FloatArray, b: FloatArray) -> FloatArray:
-    """Each point of ``a``'s distance to the nearest point of ``b``."""
-    return np.concatenate([_xy_distances(a[lo : lo + _CHUNK], b).min(axis=1) for lo in range(0, len(a), _CHUNK)])
+    """Each point of ``a``'s distance to the nearest point of ``b`` (by a k-d tree when
+    there are many: a map's doors are tens of thousands)."""
+    if len(a) * len(b) <= _BRUTE:
+        return np.concatenate([_xy_distances(a[lo : lo + _CHUNK], b).min(axis=1) for lo in range(0, len(a), _CHUNK)])
+    from scipy.spatial import cKDTree
+
+    return cKDTree(b).query(a)[0]
 
 
-def _corners(scene) -> FloatArray:
-    """The corners of the scene's polygon and box obstacles (discs and maps have none)."""
+def _corners(scene, blocked) -> FloatArray:
+    """The corners of the scene's polygon and box obstacles, and a map's outer corners: the
+    corners of the rectangles covering its blocked cells with one of the four cells around
+    them blocked (``blocked``: points -> bool), not those inside a wall or along its face.
+    Discs have none."""
     pts = []
     for ob in scene.obstacles:
-        if hasattr(ob, "vertices"):
+        if hasattr(ob, "rects"):  # a map: [xmin, ymin, xmax, ymax] rows
+            pts += [tuple(p) for p in _map_corners(ob, blocked)]
+        elif hasattr(ob, "vertices"):
             pts += [tuple(p) for p in ob.vertices()]
         elif hasattr(ob, "points"):
             pts += [tuple(p) for p in ob.points]
@@ -604,11 +617,20 @@ def _corners(scene) -> FloatArray:
     return np.array(pts, dtype=float).reshape(-1, 2)
 
 
+def _map_corners(ob, blocked) -> FloatArray:
+    """The outer corners of a map's blocked cells (see :func:`_corners`)."""
+    r = np.asarray(ob.rects, dtype=float).reshape(-1, 4)
+    c = np.unique(np.concatenate([r[:, [0, 1]], r[:, [2, 1]], r[:, [2, 3]], r[:, [0, 3]]]), axis=0)
+    h = 0.5 * float(ob.resolution)
+    around = [blocked(c + np.array([dx, dy])) for dx in (-h, h) for dy in (-h, h)]
+    return c[np.sum(around, axis=0) == 1]
+
+
 def _doors(scene, blocked, span: float) -> FloatArray:
     """Rows ``[x, y, heading, gap]``: the free midpoints of obstacle corners (or a corner and
     its nearest point on the bounds) less than ``span`` apart, the heading across the gap (the
     door's axis), the gap's width."""
-    c = _corners(scene)
+    c = _corners(scene, blocked)
     if not len(c):
         return np.zeros((0, 4))
     xmin, ymin, xmax, ymax = scene.bounds
