@@ -13,6 +13,7 @@ import json
 import math
 
 import numpy as np
+import pytest
 import shapely
 import yaml
 from conftest import run_cli_process
@@ -20,8 +21,16 @@ from shapely import affinity
 
 from gfuzzy.check.check import check_trajectory
 from gfuzzy.collision.geometry import StaticGeometry
-from gfuzzy.roadmap.join import CHECKS_PER_VERTEX, join_components
+from gfuzzy.planner.planner import Planner, PlanOptions
+from gfuzzy.roadmap.join import (
+    CHECKS_PER_VERTEX,
+    CLOSEST_PAIRS,
+    PIECE_CHECKS_PER_VERTEX,
+    door_headings,
+    join_components,
+)
 from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap, load_roadmap, roadmap_digest
+from gfuzzy.scene import load_scene
 from gfuzzy.scene.scene import parse_scene
 
 BOX = (0.8, 0.4)
@@ -178,3 +187,115 @@ def test_a_door_is_reached_from_a_node_beside_it_without_going_out_and_back():
     path = [np.asarray(p) for p in tree.poses]
     assert min(p[0] for p in path) >= node[0] - 1e-12  # never farther from the door than the node
     assert all(geometry.motion_free(tree.poses[tree.parent[i]], tree.poses[i]) for i in range(1, len(path)))
+
+
+#: A U opening forward, 0.8 long and 0.9 wide: through a 0.9 door only sideways (5 cm per side).
+U = [[0.4, -0.45], [0.4, -0.25], [-0.1, -0.25], [-0.1, 0.25], [0.4, 0.25], [0.4, 0.45], [-0.4, 0.45], [-0.4, -0.45]]
+
+
+def test_door_headings_narrowest_across_first_and_none_too_wide():
+    body = np.array(U)
+    wrapped = lambda hs: sorted((round(math.cos(h), 9) + 0.0, round(math.sin(h), 9) + 0.0) for h in hs)  # noqa: E731
+    # the door's axis north: along it the U is 0.9 wide (no room in a 0.9 door); sideways 0.8
+    assert wrapped(door_headings(body, math.pi / 2, 0.9, 4)) == wrapped([0.0, math.pi])
+    wide = door_headings(body, math.pi / 2, 0.95, 4)
+    assert wrapped(wide[:2]) == wrapped([0.0, math.pi]) and wrapped(wide[2:]) == wrapped([math.pi / 2, -math.pi / 2])
+    drive = door_headings(body, math.pi / 2, 0.95, 4, drive=True)  # a differential drive: along the axis first
+    assert wrapped(drive[:2]) == wrapped([math.pi / 2, -math.pi / 2]) and wrapped(drive[2:]) == wrapped([0.0, math.pi])
+    assert door_headings(body, 0.0, 0.8, 4) == []  # 0.8 wide at best
+
+
+def _plan_and_check(scene, rm, start, goal):
+    res = Planner(scene, rm).plan(start, goal, 0.0, PlanOptions())
+    assert res.solved, res.message
+    rep = check_trajectory(scene, res.trajectory.waypoints)
+    assert rep.valid, rep.reason
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_join_takes_a_u_footprint_sideways_through_a_door_with_5_cm_per_side(seed):
+    """The U crosses the 0.9 door only sideways (its heading across the door's axis): the
+    doors step tried the headings along the axis alone and the join spent its whole budget
+    in vain (seeds 1-3: 2 components, no_path; the scene ``rooms-u-holonomic-static``: 5
+    rooms left apart). It tries the body's narrowest headings across the door, centred."""
+    doc = door_doc(0.9)
+    doc["robot"] = {"footprint": U, "vmax": 1.0}
+    scene = parse_scene(doc)
+    rm = build_roadmap(scene, RoadmapOptions(vertices=60, seed=seed, sampler="uniform"))
+    assert rm.info.join["components_before"] == 2 and rm.info.components == 1
+    assert rm.info.join["checks"] < rm.info.join["budget"] // 2
+    _plan_and_check(scene, rm, [1.0, 1.0, 0.0], [5.0, 3.0, 0.0])
+
+
+@pytest.mark.parametrize("seed", [1, 3, 4])
+def test_join_crosses_a_door_both_ways_for_an_off_centre_differential_drive(seed):
+    """A differential drive without reverse whose body is off its reference point (0.5 x
+    0.6, its middle 0.2 m to the left) through a 0.7 door (5 cm per side): it drives through
+    on the door's middle line for its heading, which is another line facing east than facing
+    west. The doors step crossed facing one way only (seeds 1, 3, 4: one component, yet
+    no_path eastwards); it adds the crossing facing the other way too."""
+    doc = door_doc(0.7)
+    doc["robot"] = {"footprint": [[0.4, -0.1], [0.4, 0.5], [-0.1, 0.5], [-0.1, -0.1]], "vmax": 1.0,
+                    "kinematics": "unicycle"}  # fmt: skip
+    scene = parse_scene(doc)
+    rm = build_roadmap(scene, RoadmapOptions(vertices=60, seed=seed, sampler="uniform"))
+    assert rm.info.join["components_before"] == 2 and rm.info.components == 1
+    _plan_and_check(scene, rm, [1.0, 1.0, 0.0], [5.0, 3.0, 0.0])
+
+
+def cage_doc() -> dict:
+    """The floor without its wall, and a cage 0.9 x 0.5 inside with a 0.45 gap in its top and
+    bottom sides: the box (0.8 x 0.4) inside cannot turn by more than 0.12 rad nor pass a
+    gap, but its inscribed disc (0.4 across) can: the cage is not proven apart."""
+    doc = door_doc()
+    doc["name"] = "box-cage"
+    side = [_wall(4.0 + 0.275 / 2, y, 0.275, 0.05) for y in (1.725, 2.275)]
+    side += [_wall(5.0 - 0.275 / 2, y, 0.275, 0.05) for y in (1.725, 2.275)]
+    doc["obstacles"] = [_wall(4.025, 2.0, 0.05, 0.6), _wall(4.975, 2.0, 0.05, 0.6), *side]
+    return doc
+
+
+def test_join_gives_a_stray_vertex_in_a_cage_a_small_share_of_the_budget():
+    """A vertex in the cage (as PRM leaves one among a table's legs: small-house, -n 600,
+    seed 1, where the join spent 5929 of its 6000 checks on one) gets its closest pairs and
+    ``PIECE_CHECKS_PER_VERTEX`` checks, not the whole budget."""
+    scene = parse_scene(cage_doc())
+    plain = build_roadmap(scene, RoadmapOptions(vertices=60, seed=1, sampler="uniform", join=False))
+    assert plain.info.components == 1
+    geometry = StaticGeometry(scene)
+    stray = np.array([4.5, 2.0, 0.0])
+    assert geometry.is_valid(stray)
+    vertices = np.vstack([plain.vertices, stray])
+    j = join_components(geometry, vertices, plain.edges, seed=1)
+    assert (j.before, j.after, j.apart, j.budget) == (2, 2, 0, CHECKS_PER_VERTEX * 61)
+    assert j.checks <= 5 * CLOSEST_PAIRS + PIECE_CHECKS_PER_VERTEX < j.budget  # a direct join: 5 checks at most
+
+
+def map_door_scene(folder):
+    """The door scene (0.9 door) as an occupancy map of 5 cm cells, the U as its robot."""
+    res, (w, h) = 0.05, (120, 80)
+    x = (np.arange(w) + 0.5) * res
+    y = (np.arange(h)[::-1] + 0.5) * res  # row 0 is the top
+    X, Y = np.meshgrid(x, y)
+    wall = (np.abs(X - 3.0) < 0.05) & (np.abs(Y - 2.0) > 0.45)
+    img = np.where(wall, 0, 254).astype(np.uint8)
+    (folder / "door.pgm").write_bytes(b"P5\n%d %d\n255\n" % (w, h) + img.tobytes())
+    meta = {"image": "door.pgm", "resolution": res, "origin": [0.0, 0.0, 0.0], "negate": 0,
+            "occupied_thresh": 0.65, "free_thresh": 0.196}  # fmt: skip
+    (folder / "door.yaml").write_text(yaml.safe_dump(meta), encoding="utf-8")
+    doc = {"version": 1, "name": "map-door", "bounds": [0, 0, 6, 4], "robot": {"footprint": U, "vmax": 1.0},
+           "obstacles": [{"map": {"file": "door.yaml"}}]}  # fmt: skip
+    (folder / "scene.yaml").write_text(yaml.safe_dump(doc), encoding="utf-8")
+    return load_scene(folder / "scene.yaml")
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_join_finds_the_doors_of_a_map(tmp_path, seed):
+    """A map has no polygon's corners: the doors step had none to try and the RRT alone did
+    not find the U's sideways crossing (seeds 1-3: 2 pieces, the whole budget spent; the
+    rooms scene as a map, -n 400: 2-6 pieces left on seeds 1-4). The outer corners of its
+    blocked cells are the doors' jambs."""
+    scene = map_door_scene(tmp_path)
+    rm = build_roadmap(scene, RoadmapOptions(vertices=60, seed=seed, sampler="uniform"))
+    assert rm.info.join["components_before"] == 2 and rm.info.components == 1
+    _plan_and_check(scene, rm, [1.0, 1.0, 0.0], [5.0, 3.0, 0.0])

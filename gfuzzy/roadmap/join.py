@@ -7,14 +7,19 @@ robot fits between them (a door with a few centimetres to spare, a bent corridor
 only turned). :func:`join_components` spends a bounded number of collision checks joining
 them: first the closest vertex pairs of two components, directly and by a turn in place and a
 translation (the motions a rigid robot fits through a door with); then the doors between
-them (gaps between obstacle corners: the body centred in the gap, reached along its axis);
-then a bidirectional RRT (RRT-Connect, Kuffner and LaValle 2000) between a component and the
-rest of the roadmap. Every pose is checked and every motion certified by
+them (gaps between obstacle corners, a map's cells' outer corners included: the body
+centred in the gap at the headings it is narrowest across it, :func:`door_headings`,
+reached along the gap's axis; a differential drive's heading along the axis first, and
+crossing both ways when its body turned by pi is another); then a bidirectional RRT
+(RRT-Connect, Kuffner and LaValle 2000) between a component and the rest of the roadmap.
+Every pose is checked and every motion certified by
 :meth:`gfuzzy.collision.geometry.StaticGeometry.motion_free`, as the roadmap's other edges;
 the poses of a found path become vertices, its motions edges. The join gives up when its
-budget (``CHECKS_PER_VERTEX`` checks per roadmap vertex) is spent, and at once, without a
-check, on a component proven apart: a disc inside the body that cannot pass between the
-pieces (:func:`_disc_regions`; a sealed room). Seeded: the same roadmap and seed give the
+budget (``CHECKS_PER_VERTEX`` checks per roadmap vertex) is spent; on a piece when its share
+is (doors and RRT: ``PIECE_CHECKS_PER_VERTEX`` per vertex of the piece at most, so a stray
+vertex in a pocket does not take the budget); and at once, without a check, on a component
+proven apart: a disc inside the body that cannot pass between the pieces
+(:func:`_disc_regions`; a sealed room). Seeded: the same roadmap and seed give the
 same join.
 """
 
@@ -47,6 +52,12 @@ FOCUS = 0.6
 #: Doors (gaps between obstacle corners less than a robot span apart) tried per component,
 #: nearest the two pieces first, before the RRT.
 DOORS = 8
+#: Checks a piece may spend after its closest pairs (its doors, then RRT-Connect) per vertex
+#: of its own, at most: a stray vertex or two that PRM left in a pocket the robot cannot leave
+#: (among a table's legs) gets a small share, a room behind a door a large one.
+PIECE_CHECKS_PER_VERTEX = 200
+#: Headings tried per door, the body's narrowest across the door first (:func:`door_headings`).
+DOOR_HEADINGS = 4
 
 
 @dataclass
@@ -133,6 +144,7 @@ class _Search:
         self.edges: list = []
         self.labels = component_labels(len(vertices), edges)
         self.budget = budget
+        self.limit = budget  # checks allowed for the piece being joined (:func:`_join_one`)
         self.checks = 0
         self.apart = 0  # components proven apart by the inscribed disc's free space
         self.stuck = 0  # components of vertices touching obstacles, left after the direct joins
@@ -141,8 +153,9 @@ class _Search:
         self.blocked = blocked_points(geometry.scene)
         robot = geometry.scene.robot
         self.y_mid = lateral_middle(robot)
-        fp = np.asarray(robot.footprint, dtype=float) if robot.shape == "footprint" else np.zeros((1, 2))
-        self.body_mid = 0.5 * (fp.min(axis=0) + fp.max(axis=0))
+        self.body = robot.corners(np.zeros(3))[0]  # the outline's vertices in the robot's frame
+        self.drive = robot.unicycle  # a differential drive crosses a door along its heading
+        self.both_ways = self.drive and not robot.half_turn_symmetric
         self.door_list: FloatArray | None = None  # computed when first needed
         self.region = _disc_regions(geometry.scene, vertices)
 
@@ -166,7 +179,7 @@ class _Search:
 
     @property
     def spent(self) -> bool:
-        return self.checks >= self.budget
+        return self.checks >= self.limit
 
     def valid(self, q) -> bool:
         """Pose validity, one check of the budget (False, unchecked, once it is spent)."""
@@ -277,8 +290,9 @@ class _Search:
 
     def doors(self, comp: int, limit: int) -> bool:
         """Join component ``comp`` to the rest through one of the ``limit`` doors nearest
-        both (:func:`_doors`): the pose centred in the door, reached from each side by a
-        turn in place and translations along the door's axis (:meth:`_reach`)."""
+        both (:func:`_doors`): the body centred in the door at one of its headings that may
+        cross it (:func:`door_headings`), reached from each side by a turn in place and
+        translations along the door's axis (:meth:`_reach`)."""
         if self.door_list is None:
             self.door_list = _doors(self.geometry.scene, self.blocked, 2.0 * self.r)
         if not len(self.door_list):
@@ -288,30 +302,49 @@ class _Search:
         mids = self.door_list[:, :2]
         score = sum(_nearest_distance(mids, t.arr[:, :2]) for t in trees)
         for i in np.argsort(score, kind="stable")[:limit].tolist():
-            m, heading = self.door_list[i, :2], float(self.door_list[i, 2])
-            for h in (heading, heading + math.pi):
-                q = self._in_door(m, _wrap(h))
+            m, axis, gap = self.door_list[i, :2], float(self.door_list[i, 2]), float(self.door_list[i, 3])
+            for h in door_headings(self.body, axis, gap, DOOR_HEADINGS, self.drive):
                 if self.spent:
                     return False
-                if not self.valid(q):
-                    continue
-                a = self._reach(trees[0], q)
-                b = self._reach(trees[1], q) if a is not None else None
-                if b is not None:
-                    self._add_trees(trees[0], a, trees[1], b)
+                if self._through(trees, self._in_door(m, h, axis), axis):
+                    if self.both_ways and abs(math.sin(h - axis)) < 1e-9:
+                        self._other_way(m, h, axis)
                     return True
         return False
 
-    def _in_door(self, m: FloatArray, heading: float) -> FloatArray:
-        """The pose at ``heading`` whose body's middle (of its extents) is the point ``m``."""
-        c, s = math.cos(heading), math.sin(heading)
-        bx, by = self.body_mid
-        return np.array([m[0] - c * bx + s * by, m[1] - s * bx - c * by, heading])
+    def _through(self, trees: tuple, q: FloatArray, axis: float) -> bool:
+        """Add a path from ``trees[0]`` through the door pose ``q`` to ``trees[1]`` (:meth:`_reach`
+        from each); False, nothing added, when ``q`` is not valid or a tree does not reach it."""
+        if not self.valid(q):
+            return False
+        a = self._reach(trees[0], q, axis)
+        b = self._reach(trees[1], q, axis) if a is not None else None
+        if b is None:
+            return False
+        self._add_trees(trees[0], a, trees[1], b)
+        return True
 
-    def rrt(self, comp: int, share: int) -> bool:
+    def _other_way(self, m: FloatArray, heading: float, axis: float) -> None:
+        """After a differential drive crossed the door at ``m`` along its ``axis``: the crossing
+        facing the other way, when the body turned by pi is another (its middle line is
+        elsewhere, and without ``reverse`` it drives through only forwards), joined to the
+        vertices on either side of the door a circumradius or more from it (as the passage
+        sampler's chains both ways; the first crossing's pose in the door cannot turn)."""
+        V = np.array(self.verts)
+        side = (V[:, :2] - m) @ np.array([math.cos(axis), math.sin(axis)])
+        trees = _Tree(V, side <= -self.r), _Tree(V, side >= self.r)
+        self._through(trees, self._in_door(m, _wrap(heading + math.pi), axis), axis)
+
+    def _in_door(self, m: FloatArray, heading: float, axis: float) -> FloatArray:
+        """The pose at ``heading`` whose body's middle (of its extents along the door's
+        ``axis`` and across it) is the point ``m``."""
+        ox, oy = _door_middle(self.body, heading, axis)
+        c, s = math.cos(heading), math.sin(heading)
+        return np.array([m[0] - c * ox + s * oy, m[1] - s * ox - c * oy, heading])
+
+    def rrt(self, comp: int) -> bool:
         """Grow a tree from component ``comp``'s vertices and one from the rest of the
-        roadmap towards each other (RRT-Connect) for at most ``share`` checks."""
-        stop = min(self.budget, self.checks + share)
+        roadmap towards each other (RRT-Connect) until the checks allowed are spent."""
         V = np.array(self.verts)
         trees = [_Tree(V, self.labels == comp), _Tree(V, self.rest(comp))]
         pa, pb = self.closest_pairs(comp, 1)[0]
@@ -319,7 +352,7 @@ class _Search:
         hi = np.maximum(V[pa, :2], V[pb, :2]) + 2 * self.r
         xmin, ymin, xmax, ymax = self.bounds
         focus = (np.maximum(lo, [xmin, ymin]), np.minimum(hi, [xmax, ymax]))
-        while self.checks < stop:
+        while not self.spent:
             grow, other = trees
             q, passage = self._sample(focus)
             if passage and self.valid(q):  # in a door: both trees straight to it
@@ -331,7 +364,7 @@ class _Search:
                 continue
             new = self._extend(grow, q)
             if new is not None:
-                reached = self._connect(other, grow.poses[new], stop)
+                reached = self._connect(other, grow.poses[new])
                 if reached is not None:
                     self._add_trees(grow, new, other, reached)
                     return True
@@ -345,21 +378,25 @@ class _Search:
             return tree.add(new, near)
         return None
 
-    def _reach(self, tree: _Tree, q: FloatArray) -> int | None:
+    def _reach(self, tree: _Tree, q: FloatArray, axis: float | None = None) -> int | None:
         """Join a passage pose ``q`` to ``tree`` along the passage: from one of its 3 nearest
         nodes (in the plane), a turn in place to ``q``'s heading, a translation to a pose on
-        ``q``'s axis (on the node's side), a translation to ``q``; the node of ``q`` added,
-        or None. The pose on the axis is first the one abreast of the node, when the node
-        is less than a span from ``q`` along the axis, then the one a span before ``q``:
-        from a node beside the door, that one lies beyond the node, and the path went out
-        there and back (a mover's lane through the door held such a crossing too long)."""
-        d = np.array([math.cos(q[2]), math.sin(q[2]), 0.0])
+        the passage's ``axis`` (default ``q``'s heading; on the node's side), a translation to
+        ``q``; the node of ``q`` added, or None. The pose on the axis is first the one abreast
+        of the node, when the node is less than a span from ``q`` along the axis, then the one
+        a span before ``q``: from a node beside the door, that one lies beyond the node, and
+        the path went out there and back (a mover's lane through the door held such a
+        crossing too long). A differential drive's lanes turn at their ends, so it keeps the
+        span: a lane abreast of the door turns the body beside its jambs."""
+        axis = float(q[2]) if axis is None else axis
+        d = np.array([math.cos(axis), math.sin(axis), 0.0])
         span = 2.0 * self.r
         for near in tree.nearest_xy(q, 3):
             p = tree.poses[near]
             along = float(np.dot(p[:2] - q[:2], d[:2]))
             turned = np.array([p[0], p[1], q[2]])
-            for back in dict.fromkeys((min(abs(along), span), span)):  # abreast, then a span
+            backs = (span,) if self.drive else (min(abs(along), span), span)  # abreast, then a span
+            for back in dict.fromkeys(backs):
                 legs = self._legs(p, [turned, q + math.copysign(back, along) * d, q])
                 if legs is not None:
                     node = near
@@ -381,10 +418,10 @@ class _Search:
             at = leg
         return legs
 
-    def _connect(self, tree: _Tree, q: FloatArray, stop: int) -> int | None:
+    def _connect(self, tree: _Tree, q: FloatArray) -> int | None:
         """Extend ``tree`` towards ``q`` until it reaches it (the node's index) or is blocked."""
         near = tree.nearest(q, self.r)
-        while self.checks < stop:
+        while not self.spent:
             new = self._steer(tree.poses[near], q)
             if not (self.valid(new) and self.free(tree.poses[near], new)):
                 return None
@@ -448,7 +485,8 @@ def join_components(
 
     Components are taken largest first after the largest; each is joined to the rest of the
     roadmap by its ``CLOSEST_PAIRS`` closest vertex pairs (straight, or a turn in place and a
-    translation), then by RRT-Connect for an equal share of what is left of the budget.
+    translation), then through doors and by RRT-Connect for an equal share of what is left of
+    the budget, at most ``PIECE_CHECKS_PER_VERTEX`` per vertex of the piece.
 
     Parameters
     ----------
@@ -503,8 +541,9 @@ def _by_size(labels: np.ndarray) -> list:
 
 
 def _join_one(s: _Search, comp: int, left: int) -> bool:
-    """Join component ``comp`` to the rest: closest pairs, then RRT-Connect with a ``1/left``
-    share of the remaining budget; nothing spent on a component proven apart."""
+    """Join component ``comp`` to the rest: closest pairs, then doors and RRT-Connect with a
+    ``1/left`` share of the remaining budget, at most ``PIECE_CHECKS_PER_VERTEX`` per vertex
+    of the piece; nothing spent on a component proven apart."""
     if s.separated(comp):
         s.apart += 1
         return False
@@ -516,10 +555,13 @@ def _join_one(s: _Search, comp: int, left: int) -> bool:
     if s.touching(comp):  # no turn leaves it, and the RRT's steps turn
         s.stuck += 1
         return False
-    if s.doors(comp, DOORS):
-        return True
-    share = (s.budget - s.checks) // max(left, 1)
-    return share > 0 and s.rrt(comp, share)
+    size = int(np.count_nonzero(s.labels == comp))
+    share = min((s.budget - s.checks) // max(left, 1), PIECE_CHECKS_PER_VERTEX * size)
+    s.limit = s.checks + share
+    try:
+        return share > 0 and (s.doors(comp, DOORS) or s.rrt(comp))
+    finally:
+        s.limit = s.budget
 
 
 def repair_roadmap(geometry: StaticGeometry, fs, vertices: FloatArray, edges: IntArray, k: int):
@@ -553,6 +595,8 @@ def join_roadmap(geometry: StaticGeometry, vertices: FloatArray, edges: IntArray
 
 #: Rows of a distance matrix computed at once (memory: this many times the other side).
 _CHUNK = 256
+#: Point pairs up to which nearest distances are computed by brute force, not a k-d tree.
+_BRUTE = 4_000_000
 
 
 def _xy_distances(a: FloatArray, b: FloatArray) -> FloatArray:
@@ -561,15 +605,25 @@ def _xy_distances(a: FloatArray, b: FloatArray) -> FloatArray:
 
 
 def _nearest_distance(a: FloatArray, b: FloatArray) -> FloatArray:
-    """Each point of ``a``'s distance to the nearest point of ``b``."""
-    return np.concatenate([_xy_distances(a[lo : lo + _CHUNK], b).min(axis=1) for lo in range(0, len(a), _CHUNK)])
+    """Each point of ``a``'s distance to the nearest point of ``b`` (by a k-d tree when
+    there are many: a map's doors are tens of thousands)."""
+    if len(a) * len(b) <= _BRUTE:
+        return np.concatenate([_xy_distances(a[lo : lo + _CHUNK], b).min(axis=1) for lo in range(0, len(a), _CHUNK)])
+    from scipy.spatial import cKDTree
+
+    return cKDTree(b).query(a)[0]
 
 
-def _corners(scene) -> FloatArray:
-    """The corners of the scene's polygon and box obstacles (discs and maps have none)."""
+def _corners(scene, blocked) -> FloatArray:
+    """The corners of the scene's polygon and box obstacles, and a map's outer corners: the
+    corners of the rectangles covering its blocked cells with one of the four cells around
+    them blocked (``blocked``: points -> bool), not those inside a wall or along its face.
+    Discs have none."""
     pts = []
     for ob in scene.obstacles:
-        if hasattr(ob, "vertices"):
+        if hasattr(ob, "rects"):  # a map: [xmin, ymin, xmax, ymax] rows
+            pts += [tuple(p) for p in _map_corners(ob, blocked)]
+        elif hasattr(ob, "vertices"):
             pts += [tuple(p) for p in ob.vertices()]
         elif hasattr(ob, "points"):
             pts += [tuple(p) for p in ob.points]
@@ -578,12 +632,22 @@ def _corners(scene) -> FloatArray:
     return np.array(pts, dtype=float).reshape(-1, 2)
 
 
+def _map_corners(ob, blocked) -> FloatArray:
+    """The outer corners of a map's blocked cells (see :func:`_corners`)."""
+    r = np.asarray(ob.rects, dtype=float).reshape(-1, 4)
+    c = np.unique(np.concatenate([r[:, [0, 1]], r[:, [2, 1]], r[:, [2, 3]], r[:, [0, 3]]]), axis=0)
+    h = 0.5 * float(ob.resolution)
+    around = [blocked(c + np.array([dx, dy])) for dx in (-h, h) for dy in (-h, h)]
+    return c[np.sum(around, axis=0) == 1]
+
+
 def _doors(scene, blocked, span: float) -> FloatArray:
-    """Rows ``[x, y, heading]``: the free midpoints of obstacle corners (or a corner and
-    its nearest point on the bounds) less than ``span`` apart, the heading across the gap."""
-    c = _corners(scene)
+    """Rows ``[x, y, heading, gap]``: the free midpoints of obstacle corners (or a corner and
+    its nearest point on the bounds) less than ``span`` apart, the heading across the gap (the
+    door's axis), the gap's width."""
+    c = _corners(scene, blocked)
     if not len(c):
-        return np.zeros((0, 3))
+        return np.zeros((0, 4))
     xmin, ymin, xmax, ymax = scene.bounds
     wall = np.concatenate([c, c, c, c])  # each corner's foot on the four sides of the bounds
     n = len(c)
@@ -598,11 +662,75 @@ def _doors(scene, blocked, span: float) -> FloatArray:
     b = np.concatenate([c[pairs[:, 1]], wall])
     gap = np.hypot(*(b - a).T)
     keep = (gap > 1e-9) & (gap < span)
-    a, b = a[keep], b[keep]
+    a, b, gap = a[keep], b[keep], gap[keep]
     mid = 0.5 * (a + b)
     free = ~blocked(mid)
     d = (b - a)[free]
-    return np.column_stack([mid[free], np.arctan2(d[:, 1], d[:, 0]) + 0.5 * math.pi])
+    return np.column_stack([mid[free], np.arctan2(d[:, 1], d[:, 0]) + 0.5 * math.pi, gap[free]])
+
+
+def door_headings(body: FloatArray, axis: float, gap: float, limit: int, drive: bool = False) -> list:
+    """Headings at which a body may cross a door along ``axis``, narrowest across it first.
+
+    The candidates are the heading along the axis and each outline edge laid along the axis
+    (where a convex body is narrowest across, by the rotating calipers), each either way
+    round; those at which the body is at least ``gap`` wide across the axis are left out (its
+    translation through the door would meet a corner). A U or a box crossing sideways, a
+    footprint longer than wide: the heading a door with a few centimetres to spare needs is
+    one of these. Ties keep the heading along the axis first; a differential drive
+    (``drive``) has it first whatever its width: it crosses only along its heading, and its
+    lanes through the door join the positions centred for that heading.
+
+    Parameters
+    ----------
+    body : (k, 2) float
+        The outline's vertices in the robot's frame.
+    axis : float
+        The door's axis (across the gap between its corners).
+    gap : float
+        The door's width.
+    limit : int
+        Headings returned at most.
+    drive : bool
+        The heading along the axis (either way round) first.
+
+    Returns
+    -------
+    list of float
+    """
+    edges = np.roll(body, -1, axis=0) - body
+    rel = np.concatenate([[0.0, math.pi], np.arctan2(edges[:, 1], edges[:, 0])])  # heading = axis - rel
+    rel = np.concatenate([rel[:2], rel[2:], rel[2:] + math.pi])
+    out, seen = [], set()
+    widths = [_width_across(body, float(r)) for r in rel]
+    order = np.argsort(widths, kind="stable").tolist()
+    if drive:
+        order = [0, 1] + [k for k in order if k > 1]
+    for k in order:
+        key = (round(math.cos(rel[k]), 9), round(math.sin(rel[k]), 9))
+        if widths[k] >= gap or key in seen:
+            continue
+        seen.add(key)
+        out.append(float(_wrap(axis - rel[k])))
+        if len(out) == limit:
+            break
+    return out
+
+
+def _width_across(body: FloatArray, rel: float) -> float:
+    """The body's width across a door whose axis is at ``rel`` in the robot's frame."""
+    return float(np.ptp(body @ np.array([-math.sin(rel), math.cos(rel)])))
+
+
+def _door_middle(body: FloatArray, heading: float, axis: float) -> tuple[float, float]:
+    """The middle of the body's extents along a door's ``axis`` and across it, in the robot's
+    frame at ``heading`` (the middle of its extents in x and y when the two agree)."""
+    rel = axis - heading
+    along = np.array([math.cos(rel), math.sin(rel)])
+    across = np.array([-along[1], along[0]])
+    pt, pu = body @ along, body @ across
+    mt, mu = 0.5 * (pt.min() + pt.max()), 0.5 * (pu.min() + pu.max())
+    return float(mt * along[0] + mu * across[0]), float(mt * along[1] + mu * across[1])
 
 
 #: Metres the robot's inscribed disc is shrunk by before its free space proves pieces apart:
