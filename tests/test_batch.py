@@ -289,6 +289,45 @@ def test_cli_unreachable_scheduler(tmp_path, capsys):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_cli_scheduler_address_that_is_not_dask(tmp_path, capsys):
+    """Something that answers but does not speak Dask (an HTTP server, Dask's dashboard
+    port): one line naming the option and exit 2. Before: a traceback (its reply read as a
+    frame length, an exabyte to allocate) and exit 1."""
+    import socket
+    import threading
+
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(4)
+    server.settimeout(10)
+
+    def answer():
+        try:
+            while True:
+                conn, _ = server.accept()
+                with conn:
+                    conn.settimeout(2)
+                    try:
+                        conn.recv(65536)
+                    except OSError:
+                        pass
+                    conn.sendall(b"HTTP/1.1 400 Bad Request\r\nContent-Length: 0\r\n\r\n" * 4)
+        except OSError:  # closed, or nobody came for 10 s
+            return
+
+    threading.Thread(target=answer, daemon=True).start()
+    address = f"tcp://127.0.0.1:{server.getsockname()[1]}"
+    try:
+        code = main(["batch", str(ROOT / "scenes" / "sim-4s1m.yaml"), "--scheduler", address,
+                     "--connect-timeout", "3", "-o", str(tmp_path / "rows.csv")])  # fmt: skip
+    finally:
+        server.close()
+    err = capsys.readouterr().err.strip()
+    assert code == 2, err
+    assert err.startswith(f"--scheduler {address}: cannot connect") and len(err.splitlines()) == 1, err
+    assert list(tmp_path.iterdir()) == []
+
+
 class _RecordingClient:
     """A test double of ``distributed.Client``: notes the connection in ``events``, or
     refuses it like an unreachable scheduler."""

@@ -174,13 +174,18 @@ TILTED_DEEP = [3.0 + 0.3 * np.cos(0.35), 2.5 + 0.3 * np.sin(0.35), 0.35]  # the 
 
 
 @pytest.mark.parametrize("seed", SEEDS)
-def test_a_navigator_starting_deep_in_a_tilted_alcove_drives_out(seed):
+def test_a_navigator_starting_deep_in_a_tilted_alcove_drives_out(seed, monkeypatch):
     """``gfuzzy plan`` leaves the alcove only by its bridge; the navigator replanned from the
     same pose without one (no time in a period for it, it was said) until ``max_time``: no
     vertex connects, and no evasive straight motion runs along the tilted axis. It now
     bridges once, keeps the bridge, and reaches the goal; every edge certified."""
     from gfuzzy.navigation.navigator import NavOptions
     from gfuzzy.navigation.navsim import simulate
+    from gfuzzy.planner.prepared import PreparedGoal
+
+    bridged = []
+    real = PreparedGoal.bridged_from
+    monkeypatch.setattr(PreparedGoal, "bridged_from", lambda *a, **k: bridged.append(1) or real(*a, **k))
 
     out = [1.0, 0.8, 0.3]
     scene = _tilted_alcove(TILTED_DEEP, out, {"box": [0.6, 0.4], "vmax": 0.8})
@@ -191,6 +196,7 @@ def test_a_navigator_starting_deep_in_a_tilted_alcove_drives_out(seed):
     res = simulate(scene, rm, TILTED_DEEP, out, 0.0, 0.25, max_time=20.0, options=NavOptions(budget_clock="cpu"))
     assert res.reached, res.status
     assert check_trajectory(scene, res.trajectory.waypoints, scene.query("q")).valid
+    assert 1 <= len(bridged) <= 2, len(bridged)  # the bridge is kept (a second try: a period's time ran out)
 
 
 def test_a_bridged_copy_keeps_the_spanner_the_greedy_test_gives_on_it():

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from gfuzzy.check.check import check_trajectory
+from gfuzzy.check.depth import _within_tol
 from gfuzzy.collision.geometry import StaticGeometry
 from gfuzzy.planner.planner import Planner, PlanOptions, query_problem
 from gfuzzy.roadmap.roadmap import Roadmap
@@ -394,8 +395,59 @@ def test_a_box_proven_touching_is_not_measured_and_the_verdicts_are_the_same():
         measured = fast > 0
         assert np.array_equal(fast[measured], full[measured])
         assert np.all(full[~measured] <= tol)
-        proven, deep = proven + int(np.sum(~measured)), deep + int(np.sum(full > tol))
+        # proven by the core: it must hold for many (read 0 whatever the full measure says)
+        proven, deep = proven + int(np.sum(_within_tol(geoms[zero], them, tol))), deep + int(np.sum(full > tol))
     assert proven > 50 and deep > 50, (proven, deep)
+
+
+def _abutting_slide(robot, into: float):
+    """A slide along the top of 20 abutting 0.1 m boxes, ``into`` m into them (the rows of
+    tools/bench_check.py's slide, shorter)."""
+    obstacles = [{"box": {"center": [2.05 + 0.1 * i, 4.0], "size": [0.1, 1.0]}} for i in range(20)]
+    scene = parse_scene({"version": 1, "name": "abutting", "bounds": [0, 0, 6, 6], "robot": robot,
+                         "movers": [], "queries": [], "obstacles": obstacles})  # fmt: skip
+    t = np.append(np.arange(0.0, 6.0, 0.07), 6.0)
+    rows = np.column_stack([t, 1.5 + t / 6.0 * 3.0, np.full(len(t), 4.7 - into), np.zeros(len(t))])
+    return scene, rows
+
+
+@pytest.mark.parametrize("into", [0.0, 1e-12])
+def test_the_check_proves_a_box_touching_and_measures_a_footprint(into, monkeypatch):
+    """``gfuzzy check`` takes the core's proof for a box (its poses and swept hulls), and
+    never for a footprint, even one of the same outline (concave ones could hide a spike in
+    the band); both verdicts are valid."""
+    import gfuzzy.check.depth as depth
+
+    proofs = []
+
+    def spy(bodies, others, tol):
+        out = _within_tol(bodies, others, tol)
+        proofs.append(int(np.sum(out)))
+        return out
+
+    monkeypatch.setattr(depth, "_within_tol", spy)
+    outline = [[0.3, 0.2], [-0.3, 0.2], [-0.3, -0.2], [0.3, -0.2]]
+    for robot, proven in (({"box": [0.6, 0.4], "vmax": 0.5}, True), ({"footprint": outline, "vmax": 0.5}, False)):
+        proofs.clear()
+        scene, rows = _abutting_slide(robot, into)
+        rep = check_trajectory(scene, rows)
+        assert rep.valid, (robot, rep.reason)
+        assert (sum(proofs) > 0) == proven, (robot, proofs)
+
+
+def test_the_deepest_search_runs_only_when_asked(monkeypatch):
+    """``check_trajectory(deepest=False)`` (the planner's stages) gives the same verdict and
+    never searches for the deepest overlap; the default does, once, for an invalid answer."""
+    from gfuzzy.check import check as check_module
+
+    calls = []
+    real = check_module._Checker.search_deepest
+    monkeypatch.setattr(check_module._Checker, "search_deepest", lambda self, lip: calls.append(1) or real(self, lip))
+    scene, rows = _abutting_slide({"box": [0.6, 0.4], "vmax": 0.5}, 0.01)
+    quick = check_trajectory(scene, rows, deepest=False)
+    assert not quick.valid and calls == []
+    full = check_trajectory(scene, rows)
+    assert not full.valid and calls == [1] and full.time == quick.time
 
 
 def _depth_oracle(body, obstacle) -> float:

@@ -132,6 +132,9 @@ class _World:
         # a box and its swept hulls are convex: an overlap by a rounding is proven without
         # measuring it (depth.overlap_depth)
         self.convex = self.robot.shape == "box"
+        # overlaps deeper than tol: left at the first point found deeper (the verdict's
+        # need), or measured to within this fraction of their depth (the deepest's report)
+        self.relative: float | None = None
 
     @property
     def static_edges(self) -> Edges:
@@ -160,7 +163,7 @@ class _World:
             zero = d <= 0
             if np.any(zero):
                 d = d.copy()
-                d[zero] = -overlap_depth(geoms[zero], other, self.tol, self.static_edges, self.convex)
+                d[zero] = -overlap_depth(geoms[zero], other, self.tol, self.static_edges, self.convex, self.relative)
         return d
 
     def bounds_clearance(self, poses):
@@ -214,7 +217,8 @@ class _World:
                     d = shapely.distance(geoms, boxes)
                     zero = d <= 0
                     if np.any(zero):
-                        d[zero] = -overlap_depth(geoms[zero], boxes[zero], self.tol, convex=self.convex)
+                        d[zero] = -overlap_depth(geoms[zero], boxes[zero], self.tol, convex=self.convex,
+                                                                relative=self.relative)
             parts.append(np.where(present, d - self.keep_mover, np.inf))
             names.append(f"mover {mv.name!r}")
         stack = np.vstack(parts)
@@ -303,7 +307,8 @@ class _World:
                 d = shapely.distance(swept, self.static)
                 zero = d <= 0
                 if np.any(zero):
-                    d[zero] = -overlap_depth(swept[zero], self.static, self.tol, self.static_edges, self.convex)
+                    d[zero] = -overlap_depth(swept[zero], self.static, self.tol, self.static_edges, self.convex,
+                                                             self.relative)
             take(d - self.keep_static, "a static obstacle")
         for center, radius in self.discs:
             if disc:
@@ -320,7 +325,7 @@ class _World:
                 continue
             straight = np.hypot(*(mm - 0.5 * (ma + mb)).T) <= 1e-9 * (1.0 + np.hypot(*(mb - ma).T))
             qa, qb = ma - pa, mb - pb  # the mover relative to the robot's reference point
-            d = _relative_swept_distance(mv, qa, qb, disc, r, body, self.tol, self.convex)
+            d = _relative_swept_distance(mv, qa, qb, disc, r, body, self.tol, self.convex, self.relative)
             d = np.where(present, d - self.keep_mover, np.inf)
             d = np.where(straight | ~present, d, np.nan)
             nan = np.isnan(d)
@@ -333,7 +338,8 @@ class _World:
         return p if heading is None else np.column_stack([p, heading])
 
 
-def _relative_swept_distance(mv, qa, qb, disc: bool, r: float, body, tol: float, convex: bool = False):
+def _relative_swept_distance(mv, qa, qb, disc: bool, r: float, body, tol: float, convex: bool = False,
+                             relative: float | None = None):  # fmt: skip
     """Distance between the robot (a disc of radius ``r`` at the origin, or the box or
     footprint ``body`` at the origin) and mover ``mv`` translating from ``qa`` to ``qb`` relative to
     it: the mover's swept set (k,); negative where they overlap."""
@@ -356,7 +362,7 @@ def _relative_swept_distance(mv, qa, qb, disc: bool, r: float, body, tol: float,
         d = shapely.distance(hull, body)
         zero = d <= 0
         if np.any(zero):
-            d[zero] = -overlap_depth(body[zero], hull[zero], tol, convex=convex)
+            d[zero] = -overlap_depth(body[zero], hull[zero], tol, convex=convex, relative=relative)
     return d
 
 
@@ -419,8 +425,9 @@ def check_trajectory(
         are decided exactly (the swept footprint's distance), so a long touching contact
         does not need endless bisection.
     deepest : bool
-        For an invalid trajectory, search it for the bodies' deepest overlap (up to
-        ``DEEPEST_EVALUATIONS`` more evaluations), which the reason reports; the verdict is
+        For an invalid trajectory, search it for the bodies' deepest overlap (as many more
+        evaluations as the check took, within ``DEEPEST_MIN_EVALUATIONS`` and
+        ``DEEPEST_EVALUATIONS``), which the reason reports; the verdict is
         the same without it (the planner's own stages, which need only the verdict).
 
     Returns
@@ -511,9 +518,12 @@ def _unicycle_problem(robot, w: FloatArray, tol: float = 1e-6) -> CheckReport | 
 
 
 #: The deepest overlap of a trajectory found invalid is searched to within this fraction of
-#: its depth, or until this many evaluations of the clearance are spent (a long slide at an
-#: even depth: then the report says the depth is the deepest found).
-DEEPEST_RELATIVE = 1e-3
+#: its depth (each overlap measured to within it too; the report prints 3 digits), or until the evaluations of the
+#: clearance allowed are spent: as many as the check took, at least DEEPEST_MIN_EVALUATIONS
+#: and at most DEEPEST_EVALUATIONS (a long slide at an even depth: then the report says the
+#: depth is the deepest found). The search costs at most a few times the check.
+DEEPEST_RELATIVE = 1e-2
+DEEPEST_MIN_EVALUATIONS = 2_000
 DEEPEST_EVALUATIONS = 20_000
 
 
@@ -605,13 +615,18 @@ class _Checker:
             reason = _with_deepest(reason, overlap, deepest, self.searched)
         return CheckReport(False, reason + note, self.min_clear, self.vmax_seen, self.evaluations, self.first[0])
 
-    def search_deepest(self, lip: FloatArray, budget: int = DEEPEST_EVALUATIONS) -> None:
+    def search_deepest(self, lip: FloatArray, budget: int | None = None) -> None:
         """Search the whole trajectory for the bodies' deepest overlap (for the report: the
         first contact in time is found at its onset, a tiny depth, and the bisection looks no
         further). Branch and bound on the Lipschitz bound ``lip`` (per segment): an interval
         ``[a, b]`` overlaps at most ``(g(a) + g(b)) / 2 + lip (b - a) / 2`` deep; intervals
         that could hold one more than ``DEEPEST_RELATIVE`` deeper than the deepest found are
-        halved, until none is left (``searched`` True) or ``budget`` evaluations are spent."""
+        halved, until none is left (``searched`` True) or ``budget`` evaluations are spent
+        (default: as many as the check took, within ``DEEPEST_MIN_EVALUATIONS`` and
+        ``DEEPEST_EVALUATIONS``); each overlap measured to within ``DEEPEST_RELATIVE``."""
+        if budget is None:
+            budget = min(DEEPEST_EVALUATIONS, max(DEEPEST_MIN_EVALUATIONS, self.evaluations))
+        self.world.relative = DEEPEST_RELATIVE
         times, seg = self._event_times()
         g = self._overlaps(times, seg)
         a_t, b_t, a_g, b_g, a_s = times[:-1], times[1:], g[:-1], g[1:], seg[:-1]
@@ -649,7 +664,8 @@ class _Checker:
                 t[i],
                 f"speed {self.speed[i]:.9g} exceeds vmax {robot.vmax:g} between t={float(t[i])!r} and t={float(t[i + 1])!r}",
             )
-        if len(dt) == 0:
+        if len(dt) == 0:  # one pose: its overlap measured as the deepest's search would
+            self.world.relative = DEEPEST_RELATIVE if deepest else None
             d, names = self.world.clearance(p[:1], t[:1])
             if d[0] < -tol:
                 return CheckReport(False, self.hit(names[0], float(d[0]), f"at t={float(t[0])!r}"), float(d[0]), 0.0, 1, float(t[0]))

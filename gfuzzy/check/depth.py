@@ -150,7 +150,8 @@ def _within_tol(bodies, others, tol: float) -> np.ndarray:
     return near & ~shapely.intersects(core, others)
 
 
-def overlap_depth(bodies, others, tol: float, other_edges: Edges | None = None, convex: bool = False) -> FloatArray:
+def overlap_depth(bodies, others, tol: float, other_edges: Edges | None = None, convex: bool = False,
+                  relative: float | None = DEPTH_RELATIVE) -> FloatArray:  # fmt: skip
     """How deep bodies and obstacles overlap (m; 0 where they only touch), pairwise
     (``others`` one geometry or one per body).
 
@@ -162,10 +163,13 @@ def overlap_depth(bodies, others, tol: float, other_edges: Edges | None = None, 
     outline near the body's). A rounding of two touching shapes is a sliver about its size
     deep however long it is. Along each edge of an overlap's outline the distance is
     bounded exactly (see :meth:`Edges.along`), the edge split until it is within
-    ``tol`` or, where the overlap is deeper than ``tol``, within ``DEPTH_RELATIVE`` of the
+    ``tol`` or, where the overlap is deeper than ``tol``, within ``relative`` of the
     deepest point found: the depth returned is the deepest point found (the vertices'
-    exact; the true depth is at most ``DEPTH_RELATIVE`` more), and more than ``tol`` only
-    where one is. ``other_edges`` indexes the outline of a single large ``others`` (a map).
+    exact; the true depth is at most ``relative`` more), and more than ``tol`` only
+    where one is. ``relative`` None: an overlap is left at the first point found deeper than
+    ``tol`` (the verdict needs no more; several times cheaper on deep overlaps, whose depth
+    is then a lower bound). ``other_edges`` indexes the outline of a single large
+    ``others`` (a map).
 
     ``convex`` bodies (a box, its swept hull) whose overlap is proven at most ``tol`` deep
     by :func:`_within_tol` (a body sliding along a wall by a rounding) are not measured:
@@ -177,7 +181,7 @@ def overlap_depth(bodies, others, tol: float, other_edges: Edges | None = None, 
         measure = ~_within_tol(bodies, others, tol)
         depth = np.zeros(len(bodies))
         if measure.any():
-            depth[measure] = overlap_depth(bodies[measure], others[measure], tol, other_edges)
+            depth[measure] = overlap_depth(bodies[measure], others[measure], tol, other_edges, relative=relative)
         return depth
     parts, owner = shapely.get_parts(shapely.intersection(bodies, others), return_index=True)
     area = shapely.area(parts)
@@ -208,7 +212,10 @@ def overlap_depth(bodies, others, tol: float, other_edges: Edges | None = None, 
             np.maximum.at(depth, at, bound)
             break
         # open: not bounded by tol, nor (an overlap already too deep) by its depth so far
-        open_ = bound > np.maximum(tol, depth[at] * (1.0 + DEPTH_RELATIVE))
+        if relative is None:
+            open_ = (bound > tol) & (depth[at] <= tol)
+        else:
+            open_ = bound > np.maximum(tol, depth[at] * (1.0 + relative))
         if not open_.any():
             break
         # halved, and cut where a segment of the other's outline ends (past a seam at once)

@@ -135,6 +135,13 @@ def _connect(address: str, timeout: float):
         return Client(address, timeout=timeout)
     except (OSError, TimeoutError, ValueError) as exc:
         raise BadInput(f"--scheduler {address}: cannot connect: {' '.join(str(exc).split())[:120]}") from None
+    except Exception as exc:  # noqa: BLE001 - something answered that does not speak Dask's protocol
+        # (an HTTP server, Dask's dashboard port: its reply read as a frame length is an
+        # exabyte to allocate)
+        raise BadInput(
+            f"--scheduler {address}: cannot connect: what answers there is not a Dask scheduler "
+            f"({type(exc).__name__}: {' '.join(str(exc).split())[:80]}); its address is tcp://HOST:8786 by default"
+        ) from None
 
 
 def cmd_batch(args) -> int:
