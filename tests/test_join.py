@@ -200,8 +200,9 @@ def test_door_headings_narrowest_across_first_and_none_too_wide():
     assert wrapped(door_headings(body, math.pi / 2, 0.9, 4)) == wrapped([0.0, math.pi])
     wide = door_headings(body, math.pi / 2, 0.95, 4)
     assert wrapped(wide[:2]) == wrapped([0.0, math.pi]) and wrapped(wide[2:]) == wrapped([math.pi / 2, -math.pi / 2])
-    drive = door_headings(body, math.pi / 2, 0.95, 4, drive=True)  # a differential drive: along the axis first
-    assert wrapped(drive[:2]) == wrapped([math.pi / 2, -math.pi / 2]) and wrapped(drive[2:]) == wrapped([0.0, math.pi])
+    drive = door_headings(body, math.pi / 2, 0.95, 4, drive=True)  # a differential drive: along the axis only
+    assert wrapped(drive) == wrapped([math.pi / 2, -math.pi / 2])
+    assert door_headings(body, math.pi / 2, 0.9, 4, drive=True) == []  # it cannot slide through sideways
     assert door_headings(body, 0.0, 0.8, 4) == []  # 0.8 wide at best
 
 
@@ -241,6 +242,25 @@ def test_join_crosses_a_door_both_ways_for_an_off_centre_differential_drive(seed
     rm = build_roadmap(scene, RoadmapOptions(vertices=60, seed=seed, sampler="uniform"))
     assert rm.info.join["components_before"] == 2 and rm.info.components == 1
     _plan_and_check(scene, rm, [1.0, 1.0, 0.0], [5.0, 3.0, 0.0])
+
+
+def test_join_takes_a_differential_drive_through_a_door_along_its_heading_only():
+    """An L differential drive (with reverse) through a door 0.65 m wide in a wall 0.2 m
+    thick. The doors step tried it sideways too, on the door between the thick wall's
+    diagonal corners: a slide it cannot drive, counted as the join, so the doors after it
+    were not tried (1 component, every query no_path; a reviewer's case, -n 60 seed 4).
+    Along its heading it crosses, and every query is solved and checked."""
+    doc = door_doc(0.6517)
+    doc["obstacles"] = [_wall(3.0, -1.32585, 0.199, 6.0), _wall(3.0, 5.32585, 0.199, 6.0)]
+    doc["robot"] = {"footprint": [[0.3, -0.2], [0.3, 0.0], [0.0, 0.0], [0.0, 0.4], [-0.2, 0.4], [-0.2, -0.2]],
+                    "vmax": 1.0, "kinematics": "unicycle", "reverse": True}  # fmt: skip
+    scene = parse_scene(doc)
+    rm = build_roadmap(scene, RoadmapOptions(vertices=60, seed=4, sampler="uniform"))
+    assert rm.info.join["components_before"] == 2 and rm.info.components == 1
+    heading = rm.vertices[60:, 2]
+    assert np.allclose(np.abs(np.cos(heading)), 1.0), heading  # every pose the join added faces along the axis
+    for start, goal in (([1, 1, 0], [5, 3, 0]), ([5, 3, 0], [1, 1, 0]), ([1.2, 3, 0], [4.8, 1, 0])):
+        _plan_and_check(scene, rm, start, goal)
 
 
 def cage_doc() -> dict:

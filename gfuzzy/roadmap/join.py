@@ -677,9 +677,11 @@ def door_headings(body: FloatArray, axis: float, gap: float, limit: int, drive: 
     round; those at which the body is at least ``gap`` wide across the axis are left out (its
     translation through the door would meet a corner). A U or a box crossing sideways, a
     footprint longer than wide: the heading a door with a few centimetres to spare needs is
-    one of these. Ties keep the heading along the axis first; a differential drive
-    (``drive``) has it first whatever its width: it crosses only along its heading, and its
-    lanes through the door join the positions centred for that heading.
+    one of these. Ties keep the heading along the axis first. A differential drive
+    (``drive``) gets only the heading along the axis, either way round: it crosses only along
+    its heading, and its lanes through the door join the positions centred for that heading
+    (a crossing at another heading is a sideways slide it cannot drive: counted as a join, it
+    kept the doors after it and the RRT from finding one it can).
 
     Parameters
     ----------
@@ -692,7 +694,7 @@ def door_headings(body: FloatArray, axis: float, gap: float, limit: int, drive: 
     limit : int
         Headings returned at most.
     drive : bool
-        The heading along the axis (either way round) first.
+        Only the heading along the axis (either way round).
 
     Returns
     -------
@@ -705,7 +707,7 @@ def door_headings(body: FloatArray, axis: float, gap: float, limit: int, drive: 
     widths = [_width_across(body, float(r)) for r in rel]
     order = np.argsort(widths, kind="stable").tolist()
     if drive:
-        order = [0, 1] + [k for k in order if k > 1]
+        order = [0, 1]
     for k in order:
         key = (round(math.cos(rel[k]), 9), round(math.sin(rel[k]), 9))
         if widths[k] >= gap or key in seen:
