@@ -9,8 +9,8 @@ them: first the closest vertex pairs of two components, directly and by a turn i
 translation (the motions a rigid robot fits through a door with); then the doors between
 them (gaps between obstacle corners, a map's cells' outer corners included: the body
 centred in the gap at the headings it is narrowest across it, :func:`door_headings`,
-reached along the gap's axis; a differential drive's heading along the axis first, and
-crossing both ways when its body turned by pi is another); then a bidirectional RRT
+reached along the gap's axis; a differential drive only along the axis, crossing both
+ways when its body turned by pi is another); then a bidirectional RRT
 (RRT-Connect, Kuffner and LaValle 2000) between a component and the rest of the roadmap.
 Every pose is checked and every motion certified by
 :meth:`gfuzzy.collision.geometry.StaticGeometry.motion_free`, as the roadmap's other edges;
@@ -386,8 +386,9 @@ class _Search:
         of the node, when the node is less than a span from ``q`` along the axis, then the one
         a span before ``q``: from a node beside the door, that one lies beyond the node, and
         the path went out there and back (a mover's lane through the door held such a
-        crossing too long). A differential drive's lanes turn at their ends, so it keeps the
-        span: a lane abreast of the door turns the body beside its jambs."""
+        crossing too long). A differential drive keeps the span: its lanes turn at their
+        ends, and an off-centre drive's crossing from the pose abreast was not found
+        (tests/test_join.py, the crossing both ways, seed 4)."""
         axis = float(q[2]) if axis is None else axis
         d = np.array([math.cos(axis), math.sin(axis), 0.0])
         span = 2.0 * self.r
