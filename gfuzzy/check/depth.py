@@ -118,11 +118,6 @@ def _point_segment_distance(p: FloatArray, a: FloatArray, b: FloatArray) -> Floa
 #: length of tol is called one).
 _DEPTH_HALVINGS = 40
 
-#: An overlap deeper than ``tol`` is measured to within this fraction of its depth (the
-#: number a report prints), not left at the first point found deeper than ``tol``.
-DEPTH_RELATIVE = 1e-6
-
-
 #: A convex body's core: the body less a band this many ``tol`` wide along its outline.
 _CORE_BAND = 0.3
 
@@ -151,7 +146,7 @@ def _within_tol(bodies, others, tol: float) -> np.ndarray:
 
 
 def overlap_depth(bodies, others, tol: float, other_edges: Edges | None = None, convex: bool = False,
-                  relative: float | None = DEPTH_RELATIVE) -> FloatArray:  # fmt: skip
+                  relative: float | None = None) -> FloatArray:  # fmt: skip
     """How deep bodies and obstacles overlap (m; 0 where they only touch), pairwise
     (``others`` one geometry or one per body).
 
@@ -163,13 +158,13 @@ def overlap_depth(bodies, others, tol: float, other_edges: Edges | None = None, 
     outline near the body's). A rounding of two touching shapes is a sliver about its size
     deep however long it is. Along each edge of an overlap's outline the distance is
     bounded exactly (see :meth:`Edges.along`), the edge split until it is within
-    ``tol`` or, where the overlap is deeper than ``tol``, within ``relative`` of the
-    deepest point found: the depth returned is the deepest point found (the vertices'
-    exact; the true depth is at most ``relative`` more), and more than ``tol`` only
-    where one is. ``relative`` None: an overlap is left at the first point found deeper than
-    ``tol`` (the verdict needs no more; several times cheaper on deep overlaps, whose depth
-    is then a lower bound). ``other_edges`` indexes the outline of a single large
-    ``others`` (a map).
+    ``tol`` or, by default, until a point deeper than ``tol`` is found (all a verdict
+    needs: the depth of a deeper overlap is then a lower bound); with ``relative``, a
+    deeper overlap is split on until within that fraction of the deepest point found (the
+    depth returned is that point's: the vertices' exact, the true depth at most
+    ``relative`` more; the number a report prints). Either way it is more than ``tol`` only
+    where the overlap is. ``other_edges`` indexes the outline of a single large ``others``
+    (a map).
 
     ``convex`` bodies (a box, its swept hull) whose overlap is proven at most ``tol`` deep
     by :func:`_within_tol` (a body sliding along a wall by a rounding) are not measured:
