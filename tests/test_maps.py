@@ -212,6 +212,26 @@ def test_bounds_default_to_the_maps_extent(tmp_path):
         load_scene(tmp_path / "n.yaml")
 
 
+def test_bounds_beyond_the_maps_warn_that_the_space_outside_is_free(tmp_path, caplog):
+    # two maps side by side, (-1..2) x (2..4) and (2..5) x (2..4): bounds inside their union
+    # are quiet, bounds reaching past it name where, once
+    write_map(tmp_path, np.full((4, 6), 254, np.uint8), resolution=0.5, origin=(-1.0, 2.0, 0.0))
+    write_map(tmp_path, np.full((4, 6), 254, np.uint8), name="b", resolution=0.5, origin=(2.0, 2.0, 0.0))
+    two = "  - map: {file: b.yaml}\n"
+    caplog.set_level("WARNING", logger="gfuzzy.scene.scene")
+    (tmp_path / "s.yaml").write_text(scene_text(bounds=[-1, 2, 5, 4]) + two)
+    load_scene(tmp_path / "s.yaml")
+    assert not caplog.records
+    (tmp_path / "s.yaml").write_text(scene_text(bounds=[0, 2.5, 4, 3.5]))  # map m alone: x 2..4 outside
+    load_scene(tmp_path / "s.yaml")
+    (msg,) = [r.getMessage() for r in caplog.records]
+    assert "s.yaml: bounds reach 2 m² beyond the map's image (within [2, 4] x [2.5, 3.5])" in msg
+    caplog.clear()
+    (tmp_path / "s.yaml").write_text(scene_text(bounds=[0, 2.5, 4, 3.5]) + two)
+    load_scene(tmp_path / "s.yaml")
+    assert not caplog.records
+
+
 def test_plain_pgm_p2(tmp_path):
     (tmp_path / "p.pgm").write_text("P2\n3 1\n255\n0 254 205\n")
     write_map(tmp_path, [[0]], image_name="unused.png")

@@ -11,6 +11,7 @@ from __future__ import annotations
 import copy
 import hashlib
 import json
+import logging
 import math
 import os
 from dataclasses import dataclass, field, replace
@@ -25,6 +26,8 @@ from ..typed import FloatArray
 from .maps import MapObstacle, load_map
 from .meshes import mesh_footprint
 from .yamldoc import _V, MAX_MAGNITUDE, NAME_RE, _join, _kind, _load_yaml, _one_key
+
+log = logging.getLogger(__name__)
 
 __all__ = [
     "Robot",
@@ -685,8 +688,10 @@ def parse_scene(doc: Any, file: str = "<string>", folder: str | os.PathLike | No
     robot, robot_repr = _parse_robot(v, doc["robot"])
     hasher = hashlib.sha256()
     obstacles = _parse_obstacles(v, doc, folder, hasher)
-    if "bounds" not in doc:
-        grids = [o for o in obstacles if isinstance(o, MapObstacle)]
+    grids = [o for o in obstacles if isinstance(o, MapObstacle)]
+    if "bounds" in doc:
+        _warn_beyond_maps(file, bounds, grids)
+    else:
         if not grids:
             v.fail("bounds", "missing required key (it may be left out only when the scene has a map)")
         ext = np.array([g.extent for g in grids])
@@ -713,6 +718,25 @@ def parse_scene(doc: Any, file: str = "<string>", folder: str | os.PathLike | No
         raw=copy.deepcopy(doc),
         shape_hash=shape_hash,
     )
+
+
+def _warn_beyond_maps(file: str, bounds, grids: list) -> None:
+    """Warn when explicit ``bounds`` reach beyond every map's image: a map says nothing
+    about what lies outside it, so that space is free (no obstacle there), unlike the map's
+    unknown cells (docs/formats.md, section 3)."""
+    if not grids:
+        return
+    import shapely
+
+    inside = shapely.union_all([shapely.box(*g.extent) for g in grids])
+    outside = shapely.box(*bounds).difference(inside)
+    if outside.area > 1e-9 * shapely.box(*bounds).area:
+        x0, y0, x1, y1 = outside.bounds
+        log.warning(
+            "%s: bounds reach %.3g m² beyond the map's image (within [%g, %g] x [%g, %g]): "
+            "that space is free, the map knows nothing of it (bounds within the map close it)",
+            file, outside.area, x0, x1, y0, y1,
+        )
 
 
 def _static_hash(shape_hash: str, clearance: float) -> str:
