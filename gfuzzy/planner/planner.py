@@ -348,12 +348,16 @@ class Planner:
         """
         from ..roadmap.freespace import separation
         from .bridge import bridged_planner
+        from .hemmed import hemmed_note
 
         fs = self._free_space()
         bridged = bridged_planner(self, [start, goal], k, deadline) if fs is None and not self.robot.unicycle else None
         if bridged is not None:
             return bridged, ""
         if fs is None:
+            hemmed = [n for n in (hemmed_note(self.geometry, start, "start"), hemmed_note(self.geometry, goal, "goal")) if n]
+            if hemmed:  # more vertices cannot help: say what holds the end
+                return None, f"start and goal are not connected on the roadmap: {'; '.join(hemmed)}"
             return None, (
                 "start and goal are not connected on the roadmap (sealed off, or the roadmap missed "
                 "a passage: more vertices, -n, may find it)"
