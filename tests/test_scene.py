@@ -32,8 +32,8 @@ CATALOGUE = sorted(BAD_SCENES.glob("*.yaml"))
 
 #: Bad files that cannot live in git as text: name -> (bytes, expected substring).
 GENERATED = {
-    "non_utf8.yaml": (b"version: 1\nname: caf\xe9\nbounds: [0, 0, 4, 3]\n", "not UTF-8"),
-    "latin1_comment.yaml": (b"# \xff\xfe\nversion: 1\n", "not UTF-8"),
+    "non_utf8.yaml": (b"version: 1\nname: caf\xe9\nbounds: [0, 0, 4, 3]\n", "not UTF-8 text (line 2, column 10: byte 0xe9)"),
+    "latin1_comment.yaml": (b"# \xff\xfe\nversion: 1\n", "not UTF-8 text (line 1, column 3: byte 0xff)"),
     "zero_bytes.yaml": (b"", "empty"),
     "two_documents.yaml": (b"version: 1\n---\nversion: 1\n", "line 2"),
     "recursive_alias.yaml": (b"version: 1\nname: &a [*a]\n", "recursive"),

@@ -43,7 +43,7 @@ import numpy as np
 
 from ..errors import SceneError
 from ..typed import FloatArray
-from .yamldoc import _V, _inside, _join, _kind, _load_yaml
+from .yamldoc import _V, _inside, _join, _kind, _load_yaml, not_utf8
 
 __all__ = [
     "MAP_MODES",
@@ -247,7 +247,7 @@ def read_map_yaml(
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
-        v.fail("", f"not UTF-8 text (byte {exc.start}){_image_hint(data)}")
+        v.fail("", f"{not_utf8(data, exc)}{_image_hint(data)}")
     try:
         doc = _load_yaml(text, file)
     except SceneError:

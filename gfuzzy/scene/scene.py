@@ -25,7 +25,7 @@ from ..status import Status
 from ..typed import FloatArray
 from .maps import MapObstacle, load_map
 from .meshes import mesh_footprint
-from .yamldoc import _V, MAX_MAGNITUDE, NAME_RE, _join, _kind, _load_yaml, _one_key
+from .yamldoc import _V, MAX_MAGNITUDE, NAME_RE, _join, _kind, _load_yaml, _one_key, not_utf8
 
 log = logging.getLogger(__name__)
 
@@ -783,6 +783,6 @@ def load_scene(path: str | os.PathLike) -> Scene:
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
-        raise SceneError(file, "", f"not UTF-8 text (byte {exc.start})") from None
+        raise SceneError(file, "", not_utf8(raw, exc)) from None
     doc = _load_yaml(text, file)
     return parse_scene(doc, file=file, folder=Path(path).resolve().parent)

@@ -33,6 +33,7 @@ import numpy as np
 from ..errors import InputError, SceneError
 from ..settings import MAX_MAGNITUDE, MAX_RECORDED_TIME
 from ..typed import FloatArray
+from .yamldoc import not_utf8
 
 __all__ = ["ANNOTATION_PERIOD", "FORMATS", "Track", "Tracks", "read_tracks"]
 
@@ -119,7 +120,7 @@ def _read_text(path: str) -> str:
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
-        raise SceneError(path, "", f"not UTF-8 text (byte {exc.start})") from None
+        raise SceneError(path, "", not_utf8(data, exc)) from None
 
 
 def _sniff(path: str, text: str) -> str:
