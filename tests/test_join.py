@@ -196,14 +196,28 @@ U = [[0.4, -0.45], [0.4, -0.25], [-0.1, -0.25], [-0.1, 0.25], [0.4, 0.25], [0.4,
 def test_door_headings_narrowest_across_first_and_none_too_wide():
     body = np.array(U)
     wrapped = lambda hs: sorted((round(math.cos(h), 9) + 0.0, round(math.sin(h), 9) + 0.0) for h in hs)  # noqa: E731
-    # the door's axis north: along it the U is 0.9 wide (no room in a 0.9 door); sideways 0.8
-    assert wrapped(door_headings(body, math.pi / 2, 0.9, 4)) == wrapped([0.0, math.pi])
+    # the door's axis north: along it the U is 0.9 wide (no room in a 0.899 door); sideways 0.8
+    assert wrapped(door_headings(body, math.pi / 2, 0.899, 4)) == wrapped([0.0, math.pi])
     wide = door_headings(body, math.pi / 2, 0.95, 4)
     assert wrapped(wide[:2]) == wrapped([0.0, math.pi]) and wrapped(wide[2:]) == wrapped([math.pi / 2, -math.pi / 2])
     drive = door_headings(body, math.pi / 2, 0.95, 4, drive=True)  # a differential drive: along the axis only
     assert wrapped(drive) == wrapped([math.pi / 2, -math.pi / 2])
-    assert door_headings(body, math.pi / 2, 0.9, 4, drive=True) == []  # it cannot slide through sideways
-    assert door_headings(body, 0.0, 0.8, 4) == []  # 0.8 wide at best
+    assert door_headings(body, math.pi / 2, 0.899, 4, drive=True) == []  # it cannot slide through sideways
+    assert door_headings(body, 0.0, 0.8 - 1e-6, 4) == []  # 0.8 wide at best
+
+
+def test_door_headings_keep_a_body_exactly_as_wide_as_the_door():
+    """A body exactly as wide as the door crosses it touching both jambs, which the contract
+    allows, and a door's width from its corners' coordinates rounds to either side of the
+    body's (jambs at 8.75 + 0.75 and 11.2 - 0.8: 0.8999999999999986 apart). A door as wide
+    as the body or a rounding narrower was left out (a U drive through five 0.9 doors);
+    one narrower by more than a rounding still is."""
+    body = np.array(U)
+    along = [(0.0, -1.0), (0.0, 1.0)]
+    for gap in (0.9, 0.8999999999999986, 0.9000000000000004):
+        hs = door_headings(body, math.pi / 2, gap, 4, drive=True)
+        assert sorted((round(math.cos(h), 9) + 0.0, round(math.sin(h), 9) + 0.0) for h in hs) == along, gap
+    assert door_headings(body, math.pi / 2, 0.9 - 1e-8, 4, drive=True) == []
 
 
 def _plan_and_check(scene, rm, start, goal):
@@ -261,6 +275,53 @@ def test_join_takes_a_differential_drive_through_a_door_along_its_heading_only()
     assert np.allclose(np.abs(np.cos(heading)), 1.0), heading  # every pose the join added faces along the axis
     for start, goal in (([1, 1, 0], [5, 3, 0]), ([5, 3, 0], [1, 1, 0]), ([1.2, 3, 0], [4.8, 1, 0])):
         _plan_and_check(scene, rm, start, goal)
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_join_takes_a_differential_drive_exactly_as_wide_as_the_door_through_it(seed):
+    """The U as a differential drive through a 0.9 door: 0.9 wide across its heading, it
+    crosses only centred and along the door's axis, touching both jambs. The doors step left
+    the heading out (not narrower than the door) and FCL's collision test, which calls
+    contact a collision, refused the pose in the door (2 components, no_path). The pose in
+    the door is measured exactly at contact, as ``gfuzzy check`` measures it."""
+    doc = door_doc(0.9)
+    doc["robot"] = {"footprint": U, "vmax": 1.0, "kinematics": "unicycle"}
+    scene = parse_scene(doc)
+    rm = build_roadmap(scene, RoadmapOptions(vertices=60, seed=seed, sampler="uniform"))
+    assert rm.info.join["components_before"] == 2 and rm.info.components == 1
+    geometry = StaticGeometry(scene)
+    assert any(abs(v[0] - 3.0) < 0.4 and geometry.clearance1(v) == 0.0 for v in rm.vertices[60:])  # in the door
+    _plan_and_check(scene, rm, [1.0, 1.0, 0.0], [5.0, 3.0, 0.0])
+    _plan_and_check(scene, rm, [5.0, 3.0, 0.0], [1.0, 1.0, 0.0])
+
+
+def rotated_door_doc(body: dict, width: float, angle: float) -> dict:
+    """A 10 x 10 floor split through its middle by a wall 0.1 thick whose normal (the door's
+    axis) is at ``angle``, with a door ``width`` wide in the middle; ``body`` a drive's shape."""
+    u = np.array([-math.sin(angle), math.cos(angle)])  # along the wall
+    walls = [{"box": {"center": (5.0 + s * u * (width / 2 + 6.0)).tolist(), "size": [12.0, 0.1],
+                      "angle": angle + math.pi / 2}} for s in (-1, 1)]  # fmt: skip
+    robot = {**body, "vmax": 1.0, "kinematics": "unicycle"}
+    return {"version": 1, "name": "rotated-door", "bounds": [0, 0, 10, 10], "robot": robot, "obstacles": walls}
+
+
+@pytest.mark.parametrize(
+    "body, width",
+    [({"box": [0.8, 0.5]}, 0.5), ({"footprint": [[0.4, -0.1], [0.4, 0.5], [-0.1, 0.5], [-0.1, -0.1]]}, 0.6)],
+    ids=["box", "off-centre"],
+)
+def test_join_takes_a_drive_exactly_as_wide_as_a_rotated_door_through_it(body, width):
+    """A box and an off-centre footprint, each exactly as wide as a door whose axis is at
+    0.5 rad (its corners' coordinates rounded by the rotation): joined and driven through
+    both ways, checked."""
+    angle = 0.5
+    scene = parse_scene(rotated_door_doc(body, width, angle))
+    rm = build_roadmap(scene, RoadmapOptions(vertices=60, seed=1, sampler="uniform"))
+    assert rm.info.join["components_before"] == 2 and rm.info.components == 1
+    n, u = np.array([math.cos(angle), math.sin(angle)]), np.array([-math.sin(angle), math.cos(angle)])
+    a, b = 5.0 - 2.5 * n + u, 5.0 + 2.5 * n - u
+    _plan_and_check(scene, rm, [*a, angle], [*b, angle])
+    _plan_and_check(scene, rm, [*b, angle], [*a, angle])
 
 
 def cage_doc() -> dict:

@@ -247,6 +247,78 @@ def test_static_plan_is_near_the_exact_turn_and_drive_optimum():
     assert best - 1e-9 <= res.duration <= best + (pieces + 2) * dt
 
 
+def door_lanes_scene():
+    """A disc drive (radius 0.2) and a wall at x = 3, 0.3 thick, with a door 0.45 wide at
+    y = 2; a roadmap whose only way through runs on the door's axis from (1, 2) to (5, 2)
+    through a vertex in the door, and a vertex off the axis on either side."""
+    walls = [{"box": {"center": [3.0, 0.8875], "size": [0.3, 1.775]}}, {"box": {"center": [3.0, 3.1125], "size": [0.3, 1.775]}}]
+    sc = parse_scene(doc(obstacles=walls))
+    verts = np.array([[1.0, 2.0], [3.0, 2.0], [5.0, 2.0], [2.2, 3.5], [3.8, 0.5]])
+    edges = np.array([[0, 1], [1, 2], [0, 3], [2, 4]])
+    rm = Roadmap(verts, edges, np.hypot(*(verts[edges[:, 1]] - verts[edges[:, 0]]).T), sc.name, sc.static_hash,
+                 sc.robot.circumradius)  # fmt: skip
+    return sc, rm
+
+
+def test_a_disc_drive_gets_turn_points_where_a_lane_leaves_a_door():
+    """A drive turns only at vertices: a lane through a door from a vertex in it ran on to
+    the next vertex, 2 m beyond the door on its axis (the unseen rooms' seed 2 case 88: the
+    axis a mover's line). Each lane from a vertex in a passage gets a turn point where the
+    disc has a radius of clearance, just outside the door, with lanes to the nearest
+    vertices the disc sweeps free: here the vertices off the axis, straight."""
+    from gfuzzy.collision.geometry import StaticGeometry
+    from gfuzzy.timespace.unilanes import lanes
+
+    sc, rm = door_lanes_scene()
+    geo = StaticGeometry(sc)
+    ln = lanes(rm, geo, 1.0)
+    new = ln.xy[len(rm.vertices) :]
+    assert len(new) == 2
+    for p, side in zip(sorted(new.tolist()), (-1, 1), strict=True):
+        assert abs(p[1] - 2.0) < 1e-12 and 0.15 < side * (p[0] - 3.0) < 0.5, p  # on the axis, just outside
+        assert geo.clearance1(np.array(p)) >= 0.2
+    pairs = {tuple(ln.xy[e].round(6).ravel().tolist()) for e in ln.edges}
+    ends = {tuple(p) for e in pairs for p in (e[:2], e[2:])}
+    assert (2.2, 3.5) in ends and (3.8, 0.5) in ends
+    i = len(rm.vertices)
+    linked = {int(b if a >= i else a) for a, b in ln.edges if (a >= i) != (b >= i)}
+    assert {3, 4} <= linked  # the vertices off the axis, each from the turn point on its side
+    for a, b in ln.edges:
+        assert geo.sweep_free(ln.xy[a], ln.xy[b])
+
+
+def case88_doc() -> dict:
+    """The unseen rooms' seed 2 case 88: a disc drive, a door 0.34 wide in a wall 0.29 thick
+    (two polygons), a box mover bouncing along the door's axis through it."""
+    robot = {"disc": 0.15261576652492018, "vmax": 0.6393446764407181, "kinematics": "unicycle"}
+    walls = [[[2.166813180476964, 0.9431009552319747], [1.905511775245976, 1.0623612897677273],
+              [3.0515379138064933, 3.5733238960945584], [3.3672708188643066, 3.5733238960945584]],
+             [[1.7640753672880276, 0.752471733494886], [2.0253767725190146, 0.6332113989591335],
+              [1.7363733390894753, 0.0], [1.420640434031663, 0.0]]]  # fmt: skip
+    mover = {"name": "m0", "box": [0.27884447608881063, 0.35445650976480836], "speed": 0.34002554386108097,
+             "path": [[0.6008541966979437, 1.4705976490532684], [3.3300343510670474, 0.22497503967359211]],
+             "mode": "bounce", "offset": 2.83649868934185}  # fmt: skip
+    query = {"name": "q", "start": [1.4111599826616816, 2.238834604273608, 0.7138001476264089],
+             "goal": [4.3575809392649925, 3.2635786147791315, -1.7400118065285501]}  # fmt: skip
+    return doc(robot, [mover], [{"polygon": w} for w in walls], [query], (0.0, 0.0, 5.012897710984311, 3.5733238960945584))
+
+
+def test_a_disc_drive_turns_off_a_movers_line_just_beyond_the_door():
+    """Case 88 (roadmap -n 200, seed 193): the lanes through the door ran along the mover's
+    line to vertices 1.6 m and 1.1 m on, and the drive, stopping there to turn, met the
+    mover coming back (no_path; a witness waits 5.5 s and arrives in 15.55 s). With the turn
+    points it leaves the line just beyond the door: solved and checked."""
+    from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
+
+    sc = parse_scene(case88_doc())
+    rm = build_roadmap(sc, RoadmapOptions(vertices=200, seed=193))
+    q = sc.queries[0]
+    res = Planner(sc, rm).plan(q.start, q.goal, 0.0, PlanOptions())
+    assert res.solved, res.message
+    rep = check_trajectory(sc, res.trajectory.waypoints)
+    assert rep.valid, rep.reason
+
+
 def test_reverse_drives_backwards_when_turning_is_slow():
     """With a slow turn the robot backs up to a goal behind it; without reverse it must
     turn around first, which takes longer (and the checker tells the two apart)."""

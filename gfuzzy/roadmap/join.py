@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..collision.exact import TOUCH_TOL
 from ..collision.geometry import StaticGeometry, metric_distance
 from ..typed import FloatArray, IntArray
 from .freespace import TOUCHING, blocked_points
@@ -188,6 +189,16 @@ class _Search:
         self.checks += 1
         return bool(self.geometry.is_valid(q))
 
+    def valid_touching(self, q) -> bool:
+        """:meth:`valid`, but a pose FCL's collision test finds touching an obstacle is
+        measured exactly (:meth:`StaticGeometry.clearance1`: 0 at contact, as ``gfuzzy check``
+        measures it) and valid when it only touches: a body exactly as wide as a door
+        touches both jambs in it. One check of the budget."""
+        if self.spent:
+            return False
+        self.checks += 1
+        return bool(self.geometry.is_valid(q) or self.geometry.clearance1(q) >= 0.0)
+
     def free(self, a, b) -> bool:
         """A certified straight motion, one check of the budget (False once it is spent)."""
         if self.spent:
@@ -315,7 +326,7 @@ class _Search:
     def _through(self, trees: tuple, q: FloatArray, axis: float) -> bool:
         """Add a path from ``trees[0]`` through the door pose ``q`` to ``trees[1]`` (:meth:`_reach`
         from each); False, nothing added, when ``q`` is not valid or a tree does not reach it."""
-        if not self.valid(q):
+        if not self.valid_touching(q):
             return False
         a = self._reach(trees[0], q, axis)
         b = self._reach(trees[1], q, axis) if a is not None else None
@@ -410,10 +421,11 @@ class _Search:
         """``poses`` (those equal to the one before left out) if each is valid and the
         motions from ``p`` through them certified, else None."""
         legs, at = [], p
-        for leg in poses:
+        for k, leg in enumerate(poses):
             if np.array_equal(leg, at):
                 continue
-            if not (self.valid(leg) and self.free(at, leg)):
+            valid = self.valid_touching if k == len(poses) - 1 else self.valid
+            if not (valid(leg) and self.free(at, leg)):
                 return None
             legs.append(leg)
             at = leg
@@ -711,7 +723,7 @@ def door_headings(body: FloatArray, axis: float, gap: float, limit: int, drive: 
         order = [0, 1]
     for k in order:
         key = (round(math.cos(rel[k]), 9), round(math.sin(rel[k]), 9))
-        if widths[k] >= gap or key in seen:
+        if widths[k] > gap + TOUCH_TOL or key in seen:  # (as wide as the door: touching both jambs)
             continue
         seen.add(key)
         out.append(float(_wrap(axis - rel[k])))

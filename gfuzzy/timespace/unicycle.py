@@ -104,6 +104,10 @@ class _Base:
     vertex_xy: FloatArray = None
     #: Static clearances of the vertices' positions (a disc's), filled as connections need them.
     clearance: FloatArray = None
+    #: The roadmap's vertices, the first of ``vertex_xy``; the query ends join only these
+    #: (a disc's turn points after them, :func:`gfuzzy.timespace.unilanes._turn_points`,
+    #: among an end's nearest took the place of the vertices that lead on).
+    roadmap_vertices: int = 0
 
     def copies_at(self, v: int) -> IntArray:
         lo, hi = np.searchsorted(self.vertex, [v, v + 1])
@@ -203,6 +207,7 @@ def _base(roadmap, geometry, stretch: float, vmax: float, step_len: float, deadl
         n_ring=n_ring,
         vertex_xy=xy,
         clearance=np.full(len(xy), np.nan),
+        roadmap_vertices=len(roadmap.vertices),
     )
     roadmap._derived[key] = return_
     return return_
@@ -387,6 +392,7 @@ class _Extras:
         xy = base.vertex_xy
         has = np.zeros(len(xy), dtype=bool)
         has[base.vertex] = True
+        has[base.roadmap_vertices :] = False
         d = np.hypot(xy[:, 0] - px, xy[:, 1] - py)
         order = np.argsort(d, kind="stable")
         order = order[has[order] & (d[order] > 1e-9)]

@@ -67,6 +67,7 @@ def lanes(roadmap, geometry, stretch: float = 1.0, deadline: float = math.inf) -
     if robot.shape == "disc":
         keep = roadmap.spanner(stretch)
         edges = roadmap.edges[keep].astype(np.int64).reshape(-1, 2)
+        xy, edges = _turn_points(geometry, xy, edges, deadline)
         out = Lanes(xy, edges, np.ones((len(edges), 2), dtype=bool))
     else:
         out = _box_lanes(roadmap, geometry, xy, deadline)
@@ -79,6 +80,68 @@ def lanes(roadmap, geometry, stretch: float = 1.0, deadline: float = math.inf) -
             out = Lanes(xy, out.edges[keep], out.ok[keep])
     roadmap._derived[key] = out
     return out
+
+
+#: Nearest roadmap vertices a disc's turn point (:func:`_turn_points`) tries lanes to.
+TURN_LINKS = 10
+#: A disc's vertex is in a passage (:func:`_turn_points`) below this clearance, in radii.
+PASSAGE_CLEARANCE = 0.5
+
+
+def _turn_points(geometry, xy: FloatArray, edges: IntArray, deadline: float = math.inf) -> tuple[FloatArray, IntArray]:
+    """A disc drive's lanes with turn points where they leave a passage: (xy, edges), the
+    points after the roadmap's vertices.
+
+    A drive turns only at vertices; a lane through a door from a vertex in it runs on to
+    the next vertex, which may lie far beyond the door, on a mover's line through it (the
+    unseen rooms, seed 2 case 88: 1.6 m and 1.1 m on, a box bouncing along the line, missed
+    where a witness turns off just beyond the door). From each vertex in a passage (less
+    clearance than ``PASSAGE_CLEARANCE`` radii), each lane gets a point where the disc first
+    has a radius of clearance (sphere
+    tracing: the clearance grows by at most the distance moved), unless the point lies within
+    a radius of the vertex, within two of the lane's far end, or within one of a point
+    already added; the point splits the lane and gets lanes to its ``TURN_LINKS`` nearest
+    vertices that the disc sweeps free (:meth:`StaticGeometry.sweep_free`).
+    """
+    r = float(geometry.robot.radius)
+    n = len(xy)
+    if not n or not len(edges):
+        return xy, edges
+    clear = np.array([geometry.clearance1(p) for p in xy])
+    points: list = []
+    added: list = []
+    for v in np.nonzero(clear < PASSAGE_CLEARANCE * r)[0].tolist():
+        on_time(deadline)
+        for w in np.concatenate([edges[edges[:, 0] == v, 1], edges[edges[:, 1] == v, 0]]).tolist():
+            p = _passage_end(geometry, xy[v], xy[w], r)
+            if p is None or any(math.hypot(*(p - q)) < r for q in points):
+                continue
+            points.append(p)
+            i = n + len(points) - 1
+            added += [(v, i), (i, w)]
+    for i, p in enumerate(points, start=n):
+        on_time(deadline)
+        near = np.argsort(np.hypot(*(xy - p).T), kind="stable")[:TURN_LINKS]
+        added += [(int(j), i) for j in near.tolist() if geometry.sweep_free(p, xy[j])]
+    if not points:
+        return xy, edges
+    out = np.unique(np.sort(np.vstack([edges, np.array(added, dtype=np.int64)]), axis=1), axis=0)
+    return np.vstack([xy, np.array(points)]), out
+
+
+def _passage_end(geometry, a: FloatArray, b: FloatArray, r: float) -> FloatArray | None:
+    """The first point from ``a`` towards ``b`` at which the disc has ``r`` of clearance (to
+    within 5% of ``r`` past it), or None when that lies within ``r`` of ``a``, within ``2 r``
+    of ``b``, or nowhere before it."""
+    length = math.hypot(*(b - a))
+    t = 0.0
+    while t < length - 2.0 * r:
+        p = a + (t / length) * (b - a)
+        c = geometry.clearance1(p)
+        if c >= r:
+            return p if t >= r else None
+        t += max(r - c, 0.05 * r)
+    return None
 
 
 def _box_lanes(roadmap, geometry, xy: FloatArray, deadline: float = math.inf) -> Lanes:
