@@ -240,18 +240,16 @@ def _pose(values, dof, flag):
     return out
 
 
-def _out_path(path, allowed, reads=()):
+def _out_path(path, allowed, reads=(), beside=()):
     """``path`` checked as an output: its suffix one of ``allowed``, its folder writable, and
-    none of the files the command ``reads`` (given as ``(path or None, what)``; a CSV's
-    companion JSON included): writing there destroyed the input, e.g. a roadmap given as
-    both ``--roadmap`` and ``-o``, or a map YAML as both the map and the scene."""
+    neither it nor the files written ``beside`` it (suffixes: a CSV's JSON, a map's .pgm, a
+    table's .parquet) any of the files the command ``reads`` (``(path or None, what)``, e.g.
+    :func:`_scene_reads`): writing there destroyed the input, e.g. a roadmap given as both
+    ``--roadmap`` and ``-o``, or a scene's own map YAML as ``export --map``."""
     suffix = Path(path).suffix.lower()
     if suffix not in allowed:
         raise BadInput(f"{path}: output must end in {' or '.join(allowed)}")
-    writes = [Path(path)] + ([Path(path).with_suffix(".json")] if suffix == ".csv" else [])
-    for source, what in reads:
-        if source is not None and any(_same_file(w, source) for w in writes):
-            raise BadInput(f"{path}: would overwrite {source}, the {what} this command reads; write it elsewhere")
+    _refuse_overwrite(path, [Path(path)] + [Path(path).with_suffix(s) for s in beside], reads)
     parent = Path(path).resolve().parent
     if not parent.is_dir():
         raise BadInput(f"{path}: folder {parent} does not exist")
@@ -261,6 +259,34 @@ def _out_path(path, allowed, reads=()):
         raise BadInput(f"{path}: folder {parent} is not writable")
     _probe_write(path, parent)
     return Path(path)
+
+
+def _refuse_overwrite(path, writes, reads) -> None:
+    """Bad input when any of ``writes`` (the files writing ``path`` makes) is one of the
+    files in ``reads`` (``(path or None, what)``), through links and any spelling: the one
+    place every command's outputs are checked against its inputs."""
+    for source, what in reads:
+        for w in writes:
+            if source is not None and _same_file(w, source):
+                also = "" if w == Path(path) else f" (the file {w} written with it)"
+                raise BadInput(
+                    f"{path}: would overwrite {source}{also}, the {what} this command reads; write it elsewhere"
+                )
+
+
+def _scene_reads(scene) -> tuple:
+    """The files reading ``scene`` read, as ``_out_path``'s ``reads``: the scene file, each
+    map's YAML and image, each mesh."""
+    from ..scene.maps import MapObstacle
+
+    folder = Path(scene.source).resolve().parent
+    reads = [(scene.source, "scene")]
+    for ob in scene.obstacles:
+        if isinstance(ob, MapObstacle):
+            reads += [(ob.path, "map"), (ob.info.image, "map image")]
+        elif getattr(ob, "source", "polygon") != "polygon":  # a mesh's polygons name their file
+            reads.append((folder / ob.source, "mesh"))
+    return tuple(dict.fromkeys(reads))
 
 
 def _same_file(a, b) -> bool:

@@ -15,6 +15,7 @@ from .common import (
     _navigator_flags,
     _out_path,
     _say,
+    _scene_reads,
 )
 
 
@@ -238,7 +239,7 @@ def cmd_populate(args) -> int:
 
     scene = _load_scene(args.scene)
     _need_pyrvo("populate")
-    out = _out_path(args.output, (".yaml", ".yml"), ((args.scene, "scene"),))
+    out = _out_path(args.output, (".yaml", ".yml"), _scene_reads(scene))
     waypoints = None
     if args.waypoints:
         try:
