@@ -770,3 +770,21 @@ def test_hold_and_mover_clearance_match_brute_force(loop, hold, keep):
             assert res.status is Status.SOLVED, res.message
             assert abs(res.duration - steps * dt) <= 1e-6
             assert check_trajectory(scene, res.trajectory.waypoints, replace(q, hold=hold)).valid
+
+
+@pytest.mark.parametrize("bad", [1e308, -1e308, 2e9, math.inf, math.nan])
+def test_plan_refuses_a_pose_beyond_1e9_with_the_documented_value_error(bad):
+    # on a map scene 1e308 reached a cell index: OverflowError, not the InputError (a
+    # ValueError) that Planner.plan documents; a scene file refuses the same number
+    from gfuzzy.roadmap.roadmap import load_roadmap
+
+    path = ROOT / "scenes" / "depot.yaml"
+    if not path.is_file():
+        pytest.skip("no depot scene in this tree")
+    scene = load_scene(path)
+    roadmap = load_roadmap(ROOT / "roadmaps" / "depot.json", scene)
+    goal = scene.queries[0].goal
+    with pytest.raises(InputError, match="start: "):
+        plan(scene, roadmap, [bad, 1.0, 0.0], goal)
+    with pytest.raises(ValueError, match="goal: "):
+        plan(scene, roadmap, scene.queries[0].start, [1.0, bad, 0.0])

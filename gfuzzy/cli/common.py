@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import re
 import sys
 from pathlib import Path
 
@@ -19,6 +20,12 @@ class BadInput(Exception):
 
 
 class _Parser(argparse.ArgumentParser):
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        # a value that starts as a negative number does (-1e3, -.5, "-1.5,3.0;2,2" for
+        # --waypoints) is a value, not an option: argparse's own test takes only -1 and -1.5
+        self._negative_number_matcher = re.compile(r"^-\.?\d")
+
     def error(self, message):  # one line, exit 2 (argparse prints usage + error)
         raise BadInput(f"{self.prog}: {message} (see {self.prog} --help)")
 
@@ -237,7 +244,18 @@ def _pose(values, dof, flag):
         raise BadInput(f"{flag}: expected numbers ({want}), got {' '.join(values)}") from None
     if not all(math.isfinite(v) for v in out):
         raise BadInput(f"{flag}: numbers must be finite")
+    _not_too_large(out, flag)
     return out
+
+
+def _not_too_large(values, flag: str) -> None:
+    """Bad input when a coordinate given on the command line lies beyond ``MAX_MAGNITUDE``, as
+    in a scene file (a cell index of 1e308 overflowed)."""
+    from ..settings import MAX_MAGNITUDE
+
+    big = max((abs(v) for v in values), default=0.0)
+    if big > MAX_MAGNITUDE:
+        raise BadInput(f"{flag}: number too large ({big:g}; at most {MAX_MAGNITUDE:g} in magnitude)")
 
 
 def _out_path(path, allowed, reads=(), beside=()):

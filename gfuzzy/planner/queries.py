@@ -10,6 +10,7 @@ import numpy as np
 
 from ..collision.geometry import StaticGeometry
 from ..errors import InputError
+from ..settings import MAX_MAGNITUDE
 from ..typed import FloatArray
 
 __all__ = ["check_pose", "query_problem"]
@@ -32,6 +33,8 @@ def check_pose(pose, dof: int, label: str) -> FloatArray:
         raise InputError(f"{label}: expected {dof} finite numbers {want}, got {got}")
     if not np.all(np.isfinite(arr)):
         raise InputError(f"{label}: expected {dof} finite numbers {want}, got {arr.tolist()}")
+    if np.abs(arr).max() > MAX_MAGNITUDE:  # as a scene file's: int() of a cell index overflowed
+        raise InputError(f"{label}: number too large ({np.abs(arr).max():g}; at most {MAX_MAGNITUDE:g} in magnitude)")
     return arr.copy()
 
 
@@ -41,8 +44,8 @@ def query_problem(geometry: StaticGeometry, start, goal) -> str:
     dof = geometry.robot.dof
     for label, pose in (("start", start), ("goal", goal)):
         pose = np.asarray(pose, dtype=float).reshape(-1)
-        if pose.shape != (dof,) or not np.all(np.isfinite(pose)):
-            return f"{label} must be {dof} finite numbers"
+        if pose.shape != (dof,) or not np.all(np.isfinite(pose)) or np.abs(pose).max() > MAX_MAGNITUDE:
+            return f"{label} must be {dof} finite numbers of at most {MAX_MAGNITUDE:g} in magnitude"
         keep = geometry.robot.clearance
         c = geometry.clearance1(pose)  # the bounds and the obstacles less keep
         to_obstacles = geometry.obstacle_clearance(pose) if c < 0 else math.inf
