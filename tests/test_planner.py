@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from dataclasses import replace
 from pathlib import Path
 
@@ -788,3 +789,17 @@ def test_plan_refuses_a_pose_beyond_1e9_with_the_documented_value_error(bad):
         plan(scene, roadmap, [bad, 1.0, 0.0], goal)
     with pytest.raises(ValueError, match="goal: "):
         plan(scene, roadmap, scene.queries[0].start, [1.0, bad, 0.0])
+
+
+@pytest.mark.parametrize(
+    "robot, named",
+    [({"footprint": [[-0.2, -0.1], [0.2, -0.1], [0.2, 0.1], [-0.2, 0.1]]}, "for this footprint robot"),
+     ({"disc": 0.2, "kinematics": "unicycle"}, "for this disc robot (unicycle)"),
+     ({"box": [0.4, 0.2]}, "for this box robot")],
+)  # fmt: skip
+def test_a_malformed_pose_is_said_of_the_robot_the_scene_has(robot, named):
+    # a footprint robot was told "[x, y, heading] for a box robot or a unicycle"
+    scene = parse_scene({"version": 1, "name": "r", "bounds": [0, 0, 4, 4], "robot": dict(robot, vmax=1.0)})
+    rm = build_roadmap(scene, RoadmapOptions(vertices=20, seed=1))
+    with pytest.raises(InputError, match=rf"start: expected 3 finite numbers \[x, y, heading\] {re.escape(named)}, got 2"):
+        plan(scene, rm, [1.0, 1.0], [3.0, 3.0, 0.0])

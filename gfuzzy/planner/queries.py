@@ -16,14 +16,20 @@ from ..typed import FloatArray
 __all__ = ["check_pose", "query_problem"]
 
 
-def check_pose(pose, dof: int, label: str) -> FloatArray:
+def check_pose(pose, dof: int, label: str, robot=None) -> FloatArray:
     """``pose`` as a (dof,) float array; InputError naming ``label`` when it is malformed.
 
     A pose that is not ``dof`` finite numbers is bad input, like a bad scene file; a
     well-formed pose that collides or lies out of bounds is a query answered
-    ``invalid_query`` (see :func:`query_problem`).
+    ``invalid_query`` (see :func:`query_problem`). ``robot`` (optional) names its kind in
+    the message.
     """
-    want = "[x, y] for a disc robot" if dof == 2 else "[x, y, heading] for a box robot or a unicycle"
+    want = "[x, y]" if dof == 2 else "[x, y, heading]"
+    if robot is None:
+        want += " for a disc robot" if dof == 2 else " for a box or footprint robot or a unicycle"
+    else:
+        unicycle = getattr(robot, "kinematics", "holonomic") != "holonomic"
+        want += f" for this {robot.shape} robot" + (f" ({robot.kinematics})" if unicycle else "")
     try:
         arr = np.asarray(pose, dtype=float)
     except (TypeError, ValueError):
