@@ -397,3 +397,20 @@ def test_export_at_an_absurdly_fine_resolution_is_one_line(tmp_path, capsys):
                       "--resolution", "1e-300")  # fmt: skip
     assert rc == 2 and err.count("\n") == 1 and "use a coarser resolution" in err, err
     assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize(
+    "argv, expect",
+    [
+        (["plan", "scenes/sim-4s1m.yaml", "--dt", "1e-308"], "the time step is too fine"),
+        (["plan", "scenes/tb3-arena-unicycle.yaml", "--dt", "1e-308"], "the time step is too fine"),
+        (["export", "scenes/sim-4s1m.yaml", "-o", "OUT.mcap", "--step", "1e-308"], "use a larger step"),
+    ],
+)
+def test_a_step_of_1e_308_is_refused_as_too_fine_in_one_line(tmp_path, capsys, monkeypatch, argv, expect):
+    # a length / 1e-308 is inf: cast to a negative count (plan: "negative dimensions", a
+    # ValueError traceback) or int(inf) (export: an OverflowError traceback)
+    monkeypatch.chdir(ROOT)
+    rc, _, err = _run(capsys, *[str(tmp_path / "x.mcap") if a == "OUT.mcap" else a for a in argv])
+    assert rc == 2 and err.count("\n") == 1 and expect in err, err
+    assert not list(tmp_path.iterdir())
