@@ -102,3 +102,15 @@ def test_scene_reads_names_every_file_a_scene_reads(world):
     reads = {Path(p).resolve() for p, _ in _scene_reads(load_scene(world / "s.yaml"))}
     want = {world / f for f in ("s.yaml", "maps/a.yaml", "maps/a.pgm", "maps/b.yaml", "maps/b.png", "shelves.stl")}
     assert reads == {p.resolve() for p in want}
+
+
+def test_batch_refuses_a_table_whose_parquet_beside_it_is_a_scene(tmp_path, capsys, monkeypatch):
+    # -o r.csv writes r.parquet beside it (with pyarrow): here the scene file
+    monkeypatch.chdir(tmp_path)
+    scene = tmp_path / "r.parquet"
+    scene.write_text((ROOT / "scenes" / "sim-4s1m.yaml").read_text())
+    before = scene.read_bytes()
+    rc, _, err = _run(capsys, "batch", "r.parquet", "--workers", "1", "-o", "r.csv")
+    assert rc == 2 and err.count("\n") == 1, err
+    assert "would overwrite r.parquet (the file r.parquet written with it), the scene" in err, err
+    assert scene.read_bytes() == before and not (tmp_path / "r.csv").exists()
