@@ -145,9 +145,13 @@ def split_counts(lengths: FloatArray, step: float) -> FloatArray:
     Returns
     -------
     (e,) int64
+        At most ``2**40`` each: a count that large is refused by every caller's bound on
+        points (``settings.MAX_POINTS``), and a step of 1e-308 made ``inf`` cast to a
+        negative int64 (a ValueError traceback, not that refusal).
     """
     lengths = np.asarray(lengths, dtype=float)
-    k = np.maximum(1, np.ceil(lengths / step)).astype(np.int64)
+    with np.errstate(over="ignore"):  # a length / 1e-308 is inf: clipped
+        k = np.clip(np.ceil(lengths / step), 1, 2**40).astype(np.int64)
     return np.where(lengths / k > step, k + 1, k)
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -200,3 +201,18 @@ def test_the_deepest_overlap_is_the_bodies_own_with_a_mover_clearance():
     deepest, first = _penetration(rep.reason)
     assert abs(first - 0.05) < 1e-3, rep.reason
     assert abs(deepest - depth) < 1e-3 and abs(depth - 0.2) < 1e-3, rep.reason
+
+
+def test_a_collisions_times_are_said_to_bracket_its_onset():
+    # "collides with mover 'P' between t=0.5 and t=0.50098" read as the collision's span;
+    # it is the interval where the contact starts (the robot overlaps P until t=0.75 and on)
+    scene = parse_scene(
+        {"version": 1, "name": "t", "bounds": [0, 0, 10, 4], "robot": {"disc": 0.2, "vmax": 5.0},
+         "obstacles": [{"box": {"center": [5, 2], "size": [0.4, 0.4]}}],
+         "movers": [{"name": "P", "disc": 0.3, "speed": 1e-4, "path": [[2, 1], [2, 1.0001]], "mode": "once"}]}
+    )  # fmt: skip
+    for y, what in ((1.0, "mover 'P'"), (2.0, "a static obstacle")):
+        rep = check_trajectory(scene, np.array([[0.0, 0.5, y], [4.0, 8.5, y]]))
+        assert not rep.valid and rep.reason.startswith(f"collides with {what} starting between t="), rep.reason
+        start, end = (float(v) for v in re.findall(r"t=([0-9.e+-]+) and t=([0-9.e+-]+)", rep.reason)[0])
+        assert start <= rep.time <= end < start + 0.01, rep.reason

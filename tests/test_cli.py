@@ -368,3 +368,49 @@ def test_check_says_a_body_touching_by_a_rounding_has_clearance_0(tmp_path, caps
     traj = _trajectory_file(tmp_path / "t.json", [[0.0, 4.8, 4.9, 0.0], [3.0, 4.8, 2.0, 0.0]], scene="touch")
     rc, out, _ = _run(capsys, "check", str(scene), str(traj))
     assert rc == 0 and "valid (min clearance 0.0000," in out, out
+
+
+@pytest.mark.parametrize(
+    "argv, flag",
+    [
+        (["plan", "scenes/depot.yaml", "--start", "1e308", "1", "0", "--goal", "2", "2", "0"], "--start"),
+        (["plan", "scenes/depot.yaml", "--start", "2", "2", "0", "--goal", "-1e308", "1", "0"], "--goal"),
+        (["tracks", "WALK", "--static", "scenes/depot.yaml",
+          "--start", "1", "1", "0", "--goal", "1e10", "1", "0", "-o", "OUT"], "--goal"),  # fmt: skip
+    ],
+)
+def test_a_pose_beyond_1e9_on_the_command_line_is_bad_input(tmp_path, capsys, monkeypatch, argv, flag):
+    # on a map scene, 1e308 reached a cell index: an OverflowError traceback (a scene file's
+    # number that large is refused: "number too large")
+    monkeypatch.chdir(ROOT)
+    (tmp_path / "walk.csv").write_text("t,id,x,y\n0,a,1,1\n1,a,2,2\n")
+    names = {"OUT": str(tmp_path / "o.yaml"), "WALK": str(tmp_path / "walk.csv")}
+    rc, _, err = _run(capsys, *[names.get(a, a) for a in argv])
+    assert rc == 2 and err.count("\n") == 1, err
+    assert err.startswith(f"{flag}: number too large") and "at most 1e+09 in magnitude" in err, err
+    assert not (tmp_path / "o.yaml").exists()
+
+
+def test_export_at_an_absurdly_fine_resolution_is_one_line(tmp_path, capsys):
+    # 1e-300 m: ceil(inf) / a float of an int of 300 digits, an OverflowError traceback
+    rc, _, err = _run(capsys, "export", str(ROOT / "scenes" / "sim-4s1m.yaml"), "--map", str(tmp_path / "m.yaml"),
+                      "--resolution", "1e-300")  # fmt: skip
+    assert rc == 2 and err.count("\n") == 1 and "use a coarser resolution" in err, err
+    assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize(
+    "argv, expect",
+    [
+        (["plan", "scenes/sim-4s1m.yaml", "--dt", "1e-308"], "the time step is too fine"),
+        (["plan", "scenes/tb3-arena-unicycle.yaml", "--dt", "1e-308"], "the time step is too fine"),
+        (["export", "scenes/sim-4s1m.yaml", "-o", "OUT.mcap", "--step", "1e-308"], "use a larger step"),
+    ],
+)
+def test_a_step_of_1e_308_is_refused_as_too_fine_in_one_line(tmp_path, capsys, monkeypatch, argv, expect):
+    # a length / 1e-308 is inf: cast to a negative count (plan: "negative dimensions", a
+    # ValueError traceback) or int(inf) (export: an OverflowError traceback)
+    monkeypatch.chdir(ROOT)
+    rc, _, err = _run(capsys, *[str(tmp_path / "x.mcap") if a == "OUT.mcap" else a for a in argv])
+    assert rc == 2 and err.count("\n") == 1 and expect in err, err
+    assert not list(tmp_path.iterdir())

@@ -369,3 +369,15 @@ def test_a_map_free_space_cut_into_tiles_is_the_whole_one(monkeypatch, repo_root
         ring = np.asarray(g.exterior.coords)
         assert shapely.distance(shapely.points(ring), cells).min() >= 0.2 - 1e-9
     assert not any(g.intersects(shapely.Point(16.0, 5.0).buffer(0.34)) for g in tiled.regions)
+
+
+def test_a_door_exactly_as_wide_as_the_robot_is_its_bound_at_most():
+    # a 1 m door (its sides exact in binary) lets radius + clearance 0.5 through (touching is
+    # allowed; the new user's 0.8 m door in a map solved at r = 0.4) while the message for
+    # 0.51 said it "would have to be below 0.4999 m": the low end of the bisection's bracket
+    # on a free space that grows the obstacles by its tolerance more
+    narrow = parse_scene(door_doc(1.0, radius=0.51, clearance=0.0))
+    rm = build_roadmap(narrow, RoadmapOptions(vertices=60, seed=1))
+    res = Planner(narrow, rm).plan([1.0, 1.0], [5.0, 3.0])
+    assert res.status == "no_path" and "0.020 m too narrow" in res.message, res.message
+    assert "would have to be at most 0.5000 m" in res.message, res.message

@@ -450,6 +450,55 @@ def test_a_huge_image_is_refused_in_one_line_without_pillows_warning(tmp_path, c
     assert not [w for w in caught if issubclass(w.category, Image.DecompressionBombWarning)]
 
 
+def _unread_image(monkeypatch, name):
+    """Make reading the image's bytes fail the test: the size is refused from the header."""
+    from gfuzzy.scene import maps
+
+    real = maps._read_bytes
+
+    def read(v, path, place, what):
+        assert Path(path).name != name, f"{name} was read whole before its size was checked"
+        return real(v, path, place, what)
+
+    monkeypatch.setattr(maps, "_read_bytes", read)
+
+
+@pytest.mark.parametrize("comment", [b"", b"# made by hand\n"])
+def test_a_pgm_too_big_is_refused_from_its_header_naming_the_limit(tmp_path, capsys, monkeypatch, comment):
+    from gfuzzy.scene import maps
+
+    _good(tmp_path, fmt="pgm")
+    (tmp_path / "m.pgm").write_bytes(b"P5\n" + comment + b"40 30\n255\n" + bytes(40 * 30))
+    monkeypatch.setattr(maps, "MAX_MAP_CELLS", 1000)  # 40 x 30 = 1200 cells
+    _unread_image(monkeypatch, "m.pgm")
+    _bad(tmp_path, capsys, "image of 40 x 30 pixels, more than gfuzzy's limit MAX_MAP_CELLS (1,000 cells)")
+
+
+def test_a_sparse_60000_square_pgm_is_refused_at_once(tmp_path, capsys, monkeypatch):
+    # the new user's map: a 3.6 GB file of zeros took 19 s and 3.6 GB of memory to refuse
+    _good(tmp_path, fmt="pgm")
+    header = b"P5\n60000 60000\n255\n"
+    with open(tmp_path / "m.pgm", "wb") as fh:
+        fh.write(header)
+        fh.truncate(len(header) + 60000 * 60000)  # sparse: no disc, no time
+    _unread_image(monkeypatch, "m.pgm")
+    _bad(tmp_path, capsys, "image of 60000 x 60000 pixels, more than gfuzzy's limit MAX_MAP_CELLS")
+
+
+def test_a_png_beyond_pillows_own_bound_is_refused_from_its_header(tmp_path, capsys, monkeypatch):
+    import struct
+    import zlib
+
+    def chunk(kind: bytes, body: bytes) -> bytes:
+        return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
+
+    _good(tmp_path)
+    head = chunk(b"IHDR", struct.pack(">IIBBBBB", 60000, 60000, 8, 0, 0, 0, 0))
+    (tmp_path / "m.png").write_bytes(b"\x89PNG\r\n\x1a\n" + head + chunk(b"IDAT", zlib.compress(b"\0" * 64)))
+    _unread_image(monkeypatch, "m.png")
+    _bad(tmp_path, capsys, "more than gfuzzy's limit MAX_MAP_CELLS")
+
+
 def test_a_big_map_loads_without_full_size_float_copies(tmp_path):
     # the image became (H, W, 4) float64 quanta, twice over, and every value step a full-size
     # float array: 60 bytes a cell at the peak (a 4000 x 4000 SLAM map took 1 GB to load, and

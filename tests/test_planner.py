@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from dataclasses import replace
 from pathlib import Path
 
@@ -770,3 +771,35 @@ def test_hold_and_mover_clearance_match_brute_force(loop, hold, keep):
             assert res.status is Status.SOLVED, res.message
             assert abs(res.duration - steps * dt) <= 1e-6
             assert check_trajectory(scene, res.trajectory.waypoints, replace(q, hold=hold)).valid
+
+
+@pytest.mark.parametrize("bad", [1e308, -1e308, 2e9, math.inf, math.nan])
+def test_plan_refuses_a_pose_beyond_1e9_with_the_documented_value_error(bad):
+    # on a map scene 1e308 reached a cell index: OverflowError, not the InputError (a
+    # ValueError) that Planner.plan documents; a scene file refuses the same number
+    from gfuzzy.roadmap.roadmap import load_roadmap
+
+    path = ROOT / "scenes" / "depot.yaml"
+    if not path.is_file():
+        pytest.skip("no depot scene in this tree")
+    scene = load_scene(path)
+    roadmap = load_roadmap(ROOT / "roadmaps" / "depot.json", scene)
+    goal = scene.queries[0].goal
+    with pytest.raises(InputError, match="start: "):
+        plan(scene, roadmap, [bad, 1.0, 0.0], goal)
+    with pytest.raises(ValueError, match="goal: "):
+        plan(scene, roadmap, scene.queries[0].start, [1.0, bad, 0.0])
+
+
+@pytest.mark.parametrize(
+    "robot, named",
+    [({"footprint": [[-0.2, -0.1], [0.2, -0.1], [0.2, 0.1], [-0.2, 0.1]]}, "for this footprint robot"),
+     ({"disc": 0.2, "kinematics": "unicycle"}, "for this disc robot (unicycle)"),
+     ({"box": [0.4, 0.2]}, "for this box robot")],
+)  # fmt: skip
+def test_a_malformed_pose_is_said_of_the_robot_the_scene_has(robot, named):
+    # a footprint robot was told "[x, y, heading] for a box robot or a unicycle"
+    scene = parse_scene({"version": 1, "name": "r", "bounds": [0, 0, 4, 4], "robot": dict(robot, vmax=1.0)})
+    rm = build_roadmap(scene, RoadmapOptions(vertices=20, seed=1))
+    with pytest.raises(InputError, match=rf"start: expected 3 finite numbers \[x, y, heading\] {re.escape(named)}, got 2"):
+        plan(scene, rm, [1.0, 1.0], [3.0, 3.0, 0.0])

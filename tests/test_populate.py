@@ -349,3 +349,35 @@ def test_a_file_named_like_dot_dot_stays_in_the_folder(tmp_path):
     with pytest.raises(InputError, match="outside the new file's folder"):
         write_scene(tmp_path / "room.yaml", Populated(()), tmp_path / "sub" / "people.yaml")
     assert not (tmp_path / "sub" / "people.yaml").exists()
+
+
+def test_waypoints_may_start_with_a_minus_and_their_errors_name_the_option(tmp_path, capsys):
+    # --waypoints "-1.5,3.0;..." (a map with a negative origin): argparse took the value for
+    # an option, "expected one argument"; a waypoint in a wall named neither --waypoints nor
+    # the scene file
+    from helpers import run_main
+
+    doc = dict(ROOM, bounds=[-2, 0, 10, 6], queries=[])
+    src = tmp_path / "room.yaml"
+    src.write_text(yaml.safe_dump(doc))
+    out = tmp_path / "o.yaml"
+    rc, _, err = run_main(capsys, "populate", str(src), "--people", "2", "--waypoints", "-1.5,3.0;8,5",
+                          "--duration", "2", "-o", str(out))  # fmt: skip
+    assert rc == 0 and out.is_file(), err
+    out.unlink()
+    for wps, what in (("-1.5,3.0;5,1", "point 2 (5, 1) is not free"), ("-1e3,3;8,5", "point 1 (-1000, 3) lies outside"),
+                      ("-1.5,nan;8,5", "point 1 must be two finite numbers")):  # fmt: skip
+        rc, _, err = run_main(capsys, "populate", str(src), "--people", "2", "--waypoints", wps, "-o", str(out))
+        assert rc == 2 and err.count("\n") == 1, err
+        assert err.startswith(f"{src}: --waypoints: {what}"), err
+        assert not out.exists()
+
+
+@pytest.mark.parametrize("flags", [["--start", "-1e0", "1"], ["--start", "-.5", "1"]])
+def test_a_pose_may_start_with_a_minus_as_a_number_does(tmp_path, capsys, flags):
+    from helpers import run_main
+
+    src = tmp_path / "room.yaml"
+    src.write_text(yaml.safe_dump(ROOM))
+    rc, out, err = run_main(capsys, "plan", str(src), *flags, "--goal", "9", "5")
+    assert rc == 1 and "invalid_query" in out and "out of bounds" in out, (out, err)  # a pose, read as one

@@ -759,7 +759,8 @@ class _Checker:
         if bad.size:
             k = int(bad[np.argmin(a_t[idx[bad]])])
             self.min_clear = min(self.min_clear, float(ex[k]))
-            when = f"between t={float(a_t[idx[k]])!r} and t={float(b_t[idx[k]])!r}"
+            # the first interval found in violation: the contact's onset lies in it, not its span
+            when = f"starting between t={float(a_t[idx[k]])!r} and t={float(b_t[idx[k]])!r}"
             self.contact(ex_names[k], float(ex[k]), when, a_t[idx[k]])
         if decided.any():
             self.min_clear = min(self.min_clear, float(np.nanmin(ex)))

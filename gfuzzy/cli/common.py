@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import re
 import sys
 from pathlib import Path
 
@@ -19,6 +20,12 @@ class BadInput(Exception):
 
 
 class _Parser(argparse.ArgumentParser):
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        # a value that starts as a negative number does (-1e3, -.5, "-1.5,3.0;2,2" for
+        # --waypoints) is a value, not an option: argparse's own test takes only -1 and -1.5
+        self._negative_number_matcher = re.compile(r"^-\.?\d")
+
     def error(self, message):  # one line, exit 2 (argparse prints usage + error)
         raise BadInput(f"{self.prog}: {message} (see {self.prog} --help)")
 
@@ -237,21 +244,30 @@ def _pose(values, dof, flag):
         raise BadInput(f"{flag}: expected numbers ({want}), got {' '.join(values)}") from None
     if not all(math.isfinite(v) for v in out):
         raise BadInput(f"{flag}: numbers must be finite")
+    _not_too_large(out, flag)
     return out
 
 
-def _out_path(path, allowed, reads=()):
+def _not_too_large(values, flag: str) -> None:
+    """Bad input when a coordinate given on the command line lies beyond ``MAX_MAGNITUDE``, as
+    in a scene file (a cell index of 1e308 overflowed)."""
+    from ..settings import MAX_MAGNITUDE
+
+    big = max((abs(v) for v in values), default=0.0)
+    if big > MAX_MAGNITUDE:
+        raise BadInput(f"{flag}: number too large ({big:g}; at most {MAX_MAGNITUDE:g} in magnitude)")
+
+
+def _out_path(path, allowed, reads=(), beside=()):
     """``path`` checked as an output: its suffix one of ``allowed``, its folder writable, and
-    none of the files the command ``reads`` (given as ``(path or None, what)``; a CSV's
-    companion JSON included): writing there destroyed the input, e.g. a roadmap given as
-    both ``--roadmap`` and ``-o``, or a map YAML as both the map and the scene."""
+    neither it nor the files written ``beside`` it (suffixes: a CSV's JSON, a map's .pgm, a
+    table's .parquet) any of the files the command ``reads`` (``(path or None, what)``, e.g.
+    :func:`_scene_reads`): writing there destroyed the input, e.g. a roadmap given as both
+    ``--roadmap`` and ``-o``, or a scene's own map YAML as ``export --map``."""
     suffix = Path(path).suffix.lower()
     if suffix not in allowed:
         raise BadInput(f"{path}: output must end in {' or '.join(allowed)}")
-    writes = [Path(path)] + ([Path(path).with_suffix(".json")] if suffix == ".csv" else [])
-    for source, what in reads:
-        if source is not None and any(_same_file(w, source) for w in writes):
-            raise BadInput(f"{path}: would overwrite {source}, the {what} this command reads; write it elsewhere")
+    _refuse_overwrite(path, [Path(path)] + [Path(path).with_suffix(s) for s in beside], reads)
     parent = Path(path).resolve().parent
     if not parent.is_dir():
         raise BadInput(f"{path}: folder {parent} does not exist")
@@ -261,6 +277,34 @@ def _out_path(path, allowed, reads=()):
         raise BadInput(f"{path}: folder {parent} is not writable")
     _probe_write(path, parent)
     return Path(path)
+
+
+def _refuse_overwrite(path, writes, reads) -> None:
+    """Bad input when any of ``writes`` (the files writing ``path`` makes) is one of the
+    files in ``reads`` (``(path or None, what)``), through links and any spelling: the one
+    place every command's outputs are checked against its inputs."""
+    for source, what in reads:
+        for w in writes:
+            if source is not None and _same_file(w, source):
+                also = "" if w == Path(path) else f" (the file {w} written with it)"
+                raise BadInput(
+                    f"{path}: would overwrite {source}{also}, the {what} this command reads; write it elsewhere"
+                )
+
+
+def _scene_reads(scene) -> tuple:
+    """The files reading ``scene`` read, as ``_out_path``'s ``reads``: the scene file, each
+    map's YAML and image, each mesh."""
+    from ..scene.maps import MapObstacle
+
+    folder = Path(scene.source).resolve().parent
+    reads = [(scene.source, "scene")]
+    for ob in scene.obstacles:
+        if isinstance(ob, MapObstacle):
+            reads += [(ob.path, "map"), (ob.info.image, "map image")]
+        elif getattr(ob, "source", "polygon") != "polygon":  # a mesh's polygons name their file
+            reads.append((folder / ob.source, "mesh"))
+    return tuple(dict.fromkeys(reads))
 
 
 def _same_file(a, b) -> bool:

@@ -15,6 +15,7 @@ from .common import (
     _navigator_flags,
     _out_path,
     _say,
+    _scene_reads,
 )
 
 
@@ -232,13 +233,25 @@ def _cut_note(asked: int, result) -> str:
     return f" ({'; '.join(notes)})" if notes else ""
 
 
+def _waypoints_named(message: str, exc: InputError, scene: str) -> str:
+    """``message``, or, for an error about ``PopulateOptions.waypoints`` (``waypoints[2] ...``),
+    the same said of ``--waypoints`` (its point counted from 1) and the scene file."""
+    import re
+
+    m = re.match(r"waypoints(?:\[(\d+)\])? (.*)", str(exc))
+    if m is None:
+        return message
+    which = f" point {int(m[1]) + 1}" if m[1] is not None else ""
+    return f"{scene}: --waypoints:{which} {m[2]}"
+
+
 def cmd_populate(args) -> int:
     """Write a copy of the scene with ``--people`` walking people as trajectory movers."""
     from ..navigation.populate import PopulateOptions, populate, write_scene
 
     scene = _load_scene(args.scene)
     _need_pyrvo("populate")
-    out = _out_path(args.output, (".yaml", ".yml"), ((args.scene, "scene"),))
+    out = _out_path(args.output, (".yaml", ".yml"), _scene_reads(scene))
     waypoints = None
     if args.waypoints:
         try:
@@ -251,8 +264,11 @@ def cmd_populate(args) -> int:
         opts = PopulateOptions(people=args.people, seed=args.seed, duration=args.duration, radius=args.radius,
                                speed=args.speed, waypoints=tuple(waypoints) if waypoints else None)  # fmt: skip
     except InputError as exc:
-        raise BadInput(f"gfuzzy populate: {exc}") from None
-    result = populate(scene, opts)
+        raise BadInput(_waypoints_named(f"gfuzzy populate: {exc}", exc, args.scene)) from None
+    try:
+        result = populate(scene, opts)
+    except InputError as exc:  # a point outside the bounds or not free; no room for them all
+        raise BadInput(_waypoints_named(str(exc), exc, args.scene)) from None
     write_scene(args.scene, result, out)
     _say(f"{out}: {len(result.movers)} people walking for {args.duration:g} s added to {scene.name}"
          f"{_cut_note(args.people, result)}", sys.stdout)  # fmt: skip

@@ -21,9 +21,11 @@ from .common import (
     _plan_options,
     _pose,
     _progress,
+    _refuse_overwrite,
     _roadmap_for,
     _roadmap_reads,
     _say,
+    _scene_reads,
 )
 from .planning import _start_on_mover
 
@@ -54,8 +56,9 @@ def cmd_tracks(args) -> int:
     from ..scene.scene import _load_yaml, parse_scene
     from ..scene.tracks import TrackSceneOptions, read_tracks, tracks_scene
 
-    out = _out_path(args.output, (".yaml", ".yml"), ((args.static, "--static scene"), (args.file, "tracks file")))
     static = _load_scene(args.static) if args.static else None
+    reads = ((args.file, "tracks file"), *(_scene_reads(static) if static is not None else ()))
+    out = _out_path(args.output, (".yaml", ".yml"), reads)
     try:
         options = TrackSceneOptions(
             t_start=args.t_start,
@@ -127,6 +130,16 @@ def _writable_folder(path: Path, flag: str) -> None:
         raise BadInput(f"{flag} {path}: folder {parent} is not writable")
 
 
+def _trajectories_read(folder, scenes, reads) -> None:
+    """Bad input when a trajectory file ``batch --trajectories`` would write is a file it reads."""
+    from ..runs.batch import trajectory_path
+
+    for sc in scenes:
+        for q in sc.queries:
+            path = trajectory_path(folder, sc.name, q.name)
+            _refuse_overwrite(path, [path], reads)
+
+
 def _connect(address: str, timeout: float):
     """A Dask client of the scheduler at ``address`` (bad input when it cannot connect)."""
     from distributed import Client
@@ -153,11 +166,13 @@ def cmd_batch(args) -> int:
 
     if args.workers is not None and args.workers < 1:
         raise BadInput(f"--workers: must be at least 1, got {args.workers}")
-    out = _out_path(args.output, (".csv",))
+    scenes = [_apply_overrides(_load_scene(p), args) for p in args.scenes]  # all bad input first
+    reads = tuple(r for sc in scenes for r in (*_scene_reads(sc), *_roadmap_reads(sc, args)))
+    out = _out_path(args.output, (".csv",), reads, beside=(".parquet",))
     _writable_folder(out.parent, "-o")
     if args.trajectories:
         _writable_folder(Path(args.trajectories), "--trajectories")
-    scenes = [_apply_overrides(_load_scene(p), args) for p in args.scenes]  # all bad input first
+        _trajectories_read(args.trajectories, scenes, reads)
     seen: dict = {}
     for path, sc in zip(args.scenes, scenes, strict=True):
         if sc.name in seen:
@@ -262,7 +277,8 @@ def cmd_navigate(args) -> int:
         query = scene.queries[0]
     else:
         raise BadInput(f"{scene.source}: queries: the scene has no queries to navigate")
-    out = _out_path(args.output, (".json",), _roadmap_reads(scene, args)) if args.output else None
+    reads = (*_scene_reads(scene), *_roadmap_reads(scene, args))
+    out = _out_path(args.output, (".json",), reads) if args.output else None
     problem = query_problem(StaticGeometry(scene), query.start, query.goal) or _start_on_mover(scene, query)
     if problem:
         tf = TrajectoryFile(scene.name, query.name, Status.INVALID_QUERY, problem, None, None, None, 0.0)

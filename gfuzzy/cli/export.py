@@ -6,7 +6,7 @@ import math
 import sys
 
 from ..errors import InputError
-from .common import EXIT_OK, BadInput, _load_scene, _out_path, _say
+from .common import EXIT_OK, BadInput, _load_scene, _out_path, _say, _scene_reads
 from .planning import _navigate_extras, _rows_fit, _violation
 
 
@@ -49,8 +49,8 @@ def cmd_export(args) -> int:
 def _export_map(args) -> int:
     from ..export.mapexport import export_nav2_map
 
-    out = _out_path(args.map, (".yaml", ".yml"), ((args.scene, "scene"),))
     scene = _load_scene(args.scene)
+    out = _out_path(args.map, (".yaml", ".yml"), _scene_reads(scene), beside=(".pgm",))
     try:
         grid = export_nav2_map(scene, out, args.resolution if args.resolution is not None else 0.05)
     except InputError as exc:
@@ -64,8 +64,8 @@ def _export_mcap(args) -> int:
     from ..export.export import ExportOptions, export_mcap
     from ..trajectory import load_trajectory
 
-    out = _out_path(args.output, (".mcap",))
     scene = _load_scene(args.scene)
+    out = _out_path(args.output, (".mcap",), (*_scene_reads(scene), (args.trajectory, "trajectory")))
     rows, predictions = None, None
     if args.trajectory:
         tf = load_trajectory(args.trajectory)

@@ -15,7 +15,7 @@ def cmd_map(args) -> int:
     from ..scene.mapscene import map_scene
     from ..scene.yamldoc import _load_yaml
 
-    out = _out_path(args.output, (".yaml", ".yml"), ((args.map, "map"),))
+    out = _out_path(args.output, (".yaml", ".yml"), ((args.map, "map"), (_map_image(args.map), "map image")))
     footprint = None
     if args.robot_footprint is not None:
         vals = args.robot_footprint
@@ -55,6 +55,16 @@ def cmd_map(args) -> int:
             "(a smaller robot?)"
         )
     return EXIT_OK
+
+
+def _map_image(path):
+    """The image the map YAML at ``path`` names, or None when it cannot be read (said later)."""
+    from ..scene.maps import read_map_yaml
+
+    try:
+        return read_map_yaml(path)[0].image
+    except (InputError, OSError):
+        return None
 
 
 def _knows_footprints() -> bool:

@@ -22,9 +22,11 @@ from .common import (
     _plan_options,
     _pose,
     _progress,
+    _refuse_overwrite,
     _roadmap_for,
     _roadmap_reads,
     _say,
+    _scene_reads,
 )
 
 
@@ -32,7 +34,11 @@ def cmd_roadmap(args) -> int:
     from ..roadmap.roadmap import RoadmapOptions, build_roadmap, default_roadmap_path
 
     scene = _load_scene(args.scene)
-    out = _out_path(args.output, (".json",)) if args.output else default_roadmap_path(scene)
+    if args.output:
+        out = _out_path(args.output, (".json",), _scene_reads(scene))
+    else:
+        out = default_roadmap_path(scene)
+        _refuse_overwrite(out, [out], _scene_reads(scene))
     try:
         opts = RoadmapOptions(
             vertices=args.vertices,
@@ -119,8 +125,8 @@ def cmd_plan(args) -> int:
 
     scene = _apply_overrides(_load_scene(args.scene), args)
     query = _query_from_args(scene, args)
-    reads = ((args.scene, "scene"), *_roadmap_reads(scene, args))
-    out = _out_path(args.output, (".json", ".csv"), reads) if args.output else None
+    reads = (*_scene_reads(scene), *_roadmap_reads(scene, args))
+    out = _out_path(args.output, (".json", ".csv"), reads, beside=(".json",)) if args.output else None
     options = _plan_options(args)
     problem = query_problem(StaticGeometry(scene), query.start, query.goal)
     if problem:  # answered without a roadmap (the robot may fit nowhere at all)
@@ -269,7 +275,8 @@ def cmd_render(args) -> int:
     from ..trajectory import load_trajectory
 
     scene = _apply_overrides(_load_scene(args.scene), args)
-    out = _out_path(args.output, (".png", ".gif"))
+    reads = (*_scene_reads(scene), (args.trajectory, "trajectory"), *_roadmap_reads(scene, args))
+    out = _out_path(args.output, (".png", ".gif"), reads)
     traj = None
     nav_doc: dict = {}
     if args.trajectory:

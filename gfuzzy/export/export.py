@@ -137,10 +137,10 @@ def step_times(t0: float, t1: float, step: float) -> FloatArray:
         a step that would land within 1 ns of ``t1`` is dropped in favour of ``t1``.
     """
     check_number("step", step)
-    n = int(math.floor((t1 - t0) / step)) + 1 if t1 > t0 else 1
-    if n > MAX_STEPS:
-        raise InputError(f"step {step:g} s gives {n:.3g} time steps over {t1 - t0:g} s (at most {MAX_STEPS:,}); use a larger step (--step)")
-    ts = t0 + step * np.arange(n)
+    nf = (t1 - t0) // step + 1.0 if t1 > t0 else 1.0  # a float: with 1e-308, inf (int() overflowed)
+    if nf > MAX_STEPS:
+        raise InputError(f"step {step:g} s gives {nf:.3g} time steps over {t1 - t0:g} s (at most {MAX_STEPS:,}); use a larger step (--step)")
+    ts = t0 + step * np.arange(int(nf))
     ts = ts[ts < t1 - 1e-9]
     return np.append(ts, t1) if t1 > t0 or not len(ts) else ts
 

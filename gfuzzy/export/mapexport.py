@@ -96,8 +96,11 @@ class NavMap:
 
 def _grid(scene: Scene, resolution: float) -> tuple[int, int, float, float]:
     x0, y0, x1, y1 = scene.bounds
-    w = max(1, math.ceil((x1 - x0) / resolution - 1e-9))
-    h = max(1, math.ceil((y1 - y0) / resolution - 1e-9))
+    wf, hf = (x1 - x0) / resolution, (y1 - y0) / resolution
+    if not wf * hf <= 1e18:  # a resolution of 1e-300: ceil(inf), or w * h as a float, overflowed
+        raise InputError(f"resolution {resolution:g} m gives a grid of {wf * hf:.3g} cells (at most {MAX_MAP_CELLS:,}); use a coarser resolution")
+    w = max(1, math.ceil(wf - 1e-9))
+    h = max(1, math.ceil(hf - 1e-9))
     if w * h > MAX_MAP_CELLS:
         raise InputError(
             f"resolution {resolution:g} m gives a {w} x {h} grid ({w * h:.3g} cells, at most {MAX_MAP_CELLS:,}); use a coarser resolution"

@@ -453,7 +453,7 @@ class Planner:
         from .prepared import prepare_goal
 
         opts = options or PlanOptions()
-        goal = check_pose(goal, self.robot.dof, "goal")
+        goal = check_pose(goal, self.robot.dof, "goal", self.robot)
         if self.robot.unicycle:  # the copies' graph is kept on the roadmap; the rest is per query
             from ..timespace.unicycle import UnicyclePrepared
             from ..timespace.unicycle import prepare_goal as prepare_unicycle
@@ -539,8 +539,8 @@ class Planner:
         deadline = t_begin + opts.time_limit
         robot = self.robot
         vmax = robot.vmax
-        start = check_pose(start, robot.dof, "start")
-        goal = check_pose(goal, robot.dof, "goal")
+        start = check_pose(start, robot.dof, "start", robot)
+        goal = check_pose(goal, robot.dof, "goal", robot)
         t0 = _check_t0(t0)
 
         def answer(status, message="", traj=None, rd=math.inf, stats=None):

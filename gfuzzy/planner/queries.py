@@ -10,19 +10,26 @@ import numpy as np
 
 from ..collision.geometry import StaticGeometry
 from ..errors import InputError
+from ..settings import MAX_MAGNITUDE
 from ..typed import FloatArray
 
 __all__ = ["check_pose", "query_problem"]
 
 
-def check_pose(pose, dof: int, label: str) -> FloatArray:
+def check_pose(pose, dof: int, label: str, robot=None) -> FloatArray:
     """``pose`` as a (dof,) float array; InputError naming ``label`` when it is malformed.
 
     A pose that is not ``dof`` finite numbers is bad input, like a bad scene file; a
     well-formed pose that collides or lies out of bounds is a query answered
-    ``invalid_query`` (see :func:`query_problem`).
+    ``invalid_query`` (see :func:`query_problem`). ``robot`` (optional) names its kind in
+    the message.
     """
-    want = "[x, y] for a disc robot" if dof == 2 else "[x, y, heading] for a box robot or a unicycle"
+    want = "[x, y]" if dof == 2 else "[x, y, heading]"
+    if robot is None:
+        want += " for a disc robot" if dof == 2 else " for a box or footprint robot or a unicycle"
+    else:
+        unicycle = getattr(robot, "kinematics", "holonomic") != "holonomic"
+        want += f" for this {robot.shape} robot" + (f" ({robot.kinematics})" if unicycle else "")
     try:
         arr = np.asarray(pose, dtype=float)
     except (TypeError, ValueError):
@@ -32,6 +39,8 @@ def check_pose(pose, dof: int, label: str) -> FloatArray:
         raise InputError(f"{label}: expected {dof} finite numbers {want}, got {got}")
     if not np.all(np.isfinite(arr)):
         raise InputError(f"{label}: expected {dof} finite numbers {want}, got {arr.tolist()}")
+    if np.abs(arr).max() > MAX_MAGNITUDE:  # as a scene file's: int() of a cell index overflowed
+        raise InputError(f"{label}: number too large ({np.abs(arr).max():g}; at most {MAX_MAGNITUDE:g} in magnitude)")
     return arr.copy()
 
 
@@ -41,8 +50,8 @@ def query_problem(geometry: StaticGeometry, start, goal) -> str:
     dof = geometry.robot.dof
     for label, pose in (("start", start), ("goal", goal)):
         pose = np.asarray(pose, dtype=float).reshape(-1)
-        if pose.shape != (dof,) or not np.all(np.isfinite(pose)):
-            return f"{label} must be {dof} finite numbers"
+        if pose.shape != (dof,) or not np.all(np.isfinite(pose)) or np.abs(pose).max() > MAX_MAGNITUDE:
+            return f"{label} must be {dof} finite numbers of at most {MAX_MAGNITUDE:g} in magnitude"
         keep = geometry.robot.clearance
         c = geometry.clearance1(pose)  # the bounds and the obstacles less keep
         to_obstacles = geometry.obstacle_clearance(pose) if c < 0 else math.inf

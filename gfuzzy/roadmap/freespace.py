@@ -673,8 +673,12 @@ class Separation:
     grown : float
         The obstacles' growth: robot radius + clearance.
     passes_below : float or None
-        The largest growth at which the free space joins them (to 1e-4 m): a robot with
-        radius + clearance below it would pass; 0 when even a point robot cannot pass;
+        The largest growth at which the free space joins them (to 1e-4 m: the middle of
+        the bisection's last bracket plus the free space's ``tolerance``, by which it grows
+        the obstacles more): a robot with radius + clearance at most it would
+        pass (touching is allowed: a disc exactly as wide as a door goes through; the
+        bracket's low end, 0.3999 for that door, read "below 0.3999" while 0.4 passed);
+        0 when even a point robot cannot pass;
         None when not computed (a scene with many obstacles).
     narrowest : (2,) float or None
         Where the two regions come closest: the middle of the shortest segment between
@@ -700,7 +704,7 @@ class Separation:
         if self.passes_below is not None:
             msg += (
                 f", {2 * (self.grown - self.passes_below):.3f} m too narrow (radius + clearance "
-                f"would have to be below {self.passes_below:.4f} m)"
+                f"would have to be at most {self.passes_below:.4f} m)"
             )
         return msg
 
@@ -739,7 +743,7 @@ def separation(scene: Scene, fs: FreeSpace, start: FloatArray, goal: FloatArray)
     rects = sum(len(ob.rects) for ob in scene.obstacles if hasattr(ob, "rects"))
     if len(scene.obstacles) <= SEPARATION_MAX_OBSTACLES and rects <= SEPARATION_MAX_RECTS:
         lo, hi = 0.0, fs.grown
-        ok, _ = _joined(scene, lo, ends)
+        ok, fs_lo = _joined(scene, lo, ends)
         if not ok:
             passes = 0.0
         else:
@@ -748,9 +752,11 @@ def separation(scene: Scene, fs: FreeSpace, start: FloatArray, goal: FloatArray)
                 mid = 0.5 * (lo + hi)
                 ok, f = _joined(scene, mid, ends)
                 if ok:
-                    lo = mid
+                    lo, fs_lo = mid, f
                 else:
                     hi, fs_hi = mid, f
-            passes = round(lo, 4)
+            # the free space grows the obstacles by its tolerance more: the true bound is that
+            # much above the bracket (a door of 0.8 m joined only below 0.39997)
+            passes = round(0.5 * (lo + hi) + fs_lo.tolerance, 4)
             where = _narrowest(fs_hi, ends) or where
     return Separation(tuple(ends[0].tolist()), tuple(ends[1].tolist()), fs.grown, passes, where)

@@ -458,6 +458,9 @@ def _check_polygon(v: _V, pts: FloatArray, place: str) -> FloatArray:
         v.fail(place, f"a polygon needs at least 3 points, got {len(pts)}")
     if np.allclose(pts[0], pts[-1]) and len(pts) > 3:
         pts = pts[:-1]
+    spread = np.linalg.svd(pts - pts.mean(axis=0), compute_uv=False)
+    if spread[1] <= 1e-9 * spread[0]:  # its ring folds back on itself: not a self-intersection to fix
+        v.fail(place, "polygon is degenerate: its points are collinear (zero area)")
     ring = shapely.LinearRing(pts)
     if not ring.is_simple:
         v.fail(place, "polygon is self-intersecting")

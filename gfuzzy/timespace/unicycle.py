@@ -192,6 +192,7 @@ def _base(roadmap, geometry, stretch: float, vmax: float, step_len: float, deadl
     # turns: a ring of headings per vertex, on a grid one turning step apart (see _Base)
     scale = vmax / rate
     n_ring = int(split_counts(np.array([2 * math.pi * scale]), step_len)[0])
+    _too_many(n_ring)  # one ring past the bound: refused before any is made
     ring_ptr, ring_v, ring_h, ring_ok, ta, tb, tdh = _rings(geometry, xy, cv, ch, n_ring, deadline)
     tdh = np.asarray(tdh, dtype=float)
     return_ = _Base(
@@ -484,6 +485,7 @@ def _cut_pieces(nodes: FloatArray, A: IntArray, B: IntArray, DH: FloatArray, L: 
     nodes, or a function of node ids giving them."""
     k = split_counts(L, step_len)
     n_int = k - 1
+    _too_many(first + int(n_int.sum()))  # before the arrays of that many points are made
     offs = np.concatenate([[0], np.cumsum(n_int)]).astype(np.int64)
     p_of = np.repeat(np.arange(len(A)), n_int)
     j = np.arange(offs[-1]) - np.repeat(offs[:-1], n_int) + 1
