@@ -673,13 +673,16 @@ class Separation:
     grown : float
         The obstacles' growth: robot radius + clearance.
     passes_below : float or None
-        The largest growth at which the free space joins them (to 1e-4 m: the middle of
-        the bisection's last bracket plus the free space's ``tolerance``, by which it grows
-        the obstacles more): a robot with radius + clearance at most it would
-        pass (touching is allowed: a disc exactly as wide as a door goes through; the
-        bracket's low end, 0.3999 for that door, read "below 0.3999" while 0.4 passed);
+        A growth below which the planner joins them: the low end of the bisection's last
+        bracket (to 1e-4 m) less the repair paths' smallest margin (``DELTAS[-1]``, which a
+        path keeps from the free space's boundary on both sides), rounded down to 1e-4 m
+        (a 1 m door: below 0.4997; a disc of 0.4997 is solved there, 0.49975 not);
         0 when even a point robot cannot pass;
         None when not computed (a scene with many obstacles).
+    touching : float or None
+        The growth at which a disc touches both sides of the narrowest place, estimated as
+        the middle of that bracket plus the free space's ``tolerance`` (by which it grows the
+        obstacles more than asked): what "too narrow" is measured from.
     narrowest : (2,) float or None
         Where the two regions come closest: the middle of the shortest segment between
         them, at a growth just above ``passes_below`` (the pinch point), else at ``grown``.
@@ -690,6 +693,7 @@ class Separation:
     grown: float
     passes_below: float | None
     narrowest: tuple | None
+    touching: float | None = None
 
     def message(self) -> str:
         msg = (
@@ -703,8 +707,8 @@ class Separation:
             msg += f"; the narrowest place between them is near ({self.narrowest[0]:.3f}, {self.narrowest[1]:.3f})"
         if self.passes_below is not None:
             msg += (
-                f", {2 * (self.grown - self.passes_below):.3f} m too narrow (radius + clearance "
-                f"would have to be at most {self.passes_below:.4f} m)"
+                f", {2 * max(0.0, self.grown - (self.touching or self.passes_below)):.3f} m too narrow (radius + clearance "
+                f"would have to be below {self.passes_below:.4f} m)"
             )
         return msg
 
@@ -739,11 +743,12 @@ def separation(scene: Scene, fs: FreeSpace, start: FloatArray, goal: FloatArray)
     if rs == rg and rs >= 0:
         return None
     passes: float | None = None
+    touching: float | None = None
     where = _narrowest(fs, ends)
     rects = sum(len(ob.rects) for ob in scene.obstacles if hasattr(ob, "rects"))
     if len(scene.obstacles) <= SEPARATION_MAX_OBSTACLES and rects <= SEPARATION_MAX_RECTS:
         lo, hi = 0.0, fs.grown
-        ok, fs_lo = _joined(scene, lo, ends)
+        ok, _ = _joined(scene, lo, ends)
         if not ok:
             passes = 0.0
         else:
@@ -752,11 +757,13 @@ def separation(scene: Scene, fs: FreeSpace, start: FloatArray, goal: FloatArray)
                 mid = 0.5 * (lo + hi)
                 ok, f = _joined(scene, mid, ends)
                 if ok:
-                    lo, fs_lo = mid, f
+                    lo = mid
                 else:
                     hi, fs_hi = mid, f
-            # the free space grows the obstacles by its tolerance more: the true bound is that
-            # much above the bracket (a door of 0.8 m joined only below 0.39997)
-            passes = round(0.5 * (lo + hi) + fs_lo.tolerance, 4)
+            # what the planner's paths can use, rounded down: "at most 0.4000" (the bracket
+            # plus the tolerance, rounded to the nearest) was said at a 0.8 m door where
+            # 0.39995 is not solved
+            passes = max(0.0, math.floor((lo - DELTAS[-1]) * 1e4) / 1e4)
+            touching = 0.5 * (lo + hi) + fs.tolerance
             where = _narrowest(fs_hi, ends) or where
-    return Separation(tuple(ends[0].tolist()), tuple(ends[1].tolist()), fs.grown, passes, where)
+    return Separation(tuple(ends[0].tolist()), tuple(ends[1].tolist()), fs.grown, passes, where, touching)
