@@ -923,3 +923,12 @@ def test_observations_of_another_shape_are_refused_not_reshaped(open_square, see
         nav.step(0.0, np.array([0.0, -4.0]), seen)
     one = np.array([3.0, 0.0, -1.0, 0.0, 0.3])  # a single row alone is one person, as before
     assert nav.step(0.0, np.array([0.0, -4.0]), one).duration > 0
+
+
+@pytest.mark.parametrize("pose", [[1e308, -4.0], [0.0, -2e9]])
+def test_a_pose_beyond_1e9_is_refused_as_the_planner_refuses_it(open_square, pose):
+    # it returned a hold trajectory at x = 1e308 (docs/formats.md: the API refuses it)
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (0.0, 4.0))
+    with pytest.raises(InputError, match="number too large"):
+        nav.step(0.0, np.array(pose), np.zeros((0, 5)))

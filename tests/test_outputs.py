@@ -114,3 +114,24 @@ def test_batch_refuses_a_table_whose_parquet_beside_it_is_a_scene(tmp_path, caps
     assert rc == 2 and err.count("\n") == 1, err
     assert "would overwrite r.parquet (the file r.parquet written with it), the scene" in err, err
     assert scene.read_bytes() == before and not (tmp_path / "r.csv").exists()
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["roadmap", "s.json", "-n", "20", "-o", "s.json"],  # a roadmap over its JSON scene
+        ["roadmap", "s.json", "-n", "20", "-o", "./s.json"],  # another spelling
+        ["navigate", "s.json", "-n", "20", "-o", "s.json"],  # the run over the scene it runs
+        ["plan", "s.json", "-n", "20", "-o", "s.json"],
+    ],
+)
+def test_a_json_scene_is_not_overwritten_by_what_is_made_from_it(tmp_path, capsys, monkeypatch, argv):
+    # the review's surviving mutants: a JSON scene named as the output was replaced
+    monkeypatch.chdir(tmp_path)
+    scene = tmp_path / "s.json"
+    scene.write_text('{"version": 1, "name": "line", "bounds": [0, 0, 4, 2], "robot": {"disc": 0.2, "vmax": 1},'
+                     ' "queries": [{"name": "go", "start": [0.5, 1], "goal": [3.5, 1]}]}')  # fmt: skip
+    before = _files(tmp_path)
+    rc, _, err = _run(capsys, *argv)
+    assert rc == 2 and err.count("\n") == 1 and "would overwrite" in err and "this command reads" in err, err
+    assert _files(tmp_path) == before

@@ -42,7 +42,7 @@ from ..planner.planner import BACKENDS, search_function
 from ..poses import metric_distance, wrap_angle
 from ..roadmap.roadmap import Roadmap
 from ..scene.scene import Scene
-from ..settings import SPEED_SAFETY
+from ..settings import MAX_MAGNITUDE, SPEED_SAFETY
 from ..status import Status
 from ..timespace.drive import Fan, drive_rows
 from ..timespace.movers import MoverField
@@ -456,6 +456,8 @@ class Navigator(PathSpace, Prediction):
         pose = np.asarray(pose, dtype=float).reshape(-1).copy()
         if pose.shape != (self.robot.dof,) or not np.all(np.isfinite(pose)) or not math.isfinite(t):
             raise InputError(f"pose must be {self.robot.dof} finite numbers and t finite")
+        if np.abs(pose).max() > MAX_MAGNITUDE:  # as a scene file's and gfuzzy.plan's
+            raise InputError(f"pose: number too large ({np.abs(pose).max():g}; at most {MAX_MAGNITUDE:g} in magnitude)")
         obs = _observation_rows(observations)
         if not np.all(np.isfinite(obs)) or np.any(obs[:, 4] < 0):
             raise InputError("observations must be finite rows [x, y, vx, vy, radius >= 0]")
