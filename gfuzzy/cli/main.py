@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from .. import interrupt
 from ..errors import InputError, LimitError
 from .common import EXIT_BAD, EXIT_OK, BadInput, _navigator_flags, _Parser, _say
 from .crowds import add_crowd, add_populate
@@ -215,10 +216,30 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the command line; returns the exit status."""
+    """Run the command line; returns the exit status.
+
+    Ctrl-C at any moment prints one line, ``interrupted``, and returns 130, leaving no file
+    half-written (``batch`` writes the rows it finished): see :mod:`gfuzzy.interrupt`, whose
+    handling ``argv`` None (the process's own command line) keeps to the end of the process.
+    """
     import logging
 
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s: %(message)s")
+    with interrupt.handling(restore=argv is not None):
+        try:
+            status = _run(argv)
+            interrupt.check()  # an interrupt native code dropped: the command ran on to here
+            return status
+        except BaseException as exc:
+            if not interrupt.is_interrupt(exc):
+                raise
+            with interrupt.deferred():  # Ctrl-C comes twice (a terminal's repeat, `timeout`'s group signal)
+                _say("interrupted")
+            return interrupt.EXIT_INTERRUPTED
+
+
+def _run(argv: list[str] | None) -> int:
+    """Parse ``argv`` and run its command; bad input is one line and :data:`EXIT_BAD`."""
     parser = _parser()
     try:
         args = parser.parse_args(argv)
@@ -241,8 +262,3 @@ def main(argv: list[str] | None = None) -> int:
         # that refuses writing, /proc): the user's to fix, one line, nothing half-written
         _say(f"{exc.filename}: {exc.strerror or exc}")
         return EXIT_BAD
-    except KeyboardInterrupt:
-        _say("interrupted")
-        return 130
-
-

@@ -10,8 +10,10 @@ need no shared folder.
 A query whose task raises becomes a row with status ``error`` and the message; so does a
 query that kills its worker (the scheduler gives up on it with ``KilledWorker``; it is run
 again alone first, so that queries merely queued on the same worker are not blamed).
-An interrupt (``KeyboardInterrupt`` in the client) stops the batch and returns the rows
-finished so far, each complete.
+An interrupt (``KeyboardInterrupt`` in the client, or a SIGINT that
+:func:`gfuzzy.interrupt.check` raises again between results) stops the batch and returns the
+rows finished so far, each complete. A local cluster starts and closes whole whenever Ctrl-C
+comes, and its workers never see it.
 
 Planning is deterministic (``gfuzzy.plan`` uses no OMPL randomness, the GA takes its own
 seed), so the rows are the same, timings aside, whatever the number of workers.
@@ -31,6 +33,7 @@ from collections.abc import Callable, Iterator, Sequence
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 
+from .. import interrupt
 from ..atomic import write_atomic, write_atomic_with
 from ..errors import InputError
 from ..planner.planner import PlanOptions
@@ -258,25 +261,57 @@ def local_cluster(workers: int, quiet: bool = True) -> Iterator[object]:
     }
     if quiet:
         settings["logging"] = {"distributed": "error", "tornado": "critical"}
-    with dask.config.set(settings):
-        with _quiet_logs(quiet):
-            cluster = LocalCluster(
-                n_workers=workers,
-                threads_per_worker=1,
-                processes=True,
-                dashboard_address=None,
-                host="127.0.0.1",
-                # the scheduler serves HTTP (health, metrics) even without a dashboard, on
-                # port 8787 by default: a port the system picks never warns "Port 8787 is
-                # already in use" on the user's terminal when another cluster holds it
-                scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
-            )
-            client = Client(cluster)
-            try:
-                yield client
-            finally:
-                client.close()
-                cluster.close()
+    cluster = client = None
+    with dask.config.set(settings), _quiet_logs(quiet):
+        try:
+            with interrupt.deferred(), _sigint_blocked():  # no half-started cluster
+                cluster = LocalCluster(
+                    n_workers=workers,
+                    threads_per_worker=1,
+                    processes=True,
+                    dashboard_address=None,
+                    host="127.0.0.1",
+                    # the scheduler serves HTTP (health, metrics) even without a dashboard, on
+                    # port 8787 by default: a port the system picks never warns "Port 8787 is
+                    # already in use" on the user's terminal when another cluster holds it
+                    scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
+                )
+                client = Client(cluster)
+            yield client
+        finally:
+            with interrupt.deferred():  # closed whole, however often Ctrl-C comes
+                if client is not None:
+                    client.close()
+                if cluster is not None:
+                    cluster.close()
+
+
+@contextlib.contextmanager
+def _sigint_blocked() -> Iterator[None]:
+    """SIGINT blocked in this (the main) thread while a cluster starts.
+
+    The threads Dask starts meanwhile (its event loop, each nanny's process starter) inherit
+    the blocked signal, and so do the worker processes they spawn, then or when a nanny
+    restarts one: a terminal's Ctrl-C, which reaches the whole process group, never reaches
+    a worker, not even while it imports (before :func:`dask_setup` ignores it; it printed
+    a traceback of the import it cut). A SIGINT meanwhile waits in the kernel and reaches
+    the client's handler when the block ends.
+    """
+    import signal
+    import threading
+    from multiprocessing import resource_tracker
+
+    if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    # the tracker of the workers' semaphores, started now: started later, from this thread,
+    # it would unblock SIGINT here when done (it blocks the signal while it spawns itself)
+    resource_tracker.ensure_running()
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
 def dask_setup(worker) -> None:
@@ -357,9 +392,10 @@ def run_batch(
     t0 = time.perf_counter()
 
     def record(j: int, row: BatchRow, doc: dict | None) -> None:
-        if folder is not None:
-            _save(folder, row, doc)
-        rows[j] = row
+        with interrupt.deferred():  # a row and its trajectory file both, or neither
+            if folder is not None:
+                _save(folder, row, doc)
+            rows[j] = row
         if progress is not None:
             progress(len(rows), total)
 
@@ -367,6 +403,7 @@ def run_batch(
         progress(0, total)
     interrupted = False
     try:
+        interrupt.check()
         suspects = _round(client, bundles, jobs, range(total), options, before, record)
         for j in suspects:  # alone now: a query that still kills its worker is the culprit
             if _round(client, bundles, jobs, [j], options, before, record):
@@ -375,8 +412,11 @@ def run_batch(
                     scenes[si][0].name, scenes[si][0].queries[qi].name, "error", error=_KILLED
                 )
                 record(j, row, None)
-    except KeyboardInterrupt:
+    except BaseException as exc:  # noqa: BLE001 - Ctrl-C, however it surfaced (gfuzzy.interrupt)
+        if not interrupt.is_interrupt(exc):
+            raise
         interrupted = True
+        interrupt.clear()
         log.info("interrupted: %d of %d queries finished", len(rows), total)
     return BatchResult(
         [rows[j] for j in sorted(rows)], total, interrupted, time.perf_counter() - t0
@@ -427,6 +467,7 @@ def _round(client, bundles, jobs, ids, options, before, record) -> list[int]:
                 scene = bundles[jobs[j][0]].scene
                 row, doc = _error_row(scene.name, scene.queries[jobs[j][1]].name, exc), None
             record(j, row, doc)
+            interrupt.check()  # one that native code or a finaliser dropped stops here
     finally:
         with contextlib.suppress(Exception):
             client.cancel(list(futures) + list(held.values()))
