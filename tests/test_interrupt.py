@@ -1,4 +1,5 @@
-"""Ctrl-C on the command line (gfuzzy.interrupt): one line, exit 130, no file, however it surfaces.
+"""Ctrl-C on the command line (the Ctrl-C section of gfuzzy.errors): one line, exit 130,
+no file, however the interrupt surfaces.
 
 No real signal is sent: each test calls the SIGINT handler the command line installed
 (``signal.getsignal``) at a chosen point, or raises what Python raises there, so every run
@@ -14,8 +15,8 @@ import pytest
 from conftest import ROOT
 from helpers import run_main
 
-from gfuzzy import interrupt
 from gfuzzy.atomic import write_atomic
+from gfuzzy.errors import interrupt_handling, interrupt_pending, interrupts_deferred, is_interrupt
 from gfuzzy.navigation.navigator import Navigator
 
 SCENE = ROOT / "scenes" / "sim-4s1m.yaml"
@@ -107,7 +108,7 @@ def test_the_handling_is_the_callers_again_after_main(tmp_path, capsys):
     before = signal.getsignal(signal.SIGINT)
     run_main(capsys, "check", SCENE, tmp_path / "missing.json")
     assert signal.getsignal(signal.SIGINT) is before
-    assert not interrupt.pending()
+    assert not interrupt_pending()
 
 
 def test_is_interrupt_follows_the_exception_chain():
@@ -122,20 +123,20 @@ def test_is_interrupt_follows_the_exception_chain():
         except SystemError as exc:
             return exc
 
-    assert interrupt.is_interrupt(KeyboardInterrupt())
-    assert interrupt.is_interrupt(chained("cause")) and interrupt.is_interrupt(chained("context"))
-    assert not interrupt.is_interrupt(SystemError("a bug"))
-    assert not interrupt.is_interrupt(ValueError("a bug"))
+    assert is_interrupt(KeyboardInterrupt())
+    assert is_interrupt(chained("cause")) and is_interrupt(chained("context"))
+    assert not is_interrupt(SystemError("a bug"))
+    assert not is_interrupt(ValueError("a bug"))
 
 
 def test_an_atomic_write_publishes_nothing_after_a_dropped_interrupt(tmp_path):
     out = tmp_path / "a.txt"
-    with interrupt.handling():
+    with interrupt_handling():
         _dropped_ctrl_c()
         with pytest.raises(KeyboardInterrupt):
             write_atomic(out, "text\n")
         assert not list(tmp_path.iterdir())
-        with interrupt.deferred():  # a section that must finish: noted, not raised
+        with interrupts_deferred():  # a section that must finish: noted, not raised
             write_atomic(out, "text\n")
     assert out.read_text() == "text\n"
     write_atomic(out, "again\n")  # outside handling: nothing pending

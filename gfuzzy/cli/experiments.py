@@ -153,7 +153,13 @@ def cmd_batch(args) -> int:
     import logging
     import time
 
-    from .. import interrupt
+    from ..errors import (
+        EXIT_INTERRUPTED,
+        check_interrupt,
+        clear_interrupt,
+        interrupts_deferred,
+        is_interrupt,
+    )
     from ..runs.batch import BatchOptions, BatchResult, write_table
 
     if args.workers is not None and args.workers < 1:
@@ -175,22 +181,21 @@ def cmd_batch(args) -> int:
     result, where, t = None, "", time.perf_counter()
     try:
         result, where, t = _batch_result(args, scenes, options)
-        interrupt.check()
+        check_interrupt()
     except BaseException as exc:  # noqa: BLE001 - Ctrl-C outside run_batch: the rows it finished
-        if not interrupt.is_interrupt(exc):
+        if not is_interrupt(exc):
             raise
         total = sum(len(sc.queries) for sc in scenes)
         result = BatchResult(result.rows if result is not None else [], total, interrupted=True)
-    if result.interrupted:
-        with interrupt.deferred():  # a second Ctrl-C does not cut the table short
-            written = write_table(result.rows, out)
+    with interrupts_deferred():  # Ctrl-C (again) now: the CSV and the Parquet both, not one
+        written = write_table(result.rows, out)
+        if result.interrupted:
             _say(
                 f"interrupted: wrote the {len(result.rows)} finished of {result.total} queries "
                 f"to {', '.join(map(str, written))}"
             )
-            interrupt.clear()  # told once
-        return interrupt.EXIT_INTERRUPTED
-    written = write_table(result.rows, out)
+            clear_interrupt()  # told once
+            return EXIT_INTERRUPTED
     _report_batch(result, where, time.perf_counter() - t, written)
     return EXIT_NO if result.errors else EXIT_OK
 

@@ -5,8 +5,15 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .. import interrupt
-from ..errors import InputError, LimitError
+from ..errors import (
+    EXIT_INTERRUPTED,
+    InputError,
+    LimitError,
+    check_interrupt,
+    interrupt_handling,
+    interrupts_deferred,
+    is_interrupt,
+)
 from .common import EXIT_BAD, EXIT_OK, BadInput, _navigator_flags, _Parser, _say
 from .crowds import add_crowd, add_populate
 from .examples import add_examples
@@ -219,23 +226,23 @@ def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit status.
 
     Ctrl-C at any moment prints one line, ``interrupted``, and returns 130, leaving no file
-    half-written (``batch`` writes the rows it finished): see :mod:`gfuzzy.interrupt`, whose
+    half-written (``batch`` writes the rows it finished): see the Ctrl-C section of :mod:`gfuzzy.errors`, whose
     handling ``argv`` None (the process's own command line) keeps to the end of the process.
     """
     import logging
 
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s: %(message)s")
-    with interrupt.handling(restore=argv is not None):
+    with interrupt_handling(restore=argv is not None):
         try:
             status = _run(argv)
-            interrupt.check()  # an interrupt native code dropped: the command ran on to here
+            check_interrupt()  # an interrupt native code dropped: the command ran on to here
             return status
         except BaseException as exc:
-            if not interrupt.is_interrupt(exc):
+            if not is_interrupt(exc):
                 raise
-            with interrupt.deferred():  # Ctrl-C comes twice (a terminal's repeat, `timeout`'s group signal)
+            with interrupts_deferred():  # Ctrl-C comes twice (a terminal's repeat, `timeout`'s group signal)
                 _say("interrupted")
-            return interrupt.EXIT_INTERRUPTED
+            return EXIT_INTERRUPTED
 
 
 def _run(argv: list[str] | None) -> int:

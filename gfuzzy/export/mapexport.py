@@ -27,8 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError, check_number
-from ..interrupt import check as check_interrupt
+from ..errors import InputError, check_interrupt, check_number
 from ..scene.scene import Box, Disc, Polygon, Scene
 from ..typed import FloatArray
 

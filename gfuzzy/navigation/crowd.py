@@ -35,8 +35,7 @@ from enum import Enum
 
 import numpy as np
 
-from ..errors import InputError
-from ..interrupt import check as check_interrupt
+from ..errors import InputError, check_interrupt
 from ..rng import create_rng
 from ..scene.scene import Mover, Scene, parse_scene
 from ..typed import FloatArray

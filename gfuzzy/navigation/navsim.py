@@ -19,8 +19,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..collision.geometry import metric_distance, mover_distance
-from ..errors import InputError
-from ..interrupt import check as check_interrupt
+from ..errors import InputError, check_interrupt
 from ..roadmap.roadmap import Roadmap
 from ..scene.scene import Scene
 from ..status import Status

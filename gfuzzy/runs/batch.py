@@ -11,7 +11,7 @@ A query whose task raises becomes a row with status ``error`` and the message; s
 query that kills its worker (the scheduler gives up on it with ``KilledWorker``; it is run
 again alone first, so that queries merely queued on the same worker are not blamed).
 An interrupt (``KeyboardInterrupt`` in the client, or a SIGINT that
-:func:`gfuzzy.interrupt.check` raises again between results) stops the batch and returns the
+:func:`gfuzzy.check_interrupt` raises again between results) stops the batch and returns the
 rows finished so far, each complete. A local cluster starts and closes whole whenever Ctrl-C
 comes, and its workers never see it.
 
@@ -33,9 +33,8 @@ from collections.abc import Callable, Iterator, Sequence
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 
-from .. import interrupt
 from ..atomic import write_atomic, write_atomic_with
-from ..errors import InputError
+from ..errors import InputError, check_interrupt, clear_interrupt, interrupts_deferred, is_interrupt
 from ..planner.planner import PlanOptions
 from ..roadmap.roadmap import Roadmap
 from ..scene.scene import Scene
@@ -264,7 +263,7 @@ def local_cluster(workers: int, quiet: bool = True) -> Iterator[object]:
     cluster = client = None
     with dask.config.set(settings), _quiet_logs(quiet):
         try:
-            with interrupt.deferred(), _sigint_blocked():  # no half-started cluster
+            with interrupts_deferred(), _sigint_blocked():  # no half-started cluster
                 cluster = LocalCluster(
                     n_workers=workers,
                     threads_per_worker=1,
@@ -279,7 +278,7 @@ def local_cluster(workers: int, quiet: bool = True) -> Iterator[object]:
                 client = Client(cluster)
             yield client
         finally:
-            with interrupt.deferred():  # closed whole, however often Ctrl-C comes
+            with interrupts_deferred():  # closed whole, however often Ctrl-C comes
                 if client is not None:
                     client.close()
                 if cluster is not None:
@@ -392,7 +391,7 @@ def run_batch(
     t0 = time.perf_counter()
 
     def record(j: int, row: BatchRow, doc: dict | None) -> None:
-        with interrupt.deferred():  # a row and its trajectory file both, or neither
+        with interrupts_deferred():  # a row and its trajectory file both, or neither
             if folder is not None:
                 _save(folder, row, doc)
             rows[j] = row
@@ -403,7 +402,7 @@ def run_batch(
         progress(0, total)
     interrupted = False
     try:
-        interrupt.check()
+        check_interrupt()
         suspects = _round(client, bundles, jobs, range(total), options, before, record)
         for j in suspects:  # alone now: a query that still kills its worker is the culprit
             if _round(client, bundles, jobs, [j], options, before, record):
@@ -412,11 +411,11 @@ def run_batch(
                     scenes[si][0].name, scenes[si][0].queries[qi].name, "error", error=_KILLED
                 )
                 record(j, row, None)
-    except BaseException as exc:  # noqa: BLE001 - Ctrl-C, however it surfaced (gfuzzy.interrupt)
-        if not interrupt.is_interrupt(exc):
+    except BaseException as exc:  # noqa: BLE001 - Ctrl-C, however it surfaced (gfuzzy.errors.is_interrupt)
+        if not is_interrupt(exc):
             raise
         interrupted = True
-        interrupt.clear()
+        clear_interrupt()
         log.info("interrupted: %d of %d queries finished", len(rows), total)
     return BatchResult(
         [rows[j] for j in sorted(rows)], total, interrupted, time.perf_counter() - t0
@@ -467,7 +466,7 @@ def _round(client, bundles, jobs, ids, options, before, record) -> list[int]:
                 scene = bundles[jobs[j][0]].scene
                 row, doc = _error_row(scene.name, scene.queries[jobs[j][1]].name, exc), None
             record(j, row, doc)
-            interrupt.check()  # one that native code or a finaliser dropped stops here
+            check_interrupt()  # one that native code or a finaliser dropped stops here
     finally:
         with contextlib.suppress(Exception):
             client.cancel(list(futures) + list(held.values()))
