@@ -196,10 +196,9 @@ def _quiet_excepthook(previous):
 def interrupt_handling(restore: bool = True) -> Iterator[None]:
     """Note every SIGINT (see the Ctrl-C section above) while the block runs; main thread only.
 
-    ``restore=False`` leaves the handling installed after the block, deferring every later
-    SIGINT: the program's own command line keeps it to the end of the process, so that a
-    Ctrl-C after the command's last line (interpreter shutdown, Dask's exit handlers) is
-    quiet too.
+    ``restore=False`` ignores SIGINT after the block: the program's own command line, once
+    its command is over, exits with the command's status, quietly, whatever Ctrl-C comes
+    during interpreter shutdown (Dask's exit handlers); the quiet hooks stay.
     """
     if _state.active or threading.current_thread() is not threading.main_thread():
         yield
@@ -216,5 +215,5 @@ def interrupt_handling(restore: bool = True) -> Iterator[None]:
             signal.signal(signal.SIGINT, saved[0])
             sys.unraisablehook, sys.excepthook = saved[1], saved[2]
             _state.active, _state.pending = False, False
-        else:  # the command is over: a later SIGINT is only noted
-            _state.defer += 1
+        else:  # the command is over; Python's finalisation keeps an ignored signal ignored
+            signal.signal(signal.SIGINT, signal.SIG_IGN)

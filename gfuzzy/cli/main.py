@@ -226,8 +226,9 @@ def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit status.
 
     Ctrl-C at any moment prints one line, ``interrupted``, and returns 130, leaving no file
-    half-written (``batch`` writes the rows it finished): see the Ctrl-C section of :mod:`gfuzzy.errors`, whose
-    handling ``argv`` None (the process's own command line) keeps to the end of the process.
+    half-written (``batch`` writes the rows it finished): see the Ctrl-C section of
+    :mod:`gfuzzy.errors`. With ``argv`` None (the process's own command line), a Ctrl-C after
+    the command is over is ignored: the process exits with the command's status.
     """
     import logging
 
