@@ -104,6 +104,22 @@ def test_a_second_ctrl_c_while_saying_interrupted(tmp_path, capsys, monkeypatch)
     _interrupted_once(*_navigate(capsys, out)[::2], out)
 
 
+def test_a_ctrl_c_while_bad_input_is_said_adds_no_second_line(tmp_path, capsys, monkeypatch):
+    # the command's last line was out (bad input, exit 2), then came "interrupted", exit 130
+    cli_main = importlib.import_module("gfuzzy.cli.main")
+    real_say = cli_main._say
+
+    def say(msg, stream=None):
+        _ctrl_c()
+        real_say(msg, stream)
+
+    monkeypatch.setattr(cli_main, "_say", say)
+    missing = tmp_path / "missing.json"
+    rc, _, err = run_main(capsys, "check", SCENE, missing)
+    assert rc == 2
+    assert len(err.strip().splitlines()) == 1 and str(missing) in err
+
+
 def test_the_handling_is_the_callers_again_after_main(tmp_path, capsys):
     before = signal.getsignal(signal.SIGINT)
     run_main(capsys, "check", SCENE, tmp_path / "missing.json")

@@ -9,7 +9,6 @@ from ..errors import (
     EXIT_INTERRUPTED,
     InputError,
     LimitError,
-    check_interrupt,
     interrupt_handling,
     interrupts_deferred,
     is_interrupt,
@@ -235,9 +234,7 @@ def main(argv: list[str] | None = None) -> int:
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s: %(message)s")
     with interrupt_handling(restore=argv is not None):
         try:
-            status = _run(argv)
-            check_interrupt()  # an interrupt native code dropped: the command ran on to here
-            return status
+            return _run(argv)  # its last line is out: a Ctrl-C now changes nothing
         except BaseException as exc:
             if not is_interrupt(exc):
                 raise
@@ -255,12 +252,8 @@ def _run(argv: list[str] | None) -> int:
             parser.print_help(sys.stderr)
             return EXIT_BAD
         return args.func(args)
-    except BadInput as exc:
-        _say(" ".join(str(exc).split()))
-        return EXIT_BAD
-    except (InputError, LimitError) as exc:  # SceneError included; any other exception is a bug
-        _say(" ".join(str(exc).split()))
-        return EXIT_BAD
+    except (BadInput, InputError, LimitError) as exc:  # SceneError included; any other exception is a bug
+        return _bad_input(str(exc))
     except BrokenPipeError:
         return EXIT_OK
     except OSError as exc:
@@ -268,5 +261,11 @@ def _run(argv: list[str] | None) -> int:
             raise
         # a file the command had to read or write and could not (a full disc, a folder
         # that refuses writing, /proc): the user's to fix, one line, nothing half-written
-        _say(f"{exc.filename}: {exc.strerror or exc}")
-        return EXIT_BAD
+        return _bad_input(f"{exc.filename}: {exc.strerror or exc}")
+
+
+def _bad_input(message: str) -> int:
+    """Say ``message`` on one line; :data:`EXIT_BAD`. A Ctrl-C meanwhile adds no second line."""
+    with interrupts_deferred():
+        _say(" ".join(message.split()))
+    return EXIT_BAD
