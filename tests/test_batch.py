@@ -122,6 +122,16 @@ def test_workers_never_see_ctrl_c_not_even_while_they_start(client):
     assert list(client.run(_sigint_blocked).values()) == [True, True]
 
 
+def test_a_quiet_cluster_keeps_tornados_callback_errors_out_of_the_terminal(client):
+    # Ctrl-C while the client waited, before Dask's sync() had begun its wait: its cancel
+    # callback failed (a NameError in distributed.utils.sync) and tornado.application, whose
+    # own level (ERROR) won over the quiet parent's, printed the error and its traceback
+    import logging
+
+    assert not logging.getLogger("tornado.application").isEnabledFor(logging.ERROR)
+    assert not logging.getLogger("distributed.client").isEnabledFor(logging.WARNING)
+
+
 def test_rows_match_plan_and_saved_answers_check(client, pairs, tmp_path):
     res = run_batch(client, pairs, BatchOptions(trajectories=str(tmp_path / "traj")))
     assert not res.interrupted and res.errors == 0

@@ -160,7 +160,7 @@ def cmd_batch(args) -> int:
         interrupts_deferred,
         is_interrupt,
     )
-    from ..runs.batch import BatchOptions, BatchResult, write_table
+    from ..runs.batch import DASK_LOGGERS, BatchOptions, BatchResult, write_table
 
     if args.workers is not None and args.workers < 1:
         raise BadInput(f"--workers: must be at least 1, got {args.workers}")
@@ -175,9 +175,9 @@ def cmd_batch(args) -> int:
             raise BadInput(f"{path}: name: scene name {sc.name!r} repeats that of {seen[sc.name]}")
         seen[sc.name] = path
     options = BatchOptions(plan=_plan_options(args), trajectories=args.trajectories)
-    if not args.verbose:  # Dask's own INFO/WARNING lines (a worker restarting) are not ours to show
-        for name in ("distributed", "tornado"):
-            logging.getLogger(name).setLevel(logging.ERROR)
+    if not args.verbose:  # Dask's own INFO/WARNING lines (a worker restarting) are not ours to show,
+        for name in DASK_LOGGERS:  # nor tornado's (Dask's callbacks failing as Ctrl-C cuts a wait)
+            logging.getLogger(name).setLevel(logging.CRITICAL if name.startswith("tornado") else logging.ERROR)
     result, where, t = None, "", time.perf_counter()
     try:
         result, where, t = _batch_result(args, scenes, options)

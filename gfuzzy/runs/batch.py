@@ -44,6 +44,7 @@ __all__ = [
     "BatchRow",
     "BatchResult",
     "COLUMNS",
+    "DASK_LOGGERS",
     "QueryAnswer",
     "local_cluster",
     "run_batch",
@@ -59,6 +60,10 @@ WORKER_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THRE
 #: (Dask's default is 3). The local cluster gives up at once: :func:`run_batch` then runs
 #: the query again alone, which tells the culprit from innocent queries queued beside it.
 ALLOWED_FAILURES = 0
+#: Dask's loggers, with the children Dask gives a level of their own (which wins over the
+#: parent's): ``tornado.application`` logs a callback that failed, e.g. the ERROR and
+#: traceback of Dask's own ``sync`` when Ctrl-C cuts a wait short before it began.
+DASK_LOGGERS = ("distributed", "distributed.client", "tornado", "tornado.application")
 
 
 @dataclass(frozen=True)
@@ -327,7 +332,7 @@ def dask_setup(worker) -> None:
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGINT, signal.SIG_IGN)
     if os.environ.get("GFUZZY_BATCH_QUIET"):
-        for name in ("distributed", "tornado"):
+        for name in DASK_LOGGERS:
             logging.getLogger(name).setLevel(logging.CRITICAL)
 
 
@@ -336,9 +341,8 @@ def _quiet_logs(quiet: bool):
     if not quiet:
         yield
         return
-    names = ("distributed", "tornado")
-    old = {n: logging.getLogger(n).level for n in names}
-    for n in names:
+    old = {n: logging.getLogger(n).level for n in DASK_LOGGERS}
+    for n in DASK_LOGGERS:
         logging.getLogger(n).setLevel(logging.CRITICAL)
     try:
         yield
