@@ -1,7 +1,9 @@
 """Atomic file writes: a temporary file beside the target, then a rename.
 
 A reader sees the old file or the new one, never half of one; a failed write leaves the
-old file and no temporary behind.
+old file and no temporary behind. An interrupt that native code dropped on the way
+(:func:`gfuzzy.errors.check_interrupt`) stops the write before the rename: an interrupted command
+publishes nothing it computed after the Ctrl-C.
 """
 
 from __future__ import annotations
@@ -10,6 +12,8 @@ import os
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
+
+from .errors import check_interrupt
 
 __all__ = ["write_atomic", "write_atomic_with"]
 
@@ -29,6 +33,7 @@ def write_atomic_with(path: str | os.PathLike, write: Callable[[str], None]) -> 
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates 0600; give the usual permissions
+        check_interrupt()
         try:
             os.replace(tmp, path)
         except OSError as exc:

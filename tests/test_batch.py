@@ -110,6 +110,28 @@ def test_workers_leave_ctrl_c_to_the_client(client):
     assert list(client.run(_sigint_ignored).values()) == [True, True]
 
 
+def _sigint_blocked() -> bool:
+    import signal
+
+    return signal.SIGINT in signal.pthread_sigmask(signal.SIG_BLOCK, [])
+
+
+def test_workers_never_see_ctrl_c_not_even_while_they_start(client):
+    # ignoring it in dask_setup came after the worker's imports: a Ctrl-C while a worker
+    # started printed the traceback of the import it cut; blocked, it waits unseen
+    assert list(client.run(_sigint_blocked).values()) == [True, True]
+
+
+def test_a_quiet_cluster_keeps_tornados_callback_errors_out_of_the_terminal(client):
+    # Ctrl-C while the client waited, before Dask's sync() had begun its wait: its cancel
+    # callback failed (a NameError in distributed.utils.sync) and tornado.application, whose
+    # own level (ERROR) won over the quiet parent's, printed the error and its traceback
+    import logging
+
+    assert not logging.getLogger("tornado.application").isEnabledFor(logging.ERROR)
+    assert not logging.getLogger("distributed.client").isEnabledFor(logging.WARNING)
+
+
 def test_rows_match_plan_and_saved_answers_check(client, pairs, tmp_path):
     res = run_batch(client, pairs, BatchOptions(trajectories=str(tmp_path / "traj")))
     assert not res.interrupted and res.errors == 0
@@ -227,6 +249,58 @@ def test_cli_interrupt_writes_a_partial_table(client, tmp_path, monkeypatch, cap
     rows = read_csv(out)
     assert len(rows) == 1 and rows[0]["status"] == "solved"
     assert "interrupted" in capsys.readouterr().err
+
+
+def _ctrl_c() -> None:
+    """What a SIGINT does at this point: the handler in force runs."""
+    import signal
+
+    signal.getsignal(signal.SIGINT)(signal.SIGINT, None)
+
+
+def test_cli_interrupt_while_the_cluster_starts_writes_the_empty_table(tmp_path, monkeypatch, capsys):
+    # it left a half-started cluster (Dask's INFO lines as it was reaped at exit) and no table
+    import distributed
+
+    real = distributed.LocalCluster
+
+    def starting(*args, **kwargs):
+        _ctrl_c()
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(distributed, "LocalCluster", starting)
+    out = tmp_path / "rows.csv"
+    try:
+        code = main(["batch", str(ROOT / "scenes" / "sim-4s1m.yaml"), "--workers", "1", "-o", str(out)])
+    except KeyboardInterrupt:  # left to itself, it would stop the whole test session
+        pytest.fail("a KeyboardInterrupt escaped main()")
+    assert code == 130
+    assert out.read_text().splitlines() == [",".join(COLUMNS)]
+    assert f"interrupted: wrote the 0 finished of 2 queries to {out}" in capsys.readouterr().err
+
+
+def test_cli_an_interrupt_native_code_drops_stops_the_batch(client, tmp_path, monkeypatch, capsys):
+    # printed as "KeyboardInterrupt: " (an exception ignored in a finaliser or callback), it
+    # was lost: the whole batch ran on and exited 0
+    import gfuzzy.cli.experiments as cli
+
+    def progress(label):
+        def cb(done, total):
+            if done == 1:
+                try:
+                    _ctrl_c()
+                except KeyboardInterrupt:
+                    pass
+
+        return cb
+
+    monkeypatch.setattr(cli, "_progress", progress)
+    out = tmp_path / "rows.csv"
+    code = main(["batch", str(ROOT / "scenes" / "sim-4s1m.yaml"), str(ROOT / "scenes" / "sim-5s2m.yaml"),
+                 "--scheduler", client.scheduler.address, "-o", str(out)])  # fmt: skip
+    assert code == 130
+    assert len(read_csv(out)) == 1
+    assert capsys.readouterr().err.strip().startswith("interrupted: wrote the 1 finished of")
 
 
 @pytest.mark.parametrize(

@@ -158,11 +158,22 @@ def _connect(address: str, timeout: float):
 
 
 def cmd_batch(args) -> int:
-    """Every query of every scene on Dask; exit 0 all ran, 1 any error row, 130 interrupted."""
+    """Every query of every scene on Dask; exit 0 all ran, 1 any error row, 130 interrupted.
+
+    Ctrl-C once the scenes are read (building a roadmap, starting the cluster, between or
+    after the queries) writes the rows finished so far, perhaps none, and says so.
+    """
     import logging
     import time
 
-    from ..runs.batch import BatchOptions, local_cluster, run_batch, write_table
+    from ..errors import (
+        EXIT_INTERRUPTED,
+        check_interrupt,
+        clear_interrupt,
+        interrupts_deferred,
+        is_interrupt,
+    )
+    from ..runs.batch import DASK_LOGGERS, BatchOptions, BatchResult, write_table
 
     if args.workers is not None and args.workers < 1:
         raise BadInput(f"--workers: must be at least 1, got {args.workers}")
@@ -179,10 +190,38 @@ def cmd_batch(args) -> int:
             raise BadInput(f"{path}: name: scene name {sc.name!r} repeats that of {seen[sc.name]}")
         seen[sc.name] = path
     options = BatchOptions(plan=_plan_options(args), trajectories=args.trajectories)
-    quiet = not args.verbose
-    if quiet:  # Dask's own INFO/WARNING lines (a worker restarting) are not ours to show
-        for name in ("distributed", "tornado"):
-            logging.getLogger(name).setLevel(logging.ERROR)
+    if not args.verbose:  # Dask's own INFO/WARNING lines (a worker restarting) are not ours to show,
+        for name in DASK_LOGGERS:  # nor tornado's (Dask's callbacks failing as Ctrl-C cuts a wait)
+            logging.getLogger(name).setLevel(logging.CRITICAL if name.startswith("tornado") else logging.ERROR)
+    result, where, t = None, "", time.perf_counter()
+    try:
+        result, where, t = _batch_result(args, scenes, options)
+        check_interrupt()
+    except BaseException as exc:  # noqa: BLE001 - Ctrl-C outside run_batch: the rows it finished
+        if not is_interrupt(exc):
+            raise
+        total = sum(len(sc.queries) for sc in scenes)
+        result = BatchResult(result.rows if result is not None else [], total, interrupted=True)
+    with interrupts_deferred():  # Ctrl-C (again) now: the CSV and the Parquet both, not one
+        written = write_table(result.rows, out)
+        if result.interrupted:
+            _say(
+                f"interrupted: wrote the {len(result.rows)} finished of {result.total} queries "
+                f"to {', '.join(map(str, written))}"
+            )
+            clear_interrupt()  # told once
+            return EXIT_INTERRUPTED
+    _report_batch(result, where, time.perf_counter() - t, written)
+    return EXIT_NO if result.errors else EXIT_OK
+
+
+def _batch_result(args, scenes, options):
+    """(BatchResult, where it ran, when the queries started): each scene's roadmap built or
+    loaded in the client, then every query on Dask."""
+    import time
+
+    from ..runs.batch import local_cluster, run_batch
+
     with contextlib.ExitStack() as stack:
         if args.scheduler:  # connected, or refused, before any roadmap is built or loaded
             client = stack.enter_context(contextlib.closing(_connect(args.scheduler, args.connect_timeout)))
@@ -192,22 +231,19 @@ def cmd_batch(args) -> int:
         if not args.scheduler:
             workers = args.workers or 2
             where = f"{workers} local worker(s)"
-            client = stack.enter_context(local_cluster(workers, quiet=quiet))
-        result = run_batch(client, pairs, options, progress=_progress("queries"))
-    written = write_table(result.rows, out)
+            client = stack.enter_context(local_cluster(workers, quiet=not args.verbose))
+        return run_batch(client, pairs, options, progress=_progress("queries")), where, t
+
+
+def _report_batch(result, where: str, seconds: float, written) -> None:
+    """The summary line (stdout) and each error row or invalid answer (stderr)."""
     counts: dict = {}
     for r in result.rows:
         counts[r.status] = counts.get(r.status, 0) + 1
     summary = ", ".join(f"{n} {s}" for s, n in sorted(counts.items()))
     invalid = sum(r.check == "invalid" for r in result.rows)
-    if result.interrupted:
-        _say(
-            f"interrupted: wrote the {len(result.rows)} finished of {result.total} queries "
-            f"to {', '.join(map(str, written))}"
-        )
-        return 130
     _say(
-        f"{result.total} queries on {where} in {time.perf_counter() - t:.1f} s: {summary or 'none'}"
+        f"{result.total} queries on {where} in {seconds:.1f} s: {summary or 'none'}"
         f"{f', {invalid} INVALID' if invalid else ''}; wrote {', '.join(map(str, written))}",
         sys.stdout,
     )
@@ -218,7 +254,6 @@ def cmd_batch(args) -> int:
                 _say("  " + r.traceback.rstrip().replace("\n", "\n  "))
         elif r.check == "invalid":  # a planner defect: reported, but the query did run
             _say(f"{r.scene} {r.query}: the answer fails the check (see `gfuzzy check`)")
-    return EXIT_NO if result.errors else EXIT_OK
 
 def _sensor_options(args):
     """The sensor of ``gfuzzy navigate`` (section 7) from its flags."""

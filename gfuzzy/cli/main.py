@@ -5,7 +5,14 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..errors import InputError, LimitError
+from ..errors import (
+    EXIT_INTERRUPTED,
+    InputError,
+    LimitError,
+    interrupt_handling,
+    interrupts_deferred,
+    is_interrupt,
+)
 from .common import EXIT_BAD, EXIT_OK, BadInput, _navigator_flags, _Parser, _say
 from .crowds import add_crowd, add_populate
 from .examples import add_examples
@@ -215,10 +222,29 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the command line; returns the exit status."""
+    """Run the command line; returns the exit status.
+
+    Ctrl-C at any moment prints one line, ``interrupted``, and returns 130, leaving no file
+    half-written (``batch`` writes the rows it finished): see the Ctrl-C section of
+    :mod:`gfuzzy.errors`. With ``argv`` None (the process's own command line), a Ctrl-C after
+    the command is over is ignored: the process exits with the command's status.
+    """
     import logging
 
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s: %(message)s")
+    with interrupt_handling(restore=argv is not None):
+        try:
+            return _run(argv)  # its last line is out: a Ctrl-C now changes nothing
+        except BaseException as exc:
+            if not is_interrupt(exc):
+                raise
+            with interrupts_deferred():  # Ctrl-C comes twice (a terminal's repeat, `timeout`'s group signal)
+                _say("interrupted")
+            return EXIT_INTERRUPTED
+
+
+def _run(argv: list[str] | None) -> int:
+    """Parse ``argv`` and run its command; bad input is one line and :data:`EXIT_BAD`."""
     parser = _parser()
     try:
         args = parser.parse_args(argv)
@@ -226,12 +252,8 @@ def main(argv: list[str] | None = None) -> int:
             parser.print_help(sys.stderr)
             return EXIT_BAD
         return args.func(args)
-    except BadInput as exc:
-        _say(" ".join(str(exc).split()))
-        return EXIT_BAD
-    except (InputError, LimitError) as exc:  # SceneError included; any other exception is a bug
-        _say(" ".join(str(exc).split()))
-        return EXIT_BAD
+    except (BadInput, InputError, LimitError) as exc:  # SceneError included; any other exception is a bug
+        return _bad_input(str(exc))
     except BrokenPipeError:
         return EXIT_OK
     except OSError as exc:
@@ -239,10 +261,11 @@ def main(argv: list[str] | None = None) -> int:
             raise
         # a file the command had to read or write and could not (a full disc, a folder
         # that refuses writing, /proc): the user's to fix, one line, nothing half-written
-        _say(f"{exc.filename}: {exc.strerror or exc}")
-        return EXIT_BAD
-    except KeyboardInterrupt:
-        _say("interrupted")
-        return 130
+        return _bad_input(f"{exc.filename}: {exc.strerror or exc}")
 
 
+def _bad_input(message: str) -> int:
+    """Say ``message`` on one line; :data:`EXIT_BAD`. A Ctrl-C meanwhile adds no second line."""
+    with interrupts_deferred():
+        _say(" ".join(message.split()))
+    return EXIT_BAD

@@ -164,17 +164,21 @@ def _write_answer(tf, out: Path) -> None:
     column, so an unsolved answer, which has no rows, removes an older OUT.csv: a
     controller reading that path must not drive a stale trajectory.
     """
+    from ..errors import check_interrupt, interrupts_deferred
+
     json_path = out.with_suffix(".json")
-    tf.save(json_path)
-    _say(f"wrote {json_path}")
-    if out.suffix.lower() != ".csv":
-        return
-    if tf.waypoints is not None:
-        tf.save(out)
-        _say(f"wrote {out}")
-    elif out.is_file() or out.is_symlink():
-        out.unlink()
-        _say(f"removed {out}: the answer is {tf.status}, without rows, and a CSV has no status to say so")
+    check_interrupt()
+    with interrupts_deferred():  # Ctrl-C now: both files (a new JSON beside an old CSV misleads)
+        tf.save(json_path)
+        _say(f"wrote {json_path}")
+        if out.suffix.lower() != ".csv":
+            return
+        if tf.waypoints is not None:
+            tf.save(out)
+            _say(f"wrote {out}")
+        elif out.is_file() or out.is_symlink():
+            out.unlink()
+            _say(f"removed {out}: the answer is {tf.status}, without rows, and a CSV has no status to say so")
 
 
 def _stage_summary(info: dict) -> str:

@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError, check_number
+from ..errors import InputError, check_interrupt, check_number
 from ..scene.scene import Box, Disc, Polygon, Scene
 from ..typed import FloatArray
 
@@ -325,6 +325,7 @@ def export_nav2_map(scene: Scene, path, resolution: float = 0.05) -> NavMap:
         os.umask(umask)
         for tmp in temps:
             os.chmod(tmp, 0o666 & ~umask)
+        check_interrupt()  # an interrupt native code dropped: publish neither file
         os.replace(temps[0], image)
         placed_image = True
         os.replace(temps[1], path)

@@ -35,7 +35,7 @@ from enum import Enum
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, check_interrupt
 from ..rng import create_rng
 from ..scene.scene import Mover, Scene, parse_scene
 from ..typed import FloatArray
@@ -586,6 +586,7 @@ def _drive(setting, policy, index, lay, act, tracks, world, n_steps, extra) -> E
         c0 = clock()
         traj = act(t, pose, obs, sensor.unknown) if hasattr(act, "nav") else act(t, pose, obs)
         seconds.append(clock() - c0)
+        check_interrupt()  # a Ctrl-C native code dropped during the step stops the run here
         if hasattr(act, "nav"):
             m = str(act.nav.last.mode)
             modes[m] = modes.get(m, 0) + 1
@@ -679,4 +680,5 @@ def episodes(setting: CrowdSetting, roadmap, seed: int, count: int, policies, op
         done += 1
         if progress:
             progress(done, count)
+        check_interrupt()
     return client.gather(futures)

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..collision.geometry import metric_distance, mover_distance
-from ..errors import InputError
+from ..errors import InputError, check_interrupt
 from ..roadmap.roadmap import Roadmap
 from ..scene.scene import Scene
 from ..status import Status
@@ -181,6 +181,7 @@ def simulate(
         c0 = clock()
         traj = nav.step(t, pose, obs, eyes.unknown())
         seconds.append(clock() - c0)
+        check_interrupt()  # a Ctrl-C native code dropped during the replan stops the run here
         mode = str(nav.last.mode if nav.last is not None else NavMode.PLAN)
         modes[mode] = modes.get(mode, 0) + 1
         if log_every and (len(seconds) - 1) % log_every == 0:

@@ -10,8 +10,10 @@ need no shared folder.
 A query whose task raises becomes a row with status ``error`` and the message; so does a
 query that kills its worker (the scheduler gives up on it with ``KilledWorker``; it is run
 again alone first, so that queries merely queued on the same worker are not blamed).
-An interrupt (``KeyboardInterrupt`` in the client) stops the batch and returns the rows
-finished so far, each complete.
+An interrupt (``KeyboardInterrupt`` in the client, or a SIGINT that
+:func:`gfuzzy.check_interrupt` raises again between results) stops the batch and returns the
+rows finished so far, each complete. A local cluster starts and closes whole whenever Ctrl-C
+comes, and its workers never see it.
 
 Planning is deterministic (``gfuzzy.plan`` uses no OMPL randomness, the GA takes its own
 seed), so the rows are the same, timings aside, whatever the number of workers.
@@ -32,7 +34,7 @@ from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 
 from ..atomic import write_atomic, write_atomic_with
-from ..errors import InputError
+from ..errors import InputError, check_interrupt, clear_interrupt, interrupts_deferred, is_interrupt
 from ..planner.planner import PlanOptions
 from ..roadmap.roadmap import Roadmap
 from ..scene.scene import Scene
@@ -42,6 +44,7 @@ __all__ = [
     "BatchRow",
     "BatchResult",
     "COLUMNS",
+    "DASK_LOGGERS",
     "QueryAnswer",
     "local_cluster",
     "run_batch",
@@ -57,6 +60,10 @@ WORKER_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THRE
 #: (Dask's default is 3). The local cluster gives up at once: :func:`run_batch` then runs
 #: the query again alone, which tells the culprit from innocent queries queued beside it.
 ALLOWED_FAILURES = 0
+#: Dask's loggers, with the children Dask gives a level of their own (which wins over the
+#: parent's): ``tornado.application`` logs a callback that failed, e.g. the ERROR and
+#: traceback of Dask's own ``sync`` when Ctrl-C cuts a wait short before it began.
+DASK_LOGGERS = ("distributed", "distributed.client", "tornado", "tornado.application")
 
 
 @dataclass(frozen=True)
@@ -258,25 +265,57 @@ def local_cluster(workers: int, quiet: bool = True) -> Iterator[object]:
     }
     if quiet:
         settings["logging"] = {"distributed": "error", "tornado": "critical"}
-    with dask.config.set(settings):
-        with _quiet_logs(quiet):
-            cluster = LocalCluster(
-                n_workers=workers,
-                threads_per_worker=1,
-                processes=True,
-                dashboard_address=None,
-                host="127.0.0.1",
-                # the scheduler serves HTTP (health, metrics) even without a dashboard, on
-                # port 8787 by default: a port the system picks never warns "Port 8787 is
-                # already in use" on the user's terminal when another cluster holds it
-                scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
-            )
-            client = Client(cluster)
-            try:
-                yield client
-            finally:
-                client.close()
-                cluster.close()
+    cluster = client = None
+    with dask.config.set(settings), _quiet_logs(quiet):
+        try:
+            with interrupts_deferred(), _sigint_blocked():  # no half-started cluster
+                cluster = LocalCluster(
+                    n_workers=workers,
+                    threads_per_worker=1,
+                    processes=True,
+                    dashboard_address=None,
+                    host="127.0.0.1",
+                    # the scheduler serves HTTP (health, metrics) even without a dashboard, on
+                    # port 8787 by default: a port the system picks never warns "Port 8787 is
+                    # already in use" on the user's terminal when another cluster holds it
+                    scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
+                )
+                client = Client(cluster)
+            yield client
+        finally:
+            with interrupts_deferred():  # closed whole, however often Ctrl-C comes
+                if client is not None:
+                    client.close()
+                if cluster is not None:
+                    cluster.close()
+
+
+@contextlib.contextmanager
+def _sigint_blocked() -> Iterator[None]:
+    """SIGINT blocked in this (the main) thread while a cluster starts.
+
+    The threads Dask starts meanwhile (its event loop, each nanny's process starter) inherit
+    the blocked signal, and so do the worker processes they spawn, then or when a nanny
+    restarts one: a terminal's Ctrl-C, which reaches the whole process group, never reaches
+    a worker, not even while it imports (before :func:`dask_setup` ignores it; it printed
+    a traceback of the import it cut). A SIGINT meanwhile waits in the kernel and reaches
+    the client's handler when the block ends.
+    """
+    import signal
+    import threading
+    from multiprocessing import resource_tracker
+
+    if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    # the tracker of the workers' semaphores, started now: started later, from this thread,
+    # it would unblock SIGINT here when done (it blocks the signal while it spawns itself)
+    resource_tracker.ensure_running()
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
 def dask_setup(worker) -> None:
@@ -293,7 +332,7 @@ def dask_setup(worker) -> None:
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGINT, signal.SIG_IGN)
     if os.environ.get("GFUZZY_BATCH_QUIET"):
-        for name in ("distributed", "tornado"):
+        for name in DASK_LOGGERS:
             logging.getLogger(name).setLevel(logging.CRITICAL)
 
 
@@ -302,9 +341,8 @@ def _quiet_logs(quiet: bool):
     if not quiet:
         yield
         return
-    names = ("distributed", "tornado")
-    old = {n: logging.getLogger(n).level for n in names}
-    for n in names:
+    old = {n: logging.getLogger(n).level for n in DASK_LOGGERS}
+    for n in DASK_LOGGERS:
         logging.getLogger(n).setLevel(logging.CRITICAL)
     try:
         yield
@@ -357,9 +395,10 @@ def run_batch(
     t0 = time.perf_counter()
 
     def record(j: int, row: BatchRow, doc: dict | None) -> None:
-        if folder is not None:
-            _save(folder, row, doc)
-        rows[j] = row
+        with interrupts_deferred():  # a row and its trajectory file both, or neither
+            if folder is not None:
+                _save(folder, row, doc)
+            rows[j] = row
         if progress is not None:
             progress(len(rows), total)
 
@@ -367,6 +406,7 @@ def run_batch(
         progress(0, total)
     interrupted = False
     try:
+        check_interrupt()
         suspects = _round(client, bundles, jobs, range(total), options, before, record)
         for j in suspects:  # alone now: a query that still kills its worker is the culprit
             if _round(client, bundles, jobs, [j], options, before, record):
@@ -375,8 +415,11 @@ def run_batch(
                     scenes[si][0].name, scenes[si][0].queries[qi].name, "error", error=_KILLED
                 )
                 record(j, row, None)
-    except KeyboardInterrupt:
+    except BaseException as exc:  # noqa: BLE001 - Ctrl-C, however it surfaced (gfuzzy.errors.is_interrupt)
+        if not is_interrupt(exc):
+            raise
         interrupted = True
+        clear_interrupt()
         log.info("interrupted: %d of %d queries finished", len(rows), total)
     return BatchResult(
         [rows[j] for j in sorted(rows)], total, interrupted, time.perf_counter() - t0
@@ -427,6 +470,7 @@ def _round(client, bundles, jobs, ids, options, before, record) -> list[int]:
                 scene = bundles[jobs[j][0]].scene
                 row, doc = _error_row(scene.name, scene.queries[jobs[j][1]].name, exc), None
             record(j, row, doc)
+            check_interrupt()  # one that native code or a finaliser dropped stops here
     finally:
         with contextlib.suppress(Exception):
             client.cancel(list(futures) + list(held.values()))

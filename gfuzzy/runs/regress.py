@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from typing import TextIO
 
 from ..check.check import check_trajectory
+from ..errors import check_interrupt
 from ..planner.planner import Planner, PlanOptions
 from ..scene.scene import Query, Scene
 from ..status import Status
@@ -56,6 +57,7 @@ def regress_scene(scene: Scene, roadmap, options: PlanOptions | None = None) -> 
     planner = Planner(scene, roadmap)
     rows = []
     for q in scene.queries:
+        check_interrupt()  # a Ctrl-C native code dropped stops the run between queries
         res = planner.plan(q.start, q.goal, q.t0, options, hold=q.hold)
         problems = []
         valid = None
