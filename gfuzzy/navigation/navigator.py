@@ -279,6 +279,17 @@ class _Searched:
     ahead: list = field(default_factory=list)
 
 
+def _checked_pose(pose, dof: int, t: float) -> FloatArray:
+    """``pose`` as a (dof,) float array; InputError when malformed, not finite, beyond
+    ``MAX_MAGNITUDE`` (as a scene file's and :func:`gfuzzy.plan`'s), or ``t`` not finite."""
+    pose = np.asarray(pose, dtype=float).reshape(-1).copy()
+    if pose.shape != (dof,) or not np.all(np.isfinite(pose)) or not math.isfinite(t):
+        raise InputError(f"pose must be {dof} finite numbers and t finite")
+    if np.abs(pose).max() > MAX_MAGNITUDE:
+        raise InputError(f"pose: number too large ({np.abs(pose).max():g}; at most {MAX_MAGNITUDE:g} in magnitude)")
+    return pose
+
+
 class Navigator(PathSpace, Prediction):
     """Receding-horizon navigation to a fixed goal among observed moving discs.
 
@@ -453,11 +464,7 @@ class Navigator(PathSpace, Prediction):
         t_begin = self._clock()
         opts = self.options
         t = float(t)
-        pose = np.asarray(pose, dtype=float).reshape(-1).copy()
-        if pose.shape != (self.robot.dof,) or not np.all(np.isfinite(pose)) or not math.isfinite(t):
-            raise InputError(f"pose must be {self.robot.dof} finite numbers and t finite")
-        if np.abs(pose).max() > MAX_MAGNITUDE:  # as a scene file's and gfuzzy.plan's
-            raise InputError(f"pose: number too large ({np.abs(pose).max():g}; at most {MAX_MAGNITUDE:g} in magnitude)")
+        pose = _checked_pose(pose, self.robot.dof, t)
         obs = _observation_rows(observations)
         if not np.all(np.isfinite(obs)) or np.any(obs[:, 4] < 0):
             raise InputError("observations must be finite rows [x, y, vx, vy, radius >= 0]")
