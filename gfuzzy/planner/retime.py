@@ -17,7 +17,8 @@ from ..poses import discretise, metric_distance, pose_at
 from ..scene.scene import Scene
 from ..settings import SPEED_SAFETY
 from ..status import Status
-from ..timespace.timespace import MoverField, SpaceTimeGraph, sipp, timed_rows
+from ..timespace.backends import field_for, search_function
+from ..timespace.timespace import MoverField, SpaceTimeGraph, timed_rows
 from ..trajectory import Trajectory
 from ..typed import FloatArray
 
@@ -69,6 +70,7 @@ def retime_path(
     wait_at: FloatArray | None = None,
     deadline: float = math.inf,
     hold: float = 0.0,
+    backend: str = "compiled",
 ) -> RetimeResult:
     """Earliest safe timing of ``path`` departing at ``t0``.
 
@@ -87,6 +89,8 @@ def retime_path(
         ``time.perf_counter()`` value past which the answer is ``timeout``.
     hold : float
         Seconds the goal pose must stay safe after the arrival (a query's ``hold``).
+    backend : {"compiled", "reference"}
+        The search's implementation (``PlanOptions.backend``): the same answers.
 
     Returns
     -------
@@ -99,7 +103,7 @@ def retime_path(
     # robot's radius were vmax / turn_rate (>= r), so a step turns at most turn_rate dt
     radius = robot.vmax / robot.turn_rate if robot.unicycle else robot.circumradius
     poses, s = chain_points(path, radius, step)
-    return _search_chain(scene, poses, s, t0, dt, horizon, wait_at, deadline, hold=hold)
+    return _search_chain(scene, poses, s, t0, dt, horizon, wait_at, deadline, hold=hold, backend=backend)
 
 
 def _metric_profile(path, circumradius, s_xy, v_xy, vmax, amax, ds=0.02):
@@ -188,6 +192,7 @@ def retime_profile(
     deadline: float = math.inf,
     max_rounds: int = 5,
     hold: float = 0.0,
+    backend: str = "compiled",
 ) -> ProfileRetime:
     """Time a path under a speed profile and an acceleration bound, among the movers.
 
@@ -205,6 +210,8 @@ def retime_profile(
         Speed bound along the xy arc length (from :func:`gfuzzy.fuzzy.fuzzy.speed_limit`).
     hold : float
         Seconds the goal pose must stay safe after the arrival.
+    backend : {"compiled", "reference"}
+        The search's implementation (``PlanOptions.backend``): the same answers.
     """
     robot = scene.robot
     vmax = robot.vmax * SPEED_SAFETY
@@ -230,7 +237,7 @@ def retime_profile(
         # (where it moves at most amax dt) keeps the speed changes within amax dt
         res = _search_chain(
             scene, poses, s, t0, dt, horizon, wait_at, deadline, (path, cum_m, corners, times), 0.5 * amax * dt**2,
-            hold=hold, group=PROFILE_GROUP,
+            hold=hold, group=PROFILE_GROUP, backend=backend,
         )
         if res.status is Status.SOLVED:
             return ProfileRetime(Status.SOLVED, res.trajectory, waits=stops, profile_duration=duration)
@@ -239,7 +246,8 @@ def retime_profile(
             break
         # where would the robot need to stop? search again allowing waits anywhere
         free = _search_chain(
-            scene, poses, s, t0, dt, horizon, None, deadline, (path, cum_m, corners, times), hold=hold, group=PROFILE_GROUP
+            scene, poses, s, t0, dt, horizon, None, deadline, (path, cum_m, corners, times), hold=hold, group=PROFILE_GROUP,
+            backend=backend,
         )
         if free.status is not Status.SOLVED or not free.waits:
             message = free.message or message
@@ -261,7 +269,8 @@ def retime_profile(
 
 
 def _search_chain(
-    scene, poses, s, t0, dt, horizon, wait_at, deadline, corners=None, wait_tol=0.0, hold=0.0, group=GROUP
+    scene, poses, s, t0, dt, horizon, wait_at, deadline, corners=None, wait_tol=0.0, hold=0.0, group=GROUP,
+    backend="compiled",
 ) -> RetimeResult:
     """The safe-interval search on a chain of points one step apart.
 
@@ -276,6 +285,11 @@ def _search_chain(
     a chain driven under a speed profile is not, least of all a differential drive's (it
     brakes to rest at every corner and turns in place, many nodes at one point): its groups
     are pairs, which always are.
+
+    ``backend``: the search of ``PlanOptions.backend`` (:func:`gfuzzy.timespace.backends.search_function`)
+    with the safety kernels of the same backend; both judge every group by the same rule
+    (a group not evenly spaced on its segment has every point examined), so both give the
+    same answer.
     """
     robot = scene.robot
     m = len(poses)
@@ -298,8 +312,8 @@ def _search_chain(
         poses, indptr, nbrs, heur, can_wait=can_wait, groups=groups, from_start=np.arange(m, dtype=float)
     )
     steps = int(math.ceil(horizon / dt)) + hold_steps
-    field_ = MoverField(scene, t0, dt, steps, robot.vmax)
-    res = sipp(graph, field_, 0, m - 1, deadline=deadline, goal_hold=hold_steps)
+    field_ = field_for(MoverField(scene, t0, dt, steps, robot.vmax), backend)
+    res = search_function(backend)(graph, field_, 0, m - 1, deadline=deadline, goal_hold=hold_steps)
     if res.status != Status.SOLVED:
         return RetimeResult(res.status, None, res.message)
     between = None
