@@ -149,3 +149,43 @@ def test_the_stages_retime_with_the_querys_backend(monkeypatch):
         res = plan(scene, rm, [0.6, 2.5], [7.4, 2.5], options=PlanOptions(speed_layer=True, backend=backend))
         assert res.status is Status.SOLVED and res.speed_report.applied, res.speed_report
         assert seen and set(seen) == {backend}
+
+
+@pytest.mark.parametrize("unicycle", [False, True])
+def test_horizon_rounds_answer_as_one_search_with_the_whole_horizon(monkeypatch, unicycle):
+    """A chain's search starts with a short horizon and doubles its slack while the horizon
+    cut it off (the safety kept): the same answers as one search over the whole horizon,
+    which computed every point's safety over a window three times the path's duration."""
+    horizons = []
+
+    class Field(retime_module.MoverField):
+        def __init__(self, scene, t0, dt, steps, vrobot):
+            horizons.append(steps)
+            super().__init__(scene, t0, dt, steps, vrobot)
+
+    monkeypatch.setattr(retime_module, "MoverField", Field)
+
+    def answers():
+        out = []
+        for seed, shape in CASES:
+            scene, path = random_case(seed, shape, unicycle)
+            if unicycle:
+                out.append(retime_blend(scene, path, 0.0, DT, scene.robot.amax, 60.0))
+                out.append(retime_drive(scene, path, 0.0, DT, scene.robot.amax, 60.0, hold=0.5))
+            else:
+                s_xy, v_xy = speed_limit(path[:, :2], scene.robot.vmax, scene.robot.amax, expert_rules(), FuzzyOptions())
+                out.append(retime_profile(scene, path, s_xy, v_xy, 0.5, DT, scene.robot.amax, 60.0, hold=0.5))
+                out.append(retime_path(scene, path, 0.5, DT, 60.0))
+        return out
+
+    rounds = answers()
+    whole = 60.0 / DT
+    assert min(horizons) < whole / 2 and horizons.count(max(horizons)) < len(horizons) / 2  # mostly short rounds
+    monkeypatch.setattr(retime_module, "CHAIN_SLACK_STEPS", 10**9)  # one round: the whole horizon
+    horizons.clear()
+    one = answers()
+    assert min(horizons) >= whole
+    for a, b in zip(rounds, one, strict=True):
+        assert same(a, b), (a.status, a.message, b.status, b.message)
+        if hasattr(a, "hasty"):
+            assert np.array_equal(a.hasty, b.hasty)

@@ -18,6 +18,7 @@ from ..scene.scene import Scene
 from ..settings import SPEED_SAFETY
 from ..status import Status
 from ..timespace.backends import field_for, search_function
+from ..timespace.spacetime import IntervalStore
 from ..timespace.timespace import MoverField, SpaceTimeGraph, timed_rows
 from ..trajectory import Trajectory
 from ..typed import FloatArray
@@ -32,6 +33,12 @@ GROUP = 16
 PROFILE_GROUP = 2
 #: Stops of the speed-layer timing closer than this (metres of path) are one stop.
 STOP_MERGE = 0.3
+#: A chain's first search looks this many steps, at least, beyond the chain's own length
+#: (:func:`_search_chain`'s rounds) ...
+CHAIN_SLACK_STEPS = 48
+#: ... or this fraction of its length, whichever is more; the slack doubles while the
+#: horizon cuts the search off, up to the caller's horizon.
+CHAIN_SLACK = 0.25
 
 
 def chain_points(path: FloatArray, circumradius: float, step: float) -> tuple[FloatArray, FloatArray]:
@@ -286,6 +293,17 @@ def _search_chain(
     brakes to rest at every corner and turns in place, many nodes at one point): its groups
     are pairs, which always are.
 
+    Rounds: the search runs first with a horizon of the chain's length plus a slack
+    (:data:`CHAIN_SLACK`), the slack doubled while the horizon cut it off, up to ``horizon``;
+    the safety computed stays in one store. The same answer as one search with the whole
+    horizon: the search expands states in order of arrival plus the steps left, never more
+    than the arrival it returns, and every such state, its safe interval's index and its
+    successors within that bound are the same under any longer horizon (a state's window
+    ends at the horizon minus the steps left); a search that ran empty without touching its
+    horizon runs empty under any longer one. A chain's safety is computed over each point's
+    whole window at once, so a horizon of three times the path's duration cost about ten
+    times the safety the answer needs.
+
     ``backend``: the search of ``PlanOptions.backend`` (:func:`gfuzzy.timespace.backends.search_function`)
     with the safety kernels of the same backend; both judge every group by the same rule
     (a group not evenly spaced on its segment has every point examined), so both give the
@@ -311,9 +329,7 @@ def _search_chain(
     graph = SpaceTimeGraph(
         poses, indptr, nbrs, heur, can_wait=can_wait, groups=groups, from_start=np.arange(m, dtype=float)
     )
-    steps = int(math.ceil(horizon / dt)) + hold_steps
-    field_ = field_for(MoverField(scene, t0, dt, steps, robot.vmax), backend)
-    res = search_function(backend)(graph, field_, 0, m - 1, deadline=deadline, goal_hold=hold_steps)
+    res = _rounds(scene, graph, t0, dt, int(math.ceil(horizon / dt)), hold_steps, deadline, backend)
     if res.status != Status.SOLVED:
         return RetimeResult(res.status, None, res.message)
     between = None
@@ -331,3 +347,20 @@ def _search_chain(
     wps, wait_nodes = timed_rows(res.nodes, res.steps, poses, t0, dt, between)
     waits = [float(s[a]) for a in wait_nodes]
     return RetimeResult(Status.SOLVED, Trajectory(wps, robot.circumradius), waits=waits)
+
+
+def _rounds(scene, graph, t0, dt, horizon_steps, hold_steps, deadline, backend):
+    """The chain's search with a horizon that doubles its slack while it cut the search off
+    (:func:`_search_chain`), at most ``horizon_steps``; the safety kept in one store."""
+    h0 = float(graph.heuristic[0])
+    most = horizon_steps + hold_steps
+    slack = max(float(CHAIN_SLACK_STEPS), CHAIN_SLACK * h0)
+    store = IntervalStore(graph)
+    search = search_function(backend)
+    while True:
+        steps = min(most, int(math.ceil(h0 + slack)) + hold_steps)
+        field_ = field_for(MoverField(scene, t0, dt, steps, scene.robot.vmax), backend)
+        res = search(graph, field_, 0, len(graph.poses) - 1, deadline=deadline, store=store, goal_hold=hold_steps)
+        if res.status != Status.NO_PATH or not res.horizon_hit or steps >= most:
+            return res
+        slack *= 2.0
