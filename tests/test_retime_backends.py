@@ -157,13 +157,18 @@ def test_horizon_rounds_answer_as_one_search_with_the_whole_horizon(monkeypatch,
     cut it off (the safety kept): the same answers as one search over the whole horizon,
     which computed every point's safety over a window three times the path's duration."""
     horizons = []
+    inner = retime_module.search_function
 
-    class Field(retime_module.MoverField):
-        def __init__(self, scene, t0, dt, steps, vrobot):
-            horizons.append(steps)
-            super().__init__(scene, t0, dt, steps, vrobot)
+    def spy(backend):
+        search = inner(backend)
 
-    monkeypatch.setattr(retime_module, "MoverField", Field)
+        def run(graph, field_, *args, **kw):
+            horizons.append(field_.steps)
+            return search(graph, field_, *args, **kw)
+
+        return run
+
+    monkeypatch.setattr(retime_module, "search_function", spy)
 
     def answers():
         out = []
@@ -189,3 +194,25 @@ def test_horizon_rounds_answer_as_one_search_with_the_whole_horizon(monkeypatch,
         assert same(a, b), (a.status, a.message, b.status, b.message)
         if hasattr(a, "hasty"):
             assert np.array_equal(a.hasty, b.hasty)
+
+
+def test_a_fields_prefix_is_the_field_of_the_shorter_horizon():
+    """:meth:`MoverField.prefix` (the chain searches of one stage share the movers' samples)
+    equals, to the last bit, the field built for the shorter horizon: path and trajectory
+    movers, present or not, with a clearance."""
+    doc = {"version": 1, "name": "p", "bounds": [0, 0, W, H], "robot": {"box": [0.5, 0.3], "vmax": 1.0,
+           "mover_clearance": 0.1},
+           "movers": [{"name": "t", "disc": 0.2, "trajectory": [[2.0, 1, 1], [3.5, 4, 1], [3.6, 4, 4], [9.0, 1, 4]]},
+                      {"name": "b", "box": [0.4, 0.3], "speed": 0.7, "path": [[1, 1], [7, 4]], "mode": "bounce"},
+                      {"name": "o", "disc": 0.3, "speed": 1.1, "path": [[7, 1], [1, 4], [4, 4]], "mode": "once",
+                       "offset": 1.5}]}  # fmt: skip
+    scene = parse_scene(doc)
+    long = retime_module.MoverField(scene, 0.3, DT, 400, 1.0)
+    for steps in (0, 7, 8, 9, 55, 400):
+        short = retime_module.MoverField(scene, 0.3, DT, steps, 1.0)
+        cut = long.prefix(steps)
+        assert cut.steps == short.steps and cut.nc == short.nc
+        for name in ("times", "xy", "present", "margin", "bbox"):
+            assert np.array_equal(getattr(cut, name), getattr(short, name)), name
+    with pytest.raises(ValueError):
+        long.prefix(401)

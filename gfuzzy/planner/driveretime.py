@@ -34,7 +34,7 @@ from ..scene.scene import Scene
 from ..settings import SPEED_SAFETY
 from ..status import Status
 from ..typed import FloatArray
-from .retime import PROFILE_GROUP, ProfileRetime, _search_chain, s_at
+from .retime import PROFILE_GROUP, ChainFields, ProfileRetime, _search_chain, s_at
 
 if TYPE_CHECKING:
     from ..fuzzy.rules import RuleBase
@@ -111,6 +111,8 @@ class DriveTiming:
         self.t0, self.dt, self.amax, self.horizon, self.deadline, self.hold = t0, dt, amax, horizon, deadline, hold
         #: the searches' implementation (``PlanOptions.backend``)
         self.backend = backend
+        #: the movers sampled once for all the searches
+        self.fields = ChainFields(scene, t0, dt)
         #: (n + 1,) float: the legs' ends (0, the profile's rests, the length)
         self.legs = np.unique(np.concatenate([[0.0, float(prof.knots[-1])], prof.stops]))
         turn = robot.turn_rate * SPEED_SAFETY * robot.circumradius
@@ -128,7 +130,7 @@ class DriveTiming:
         """The safe-interval search on the chain (``hold`` default the query's)."""
         hold = self.hold if hold is None else hold
         return _search_chain(self.scene, poses, s, self.t0, self.dt, self.horizon, wait_at, self.deadline,
-                             hold=hold, group=DRIVE_GROUP, backend=self.backend)  # fmt: skip
+                             hold=hold, group=DRIVE_GROUP, backend=self.backend, fields=self.fields)  # fmt: skip
 
     def leg_of(self, s, hasty):
         """The leg of each arc length in ``s``."""

@@ -96,7 +96,8 @@ class PlanOptions:
     backend : str
         ``"compiled"`` runs the search loop in machine code (:mod:`gfuzzy.timespace.search_kernel`,
         numba); ``"reference"`` runs the pure-Python definition
-        (:func:`gfuzzy.timespace.timespace.sipp`). Both give the same answers.
+        (:func:`gfuzzy.timespace.timespace.sipp`). Both give the same answers. The stages'
+        timing of a refined or speed-limited path (:mod:`gfuzzy.planner.retime`) uses the same.
     """
 
     dt: float = 0.07

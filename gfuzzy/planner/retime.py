@@ -41,6 +41,22 @@ CHAIN_SLACK_STEPS = 48
 CHAIN_SLACK = 0.25
 
 
+class ChainFields:
+    """The movers' fields of many chain searches of one stage (one scene, ``t0`` and ``dt``):
+    the movers sampled once, over the longest horizon asked, and each search's field a
+    prefix of it (:meth:`MoverField.prefix`: the field it would build, to the last bit)."""
+
+    def __init__(self, scene: Scene, t0: float, dt: float):
+        self.scene, self.t0, self.dt = scene, t0, dt
+        self._field: MoverField | None = None
+
+    def __call__(self, steps: int, most: int) -> MoverField:
+        """The field over ``steps`` steps; ``most``: the longest the caller may ask next."""
+        if self._field is None or self._field.steps < max(steps, most):
+            self._field = MoverField(self.scene, self.t0, self.dt, max(steps, most), self.scene.robot.vmax)
+        return self._field.prefix(steps)
+
+
 def chain_points(path: FloatArray, circumradius: float, step: float) -> tuple[FloatArray, FloatArray]:
     """Cut a path into points at most one step apart: :func:`gfuzzy.poses.discretise`."""
     return discretise(path, circumradius, step)
@@ -223,6 +239,7 @@ def retime_profile(
     robot = scene.robot
     vmax = robot.vmax * SPEED_SAFETY
     path = np.asarray(path, dtype=float)
+    fields = ChainFields(scene, t0, dt)
     s_m, v_m, cum_m = _metric_profile(path, robot.circumradius, s_xy, v_xy, vmax, amax)
     duration = float(profile_times(s_m, v_m)[-1])
     stops: list[float] = []
@@ -244,7 +261,7 @@ def retime_profile(
         # (where it moves at most amax dt) keeps the speed changes within amax dt
         res = _search_chain(
             scene, poses, s, t0, dt, horizon, wait_at, deadline, (path, cum_m, corners, times), 0.5 * amax * dt**2,
-            hold=hold, group=PROFILE_GROUP, backend=backend,
+            hold=hold, group=PROFILE_GROUP, backend=backend, fields=fields,
         )
         if res.status is Status.SOLVED:
             return ProfileRetime(Status.SOLVED, res.trajectory, waits=stops, profile_duration=duration)
@@ -254,7 +271,7 @@ def retime_profile(
         # where would the robot need to stop? search again allowing waits anywhere
         free = _search_chain(
             scene, poses, s, t0, dt, horizon, None, deadline, (path, cum_m, corners, times), hold=hold, group=PROFILE_GROUP,
-            backend=backend,
+            backend=backend, fields=fields,
         )
         if free.status is not Status.SOLVED or not free.waits:
             message = free.message or message
@@ -277,7 +294,7 @@ def retime_profile(
 
 def _search_chain(
     scene, poses, s, t0, dt, horizon, wait_at, deadline, corners=None, wait_tol=0.0, hold=0.0, group=GROUP,
-    backend="compiled",
+    backend="compiled", fields=None,
 ) -> RetimeResult:
     """The safe-interval search on a chain of points one step apart.
 
@@ -307,7 +324,8 @@ def _search_chain(
     ``backend``: the search of ``PlanOptions.backend`` (:func:`gfuzzy.timespace.backends.search_function`)
     with the safety kernels of the same backend; both judge every group by the same rule
     (a group not evenly spaced on its segment has every point examined), so both give the
-    same answer.
+    same answer. ``fields``: a :class:`ChainFields` the caller's searches share (default: the
+    movers sampled for this search alone).
     """
     robot = scene.robot
     m = len(poses)
@@ -329,7 +347,7 @@ def _search_chain(
     graph = SpaceTimeGraph(
         poses, indptr, nbrs, heur, can_wait=can_wait, groups=groups, from_start=np.arange(m, dtype=float)
     )
-    res = _rounds(scene, graph, t0, dt, int(math.ceil(horizon / dt)), hold_steps, deadline, backend)
+    res = _rounds(scene, graph, t0, dt, int(math.ceil(horizon / dt)), hold_steps, deadline, backend, fields)
     if res.status != Status.SOLVED:
         return RetimeResult(res.status, None, res.message)
     between = None
@@ -349,7 +367,7 @@ def _search_chain(
     return RetimeResult(Status.SOLVED, Trajectory(wps, robot.circumradius), waits=waits)
 
 
-def _rounds(scene, graph, t0, dt, horizon_steps, hold_steps, deadline, backend):
+def _rounds(scene, graph, t0, dt, horizon_steps, hold_steps, deadline, backend, fields=None):
     """The chain's search with a horizon that doubles its slack while it cut the search off
     (:func:`_search_chain`), at most ``horizon_steps``; the safety kept in one store."""
     h0 = float(graph.heuristic[0])
@@ -359,7 +377,11 @@ def _rounds(scene, graph, t0, dt, horizon_steps, hold_steps, deadline, backend):
     search = search_function(backend)
     while True:
         steps = min(most, int(math.ceil(h0 + slack)) + hold_steps)
-        field_ = field_for(MoverField(scene, t0, dt, steps, scene.robot.vmax), backend)
+        if fields is None:
+            field_ = MoverField(scene, t0, dt, steps, scene.robot.vmax)
+        else:
+            field_ = fields(steps, most)
+        field_ = field_for(field_, backend)
         res = search(graph, field_, 0, len(graph.poses) - 1, deadline=deadline, store=store, goal_hold=hold_steps)
         if res.status != Status.NO_PATH or not res.horizon_hit or steps >= most:
             return res
