@@ -214,5 +214,7 @@ def test_a_fields_prefix_is_the_field_of_the_shorter_horizon():
         assert cut.steps == short.steps and cut.nc == short.nc
         for name in ("times", "xy", "present", "margin", "bbox"):
             assert np.array_equal(getattr(cut, name), getattr(short, name)), name
+            # the precompiled kernels take C-contiguous arrays only (else numba runs them)
+            assert getattr(cut, name).flags.c_contiguous, name
     with pytest.raises(ValueError):
         long.prefix(401)

@@ -142,7 +142,10 @@ class MoverField:
         out = copy.copy(self)
         n = steps + 1
         out.steps = int(steps)
-        out.times, out.xy, out.present, out.margin = self.times[:n], self.xy[:, :n], self.present[:, :n], self.margin[:, :n]
+        # copies, C-contiguous as a field's own arrays: the precompiled kernels take only those
+        # (a view of the longer field would send every call to numba, compiled at first use)
+        cut = (np.ascontiguousarray(a) for a in (self.times[:n], self.xy[:, :n], self.present[:, :n], self.margin[:, :n]))
+        out.times, out.xy, out.present, out.margin = cut
         out._boxes()
         out.evaluations = 0
         return out
