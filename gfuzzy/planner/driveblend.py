@@ -164,12 +164,12 @@ def _prune(blend: _Blend, hasty, res, stops, max_rounds):
     return res, stops, hasty
 
 
-def _blend_of(scene, path, t0, dt, amax, horizon, rulebase, deadline, hold) -> _Blend:
+def _blend_of(scene, path, t0, dt, amax, horizon, rulebase, deadline, hold, backend="compiled") -> _Blend:
     robot = scene.robot
     path = _without_null_motions(np.asarray(path, dtype=float))
     prof = drive_profile(path, robot.circumradius, robot.vmax * SPEED_SAFETY, amax,
                          robot.turn_rate * SPEED_SAFETY, rulebase)  # fmt: skip
-    return _Blend(scene, path, prof, t0, dt, amax, horizon, deadline, hold)
+    return _Blend(scene, path, prof, t0, dt, amax, horizon, deadline, hold, backend)
 
 
 def retime_legs(
@@ -184,6 +184,7 @@ def retime_legs(
     deadline: float = math.inf,
     max_rounds: int = 5,
     hold: float = 0.0,
+    backend: str = "compiled",
 ) -> RetimeResult:
     """Time a differential drive's path with the given legs at the search's pace.
 
@@ -192,7 +193,7 @@ def retime_legs(
 
     Parameters
     ----------
-    scene, path, t0, dt, amax, horizon, rulebase, deadline, max_rounds, hold
+    scene, path, t0, dt, amax, horizon, rulebase, deadline, max_rounds, hold, backend
         As for :func:`retime_blend`.
     hasty : (n,) bool
         For each leg (``BlendRetime.legs``), whether it is driven at the search's pace.
@@ -202,7 +203,7 @@ def retime_legs(
     RetimeResult
         Solved with the trajectory, or why not.
     """
-    blend = _blend_of(scene, path, t0, dt, amax, horizon, rulebase, deadline, hold)
+    blend = _blend_of(scene, path, t0, dt, amax, horizon, rulebase, deadline, hold, backend)
     hasty = np.asarray(hasty, dtype=bool)
     if hasty.shape != (len(blend.legs) - 1,):
         raise ValueError(f"hasty has {hasty.size} entries, the path has {len(blend.legs) - 1} legs")
@@ -221,6 +222,7 @@ def retime_blend(
     deadline: float = math.inf,
     max_rounds: int = 5,
     hold: float = 0.0,
+    backend: str = "compiled",
 ) -> BlendRetime:
     """Time a differential drive's path with the speed layer on the legs the movers leave it.
 
@@ -243,6 +245,8 @@ def retime_blend(
         Searches with waits at the rests, at most, per choice of hasty legs.
     hold : float
         Seconds the goal pose must stay safe after the arrival.
+    backend : {"compiled", "reference"}
+        The searches' implementation (``PlanOptions.backend``): the same answers.
 
     Returns
     -------
@@ -251,7 +255,7 @@ def retime_blend(
         all legs at the search's pace find no timing (the path itself is blocked), or only
         that does (no leg keeps the layer).
     """
-    blend = _blend_of(scene, path, t0, dt, amax, horizon, rulebase, deadline, hold)
+    blend = _blend_of(scene, path, t0, dt, amax, horizon, rulebase, deadline, hold, backend)
     duration = float(profile_times(blend.prof.s, blend.prof.v)[-1])
     legs = blend.legs
 

@@ -34,7 +34,7 @@ from ..scene.scene import Scene
 from ..settings import SPEED_SAFETY
 from ..status import Status
 from ..typed import FloatArray
-from .retime import PROFILE_GROUP, ProfileRetime, _search_chain, s_at
+from .retime import PROFILE_GROUP, ChainFields, ProfileRetime, _search_chain, s_at
 
 if TYPE_CHECKING:
     from ..fuzzy.rules import RuleBase
@@ -105,10 +105,14 @@ class DriveTiming:
     (:mod:`gfuzzy.planner.driveblend`) chooses the hasty legs.
     """
 
-    def __init__(self, scene, path, prof, t0, dt, amax, horizon, deadline, hold):
+    def __init__(self, scene, path, prof, t0, dt, amax, horizon, deadline, hold, backend="compiled"):
         robot = scene.robot
         self.scene, self.path, self.prof = scene, path, prof
         self.t0, self.dt, self.amax, self.horizon, self.deadline, self.hold = t0, dt, amax, horizon, deadline, hold
+        #: the searches' implementation (``PlanOptions.backend``)
+        self.backend = backend
+        #: the movers sampled once for all the searches
+        self.fields = ChainFields(scene, t0, dt)
         #: (n + 1,) float: the legs' ends (0, the profile's rests, the length)
         self.legs = np.unique(np.concatenate([[0.0, float(prof.knots[-1])], prof.stops]))
         turn = robot.turn_rate * SPEED_SAFETY * robot.circumradius
@@ -126,7 +130,7 @@ class DriveTiming:
         """The safe-interval search on the chain (``hold`` default the query's)."""
         hold = self.hold if hold is None else hold
         return _search_chain(self.scene, poses, s, self.t0, self.dt, self.horizon, wait_at, self.deadline,
-                             hold=hold, group=DRIVE_GROUP)  # fmt: skip
+                             hold=hold, group=DRIVE_GROUP, backend=self.backend, fields=self.fields)  # fmt: skip
 
     def leg_of(self, s, hasty):
         """The leg of each arc length in ``s``."""
@@ -191,6 +195,7 @@ def retime_drive(
     deadline: float = math.inf,
     max_rounds: int = 5,
     hold: float = 0.0,
+    backend: str = "compiled",
 ) -> ProfileRetime:
     """Time a differential drive's path under its speed layer, among the movers.
 
@@ -213,6 +218,8 @@ def retime_drive(
         Searches among the movers, at most.
     hold : float
         Seconds the goal pose must stay safe after the arrival.
+    backend : {"compiled", "reference"}
+        The searches' implementation (``PlanOptions.backend``): the same answers.
 
     Returns
     -------
@@ -225,7 +232,7 @@ def retime_drive(
     prof = drive_profile(path, robot.circumradius, robot.vmax * SPEED_SAFETY, amax,
                          robot.turn_rate * SPEED_SAFETY, rulebase)  # fmt: skip
     duration = float(profile_times(prof.s, prof.v)[-1])
-    timing = DriveTiming(scene, path, prof, t0, dt, amax, horizon, deadline, hold)
+    timing = DriveTiming(scene, path, prof, t0, dt, amax, horizon, deadline, hold, backend)
     res, stops = timing.rounds(np.zeros(len(timing.legs) - 1, dtype=bool), max_rounds)
     if res is not None and res.status is Status.SOLVED:
         return ProfileRetime(Status.SOLVED, res.trajectory, waits=stops, profile_duration=duration)

@@ -25,10 +25,11 @@ from ..roadmap.roadmap import Roadmap
 from ..scene.scene import Query, Scene
 from ..settings import MAX_MAGNITUDE, MAX_MOVER_SAMPLES, SPEED_SAFETY
 from ..status import Status
+from ..timespace.backends import BACKENDS, search_function
 from ..timespace.movers import MoverField
 from ..timespace.roadgraph import connect
 from ..timespace.spacetime import IntervalStore, SearchResult
-from ..timespace.timespace import sipp, timed_rows
+from ..timespace.timespace import timed_rows
 from ..timespace.unilanes import OutOfTime
 from ..trajectory import Trajectory, TrajectoryFile
 from ..typed import FloatArray
@@ -53,9 +54,6 @@ __all__ = [
 ]
 
 log = logging.getLogger(__name__)
-
-#: Implementations of the search (PlanOptions.backend).
-BACKENDS = ("compiled", "reference")
 
 
 @dataclass(frozen=True)
@@ -98,7 +96,8 @@ class PlanOptions:
     backend : str
         ``"compiled"`` runs the search loop in machine code (:mod:`gfuzzy.timespace.search_kernel`,
         numba); ``"reference"`` runs the pure-Python definition
-        (:func:`gfuzzy.timespace.timespace.sipp`). Both give the same answers.
+        (:func:`gfuzzy.timespace.timespace.sipp`). Both give the same answers. The stages'
+        timing of a refined or speed-limited path (:mod:`gfuzzy.planner.retime`) uses the same.
     """
 
     dt: float = 0.07
@@ -725,18 +724,6 @@ def _check_t0(t0) -> float:
     if abs(t0) > MAX_MAGNITUDE:  # as in a scene file: beyond, t0 + dt == t0 and times stop increasing
         raise InputError(f"t0: {t0:g} is too large (at most {MAX_MAGNITUDE:g} in magnitude)")
     return float(t0)
-
-
-def search_function(backend: str):
-    """The search of ``backend``; numba loads only for the compiled one."""
-    if backend == "reference":
-        return sipp
-    from ..timespace.jit import note_cold
-
-    note_cold()
-    from ..timespace.search_kernel import sipp_compiled
-
-    return sipp_compiled
 
 
 def settle_time(scene: Scene, t0: float = 0.0) -> float:

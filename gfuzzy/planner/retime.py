@@ -17,7 +17,9 @@ from ..poses import discretise, metric_distance, pose_at
 from ..scene.scene import Scene
 from ..settings import SPEED_SAFETY
 from ..status import Status
-from ..timespace.timespace import MoverField, SpaceTimeGraph, sipp, timed_rows
+from ..timespace.backends import field_for, search_function
+from ..timespace.spacetime import IntervalStore
+from ..timespace.timespace import MoverField, SpaceTimeGraph, timed_rows
 from ..trajectory import Trajectory
 from ..typed import FloatArray
 
@@ -31,6 +33,28 @@ GROUP = 16
 PROFILE_GROUP = 2
 #: Stops of the speed-layer timing closer than this (metres of path) are one stop.
 STOP_MERGE = 0.3
+#: A chain's first search looks this many steps, at least, beyond the chain's own length
+#: (:func:`_search_chain`'s rounds) ...
+CHAIN_SLACK_STEPS = 48
+#: ... or this fraction of its length, whichever is more; the slack doubles while the
+#: horizon cuts the search off, up to the caller's horizon.
+CHAIN_SLACK = 0.25
+
+
+class ChainFields:
+    """The movers' fields of many chain searches of one stage (one scene, ``t0`` and ``dt``):
+    the movers sampled once, over the longest horizon asked, and each search's field a
+    prefix of it (:meth:`MoverField.prefix`: the field it would build, to the last bit)."""
+
+    def __init__(self, scene: Scene, t0: float, dt: float):
+        self.scene, self.t0, self.dt = scene, t0, dt
+        self._field: MoverField | None = None
+
+    def __call__(self, steps: int, most: int) -> MoverField:
+        """The field over ``steps`` steps; ``most``: the longest the caller may ask next."""
+        if self._field is None or self._field.steps < max(steps, most):
+            self._field = MoverField(self.scene, self.t0, self.dt, max(steps, most), self.scene.robot.vmax)
+        return self._field.prefix(steps)
 
 
 def chain_points(path: FloatArray, circumradius: float, step: float) -> tuple[FloatArray, FloatArray]:
@@ -69,6 +93,7 @@ def retime_path(
     wait_at: FloatArray | None = None,
     deadline: float = math.inf,
     hold: float = 0.0,
+    backend: str = "compiled",
 ) -> RetimeResult:
     """Earliest safe timing of ``path`` departing at ``t0``.
 
@@ -87,6 +112,8 @@ def retime_path(
         ``time.perf_counter()`` value past which the answer is ``timeout``.
     hold : float
         Seconds the goal pose must stay safe after the arrival (a query's ``hold``).
+    backend : {"compiled", "reference"}
+        The search's implementation (``PlanOptions.backend``): the same answers.
 
     Returns
     -------
@@ -99,7 +126,7 @@ def retime_path(
     # robot's radius were vmax / turn_rate (>= r), so a step turns at most turn_rate dt
     radius = robot.vmax / robot.turn_rate if robot.unicycle else robot.circumradius
     poses, s = chain_points(path, radius, step)
-    return _search_chain(scene, poses, s, t0, dt, horizon, wait_at, deadline, hold=hold)
+    return _search_chain(scene, poses, s, t0, dt, horizon, wait_at, deadline, hold=hold, backend=backend)
 
 
 def _metric_profile(path, circumradius, s_xy, v_xy, vmax, amax, ds=0.02):
@@ -188,6 +215,7 @@ def retime_profile(
     deadline: float = math.inf,
     max_rounds: int = 5,
     hold: float = 0.0,
+    backend: str = "compiled",
 ) -> ProfileRetime:
     """Time a path under a speed profile and an acceleration bound, among the movers.
 
@@ -205,10 +233,13 @@ def retime_profile(
         Speed bound along the xy arc length (from :func:`gfuzzy.fuzzy.fuzzy.speed_limit`).
     hold : float
         Seconds the goal pose must stay safe after the arrival.
+    backend : {"compiled", "reference"}
+        The search's implementation (``PlanOptions.backend``): the same answers.
     """
     robot = scene.robot
     vmax = robot.vmax * SPEED_SAFETY
     path = np.asarray(path, dtype=float)
+    fields = ChainFields(scene, t0, dt)
     s_m, v_m, cum_m = _metric_profile(path, robot.circumradius, s_xy, v_xy, vmax, amax)
     duration = float(profile_times(s_m, v_m)[-1])
     stops: list[float] = []
@@ -230,7 +261,7 @@ def retime_profile(
         # (where it moves at most amax dt) keeps the speed changes within amax dt
         res = _search_chain(
             scene, poses, s, t0, dt, horizon, wait_at, deadline, (path, cum_m, corners, times), 0.5 * amax * dt**2,
-            hold=hold, group=PROFILE_GROUP,
+            hold=hold, group=PROFILE_GROUP, backend=backend, fields=fields,
         )
         if res.status is Status.SOLVED:
             return ProfileRetime(Status.SOLVED, res.trajectory, waits=stops, profile_duration=duration)
@@ -239,7 +270,8 @@ def retime_profile(
             break
         # where would the robot need to stop? search again allowing waits anywhere
         free = _search_chain(
-            scene, poses, s, t0, dt, horizon, None, deadline, (path, cum_m, corners, times), hold=hold, group=PROFILE_GROUP
+            scene, poses, s, t0, dt, horizon, None, deadline, (path, cum_m, corners, times), hold=hold, group=PROFILE_GROUP,
+            backend=backend, fields=fields,
         )
         if free.status is not Status.SOLVED or not free.waits:
             message = free.message or message
@@ -261,7 +293,8 @@ def retime_profile(
 
 
 def _search_chain(
-    scene, poses, s, t0, dt, horizon, wait_at, deadline, corners=None, wait_tol=0.0, hold=0.0, group=GROUP
+    scene, poses, s, t0, dt, horizon, wait_at, deadline, corners=None, wait_tol=0.0, hold=0.0, group=GROUP,
+    backend="compiled", fields=None,
 ) -> RetimeResult:
     """The safe-interval search on a chain of points one step apart.
 
@@ -276,6 +309,23 @@ def _search_chain(
     a chain driven under a speed profile is not, least of all a differential drive's (it
     brakes to rest at every corner and turns in place, many nodes at one point): its groups
     are pairs, which always are.
+
+    Rounds: the search runs first with a horizon of the chain's length plus a slack
+    (:data:`CHAIN_SLACK`), the slack doubled while the horizon cut it off, up to ``horizon``;
+    the safety computed stays in one store. The same answer as one search with the whole
+    horizon: the search expands states in order of arrival plus the steps left, never more
+    than the arrival it returns, and every such state, its safe interval's index and its
+    successors within that bound are the same under any longer horizon (a state's window
+    ends at the horizon minus the steps left); a search that ran empty without touching its
+    horizon runs empty under any longer one. A chain's safety is computed over each point's
+    whole window at once, so a horizon of three times the path's duration cost about ten
+    times the safety the answer needs.
+
+    ``backend``: the search of ``PlanOptions.backend`` (:func:`gfuzzy.timespace.backends.search_function`)
+    with the safety kernels of the same backend; both judge every group by the same rule
+    (a group not evenly spaced on its segment has every point examined), so both give the
+    same answer. ``fields``: a :class:`ChainFields` the caller's searches share (default: the
+    movers sampled for this search alone).
     """
     robot = scene.robot
     m = len(poses)
@@ -297,9 +347,7 @@ def _search_chain(
     graph = SpaceTimeGraph(
         poses, indptr, nbrs, heur, can_wait=can_wait, groups=groups, from_start=np.arange(m, dtype=float)
     )
-    steps = int(math.ceil(horizon / dt)) + hold_steps
-    field_ = MoverField(scene, t0, dt, steps, robot.vmax)
-    res = sipp(graph, field_, 0, m - 1, deadline=deadline, goal_hold=hold_steps)
+    res = _rounds(scene, graph, t0, dt, int(math.ceil(horizon / dt)), hold_steps, deadline, backend, fields)
     if res.status != Status.SOLVED:
         return RetimeResult(res.status, None, res.message)
     between = None
@@ -317,3 +365,24 @@ def _search_chain(
     wps, wait_nodes = timed_rows(res.nodes, res.steps, poses, t0, dt, between)
     waits = [float(s[a]) for a in wait_nodes]
     return RetimeResult(Status.SOLVED, Trajectory(wps, robot.circumradius), waits=waits)
+
+
+def _rounds(scene, graph, t0, dt, horizon_steps, hold_steps, deadline, backend, fields=None):
+    """The chain's search with a horizon that doubles its slack while it cut the search off
+    (:func:`_search_chain`), at most ``horizon_steps``; the safety kept in one store."""
+    h0 = float(graph.heuristic[0])
+    most = horizon_steps + hold_steps
+    slack = max(float(CHAIN_SLACK_STEPS), CHAIN_SLACK * h0)
+    store = IntervalStore(graph)
+    search = search_function(backend)
+    while True:
+        steps = min(most, int(math.ceil(h0 + slack)) + hold_steps)
+        if fields is None:
+            field_ = MoverField(scene, t0, dt, steps, scene.robot.vmax)
+        else:
+            field_ = fields(steps, most)
+        field_ = field_for(field_, backend)
+        res = search(graph, field_, 0, len(graph.poses) - 1, deadline=deadline, store=store, goal_hold=hold_steps)
+        if res.status != Status.NO_PATH or not res.horizon_hit or steps >= most:
+            return res
+        slack *= 2.0

@@ -390,7 +390,8 @@ def _refine(ctx: StageContext, traj: Trajectory, query, opts, deadline) -> tuple
         if not ctx.geometry.motion_free(a, b):
             return traj, replace(report, reason="a refined segment could not be certified free of static obstacles")
     horizon = max(opts.horizon or 0.0, 2.0 * traj.duration + 30.0)
-    rt = retime_path(ctx.scene, path, query.t0, opts.dt, horizon, deadline=deadline, hold=query.hold)
+    rt = retime_path(ctx.scene, path, query.t0, opts.dt, horizon, deadline=deadline, hold=query.hold,
+                     backend=opts.backend)  # fmt: skip
     if rt.status is not Status.SOLVED:
         return traj, replace(report, reason=f"the refined path could not be timed among the movers ({rt.message})")
     ok, why = _accept(ctx, rt.trajectory, query, traj, opts.refine_max_slowdown)
@@ -421,7 +422,8 @@ def _speed_layer(ctx: StageContext, traj: Trajectory, query, opts, deadline) -> 
     else:
         s_xy, v_xy = speed_limit(path[:, :2], robot.vmax, amax, rules, FuzzyOptions())
         rt = retime_profile(scene=ctx.scene, path=path, s_xy=s_xy, v_xy=v_xy, t0=query.t0,
-                            dt=opts.dt, amax=amax, horizon=horizon, deadline=deadline, hold=query.hold)  # fmt: skip
+                            dt=opts.dt, amax=amax, horizon=horizon, deadline=deadline, hold=query.hold,
+                            backend=opts.backend)  # fmt: skip
     report = SpeedReport(False, amax, profile_seconds=rt.profile_duration, corners=corners)
     if rt.status is Status.TIMEOUT:
         return traj, replace(report, reason="the time limit passed while timing the speed-limited path among the movers")
@@ -456,14 +458,16 @@ def _drive_layer(ctx: StageContext, path, query, opts, amax, horizon, rules, dea
     straight = straighten(ctx.geometry, path)
     tries = [straight, path] if straight is not path else [path]
     for candidate in tries:
-        rt = retime_drive(ctx.scene, candidate, query.t0, opts.dt, amax, horizon, rules, deadline=deadline, hold=query.hold)
+        rt = retime_drive(ctx.scene, candidate, query.t0, opts.dt, amax, horizon, rules, deadline=deadline,
+                          hold=query.hold, backend=opts.backend)  # fmt: skip
         if rt.status is Status.SOLVED:
             return rt, {"before": count(path), "after": count(candidate)}
     # no timing of the whole layered path: the layer where it fits, haste where a mover forces it
     for candidate in tries:
         if time.perf_counter() > deadline:
             break
-        rt = retime_blend(ctx.scene, candidate, query.t0, opts.dt, amax, horizon, rules, deadline=deadline, hold=query.hold)
+        rt = retime_blend(ctx.scene, candidate, query.t0, opts.dt, amax, horizon, rules, deadline=deadline,
+                          hold=query.hold, backend=opts.backend)  # fmt: skip
         if rt.status is Status.SOLVED:
             return rt, {"before": count(path), "after": count(candidate)}
     if time.perf_counter() > deadline:  # the last answer's why, but the time ran out
@@ -495,6 +499,7 @@ class StageSettings(Protocol):
     refine_max_slowdown: float
     ga: GAOptions | None
     rules: RuleBase | None
+    backend: str  # the retiming searches' implementation, as the search's ("compiled" or "reference")
 
 
 @dataclass(frozen=True)

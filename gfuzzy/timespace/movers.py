@@ -12,6 +12,7 @@ step (``motion_safe``). The safety rule itself (the margin
 
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
@@ -94,6 +95,19 @@ class MoverField:
             self.xy[i], _ = mv.state(tc)
             self.present[i] = (times + half >= ta) & (times - half <= tb)
             self.margin[i] = (vrobot + _local_speed(mv, times, half)) * half + self.keep
+        self._boxes()
+        self.evaluations = 0
+        self._extent = np.array([mv.extent for mv in self.movers])
+        self._is_disc = np.array([mv.shape == "disc" for mv in self.movers], dtype=bool)
+        self._radius = np.array([mv.radius for mv in self.movers])
+        self._size = np.array([mv.size for mv in self.movers], dtype=float).reshape(-1, 2)
+        self._inner = np.where(self._is_disc, self._radius, 0.5 * self._size.min(axis=1, initial=np.inf))
+        #: Phases 2 and 3 of unsafe_pairs compiled (gfuzzy.timespace.search_kernel); the same answers.
+        self.compiled = False
+
+    def _boxes(self) -> None:
+        """The broad phase's boxes (:attr:`bbox`, :attr:`nc`) from the samples."""
+        m, n = self.xy.shape[0], self.steps + 1
         # broad phase: per mover and chunk, the box of reference points inflated by reach
         nc = (n + CHUNK - 1) // CHUNK
         pad = nc * CHUNK - n
@@ -117,14 +131,24 @@ class MoverField:
         )  # (m, nc, 4); empty (inf/-inf) where absent
         self.nc = nc
         self._bbox_keep = self.keep  # the clearance the boxes were built with (a caller may lower keep)
-        self.evaluations = 0
-        self._extent = np.array([mv.extent for mv in self.movers])
-        self._is_disc = np.array([mv.shape == "disc" for mv in self.movers], dtype=bool)
-        self._radius = np.array([mv.radius for mv in self.movers])
-        self._size = np.array([mv.size for mv in self.movers], dtype=float).reshape(-1, 2)
-        self._inner = np.where(self._is_disc, self._radius, 0.5 * self._size.min(axis=1, initial=np.inf))
-        #: Phases 2 and 3 of unsafe_pairs compiled (gfuzzy.timespace.search_kernel); the same answers.
-        self.compiled = False
+
+    def prefix(self, steps: int) -> MoverField:
+        """This field over its first ``steps`` steps only: the field ``MoverField(scene, t0,
+        dt, steps, vrobot, clearance)`` would build, equal to the last bit (every sample and
+        margin depends on its own time only; the boxes are built again), without sampling
+        the movers again. A field a caller changed (``keep``) is not to be cut."""
+        if not 0 <= steps <= self.steps:
+            raise ValueError(f"a prefix of {steps} steps of a field of {self.steps}")
+        out = copy.copy(self)
+        n = steps + 1
+        out.steps = int(steps)
+        # copies, C-contiguous as a field's own arrays: the precompiled kernels take only those
+        # (a view of the longer field would send every call to numba, compiled at first use)
+        cut = (np.ascontiguousarray(a) for a in (self.times[:n], self.xy[:, :n], self.present[:, :n], self.margin[:, :n]))
+        out.times, out.xy, out.present, out.margin = cut
+        out._boxes()
+        out.evaluations = 0
+        return out
 
     def unsafe(self, poses: FloatArray, lo: int = 0, hi: int | None = None) -> BoolArray:
         """Steps at which the robot at each of ``poses`` is not safe (one group; dense, for
