@@ -24,9 +24,15 @@ warm: $(STAMP)
 demo: warm
 	$(BIN)/python tools/demo.py
 
+# the suite on every core (pytest-xdist; TEST_WORKERS=0 runs it in this one process); `warm`
+# has built the kernels before the workers start. A test file runs on one worker
+# (--dist loadfile): a module's expensive fixtures (a Dask cluster, roadmaps) are built once;
+# files start in collection order (--no-loadscope-reorder), where tests/conftest.py puts the
+# tests marked long first (xdist's own order, most tests first, started the packaging test last)
+TEST_WORKERS ?= auto
 test: warm
 	$(BIN)/ruff check gfuzzy tests tools
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadfile --no-loadscope-reorder
 
 # the slow tests (@pytest.mark.slow, left out of `make test`): experiments over every bundled scene
 slow: warm

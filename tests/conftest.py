@@ -32,6 +32,13 @@ def cli_present() -> bool:
 needs_cli = pytest.mark.skipif(not cli_present(), reason="gfuzzy/cli/ is not there yet")
 
 
+def pytest_collection_modifyitems(config, items):
+    """Tests marked ``long`` (a minute or more: a module sets ``pytestmark``) run first, the
+    rest in their order: under ``pytest -n`` the file that starts last ends the run, and a
+    long one there left the other worker idle for a minute."""
+    items.sort(key=lambda item: item.get_closest_marker("long") is None)
+
+
 @pytest.fixture(scope="session")
 def repo_root() -> Path:
     """The repository root (holds ``gfuzzy/``, ``scenes/``, ``roadmaps/``)."""

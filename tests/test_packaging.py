@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tarfile
@@ -20,6 +21,8 @@ import pytest
 from conftest import ROOT
 
 PACKAGE = ROOT / "gfuzzy"
+
+pytestmark = pytest.mark.long  # a virtualenv, an install and a cold numba compile: started first
 
 
 def _source_files() -> set[str]:
@@ -32,11 +35,21 @@ def _source_files() -> set[str]:
     }
 
 
+#: what the build's copy of the repository leaves out: version control, virtualenvs, caches
+#: (numba's, the precompiled kernels) and earlier builds' outputs
+NOT_SOURCE = (".git", ".venv", "out", "build", "dist", "*.egg-info", "__pycache__", ".*_cache", ".hypothesis")
+
+
 @pytest.fixture(scope="module")
 def dist(tmp_path_factory) -> Path:
+    """The sdist and the wheel, built from a copy of the repository: the build writes
+    ``gfuzzy.egg-info`` into its source folder, and the repository is not written by tests
+    (tests/test_readme.py checks that, and may run at the same time under ``pytest -n``)."""
     out = tmp_path_factory.mktemp("dist")
+    src = tmp_path_factory.mktemp("src") / "gfuzzy"
+    shutil.copytree(ROOT, src, ignore=shutil.ignore_patterns(*NOT_SOURCE), symlinks=True)
     proc = subprocess.run(
-        [sys.executable, "-m", "build", "--outdir", str(out), str(ROOT)],
+        [sys.executable, "-m", "build", "--outdir", str(out), str(src)],
         capture_output=True,
         text=True,
         timeout=600,

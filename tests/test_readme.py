@@ -63,6 +63,16 @@ for line, code in blocks:
 """
 
 
+#: what the test tools make in the repository (Hypothesis's example database in the working
+#: folder): under ``pytest -n`` another worker may make them while the README's code runs
+TOOL_CACHES = {".hypothesis", ".pytest_cache", ".ruff_cache", "__pycache__"}
+
+
+def _listing(folder) -> list[str]:
+    """The names in ``folder``, less the test tools' caches."""
+    return sorted(q.name for q in folder.iterdir() if q.name not in TOOL_CACHES)
+
+
 def test_readme_python_blocks_run(tmp_path):
     """Every ```python block of README.md runs, in order, in one namespace (a later block
     may use what an earlier one made), from a folder that holds the repository's files and
@@ -74,10 +84,10 @@ def test_readme_python_blocks_run(tmp_path):
         if not entry.name.startswith(".") and entry.name not in ("out", "build", "dist"):
             (tmp_path / entry.name).symlink_to(entry, target_is_directory=entry.is_dir())
     (tmp_path / "out").mkdir()
-    before = {p: sorted(q.name for q in p.iterdir()) for p in (ROOT, ROOT / "scenes", ROOT / "roadmaps")}
+    before = {p: _listing(p) for p in (ROOT, ROOT / "scenes", ROOT / "roadmaps")}
     proc = run_python(RUNNER, json.dumps(blocks), cwd=tmp_path, timeout=300)
     assert proc.returncode == 0, f"a README.md python block failed:\n{proc.stdout}\n{proc.stderr}"
-    after = {p: sorted(q.name for q in p.iterdir()) for p in before}
+    after = {p: _listing(p) for p in before}
     assert after == before, "the README's code wrote into the repository"
 
 

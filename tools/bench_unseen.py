@@ -289,7 +289,8 @@ def witness_for(scene, query, motion: Motion | None, body: Body, dof: int, waits
     for wait in waits:
         rows = motion.rows(body, dof, wait)
         rows[0, 1:], rows[-1, 1:] = query.start, query.goal  # the query's own numbers
-        if check_trajectory(scene, rows, query=query).valid:
+        # the verdict only: measuring each refused wait's deepest overlap took 3/4 of the time
+        if check_trajectory(scene, rows, query=query, deepest=False).valid:
             return rows
     return None
 
@@ -507,8 +508,8 @@ def _ends_valid(scene, query) -> bool:
     start = np.array([[query.t0, *query.start], [query.t0 + 1e-3, *query.start]])
     goal = np.array([[0.0, *query.goal], [1e-3, *query.goal]])
     if scene.movers:
-        return check_trajectory(scene, start).valid
-    return check_trajectory(scene, start).valid and check_trajectory(scene, goal).valid
+        return check_trajectory(scene, start, deepest=False).valid
+    return check_trajectory(scene, start, deepest=False).valid and check_trajectory(scene, goal, deepest=False).valid
 
 
 def run_case(case: dict, vertices: int) -> dict:
