@@ -458,14 +458,17 @@ def _check_polygon(v: _V, pts: FloatArray, place: str) -> FloatArray:
         v.fail(place, f"a polygon needs at least 3 points, got {len(pts)}")
     if np.allclose(pts[0], pts[-1]) and len(pts) > 3:
         pts = pts[:-1]
+    # a refused ring whose points lie on one line folds back on itself: say so, not that it
+    # crosses itself (only the message: a sliver 1.5e-9 thick is a polygon as before)
     spread = np.linalg.svd(pts - pts.mean(axis=0), compute_uv=False)
-    if spread[1] <= 1e-9 * spread[0]:  # its ring folds back on itself: not a self-intersection to fix
-        v.fail(place, "polygon is degenerate: its points are collinear (zero area)")
+    collinear = spread[1] <= 1e-9 * spread[0]
     ring = shapely.LinearRing(pts)
-    if not ring.is_simple:
-        v.fail(place, "polygon is self-intersecting")
     poly = shapely.Polygon(pts)
-    if not poly.is_valid or poly.area <= 1e-12:
+    if not ring.is_simple or not poly.is_valid or poly.area <= 1e-12:
+        if collinear:
+            v.fail(place, "polygon is degenerate: its points are collinear (zero area)")
+        if not ring.is_simple:
+            v.fail(place, "polygon is self-intersecting")
         v.fail(place, "polygon is degenerate (zero area)")
     x, y = pts[:, 0], pts[:, 1]
     signed = 0.5 * np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y)
