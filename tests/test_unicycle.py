@@ -302,13 +302,13 @@ def plane_lanes(obstacles, verts, edges):
 
 
 def test_a_disc_drive_gets_turn_points_in_a_passage_only():
-    """A vertex 5 cm from a wall (less than half a radius) beside one wall is in no passage:
-    the disc turns there as well as a radius off, and its lanes get no turn points (75 on
-    tb3-arena-unicycle, 802 more lanes, a slower search for every plan). A second wall
-    0.5 m from the first (a corridor 2.5 radii wide) pinches it: the lanes leaving the
-    corridor get one each."""
+    """A vertex 2 cm from a wall (less than half a radius) beside one wall is in no passage:
+    a radius away from the wall the disc has a radius of clearance, and its lanes get no
+    turn points (107 on tb3-arena-unicycle at stretch 1, a slower search for every plan). A
+    second wall 0.5 m from the first (a corridor 2.5 radii wide) pinches it: the lanes
+    leaving the corridor get one each."""
     floor = {"box": {"center": [3.0, 0.5], "size": [3.0, 1.0]}}
-    verts, edges = [[3.0, 1.25], [1.5, 3.0], [4.5, 3.0], [0.5, 1.25], [5.5, 1.25]], [[0, 1], [0, 2], [0, 3], [0, 4]]
+    verts, edges = [[3.0, 1.22], [1.5, 3.0], [4.5, 3.0], [0.5, 1.22], [5.5, 1.22]], [[0, 1], [0, 2], [0, 3], [0, 4]]
     ln, geo, n = plane_lanes([floor], verts, edges)
     assert geo.clearance1(np.array(verts[0])) < 0.1 and len(ln.xy) == n
     ceiling = {"box": {"center": [3.0, 2.0], "size": [3.0, 1.0]}}

@@ -88,10 +88,11 @@ def lanes(roadmap, geometry, stretch: float = 1.0, deadline: float = math.inf) -
 TURN_LINKS = 10
 #: A disc's vertex is in a passage (:func:`_turn_points`) below this clearance, in radii.
 PASSAGE_CLEARANCE = 0.5
-#: Axes through a vertex on which :func:`_in_passage` looks for walls on both sides.
-PASSAGE_AXES = 8
-#: How far :func:`_blocked` looks for a wall, in radii.
-PASSAGE_REACH = 2.0
+#: Below this gradient of the clearance a vertex is on a ridge between walls (:func:`_in_passage`).
+PASSAGE_RIDGE = 0.5
+#: Where :func:`_in_passage` looks for a radius of clearance: these times as far from the
+#: vertex as one wall alone would give it one.
+PASSAGE_REACH = (1.5, 2.0)
 
 
 def _turn_points(geometry, xy: FloatArray, edges: IntArray, deadline: float = math.inf) -> tuple[FloatArray, IntArray]:
@@ -139,36 +140,18 @@ def _turn_points(geometry, xy: FloatArray, edges: IntArray, deadline: float = ma
 
 
 def _in_passage(geometry, p: FloatArray, c: float, r: float) -> bool:
-    """Whether the disc at ``p`` (clearance ``c``) is pinched from two opposite sides (a door,
-    a corridor less than four radii wide): along one of ``PASSAGE_AXES`` axes through ``p``
-    it meets a wall both ways (:func:`_blocked`)."""
-    for k in range(PASSAGE_AXES):
-        a = math.pi * k / PASSAGE_AXES
-        u = np.array([math.cos(a), math.sin(a)])
-        if _blocked(geometry, p, c, u, r) and _blocked(geometry, p, c, -u, r):
-            return True
-    return False
-
-
-def _blocked(geometry, p: FloatArray, c: float, u: FloatArray, r: float) -> bool:
-    """Whether the disc moving from ``p`` (clearance ``c``) along ``u`` (a unit vector)
-    collides within ``PASSAGE_REACH`` radii before it has a radius of clearance: looked at
-    a clearance apart (the disc is clear that far on), half a radius at least (a wall grown
-    by the disc's radius is at least two radii across). A map's distance bound
-    (:meth:`StaticGeometry.disc_bound`, a few microseconds) stands for the clearance where
-    it is positive."""
-    t = max(c, 0.5 * r)
-    while t < PASSAGE_REACH * r:
-        q = p + t * u
-        c = geometry.disc_bound(float(q[0]), float(q[1]))
-        if not c > 0.0:
-            c = geometry.clearance1(q)
-        if c < 0.0:
-            return True
-        if c >= r:
-            return False
-        t += max(c, 0.5 * r)
-    return False
+    """Whether the disc at ``p`` (clearance ``c`` below a radius) is pinched from two
+    opposite sides (a door, a corridor less than four radii wide): moving straight away
+    from its nearest wall (up the clearance's gradient, central differences a twentieth of
+    a radius wide), it has less than a radius of clearance ``PASSAGE_REACH`` times as far on
+    as one wall alone would give it one (half as far again and twice), or the gradient is
+    below ``PASSAGE_RIDGE`` (a ridge of the clearance between two walls: a door's middle)."""
+    e = 0.05 * r
+    g = np.array([geometry.clearance1(p + d) - geometry.clearance1(p - d) for d in ((e, 0.0), (0.0, e))]) / (2 * e)
+    n = math.hypot(*g)
+    if n < PASSAGE_RIDGE:
+        return True
+    return all(geometry.clearance1(p + (k * (r - c) / n) * g) < r for k in PASSAGE_REACH)
 
 
 def _passage_end(geometry, a: FloatArray, b: FloatArray, r: float) -> FloatArray | None:
