@@ -306,7 +306,8 @@ def test_a_disc_drive_gets_turn_points_in_a_passage_only():
     a radius away from the wall the disc has a radius of clearance, and its lanes get no
     turn points (107 on tb3-arena-unicycle at stretch 1, a slower search for every plan). A
     second wall 0.5 m from the first (a corridor 2.5 radii wide) pinches it: the lanes
-    leaving the corridor get one each."""
+    leaving the corridor get one each; 0.94 m from it (4.7 radii: a radius and a third of
+    clearance in its middle) it does not."""
     floor = {"box": {"center": [3.0, 0.5], "size": [3.0, 1.0]}}
     verts, edges = [[3.0, 1.22], [1.5, 3.0], [4.5, 3.0], [0.5, 1.22], [5.5, 1.22]], [[0, 1], [0, 2], [0, 3], [0, 4]]
     ln, geo, n = plane_lanes([floor], verts, edges)
@@ -316,6 +317,9 @@ def test_a_disc_drive_gets_turn_points_in_a_passage_only():
     new = sorted(ln.xy[n:].tolist())
     assert len(new) == 2 and new[0][0] < 1.5 < 4.5 < new[1][0], new  # just out of the corridor, either end
     assert all(geo.clearance1(np.array(p)) >= 0.2 for p in new)
+    wide = {"box": {"center": [3.0, 2.44], "size": [3.0, 1.0]}}
+    ln, geo, n = plane_lanes([floor, wide], verts, [[0, 3], [0, 4]])
+    assert len(ln.xy) == n
 
 
 def test_a_passage_end_is_a_radius_from_the_vertex_and_two_from_the_far_end():
@@ -354,6 +358,26 @@ def test_a_disc_drive_gets_turn_points_in_a_door_with_a_third_of_a_radius_to_spa
     ln, geo, n = plane_lanes(walls, rm.vertices[:, :2], rm.edges)
     assert 0.25 * 0.2 < geo.clearance1(np.array([3.0, 2.0])) < 0.5 * 0.2
     assert len(ln.xy) == n + 2
+
+
+def test_a_query_end_joins_only_the_roadmaps_vertices_not_turn_points():
+    """A goal just beyond the door's turn point (of :func:`door_lanes_scene`): its lanes run
+    to roadmap vertices only. Turn points among an end's nearest took the place of the
+    vertices that lead on (unseen rooms seed 3 case 8: the same answer, its plan 0.28 ->
+    15.7 s of CPU with the end joined to them)."""
+    from gfuzzy.timespace.unicycle import _base, _Extras
+
+    sc, rm = door_lanes_scene()
+    planner = Planner(sc, rm)
+    base = _base(rm, planner.geometry, 1.0, sc.robot.vmax, 0.1)
+    turn_points = base.vertex_xy[base.roadmap_vertices :]
+    assert len(turn_points) == 2 and base.roadmap_vertices == len(rm.vertices)
+    goal = np.array([*(turn_points[np.argmax(turn_points[:, 0])] + [0.1, 0.05]), 0.0])
+    ex = _Extras(base, planner.geometry, sc.robot.vmax / sc.robot.turn_rate, 10**6)
+    g = ex.node(*goal)
+    ex.join(goal, g, 10, False, False)
+    ends = [ex.pose(a)[:2] for a, b, dh, _ in ex.pieces if dh == 0.0 and a != g]
+    assert ends and all(np.isclose(rm.vertices[:, :2], e).all(axis=1).any() for e in ends), ends
 
 
 def case88_doc() -> dict:
