@@ -104,11 +104,10 @@ def _turn_points(geometry, xy: FloatArray, edges: IntArray, deadline: float = ma
     unseen rooms, seed 2 case 88: 1.6 m and 1.1 m on, a box bouncing along the line, missed
     where a witness turns off just beyond the door). From each vertex in a passage (less
     clearance than ``PASSAGE_CLEARANCE`` radii, pinched from two opposite sides:
-    :func:`_in_passage`; beside one wall the disc can turn where it is), each lane gets a
-    point where the disc first has a radius of clearance (sphere
-    tracing: the clearance grows by at most the distance moved), unless the point lies within
-    a radius of the vertex, within two of the lane's far end, or within one of a point
-    already added; the point splits the lane and gets lanes to its ``TURN_LINKS`` nearest
+    :func:`_in_passage`; beside one wall it has a radius of clearance a radius off), each
+    lane gets a point where the disc first has a radius of clearance (sphere tracing: the
+    clearance grows by at most the distance moved), unless the point lies within a radius
+    of the vertex, within two of the lane's far end, or within one of a point already added; the point splits the lane and gets lanes to its ``TURN_LINKS`` nearest
     vertices that the disc sweeps free (:meth:`StaticGeometry.sweep_free`).
     """
     r = float(geometry.robot.radius)
@@ -141,7 +140,7 @@ def _turn_points(geometry, xy: FloatArray, edges: IntArray, deadline: float = ma
 
 def _in_passage(geometry, p: FloatArray, c: float, r: float) -> bool:
     """Whether the disc at ``p`` (clearance ``c`` below a radius) is pinched from two
-    opposite sides (a door, a corridor less than four radii wide): moving straight away
+    opposite sides (a door, a corridor up to about 4.5 radii wide): moving straight away
     from its nearest wall (up the clearance's gradient, central differences a twentieth of
     a radius wide), it has less than a radius of clearance ``PASSAGE_REACH`` times as far on
     as one wall alone would give it one (half as far again and twice), or the gradient is
