@@ -218,6 +218,7 @@ def test_door_headings_keep_a_body_exactly_as_wide_as_the_door():
         hs = door_headings(body, math.pi / 2, gap, 4, drive=True)
         assert sorted((round(math.cos(h), 9) + 0.0, round(math.sin(h), 9) + 0.0) for h in hs) == along, gap
     assert door_headings(body, math.pi / 2, 0.9 - 1e-8, 4, drive=True) == []
+    assert door_headings(body, math.pi / 2, 0.9 - 2e-9, 4, drive=True) == []  # 4 x the tolerance (5e-10)
 
 
 def _plan_and_check(scene, rm, start, goal):
@@ -293,6 +294,26 @@ def test_join_takes_a_differential_drive_exactly_as_wide_as_the_door_through_it(
     assert any(abs(v[0] - 3.0) < 0.4 and geometry.clearance1(v) == 0.0 for v in rm.vertices[60:])  # in the door
     _plan_and_check(scene, rm, [1.0, 1.0, 0.0], [5.0, 3.0, 0.0])
     _plan_and_check(scene, rm, [5.0, 3.0, 0.0], [1.0, 1.0, 0.0])
+
+
+def test_join_takes_only_a_pose_touching_the_jambs_and_only_as_the_last_leg():
+    """The U drive in the 0.9 door, centred along the axis, touches both jambs (clearance
+    exactly 0; FCL's collision test calls it a collision): ``valid_touching`` takes it, but
+    not the pose 1e-6 m into a jamb, and a path of legs takes it only as its last pose (the
+    door pose itself), not as a pose it goes on from."""
+    from gfuzzy.roadmap.join import _Search
+
+    doc = door_doc(0.9)
+    doc["robot"] = {"footprint": U, "vmax": 1.0, "kinematics": "unicycle"}
+    geometry = StaticGeometry(parse_scene(doc))
+    search = _Search(geometry, np.array([[1.0, 1.0, 0.0], [5.0, 3.0, 0.0]]), np.zeros((0, 2), dtype=int), 100, 1)
+    door, into = np.array([3.0, 2.0, 0.0]), np.array([3.0, 2.0 + 1e-6, 0.0])
+    assert geometry.clearance1(door) == 0.0 and not search.valid(door) and search.valid_touching(door)
+    assert geometry.clearance1(into) < 0.0 and not search.valid_touching(into)
+    before, after = np.array([2.0, 2.0, 0.0]), np.array([4.0, 2.0, 0.0])
+    legs = search._legs(before, [door])
+    assert legs is not None and np.array_equal(legs[-1], door)
+    assert search._legs(before, [door, after]) is None
 
 
 def rotated_door_doc(body: dict, width: float, angle: float) -> dict:

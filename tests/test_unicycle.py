@@ -287,6 +287,99 @@ def test_a_disc_drive_gets_turn_points_where_a_lane_leaves_a_door():
         assert geo.sweep_free(ln.xy[a], ln.xy[b])
 
 
+def plane_lanes(obstacles, verts, edges):
+    """The lanes (stretch 1) of a disc drive (radius 0.2) among ``obstacles`` on a roadmap of
+    ``verts`` and ``edges``, with its geometry and its number of vertices."""
+    from gfuzzy.collision.geometry import StaticGeometry
+    from gfuzzy.timespace.unilanes import lanes
+
+    sc = parse_scene(doc(obstacles=obstacles))
+    verts, edges = np.array(verts, dtype=float), np.array(edges)
+    rm = Roadmap(verts, edges, np.hypot(*(verts[edges[:, 1]] - verts[edges[:, 0]]).T), sc.name, sc.static_hash,
+                 sc.robot.circumradius)  # fmt: skip
+    geo = StaticGeometry(sc)
+    return lanes(rm, geo, 1.0), geo, len(verts)
+
+
+def test_a_disc_drive_gets_turn_points_in_a_passage_only():
+    """A vertex 2 cm from a wall (less than half a radius) beside one wall is in no passage:
+    a radius away from the wall the disc has a radius of clearance, and its lanes get no
+    turn points (107 on tb3-arena-unicycle at stretch 1, a slower search for every plan). A
+    second wall 0.5 m from the first (a corridor 2.5 radii wide) pinches it: the lanes
+    leaving the corridor get one each; 0.94 m from it (4.7 radii: a radius and a third of
+    clearance in its middle) it does not."""
+    floor = {"box": {"center": [3.0, 0.5], "size": [3.0, 1.0]}}
+    verts, edges = [[3.0, 1.22], [1.5, 3.0], [4.5, 3.0], [0.5, 1.22], [5.5, 1.22]], [[0, 1], [0, 2], [0, 3], [0, 4]]
+    ln, geo, n = plane_lanes([floor], verts, edges)
+    assert geo.clearance1(np.array(verts[0])) < 0.1 and len(ln.xy) == n
+    ceiling = {"box": {"center": [3.0, 2.0], "size": [3.0, 1.0]}}
+    ln, geo, n = plane_lanes([floor, ceiling], verts, [[0, 3], [0, 4]])
+    new = sorted(ln.xy[n:].tolist())
+    assert len(new) == 2 and new[0][0] < 1.5 < 4.5 < new[1][0], new  # just out of the corridor, either end
+    assert all(geo.clearance1(np.array(p)) >= 0.2 for p in new)
+    wide = {"box": {"center": [3.0, 2.44], "size": [3.0, 1.0]}}
+    ln, geo, n = plane_lanes([floor, wide], verts, [[0, 3], [0, 4]])
+    assert len(ln.xy) == n
+
+
+def test_a_passage_end_is_a_radius_from_the_vertex_and_two_from_the_far_end():
+    """The point where a lane from a vertex in a passage has a radius of clearance is no
+    turn point within a radius of the vertex (the disc turns there about as well) nor within
+    two of the lane's far end (it turns there)."""
+    from gfuzzy.collision.geometry import StaticGeometry
+    from gfuzzy.timespace.unilanes import _passage_end
+
+    geo = StaticGeometry(parse_scene(doc(obstacles=[{"box": {"center": [3.0, 0.5], "size": [6.0, 1.0]}}])))
+    r = 0.2
+    touch, half = np.array([3.0, 1.2]), np.array([3.0, 1.3])  # clearance 0 and half a radius
+    p = _passage_end(geo, touch, np.array([3.0, 3.0]), r)
+    assert p is not None and 1.4 <= p[1] <= 1.4 + 0.05 * r  # a radius on: a radius of clearance (within 5%)
+    assert _passage_end(geo, half, np.array([3.0, 3.0]), r) is None  # that within a radius of it
+    assert _passage_end(geo, touch, np.array([3.0, 1.2 + 2.5 * r]), r) is None  # within two of the far end
+
+
+def test_a_disc_drive_gets_one_turn_point_where_lanes_leave_a_door_together():
+    """Two vertices in the door (of :func:`door_lanes_scene`) 5 cm apart, each with a lane
+    out to the same vertex beyond it: their points where the disc has a radius of clearance
+    lie within a radius of each other, and only the first is a turn point."""
+    sc, rm = door_lanes_scene()
+    walls = [{"box": {"center": [3.0, 0.8875], "size": [0.3, 1.775]}}, {"box": {"center": [3.0, 3.1125], "size": [0.3, 1.775]}}]
+    verts = [*rm.vertices[:, :2].tolist(), [3.05, 2.0]]
+    ln, geo, n = plane_lanes(walls, verts, [*rm.edges.tolist(), [0, 5], [5, 2]])
+    new = ln.xy[n:]
+    assert len(new) == 2 and math.hypot(*(new[0] - new[1])) > 0.2, new  # one each side of the door
+
+
+def test_a_disc_drive_gets_turn_points_in_a_door_with_a_third_of_a_radius_to_spare():
+    """A door 0.54 m wide (the disc 0.4 across, 0.07 m of clearance centred: more than a
+    quarter of a radius, less than half) is a passage: its lanes get turn points."""
+    walls = [{"box": {"center": [3.0, 0.865], "size": [0.3, 1.73]}}, {"box": {"center": [3.0, 3.135], "size": [0.3, 1.73]}}]
+    sc, rm = door_lanes_scene()
+    ln, geo, n = plane_lanes(walls, rm.vertices[:, :2], rm.edges)
+    assert 0.25 * 0.2 < geo.clearance1(np.array([3.0, 2.0])) < 0.5 * 0.2
+    assert len(ln.xy) == n + 2
+
+
+def test_a_query_end_joins_only_the_roadmaps_vertices_not_turn_points():
+    """A goal just beyond the door's turn point (of :func:`door_lanes_scene`): its lanes run
+    to roadmap vertices only. Turn points among an end's nearest took the place of the
+    vertices that lead on (unseen rooms seed 3 case 8: the same answer, its plan 0.28 ->
+    15.7 s of CPU with the end joined to them)."""
+    from gfuzzy.timespace.unicycle import _base, _Extras
+
+    sc, rm = door_lanes_scene()
+    planner = Planner(sc, rm)
+    base = _base(rm, planner.geometry, 1.0, sc.robot.vmax, 0.1)
+    turn_points = base.vertex_xy[base.roadmap_vertices :]
+    assert len(turn_points) == 2 and base.roadmap_vertices == len(rm.vertices)
+    goal = np.array([*(turn_points[np.argmax(turn_points[:, 0])] + [0.1, 0.05]), 0.0])
+    ex = _Extras(base, planner.geometry, sc.robot.vmax / sc.robot.turn_rate, 10**6)
+    g = ex.node(*goal)
+    ex.join(goal, g, 10, False, False)
+    ends = [ex.pose(a)[:2] for a, b, dh, _ in ex.pieces if dh == 0.0 and a != g]
+    assert ends and all(np.isclose(rm.vertices[:, :2], e).all(axis=1).any() for e in ends), ends
+
+
 def case88_doc() -> dict:
     """The unseen rooms' seed 2 case 88: a disc drive, a door 0.34 wide in a wall 0.29 thick
     (two polygons), a box mover bouncing along the door's axis through it."""

@@ -1,9 +1,10 @@
 """The differential drive's plane roadmap: lanes and turning rings (:mod:`gfuzzy.timespace.unicycle`).
 
 A unicycle's lanes are straight roadmap edges driven at their own heading, certified for the
-body held at it; its turning rings are the headings, one turning step apart, at which it
-turns in place at a vertex, certified while they sweep. Both are the query-independent
-part of its search graph, cached on the roadmap by :func:`gfuzzy.timespace.unicycle._base`.
+body held at it (a disc's also split at *turn points* where they leave a passage, each with
+lanes to its nearest vertices: :func:`_turn_points`); its turning rings are the headings,
+one turning step apart, at which it turns in place at a vertex, certified while they
+sweep. Both are the query-independent part of its search graph, cached on the roadmap by :func:`gfuzzy.timespace.unicycle._base`.
 """
 
 from __future__ import annotations
@@ -44,6 +45,7 @@ class Lanes:
     Attributes
     ----------
     xy : (V, 2) float
+        The roadmap's vertices' positions, then a disc's turn points (:func:`_turn_points`).
     edges : (E, 2) int
     ok : (E, 2) bool
         Whether edge ``(u, v)`` is free at the heading of u -> v (column 0) and of v -> u
@@ -86,6 +88,11 @@ def lanes(roadmap, geometry, stretch: float = 1.0, deadline: float = math.inf) -
 TURN_LINKS = 10
 #: A disc's vertex is in a passage (:func:`_turn_points`) below this clearance, in radii.
 PASSAGE_CLEARANCE = 0.5
+#: Below this gradient of the clearance a vertex is on a ridge between walls (:func:`_in_passage`).
+PASSAGE_RIDGE = 0.5
+#: Where :func:`_in_passage` looks for a radius of clearance: these times as far from the
+#: vertex as one wall alone would give it one.
+PASSAGE_REACH = (1.5, 2.0)
 
 
 def _turn_points(geometry, xy: FloatArray, edges: IntArray, deadline: float = math.inf) -> tuple[FloatArray, IntArray]:
@@ -96,11 +103,11 @@ def _turn_points(geometry, xy: FloatArray, edges: IntArray, deadline: float = ma
     the next vertex, which may lie far beyond the door, on a mover's line through it (the
     unseen rooms, seed 2 case 88: 1.6 m and 1.1 m on, a box bouncing along the line, missed
     where a witness turns off just beyond the door). From each vertex in a passage (less
-    clearance than ``PASSAGE_CLEARANCE`` radii), each lane gets a point where the disc first
-    has a radius of clearance (sphere
-    tracing: the clearance grows by at most the distance moved), unless the point lies within
-    a radius of the vertex, within two of the lane's far end, or within one of a point
-    already added; the point splits the lane and gets lanes to its ``TURN_LINKS`` nearest
+    clearance than ``PASSAGE_CLEARANCE`` radii, pinched from two opposite sides:
+    :func:`_in_passage`; beside one wall it has a radius of clearance a radius off), each
+    lane gets a point where the disc first has a radius of clearance (sphere tracing: the
+    clearance grows by at most the distance moved), unless the point lies within a radius
+    of the vertex, within two of the lane's far end, or within one of a point already added; the point splits the lane and gets lanes to its ``TURN_LINKS`` nearest
     vertices that the disc sweeps free (:meth:`StaticGeometry.sweep_free`).
     """
     r = float(geometry.robot.radius)
@@ -112,6 +119,8 @@ def _turn_points(geometry, xy: FloatArray, edges: IntArray, deadline: float = ma
     added: list = []
     for v in np.nonzero(clear < PASSAGE_CLEARANCE * r)[0].tolist():
         on_time(deadline)
+        if not _in_passage(geometry, xy[v], clear[v], r):
+            continue
         for w in np.concatenate([edges[edges[:, 0] == v, 1], edges[edges[:, 1] == v, 0]]).tolist():
             p = _passage_end(geometry, xy[v], xy[w], r)
             if p is None or any(math.hypot(*(p - q)) < r for q in points):
@@ -127,6 +136,21 @@ def _turn_points(geometry, xy: FloatArray, edges: IntArray, deadline: float = ma
         return xy, edges
     out = np.unique(np.sort(np.vstack([edges, np.array(added, dtype=np.int64)]), axis=1), axis=0)
     return np.vstack([xy, np.array(points)]), out
+
+
+def _in_passage(geometry, p: FloatArray, c: float, r: float) -> bool:
+    """Whether the disc at ``p`` (clearance ``c`` below a radius) is pinched from two
+    opposite sides (a door, a corridor up to about 4.5 radii wide): moving straight away
+    from its nearest wall (up the clearance's gradient, central differences a twentieth of
+    a radius wide), it has less than a radius of clearance ``PASSAGE_REACH`` times as far on
+    as one wall alone would give it one (half as far again and twice), or the gradient is
+    below ``PASSAGE_RIDGE`` (a ridge of the clearance between two walls: a door's middle)."""
+    e = 0.05 * r
+    g = np.array([geometry.clearance1(p + d) - geometry.clearance1(p - d) for d in ((e, 0.0), (0.0, e))]) / (2 * e)
+    n = math.hypot(*g)
+    if n < PASSAGE_RIDGE:
+        return True
+    return all(geometry.clearance1(p + (k * (r - c) / n) * g) < r for k in PASSAGE_REACH)
 
 
 def _passage_end(geometry, a: FloatArray, b: FloatArray, r: float) -> FloatArray | None:
