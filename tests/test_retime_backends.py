@@ -129,9 +129,11 @@ def test_the_random_cases_cover_waits_and_haste():
     assert waits > 0 and hasty > 0, (waits, hasty)
 
 
-def test_the_stages_retime_with_the_querys_backend(monkeypatch):
-    """The speed layer and the refinement's timing search with ``PlanOptions.backend``
-    (before, they always ran the pure-Python reference)."""
+@pytest.mark.parametrize("unicycle, refine", [(False, False), (False, True), (True, False), (True, True)])
+def test_the_stages_retime_with_the_querys_backend(monkeypatch, unicycle, refine):
+    """The speed layer, the drive layer and the refinement's timing search with
+    ``PlanOptions.backend`` (before, they always ran the pure-Python reference): every
+    chain search asks for the query's backend, none for the default."""
     seen = []
     inner = retime_module.search_function
 
@@ -140,15 +142,18 @@ def test_the_stages_retime_with_the_querys_backend(monkeypatch):
         return inner(backend)
 
     monkeypatch.setattr(retime_module, "search_function", spy)
-    scene = parse_scene({"version": 1, "name": "s", "bounds": [0, 0, W, H], "robot": {"disc": 0.2, "vmax": 1.0},
+    robot = {"disc": 0.2, "vmax": 1.0, **({"kinematics": "unicycle"} if unicycle else {})}
+    scene = parse_scene({"version": 1, "name": "s", "bounds": [0, 0, W, H], "robot": robot,
                          "movers": [{"name": "m", "disc": 0.2, "speed": 0.5, "path": [[4, 0.5], [4, 4.5]],
                                      "mode": "bounce"}]})  # fmt: skip
     rm = build_roadmap(scene, RoadmapOptions(vertices=60, seed=1))
+    ends = ([0.6, 2.5, 0.0], [7.4, 2.5, 0.0]) if unicycle else ([0.6, 2.5], [7.4, 2.5])
     for backend in ("compiled", "reference"):
         seen.clear()
-        res = plan(scene, rm, [0.6, 2.5], [7.4, 2.5], options=PlanOptions(speed_layer=True, backend=backend))
+        opts = PlanOptions(speed_layer=True, refine=refine, backend=backend, seed=1)
+        res = plan(scene, rm, *ends, options=opts)
         assert res.status is Status.SOLVED and res.speed_report.applied, res.speed_report
-        assert seen and set(seen) == {backend}
+        assert seen and set(seen) == {backend}, seen
 
 
 @pytest.mark.parametrize("unicycle", [False, True])
@@ -218,3 +223,41 @@ def test_a_fields_prefix_is_the_field_of_the_shorter_horizon():
             assert getattr(cut, name).flags.c_contiguous, name
     with pytest.raises(ValueError):
         long.prefix(401)
+
+
+def test_the_blend_stage_retimes_with_the_querys_backend(monkeypatch):
+    """The drive layer's blend (a mover forces haste on one leg) searches with the query's
+    backend too: a gate appears on the straight at 4.4 s and stays."""
+    import time
+
+    from gfuzzy.collision.geometry import StaticGeometry
+    from gfuzzy.planner.stages import StageContext, apply_stages
+    from gfuzzy.trajectory import Trajectory
+
+    seen = []
+    inner = retime_module.search_function
+    monkeypatch.setattr(retime_module, "search_function", lambda b: seen.append(b) or inner(b))
+    path = np.array([[0.5, 0.5, math.pi / 2], [0.5, 0.5, 0.0], [4.5, 0.5, 0.0], [4.5, 0.5, math.pi / 2]])
+    scene = parse_scene({
+        "version": 1, "name": "gate", "bounds": [0, 0, 5, 2],
+        "robot": {"disc": 0.2, "vmax": 1.0, "amax": 1.0, "kinematics": "unicycle"},
+        "movers": [{"name": "gate", "disc": 0.25, "trajectory": [[4.4, 3.0, 0.5], [1000.0, 3.0, 0.5]]}],
+    })  # fmt: skip
+    times = np.cumsum([0.0, (math.pi / 2) / 5.0, 4.0, (math.pi / 2) / 5.0])
+    searched = Trajectory(np.column_stack([times, path]), 0.2)
+    q = Query("q", tuple(path[0]), tuple(path[-1]), 0.0)
+    for backend in ("compiled", "reference"):
+        seen.clear()
+        out = apply_stages(StageContext(scene, StaticGeometry(scene)), searched, q,
+                           PlanOptions(speed_layer=True, backend=backend), time.perf_counter() + 60)  # fmt: skip
+        assert out.speed_report.applied and not out.speed_report.whole  # the blend answered
+        assert seen and set(seen) == {backend}, seen
+
+
+def test_the_first_round_covers_the_first_motions_window():
+    # a search whose first motions were cut by the horizon answers NO_FIRST_MOTION without
+    # horizon_hit: the rounds would then stop early with another answer (the review's
+    # latent case); the first round's slack covers the whole waiting window
+    from gfuzzy.timespace.timespace import FIRST_WAIT_STEPS
+
+    assert retime_module.CHAIN_SLACK_STEPS >= FIRST_WAIT_STEPS
