@@ -309,10 +309,12 @@ def test_cli_interrupt_while_the_client_closes_keeps_every_row(client, tmp_path,
     import distributed
 
     real = distributed.Client.close
+    closing = []
 
     def close(self, *args, **kwargs):
         if self is not client:
             monkeypatch.setattr(distributed.Client, "close", real)
+            closing.append(self)
             _ctrl_c()
         return real(self, *args, **kwargs)
 
@@ -325,6 +327,7 @@ def test_cli_interrupt_while_the_client_closes_keeps_every_row(client, tmp_path,
     assert len(rows) == 2
     assert sorted(p.name for p in folder.iterdir()) == sorted(f"{r['scene']}-{r['query']}.json" for r in rows)
     assert "interrupted: wrote the 2 finished of 2 queries" in capsys.readouterr().err
+    assert closing[0].status == "closed"  # closed whole all the same
 
 
 def test_cli_interrupt_while_the_table_is_written(client, tmp_path, monkeypatch, capsys):

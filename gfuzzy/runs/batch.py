@@ -271,7 +271,9 @@ def local_cluster(workers: int, quiet: bool = True) -> Iterator[object]:
     cluster = client = None
     with dask.config.set(settings), _quiet_logs(quiet):
         try:
-            with interrupts_deferred(), _sigint_blocked():  # no half-started cluster
+            # no half-started cluster; a Ctrl-C meanwhile is raised as the section ends (the
+            # cluster then closes), not held until the first task ends
+            with interrupts_deferred(), _sigint_blocked():
                 cluster = LocalCluster(
                     n_workers=workers,
                     threads_per_worker=1,
@@ -284,7 +286,6 @@ def local_cluster(workers: int, quiet: bool = True) -> Iterator[object]:
                     scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
                 )
                 client = Client(cluster)
-            check_interrupt()  # a Ctrl-C while it started stops here, not after the first task
             yield client
         finally:
             with interrupts_deferred():  # closed whole, however often Ctrl-C comes
