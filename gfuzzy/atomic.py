@@ -13,9 +13,9 @@ import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
-from .errors import check_interrupt
+from .errors import check_interrupt, interrupts_deferred
 
-__all__ = ["write_atomic", "write_atomic_with"]
+__all__ = ["remove_quietly", "write_atomic", "write_atomic_with"]
 
 
 def write_atomic_with(path: str | os.PathLike, write: Callable[[str], None]) -> None:
@@ -39,11 +39,18 @@ def write_atomic_with(path: str | os.PathLike, write: Callable[[str], None]) -> 
         except OSError as exc:
             raise OSError(exc.errno, exc.strerror, str(path)) from exc
     except BaseException:
+        with interrupts_deferred():  # a second Ctrl-C leaves no temporary behind
+            remove_quietly(tmp)
+        raise
+
+
+def remove_quietly(*paths: str | os.PathLike) -> None:
+    """Remove each of ``paths`` that exists (a failed write's leftovers); never raises ``OSError``."""
+    for p in paths:
         try:
-            os.unlink(tmp)
+            os.unlink(p)
         except OSError:
             pass
-        raise
 
 
 def write_atomic(path: str | os.PathLike, text: str) -> None:

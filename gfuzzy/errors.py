@@ -98,7 +98,7 @@ def check_number(name: str, value, low: float = 0.0, *, strict: bool = True, fin
 #   publishes its file, between a batch's results, between a navigation's replans);
 # * :func:`interrupts_deferred` holds interrupts off where stopping half-way leaves a mess (a Dask
 #   cluster starting or closing, a batch writing the rows it finished): a SIGINT there is
-#   only noted, and the next :func:`check_interrupt` outside raises it;
+#   only noted, and raised when the outermost such section ends;
 # * the noise an interrupt leaves behind (an "Exception ignored" report, a half-built
 #   object's finaliser failing at exit) is not printed.
 #
@@ -113,6 +113,7 @@ class _State:
     active = False  # interrupt_handling() is installed
     pending = False  # a SIGINT came and was not handled yet
     defer = 0  # depth of interrupts_deferred() sections
+    aftermath = False  # the command that ended (restore=False) was interrupted: its noise stays quiet
 
 
 _state = _State()
@@ -163,22 +164,31 @@ def is_interrupt(exc: BaseException) -> bool:
 
 
 @contextlib.contextmanager
-def interrupts_deferred() -> Iterator[None]:
-    """A section that a SIGINT does not cut: it is only noted (:func:`check_interrupt` raises it after)."""
+def interrupts_deferred(raise_after: bool = True) -> Iterator[None]:
+    """A section that a SIGINT does not cut: it is only noted.
+
+    When the outermost section ends normally, a SIGINT noted meanwhile is raised there
+    (:func:`check_interrupt`), unless ``raise_after`` is False: the section is the command's
+    last word (its "interrupted" or bad-input line), after which an interrupt changes nothing.
+    A section left by an exception lets that exception go on (:func:`is_interrupt` then counts it).
+    """
     _state.defer += 1
     try:
         yield
     finally:
         _state.defer -= 1
+    if raise_after:
+        check_interrupt()
 
 
 def _quiet_unraisable(previous):
     def hook(unraisable) -> None:
-        if _state.pending or isinstance(unraisable.exc_value, KeyboardInterrupt):
+        if _state.pending or _state.aftermath or isinstance(unraisable.exc_value, KeyboardInterrupt):
             _state.pending = True  # an interrupt dropped by native code, or its aftermath
             return
         previous(unraisable)
 
+    hook._gfuzzy_outer = previous  # type: ignore[attr-defined] - a later block wraps this one's previous
     return hook
 
 
@@ -189,6 +199,7 @@ def _quiet_excepthook(previous):
             return
         previous(kind, value, tb)
 
+    hook._gfuzzy_outer = previous  # type: ignore[attr-defined]
     return hook
 
 
@@ -198,22 +209,25 @@ def interrupt_handling(restore: bool = True) -> Iterator[None]:
 
     ``restore=False`` ignores SIGINT after the block: the program's own command line, once
     its command is over, exits with the command's status, quietly, whatever Ctrl-C comes
-    during interpreter shutdown (Dask's exit handlers); the quiet hooks stay.
+    during interpreter shutdown (Dask's exit handlers); the quiet hooks stay (quiet about an
+    interrupted command's aftermath). Either way the next block starts afresh: nothing
+    pending, whatever came before.
     """
     if _state.active or threading.current_thread() is not threading.main_thread():
         yield
         return
     saved = (signal.getsignal(signal.SIGINT), sys.unraisablehook, sys.excepthook)
     signal.signal(signal.SIGINT, _on_sigint)
-    sys.unraisablehook = _quiet_unraisable(saved[1])
-    sys.excepthook = _quiet_excepthook(saved[2])
-    _state.active, _state.pending, _state.defer = True, False, 0
+    sys.unraisablehook = _quiet_unraisable(getattr(saved[1], "_gfuzzy_outer", saved[1]))
+    sys.excepthook = _quiet_excepthook(getattr(saved[2], "_gfuzzy_outer", saved[2]))
+    _state.active, _state.pending, _state.defer, _state.aftermath = True, False, 0, False
     try:
         yield
     finally:
         if restore:
             signal.signal(signal.SIGINT, saved[0])
             sys.unraisablehook, sys.excepthook = saved[1], saved[2]
-            _state.active, _state.pending = False, False
         else:  # the command is over; Python's finalisation keeps an ignored signal ignored
             signal.signal(signal.SIGINT, signal.SIG_IGN)
+            _state.aftermath = _state.pending
+        _state.active, _state.pending, _state.defer = False, False, 0

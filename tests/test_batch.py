@@ -303,6 +303,126 @@ def test_cli_an_interrupt_native_code_drops_stops_the_batch(client, tmp_path, mo
     assert capsys.readouterr().err.strip().startswith("interrupted: wrote the 1 finished of")
 
 
+def test_cli_interrupt_while_the_client_closes_keeps_every_row(client, tmp_path, monkeypatch, capsys):
+    # `--scheduler`: the Ctrl-C cut the client's closing and threw every finished row away
+    # ("wrote the 0 finished of 2 queries", a header-only table beside 2 trajectory files)
+    import distributed
+
+    real = distributed.Client.close
+    closing = []
+
+    def close(self, *args, **kwargs):
+        if self is not client:
+            monkeypatch.setattr(distributed.Client, "close", real)
+            closing.append(self)
+            _ctrl_c()
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(distributed.Client, "close", close)
+    out, folder = tmp_path / "rows.csv", tmp_path / "t"
+    code = main(["batch", str(ROOT / "scenes" / "sim-4s1m.yaml"), "--scheduler", client.scheduler.address,
+                 "-o", str(out), "--trajectories", str(folder)])  # fmt: skip
+    assert code == 130
+    rows = read_csv(out)
+    assert len(rows) == 2
+    assert sorted(p.name for p in folder.iterdir()) == sorted(f"{r['scene']}-{r['query']}.json" for r in rows)
+    assert "interrupted: wrote the 2 finished of 2 queries" in capsys.readouterr().err
+    assert closing[0].status == "closed"  # closed whole all the same
+
+
+def test_cli_interrupt_while_the_table_is_written(client, tmp_path, monkeypatch, capsys):
+    # noted while the CSV was written, then dropped: the batch said nothing of it and exited 0
+    import gfuzzy.runs.batch as batch
+
+    real = batch.table_csv
+
+    def table_csv(rows):
+        _ctrl_c()
+        return real(rows)
+
+    monkeypatch.setattr(batch, "table_csv", table_csv)
+    out = tmp_path / "rows.csv"
+    code = main(["batch", str(ROOT / "scenes" / "sim-4s1m.yaml"), "--scheduler", client.scheduler.address,
+                 "-o", str(out)])  # fmt: skip
+    assert code == 130
+    assert len(read_csv(out)) == 2  # written whole: the CSV, and the Parquet with it when pyarrow is here
+    assert out.with_suffix(".parquet").exists() == _has_pyarrow()
+    assert capsys.readouterr().err.strip() == f"interrupted: wrote the 2 finished of 2 queries to {_written(out)}"
+
+
+def _has_pyarrow() -> bool:
+    import importlib.util
+
+    return importlib.util.find_spec("pyarrow") is not None
+
+
+def _written(out: Path) -> str:
+    return ", ".join(map(str, [out, *([out.with_suffix(".parquet")] if _has_pyarrow() else [])]))
+
+
+def test_a_row_and_its_trajectory_file_are_recorded_together(client, pairs, tmp_path, monkeypatch):
+    # a Ctrl-C right after a trajectory file was saved must not lose its row
+    import gfuzzy.runs.batch as batch
+    from gfuzzy.errors import interrupt_handling
+
+    real = batch._save
+
+    def save(folder, row, doc):
+        real(folder, row, doc)
+        monkeypatch.setattr(batch, "_save", real)
+        _ctrl_c()
+
+    monkeypatch.setattr(batch, "_save", save)
+    folder = tmp_path / "t"
+    with interrupt_handling():
+        res = run_batch(client, pairs[:1], BatchOptions(trajectories=str(folder)))
+    assert res.interrupted and len(res.rows) == 1
+    assert [p.name for p in folder.iterdir()] == [f"{res.rows[0].scene}-{res.rows[0].query}.json"]
+
+
+def test_a_ctrl_c_while_the_local_cluster_starts_lets_it_start_whole_then_stops(monkeypatch):
+    # the Ctrl-C was held until the first task ended (`crowd --workers`: a whole episode);
+    # without the deferral it cut the start and left a half-started cluster
+    import distributed
+
+    from gfuzzy.errors import interrupt_handling
+
+    real = distributed.LocalCluster
+    made, ran = [], []
+
+    def starting(*args, **kwargs):
+        _ctrl_c()
+        made.append(real(*args, **kwargs))
+        return made[-1]
+
+    monkeypatch.setattr(distributed, "LocalCluster", starting)
+    with interrupt_handling(), pytest.raises(KeyboardInterrupt):
+        with local_cluster(1):
+            ran.append(1)
+    assert not ran
+    assert len(made) == 1 and made[0].status.name == "closed"
+
+
+def test_a_ctrl_c_while_the_local_client_closes_still_closes_the_cluster(monkeypatch):
+    import distributed
+
+    from gfuzzy.errors import interrupt_handling
+
+    real = distributed.Client.close
+    seen = []
+
+    def close(self, *args, **kwargs):
+        monkeypatch.setattr(distributed.Client, "close", real)
+        _ctrl_c()
+        return real(self, *args, **kwargs)
+
+    with interrupt_handling(), pytest.raises(KeyboardInterrupt):
+        with local_cluster(1) as c:
+            seen.append(c.cluster)
+            monkeypatch.setattr(distributed.Client, "close", close)
+    assert seen[0].status.name == "closed"
+
+
 @pytest.mark.parametrize(
     "extra, message",
     [

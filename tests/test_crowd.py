@@ -446,3 +446,82 @@ def test_the_oracle_plans_on_the_time_step_it_is_given(roadmap, monkeypatch):
     fine = C.run_episode(s, roadmap, 1, 0, ["oracle"], oracle_dt=0.05)[0]
     C.run_episode(s, roadmap, 1, 0, ["oracle"])
     assert seen == [0.05, planner.PlanOptions().dt] and fine.reached
+
+
+# ------------------------------------------------------------------------ Ctrl-C
+
+
+def _ctrl_c() -> None:
+    """What a SIGINT does at this point: the handler in force runs (no real signal)."""
+    import signal
+
+    signal.getsignal(signal.SIGINT)(signal.SIGINT, None)
+
+
+def _dropped_ctrl_c() -> None:
+    """A SIGINT that a callback from native code printed and dropped."""
+    try:
+        _ctrl_c()
+    except KeyboardInterrupt:
+        pass
+
+
+def test_an_episode_stops_at_the_step_after_a_dropped_interrupt(roadmap, monkeypatch):
+    from gfuzzy.errors import interrupt_handling
+
+    real = C.Sensor.observe
+    calls = []
+
+    def observe(self, *args, **kwargs):
+        calls.append(1)
+        if len(calls) == 2:
+            _dropped_ctrl_c()
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(C.Sensor, "observe", observe)
+    with interrupt_handling(), pytest.raises(KeyboardInterrupt):
+        C.run_episode(C.CrowdSetting(humans=3), roadmap, 1, 0, ["orca"])
+    assert len(calls) == 2
+
+
+def _crowd_on_one_worker(monkeypatch, at_start=None, at_progress=None):
+    """``gfuzzy crowd --workers 1 --episodes 3 --policy orca`` in-process: (status, the
+    progress counts seen)."""
+    import distributed
+
+    import gfuzzy.cli.crowds as crowds
+    from gfuzzy.cli import main
+
+    real = distributed.LocalCluster
+    seen = []
+
+    def starting(*args, **kwargs):
+        if at_start:
+            at_start()
+        return real(*args, **kwargs)
+
+    def bar(label):
+        def cb(done, total):
+            seen.append(done)
+            if done == 1 and at_progress:
+                at_progress()
+
+        return cb
+
+    monkeypatch.setattr(distributed, "LocalCluster", starting)
+    monkeypatch.setattr(crowds, "_progress_bar", bar)
+    code = main(["crowd", "--workers", "1", "--episodes", "3", "--humans", "3", "--policy", "orca"])
+    return code, seen
+
+
+def test_crowd_stops_as_its_cluster_has_started_on_a_ctrl_c_meanwhile(monkeypatch, capsys):
+    # the Ctrl-C was held until the first episode had run
+    code, seen = _crowd_on_one_worker(monkeypatch, at_start=_ctrl_c)
+    assert code == 130 and capsys.readouterr().err.strip() == "interrupted"
+    assert [d for d in seen if d] == []
+
+
+def test_crowd_stops_between_episodes_after_a_dropped_interrupt(monkeypatch, capsys):
+    code, seen = _crowd_on_one_worker(monkeypatch, at_progress=_dropped_ctrl_c)
+    assert code == 130 and capsys.readouterr().err.strip() == "interrupted"
+    assert [d for d in seen if d] == [1]

@@ -9,13 +9,16 @@ takes the same path.
 from __future__ import annotations
 
 import importlib
+import os
 import signal
+import sys
 
 import pytest
 from conftest import ROOT
 from helpers import run_main
 
-from gfuzzy.atomic import write_atomic
+from gfuzzy.atomic import write_atomic, write_atomic_with
+from gfuzzy.cli import main
 from gfuzzy.errors import interrupt_handling, interrupt_pending, interrupts_deferred, is_interrupt
 from gfuzzy.navigation.navigator import Navigator
 
@@ -152,8 +155,205 @@ def test_an_atomic_write_publishes_nothing_after_a_dropped_interrupt(tmp_path):
         with pytest.raises(KeyboardInterrupt):
             write_atomic(out, "text\n")
         assert not list(tmp_path.iterdir())
-        with interrupts_deferred():  # a section that must finish: noted, not raised
-            write_atomic(out, "text\n")
-    assert out.read_text() == "text\n"
+        with pytest.raises(KeyboardInterrupt), interrupts_deferred():  # a section that must finish:
+            write_atomic(out, "text\n")  # raised as it ends, not before
+        assert out.read_text() == "text\n"
     write_atomic(out, "again\n")  # outside handling: nothing pending
     assert out.read_text() == "again\n"
+
+
+# ------------------------------------------------------------------ deferred sections, repeated calls
+
+
+def test_a_ctrl_c_in_a_deferred_section_is_raised_when_the_outermost_ends():
+    # it was only noted: with no check_interrupt after, the command ran on and exited 0
+    ran = []
+    with interrupt_handling():
+        with pytest.raises(KeyboardInterrupt):
+            with interrupts_deferred():
+                with interrupts_deferred():
+                    _ctrl_c()
+                    ran.append("inner")
+                ran.append("outer")  # the inner section's end does not cut the outer one
+            ran.append("after")
+        assert ran == ["inner", "outer"]
+        with interrupts_deferred(raise_after=False):  # a command's last line: nothing after it
+            _ctrl_c()
+    assert not interrupt_pending()
+
+
+def test_any_exception_after_a_ctrl_c_counts_as_the_interrupt():
+    # a half-built object failing after the interrupt cut it short is not a bug to show
+    with interrupt_handling():
+        assert not is_interrupt(RuntimeError("a bug"))
+        _dropped_ctrl_c()
+        assert is_interrupt(RuntimeError("a half-built object"))
+    assert not is_interrupt(RuntimeError("a bug"))
+
+
+class _Unraisable:
+    def __init__(self, exc):
+        self.exc_value, self.exc_type, self.exc_traceback = exc, type(exc), None
+        self.err_msg, self.object = "Exception ignored in", None
+
+
+def test_the_noise_an_interrupt_leaves_is_not_printed(monkeypatch):
+    shown = []  # what Python's own hooks would have printed
+    monkeypatch.setattr(sys, "unraisablehook", lambda u: shown.append(u.exc_value))
+    monkeypatch.setattr(sys, "excepthook", lambda kind, value, tb: shown.append(value))
+    bug = RuntimeError("a finaliser's own bug")
+    with interrupt_handling():
+        sys.unraisablehook(_Unraisable(bug))
+        assert shown == [bug]  # not an interrupt: shown
+        sys.unraisablehook(_Unraisable(KeyboardInterrupt()))  # a callback dropped it
+        assert interrupt_pending()
+        sys.unraisablehook(_Unraisable(RuntimeError("its aftermath")))
+    with interrupt_handling():
+        sys.excepthook(SystemError, _caused_by(KeyboardInterrupt()), None)  # printed by Cython, then dropped
+        assert interrupt_pending()
+    assert shown == [bug]
+
+
+def _caused_by(ki: KeyboardInterrupt) -> SystemError:
+    exc = SystemError("returned a result with an exception set")
+    exc.__cause__ = ki
+    return exc
+
+
+@pytest.fixture
+def own_command_line(monkeypatch):
+    """``main()`` as the program's own entry point (argv None) leaves SIGINT ignored and its
+    quiet hooks installed: give the test session its own back."""
+    saved = (signal.getsignal(signal.SIGINT), sys.unraisablehook, sys.excepthook)
+    yield lambda *args: (monkeypatch.setattr(sys, "argv", ["gfuzzy", *map(str, args)]), main())[1]
+    signal.signal(signal.SIGINT, saved[0])
+    sys.unraisablehook, sys.excepthook = saved[1], saved[2]
+
+
+def test_the_own_command_line_ignores_ctrl_c_once_the_command_is_over(tmp_path, own_command_line):
+    assert own_command_line("check", SCENE, tmp_path / "missing.json") == 2
+    assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+
+
+def test_a_second_call_of_main_starts_afresh(tmp_path, capsys, monkeypatch, own_command_line):
+    # a Ctrl-C during the first call (argv None) was still pending in the second, which had
+    # none: "interrupted", exit 130
+    cli_main = importlib.import_module("gfuzzy.cli.main")
+    real_say = cli_main._say
+
+    def say(msg, stream=None):
+        monkeypatch.setattr(cli_main, "_say", real_say)
+        _ctrl_c()
+        real_say(msg, stream)
+
+    monkeypatch.setattr(cli_main, "_say", say)
+    assert own_command_line("check", SCENE, tmp_path / "missing.json") == 2
+    assert not interrupt_pending()
+    out = tmp_path / "p.json"
+    assert own_command_line("plan", SCENE, "--roadmap", ROADMAP, "-o", out) == 0
+    assert out.is_file() and "interrupted" not in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------ pairs of files
+
+
+def test_plan_finishes_its_json_and_csv_then_stops(tmp_path, capsys, monkeypatch):
+    # the Ctrl-C that came while the JSON was written was noted and then dropped: exit 0
+    from gfuzzy.trajectory import TrajectoryFile
+
+    real = TrajectoryFile.save
+
+    def save(self, path):
+        monkeypatch.setattr(TrajectoryFile, "save", real)
+        _ctrl_c()
+        return real(self, path)
+
+    monkeypatch.setattr(TrajectoryFile, "save", save)
+    out = tmp_path / "p.csv"
+    rc, _, err = run_main(capsys, "plan", SCENE, "--roadmap", ROADMAP, "-o", out)
+    assert rc == 130 and err.strip().splitlines()[-1] == "interrupted"
+    assert out.is_file() and out.with_suffix(".json").is_file()  # both, not one
+
+
+def test_the_map_export_publishes_its_image_and_yaml_both(tmp_path, monkeypatch):
+    # a Ctrl-C between the two renames left the new image beside the old YAML
+    from gfuzzy import load_scene
+    from gfuzzy.export.mapexport import export_nav2_map
+
+    scene = load_scene(SCENE)
+    yaml_path = tmp_path / "m.yaml"
+    export_nav2_map(scene, yaml_path, 0.1)
+    real = os.replace
+    done = []
+
+    def replace(a, b):
+        real(a, b)
+        done.append(b)
+        if len(done) == 1:
+            _ctrl_c()
+
+    monkeypatch.setattr(os, "replace", replace)
+    with interrupt_handling(), pytest.raises(KeyboardInterrupt):
+        export_nav2_map(scene, yaml_path, 0.05)
+    monkeypatch.setattr(os, "replace", real)
+    fresh = tmp_path / "fresh" / "m.yaml"
+    export_nav2_map(scene, fresh, 0.05)
+    assert yaml_path.read_text() == fresh.read_text()
+    assert (tmp_path / "m.pgm").read_bytes() == fresh.with_suffix(".pgm").read_bytes()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fresh", "m.pgm", "m.yaml"]
+
+
+def test_the_map_export_stops_before_publishing_after_a_dropped_interrupt(tmp_path, monkeypatch):
+    import gfuzzy.export.mapexport as mapexport
+    from gfuzzy import load_scene
+
+    real = mapexport.rasterise
+
+    def rasterise(*args):
+        _dropped_ctrl_c()
+        return real(*args)
+
+    monkeypatch.setattr(mapexport, "rasterise", rasterise)
+    with interrupt_handling(), pytest.raises(KeyboardInterrupt):
+        mapexport.export_nav2_map(load_scene(SCENE), tmp_path / "m.yaml", 0.1)
+    assert not list(tmp_path.iterdir())
+
+
+def test_a_second_ctrl_c_while_a_failed_write_cleans_up_leaves_no_temporary(tmp_path, monkeypatch):
+    real = os.unlink
+
+    def unlink(path, *args, **kwargs):
+        monkeypatch.setattr(os, "unlink", real)
+        _ctrl_c()  # the second SIGINT, as the cleanup starts
+        real(path, *args, **kwargs)
+
+    def write(tmp):
+        open(tmp, "w").write("half")
+        monkeypatch.setattr(os, "unlink", unlink)
+        _ctrl_c()  # the first, mid-write
+
+    with interrupt_handling(), pytest.raises(KeyboardInterrupt):
+        write_atomic_with(tmp_path / "out.json", write)
+    assert not list(tmp_path.iterdir())
+
+
+def test_regress_stops_between_queries_after_a_dropped_interrupt(monkeypatch):
+    from gfuzzy import load_scene
+    from gfuzzy.planner.planner import Planner
+    from gfuzzy.roadmap.roadmap import load_roadmap
+    from gfuzzy.runs.regress import regress_scene
+
+    scene = load_scene(SCENE)
+    assert len(scene.queries) > 1
+    real = Planner.plan
+    calls = []
+
+    def plan(self, *args, **kwargs):
+        calls.append(1)
+        _dropped_ctrl_c()
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(Planner, "plan", plan)
+    with interrupt_handling(), pytest.raises(KeyboardInterrupt):
+        regress_scene(scene, load_roadmap(ROADMAP, scene))
+    assert len(calls) == 1

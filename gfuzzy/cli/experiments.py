@@ -169,7 +169,7 @@ def cmd_batch(args) -> int:
     from ..errors import (
         EXIT_INTERRUPTED,
         check_interrupt,
-        clear_interrupt,
+        interrupt_pending,
         interrupts_deferred,
         is_interrupt,
     )
@@ -193,38 +193,44 @@ def cmd_batch(args) -> int:
     if not args.verbose:  # Dask's own INFO/WARNING lines (a worker restarting) are not ours to show,
         for name in DASK_LOGGERS:  # nor tornado's (Dask's callbacks failing as Ctrl-C cuts a wait)
             logging.getLogger(name).setLevel(logging.CRITICAL if name.startswith("tornado") else logging.ERROR)
-    result, where, t = None, "", time.perf_counter()
+    ran: list = []  # (BatchResult, where, t) once run_batch returns: kept if the cluster's closing is cut
     try:
-        result, where, t = _batch_result(args, scenes, options)
+        _batch_result(args, scenes, options, ran)
         check_interrupt()
+        result, where, t = ran[0]
     except BaseException as exc:  # noqa: BLE001 - Ctrl-C outside run_batch: the rows it finished
         if not is_interrupt(exc):
             raise
         total = sum(len(sc.queries) for sc in scenes)
-        result = BatchResult(result.rows if result is not None else [], total, interrupted=True)
-    with interrupts_deferred():  # Ctrl-C (again) now: the CSV and the Parquet both, not one
+        result = BatchResult(ran[0][0].rows if ran else [], total, interrupted=True)
+    # Ctrl-C (again) now: the CSV and the Parquet both, not one; said once, on the last line
+    with interrupts_deferred(raise_after=False):
         written = write_table(result.rows, out)
-        if result.interrupted:
+        if result.interrupted or interrupt_pending():  # a Ctrl-C while the table was written too
             _say(
                 f"interrupted: wrote the {len(result.rows)} finished of {result.total} queries "
                 f"to {', '.join(map(str, written))}"
             )
-            clear_interrupt()  # told once
             return EXIT_INTERRUPTED
+    check_interrupt()  # one that came as the section ended
     _report_batch(result, where, time.perf_counter() - t, written)
     return EXIT_NO if result.errors else EXIT_OK
 
 
-def _batch_result(args, scenes, options):
-    """(BatchResult, where it ran, when the queries started): each scene's roadmap built or
-    loaded in the client, then every query on Dask."""
+def _batch_result(args, scenes, options, ran: list) -> None:
+    """Append (BatchResult, where it ran, when the queries started) to ``ran``: each scene's
+    roadmap built or loaded in the client, then every query on Dask.
+
+    The result is in ``ran`` before the client and cluster close, so a Ctrl-C while they
+    close (raised once they are closed) keeps every row.
+    """
     import time
 
-    from ..runs.batch import local_cluster, run_batch
+    from ..runs.batch import closed_whole, local_cluster, run_batch
 
     with contextlib.ExitStack() as stack:
         if args.scheduler:  # connected, or refused, before any roadmap is built or loaded
-            client = stack.enter_context(contextlib.closing(_connect(args.scheduler, args.connect_timeout)))
+            client = stack.enter_context(closed_whole(_connect(args.scheduler, args.connect_timeout)))
             where = f"the cluster at {args.scheduler}"
         pairs = [(sc, _roadmap_for(sc, args)) for sc in scenes]  # once per scene, in the client
         t = time.perf_counter()
@@ -232,7 +238,7 @@ def _batch_result(args, scenes, options):
             workers = args.workers or 2
             where = f"{workers} local worker(s)"
             client = stack.enter_context(local_cluster(workers, quiet=not args.verbose))
-        return run_batch(client, pairs, options, progress=_progress("queries")), where, t
+        ran.append((run_batch(client, pairs, options, progress=_progress("queries")), where, t))
 
 
 def _report_batch(result, where: str, seconds: float, written) -> None:

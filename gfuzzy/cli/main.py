@@ -238,7 +238,8 @@ def main(argv: list[str] | None = None) -> int:
         except BaseException as exc:
             if not is_interrupt(exc):
                 raise
-            with interrupts_deferred():  # Ctrl-C comes twice (a terminal's repeat, `timeout`'s group signal)
+            # Ctrl-C comes twice (a terminal's repeat, `timeout`'s group signal): one line
+            with interrupts_deferred(raise_after=False):
                 _say("interrupted")
             return EXIT_INTERRUPTED
 
@@ -266,6 +267,6 @@ def _run(argv: list[str] | None) -> int:
 
 def _bad_input(message: str) -> int:
     """Say ``message`` on one line; :data:`EXIT_BAD`. A Ctrl-C meanwhile adds no second line."""
-    with interrupts_deferred():
+    with interrupts_deferred(raise_after=False):
         _say(" ".join(message.split()))
     return EXIT_BAD

@@ -27,7 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError, check_interrupt, check_number
+from ..atomic import remove_quietly
+from ..errors import InputError, check_interrupt, check_number, interrupts_deferred
 from ..scene.scene import Box, Disc, Polygon, Scene
 from ..typed import FloatArray
 
@@ -326,20 +327,15 @@ def export_nav2_map(scene: Scene, path, resolution: float = 0.05) -> NavMap:
         for tmp in temps:
             os.chmod(tmp, 0o666 & ~umask)
         check_interrupt()  # an interrupt native code dropped: publish neither file
-        os.replace(temps[0], image)
-        placed_image = True
-        os.replace(temps[1], path)
+        with interrupts_deferred():  # Ctrl-C now: both files (a new image beside an old YAML misleads)
+            os.replace(temps[0], image)
+            placed_image = True
+            os.replace(temps[1], path)
+            temps.clear()
+            placed_image = False  # both published: a Ctrl-C raised as the section ends keeps them
     except BaseException:
-        for tmp in temps:
-            try:
-                os.unlink(tmp)
-            except OSError:
-                pass
-        if placed_image and not image_existed:
-            try:
-                os.unlink(image)
-            except OSError:
-                pass
+        with interrupts_deferred():  # a second Ctrl-C leaves no temporary, no lone image
+            remove_quietly(*temps, *([image] if placed_image and not image_existed else []))
         raise
     log.info("wrote %s and %s (%d x %d cells)", path, image, grid.shape[1], grid.shape[0])
     return grid

@@ -12,8 +12,10 @@ query that kills its worker (the scheduler gives up on it with ``KilledWorker``;
 again alone first, so that queries merely queued on the same worker are not blamed).
 An interrupt (``KeyboardInterrupt`` in the client, or a SIGINT that
 :func:`gfuzzy.check_interrupt` raises again between results) stops the batch and returns the
-rows finished so far, each complete. A local cluster starts and closes whole whenever Ctrl-C
-comes, and its workers never see it.
+rows finished so far, each complete. Under the command line's
+:func:`gfuzzy.errors.interrupt_handling`, a local cluster starts and closes whole whenever
+Ctrl-C comes; used from Python without it, a Ctrl-C may cut its start short (Python's own
+``KeyboardInterrupt``). Either way its workers never see a terminal's Ctrl-C.
 
 Planning is deterministic (``gfuzzy.plan`` uses no OMPL randomness, the GA takes its own
 seed), so the rows are the same, timings aside, whatever the number of workers.
@@ -44,6 +46,7 @@ __all__ = [
     "BatchRow",
     "BatchResult",
     "COLUMNS",
+    "closed_whole",
     "DASK_LOGGERS",
     "QueryAnswer",
     "local_cluster",
@@ -268,7 +271,9 @@ def local_cluster(workers: int, quiet: bool = True) -> Iterator[object]:
     cluster = client = None
     with dask.config.set(settings), _quiet_logs(quiet):
         try:
-            with interrupts_deferred(), _sigint_blocked():  # no half-started cluster
+            # no half-started cluster; a Ctrl-C meanwhile is raised as the section ends (the
+            # cluster then closes), not held until the first task ends
+            with interrupts_deferred(), _sigint_blocked():
                 cluster = LocalCluster(
                     n_workers=workers,
                     threads_per_worker=1,
@@ -291,6 +296,17 @@ def local_cluster(workers: int, quiet: bool = True) -> Iterator[object]:
 
 
 @contextlib.contextmanager
+def closed_whole(client) -> Iterator[object]:
+    """``client``, closed on leaving as :func:`local_cluster` closes its own: whole, a Ctrl-C
+    meanwhile raised once it is closed."""
+    try:
+        yield client
+    finally:
+        with interrupts_deferred():
+            client.close()
+
+
+@contextlib.contextmanager
 def _sigint_blocked() -> Iterator[None]:
     """SIGINT blocked in this (the main) thread while a cluster starts.
 
@@ -298,8 +314,14 @@ def _sigint_blocked() -> Iterator[None]:
     the blocked signal, and so do the worker processes they spawn, then or when a nanny
     restarts one: a terminal's Ctrl-C, which reaches the whole process group, never reaches
     a worker, not even while it imports (before :func:`dask_setup` ignores it; it printed
-    a traceback of the import it cut). A SIGINT meanwhile waits in the kernel and reaches
-    the client's handler when the block ends.
+    a traceback of the import it cut).
+
+    The block does not hold the signal off this process's Python handler: a thread that was
+    running before it (one of gfuzzy's native libraries') still takes a SIGINT, and Python
+    then runs the handler in this thread at once. :func:`gfuzzy.errors.interrupts_deferred`
+    around the start is what keeps it whole (only under
+    :func:`gfuzzy.errors.interrupt_handling`); only when no thread takes the signal does it
+    wait in the kernel until the block ends.
     """
     import signal
     import threading
