@@ -55,3 +55,21 @@ def test_no_path_from_a_hemmed_start_says_why_and_reversing_solves_it(roadmap):
     assert "the start is hemmed in" in res.message and "-n" not in res.message
     rev = slot_scene(True)
     assert Planner(rev, roadmap).plan(q.start, q.goal).status == "solved"
+
+
+@pytest.mark.parametrize("half_width, hemmed", [(0.215, True), (0.25, False)])
+def test_a_part_turn_that_clears_the_way_is_no_hemming(half_width, hemmed):
+    # a pointed nose 5 mm from a post, walls on both sides: straight ahead is blocked at once,
+    # but where the walls leave 17 degrees of turn, the straight at the turn's limit drives
+    # 0.08 m past the post (the review: an end that can turn part way and drive out was called
+    # hemmed in); with 4 degrees it cannot
+    fp = [[0.3, 0.0], [0.1, 0.2], [-0.2, 0.2], [-0.2, -0.2], [0.1, -0.2]]
+    scene = parse_scene({
+        "version": 1, "name": "post", "bounds": [-2, -2, 2, 2],
+        "robot": {"footprint": fp, "vmax": 1.0, "kinematics": "unicycle"},
+        "obstacles": [{"disc": {"center": [0.325, 0.0], "radius": 0.02}},
+                      {"box": {"center": [0.0, half_width + 0.05], "size": [0.8, 0.1]}},
+                      {"box": {"center": [0.0, -half_width - 0.05], "size": [0.8, 0.1]}}],
+    })  # fmt: skip
+    note = hemmed_note(StaticGeometry(scene), [0.0, 0.0, 0.0], "start")
+    assert note.startswith("the start is hemmed in") if hemmed else note == ""

@@ -268,7 +268,7 @@ def cmd_populate(args) -> int:
     try:
         result = populate(scene, opts)
     except InputError as exc:  # a point outside the bounds or not free; no room for them all
-        raise BadInput(_waypoints_named(str(exc), exc, args.scene)) from None
+        raise BadInput(_waypoints_named(f"gfuzzy populate: {exc}", exc, args.scene)) from None
     write_scene(args.scene, result, out)
     _say(f"{out}: {len(result.movers)} people walking for {args.duration:g} s added to {scene.name}"
          f"{_cut_note(args.people, result)}", sys.stdout)  # fmt: skip

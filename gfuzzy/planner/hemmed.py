@@ -20,6 +20,9 @@ from ..timespace.drive import turn_free
 STRAIGHT = 0.05
 #: Longest straight measured (m).
 REACH = 1.0
+#: Headings tried within each free turn (its limit included) before an end is called
+#: hemmed in: a part turn may clear the way out.
+TURN_SAMPLES = 4
 
 
 def _free_turn(geometry, x: float, y: float, h: float, side: int, steps: int = 10) -> float:
@@ -72,6 +75,12 @@ def hemmed_note(geometry, pose, end: str) -> str:
     usable = max(fwd, back) if robot.reverse else fwd
     if usable >= STRAIGHT:
         return ""
+    # a part turn may clear the way: the straights at the turns' limits (and between)
+    signs = (ahead, -ahead) if robot.reverse else (ahead,)
+    for k in range(1, TURN_SAMPLES + 1):
+        for dh in (left * k / TURN_SAMPLES, -right * k / TURN_SAMPLES):
+            if any(_free_straight(geometry, x, y, h + dh, sg) >= STRAIGHT for sg in signs):
+                return ""
     turns = f"turns in place at most {math.degrees(left):.0f}° left and {math.degrees(right):.0f}° right"
     if end == "start":
         way = f"drives at most {fwd:.2g} m forwards"

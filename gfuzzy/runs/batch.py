@@ -11,7 +11,7 @@ A query whose task raises becomes a row with status ``error`` and the message; s
 query that kills its worker (the scheduler gives up on it with ``KilledWorker``; it is run
 again alone first, so that queries merely queued on the same worker are not blamed).
 An interrupt (``KeyboardInterrupt`` in the client, or a SIGINT that
-:func:`gfuzzy.check_interrupt` raises again between results) stops the batch and returns the
+:func:`gfuzzy.errors.check_interrupt` raises again between results) stops the batch and returns the
 rows finished so far, each complete. Under the command line's
 :func:`gfuzzy.errors.interrupt_handling`, a local cluster starts and closes whole whenever
 Ctrl-C comes; used from Python without it, a Ctrl-C may cut its start short (Python's own

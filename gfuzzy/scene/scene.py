@@ -729,7 +729,7 @@ def parse_scene(doc: Any, file: str = "<string>", folder: str | os.PathLike | No
 def _warn_beyond_maps(file: str, bounds, grids: list) -> None:
     """Warn when explicit ``bounds`` reach beyond every map's image: a map says nothing
     about what lies outside it, so that space is free (no obstacle there), unlike the map's
-    unknown cells (docs/formats.md, section 3)."""
+    unknown cells (docs/formats.md, section 1)."""
     if not grids:
         return
     import shapely

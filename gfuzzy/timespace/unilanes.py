@@ -107,7 +107,7 @@ def _turn_points(geometry, xy: FloatArray, edges: IntArray, deadline: float = ma
     :func:`_in_passage`; beside one wall it has a radius of clearance a radius off), each
     lane gets a point where the disc first has a radius of clearance (sphere tracing: the
     clearance grows by at most the distance moved), unless the point lies within a radius
-    of the vertex, within two of the lane's far end, or within one of a point already added; the point splits the lane and gets lanes to its ``TURN_LINKS`` nearest
+    of the vertex, within two of the lane's far end, or within one of a point already added; the point gets lanes to both ends of its lane (which is kept whole too) and to its ``TURN_LINKS`` nearest
     vertices that the disc sweeps free (:meth:`StaticGeometry.sweep_free`).
     """
     r = float(geometry.robot.radius)
