@@ -106,8 +106,9 @@ class _Base:
     clearance: FloatArray = None
     #: The roadmap's vertices, the first of ``vertex_xy``; the query ends join only these
     #: (a disc's turn points after them, :func:`gfuzzy.timespace.unilanes._turn_points`,
-    #: among an end's nearest took the place of the vertices that lead on).
-    roadmap_vertices: int = 0
+    #: among an end's nearest took the place of the vertices that lead on); None: all of
+    #: ``vertex_xy`` (0 would let the ends join nothing).
+    roadmap_vertices: int | None = None
 
     def copies_at(self, v: int) -> IntArray:
         lo, hi = np.searchsorted(self.vertex, [v, v + 1])
@@ -393,7 +394,8 @@ class _Extras:
         xy = base.vertex_xy
         has = np.zeros(len(xy), dtype=bool)
         has[base.vertex] = True
-        has[base.roadmap_vertices :] = False
+        if base.roadmap_vertices is not None:
+            has[base.roadmap_vertices :] = False
         d = np.hypot(xy[:, 0] - px, xy[:, 1] - py)
         order = np.argsort(d, kind="stable")
         order = order[has[order] & (d[order] > 1e-9)]
