@@ -261,3 +261,26 @@ def test_the_first_round_covers_the_first_motions_window():
     from gfuzzy.timespace.timespace import FIRST_WAIT_STEPS
 
     assert retime_module.CHAIN_SLACK_STEPS >= FIRST_WAIT_STEPS
+
+
+@pytest.mark.parametrize("unicycle", [False, True])
+def test_a_horizon_that_ends_at_the_arrival_still_holds_the_goal(unicycle):
+    # the hold comes on top of the horizon (as the search before the rounds had it): an
+    # answer arriving at the horizon's last step is found with its hold, the same answer as
+    # with a long horizon (the review's mutant capping the rounds at the horizon alone
+    # answered no_path here)
+    hold = 1.0
+    t0 = 0.0 if unicycle else 0.5
+
+    def run(scene, path, horizon):
+        if unicycle:
+            return retime_drive(scene, path, t0, DT, scene.robot.amax, horizon, hold=hold)
+        return retime_path(scene, path, t0, DT, horizon, hold=hold)
+
+    for seed, shape in CASES[:6]:
+        scene, path = random_case(seed, shape, unicycle)
+        free = run(scene, path, 60.0)
+        if free.status is not Status.SOLVED:
+            continue
+        tight = run(scene, path, free.trajectory.waypoints[-1, 0] - t0)  # ends at the arrival
+        assert same(tight, free), (seed, shape, tight.status, tight.message)
