@@ -284,3 +284,19 @@ def test_a_horizon_that_ends_at_the_arrival_still_holds_the_goal(unicycle):
             continue
         tight = run(scene, path, free.trajectory.waypoints[-1, 0] - t0)  # ends at the arrival
         assert same(tight, free), (seed, shape, tight.status, tight.message)
+
+
+def test_chain_fields_grow_when_a_later_search_asks_for_more():
+    # a stage's later search may ask past the longest horizon sampled so far (a larger hold):
+    # the samples are then taken again over the longer horizon, and every prefix is still
+    # the field built for it (the branch no caller reached in the review's runs)
+    scene, _ = random_case(1, "box", False)
+    fields = retime_module.ChainFields(scene, 0.3, DT)
+    first = fields(40, 60)
+    assert first.steps == 40
+    later = fields(50, 200)  # more than the 60 sampled: sampled again
+    fresh = retime_module.MoverField(scene, 0.3, DT, 50, scene.robot.vmax)
+    assert later.steps == 50
+    for name in ("times", "xy", "present", "margin", "bbox"):
+        assert np.array_equal(getattr(later, name), getattr(fresh, name)), name
+    assert fields(200, 200).steps == 200
