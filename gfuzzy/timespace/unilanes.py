@@ -17,6 +17,7 @@ import numpy as np
 
 from ..typed import FloatArray, IntArray
 from .drive import turn_free
+from .roadgraph import vertex_clearances
 
 __all__ = ["Lanes", "lanes", "LANE_NEIGHBOURS", "DISC_TRACE_STEPS", "OutOfTime", "on_time"]
 
@@ -69,7 +70,10 @@ def lanes(roadmap, geometry, stretch: float = 1.0, deadline: float = math.inf) -
     if robot.shape == "disc":
         keep = roadmap.spanner(stretch)
         edges = roadmap.edges[keep].astype(np.int64).reshape(-1, 2)
-        xy, edges = _turn_points(geometry, xy, edges, deadline)
+        clear = vertex_clearances(roadmap, geometry)  # shared with every query's connections
+        todo = np.nonzero(np.isnan(clear))[0]
+        clear[todo] = [geometry.clearance1(xy[i]) for i in todo.tolist()]
+        xy, edges = _turn_points(geometry, xy, edges, clear, deadline)
         out = Lanes(xy, edges, np.ones((len(edges), 2), dtype=bool))
     else:
         out = _box_lanes(roadmap, geometry, xy, deadline)
@@ -95,9 +99,10 @@ PASSAGE_RIDGE = 0.5
 PASSAGE_REACH = (1.5, 2.0)
 
 
-def _turn_points(geometry, xy: FloatArray, edges: IntArray, deadline: float = math.inf) -> tuple[FloatArray, IntArray]:
+def _turn_points(geometry, xy: FloatArray, edges: IntArray, clear: FloatArray,
+                 deadline: float = math.inf) -> tuple[FloatArray, IntArray]:  # fmt: skip
     """A disc drive's lanes with turn points where they leave a passage: (xy, edges), the
-    points after the roadmap's vertices.
+    points after the roadmap's vertices (``clear``: the vertices' static clearances).
 
     A drive turns only at vertices; a lane through a door from a vertex in it runs on to
     the next vertex, which may lie far beyond the door, on a mover's line through it (the
@@ -114,7 +119,6 @@ def _turn_points(geometry, xy: FloatArray, edges: IntArray, deadline: float = ma
     n = len(xy)
     if not n or not len(edges):
         return xy, edges
-    clear = np.array([geometry.clearance1(p) for p in xy])
     points: list = []
     added: list = []
     for v in np.nonzero(clear < PASSAGE_CLEARANCE * r)[0].tolist():
