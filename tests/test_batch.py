@@ -231,13 +231,15 @@ def test_cli_exit_1_on_an_error_row(client, tmp_path, monkeypatch, capsys):
     assert "Traceback" in err and "raise_on_across" in err  # the bug shows where it happened
 
 
-def test_cli_interrupt_writes_a_partial_table(client, tmp_path, monkeypatch, capsys):
+def _two_scenes_interrupted(client, tmp_path, monkeypatch, first_done):
+    """``gfuzzy batch`` of two scenes on ``client`` with ``first_done()`` run when the first
+    query is done (the progress callback): (the table's path, the exit status)."""
     import gfuzzy.cli.experiments as cli  # the module of cmd_batch
 
     def progress(label):
         def cb(done, total):
             if done == 1:
-                raise KeyboardInterrupt
+                first_done()
 
         return cb
 
@@ -245,6 +247,14 @@ def test_cli_interrupt_writes_a_partial_table(client, tmp_path, monkeypatch, cap
     out = tmp_path / "rows.csv"
     code = main(["batch", str(ROOT / "scenes" / "sim-4s1m.yaml"), str(ROOT / "scenes" / "sim-5s2m.yaml"),
                  "--scheduler", client.scheduler.address, "-o", str(out)])  # fmt: skip
+    return out, code
+
+
+def test_cli_interrupt_writes_a_partial_table(client, tmp_path, monkeypatch, capsys):
+    def first_done():
+        raise KeyboardInterrupt
+
+    out, code = _two_scenes_interrupted(client, tmp_path, monkeypatch, first_done)
     assert code == 130
     rows = read_csv(out)
     assert len(rows) == 1 and rows[0]["status"] == "solved"
@@ -282,22 +292,13 @@ def test_cli_interrupt_while_the_cluster_starts_writes_the_empty_table(tmp_path,
 def test_cli_an_interrupt_native_code_drops_stops_the_batch(client, tmp_path, monkeypatch, capsys):
     # printed as "KeyboardInterrupt: " (an exception ignored in a finaliser or callback), it
     # was lost: the whole batch ran on and exited 0
-    import gfuzzy.cli.experiments as cli
+    def first_done():
+        try:
+            _ctrl_c()
+        except KeyboardInterrupt:
+            pass
 
-    def progress(label):
-        def cb(done, total):
-            if done == 1:
-                try:
-                    _ctrl_c()
-                except KeyboardInterrupt:
-                    pass
-
-        return cb
-
-    monkeypatch.setattr(cli, "_progress", progress)
-    out = tmp_path / "rows.csv"
-    code = main(["batch", str(ROOT / "scenes" / "sim-4s1m.yaml"), str(ROOT / "scenes" / "sim-5s2m.yaml"),
-                 "--scheduler", client.scheduler.address, "-o", str(out)])  # fmt: skip
+    out, code = _two_scenes_interrupted(client, tmp_path, monkeypatch, first_done)
     assert code == 130
     assert len(read_csv(out)) == 1
     assert capsys.readouterr().err.strip().startswith("interrupted: wrote the 1 finished of")
