@@ -50,6 +50,7 @@ __all__ = [
     "DASK_LOGGERS",
     "QueryAnswer",
     "local_cluster",
+    "quiet_dask_logs",
     "run_batch",
     "trajectory_path",
     "write_table",
@@ -354,18 +355,31 @@ def dask_setup(worker) -> None:
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGINT, signal.SIG_IGN)
     if os.environ.get("GFUZZY_BATCH_QUIET"):
-        for name in DASK_LOGGERS:
-            logging.getLogger(name).setLevel(logging.CRITICAL)
+        quiet_dask_logs()
+
+
+def quiet_dask_logs(errors: bool = False) -> dict[str, int]:
+    """Dask's log lines kept out of the terminal: the one place that sets the levels of
+    :data:`DASK_LOGGERS`.
+
+    Every one goes to CRITICAL (tornado's callback errors too, see :data:`DASK_LOGGERS`),
+    except that with ``errors`` Dask's own ERROR lines (``distributed``, e.g. a remote
+    scheduler lost) still show. Returns the loggers' previous levels, to set back.
+    """
+    old = {n: logging.getLogger(n).level for n in DASK_LOGGERS}
+    for n in DASK_LOGGERS:
+        shown = errors and not n.startswith("tornado")
+        logging.getLogger(n).setLevel(logging.ERROR if shown else logging.CRITICAL)
+    return old
 
 
 @contextlib.contextmanager
 def _quiet_logs(quiet: bool):
+    """:func:`quiet_dask_logs` (if ``quiet``) while the block runs, the old levels after."""
     if not quiet:
         yield
         return
-    old = {n: logging.getLogger(n).level for n in DASK_LOGGERS}
-    for n in DASK_LOGGERS:
-        logging.getLogger(n).setLevel(logging.CRITICAL)
+    old = quiet_dask_logs()
     try:
         yield
     finally:
