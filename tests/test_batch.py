@@ -427,6 +427,38 @@ def test_a_row_and_its_trajectory_file_are_recorded_together(client, pairs, tmp_
     assert [p.name for p in folder.iterdir()] == [f"{res.rows[0].scene}-{res.rows[0].query}.json"]
 
 
+class _Closable:
+    def __init__(self, closed: list, name: str, ctrl_c: bool = False):
+        self.closed, self.name, self.ctrl_c = closed, name, ctrl_c
+
+    def close(self) -> None:
+        if self.ctrl_c:
+            _ctrl_c()
+        self.closed.append(self.name)
+
+
+def test_close_whole_closes_every_part_then_raises_the_ctrl_c_that_came_meanwhile():
+    from gfuzzy.errors import interrupt_handling
+    from gfuzzy.runs.batch import close_whole
+
+    closed: list = []
+    with interrupt_handling(), pytest.raises(KeyboardInterrupt):
+        close_whole(_Closable(closed, "client", ctrl_c=True), None, _Closable(closed, "cluster"))
+    assert closed == ["client", "cluster"]
+
+
+def test_a_scheduler_client_is_closed_by_the_one_close_whole(monkeypatch):
+    # local_cluster's deferred close and closed_whole were twins; both are close_whole now
+    import gfuzzy.runs.batch as batch
+
+    seen = []
+    monkeypatch.setattr(batch, "close_whole", lambda *parts: seen.append(parts))
+    client = _Closable([], "client")
+    with batch.closed_whole(client) as c:
+        assert c is client
+    assert seen == [(client,)]
+
+
 def test_a_ctrl_c_while_the_local_cluster_starts_lets_it_start_whole_then_stops(monkeypatch):
     # the Ctrl-C was held until the first task ended (`crowd --workers`: a whole episode);
     # without the deferral it cut the start and left a half-started cluster

@@ -46,6 +46,7 @@ __all__ = [
     "BatchRow",
     "BatchResult",
     "COLUMNS",
+    "close_whole",
     "closed_whole",
     "DASK_LOGGERS",
     "QueryAnswer",
@@ -289,22 +290,28 @@ def local_cluster(workers: int, quiet: bool = True) -> Iterator[object]:
                 client = Client(cluster)
             yield client
         finally:
-            with interrupts_deferred():  # closed whole, however often Ctrl-C comes
-                if client is not None:
-                    client.close()
-                if cluster is not None:
-                    cluster.close()
+            close_whole(client, cluster)
 
 
 @contextlib.contextmanager
 def closed_whole(client) -> Iterator[object]:
-    """``client``, closed on leaving as :func:`local_cluster` closes its own: whole, a Ctrl-C
-    meanwhile raised once it is closed."""
+    """``client``, closed on leaving by :func:`close_whole`, as :func:`local_cluster` closes its own."""
     try:
         yield client
     finally:
-        with interrupts_deferred():
-            client.close()
+        close_whole(client)
+
+
+def close_whole(*parts) -> None:
+    """Close each of ``parts`` in order (a client, then its cluster; None is skipped), whole.
+
+    The one place for "closed even under Ctrl-C": a SIGINT meanwhile (under
+    :func:`gfuzzy.errors.interrupt_handling`) is only noted, and raised once every part is closed.
+    """
+    with interrupts_deferred():
+        for part in parts:
+            if part is not None:
+                part.close()
 
 
 @contextlib.contextmanager
