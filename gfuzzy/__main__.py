@@ -1,8 +1,26 @@
-"""``python -m gfuzzy`` is the same program as ``gfuzzy``."""
+"""``python -m gfuzzy`` is the same program as ``gfuzzy`` (its console script runs :func:`run`)."""
 
+import signal
 import sys
 
-from .cli import main
+from .errors import say_interrupted  # light: gfuzzy's package imports its public names on first use
+
+
+def run() -> int:
+    """The ``gfuzzy`` program: :func:`gfuzzy.cli.main` on the process's command line.
+
+    The command line is imported here, not before: a Ctrl-C while it imports (numpy, FCL,
+    OMPL, the first half second of every command) or before :func:`gfuzzy.cli.main` takes
+    over the signal is the same one line, ``interrupted``, and exit status 130 as any later one.
+    """
+    try:
+        from .cli.main import main
+
+        return main()
+    except KeyboardInterrupt:  # one that main's own handling never saw
+        signal.signal(signal.SIGINT, signal.SIG_IGN)  # the process ends: a second one changes nothing
+        return say_interrupted()
+
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run())
