@@ -5,7 +5,9 @@ obstacles, box and footprint shapes) and closed-form disc distances, and it chec
 samples. Between two evaluated times the clearance d(t) changes no faster than the speed
 of the robot's fastest point plus the fastest mover, L; an interval ``[a, b]`` with
 ``d(a) + d(b) >= L (b - a)`` therefore holds no collision, and any other interval is
-bisected. Times at which a mover appears or vanishes are evaluated exactly. An interval
+bisected. An interval between rows that no mover can reach (:mod:`.reach`: a mover stays on its
+path, or on its rows) needs only the robot's own speed, however long it is (a wait of hours
+at the goal). Times at which a mover appears or vanishes are evaluated exactly. An interval
 still undecided below ``min_interval`` seconds is a touching contact, which the contract
 allows.
 
@@ -27,6 +29,7 @@ import shapely
 from ..scene.scene import Box, Disc, MapObstacle, Query, Scene
 from ..typed import FloatArray
 from .depth import Edges, overlap_depth
+from .reach import movers_out_of_reach
 
 __all__ = ["CheckReport", "check_trajectory"]
 
@@ -678,6 +681,10 @@ class _Checker:
             body = np.hypot(*np.diff(p[:, :2], axis=0).T) / dt
             turn = np.zeros(len(dt))
         lip = body + vm  # per segment
+        # an interval no mover can reach needs only the robot's own speed: a long wait is
+        # not halved until the evaluations run out
+        keep = ~self._beyond_movers(a_t, b_t, a_d + b_d, a_s, body, lip)
+        a_t, b_t, a_d, b_d, a_s = a_t[keep], b_t[keep], a_d[keep], b_d[keep], a_s[keep]
         while a_t.size:
             need = (a_d + b_d < lip[a_s] * (b_t - a_t)) & (a_t < self.first[0])
             need &= (b_t - a_t) >= self.min_interval
@@ -709,6 +716,17 @@ class _Checker:
         if deepest and self.first[1].startswith(("collides", "comes within")):
             self.search_deepest(lip)
         return self.report()
+
+    def _beyond_movers(self, a_t, b_t, ends, a_s, body, lip) -> np.ndarray:
+        """The intervals between rows that only the movers' speed would have bisected and
+        that no mover can reach (:func:`gfuzzy.check.reach.movers_out_of_reach`): decided."""
+        span = b_t - a_t
+        out = (ends < lip[a_s] * span) & (ends >= body[a_s] * span)
+        idx = np.nonzero(out)[0]
+        if idx.size:
+            pa, pb = self.pose_at(a_t[idx], a_s[idx]), self.pose_at(b_t[idx], a_s[idx])
+            out[idx] = movers_out_of_reach(self.scene, pa[:, :2], pb[:, :2], a_t[idx], b_t[idx])
+        return out
 
     def _sample(self, times, seg_of) -> FloatArray:
         """Clearances at ``times`` (sorted or not); the earliest violation among them is noted."""

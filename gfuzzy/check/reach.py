@@ -1,0 +1,91 @@
+"""Where a mover can be over a whole time interval, without sampling the interval.
+
+The check's bisection bounds how fast the clearance changes by the robot's speed plus the
+fastest mover's, so a long interval (a wait of an hour at the goal, a last row at t = 1e300)
+is halved until the evaluations run out, however far the movers keep. Over any interval,
+though, a mover's reference point stays on a known polyline: a path mover on its path (all
+of it, whatever the interval), a trajectory mover on its rows between the interval's ends
+(and nowhere outside its time range). The robot's reference point stays on the segment
+between its poses at the ends (rows are linear in x and y), its body within its
+circumradius of that point. Their distance, less the bodies' extents, is a lower bound of
+the bodies' distance at every instant of the interval.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..scene.scene import Mover, Scene
+from ..typed import FloatArray
+
+__all__ = ["movers_out_of_reach"]
+
+
+def movers_out_of_reach(scene: Scene, pa: FloatArray, pb: FloatArray, ta: FloatArray, tb: FloatArray) -> np.ndarray:
+    """Intervals in which every mover keeps ``robot.mover_clearance`` from the robot throughout.
+
+    Parameters
+    ----------
+    scene : Scene
+    pa, pb : (k, 2) float
+        The robot's reference point at the intervals' ends (it moves straight between them).
+    ta, tb : (k,) float
+        The intervals, ``ta <= tb``.
+
+    Returns
+    -------
+    (k,) bool
+        True where that is proven (a lower bound: False does not say a mover comes near).
+    """
+    mid = 0.5 * (pa + pb)
+    reach = 0.5 * np.hypot(*(pb - pa).T) + scene.robot.circumradius + scene.robot.mover_clearance
+    clear = np.ones(len(mid), dtype=bool)
+    for mv in scene.movers:
+        d = _path_distance(mv, mid) if mv.trajectory is None else _rows_distance(mv.trajectory, mid, ta, tb)
+        clear &= d - mv.extent >= reach
+    return clear
+
+
+def _path_distance(mv: Mover, points: FloatArray) -> FloatArray:
+    """Distance from each point to a path mover's whole polyline (closed for a loop)."""
+    pts = mv._polyline
+    if len(pts) == 1:
+        return np.hypot(*(points - pts[0]).T)
+    return _segments_distance(points[:, None], pts[None, :-1], pts[None, 1:]).min(axis=1)
+
+
+def _rows_distance(tr: FloatArray, points: FloatArray, ta: FloatArray, tb: FloatArray) -> FloatArray:
+    """Distance from each point to the trajectory mover's polyline between ``ta`` and ``tb``
+    (its positions there, its rows in between); inf where it is absent all the interval."""
+    t, xy = tr[:, 0], tr[:, 1:3]
+    a, b = np.maximum(ta, t[0]), np.minimum(tb, t[-1])
+    present = a <= b
+    out = np.full(len(points), np.inf)
+    if not present.any():
+        return out
+    a, b, p = a[present], b[present], points[present]
+    ends = [np.column_stack([np.interp(x, t, xy[:, 0]), np.interp(x, t, xy[:, 1])]) for x in (a, b)]
+    lo, hi = np.searchsorted(t, a, side="right"), np.searchsorted(t, b, side="left")
+    inner = np.maximum(hi - lo, 0)  # rows strictly inside each interval
+    count = inner + 2  # each interval's polyline: its start, those rows, its end
+    first = np.concatenate([[0], np.cumsum(count)[:-1]])
+    verts = np.empty((int(count.sum()), 2))
+    verts[first] = ends[0]
+    verts[first + count - 1] = ends[1]
+    owner = np.repeat(np.arange(len(a)), inner)
+    within = np.arange(len(owner)) - np.repeat(np.cumsum(inner) - inner, inner)  # 0.. inner-1
+    verts[first[owner] + 1 + within] = xy[lo[owner] + within]
+    segs = count - 1
+    seg_owner = np.repeat(np.arange(len(a)), segs)
+    start = np.repeat(first, segs) + np.arange(len(seg_owner)) - np.repeat(np.cumsum(segs) - segs, segs)
+    d = _segments_distance(p[seg_owner], verts[start], verts[start + 1])
+    out[present] = np.minimum.reduceat(d, np.cumsum(segs) - segs)
+    return out
+
+
+def _segments_distance(c: FloatArray, a: FloatArray, b: FloatArray) -> FloatArray:
+    """Distance from points ``c`` to segments ``a``-``b`` (broadcast, last axis x, y)."""
+    ab = b - a
+    den = np.maximum((ab * ab).sum(-1), 1e-300)
+    f = np.clip(((c - a) * ab).sum(-1) / den, 0.0, 1.0)
+    return np.hypot(*np.moveaxis(a + f[..., None] * ab - c, -1, 0))
