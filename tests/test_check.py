@@ -234,6 +234,17 @@ def test_a_long_wait_far_from_every_movers_reach_is_decided_by_counting_rows(las
     assert rep.evaluations == 4  # the rows and the instant the walker vanishes, nothing more
 
 
+def test_a_long_crawl_beside_a_parked_mover_is_decided_once_it_stands_still():
+    # a `once` mover runs along y = 0.5 until t = 4, then stands at (6, 0.5) for ever, 0.1 m
+    # from the robot's crawl: within its reach, but the clearance no longer moves with it
+    parker = {"name": "park", "disc": 0.3, "speed": 1.0, "path": [[2.0, 0.5], [6.0, 0.5]], "mode": "once"}
+    sc = scene({"disc": 0.2, "vmax": 1.0}, movers=[parker])
+    w = np.array([[0.0, 6.0, 1.1], [10.0, 6.0, 1.1], [1e300, 7.0, 1.1]])
+    rep = check_trajectory(sc, w, max_evaluations=100_000)
+    assert rep.valid, rep.reason
+    assert rep.evaluations < 1_000  # the wait while it runs; nothing after
+
+
 def test_a_long_wait_within_a_movers_reach_is_still_bisected():
     # the walker's box passes 0.05 m from the disc waiting at (8.55, 2), closer than its
     # extent (the box's half-diagonal) allows the reach bound to prove

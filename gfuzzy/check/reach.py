@@ -8,21 +8,29 @@ of it, whatever the interval), a trajectory mover on its rows between the interv
 (and nowhere outside its time range). The robot's reference point stays on the segment
 between its poses at the ends (rows are linear in x and y), its body within its
 circumradius of that point. Their distance, less the bodies' extents, is a lower bound of
-the bodies' distance at every instant of the interval.
+the bodies' distance at every instant of the interval. A mover that stands still all the
+interval (a ``once`` mover at either end of its path) does not move the clearance either.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
 from ..scene.scene import Mover, Scene
 from ..typed import FloatArray
 
-__all__ = ["movers_out_of_reach"]
+__all__ = ["moving_window", "near_movers_speed"]
 
 
-def movers_out_of_reach(scene: Scene, pa: FloatArray, pb: FloatArray, ta: FloatArray, tb: FloatArray) -> np.ndarray:
-    """Intervals in which every mover keeps ``robot.mover_clearance`` from the robot throughout.
+def near_movers_speed(scene: Scene, pa: FloatArray, pb: FloatArray, ta: FloatArray, tb: FloatArray) -> FloatArray:
+    """The fastest speed, over each interval, of the movers that may come near the robot.
+
+    A mover counts unless it stands still all the interval (:func:`moving_window`) or keeps
+    ``robot.mover_clearance`` from the robot throughout it (its reach, the module docstring).
+    The clearance to the others and to the static world then changes no faster than the
+    robot's own speed plus this one.
 
     Parameters
     ----------
@@ -34,16 +42,34 @@ def movers_out_of_reach(scene: Scene, pa: FloatArray, pb: FloatArray, ta: FloatA
 
     Returns
     -------
-    (k,) bool
-        True where that is proven (a lower bound: False does not say a mover comes near).
+    (k,) float
+        0 where no mover counts.
     """
     mid = 0.5 * (pa + pb)
     reach = 0.5 * np.hypot(*(pb - pa).T) + scene.robot.circumradius + scene.robot.mover_clearance
-    clear = np.ones(len(mid), dtype=bool)
+    speed = np.zeros(len(mid))
     for mv in scene.movers:
+        lo, hi = moving_window(mv)
+        moving = (lo < tb) & (hi > ta)
+        if not moving.any():
+            continue
         d = _path_distance(mv, mid) if mv.trajectory is None else _rows_distance(mv.trajectory, mid, ta, tb)
-        clear &= d - mv.extent >= reach
-    return clear
+        near = moving & (d - mv.extent < reach)
+        speed[near] = np.maximum(speed[near], mv.max_speed)
+    return speed
+
+
+def moving_window(mv: Mover) -> tuple[float, float]:
+    """When ``mv`` moves: before and after it stands still (a ``once`` path mover at its
+    path's ends) or is absent (a trajectory mover outside its rows); ``(inf, inf)``: never."""
+    if mv.trajectory is not None:
+        return mv.time_range
+    if mv.speed == 0:
+        return (math.inf, math.inf)
+    if mv.mode != "once":
+        return (-math.inf, math.inf)
+    length = float(np.hypot(*np.diff(mv.path, axis=0).T).sum())
+    return (-mv.offset / mv.speed, (length - mv.offset) / mv.speed)
 
 
 def _path_distance(mv: Mover, points: FloatArray) -> FloatArray:
