@@ -245,6 +245,19 @@ def test_a_long_crawl_beside_a_parked_mover_is_decided_once_it_stands_still():
     assert rep.evaluations < 1_000  # the wait while it runs; nothing after
 
 
+@pytest.mark.parametrize("x, valid", [(8.55, True), (8.65, False)])
+def test_a_long_wait_beside_a_repeating_mover_is_decided_over_one_period(x, valid):
+    # a box bounces along x = 9 (a period of 6 s) past a robot standing still for 1e300 s,
+    # 0.05 m from it (or 0.05 m into it): the clearance repeats, so one period decides; it was
+    # bisected until the evaluations ran out ("could not decide")
+    bouncer = {"name": "b", "box": [0.4, 0.4], "speed": 1.0, "path": [[9.0, 0.5], [9.0, 3.5]], "mode": "bounce"}
+    sc = scene({"disc": 0.2, "vmax": 1.0}, movers=[bouncer])
+    rep = check_trajectory(sc, np.array([[0.0, x, 2.0], [1e300, x, 2.0]]), max_evaluations=100_000)
+    assert rep.valid == valid, rep.reason
+    assert valid or "collides with mover 'b' starting between t=1.16" in rep.reason
+    assert rep.evaluations < 5_000
+
+
 def test_a_long_wait_within_a_movers_reach_is_still_bisected():
     # the walker's box passes 0.05 m from the disc waiting at (8.55, 2), closer than its
     # extent (the box's half-diagonal) allows the reach bound to prove

@@ -29,7 +29,7 @@ import shapely
 from ..scene.scene import Box, Disc, MapObstacle, Query, Scene
 from ..typed import FloatArray
 from .depth import Edges, overlap_depth
-from .reach import near_movers_speed
+from .reach import near_movers, one_period_end
 
 __all__ = ["CheckReport", "check_trajectory"]
 
@@ -683,7 +683,7 @@ class _Checker:
         lip = body + vm  # per segment
         # per interval: the movers that cannot come near, or stand still, do not count, so a
         # long wait far from them is not halved until the evaluations run out
-        a_l = self._interval_lip(a_t, b_t, a_d + b_d, a_s, body, lip)
+        a_l, b_t, b_d = self._interval_lip(a_t, b_t, a_d, b_d, a_s, body, lip)
         while a_t.size:
             need = (a_d + b_d < a_l * (b_t - a_t)) & (a_t < self.first[0])
             need &= (b_t - a_t) >= self.min_interval
@@ -716,17 +716,26 @@ class _Checker:
             self.search_deepest(lip)
         return self.report()
 
-    def _interval_lip(self, a_t, b_t, ends, a_s, body, lip) -> FloatArray:
-        """Each interval's bound on the clearance's speed: the segment's ``lip``, or, where
-        the bisection would need it, the robot's own speed plus the movers' that may come near
-        (:func:`gfuzzy.check.reach.near_movers_speed`); its parts inherit it."""
+    def _interval_lip(self, a_t, b_t, a_d, b_d, a_s, body, lip):
+        """Each interval's bound on the clearance's speed, and its end: the segment's ``lip``,
+        or, where the bisection would need it, the robot's own speed plus the movers' that may
+        come near (:func:`gfuzzy.check.reach.near_movers`), the bound its parts inherit. Where
+        the robot stands still and those movers repeat, one period is the whole interval's
+        clearance: the interval ends after it (at a point of its bisection)."""
         out = lip[a_s]
-        idx = np.nonzero(ends < out * (b_t - a_t))[0]
+        idx = np.nonzero(a_d + b_d < out * (b_t - a_t))[0]
         if idx.size:
             pa, pb = self.pose_at(a_t[idx], a_s[idx]), self.pose_at(b_t[idx], a_s[idx])
-            near = near_movers_speed(self.scene, pa[:, :2], pb[:, :2], a_t[idx], b_t[idx])
-            out[idx] = body[a_s[idx]] + near
-        return out
+            speed, period = near_movers(self.scene, pa[:, :2], pb[:, :2], a_t[idx], b_t[idx])
+            out[idx] = body[a_s[idx]] + speed
+            still = np.all(self.p[a_s[idx]] == self.p[a_s[idx] + 1], axis=1) & (speed > 0)
+            longer = still & (b_t[idx] - a_t[idx] > period)
+            if longer.any():
+                cut = idx[longer]
+                b_t, b_d = b_t.copy(), b_d.copy()
+                b_t[cut] = one_period_end(a_t[cut], b_t[cut], period[longer])
+                b_d[cut] = self._sample(b_t[cut], a_s[cut])
+        return out, b_t, b_d
 
     def _sample(self, times, seg_of) -> FloatArray:
         """Clearances at ``times`` (sorted or not); the earliest violation among them is noted."""

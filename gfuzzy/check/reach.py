@@ -21,16 +21,18 @@ import numpy as np
 from ..scene.scene import Mover, Scene
 from ..typed import FloatArray
 
-__all__ = ["moving_window", "near_movers_speed"]
+__all__ = ["moving_window", "near_movers", "one_period_end"]
 
 
-def near_movers_speed(scene: Scene, pa: FloatArray, pb: FloatArray, ta: FloatArray, tb: FloatArray) -> FloatArray:
-    """The fastest speed, over each interval, of the movers that may come near the robot.
+def near_movers(scene: Scene, pa: FloatArray, pb: FloatArray, ta: FloatArray, tb: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """The movers that may come near the robot over each interval: their fastest speed and
+    their longest period.
 
     A mover counts unless it stands still all the interval (:func:`moving_window`) or keeps
     ``robot.mover_clearance`` from the robot throughout it (its reach, the module docstring).
     The clearance to the others and to the static world then changes no faster than the
-    robot's own speed plus this one.
+    robot's own speed plus that speed; and where the robot stands still, it repeats after
+    that period.
 
     Parameters
     ----------
@@ -42,12 +44,14 @@ def near_movers_speed(scene: Scene, pa: FloatArray, pb: FloatArray, ta: FloatArr
 
     Returns
     -------
-    (k,) float
+    speed : (k,) float
         0 where no mover counts.
+    period : (k,) float
+        0 where no mover counts, inf where one that counts does not repeat (:attr:`Mover.period`).
     """
     mid = 0.5 * (pa + pb)
     reach = 0.5 * np.hypot(*(pb - pa).T) + scene.robot.circumradius + scene.robot.mover_clearance
-    speed = np.zeros(len(mid))
+    speed, period = np.zeros(len(mid)), np.zeros(len(mid))
     for mv in scene.movers:
         lo, hi = moving_window(mv)
         moving = (lo < tb) & (hi > ta)
@@ -56,7 +60,19 @@ def near_movers_speed(scene: Scene, pa: FloatArray, pb: FloatArray, ta: FloatArr
         d = _path_distance(mv, mid) if mv.trajectory is None else _rows_distance(mv.trajectory, mid, ta, tb)
         near = moving & (d - mv.extent < reach)
         speed[near] = np.maximum(speed[near], mv.max_speed)
-    return speed
+        period[near] = np.maximum(period[near], mv.period)
+    return speed, period
+
+
+def one_period_end(a: FloatArray, b: FloatArray, period: FloatArray) -> FloatArray:
+    """For each interval ``[a, b]``, the earliest end ``0.5 (a + m)``, halving from ``b``, that
+    still leaves a whole ``period``: a point the check's bisection of ``[a, b]`` samples too,
+    so an interval ended there is bisected as the whole one was."""
+    out = np.array(b, dtype=float, copy=True)
+    for i in range(len(out)):
+        while 0.5 * (a[i] + out[i]) - a[i] >= period[i]:
+            out[i] = 0.5 * (a[i] + out[i])
+    return out
 
 
 def moving_window(mv: Mover) -> tuple[float, float]:
