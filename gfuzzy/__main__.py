@@ -3,7 +3,8 @@
 import signal
 import sys
 
-from .errors import say_interrupted  # light: gfuzzy's package imports its public names on first use
+# light: gfuzzy's package imports its public names on first use
+from .errors import is_interrupt, say_interrupted
 
 
 def run() -> int:
@@ -17,7 +18,9 @@ def run() -> int:
         from .cli.main import main
 
         return main()
-    except KeyboardInterrupt:  # one that main's own handling never saw
+    except BaseException as exc:  # noqa: BLE001 - an interrupt that main's own handling never saw
+        if not is_interrupt(exc):  # (or an import error it caused: an extension's init cut short)
+            raise
         signal.signal(signal.SIGINT, signal.SIG_IGN)  # the process ends: a second one changes nothing
         return say_interrupted()
 

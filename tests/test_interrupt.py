@@ -403,3 +403,36 @@ def test_a_ctrl_c_while_gfuzzy_imports_is_one_line(tmp_path, entry):
         cwd=ROOT, env=env, capture_output=True, text=True, timeout=120,
     )  # fmt: skip
     _interrupted_once(run.returncode, run.stderr, out)
+
+
+def test_an_import_error_an_interrupt_caused_is_the_one_line_too(monkeypatch, capsys):
+    # an extension whose init a Ctrl-C cut short raises its own error, caused by the interrupt
+    import builtins
+
+    import gfuzzy.__main__ as entry
+
+    real = builtins.__import__
+
+    def importing(name, *args, **kwargs):
+        if name == "cli.main":  # run()'s `from .cli.main import main`
+            try:
+                raise KeyboardInterrupt
+            except KeyboardInterrupt as exc:
+                raise ImportError("initialization of an extension cut short") from exc
+        return real(name, *args, **kwargs)
+
+    handler = signal.getsignal(signal.SIGINT)
+    monkeypatch.setattr(builtins, "__import__", importing)
+    try:
+        assert entry.run() == 130
+    finally:
+        signal.signal(signal.SIGINT, handler)
+    assert capsys.readouterr().err == "interrupted\n"
+
+
+def test_the_entry_point_lets_any_other_error_through(monkeypatch):
+    import gfuzzy.__main__ as entry
+
+    monkeypatch.setattr(sys.modules["gfuzzy.cli.main"], "main", lambda: 1 / 0)
+    with pytest.raises(ZeroDivisionError):
+        entry.run()
