@@ -6,46 +6,57 @@ Pipeline (one module per stage): :mod:`~gfuzzy.scene.scene` -> :mod:`~gfuzzy.roa
 the answer independently.
 """
 
+import importlib
 import logging
-
-from .check.check import CheckReport, check_trajectory
-from .errors import GfuzzyError, SceneError
-from .navigation.navigator import Navigator, NavOptions, NavStep
-from .planner.planner import Planner, PlanOptions, PlanResult, Status, plan
-from .roadmap.roadmap import Roadmap, RoadmapOptions, build_roadmap, load_roadmap
-from .scene.scene import Scene, load_scene
-from .scene.tracks import Track, Tracks, TrackScene, TrackSceneOptions, read_tracks, tracks_scene
-from .trajectory import Trajectory, load_trajectory
 
 logging.getLogger(__name__).addHandler(logging.NullHandler())
 
 __version__ = "0.1.0"
 
-__all__ = [
-    "CheckReport",
-    "GfuzzyError",
-    "NavOptions",
-    "NavStep",
-    "Navigator",
-    "PlanOptions",
-    "PlanResult",
-    "Planner",
-    "Roadmap",
-    "RoadmapOptions",
-    "Scene",
-    "SceneError",
-    "Status",
-    "Track",
-    "TrackScene",
-    "TrackSceneOptions",
-    "Tracks",
-    "Trajectory",
-    "build_roadmap",
-    "check_trajectory",
-    "load_roadmap",
-    "load_scene",
-    "load_trajectory",
-    "plan",
-    "read_tracks",
-    "tracks_scene",
-]
+#: Where each public name lives: imported on first use (PEP 562), so that ``import gfuzzy``
+#: itself is light and the command line's entry point (:mod:`gfuzzy.__main__`) runs before
+#: the heavy imports (numpy, FCL, OMPL), which a Ctrl-C may then cut like any later step.
+_HOMES = {
+    "CheckReport": ".check.check",
+    "check_trajectory": ".check.check",
+    "GfuzzyError": ".errors",
+    "SceneError": ".errors",
+    "Navigator": ".navigation.navigator",
+    "NavOptions": ".navigation.navigator",
+    "NavStep": ".navigation.navigator",
+    "Planner": ".planner.planner",
+    "PlanOptions": ".planner.planner",
+    "PlanResult": ".planner.planner",
+    "Status": ".planner.planner",
+    "plan": ".planner.planner",
+    "Roadmap": ".roadmap.roadmap",
+    "RoadmapOptions": ".roadmap.roadmap",
+    "build_roadmap": ".roadmap.roadmap",
+    "load_roadmap": ".roadmap.roadmap",
+    "Scene": ".scene.scene",
+    "load_scene": ".scene.scene",
+    "Track": ".scene.tracks",
+    "Tracks": ".scene.tracks",
+    "TrackScene": ".scene.tracks",
+    "TrackSceneOptions": ".scene.tracks",
+    "read_tracks": ".scene.tracks",
+    "tracks_scene": ".scene.tracks",
+    "Trajectory": ".trajectory",
+    "load_trajectory": ".trajectory",
+}
+__all__ = sorted(_HOMES)
+
+
+def __getattr__(name: str):
+    """A public name, imported from its module the first time it is asked for."""
+    home = _HOMES.get(name)
+    if home is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(home, __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_HOMES})
+

@@ -181,6 +181,18 @@ def interrupts_deferred(raise_after: bool = True) -> Iterator[None]:
         check_interrupt()
 
 
+def say_interrupted() -> int:
+    """The command line's last word on a Ctrl-C: the one line ``interrupted`` on stderr.
+
+    Said whole (a second Ctrl-C meanwhile, a terminal's repeat, adds nothing under
+    :func:`interrupt_handling`); returns :data:`EXIT_INTERRUPTED`.
+    """
+    with interrupts_deferred(raise_after=False):
+        sys.stderr.write("interrupted\n")
+        sys.stderr.flush()
+    return EXIT_INTERRUPTED
+
+
 def _quiet_unraisable(previous):
     def hook(unraisable) -> None:
         if _state.pending or _state.aftermath or isinstance(unraisable.exc_value, KeyboardInterrupt):

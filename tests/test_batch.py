@@ -132,6 +132,50 @@ def test_a_quiet_cluster_keeps_tornados_callback_errors_out_of_the_terminal(clie
     assert not logging.getLogger("distributed.client").isEnabledFor(logging.WARNING)
 
 
+def test_quiet_dask_logs_sets_every_dask_logger_and_gives_the_old_levels_back():
+    import logging
+
+    from gfuzzy.runs.batch import DASK_LOGGERS, quiet_dask_logs
+
+    before = {n: logging.getLogger(n).level for n in DASK_LOGGERS}
+    try:
+        assert quiet_dask_logs() == before
+        assert {logging.getLogger(n).level for n in DASK_LOGGERS} == {logging.CRITICAL}
+        quiet_dask_logs(errors=True)  # the command line's: Dask's own errors still show
+        assert {n: logging.getLogger(n).level for n in DASK_LOGGERS} == {
+            "distributed": logging.ERROR,
+            "distributed.client": logging.ERROR,
+            "tornado": logging.CRITICAL,
+            "tornado.application": logging.CRITICAL,
+        }
+    finally:
+        for n, level in before.items():
+            logging.getLogger(n).setLevel(level)
+
+
+def test_the_command_line_and_the_workers_quiet_dask_through_the_one_function(monkeypatch, tmp_path):
+    # the levels were set in three places (cmd_batch, _quiet_logs, dask_setup), each a little
+    # differently; now quiet_dask_logs is the only one
+    import signal
+
+    import gfuzzy.runs.batch as batch
+
+    calls = []
+    monkeypatch.setattr(batch, "quiet_dask_logs", lambda errors=False: calls.append(errors) or {})
+    monkeypatch.setenv("GFUZZY_BATCH_QUIET", "1")
+    handler = signal.getsignal(signal.SIGINT)
+    try:
+        batch.dask_setup(None)
+    finally:
+        signal.signal(signal.SIGINT, handler)
+    with batch._quiet_logs(True):
+        pass
+    code = main(["batch", str(ROOT / "scenes" / "sim-4s1m.yaml"), "--scheduler", "tcp://127.0.0.1:1",
+                 "--connect-timeout", "0.2", "-o", str(tmp_path / "rows.csv")])  # fmt: skip
+    assert code == 2  # nothing listens there; the levels were set before connecting
+    assert calls == [False, False, True]
+
+
 def test_rows_match_plan_and_saved_answers_check(client, pairs, tmp_path):
     res = run_batch(client, pairs, BatchOptions(trajectories=str(tmp_path / "traj")))
     assert not res.interrupted and res.errors == 0
@@ -381,6 +425,38 @@ def test_a_row_and_its_trajectory_file_are_recorded_together(client, pairs, tmp_
         res = run_batch(client, pairs[:1], BatchOptions(trajectories=str(folder)))
     assert res.interrupted and len(res.rows) == 1
     assert [p.name for p in folder.iterdir()] == [f"{res.rows[0].scene}-{res.rows[0].query}.json"]
+
+
+class _Closable:
+    def __init__(self, closed: list, name: str, ctrl_c: bool = False):
+        self.closed, self.name, self.ctrl_c = closed, name, ctrl_c
+
+    def close(self) -> None:
+        if self.ctrl_c:
+            _ctrl_c()
+        self.closed.append(self.name)
+
+
+def test_close_whole_closes_every_part_then_raises_the_ctrl_c_that_came_meanwhile():
+    from gfuzzy.errors import interrupt_handling
+    from gfuzzy.runs.batch import close_whole
+
+    closed: list = []
+    with interrupt_handling(), pytest.raises(KeyboardInterrupt):
+        close_whole(_Closable(closed, "client", ctrl_c=True), None, _Closable(closed, "cluster"))
+    assert closed == ["client", "cluster"]
+
+
+def test_a_scheduler_client_is_closed_by_the_one_close_whole(monkeypatch):
+    # local_cluster's deferred close and closed_whole were twins; both are close_whole now
+    import gfuzzy.runs.batch as batch
+
+    seen = []
+    monkeypatch.setattr(batch, "close_whole", lambda *parts: seen.append(parts))
+    client = _Closable([], "client")
+    with batch.closed_whole(client) as c:
+        assert c is client
+    assert seen == [(client,)]
 
 
 def test_a_ctrl_c_while_the_local_cluster_starts_lets_it_start_whole_then_stops(monkeypatch):

@@ -216,3 +216,73 @@ def test_a_collisions_times_are_said_to_bracket_its_onset():
         assert not rep.valid and rep.reason.startswith(f"collides with {what} starting between t="), rep.reason
         start, end = (float(v) for v in re.findall(r"t=([0-9.e+-]+) and t=([0-9.e+-]+)", rep.reason)[0])
         assert start <= rep.time <= end < start + 0.01, rep.reason
+
+
+LOOPER = {"name": "loop", "disc": 0.3, "speed": 0.6, "path": [[1.0, 1.0], [3.0, 1.0], [3.0, 3.0]], "mode": "loop"}
+WALKER = {"name": "walk", "box": [0.4, 0.4], "trajectory": [[0.0, 9.0, 0.5], [5.0, 9.0, 3.5], [6.0, 8.0, 3.5]]}
+
+
+@pytest.mark.parametrize("last", [1e4, 1e300])
+def test_a_long_wait_far_from_every_movers_reach_is_decided_by_counting_rows(last):
+    # rendering a plan whose last row was edited to t = 1e300 spent ~21 s in its check: the
+    # bisection halved the last interval (movers' speed times 1e300) until the evaluations ran
+    # out, then said "could not decide"; no mover's path comes near the robot's last stretch
+    sc = scene({"disc": 0.2, "vmax": 1.0}, movers=[LOOPER, WALKER])
+    w = np.array([[0.0, 5.0, 3.0], [1.0, 6.0, 3.0], [last, 6.5, 2.0]])
+    rep = check_trajectory(sc, w, max_evaluations=100_000)
+    assert rep.valid, rep.reason
+    assert rep.evaluations == 4  # the rows and the instant the walker vanishes, nothing more
+
+
+def test_a_long_crawl_beside_a_parked_mover_is_decided_once_it_stands_still():
+    # a `once` mover runs along y = 0.5 until t = 4, then stands at (6, 0.5) for ever, 0.1 m
+    # from the robot's crawl: within its reach, but the clearance no longer moves with it
+    parker = {"name": "park", "disc": 0.3, "speed": 1.0, "path": [[2.0, 0.5], [6.0, 0.5]], "mode": "once"}
+    sc = scene({"disc": 0.2, "vmax": 1.0}, movers=[parker])
+    w = np.array([[0.0, 6.0, 1.1], [10.0, 6.0, 1.1], [1e300, 7.0, 1.1]])
+    rep = check_trajectory(sc, w, max_evaluations=100_000)
+    assert rep.valid, rep.reason
+    assert rep.evaluations < 1_000  # the wait while it runs; nothing after
+
+
+@pytest.mark.parametrize("x, valid", [(8.55, True), (8.65, False)])
+def test_a_long_wait_beside_a_repeating_mover_is_decided_over_one_period(x, valid):
+    # a box bounces along x = 9 (a period of 6 s) past a robot standing still for 1e300 s,
+    # 0.05 m from it (or 0.05 m into it): the clearance repeats, so one period decides; it was
+    # bisected until the evaluations ran out ("could not decide")
+    bouncer = {"name": "b", "box": [0.4, 0.4], "speed": 1.0, "path": [[9.0, 0.5], [9.0, 3.5]], "mode": "bounce"}
+    sc = scene({"disc": 0.2, "vmax": 1.0}, movers=[bouncer])
+    rep = check_trajectory(sc, np.array([[0.0, x, 2.0], [1e300, x, 2.0]]), max_evaluations=100_000)
+    assert rep.valid == valid, rep.reason
+    assert valid or "collides with mover 'b' starting between t=1.16" in rep.reason
+    assert rep.evaluations < 5_000
+
+
+def test_a_long_wait_within_a_movers_reach_is_still_bisected():
+    # the walker's box passes 0.05 m from the disc waiting at (8.55, 2), closer than its
+    # extent (the box's half-diagonal) allows the reach bound to prove
+    sc = scene({"disc": 0.2, "vmax": 1.0}, movers=[WALKER])
+    rep = check_trajectory(sc, np.array([[0.0, 8.55, 2.0], [100.0, 8.55, 2.0]]))
+    assert rep.valid, rep.reason
+    assert rep.evaluations > 3
+    # closer, it hits: the reach bound never hides a collision
+    bad = check_trajectory(sc, np.array([[0.0, 8.65, 2.0], [100.0, 8.65, 2.0]]))
+    assert not bad.valid and "walk" in bad.reason
+
+
+def test_a_trajectory_movers_reach_is_its_rows_between_the_intervals_ends():
+    from gfuzzy.check.reach import _rows_distance
+
+    tr = scene({"disc": 0.2, "vmax": 1.0}, movers=[WALKER]).movers[0].trajectory
+    rng = np.random.default_rng(3)
+    points = rng.uniform([0, 0], [10, 4], (200, 2))
+    ta = rng.uniform(-2, 7, 200)
+    tb = ta + rng.choice([0.0, 0.3, 2.0, 9.0], 200)
+    got = _rows_distance(tr, points, ta, tb)
+    for p, a, b, d in zip(points, ta, tb, got, strict=True):
+        times = np.linspace(max(a, 0.0), min(b, 6.0), 20001)
+        if len(times) == 0 or times[0] > times[-1]:
+            assert d == math.inf
+            continue
+        xy = np.column_stack([np.interp(times, tr[:, 0], tr[:, 1]), np.interp(times, tr[:, 0], tr[:, 2])])
+        assert d == pytest.approx(np.hypot(*(xy - p).T).min(), abs=1e-3)

@@ -357,3 +357,82 @@ def test_regress_stops_between_queries_after_a_dropped_interrupt(monkeypatch):
     with interrupt_handling(), pytest.raises(KeyboardInterrupt):
         regress_scene(scene, load_roadmap(ROADMAP, scene))
     assert len(calls) == 1
+
+
+_SLOW_IMPORT = '''
+import builtins
+import signal
+
+_real = builtins.__import__
+
+
+def _importing(name, *args, **kwargs):
+    if name == "numpy" and not _importing.done:  # a Ctrl-C while gfuzzy imports numpy
+        _importing.done = True
+        signal.getsignal(signal.SIGINT)(signal.SIGINT, None)
+    return _real(name, *args, **kwargs)
+
+
+_importing.done = False
+builtins.__import__ = _importing
+'''
+
+
+def _entry_points() -> dict[str, list[str]]:
+    """The two ways to run the program: pyproject's console script and ``python -m gfuzzy``."""
+    import tomllib
+
+    with open(ROOT / "pyproject.toml", "rb") as fh:
+        module, func = tomllib.load(fh)["project"]["scripts"]["gfuzzy"].split(":")
+    script = f"import sys; from {module} import {func}; sys.exit({func}())"  # what pip's script runs
+    return {"console script": ["-c", script], "python -m": ["-m", "gfuzzy"]}
+
+
+@pytest.mark.parametrize("entry", ["console script", "python -m"])
+def test_a_ctrl_c_while_gfuzzy_imports_is_one_line(tmp_path, entry):
+    # the first half second of every command (numpy, FCL, OMPL imported) was Python's own:
+    # a KeyboardInterrupt traceback. A sitecustomize of this test's runs the SIGINT handler
+    # in force as numpy's import begins
+    import subprocess
+
+    (tmp_path / "sitecustomize.py").write_text(_SLOW_IMPORT)
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(tmp_path), str(ROOT)]))
+    out = tmp_path / "x.json"
+    run = subprocess.run(
+        [sys.executable, *_entry_points()[entry], "plan", str(SCENE), "--roadmap", str(ROADMAP), "-o", str(out)],
+        cwd=ROOT, env=env, capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    _interrupted_once(run.returncode, run.stderr, out)
+
+
+def test_an_import_error_an_interrupt_caused_is_the_one_line_too(monkeypatch, capsys):
+    # an extension whose init a Ctrl-C cut short raises its own error, caused by the interrupt
+    import builtins
+
+    import gfuzzy.__main__ as entry
+
+    real = builtins.__import__
+
+    def importing(name, *args, **kwargs):
+        if name == "cli.main":  # run()'s `from .cli.main import main`
+            try:
+                raise KeyboardInterrupt
+            except KeyboardInterrupt as exc:
+                raise ImportError("initialization of an extension cut short") from exc
+        return real(name, *args, **kwargs)
+
+    handler = signal.getsignal(signal.SIGINT)
+    monkeypatch.setattr(builtins, "__import__", importing)
+    try:
+        assert entry.run() == 130
+    finally:
+        signal.signal(signal.SIGINT, handler)
+    assert capsys.readouterr().err == "interrupted\n"
+
+
+def test_the_entry_point_lets_any_other_error_through(monkeypatch):
+    import gfuzzy.__main__ as entry
+
+    monkeypatch.setattr(sys.modules["gfuzzy.cli.main"], "main", lambda: 1 / 0)
+    with pytest.raises(ZeroDivisionError):
+        entry.run()

@@ -390,3 +390,19 @@ def test_render_draws_the_clearances(tmp_path):
     render(disc, a, trajectory=wps)
     render(disc.with_clearances(0.0), b, trajectory=wps)
     assert a.read_bytes() != b.read_bytes()
+
+
+def test_a_gif_of_a_trajectory_ending_at_1e300_keeps_its_delays_and_clock_in_bounds():
+    # a plan whose last row was edited to t = 1e300: the frames' running clock overflowed
+    # the int cast (a RuntimeWarning, then every delay 10 ms), and each frame drew its
+    # clock's 300 digits (92,000 glyphs, most of the animation's 17 s)
+    import warnings
+
+    from gfuzzy.render.animate import GIF_MAX_DELAY_CS, _clock_text, _gif_durations
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert _gif_durations(300, 1e303 / 299) == [10 * GIF_MAX_DELAY_CS] * 300
+    assert _gif_durations(4, 1000.0 / 15) == [70, 60, 70, 70]  # real time kept below the bound
+    assert _clock_text(1e300) == "t = 1e+300 s"
+    assert _clock_text(6.65) == "t =   6.65 s"

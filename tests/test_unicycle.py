@@ -1072,3 +1072,37 @@ def test_an_answer_found_after_the_time_limit_is_a_timeout(monkeypatch):
     monkeypatch.setattr(planner_module.Planner, "_search_rounds", slow)
     res = pl.plan([1.0, 2.0, 0.0], [1.0, 2.0, 1.0], 0.0, PlanOptions(time_limit=0.2))
     assert res.status.value == "timeout", res.message
+
+
+def test_a_disc_drives_ends_join_on_the_vertex_clearances_every_query_shares(monkeypatch):
+    # the drive kept a second, lazily filled table of its vertices' clearances beside the
+    # roadmap's (roadgraph.vertex_clearances, which its lanes fill): one table now
+    from pathlib import Path
+
+    import gfuzzy.timespace.unicycle as uni
+    from gfuzzy.roadmap.roadmap import load_roadmap
+    from gfuzzy.scene.scene import load_scene
+    from gfuzzy.timespace.roadgraph import vertex_clearances
+
+    root = Path(__file__).resolve().parent.parent
+    scene = load_scene(root / "scenes" / "tb3-arena-unicycle.yaml")
+    roadmap = load_roadmap(root / "roadmaps" / "tb3-arena-unicycle.json", scene)
+    planner = Planner(scene, roadmap)
+    first, second = scene.queries[:2]
+    assert planner.plan(first.start, first.goal, first.t0).status.value == "solved"
+    table = vertex_clearances(roadmap, planner.geometry)
+    base = next(v for k, v in roadmap._derived.items() if k[0] == "unicycle-base")
+    assert base.clearance is table and not np.isnan(table).any()
+    table -= 1e-3  # marked: what the joins read must be these
+    seen = []
+    real = uni._drive
+
+    def drive(geo, robot, ax, ay, bx, by, back, ca=None, cb=None):
+        seen.extend([((ax, ay), ca), ((bx, by), cb)])
+        return real(geo, robot, ax, ay, bx, by, back, ca, cb)
+
+    monkeypatch.setattr(uni, "_drive", drive)
+    planner.plan(second.start, second.goal, second.t0)
+    at = {(float(x), float(y)): i for i, (x, y) in enumerate(roadmap.vertices[:, :2])}
+    read = [(at[xy], c) for xy, c in seen if xy in at]
+    assert read and all(c == table[i] for i, c in read)

@@ -5,7 +5,9 @@ obstacles, box and footprint shapes) and closed-form disc distances, and it chec
 samples. Between two evaluated times the clearance d(t) changes no faster than the speed
 of the robot's fastest point plus the fastest mover, L; an interval ``[a, b]`` with
 ``d(a) + d(b) >= L (b - a)`` therefore holds no collision, and any other interval is
-bisected. Times at which a mover appears or vanishes are evaluated exactly. An interval
+bisected. Between rows, L counts only the movers that may come near and move (:mod:`.reach`:
+a mover stays on its path, or on its rows), so a wait of hours far from every mover is
+decided at once. Times at which a mover appears or vanishes are evaluated exactly. An interval
 still undecided below ``min_interval`` seconds is a touching contact, which the contract
 allows.
 
@@ -27,6 +29,7 @@ import shapely
 from ..scene.scene import Box, Disc, MapObstacle, Query, Scene
 from ..typed import FloatArray
 from .depth import Edges, overlap_depth
+from .reach import near_movers, one_period_end
 
 __all__ = ["CheckReport", "check_trajectory"]
 
@@ -678,10 +681,13 @@ class _Checker:
             body = np.hypot(*np.diff(p[:, :2], axis=0).T) / dt
             turn = np.zeros(len(dt))
         lip = body + vm  # per segment
+        # per interval: the movers that cannot come near, or stand still, do not count, so a
+        # long wait far from them is not halved until the evaluations run out
+        a_l, b_t, b_d = self._interval_lip(a_t, b_t, a_d, b_d, a_s, body, lip)
         while a_t.size:
-            need = (a_d + b_d < lip[a_s] * (b_t - a_t)) & (a_t < self.first[0])
+            need = (a_d + b_d < a_l * (b_t - a_t)) & (a_t < self.first[0])
             need &= (b_t - a_t) >= self.min_interval
-            a_t, b_t, a_d, b_d, a_s = a_t[need], b_t[need], a_d[need], b_d[need], a_s[need]
+            a_t, b_t, a_d, b_d, a_s, a_l = a_t[need], b_t[need], a_d[need], b_d[need], a_s[need], a_l[need]
             if a_t.size == 0:
                 break
             # near contact, bisection would go on for ever along a touching stretch: where
@@ -691,7 +697,7 @@ class _Checker:
                 near &= turn[a_s] == 0.0
             if near.any():
                 keep = self._decide_exactly(a_t, b_t, a_s, np.nonzero(near)[0])
-                a_t, b_t, a_d, b_d, a_s = a_t[keep], b_t[keep], a_d[keep], b_d[keep], a_s[keep]
+                a_t, b_t, a_d, b_d, a_s, a_l = a_t[keep], b_t[keep], a_d[keep], b_d[keep], a_s[keep], a_l[keep]
                 if a_t.size == 0:
                     break
             if self.evaluations > max_evaluations:
@@ -705,10 +711,31 @@ class _Checker:
             m_d = self._sample(m_t, a_s)
             a_t, b_t = np.concatenate([a_t, m_t]), np.concatenate([m_t, b_t])
             a_d, b_d = np.concatenate([a_d, m_d]), np.concatenate([m_d, b_d])
-            a_s = np.concatenate([a_s, a_s])
+            a_s, a_l = np.concatenate([a_s, a_s]), np.concatenate([a_l, a_l])
         if deepest and self.first[1].startswith(("collides", "comes within")):
             self.search_deepest(lip)
         return self.report()
+
+    def _interval_lip(self, a_t, b_t, a_d, b_d, a_s, body, lip):
+        """Each interval's bound on the clearance's speed, and its end: the segment's ``lip``,
+        or, where the bisection would need it, the robot's own speed plus the movers' that may
+        come near (:func:`gfuzzy.check.reach.near_movers`), the bound its parts inherit. Where
+        the robot stands still and those movers repeat, one period is the whole interval's
+        clearance: the interval ends after it (at a point of its bisection)."""
+        out = lip[a_s]
+        idx = np.nonzero(a_d + b_d < out * (b_t - a_t))[0]
+        if idx.size:
+            pa, pb = self.pose_at(a_t[idx], a_s[idx]), self.pose_at(b_t[idx], a_s[idx])
+            speed, period = near_movers(self.scene, pa[:, :2], pb[:, :2], a_t[idx], b_t[idx])
+            out[idx] = body[a_s[idx]] + speed
+            still = np.all(self.p[a_s[idx]] == self.p[a_s[idx] + 1], axis=1) & (speed > 0)
+            longer = still & (b_t[idx] - a_t[idx] > period)
+            if longer.any():
+                cut = idx[longer]
+                b_t, b_d = b_t.copy(), b_d.copy()
+                b_t[cut] = one_period_end(a_t[cut], b_t[cut], period[longer])
+                b_d[cut] = self._sample(b_t[cut], a_s[cut])
+        return out, b_t, b_d
 
     def _sample(self, times, seg_of) -> FloatArray:
         """Clearances at ``times`` (sorted or not); the earliest violation among them is noted."""

@@ -163,7 +163,6 @@ def cmd_batch(args) -> int:
     Ctrl-C once the scenes are read (building a roadmap, starting the cluster, between or
     after the queries) writes the rows finished so far, perhaps none, and says so.
     """
-    import logging
     import time
 
     from ..errors import (
@@ -173,7 +172,7 @@ def cmd_batch(args) -> int:
         interrupts_deferred,
         is_interrupt,
     )
-    from ..runs.batch import DASK_LOGGERS, BatchOptions, BatchResult, write_table
+    from ..runs.batch import BatchOptions, BatchResult, quiet_dask_logs, write_table
 
     if args.workers is not None and args.workers < 1:
         raise BadInput(f"--workers: must be at least 1, got {args.workers}")
@@ -191,8 +190,7 @@ def cmd_batch(args) -> int:
         seen[sc.name] = path
     options = BatchOptions(plan=_plan_options(args), trajectories=args.trajectories)
     if not args.verbose:  # Dask's own INFO/WARNING lines (a worker restarting) are not ours to show,
-        for name in DASK_LOGGERS:  # nor tornado's (Dask's callbacks failing as Ctrl-C cuts a wait)
-            logging.getLogger(name).setLevel(logging.CRITICAL if name.startswith("tornado") else logging.ERROR)
+        quiet_dask_logs(errors=True)  # nor tornado's (Dask's callbacks failing as Ctrl-C cuts a wait)
     ran: list = []  # (BatchResult, where, t) once run_batch returns: kept if the cluster's closing is cut
     try:
         _batch_result(args, scenes, options, ran)

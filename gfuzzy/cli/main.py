@@ -6,12 +6,12 @@ import argparse
 import sys
 
 from ..errors import (
-    EXIT_INTERRUPTED,
     InputError,
     LimitError,
     interrupt_handling,
     interrupts_deferred,
     is_interrupt,
+    say_interrupted,
 )
 from .common import EXIT_BAD, EXIT_OK, BadInput, _navigator_flags, _Parser, _say
 from .crowds import add_crowd, add_populate
@@ -239,9 +239,7 @@ def main(argv: list[str] | None = None) -> int:
             if not is_interrupt(exc):
                 raise
             # Ctrl-C comes twice (a terminal's repeat, `timeout`'s group signal): one line
-            with interrupts_deferred(raise_after=False):
-                _say("interrupted")
-            return EXIT_INTERRUPTED
+            return say_interrupted()
 
 
 def _run(argv: list[str] | None) -> int:

@@ -178,7 +178,7 @@ def render_animation(
             p.set_visible(bool(present[i, k]))
         if robot is not None:
             robot.update(k, t)
-        clock.set_text(f"t = {t:6.2f} s")
+        clock.set_text(_clock_text(t))
         if overlay is not None:
             overlay.update(t)
 
@@ -263,11 +263,23 @@ def _frame_times(scene: Scene, wp, fps: float, max_frames: int, duration) -> tup
     return times, frame_ms
 
 
+#: The longest delay a GIF frame can have, in centiseconds (a 16-bit field).
+GIF_MAX_DELAY_CS = 65535
+
+
 def _gif_durations(count: int, frame_ms: float) -> list:
     """Each frame's delay in ms. GIF delays are whole centiseconds: round the running
-    clock, not each frame, so that playback keeps real time."""
-    ticks = np.round(np.arange(count + 1) * frame_ms / 10.0).astype(int)
-    return (10 * np.maximum(np.diff(ticks), 1)).tolist()
+    clock, not each frame, so that playback keeps real time, up to the longest delay a
+    frame can have (:data:`GIF_MAX_DELAY_CS`: a trajectory of days plays faster)."""
+    step = min(frame_ms / 10.0, GIF_MAX_DELAY_CS)
+    ticks = np.round(np.arange(count + 1) * step).astype(np.int64)
+    return (10 * np.clip(np.diff(ticks), 1, GIF_MAX_DELAY_CS)).tolist()
+
+
+def _clock_text(t: float) -> str:
+    """A frame's clock: hundredths of a second, or 6 digits past a million seconds (the
+    hundredths of t = 1e300 are 300 digits, drawn in every frame)."""
+    return f"t = {t:6.2f} s" if abs(t) < 1e6 else f"t = {t:.6g} s"
 
 
 class _RobotArtists:

@@ -46,10 +46,12 @@ __all__ = [
     "BatchRow",
     "BatchResult",
     "COLUMNS",
+    "close_whole",
     "closed_whole",
     "DASK_LOGGERS",
     "QueryAnswer",
     "local_cluster",
+    "quiet_dask_logs",
     "run_batch",
     "trajectory_path",
     "write_table",
@@ -288,22 +290,28 @@ def local_cluster(workers: int, quiet: bool = True) -> Iterator[object]:
                 client = Client(cluster)
             yield client
         finally:
-            with interrupts_deferred():  # closed whole, however often Ctrl-C comes
-                if client is not None:
-                    client.close()
-                if cluster is not None:
-                    cluster.close()
+            close_whole(client, cluster)
 
 
 @contextlib.contextmanager
 def closed_whole(client) -> Iterator[object]:
-    """``client``, closed on leaving as :func:`local_cluster` closes its own: whole, a Ctrl-C
-    meanwhile raised once it is closed."""
+    """``client``, closed on leaving by :func:`close_whole`, as :func:`local_cluster` closes its own."""
     try:
         yield client
     finally:
-        with interrupts_deferred():
-            client.close()
+        close_whole(client)
+
+
+def close_whole(*parts) -> None:
+    """Close each of ``parts`` in order (a client, then its cluster; None is skipped), whole.
+
+    The one place for "closed even under Ctrl-C": a SIGINT meanwhile (under
+    :func:`gfuzzy.errors.interrupt_handling`) is only noted, and raised once every part is closed.
+    """
+    with interrupts_deferred():
+        for part in parts:
+            if part is not None:
+                part.close()
 
 
 @contextlib.contextmanager
@@ -354,18 +362,31 @@ def dask_setup(worker) -> None:
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGINT, signal.SIG_IGN)
     if os.environ.get("GFUZZY_BATCH_QUIET"):
-        for name in DASK_LOGGERS:
-            logging.getLogger(name).setLevel(logging.CRITICAL)
+        quiet_dask_logs()
+
+
+def quiet_dask_logs(errors: bool = False) -> dict[str, int]:
+    """Dask's log lines kept out of the terminal: the one place that sets the levels of
+    :data:`DASK_LOGGERS`.
+
+    Every one goes to CRITICAL (tornado's callback errors too, see :data:`DASK_LOGGERS`),
+    except that with ``errors`` Dask's own ERROR lines (``distributed``, e.g. a remote
+    scheduler lost) still show. Returns the loggers' previous levels, to set back.
+    """
+    old = {n: logging.getLogger(n).level for n in DASK_LOGGERS}
+    for n in DASK_LOGGERS:
+        shown = errors and not n.startswith("tornado")
+        logging.getLogger(n).setLevel(logging.ERROR if shown else logging.CRITICAL)
+    return old
 
 
 @contextlib.contextmanager
 def _quiet_logs(quiet: bool):
+    """:func:`quiet_dask_logs` (if ``quiet``) while the block runs, the old levels after."""
     if not quiet:
         yield
         return
-    old = {n: logging.getLogger(n).level for n in DASK_LOGGERS}
-    for n in DASK_LOGGERS:
-        logging.getLogger(n).setLevel(logging.CRITICAL)
+    old = quiet_dask_logs()
     try:
         yield
     finally:

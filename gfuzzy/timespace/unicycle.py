@@ -39,6 +39,7 @@ import numpy as np
 from ..poses import split_counts, wrap_angle
 from ..typed import FloatArray, IntArray
 from .drive import MERGE_HEADING, SAME_HEADING, _xy_pose, fan, lane_turn, pick_turn, turn_free
+from .roadgraph import vertex_clearances
 from .spacetime import SpaceTimeGraph
 from .unilanes import LANE_NEIGHBOURS, _brackets, _rings, _same_interval, lanes
 from .unipaths import dijkstra, matrix, new_to_goal, with_rows
@@ -102,7 +103,9 @@ class _Base:
     n_ring: int
 
     vertex_xy: FloatArray = None
-    #: Static clearances of the vertices' positions (a disc's), filled as connections need them.
+    #: A disc's static clearances of the roadmap's vertices (None for a box or footprint):
+    #: the one table every query's connections share (:func:`gfuzzy.timespace.roadgraph.vertex_clearances`,
+    #: which :func:`gfuzzy.timespace.unilanes.lanes` fills); the ends join only those vertices.
     clearance: FloatArray = None
     #: The roadmap's vertices, the first of ``vertex_xy``; the query ends join only these
     #: (a disc's turn points after them, :func:`gfuzzy.timespace.unilanes._turn_points`,
@@ -208,7 +211,7 @@ def _base(roadmap, geometry, stretch: float, vmax: float, step_len: float, deadl
         ring_ok=ring_ok,
         n_ring=n_ring,
         vertex_xy=xy,
-        clearance=np.full(len(xy), np.nan),
+        clearance=vertex_clearances(roadmap, geometry) if robot.shape == "disc" else None,
         roadmap_vertices=len(roadmap.vertices),
     )
     roadmap._derived[key] = return_
@@ -402,7 +405,7 @@ class _Extras:
         tried = joined = 0
         disc = robot.shape == "disc"
         c_p = geo.clearance1([px, py]) if disc else None
-        table = self.base.clearance if disc else None  # the vertices' (shared by every query)
+        table = base.clearance  # the roadmap vertices' (shared by every query)
         for v in order[: 4 * max(connect_k, 1)].tolist():
             if tried >= connect_k and joined:
                 break
