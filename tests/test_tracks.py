@@ -554,3 +554,13 @@ def test_a_mesh_folder_named_like_dot_dot_stays_in_the_folder(tmp_path):
     (folder / "sub").mkdir()
     with pytest.raises(SceneError, match=r"obstacles\[0\]\.mesh\.file"):
         _static_obstacles(static, folder / "sub")
+
+
+@pytest.mark.parametrize("stem, name", [("my walk", "my-walk"), ("gang ü #2", "gang-2"), ("über", "ber"), ("ü", "tracks")])
+def test_an_output_named_with_spaces_or_accents_names_the_scene_with_dashes(tmp_path, eth_file, stem, name):
+    # the default name is the output's stem: `-o "my walk.yaml"` was refused, exit 2,
+    # "name must be letters, digits, _ . - (got 'my walk')", a name the user never gave
+    out = tmp_path / f"{stem}.yaml"
+    proc = run_cli_process("tracks", eth_file, "-o", out)
+    assert proc.returncode == 0, proc.stderr
+    assert load_scene(out).name == name

@@ -55,6 +55,7 @@ def cmd_tracks(args) -> int:
     from ..atomic import write_atomic
     from ..scene.scene import _load_yaml, parse_scene
     from ..scene.tracks import TrackSceneOptions, read_tracks, tracks_scene
+    from ..scene.yamldoc import name_from_stem
 
     static = _load_scene(args.static) if args.static else None
     reads = ((args.file, "tracks file"), *(_scene_reads(static) if static is not None else ()))
@@ -67,7 +68,7 @@ def cmd_tracks(args) -> int:
             scale=args.scale,
             radius=args.radius,
             max_movers=args.max_movers,
-            name=args.name or out.stem,
+            name=args.name or name_from_stem(out.stem, "tracks"),
             robot_radius=args.robot_radius,
             vmax=args.vmax,
             amax=args.amax,

@@ -21,6 +21,13 @@ from ..settings import MAX_MAGNITUDE
 
 #: Names of scenes, movers and queries: letters, digits, ``_ . -``.
 NAME_RE = re.compile(r"^[A-Za-z0-9_.-]+$")
+
+
+def name_from_stem(stem: str, fallback: str) -> str:
+    """A scene name made from a file's stem: each run of characters a name cannot hold
+    (spaces, non-ASCII letters, ...) becomes ``-`` (``my map`` -> ``my-map``); ``fallback``
+    when nothing is left."""
+    return re.sub(r"[^A-Za-z0-9_.-]+", "-", stem).strip("-") or fallback
 #: Largest number of YAML nodes a scene may expand to (aliases counted each time used).
 MAX_NODES = 2_000_000
 
