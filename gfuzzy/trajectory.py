@@ -214,6 +214,10 @@ def _finite(obj):
 def load_trajectory(path: str | os.PathLike) -> TrajectoryFile:
     """Read a trajectory JSON file (docs/formats.md section 2).
 
+    The file's other keys (a plan's ``stats``; a navigate run's ``replans``,
+    ``min_separation``, ``executed``, ``replan_log``, ...) are kept, as read, in ``extra``:
+    a saved :class:`TrajectoryFile` loads back equal (unless it held NaN or inf, written as null).
+
     Raises
     ------
     SceneError
@@ -283,4 +287,10 @@ def load_trajectory(path: str | os.PathLike) -> TrajectoryFile:
         delay_factor=num("delay_factor"),
         planning_seconds=num("planning_seconds") or 0.0,
         waypoints=wps,
+        extra={k: v for k, v in doc.items() if k not in _CONTRACT_KEYS},
     )
+
+
+# the keys TrajectoryFile holds as fields; any other key of a file is an extra
+_CONTRACT_KEYS = frozenset(("version", "scene", "query", "status", "message", "duration", "roadmap_distance",
+                            "delay_factor", "planning_seconds", "waypoints"))

@@ -121,3 +121,17 @@ def test_rows_given_as_lists_make_a_trajectory_and_no_rows_are_refused():
     for bad in (np.zeros((0, 3)), [[0, 1], [1, 2]], [0, 1, 2], [[[0, 0, 0]]]):
         with pytest.raises(ValueError, match=r"waypoints: expected rows \[t, x, y\] or \[t, x, y, heading\]"):
             Trajectory(bad)
+
+
+def test_a_saved_file_loads_back_equal_with_its_other_keys(tmp_path):
+    # load_trajectory kept the contract's keys only: a plan's `stats` and a navigate run's
+    # `replans`, `min_separation`, `executed` ... were lost, and nothing saved loaded back equal
+    extra = {"stats": {"expansions": 12, "horizon": 4.5}, "replans": 3, "min_separation": 0.25,
+             "executed": [[0.0, 0.0, 0.0], [1.0, 1.0, 0.0]]}
+    tf = TrajectoryFile("s", "q", "solved", "", 4.0, 2.0, 2.0, 0.1, ROWS, extra=extra)
+    tf.save(tmp_path / "a.json")
+    back = load_trajectory(tmp_path / "a.json")
+    assert back.extra == extra and back == tf
+    no_rows = TrajectoryFile("s", "q", "timeout", "not there", None, None, None, 0.0, extra={"replans": 9})
+    no_rows.save(tmp_path / "b.json")
+    assert load_trajectory(tmp_path / "b.json") == no_rows
