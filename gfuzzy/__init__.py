@@ -13,7 +13,7 @@ from .errors import GfuzzyError, SceneError
 from .navigation.navigator import Navigator, NavOptions, NavStep
 from .planner.planner import Planner, PlanOptions, PlanResult, Status, plan
 from .roadmap.roadmap import Roadmap, RoadmapOptions, build_roadmap, load_roadmap
-from .scene.scene import Scene, load_scene
+from .scene.scene import Scene, load_scene, parse_scene
 from .scene.tracks import Track, Tracks, TrackScene, TrackSceneOptions, read_tracks, tracks_scene
 from .trajectory import Trajectory, load_trajectory
 
@@ -45,6 +45,7 @@ __all__ = [
     "load_roadmap",
     "load_scene",
     "load_trajectory",
+    "parse_scene",
     "plan",
     "read_tracks",
     "tracks_scene",

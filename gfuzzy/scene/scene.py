@@ -23,6 +23,7 @@ import numpy as np
 from ..errors import InputError, SceneError
 from ..status import Status
 from ..typed import FloatArray
+from . import yamldoc
 from .maps import MapObstacle, load_map
 from .meshes import mesh_footprint
 from .yamldoc import _V, MAX_MAGNITUDE, NAME_RE, _join, _kind, _load_yaml, _one_key, not_utf8
@@ -664,7 +665,8 @@ def parse_scene(doc: Any, file: str = "<string>", folder: str | os.PathLike | No
     Parameters
     ----------
     doc : dict
-        The parsed YAML document.
+        The document as YAML gives it, or built in code: tuples, numpy arrays and numpy
+        numbers are read as the lists and numbers they hold.
     file : str
         Name used in error messages.
     folder : path-like, optional
@@ -676,6 +678,7 @@ def parse_scene(doc: Any, file: str = "<string>", folder: str | os.PathLike | No
         On any bad input, naming ``file`` and the place in it.
     """
     v = _V(file)
+    doc = yamldoc.plain_document(doc)
     folder = Path(folder) if folder is not None else Path.cwd()
     v.mapping(
         doc,

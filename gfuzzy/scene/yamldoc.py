@@ -132,6 +132,19 @@ def not_utf8(data: bytes, exc: UnicodeDecodeError) -> str:
     return f"not UTF-8 text (line {line}, column {column}: byte 0x{data[at]:02x})"
 
 
+def plain_document(doc: Any) -> Any:
+    """``doc`` as YAML would have given it, for a scene built in code: tuples and numpy arrays
+    as lists, numpy numbers and booleans as Python's (``np.int64(2)`` -> 2); anything else
+    as it is, for the validator to judge."""
+    if isinstance(doc, dict):
+        return {k: plain_document(v) for k, v in doc.items()}
+    if isinstance(doc, (list, tuple)):
+        return [plain_document(v) for v in doc]
+    if isinstance(doc, (np.ndarray, np.generic)):
+        return doc.tolist()
+    return doc
+
+
 def plain_name(name: str, flow: bool = False) -> str:
     """``name`` as a YAML scalar that reads back as that string: plain when it does, else
     double-quoted (a scene written for ``12.yaml``, ``true.yaml`` or ``1e3.yaml`` had the
