@@ -369,6 +369,11 @@ def test_navigate_timeout_still_writes_the_executed_motion(tmp_path):
     rows = np.array(doc["executed"])
     assert rows[0, 0] == 0.0 and rows[-1, 0] == pytest.approx(3.0)
     assert doc["replans"] == 12
+    # the shortest route alone takes longer than --max-time: said before the run and in the
+    # file (it said only "the goal was not reached within 3 s")
+    rd = doc["roadmap_distance"]  # 4.0 m at vmax 1
+    why = f"the shortest roadmap route ({rd:.1f} m) takes at least {rd:.1f} s at vmax 1, more than --max-time 3 s"
+    assert f"({why}: give a larger --max-time)" in doc["message"] and f"note: {why}" in p.stderr
 
 
 def test_navigate_into_a_sealed_room_is_no_path_at_once(tmp_path):
