@@ -365,8 +365,8 @@ def cmd_regress(args) -> int:
     _check_roadmap_flags(args)  # before the table's header: bad input prints nothing else
     try:
         ok = run_regression(scenes, lambda sc: _roadmap_for(sc, args), options, sys.stdout)
-    except LimitError as exc:  # a request beyond the memory bounds (dt far too fine)
-        raise BadInput(f"gfuzzy regress: {exc}") from None
+    except LimitError as exc:  # a request beyond the memory bounds (dt far too fine): names file and query
+        raise BadInput(str(exc)) from None
     return EXIT_OK if ok else EXIT_NO
 
 
