@@ -443,7 +443,8 @@ def test_a_ctrl_c_while_the_local_client_closes_still_closes_the_cluster(monkeyp
 @pytest.mark.parametrize(
     "extra, message",
     [
-        (["--workers", "0"], "--workers"),
+        # named by the command, as every other command's options are (it began "--workers: ...")
+        (["--workers", "0"], "gfuzzy batch: --workers must be at least 1 (local worker processes), got 0"),
         (["--workers", "1", "--scheduler", "tcp://127.0.0.1:1"], "not allowed with"),
         (["-o", "{tmp}/missing/rows.csv"], "does not exist"),
         (["-o", "{tmp}/rows.txt"], ".csv"),

@@ -177,7 +177,7 @@ def cmd_batch(args) -> int:
     from ..runs.batch import DASK_LOGGERS, BatchOptions, BatchResult, write_table
 
     if args.workers is not None and args.workers < 1:
-        raise BadInput(f"--workers: must be at least 1, got {args.workers}")
+        raise BadInput(f"gfuzzy batch: --workers must be at least 1 (local worker processes), got {args.workers}")
     scenes = [_apply_overrides(_load_scene(p), args) for p in args.scenes]  # all bad input first
     reads = tuple(r for sc in scenes for r in (*_scene_reads(sc), *_roadmap_reads(sc, args)))
     out = _out_path(args.output, (".csv",), reads, beside=(".parquet",))
