@@ -13,6 +13,7 @@ import hashlib
 import json
 import logging
 import math
+import numbers
 import os
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -440,10 +441,10 @@ class Scene:
         for key, value in (("clearance", clearance), ("mover_clearance", mover_clearance)):
             if value is None:
                 continue
-            value = float(value)
-            if not (math.isfinite(value) and 0.0 <= value <= MAX_MAGNITUDE):
+            number = isinstance(value, numbers.Real) and not isinstance(value, bool)  # not "0.1", not True
+            if not (number and math.isfinite(value) and 0.0 <= value <= MAX_MAGNITUDE):
                 raise InputError(f"robot.{key} must be a non-negative finite number, got {value!r}")
-            new[key] = value
+            new[key] = float(value)
         robot = replace(robot, **new)
         raw = copy.deepcopy(self.raw)
         if isinstance(raw.get("robot"), dict):
