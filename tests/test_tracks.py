@@ -283,6 +283,11 @@ def test_static_mesh_paths_follow_the_new_file(tmp_path, csv_file):
         # a position past 1e9 was refused later, naming the scene about to be written
         ("far.txt", "0 1 0 0\n10 1 1e300 0\n", "far.txt: line 2: x 1e+300 is too large"),
         ("twice.csv", "t,id,x,y,X\n0,a,0,0,9\n1,a,1,0,9\n", "twice.csv: line 1: the header names column x twice"),
+        # a spreadsheet's semicolons or tabs, or `time` for t: "missing: t, id, x, y" of a header naming them all
+        ("semi.csv", "t;id;x;y\n0;a;0;0\n", "semi.csv: line 1: the header must name the columns t, id, x, y (missing: t, id, x, y); "
+         "the header is one column, 't;id;x;y': columns are separated by commas, not ';'"),
+        ("tab.csv", "t\tid\tx\ty\n0\ta\t0\t0\n", "tab.csv: line 1: the header must name the columns t, id, x, y (missing: t, id, x, y); the header is one column, 't\\tid\\tx\\ty': columns are separated by commas, not '\\t'"),
+        ("time.csv", "time,id,x,y\n0,a,0,0\n", "time.csv: line 1: the header must name the columns t, id, x, y (missing: t); name the time column t"),
         ("late.csv", "t,id,x,y\n0,a,0,0\n1e14,a,1,0\n", "late.csv: line 3: time 1e+14 is too large"),
         ("long.csv", "t,id,x,y\n0,a,0,0\n1e12,a,1,0\n", "long.csv: the window 0 s .. 1e+12 s is longer than 1e+09 s"),
     ],
