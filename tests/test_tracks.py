@@ -287,6 +287,8 @@ def test_static_mesh_paths_follow_the_new_file(tmp_path, csv_file):
         ("semi.csv", "t;id;x;y\n0;a;0;0\n", "semi.csv: line 1: the header must name the columns t, id, x, y (missing: t, id, x, y); "
          "the header is one column, 't;id;x;y': columns are separated by commas, not ';'"),
         ("tab.csv", "t\tid\tx\ty\n0\ta\t0\t0\n", "tab.csv: line 1: the header must name the columns t, id, x, y (missing: t, id, x, y); the header is one column, 't\\tid\\tx\\ty': columns are separated by commas, not '\\t'"),
+        ("nohead.csv", "0,1,1.0,1.0\n10,1,2.0,1.0\n", "nohead.csv: line 1: the header must name the columns t, id, x, y "
+         "(missing: t, id, x, y); this first line holds numbers: a CSV starts with a header line such as t,id,x,y"),
         ("time.csv", "time,id,x,y\n0,a,0,0\n", "time.csv: line 1: the header must name the columns t, id, x, y (missing: t); name the time column t"),
         ("late.csv", "t,id,x,y\n0,a,0,0\n1e14,a,1,0\n", "late.csv: line 3: time 1e+14 is too large"),
         ("long.csv", "t,id,x,y\n0,a,0,0\n1e12,a,1,0\n", "long.csv: the window 0 s .. 1e+12 s is longer than 1e+09 s"),
