@@ -374,6 +374,12 @@ def test_navigate_timeout_still_writes_the_executed_motion(tmp_path):
     rd = doc["roadmap_distance"]  # 4.0 m at vmax 1
     why = f"the shortest roadmap route ({rd:.1f} m) takes at least {rd:.1f} s at vmax 1, more than --max-time 3 s"
     assert f"({why}: give a larger --max-time)" in doc["message"] and f"note: {why}" in p.stderr
+    # `check` said only "there is no trajectory to check" of the motion render and export show
+    c = run_cli_process("check", ROOT / "scenes" / "sealed-room.yaml", out)
+    assert c.returncode == 1 and c.stderr.startswith(
+        f"{out}: status is timeout: the goal was not reached, no answer to check; "
+        f"the motion it executed ({len(rows)} rows, t 0 to 3) is valid (min clearance"
+    ), c.stderr
 
 
 def test_navigate_into_a_sealed_room_is_no_path_at_once(tmp_path):
