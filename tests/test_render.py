@@ -390,3 +390,16 @@ def test_render_draws_the_clearances(tmp_path):
     render(disc, a, trajectory=wps)
     render(disc.with_clearances(0.0), b, trajectory=wps)
     assert a.read_bytes() != b.read_bytes()
+
+
+def test_queries_from_one_start_share_one_label():
+    # three queries leaving one place printed their names over each other at that start
+    from gfuzzy.scene.scene import parse_scene
+
+    doc = {"version": 1, "name": "starts", "bounds": [0, 0, 6, 4], "robot": {"disc": 0.2, "vmax": 1.0},
+           "queries": [{"name": n, "start": s, "goal": [5, 3]} for n, s in
+                       (("q", [1, 1]), ("late", [1, 1]), ("other", [2, 1]), ("hold", [1, 1]))]}  # fmt: skip
+    fig, ax = R._figure(parse_scene(doc), 8.0, False, 3)
+    R._draw_queries(ax, parse_scene(doc))
+    labels = sorted((t.get_text(), tuple(t.xy)) for t in ax.texts)
+    assert labels == [("other", (2.0, 1.0)), ("q, late, hold", (1.0, 1.0))]
