@@ -35,6 +35,7 @@ _HOMES = {
     "load_roadmap": ".roadmap.roadmap",
     "Scene": ".scene.scene",
     "load_scene": ".scene.scene",
+    "parse_scene": ".scene.scene",
     "Track": ".scene.tracks",
     "Tracks": ".scene.tracks",
     "TrackScene": ".scene.tracks",
@@ -59,4 +60,3 @@ def __getattr__(name: str):
 
 def __dir__() -> list[str]:
     return sorted({*globals(), *_HOMES})
-

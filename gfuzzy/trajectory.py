@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from .atomic import write_atomic
-from .errors import SceneError
+from .errors import InputError, SceneError
 from .poses import metric_distance, pose_at
 from .status import Status
 from .typed import FloatArray
@@ -36,13 +36,25 @@ class Trajectory:
     Attributes
     ----------
     waypoints : (n, 3) or (n, 4) float
-        Rows ``[t, x, y(, heading)]``.
+        Rows ``[t, x, y(, heading)]``, n >= 1 (any sequence of such rows is taken as a float
+        array).
     circumradius : float
         The robot's circumscribed radius (weights heading change in the metric).
+
+    Raises
+    ------
+    InputError
+        Rows that are no table of ``[t, x, y(, heading)]`` (none, or of another width).
     """
 
     waypoints: FloatArray
     circumradius: float = 0.0
+
+    def __post_init__(self) -> None:
+        rows = np.asarray(self.waypoints, dtype=float)
+        if rows.ndim != 2 or len(rows) == 0 or rows.shape[1] not in (3, 4):
+            raise InputError(f"waypoints: expected rows [t, x, y] or [t, x, y, heading], at least one; got shape {rows.shape}")
+        object.__setattr__(self, "waypoints", rows)
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, Trajectory):
@@ -104,20 +116,20 @@ class Trajectory:
 
         Parameters
         ----------
-        t : float or (k,) float
+        t : float or array of float, any shape
 
         Returns
         -------
-        (d,) or (k, d) float
+        (d,) float for a number; an array of shape ``t.shape + (d,)`` otherwise
         """
-        scalar = np.ndim(t) == 0
-        tt = np.clip(np.atleast_1d(np.asarray(t, dtype=float)), self.t0, self.t_end)
+        shape = np.shape(t)
+        tt = np.clip(np.asarray(t, dtype=float).reshape(-1), self.t0, self.t_end)
         times, poses = self.times, self.poses
         if len(times) == 1:
             out = np.repeat(poses[:1], len(tt), axis=0)
-            return out[0] if scalar else out
-        out = pose_at(times, poses, tt)
-        return out[0] if scalar else out
+        else:
+            out = pose_at(times, poses, tt)
+        return out.reshape(*shape, poses.shape[1])
 
     def to_csv(self) -> str:
         """CSV text with header ``t,x,y`` or ``t,x,y,heading``."""
@@ -202,6 +214,10 @@ def _finite(obj):
 def load_trajectory(path: str | os.PathLike) -> TrajectoryFile:
     """Read a trajectory JSON file (docs/formats.md section 2).
 
+    The file's other keys (a plan's ``stats``; a navigate run's ``replans``,
+    ``min_separation``, ``executed``, ``replan_log``, ...) are kept, as read, in ``extra``:
+    a saved :class:`TrajectoryFile` loads back equal (unless it held NaN or inf, written as null).
+
     Raises
     ------
     SceneError
@@ -271,4 +287,10 @@ def load_trajectory(path: str | os.PathLike) -> TrajectoryFile:
         delay_factor=num("delay_factor"),
         planning_seconds=num("planning_seconds") or 0.0,
         waypoints=wps,
+        extra={k: v for k, v in doc.items() if k not in _CONTRACT_KEYS},
     )
+
+
+# the keys TrajectoryFile holds as fields; any other key of a file is an extra
+_CONTRACT_KEYS = frozenset(("version", "scene", "query", "status", "message", "duration", "roadmap_distance",
+                            "delay_factor", "planning_seconds", "waypoints"))

@@ -16,6 +16,7 @@ from shared_scenes import LOOP
 
 from gfuzzy import load_scene, plan
 from gfuzzy.cli import main
+from gfuzzy.errors import LimitError
 from gfuzzy.roadmap.roadmap import load_roadmap
 from gfuzzy.runs.batch import (
     COLUMNS,
@@ -38,6 +39,11 @@ cloudpickle.register_pickle_by_value(sys.modules[__name__])
 def raise_on_across(scene: str, query: str) -> None:
     if query == "across":
         raise RuntimeError("injected failure")
+
+
+def limit_on_across(scene: str, query: str) -> None:
+    if query == "across":
+        raise LimitError("too many samples (injected)")
 
 
 def exit_on_across(scene: str, query: str) -> None:
@@ -217,6 +223,14 @@ def test_a_raising_query_is_an_error_row(client, pairs, tmp_path):
     assert len(res.rows) == n_queries(pairs[:2])
     assert all(r.status == "solved" for r in res.rows if r.query != "across")
     assert not stale.exists()  # no answer: the previous run's file is gone
+
+
+def test_a_query_beyond_the_memory_bounds_is_an_error_row_without_a_traceback(client, pairs):
+    # a LimitError (a query's hold of 1e6 s: too many mover samples) is a request refused, as
+    # an InputError is, not a bug: its traceback was printed on the terminal
+    res = run_batch(client, pairs[:1], before=limit_on_across)
+    (bad,) = [r for r in res.rows if r.status == "error"]
+    assert bad.error == "LimitError: too many samples (injected)" and bad.traceback == ""
 
 
 def test_a_killed_worker_is_an_error_row(client, pairs):
@@ -505,7 +519,8 @@ def test_a_ctrl_c_while_the_local_client_closes_still_closes_the_cluster(monkeyp
 @pytest.mark.parametrize(
     "extra, message",
     [
-        (["--workers", "0"], "--workers"),
+        # named by the command, as every other command's options are (it began "--workers: ...")
+        (["--workers", "0"], "gfuzzy batch: --workers must be at least 1 (local worker processes), got 0"),
         (["--workers", "1", "--scheduler", "tcp://127.0.0.1:1"], "not allowed with"),
         (["-o", "{tmp}/missing/rows.csv"], "does not exist"),
         (["-o", "{tmp}/rows.txt"], ".csv"),

@@ -369,6 +369,17 @@ def test_navigate_timeout_still_writes_the_executed_motion(tmp_path):
     rows = np.array(doc["executed"])
     assert rows[0, 0] == 0.0 and rows[-1, 0] == pytest.approx(3.0)
     assert doc["replans"] == 12
+    # the shortest route alone takes longer than --max-time: said before the run and in the
+    # file (it said only "the goal was not reached within 3 s")
+    rd = doc["roadmap_distance"]  # 4.0 m at vmax 1
+    why = f"the shortest roadmap route ({rd:.1f} m) takes at least {rd:.1f} s at vmax 1, more than --max-time 3 s"
+    assert f"({why}: give a larger --max-time)" in doc["message"] and f"note: {why}" in p.stderr
+    # `check` said only "there is no trajectory to check" of the motion render and export show
+    c = run_cli_process("check", ROOT / "scenes" / "sealed-room.yaml", out)
+    assert c.returncode == 1 and c.stderr.startswith(
+        f"{out}: status is timeout: the goal was not reached, no answer to check; "
+        f"the motion it executed ({len(rows)} rows, t 0 to 3) is valid (min clearance"
+    ), c.stderr
 
 
 def test_navigate_into_a_sealed_room_is_no_path_at_once(tmp_path):
@@ -932,3 +943,21 @@ def test_a_pose_beyond_1e9_is_refused_as_the_planner_refuses_it(open_square, pos
     nav = Navigator(scene, rm, (0.0, 4.0))
     with pytest.raises(InputError, match="number too large"):
         nav.step(0.0, np.array(pose), np.zeros((0, 5)))
+
+
+def test_step_and_goal_name_what_is_wrong_and_take_no_strings_or_booleans():
+    # nav.step("a", ...) raised "could not convert string to float: 'a'"; strings were taken as
+    # coordinates (["0.5", "0.5"]) and so were booleans; the message said only "pose must be
+    # 2 finite numbers and t finite"
+    scene = parse_scene({"version": 1, "name": "n", "bounds": [0, 0, 4, 2], "robot": {"disc": 0.2, "vmax": 1.0}})
+    rm = gfuzzy.build_roadmap(scene, gfuzzy.RoadmapOptions(vertices=20, seed=1))
+    with pytest.raises(InputError, match=r"^goal: expected 2 finite numbers \[x, y\] for this disc robot, got \[True, False\]$"):
+        Navigator(scene, rm, [True, False])
+    nav = Navigator(scene, rm, (3.5, 1.0), NavOptions(budget_clock="cpu"))
+    with pytest.raises(InputError, match=r"^t: expected a finite number, got 'a'$"):
+        nav.step("a", (0.5, 1.0), [])
+    with pytest.raises(InputError, match=r"^pose: expected 2 finite numbers \[x, y\] for this disc robot, got \['0.5', '1'\]$"):
+        nav.step(0.0, ["0.5", "1"], [])
+    with pytest.raises(InputError, match=r"^pose: expected 2 finite numbers .*, got \[nan, 1.0\]$"):
+        nav.step(0.0, (math.nan, 1.0), [])
+    assert nav.step(np.float32(0.5), [[0.5, 1.0]], []).t0 == 0.5  # numpy numbers and a (1, 2) pose serve

@@ -447,6 +447,17 @@ def test_bad_options_and_poses_raise_input_error():
             NavOptions(**kwargs)
     with pytest.raises(InputError, match="start: expected 2 finite numbers"):
         check_pose([0.0, float("nan")], 2, "start")
+    # strings and booleans were taken as numbers: ["0.5", "0.5"] planned, [True, False] was the
+    # pose (1, 0); a scene file refuses both, and so does t0
+    for pose in (["0.5", "0.5"], [True, False], [None, 1.0], [[0.5], [0.5, 1.0]]):
+        with pytest.raises(InputError, match=r"start: expected 2 finite numbers \[x, y\] for a disc robot, got \["):
+            check_pose(pose, 2, "start")
+    np.testing.assert_array_equal(check_pose((np.float32(0.5), np.int64(2)), 2, "start"), [0.5, 2.0])
+    scene = parse_scene({"version": 1, "name": "c", "bounds": [0, 0, 1, 1], "robot": {"disc": 0.1, "vmax": 1}})
+    for value in ("0.1", True):
+        with pytest.raises(InputError, match=r"robot.clearance must be a non-negative finite number, got"):
+            scene.with_clearances(value)
+    assert scene.with_clearances(np.float32(0.25), 1).robot.mover_clearance == 1.0
     with pytest.raises(InputError, match="w must be a number >= 1, got 0.5"):
         check_number("w", 0.5, 1.0, strict=False)
     check_number("w", 1.0, 1.0, strict=False)

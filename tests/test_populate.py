@@ -125,6 +125,12 @@ def test_populate_refuses_bad_input(tmp_path):
             assert p.stderr.startswith("gfuzzy populate: seed must be")
 
 
+def test_too_long_a_walk_is_refused_in_seconds():
+    # "duration / dt must be at most 100000 samples": dt is no option of `gfuzzy populate`
+    with pytest.raises(InputError, match=r"^duration must be at most 25000 s \(100000 steps of 0.25 s\), got 1e\+06$"):
+        PopulateOptions(people=2, duration=1e6)
+
+
 def test_a_waypoint_outside_the_bounds_is_refused_even_where_the_grid_is_coarse():
     # on a long floor the grid's cells are 1.2 m and its border cells are free: the lookup
     # clamped (1000, 5) to one of them and people were sent 700 m beyond the bounds

@@ -9,6 +9,7 @@ import yaml
 from helpers import BUNDLED_SCENES as SCENES
 from helpers import bundled_setup as _setup
 
+from gfuzzy.cli import main
 from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
 from gfuzzy.runs.regress import format_row, regress_scene, run_regression
 from gfuzzy.scene.scene import load_scene, parse_scene
@@ -49,6 +50,21 @@ def test_run_regression_prints_a_table_and_the_count():
     assert ok is False
     assert len(lines) == 1 + 4 + 1
     assert lines[-1] == "2 of 4 queries met their expectations"
+
+
+def test_a_query_beyond_the_memory_bounds_names_the_scene_file_and_the_query(tmp_path, capsys):
+    # `gfuzzy regress` of many scenes said only "gfuzzy regress: 3 movers over 14,285,716 time
+    # steps (the hold's ...) are too many to sample ...": which file, which query?
+    doc = yaml.safe_load(SCENE)
+    doc["movers"] = [{"name": f"m{i}", "disc": 0.2, "speed": 0.5, "path": [[1, 0.3], [3, 0.3]], "mode": "bounce"}
+                     for i in range(3)]
+    doc["queries"] = [doc["queries"][3], {"name": "parked", "start": [0.5, 1], "goal": [3.5, 1], "hold": 1e6}]
+    path = tmp_path / "tiny.yaml"
+    path.write_text(yaml.safe_dump(doc))
+    assert main(["regress", str(path), "-n", "20"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith(f"{path}: queries[1] (parked): 3 movers over"), err
+    assert "too many to sample" in err
 
 
 def test_a_scene_without_queries_gets_a_line_and_no_roadmap():

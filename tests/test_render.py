@@ -406,3 +406,16 @@ def test_a_gif_of_a_trajectory_ending_at_1e300_keeps_its_delays_and_clock_in_bou
     assert _gif_durations(4, 1000.0 / 15) == [70, 60, 70, 70]  # real time kept below the bound
     assert _clock_text(1e300) == "t = 1e+300 s"
     assert _clock_text(6.65) == "t =   6.65 s"
+
+
+def test_queries_from_one_start_share_one_label():
+    # three queries leaving one place printed their names over each other at that start
+    from gfuzzy.scene.scene import parse_scene
+
+    doc = {"version": 1, "name": "starts", "bounds": [0, 0, 6, 4], "robot": {"disc": 0.2, "vmax": 1.0},
+           "queries": [{"name": n, "start": s, "goal": [5, 3]} for n, s in
+                       (("q", [1, 1]), ("late", [1, 1]), ("other", [2, 1]), ("hold", [1, 1]))]}  # fmt: skip
+    fig, ax = R._figure(parse_scene(doc), 8.0, False, 3)
+    R._draw_queries(ax, parse_scene(doc))
+    labels = sorted((t.get_text(), tuple(t.xy)) for t in ax.texts)
+    assert labels == [("other", (2.0, 1.0)), ("q, late, hold", (1.0, 1.0))]

@@ -18,6 +18,7 @@ from hypothesis import strategies as st
 from reference import prism_mesh
 from shared_scenes import DOOR, LOOP
 
+import gfuzzy
 from gfuzzy.errors import SceneError
 from gfuzzy.scene.scene import Box, Disc, Polygon, load_scene, parse_scene
 from gfuzzy.scene.yamldoc import dump_yaml
@@ -769,3 +770,41 @@ def test_hold_is_read_and_validated():
     doc["queries"][0]["hold"] = -1
     with pytest.raises(ValueError, match=r"queries\[0\].hold"):
         parse_scene(doc)
+
+
+def test_a_scene_built_in_code_with_tuples_and_numpy_reads_as_its_yaml(tmp_path):
+    # gfuzzy.parse_scene refused what code holds: "bounds: expected a list of 4 numbers, got
+    # tuple", "got ndarray", "bounds[0]: expected a number, got int64" (np.float64 passed)
+    text = """\
+version: 1
+name: built
+bounds: [-50, -30, -40, -24]
+robot: {disc: 0.25, vmax: 1.0}
+obstacles:
+  - polygon: [[-46, -29], [-44, -29], [-45, -27]]
+movers:
+  - {name: a, disc: 0.3, speed: 0.5, path: [[-49, -25], [-41, -25]], mode: bounce}
+  - {name: b, disc: 0.3, trajectory: [[0, -48, -26], [2, -47, -26]]}
+queries:
+  - {name: q, start: [-49.5, -29.5], goal: [-40.5, -24.5], t0: 1}
+"""
+    (tmp_path / "built.yaml").write_text(text)
+    from_file = load_scene(tmp_path / "built.yaml")
+    built = gfuzzy.parse_scene({
+        "version": np.int64(1), "name": "built", "bounds": np.array([-50, -30, -40, -24]),
+        "robot": {"disc": np.float32(0.25), "vmax": 1.0},
+        "obstacles": [{"polygon": np.array([[-46.0, -29.0], [-44.0, -29.0], [-45.0, -27.0]])}],
+        "movers": ({"name": "a", "disc": 0.3, "speed": np.float64(0.5), "path": ((-49, -25), (-41, -25)), "mode": "bounce"},
+                   {"name": "b", "disc": 0.3, "trajectory": np.array([[0, -48, -26], [2, -47, -26]])}),
+        "queries": [{"name": "q", "start": (np.int32(-49), -29.5), "goal": np.array([-40.5, -24.5]), "t0": np.int64(1)}],
+    })
+    assert built.static_hash == from_file.static_hash
+    assert built.robot.radius == 0.25 and built.queries[0].start == (-49.0, -29.5)
+    assert built.queries[0].goal == from_file.queries[0].goal and built.queries[0].t0 == 1.0
+    for a, b in zip(built.movers, from_file.movers, strict=True):
+        np.testing.assert_array_equal(a.state(np.array([0.5, 1.5]))[0], b.state(np.array([0.5, 1.5]))[0])
+    with pytest.raises(SceneError, match=r"bounds\[2\]: expected a finite number, got nan"):
+        gfuzzy.parse_scene({"version": 1, "name": "n", "bounds": np.array([0, 0, np.nan, 1]), "robot": {"disc": 0.1, "vmax": 1}})
+    drive = gfuzzy.parse_scene({"version": 1, "name": "n", "bounds": [0, 0, 1, 1],
+                                "robot": {"disc": 0.1, "vmax": 1, "kinematics": "unicycle", "reverse": np.bool_(True)}})
+    assert drive.robot.reverse is True

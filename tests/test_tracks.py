@@ -283,6 +283,13 @@ def test_static_mesh_paths_follow_the_new_file(tmp_path, csv_file):
         # a position past 1e9 was refused later, naming the scene about to be written
         ("far.txt", "0 1 0 0\n10 1 1e300 0\n", "far.txt: line 2: x 1e+300 is too large"),
         ("twice.csv", "t,id,x,y,X\n0,a,0,0,9\n1,a,1,0,9\n", "twice.csv: line 1: the header names column x twice"),
+        # a spreadsheet's semicolons or tabs, or `time` for t: "missing: t, id, x, y" of a header naming them all
+        ("semi.csv", "t;id;x;y\n0;a;0;0\n", "semi.csv: line 1: the header must name the columns t, id, x, y (missing: t, id, x, y); "
+         "the header is one column, 't;id;x;y': columns are separated by commas, not ';'"),
+        ("tab.csv", "t\tid\tx\ty\n0\ta\t0\t0\n", "tab.csv: line 1: the header must name the columns t, id, x, y (missing: t, id, x, y); the header is one column, 't\\tid\\tx\\ty': columns are separated by commas, not '\\t'"),
+        ("nohead.csv", "0,1,1.0,1.0\n10,1,2.0,1.0\n", "nohead.csv: line 1: the header must name the columns t, id, x, y "
+         "(missing: t, id, x, y); this first line holds numbers: a CSV starts with a header line such as t,id,x,y"),
+        ("time.csv", "time,id,x,y\n0,a,0,0\n", "time.csv: line 1: the header must name the columns t, id, x, y (missing: t); name the time column t"),
         ("late.csv", "t,id,x,y\n0,a,0,0\n1e14,a,1,0\n", "late.csv: line 3: time 1e+14 is too large"),
         ("long.csv", "t,id,x,y\n0,a,0,0\n1e12,a,1,0\n", "long.csv: the window 0 s .. 1e+12 s is longer than 1e+09 s"),
     ],
@@ -554,3 +561,13 @@ def test_a_mesh_folder_named_like_dot_dot_stays_in_the_folder(tmp_path):
     (folder / "sub").mkdir()
     with pytest.raises(SceneError, match=r"obstacles\[0\]\.mesh\.file"):
         _static_obstacles(static, folder / "sub")
+
+
+@pytest.mark.parametrize("stem, name", [("my walk", "my-walk"), ("gang ü #2", "gang-2"), ("über", "ber"), ("ü", "tracks")])
+def test_an_output_named_with_spaces_or_accents_names_the_scene_with_dashes(tmp_path, eth_file, stem, name):
+    # the default name is the output's stem: `-o "my walk.yaml"` was refused, exit 2,
+    # "name must be letters, digits, _ . - (got 'my walk')", a name the user never gave
+    out = tmp_path / f"{stem}.yaml"
+    proc = run_cli_process("tracks", eth_file, "-o", out)
+    assert proc.returncode == 0, proc.stderr
+    assert load_scene(out).name == name

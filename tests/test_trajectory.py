@@ -97,3 +97,41 @@ def test_trajectory_files_with_other_waypoints_or_extras_are_not_equal():
     no_rows = TrajectoryFile("s", "q", "no_path", "x", None, None, None, 0.0)
     assert no_rows == TrajectoryFile("s", "q", "no_path", "x", None, None, None, 0.0)
     assert no_rows != doc(rows)
+
+
+@pytest.mark.parametrize("heading", [False, True])
+def test_at_keeps_the_shape_of_the_times(heading):
+    # a (2, 2) array of times gave a (2, 2, 2) array whose rows were not the poses at those
+    # times (a disc robot), or an IndexError (a robot with a heading)
+    rows = np.c_[ROWS, [0.0, 0.5, 1.0, 1.5]] if heading else ROWS
+    tr = Trajectory(rows)
+    times = np.array([[0.5, 2.0], [3.5, 9.0]])
+    got = tr.at(times)
+    assert got.shape == (2, 2, rows.shape[1] - 1)
+    np.testing.assert_allclose(got.reshape(4, -1), tr.at(times.reshape(-1)))
+    np.testing.assert_allclose(got[1, 0, :2], [1.0, 0.5])
+    assert tr.at(2.0).shape == (rows.shape[1] - 1,) and tr.at([]).shape == (0, rows.shape[1] - 1)
+
+
+def test_rows_given_as_lists_make_a_trajectory_and_no_rows_are_refused():
+    # Trajectory([[...]]) was kept as a list: .duration raised "list indices must be integers";
+    # no rows raised IndexError at the first use, far from the mistake
+    tr = Trajectory([[0, 0, 0], [1, 1, 0]])
+    assert tr.duration == 1.0 and tr.waypoints.dtype == float and tr == Trajectory(np.array([[0.0, 0, 0], [1, 1, 0]]))
+    for bad in (np.zeros((0, 3)), [[0, 1], [1, 2]], [0, 1, 2], [[[0, 0, 0]]]):
+        with pytest.raises(ValueError, match=r"waypoints: expected rows \[t, x, y\] or \[t, x, y, heading\]"):
+            Trajectory(bad)
+
+
+def test_a_saved_file_loads_back_equal_with_its_other_keys(tmp_path):
+    # load_trajectory kept the contract's keys only: a plan's `stats` and a navigate run's
+    # `replans`, `min_separation`, `executed` ... were lost, and nothing saved loaded back equal
+    extra = {"stats": {"expansions": 12, "horizon": 4.5}, "replans": 3, "min_separation": 0.25,
+             "executed": [[0.0, 0.0, 0.0], [1.0, 1.0, 0.0]]}
+    tf = TrajectoryFile("s", "q", "solved", "", 4.0, 2.0, 2.0, 0.1, ROWS, extra=extra)
+    tf.save(tmp_path / "a.json")
+    back = load_trajectory(tmp_path / "a.json")
+    assert back.extra == extra and back == tf
+    no_rows = TrajectoryFile("s", "q", "timeout", "not there", None, None, None, 0.0, extra={"replans": 9})
+    no_rows.save(tmp_path / "b.json")
+    assert load_trajectory(tmp_path / "b.json") == no_rows

@@ -55,6 +55,7 @@ def cmd_tracks(args) -> int:
     from ..atomic import write_atomic
     from ..scene.scene import _load_yaml, parse_scene
     from ..scene.tracks import TrackSceneOptions, read_tracks, tracks_scene
+    from ..scene.yamldoc import name_from_stem
 
     static = _load_scene(args.static) if args.static else None
     reads = ((args.file, "tracks file"), *(_scene_reads(static) if static is not None else ()))
@@ -67,7 +68,7 @@ def cmd_tracks(args) -> int:
             scale=args.scale,
             radius=args.radius,
             max_movers=args.max_movers,
-            name=args.name or out.stem,
+            name=args.name or name_from_stem(out.stem, "tracks"),
             robot_radius=args.robot_radius,
             vmax=args.vmax,
             amax=args.amax,
@@ -175,7 +176,7 @@ def cmd_batch(args) -> int:
     from ..runs.batch import BatchOptions, BatchResult, quiet_dask_logs, write_table
 
     if args.workers is not None and args.workers < 1:
-        raise BadInput(f"--workers: must be at least 1, got {args.workers}")
+        raise BadInput(f"gfuzzy batch: --workers must be at least 1 (local worker processes), got {args.workers}")
     scenes = [_apply_overrides(_load_scene(p), args) for p in args.scenes]  # all bad input first
     reads = tuple(r for sc in scenes for r in (*_scene_reads(sc), *_roadmap_reads(sc, args)))
     out = _out_path(args.output, (".csv",), reads, beside=(".parquet",))
@@ -335,6 +336,9 @@ def cmd_navigate(args) -> int:
             tf.save(out)
         _say(f"{scene.name} {query.name}: no_path ({sealed})", sys.stdout)
         return EXIT_NO
+    slow = _beyond_max_time(rd, scene.robot.vmax, args.max_time)
+    if slow:  # said before the run: it will time out whatever the movers do
+        _say(f"note: {slow}")
     res = simulate(
         scene, roadmap, query.start, query.goal, query.t0, args.period, sense, args.max_time,
         navigator=nav, log_every=args.log_every, sensor=sensor,
@@ -343,7 +347,7 @@ def cmd_navigate(args) -> int:
     report = check_trajectory(scene, wps, query if res.reached else None)
     rd_ok = math.isfinite(rd)
     solved = res.reached
-    message = "" if solved else f"the goal was not reached within {args.max_time:g} s"
+    message = "" if solved else f"the goal was not reached within {args.max_time:g} s" + (f" ({slow})" if slow else "")
     if not report.valid:
         message = (message + "; " if message else "") + f"the executed trajectory is invalid: {report.reason}"
     extra = {
@@ -378,17 +382,30 @@ def cmd_navigate(args) -> int:
     )
     if out is not None:
         tf.save(out)
+    _say(f"{scene.name} {query.name}: {_navigate_summary(res, report)}", sys.stdout)
+    return EXIT_OK if (solved and report.valid) else EXIT_NO
+
+
+def _navigate_summary(res, report) -> str:
+    """``navigate``'s one line on a run: the outcome, the replans' times, the distances kept, the check."""
     sep = "none seen" if not math.isfinite(res.min_separation) else f"{res.min_separation:.3f} m"
-    line = f"{scene.name} {query.name}: {'solved' if solved else 'timeout'}"
-    if solved:
-        line += f" in {res.duration:.2f} s"
-    line += (
-        f", {res.replans} replans (p95 {res.latency(0.95) * 1000:.0f} ms, max "
+    return (
+        (f"solved in {res.duration:.2f} s" if res.reached else "timeout")
+        + f", {res.replans} replans (p95 {res.latency(0.95) * 1000:.0f} ms, max "
         f"{float(res.replan_seconds.max(initial=0.0)) * 1000:.0f} ms), min separation {sep}, "
         f"discomfort {res.social.discomfort_frequency:.3f}, intrusion {res.social.intrusion_ratio:.3f}, "
         f"check {'valid' if report.valid else 'INVALID: ' + report.reason}"
     )
-    _say(line, sys.stdout)
-    return EXIT_OK if (solved and report.valid) else EXIT_NO
+
+
+def _beyond_max_time(rd: float, vmax: float, max_time: float) -> str:
+    """Why a navigate run cannot arrive within ``--max-time``: the shortest roadmap route
+    ``rd`` alone takes longer at ``vmax`` (a 500 m hall timed out after the default 120 s
+    saying only "not reached"); "" when it can."""
+    fastest = rd / vmax
+    if not math.isfinite(fastest) or fastest <= max_time:
+        return ""
+    return (f"the shortest roadmap route ({rd:.1f} m) takes at least {fastest:.1f} s at vmax {vmax:g}, "
+            f"more than --max-time {max_time:g} s: give a larger --max-time")
 
 

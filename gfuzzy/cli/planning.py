@@ -205,7 +205,8 @@ def cmd_check(args) -> int:
     scene = _apply_overrides(_load_scene(args.scene), args)
     tf = load_trajectory(args.trajectory)
     if tf.status != Status.SOLVED:
-        _say(f"{args.trajectory}: status is {tf.status}: there is no trajectory to check")
+        executed = _executed_verdict(scene, args.trajectory)
+        _say(f"{args.trajectory}: status is {tf.status}: " + (executed or "there is no trajectory to check"))
         return EXIT_NO
     query = _query_of(scene, tf)
     if tf.scene and tf.scene != scene.name:
@@ -239,6 +240,21 @@ def cmd_check(args) -> int:
         sys.stdout,
     )
     return EXIT_OK
+
+
+def _executed_verdict(scene, path) -> str:
+    """What the check says of a navigate run's ``executed`` rows, when it did not arrive (its
+    motion, speed and collisions, as navigate checked them), or "" (no such rows)."""
+    from ..check.check import check_trajectory
+
+    rows = _navigate_extras(path).get("executed")
+    if not rows or len(rows[0]) != scene.robot.dof + 1:
+        return ""
+    rep = check_trajectory(scene, rows, None)
+    done = f"the goal was not reached, no answer to check; the motion it executed ({len(rows)} rows, t {rows[0][0]:g} to {rows[-1][0]:g})"
+    if not rep.valid:
+        return f"{done} is invalid: {rep.reason}"
+    return f"{done} is valid (min clearance {max(rep.min_clearance, 0.0):.4f}, max speed {rep.max_speed:.4f})"
 
 
 def _rows_fit(scene, tf, path) -> None:
@@ -365,8 +381,8 @@ def cmd_regress(args) -> int:
     _check_roadmap_flags(args)  # before the table's header: bad input prints nothing else
     try:
         ok = run_regression(scenes, lambda sc: _roadmap_for(sc, args), options, sys.stdout)
-    except LimitError as exc:  # a request beyond the memory bounds (dt far too fine)
-        raise BadInput(f"gfuzzy regress: {exc}") from None
+    except LimitError as exc:  # a request beyond the memory bounds (dt far too fine): names file and query
+        raise BadInput(str(exc)) from None
     return EXIT_OK if ok else EXIT_NO
 
 

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import logging
 import math
+import numbers
 import time
 from dataclasses import dataclass, field, replace
 
@@ -38,11 +39,11 @@ import numpy as np
 
 from ..collision.geometry import StaticGeometry, mover_distance
 from ..errors import InputError, LimitError, check_number
-from ..planner.planner import BACKENDS, search_function
+from ..planner.planner import BACKENDS, check_pose, search_function
 from ..poses import metric_distance, wrap_angle
 from ..roadmap.roadmap import Roadmap
 from ..scene.scene import Scene
-from ..settings import MAX_MAGNITUDE, SPEED_SAFETY
+from ..settings import SPEED_SAFETY
 from ..status import Status
 from ..timespace.drive import Fan, drive_rows
 from ..timespace.movers import MoverField
@@ -279,15 +280,17 @@ class _Searched:
     ahead: list = field(default_factory=list)
 
 
-def _checked_pose(pose, dof: int, t: float) -> FloatArray:
-    """``pose`` as a (dof,) float array; InputError when malformed, not finite, beyond
-    ``MAX_MAGNITUDE`` (as a scene file's and :func:`gfuzzy.plan`'s), or ``t`` not finite."""
-    pose = np.asarray(pose, dtype=float).reshape(-1).copy()
-    if pose.shape != (dof,) or not np.all(np.isfinite(pose)) or not math.isfinite(t):
-        raise InputError(f"pose must be {dof} finite numbers and t finite")
-    if np.abs(pose).max() > MAX_MAGNITUDE:
-        raise InputError(f"pose: number too large ({np.abs(pose).max():g}; at most {MAX_MAGNITUDE:g} in magnitude)")
-    return pose
+def _checked_pose(pose, robot, t) -> FloatArray:
+    """``pose`` as a (dof,) float array (``[[x, y]]`` serves as ``[x, y]``); InputError naming
+    what is wrong when it is not ``dof`` finite numbers (a string or a boolean is none, as in a
+    scene file; beyond ``MAX_MAGNITUDE`` too, as :func:`gfuzzy.plan`'s), or ``t`` is no finite number."""
+    if isinstance(t, bool) or not isinstance(t, numbers.Real) or not math.isfinite(t):
+        raise InputError(f"t: expected a finite number, got {t!r}")
+    try:
+        pose = np.asarray(pose).reshape(-1)
+    except ValueError:  # rows of other lengths: check_pose says so
+        pass
+    return check_pose(pose, robot.dof, "pose", robot)
 
 
 class Navigator(PathSpace, Prediction):
@@ -321,9 +324,7 @@ class Navigator(PathSpace, Prediction):
         self.roadmap = roadmap
         self.robot = robot = scene.robot
         self.geometry = StaticGeometry(scene)
-        goal = np.asarray(goal, dtype=float).reshape(-1)
-        if goal.shape != (robot.dof,) or not np.all(np.isfinite(goal)):
-            raise InputError(f"goal must be {robot.dof} finite numbers")
+        goal = check_pose(goal, robot.dof, "goal", robot)
         if self.geometry.bounds_clearance(goal[None])[0] < 0 or self.geometry.clearance1(goal) < 0:
             raise InputError(f"goal {goal.tolist()} is out of bounds or collides with a static obstacle")
         self.goal = goal
@@ -463,8 +464,8 @@ class Navigator(PathSpace, Prediction):
         """
         t_begin = self._clock()
         opts = self.options
+        pose = _checked_pose(pose, self.robot, t)
         t = float(t)
-        pose = _checked_pose(pose, self.robot.dof, t)
         obs = _observation_rows(observations)
         if not np.all(np.isfinite(obs)) or np.any(obs[:, 4] < 0):
             raise InputError("observations must be finite rows [x, y, vx, vy, radius >= 0]")

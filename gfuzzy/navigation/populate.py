@@ -78,8 +78,9 @@ class PopulateOptions:
             raise InputError(f"people must be between 1 and 500, got {self.people}")
         for name in ("duration", "radius", "speed", "dt"):
             check_number(name, getattr(self, name))  # positive, at most 1e9: ORCA's arithmetic overflows beyond
-        if self.duration / self.dt > 100_000:
-            raise InputError("duration / dt must be at most 100000 samples")
+        if self.duration / self.dt > 100_000:  # named in seconds: dt is no option of `gfuzzy populate`
+            raise InputError(f"duration must be at most {100_000 * self.dt:g} s (100000 steps of {self.dt:g} s), "
+                             f"got {self.duration:g}")
         create_rng(self.seed)  # a negative seed is refused here, before the walk
         if self.duration < self.dt:  # one sample is no walk: nobody would be written
             raise InputError(f"duration must be at least one step of {self.dt:g} s, got {self.duration:g}")

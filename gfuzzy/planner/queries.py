@@ -31,9 +31,13 @@ def check_pose(pose, dof: int, label: str, robot=None) -> FloatArray:
         unicycle = getattr(robot, "kinematics", "holonomic") != "holonomic"
         want += f" for this {robot.shape} robot" + (f" ({robot.kinematics})" if unicycle else "")
     try:
-        arr = np.asarray(pose, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(f"{label}: expected {dof} finite numbers {want}, got {pose!r}") from None
+        arr = np.asarray(pose)
+    except (TypeError, ValueError):  # rows of other lengths
+        arr = np.array(None)
+    if arr.dtype.kind not in "iuf":  # a string, a boolean, None: no number, as in a scene file
+        shown = pose.tolist() if isinstance(pose, np.ndarray) else pose
+        raise InputError(f"{label}: expected {dof} finite numbers {want}, got {shown!r}")
+    arr = arr.astype(float)
     if arr.ndim != 1 or arr.shape != (dof,):
         got = f"{arr.size} numbers" if arr.ndim == 1 else f"shape {arr.shape}"
         raise InputError(f"{label}: expected {dof} finite numbers {want}, got {got}")

@@ -421,10 +421,12 @@ def _draw_queries(ax, scene: Scene) -> None:
                 zorder=6,
                 label=what if k == 0 else None,
             )
-        if len(scene.queries) > 1:
-            ax.annotate(
-                q.name, q.start[:2], xytext=(4, 4), textcoords="offset points", fontsize=7, zorder=6
-            )
+    if len(scene.queries) > 1:  # one label per start: names of queries leaving one place were printed over each other
+        at: dict = {}
+        for q in scene.queries:
+            at.setdefault(tuple(q.start[:2]), []).append(q.name)
+        for xy, names in at.items():
+            ax.annotate(", ".join(names), xy, xytext=(4, 4), textcoords="offset points", fontsize=7, zorder=6)
 
 
 def _nice_step(duration: float, target: int = 8) -> float:

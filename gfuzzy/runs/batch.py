@@ -36,7 +36,14 @@ from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 
 from ..atomic import write_atomic, write_atomic_with
-from ..errors import InputError, check_interrupt, clear_interrupt, interrupts_deferred, is_interrupt
+from ..errors import (
+    InputError,
+    LimitError,
+    check_interrupt,
+    clear_interrupt,
+    interrupts_deferred,
+    is_interrupt,
+)
 from ..planner.planner import PlanOptions
 from ..roadmap.roadmap import Roadmap
 from ..scene.scene import Scene
@@ -98,7 +105,7 @@ class BatchRow:
     ``timeout``) or ``error`` when the query failed to run (``error`` then says why).
     ``check`` is ``valid`` or ``invalid`` for a solved answer, ``""`` otherwise.
     ``traceback`` is the failure's traceback for an ``error`` row that is a bug (not an
-    `InputError`): kept for the terminal and the log, never a column of the table.
+    `InputError` or `LimitError`): kept for the terminal and the log, never a column of the table.
     """
 
     scene: str
@@ -237,7 +244,7 @@ def _one_line(exc: BaseException) -> str:
 
 def _error_row(scene: str, query: str, exc: BaseException) -> BatchRow:
     """The ``error`` row of a query that raised ``exc``: a bug keeps its traceback."""
-    tb = "" if isinstance(exc, InputError) else "".join(traceback.format_exception(exc))
+    tb = "" if isinstance(exc, (InputError, LimitError)) else "".join(traceback.format_exception(exc))
     if tb:
         log.error("%s/%s failed:\n%s", scene, query, tb.rstrip())
     return BatchRow(scene, query, "error", error=_one_line(exc), traceback=tb)

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from typing import TextIO
 
 from ..check.check import check_trajectory
-from ..errors import check_interrupt
+from ..errors import LimitError, check_interrupt
 from ..planner.planner import Planner, PlanOptions
 from ..scene.scene import Query, Scene
 from ..status import Status
@@ -51,14 +51,18 @@ def _expectation_problems(query: Query, status: str, duration, delay) -> list[st
 def regress_scene(scene: Scene, roadmap, options: PlanOptions | None = None) -> list[RegressionRow]:
     """Answer and check every query of ``scene``.
 
-    A solved answer must pass :func:`gfuzzy.check.check.check_trajectory` (with the query's
+    A query beyond the memory bounds raises :class:`~gfuzzy.errors.LimitError` naming the
+    scene file and the query. A solved answer must pass :func:`gfuzzy.check.check.check_trajectory` (with the query's
     start, goal and t0), and every answer must meet the query's ``expect`` block.
     """
     planner = Planner(scene, roadmap)
     rows = []
-    for q in scene.queries:
+    for i, q in enumerate(scene.queries):
         check_interrupt()  # a Ctrl-C native code dropped stops the run between queries
-        res = planner.plan(q.start, q.goal, q.t0, options, hold=q.hold)
+        try:
+            res = planner.plan(q.start, q.goal, q.t0, options, hold=q.hold)
+        except LimitError as exc:  # which of many scenes and queries asked too much (a hold of 1e6 s)
+            raise LimitError(f"{scene.source}: queries[{i}] ({q.name}): {exc}") from None
         problems = []
         valid = None
         if res.solved:

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import math
 import os
-import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -18,7 +17,7 @@ import numpy as np
 from ..errors import InputError
 from ..typed import FloatArray
 from .maps import UNKNOWN, MapObstacle, load_map
-from .yamldoc import NAME_RE, leaves_folder, plain_name
+from .yamldoc import NAME_RE, leaves_folder, name_from_stem, plain_name
 
 __all__ = ["MapScene", "map_scene"]
 
@@ -247,7 +246,7 @@ def map_scene(
     bounds = _bounds(grid)
     fits, fit = _fits(grid, bounds, fp, radius, kinematics)
     pair = _far_apart(grid, fits)
-    stem = name or re.sub(r"[^A-Za-z0-9_.-]", "-", scene_path.stem) or "map"
+    stem = name or name_from_stem(scene_path.stem, "map")
     lines = [
         f"# A scene around the map {_printable(rel)} ({grid.shape[1]} x {grid.shape[0]} cells at {_fmt(grid.resolution)} m),",
         f"# written by: {_printable(command)}" if command else "# written by gfuzzy map",

@@ -13,6 +13,7 @@ import hashlib
 import json
 import logging
 import math
+import numbers
 import os
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -23,6 +24,7 @@ import numpy as np
 from ..errors import InputError, SceneError
 from ..status import Status
 from ..typed import FloatArray
+from . import yamldoc
 from .maps import MapObstacle, load_map
 from .meshes import mesh_footprint
 from .yamldoc import _V, MAX_MAGNITUDE, NAME_RE, _join, _kind, _load_yaml, _one_key, not_utf8
@@ -439,10 +441,10 @@ class Scene:
         for key, value in (("clearance", clearance), ("mover_clearance", mover_clearance)):
             if value is None:
                 continue
-            value = float(value)
-            if not (math.isfinite(value) and 0.0 <= value <= MAX_MAGNITUDE):
+            number = isinstance(value, numbers.Real) and not isinstance(value, bool)  # not "0.1", not True
+            if not (number and math.isfinite(value) and 0.0 <= value <= MAX_MAGNITUDE):
                 raise InputError(f"robot.{key} must be a non-negative finite number, got {value!r}")
-            new[key] = value
+            new[key] = float(value)
         robot = replace(robot, **new)
         raw = copy.deepcopy(self.raw)
         if isinstance(raw.get("robot"), dict):
@@ -664,7 +666,8 @@ def parse_scene(doc: Any, file: str = "<string>", folder: str | os.PathLike | No
     Parameters
     ----------
     doc : dict
-        The parsed YAML document.
+        The document as YAML gives it, or built in code: tuples, numpy arrays and numpy
+        numbers are read as the lists and numbers they hold.
     file : str
         Name used in error messages.
     folder : path-like, optional
@@ -676,6 +679,7 @@ def parse_scene(doc: Any, file: str = "<string>", folder: str | os.PathLike | No
         On any bad input, naming ``file`` and the place in it.
     """
     v = _V(file)
+    doc = yamldoc.plain_document(doc)
     folder = Path(folder) if folder is not None else Path.cwd()
     v.mapping(
         doc,

@@ -192,6 +192,26 @@ def _read_eth(path: str, text: str) -> tuple[dict, int | None]:
     return rows, (min(steps) if steps else None)
 
 
+def _header_hint(cols: list) -> str:
+    """Why a CSV header lacks t, id, x, y when the reason is a common one: another separator
+    (a spreadsheet's ``t;id;x;y``), ``time`` for ``t``, or no header at all."""
+    if len(cols) == 1 and (sep := next((c for c in ";\t|" if c in cols[0]), None)):
+        return f"; the header is one column, {cols[0]!r}: columns are separated by commas, not {sep!r}"
+    if "time" in (c.lower() for c in cols):
+        return "; name the time column t"
+    if all(_is_number(c) for c in cols):
+        return "; this first line holds numbers: a CSV starts with a header line such as t,id,x,y"
+    return ""
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
 def _read_csv(path: str, text: str) -> dict:
     """{id: [(t, x, y), ...]} of a CSV file with a header naming t, id, x, y."""
     reader = csv.reader(io.StringIO(text))
@@ -210,7 +230,7 @@ def _read_csv(path: str, text: str) -> dict:
                 raise SceneError(
                     path,
                     f"line {lineno}",
-                    f"the header must name the columns t, id, x, y (missing: {', '.join(missing)})",
+                    f"the header must name the columns t, id, x, y (missing: {', '.join(missing)}){_header_hint(cols)}",
                 )
             twice = [k for k in ("t", "id", "x", "y") if names.count(k) > 1]
             if twice:  # which of the two holds the values is anyone's guess

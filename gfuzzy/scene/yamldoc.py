@@ -21,6 +21,13 @@ from ..settings import MAX_MAGNITUDE
 
 #: Names of scenes, movers and queries: letters, digits, ``_ . -``.
 NAME_RE = re.compile(r"^[A-Za-z0-9_.-]+$")
+
+
+def name_from_stem(stem: str, fallback: str) -> str:
+    """A scene name made from a file's stem: each run of characters a name cannot hold
+    (spaces, non-ASCII letters, ...) becomes ``-`` (``my map`` -> ``my-map``); ``fallback``
+    when nothing is left."""
+    return re.sub(r"[^A-Za-z0-9_.-]+", "-", stem).strip("-") or fallback
 #: Largest number of YAML nodes a scene may expand to (aliases counted each time used).
 MAX_NODES = 2_000_000
 
@@ -123,6 +130,19 @@ def not_utf8(data: bytes, exc: UnicodeDecodeError) -> str:
     line = data.count(b"\n", 0, at) + 1
     column = at - (data.rfind(b"\n", 0, at) + 1) + 1  # in bytes: the line is not text
     return f"not UTF-8 text (line {line}, column {column}: byte 0x{data[at]:02x})"
+
+
+def plain_document(doc: Any) -> Any:
+    """``doc`` as YAML would have given it, for a scene built in code: tuples and numpy arrays
+    as lists, numpy numbers and booleans as Python's (``np.int64(2)`` -> 2); anything else
+    as it is, for the validator to judge."""
+    if isinstance(doc, dict):
+        return {k: plain_document(v) for k, v in doc.items()}
+    if isinstance(doc, (list, tuple)):
+        return [plain_document(v) for v in doc]
+    if isinstance(doc, (np.ndarray, np.generic)):
+        return doc.tolist()
+    return doc
 
 
 def plain_name(name: str, flow: bool = False) -> str:
