@@ -945,6 +945,19 @@ def test_a_pose_beyond_1e9_is_refused_as_the_planner_refuses_it(open_square, pos
         nav.step(0.0, np.array(pose), np.zeros((0, 5)))
 
 
+def test_a_step_earlier_than_the_last_is_refused(open_square):
+    # a call at an earlier time was answered from predictions, kept plans and look-outs of the
+    # later one; the same time twice, and later times, serve
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (0.0, 4.0), NavOptions(budget_clock="cpu"))
+    start, nobody = np.array([0.0, -4.0]), np.zeros((0, 5))
+    nav.step(1.0, start, nobody)
+    with pytest.raises(InputError, match=r"^t: 0.75 is before the last call's t = 1 \(a new run needs a new Navigator\)$"):
+        nav.step(0.75, start, nobody)
+    assert nav.step(1.0, start, nobody).t0 == 1.0
+    assert nav.step(1.25, start, nobody).t0 == 1.25
+
+
 def test_step_and_goal_name_what_is_wrong_and_take_no_strings_or_booleans():
     # nav.step("a", ...) raised "could not convert string to float: 'a'"; strings were taken as
     # coordinates (["0.5", "0.5"]) and so were booleans; the message said only "pose must be

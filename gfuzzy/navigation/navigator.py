@@ -338,6 +338,7 @@ class Navigator(PathSpace, Prediction):
         self._pred_robot = replace(robot, mover_clearance=0.0) if hasattr(robot, "mover_clearance") else robot
         self.reached = False
         self.replans = 0
+        self._t_last = -math.inf  # the last call's time: time never runs backwards
         self.last: NavStep | None = None
         self._previous: Trajectory | None = None
         self._previous_mode: NavMode | None = None  # the mode of the search that made it
@@ -460,16 +461,20 @@ class Navigator(PathSpace, Prediction):
         Raises
         ------
         ValueError
-            Malformed input (wrong shapes, non-finite numbers): a caller's bug.
+            Malformed input (wrong shapes, non-finite numbers, a ``t`` before the last
+            call's): a caller's bug.
         """
         t_begin = self._clock()
         opts = self.options
         pose = _checked_pose(pose, self.robot, t)
         t = float(t)
+        if t < self._t_last:  # its predictions, look-outs and kept plans are of later times
+            raise InputError(f"t: {t:g} is before the last call's t = {self._t_last:g} (a new run needs a new Navigator)")
         obs = _observation_rows(observations)
         if not np.all(np.isfinite(obs)) or np.any(obs[:, 4] < 0):
             raise InputError("observations must be finite rows [x, y, vx, vy, radius >= 0]")
         self._unknown = unknown_positions(obs, unknown)
+        self._t_last = t
         self.replans += 1
         if self._lookout is not None:
             self._lookout.observe(t, pose)
