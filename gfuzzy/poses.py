@@ -17,6 +17,7 @@ import numpy as np
 from .typed import FloatArray
 
 __all__ = [
+    "pose_words",
     "wrap_angle",
     "metric_distance",
     "interpolate_segment",
@@ -26,6 +27,16 @@ __all__ = [
     "discretise",
     "path_length_xy",
 ]
+
+
+def pose_words(dof: int, robot=None) -> str:
+    """What a pose of ``dof`` numbers holds, for messages: ``[x, y, heading] for this disc
+    robot (unicycle)``; without ``robot``, which robots take such poses."""
+    want = "[x, y]" if dof == 2 else "[x, y, heading]"
+    if robot is None:
+        return want + (" for a disc robot" if dof == 2 else " for a box or footprint robot or a unicycle")
+    unicycle = getattr(robot, "kinematics", "holonomic") != "holonomic"
+    return want + f" for this {robot.shape} robot" + (f" ({robot.kinematics})" if unicycle else "")
 
 
 def wrap_angle(a):

@@ -280,12 +280,16 @@ class _Searched:
     ahead: list = field(default_factory=list)
 
 
-def _checked_pose(pose, robot, t) -> FloatArray:
+def _checked_pose(pose, robot, t, t_last=-math.inf) -> FloatArray:
     """``pose`` as a (dof,) float array (``[[x, y]]`` serves as ``[x, y]``); InputError naming
     what is wrong when it is not ``dof`` finite numbers (a string or a boolean is none, as in a
-    scene file; beyond ``MAX_MAGNITUDE`` too, as :func:`gfuzzy.plan`'s), or ``t`` is no finite number."""
+    scene file; beyond ``MAX_MAGNITUDE`` too, as :func:`gfuzzy.plan`'s), or ``t`` is no finite
+    number or is before ``t_last``, the last call's (its predictions, look-outs and kept plans
+    are of that later time)."""
     if isinstance(t, bool) or not isinstance(t, numbers.Real) or not math.isfinite(t):
         raise InputError(f"t: expected a finite number, got {t!r}")
+    if t < t_last:
+        raise InputError(f"t: {t:g} is before the last call's t = {t_last:g} (a new run needs a new Navigator)")
     try:
         pose = np.asarray(pose).reshape(-1)
     except ValueError:  # rows of other lengths: check_pose says so
@@ -466,10 +470,8 @@ class Navigator(PathSpace, Prediction):
         """
         t_begin = self._clock()
         opts = self.options
-        pose = _checked_pose(pose, self.robot, t)
+        pose = _checked_pose(pose, self.robot, t, self._t_last)
         t = float(t)
-        if t < self._t_last:  # its predictions, look-outs and kept plans are of later times
-            raise InputError(f"t: {t:g} is before the last call's t = {self._t_last:g} (a new run needs a new Navigator)")
         obs = _observation_rows(observations)
         if not np.all(np.isfinite(obs)) or np.any(obs[:, 4] < 0):
             raise InputError("observations must be finite rows [x, y, vx, vy, radius >= 0]")

@@ -10,6 +10,7 @@ import numpy as np
 
 from ..collision.geometry import StaticGeometry
 from ..errors import InputError
+from ..poses import pose_words
 from ..settings import MAX_MAGNITUDE
 from ..typed import FloatArray
 
@@ -24,12 +25,7 @@ def check_pose(pose, dof: int, label: str, robot=None) -> FloatArray:
     ``invalid_query`` (see :func:`query_problem`). ``robot`` (optional) names its kind in
     the message.
     """
-    want = "[x, y]" if dof == 2 else "[x, y, heading]"
-    if robot is None:
-        want += " for a disc robot" if dof == 2 else " for a box or footprint robot or a unicycle"
-    else:
-        unicycle = getattr(robot, "kinematics", "holonomic") != "holonomic"
-        want += f" for this {robot.shape} robot" + (f" ({robot.kinematics})" if unicycle else "")
+    want = pose_words(dof, robot)
     try:
         arr = np.asarray(pose)
     except (TypeError, ValueError):  # rows of other lengths

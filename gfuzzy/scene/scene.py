@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, SceneError
+from ..poses import pose_words
 from ..status import Status
 from ..typed import FloatArray
 from . import yamldoc
@@ -637,8 +638,8 @@ def _parse_queries(v: _V, doc: dict, robot: Robot) -> list:
         if qname in qnames:
             v.fail(_join(place, "name"), f"duplicate query name {qname!r}")
         qnames.add(qname)
-        start = v.vector(qd["start"], _join(place, "start"), robot.dof)
-        goal = v.vector(qd["goal"], _join(place, "goal"), robot.dof)
+        start = v.vector(qd["start"], _join(place, "start"), robot.dof, words=pose_words(robot.dof, robot))
+        goal = v.vector(qd["goal"], _join(place, "goal"), robot.dof, words=pose_words(robot.dof, robot))
         t0 = v.number(qd.get("t0", 0.0), _join(place, "t0"))
         hold = v.number(qd.get("hold", 0.0), _join(place, "hold"), nonneg=True)
         expect = None

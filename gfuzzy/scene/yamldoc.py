@@ -203,11 +203,14 @@ class _V:
             self.fail(place, f"must not be negative, got {value:g}")
         return value
 
-    def vector(self, value, place, length, positive=False):
+    def vector(self, value, place, length, positive=False, words=""):
+        """A list of ``length`` numbers; ``words`` (a pose's: :func:`gfuzzy.poses.pose_words`)
+        say in the message what they hold."""
+        words = f" {words}" if words else ""
         if not isinstance(value, list):
-            self.fail(place, f"expected a list of {length} numbers, got {_kind(value)}")
+            self.fail(place, f"expected a list of {length} numbers{words}, got {_kind(value)}")
         if len(value) != length:
-            self.fail(place, f"expected {length} numbers, got {len(value)}")
+            self.fail(place, f"expected {length} numbers{words}, got {len(value)}")
         return tuple(
             self.number(v, f"{place}[{i}]", positive=positive) for i, v in enumerate(value)
         )
