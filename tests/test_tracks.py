@@ -4,6 +4,7 @@ the bundled pedestrian scenes made again from the excerpts in data/pedestrians/.
 
 from __future__ import annotations
 
+import math
 import shlex
 import shutil
 from pathlib import Path
@@ -147,6 +148,35 @@ def test_region_cuts_tracks_and_a_return_is_a_second_mover(csv_file):
     movers = _movers(tracks_scene(tracks, TrackSceneOptions(region=(1, -1, 1.5, 1))))
     np.testing.assert_allclose(movers["ped-c"], [[0.5, 1, 0], [0.75, 1.5, 0]])
     np.testing.assert_allclose(movers["ped-c-2"], [[1.25, 1.5, 0], [1.5, 1, 0]])
+
+
+def test_a_person_unseen_for_longer_than_max_gap_is_two_movers(tmp_path):
+    # a tracker lost d from 1 s to 8 s: one mover walked a straight line through the gap (a
+    # phantom where nobody was seen); the rows before and after are two movers, absent between
+    rows = np.array([[0, 0, 0], [1, 1, 0], [8, 8, 0], [9, 9, 0], [9.5, 9.5, 0]], float)
+    tracks = gfuzzy.Tracks("mem", "csv", None, None, (gfuzzy.Track("d", rows),))
+    movers = _movers(tracks_scene(tracks, TrackSceneOptions(max_gap=2.0)))
+    np.testing.assert_allclose(movers["ped-d"], [[0, 0, 0], [1, 1, 0]])
+    np.testing.assert_allclose(movers["ped-d-2"], rows[2:])
+    assert list(_movers(tracks_scene(tracks, TrackSceneOptions(max_gap=7.0)))) == ["ped-d"]  # 7 s: not longer
+    assert list(_movers(tracks_scene(tracks, TrackSceneOptions(max_gap=math.inf)))) == ["ped-d"]
+    # parts of one row are dropped, the movers numbered as kept: only 9 -> 9.5 s is left
+    np.testing.assert_allclose(_movers(tracks_scene(tracks, TrackSceneOptions(max_gap=0.6)))["ped-d"], rows[3:])
+    # by default, five times the file's median spacing (1 s here): cut at the 7 s gap, not at 4.9 s
+    assert list(_movers(tracks_scene(tracks))) == ["ped-d", "ped-d-2"]
+    nearer = np.array([[0, 0, 0], [1, 1, 0], [5.9, 5.9, 0], [6.9, 6.9, 0], [7.4, 7.4, 0]], float)
+    assert list(_movers(tracks_scene(gfuzzy.Tracks("mem", "csv", None, None, (gfuzzy.Track("d", nearer),))))) == ["ped-d"]
+    sparse = gfuzzy.Tracks("mem", "csv", None, None, (gfuzzy.Track("e", rows[[0, 2]]),))
+    assert list(_movers(tracks_scene(sparse))) == ["ped-e"]  # keyframes 8 s apart are the file's pace
+    for bad in (0, -1, math.nan, True):
+        with pytest.raises(gfuzzy.errors.InputError, match="max_gap must be positive"):
+            TrackSceneOptions(max_gap=bad)
+    csv = tmp_path / "lost.csv"
+    csv.write_text("t,id,x,y\n" + "".join(f"{t:g},d,{x:g},{y:g}\n" for t, x, y in rows))
+    out = tmp_path / "lost.yaml"
+    run = run_cli_process("tracks", str(csv), "-o", str(out), "--max-gap", "inf")
+    assert run.returncode == 0, run.stderr
+    assert "--max-gap inf" in out.read_text() and [m.name for m in load_scene(out).movers] == ["ped-d"]
 
 
 def test_scale_and_default_region(csv_file):

@@ -164,6 +164,9 @@ def _add_tracks(sub) -> None:
     k.add_argument("--scale", type=float, metavar="S", default=1.0, help="multiplies every x and y of the file (default 1)")
     k.add_argument("--radius", "--ped-radius", dest="radius", type=float, metavar="R", default=0.25, help="pedestrians' disc radius (default 0.25)")
     k.add_argument("--max-movers", type=int, metavar="N", help="keep the N people present longest")
+    k.add_argument("--max-gap", type=float, metavar="S",
+                   help="a person unseen for longer than S seconds is two movers, absent in between "
+                        "(default: 5 times the file's median time between a person's rows; inf: never cut)")  # fmt: skip
     k.add_argument("--static", metavar="SCENE", help="take the robot, the static obstacles and the bounds of this scene")
     k.add_argument("--name", help="scene name (default: the output file's stem)")
     k.add_argument("--robot-radius", type=float, metavar="R", help="a disc robot of this radius (default 0.2, or --static's robot)")

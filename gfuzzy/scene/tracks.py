@@ -14,7 +14,9 @@ from __future__ import annotations
 
 import logging
 import math
+import numbers
 import os
+import statistics
 from dataclasses import dataclass
 from itertools import pairwise
 from pathlib import Path
@@ -39,6 +41,8 @@ log = logging.getLogger(__name__)
 
 #: Margin (m) around the pedestrians' extent when no region is given.
 REGION_MARGIN = 0.5
+#: How many of the file's usual periods between a person's rows they may go unseen and stay one mover.
+GAP_PERIODS = 5
 
 
 
@@ -179,6 +183,12 @@ class TrackSceneOptions:
         Radius of each person's disc mover, metres.
     max_movers : int or None
         Keep the movers present longest in the window (ties: smaller id first).
+    max_gap : float or None
+        A person unseen for longer than this (seconds between two of their rows: a tracker
+        that lost them) is absent in between: the rows before and after become two movers,
+        not one walking a straight line through the gap. None: :data:`GAP_PERIODS` times the
+        file's median time between a person's consecutive rows (2 s for annotations 0.4 s
+        apart; a hand-written file of sparse rows is never cut). ``math.inf``: never cut.
     name : str
         The scene's name.
     robot_radius, vmax, amax : float or None
@@ -191,6 +201,7 @@ class TrackSceneOptions:
     scale: float = 1.0
     radius: float = 0.25
     max_movers: int | None = None
+    max_gap: float | None = None
     name: str = "pedestrians"
     robot_radius: float | None = None
     vmax: float | None = None
@@ -210,6 +221,9 @@ class TrackSceneOptions:
                 raise InputError(f"{key} must be positive, got {value!r}")
         if self.max_movers is not None and self.max_movers < 0:
             raise InputError(f"max_movers must not be negative, got {self.max_movers!r}")
+        gap = self.max_gap
+        if gap is not None and (isinstance(gap, bool) or not (isinstance(gap, numbers.Real) and gap > 0)):
+            raise InputError(f"max_gap must be positive (math.inf: never cut), got {self.max_gap!r}")
         if self.region is not None:
             r = tuple(float(v) for v in self.region)
             if (
@@ -492,18 +506,30 @@ def _query_docs(start, goal, query_name, expect, dof, inradius, region, src) -> 
     return queries
 
 
+def _split_gaps(rows, max_gap: float) -> list[list]:
+    """``rows`` cut where two consecutive rows are more than ``max_gap`` seconds apart."""
+    runs = [[rows[0]]]
+    for a, b in pairwise(rows):
+        if b[0] - a[0] > max_gap:
+            runs.append([])
+        runs[-1].append(b)
+    return runs
+
+
 def _movers(rel: dict, duration: float, region, options: TrackSceneOptions, src) -> list:
     """Every person's runs inside the window and the region, as movers, in order of
     appearance (the ``max_movers`` present longest when that is set)."""
     movers: list[_Mover] = []
+    max_gap = options.max_gap
+    if max_gap is None:  # the file's own sampling: a tracker's 0.1 s, the annotations' 0.4 s, sparse keyframes
+        steps = [b[0] - a[0] for rows in rel.values() for a, b in pairwise(rows)]
+        max_gap = GAP_PERIODS * statistics.median(steps) if steps else math.inf
     for pid, rows in rel.items():
         rows = _clip_time(rows, 0.0, duration)
         if len(rows) < 2:
             continue
-        for k, run in enumerate(_clip_region(rows, region), start=1):
-            run = _round_rows(run)
-            if len(run) < 2:
-                continue
+        runs = (_round_rows(run) for seen in _split_gaps(rows, max_gap) for run in _clip_region(seen, region))
+        for k, run in enumerate((run for run in runs if len(run) >= 2), start=1):  # numbered as kept
             movers.append(_Mover(f"ped-{pid}" if k == 1 else f"ped-{pid}-{k}", pid, run))
     if not movers:
         raise SceneError(
@@ -548,8 +574,8 @@ def tracks_scene(
 
     Each person becomes a disc mover ``ped-<id>`` with a timed trajectory, times relative
     to the window's start. A track is cut at the window's ends and at the region's border
-    (rows interpolated there); a person who leaves the region and comes back becomes
-    ``ped-<id>``, ``ped-<id>-2``, ... Rows are rounded to 1 mm and 1 ms (a row whose time no
+    (rows interpolated there); a person who leaves the region and comes back, or is unseen
+    for more than ``max_gap``, becomes ``ped-<id>``, ``ped-<id>-2``, ... Rows are rounded to 1 mm and 1 ms (a row whose time no
     longer increases is dropped) and a mover left with fewer than two rows is dropped.
 
     Parameters
