@@ -44,6 +44,11 @@ class LimitError(GfuzzyError, ValueError):
     far too fine or a horizon far too long for the scene. The message says what to change."""
 
 
+class TimeStepError(LimitError):
+    """The time step (``dt``) is too fine for the roadmap: the query graph would hold too many
+    points whatever the query (the option's fault, not a query's)."""
+
+
 class SceneError(InputError):
     """Bad input: a file (scene, roadmap, trajectory, rule base) that cannot be used.
 

@@ -12,11 +12,16 @@ This module imports nothing from gfuzzy: it is the bottom of the import graph.
 
 from __future__ import annotations
 
+import decimal
+import numbers
+
 import numpy as np
 
 from .typed import FloatArray
 
 __all__ = [
+    "as_number",
+    "number_array",
     "pose_words",
     "wrap_angle",
     "metric_distance",
@@ -27,6 +32,40 @@ __all__ = [
     "discretise",
     "path_length_xy",
 ]
+
+
+def as_number(value) -> float | None:
+    """``value`` as a float when it is one number (a ``numbers.Real``, a ``Decimal`` or a 0-d
+    numeric array), else None: a boolean, a string, None or a sequence is no number, as in a
+    scene file."""
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value[()]
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (numbers.Real, decimal.Decimal)):
+        return None
+    return float(value)
+
+
+def number_array(value) -> FloatArray | None:
+    """``value`` (numbers, or nested sequences of numbers of one shape) as a float array, or
+    None when any element is no number (:func:`as_number`): numpy would take
+    ``[0.5, True]`` as ``[0.5, 1.0]`` and ``["0", "1"]`` as numbers."""
+    if isinstance(value, np.ndarray) and value.dtype.kind in "iuf":
+        return value.astype(float, copy=False)
+    try:
+        arr, cells = np.asarray(value), np.asarray(value, dtype=object)
+    except (TypeError, ValueError):  # rows of other lengths
+        return None
+    if arr.dtype.kind in "iuf":  # numbers, unless numpy took a boolean among them for one
+        kinds = set(map(type, cells.reshape(-1)))
+        return None if bool in kinds or np.bool_ in kinds else arr.astype(float, copy=False)
+    out = np.empty(cells.shape, dtype=float)
+    flat = out.reshape(-1)
+    for i, v in enumerate(cells.reshape(-1)):
+        x = as_number(v)
+        if x is None:
+            return None
+        flat[i] = x
+    return out
 
 
 def pose_words(dof: int, robot=None) -> str:

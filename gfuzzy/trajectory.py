@@ -19,11 +19,11 @@ import numpy as np
 
 from .atomic import write_atomic
 from .errors import InputError, SceneError
-from .poses import metric_distance, pose_at
+from .poses import metric_distance, number_array, pose_at
 from .status import Status
 from .typed import FloatArray
 
-__all__ = ["Trajectory", "load_trajectory", "TrajectoryFile"]
+__all__ = ["Trajectory", "load_trajectory", "TrajectoryFile", "executed_rows"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -44,14 +44,17 @@ class Trajectory:
     Raises
     ------
     InputError
-        Rows that are no table of ``[t, x, y(, heading)]`` (none, or of another width).
+        Rows that are no table of numbers ``[t, x, y(, heading)]`` (none, of another width,
+        or holding a string or a boolean).
     """
 
     waypoints: FloatArray
     circumradius: float = 0.0
 
     def __post_init__(self) -> None:
-        rows = np.asarray(self.waypoints, dtype=float)
+        rows = number_array(self.waypoints)
+        if rows is None:  # numpy would take "0" or True for a number, as a scene file does not
+            raise InputError("waypoints: expected rows of numbers [t, x, y(, heading)] of one width (no strings or booleans)")
         if rows.ndim != 2 or len(rows) == 0 or rows.shape[1] not in (3, 4):
             raise InputError(f"waypoints: expected rows [t, x, y] or [t, x, y, heading], at least one; got shape {rows.shape}")
         object.__setattr__(self, "waypoints", rows)
@@ -253,25 +256,7 @@ def load_trajectory(path: str | os.PathLike) -> TrajectoryFile:
         raise SceneError(file, "status", f"unknown status {doc['status']!r}")
     wps = None
     if doc["status"] == Status.SOLVED:
-        rows = doc.get("waypoints")
-        if not isinstance(rows, list) or not rows:
-            raise SceneError(file, "waypoints", "a solved trajectory needs a non-empty list of rows")
-        width = len(rows[0]) if isinstance(rows[0], list) else -1
-        if width not in (3, 4):
-            raise SceneError(file, "waypoints[0]", "rows must be [t, x, y] or [t, x, y, heading]")
-        for i, row in enumerate(rows):
-            if not isinstance(row, list) or len(row) != width:
-                raise SceneError(file, f"waypoints[{i}]", f"expected {width} numbers")
-            for j, v in enumerate(row):
-                if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-                    raise SceneError(file, f"waypoints[{i}][{j}]", f"expected a finite number, got {v!r}")
-        wps = np.asarray(rows, dtype=float)
-        back = np.nonzero(np.diff(wps[:, 0]) <= 0)[0]
-        if back.size:  # section 2: t strictly increasing; without it the rows are no trajectory
-            j = int(back[0]) + 1
-            raise SceneError(
-                file, f"waypoints[{j}][0]", f"t={float(wps[j, 0])!r} does not increase (the row before has t={float(wps[j - 1, 0])!r})"
-            )
+        wps = _rows(doc.get("waypoints"), file, "waypoints")
 
     def num(key):
         v = doc.get(key)
@@ -294,3 +279,43 @@ def load_trajectory(path: str | os.PathLike) -> TrajectoryFile:
 # the keys TrajectoryFile holds as fields; any other key of a file is an extra
 _CONTRACT_KEYS = frozenset(("version", "scene", "query", "status", "message", "duration", "roadmap_distance",
                             "delay_factor", "planning_seconds", "waypoints"))
+
+
+def _rows(rows, file: str, key: str) -> FloatArray:
+    """A file's ``key`` (``waypoints``, or a navigate run's ``executed``) as a float table,
+    read by the contract's rules: a non-empty list of rows ``[t, x, y(, heading)]`` of one
+    width, finite numbers (no strings or booleans), t strictly increasing; else a SceneError
+    naming the row."""
+    if not isinstance(rows, list) or not rows:
+        raise SceneError(file, key, "expected a non-empty list of rows [t, x, y] or [t, x, y, heading]")
+    width = len(rows[0]) if isinstance(rows[0], list) else -1
+    if width not in (3, 4):
+        raise SceneError(file, f"{key}[0]", "rows must be [t, x, y] or [t, x, y, heading]")
+    for i, row in enumerate(rows):
+        if not isinstance(row, list) or len(row) != width:
+            raise SceneError(file, f"{key}[{i}]", f"expected {width} numbers, as {key}[0] has")
+        for j, v in enumerate(row):
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                raise SceneError(file, f"{key}[{i}][{j}]", f"expected a finite number, got {v!r}")
+    table = np.asarray(rows, dtype=float)
+    back = np.nonzero(np.diff(table[:, 0]) <= 0)[0]
+    if back.size:  # section 2: t strictly increasing; without it the rows are no trajectory
+        j = int(back[0]) + 1
+        raise SceneError(
+            file, f"{key}[{j}][0]", f"t={float(table[j, 0])!r} does not increase (the row before has t={float(table[j - 1, 0])!r})"
+        )
+    return table
+
+
+def executed_rows(tf: TrajectoryFile, file: str) -> FloatArray | None:
+    """The rows a navigate run that did not arrive executed (its ``executed`` key, read as
+    ``waypoints`` are), or None when the file has none. ``file`` names it in errors.
+
+    Raises
+    ------
+    SceneError
+        ``executed`` present but not such a table, naming the row (``executed[3]``).
+    """
+    if tf.waypoints is not None or "executed" not in tf.extra:
+        return None
+    return _rows(tf.extra["executed"], file, "executed")

@@ -414,3 +414,47 @@ def test_a_step_of_1e_308_is_refused_as_too_fine_in_one_line(tmp_path, capsys, m
     rc, _, err = _run(capsys, *[str(tmp_path / "x.mcap") if a == "OUT.mcap" else a for a in argv])
     assert rc == 2 and err.count("\n") == 1 and expect in err, err
     assert not list(tmp_path.iterdir())
+
+
+def _timed_out_file(path, executed, scene="line"):
+    """A navigate run that did not arrive: no waypoints, its motion under ``executed``."""
+    doc = json.loads(_trajectory_file(path, None, scene=scene, query="up", status="timeout").read_text())
+    doc["executed"] = executed
+    path.write_text(json.dumps(doc))
+    return path
+
+
+@pytest.mark.parametrize(
+    "executed, place",
+    [
+        ([[0, 1, 2.5], [1, 1.5, 2.5, 0]], "executed[1]: expected 3 numbers"),  # was a traceback
+        ([["0", "1", "2.5"], ["1", "1.5", "2.5"]], "executed[0][0]: expected a finite number, got '0'"),
+        ([[0, 1, 2.5], [True, 1.5, 2.5]], "executed[1][0]: expected a finite number, got True"),
+        ([[0, 1, 2.5], [0, 1.5, 2.5]], "executed[1][0]: t=0.0 does not increase"),
+        # rows of a box robot ("there is no trajectory to check")
+        ([[0, 1, 2.5, 0], [1, 1.5, 2.5, 0]], "executed: rows of 4 numbers, but scene 'line' has a disc robot"),
+    ],
+)
+@pytest.mark.parametrize("command", ["check", "render", "export"])
+def test_a_timed_out_runs_executed_rows_are_read_one_way(line_scene, tmp_path, capsys, executed, place, command):
+    nav = _timed_out_file(tmp_path / "nav.json", executed)
+    out = {"check": [], "render": ["-o", tmp_path / "t.png", "--no-roadmap"], "export": ["-o", tmp_path / "t.mcap"]}
+    rc, _, err = _run(capsys, command, line_scene, nav, *out[command])
+    assert rc == 2 and err.strip().splitlines() == [err.strip()], err
+    assert err.startswith(f"{nav}: {place}"), err
+    assert not list(tmp_path.glob("t.*"))
+
+
+def test_check_of_a_timed_out_run_says_what_is_wrong_with_its_motion(line_scene, tmp_path, capsys):
+    # too fast (3 m in 1 s at vmax 1): called valid when the verdict was dropped
+    nav = _timed_out_file(tmp_path / "nav.json", [[0, 1, 2.5], [1, 4, 2.5]])
+    rc, _, err = _run(capsys, "check", line_scene, nav)
+    assert rc == 1 and err == (
+        f"{nav}: status is timeout: the goal was not reached, no answer to check; the motion it "
+        "executed (2 rows, t 0 to 1) is invalid: speed 3 exceeds vmax 1 between t=0.0 and t=1.0\n"
+    ), err
+    # one row is "1 row"; a file of another scene is noted, as a solved one is
+    nav = _timed_out_file(tmp_path / "nav.json", [[0, 1, 2.5]], scene="elsewhere")
+    rc, _, err = _run(capsys, "check", line_scene, nav)
+    assert rc == 1 and err.splitlines()[0] == f"note: {nav} was planned for scene 'elsewhere', checking against 'line'"
+    assert "the motion it executed (1 row, t 0 to 0) is valid" in err.splitlines()[1], err

@@ -385,6 +385,14 @@ def test_navigate_timeout_still_writes_the_executed_motion(tmp_path):
     ), c.stderr
 
 
+def test_the_too_long_route_note_is_for_a_route_longer_than_max_time_only():
+    from gfuzzy.cli.experiments import _beyond_max_time
+
+    assert _beyond_max_time(4.0, 1.0, 4.0) == ""  # just in time: it can arrive
+    assert _beyond_max_time(4.0, 2.0, 2.0) == "" and _beyond_max_time(math.inf, 1.0, 3.0) == ""
+    assert _beyond_max_time(4.0, 1.0, 3.999).startswith("the shortest roadmap route (4.0 m) takes at least 4.0 s")
+
+
 def test_navigate_into_a_sealed_room_is_no_path_at_once(tmp_path):
     # it replanned until --max-time (with 1e6: for hours) and said only "timeout": no mover
     # can open a way the free space does not have, as plan says
@@ -977,3 +985,42 @@ def test_step_and_goal_name_what_is_wrong_and_take_no_strings_or_booleans():
     with pytest.raises(InputError, match=r"^pose: expected 2 finite numbers .*, got \[nan, 1.0\]$"):
         nav.step(0.0, (math.nan, 1.0), [])
     assert nav.step(np.float32(0.5), [[0.5, 1.0]], []).t0 == 0.5  # numpy numbers and a (1, 2) pose serve
+    with pytest.raises(InputError, match=r"^t: expected a finite number, got True$"):
+        nav.step(True, (0.5, 1.0), [])
+
+
+@pytest.mark.parametrize("bad", [[0.5, True], np.array([0.5, True], dtype=object), [[np.True_, 1.0]]])
+def test_a_boolean_among_numbers_is_no_coordinate(bad):
+    # numpy made [0.5, True] the pose [0.5, 1.0]: only an all-boolean pose was refused
+    scene = parse_scene({"version": 1, "name": "n", "bounds": [0, 0, 4, 2], "robot": {"disc": 0.2, "vmax": 1.0}})
+    rm = gfuzzy.build_roadmap(scene, gfuzzy.RoadmapOptions(vertices=20, seed=1))
+    with pytest.raises(InputError, match=r"^goal: expected 2 finite numbers"):
+        Navigator(scene, rm, bad)
+    nav = Navigator(scene, rm, (3.5, 1.0), NavOptions(budget_clock="cpu"))
+    with pytest.raises(InputError, match=r"^pose: expected 2 finite numbers"):
+        nav.step(0.0, bad, [])
+    with pytest.raises(InputError, match=r"^start: expected 2 finite numbers"):
+        gfuzzy.plan(scene, rm, bad, (3.5, 1.0))
+
+
+def test_the_goal_takes_what_step_takes_as_a_pose():
+    # Navigator refused a (1, 2) goal (traj.at([t_end]) gives one) that step took as a pose;
+    # a 0-d array t, a Fraction and a Decimal were numbers before, and are again
+    from decimal import Decimal
+    from fractions import Fraction
+
+    scene = parse_scene({"version": 1, "name": "n", "bounds": [0, 0, 4, 2], "robot": {"disc": 0.2, "vmax": 1.0}})
+    rm = gfuzzy.build_roadmap(scene, gfuzzy.RoadmapOptions(vertices=20, seed=1))
+    for goal in (np.array([[3.5, 1.0]]), [[3.5], [1.0]], [Fraction(7, 2), Decimal(1)], (np.float32(3.5), np.array(1.0))):
+        assert Navigator(scene, rm, goal).goal.tolist() == [3.5, 1.0]
+    nav = Navigator(scene, rm, (3.5, 1.0), NavOptions(budget_clock="cpu"))
+    assert nav.step(np.array(0.25), np.array([[0.5, 1.0]]), []).t0 == 0.25
+    assert nav.step(Fraction(1, 2), [Decimal("0.5"), Fraction(1)], []).waypoints[0].tolist() == [0.5, 0.5, 1.0]
+    assert nav.step(Decimal("0.75"), (0.5, 1.0), []).t0 == 0.75
+    with pytest.raises(InputError, match=r"^t: expected a finite number, got array\(\[1.\]\)$"):
+        nav.step(np.array([1.0]), (0.5, 1.0), [])  # a 1-element array is no number (nor was it)
+    # and plan's t0 is read the same way (it refused a Decimal and a 0-d array)
+    assert gfuzzy.plan(scene, rm, (0.5, 1.0), (3.5, 1.0), t0=Decimal("0.5")).trajectory.t0 == 0.5
+    assert gfuzzy.plan(scene, rm, (0.5, 1.0), (3.5, 1.0), t0=np.array(0.5)).trajectory.t0 == 0.5
+    with pytest.raises(InputError, match=r"^t0: expected a finite number, got np.True_$"):
+        gfuzzy.plan(scene, rm, (0.5, 1.0), (3.5, 1.0), t0=np.True_)

@@ -6,6 +6,8 @@ import json
 import math
 import re
 from dataclasses import replace
+from decimal import Decimal
+from fractions import Fraction
 from pathlib import Path
 
 import numpy as np
@@ -458,6 +460,15 @@ def test_bad_options_and_poses_raise_input_error():
         with pytest.raises(InputError, match=r"robot.clearance must be a non-negative finite number, got"):
             scene.with_clearances(value)
     assert scene.with_clearances(np.float32(0.25), 1).robot.mover_clearance == 1.0
+    # a boolean among numbers was a coordinate ([0.5, True] was (0.5, 1)); np.True_ a clearance
+    # of 1; a Decimal, a Fraction and a 0-d array, numbers before, were refused
+    with pytest.raises(InputError, match=r"start: expected 2 finite numbers \[x, y\] for a disc robot, got \[0.5, True\]"):
+        check_pose([0.5, True], 2, "start")
+    with pytest.raises(InputError, match=r"robot.clearance must be a non-negative finite number, got np.True_"):
+        scene.with_clearances(np.True_)
+    np.testing.assert_array_equal(check_pose([Fraction(1, 2), Decimal("2")], 2, "start"), [0.5, 2.0])
+    for value in (np.array(0.25), Decimal("0.25"), Fraction(1, 4)):
+        assert scene.with_clearances(value).robot.clearance == 0.25
     with pytest.raises(InputError, match="w must be a number >= 1, got 0.5"):
         check_number("w", 0.5, 1.0, strict=False)
     check_number("w", 1.0, 1.0, strict=False)

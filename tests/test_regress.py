@@ -67,6 +67,16 @@ def test_a_query_beyond_the_memory_bounds_names_the_scene_file_and_the_query(tmp
     assert "too many to sample" in err
 
 
+def test_a_time_step_too_fine_for_the_roadmap_names_the_option_not_a_query(tmp_path, capsys):
+    # it said "tiny.yaml: queries[0] (...): the time step is too fine ...": the first query
+    # blamed for --dt, which no query can satisfy
+    path = tmp_path / "tiny.yaml"
+    path.write_text(SCENE)
+    assert main(["regress", str(path), "-n", "20", "--dt", "1e-7"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith(f"gfuzzy regress: --dt 1e-07: {path}: the time step is too fine"), err
+
+
 def test_a_scene_without_queries_gets_a_line_and_no_roadmap():
     """A scene without queries is said to have none, in one line, and no roadmap is built
     or loaded for it (``roadmap_for`` refuses here). Before: a 200-vertex roadmap was built

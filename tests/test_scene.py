@@ -808,3 +808,18 @@ queries:
     drive = gfuzzy.parse_scene({"version": 1, "name": "n", "bounds": [0, 0, 1, 1],
                                 "robot": {"disc": 0.1, "vmax": 1, "kinematics": "unicycle", "reverse": np.bool_(True)}})
     assert drive.robot.reverse is True
+
+
+def test_a_document_in_code_nested_too_deep_or_holding_itself_is_a_scene_error():
+    # a RecursionError (making numpy values plain recursed before the validator looked)
+    doc = {"version": 1, "name": "n", "bounds": [0, 0, 1, 1], "robot": {"disc": 0.1, "vmax": 1}}
+    deep: list = []
+    for _ in range(2000):
+        deep = [deep]
+    looped = dict(doc)
+    looped["bounds"] = looped
+    cycle: list = []
+    cycle.append(cycle)
+    for bad, place in ((dict(doc, bounds=deep), "bounds"), (looped, "bounds"), (cycle, "top level")):
+        with pytest.raises(SceneError, match=rf"^<string>: {place}: nested over 100 levels deep"):
+            gfuzzy.parse_scene(bad)

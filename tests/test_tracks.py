@@ -332,6 +332,9 @@ def test_bad_files_are_one_line_and_exit_2(tmp_path, name, text, where):
     assert proc.returncode == 2
     assert proc.stderr.count("\n") == 1 and "Traceback" not in proc.stderr
     assert proc.stderr.startswith(str(path)) and where.split(": ", 1)[1] in proc.stderr, proc.stderr
+    # and no wrong hint: a header "t,x,y" is no line of numbers
+    hint = "this first line holds numbers"
+    assert (hint in proc.stderr) == (hint in where), proc.stderr
     assert not out.exists() and proc.stdout == ""
 
 

@@ -111,6 +111,10 @@ def test_at_keeps_the_shape_of_the_times(heading):
     np.testing.assert_allclose(got.reshape(4, -1), tr.at(times.reshape(-1)))
     np.testing.assert_allclose(got[1, 0, :2], [1.0, 0.5])
     assert tr.at(2.0).shape == (rows.shape[1] - 1,) and tr.at([]).shape == (0, rows.shape[1] - 1)
+    # one row: the same shapes (only a 4-row trajectory was tried)
+    one = Trajectory(rows[:1])
+    assert one.at(times).shape == (2, 2, rows.shape[1] - 1) and one.at(7.0).shape == (rows.shape[1] - 1,)
+    np.testing.assert_array_equal(one.at(times)[1, 1], rows[0, 1:])
 
 
 def test_rows_given_as_lists_make_a_trajectory_and_no_rows_are_refused():
@@ -120,6 +124,14 @@ def test_rows_given_as_lists_make_a_trajectory_and_no_rows_are_refused():
     assert tr.duration == 1.0 and tr.waypoints.dtype == float and tr == Trajectory(np.array([[0.0, 0, 0], [1, 1, 0]]))
     for bad in (np.zeros((0, 3)), [[0, 1], [1, 2]], [0, 1, 2], [[[0, 0, 0]]]):
         with pytest.raises(ValueError, match=r"waypoints: expected rows \[t, x, y\] or \[t, x, y, heading\]"):
+            Trajectory(bad)
+
+
+
+def test_rows_of_strings_or_booleans_are_no_trajectory():
+    # numpy made ["0", "1", "1"] and True numbers (plan and load_trajectory refuse both)
+    for bad in ([["0", "1", "1"], ["1", "2", "1"]], np.ones((2, 3), dtype=bool), [[0, 1, 1], [True, 2, 1]], [[0, 1, 1], [1, 2]]):
+        with pytest.raises(ValueError, match=r"^waypoints: expected rows of numbers \[t, x, y\(, heading\)\] of one width"):
             Trajectory(bad)
 
 

@@ -69,15 +69,10 @@ def _export_mcap(args) -> int:
     rows, predictions = None, None
     if args.trajectory:
         tf = load_trajectory(args.trajectory)
-        _rows_fit(scene, tf, args.trajectory)
-        extras = _navigate_extras(args.trajectory)
-        if tf.waypoints is not None:
-            rows = tf.waypoints
-        elif extras.get("executed") is not None:  # a navigate run that did not arrive
-            rows = extras["executed"]
-            if len(rows[0]) != scene.robot.dof + 1:
-                raise BadInput(f"{args.trajectory}: executed: rows of {len(rows[0])} numbers do not fit scene {scene.name!r}'s robot")
-        else:
+        _rows_fit(scene, tf.waypoints, args.trajectory)
+        extras = _navigate_extras(scene, tf, args.trajectory)
+        rows = tf.waypoints if tf.waypoints is not None else extras.get("executed")
+        if rows is None:
             _say(f"note: {args.trajectory} has status {tf.status} and no rows: exporting the scene only")
         predictions = extras.get("replan_log")
     kw = {k: v for k, v in (("step", args.step), ("span", args.span)) if v is not None}

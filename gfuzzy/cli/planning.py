@@ -7,7 +7,7 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
-from ..errors import InputError, LimitError
+from ..errors import InputError, LimitError, TimeStepError
 from ..settings import MAX_MAGNITUDE
 from ..status import Status
 from .common import (
@@ -204,20 +204,20 @@ def cmd_check(args) -> int:
 
     scene = _apply_overrides(_load_scene(args.scene), args)
     tf = load_trajectory(args.trajectory)
+    if tf.scene and tf.scene != scene.name:
+        _say(f"note: {args.trajectory} was planned for scene {tf.scene!r}, checking against {scene.name!r}")
     if tf.status != Status.SOLVED:
-        executed = _executed_verdict(scene, args.trajectory)
+        executed = _executed_verdict(scene, tf, args.trajectory)
         _say(f"{args.trajectory}: status is {tf.status}: " + (executed or "there is no trajectory to check"))
         return EXIT_NO
     query = _query_of(scene, tf)
-    if tf.scene and tf.scene != scene.name:
-        _say(f"note: {args.trajectory} was planned for scene {tf.scene!r}, checking against {scene.name!r}")
     if query is None:
         what = f"names query {tf.query!r}, which scene {scene.name!r} does not have" if tf.query else "names no query"
         _say(
             f"note: {args.trajectory} {what}: its start, goal, departure time and any hold are "
             "not checked (only motion, speed and collisions; --hold checks a parking)"
         )
-    _rows_fit(scene, tf, args.trajectory)
+    _rows_fit(scene, tf.waypoints, args.trajectory)
     if args.hold is not None:  # park at the last row (an ad-hoc query has no hold of its own)
         from ..scene.scene import Query
 
@@ -242,28 +242,33 @@ def cmd_check(args) -> int:
     return EXIT_OK
 
 
-def _executed_verdict(scene, path) -> str:
+def _executed_verdict(scene, tf, path) -> str:
     """What the check says of a navigate run's ``executed`` rows, when it did not arrive (its
-    motion, speed and collisions, as navigate checked them), or "" (no such rows)."""
+    motion, speed and collisions, as navigate checked them), or "" (no such rows).
+    BadInput (a SceneError) when they are no table of numbers or not the robot's width."""
     from ..check.check import check_trajectory
+    from ..trajectory import executed_rows
 
-    rows = _navigate_extras(path).get("executed")
-    if not rows or len(rows[0]) != scene.robot.dof + 1:
+    rows = executed_rows(tf, path)
+    if rows is None:
         return ""
+    _rows_fit(scene, rows, path, "executed")
     rep = check_trajectory(scene, rows, None)
-    done = f"the goal was not reached, no answer to check; the motion it executed ({len(rows)} rows, t {rows[0][0]:g} to {rows[-1][0]:g})"
+    n = len(rows)
+    done = (f"the goal was not reached, no answer to check; the motion it executed "
+            f"({n} row{'s' if n != 1 else ''}, t {rows[0, 0]:g} to {rows[-1, 0]:g})")
     if not rep.valid:
         return f"{done} is invalid: {rep.reason}"
     return f"{done} is valid (min clearance {max(rep.min_clearance, 0.0):.4f}, max speed {rep.max_speed:.4f})"
 
 
-def _rows_fit(scene, tf, path) -> None:
+def _rows_fit(scene, rows, path, key="waypoints") -> None:
     """Rows of the wrong width for the scene's robot are bad input (for check as for
-    render): a trajectory planned for another robot, not an invalid one."""
-    if tf.waypoints is not None and tf.waypoints.shape[1] != scene.robot.dof + 1:
+    render and export): a trajectory planned for another robot, not an invalid one."""
+    if rows is not None and rows.shape[1] != scene.robot.dof + 1:
         want = "[t, x, y]" if scene.robot.dof == 2 else "[t, x, y, heading]"
         raise BadInput(
-            f"{path}: waypoints: rows of {tf.waypoints.shape[1]} numbers, but scene "
+            f"{path}: {key}: rows of {rows.shape[1]} numbers, but scene "
             f"{scene.name!r} has a {scene.robot.shape} robot: expected {want}"
         )
 
@@ -301,13 +306,10 @@ def cmd_render(args) -> int:
     nav_doc: dict = {}
     if args.trajectory:
         tf = load_trajectory(args.trajectory)
-        nav_doc = _navigate_extras(args.trajectory)
-        if tf.waypoints is not None:
-            _rows_fit(scene, tf, args.trajectory)
-            traj = tf.waypoints
-        elif nav_doc.get("executed") is not None:  # a navigate run that did not arrive
-            traj = nav_doc["executed"]
-        else:
+        nav_doc = _navigate_extras(scene, tf, args.trajectory)
+        traj = tf.waypoints if tf.waypoints is not None else nav_doc.get("executed")
+        _rows_fit(scene, tf.waypoints, args.trajectory)
+        if traj is None:
             _say(f"note: {args.trajectory} has status {tf.status}: drawing the scene only")
     if args.roadmap:
         roadmap = load_roadmap(args.roadmap, scene)
@@ -350,26 +352,20 @@ def _start_on_mover(scene, query) -> str:
     return ""
 
 
-def _navigate_extras(path) -> dict:
-    """The ``executed`` rows and ``replan_log`` of a ``gfuzzy navigate`` file (else {})."""
-    import json
+def _navigate_extras(scene, tf, path) -> dict:
+    """The ``executed`` rows (:func:`gfuzzy.trajectory.executed_rows`, of the robot's width)
+    and ``replan_log`` of a ``gfuzzy navigate`` file (else {}), for render and export."""
+    from ..poses import as_number
+    from ..trajectory import executed_rows
 
-    try:
-        doc = json.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return {}
-    if not isinstance(doc, dict):
-        return {}
     out = {}
-    rows = doc.get("executed")
-    if isinstance(rows, list) and rows and all(isinstance(r, list) and len(r) in (3, 4) for r in rows):
-        try:
-            out["executed"] = [[float(v) for v in r] for r in rows]
-        except (TypeError, ValueError):
-            pass
-    log = doc.get("replan_log")
+    rows = executed_rows(tf, path)
+    if rows is not None:
+        _rows_fit(scene, rows, path, "executed")
+        out["executed"] = rows
+    log = tf.extra.get("replan_log")
     if isinstance(log, list):
-        out["replan_log"] = [e for e in log if isinstance(e, dict) and isinstance(e.get("t"), (int, float))]
+        out["replan_log"] = [e for e in log if isinstance(e, dict) and as_number(e.get("t")) is not None]
     return out
 
 
@@ -381,7 +377,9 @@ def cmd_regress(args) -> int:
     _check_roadmap_flags(args)  # before the table's header: bad input prints nothing else
     try:
         ok = run_regression(scenes, lambda sc: _roadmap_for(sc, args), options, sys.stdout)
-    except LimitError as exc:  # a request beyond the memory bounds (dt far too fine): names file and query
+    except TimeStepError as exc:  # the option's fault, not the first query's
+        raise BadInput(f"gfuzzy regress: --dt {options.dt:g}: {exc}") from None
+    except LimitError as exc:  # a request beyond the memory bounds (a hold of 1e6 s): names file and query
         raise BadInput(str(exc)) from None
     return EXIT_OK if ok else EXIT_NO
 

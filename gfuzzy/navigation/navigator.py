@@ -31,7 +31,6 @@ from __future__ import annotations
 
 import logging
 import math
-import numbers
 import time
 from dataclasses import dataclass, field, replace
 
@@ -40,7 +39,7 @@ import numpy as np
 from ..collision.geometry import StaticGeometry, mover_distance
 from ..errors import InputError, LimitError, check_number
 from ..planner.planner import BACKENDS, check_pose, search_function
-from ..poses import metric_distance, wrap_angle
+from ..poses import as_number, metric_distance, number_array, wrap_angle
 from ..roadmap.roadmap import Roadmap
 from ..scene.scene import Scene
 from ..settings import SPEED_SAFETY
@@ -281,20 +280,24 @@ class _Searched:
 
 
 def _checked_pose(pose, robot, t, t_last=-math.inf) -> FloatArray:
-    """``pose`` as a (dof,) float array (``[[x, y]]`` serves as ``[x, y]``); InputError naming
-    what is wrong when it is not ``dof`` finite numbers (a string or a boolean is none, as in a
-    scene file; beyond ``MAX_MAGNITUDE`` too, as :func:`gfuzzy.plan`'s), or ``t`` is no finite
-    number or is before ``t_last``, the last call's (its predictions, look-outs and kept plans
-    are of that later time)."""
-    if isinstance(t, bool) or not isinstance(t, numbers.Real) or not math.isfinite(t):
+    """``pose`` as a (dof,) float array (:func:`_flat_pose`); InputError also when ``t`` is no
+    finite number (:func:`gfuzzy.poses.as_number`: not a boolean or a string) or is before
+    ``t_last``, the last call's (its predictions, look-outs and kept plans are of that later time)."""
+    number = as_number(t)
+    if number is None or not math.isfinite(number):
         raise InputError(f"t: expected a finite number, got {t!r}")
-    if t < t_last:
-        raise InputError(f"t: {t:g} is before the last call's t = {t_last:g} (a new run needs a new Navigator)")
-    try:
-        pose = np.asarray(pose).reshape(-1)
-    except ValueError:  # rows of other lengths: check_pose says so
-        pass
-    return check_pose(pose, robot.dof, "pose", robot)
+    if number < t_last:
+        raise InputError(f"t: {number:g} is before the last call's t = {t_last:g} (a new run needs a new Navigator)")
+    return _flat_pose(pose, robot, "pose")
+
+
+def _flat_pose(pose, robot, label: str) -> FloatArray:
+    """A goal or a pose as a (dof,) float array (``[[x, y]]`` serves as ``[x, y]``, as
+    ``traj.at([t])`` gives it); InputError naming ``label`` when it is not ``dof`` finite
+    numbers (a string or a boolean, even among numbers, is none, as in a scene file; beyond
+    ``MAX_MAGNITUDE`` too, as :func:`gfuzzy.plan`'s)."""
+    arr = number_array(pose)
+    return check_pose(pose if arr is None else arr.reshape(-1), robot.dof, label, robot)
 
 
 class Navigator(PathSpace, Prediction):
@@ -328,7 +331,7 @@ class Navigator(PathSpace, Prediction):
         self.roadmap = roadmap
         self.robot = robot = scene.robot
         self.geometry = StaticGeometry(scene)
-        goal = check_pose(goal, robot.dof, "goal", robot)
+        goal = _flat_pose(goal, robot, "goal")
         if self.geometry.bounds_clearance(goal[None])[0] < 0 or self.geometry.clearance1(goal) < 0:
             raise InputError(f"goal {goal.tolist()} is out of bounds or collides with a static obstacle")
         self.goal = goal

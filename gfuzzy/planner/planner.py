@@ -20,7 +20,7 @@ import numpy as np
 
 from ..collision.geometry import StaticGeometry
 from ..errors import InputError, LimitError, check_number
-from ..poses import wrap_angle
+from ..poses import as_number, wrap_angle
 from ..roadmap.roadmap import Roadmap
 from ..scene.scene import Query, Scene
 from ..settings import MAX_MAGNITUDE, MAX_MOVER_SAMPLES, SPEED_SAFETY
@@ -718,12 +718,13 @@ def _check_hold(hold) -> float:
 
 
 def _check_t0(t0) -> float:
-    """A departure time as a float (InputError when not a finite number)."""
-    if isinstance(t0, bool) or not isinstance(t0, (int, float, np.number)) or not math.isfinite(t0):
+    """A departure time as a float (InputError when not a finite number: :func:`gfuzzy.poses.as_number`)."""
+    number = as_number(t0)
+    if number is None or not math.isfinite(number):
         raise InputError(f"t0: expected a finite number, got {t0!r}")
-    if abs(t0) > MAX_MAGNITUDE:  # as in a scene file: beyond, t0 + dt == t0 and times stop increasing
-        raise InputError(f"t0: {t0:g} is too large (at most {MAX_MAGNITUDE:g} in magnitude)")
-    return float(t0)
+    if abs(number) > MAX_MAGNITUDE:  # as in a scene file: beyond, t0 + dt == t0 and times stop increasing
+        raise InputError(f"t0: {number:g} is too large (at most {MAX_MAGNITUDE:g} in magnitude)")
+    return number
 
 
 def settle_time(scene: Scene, t0: float = 0.0) -> float:

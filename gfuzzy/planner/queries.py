@@ -10,7 +10,7 @@ import numpy as np
 
 from ..collision.geometry import StaticGeometry
 from ..errors import InputError
-from ..poses import pose_words
+from ..poses import number_array, pose_words
 from ..settings import MAX_MAGNITUDE
 from ..typed import FloatArray
 
@@ -26,14 +26,10 @@ def check_pose(pose, dof: int, label: str, robot=None) -> FloatArray:
     the message.
     """
     want = pose_words(dof, robot)
-    try:
-        arr = np.asarray(pose)
-    except (TypeError, ValueError):  # rows of other lengths
-        arr = np.array(None)
-    if arr.dtype.kind not in "iuf":  # a string, a boolean, None: no number, as in a scene file
+    arr = number_array(pose)
+    if arr is None:  # a string, a boolean (even among numbers), None, ragged rows: as in a scene file
         shown = pose.tolist() if isinstance(pose, np.ndarray) else pose
         raise InputError(f"{label}: expected {dof} finite numbers {want}, got {shown!r}")
-    arr = arr.astype(float)
     if arr.ndim != 1 or arr.shape != (dof,):
         got = f"{arr.size} numbers" if arr.ndim == 1 else f"shape {arr.shape}"
         raise InputError(f"{label}: expected {dof} finite numbers {want}, got {got}")

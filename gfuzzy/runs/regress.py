@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from typing import TextIO
 
 from ..check.check import check_trajectory
-from ..errors import LimitError, check_interrupt
+from ..errors import LimitError, TimeStepError, check_interrupt
 from ..planner.planner import Planner, PlanOptions
 from ..scene.scene import Query, Scene
 from ..status import Status
@@ -52,7 +52,8 @@ def regress_scene(scene: Scene, roadmap, options: PlanOptions | None = None) -> 
     """Answer and check every query of ``scene``.
 
     A query beyond the memory bounds raises :class:`~gfuzzy.errors.LimitError` naming the
-    scene file and the query. A solved answer must pass :func:`gfuzzy.check.check.check_trajectory` (with the query's
+    scene file and the query (a :class:`~gfuzzy.errors.TimeStepError`, the same for every
+    query, names the scene file only). A solved answer must pass :func:`gfuzzy.check.check.check_trajectory` (with the query's
     start, goal and t0), and every answer must meet the query's ``expect`` block.
     """
     planner = Planner(scene, roadmap)
@@ -61,6 +62,8 @@ def regress_scene(scene: Scene, roadmap, options: PlanOptions | None = None) -> 
         check_interrupt()  # a Ctrl-C native code dropped stops the run between queries
         try:
             res = planner.plan(q.start, q.goal, q.t0, options, hold=q.hold)
+        except TimeStepError as exc:  # dt's, for every query alike: the scene, not a query
+            raise TimeStepError(f"{scene.source}: {exc}") from None
         except LimitError as exc:  # which of many scenes and queries asked too much (a hold of 1e6 s)
             raise LimitError(f"{scene.source}: queries[{i}] ({q.name}): {exc}") from None
         problems = []

@@ -13,7 +13,6 @@ import hashlib
 import json
 import logging
 import math
-import numbers
 import os
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -22,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, SceneError
-from ..poses import pose_words
+from ..poses import as_number, pose_words
 from ..status import Status
 from ..typed import FloatArray
 from . import yamldoc
@@ -442,10 +441,10 @@ class Scene:
         for key, value in (("clearance", clearance), ("mover_clearance", mover_clearance)):
             if value is None:
                 continue
-            number = isinstance(value, numbers.Real) and not isinstance(value, bool)  # not "0.1", not True
-            if not (number and math.isfinite(value) and 0.0 <= value <= MAX_MAGNITUDE):
+            number = as_number(value)  # not "0.1", not True; a Decimal or a 0-d array is one
+            if number is None or not (math.isfinite(number) and 0.0 <= number <= MAX_MAGNITUDE):
                 raise InputError(f"robot.{key} must be a non-negative finite number, got {value!r}")
-            new[key] = float(value)
+            new[key] = number
         robot = replace(robot, **new)
         raw = copy.deepcopy(self.raw)
         if isinstance(raw.get("robot"), dict):
@@ -680,7 +679,7 @@ def parse_scene(doc: Any, file: str = "<string>", folder: str | os.PathLike | No
         On any bad input, naming ``file`` and the place in it.
     """
     v = _V(file)
-    doc = yamldoc.plain_document(doc)
+    doc = yamldoc.plain_document(doc, file)
     folder = Path(folder) if folder is not None else Path.cwd()
     v.mapping(
         doc,

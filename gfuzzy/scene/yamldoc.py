@@ -132,14 +132,44 @@ def not_utf8(data: bytes, exc: UnicodeDecodeError) -> str:
     return f"not UTF-8 text (line {line}, column {column}: byte 0x{data[at]:02x})"
 
 
-def plain_document(doc: Any) -> Any:
+#: How deep a scene document may nest (a scene needs a handful of levels): one built in code
+#: that nests deeper, or contains itself, is refused here, not with a RecursionError.
+MAX_DEPTH = 100
+
+
+def plain_document(doc: Any, file: str = "<string>") -> Any:
     """``doc`` as YAML would have given it, for a scene built in code: tuples and numpy arrays
     as lists, numpy numbers and booleans as Python's (``np.int64(2)`` -> 2); anything else
-    as it is, for the validator to judge."""
+    as it is, for the validator to judge.
+
+    Raises
+    ------
+    SceneError
+        Lists or mappings nested over ``MAX_DEPTH`` levels (naming the top-level key).
+    """
+    place = "top level"
+    try:
+        if isinstance(doc, dict):
+            out = {}
+            for place, value in doc.items():  # the top-level key, for the message
+                out[place] = _plain(value, MAX_DEPTH - 1)
+            return out
+        return _plain(doc, MAX_DEPTH)
+    except _TooDeep:
+        raise SceneError(file, str(place), f"nested over {MAX_DEPTH} levels deep (a list or mapping that holds itself?)") from None
+
+
+class _TooDeep(Exception):
+    pass
+
+
+def _plain(doc: Any, left: int) -> Any:
+    if left <= 0 and isinstance(doc, (dict, list, tuple, np.ndarray)):
+        raise _TooDeep
     if isinstance(doc, dict):
-        return {k: plain_document(v) for k, v in doc.items()}
+        return {k: _plain(v, left - 1) for k, v in doc.items()}
     if isinstance(doc, (list, tuple)):
-        return [plain_document(v) for v in doc]
+        return [_plain(v, left - 1) for v in doc]
     if isinstance(doc, (np.ndarray, np.generic)):
         return doc.tolist()
     return doc

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..collision.geometry import StaticGeometry, metric_distance
-from ..errors import LimitError
+from ..errors import TimeStepError
 from ..poses import split_counts
 from ..settings import MAX_POINTS
 from ..typed import FloatArray, IntArray
@@ -56,11 +56,11 @@ def check_points(total: int) -> None:
 
     Raises
     ------
-    LimitError
+    TimeStepError
         When ``total`` exceeds ``MAX_POINTS``.
     """
     if total > MAX_POINTS:
-        raise LimitError(
+        raise TimeStepError(
             f"the time step is too fine for this roadmap: its edges would be cut into "
             f"{total:,} points (at most {MAX_POINTS:,}); use a larger dt"
         )

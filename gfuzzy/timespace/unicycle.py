@@ -510,11 +510,11 @@ def _cut_pieces(nodes: FloatArray, A: IntArray, B: IntArray, DH: FloatArray, L: 
 
 
 def _too_many(total: int):
-    from ..errors import LimitError
+    from ..errors import TimeStepError
     from ..settings import MAX_POINTS
 
     if total > MAX_POINTS:
-        raise LimitError(
+        raise TimeStepError(
             f"the time step is too fine for this roadmap: the unicycle's graph would have {total:,} points "
             f"(at most {MAX_POINTS:,}); use a larger dt"
         )
