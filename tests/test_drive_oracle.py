@@ -18,7 +18,7 @@ sys.path.insert(0, str(ROOT))
 from gfuzzy.planner.planner import Planner  # noqa: E402
 from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap  # noqa: E402
 from gfuzzy.scene.scene import parse_scene  # noqa: E402
-from tools.drive_oracle import solve  # noqa: E402
+from tools.drive_oracle import LADDER, solve  # noqa: E402
 
 
 def door_scene(door: float, reverse: bool = False) -> object:
@@ -45,7 +45,7 @@ def test_oracle_path_passes_check_through_a_door():
 
 def test_oracle_finds_nothing_through_a_door_narrower_than_the_body():
     scene = door_scene(0.38)
-    res = solve(scene, scene.queries[0])
+    res = solve(scene, scene.queries[0], LADDER[:2])
     assert not res["found"] and not res["verified"]
 
 

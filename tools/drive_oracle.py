@@ -7,7 +7,10 @@ own moves only (turns in place by one heading bin, straight steps along the head
 backwards too with ``reverse``), cells of ``cell`` metres and ``bins`` headings for the
 duplicates, and collision against a distance field of the scene's static obstacles
 (shapely rasterises them at ``res`` metres; scipy's exact Euclidean distance transform).
-Movers are ignored: the question is whether a static path exists.
+Movers are ignored: the question is whether a static path exists. The lattices of
+``LADDER`` are tried in turn, coarse (5 degree headings, 4 cm cells: open rooms, a few
+seconds) to fine (half a degree, 1 cm cells and a 2.5 mm field: passages with 1-2 cm per
+side); ``-o`` writes the path as a trajectory file that ``gfuzzy check SCENE FILE`` reads.
 
 **Conservative.** A pose is accepted when every sample of the body's outline (``res``
 apart) lies in a cell whose distance to the nearest blocked cell is at least the robot's
@@ -387,8 +390,12 @@ def to_waypoints(poses, robot, t0: float) -> np.ndarray:
     return np.array(rows)
 
 
-#: the lattices tried in turn: coarse first (open rooms), then fine (narrow passages)
-LADDER = (OracleOptions(bins=72, cell=0.04, step=0.04, max_nodes=1_000_000), OracleOptions())
+#: the lattices tried in turn: coarse first (open rooms), then fine, then finer (narrow passages)
+LADDER = (
+    OracleOptions(bins=72, cell=0.04, step=0.04, max_nodes=1_000_000),
+    OracleOptions(),
+    OracleOptions(res=0.0025, cell=0.01, step=0.01, bins=720, max_nodes=3_000_000, weight=3.0),
+)
 
 
 def solve(scene, query, ladder=LADDER) -> dict:
@@ -487,11 +494,15 @@ def main(argv=None) -> int:
         f"cpu {res['seconds']:.2f} s {res['reason']}"
     )
     if args.out and res["found"]:
+        wp = res["waypoints"]
         doc = {
+            "version": 1,
             "scene": scene.name,
             "query": q.name,
             "status": "solved",
-            "waypoints": res["waypoints"].tolist(),
+            "message": "tools/drive_oracle.py",
+            "duration": float(wp[-1, 0] - wp[0, 0]),
+            "waypoints": wp.tolist(),
         }
         Path(args.out).write_text(json.dumps(doc))
     return 0 if res["verified"] else 1
