@@ -32,7 +32,7 @@ from __future__ import annotations
 import logging
 import math
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -46,7 +46,7 @@ from ..settings import MAX_MAGNITUDE, SPEED_SAFETY
 from ..status import Status
 from ..timespace.drive import Fan, drive_rows
 from ..timespace.movers import MoverField
-from ..timespace.spacetime import IntervalStore, SearchResult, SpaceTimeGraph
+from ..timespace.spacetime import IntervalStore, SearchResult
 from ..timespace.timespace import timed_rows
 from ..trajectory import Trajectory
 from ..typed import FloatArray
@@ -54,9 +54,10 @@ from .brisk import brisk
 from .drivenav import drive_evasion, kept_plan, rest_of, sooner_plan
 from .evasion import holonomic_evasion
 from .lookout import Lookout
-from .navtypes import MOTION_SAMPLE, NavMode, NavStep, sample_loss
+from .navtypes import MOTION_SAMPLE, NavMode, NavStep, _Searched, sample_loss
 from .pathspace import STILL_SPEED, PathSpace, WallCheck  # noqa: F401 (STILL_SPEED: kept importable here)
 from .prediction import REACH_SAMPLES, Prediction  # noqa: F401 (REACH_SAMPLES: kept importable here)
+from .softcost import SoftCost
 from .timedfield import PAIR_SECONDS, PIECE_WORK, _OutOfTime, _TimedField  # noqa: F401 (PIECE_WORK, PAIR_SECONDS: kept importable here)
 from .unknown import unknown_growth, unknown_positions
 
@@ -198,6 +199,12 @@ class NavOptions:
         360 it looks, now and then, where it has not looked (:mod:`gfuzzy.navigation.lookout`).
     look_after : float
         Seconds a side may go unseen before the robot (``fov`` < 360) looks there.
+    soft_search : bool
+        One search that prices the personal space and the path space instead of the tiers
+        that forbid them (:mod:`gfuzzy.navigation.softcost`). Off by default.
+    intrusion_cost : float
+        With ``soft_search``: seconds of arrival one second of the robot inside someone's
+        personal space or way is worth.
     """
 
     dt: float = 0.1
@@ -229,6 +236,8 @@ class NavOptions:
     swerve_growth: float = 0.0
     fov: float = 360.0
     look_after: float = 1.0
+    soft_search: bool = False
+    intrusion_cost: float = 2.0
 
     def __post_init__(self):
         if self.budget_clock not in BUDGET_CLOCKS:
@@ -240,7 +249,7 @@ class NavOptions:
             check_number(name, getattr(self, name))
         for name in ("uncertainty_growth", "safety_buffer", "personal_space", "personal_space_cost", "path_space",
                      "path_space_cost", "social_horizon", "stationary_hold", "goal_tolerance", "commitment",
-                     "swerve_growth"):
+                     "swerve_growth", "intrusion_cost"):
             check_number(name, getattr(self, name), strict=False)
         if self.connect_k < 1 or self.evasion_headings < 4:
             raise InputError("connect_k must be >= 1 and evasion_headings >= 4")
@@ -265,20 +274,6 @@ def _observation_rows(observations) -> np.ndarray:
     return obs
 
 
-@dataclass(frozen=True)
-class _Searched:
-    """What one search of :meth:`Navigator.step` found (the trajectory, or why not), and the
-    spliced graph, kept for a second search from the same pose."""
-
-    trajectory: Trajectory | None
-    message: str = ""
-    detailed: int = 0
-    out_of_time: bool = False
-    graph: SpaceTimeGraph | None = None
-    start: int = -1
-    ahead: list = field(default_factory=list)
-
-
 def _checked_pose(pose, dof: int, t: float) -> FloatArray:
     """``pose`` as a (dof,) float array; InputError when malformed, not finite, beyond
     ``MAX_MAGNITUDE`` (as a scene file's and :func:`gfuzzy.plan`'s), or ``t`` not finite."""
@@ -290,7 +285,7 @@ def _checked_pose(pose, dof: int, t: float) -> FloatArray:
     return pose
 
 
-class Navigator(PathSpace, Prediction):
+class Navigator(PathSpace, Prediction, SoftCost):
     """Receding-horizon navigation to a fixed goal among observed moving discs.
 
     Parameters
@@ -358,6 +353,10 @@ class Navigator(PathSpace, Prediction):
             from ..timespace.search_kernel import warm
 
             warm()
+            if opts.soft_search:
+                from ..timespace.soft_kernel import warm as warm_soft
+
+                warm_soft()
 
     # ------------------------------------------------------------------ graph
     def _build_base(self) -> None:
@@ -483,15 +482,12 @@ class Navigator(PathSpace, Prediction):
         predicted = obs.copy()
         if len(obs):
             predicted[:, 4] = obs[:, 4] + infl[:, 0]
-        found = self._search(t, pose, *self._with_ghosts(pose, obs, infl), deadline)
-        ghosts = opts.path_space > 0 and len(obs) > 0  # the plan keeps off the people's ways
-        if ghosts and found.graph is not None and self._clock() < deadline:
-            ghosted = found
-            found = self._path_space_cost(t, pose, obs, infl, found, deadline)
-            ghosts = found is ghosted
-        traj, mode = found.trajectory, NavMode.PLAN
-        if opts.personal_space > 0 and len(obs) and found.graph is not None and self._clock() < deadline:
-            traj, mode, found = self._closer(t, pose, obs, found, deadline, ghosts)
+        soft = opts.soft_search and len(obs) > 0 and (opts.path_space > 0 or opts.personal_space > 0)
+        if soft:  # one priced search: its plan keeps the buffer and the uncertainty only
+            found = self._soft_plan(t, pose, obs, deadline)
+            traj, mode, ghosts, infl = found.trajectory, NavMode.PLAN, False, self._inflation(pose, obs, personal=False)
+        else:
+            traj, mode, found, ghosts = self._tiers(t, pose, obs, infl, deadline)
         if opts.full_speed and traj is not None and mode in (NavMode.PLAN, NavMode.CLOSE):
             traj = brisk(self, t, pose, traj, obs, self._kept_inflation(pose, obs, infl, mode), ghosts)
         if traj is None and len(obs) and not found.out_of_time and self._clock() < deadline:

@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..typed import BoolArray, FloatArray, IntArray
+from .navtypes import NavMode
 
 if TYPE_CHECKING:
     from .navigator import _Searched
@@ -268,6 +269,22 @@ class PathSpace:
         ghosts, g_infl = self._path_ghosts(pose, obs)
         always = np.column_stack([obs, np.zeros(len(obs)), np.full(len(obs), math.inf)])
         return np.vstack([always, ghosts]), np.vstack([infl, g_infl])
+
+    def _tiers(self, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray, deadline: float):
+        """(plan, mode, search, ghosts kept) of the tiers: the ghosts and the personal space,
+        then without the ghosts (:meth:`_path_space_cost`), then without the personal space
+        (:meth:`_closer`)."""
+        opts = self.options
+        found = self._search(t, pose, *self._with_ghosts(pose, obs, infl), deadline)
+        ghosts = opts.path_space > 0 and len(obs) > 0  # the plan keeps off the people's ways
+        if ghosts and found.graph is not None and self._clock() < deadline:
+            ghosted = found
+            found = self._path_space_cost(t, pose, obs, infl, found, deadline)
+            ghosts = found is ghosted
+        traj, mode = found.trajectory, NavMode.PLAN
+        if opts.personal_space > 0 and len(obs) and found.graph is not None and self._clock() < deadline:
+            traj, mode, found = self._closer(t, pose, obs, found, deadline, ghosts)
+        return traj, mode, found, ghosts
 
     def _path_space_cost(self, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray, found: _Searched,
                          deadline: float) -> _Searched:  # fmt: skip

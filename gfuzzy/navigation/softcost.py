@@ -1,0 +1,73 @@
+"""One search that prices the time spent in people's ways (``NavOptions.soft_search``, issue 19).
+
+The navigator's default keeps off people's ways (the ghosts of :mod:`.pathspace`) and
+their personal space by *tiers* of searches that forbid them, each dropped when the plan
+that keeps it arrives too late. :meth:`SoftCost._soft_plan` runs one search instead
+(:func:`gfuzzy.timespace.soft_kernel.soft_search`): the people's discs with the safety
+buffer and the uncertainty stay forbidden (the ``close`` tier's field), and every step the
+robot's body spends where the first tier's field (the personal space and the ghosts) is
+unsafe costs ``intrusion_cost`` seconds of arrival per second: the robot yields where
+yielding is cheap and goes through where a detour or a wait would cost more.
+"""
+
+from __future__ import annotations
+
+import math
+
+from ..errors import InputError, LimitError
+from ..status import Status
+from ..timespace.soft_kernel import soft_search
+from ..timespace.spacetime import IntervalStore
+from ..timespace.timespace import timed_rows
+from ..trajectory import Trajectory
+from ..typed import FloatArray
+from .navtypes import _Searched
+from .timedfield import _OutOfTime
+
+__all__ = ["SoftCost"]
+
+
+class SoftCost:
+    """The navigator's single priced search (a base of :class:`gfuzzy.navigation.navigator.Navigator`)."""
+
+    def _soft_plan(self, t: float, pose: FloatArray, obs: FloatArray, deadline: float) -> _Searched:
+        """The plan of least ``arrival + intrusion_cost * seconds inside the personal space
+        or a ghost``, the people's discs with the buffer and the uncertainty forbidden."""
+        opts = self.options
+        graph, s_id = self._splice(pose, t, deadline)
+        if graph is None:
+            return _Searched(None, s_id)
+        h0 = float(graph.heuristic[s_id])
+        if not math.isfinite(h0):
+            return _Searched(None, "the goal is not reachable on the roadmap", graph=graph, start=s_id)
+        bare = self._inflation(pose, obs, personal=False)
+        s_obs, s_infl = self._with_ghosts(pose, obs, self._inflation(pose, obs))
+        stores = (IntervalStore(graph), IntervalStore(graph))
+        slack = (opts.plan_slack + opts.prediction_horizon) / opts.dt
+        detailed = 0
+        try:
+            for _ in range(2):
+                steps = int(math.ceil(h0 + slack))
+                hk = self._relevant(pose, obs, bare, steps * opts.dt)
+                sk = self._relevant(pose, s_obs, s_infl, steps * opts.dt)
+                detailed = int(hk.sum() + sk.sum())
+                if self._clock() + detailed * self._person_seconds > deadline:
+                    return _Searched(None, "time budget spent before the search", detailed, True, graph, s_id)
+                hard = self._field(t, obs[hk], bare[hk], steps, deadline)
+                soft = self._field(t, s_obs[sk], s_infl[sk], steps, deadline)
+                res = soft_search(graph, hard, soft, s_id, self._g_id, opts.intrusion_cost, deadline, stores,
+                                  self._clock)  # fmt: skip
+                if res.status != Status.NO_PATH or not res.horizon_hit or self._clock() > deadline:
+                    break
+                slack *= 2.0
+        except _OutOfTime:
+            return _Searched(None, "time budget spent on the predicted people's safety", detailed, True, graph, s_id)
+        except (InputError, LimitError) as exc:
+            return _Searched(None, f"search refused: {exc}", graph=graph, start=s_id)
+        if res.status != Status.SOLVED:
+            return _Searched(None, res.message, detailed, res.status == Status.TIMEOUT, graph, s_id)
+        rows, _ = timed_rows(res.nodes, res.steps, graph.poses, t, opts.dt)
+        self._ahead = [(t + st * opts.dt, nd) for nd, st in zip(res.nodes, res.steps, strict=True) if nd < self._nv]
+        rows[0, 1:] = pose
+        rows[-1, 1:] = self.goal
+        return _Searched(Trajectory(rows, self.robot.circumradius), "", detailed, False, graph, s_id, self._ahead)

@@ -1,0 +1,119 @@
+"""The priced search (gfuzzy.timespace.soft_kernel) and the navigator's switch to it (issue 19).
+
+A corridor of points 0.1 m apart (one step each at 1 m/s, dt 0.1) crossed at x = 1 by a
+person walking across it. The hard field is the person's disc; the soft field the same
+disc widened by 0.5 m (their way, their personal space). The priced search must never
+enter a hard-unsafe (point, step); with no price it arrives as early as the safe-interval
+search among the hard field, with a large price as late as the one among the soft field
+(it yields), and in between it pays for a short crossing instead of a long wait.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gfuzzy.navigation.navigator import NavOptions
+from gfuzzy.scene.scene import parse_scene
+from gfuzzy.status import Status
+from gfuzzy.timespace.soft_kernel import soft_search
+from gfuzzy.timespace.spacetime import IntervalStore
+from gfuzzy.timespace.timespace import MoverField, SpaceTimeGraph, sipp
+
+N = 31  # points x = 0.0 .. 3.0
+
+
+def _corridor():
+    xs = np.linspace(0.0, 3.0, N)
+    poses = np.column_stack([xs, np.full(N, 1.0)])
+    nbrs, indptr = [], [0]
+    for i in range(N):
+        nbrs += [j for j in (i - 1, i + 1) if 0 <= j < N]
+        indptr.append(len(nbrs))
+    h = (N - 1 - np.arange(N)).astype(float)
+    return SpaceTimeGraph(poses=poses, indptr=np.array(indptr), neighbors=np.array(nbrs), heuristic=h)
+
+
+def _fields(speed: float = 0.5, steps: int = 120, start_y: float = 2.5):
+    """The person walks down x = 1.5 from ``start_y`` at ``speed``; hard: their disc, soft: 0.5 m wider."""
+    scene = parse_scene({"version": 1, "name": "cross", "bounds": [-1, -1, 4, 4], "robot": {"disc": 0.2, "vmax": 1.0},
+                         "movers": [{"name": "p", "disc": 0.3, "speed": speed, "path": [[1.5, start_y], [1.5, -30.0]], "mode": "once"}]})
+    hard = MoverField(scene, 0.0, 0.1, steps, 1.0)
+    soft = MoverField(scene, 0.0, 0.1, steps, 1.0, clearance=0.5)
+    hard.compiled = soft.compiled = True
+    return hard, soft
+
+
+def _steps_at(res):
+    """(node, step) of every step of the answer, the waits included."""
+    out = []
+    for k in range(len(res.nodes)):
+        last = res.steps[k + 1] if k + 1 < len(res.nodes) else res.steps[k] + 1
+        out += [(res.nodes[k], s) for s in range(res.steps[k], last)]
+    return out
+
+
+def _unsafe(graph, field_, visits):
+    store = IntervalStore(graph)
+    store.set_horizon(field_, pool=True)
+    bad = 0
+    for v, s in visits:
+        starts, ends, _ = store.get(v)
+        bad += not any(a <= s <= b for a, b in zip(starts, ends, strict=True))
+    return bad
+
+
+def _sipp_arrival(graph, field_):
+    res = sipp(graph, field_, 0, N - 1)
+    assert res.status == Status.SOLVED
+    return res.steps[-1]
+
+
+def test_free_price_arrives_as_the_hard_search():
+    graph = _corridor()
+    hard, soft = _fields()
+    res = soft_search(graph, hard, soft, 0, N - 1, 0.0)
+    assert res.status == Status.SOLVED
+    assert res.steps[-1] == _sipp_arrival(graph, hard)
+    assert _unsafe(graph, hard, _steps_at(res)) == 0
+
+
+def test_high_price_yields_as_the_soft_search():
+    graph = _corridor()
+    hard, soft = _fields()
+    res = soft_search(graph, hard, soft, 0, N - 1, 100.0)
+    assert res.status == Status.SOLVED
+    assert res.steps[-1] == _sipp_arrival(graph, soft) > _sipp_arrival(graph, hard)
+    assert _unsafe(graph, soft, _steps_at(res)) == 0
+
+
+def test_moderate_price_crosses_when_yielding_costs_more():
+    """A slow walker: waiting for their wider way to clear costs far more steps than the few
+    spent crossing it behind their disc; with a price of 0.5 s a second the search crosses
+    (never into the disc), with 100 it waits."""
+    graph = _corridor()
+    hard, soft = _fields(speed=0.15, steps=250, start_y=1.6)
+    cheap = soft_search(graph, hard, soft, 0, N - 1, 0.5)
+    dear = soft_search(graph, hard, soft, 0, N - 1, 100.0)
+    assert cheap.status == dear.status == Status.SOLVED
+    inside = _unsafe(graph, soft, _steps_at(cheap))
+    assert 0 < inside
+    assert cheap.steps[-1] + 0.5 * inside < dear.steps[-1]  # the crossing was the cheaper answer
+    assert _unsafe(graph, hard, _steps_at(cheap)) == 0
+    assert _unsafe(graph, soft, _steps_at(dear)) == 0
+
+
+def test_blocked_by_the_hard_field_finds_nothing():
+    """A person standing on the corridor: no price buys a way through their disc."""
+    scene = parse_scene({"version": 1, "name": "block", "bounds": [-1, -1, 4, 4], "robot": {"disc": 0.2, "vmax": 1.0},
+                         "movers": [{"name": "p", "disc": 0.3, "speed": 0.0, "path": [[1.0, 1.0], [1.0, 1.5]], "mode": "once"}]})
+    hard = MoverField(scene, 0.0, 0.1, 80, 1.0)
+    soft = MoverField(scene, 0.0, 0.1, 80, 1.0, clearance=0.5)
+    hard.compiled = soft.compiled = True
+    res = soft_search(_corridor(), hard, soft, 0, N - 1, 0.0)
+    assert res.status == Status.NO_PATH
+
+
+def test_intrusion_cost_is_checked():
+    with pytest.raises(ValueError, match="intrusion_cost"):
+        NavOptions(soft_search=True, intrusion_cost=-1.0)
