@@ -47,6 +47,22 @@ def _slot(tk, key):
 
 
 @njit(cache=True)
+def _grow_table(tk, tb, tp):
+    """The table doubled and rehashed."""
+    n = len(tk) * 2
+    nk = np.full(n, -1, np.int64)
+    nb = np.empty(n, np.float64)
+    np_ = np.empty(n, np.int64)
+    for i in range(len(tk)):
+        if tk[i] != -1:
+            s = _slot(nk, tk[i])
+            nk[s] = tk[i]
+            nb[s] = tb[i]
+            np_[s] = tp[i]
+    return nk, nb, np_
+
+
+@njit(cache=True)
 def _inside(s, e, off, cnt, k):
     """Whether step ``k`` lies in one of the intervals ``s[off:off+cnt]``/``e[...]``."""
     a, b = 0, cnt
@@ -221,12 +237,7 @@ def _room(hf, hg, hq, tk, tb, tp, ctr, pushes: int):
         nf[:n], ng[:n], nq[:n] = hf[:n], hg[:n], hq[:n]
         hf, hg, hq = nf, ng, nq
     while 2 * (ctr[_TCOUNT] + pushes) > len(tk):
-        m = 2 * len(tk)
-        nk, nb, np_ = np.full(m, -1, np.int64), np.empty(m), np.empty(m, np.int64)
-        for i in np.flatnonzero(tk != -1).tolist():
-            s = _slot(nk, tk[i])
-            nk[s], nb[s], np_[s] = tk[i], tb[i], tp[i]
-        tk, tb, tp = nk, nb, np_
+        tk, tb, tp = _grow_table(tk, tb, tp)
     return hf, hg, hq, tk, tb, tp
 
 
@@ -275,10 +286,10 @@ def soft_search(graph, hard, soft, start: int, goal: int, penalty: float, deadli
     n = len(h)
     wait_ok = np.ones(n, np.bool_) if graph.can_wait is None else np.ascontiguousarray(graph.can_wait, np.bool_)
     stride = H + 2
-    hf, hg = np.empty(1024), np.empty(1024)
-    hq = np.empty((1024, 2), np.int64)
-    tk = np.full(4096, -1, np.int64)
-    tb, tp = np.empty(4096), np.empty(4096, np.int64)
+    hf, hg = np.empty(8192), np.empty(8192)
+    hq = np.empty((8192, 2), np.int64)
+    tk = np.full(1 << 16, -1, np.int64)
+    tb, tp = np.empty(1 << 16), np.empty(1 << 16, np.int64)
     ctr = np.zeros(7, np.int64)
     need = np.empty(max(1, int(np.diff(indptr).max(initial=0))), np.int64)
 
