@@ -359,3 +359,4 @@ def warm() -> None:
     soft = MoverField(scene, 0.0, 0.1, 40, 1.0, clearance=0.3)
     hard.compiled = soft.compiled = True
     soft_search(graph, hard, soft, 0, 2, 2.0)
+    _grow_table(np.full(2, -1, np.int64), np.empty(2), np.empty(2, np.int64))  # called only past 32,768 states
