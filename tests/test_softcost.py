@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gfuzzy.navigation.navigator import NavOptions
+from gfuzzy.navigation.navigator import Navigator, NavOptions
 from gfuzzy.scene.scene import parse_scene
 from gfuzzy.status import Status
 from gfuzzy.timespace.soft_kernel import soft_search
@@ -117,3 +117,36 @@ def test_blocked_by_the_hard_field_finds_nothing():
 def test_intrusion_cost_is_checked():
     with pytest.raises(ValueError, match="intrusion_cost"):
         NavOptions(soft_search=True, intrusion_cost=-1.0)
+
+
+@pytest.fixture(scope="module")
+def open_square():
+    from test_pathspace import _scene
+
+    import gfuzzy
+
+    scene = _scene()
+    return scene, gfuzzy.build_roadmap(scene, gfuzzy.RoadmapOptions(vertices=300, seed=4))
+
+
+def test_the_navigator_yields_only_where_yielding_is_cheap(open_square):
+    """The walker of test_pathspace's crossing (due at the robot's straight way in 2.5 s):
+    priced at nothing the plan is the search's without the zones (it crosses in front of
+    them); priced high it lets them pass, as the tier that forbids their way; priced low it
+    crosses, where the tiers would forbid the way unless it cost 5 s."""
+    from test_pathspace import _intrusions
+
+    scene, rm = open_square
+    pose, goal = np.array([0.0, -3.0]), (0.0, 3.0)
+    person = np.array([-2.5, -2.0, 1.0, 0.0, 0.3])
+    bare = Navigator(scene, rm, goal, NavOptions(path_space=0.0, personal_space=0.0, time_budget=5.0))
+    crossing = bare.step(0.0, pose, person[None])
+    ways, ends = {}, {}
+    for cost in (0.0, 0.5, 20.0):
+        nav = Navigator(scene, rm, goal, NavOptions(soft_search=True, intrusion_cost=cost, time_budget=5.0))
+        traj = nav.step(0.0, pose, person[None])
+        assert nav.last.mode == "plan"
+        ways[cost], ends[cost] = _intrusions(traj, person, 0.0), traj.t_end
+    assert ways[0.0] > 0 and ends[0.0] == pytest.approx(crossing.t_end)
+    assert ways[20.0] == 0 and ends[20.0] > ends[0.0] + 1.0  # it lets them pass
+    assert ways[0.5] > 0 and ends[0.5] < ends[20.0]  # yielding costs more than the crossing's price
