@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gfuzzy.navigation.navigator import Navigator, NavOptions
+from gfuzzy.navigation.navigator import SEARCH_SHARE, Navigator, NavOptions
 from gfuzzy.scene.scene import parse_scene
 from gfuzzy.status import Status
 from gfuzzy.timespace.soft_kernel import soft_search
@@ -150,3 +150,39 @@ def test_the_navigator_yields_only_where_yielding_is_cheap(open_square):
     assert ways[0.0] > 0 and ends[0.0] == pytest.approx(crossing.t_end)
     assert ways[20.0] == 0 and ends[20.0] > ends[0.0] + 1.0  # it lets them pass
     assert ways[0.5] > 0 and ends[0.5] < ends[20.0]  # yielding costs more than the crossing's price
+
+
+def test_a_goal_taken_is_told_before_the_priced_search(open_square, monkeypatch):
+    """Someone standing on the goal: the priced search is not run (it would expand every
+    reachable (point, step) to learn it, as at the first sight of people of unknown velocity)."""
+    import gfuzzy.navigation.softcost as softcost
+    from gfuzzy.navigation.navigator import GOAL_TAKEN
+
+    def never(*args, **kwargs):
+        raise AssertionError("the priced search ran")
+
+    monkeypatch.setattr(softcost, "soft_search", never)
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (0.0, 3.0), NavOptions(soft_search=True, time_budget=5.0))
+    nav.step(0.0, np.array([0.0, -3.0]), np.array([[0.0, 3.0, 0.0, 0.0, 0.3]]))
+    assert nav.last.message == GOAL_TAKEN
+
+
+def test_a_priced_search_out_of_time_leaves_the_rest_to_the_close_search(open_square, monkeypatch):
+    import gfuzzy.navigation.softcost as softcost
+    from gfuzzy.timespace.spacetime import SearchResult
+
+    seen = []
+
+    def slow(graph, hard, soft, start, goal, penalty, deadline, stores, clock):
+        seen.append(deadline)
+        return SearchResult(Status.TIMEOUT, message="planning time budget exhausted")
+
+    monkeypatch.setattr(softcost, "soft_search", slow)
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (0.0, 3.0), NavOptions(soft_search=True, time_budget=5.0, budget_clock="cpu"))
+    c0 = nav._clock()
+    nav.step(0.0, np.array([0.0, -3.0]), np.array([[-2.5, -2.0, 1.0, 0.0, 0.3]]))
+    assert nav.last.mode == "close"
+    # it had only its share of the search's time (SEARCH_SHARE of the budget), the rest the close search's
+    assert len(seen) == 1 and c0 < seen[0] <= c0 + softcost.SOFT_SHARE * SEARCH_SHARE * 5.0 + 1e-3

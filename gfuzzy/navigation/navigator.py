@@ -54,7 +54,7 @@ from .brisk import brisk
 from .drivenav import drive_evasion, kept_plan, rest_of, sooner_plan
 from .evasion import holonomic_evasion
 from .lookout import Lookout
-from .navtypes import MOTION_SAMPLE, NavMode, NavStep, _Searched, sample_loss
+from .navtypes import GOAL_TAKEN, MOTION_SAMPLE, NavMode, NavStep, _Searched, sample_loss
 from .pathspace import STILL_SPEED, PathSpace, WallCheck  # noqa: F401 (STILL_SPEED: kept importable here)
 from .prediction import REACH_SAMPLES, Prediction  # noqa: F401 (REACH_SAMPLES: kept importable here)
 from .softcost import SoftCost
@@ -91,8 +91,6 @@ PERSON_SECONDS = 150e-6
 #: ``lookout.LOOK_CHECK`` only).
 LOOK_OVER = (NavMode.PLAN, NavMode.CLOSE, NavMode.KEPT)
 
-#: Why a search did not run: the goal is unsafe at every step it could be reached.
-GOAL_TAKEN = "the goal is taken at every step within the horizon (someone stands on it, with these margins)"
 
 #: The clocks a time budget can be measured on (``NavOptions.budget_clock``).
 BUDGET_CLOCKS = {"wall": time.perf_counter, "cpu": time.thread_time}
@@ -484,8 +482,8 @@ class Navigator(PathSpace, Prediction, SoftCost):
             predicted[:, 4] = obs[:, 4] + infl[:, 0]
         soft = opts.soft_search and len(obs) > 0 and (opts.path_space > 0 or opts.personal_space > 0)
         if soft:  # one priced search: its plan keeps the buffer and the uncertainty only
-            found = self._soft_plan(t, pose, obs, deadline)
-            traj, mode, ghosts, infl = found.trajectory, NavMode.PLAN, False, self._inflation(pose, obs, personal=False)
+            traj, mode, found, infl = self._priced(t, pose, obs, deadline)
+            ghosts = False
         else:
             traj, mode, found, ghosts = self._tiers(t, pose, obs, infl, deadline)
         if opts.full_speed and traj is not None and mode in (NavMode.PLAN, NavMode.CLOSE):

@@ -20,6 +20,9 @@ __all__ = ["NavMode", "NavStep", "MOTION_SAMPLE", "sample_loss"]
 #: constant velocity (the fallbacks, a kept plan); :func:`sample_loss` bounds the rest.
 MOTION_SAMPLE = 0.05
 
+#: Why a search did not run: the goal is unsafe at every step it could be reached.
+GOAL_TAKEN = "the goal is taken at every step within the horizon (someone stands on it, with these margins)"
+
 
 def sample_loss(robot_speed, person_speed):
     """What the gap between the robot and a person can lose between two samples

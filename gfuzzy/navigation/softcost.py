@@ -21,14 +21,32 @@ from ..timespace.spacetime import IntervalStore
 from ..timespace.timespace import timed_rows
 from ..trajectory import Trajectory
 from ..typed import FloatArray
-from .navtypes import _Searched
+from .navtypes import GOAL_TAKEN, NavMode, _Searched
 from .timedfield import _OutOfTime
 
-__all__ = ["SoftCost"]
+__all__ = ["SoftCost", "SOFT_SHARE"]
+
+#: Share of the search's time left that the priced search may use; when it runs out, the
+#: safe-interval search among the same forbidden field answers (*close*) in the rest: the
+#: priced search has a state per (point, step), and among people of unknown velocity
+#: (their zones growing every step, at the first sight of them) it can exhaust its time
+#: where the safe-interval search finishes in a few milliseconds.
+SOFT_SHARE = 0.6
 
 
 class SoftCost:
     """The navigator's single priced search (a base of :class:`gfuzzy.navigation.navigator.Navigator`)."""
+
+    def _priced(self, t: float, pose: FloatArray, obs: FloatArray, deadline: float):
+        """(plan, mode, search, inflation kept) of the priced search, within ``SOFT_SHARE`` of
+        the time left; when it runs out, the safe-interval search among its forbidden field."""
+        bare = self._inflation(pose, obs, personal=False)
+        now = self._clock()
+        found = self._soft_plan(t, pose, obs, now + SOFT_SHARE * max(deadline - now, 0.0))
+        if found.trajectory is None and found.out_of_time and self._clock() < deadline:
+            close = self._search(t, pose, obs, bare, deadline, found)
+            return close.trajectory, NavMode.CLOSE, close, bare
+        return found.trajectory, NavMode.PLAN, found, bare
 
     def _soft_plan(self, t: float, pose: FloatArray, obs: FloatArray, deadline: float) -> _Searched:
         """The plan of least ``arrival + intrusion_cost * seconds inside the personal space
@@ -54,6 +72,9 @@ class SoftCost:
                 if self._clock() + detailed * self._person_seconds > deadline:
                     return _Searched(None, "time budget spent before the search", detailed, True, graph, s_id)
                 hard = self._field(t, obs[hk], bare[hk], steps, deadline)
+                stores[0].set_horizon(hard, pool=True)
+                if len(stores[0].get(self._g_id)[0]) == 0:  # as the safe-interval search's _goal_taken
+                    return _Searched(None, GOAL_TAKEN, detailed, False, graph, s_id)
                 soft = self._field(t, s_obs[sk], s_infl[sk], steps, deadline)
                 res = soft_search(graph, hard, soft, s_id, self._g_id, opts.intrusion_cost, deadline, stores,
                                   self._clock)  # fmt: skip
