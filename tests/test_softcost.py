@@ -186,3 +186,16 @@ def test_a_priced_search_out_of_time_leaves_the_rest_to_the_close_search(open_sq
     assert nav.last.mode == "close"
     # it had only its share of the search's time (SEARCH_SHARE of the budget), the rest the close search's
     assert len(seen) == 1 and c0 < seen[0] <= c0 + softcost.SOFT_SHARE * SEARCH_SHARE * 5.0 + 1e-3
+
+
+def test_two_priced_fields_add_their_prices():
+    """A step unsafe in both priced fields pays both: the same field twice at 0.25 s a second
+    each is the field once at 0.5; a field priced 0 changes nothing."""
+    graph = _corridor()
+    hard, soft = _fields(speed=0.15, steps=250, start_y=1.6)
+    once = soft_search(graph, hard, soft, 0, N - 1, 0.5)
+    twice = soft_search(graph, hard, (soft, soft), 0, N - 1, (0.25, 0.25))
+    free = soft_search(graph, hard, (soft, hard), 0, N - 1, (0.5, 0.0))
+    assert once.nodes == twice.nodes == free.nodes and once.steps == twice.steps == free.steps
+    dear = soft_search(graph, hard, (hard, soft), 0, N - 1, (0.0, 100.0))
+    assert dear.steps[-1] == _sipp_arrival(graph, soft)

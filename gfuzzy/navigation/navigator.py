@@ -202,7 +202,10 @@ class NavOptions:
         that forbid them (:mod:`gfuzzy.navigation.softcost`). Off by default.
     intrusion_cost : float
         With ``soft_search``: seconds of arrival one second of the robot inside someone's
-        personal space or way is worth.
+        personal space or way is worth (in their way only, when ``discomfort_cost`` is set).
+    discomfort_cost : float or None
+        With ``soft_search``: when set, seconds of arrival one second inside someone's
+        personal space is worth, priced apart from their way (a step in both pays both).
     """
 
     dt: float = 0.1
@@ -236,6 +239,7 @@ class NavOptions:
     look_after: float = 1.0
     soft_search: bool = False
     intrusion_cost: float = 2.0
+    discomfort_cost: float | None = None
 
     def __post_init__(self):
         if self.budget_clock not in BUDGET_CLOCKS:
@@ -249,6 +253,8 @@ class NavOptions:
                      "path_space_cost", "social_horizon", "stationary_hold", "goal_tolerance", "commitment",
                      "swerve_growth", "intrusion_cost"):
             check_number(name, getattr(self, name), strict=False)
+        if self.discomfort_cost is not None:
+            check_number("discomfort_cost", self.discomfort_cost, strict=False)
         if self.connect_k < 1 or self.evasion_headings < 4:
             raise InputError("connect_k must be >= 1 and evasion_headings >= 4")
         check_number("stretch", self.stretch, 1.0, strict=False)

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from ..errors import InputError, LimitError
 from ..status import Status
 from ..timespace.soft_kernel import soft_search
@@ -48,9 +50,22 @@ class SoftCost:
             return close.trajectory, NavMode.CLOSE, close, bare
         return found.trajectory, NavMode.PLAN, found, bare
 
+    def _priced_zones(self, pose: FloatArray, obs: FloatArray) -> tuple[list, list]:
+        """([(rows, inflation)] of the priced fields, [their prices in steps per step]): the
+        people with the personal space and their ghosts as one field priced ``intrusion_cost``;
+        with ``discomfort_cost`` set, the people with the personal space priced that and the
+        ghosts alone priced ``intrusion_cost``."""
+        opts = self.options
+        infl = self._inflation(pose, obs)
+        if opts.discomfort_cost is None:
+            return [self._with_ghosts(pose, obs, infl)], [opts.intrusion_cost]
+        ghosts = self._path_ghosts(pose, obs) if opts.path_space > 0 else (np.zeros((0, 7)), np.zeros((0, infl.shape[1])))
+        return [(obs, infl), ghosts], [opts.discomfort_cost, opts.intrusion_cost]
+
     def _soft_plan(self, t: float, pose: FloatArray, obs: FloatArray, deadline: float) -> _Searched:
         """The plan of least ``arrival + intrusion_cost * seconds inside the personal space
-        or a ghost``, the people's discs with the buffer and the uncertainty forbidden."""
+        or a ghost`` (:meth:`_priced_zones`), the people's discs with the buffer and the
+        uncertainty forbidden."""
         opts = self.options
         graph, s_id = self._splice(pose, t, deadline)
         if graph is None:
@@ -59,25 +74,24 @@ class SoftCost:
         if not math.isfinite(h0):
             return _Searched(None, "the goal is not reachable on the roadmap", graph=graph, start=s_id)
         bare = self._inflation(pose, obs, personal=False)
-        s_obs, s_infl = self._with_ghosts(pose, obs, self._inflation(pose, obs))
-        stores = (IntervalStore(graph), IntervalStore(graph))
+        priced, prices = self._priced_zones(pose, obs)
+        stores = tuple(IntervalStore(graph) for _ in range(1 + len(priced)))
         slack = (opts.plan_slack + opts.prediction_horizon) / opts.dt
         detailed = 0
         try:
             for _ in range(2):
                 steps = int(math.ceil(h0 + slack))
                 hk = self._relevant(pose, obs, bare, steps * opts.dt)
-                sk = self._relevant(pose, s_obs, s_infl, steps * opts.dt)
-                detailed = int(hk.sum() + sk.sum())
+                keep = [self._relevant(pose, o, i, steps * opts.dt) for o, i in priced]
+                detailed = int(hk.sum() + sum(k.sum() for k in keep))
                 if self._clock() + detailed * self._person_seconds > deadline:
                     return _Searched(None, "time budget spent before the search", detailed, True, graph, s_id)
                 hard = self._field(t, obs[hk], bare[hk], steps, deadline)
                 stores[0].set_horizon(hard, pool=True)
                 if len(stores[0].get(self._g_id)[0]) == 0:  # as the safe-interval search's _goal_taken
                     return _Searched(None, GOAL_TAKEN, detailed, False, graph, s_id)
-                soft = self._field(t, s_obs[sk], s_infl[sk], steps, deadline)
-                res = soft_search(graph, hard, soft, s_id, self._g_id, opts.intrusion_cost, deadline, stores,
-                                  self._clock)  # fmt: skip
+                soft = [self._field(t, o[k], i[k], steps, deadline) for (o, i), k in zip(priced, keep, strict=True)]
+                res = soft_search(graph, hard, soft, s_id, self._g_id, prices, deadline, stores, self._clock)
                 if res.status != Status.NO_PATH or not res.horizon_hit or self._clock() > deadline:
                     break
                 slack *= 2.0

@@ -3,7 +3,8 @@
 :func:`gfuzzy.timespace.timespace.sipp` forbids every (point, step) its field makes unsafe.
 :func:`soft_search` keeps that for a *hard* field (people's discs plus the buffer) and only
 prices a second, *soft* one (their personal space, the ghosts of their ways): it
-minimises ``arrival step + penalty * (steps in a soft zone)`` in A* order over the
+minimises ``arrival step + penalty * (steps in a soft zone)`` (one or two soft fields, each
+with its own penalty, added where both are unsafe) in A* order over the
 time-expanded graph, one state per (node, step), each keeping its least cost. Waiting is
 a move to the same node (where the node may wait), so a wait inside someone's way costs
 as much per step as walking through it. The heuristic (static steps to the goal) stays
@@ -26,6 +27,7 @@ import numpy as np
 
 from ..status import Status
 from .jit import njit
+from .movers import MoverField
 from .spacetime import IntervalStore, SearchResult
 from .timespace import NO_FIRST_MOTION, exhausted, first_motions, too_short
 
@@ -149,8 +151,8 @@ def _get(tk, tb, key):
 
 
 @njit(cache=True)
-def _run(indptr, nbrs, h, wait_ok, goal, H, penalty, stride, ho, hc, hcap, hs, he, so, sc, ss, se,
-         hf, hg, hq, tk, tb, tp, ctr, need):  # fmt: skip
+def _run(indptr, nbrs, h, wait_ok, goal, H, penalty, penalty2, stride, ho, hc, hcap, hs, he, so, sc, ss, se,
+         so2, sc2, ss2, se2, hf, hg, hq, tk, tb, tp, ctr, need):  # fmt: skip
     """The A* loop over (node, step) states until it ends or needs something (as
     :func:`gfuzzy.timespace.search_kernel._run`: ``_NEED``, ``_ROOM``, ``_YIELD``)."""
     while ctr[_HSIZE] > 0:
@@ -171,7 +173,7 @@ def _run(indptr, nbrs, h, wait_ok, goal, H, penalty, stride, ho, hc, hcap, hs, h
                 v = nbrs[e]
                 if math.isinf(h[v]):
                     continue
-                if hc[v] < 0 or sc[v] < 0:
+                if hc[v] < 0 or sc[v] < 0 or sc2[v] < 0:
                     need[nn] = v
                     nn += 1
                 pushes += 1
@@ -207,6 +209,8 @@ def _run(indptr, nbrs, h, wait_ok, goal, H, penalty, stride, ho, hc, hcap, hs, h
             ng = g + 1.0
             if not _inside(ss, se, so[v], sc[v], n1):
                 ng += penalty
+            if not _inside(ss2, se2, so2[v], sc2[v], n1):
+                ng += penalty2
             key = v * stride + n1
             if ng < _get(tk, tb, key):
                 _set(tk, tb, tp, ctr, key, ng, ukey)
@@ -252,20 +256,22 @@ def _merged(nodes, steps) -> tuple[list, list]:
     return out_n, out_s
 
 
-def soft_search(graph, hard, soft, start: int, goal: int, penalty: float, deadline: float = math.inf,
+def soft_search(graph, hard, soft, start: int, goal: int, penalty, deadline: float = math.inf,
                 stores: tuple | None = None, clock=time.perf_counter) -> SearchResult:  # fmt: skip
-    """Least ``arrival + penalty * soft steps`` from ``start`` (at step 0) to ``goal``.
+    """Least ``arrival + sum of penalty * soft steps`` from ``start`` (at step 0) to ``goal``.
 
     Parameters
     ----------
     graph : SpaceTimeGraph
-    hard, soft : MoverField
-        The field whose unsafe (point, step) pairs are forbidden, and the one whose unsafe
-        pairs cost ``penalty`` more steps each (same horizon; soft at least as cautious).
-    penalty : float
-        Extra cost (in steps) of a step the soft field calls unsafe.
-    stores : (IntervalStore, IntervalStore), optional
-        The two fields' stores (pool storage), kept across horizons.
+    hard : MoverField
+        The field whose unsafe (point, step) pairs are forbidden.
+    soft : MoverField or (MoverField, MoverField)
+        The priced fields (same horizon): a step in an unsafe pair of each costs its
+        ``penalty`` more steps (a step unsafe in both, both).
+    penalty : float or (float, float)
+        Extra cost (in steps) of a step each soft field calls unsafe (>= 0).
+    stores : tuple of IntervalStore, optional
+        The hard field's store and the soft fields' (pool storage), kept across horizons.
 
     Returns
     -------
@@ -273,9 +279,15 @@ def soft_search(graph, hard, soft, start: int, goal: int, penalty: float, deadli
         The nodes and arrival steps of the cheapest answer (waits folded in), or why none.
     """
     H = hard.steps
-    hstore, sstore = stores or (IntervalStore(graph), IntervalStore(graph))
+    softs = (soft,) if isinstance(soft, MoverField) else tuple(soft)
+    prices = (float(penalty),) if np.ndim(penalty) == 0 else tuple(float(x) for x in penalty)
+    stores = stores or tuple(IntervalStore(graph) for _ in range(1 + len(softs)))
+    hstore, sstore = stores[0], stores[1]
+    sstore2 = stores[2] if len(softs) > 1 else sstore  # one soft field: the second is the first, priced 0
+    penalty, penalty2 = prices[0], (prices[1] if len(softs) > 1 else 0.0)
     hstore.set_horizon(hard, pool=True)
-    sstore.set_horizon(soft, pool=True)
+    for store, field_ in zip(stores[1:], softs, strict=True):
+        store.set_horizon(field_, pool=True)
     h = np.ascontiguousarray(graph.heuristic, dtype=np.float64)
     if not math.isfinite(h[start]):
         return SearchResult(Status.NO_PATH, message="the goal is not reachable on the roadmap")
@@ -296,6 +308,7 @@ def soft_search(graph, hard, soft, start: int, goal: int, penalty: float, deadli
     def load(v):
         hstore.ensure(v)
         sstore.ensure(v)
+        sstore2.ensure(v)
 
     load(start)
     if _inside(hstore.s, hstore.e, int(hstore.off[start]), int(hstore.ready[start]), 0):
@@ -310,6 +323,8 @@ def soft_search(graph, hard, soft, start: int, goal: int, penalty: float, deadli
             cost = float(arrive)
             if not _inside(sstore.s, sstore.e, int(sstore.off[v]), int(sstore.ready[v]), arrive):
                 cost += penalty
+            if not _inside(sstore2.s, sstore2.e, int(sstore2.off[v]), int(sstore2.ready[v]), arrive):
+                cost += penalty2
             key = v * stride + arrive
             if cost < _get(tk, tb, key):
                 hf, hg, hq, tk, tb, tp = _room(hf, hg, hq, tk, tb, tp, ctr, 1)
@@ -318,9 +333,9 @@ def soft_search(graph, hard, soft, start: int, goal: int, penalty: float, deadli
         if ctr[_HSIZE] == 0:
             return SearchResult(Status.NO_PATH, message=NO_FIRST_MOTION)
     while True:
-        code = _run(indptr, nbrs, h, wait_ok, goal, H, float(penalty), stride,
-                    hstore.off, hstore.ready, hstore.cap, hstore.s, hstore.e,
-                    sstore.off, sstore.ready, sstore.s, sstore.e, hf, hg, hq, tk, tb, tp, ctr, need)  # fmt: skip
+        code = _run(indptr, nbrs, h, wait_ok, goal, H, penalty, penalty2, stride,
+                    hstore.off, hstore.ready, hstore.cap, hstore.s, hstore.e, sstore.off, sstore.ready, sstore.s,
+                    sstore.e, sstore2.off, sstore2.ready, sstore2.s, sstore2.e, hf, hg, hq, tk, tb, tp, ctr, need)  # fmt: skip
         if code == _ROOM:
             hf, hg, hq, tk, tb, tp = _room(hf, hg, hq, tk, tb, tp, ctr, int(ctr[_NNEED]))
             continue
@@ -347,7 +362,6 @@ def warm() -> None:
     """Compile (or load from numba's cache) the loop: a priced search on a three-node line
     past a mover, with waits, so that a navigator's first call does not pay for it."""
     from ..scene.scene import parse_scene
-    from .movers import MoverField
     from .spacetime import SpaceTimeGraph
 
     scene = parse_scene({"version": 1, "name": "warm", "bounds": [0, 0, 2, 2], "robot": {"disc": 0.2, "vmax": 1.0},
@@ -359,4 +373,5 @@ def warm() -> None:
     soft = MoverField(scene, 0.0, 0.1, 40, 1.0, clearance=0.3)
     hard.compiled = soft.compiled = True
     soft_search(graph, hard, soft, 0, 2, 2.0)
+    soft_search(graph, hard, (soft, hard), 0, 2, (2.0, 1.0))
     _grow_table(np.full(2, -1, np.int64), np.empty(2), np.empty(2, np.int64))  # called only past 32,768 states
