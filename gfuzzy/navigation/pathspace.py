@@ -241,7 +241,7 @@ class PathSpace:
         """(k,) the search's continuous-time margin at step 0 against people at ``speed``."""
         return (self.vplan + speed) * self.options.dt / 2
 
-    def _path_ghosts(self, pose: FloatArray, obs: FloatArray) -> tuple[FloatArray, FloatArray]:
+    def _path_ghosts(self, pose: FloatArray, obs: FloatArray, escape: bool = True) -> tuple[FloatArray, FloatArray]:
         """The first search's ghosts (:mod:`gfuzzy.navigation.pathspace`): predicted discs
         along each walking person's next ``path_space`` seconds, as rows ``[x, y, vx, vy,
         radius, appear, vanish]`` (g, 7) (seconds after now), and their inflation (g, S): the
@@ -258,6 +258,8 @@ class PathSpace:
         infl = np.repeat(grown[:, None], n_slices, axis=1)
         # none due after the social horizon, behind a wall from its person, or in a passage
         reach = cr + gh.obs[:, 4] + grown
+        if not escape:  # priced, not forbidden: a robot in someone's way pays from the first step
+            window = (np.zeros_like(window[0]), window[1])
         kept = (window[0] < window[1] - opts.dt) & ~walled_off(gh, obs, self._walls, reach)
         return np.column_stack([gh.obs, *window])[kept], infl[kept]
 

@@ -54,13 +54,18 @@ class SoftCost:
         """([(rows, inflation)] of the priced fields, [their prices in steps per step]): the
         people with the personal space and their ghosts as one field priced ``intrusion_cost``;
         with ``discomfort_cost`` set, the people with the personal space priced that and the
-        ghosts alone priced ``intrusion_cost``."""
+        ghosts alone priced ``intrusion_cost``. The ghosts have no escape window (forbidden,
+        a robot in someone's way had to be given time to step out; priced, it pays for every
+        step it stays)."""
         opts = self.options
         infl = self._inflation(pose, obs)
+        # no escape window (pathspace.ghost_window): a robot in someone's way pays from the first step
+        g_obs, g_infl = (self._path_ghosts(pose, obs, escape=False) if opts.path_space > 0
+                         else (np.zeros((0, 7)), np.zeros((0, infl.shape[1]))))  # fmt: skip
         if opts.discomfort_cost is None:
-            return [self._with_ghosts(pose, obs, infl)], [opts.intrusion_cost]
-        ghosts = self._path_ghosts(pose, obs) if opts.path_space > 0 else (np.zeros((0, 7)), np.zeros((0, infl.shape[1])))
-        return [(obs, infl), ghosts], [opts.discomfort_cost, opts.intrusion_cost]
+            people = np.column_stack([obs, np.zeros(len(obs)), np.full(len(obs), math.inf)])
+            return [(np.vstack([people, g_obs]), np.vstack([infl, g_infl]))], [opts.intrusion_cost]
+        return [(obs, infl), (g_obs, g_infl)], [opts.discomfort_cost, opts.intrusion_cost]
 
     def _soft_plan(self, t: float, pose: FloatArray, obs: FloatArray, deadline: float) -> _Searched:
         """The plan of least ``arrival + intrusion_cost * seconds inside the personal space
