@@ -199,3 +199,16 @@ def test_two_priced_fields_add_their_prices():
     assert once.nodes == twice.nodes == free.nodes and once.steps == twice.steps == free.steps
     dear = soft_search(graph, hard, (hard, soft), 0, N - 1, (0.0, 100.0))
     assert dear.steps[-1] == _sipp_arrival(graph, soft)
+
+
+def test_importing_the_navigator_without_the_precompiled_kernels_loads_no_numba():
+    """The priced search's kernels are numba's until first called (as the search kernel's,
+    imported only by its search): importing the navigator imported numba when they were not."""
+    import os
+    import subprocess
+    import sys
+
+    code = "import sys, gfuzzy.navigation.navigator; print('numba' in sys.modules)"
+    env = {**os.environ, "GFUZZY_PRECOMPILED": "0"}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True)
+    assert out.stdout.strip() == "False"

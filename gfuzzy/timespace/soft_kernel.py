@@ -39,7 +39,7 @@ _HSIZE, _TCOUNT, _EXP, _HIT, _NNEED, _RESULT, _SINCE = range(7)
 YIELD_EVERY = 4096
 
 
-@njit(cache=True)
+@njit(lazy=True, cache=True)
 def _slot(tk, key):
     mask = len(tk) - 1
     i = ((key * -7046029254386353131) >> 17) & mask
@@ -48,7 +48,7 @@ def _slot(tk, key):
     return i
 
 
-@njit(cache=True)
+@njit(lazy=True, cache=True)
 def _grow_table(tk, tb, tp):
     """The table doubled and rehashed."""
     n = len(tk) * 2
@@ -64,7 +64,7 @@ def _grow_table(tk, tb, tp):
     return nk, nb, np_
 
 
-@njit(cache=True)
+@njit(lazy=True, cache=True)
 def _inside(s, e, off, cnt, k):
     """Whether step ``k`` lies in one of the intervals ``s[off:off+cnt]``/``e[...]``."""
     a, b = 0, cnt
@@ -77,7 +77,7 @@ def _inside(s, e, off, cnt, k):
     return a < cnt and s[off + a] <= k
 
 
-@njit(cache=True)
+@njit(lazy=True, cache=True)
 def _less(hf, hq, a, b):
     if hf[a] != hf[b]:
         return hf[a] < hf[b]
@@ -86,7 +86,7 @@ def _less(hf, hq, a, b):
     return hq[a, 1] < hq[b, 1]
 
 
-@njit(cache=True)
+@njit(lazy=True, cache=True)
 def _swap(hf, hg, hq, a, b):
     hf[a], hf[b] = hf[b], hf[a]
     hg[a], hg[b] = hg[b], hg[a]
@@ -96,7 +96,7 @@ def _swap(hf, hg, hq, a, b):
         hq[b, c] = x
 
 
-@njit(cache=True)
+@njit(lazy=True, cache=True)
 def _push(hf, hg, hq, ctr, f, g, k, v):
     n = ctr[_HSIZE]
     hf[n] = f
@@ -113,7 +113,7 @@ def _push(hf, hg, hq, ctr, f, g, k, v):
             break
 
 
-@njit(cache=True)
+@njit(lazy=True, cache=True)
 def _pop(hf, hg, hq, ctr):
     n = ctr[_HSIZE] - 1
     ctr[_HSIZE] = n
@@ -134,7 +134,7 @@ def _pop(hf, hg, hq, ctr):
             break
 
 
-@njit(cache=True)
+@njit(lazy=True, cache=True)
 def _set(tk, tb, tp, ctr, key, best, parent):
     s = _slot(tk, key)
     if tk[s] == -1:
@@ -144,13 +144,13 @@ def _set(tk, tb, tp, ctr, key, best, parent):
     tp[s] = parent
 
 
-@njit(cache=True)
+@njit(lazy=True, cache=True)
 def _get(tk, tb, key):
     s = _slot(tk, key)
     return tb[s] if tk[s] == key else np.inf
 
 
-@njit(cache=True)
+@njit(lazy=True, cache=True)
 def _run(indptr, nbrs, h, wait_ok, goal, H, penalty, penalty2, stride, ho, hc, hcap, hs, he, so, sc, ss, se,
          so2, sc2, ss2, se2, hf, hg, hq, tk, tb, tp, ctr, need):  # fmt: skip
     """The A* loop over (node, step) states until it ends or needs something (as
@@ -218,7 +218,7 @@ def _run(indptr, nbrs, h, wait_ok, goal, H, penalty, penalty2, stride, ho, hc, h
     return _EXHAUSTED
 
 
-@njit(cache=True)
+@njit(lazy=True, cache=True)
 def _path(tk, tp, key, stride):
     nodes = []
     steps = []
