@@ -357,10 +357,10 @@ class Navigator(PathSpace, Prediction, SoftCost):
             from ..timespace.search_kernel import warm
 
             warm()
-            if opts.soft_search:
-                from ..timespace.soft_kernel import warm as warm_soft
+        if opts.soft_search:  # the priced search runs numba's kernels whatever the backend
+            from ..timespace.soft_kernel import warm as warm_soft
 
-                warm_soft()
+            warm_soft()
 
     # ------------------------------------------------------------------ graph
     def _build_base(self) -> None:
