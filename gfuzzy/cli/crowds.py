@@ -16,6 +16,7 @@ from .common import (
     _out_path,
     _say,
     _scene_reads,
+    _soft_options,
 )
 
 
@@ -50,10 +51,6 @@ def add_crowd(sub) -> None:
     c.add_argument("--dt", type=float, default=0.1, help="the navigator's search time step (s; default 0.1)")
     c.add_argument("--full-speed", action="store_true",
                    help="the navigator runs its plans at full speed up to their first wait (NavOptions.full_speed)")
-    c.add_argument("--soft-search", action="store_true",
-                   help="one search pricing people's personal space and ways instead of the tiers (NavOptions.soft_search)")
-    c.add_argument("--intrusion-cost", type=float, default=2.0, metavar="SECONDS",
-                   help="with --soft-search: seconds of arrival one second inside someone's space or way costs (default 2)")
     c.add_argument("-o", "--output", metavar="RESULTS.csv", help="one row per episode and policy")
     c.set_defaults(func=cmd_crowd)
 
@@ -96,8 +93,6 @@ def _setting(args):
                         ("--path-space", args.path_space)):  # fmt: skip
         if not math.isfinite(value):
             raise BadInput(f"gfuzzy crowd: {flag} must be a finite number, got {value:g}")
-    if not (math.isfinite(args.intrusion_cost) and args.intrusion_cost >= 0):
-        raise BadInput(f"gfuzzy crowd: --intrusion-cost must be a number >= 0, got {args.intrusion_cost:g}")
     if not (math.isfinite(args.dt) and args.dt > 0):
         raise BadInput(f"gfuzzy crowd: --dt must be a positive number, got {args.dt:g}")
     sense = math.inf if args.sense is None else args.sense
@@ -110,7 +105,7 @@ def _setting(args):
                                not args.steady_goals, args.reverse)  # fmt: skip
         options = NavOptions(time_budget=args.time_budget, personal_space=args.personal_space,
                              path_space=args.path_space, budget_clock=args.budget_clock, full_speed=args.full_speed,
-                             dt=args.dt, soft_search=args.soft_search, intrusion_cost=args.intrusion_cost)  # fmt: skip
+                             dt=args.dt, **_soft_options(args))  # fmt: skip
     except InputError as exc:
         raise BadInput(f"gfuzzy crowd: {exc}") from None
     policies = args.policy or (["navigator", "orca"] + ([] if args.visible else ["oracle"]))
