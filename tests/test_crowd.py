@@ -383,6 +383,9 @@ def test_crowd_command_navigator_visible(tmp_path, workers):
     ["--path-space", "-1"], ["--path-space", "nan"], ["--personal-space", "inf"], ["--reverse"], ["--dt", "0"],
     ["--dt", "nan"], ["--dt", "100"],  # a step longer than the prediction: every episode ran to its limit
     ["--seed", "-1"], ["--noise", "1e300"],  # a traceback each: numpy's seed, a 146 GiB array of ghosts
+    ["--soft-search", "--intrusion-cost", "-1"], ["--soft-search", "--intrusion-cost", "nan"],
+    ["--soft-search", "--intrusion-cost", "1e308"],  # named NavOptions' intrusion_cost, not the flag
+    ["--intrusion-cost", "3"],  # silently ignored without --soft-search
 ])  # fmt: skip
 def test_crowd_command_refuses_bad_arguments_in_one_line(tmp_path, flags):
     out = tmp_path / "x.csv"
@@ -390,8 +393,9 @@ def test_crowd_command_refuses_bad_arguments_in_one_line(tmp_path, flags):
     assert p.returncode == 2, p.stdout + p.stderr
     assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
     assert not out.exists()
-    if flags[0] in ("--fov", "--noise") and flags[1] != "1e300":  # named as the user typed it, as navigate does
-        assert f"gfuzzy crowd: {flags[0]} must be" in p.stderr
+    named = [f for f in flags if f in ("--fov", "--noise", "--intrusion-cost")]
+    if named and "1e300" not in flags:  # named as the user typed it, as navigate does
+        assert p.stderr.startswith(f"gfuzzy crowd: {named[0]} ")
 
 
 def test_crowd_command_refuses_humans_that_do_not_fit_before_any_episode(tmp_path):
@@ -419,6 +423,19 @@ def test_crowd_command_takes_the_navigators_full_speed_option():
     off = _setting(parser.parse_args(["crowd", "--humans", "2"]))[1]
     on = _setting(parser.parse_args(["crowd", "--humans", "2", "--full-speed"]))[1]
     assert not off.full_speed and on.full_speed
+
+
+def test_crowd_command_takes_the_navigators_priced_search():
+    import argparse
+
+    from gfuzzy.cli.crowds import _setting, add_crowd
+
+    parser = argparse.ArgumentParser()
+    add_crowd(parser.add_subparsers())
+    off = _setting(parser.parse_args(["crowd", "--humans", "2"]))[1]
+    on = _setting(parser.parse_args(["crowd", "--humans", "2", "--soft-search", "--intrusion-cost", "4"]))[1]
+    assert not off.soft_search and off.intrusion_cost == 2.0
+    assert on.soft_search and on.intrusion_cost == 4.0
 
 
 def test_crowd_command_takes_the_navigators_time_step():

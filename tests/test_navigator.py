@@ -290,10 +290,26 @@ def test_navigate_bad_input(tmp_path, args):
     assert not out.exists()
 
 
+@pytest.mark.parametrize(
+    "args",
+    [["--soft-search", "--intrusion-cost", "-1"], ["--soft-search", "--intrusion-cost", "nan"],
+     ["--soft-search", "--intrusion-cost", "1e308"], ["--intrusion-cost", "3"]],
+)
+def test_navigate_refuses_a_bad_intrusion_cost_by_its_flag(tmp_path, args):
+    """As ``gfuzzy crowd``: one line naming ``--intrusion-cost`` (not NavOptions' field),
+    exit 2, no file; without ``--soft-search`` the flag would change nothing."""
+    out = tmp_path / "o.json"
+    p = run_cli_process("navigate", ROOT / "scenes" / "eth-crossing.yaml", *args, "-o", out)
+    assert p.returncode == 2, p.stdout + p.stderr
+    assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
+    assert p.stderr.startswith("gfuzzy navigate: --intrusion-cost ")
+    assert not out.exists()
+
+
 def test_navigate_takes_the_navigator_options_crowd_takes(monkeypatch, tmp_path):
-    """``--budget-clock``, ``--personal-space`` and ``--path-space`` reach the navigator of
-    ``gfuzzy navigate`` as they reach ``gfuzzy crowd``'s (a user measuring on a loaded
-    machine needs the CPU clock)."""
+    """``--budget-clock``, ``--personal-space``, ``--path-space``, ``--soft-search`` and
+    ``--intrusion-cost`` reach the navigator of ``gfuzzy navigate`` as they reach ``gfuzzy
+    crowd``'s (a user measuring on a loaded machine needs the CPU clock)."""
     from gfuzzy.cli.main import main
     from gfuzzy.navigation import navigator
 
@@ -310,8 +326,10 @@ def test_navigate_takes_the_navigator_options_crowd_takes(monkeypatch, tmp_path)
             "--personal-space", "0.3", "--path-space", "0", "--max-time", "2", "-o", str(out)]  # fmt: skip
     assert main(args) in (0, 1)
     assert out.exists()
-    (opts,) = seen
+    assert main([*args[:-2], "--soft-search", "--intrusion-cost", "4", "-o", str(tmp_path / "soft.json")]) in (0, 1)
+    opts, soft = seen
     assert (opts.budget_clock, opts.personal_space, opts.path_space) == ("cpu", 0.3, 0.0)
+    assert not opts.soft_search and (soft.soft_search, soft.intrusion_cost) == (True, 4.0)
 
 
 def test_crowd_episodes():

@@ -10,7 +10,7 @@ import re
 import sys
 from pathlib import Path
 
-from ..errors import InputError, LimitError, SceneError
+from ..errors import InputError, LimitError, SceneError, check_number
 
 EXIT_OK, EXIT_NO, EXIT_BAD = 0, 1, 2
 
@@ -46,6 +46,22 @@ def _navigator_flags(p) -> None:
     p.add_argument("--path-space", type=float, default=1.25, metavar="SECONDS",
                    help="how far ahead (s) the navigator keeps off the way people are about to walk, when that "
                         "costs little (default 1.25, 0: off)")  # fmt: skip
+    p.add_argument("--soft-search", action="store_true",
+                   help="one search pricing people's personal space and ways instead of the tiers (NavOptions.soft_search)")
+    p.add_argument("--intrusion-cost", type=float, metavar="SECONDS",
+                   help="with --soft-search: seconds of arrival one second inside someone's space or way costs (default 2)")
+
+
+def _soft_options(args) -> dict:
+    """``NavOptions``' priced search from ``--soft-search`` and ``--intrusion-cost`` of
+    ``navigate`` and ``crowd``, refused by the flags' names (InputError): the cost is a
+    number >= 0 and at most ``settings.MAX_MAGNITUDE``, and only taken with ``--soft-search``."""
+    if args.intrusion_cost is None:
+        return {"soft_search": args.soft_search}
+    if not args.soft_search:
+        raise InputError("--intrusion-cost needs --soft-search (the tiers do not price)")
+    check_number("--intrusion-cost", args.intrusion_cost, strict=False)
+    return {"soft_search": True, "intrusion_cost": args.intrusion_cost}
 
 
 def _check_sensor_flags(args) -> None:

@@ -16,6 +16,7 @@ from .common import (
     _out_path,
     _say,
     _scene_reads,
+    _soft_options,
 )
 
 
@@ -104,7 +105,7 @@ def _setting(args):
                                not args.steady_goals, args.reverse)  # fmt: skip
         options = NavOptions(time_budget=args.time_budget, personal_space=args.personal_space,
                              path_space=args.path_space, budget_clock=args.budget_clock, full_speed=args.full_speed,
-                             dt=args.dt)  # fmt: skip
+                             dt=args.dt, **_soft_options(args))  # fmt: skip
     except InputError as exc:
         raise BadInput(f"gfuzzy crowd: {exc}") from None
     policies = args.policy or (["navigator", "orca"] + ([] if args.visible else ["oracle"]))

@@ -26,6 +26,7 @@ from .common import (
     _roadmap_reads,
     _say,
     _scene_reads,
+    _soft_options,
 )
 from .planning import _start_on_mover
 
@@ -290,7 +291,7 @@ def _navigate_options(args):
     try:
         options = NavOptions(dt=args.dt, time_budget=args.time_budget, backend=args.backend,
                              budget_clock=args.budget_clock, personal_space=args.personal_space,
-                             path_space=args.path_space)  # fmt: skip
+                             path_space=args.path_space, **_soft_options(args))  # fmt: skip
         return options, _sensor_options(args), sense
     except InputError as exc:
         raise BadInput(f"gfuzzy navigate: {exc}") from None

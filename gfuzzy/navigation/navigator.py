@@ -32,7 +32,7 @@ from __future__ import annotations
 import logging
 import math
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -46,7 +46,7 @@ from ..settings import SPEED_SAFETY
 from ..status import Status
 from ..timespace.drive import Fan, drive_rows
 from ..timespace.movers import MoverField
-from ..timespace.spacetime import IntervalStore, SearchResult, SpaceTimeGraph
+from ..timespace.spacetime import IntervalStore, SearchResult
 from ..timespace.timespace import timed_rows
 from ..trajectory import Trajectory
 from ..typed import FloatArray
@@ -54,9 +54,10 @@ from .brisk import brisk
 from .drivenav import drive_evasion, kept_plan, rest_of, sooner_plan
 from .evasion import holonomic_evasion
 from .lookout import Lookout
-from .navtypes import MOTION_SAMPLE, NavMode, NavStep, sample_loss
+from .navtypes import GOAL_TAKEN, MOTION_SAMPLE, NavMode, NavStep, _Searched, sample_loss
 from .pathspace import STILL_SPEED, PathSpace, WallCheck  # noqa: F401 (STILL_SPEED: kept importable here)
 from .prediction import REACH_SAMPLES, Prediction  # noqa: F401 (REACH_SAMPLES: kept importable here)
+from .softcost import SoftCost
 from .timedfield import PAIR_SECONDS, PIECE_WORK, _OutOfTime, _TimedField  # noqa: F401 (PIECE_WORK, PAIR_SECONDS: kept importable here)
 from .unknown import unknown_growth, unknown_positions
 
@@ -90,8 +91,6 @@ PERSON_SECONDS = 150e-6
 #: ``lookout.LOOK_CHECK`` only).
 LOOK_OVER = (NavMode.PLAN, NavMode.CLOSE, NavMode.KEPT)
 
-#: Why a search did not run: the goal is unsafe at every step it could be reached.
-GOAL_TAKEN = "the goal is taken at every step within the horizon (someone stands on it, with these margins)"
 
 #: The clocks a time budget can be measured on (``NavOptions.budget_clock``).
 BUDGET_CLOCKS = {"wall": time.perf_counter, "cpu": time.thread_time}
@@ -198,6 +197,15 @@ class NavOptions:
         360 it looks, now and then, where it has not looked (:mod:`gfuzzy.navigation.lookout`).
     look_after : float
         Seconds a side may go unseen before the robot (``fov`` < 360) looks there.
+    soft_search : bool
+        One search that prices the personal space and the path space instead of the tiers
+        that forbid them (:mod:`gfuzzy.navigation.softcost`). Off by default.
+    intrusion_cost : float
+        With ``soft_search``: seconds of arrival one second of the robot inside someone's
+        personal space or way is worth (in their way only, when ``discomfort_cost`` is set).
+    discomfort_cost : float or None
+        With ``soft_search``: when set, seconds of arrival one second inside someone's
+        personal space is worth, priced apart from their way (a step in both pays both).
     """
 
     dt: float = 0.1
@@ -229,6 +237,9 @@ class NavOptions:
     swerve_growth: float = 0.0
     fov: float = 360.0
     look_after: float = 1.0
+    soft_search: bool = False
+    intrusion_cost: float = 2.0
+    discomfort_cost: float | None = None
 
     def __post_init__(self):
         if self.budget_clock not in BUDGET_CLOCKS:
@@ -240,8 +251,10 @@ class NavOptions:
             check_number(name, getattr(self, name))
         for name in ("uncertainty_growth", "safety_buffer", "personal_space", "personal_space_cost", "path_space",
                      "path_space_cost", "social_horizon", "stationary_hold", "goal_tolerance", "commitment",
-                     "swerve_growth"):
+                     "swerve_growth", "intrusion_cost"):
             check_number(name, getattr(self, name), strict=False)
+        if self.discomfort_cost is not None:
+            check_number("discomfort_cost", self.discomfort_cost, strict=False)
         if self.connect_k < 1 or self.evasion_headings < 4:
             raise InputError("connect_k must be >= 1 and evasion_headings >= 4")
         check_number("stretch", self.stretch, 1.0, strict=False)
@@ -265,20 +278,6 @@ def _observation_rows(observations) -> np.ndarray:
     return obs
 
 
-@dataclass(frozen=True)
-class _Searched:
-    """What one search of :meth:`Navigator.step` found (the trajectory, or why not), and the
-    spliced graph, kept for a second search from the same pose."""
-
-    trajectory: Trajectory | None
-    message: str = ""
-    detailed: int = 0
-    out_of_time: bool = False
-    graph: SpaceTimeGraph | None = None
-    start: int = -1
-    ahead: list = field(default_factory=list)
-
-
 def _checked_pose(pose, robot, t, t_last=-math.inf) -> FloatArray:
     """``pose`` as a (dof,) float array (:func:`_flat_pose`); InputError also when ``t`` is no
     finite number (:func:`gfuzzy.poses.as_number`: not a boolean or a string) or is before
@@ -300,7 +299,7 @@ def _flat_pose(pose, robot, label: str) -> FloatArray:
     return check_pose(pose if arr is None else arr.reshape(-1), robot.dof, label, robot)
 
 
-class Navigator(PathSpace, Prediction):
+class Navigator(PathSpace, Prediction, SoftCost):
     """Receding-horizon navigation to a fixed goal among observed moving discs.
 
     Parameters
@@ -367,6 +366,10 @@ class Navigator(PathSpace, Prediction):
             from ..timespace.search_kernel import warm
 
             warm()
+        if opts.soft_search:  # the priced search runs numba's kernels whatever the backend
+            from ..timespace.soft_kernel import warm as warm_soft
+
+            warm_soft()
 
     # ------------------------------------------------------------------ graph
     def _build_base(self) -> None:
@@ -494,15 +497,12 @@ class Navigator(PathSpace, Prediction):
         predicted = obs.copy()
         if len(obs):
             predicted[:, 4] = obs[:, 4] + infl[:, 0]
-        found = self._search(t, pose, *self._with_ghosts(pose, obs, infl), deadline)
-        ghosts = opts.path_space > 0 and len(obs) > 0  # the plan keeps off the people's ways
-        if ghosts and found.graph is not None and self._clock() < deadline:
-            ghosted = found
-            found = self._path_space_cost(t, pose, obs, infl, found, deadline)
-            ghosts = found is ghosted
-        traj, mode = found.trajectory, NavMode.PLAN
-        if opts.personal_space > 0 and len(obs) and found.graph is not None and self._clock() < deadline:
-            traj, mode, found = self._closer(t, pose, obs, found, deadline, ghosts)
+        soft = opts.soft_search and len(obs) > 0 and (opts.path_space > 0 or opts.personal_space > 0)
+        if soft:  # one priced search: its plan keeps the buffer and the uncertainty only
+            traj, mode, found, infl = self._priced(t, pose, obs, deadline)
+            ghosts = False
+        else:
+            traj, mode, found, ghosts = self._tiers(t, pose, obs, infl, deadline)
         if opts.full_speed and traj is not None and mode in (NavMode.PLAN, NavMode.CLOSE):
             traj = brisk(self, t, pose, traj, obs, self._kept_inflation(pose, obs, infl, mode), ghosts)
         if traj is None and len(obs) and not found.out_of_time and self._clock() < deadline:

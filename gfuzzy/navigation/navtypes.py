@@ -4,16 +4,24 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from enum import Enum
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..typed import FloatArray
+
+if TYPE_CHECKING:
+    from ..timespace.spacetime import SpaceTimeGraph
+    from ..trajectory import Trajectory
 
 __all__ = ["NavMode", "NavStep", "MOTION_SAMPLE", "sample_loss"]
 
 #: Seconds between two samples at which a motion is checked against people walking on at
 #: constant velocity (the fallbacks, a kept plan); :func:`sample_loss` bounds the rest.
 MOTION_SAMPLE = 0.05
+
+#: Why a search did not run: the goal is unsafe at every step it could be reached.
+GOAL_TAKEN = "the goal is taken at every step within the horizon (someone stands on it, with these margins)"
 
 
 def sample_loss(robot_speed, person_speed):
@@ -72,3 +80,17 @@ class NavStep:
     message: str = ""
     predicted: FloatArray = field(default_factory=lambda: np.zeros((0, 5)), compare=False)
     detailed: int = 0
+
+
+@dataclass(frozen=True)
+class _Searched:
+    """What one search of :meth:`Navigator.step` found (the trajectory, or why not), and the
+    spliced graph, kept for a second search from the same pose."""
+
+    trajectory: Trajectory | None
+    message: str = ""
+    detailed: int = 0
+    out_of_time: bool = False
+    graph: SpaceTimeGraph | None = None
+    start: int = -1
+    ahead: list = field(default_factory=list)

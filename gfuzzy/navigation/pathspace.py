@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..typed import BoolArray, FloatArray, IntArray
+from .navtypes import NavMode
 
 if TYPE_CHECKING:
     from .navigator import _Searched
@@ -240,7 +241,7 @@ class PathSpace:
         """(k,) the search's continuous-time margin at step 0 against people at ``speed``."""
         return (self.vplan + speed) * self.options.dt / 2
 
-    def _path_ghosts(self, pose: FloatArray, obs: FloatArray) -> tuple[FloatArray, FloatArray]:
+    def _path_ghosts(self, pose: FloatArray, obs: FloatArray, escape: bool = True) -> tuple[FloatArray, FloatArray]:
         """The first search's ghosts (:mod:`gfuzzy.navigation.pathspace`): predicted discs
         along each walking person's next ``path_space`` seconds, as rows ``[x, y, vx, vy,
         radius, appear, vanish]`` (g, 7) (seconds after now), and their inflation (g, S): the
@@ -257,6 +258,8 @@ class PathSpace:
         infl = np.repeat(grown[:, None], n_slices, axis=1)
         # none due after the social horizon, behind a wall from its person, or in a passage
         reach = cr + gh.obs[:, 4] + grown
+        if not escape:  # priced, not forbidden: a robot in someone's way pays from the first step
+            window = (np.zeros_like(window[0]), window[1])
         kept = (window[0] < window[1] - opts.dt) & ~walled_off(gh, obs, self._walls, reach)
         return np.column_stack([gh.obs, *window])[kept], infl[kept]
 
@@ -268,6 +271,22 @@ class PathSpace:
         ghosts, g_infl = self._path_ghosts(pose, obs)
         always = np.column_stack([obs, np.zeros(len(obs)), np.full(len(obs), math.inf)])
         return np.vstack([always, ghosts]), np.vstack([infl, g_infl])
+
+    def _tiers(self, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray, deadline: float):
+        """(plan, mode, search, ghosts kept) of the tiers: the ghosts and the personal space,
+        then without the ghosts (:meth:`_path_space_cost`), then without the personal space
+        (:meth:`_closer`)."""
+        opts = self.options
+        found = self._search(t, pose, *self._with_ghosts(pose, obs, infl), deadline)
+        ghosts = opts.path_space > 0 and len(obs) > 0  # the plan keeps off the people's ways
+        if ghosts and found.graph is not None and self._clock() < deadline:
+            ghosted = found
+            found = self._path_space_cost(t, pose, obs, infl, found, deadline)
+            ghosts = found is ghosted
+        traj, mode = found.trajectory, NavMode.PLAN
+        if opts.personal_space > 0 and len(obs) and found.graph is not None and self._clock() < deadline:
+            traj, mode, found = self._closer(t, pose, obs, found, deadline, ghosts)
+        return traj, mode, found, ghosts
 
     def _path_space_cost(self, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray, found: _Searched,
                          deadline: float) -> _Searched:  # fmt: skip
