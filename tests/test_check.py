@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import json
 import math
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -322,3 +324,21 @@ def test_an_interval_as_short_as_the_float_spacing_is_undecided_at_once(start):
     assert rep.evaluations < 1_000
     # earlier, the same wait is decided over one period
     assert check_trajectory(sc, np.array([[1e10, 2.5, 2.93], [1e21, 2.5, 2.93]])).valid
+
+
+REACH_WITNESSES = json.loads((Path(__file__).parent / "reach_witnesses.json").read_text())
+
+
+@pytest.mark.parametrize("edit", sorted(REACH_WITNESSES))
+def test_the_reach_bound_never_hides_these_contacts(edit):
+    # randomized cases (a review's, 2026-11-28) each of which an unsound one-line edit of the
+    # reach bound (keyed by the review's name for it) made valid while all the other tests
+    # passed: the robot's mover_clearance or its own motion left out of its reach (M3, M4), a
+    # loop's closing segment (M5), a once mover's offset (M7), the shortest period kept (M8),
+    # the cut to one period where the robot moves (M9), half a period (M10), the last near
+    # mover's speed, not the fastest (M16)
+    w = REACH_WITNESSES[edit]
+    rep = check_trajectory(parse_scene(w["scene"]), np.array(w["waypoints"]), deepest=False)
+    assert not rep.valid
+    assert rep.reason.split(" (")[0] == w["check_says"].split(" (")[0]
+    assert rep.evaluations < 20_000
