@@ -389,13 +389,14 @@ def _entry_points() -> dict[str, list[str]]:
     return {"console script": ["-c", script], "python -m": ["-m", "gfuzzy"]}
 
 
-@pytest.mark.parametrize("cut_at", ["argparse", "numpy"])
+@pytest.mark.parametrize("cut_at", ["errors", "argparse", "numpy"])
 @pytest.mark.parametrize("entry", ["console script", "python -m"])
 def test_a_ctrl_c_while_gfuzzy_imports_is_one_line(tmp_path, entry, cut_at):
     # the first half second of every command (numpy, FCL, OMPL imported) was Python's own:
     # a KeyboardInterrupt traceback. A sitecustomize of this test's runs the SIGINT handler
-    # in force as the command line's first import (argparse, before main takes the signal:
-    # a console script of gfuzzy.cli:main fails here) or numpy's (inside main's handling) begins
+    # in force as the entry's own first import (gfuzzy.errors: it was before run()'s try),
+    # the command line's first (argparse, before main takes the signal: a console script of
+    # gfuzzy.cli:main fails here) or numpy's (inside main's handling) begins
     import subprocess
 
     (tmp_path / "sitecustomize.py").write_text(_SLOW_IMPORT)
