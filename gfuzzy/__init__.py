@@ -49,14 +49,34 @@ __all__ = sorted(_HOMES)
 
 
 def __getattr__(name: str):
-    """A public name, imported from its module the first time it is asked for."""
+    """A public name, imported from its module the first time it is asked for; or a
+    subpackage or module of gfuzzy's (``gfuzzy.errors``, ``gfuzzy.scene``), imported then as
+    ``import gfuzzy`` used to import them all."""
     home = _HOMES.get(name)
     if home is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+        return submodule(__name__, name)
     value = getattr(importlib.import_module(home, __name__), name)
     globals()[name] = value
     return value
 
 
+def submodule(package: str, name: str):
+    """The module ``<package>.<name>`` imported (which binds it in its package), or the
+    AttributeError of a name that is none of the package's modules: what a package's
+    ``__getattr__`` answers for a name it does not hold itself."""
+    missing = AttributeError(f"module {package!r} has no attribute {name!r}")
+    if name.startswith("__"):  # (what tools probe for: __wrapped__, __loader__, ...)
+        raise missing
+    try:
+        return importlib.import_module(f"{package}.{name}")
+    except ModuleNotFoundError as exc:
+        if exc.name != f"{package}.{name}":  # a module it imports is missing: that error
+            raise
+        raise missing from None
+
+
 def __dir__() -> list[str]:
-    return sorted({*globals(), *_HOMES})
+    import pkgutil
+
+    modules = {m.name for m in pkgutil.iter_modules(__path__) if not m.name.startswith("_")}
+    return sorted({*globals(), *_HOMES, *modules})

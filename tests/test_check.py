@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import json
 import math
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -286,3 +288,57 @@ def test_a_trajectory_movers_reach_is_its_rows_between_the_intervals_ends():
             continue
         xy = np.column_stack([np.interp(times, tr[:, 0], tr[:, 1]), np.interp(times, tr[:, 0], tr[:, 2])])
         assert d == pytest.approx(np.hypot(*(xy - p).T).min(), abs=1e-3)
+
+
+BOUNCER = {"name": "B", "box": [0.4, 0.4], "speed": 0.5, "path": [[1.0, 2.5], [4.0, 2.5]], "mode": "bounce"}
+
+
+def test_one_period_end_stops_where_the_float_spacing_exceeds_the_period():
+    from gfuzzy.check.reach import one_period_end
+
+    # at t = 1e20 the floats are 16384 s apart: halving towards a 11.3 s period reached
+    # a + spacing, whose midpoint rounds back to it, and looped for ever (no evaluation counted)
+    a = np.array([1.0000000000000002e20, 1e20, 0.0, 5.0, 0.0])
+    b = np.array([1.5e307, 1.5e307, 1e300, 7.0, np.inf])
+    got = one_period_end(a, b, np.array([11.3, 11.3, 12.0, 0.0, 12.0]))
+    assert got[:2].tolist() == b[:2].tolist()  # no point of the bisection leaves a period: not cut
+    assert 12.0 <= got[2] < 24.0 and got[3] == 7.0 and got[4] == np.inf
+
+
+def test_a_wait_at_a_huge_time_beside_a_repeating_mover_ends():
+    # a robot 0.03 m clear of a bouncing box from t = 1e20 to 1e21: `gfuzzy check` never
+    # returned (the period's end above); now it ends as before the period cut did
+    sc = scene({"disc": 0.2, "vmax": 1.0}, movers=[BOUNCER])
+    w = np.array([[1.0000000000000002e20, 2.5, 2.93], [1e21, 2.5, 2.93]])
+    rep = check_trajectory(sc, w, max_evaluations=20_000)
+    assert not rep.valid and rep.reason.startswith("could not decide")
+
+
+@pytest.mark.parametrize("start", [1e15, 1e16])
+def test_an_interval_as_short_as_the_float_spacing_is_undecided_at_once(start):
+    # floats 0.125-2 s apart: one period's bisection reaches two adjacent floats, which it
+    # cannot split; it went on one evaluation a round (20 000 in 1.2 s, 5 million for ever)
+    sc = scene({"disc": 0.2, "vmax": 1.0}, movers=[BOUNCER])
+    rep = check_trajectory(sc, np.array([[start, 2.5, 2.93], [1e21, 2.5, 2.93]]), max_evaluations=20_000)
+    assert rep.reason == "could not decide: an interval as short as the float spacing (near-grazing contact)"
+    assert rep.evaluations < 1_000
+    # earlier, the same wait is decided over one period
+    assert check_trajectory(sc, np.array([[1e10, 2.5, 2.93], [1e21, 2.5, 2.93]])).valid
+
+
+REACH_WITNESSES = json.loads((Path(__file__).parent / "reach_witnesses.json").read_text())
+
+
+@pytest.mark.parametrize("edit", sorted(REACH_WITNESSES))
+def test_the_reach_bound_never_hides_these_contacts(edit):
+    # randomized cases (a review's, 2026-11-28) each of which an unsound one-line edit of the
+    # reach bound (keyed by the review's name for it) made valid while all the other tests
+    # passed: the robot's mover_clearance or its own motion left out of its reach (M3, M4), a
+    # loop's closing segment (M5), a once mover's offset (M7), the shortest period kept (M8),
+    # the cut to one period where the robot moves (M9), half a period (M10), the last near
+    # mover's speed, not the fastest (M16)
+    w = REACH_WITNESSES[edit]
+    rep = check_trajectory(parse_scene(w["scene"]), np.array(w["waypoints"]), deepest=False)
+    assert not rep.valid
+    assert rep.reason.split(" (")[0] == w["check_says"].split(" (")[0]
+    assert rep.evaluations < 20_000

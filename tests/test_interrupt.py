@@ -361,13 +361,14 @@ def test_regress_stops_between_queries_after_a_dropped_interrupt(monkeypatch):
 
 _SLOW_IMPORT = '''
 import builtins
+import os
 import signal
 
 _real = builtins.__import__
 
 
 def _importing(name, *args, **kwargs):
-    if name == "numpy" and not _importing.done:  # a Ctrl-C while gfuzzy imports numpy
+    if name == os.environ["CUT_AT"] and not _importing.done:  # a Ctrl-C as it is imported
         _importing.done = True
         signal.getsignal(signal.SIGINT)(signal.SIGINT, None)
     return _real(name, *args, **kwargs)
@@ -388,15 +389,18 @@ def _entry_points() -> dict[str, list[str]]:
     return {"console script": ["-c", script], "python -m": ["-m", "gfuzzy"]}
 
 
+@pytest.mark.parametrize("cut_at", ["errors", "argparse", "numpy"])
 @pytest.mark.parametrize("entry", ["console script", "python -m"])
-def test_a_ctrl_c_while_gfuzzy_imports_is_one_line(tmp_path, entry):
+def test_a_ctrl_c_while_gfuzzy_imports_is_one_line(tmp_path, entry, cut_at):
     # the first half second of every command (numpy, FCL, OMPL imported) was Python's own:
     # a KeyboardInterrupt traceback. A sitecustomize of this test's runs the SIGINT handler
-    # in force as numpy's import begins
+    # in force as the entry's own first import (gfuzzy.errors: it was before run()'s try),
+    # the command line's first (argparse, before main takes the signal: a console script of
+    # gfuzzy.cli:main fails here) or numpy's (inside main's handling) begins
     import subprocess
 
     (tmp_path / "sitecustomize.py").write_text(_SLOW_IMPORT)
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(tmp_path), str(ROOT)]))
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(tmp_path), str(ROOT)]), CUT_AT=cut_at)
     out = tmp_path / "x.json"
     run = subprocess.run(
         [sys.executable, *_entry_points()[entry], "plan", str(SCENE), "--roadmap", str(ROADMAP), "-o", str(out)],

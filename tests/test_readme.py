@@ -120,3 +120,40 @@ def test_the_docs_python_imports_resolve():
     assert len(lines) >= 3, lines
     proc = run_python("\n".join(lines), cwd=ROOT)
     assert proc.returncode == 0, proc.stderr
+
+
+_MODULES_AS_ATTRIBUTES = """
+import importlib, pkgutil, sys
+import gfuzzy
+assert "numpy" not in sys.modules  # still light
+seen = 0
+for pkg in ["gfuzzy", *sys.argv[1:]]:  # gfuzzy first: its own attributes before any import
+    flat = pkg.rsplit(".", 1)[-1]  # a package that was a flat module: gfuzzy.check.check
+    for info in pkgutil.iter_modules(importlib.import_module(pkg).__path__):
+        if info.name.startswith("__"):
+            continue
+        obj = gfuzzy
+        for part in [*pkg.split(".")[1:], info.name]:
+            obj = getattr(obj, part)
+        name = getattr(obj, "__name__", None)
+        assert name == f"{pkg}.{info.name}" or name == info.name == flat, (pkg, info.name, obj)
+        seen += 1
+for name in ("nope", "__wrapped__"):
+    assert not hasattr(gfuzzy, name) and not hasattr(gfuzzy.check, name)
+print(seen)
+"""
+
+
+def test_gfuzzys_modules_are_attributes_after_import_gfuzzy():
+    # `import gfuzzy; gfuzzy.errors` (and .scene, .check, .status: 15 names) was an
+    # AttributeError once `import gfuzzy` became lazy; before, its eager imports had made every
+    # one an attribute (and gfuzzy.check.check, .reach, ... of the packages that were modules)
+    compat = sorted(  # the packages that were a module: gfuzzy/check.py is gfuzzy/check/check.py
+        f"gfuzzy.{p.parent.name}"
+        for p in (ROOT / "gfuzzy").glob("*/__init__.py")
+        if (p.parent / f"{p.parent.name}.py").exists() and "def __getattr__" in p.read_text()
+    )
+    assert len(compat) >= 8, compat
+    proc = run_python(_MODULES_AS_ATTRIBUTES, *compat, cwd=ROOT)
+    assert proc.returncode == 0, proc.stderr
+    assert int(proc.stdout) >= 40

@@ -700,14 +700,16 @@ class _Checker:
                 a_t, b_t, a_d, b_d, a_s, a_l = a_t[keep], b_t[keep], a_d[keep], b_d[keep], a_s[keep], a_l[keep]
                 if a_t.size == 0:
                     break
-            if self.evaluations > max_evaluations:
+            m_t = 0.5 * (a_t + b_t)  # none between two floats (t > 1e9): never split, never decided
+            short = np.any((m_t <= a_t) | (m_t >= b_t))
+            if self.evaluations > max_evaluations or short:
                 if self.first[1]:
                     return self.report(" (an earlier near-grazing contact could not be decided)")
+                why = "an interval as short as the float spacing" if short else "too many evaluations"
                 return CheckReport(
-                    False, "could not decide: too many evaluations (near-grazing contact)", self.min_clear,
+                    False, f"could not decide: {why} (near-grazing contact)", self.min_clear,
                     self.vmax_seen, self.evaluations,
                 )  # fmt: skip
-            m_t = 0.5 * (a_t + b_t)
             m_d = self._sample(m_t, a_s)
             a_t, b_t = np.concatenate([a_t, m_t]), np.concatenate([m_t, b_t])
             a_d, b_d = np.concatenate([a_d, m_d]), np.concatenate([m_d, b_d])

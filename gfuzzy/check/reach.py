@@ -64,15 +64,40 @@ def near_movers(scene: Scene, pa: FloatArray, pb: FloatArray, ta: FloatArray, tb
     return speed, period
 
 
+#: Halvings enough to bring any finite float interval below any positive period (the
+#: exponents span about 2,100 powers of two): a bound on :func:`one_period_end`'s loop.
+_MAX_HALVINGS = 2200
+
+
 def one_period_end(a: FloatArray, b: FloatArray, period: FloatArray) -> FloatArray:
     """For each interval ``[a, b]``, the earliest end ``0.5 (a + m)``, halving from ``b``, that
     still leaves a whole ``period``: a point the check's bisection of ``[a, b]`` samples too,
-    so an interval ended there is bisected as the whole one was."""
+    so an interval ended there is bisected as the whole one was.
+
+    The end stays ``b`` (the interval is bisected whole, as without the cut) where the period
+    is not positive, or where the halving reaches the float spacing at ``a`` before it leaves
+    less than a period (a period about that spacing or below: around t = 1e17 for a 10 s
+    period), where an interval ended there could not be split further. Each interval takes at most
+    :data:`_MAX_HALVINGS` halvings."""
     out = np.array(b, dtype=float, copy=True)
     for i in range(len(out)):
-        while 0.5 * (a[i] + out[i]) - a[i] >= period[i]:
-            out[i] = 0.5 * (a[i] + out[i])
+        out[i] = _halve_to_period(float(a[i]), float(b[i]), float(period[i]))
     return out
+
+
+def _halve_to_period(a: float, b: float, period: float) -> float:
+    """:func:`one_period_end` for one interval."""
+    if not period > 0:
+        return b
+    end = b
+    for _ in range(_MAX_HALVINGS):
+        mid = 0.5 * (a + end)
+        if not a < mid < end:  # the float spacing at a is about the period: no bisection point
+            return b
+        if mid - a < period:
+            return end
+        end = mid
+    return b
 
 
 def moving_window(mv: Mover) -> tuple[float, float]:

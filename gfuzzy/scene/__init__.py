@@ -3,9 +3,13 @@
 
 def __getattr__(name: str):
     # `gfuzzy.scene.X` was the flat module gfuzzy/scene.py: its names stay reachable,
-    # loaded on first use (so importing a sibling module never loads this one)
+    # loaded on first use (so importing a sibling module never loads this one); so do the
+    # package's modules, as eager imports once made them
     if name.startswith("__"):
         raise AttributeError(name)
     from importlib import import_module
 
-    return getattr(import_module(".scene", __name__), name)
+    from .. import submodule
+
+    flat = import_module(".scene", __name__)
+    return getattr(flat, name) if hasattr(flat, name) else submodule(__name__, name)
