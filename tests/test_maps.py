@@ -218,7 +218,7 @@ def test_bounds_beyond_the_maps_warn_that_the_space_outside_is_free(tmp_path, ca
     write_map(tmp_path, np.full((4, 6), 254, np.uint8), resolution=0.5, origin=(-1.0, 2.0, 0.0))
     write_map(tmp_path, np.full((4, 6), 254, np.uint8), name="b", resolution=0.5, origin=(2.0, 2.0, 0.0))
     two = "  - map: {file: b.yaml}\n"
-    caplog.set_level("WARNING", logger="gfuzzy.scene.scene")
+    caplog.set_level("WARNING", logger="gfuzzy.scene")
     (tmp_path / "s.yaml").write_text(scene_text(bounds=[-1, 2, 5, 4]) + two)
     load_scene(tmp_path / "s.yaml")
     assert not caplog.records

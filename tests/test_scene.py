@@ -823,3 +823,16 @@ def test_a_document_in_code_nested_too_deep_or_holding_itself_is_a_scene_error()
     for bad, place in ((dict(doc, bounds=deep), "bounds"), (looped, "bounds"), (cycle, "top level")):
         with pytest.raises(SceneError, match=rf"^<string>: {place}: nested over 100 levels deep"):
             gfuzzy.parse_scene(bad)
+
+
+def test_a_scene_in_millimetres_is_loaded_with_a_warning(caplog):
+    # bounds 10000 x 6000, a robot of 200 at 1000 "m/s": it planned, but navigate reported
+    # "min separation 859 m" and kept a 0.2 "m" personal space, without a word
+    caplog.set_level("WARNING", logger="gfuzzy.scene")
+    doc = {"version": 1, "name": "mm", "bounds": [0, 0, 10000, 6000], "robot": {"disc": 200, "vmax": 1000}}
+    parse_scene(doc)
+    (msg,) = [r.getMessage() for r in caplog.records]
+    assert "robot.vmax 1000 m/s: gfuzzy's units are metres and seconds" in msg
+    caplog.clear()
+    parse_scene({**doc, "bounds": [0, 0, 10, 6], "robot": {"disc": 0.2, "vmax": 20}})  # fast, but metres
+    assert not caplog.records

@@ -27,6 +27,7 @@ from ..typed import FloatArray
 from . import yamldoc
 from .maps import MapObstacle, load_map
 from .meshes import mesh_footprint
+from .sanity import warn_beyond_maps, warn_units
 from .yamldoc import _V, MAX_MAGNITUDE, NAME_RE, _join, _kind, _load_yaml, _one_key, not_utf8
 
 log = logging.getLogger(__name__)
@@ -700,12 +701,13 @@ def parse_scene(doc: Any, file: str = "<string>", folder: str | os.PathLike | No
     obstacles = _parse_obstacles(v, doc, folder, hasher)
     grids = [o for o in obstacles if isinstance(o, MapObstacle)]
     if "bounds" in doc:
-        _warn_beyond_maps(file, bounds, grids)
+        warn_beyond_maps(file, bounds, grids)
     else:
         if not grids:
             v.fail("bounds", "missing required key (it may be left out only when the scene has a map)")
         ext = np.array([g.extent for g in grids])
         bounds = (float(ext[:, 0].min()), float(ext[:, 1].min()), float(ext[:, 2].max()), float(ext[:, 3].max()))
+    warn_units(file, robot)
     movers = _parse_movers(v, doc)
     queries = _parse_queries(v, doc, robot)
 
@@ -728,25 +730,6 @@ def parse_scene(doc: Any, file: str = "<string>", folder: str | os.PathLike | No
         raw=copy.deepcopy(doc),
         shape_hash=shape_hash,
     )
-
-
-def _warn_beyond_maps(file: str, bounds, grids: list) -> None:
-    """Warn when explicit ``bounds`` reach beyond every map's image: a map says nothing
-    about what lies outside it, so that space is free (no obstacle there), unlike the map's
-    unknown cells (docs/formats.md, section 1)."""
-    if not grids:
-        return
-    import shapely
-
-    inside = shapely.union_all([shapely.box(*g.extent) for g in grids])
-    outside = shapely.box(*bounds).difference(inside)
-    if outside.area > 1e-9 * shapely.box(*bounds).area:
-        x0, y0, x1, y1 = outside.bounds
-        log.warning(
-            "%s: bounds reach %.3g m² beyond the map's image (within [%g, %g] x [%g, %g]): "
-            "that space is free, the map knows nothing of it (bounds within the map close it)",
-            file, outside.area, x0, x1, y0, y1,
-        )
 
 
 def _static_hash(shape_hash: str, clearance: float) -> str:
