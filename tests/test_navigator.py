@@ -981,9 +981,13 @@ def test_a_step_earlier_than_the_last_is_refused(open_square):
     nav = Navigator(scene, rm, (0.0, 4.0), NavOptions(budget_clock="cpu"))
     start, nobody = np.array([0.0, -4.0]), np.zeros((0, 5))
     nav.step(1.0, start, nobody)
-    with pytest.raises(InputError, match=r"^t: 0.75 is before the last call's t = 1 \(a new run needs a new Navigator\)$"):
+    with pytest.raises(InputError, match=r"^t: 0.75 is before the last call's t = 1.0 \(a new run needs a new Navigator\)$"):
         nav.step(0.75, start, nobody)
+    with pytest.raises(InputError, match=r"^t: 0.9999999999 is before the last call's t = 1.0 "):  # no tolerance
+        nav.step(0.9999999999, start, nobody)
     assert nav.step(1.0, start, nobody).t0 == 1.0
+    with pytest.raises(InputError, match="observations"):  # a refused call does not move the clock on
+        nav.step(5.0, start, np.full((1, 5), np.nan))
     assert nav.step(1.25, start, nobody).t0 == 1.25
 
 

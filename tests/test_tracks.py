@@ -150,7 +150,7 @@ def test_region_cuts_tracks_and_a_return_is_a_second_mover(csv_file):
     np.testing.assert_allclose(movers["ped-c-2"], [[1.25, 1.5, 0], [1.5, 1, 0]])
 
 
-def test_a_person_unseen_for_longer_than_max_gap_is_two_movers(tmp_path):
+def test_a_person_unseen_for_longer_than_max_gap_is_two_movers(tmp_path, caplog):
     # a tracker lost d from 1 s to 8 s: one mover walked a straight line through the gap (a
     # phantom where nobody was seen); the rows before and after are two movers, absent between
     rows = np.array([[0, 0, 0], [1, 1, 0], [8, 8, 0], [9, 9, 0], [9.5, 9.5, 0]], float)
@@ -162,12 +162,21 @@ def test_a_person_unseen_for_longer_than_max_gap_is_two_movers(tmp_path):
     assert list(_movers(tracks_scene(tracks, TrackSceneOptions(max_gap=math.inf)))) == ["ped-d"]
     # parts of one row are dropped, the movers numbered as kept: only 9 -> 9.5 s is left
     np.testing.assert_allclose(_movers(tracks_scene(tracks, TrackSceneOptions(max_gap=0.6)))["ped-d"], rows[3:])
-    # by default, five times the file's median spacing (1 s here): cut at the 7 s gap, not at 4.9 s
+    # by default, five times the person's own median spacing (1 s here): cut at a 7 s or a
+    # 5.05 s gap, not at 4.9 s; the cut is logged
+    caplog.set_level("WARNING", logger="gfuzzy.scene.tracks")
+    caplog.clear()
     assert list(_movers(tracks_scene(tracks))) == ["ped-d", "ped-d-2"]
-    nearer = np.array([[0, 0, 0], [1, 1, 0], [5.9, 5.9, 0], [6.9, 6.9, 0], [7.4, 7.4, 0]], float)
-    assert list(_movers(tracks_scene(gfuzzy.Tracks("mem", "csv", None, None, (gfuzzy.Track("d", nearer),))))) == ["ped-d"]
-    sparse = gfuzzy.Tracks("mem", "csv", None, None, (gfuzzy.Track("e", rows[[0, 2]]),))
-    assert list(_movers(tracks_scene(sparse))) == ["ped-e"]  # keyframes 8 s apart are the file's pace
+    (msg,) = [r.getMessage() for r in caplog.records]
+    assert msg.startswith("ped-d unseen for 7 s from t = 1 s (more than 5 s): absent in between")
+    for gap, movers in ((5.05, ["ped-d", "ped-d-2"]), (4.9, ["ped-d"])):
+        near = np.array([[0, 0, 0], [1, 1, 0], [1 + gap, 2, 0], [2 + gap, 3, 0], [2.5 + gap, 3.5, 0]], float)
+        assert list(_movers(tracks_scene(gfuzzy.Tracks("mem", "csv", None, None, (gfuzzy.Track("d", near),))))) == movers
+    sparse = gfuzzy.Track("e", rows[[0, 2]])  # keyframes 8 s apart are that person's pace
+    assert list(_movers(tracks_scene(gfuzzy.Tracks("mem", "csv", None, None, (sparse,))))) == ["ped-e"]
+    # beside someone tracked every 0.5 s, too (the file's pooled median cut e away, unnoticed)
+    dense = gfuzzy.Track("a", np.array([[t, t, 1.0] for t in np.arange(0, 8.5, 0.5)]))
+    assert list(_movers(tracks_scene(gfuzzy.Tracks("mem", "csv", None, None, (dense, sparse))))) == ["ped-a", "ped-e"]
     for bad in (0, -1, math.nan, True):
         with pytest.raises(gfuzzy.errors.InputError, match="max_gap must be positive"):
             TrackSceneOptions(max_gap=bad)

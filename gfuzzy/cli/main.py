@@ -166,7 +166,7 @@ def _add_tracks(sub) -> None:
     k.add_argument("--max-movers", type=int, metavar="N", help="keep the N people present longest")
     k.add_argument("--max-gap", type=float, metavar="S",
                    help="a person unseen for longer than S seconds is two movers, absent in between "
-                        "(default: 5 times the file's median time between a person's rows; inf: never cut)")  # fmt: skip
+                        "(default: 5 times the person's own median time between rows; inf: never cut)")  # fmt: skip
     k.add_argument("--static", metavar="SCENE", help="take the robot, the static obstacles and the bounds of this scene")
     k.add_argument("--name", help="scene name (default: the output file's stem)")
     k.add_argument("--robot-radius", type=float, metavar="R", help="a disc robot of this radius (default 0.2, or --static's robot)")

@@ -16,3 +16,10 @@ __all__ = [
     "learn_rules",
     "track",
 ]
+
+
+def __getattr__(name: str):
+    # the package's other modules, loaded on first use (`gfuzzy.learning.drivetracking`)
+    from .. import submodule
+
+    return submodule(__name__, name)

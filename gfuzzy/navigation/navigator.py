@@ -286,7 +286,7 @@ def _checked_pose(pose, robot, t, t_last=-math.inf) -> FloatArray:
     if number is None or not math.isfinite(number):
         raise InputError(f"t: expected a finite number, got {t!r}")
     if number < t_last:
-        raise InputError(f"t: {number:g} is before the last call's t = {t_last:g} (a new run needs a new Navigator)")
+        raise InputError(f"t: {number!r} is before the last call's t = {t_last!r} (a new run needs a new Navigator)")
     return _flat_pose(pose, robot, "pose")
 
 

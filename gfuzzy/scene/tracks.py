@@ -186,9 +186,10 @@ class TrackSceneOptions:
     max_gap : float or None
         A person unseen for longer than this (seconds between two of their rows: a tracker
         that lost them) is absent in between: the rows before and after become two movers,
-        not one walking a straight line through the gap. None: :data:`GAP_PERIODS` times the
-        file's median time between a person's consecutive rows (2 s for annotations 0.4 s
-        apart; a hand-written file of sparse rows is never cut). ``math.inf``: never cut.
+        not one walking a straight line through the gap; each cut is logged. None:
+        :data:`GAP_PERIODS` times the person's own median time between consecutive rows (2 s
+        for annotations 0.4 s apart; sparse hand-written keyframes are never cut).
+        ``math.inf``: never cut.
     name : str
         The scene's name.
     robot_radius, vmax, amax : float or None
@@ -223,7 +224,7 @@ class TrackSceneOptions:
             raise InputError(f"max_movers must not be negative, got {self.max_movers!r}")
         gap = self.max_gap
         if gap is not None and (isinstance(gap, bool) or not (isinstance(gap, numbers.Real) and gap > 0)):
-            raise InputError(f"max_gap must be positive (math.inf: never cut), got {self.max_gap!r}")
+            raise InputError(f"max_gap must be positive (inf: never cut), got {self.max_gap!r}")
         if self.region is not None:
             r = tuple(float(v) for v in self.region)
             if (
@@ -506,11 +507,18 @@ def _query_docs(start, goal, query_name, expect, dof, inradius, region, src) -> 
     return queries
 
 
-def _split_gaps(rows, max_gap: float) -> list[list]:
-    """``rows`` cut where two consecutive rows are more than ``max_gap`` seconds apart."""
+def _split_gaps(pid: str, rows, max_gap: float | None, own: list) -> list[list]:
+    """``rows`` cut where two consecutive rows are more than ``max_gap`` seconds apart (None:
+    :data:`GAP_PERIODS` times the median time between the person's ``own`` rows, the whole
+    track's); each cut logged."""
+    if max_gap is None:
+        steps = [b[0] - a[0] for a, b in pairwise(own)]
+        max_gap = GAP_PERIODS * statistics.median(steps) if steps else math.inf
     runs = [[rows[0]]]
     for a, b in pairwise(rows):
         if b[0] - a[0] > max_gap:
+            log.warning("ped-%s unseen for %g s from t = %g s (more than %g s): absent in between, the rows "
+                        "before and after are separate movers (--max-gap)", pid, b[0] - a[0], a[0], max_gap)
             runs.append([])
         runs[-1].append(b)
     return runs
@@ -520,15 +528,12 @@ def _movers(rel: dict, duration: float, region, options: TrackSceneOptions, src)
     """Every person's runs inside the window and the region, as movers, in order of
     appearance (the ``max_movers`` present longest when that is set)."""
     movers: list[_Mover] = []
-    max_gap = options.max_gap
-    if max_gap is None:  # the file's own sampling: a tracker's 0.1 s, the annotations' 0.4 s, sparse keyframes
-        steps = [b[0] - a[0] for rows in rel.values() for a, b in pairwise(rows)]
-        max_gap = GAP_PERIODS * statistics.median(steps) if steps else math.inf
-    for pid, rows in rel.items():
-        rows = _clip_time(rows, 0.0, duration)
+    for pid, own in rel.items():
+        rows = _clip_time(own, 0.0, duration)
         if len(rows) < 2:
             continue
-        runs = (_round_rows(run) for seen in _split_gaps(rows, max_gap) for run in _clip_region(seen, region))
+        seen = _split_gaps(pid, rows, options.max_gap, own)
+        runs = (_round_rows(run) for part in seen for run in _clip_region(part, region))
         for k, run in enumerate((run for run in runs if len(run) >= 2), start=1):  # numbered as kept
             movers.append(_Mover(f"ped-{pid}" if k == 1 else f"ped-{pid}-{k}", pid, run))
     if not movers:
