@@ -377,6 +377,23 @@ def test_navigate_budget_on_cpu_time(tmp_path):
     assert p.returncode == 2 and len(p.stderr.strip().splitlines()) == 1
 
 
+def test_navigate_file_says_how_the_navigator_searched(tmp_path):
+    """A run with ``--soft-search`` and one without wrote the same ``navigate`` settings: the
+    file did not say that people's space had been priced, nor the search's step, budget or
+    backend; every setting that changes the run is there now."""
+    docs = {}
+    for name, flags in (("tiers", ()), ("priced", ("--soft-search", "--intrusion-cost", "3", "--dt", "0.2"))):
+        out = tmp_path / f"{name}.json"
+        p = _run("navigate", "scenes/zara-crowd.yaml", "--budget-clock", "cpu", "--time-budget", "0.08",
+                 *flags, "-o", str(out))  # fmt: skip
+        assert p.returncode in (0, 1), p.stdout + p.stderr
+        docs[name] = json.loads(out.read_text())["navigate"]
+    assert docs["tiers"]["soft_search"] is False and docs["tiers"]["intrusion_cost"] is None
+    assert docs["priced"]["soft_search"] is True and docs["priced"]["intrusion_cost"] == 3.0
+    assert docs["tiers"]["dt"] == 0.1 and docs["priced"]["dt"] == 0.2
+    assert docs["priced"]["time_budget"] == 0.08 and docs["priced"]["backend"] == "compiled"
+
+
 def test_replan_times_are_on_the_budget_clock(monkeypatch):
     """The replan times a run reports are on the navigator's budget clock: with the budget
     on CPU time, a loaded machine does not make calls look over budget (they were always

@@ -297,6 +297,20 @@ def _navigate_options(args):
         raise BadInput(f"gfuzzy navigate: {exc}") from None
 
 
+def _run_settings(args, options, seed: int, sense: float) -> dict:
+    """The ``navigate`` key of a run's file: every setting that changes the run (the sensor's,
+    the loop's, the navigator's options as the flags set them), so that two files say how
+    they differ; ``intrusion_cost`` is null without ``--soft-search`` (nothing is priced)."""
+    return {
+        "period": args.period, "sense": None if math.isinf(sense) else sense, "max_time": args.max_time,
+        "velocity": args.velocity, "noise": args.noise, "fov": args.fov, "occlusion": args.occlusion,
+        "seed": seed, "budget_clock": options.budget_clock, "time_budget": options.time_budget,
+        "dt": options.dt, "backend": options.backend, "personal_space": options.personal_space,
+        "path_space": options.path_space, "soft_search": options.soft_search,
+        "intrusion_cost": options.intrusion_cost if options.soft_search else None,
+    }  # fmt: skip
+
+
 def cmd_navigate(args) -> int:
     """Drive the robot among the scene's movers without knowing their future (section 5)."""
     import numpy as np
@@ -363,10 +377,7 @@ def cmd_navigate(args) -> int:
         "intrusion_ratio": round(res.social.intrusion_ratio, 6),
         "check": {"valid": report.valid, "reason": report.reason},
         "modes": res.modes,
-        "navigate": {"period": args.period, "sense": None if math.isinf(sense) else sense, "max_time": args.max_time,
-                     "velocity": args.velocity, "noise": args.noise, "fov": args.fov, "occlusion": args.occlusion,
-                     "seed": sensor.seed, "budget_clock": args.budget_clock,
-                     "personal_space": args.personal_space, "path_space": args.path_space},  # fmt: skip
+        "navigate": _run_settings(args, options, sensor.seed, sense),
         "replan_log": res.log,
     }
     if not solved:  # only a solved file carries waypoints (section 2): the motion goes here
