@@ -409,3 +409,26 @@ def test_replan_times_are_on_the_budget_clock(monkeypatch):
     q = scene.queries[0]
     run = navsim.simulate(scene, rm, q.start, q.goal, max_time=1.0, options=gfuzzy.NavOptions(budget_clock="cpu"))
     assert run.replans >= 2 and np.all(run.replan_seconds == 7.0)
+
+
+def test_navigate_says_when_the_run_went_on_after_every_mover(tmp_path, capsys):
+    """``gfuzzy populate`` records 60 s by default; a crossing of the depot took 72 s, its
+    last 12 s among nobody, and the run said "check valid" without a word. It says so now,
+    and not when someone is there to the end."""
+    from gfuzzy.cli import main
+
+    def scene(until: float) -> Path:
+        path = tmp_path / f"s{until:g}.yaml"
+        path.write_text(
+            "version: 1\nname: gone\nbounds: [0, 0, 10, 4]\nrobot: {disc: 0.2, vmax: 1.0}\n"
+            f"movers:\n  - {{name: p, disc: 0.3, trajectory: [[0, 5, 3.5], [{until}, 5.5, 3.5]]}}\n"
+            "queries:\n  - {name: q, start: [1, 1], goal: [9, 1]}\n"
+        )
+        return path
+
+    for until, said in ((2.0, True), (60.0, False)):
+        out = tmp_path / f"r{until:g}.json"
+        argv = ["navigate", str(scene(until)), "-n", "60", "--budget-clock", "cpu", "-o", str(out)]
+        assert main(argv) == 0
+        err = capsys.readouterr().err
+        assert ("every mover's recorded motion ends by t = 2 s and the robot drove on to" in err) == said, err

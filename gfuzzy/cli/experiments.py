@@ -397,7 +397,21 @@ def cmd_navigate(args) -> int:
     if out is not None:
         tf.save(out)
     _say(f"{scene.name} {query.name}: {_navigate_summary(res, report)}", sys.stdout)
+    gone = _after_the_movers(scene, float(wps[-1, 0]))
+    if gone:
+        _say(f"note: {gone}")
     return EXIT_OK if (solved and report.valid) else EXIT_NO
+
+
+def _after_the_movers(scene, t_end: float) -> str:
+    """Why a run's end was among nobody: every mover's recorded motion (``gfuzzy populate``'s
+    ``--duration``, a tracks window) ended before the robot stopped at ``t_end``; "" when
+    someone is there to the end (a path mover is there always) or there are no movers."""
+    ends = [m.time_range[1] for m in scene.movers]
+    if not ends or max(ends) >= t_end:
+        return ""
+    return (f"every mover's recorded motion ends by t = {max(ends):g} s and the robot drove on to "
+            f"t = {t_end:g} s among nobody: record longer (gfuzzy populate --duration, a longer tracks window)")
 
 
 def _navigate_summary(res, report) -> str:
