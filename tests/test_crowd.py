@@ -542,3 +542,16 @@ def test_crowd_stops_between_episodes_after_a_dropped_interrupt(monkeypatch, cap
     code, seen = _crowd_on_one_worker(monkeypatch, at_progress=_dropped_ctrl_c)
     assert code == 130 and capsys.readouterr().err.strip() == "interrupted"
     assert [d for d in seen if d] == [1]
+
+
+def test_an_oracle_without_a_plan_says_so_beside_its_outcome():
+    """The unicycle oracle of the arena (20 humans, seed 1, episode 0) finds no plan and
+    stands at its start until someone walks into it: the table said only "collide 1.000",
+    as if it had driven into them. Its modes say ``no_plan`` now; an oracle that planned has none."""
+    s = C.CrowdSetting("arena", humans=20, kinematics="unicycle")
+    (ep,) = C.run_episode(s, C.crowd_roadmap(s), 1, 0, ["oracle"])
+    assert ep.outcome == C.Outcome.COLLISION and ep.path_length == 0.0
+    assert dict(ep.modes) == {C.NO_PLAN: 1}
+    h = replace(s, kinematics="holonomic")
+    (ok,) = C.run_episode(h, C.crowd_roadmap(h), 1, 0, ["oracle"])
+    assert ok.outcome == C.Outcome.SUCCESS and ok.modes == ()

@@ -807,6 +807,32 @@ def test_gfuzzy_map_writes_a_differential_drive(tmp_path, capsys):
     assert "(its circumscribed disc, radius 0.7433, to turn in place)" in capsys.readouterr().err
 
 
+def test_gfuzzy_map_writes_a_differential_drive_that_reverses(tmp_path, capsys):
+    # a user whose base backs up had to edit the scene by hand (map had no --reverse), and
+    # after populate the robot is one flow-style line a block edit misses
+    for f in ("tb3_sandbox.yaml", "tb3_sandbox.pgm"):
+        shutil.copy(MAPS / f, tmp_path / f)
+    out = tmp_path / "tb3.yaml"
+    argv = ["map", str(tmp_path / "tb3_sandbox.yaml"), "--kinematics", "unicycle", "--reverse", "-o", str(out)]
+    assert main(argv) == 0
+    robot = load_scene(out).robot
+    assert robot.kinematics == "unicycle" and robot.reverse
+    assert not load_scene(_map_to(tmp_path, "fwd.yaml", "--kinematics", "unicycle")).robot.reverse
+    capsys.readouterr()
+    bad = tmp_path / "bad.yaml"
+    assert main(["map", str(tmp_path / "tb3_sandbox.yaml"), "--reverse", "-o", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert "--reverse needs --kinematics unicycle" in err and "Traceback" not in err
+    assert not bad.exists()
+
+
+def _map_to(folder, name, *flags):
+    """The scene ``gfuzzy map`` writes around the tb3 map in ``folder`` with ``flags``."""
+    out = folder / name
+    assert main(["map", str(folder / "tb3_sandbox.yaml"), *flags, "-o", str(out)]) == 0
+    return out
+
+
 def test_render_draws_the_grid_at_its_place(tmp_path):
     px = np.full((20, 40), 254, dtype=np.uint8)
     px[:, :20] = 205  # the west half unknown (gray), the east half free

@@ -965,6 +965,20 @@ def test_observations_of_another_shape_are_refused_not_reshaped(open_square, see
     assert nav.step(0.0, np.array([0.0, -4.0]), one).duration > 0
 
 
+def test_a_bad_observation_row_is_named(open_square):
+    # a tracker's NaN row among many was refused without saying which (a user could not find it)
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (0.0, 4.0))
+    seen = np.tile([3.0, 0.0, -1.0, 0.0, 0.3], (6, 1))
+    seen[3, 2] = math.nan
+    seen[5, 4] = -0.1
+    with pytest.raises(InputError, match=r"^observations\[3\] = \[3.0, 0.0, nan, 0.0, 0.3\] \(and 1 more\): rows must be finite"):
+        nav.step(0.0, np.array([0.0, -4.0]), seen)
+    with pytest.raises(InputError, match=r"^observations\[0\] = \[3.0, 0.0, -1.0, 0.0, -0.1\]: rows must be"):
+        nav.step(0.0, np.array([0.0, -4.0]), seen[5])
+    assert nav.step(0.0, np.array([0.0, -4.0]), seen[[0, 1, 2, 4]]).duration > 0  # the rest is fine
+
+
 @pytest.mark.parametrize("pose", [[1e308, -4.0], [0.0, -2e9]])
 def test_a_pose_beyond_1e9_is_refused_as_the_planner_refuses_it(open_square, pose):
     # it returned a hold trajectory at x = 1e308 (docs/formats.md: the API refuses it)

@@ -377,6 +377,23 @@ def test_navigate_budget_on_cpu_time(tmp_path):
     assert p.returncode == 2 and len(p.stderr.strip().splitlines()) == 1
 
 
+def test_navigate_file_says_how_the_navigator_searched(tmp_path):
+    """A run with ``--soft-search`` and one without wrote the same ``navigate`` settings: the
+    file did not say that people's space had been priced, nor the search's step, budget or
+    backend; every setting that changes the run is there now."""
+    docs = {}
+    for name, flags in (("tiers", ()), ("priced", ("--soft-search", "--intrusion-cost", "3", "--dt", "0.2"))):
+        out = tmp_path / f"{name}.json"
+        p = _run("navigate", "scenes/zara-crowd.yaml", "--budget-clock", "cpu", "--time-budget", "0.08",
+                 *flags, "-o", str(out))  # fmt: skip
+        assert p.returncode in (0, 1), p.stdout + p.stderr
+        docs[name] = json.loads(out.read_text())["navigate"]
+    assert docs["tiers"]["soft_search"] is False and docs["tiers"]["intrusion_cost"] is None
+    assert docs["priced"]["soft_search"] is True and docs["priced"]["intrusion_cost"] == 3.0
+    assert docs["tiers"]["dt"] == 0.1 and docs["priced"]["dt"] == 0.2
+    assert docs["priced"]["time_budget"] == 0.08 and docs["priced"]["backend"] == "compiled"
+
+
 def test_replan_times_are_on_the_budget_clock(monkeypatch):
     """The replan times a run reports are on the navigator's budget clock: with the budget
     on CPU time, a loaded machine does not make calls look over budget (they were always
@@ -392,3 +409,26 @@ def test_replan_times_are_on_the_budget_clock(monkeypatch):
     q = scene.queries[0]
     run = navsim.simulate(scene, rm, q.start, q.goal, max_time=1.0, options=gfuzzy.NavOptions(budget_clock="cpu"))
     assert run.replans >= 2 and np.all(run.replan_seconds == 7.0)
+
+
+def test_navigate_says_when_the_run_went_on_after_every_mover(tmp_path, capsys):
+    """``gfuzzy populate`` records 60 s by default; a crossing of the depot took 72 s, its
+    last 12 s among nobody, and the run said "check valid" without a word. It says so now,
+    and not when someone is there to the end."""
+    from gfuzzy.cli import main
+
+    def scene(until: float) -> Path:
+        path = tmp_path / f"s{until:g}.yaml"
+        path.write_text(
+            "version: 1\nname: gone\nbounds: [0, 0, 10, 4]\nrobot: {disc: 0.2, vmax: 1.0}\n"
+            f"movers:\n  - {{name: p, disc: 0.3, trajectory: [[0, 5, 3.5], [{until}, 5.5, 3.5]]}}\n"
+            "queries:\n  - {name: q, start: [1, 1], goal: [9, 1]}\n"
+        )
+        return path
+
+    for until, said in ((2.0, True), (60.0, False)):
+        out = tmp_path / f"r{until:g}.json"
+        argv = ["navigate", str(scene(until)), "-n", "60", "--budget-clock", "cpu", "-o", str(out)]
+        assert main(argv) == 0
+        err = capsys.readouterr().err
+        assert ("every mover's recorded motion ends by t = 2 s and the robot drove on to" in err) == said, err

@@ -297,6 +297,20 @@ def _navigate_options(args):
         raise BadInput(f"gfuzzy navigate: {exc}") from None
 
 
+def _run_settings(args, options, seed: int, sense: float) -> dict:
+    """The ``navigate`` key of a run's file: every setting that changes the run (the sensor's,
+    the loop's, the navigator's options as the flags set them), so that two files say how
+    they differ; ``intrusion_cost`` is null without ``--soft-search`` (nothing is priced)."""
+    return {
+        "period": args.period, "sense": None if math.isinf(sense) else sense, "max_time": args.max_time,
+        "velocity": args.velocity, "noise": args.noise, "fov": args.fov, "occlusion": args.occlusion,
+        "seed": seed, "budget_clock": options.budget_clock, "time_budget": options.time_budget,
+        "dt": options.dt, "backend": options.backend, "personal_space": options.personal_space,
+        "path_space": options.path_space, "soft_search": options.soft_search,
+        "intrusion_cost": options.intrusion_cost if options.soft_search else None,
+    }  # fmt: skip
+
+
 def cmd_navigate(args) -> int:
     """Drive the robot among the scene's movers without knowing their future (section 5)."""
     import numpy as np
@@ -363,10 +377,7 @@ def cmd_navigate(args) -> int:
         "intrusion_ratio": round(res.social.intrusion_ratio, 6),
         "check": {"valid": report.valid, "reason": report.reason},
         "modes": res.modes,
-        "navigate": {"period": args.period, "sense": None if math.isinf(sense) else sense, "max_time": args.max_time,
-                     "velocity": args.velocity, "noise": args.noise, "fov": args.fov, "occlusion": args.occlusion,
-                     "seed": sensor.seed, "budget_clock": args.budget_clock,
-                     "personal_space": args.personal_space, "path_space": args.path_space},  # fmt: skip
+        "navigate": _run_settings(args, options, sensor.seed, sense),
         "replan_log": res.log,
     }
     if not solved:  # only a solved file carries waypoints (section 2): the motion goes here
@@ -386,7 +397,21 @@ def cmd_navigate(args) -> int:
     if out is not None:
         tf.save(out)
     _say(f"{scene.name} {query.name}: {_navigate_summary(res, report)}", sys.stdout)
+    gone = _after_the_movers(scene, float(wps[-1, 0]))
+    if gone:
+        _say(f"note: {gone}")
     return EXIT_OK if (solved and report.valid) else EXIT_NO
+
+
+def _after_the_movers(scene, t_end: float) -> str:
+    """Why a run's end was among nobody: every mover's recorded motion (``gfuzzy populate``'s
+    ``--duration``, a tracks window) ended before the robot stopped at ``t_end``; "" when
+    someone is there to the end (a path mover is there always) or there are no movers."""
+    ends = [m.time_range[1] for m in scene.movers]
+    if not ends or max(ends) >= t_end:
+        return ""
+    return (f"every mover's recorded motion ends by t = {max(ends):g} s and the robot drove on to "
+            f"t = {t_end:g} s among nobody: record longer (gfuzzy populate --duration, a longer tracks window)")
 
 
 def _navigate_summary(res, report) -> str:

@@ -208,6 +208,8 @@ def _add_map(sub) -> None:
     m.add_argument("--vmax", type=float, metavar="V", help="robot speed bound (default 0.5)")
     m.add_argument("--kinematics", choices=("holonomic", "unicycle"), default="holonomic",
                    help="unicycle: a differential drive (turns in place, straight moves; poses get a heading)")  # fmt: skip
+    m.add_argument("--reverse", action="store_true",
+                   help="unicycle: the robot may also drive backwards (default: forwards only)")  # fmt: skip
     m.add_argument("--name", help="scene name (default: the output file's stem)")
     m.set_defaults(func=cmd_map)
 

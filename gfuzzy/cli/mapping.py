@@ -36,6 +36,7 @@ def cmd_map(args) -> int:
         made = map_scene(
             args.map, out, robot_disc=args.robot_disc, robot_footprint=footprint,
             vmax=args.vmax or 0.5, name=args.name, command=command, kinematics=args.kinematics,
+            reverse=args.reverse,
         )  # fmt: skip
     except SceneError:
         raise

@@ -198,6 +198,9 @@ def orca_robot(scene: Scene, time_limit: float | None = None) -> tuple[FloatArra
 
 SCENARIOS = ("circle", "square", "arena")
 POLICIES = ("navigator", "orca", "social-force", "oracle")
+#: The oracle's ``modes`` in an episode where :func:`gfuzzy.plan` found no plan: the robot
+#: stood at its start (a collision is then someone walking into it; an arena's unicycle).
+NO_PLAN = "no_plan"
 CROWD_MODELS = ("orca", "social-force")
 KINEMATICS = ("holonomic", "unicycle")
 class Outcome(str, Enum):
@@ -614,6 +617,8 @@ def _drive(setting, policy, index, lay, act, tracks, world, n_steps, extra) -> E
         if np.hypot(*(pose[:2] - lay.goal)) < rr:
             outcome, t_goal = Outcome.SUCCESS, t + dt
             break
+    if policy == "oracle" and act.traj is None:  # it stood at its start: say why, beside its outcome
+        modes[NO_PLAN] = 1
     w = np.array(rows)
     keep = np.ones(len(w), dtype=bool)
     keep[1:] = np.diff(w[:, 0]) > 1e-9

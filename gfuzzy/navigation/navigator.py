@@ -267,14 +267,21 @@ class NavOptions:
 
 def _observation_rows(observations) -> np.ndarray:
     """``Navigator.step``'s observations as a (k, 5) array: rows ``[x, y, vx, vy, radius]``, or one
-    such row alone; any other shape (a transposed array, a row of 4) is refused, never reshaped."""
+    such row alone; any other shape (a transposed array, a row of 4) is refused, never reshaped,
+    and so is a row that is not finite or has a negative radius, by its index."""
     obs = np.asarray(observations, dtype=float)
     if obs.size == 0:
         return np.zeros((0, 5))
     if obs.shape == (5,):
-        return obs[None, :]
+        obs = obs[None, :]
     if obs.ndim != 2 or obs.shape[1] != 5:
         raise InputError(f"observations must be an array of shape (k, 5), rows [x, y, vx, vy, radius]; got shape {obs.shape}")
+    bad = np.flatnonzero(~np.all(np.isfinite(obs), axis=1) | ~(obs[:, 4] >= 0))
+    if len(bad):  # a tracker's NaN row among fifty: say which, and what is in it
+        i = int(bad[0])
+        more = f" (and {len(bad) - 1} more)" if len(bad) > 1 else ""
+        raise InputError(f"observations[{i}] = {obs[i].tolist()}{more}: rows must be finite [x, y, vx, vy, radius >= 0] "
+                         "(drop a track the tracker has no estimate for)")
     return obs
 
 
@@ -479,8 +486,6 @@ class Navigator(PathSpace, Prediction, SoftCost):
         pose = _checked_pose(pose, self.robot, t, self._t_last)
         t = float(t)
         obs = _observation_rows(observations)
-        if not np.all(np.isfinite(obs)) or np.any(obs[:, 4] < 0):
-            raise InputError("observations must be finite rows [x, y, vx, vy, radius >= 0]")
         self._unknown = unknown_positions(obs, unknown)
         self._t_last = t
         self.replans += 1

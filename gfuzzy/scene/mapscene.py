@@ -183,6 +183,16 @@ def _fits(grid: MapObstacle, bounds, fp, radius: float, kinematics: str) -> tupl
     return fits, f"a disc of radius {radius:.4g}"
 
 
+def _kinematics_lines(kinematics: str, reverse: bool) -> list[str]:
+    """The robot's ``kinematics`` and ``reverse`` lines of a map's scene (none for a holonomic robot)."""
+    if kinematics != "unicycle":
+        return []
+    drive = "  kinematics: unicycle   # a differential drive: turns in place, straight moves"
+    if reverse:
+        return [drive, "  reverse: true   # it may also drive backwards"]
+    return [drive + ", forwards only (reverse: true to back up)"]
+
+
 def map_scene(
     map_yaml: str | os.PathLike,
     scene_path: str | os.PathLike,
@@ -192,6 +202,7 @@ def map_scene(
     name: str | None = None,
     command: str = "",
     kinematics: str = "holonomic",
+    reverse: bool = False,
 ) -> MapScene:
     """Write-ready scene text around a map.
 
@@ -213,6 +224,9 @@ def map_scene(
     kinematics : {"holonomic", "unicycle"}
         A differential drive gets ``kinematics: unicycle`` and poses with a heading (a disc
         included).
+    reverse : bool
+        The differential drive may also drive backwards (``reverse: true``); only with
+        ``kinematics="unicycle"``.
 
     Notes
     -----
@@ -239,6 +253,8 @@ def map_scene(
     rel = Path(rel).as_posix()
     if kinematics not in ("holonomic", "unicycle"):
         raise InputError(f"--kinematics: expected holonomic or unicycle, got {kinematics!r}")
+    if reverse and kinematics != "unicycle":  # as the scene file's own rule (and gfuzzy crowd's)
+        raise InputError("--reverse needs --kinematics unicycle (only a differential drive drives backwards)")
     if name is not None and not NAME_RE.match(name):  # before the map is read, and as gfuzzy tracks says it
         raise InputError(f"name must be letters, digits, _ . - (got {name!r})")
     grid = load_map({"file": rel}, "map", str(map_yaml), folder)
@@ -257,11 +273,7 @@ def map_scene(
         "robot:",
         robot_line,
         f"  vmax: {_fmt(vmax)}",
-        *(
-            ["  kinematics: unicycle   # a differential drive: turns in place, straight moves"]
-            if kinematics == "unicycle"
-            else []
-        ),
+        *_kinematics_lines(kinematics, reverse),
         "obstacles:",
         f"  - map: {{file: {plain_name(rel, flow=True)}, unknown: blocked}}"
         "   # unknown cells block; 'free' to let them not",
