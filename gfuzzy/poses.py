@@ -23,6 +23,7 @@ __all__ = [
     "as_number",
     "number_array",
     "pose_words",
+    "row_words",
     "wrap_angle",
     "metric_distance",
     "interpolate_segment",
@@ -76,6 +77,13 @@ def pose_words(dof: int, robot=None) -> str:
         return want + (" for a disc robot" if dof == 2 else " for a box or footprint robot or a unicycle")
     unicycle = getattr(robot, "kinematics", "holonomic") != "holonomic"
     return want + f" for this {robot.shape} robot" + (f" ({robot.kinematics})" if unicycle else "")
+
+
+def row_words(dof: int, robot=None) -> str:
+    """What a trajectory row of a ``dof``-number pose holds, for messages: the time, then
+    the pose as :func:`pose_words` puts it (``[t, x, y, heading] for this disc robot
+    (unicycle)``)."""
+    return "[t, " + pose_words(dof, robot)[1:]
 
 
 def wrap_angle(a):

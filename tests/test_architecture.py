@@ -11,6 +11,7 @@
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parent.parent / "gfuzzy"
@@ -195,3 +196,34 @@ def test_the_layer_rule_sees_an_upward_import():
     assert _layer("gfuzzy.timespace.unicycle") == "timespace" and _layer("gfuzzy.poses") == "base"
     order = {name: i for i, name in enumerate(LAYERS)}
     assert order[_layer("gfuzzy.planner.stages")] > order[_layer("gfuzzy.timespace.drive")]
+
+
+def _documented_packages() -> list[tuple[str, list[str]]]:
+    """docs/architecture.md's package table: (layer, modules in the order listed) per row."""
+    doc = (PACKAGE.parent / "docs" / "architecture.md").read_text(encoding="utf-8")
+    rows = []
+    for line in doc.splitlines():
+        cells = line.split("|")
+        name = re.fullmatch(r" `([a-z_]+)/`.*", cells[1]) if len(cells) > 3 else None
+        if name:
+            layer = "base" if name[1] == "gfuzzy" else name[1]
+            rows.append((layer, re.findall(r"`([a-z_]+)`", cells[2])))
+    return rows
+
+
+def test_the_architecture_table_lists_every_module_in_import_order():
+    # it had lost eight modules (reach, softcost, soft_kernel, __main__, depth, exact, join,
+    # passage) and put planner before check, which planner imports
+    rows = _documented_packages()
+    assert [layer for layer, _ in rows] == list(LAYERS)
+    graph = _graph()
+    for layer, listed in rows:
+        prefix = "gfuzzy" if layer == "base" else f"gfuzzy.{layer}"
+        here = {m[len(prefix) + 1 :] for m in graph if m != prefix and m.rsplit(".", 1)[0] == prefix}
+        here -= set(LAYERS) if layer == "base" else set()  # the packages are rows of their own
+        assert sorted(listed) == sorted(here), (layer, set(listed) ^ here)
+        before: set[str] = set()
+        for name in listed:
+            later = {d for d in graph[f"{prefix}.{name}"] if d.rsplit(".", 1)[0] == prefix} - before
+            assert name == "__main__" or not later, f"{prefix}.{name} imports {sorted(later)}, listed after it"
+            before.add(f"{prefix}.{name}")

@@ -432,7 +432,7 @@ def _timed_out_file(path, executed, scene="line"):
         ([[0, 1, 2.5], [True, 1.5, 2.5]], "executed[1][0]: expected a finite number, got True"),
         ([[0, 1, 2.5], [0, 1.5, 2.5]], "executed[1][0]: t=0.0 does not increase"),
         # rows of a box robot ("there is no trajectory to check")
-        ([[0, 1, 2.5, 0], [1, 1.5, 2.5, 0]], "executed: rows of 4 numbers, but scene 'line' has a disc robot"),
+        ([[0, 1, 2.5, 0], [1, 1.5, 2.5, 0]], "executed: rows of 4 numbers, but scene 'line' expects [t, x, y] for this disc robot"),
     ],
 )
 @pytest.mark.parametrize("command", ["check", "render", "export"])

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -13,6 +14,7 @@ from gfuzzy.poses import (
     interpolate_segment,
     metric_distance,
     pose_at,
+    row_words,
     split_counts,
     wrap_angle,
 )
@@ -127,3 +129,9 @@ def test_a_leading_cut_leaves_no_hair_of_a_step():
     np.testing.assert_allclose(leading_fractions(j / k, j, k, hair, 0.25, np.ones(2)), j / k)
     some = np.full(2, 0.52)  # a real remainder: whole steps from the first end
     np.testing.assert_allclose(leading_fractions(j / k, j, k, some, 0.25, np.ones(2)), j * 0.25 / 0.52)
+
+
+def test_row_words_put_the_time_before_the_pose_words():
+    robot = SimpleNamespace(shape="disc", kinematics="unicycle")
+    assert row_words(3, robot) == "[t, x, y, heading] for this disc robot (unicycle)"
+    assert row_words(2) == "[t, x, y] for a disc robot"

@@ -105,6 +105,59 @@ def test_no_documented_populate_writes_among_the_bundled_scenes():
     assert found >= 2
 
 
+def _navigator_doc() -> str:
+    return (ROOT / "docs" / "navigator.md").read_text(encoding="utf-8")
+
+
+def _table_rows(text: str, header: str) -> list[list[str]]:
+    """The cells of the rows of the markdown table whose header line is ``header``."""
+    lines = text.split(header + "\n", 1)[1].splitlines()[1:]  # past the --- line
+    return [[c.strip() for c in line.strip("|").split(" | ")] for line in lines[: next(i for i, x in enumerate(lines) if not x.startswith("|"))]]
+
+
+def test_navigators_settings_table_names_every_option_with_its_default():
+    # it lacked budget_clock, backend, commitment, fan, full_speed, fov and look_after
+    from dataclasses import fields
+
+    from gfuzzy.navigation.navigator import NavOptions
+
+    documented = {}
+    for cells in _table_rows(_navigator_doc(), "| setting | default | meaning |"):
+        names = re.findall(r"`(\w+)`", cells[0])
+        documented.update(zip(names, cells[1].split(", "), strict=True))
+    defaults = {f.name: f.default for f in fields(NavOptions)}
+    assert sorted(documented) == sorted(defaults)
+    wrong = {
+        name: (text, defaults[name])
+        for name, text in documented.items()
+        if text != str(defaults[name]) and not (type(defaults[name]) in (int, float) and float(text) == defaults[name])
+    }
+    assert wrong == {}
+
+
+def test_navigators_modes_key_names_every_mode():
+    # it named six of the nine modes a run counts (not kept, goal, look)
+    from gfuzzy.navigation.navtypes import NavMode
+
+    (cells,) = [c for c in _table_rows(_navigator_doc(), "| key | meaning |") if c[0] == "`modes`"]
+    named = set(re.findall(r"`(\w+)` \(", cells[1]))
+    assert named == {m.value for m in NavMode}
+
+
+def test_navigators_docs_name_every_flag_of_navigate():
+    # --backend, --clearance and --mover-clearance were not there
+    from gfuzzy.cli.main import _parser
+
+    (sub,) = [a for a in _parser()._actions if a.dest == "command"]
+    section = _navigator_doc().split("## `gfuzzy navigate`", 1)[1].split("\n## ", 1)[0]
+    missing = [
+        a.option_strings
+        for a in sub.choices["navigate"]._actions
+        if a.option_strings and a.dest != "help" and not any(re.search(rf"(?<![\w-]){o}(?![\w-])", section) for o in a.option_strings)
+    ]
+    assert missing == []
+
+
 def test_the_docs_python_imports_resolve():
     # docs/speed-layer.md said `from gfuzzy import tracking` (ImportError): the module is
     # gfuzzy.learning.tracking; the docs' blocks are fragments, but their imports must run

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 from types import SimpleNamespace
 
 import numpy as np
@@ -419,3 +420,15 @@ def test_queries_from_one_start_share_one_label():
     R._draw_queries(ax, parse_scene(doc))
     labels = sorted((t.get_text(), tuple(t.xy)) for t in ax.texts)
     assert labels == [("other", (2.0, 1.0)), ("q, late, hold", (1.0, 1.0))]
+
+
+def test_rows_of_the_wrong_width_name_the_rows_a_unicycle_disc_robot_takes(repo_root, tmp_path, capsys):
+    # a unicycle disc robot takes [t, x, y, heading]: the message said "disc robot: expected [t, x, y]"
+    sc = load_scene(repo_root / "scenes" / "tb3-arena-unicycle.yaml")
+    want = "expects [t, x, y, heading] for this disc robot (unicycle)"
+    with pytest.raises(ValueError, match=re.escape(want)):
+        R.as_waypoints([[0.0, 1.0, 1.0], [1.0, 1.2, 1.0]], sc)
+    assert R.as_waypoints([[0.0, 1.0, 1.0, 0.0], [1.0, 1.2, 1.0, 0.0]], sc).shape == (2, 4)
+    traj = _trajectory_file(tmp_path / "t.json", [[0.0, 1.0, 1.0], [1.0, 1.2, 1.0]], scene=sc.name)
+    rc, _, err = _run(capsys, "check", repo_root / "scenes" / "tb3-arena-unicycle.yaml", traj)
+    assert rc == 2 and f"{traj}: waypoints: rows of 3 numbers, but scene 'tb3-arena-unicycle' {want}" in err, err

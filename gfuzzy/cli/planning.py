@@ -266,10 +266,11 @@ def _rows_fit(scene, rows, path, key="waypoints") -> None:
     """Rows of the wrong width for the scene's robot are bad input (for check as for
     render and export): a trajectory planned for another robot, not an invalid one."""
     if rows is not None and rows.shape[1] != scene.robot.dof + 1:
-        want = "[t, x, y]" if scene.robot.dof == 2 else "[t, x, y, heading]"
+        from ..poses import row_words
+
         raise BadInput(
             f"{path}: {key}: rows of {rows.shape[1]} numbers, but scene "
-            f"{scene.name!r} has a {scene.robot.shape} robot: expected {want}"
+            f"{scene.name!r} expects {row_words(scene.robot.dof, scene.robot)}"
         )
 
 

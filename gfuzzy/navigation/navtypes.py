@@ -41,7 +41,7 @@ class NavMode(str, Enum):
     RELAXED = "relaxed"  # a fresh search without the buffer, personal space and uncertainty
     DIRECT = "direct"  # straight to the goal nearby, checked finely
     PREVIOUS = "previous"  # the last plan, still clear
-    KEPT = "kept"  # a fresh search answered, but the last plan (a unicycle's) was as good: kept
+    KEPT = "kept"  # a fresh search answered, but the last plan was as good (a unicycle's) or much sooner: kept
     EVASIVE = "evasive"  # the statically free straight motion with the latest contact
     GOAL = "goal"  # already at the goal
     LOOK = "look"  # a short slow motion that turns a disc robot's view to a side it has not seen
@@ -62,10 +62,12 @@ class NavStep:
         none), ``"relaxed"`` (a fresh search without the safety
         buffer, the personal space and the uncertainty), ``"direct"`` (straight to the goal nearby, checked
         finely), ``"previous"`` (the last plan, still clear), ``"evasive"``, ``"goal"``,
-        ``"kept"`` (a differential drive's: a fresh search answered, and the last plan,
-        as safe and at most ``NavOptions.commitment`` seconds later, was kept).
+        ``"kept"`` (a fresh search answered, and the last plan was kept: a differential
+        drive's as safe and at most ``NavOptions.commitment`` seconds later, a disc's as safe
+        as when it was made and arriving much sooner), ``"look"``
+        (a short slow motion turning a narrow view to a side not seen: ``NavOptions.fov``).
     seconds : float
-        Wall-clock time of the call.
+        Time of the call on the budget's clock (``NavOptions.budget_clock``).
     message : str
         Why the search did not answer, when it did not.
     predicted : (k, 5) float

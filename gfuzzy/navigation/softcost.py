@@ -44,7 +44,7 @@ class SoftCost:
         the time left; when it runs out, the safe-interval search among its forbidden field."""
         bare = self._inflation(pose, obs, personal=False)
         now = self._clock()
-        found = self._soft_plan(t, pose, obs, now + SOFT_SHARE * max(deadline - now, 0.0))
+        found = self._soft_plan(t, pose, obs, bare, now + SOFT_SHARE * max(deadline - now, 0.0))
         if found.trajectory is None and found.out_of_time and self._clock() < deadline:
             close = self._search(t, pose, obs, bare, deadline, found)
             return close.trajectory, NavMode.CLOSE, close, bare
@@ -67,10 +67,11 @@ class SoftCost:
             return [(np.vstack([people, g_obs]), np.vstack([infl, g_infl]))], [opts.intrusion_cost]
         return [(obs, infl), (g_obs, g_infl)], [opts.discomfort_cost, opts.intrusion_cost]
 
-    def _soft_plan(self, t: float, pose: FloatArray, obs: FloatArray, deadline: float) -> _Searched:
+    def _soft_plan(self, t: float, pose: FloatArray, obs: FloatArray, bare: FloatArray,
+                   deadline: float) -> _Searched:  # fmt: skip
         """The plan of least ``arrival + intrusion_cost * seconds inside the personal space
         or a ghost`` (:meth:`_priced_zones`), the people's discs with the buffer and the
-        uncertainty forbidden."""
+        uncertainty (inflated by ``bare``, without the personal space) forbidden."""
         opts = self.options
         graph, s_id = self._splice(pose, t, deadline)
         if graph is None:
@@ -78,7 +79,6 @@ class SoftCost:
         h0 = float(graph.heuristic[s_id])
         if not math.isfinite(h0):
             return _Searched(None, "the goal is not reachable on the roadmap", graph=graph, start=s_id)
-        bare = self._inflation(pose, obs, personal=False)
         priced, prices = self._priced_zones(pose, obs)
         stores = tuple(IntervalStore(graph) for _ in range(1 + len(priced)))
         slack = (opts.plan_slack + opts.prediction_horizon) / opts.dt

@@ -28,7 +28,7 @@ from matplotlib.patches import Polygon as PolygonPatch
 from matplotlib.path import Path as MplPath
 
 from ..errors import InputError
-from ..poses import wrap_angle
+from ..poses import row_words, wrap_angle
 from ..scene.scene import Box, Disc, MapObstacle, Mover, Polygon, Scene
 from ..trajectory import Trajectory
 from ..typed import FloatArray
@@ -70,7 +70,7 @@ def as_waypoints(trajectory: Any, scene: Scene | None = None) -> FloatArray:
     Parameters
     ----------
     trajectory : array-like, object with ``.waypoints``, or mapping with ``"waypoints"``
-        Rows ``[t, x, y]`` (disc robot) or ``[t, x, y, heading]`` (box robot),
+        Rows ``[t, x, y]`` (holonomic disc robot) or ``[t, x, y, heading]`` (any other robot),
         t strictly increasing (docs/formats.md section 2).
     scene : Scene, optional
         When given, the row length must match its robot.
@@ -108,10 +108,9 @@ def as_waypoints(trajectory: Any, scene: Scene | None = None) -> FloatArray:
         j = int(bad[0]) + 1
         raise InputError(f"trajectory waypoints[{j}]: t={wp[j, 0]:g} does not increase")
     if scene is not None and wp.shape[1] != scene.robot.dof + 1:
-        want = "[t, x, y]" if scene.robot.shape == "disc" else "[t, x, y, heading]"
         raise InputError(
-            f"trajectory rows have {wp.shape[1]} numbers but scene {scene.name!r} has a "
-            f"{scene.robot.shape} robot: expected {want}"
+            f"trajectory rows have {wp.shape[1]} numbers but scene {scene.name!r} expects "
+            f"{row_words(scene.robot.dof, scene.robot)}"
         )
     return wp
 

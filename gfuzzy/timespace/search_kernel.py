@@ -211,7 +211,7 @@ def _run(indptr, nbrs, h, wait_ok, goal, goal_hold, H, weight, stride,
             if ctr[_HSIZE] + pushes > len(hf) or 2 * (ctr[_TCOUNT] + pushes) > len(tk):
                 ctr[_NNEED] = pushes
                 return _ROOM
-        if ctr[_SINCE] >= 4096:
+        if ctr[_SINCE] >= YIELD_EVERY:
             ctr[_SINCE] = 0
             return _YIELD
         _pop(hf, hq, ctr)

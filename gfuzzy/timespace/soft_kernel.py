@@ -16,6 +16,15 @@ as cautious as the hard one (every soft-safe (point, step) hard-safe), as the na
 are (the same people, more inflation, plus ghosts). The loop is a resumable kernel with
 the protocol of :mod:`gfuzzy.timespace.search_kernel` (it returns the nodes it needs,
 the driver loads them, it resumes on the same top of the open list).
+
+Its open-addressing table and heap are its own, on purpose, though they follow the
+search kernel's: the heap orders other entries (a cost and a g column; the later step
+first at equal cost), the table holds a float cost, and the search kernel's functions
+cannot be called from here. When the precompiled extension is loaded (:mod:`.jit`) they are
+Python stand-ins, not numba dispatchers, so nopython code here cannot call them ("Untyped
+global name '_slot'"); and numba's cache does not see a change in another file, so this
+module's cached machine code would keep an edited function's old body while the search
+kernel's own code took the new one.
 """
 
 from __future__ import annotations
@@ -35,7 +44,7 @@ __all__ = ["soft_search"]
 
 _SOLVED, _EXHAUSTED, _NEED, _YIELD, _ROOM = 0, 1, 2, 3, 4
 _HSIZE, _TCOUNT, _EXP, _HIT, _NNEED, _RESULT, _SINCE = range(7)
-#: Expansions between two returns to Python (deadline check).
+#: Expansions between two returns to Python (deadline check), as the search kernel's.
 YIELD_EVERY = 4096
 
 
@@ -183,7 +192,7 @@ def _run(indptr, nbrs, h, wait_ok, goal, H, penalty, penalty2, stride, ho, hc, h
             if ctr[_HSIZE] + pushes > len(hf) or 2 * (ctr[_TCOUNT] + pushes) > len(tk):
                 ctr[_NNEED] = pushes
                 return _ROOM
-        if ctr[_SINCE] >= 4096:
+        if ctr[_SINCE] >= YIELD_EVERY:
             ctr[_SINCE] = 0
             return _YIELD
         _pop(hf, hg, hq, ctr)
