@@ -401,3 +401,105 @@ def test_the_priced_search_is_warmed_whatever_the_backend(open_square, monkeypat
     assert calls == []
     Navigator(scene, rm, (0.0, 3.0), NavOptions(soft_search=True, backend=backend))
     assert calls == [1]
+
+
+def test_the_last_priced_plan_is_kept_when_the_fresh_one_costs_more(open_square, monkeypatch):
+    """A fresh search spliced from a slightly different pose went back to a roadmap vertex
+    before going on, arriving 0.5 s later: the robot undid its last move every period,
+    0.4 m from a goal two people stood beside (softcost2, 20 invisible, episode 55). The
+    last plan, as safe and cheaper at the price, is kept (the old test asked it to arrive
+    the soft costs, 5.5 s, sooner)."""
+    from gfuzzy.navigation.navtypes import _Searched
+    from gfuzzy.navigation.softcost import SoftCost
+    from gfuzzy.trajectory import Trajectory
+
+    scene, rm = open_square
+    far = np.array([[4.5, -4.5, 0.0, 0.0, 0.3]])  # someone standing far away: the priced search runs
+    nav = Navigator(scene, rm, (0.0, 3.0), NavOptions(soft_search=True, time_budget=5.0))
+    first = nav.step(0.0, np.array([0.0, -3.0]), far)
+    assert nav.last.mode == "plan"
+    t = 0.25
+    pose = first.at(t)
+    w = first.waypoints
+    back = np.vstack([[t, *pose], [t + 0.25, *w[0, 1:]], w + [0.5, 0.0, 0.0]])  # back to the start, then as before
+    real = SoftCost._soft_plan
+
+    def detour(self, *args, **kwargs):
+        found = real(self, *args, **kwargs)
+        return _Searched(Trajectory(back, nav.robot.circumradius), "", found.detailed, False, found.graph, found.start)
+
+    monkeypatch.setattr(SoftCost, "_soft_plan", detour)
+    traj = nav.step(t, pose, far)
+    assert nav.last.mode == "kept"
+    assert traj.t_end == pytest.approx(first.t_end)
+    assert np.allclose(traj.at(t + 0.25), first.at(t + 0.25))
+
+
+def test_a_fresh_plan_cheaper_at_the_price_replaces_the_last(open_square, monkeypatch):
+    """The rule keeps the last plan only while it is as good: the same fresh plan 0.5 s
+    sooner (the last one re-timed) is taken."""
+    from gfuzzy.navigation.navtypes import _Searched
+    from gfuzzy.navigation.softcost import SoftCost
+    from gfuzzy.trajectory import Trajectory
+
+    scene, rm = open_square
+    far = np.array([[4.5, -4.5, 0.0, 0.0, 0.3]])
+    nav = Navigator(scene, rm, (0.0, 3.0), NavOptions(soft_search=True, time_budget=5.0))
+    first = nav.step(0.0, np.array([0.0, -3.0]), far)
+    t = 1.0
+    pose = first.at(t)
+    w = first.waypoints[first.waypoints[:, 0] > t + 1e-6]
+    slow = np.vstack([[t, *pose], w - [0.2, 0.0, 0.0]])  # the rest of it, 0.2 s sooner (a faster first leg)
+    real = SoftCost._soft_plan
+
+    def sooner(self, *args, **kwargs):
+        found = real(self, *args, **kwargs)
+        return _Searched(Trajectory(slow, nav.robot.circumradius), "", found.detailed, False, found.graph, found.start)
+
+    monkeypatch.setattr(SoftCost, "_soft_plan", sooner)
+    traj = nav.step(t, pose, far)
+    assert nav.last.mode == "plan"
+    assert traj.t_end == pytest.approx(first.t_end - 0.2)
+
+
+def test_the_price_is_halved_while_the_planned_arrival_slips(open_square, monkeypatch):
+    """A robot that does not get on with its plan (held at its start: the arrival slips a
+    second per second, as among a stream of people each plan yields again) has its price
+    halved after SLIP_WINDOW s, and again while it goes on slipping; a fixed price never
+    escalated (softcost2, 20 visible, episode 32: the arrival slipped from 17.4 s to 27.5 s)."""
+    import gfuzzy.navigation.softcost as softcost
+
+    seen = []
+    real = softcost.soft_search
+
+    def spy(graph, hard, soft, start, goal, prices, *args):
+        seen.append(tuple(prices))
+        return real(graph, hard, soft, start, goal, prices, *args)
+
+    monkeypatch.setattr(softcost, "soft_search", spy)
+    scene, rm = open_square
+    far = np.array([[4.5, -4.5, 0.0, 0.0, 0.3]])
+    nav = Navigator(scene, rm, (0.0, 3.0), NavOptions(soft_search=True, intrusion_cost=4.0, time_budget=5.0))
+    for t in np.arange(0.0, 7.0, 0.5):  # two windows of SLIP_WINDOW (3 s) and a half
+        nav.step(float(t), np.array([0.0, -3.0]), far)
+        assert nav.last.mode == "plan"
+    prices = [p[0] for p in seen]
+    assert prices[0] == 4.0 and prices == sorted(prices, reverse=True)
+    assert prices[-1] == 1.0  # halved twice: it slipped over two windows
+
+
+def test_a_lowered_price_is_doubled_back_once_the_arrival_holds(open_square):
+    import gfuzzy.navigation.softcost as softcost
+
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (0.0, 3.0), NavOptions(soft_search=True, intrusion_cost=4.0, time_budget=5.0))
+    nav._price_scale = 0.25
+    nav._arrivals = ((0.0, 10.0), (softcost.SLIP_WINDOW, 10.0 + softcost.SLIP_LIMIT - 0.1))
+    nav._price_slip(softcost.SLIP_WINDOW + 0.5)
+    assert nav._price_scale == 0.5
+    nav._arrivals = ((4.0, 10.0), (4.0 + softcost.SLIP_WINDOW, 10.0))
+    nav._price_slip(4.5 + softcost.SLIP_WINDOW)
+    nav._arrivals = ((8.0, 10.0), (8.0 + softcost.SLIP_WINDOW, 10.0))
+    nav._price_slip(8.5 + softcost.SLIP_WINDOW)
+    assert nav._price_scale == 1.0  # never above the set price
+    assert nav._priced_zones(np.array([0.0, -3.0]), np.array([[4.5, -4.5, 0.0, 0.0, 0.3]]))[1] == [4.0]

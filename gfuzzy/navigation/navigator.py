@@ -530,6 +530,8 @@ class Navigator(PathSpace, Prediction, SoftCost):
                                  opts.commitment)
                 if kept is not None:
                     traj, mode = kept, NavMode.KEPT
+            elif soft and mode in (NavMode.PLAN, NavMode.CLOSE):  # the last plan if as good at the price
+                traj, mode = self._priced_kept(t, pose, obs, traj, mode)
             elif self._previous_mode in (NavMode.PLAN, NavMode.CLOSE) and mode != NavMode.DIRECT and len(obs):
                 # the last plan, still as safe as when it was made, arriving much sooner
                 kept = sooner_plan(self, t, pose, obs, self._kept_inflation(pose, obs, infl, self._previous_mode),
@@ -571,19 +573,24 @@ class Navigator(PathSpace, Prediction, SoftCost):
     def _keeps_gaps(self, traj: Trajectory, t: float, t_end: float, obs: FloatArray, infl: FloatArray) -> bool:
         """Whether ``traj`` keeps, from ``t`` to ``t_end`` (sampled every ``MOTION_SAMPLE``
         s, with the gap two samples can lose), the gap ``infl`` (k, S) (by prediction slice)
-        from each of ``obs`` walking on at constant velocity; rows of 7 columns (ghosts)
-        count only from ``t + appear`` to ``t + vanish``."""
-        opts = self.options
+        from each of ``obs`` walking on at constant velocity (:meth:`_short_along`)."""
         times = t + np.arange(0.0, t_end - t + MOTION_SAMPLE, MOTION_SAMPLE)
+        lost = sample_loss(self.vplan, np.hypot(obs[:, 2], obs[:, 3]))
+        return not bool(self._short_along(traj, t, times, obs, infl, lost).any())
+
+    def _short_along(self, traj: Trajectory, t: float, times: FloatArray, obs: FloatArray, infl: FloatArray,
+                     lost: FloatArray | float = 0.0) -> np.ndarray:  # fmt: skip
+        """(T, k) whether ``traj`` at ``times`` is within the gap ``infl`` (k, S) (slice by
+        time after ``t``) plus ``lost`` of each of ``obs`` walking on at constant velocity;
+        rows of 7 columns (ghosts) count only from ``t + appear`` to ``t + vanish``."""
         pts = traj.at(np.minimum(times, traj.t_end))
         gap = self._clearance_along(pts, times, obs[:, :5]) + self.mover_clearance  # (T, k)
-        s_of = np.minimum(np.floor((times - t) / opts.slice + 1e-9).astype(np.int64), infl.shape[1] - 1)
-        lost = sample_loss(self.vplan, np.hypot(obs[:, 2], obs[:, 3]))
-        short = gap < infl[:, s_of].T + lost[None, :]
+        s_of = np.minimum(np.floor((times - t) / self.options.slice + 1e-9).astype(np.int64), infl.shape[1] - 1)
+        short = gap < infl[:, s_of].T + np.reshape(lost, (1, -1))
         if obs.shape[1] > 6:
             tau = (times - t)[:, None]
             short &= (tau >= obs[None, :, 5] - MOTION_SAMPLE) & (tau <= obs[None, :, 6] + MOTION_SAMPLE)
-        return not bool(short.any())
+        return short
 
     def _kept_inflation(self, pose: FloatArray, obs: FloatArray, infl: FloatArray, mode: NavMode) -> FloatArray:
         """(k, S) the gaps the fresh plan of ``mode`` kept: a kept plan must keep them too."""

@@ -8,6 +8,12 @@ buffer and the uncertainty stay forbidden (the ``close`` tier's field), and ever
 robot's body spends where the first tier's field (the personal space and the ghosts) is
 unsafe costs ``intrusion_cost`` seconds of arrival per second: the robot yields where
 yielding is cheap and goes through where a detour or a wait would cost more.
+
+Two rules keep a fixed price from dithering (navigator-experiments.md, "The priced search's
+way out of dithering"): the last plan is kept while its priced cost, under the new
+predictions, is as good as the fresh plan's (:meth:`SoftCost._priced_kept`); and when the
+planned arrival keeps slipping later, the price is halved until it stops
+(:meth:`SoftCost._price_slip`), as the tiers drop to *close* when keeping away costs too much.
 """
 
 from __future__ import annotations
@@ -23,10 +29,11 @@ from ..timespace.spacetime import IntervalStore
 from ..timespace.timespace import timed_rows
 from ..trajectory import Trajectory
 from ..typed import FloatArray
-from .navtypes import GOAL_TAKEN, NavMode, _Searched
+from .drivenav import kept_plan
+from .navtypes import GOAL_TAKEN, MOTION_SAMPLE, NavMode, _Searched
 from .timedfield import _OutOfTime
 
-__all__ = ["SoftCost", "SOFT_SHARE"]
+__all__ = ["SoftCost", "SOFT_SHARE", "SLIP_WINDOW", "SLIP_LIMIT"]
 
 #: Share of the search's time left that the priced search may use; when it runs out, the
 #: safe-interval search among the same forbidden field answers (*close*) in the rest (the
@@ -34,14 +41,24 @@ __all__ = ["SoftCost", "SOFT_SHARE"]
 #: then). In the arena at 5 s per s, 60 % left it out of time on one call in 25 and two
 #: episodes of 60 collided after runs of close answers; 85 %: none (navigator-experiments.md).
 SOFT_SHARE = 0.85
+#: Seconds over which the answered plans' arrival is watched (:meth:`SoftCost._price_slip`).
+SLIP_WINDOW = 3.0
+#: Seconds the planned arrival may move later over ``SLIP_WINDOW`` (the robot losing more
+#: than half the time it spends) before the price is halved; over a window where it does
+#: not, a lowered price is doubled back, up to the set one.
+SLIP_LIMIT = 1.5
 
 
 class SoftCost:
     """The navigator's single priced search (a base of :class:`gfuzzy.navigation.navigator.Navigator`)."""
 
+    _price_scale = 1.0  # the share of the set prices in force (halved while the arrival slips)
+    _arrivals: tuple = ()  # (time, planned arrival) of the priced answers since the price last changed
+
     def _priced(self, t: float, pose: FloatArray, obs: FloatArray, deadline: float):
         """(plan, mode, search, inflation kept) of the priced search, within ``SOFT_SHARE`` of
         the time left; when it runs out, the safe-interval search among its forbidden field."""
+        self._price_slip(t)
         bare = self._inflation(pose, obs, personal=False)
         now = self._clock()
         found = self._soft_plan(t, pose, obs, bare, now + SOFT_SHARE * max(deadline - now, 0.0))
@@ -64,8 +81,8 @@ class SoftCost:
                          else (np.zeros((0, 7)), np.zeros((0, infl.shape[1]))))  # fmt: skip
         if opts.discomfort_cost is None:
             people = np.column_stack([obs, np.zeros(len(obs)), np.full(len(obs), math.inf)])
-            return [(np.vstack([people, g_obs]), np.vstack([infl, g_infl]))], [opts.intrusion_cost]
-        return [(obs, infl), (g_obs, g_infl)], [opts.discomfort_cost, opts.intrusion_cost]
+            return [(np.vstack([people, g_obs]), np.vstack([infl, g_infl]))], [self._price_scale * opts.intrusion_cost]
+        return [(obs, infl), (g_obs, g_infl)], [self._price_scale * c for c in (opts.discomfort_cost, opts.intrusion_cost)]
 
     def _soft_plan(self, t: float, pose: FloatArray, obs: FloatArray, bare: FloatArray,
                    deadline: float) -> _Searched:  # fmt: skip
@@ -111,3 +128,46 @@ class SoftCost:
         rows[0, 1:] = pose
         rows[-1, 1:] = self.goal
         return _Searched(Trajectory(rows, self.robot.circumradius), "", detailed, False, graph, s_id, self._ahead)
+
+    def _price_slip(self, t: float) -> None:
+        """Halve the prices when the planned arrival of the priced answers has moved later by
+        more than ``SLIP_LIMIT`` s over the last ``SLIP_WINDOW`` s (a fixed price among a
+        stream of people keeps paying in time: the arrival slips and the robot dithers); double
+        a lowered price back, up to the set one, after a window where it did not slip."""
+        past = [arrive for ta, arrive in self._arrivals if ta <= t - SLIP_WINDOW + 1e-9]
+        if not past:
+            return
+        slipped = self._arrivals[-1][1] - past[-1] > SLIP_LIMIT
+        if slipped or self._price_scale < 1.0:
+            self._price_scale = self._price_scale / 2.0 if slipped else min(1.0, 2.0 * self._price_scale)
+            self._arrivals = ()
+        else:  # keep the last answer before the window as its reference
+            self._arrivals = self._arrivals[len(past) - 1:]
+
+    def _priced_kept(self, t: float, pose: FloatArray, obs: FloatArray, fresh: Trajectory, mode: NavMode):
+        """(plan, mode): the last priced (or close) plan from ``t`` on (*kept*) when the robot
+        is on it, it keeps the forbidden field's gaps from everyone seen now and its priced
+        cost under the new predictions (:meth:`_priced_cost`) is no more than the fresh plan's;
+        else ``fresh``. Without it a fresh search, spliced from a slightly different pose,
+        undid the last plan's first move every period (0.4 m from a goal two people stood beside)."""
+        if self._previous_mode in (NavMode.PLAN, NavMode.CLOSE):
+            bare = self._inflation(pose, obs, personal=False)
+            last = kept_plan(self, t, pose, obs, bare, fresh, math.inf)
+            if last is not None:
+                zones, prices = self._priced_zones(pose, obs)
+                if self._priced_cost(last, t, zones, prices) <= self._priced_cost(fresh, t, zones, prices) + 1e-9:
+                    fresh, mode = last, NavMode.KEPT
+                    self._ahead = self._previous_ahead  # the vertices the kept plan heads for
+        self._arrivals = (*self._arrivals, (t, fresh.t_end))
+        return fresh, mode
+
+    def _priced_cost(self, traj: Trajectory, t: float, zones: list, prices: list) -> float:
+        """Seconds from ``t`` to ``traj``'s arrival plus each price times the seconds the robot
+        spends inside its priced field ``zones`` [(rows, inflation)] (sampled every ``MOTION_SAMPLE``
+        s, with the people walking on at constant velocity): the priced search's cost, re-evaluated."""
+        times = t + np.arange(0.0, traj.t_end - t, MOTION_SAMPLE)
+        cost = traj.t_end - t
+        for (rows, infl), price in zip(zones, prices, strict=True):
+            if len(rows) and price > 0:
+                cost += price * MOTION_SAMPLE * float(self._short_along(traj, t, times, rows, infl).any(axis=1).sum())
+        return cost
