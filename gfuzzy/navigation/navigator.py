@@ -38,8 +38,8 @@ import numpy as np
 
 from ..collision.geometry import StaticGeometry, mover_distance
 from ..errors import InputError, LimitError, check_number
-from ..planner.planner import BACKENDS, check_pose, search_function
-from ..poses import as_number, metric_distance, number_array, wrap_angle
+from ..planner.planner import BACKENDS, search_function
+from ..poses import metric_distance, wrap_angle
 from ..roadmap.roadmap import Roadmap
 from ..scene.scene import Scene
 from ..settings import SPEED_SAFETY
@@ -54,6 +54,7 @@ from .brisk import brisk
 from .drivenav import drive_evasion, kept_plan, rest_of, sooner_plan
 from .evasion import holonomic_evasion
 from .lookout import Lookout
+from .navinput import checked_pose, flat_pose, observation_rows
 from .navtypes import GOAL_TAKEN, MOTION_SAMPLE, NavMode, NavStep, _Searched, sample_loss
 from .pathspace import STILL_SPEED, PathSpace, WallCheck  # noqa: F401 (STILL_SPEED: kept importable here)
 from .prediction import REACH_SAMPLES, Prediction  # noqa: F401 (REACH_SAMPLES: kept importable here)
@@ -265,47 +266,6 @@ class NavOptions:
             raise InputError(f"fov must be in (0, 360] degrees, got {self.fov}")
 
 
-def _observation_rows(observations) -> np.ndarray:
-    """``Navigator.step``'s observations as a (k, 5) array: rows ``[x, y, vx, vy, radius]``, or one
-    such row alone; any other shape (a transposed array, a row of 4) is refused, never reshaped,
-    and so is a row that is not finite or has a negative radius, by its index."""
-    obs = np.asarray(observations, dtype=float)
-    if obs.size == 0:
-        return np.zeros((0, 5))
-    if obs.shape == (5,):
-        obs = obs[None, :]
-    if obs.ndim != 2 or obs.shape[1] != 5:
-        raise InputError(f"observations must be an array of shape (k, 5), rows [x, y, vx, vy, radius]; got shape {obs.shape}")
-    bad = np.flatnonzero(~np.all(np.isfinite(obs), axis=1) | ~(obs[:, 4] >= 0))
-    if len(bad):  # a tracker's NaN row among fifty: say which, and what is in it
-        i = int(bad[0])
-        more = f" (and {len(bad) - 1} more)" if len(bad) > 1 else ""
-        raise InputError(f"observations[{i}] = {obs[i].tolist()}{more}: rows must be finite [x, y, vx, vy, radius >= 0] "
-                         "(drop a track the tracker has no estimate for)")
-    return obs
-
-
-def _checked_pose(pose, robot, t, t_last=-math.inf) -> FloatArray:
-    """``pose`` as a (dof,) float array (:func:`_flat_pose`); InputError also when ``t`` is no
-    finite number (:func:`gfuzzy.poses.as_number`: not a boolean or a string) or is before
-    ``t_last``, the last call's (its predictions, look-outs and kept plans are of that later time)."""
-    number = as_number(t)
-    if number is None or not math.isfinite(number):
-        raise InputError(f"t: expected a finite number, got {t!r}")
-    if number < t_last:
-        raise InputError(f"t: {number!r} is before the last call's t = {t_last!r} (a new run needs a new Navigator)")
-    return _flat_pose(pose, robot, "pose")
-
-
-def _flat_pose(pose, robot, label: str) -> FloatArray:
-    """A goal or a pose as a (dof,) float array (``[[x, y]]`` serves as ``[x, y]``, as
-    ``traj.at([t])`` gives it); InputError naming ``label`` when it is not ``dof`` finite
-    numbers (a string or a boolean, even among numbers, is none, as in a scene file; beyond
-    ``MAX_MAGNITUDE`` too, as :func:`gfuzzy.plan`'s)."""
-    arr = number_array(pose)
-    return check_pose(pose if arr is None else arr.reshape(-1), robot.dof, label, robot)
-
-
 class Navigator(PathSpace, Prediction, SoftCost):
     """Receding-horizon navigation to a fixed goal among observed moving discs.
 
@@ -337,7 +297,7 @@ class Navigator(PathSpace, Prediction, SoftCost):
         self.roadmap = roadmap
         self.robot = robot = scene.robot
         self.geometry = StaticGeometry(scene)
-        goal = _flat_pose(goal, robot, "goal")
+        goal = flat_pose(goal, robot, "goal")
         if self.geometry.bounds_clearance(goal[None])[0] < 0 or self.geometry.clearance1(goal) < 0:
             raise InputError(f"goal {goal.tolist()} is out of bounds or collides with a static obstacle")
         self.goal = goal
@@ -483,9 +443,9 @@ class Navigator(PathSpace, Prediction, SoftCost):
         """
         t_begin = self._clock()
         opts = self.options
-        pose = _checked_pose(pose, self.robot, t, self._t_last)
+        pose = checked_pose(pose, self.robot, t, self._t_last)
         t = float(t)
-        obs = _observation_rows(observations)
+        obs = observation_rows(observations)
         self._unknown = unknown_positions(obs, unknown)
         self._t_last = t
         self.replans += 1
