@@ -417,18 +417,20 @@ def test_navigate_says_when_the_run_went_on_after_every_mover(tmp_path, capsys):
     and not when someone is there to the end."""
     from gfuzzy.cli import main
 
-    def scene(until: float) -> Path:
-        path = tmp_path / f"s{until:g}.yaml"
+    def scene(until: float, cart: bool = False) -> Path:
+        path = tmp_path / f"s{until:g}{cart}.yaml"
         path.write_text(
             "version: 1\nname: gone\nbounds: [0, 0, 10, 4]\nrobot: {disc: 0.2, vmax: 1.0}\n"
             f"movers:\n  - {{name: p, disc: 0.3, trajectory: [[0, 5, 3.5], [{until}, 5.5, 3.5]]}}\n"
-            "queries:\n  - {name: q, start: [1, 1], goal: [9, 1]}\n"
+            + ("  - {name: c, disc: 0.2, speed: 0.5, path: [[8, 3.6], [9, 3.6]], mode: bounce}\n" if cart else "")
+            + "queries:\n  - {name: q, start: [1, 1], goal: [9, 1]}\n"
         )
         return path
 
-    for until, said in ((2.0, True), (60.0, False)):
-        out = tmp_path / f"r{until:g}.json"
-        argv = ["navigate", str(scene(until)), "-n", "60", "--budget-clock", "cpu", "-o", str(out)]
+    # a path mover (a cart on its loop) is there to the end: no note
+    for until, cart, said in ((2.0, False, True), (60.0, False, False), (2.0, True, False)):
+        out = tmp_path / f"r{until:g}{cart}.json"
+        argv = ["navigate", str(scene(until, cart)), "-n", "60", "--budget-clock", "cpu", "-o", str(out)]
         assert main(argv) == 0
         err = capsys.readouterr().err
         assert ("every mover's recorded motion ends by t = 2 s and the robot drove on to" in err) == said, err
