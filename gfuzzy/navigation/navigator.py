@@ -638,10 +638,16 @@ class Navigator(PathSpace, Prediction, SoftCost):
         except (InputError, LimitError) as exc:  # a request the search refuses: the fallback answers
             log.warning("navigator search refused at t=%g: %s", t, exc)
             return _Searched(None, f"search refused: {exc}")
+        return self._answered(res, graph, s_id, t, pose, detailed)
+
+    def _answered(self, res: SearchResult, graph, s_id: int, t: float, pose: FloatArray, detailed: int) -> _Searched:
+        """What a finished search found (this one's or the priced one's): its plan timed from
+        ``pose`` at ``t`` to the goal, the roadmap vertices it heads for kept, or why none."""
+        dt = self.options.dt
         if res.status != Status.SOLVED:
             return _Searched(None, res.message, detailed, res.status == Status.TIMEOUT, graph, s_id)
-        rows, _ = timed_rows(res.nodes, res.steps, graph.poses, t, opts.dt)
-        self._ahead = [(t + st * opts.dt, nd) for nd, st in zip(res.nodes, res.steps, strict=True) if nd < self._nv]
+        rows, _ = timed_rows(res.nodes, res.steps, graph.poses, t, dt)
+        self._ahead = [(t + st * dt, nd) for nd, st in zip(res.nodes, res.steps, strict=True) if nd < self._nv]
         rows[0, 1:] = pose
         rows[-1, 1:] = self.goal
         return _Searched(Trajectory(rows, self.robot.circumradius), "", detailed, False, graph, s_id, self._ahead)

@@ -26,7 +26,6 @@ from ..errors import InputError, LimitError
 from ..status import Status
 from ..timespace.soft_kernel import soft_search
 from ..timespace.spacetime import IntervalStore
-from ..timespace.timespace import timed_rows
 from ..trajectory import Trajectory
 from ..typed import FloatArray
 from .drivenav import kept_plan
@@ -121,13 +120,7 @@ class SoftCost:
             return _Searched(None, "time budget spent on the predicted people's safety", detailed, True, graph, s_id)
         except (InputError, LimitError) as exc:
             return _Searched(None, f"search refused: {exc}", graph=graph, start=s_id)
-        if res.status != Status.SOLVED:
-            return _Searched(None, res.message, detailed, res.status == Status.TIMEOUT, graph, s_id)
-        rows, _ = timed_rows(res.nodes, res.steps, graph.poses, t, opts.dt)
-        self._ahead = [(t + st * opts.dt, nd) for nd, st in zip(res.nodes, res.steps, strict=True) if nd < self._nv]
-        rows[0, 1:] = pose
-        rows[-1, 1:] = self.goal
-        return _Searched(Trajectory(rows, self.robot.circumradius), "", detailed, False, graph, s_id, self._ahead)
+        return self._answered(res, graph, s_id, t, pose, detailed)
 
     def _price_slip(self, t: float) -> None:
         """Halve the prices when the planned arrival of the priced answers has moved later by
