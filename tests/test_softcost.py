@@ -403,16 +403,27 @@ def test_the_priced_search_is_warmed_whatever_the_backend(open_square, monkeypat
     assert calls == [1]
 
 
+def _priced_answer(monkeypatch, nav, rows) -> None:
+    """The priced search answers ``rows`` (from the graph and start it spliced)."""
+    from gfuzzy.navigation.navtypes import _Searched
+    from gfuzzy.navigation.softcost import SoftCost
+    from gfuzzy.trajectory import Trajectory
+
+    real = SoftCost._soft_plan
+
+    def answer(self, *args, **kwargs):
+        found = real(self, *args, **kwargs)
+        return _Searched(Trajectory(rows, nav.robot.circumradius), "", found.detailed, False, found.graph, found.start)
+
+    monkeypatch.setattr(SoftCost, "_soft_plan", answer)
+
+
 def test_the_last_priced_plan_is_kept_when_the_fresh_one_costs_more(open_square, monkeypatch):
     """A fresh search spliced from a slightly different pose went back to a roadmap vertex
     before going on, arriving 0.5 s later: the robot undid its last move every period,
     0.4 m from a goal two people stood beside (softcost2, 20 invisible, episode 55). The
     last plan, as safe and cheaper at the price, is kept (the old test asked it to arrive
     the soft costs, 5.5 s, sooner)."""
-    from gfuzzy.navigation.navtypes import _Searched
-    from gfuzzy.navigation.softcost import SoftCost
-    from gfuzzy.trajectory import Trajectory
-
     scene, rm = open_square
     far = np.array([[4.5, -4.5, 0.0, 0.0, 0.3]])  # someone standing far away: the priced search runs
     nav = Navigator(scene, rm, (0.0, 3.0), NavOptions(soft_search=True, time_budget=5.0))
@@ -422,13 +433,7 @@ def test_the_last_priced_plan_is_kept_when_the_fresh_one_costs_more(open_square,
     pose = first.at(t)
     w = first.waypoints
     back = np.vstack([[t, *pose], [t + 0.25, *w[0, 1:]], w + [0.5, 0.0, 0.0]])  # back to the start, then as before
-    real = SoftCost._soft_plan
-
-    def detour(self, *args, **kwargs):
-        found = real(self, *args, **kwargs)
-        return _Searched(Trajectory(back, nav.robot.circumradius), "", found.detailed, False, found.graph, found.start)
-
-    monkeypatch.setattr(SoftCost, "_soft_plan", detour)
+    _priced_answer(monkeypatch, nav, back)
     traj = nav.step(t, pose, far)
     assert nav.last.mode == "kept"
     assert traj.t_end == pytest.approx(first.t_end)
@@ -436,11 +441,8 @@ def test_the_last_priced_plan_is_kept_when_the_fresh_one_costs_more(open_square,
 
 
 def test_a_fresh_plan_cheaper_at_the_price_replaces_the_last(open_square, monkeypatch):
-    """The rule keeps the last plan only while it is as good: the same fresh plan 0.5 s
+    """The rule keeps the last plan only while it is as good: the same fresh plan 0.2 s
     sooner (the last one re-timed) is taken."""
-    from gfuzzy.navigation.navtypes import _Searched
-    from gfuzzy.navigation.softcost import SoftCost
-    from gfuzzy.trajectory import Trajectory
 
     scene, rm = open_square
     far = np.array([[4.5, -4.5, 0.0, 0.0, 0.3]])
@@ -449,14 +451,8 @@ def test_a_fresh_plan_cheaper_at_the_price_replaces_the_last(open_square, monkey
     t = 1.0
     pose = first.at(t)
     w = first.waypoints[first.waypoints[:, 0] > t + 1e-6]
-    slow = np.vstack([[t, *pose], w - [0.2, 0.0, 0.0]])  # the rest of it, 0.2 s sooner (a faster first leg)
-    real = SoftCost._soft_plan
-
-    def sooner(self, *args, **kwargs):
-        found = real(self, *args, **kwargs)
-        return _Searched(Trajectory(slow, nav.robot.circumradius), "", found.detailed, False, found.graph, found.start)
-
-    monkeypatch.setattr(SoftCost, "_soft_plan", sooner)
+    sooner = np.vstack([[t, *pose], w - [0.2, 0.0, 0.0]])  # the rest of it, 0.2 s sooner (a faster first leg)
+    _priced_answer(monkeypatch, nav, sooner)
     traj = nav.step(t, pose, far)
     assert nav.last.mode == "plan"
     assert traj.t_end == pytest.approx(first.t_end - 0.2)

@@ -602,15 +602,10 @@ class Navigator(PathSpace, Prediction, SoftCost):
         """
         opts = self.options
         try:
-            if before is not None and before.graph is not None:
-                graph, s_id = before.graph, before.start
-            else:
-                graph, s_id = self._splice(pose, t, deadline)
-            if graph is None:
-                return _Searched(None, s_id)
-            h0 = float(graph.heuristic[s_id])
-            if not math.isfinite(h0):
-                return _Searched(None, "the goal is not reachable on the roadmap", graph=graph, start=s_id)
+            start = self._search_start(pose, t, deadline, before)
+            if isinstance(start, _Searched):
+                return start
+            graph, s_id, h0 = start
             store = IntervalStore(graph)
             search = search_function(opts.backend)
             slack = (opts.plan_slack + opts.prediction_horizon) / opts.dt
@@ -639,6 +634,21 @@ class Navigator(PathSpace, Prediction, SoftCost):
             log.warning("navigator search refused at t=%g: %s", t, exc)
             return _Searched(None, f"search refused: {exc}")
         return self._answered(res, graph, s_id, t, pose, detailed)
+
+    def _search_start(self, pose: FloatArray, t: float, deadline: float, before: _Searched | None = None):
+        """(graph, start id, the start's heuristic in steps) for a search from ``pose`` (the
+        graph ``before`` spliced, if any), or the :class:`_Searched` saying why none can run
+        (no splice, or a goal the roadmap does not reach from there)."""
+        if before is not None and before.graph is not None:
+            graph, s_id = before.graph, before.start
+        else:
+            graph, s_id = self._splice(pose, t, deadline)
+        if graph is None:
+            return _Searched(None, s_id)
+        h0 = float(graph.heuristic[s_id])
+        if not math.isfinite(h0):
+            return _Searched(None, "the goal is not reachable on the roadmap", graph=graph, start=s_id)
+        return graph, s_id, h0
 
     def _answered(self, res: SearchResult, graph, s_id: int, t: float, pose: FloatArray, detailed: int) -> _Searched:
         """What a finished search found (this one's or the priced one's): its plan timed from

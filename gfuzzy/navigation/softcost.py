@@ -89,12 +89,10 @@ class SoftCost:
         or a ghost`` (:meth:`_priced_zones`), the people's discs with the buffer and the
         uncertainty (inflated by ``bare``, without the personal space) forbidden."""
         opts = self.options
-        graph, s_id = self._splice(pose, t, deadline)
-        if graph is None:
-            return _Searched(None, s_id)
-        h0 = float(graph.heuristic[s_id])
-        if not math.isfinite(h0):
-            return _Searched(None, "the goal is not reachable on the roadmap", graph=graph, start=s_id)
+        start = self._search_start(pose, t, deadline)
+        if isinstance(start, _Searched):
+            return start
+        graph, s_id, h0 = start
         priced, prices = self._priced_zones(pose, obs)
         stores = tuple(IntervalStore(graph) for _ in range(1 + len(priced)))
         slack = (opts.plan_slack + opts.prediction_horizon) / opts.dt
