@@ -83,7 +83,8 @@ def test_a_plan_leaves_at_full_speed(open_square):
     # connection cut into whole steps runs 0.1 m a step and leaves the remainder last
     scene, rm = open_square
     pose = np.array([0.03, -3.0])
-    traj = Navigator(scene, rm, (0.0, 4.0)).step(0.0, pose, np.array([[4.0, 0.0, 0.0, 0.0, 0.3]]))
+    roomy = NavOptions(time_budget=5.0, budget_clock="cpu")  # never cut by a loaded machine's clock
+    traj = Navigator(scene, rm, (0.0, 4.0), roomy).step(0.0, pose, np.array([[4.0, 0.0, 0.0, 0.0, 0.3]]))
     assert traj.duration == pytest.approx(7.1)
     step = np.hypot(*np.diff(traj.waypoints[:4, 1:], axis=0).T)
     np.testing.assert_allclose(step, 0.1, rtol=1e-6)
@@ -99,15 +100,36 @@ def test_the_plan_runs_at_full_speed_up_to_its_first_wait(open_square, monkeypat
     pose, goal = np.array([0.03, -3.0]), (0.0, 4.0)
     far = np.array([[4.0, 0.0, 0.0, 0.0, 0.3]])
     length = math.hypot(0.03, 7.0)
-    fast = NavOptions(full_speed=True)
+    roomy = NavOptions(time_budget=5.0, budget_clock="cpu")  # never cut by a loaded machine's clock
+    fast = NavOptions(full_speed=True, time_budget=5.0, budget_clock="cpu")
     traj = Navigator(scene, rm, goal, fast).step(0.0, pose, far)
     assert traj.duration == pytest.approx(length / scene.robot.vmax, rel=1e-6)
     assert _speeds_ok(traj, 1.0)
     assert gfuzzy.check_trajectory(scene, traj.waypoints).valid
-    assert Navigator(scene, rm, goal).step(0.0, pose, far).duration == pytest.approx(7.1)  # off by default
+    assert Navigator(scene, rm, goal, roomy).step(0.0, pose, far).duration == pytest.approx(7.1)  # off by default
     monkeypatch.setattr(Navigator, "_keeps_gaps", lambda *args: False)
     slow = Navigator(scene, rm, goal, fast).step(0.0, pose, far)
     assert slow.duration == pytest.approx(7.1)
+
+
+@pytest.mark.parametrize("seen", [0, 1])
+def test_a_step_longer_than_the_period_does_not_creep_into_the_goal(open_square, seen):
+    # a search step of 0.4 s, the robot replanned every 0.25 s (an outside harness's
+    # setting): the last move into the goal took a whole step however short it was, so
+    # each call covered 5/8 of what was left and the robot crept in (the 7 m, planned in
+    # 7.2 s, reached at 10.25 s; 8 m took 19.5 s at a step of 1 s). Now that
+    # move runs at vmax, when it keeps the search's gaps (someone seen far away)
+    scene, rm = open_square
+    obs = np.array([[4.0, 0.0, 0.0, 0.0, 0.3]])[:seen]
+    nav = Navigator(scene, rm, (0.0, 4.0), NavOptions(dt=0.4, time_budget=5.0, budget_clock="cpu"))
+    pose, t, first = np.array([0.0, -3.0]), 0.0, None
+    while not nav.reached and t < 20.0:
+        traj = nav.step(t, pose, obs)
+        first = traj.t_end if first is None else first
+        assert _speeds_ok(traj, 1.0)
+        t += 0.25
+        pose = traj.at(t)
+    assert nav.reached and t - 0.25 <= first + 0.25 + 1e-9  # the call that found it there, a period after
 
 
 def test_person_walking_straight_at_the_robot_is_dodged(open_square):
