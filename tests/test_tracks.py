@@ -188,6 +188,25 @@ def test_a_person_unseen_for_longer_than_max_gap_is_two_movers(tmp_path, caplog)
     assert "--max-gap inf" in out.read_text() and [m.name for m in load_scene(out).movers] == ["ped-d"]
 
 
+def test_a_person_seen_once_is_dropped_aloud(tmp_path, caplog):
+    # a user's file with one row for some people (a detector's single hit): they were
+    # dropped without a word, and a file of such rows only was "no pedestrian in the window"
+    walk = gfuzzy.Track("a", np.array([[0, 0, 0], [1, 1, 0]], float))
+    once = gfuzzy.Track("b", np.array([[0.5, 2, 2]], float))
+    caplog.set_level("WARNING", logger="gfuzzy.scene.tracks")
+    caplog.clear()
+    assert list(_movers(tracks_scene(gfuzzy.Tracks("mem", "csv", None, None, (walk, once))))) == ["ped-a"]
+    (msg,) = [r.getMessage() for r in caplog.records]
+    assert msg.startswith("ped-b is seen at one instant only in the window (t = 0.5 s): dropped")
+    csv = tmp_path / "once.csv"
+    csv.write_text("t,id,x,y\n0,a,1,1\n0,b,-1,1\n0.5,c,0,2\n")
+    run = run_cli_process("tracks", str(csv), "-o", str(tmp_path / "once.yaml"))
+    assert run.returncode == 2 and not (tmp_path / "once.yaml").exists()
+    assert run.stderr.strip() == (f"{csv}: 3 pedestrian(s) in the window 0 s .. 0.5 s, each seen at one instant only: "
+                                  "a mover needs two rows or more (someone standing still: a row at the first time "
+                                  "and one at the last)")
+
+
 def test_scale_and_default_region(csv_file):
     made = tracks_scene(read_tracks(csv_file), TrackSceneOptions(scale=0.5))
     np.testing.assert_allclose(_movers(made)["ped-a"], [[0, 0, 0], [1, 1, 0], [2, 2, 0]])

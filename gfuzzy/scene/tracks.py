@@ -441,10 +441,14 @@ def _window(tracks: Tracks, options: TrackSceneOptions):
         for tr in sorted(tracks.tracks, key=lambda tr: _id_key(tr.id))
     }
     duration = t_hi - t_lo
-    if not any(len(_clip_time(rows, 0.0, duration)) >= 2 for rows in rel.values()):
+    counts = [len(_clip_time(rows, 0.0, duration)) for rows in rel.values()]
+    if not any(n >= 2 for n in counts):
+        once = sum(n == 1 for n in counts)  # every row a different person's: say so, not "nobody"
         raise SceneError(
             src,
             "",
+            f"{once} pedestrian(s) in the window {t_lo:g} s .. {t_hi:g} s, each seen at one instant only: a mover needs "
+            "two rows or more (someone standing still: a row at the first time and one at the last)" if once else
             f"no pedestrian in the window {t_lo:g} s .. {t_hi:g} s (the recording spans {first:g} .. {last:g} s)",
         )
     return rel, t_lo, t_hi
@@ -531,6 +535,9 @@ def _movers(rel: dict, duration: float, region, options: TrackSceneOptions, src)
     for pid, own in rel.items():
         rows = _clip_time(own, 0.0, duration)
         if len(rows) < 2:
+            if rows:  # a person seen once is not a motion: dropped, but never silently
+                log.warning("ped-%s is seen at one instant only in the window (t = %g s): dropped (a mover needs two "
+                            "rows or more)", pid, rows[0][0])
             continue
         seen = _split_gaps(pid, rows, options.max_gap, own)
         runs = (_round_rows(run) for part in seen for run in _clip_region(part, region))
