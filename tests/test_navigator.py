@@ -113,16 +113,23 @@ def test_the_plan_runs_at_full_speed_up_to_its_first_wait(open_square, monkeypat
 
 
 @pytest.mark.parametrize("seen", [0, 1])
-def test_a_step_longer_than_the_period_does_not_creep_into_the_goal(open_square, seen):
+@pytest.mark.parametrize("shape", ["disc", "box"])
+def test_a_step_longer_than_the_period_does_not_creep_into_the_goal(open_square, seen, shape):
     # a search step of 0.4 s, the robot replanned every 0.25 s (an outside harness's
     # setting): the last move into the goal took a whole step however short it was, so
     # each call covered 5/8 of what was left and the robot crept in (the 7 m, planned in
-    # 7.2 s, reached at 10.25 s; 8 m took 19.5 s at a step of 1 s). Now that
-    # move runs at vmax, when it keeps the search's gaps (someone seen far away)
+    # 7.2 s, reached at 10.25 s; 8 m took 19.5 s at a step of 1 s). Now that move runs at
+    # vmax, when it keeps the search's gaps (someone seen far away); a box's too
     scene, rm = open_square
+    goal, pose = (0.0, 4.0), np.array([0.0, -3.0])
+    if shape == "box":
+        scene = parse_scene({"version": 1, "name": "box", "bounds": [-5.0, -5.0, 5.0, 5.0],
+                             "robot": {"box": [0.6, 0.4], "vmax": 1.0}})  # fmt: skip
+        rm = gfuzzy.build_roadmap(scene, gfuzzy.RoadmapOptions(vertices=150, seed=3))
+        goal, pose = (0.0, 4.0, 0.0), np.array([0.0, -3.0, 0.0])
     obs = np.array([[4.0, 0.0, 0.0, 0.0, 0.3]])[:seen]
-    nav = Navigator(scene, rm, (0.0, 4.0), NavOptions(dt=0.4, time_budget=5.0, budget_clock="cpu"))
-    pose, t, first = np.array([0.0, -3.0]), 0.0, None
+    nav = Navigator(scene, rm, goal, NavOptions(dt=0.4, time_budget=5.0, budget_clock="cpu"))
+    t, first = 0.0, None
     while not nav.reached and t < 20.0:
         traj = nav.step(t, pose, obs)
         first = traj.t_end if first is None else first

@@ -52,26 +52,38 @@ def brisk(nav: Navigator, t: float, pose: FloatArray, traj: Trajectory, obs: Flo
     rows = w.copy()
     rows[: k + 1, 0] = times
     fast = Trajectory(rows, traj.circumradius)
-    if len(obs):
-        rows_g, infl_g = nav._path_ghosts(pose, obs) if ghosts and nav.options.path_space > 0 else (None, None)
-        if not nav._keeps_gaps(fast, t, float(w[k, 0]), obs, infl) or (
-                rows_g is not None and len(rows_g) and not nav._keeps_gaps(fast, t, float(w[k, 0]), rows_g, infl_g)):
-            return traj
-    return fast
+    return fast if _keeps(nav, t, pose, fast, float(w[k, 0]), obs, infl, ghosts) else traj
+
+
+def _keeps(nav: Navigator, t: float, pose: FloatArray, fast: Trajectory, until: float, obs: FloatArray,
+           infl: FloatArray, ghosts: bool) -> bool:  # fmt: skip
+    """Whether ``fast`` keeps, until ``until``, the gaps ``infl`` from everyone seen walking
+    on and, when the plan kept off people's ways (``ghosts``), from the ghosts it kept off."""
+    if not len(obs):
+        return True
+    rows_g, infl_g = nav._path_ghosts(pose, obs) if ghosts and nav.options.path_space > 0 else (None, None)
+    return nav._keeps_gaps(fast, t, until, obs, infl) and (
+        rows_g is None or not len(rows_g) or nav._keeps_gaps(fast, t, until, rows_g, infl_g))
 
 
 def brisk_arrival(nav: Navigator, t: float, pose: FloatArray, traj: Trajectory, obs: FloatArray,
                   infl: FloatArray, ghosts: bool, since: float) -> Trajectory:  # fmt: skip
-    """``traj`` with its first move at full speed (:func:`brisk`) when that move ends at
-    the goal and takes longer than ``since`` (the time since the last call, the period
+    """``traj`` with its first move at full speed (a holonomic robot of any shape) when
+    that move ends at the goal and takes longer than ``since`` (the time since the last call, the period
     at which the robot is replanned): the robot is within a step of the goal, and the
     search gives the sliver left a whole step of ``dt``. Replanned every period shorter
     than ``dt``, the robot covered only ``period / dt`` of what was left at each call and
     crept into the goal (in an empty room, ``dt`` 0.4 s and calls every 0.25 s: 8 m in
     11.5 s, 19.5 s at ``dt`` 1, for plans of 8.4 and 9 s). With ``dt`` at most the period
     the move ends before the next call: the plan is left as it is."""
-    w = traj.waypoints
-    if (len(w) < 2 or w[1, 0] - t <= since + 1e-9
-            or float(metric_distance(w[1, 1:], nav.goal, nav.robot.circumradius)) > nav.options.goal_tolerance):
+    w, cr = traj.waypoints, nav.robot.circumradius
+    if (nav.robot.unicycle or len(w) < 2 or w[1, 0] - t <= since + 1e-9
+            or float(metric_distance(w[1, 1:], nav.goal, cr)) > nav.options.goal_tolerance):
         return traj
-    return brisk(nav, t, pose, traj, obs, infl, ghosts)
+    arrive = t + float(metric_distance(w[0, 1:], w[1, 1:], cr)) / nav.vplan  # the same motion, sooner
+    if w[1, 0] - arrive < 1e-6:
+        return traj
+    rows = w.copy()
+    rows[1, 0] = arrive
+    fast = Trajectory(rows, cr)
+    return fast if _keeps(nav, t, pose, fast, float(w[1, 0]), obs, infl, ghosts) else traj
