@@ -8,6 +8,7 @@ first wait when that keeps the gaps its search kept.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -22,8 +23,8 @@ if TYPE_CHECKING:
 __all__ = ["brisk", "brisk_arrival"]
 
 
-def brisk(nav: Navigator, t: float, pose: FloatArray, traj: Trajectory, obs: FloatArray, infl: FloatArray,
-          ghosts: bool) -> Trajectory:  # fmt: skip
+def brisk(nav: Navigator, t: float, pose: FloatArray, traj: Trajectory, obs: FloatArray,
+          infl: Callable[[], FloatArray], ghosts: bool) -> Trajectory:  # fmt: skip
     """``traj`` with its motion up to its first wait (or to its end) at full speed, when
     that keeps the gaps its search kept; ``traj`` otherwise (a disc robot's plan only).
 
@@ -35,8 +36,8 @@ def brisk(nav: Navigator, t: float, pose: FloatArray, traj: Trajectory, obs: Flo
     wait sooner and waits there until the plan goes on (at the goal: arrives sooner).
     Checked every ``MOTION_SAMPLE`` s until the plan's own time at that point (after
     it, the two are the same) against everyone walking on at constant velocity with
-    the inflation ``infl`` (k, S) of the plan's search and, when it kept off people's
-    ways (``ghosts``), against the ghosts it kept off.
+    the inflation ``infl()`` (k, S) of the plan's search (called only then) and, when it
+    kept off people's ways (``ghosts``), against the ghosts it kept off.
     """
     w = traj.waypoints
     if nav.robot.unicycle or nav.robot.dof != 2 or nav.robot.shape != "disc" or len(w) < 2:
@@ -56,18 +57,19 @@ def brisk(nav: Navigator, t: float, pose: FloatArray, traj: Trajectory, obs: Flo
 
 
 def _keeps(nav: Navigator, t: float, pose: FloatArray, fast: Trajectory, until: float, obs: FloatArray,
-           infl: FloatArray, ghosts: bool) -> bool:  # fmt: skip
-    """Whether ``fast`` keeps, until ``until``, the gaps ``infl`` from everyone seen walking
+           infl_of: Callable[[], FloatArray], ghosts: bool) -> bool:  # fmt: skip
+    """Whether ``fast`` keeps, until ``until``, the gaps ``infl_of()`` from everyone seen walking
     on and, when the plan kept off people's ways (``ghosts``), from the ghosts it kept off."""
     if not len(obs):
         return True
+    infl = infl_of()
     rows_g, infl_g = nav._path_ghosts(pose, obs) if ghosts and nav.options.path_space > 0 else (None, None)
     return nav._keeps_gaps(fast, t, until, obs, infl) and (
         rows_g is None or not len(rows_g) or nav._keeps_gaps(fast, t, until, rows_g, infl_g))
 
 
 def brisk_arrival(nav: Navigator, t: float, pose: FloatArray, traj: Trajectory, obs: FloatArray,
-                  infl: FloatArray, ghosts: bool, since: float) -> Trajectory:  # fmt: skip
+                  infl: Callable[[], FloatArray], ghosts: bool, since: float) -> Trajectory:  # fmt: skip
     """``traj`` with its first move at full speed (a holonomic robot of any shape) when
     that move ends at the goal and takes longer than ``since`` (the time since the last call, the period
     at which the robot is replanned): the robot is within a step of the goal, and the

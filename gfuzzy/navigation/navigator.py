@@ -29,6 +29,7 @@ is ``[t, *pose]`` and that meets the speed bound.
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 import time
@@ -469,9 +470,11 @@ class Navigator(PathSpace, Prediction, SoftCost):
         else:
             traj, mode, found, ghosts = self._tiers(t, pose, obs, infl, deadline)
         if traj is not None and mode in (NavMode.PLAN, NavMode.CLOSE):  # at full speed: all of it, or into the goal
-            keep = self._kept_inflation(pose, obs, infl, mode)
-            traj = (brisk(self, t, pose, traj, obs, keep, ghosts) if opts.full_speed
-                    else brisk_arrival(self, t, pose, traj, obs, keep, ghosts, since))
+            # the gaps the plan kept: computed only when a faster motion is checked against someone
+            keep = functools.cache(lambda: self._kept_inflation(pose, obs, infl, mode))
+            if opts.full_speed:
+                traj = brisk(self, t, pose, traj, obs, keep, ghosts)
+            traj = brisk_arrival(self, t, pose, traj, obs, keep, ghosts, since)
         if traj is None and len(obs) and not found.out_of_time and self._clock() < deadline:
             # blocked by the margins (someone standing beside the goal, a narrow gap): try
             # once more with the people's discs as they are, plus the mover clearance only
