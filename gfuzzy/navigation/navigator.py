@@ -470,8 +470,7 @@ class Navigator(PathSpace, Prediction, SoftCost):
         else:
             traj, mode, found, ghosts = self._tiers(t, pose, obs, infl, deadline)
         if traj is not None and mode in (NavMode.PLAN, NavMode.CLOSE):  # at full speed: all of it, or into the goal
-            # the gaps the plan kept: computed only when a faster motion is checked against someone
-            keep = functools.cache(lambda: self._kept_inflation(pose, obs, infl, mode))
+            keep = functools.cache(lambda: self._kept_inflation(pose, obs, infl, mode))  # only when checked
             if opts.full_speed:
                 traj = brisk(self, t, pose, traj, obs, keep, ghosts)
             traj = brisk_arrival(self, t, pose, traj, obs, keep, ghosts, since)
