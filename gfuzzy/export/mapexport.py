@@ -8,8 +8,12 @@ boxes, polygons and mesh footprints with shapely's exact predicates: the cells n
 boundary (traced along every ring) by the DE-9IM interior-interior test, every other cell,
 which lies wholly inside or outside, by its centre. So the map never loses an obstacle: the
 blocked cells cover each obstacle, and a robot that overlaps an obstacle overlaps a blocked
-cell. An edge lying exactly on a cell border does not mark the cell beyond it (touching is
-no collision, contract section 1).
+cell. An edge lying on a cell border does not mark the cell beyond it (touching is no
+collision, contract section 1), also when the two were computed apart and differ by a
+rounding: an obstacle must reach more than :func:`edge_tolerance` into a cell (the
+touching ``gfuzzy check`` tolerates) to mark it. A map scene's cells at ``-12.5 + 60 *
+0.05`` and the grid's at ``-9.55 + 1 * 0.05`` are the same line a few ulps apart; counted as
+overlap, they thickened every wall on one side by a cell (small-house: 771 cells).
 
 The grid covers the scene's bounds from their lower-left corner, rounded up to whole cells;
 image row 0 is the top (contract section 6), so the cell in row i, column j of an H-row
@@ -117,12 +121,23 @@ def _span(lo: float, hi: float, origin: float, res: float, n: int) -> tuple[int,
     return a, max(a, b)
 
 
+def edge_tolerance(w: int, h: int, ox: float, oy: float, res: float) -> float:
+    """How far (m) an obstacle may reach into a cell without marking it: the overlap
+    ``gfuzzy check`` tolerates as touching (:data:`gfuzzy.collision.exact.TOUCH_TOL`), or,
+    on a grid far from the origin, 8 ulps of its largest coordinate (the rounding of
+    ``origin + k * res`` there)."""
+    from ..collision.exact import TOUCH_TOL
+
+    far = max(abs(ox), abs(oy), abs(ox + w * res), abs(oy + h * res))
+    return max(TOUCH_TOL, 8.0 * float(np.spacing(far)))
+
+
 def _cell_edges(origin: float, res: float, a: int, b: int) -> FloatArray:
     k = np.arange(a, b + 1)
     return origin + k * res  # the reader's very expression (contract section 6)
 
 
-def _mark_disc(occ: np.ndarray, d: Disc, w: int, h: int, ox: float, oy: float, res: float) -> None:
+def _mark_disc(occ: np.ndarray, d: Disc, w: int, h: int, ox: float, oy: float, res: float, eps: float) -> None:
     cx, cy = d.center
     r = d.radius
     ja, jb = _span(cx - r, cx + r, ox, res, w)
@@ -130,15 +145,15 @@ def _mark_disc(occ: np.ndarray, d: Disc, w: int, h: int, ox: float, oy: float, r
     if ja >= jb or ka >= kb:
         return
     xe, ye = _cell_edges(ox, res, ja, jb), _cell_edges(oy, res, ka, kb)
-    # distance from the centre to each closed square, per axis; the open square meets the
-    # open disc exactly when that distance is below the radius
-    dx = np.maximum(np.maximum(xe[:-1] - cx, cx - xe[1:]), 0.0)
-    dy = np.maximum(np.maximum(ye[:-1] - cy, cy - ye[1:]), 0.0)
+    # distance from the centre to each closed square (shrunk by eps), per axis; the open
+    # square meets the open disc exactly when that distance is below the radius
+    dx = np.maximum(np.maximum(xe[:-1] + eps - cx, cx - (xe[1:] - eps)), 0.0)
+    dy = np.maximum(np.maximum(ye[:-1] + eps - cy, cy - (ye[1:] - eps)), 0.0)
     d2 = dy[:, None] ** 2 + dx[None, :] ** 2  # (rows by y, cols)
     hit = d2 < r * r
     # where rounding could decide (a cell within a few ulps of the circle), decide exactly
     for k, j in zip(*np.nonzero(np.abs(d2 - r * r) <= 1e-9 * r * r), strict=True):
-        hit[k, j] = _disc_meets_cell(cx, cy, r, xe[j], ye[k], xe[j + 1], ye[k + 1])
+        hit[k, j] = _disc_meets_cell(cx, cy, r, xe[j] + eps, ye[k] + eps, xe[j + 1] - eps, ye[k + 1] - eps)
     occ[ka:kb, ja:jb] |= hit
 
 
@@ -184,9 +199,10 @@ def _boundary_cells(poly, ja: int, ka: int, shape: tuple[int, int], ox: float, o
     return out
 
 
-def _mark_polygon(occ: np.ndarray, poly, w: int, h: int, ox: float, oy: float, res: float) -> None:
-    """Cells near the boundary by the exact DE-9IM test (their open square meets the
-    interior); every other cell lies wholly inside or outside, which its centre tells."""
+def _mark_polygon(occ: np.ndarray, poly, w: int, h: int, ox: float, oy: float, res: float, eps: float) -> None:
+    """Cells near the boundary by the exact DE-9IM test (their open square, shrunk by
+    ``eps``, meets the interior); every other cell lies wholly inside or outside, which its
+    centre tells."""
     import shapely
 
     bx0, by0, bx1, by1 = poly.bounds
@@ -206,7 +222,7 @@ def _mark_polygon(occ: np.ndarray, poly, w: int, h: int, ox: float, oy: float, r
         occ[ka + r0 : ka + r1, ja:jb] |= inside & ~near[r0:r1]
     k, j = np.nonzero(near)
     if len(k):
-        cells = shapely.box(xe[j], ye[k], xe[j + 1], ye[k + 1])
+        cells = shapely.box(xe[j] + eps, ye[k] + eps, xe[j + 1] - eps, ye[k + 1] - eps)
         hit = shapely.relate_pattern(cells, poly, "T********")
         occ[ka + k[hit], ja + j[hit]] = True
 
@@ -225,13 +241,13 @@ def obstacle_boxes(ob) -> FloatArray | None:
     return np.asarray(rects, dtype=float).reshape(-1, 4)
 
 
-def _mark_rects(occ: np.ndarray, rects: FloatArray, w: int, h: int, ox: float, oy: float, res: float) -> None:
-    """Axis-aligned rectangles, exactly: the open cell (a, b) meets the open rectangle
-    (x0, x1) when a < x1 and b > x0 (and the same along y)."""
+def _mark_rects(occ: np.ndarray, rects: FloatArray, w: int, h: int, ox: float, oy: float, res: float, eps: float) -> None:
+    """Axis-aligned rectangles, exactly: the open cell (a, b) shrunk by ``eps`` meets the open
+    rectangle (x0, x1) when a + eps < x1 and b - eps > x0 (and the same along y)."""
     xe, ye = _cell_edges(ox, res, 0, w), _cell_edges(oy, res, 0, h)
     for x0, y0, x1, y1 in rects:
-        ja, jb = int(np.searchsorted(xe[1:], x0, side="right")), int(np.searchsorted(xe[:-1], x1, side="left"))
-        ka, kb = int(np.searchsorted(ye[1:], y0, side="right")), int(np.searchsorted(ye[:-1], y1, side="left"))
+        ja, jb = int(np.searchsorted(xe[1:] - eps, x0, side="right")), int(np.searchsorted(xe[:-1] + eps, x1, side="left"))
+        ka, kb = int(np.searchsorted(ye[1:] - eps, y0, side="right")), int(np.searchsorted(ye[:-1] + eps, y1, side="left"))
         if ja < jb and ka < kb:
             occ[ka:kb, ja:jb] = True
 
@@ -259,7 +275,8 @@ def rasterise(scene: Scene, resolution: float = 0.05) -> NavMap:
     Returns
     -------
     NavMap
-        A cell is occupied exactly when an obstacle overlaps it with positive area.
+        A cell is occupied exactly when an obstacle overlaps it with positive area, reaching
+        more than :func:`edge_tolerance` into it (less is touching, as ``gfuzzy check`` sees it).
 
     Raises
     ------
@@ -270,15 +287,16 @@ def rasterise(scene: Scene, resolution: float = 0.05) -> NavMap:
     res = float(resolution)
     w, h, ox, oy = _grid(scene, res)
     occ = np.zeros((h, w), dtype=bool)  # row k is y-index k (bottom first) until flipped
+    eps = edge_tolerance(w, h, ox, oy, res)
     for i, ob in enumerate(scene.obstacles):
         boxes = obstacle_boxes(ob)
         if isinstance(ob, Disc):
-            _mark_disc(occ, ob, w, h, ox, oy, res)
+            _mark_disc(occ, ob, w, h, ox, oy, res, eps)
         elif boxes is not None:
-            _mark_rects(occ, boxes, w, h, ox, oy, res)
+            _mark_rects(occ, boxes, w, h, ox, oy, res, eps)
         else:
             for poly in _shapes(ob, i):
-                _mark_polygon(occ, poly, w, h, ox, oy, res)
+                _mark_polygon(occ, poly, w, h, ox, oy, res, eps)
     return NavMap(occ[::-1].copy(), res, (ox, oy))
 
 
