@@ -180,3 +180,47 @@ def test_a_cold_install_says_it_compiles_before_the_first_search(monkeypatch, tm
     term = Terminal()
     jit.note_cold(term)
     assert term.getvalue() == ""
+
+
+def test_plan_compiles_a_cold_install_before_its_clock(monkeypatch):
+    """A fresh `pip install`'s first `gfuzzy plan` of the building floor answered `timeout`
+    after 2 minutes on a busy 2-core machine: numba compiled the kernels inside the query's
+    60 s budget (a newcomer met it). On a cold install `Planner.plan` now compiles them
+    first, once per process, and its clock starts after: here a compile that takes 1000 s
+    on the planner's clock leaves the answer solved and its planning_seconds small."""
+    import types
+
+    import gfuzzy.planner.planner as P
+    from gfuzzy.roadmap.roadmap import load_roadmap
+    from gfuzzy.scene.scene import load_scene
+    from gfuzzy.timespace import backends, graph_kernel, search_kernel
+
+    real = P.time.perf_counter
+    late = [0.0]
+    compiles = []
+
+    def compiling():  # slower than any budget, on the planner's clock
+        compiles.append(late[0])
+        late[0] += 1000.0
+
+    monkeypatch.setattr(P, "time", types.SimpleNamespace(perf_counter=lambda: real() + late[0]))
+    monkeypatch.setattr(backends, "_compiled", [], raising=False)
+    monkeypatch.setattr(jit, "cold", lambda: True)
+    monkeypatch.setattr(search_kernel, "warm", compiling)
+    monkeypatch.setattr(graph_kernel, "warm", lambda: None)
+    s = load_scene(ROOT / "scenes" / "sim-5s2m.yaml")
+    planner = P.Planner(s, load_roadmap(ROOT / "roadmaps" / "sim-5s2m.json", s))
+    q = s.queries[0]
+    first = planner.plan(q.start, q.goal, q.t0, options=P.PlanOptions(time_limit=60.0))
+    assert compiles == [0.0]
+    assert first.status == "solved" and first.planning_seconds < 1000.0
+    again = planner.plan(q.start, q.goal, q.t0)
+    assert compiles == [0.0] and again.status == "solved"  # once per process
+    monkeypatch.setattr(backends, "_compiled", [], raising=False)
+    monkeypatch.setattr(jit, "cold", lambda: False)  # a cache or the extension: nothing to compile
+    planner.plan(q.start, q.goal, q.t0)
+    assert compiles == [0.0]
+    monkeypatch.setattr(backends, "_compiled", [], raising=False)
+    monkeypatch.setattr(jit, "cold", lambda: True)
+    planner.plan(q.start, q.goal, q.t0, options=P.PlanOptions(backend="reference"))
+    assert compiles == [0.0]  # the reference search compiles nothing

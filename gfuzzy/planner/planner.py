@@ -25,7 +25,7 @@ from ..roadmap.roadmap import Roadmap
 from ..scene.scene import Query, Scene
 from ..settings import MAX_MAGNITUDE, MAX_MOVER_SAMPLES, SPEED_SAFETY
 from ..status import Status
-from ..timespace.backends import BACKENDS, search_function
+from ..timespace.backends import BACKENDS, compile_if_cold, search_function
 from ..timespace.movers import MoverField
 from ..timespace.roadgraph import connect
 from ..timespace.spacetime import IntervalStore, SearchResult
@@ -69,7 +69,9 @@ class PlanOptions:
         top); None picks ``60 + 10 * roadmap distance / vmax``, plus the time until the
         movers' behaviour stops changing (:func:`settle_time`).
     time_limit : float
-        Planning-time budget in seconds; past it the answer is ``timeout``.
+        Planning-time budget in seconds; past it the answer is ``timeout``. A fresh
+        installation's one compile of the search kernels (no precompiled extension, no
+        numba cache: 20-40 s, more on a busy machine) is done before the clock starts.
     connect_k : int
         How many nearest roadmap vertices start and goal try to connect to.
     refine : bool
@@ -534,6 +536,8 @@ class Planner:
         opts = options or PlanOptions()
         hold = _check_hold(hold)
         hold_steps = int(math.ceil(hold / opts.dt - 1e-9)) if hold > 0 else 0
+        if opts.backend == "compiled":
+            compile_if_cold()
         t_begin = time.perf_counter()
         deadline = t_begin + opts.time_limit
         robot = self.robot
