@@ -216,6 +216,27 @@ def test_disconnected_free_space_names_where():
     assert "0.010 m too narrow" in msg
 
 
+def test_the_narrowest_place_is_a_door_on_the_way_not_a_wall_between():
+    """Two rooms off a corridor 1.5 m wide, each behind a door 0.69 m wide that a disc of 0.35
+    does not pass: the place named is the start's door, (1, 1.95). The segment straight
+    from room to room crossed both corridor walls, and its middle, in the corridor (x 4,
+    y 2.75), was named (a newcomer looked there and found 1.5 m of floor)."""
+    from gfuzzy.roadmap.freespace import separation
+
+    def wall(x0, x1, y):
+        return {"box": {"center": [0.5 * (x0 + x1), y], "size": [x1 - x0, 0.1]}}
+
+    doc = {
+        "version": 1, "name": "corridor", "bounds": [0, 0, 8, 5], "robot": {"disc": 0.35, "vmax": 1.0},
+        "obstacles": [wall(0, 0.655, 1.95), wall(1.345, 8, 1.95), wall(0, 6.655, 3.55), wall(7.345, 8, 3.55)],
+    }  # fmt: skip
+    scene = parse_scene(doc)
+    sep = separation(scene, free_space(scene, 0.35), np.array([4.0, 1.0]), np.array([4.0, 4.3]))
+    assert sep is not None and sep.passes_below is not None and sep.passes_below < 0.345
+    assert np.hypot(sep.narrowest[0] - 1.0, sep.narrowest[1] - 1.95) < 0.06, sep.narrowest
+    assert "near (1.000, 1.950)" in sep.message() and "0.010 m too narrow" in sep.message()
+
+
 def test_sealed_off_free_space_says_so():
     doc = door_doc(0.69)
     doc["obstacles"] = [{"box": {"center": [3.0, 2.0], "size": [WALL, 4.0]}}]
