@@ -224,3 +224,46 @@ def test_plan_compiles_a_cold_install_before_its_clock(monkeypatch):
     monkeypatch.setattr(jit, "cold", lambda: True)
     planner.plan(q.start, q.goal, q.t0, options=P.PlanOptions(backend="reference"))
     assert compiles == [0.0]  # the reference search compiles nothing
+
+
+def test_plan_compiles_the_ga_of_a_cold_install_before_its_clock(monkeypatch, tmp_path):
+    """`--refine --time-limit 10` with numba's cache empty answered `solved` after 137 s, 136
+    of them compiling the GA's kernels inside the GA, which no deadline stops. With `refine`
+    `Planner.plan` now compiles them first when numba's cache holds none (once per process),
+    and never when it does or without `refine`."""
+    import types
+
+    import gfuzzy.planner.planner as P
+    from gfuzzy.ga import refine
+    from gfuzzy.roadmap.roadmap import load_roadmap
+    from gfuzzy.scene.scene import load_scene
+
+    real = P.time.perf_counter
+    late = [0.0]
+    compiles = []
+
+    def compiling():
+        compiles.append(late[0])
+        late[0] += 1000.0
+
+    cache = tmp_path / "numba"
+    cache.mkdir()
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(cache))
+    monkeypatch.setattr(P, "time", types.SimpleNamespace(perf_counter=lambda: real() + late[0]))
+    monkeypatch.setattr(refine, "_warmed", [], raising=False)
+    monkeypatch.setattr(refine, "warm", compiling)
+    s = load_scene(ROOT / "scenes" / "sim-5s2m.yaml")
+    planner = P.Planner(s, load_roadmap(ROOT / "roadmaps" / "sim-5s2m.json", s))
+    q = s.queries[0]
+    planner.plan(q.start, q.goal, q.t0)
+    assert compiles == []  # no refine: no GA
+    r = planner.plan(q.start, q.goal, q.t0, options=P.PlanOptions(refine=True, time_limit=60.0))
+    assert compiles == [0.0]
+    assert r.status == "solved" and r.planning_seconds < 1000.0
+    planner.plan(q.start, q.goal, q.t0, options=P.PlanOptions(refine=True))
+    assert compiles == [0.0]  # once per process
+    monkeypatch.setattr(refine, "_warmed", [], raising=False)
+    (cache / "ga_x").mkdir()
+    (cache / "ga_x" / "kernels.mutation_apply-39.py311.nbi").write_bytes(b"")
+    planner.plan(q.start, q.goal, q.t0, options=P.PlanOptions(refine=True))
+    assert compiles == [0.0]  # numba's cache holds them

@@ -71,7 +71,8 @@ class PlanOptions:
     time_limit : float
         Planning-time budget in seconds; past it the answer is ``timeout``. A fresh
         installation's one compile of the search kernels (no precompiled extension, no
-        numba cache: 20-40 s, more on a busy machine) is done before the clock starts.
+        numba cache: 20-40 s, more on a busy machine), and of the GA's with ``refine``, is
+        done before the clock starts.
     connect_k : int
         How many nearest roadmap vertices start and goal try to connect to.
     refine : bool
@@ -538,6 +539,10 @@ class Planner:
         hold_steps = int(math.ceil(hold / opts.dt - 1e-9)) if hold > 0 else 0
         if opts.backend == "compiled":
             compile_if_cold()
+        if opts.refine:  # the GA's kernels are numba's whatever the backend
+            from ..ga.refine import warm_if_cold
+
+            warm_if_cold()
         t_begin = time.perf_counter()
         deadline = t_begin + opts.time_limit
         robot = self.robot
