@@ -537,12 +537,7 @@ class Planner:
         opts = options or PlanOptions()
         hold = _check_hold(hold)
         hold_steps = int(math.ceil(hold / opts.dt - 1e-9)) if hold > 0 else 0
-        if opts.backend == "compiled":
-            compile_if_cold()
-        if opts.refine:  # the GA's kernels are numba's whatever the backend
-            from ..ga.refine import warm_if_cold
-
-            warm_if_cold()
+        _compile_cold(opts)  # before the clock starts
         t_begin = time.perf_counter()
         deadline = t_begin + opts.time_limit
         robot = self.robot
@@ -702,6 +697,17 @@ class _Rounds:
     expansions: int
     evaluations: int
     problem: str = ""
+
+
+def _compile_cold(opts: PlanOptions) -> None:
+    """A fresh installation's one compile of the kernels a query will run (the search's,
+    the GA's with ``refine``: numba's whatever the backend), outside the planning budget."""
+    if opts.backend == "compiled":
+        compile_if_cold()
+    if opts.refine:
+        from ..ga.refine import warm_if_cold
+
+        warm_if_cold()
 
 
 def _late(limit: float, doing: str) -> str:
