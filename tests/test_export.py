@@ -485,7 +485,8 @@ def test_map_hand_computed_cells(obstacle, cells):
 
 
 #: What ``gfuzzy check`` tolerates as touching (m): an obstacle reaching this far or less
-#: into a cell does not mark it (the oracle's own copy of the rule).
+#: into a cell does not mark it, unless it reaches that far into no cell at all (the
+#: oracle's own copy of the rule).
 _TOUCH = 0.5e-9
 
 
@@ -500,22 +501,27 @@ def _oracle_cells(scene, res):
     x0, y0, x1, y1 = scene.bounds
     w, h = math.ceil((x1 - x0) / res - 1e-9), math.ceil((y1 - y0) / res - 1e-9)
     j, k = np.meshgrid(np.arange(w), np.arange(h))
-    e = _TOUCH
-    cells = shapely.box(x0 + j * res + e, y0 + k * res + e, x0 + (j + 1) * res - e, y0 + (k + 1) * res - e)
-    occ = np.zeros((h, w), dtype=bool)
-    for ob in scene.obstacles:
+
+    def marks(ob, e):
         if isinstance(ob, Disc):
             cx, cy, r = (Fraction(v) for v in (*ob.center, ob.radius))
             fe = Fraction(e)
+            out = np.zeros((h, w), dtype=bool)
             for kk in range(h):
                 for jj in range(w):
                     # the nearest point of the closed (shrunk) square, exactly
                     nx = min(max(cx, Fraction(x0 + jj * res) + fe), Fraction(x0 + (jj + 1) * res) - fe)
                     ny = min(max(cy, Fraction(y0 + kk * res) + fe), Fraction(y0 + (kk + 1) * res) - fe)
-                    occ[kk, jj] |= (nx - cx) ** 2 + (ny - cy) ** 2 < r * r
-        else:
-            shape = shapely.Polygon(ob.vertices()) if isinstance(ob, Box) else shapely.Polygon(ob.points, list(ob.holes))
-            occ |= shapely.relate_pattern(cells, shape, "T********")
+                    out[kk, jj] = (nx - cx) ** 2 + (ny - cy) ** 2 < r * r
+            return out
+        cells = shapely.box(x0 + j * res + e, y0 + k * res + e, x0 + (j + 1) * res - e, y0 + (k + 1) * res - e)
+        shape = shapely.Polygon(ob.vertices()) if isinstance(ob, Box) else shapely.Polygon(ob.points, list(ob.holes))
+        return shapely.relate_pattern(cells, shape, "T********")
+
+    occ = np.zeros((h, w), dtype=bool)
+    for ob in scene.obstacles:
+        got = marks(ob, _TOUCH)
+        occ |= got if got.any() else marks(ob, 0.0)  # one reaching that far into no cell: every cell it overlaps
     return occ[::-1]
 
 
@@ -572,6 +578,49 @@ def test_map_disc_one_ulp_into_a_cell():
     grid = rasterise(parse_scene(doc), 0.1)
     assert grid.occupied[grid.shape[0] - 1 - 13, 7]
     assert not grid.occupied[grid.shape[0] - 1 - 14, 7]
+
+
+def _cells(doc, res):
+    grid = rasterise(parse_scene(doc), res)
+    h = grid.shape[0]
+    return {(h - 1 - i, j) for i, j in zip(*np.nonzero(grid.occupied), strict=True)}  # (y index, x index)
+
+
+@pytest.mark.parametrize(
+    "obstacle, cells",
+    [
+        # a wall 0.8e-9 m thick centred on the border x = 1: it reaches 0.4e-9 m into each side
+        ({"box": {"center": [1.0, 1.0], "size": [0.8e-9, 1.0]}}, {(k, j) for k in range(2, 6) for j in (3, 4)}),
+        ({"polygon": [[1.0 - 0.4e-9, 0.5], [1.0 + 0.4e-9, 0.5], [1.0 + 0.4e-9, 1.5], [1.0 - 0.4e-9, 1.5]]},
+         {(k, j) for k in range(2, 6) for j in (3, 4)}),
+        # a disc of radius 0.4e-9 m on a cell corner: the four cells around it
+        ({"disc": {"center": [1.0, 1.0], "radius": 0.4e-9}}, {(3, 3), (3, 4), (4, 3), (4, 4)}),
+    ],
+)  # fmt: skip
+def test_map_never_loses_an_obstacle_thinner_than_the_tolerance(obstacle, cells):
+    """An obstacle reaching no more than the touching tolerance into any cell (thinner than
+    1e-9 m, on a cell border) marked no cell at all: the map lost it (docs/export.md says it
+    never does). It marks every cell it overlaps instead; a thicker neighbour keeps the rule."""
+    doc = {"version": 1, "name": "t", "bounds": [0, 0, 2, 2], "robot": {"disc": 0.1, "vmax": 1}, "obstacles": [obstacle]}
+    assert _cells(doc, 0.25) == cells
+    doc["obstacles"].append({"box": {"center": [0.25, 0.25], "size": [0.5 + 0.8e-9, 0.5 + 0.8e-9]}})
+    assert _cells(doc, 0.25) == cells | {(0, 0), (0, 1), (1, 0), (1, 1)}  # the rule, not the fallback
+
+
+@pytest.mark.parametrize("radius", [0.2, 2.0])  # decided by the floats, and exactly (within 1e-9 r^2)
+@pytest.mark.parametrize("axis", [0, 1])
+def test_map_disc_reaching_just_under_or_over_the_tolerance_into_a_cell(radius, axis):
+    """A disc whose edge reaches 0.4e-9 m past the border 3.0 into the cell beyond leaves it
+    free (touching, as `gfuzzy check` sees it); 0.6e-9 m marks it; along x and along y."""
+    doc = {"version": 1, "name": "t", "bounds": [0, 0, 6, 6], "robot": {"disc": 0.1, "vmax": 1}}
+    beyond, before = (12, 12), ((12, 11) if axis == 0 else (11, 12))  # (y index, x index): the cell [3, 3.25]^2, the one before it
+    for reach, marked in ((0.4e-9, False), (0.6e-9, True)):
+        centre = [3.125, 3.125]
+        centre[axis] = 3.0 - radius + reach
+        doc["obstacles"] = [{"disc": {"center": centre, "radius": radius}}]
+        got = _cells(doc, 0.25)
+        assert before in got
+        assert (beyond in got) == marked, (reach, radius, axis)
 
 
 def test_map_pair_written_together_or_not_at_all(tmp_path, monkeypatch):
