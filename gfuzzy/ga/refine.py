@@ -446,20 +446,21 @@ def warm() -> None:
 _warmed: list = []  # warm_if_cold ran in this process
 
 
-def warm_if_cold() -> None:
+def warm_if_cold() -> bool:
     """Compile the GA's kernels now (:func:`warm`), once per process, when numba's cache holds
-    none of them (``NUMBA_CACHE_DIR``, or this package's ``__pycache__``): a fresh ``pip
+    none of them (:func:`gfuzzy.timespace.jit.numba_cached`): a fresh ``pip
     install`` without ``make warm``. ``Planner.plan`` calls it before its clock starts with
     ``refine``: a cold ``--refine --time-limit 10`` on office-polygons answered ``solved``
-    after 137 s, 136 of them compiling inside the GA, which no deadline stops."""
+    after 137 s, 136 of them compiling inside the GA, which no deadline stops. Whether it
+    compiled them."""
     if _warmed:
-        return
+        return False
     _warmed.append(True)
     import os
-    from pathlib import Path
 
-    env = os.environ.get("NUMBA_CACHE_DIR")
-    folder = Path(env) if env else Path(__file__).resolve().parent / "__pycache__"
-    if folder.is_dir() and next(folder.rglob("kernels.*.nbi"), None) is not None:
-        return
+    from ..timespace.jit import numba_cached
+
+    if numba_cached("kernels", os.path.dirname(os.path.abspath(__file__))):
+        return False
     warm()
+    return True
