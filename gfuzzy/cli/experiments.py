@@ -108,7 +108,8 @@ def _sealed_off(scene, query) -> str:
     free space holds them in separate regions: ``plan``'s no_path message), or ""."""
     import numpy as np
 
-    from ..roadmap.freespace import free_space, separation
+    from ..roadmap.freespace import free_space
+    from ..roadmap.narrowest import separation
 
     fs = free_space(scene)
     if fs is None:  # not a disc robot: the roadmap's gap proves nothing
