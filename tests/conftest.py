@@ -112,6 +112,16 @@ def door():
     return scene, build_roadmap(scene, RoadmapOptions(vertices=80, seed=2))
 
 
+def unhurried(**options):
+    """Navigator options whose time budget no call reaches, counted in the process's CPU
+    time (5 s): a test that is not about the budget must not depend on the machine's load
+    (at load 10-19 on 2 cores the default 0.1 s wall-clock budget ran out before the search
+    answered, or before it ran at all)."""
+    from gfuzzy.navigation.navigator import NavOptions
+
+    return NavOptions(time_budget=5.0, budget_clock="cpu", **options)
+
+
 @pytest.fixture(scope="module")
 def open_square():
     """A 10 x 10 m room without obstacles, a disc robot (radius 0.3, vmax 1) from (0, -4) to

@@ -61,6 +61,21 @@ def test_a_micrometre_of_overlap_is_a_collision(robot, y, heading):
     assert "static obstacle" in rep.reason
 
 
+@pytest.mark.parametrize(
+    "robot, rows, words",
+    [
+        ({"disc": 0.3, "vmax": 1.0, "kinematics": "unicycle"}, slide(1.0), "[t, x, y, heading] for this disc robot (unicycle)"),
+        ({"disc": 0.3, "vmax": 1.0}, slide(1.0, 0.0), "[t, x, y] for this disc robot"),
+        ({"box": [0.8, 0.6], "vmax": 1.0}, slide(1.0), "[t, x, y, heading] for this box robot"),
+    ],
+)
+def test_rows_of_the_wrong_width_are_named_with_what_a_row_holds(robot, rows, words):
+    """A disc unicycle's rows carry a heading: the reason used to say only `[t, x, y,
+    heading] for this robot`, not which robot nor why."""
+    rep = check_trajectory(scene(robot), rows)
+    assert not rep.valid and rep.reason == f"waypoints must be rows of {words}"
+
+
 def test_riding_alongside_a_mover_at_contact():
     mover = {"name": "m", "disc": 0.3, "speed": 1.0, "path": [[1.0, 2.5], [9.0, 2.5]], "mode": "once"}
     sc = scene({"disc": 0.2, "vmax": 1.0}, movers=[mover])

@@ -484,9 +484,16 @@ def test_map_hand_computed_cells(obstacle, cells):
     assert got == cells
 
 
+#: What ``gfuzzy check`` tolerates as touching (m): an obstacle reaching this far or less
+#: into a cell does not mark it, unless it reaches that far into no cell at all (the
+#: oracle's own copy of the rule).
+_TOUCH = 0.5e-9
+
+
 def _oracle_cells(scene, res):
     """Every cell of the grid tested on its own (no bounding boxes, no boundary tracing):
-    the DE-9IM interior test for polygons and boxes, exact rational arithmetic for discs."""
+    the DE-9IM interior test for polygons and boxes, exact rational arithmetic for discs,
+    on each cell shrunk by the touching tolerance (an obstacle must reach more than that in)."""
     from fractions import Fraction
 
     import shapely
@@ -494,20 +501,27 @@ def _oracle_cells(scene, res):
     x0, y0, x1, y1 = scene.bounds
     w, h = math.ceil((x1 - x0) / res - 1e-9), math.ceil((y1 - y0) / res - 1e-9)
     j, k = np.meshgrid(np.arange(w), np.arange(h))
-    cells = shapely.box(x0 + j * res, y0 + k * res, x0 + (j + 1) * res, y0 + (k + 1) * res)
-    occ = np.zeros((h, w), dtype=bool)
-    for ob in scene.obstacles:
+
+    def marks(ob, e):
         if isinstance(ob, Disc):
             cx, cy, r = (Fraction(v) for v in (*ob.center, ob.radius))
+            fe = Fraction(e)
+            out = np.zeros((h, w), dtype=bool)
             for kk in range(h):
                 for jj in range(w):
-                    # the nearest point of the closed square, exactly
-                    nx = min(max(cx, Fraction(x0 + jj * res)), Fraction(x0 + (jj + 1) * res))
-                    ny = min(max(cy, Fraction(y0 + kk * res)), Fraction(y0 + (kk + 1) * res))
-                    occ[kk, jj] |= (nx - cx) ** 2 + (ny - cy) ** 2 < r * r
-        else:
-            shape = shapely.Polygon(ob.vertices()) if isinstance(ob, Box) else shapely.Polygon(ob.points, list(ob.holes))
-            occ |= shapely.relate_pattern(cells, shape, "T********")
+                    # the nearest point of the closed (shrunk) square, exactly
+                    nx = min(max(cx, Fraction(x0 + jj * res) + fe), Fraction(x0 + (jj + 1) * res) - fe)
+                    ny = min(max(cy, Fraction(y0 + kk * res) + fe), Fraction(y0 + (kk + 1) * res) - fe)
+                    out[kk, jj] = (nx - cx) ** 2 + (ny - cy) ** 2 < r * r
+            return out
+        cells = shapely.box(x0 + j * res + e, y0 + k * res + e, x0 + (j + 1) * res - e, y0 + (k + 1) * res - e)
+        shape = shapely.Polygon(ob.vertices()) if isinstance(ob, Box) else shapely.Polygon(ob.points, list(ob.holes))
+        return shapely.relate_pattern(cells, shape, "T********")
+
+    occ = np.zeros((h, w), dtype=bool)
+    for ob in scene.obstacles:
+        got = marks(ob, _TOUCH)
+        occ |= got if got.any() else marks(ob, 0.0)  # one reaching that far into no cell: every cell it overlaps
     return occ[::-1]
 
 
@@ -552,12 +566,61 @@ def test_map_equals_the_cell_by_cell_oracle(case):
 
 def test_map_disc_one_ulp_into_a_cell():
     """Found by the oracle test: the disc's top, 0.6000000000000001 + 0.7000000000000001, lies
-    2.2e-16 m above the cell border 13 x 0.1: the cell is occupied (rounding must not decide)."""
+    2.2e-16 m above the cell border 13 x 0.1: a rounding, touching (``gfuzzy check``
+    tolerates 1e-9 m), so the cell above is free; a disc 1e-6 m higher marks it (the rule is
+    the touching tolerance, not the float that happens to come out)."""
     doc = {"version": 1, "name": "u", "bounds": [0, 0, 5, 4], "robot": {"disc": 0.1, "vmax": 1}}
     doc["obstacles"] = [{"disc": {"center": [0.75, 0.6000000000000001], "radius": 0.7000000000000001}}]
     grid = rasterise(parse_scene(doc), 0.1)
+    assert grid.occupied[grid.shape[0] - 1 - 12, 7]
+    assert not grid.occupied[grid.shape[0] - 1 - 13, 7]
+    doc["obstacles"] = [{"disc": {"center": [0.75, 0.600001], "radius": 0.7}}]
+    grid = rasterise(parse_scene(doc), 0.1)
     assert grid.occupied[grid.shape[0] - 1 - 13, 7]
     assert not grid.occupied[grid.shape[0] - 1 - 14, 7]
+
+
+def _cells(doc, res):
+    grid = rasterise(parse_scene(doc), res)
+    h = grid.shape[0]
+    return {(h - 1 - i, j) for i, j in zip(*np.nonzero(grid.occupied), strict=True)}  # (y index, x index)
+
+
+@pytest.mark.parametrize(
+    "obstacle, cells",
+    [
+        # a wall 0.8e-9 m thick centred on the border x = 1: it reaches 0.4e-9 m into each side
+        ({"box": {"center": [1.0, 1.0], "size": [0.8e-9, 1.0]}}, {(k, j) for k in range(2, 6) for j in (3, 4)}),
+        ({"polygon": [[1.0 - 0.4e-9, 0.5], [1.0 + 0.4e-9, 0.5], [1.0 + 0.4e-9, 1.5], [1.0 - 0.4e-9, 1.5]]},
+         {(k, j) for k in range(2, 6) for j in (3, 4)}),
+        # a disc of radius 0.4e-9 m on a cell corner: the four cells around it
+        ({"disc": {"center": [1.0, 1.0], "radius": 0.4e-9}}, {(3, 3), (3, 4), (4, 3), (4, 4)}),
+    ],
+)  # fmt: skip
+def test_map_never_loses_an_obstacle_thinner_than_the_tolerance(obstacle, cells):
+    """An obstacle reaching no more than the touching tolerance into any cell (thinner than
+    1e-9 m, on a cell border) marked no cell at all: the map lost it (docs/export.md says it
+    never does). It marks every cell it overlaps instead; a thicker neighbour keeps the rule."""
+    doc = {"version": 1, "name": "t", "bounds": [0, 0, 2, 2], "robot": {"disc": 0.1, "vmax": 1}, "obstacles": [obstacle]}
+    assert _cells(doc, 0.25) == cells
+    doc["obstacles"].append({"box": {"center": [0.25, 0.25], "size": [0.5 + 0.8e-9, 0.5 + 0.8e-9]}})
+    assert _cells(doc, 0.25) == cells | {(0, 0), (0, 1), (1, 0), (1, 1)}  # the rule, not the fallback
+
+
+@pytest.mark.parametrize("radius", [0.2, 2.0])  # decided by the floats, and exactly (within 1e-9 r^2)
+@pytest.mark.parametrize("axis", [0, 1])
+def test_map_disc_reaching_just_under_or_over_the_tolerance_into_a_cell(radius, axis):
+    """A disc whose edge reaches 0.4e-9 m past the border 3.0 into the cell beyond leaves it
+    free (touching, as `gfuzzy check` sees it); 0.6e-9 m marks it; along x and along y."""
+    doc = {"version": 1, "name": "t", "bounds": [0, 0, 6, 6], "robot": {"disc": 0.1, "vmax": 1}}
+    beyond, before = (12, 12), ((12, 11) if axis == 0 else (11, 12))  # (y index, x index): the cell [3, 3.25]^2, the one before it
+    for reach, marked in ((0.4e-9, False), (0.6e-9, True)):
+        centre = [3.125, 3.125]
+        centre[axis] = 3.0 - radius + reach
+        doc["obstacles"] = [{"disc": {"center": centre, "radius": radius}}]
+        got = _cells(doc, 0.25)
+        assert before in got
+        assert (beyond in got) == marked, (reach, radius, axis)
 
 
 def test_map_pair_written_together_or_not_at_all(tmp_path, monkeypatch):
@@ -628,6 +691,46 @@ def test_map_scene_round_trips_exactly(tmp_path):
     _, grid = _read_back(tmp_path, out)
     assert grid.shape == original.shape
     np.testing.assert_array_equal(grid.blocked, original.blocked)
+
+
+@pytest.mark.parametrize("name", ["small-house", "tb3-arena"])
+def test_map_scene_off_the_origin_round_trips_exactly(tmp_path, name):
+    """A map whose origin is not 0 (small-house: -12.5) under bounds a whole number of cells
+    in: the grid's cell borders (-9.55 + k 0.05) and the map's (-12.5 + j 0.05) are the same
+    lines computed apart, a few ulps off; the old export took that rounding for overlap and
+    thickened walls by a cell (small-house 771 cells, tb3-arena 212)."""
+    from gfuzzy.scene.maps import MapObstacle
+
+    scene = load_scene(SCENES / f"{name}.yaml")
+    (original,) = [o for o in scene.obstacles if isinstance(o, MapObstacle)]
+    res = original.resolution
+    written = export_nav2_map(scene, tmp_path / "m.yaml", res)
+    h, w = written.shape
+    j0 = round((written.origin[0] - original.origin[0]) / res)
+    k0 = round((written.origin[1] - original.origin[1]) / res)
+    rows = original.shape[0] - 1 - (h - 1 - np.arange(h) + k0)  # the same cells, row 0 at the top
+    np.testing.assert_array_equal(written.occupied, original.blocked[rows][:, j0 : j0 + w])
+
+
+def test_obstacle_edges_on_cell_borders_of_an_offset_grid():
+    """Walls 0.15 m thick whose edges lie on cell borders of a grid from -4.35 (as written in
+    decimals): three columns each, box or polygon, not four (3.7 = -4.35 + 161 * 0.05 in
+    decimals; the floats differ by an ulp)."""
+    doc = {
+        "version": 1, "name": "walls", "bounds": [-4.35, -1.15, 15.75, 10.95], "robot": {"disc": 0.2, "vmax": 1.0},
+        "obstacles": [
+            {"box": {"center": [3.775, 2.0], "size": [0.15, 4.0]}},
+            {"box": {"center": [7.775, 2.0], "size": [0.15, 4.0]}},
+            {"polygon": [[11.7, 5.0], [11.85, 5.0], [11.85, 9.0], [11.7, 9.0]]},
+            {"disc": {"center": [0.5, 8.05], "radius": 0.05}},  # touches the borders at 0.45, 0.55, 8.0, 8.1
+        ],
+    }  # fmt: skip
+    grid = rasterise(parse_scene(doc), 0.05)
+    cols = np.nonzero(grid.occupied.any(axis=0))[0].tolist()
+    assert cols == [96, 97, 161, 162, 163, 241, 242, 243, 321, 322, 323]
+    rows = np.nonzero(grid.occupied[:, 161])[0]
+    assert len(rows) == 80  # y from 0 to 4: 80 cells, not 81
+    assert grid.occupied[:, 96].sum() == grid.occupied[:, 97].sum() == 2  # the disc: its 2 x 2 cells
 
 
 def test_mcap_map_scene_draws_the_blocked_cells(tmp_path):

@@ -216,6 +216,69 @@ def test_disconnected_free_space_names_where():
     assert "0.010 m too narrow" in msg
 
 
+def test_the_narrowest_place_is_a_door_on_the_way_not_a_wall_between():
+    """Two rooms off a corridor 1.5 m wide, each behind a door 0.69 m wide that a disc of 0.35
+    does not pass: the place named is the start's door, (1, 1.95). The segment straight
+    from room to room crossed both corridor walls, and its middle, in the corridor (x 4,
+    y 2.75), was named (a newcomer looked there and found 1.5 m of floor)."""
+    from gfuzzy.roadmap.narrowest import separation
+
+    def wall(x0, x1, y):
+        return {"box": {"center": [0.5 * (x0 + x1), y], "size": [x1 - x0, 0.1]}}
+
+    doc = {
+        "version": 1, "name": "corridor", "bounds": [0, 0, 8, 5], "robot": {"disc": 0.35, "vmax": 1.0},
+        "obstacles": [wall(0, 0.655, 1.95), wall(1.345, 8, 1.95), wall(0, 6.655, 3.55), wall(7.345, 8, 3.55)],
+    }  # fmt: skip
+    scene = parse_scene(doc)
+    sep = separation(scene, free_space(scene, 0.35), np.array([4.0, 1.0]), np.array([4.0, 4.3]))
+    assert sep is not None and sep.passes_below is not None and sep.passes_below < 0.345
+    assert np.hypot(sep.narrowest[0] - 1.0, sep.narrowest[1] - 1.95) < 0.06, sep.narrowest
+    assert "near (1.000, 1.950)" in sep.message() and "0.010 m too narrow" in sep.message()
+
+
+def test_the_way_is_the_chain_whose_largest_step_is_least_not_the_shortest_sum():
+    """`narrowest._way` by hand: rooms S, A, B, G in a row 0.3 apart (three cuts, largest
+    step 0.3, sum 0.9), and a room C 0.5 above S and 0.1 above G (largest step 0.5, sum 0.6):
+    the way leaves S for A, where the passages close last; by the sum of steps it left for C."""
+    import types
+
+    import shapely
+
+    from gfuzzy.roadmap.narrowest import _way
+
+    row = [shapely.box(x, 0.0, x + 1.0, 1.0) for x in (0.0, 1.3, 2.6, 3.9)]  # S, A, B, G
+    c = shapely.union(shapely.box(0.0, 1.5, 4.9, 2.0), shapely.box(4.5, 1.1, 4.9, 2.0))
+    fs = types.SimpleNamespace(regions=[*row, c])
+    whole = shapely.box(-1.0, -1.0, 6.0, 3.0)
+    assert _way(fs, 0, 3, whole) == 1  # A
+    assert _way(fs, 3, 0, whole) == 2  # from G: B
+    fs.regions[1] = shapely.box(1.45, 0.0, 2.3, 1.0)  # S to A 0.45 now: still A (0.45 < 0.5)
+    assert _way(fs, 0, 3, whole) == 1
+    fs.regions[1] = shapely.box(1.6, 0.0, 2.3, 1.0)  # 0.6 > 0.5: by C
+    assert _way(fs, 0, 3, whole) == 4
+
+
+def test_the_way_is_looked_for_in_the_free_space_just_below_the_join(monkeypatch):
+    """`separation` bisects the growth at which the start and goal join; the way is looked
+    for among the regions of the free space at the bracket's low end (where the two are
+    joined), not at growth 0, where passages narrower than the door are open too."""
+    from gfuzzy.roadmap import narrowest
+
+    seen = []
+    inner = narrowest._narrowest
+
+    def spy(fs, ends, joined=None):
+        seen.append((fs.grown, None if joined is None else joined.grown))
+        return inner(fs, ends, joined)
+
+    monkeypatch.setattr(narrowest, "_narrowest", spy)
+    scene = parse_scene(door_doc(0.69))
+    sep = narrowest.separation(scene, free_space(scene, 0.35), np.array([1.0, 1.0]), np.array([5.0, 3.0]))
+    hi, lo = seen[-1]
+    assert sep is not None and lo is not None and 0.34 < lo < hi <= lo + 1e-4, seen
+
+
 def test_sealed_off_free_space_says_so():
     doc = door_doc(0.69)
     doc["obstacles"] = [{"box": {"center": [3.0, 2.0], "size": [WALL, 4.0]}}]

@@ -4,6 +4,7 @@ and refined paths checked for collisions independently with shapely."""
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 import pytest
@@ -357,6 +358,15 @@ def test_zigzag_around_disc_gets_shorter_smoother_and_stays_free():
     assert (
         shapely.intersection(swept, Point(DISC_C).buffer(DISC_R * 0.999, quad_segs=64)).area == 0.0
     )
+
+
+def test_a_passed_deadline_returns_the_input():
+    static = disc_clearance(DISC_C, DISC_R)
+    res = refine_path(ZIGZAG, None, R_ROBOT, static, None, FAST, seed=1, deadline=time.perf_counter() - 1.0)
+    assert res.out_of_time and not res.improved and res.generations == 0
+    np.testing.assert_array_equal(res.path, ZIGZAG)
+    done = refine_path(ZIGZAG, None, R_ROBOT, static, None, FAST, seed=1, deadline=time.perf_counter() + 600)
+    assert done.improved and not done.out_of_time and done.generations > 0
 
 
 def test_same_seed_same_result_and_other_seed_runs():

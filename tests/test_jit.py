@@ -145,6 +145,28 @@ print(json.dumps([r.status.value, len(spans), r.planning_seconds >= sum(spans) >
 """
     for precompiled in (True, False):
         assert _run(code, kernel_dir, precompiled) == ["solved", 1, True]
+    # the first look at the kernels (jit.loaded: the extension loaded, its source hashed) is
+    # the query's time too, also when plan() asks before its search (compile_if_cold);
+    # here that load takes 1000 s on the planner's clock
+    slow = """
+import json, time, types
+import gfuzzy, gfuzzy.planner.planner as P
+from gfuzzy.timespace import jit
+from gfuzzy.roadmap.roadmap import load_roadmap
+from gfuzzy.scene.scene import load_scene
+real, late, loads = time.perf_counter, [0.0], []
+P.time = types.SimpleNamespace(perf_counter=lambda: real() + late[0])
+inner = jit.loaded
+def loading():
+    if "ext" not in jit._state:
+        loads.append(late[0]); late[0] += 1000.0
+    return inner()
+jit.loaded = loading
+s = load_scene("scenes/sim-5s2m.yaml")
+r = gfuzzy.Planner(s, load_roadmap("roadmaps/sim-5s2m.json", s)).plan(s.queries[0].start, s.queries[0].goal)
+print(json.dumps([jit.cold(), loads, r.planning_seconds >= 1000.0]))
+"""
+    assert _run(slow, kernel_dir) == [False, [0.0], True]
 
 
 def test_a_cold_install_says_it_compiles_before_the_first_search(monkeypatch, tmp_path):
@@ -158,6 +180,8 @@ def test_a_cold_install_says_it_compiles_before_the_first_search(monkeypatch, tm
         def isatty(self):
             return True
 
+    from numba.core import caching  # noqa: F401  (before NUMBA_CACHE_DIR: see _cache_of)
+
     cache = tmp_path / "numba"
     cache.mkdir()
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(cache))
@@ -170,13 +194,148 @@ def test_a_cold_install_says_it_compiles_before_the_first_search(monkeypatch, tm
     jit.note_cold(term)
     jit.note_cold(term)
     assert term.getvalue().count("note: compiling the search kernels") == 1 and "precompile" in term.getvalue()
-    (cache / "gfuzzy").mkdir()
-    (cache / "gfuzzy" / "search_kernel.astar-100.py311.nbi").write_bytes(b"")
+    _cache_of(cache, jit.__file__, "search_kernel.astar-100.py311.nbi")
     assert not jit.cold()  # numba's cache holds them
     monkeypatch.setattr(jit, "loaded", lambda: object())
-    (cache / "gfuzzy" / "search_kernel.astar-100.py311.nbi").unlink()
+    for f in cache.rglob("*.nbi"):
+        f.unlink()
     assert not jit.cold()  # the precompiled extension serves
     monkeypatch.setattr(jit, "_noted", [])
     term = Terminal()
     jit.note_cold(term)
     assert term.getvalue() == ""
+
+
+def _cache_of(cache: Path, source: str, name: str) -> Path:
+    """An empty numba index file ``name`` where numba keeps the cache of kernels whose source
+    is beside ``source`` under ``NUMBA_CACHE_DIR=cache`` (its own rule, asked of numba: import
+    numba before setting NUMBA_CACHE_DIR, which numba reads at its import, or this process's
+    later compiles go to the test's empty folder)."""
+    from numba.core.caching import UserProvidedCacheLocator
+
+    folder = cache / UserProvidedCacheLocator.get_suitable_cache_subpath(source)
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / name).write_bytes(b"")
+    return folder / name
+
+
+def test_numba_cached_looks_where_numba_keeps_gfuzzys_kernels(monkeypatch, tmp_path):
+    """`jit.numba_cached` (behind `jit.cold` and `ga.refine.warm_if_cold`) finds numba's index
+    of a gfuzzy kernel module in a shared NUMBA_CACHE_DIR, and not another package's module of
+    the same name there (a `kernels.*.nbi` of any package counted as the GA's)."""
+    from numba.core import caching  # noqa: F401  (before NUMBA_CACHE_DIR: see _cache_of)
+
+    from gfuzzy.ga import kernels
+
+    cache = tmp_path / "numba"
+    cache.mkdir()
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(cache))
+    ga = os.path.dirname(os.path.abspath(kernels.__file__))
+    other = tmp_path / "other_pkg" / "kernels.py"
+    _cache_of(cache, str(other), "kernels.mutate-12.py311.nbi")
+    _cache_of(cache, jit.__file__, "search_kernel.sipp-40.py311.nbi")
+    assert not jit.numba_cached("kernels", ga)  # another package's, and the search's
+    assert jit.numba_cached("search_kernel", os.path.dirname(jit.__file__))
+    _cache_of(cache, kernels.__file__, "kernels.mutation_apply-39.py311.nbi")
+    assert jit.numba_cached("kernels", ga)
+    monkeypatch.delenv("NUMBA_CACHE_DIR")  # then the folder's own __pycache__
+    assert not jit.numba_cached("kernels", tmp_path / "other_pkg")
+    (tmp_path / "other_pkg" / "__pycache__").mkdir(parents=True)
+    (tmp_path / "other_pkg" / "__pycache__" / "kernels.mutate-12.py311.nbi").write_bytes(b"")
+    assert jit.numba_cached("kernels", tmp_path / "other_pkg")
+
+
+def test_plan_compiles_a_cold_install_before_its_clock(monkeypatch):
+    """A fresh `pip install`'s first `gfuzzy plan` of the building floor answered `timeout`
+    after 2 minutes on a busy 2-core machine: numba compiled the kernels inside the query's
+    60 s budget (a newcomer met it). On a cold install `Planner.plan` now compiles them
+    first, once per process, and its clock starts after: here a compile that takes 1000 s
+    on the planner's clock leaves the answer solved and its planning_seconds small."""
+    import types
+
+    import gfuzzy.planner.planner as P
+    from gfuzzy.roadmap.roadmap import load_roadmap
+    from gfuzzy.scene.scene import load_scene
+    from gfuzzy.timespace import backends, graph_kernel, search_kernel
+
+    real = P.time.perf_counter
+    late = [0.0]
+    compiles = []
+
+    def compiling():  # slower than any budget, on the planner's clock
+        compiles.append(late[0])
+        late[0] += 1000.0
+
+    def graph_compiling():
+        graphs.append(late[0])
+
+    graphs: list = []
+    monkeypatch.setattr(P, "time", types.SimpleNamespace(perf_counter=lambda: real() + late[0]))
+    monkeypatch.setattr(backends, "_compiled", [], raising=False)
+    monkeypatch.setattr(jit, "cold", lambda: True)
+    monkeypatch.setattr(search_kernel, "warm", compiling)
+    monkeypatch.setattr(graph_kernel, "warm", graph_compiling)
+    s = load_scene(ROOT / "scenes" / "sim-5s2m.yaml")
+    planner = P.Planner(s, load_roadmap(ROOT / "roadmaps" / "sim-5s2m.json", s))
+    q = s.queries[0]
+    first = planner.plan(q.start, q.goal, q.t0, options=P.PlanOptions(time_limit=60.0))
+    assert compiles == [0.0] and graphs == [1000.0]  # both kernels' warms, once each
+    assert first.status == "solved" and first.planning_seconds < 1000.0
+    again = planner.plan(q.start, q.goal, q.t0)
+    assert compiles == [0.0] and graphs == [1000.0] and again.status == "solved"  # once per process
+    monkeypatch.setattr(backends, "_compiled", [], raising=False)
+    monkeypatch.setattr(jit, "cold", lambda: False)  # a cache or the extension: nothing to compile
+    planner.plan(q.start, q.goal, q.t0)
+    assert compiles == [0.0] and graphs == [1000.0]
+    monkeypatch.setattr(backends, "_compiled", [], raising=False)
+    monkeypatch.setattr(jit, "cold", lambda: True)
+    planner.plan(q.start, q.goal, q.t0, options=P.PlanOptions(backend="reference"))
+    assert compiles == [0.0] and graphs == [1000.0]  # the reference search compiles nothing
+
+
+def test_plan_compiles_the_ga_of_a_cold_install_before_its_clock(monkeypatch, tmp_path):
+    """`--refine --time-limit 10` with numba's cache empty answered `solved` after 137 s, 136
+    of them compiling the GA's kernels inside the GA, which no deadline stops. With `refine`
+    `Planner.plan` now compiles them first when numba's cache holds none (once per process),
+    and never when it does or without `refine`."""
+    import types
+
+    import gfuzzy.planner.planner as P
+    from gfuzzy.ga import refine
+    from gfuzzy.roadmap.roadmap import load_roadmap
+    from gfuzzy.scene.scene import load_scene
+
+    real = P.time.perf_counter
+    late = [0.0]
+    compiles = []
+
+    def compiling():
+        compiles.append(late[0])
+        late[0] += 1000.0
+
+    from numba.core import caching  # noqa: F401  (before NUMBA_CACHE_DIR: see _cache_of)
+
+    cache = tmp_path / "numba"
+    cache.mkdir()
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(cache))
+    monkeypatch.setattr(P, "time", types.SimpleNamespace(perf_counter=lambda: real() + late[0]))
+    monkeypatch.setattr(refine, "_warmed", [], raising=False)
+    monkeypatch.setattr(refine, "warm", compiling)
+    s = load_scene(ROOT / "scenes" / "sim-5s2m.yaml")
+    planner = P.Planner(s, load_roadmap(ROOT / "roadmaps" / "sim-5s2m.json", s))
+    q = s.queries[0]
+    planner.plan(q.start, q.goal, q.t0)
+    assert compiles == []  # no refine: no GA
+    r = planner.plan(q.start, q.goal, q.t0, options=P.PlanOptions(refine=True, time_limit=60.0))
+    assert compiles == [0.0]
+    assert r.status == "solved" and r.planning_seconds < 1000.0
+    planner.plan(q.start, q.goal, q.t0, options=P.PlanOptions(refine=True))
+    assert compiles == [0.0]  # once per process
+    monkeypatch.setattr(refine, "_warmed", [], raising=False)
+    _cache_of(cache, str(tmp_path / "other" / "kernels.py"), "kernels.mutation_apply-39.py311.nbi")
+    planner.plan(q.start, q.goal, q.t0, options=P.PlanOptions(refine=True))
+    assert compiles == [0.0, 1000.0]  # another package's kernels in the shared cache are not the GA's
+    monkeypatch.setattr(refine, "_warmed", [], raising=False)
+    _cache_of(cache, refine.__file__, "kernels.mutation_apply-39.py311.nbi")
+    planner.plan(q.start, q.goal, q.t0, options=P.PlanOptions(refine=True))
+    assert compiles == [0.0, 1000.0]  # numba's cache holds them

@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from conftest import unhurried
 
 from gfuzzy.errors import InputError
 from gfuzzy.navigation.lookout import EMPTY_FACTOR, LOOK_SPEED, LOOK_TIME, Lookout, knowing_view
@@ -53,7 +54,7 @@ def test_someone_seen_walking_into_the_blind_side_is_looked_for_after_look_after
 
 def test_navigator_looks_back_first_then_drives(open_square):
     scene, rm = open_square
-    nav = Navigator(scene, rm, (0.0, 4.0), NavOptions(fov=180.0))
+    nav = Navigator(scene, rm, (0.0, 4.0), unhurried(fov=180.0))
     pose = np.array([0.0, -4.0])
     traj = nav.step(0.0, pose, np.zeros((0, 5)))
     assert nav.last.mode == NavMode.LOOK
@@ -91,7 +92,7 @@ def test_a_look_never_replaces_a_fallback(open_square, monkeypatch):
 
 def test_a_navigator_with_a_full_view_never_looks(open_square):
     scene, rm = open_square
-    nav = Navigator(scene, rm, (0.0, 4.0))
+    nav = Navigator(scene, rm, (0.0, 4.0), unhurried())
     nav.step(0.0, np.array([0.0, -4.0]), np.zeros((0, 5)))
     assert nav.last.mode == NavMode.PLAN
 

@@ -707,6 +707,18 @@ def test_gfuzzy_map_with_a_footprint_writes_the_contract_key(tmp_path):
         assert geo.is_valid(pose), pose
 
 
+def test_gfuzzy_map_writes_no_negative_zero(tmp_path):
+    # a footprint given with "-0" (as a script printing rounded coordinates writes it) was
+    # copied into the scene as "-0"
+    for f in ("tb3_sandbox.yaml", "tb3_sandbox.pgm"):
+        shutil.copy(MAPS / f, tmp_path / f)
+    out = tmp_path / "fp.yaml"
+    fp = ["0.15", "0.1", "-0.1", "0.1", "-0.12", "-0", "-0.1", "-0.1", "0.15", "-0.1"]
+    assert main(["map", str(tmp_path / "tb3_sandbox.yaml"), "--robot-footprint", *fp, "-o", str(out)]) == 0
+    line = next(ln for ln in out.read_text().splitlines() if "footprint:" in ln)
+    assert "[-0.12, 0]" in line and "-0]" not in line, line
+
+
 CART = ["0.7", "0.25", "-0.1", "0.25", "-0.1", "-0.25", "0.7", "-0.25"]  # 0.8 x 0.5, off-centre
 
 

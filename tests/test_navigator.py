@@ -8,7 +8,7 @@ import time
 
 import numpy as np
 import pytest
-from conftest import ROOT, run_cli_process
+from conftest import ROOT, run_cli_process, unhurried
 
 import gfuzzy
 from gfuzzy.errors import InputError
@@ -51,7 +51,7 @@ def _speeds_ok(traj: gfuzzy.Trajectory, vmax: float) -> bool:
 
 def test_nobody_seen_goes_straight_to_the_goal(open_square):
     scene, rm = open_square
-    nav = Navigator(scene, rm, (0.0, 4.0))
+    nav = Navigator(scene, rm, (0.0, 4.0), unhurried())
     traj = nav.step(0.0, np.array([0.0, -4.0]), np.zeros((0, 5)))
     assert nav.last.mode == "plan"
     np.testing.assert_allclose(traj.waypoints[0], [0.0, 0.0, -4.0])
@@ -68,7 +68,7 @@ def test_mid_edge_start(open_square):
     e = int(np.argmax(rm.lengths))
     a, b = rm.vertices[rm.edges[e]]
     pose = 0.37 * a + 0.63 * b  # strictly inside a roadmap edge, not a vertex
-    nav = Navigator(scene, rm, (0.0, 4.0))
+    nav = Navigator(scene, rm, (0.0, 4.0), unhurried())
     traj = nav.step(2.5, pose, np.zeros((0, 5)))
     assert nav.last.mode == "plan"
     np.testing.assert_allclose(traj.waypoints[0], [2.5, *pose])
@@ -84,8 +84,7 @@ def test_a_plan_leaves_at_full_speed(open_square):
     # connection cut into whole steps runs 0.1 m a step and leaves the remainder last
     scene, rm = open_square
     pose = np.array([0.03, -3.0])
-    roomy = NavOptions(time_budget=5.0, budget_clock="cpu")  # never cut by a loaded machine's clock
-    traj = Navigator(scene, rm, (0.0, 4.0), roomy).step(0.0, pose, np.array([[4.0, 0.0, 0.0, 0.0, 0.3]]))
+    traj = Navigator(scene, rm, (0.0, 4.0), unhurried()).step(0.0, pose, np.array([[4.0, 0.0, 0.0, 0.0, 0.3]]))
     assert traj.duration == pytest.approx(7.1)
     step = np.hypot(*np.diff(traj.waypoints[:4, 1:], axis=0).T)
     np.testing.assert_allclose(step, 0.1, rtol=1e-6)
@@ -101,13 +100,12 @@ def test_the_plan_runs_at_full_speed_up_to_its_first_wait(open_square, monkeypat
     pose, goal = np.array([0.03, -3.0]), (0.0, 4.0)
     far = np.array([[4.0, 0.0, 0.0, 0.0, 0.3]])
     length = math.hypot(0.03, 7.0)
-    roomy = NavOptions(time_budget=5.0, budget_clock="cpu")  # never cut by a loaded machine's clock
-    fast = NavOptions(full_speed=True, time_budget=5.0, budget_clock="cpu")
+    fast = unhurried(full_speed=True)
     traj = Navigator(scene, rm, goal, fast).step(0.0, pose, far)
     assert traj.duration == pytest.approx(length / scene.robot.vmax, rel=1e-6)
     assert _speeds_ok(traj, 1.0)
     assert gfuzzy.check_trajectory(scene, traj.waypoints).valid
-    assert Navigator(scene, rm, goal, roomy).step(0.0, pose, far).duration == pytest.approx(7.1)  # off by default
+    assert Navigator(scene, rm, goal, unhurried()).step(0.0, pose, far).duration == pytest.approx(7.1)  # off by default
     monkeypatch.setattr(Navigator, "_keeps_gaps", lambda *args: False)
     slow = Navigator(scene, rm, goal, fast).step(0.0, pose, far)
     assert slow.duration == pytest.approx(7.1)
@@ -214,7 +212,7 @@ def test_person_standing_in_a_doorway(two_doors):
     person = {"name": "door", "disc": 0.3, "trajectory": [[0.0, 0.0, 0.0], [200.0, 0.0, 0.0]]}
     scene = _scene(movers=[person], obstacles=scene0.raw["obstacles"])
     q = scene.queries[0]
-    res = simulate(scene, rm, q.start, q.goal, 0.0, 0.25, max_time=60.0)
+    res = simulate(scene, rm, q.start, q.goal, 0.0, 0.25, max_time=60.0, options=unhurried())
     assert res.reached
     assert gfuzzy.check_trajectory(scene, res.trajectory.waypoints, q).valid
     # it went through the other door
@@ -253,8 +251,10 @@ def test_evasive_motion_steps_away_from_a_close_person(open_square):
 
 
 def test_time_budget_falls_back_to_the_previous_plan(open_square):
+    """A budget of 1e-9 s is spent before any search (on any machine): the previous plan if
+    there is one, else the evasive motion. The first plan has all the time it needs."""
     scene, rm = open_square
-    nav = Navigator(scene, rm, (0.0, 4.0))
+    nav = Navigator(scene, rm, (0.0, 4.0), unhurried())
     first = nav.step(0.0, np.array([0.0, -4.0]), np.zeros((0, 5)))
     assert nav.last.mode == "plan"
     hurried = Navigator(scene, rm, (0.0, 4.0), NavOptions(time_budget=1e-9))
@@ -678,7 +678,7 @@ def test_exhausted_budget_builds_no_prediction(open_square, monkeypatch):
 
     monkeypatch.setattr(Navigator, "_field", counting)
     obs = np.array([[0.0, 0.0, 0.0, -1.0, 0.3], [2.0, 1.0, -1.0, 0.0, 0.3]])
-    nav = Navigator(scene, rm, (0.0, 4.0))
+    nav = Navigator(scene, rm, (0.0, 4.0), unhurried())
     nav.step(0.0, np.array([0.0, -4.0]), obs)
     assert calls and nav.last.mode in ("plan", "close", "relaxed")  # with time: the predictions are built, a search answers
     calls.clear()
@@ -756,16 +756,19 @@ def test_the_field_cuts_its_pieces_by_the_steps_asked_too(open_square):
 
 
 def test_a_search_out_of_time_inside_a_batch_falls_back(open_square):
+    """The budget runs out once the predictions are built, inside the search's safety work:
+    the fallback answers and says where the time went. Until then the budget (5 s of CPU)
+    is never reached, so the clock, not the machine's load, decides where it runs out."""
     scene, rm = open_square
-    nav = Navigator(scene, rm, (0.0, 4.0))
+    nav = Navigator(scene, rm, (0.0, 4.0), unhurried())
     obs = np.array([[0.0, 0.0, 0.0, -1.0, 0.3], [2.0, 1.0, -1.0, 0.0, 0.3]])
-    late = [0.0]
-    nav._clock = lambda: time.perf_counter() + late[0]  # the search keeps the real clock
+    late, clock = [0.0], nav._clock
+    nav._clock = lambda: clock() + late[0]  # the search keeps the real clock
     real = Navigator._field
 
     def field_then_late(self, *args):  # the budget is gone once the search asks for safety
         field_ = real(self, *args)
-        late[0] = 1.0
+        late[0] = 1e6
         return field_
 
     nav._field = field_then_late.__get__(nav)
@@ -783,7 +786,7 @@ def test_a_bug_in_the_search_propagates(open_square, monkeypatch, error):
         raise error
 
     monkeypatch.setattr("gfuzzy.navigation.navigator.search_function", lambda backend: broken)
-    nav = Navigator(scene, rm, (0.0, 4.0))
+    nav = Navigator(scene, rm, (0.0, 4.0), unhurried())  # the search is reached: no budget runs out before it
     with pytest.raises(type(error), match="a bug"):
         nav.step(0.0, np.array([0.0, -4.0]), np.array([[0.0, 0.0, 0.0, -1.0, 0.3]]))
 
@@ -799,7 +802,7 @@ def test_a_refused_search_falls_back(open_square, monkeypatch, family):
         raise error("horizon beyond the memory bounds")
 
     monkeypatch.setattr("gfuzzy.navigation.navigator.search_function", lambda backend: refusing)
-    nav = Navigator(scene, rm, (0.0, 4.0))
+    nav = Navigator(scene, rm, (0.0, 4.0), unhurried())  # the search is reached: no budget runs out before it
     traj = nav.step(0.0, np.array([0.0, -4.0]), np.array([[0.0, 0.0, 0.0, -1.0, 0.3]]))
     assert nav.last.mode in ("direct", "previous", "evasive")
     assert "refused" in nav.last.message

@@ -81,6 +81,24 @@ def test_both_stages_report_and_keep_a_safe_answer(hall):
     assert out.speed_report.stops >= 1  # the cart stands in the corridor until t = 4
 
 
+def test_a_ga_past_the_time_limit_keeps_the_search_answer(hall):
+    """`--refine` ran the GA to its end whatever `--time-limit` said (a refined answer
+    came back at 23 s with a limit of 10 s): past the deadline the generations stop and the
+    search's answer is kept, said in the report; the GA alone shows it stopped at once."""
+    _, scene, rm = hall
+    q = scene.queries[0]
+    base = _searched(scene, rm, q)
+    ctx = StageContext(scene, StaticGeometry(scene))
+    opts = PlanOptions(refine=True, seed=2, time_limit=7.0)
+    out = apply_stages(ctx, base.trajectory, _query(q), opts, time.perf_counter() - 1.0)
+    r = out.refine_report
+    assert not r.applied and r.generations == 0
+    assert r.reason.startswith("the planning budget (7 s, --time-limit) ran out while the GA refined")
+    np.testing.assert_array_equal(out.trajectory.waypoints, base.trajectory.waypoints)
+    # with time left the same call refines (the hall has a corner to cut)
+    assert apply_stages(ctx, base.trajectory, _query(q), opts, time.perf_counter() + 60).refine_report.applied
+
+
 def test_a_straight_answer_is_left_to_the_search(hall):
     _, scene, rm = hall
     ctx = StageContext(scene, StaticGeometry(scene))

@@ -17,6 +17,7 @@ from hypothesis import strategies as st
 
 import gfuzzy
 from gfuzzy.check.check import check_trajectory
+from gfuzzy.errors import InputError
 from gfuzzy.planner.planner import Planner, PlanOptions, Status
 from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
 from gfuzzy.scene.scene import load_scene, parse_scene
@@ -328,6 +329,27 @@ def test_a_differential_drive_from_a_static_scene_is_written_as_yaml(tmp_path, e
     robot = load_scene(out).robot
     assert (robot.kinematics, robot.wmax, robot.reverse) == ("unicycle", 1.5, True)
     assert load_scene(out).queries[0].start == (0.0, 0.0, 0.0)
+
+
+def test_a_smaller_disc_keeps_a_differential_drive_and_its_headings(tmp_path, eth_file):
+    """`--robot-radius` on a unicycle scene makes a disc unicycle, whose poses carry a
+    heading: the command took only [x, y] for its start and goal, and then refused the
+    scene it had written (its start had no heading)."""
+    static = ROOT / "scenes" / "building-floor-unicycle.yaml"
+    out = tmp_path / "small-drive.yaml"
+    args = ("--static", static, "--robot-radius", 0.2, "--start", 1, 1, 0, "--goal", 7, 1, 0, "-o", out)
+    proc = run_cli_process("tracks", eth_file, *args)
+    assert proc.returncode == 0, proc.stderr
+    scene = load_scene(out)
+    assert (scene.robot.shape, scene.robot.kinematics, scene.robot.dof) == ("disc", "unicycle", 3)
+    assert scene.queries[0].start == (1.0, 1.0, 0.0)
+    proc = run_cli_process("tracks", eth_file, *args[:4], "--start", 1, 1, "--goal", 7, 1, "-o", out)
+    assert proc.returncode == 2 and "--start: expected 3 numbers (x y heading)" in proc.stderr
+    with pytest.raises(InputError, match=r"start: expected 3 numbers \[x, y, heading\]"):
+        tracks_scene(
+            read_tracks(eth_file), TrackSceneOptions(name="drive", robot_radius=0.2), static=load_scene(static),
+            start=(1, 1), goal=(7, 1),
+        )  # fmt: skip
 
 
 def test_static_mesh_paths_follow_the_new_file(tmp_path, csv_file):

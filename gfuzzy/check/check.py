@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 
+from ..poses import row_words
 from ..scene.scene import Box, Disc, MapObstacle, Query, Scene
 from ..typed import FloatArray
 from .depth import Edges, overlap_depth
@@ -452,8 +453,7 @@ def check_trajectory(
 def _rows_problem(robot, w: FloatArray, query) -> CheckReport | None:
     """The rows' shape, finiteness, increasing times, and the query's ends (None: fine)."""
     if w.ndim != 2 or w.shape[1] != robot.dof + 1 or len(w) == 0:
-        width = "[t, x, y]" if robot.dof == 2 else "[t, x, y, heading]"
-        return CheckReport(False, f"waypoints must be rows of {width} for this robot")
+        return CheckReport(False, f"waypoints must be rows of {row_words(robot.dof, robot)}")
     if not np.all(np.isfinite(w)):
         return CheckReport(False, "waypoints contain a non-finite number")
     t = w[:, 0]

@@ -56,7 +56,7 @@ def _tracks_command(args) -> str:
 def cmd_tracks(args) -> int:
     from ..atomic import write_atomic
     from ..scene.scene import _load_yaml, parse_scene
-    from ..scene.tracks import TrackSceneOptions, read_tracks, tracks_scene
+    from ..scene.tracks import TrackSceneOptions, read_tracks, robot_dof, tracks_scene
     from ..scene.yamldoc import name_from_stem
 
     static = _load_scene(args.static) if args.static else None
@@ -79,7 +79,7 @@ def cmd_tracks(args) -> int:
         tracks = read_tracks(args.file, args.format, args.fps)
         if args.start is None and args.query_name != "cross":
             raise InputError("--query-name names the query of --start and --goal: give them too")
-        dof = static.robot.dof if static is not None and args.robot_radius is None else 2
+        dof = robot_dof(static, args.robot_radius)
         start = _pose(args.start, dof, "--start")
         goal = _pose(args.goal, dof, "--goal")
         expect = {}
@@ -108,7 +108,8 @@ def _sealed_off(scene, query) -> str:
     free space holds them in separate regions: ``plan``'s no_path message), or ""."""
     import numpy as np
 
-    from ..roadmap.freespace import free_space, separation
+    from ..roadmap.freespace import free_space
+    from ..roadmap.narrowest import separation
 
     fs = free_space(scene)
     if fs is None:  # not a disc robot: the roadmap's gap proves nothing

@@ -8,8 +8,12 @@ boxes, polygons and mesh footprints with shapely's exact predicates: the cells n
 boundary (traced along every ring) by the DE-9IM interior-interior test, every other cell,
 which lies wholly inside or outside, by its centre. So the map never loses an obstacle: the
 blocked cells cover each obstacle, and a robot that overlaps an obstacle overlaps a blocked
-cell. An edge lying exactly on a cell border does not mark the cell beyond it (touching is
-no collision, contract section 1).
+cell. An edge lying on a cell border does not mark the cell beyond it (touching is no
+collision, contract section 1), also when the two were computed apart and differ by a
+rounding: an obstacle must reach more than :func:`edge_tolerance` into a cell (the
+touching ``gfuzzy check`` tolerates) to mark it. A map scene's cells at ``-12.5 + 60 *
+0.05`` and the grid's at ``-9.55 + 1 * 0.05`` are the same line a few ulps apart; counted as
+overlap, they thickened every wall on one side by a cell (small-house: 771 cells).
 
 The grid covers the scene's bounds from their lower-left corner, rounded up to whole cells;
 image row 0 is the top (contract section 6), so the cell in row i, column j of an H-row
@@ -32,7 +36,7 @@ from ..errors import InputError, check_interrupt, check_number, interrupts_defer
 from ..scene.scene import Box, Disc, Polygon, Scene
 from ..typed import FloatArray
 
-__all__ = ["NavMap", "rasterise", "export_nav2_map", "obstacle_boxes", "MAX_MAP_CELLS", "OCCUPIED", "FREE"]
+__all__ = ["NavMap", "rasterise", "export_nav2_map", "obstacle_boxes", "edge_tolerance", "MAX_MAP_CELLS", "OCCUPIED", "FREE"]
 
 log = logging.getLogger(__name__)
 
@@ -117,29 +121,42 @@ def _span(lo: float, hi: float, origin: float, res: float, n: int) -> tuple[int,
     return a, max(a, b)
 
 
+def edge_tolerance(w: int, h: int, ox: float, oy: float, res: float) -> float:
+    """How far (m) an obstacle may reach into a cell without marking it: the overlap
+    ``gfuzzy check`` tolerates as touching (:data:`gfuzzy.collision.exact.TOUCH_TOL`), or,
+    on a grid far from the origin, 8 ulps of its largest coordinate (the rounding of
+    ``origin + k * res`` there)."""
+    from ..collision.exact import TOUCH_TOL
+
+    far = max(abs(ox), abs(oy), abs(ox + w * res), abs(oy + h * res))
+    return max(TOUCH_TOL, 8.0 * float(np.spacing(far)))
+
+
 def _cell_edges(origin: float, res: float, a: int, b: int) -> FloatArray:
     k = np.arange(a, b + 1)
     return origin + k * res  # the reader's very expression (contract section 6)
 
 
-def _mark_disc(occ: np.ndarray, d: Disc, w: int, h: int, ox: float, oy: float, res: float) -> None:
+def _mark_disc(occ: np.ndarray, d: Disc, w: int, h: int, ox: float, oy: float, res: float, eps: float) -> bool:
+    """Whether the disc marked a cell."""
     cx, cy = d.center
     r = d.radius
     ja, jb = _span(cx - r, cx + r, ox, res, w)
     ka, kb = _span(cy - r, cy + r, oy, res, h)
     if ja >= jb or ka >= kb:
-        return
+        return False
     xe, ye = _cell_edges(ox, res, ja, jb), _cell_edges(oy, res, ka, kb)
-    # distance from the centre to each closed square, per axis; the open square meets the
-    # open disc exactly when that distance is below the radius
-    dx = np.maximum(np.maximum(xe[:-1] - cx, cx - xe[1:]), 0.0)
-    dy = np.maximum(np.maximum(ye[:-1] - cy, cy - ye[1:]), 0.0)
+    # distance from the centre to each closed square (shrunk by eps), per axis; the open
+    # square meets the open disc exactly when that distance is below the radius
+    dx = np.maximum(np.maximum(xe[:-1] + eps - cx, cx - (xe[1:] - eps)), 0.0)
+    dy = np.maximum(np.maximum(ye[:-1] + eps - cy, cy - (ye[1:] - eps)), 0.0)
     d2 = dy[:, None] ** 2 + dx[None, :] ** 2  # (rows by y, cols)
     hit = d2 < r * r
     # where rounding could decide (a cell within a few ulps of the circle), decide exactly
     for k, j in zip(*np.nonzero(np.abs(d2 - r * r) <= 1e-9 * r * r), strict=True):
-        hit[k, j] = _disc_meets_cell(cx, cy, r, xe[j], ye[k], xe[j + 1], ye[k + 1])
+        hit[k, j] = _disc_meets_cell(cx, cy, r, xe[j] + eps, ye[k] + eps, xe[j + 1] - eps, ye[k + 1] - eps)
     occ[ka:kb, ja:jb] |= hit
+    return bool(hit.any())
 
 
 def _disc_meets_cell(cx: float, cy: float, r: float, x0: float, y0: float, x1: float, y1: float) -> bool:
@@ -184,17 +201,19 @@ def _boundary_cells(poly, ja: int, ka: int, shape: tuple[int, int], ox: float, o
     return out
 
 
-def _mark_polygon(occ: np.ndarray, poly, w: int, h: int, ox: float, oy: float, res: float) -> None:
-    """Cells near the boundary by the exact DE-9IM test (their open square meets the
-    interior); every other cell lies wholly inside or outside, which its centre tells."""
+def _mark_polygon(occ: np.ndarray, poly, w: int, h: int, ox: float, oy: float, res: float, eps: float) -> bool:
+    """Cells near the boundary by the exact DE-9IM test (their open square, shrunk by
+    ``eps``, meets the interior); every other cell lies wholly inside or outside, which its
+    centre tells. Whether the polygon marked a cell."""
     import shapely
 
     bx0, by0, bx1, by1 = poly.bounds
     ja, jb = _span(bx0, bx1, ox, res, w)
     ka, kb = _span(by0, by1, oy, res, h)
     if ja >= jb or ka >= kb:
-        return
+        return False
     shapely.prepare(poly)
+    marked = False
     xe, ye = _cell_edges(ox, res, ja, jb), _cell_edges(oy, res, ka, kb)
     near = _boundary_cells(poly, ja, ka, (kb - ka, jb - ja), ox, oy, res)
     xc = 0.5 * (xe[:-1] + xe[1:])
@@ -203,12 +222,16 @@ def _mark_polygon(occ: np.ndarray, poly, w: int, h: int, ox: float, oy: float, r
         r1 = min(kb - ka, r0 + rows_per)
         yc = 0.5 * (ye[r0:r1] + ye[r0 + 1 : r1 + 1])
         inside = shapely.contains_xy(poly, xc[None, :], yc[:, None])
-        occ[ka + r0 : ka + r1, ja:jb] |= inside & ~near[r0:r1]
+        inside &= ~near[r0:r1]
+        occ[ka + r0 : ka + r1, ja:jb] |= inside
+        marked = marked or bool(inside.any())
     k, j = np.nonzero(near)
     if len(k):
-        cells = shapely.box(xe[j], ye[k], xe[j + 1], ye[k + 1])
+        cells = shapely.box(xe[j] + eps, ye[k] + eps, xe[j + 1] - eps, ye[k + 1] - eps)
         hit = shapely.relate_pattern(cells, poly, "T********")
         occ[ka + k[hit], ja + j[hit]] = True
+        marked = marked or bool(hit.any())
+    return marked
 
 
 def obstacle_boxes(ob) -> FloatArray | None:
@@ -225,15 +248,19 @@ def obstacle_boxes(ob) -> FloatArray | None:
     return np.asarray(rects, dtype=float).reshape(-1, 4)
 
 
-def _mark_rects(occ: np.ndarray, rects: FloatArray, w: int, h: int, ox: float, oy: float, res: float) -> None:
-    """Axis-aligned rectangles, exactly: the open cell (a, b) meets the open rectangle
-    (x0, x1) when a < x1 and b > x0 (and the same along y)."""
+def _mark_rects(occ: np.ndarray, rects: FloatArray, w: int, h: int, ox: float, oy: float, res: float, eps: float) -> bool:
+    """Axis-aligned rectangles, exactly: the open cell (a, b) shrunk by ``eps`` meets the open
+    rectangle (x0, x1) when a + eps < x1 and b - eps > x0 (and the same along y). Whether
+    they marked a cell."""
     xe, ye = _cell_edges(ox, res, 0, w), _cell_edges(oy, res, 0, h)
+    marked = False
     for x0, y0, x1, y1 in rects:
-        ja, jb = int(np.searchsorted(xe[1:], x0, side="right")), int(np.searchsorted(xe[:-1], x1, side="left"))
-        ka, kb = int(np.searchsorted(ye[1:], y0, side="right")), int(np.searchsorted(ye[:-1], y1, side="left"))
+        ja, jb = int(np.searchsorted(xe[1:] - eps, x0, side="right")), int(np.searchsorted(xe[:-1] + eps, x1, side="left"))
+        ka, kb = int(np.searchsorted(ye[1:] - eps, y0, side="right")), int(np.searchsorted(ye[:-1] + eps, y1, side="left"))
         if ja < jb and ka < kb:
             occ[ka:kb, ja:jb] = True
+            marked = True
+    return marked
 
 
 def _shapes(ob, index: int):
@@ -245,6 +272,17 @@ def _shapes(ob, index: int):
     if isinstance(ob, Polygon):
         return [shapely.Polygon(ob.points, list(ob.holes))]
     raise InputError(f"obstacles[{index}]: cannot rasterise an obstacle of type {type(ob).__name__}")
+
+
+def _mark(occ: np.ndarray, ob, index: int, w: int, h: int, ox: float, oy: float, res: float, eps: float) -> bool:
+    """Mark the cells obstacle ``ob`` reaches more than ``eps`` into; whether it marked any."""
+    boxes = obstacle_boxes(ob)
+    if isinstance(ob, Disc):
+        return _mark_disc(occ, ob, w, h, ox, oy, res, eps)
+    if boxes is not None:
+        return _mark_rects(occ, boxes, w, h, ox, oy, res, eps)
+    marked = [_mark_polygon(occ, poly, w, h, ox, oy, res, eps) for poly in _shapes(ob, index)]
+    return any(marked)
 
 
 def rasterise(scene: Scene, resolution: float = 0.05) -> NavMap:
@@ -259,7 +297,9 @@ def rasterise(scene: Scene, resolution: float = 0.05) -> NavMap:
     Returns
     -------
     NavMap
-        A cell is occupied exactly when an obstacle overlaps it with positive area.
+        A cell is occupied exactly when an obstacle overlaps it with positive area, reaching
+        more than :func:`edge_tolerance` into it (less is touching, as ``gfuzzy check`` sees it);
+        an obstacle that reaches that far into no cell marks every cell it overlaps at all.
 
     Raises
     ------
@@ -270,15 +310,12 @@ def rasterise(scene: Scene, resolution: float = 0.05) -> NavMap:
     res = float(resolution)
     w, h, ox, oy = _grid(scene, res)
     occ = np.zeros((h, w), dtype=bool)  # row k is y-index k (bottom first) until flipped
+    eps = edge_tolerance(w, h, ox, oy, res)
     for i, ob in enumerate(scene.obstacles):
-        boxes = obstacle_boxes(ob)
-        if isinstance(ob, Disc):
-            _mark_disc(occ, ob, w, h, ox, oy, res)
-        elif boxes is not None:
-            _mark_rects(occ, boxes, w, h, ox, oy, res)
-        else:
-            for poly in _shapes(ob, i):
-                _mark_polygon(occ, poly, w, h, ox, oy, res)
+        # an obstacle thinner than twice the tolerance (a wall 0.8e-9 m thick on a cell
+        # border) would mark no cell: marked again with none, so none is ever lost
+        if not _mark(occ, ob, i, w, h, ox, oy, res, eps):
+            _mark(occ, ob, i, w, h, ox, oy, res, 0.0)
     return NavMap(occ[::-1].copy(), res, (ox, oy))
 
 

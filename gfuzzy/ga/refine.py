@@ -19,7 +19,8 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass
+import time
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -75,6 +76,9 @@ class GAResult:
         moved over the same stretch, waits included. Linear between rows.
     coding : PathCoding or None
         The knots, search lines and steps used (None if the path had zero length).
+    out_of_time : bool
+        The ``deadline`` passed before the generations ended: the input is returned
+        (``improved`` False), whatever the generations so far had found.
     """
 
     path: FloatArray
@@ -92,6 +96,7 @@ class GAResult:
     clearance_after: float
     trajectory: FloatArray | None
     coding: PathCoding | None
+    out_of_time: bool = False
 
 
 def refine_path(
@@ -103,6 +108,7 @@ def refine_path(
     options: GAOptions | None = None,
     seed: int | np.random.Generator | None = None,
     static_segment: StaticSegment | None = None,
+    deadline: float | None = None,
 ) -> GAResult:
     """Straighten and smooth a path's via-points with a genetic algorithm.
 
@@ -143,6 +149,10 @@ def refine_path(
         segments instead of sampling ``static_clearance`` along them (the planner passes
         an exact sphere-tracing check, which also works in passages narrower than the
         sample spacing allows).
+    deadline : float or None
+        A :func:`time.perf_counter` time: once past it the generations stop and the input is
+        returned, ``out_of_time`` set (never a partly evolved path: the answer does not
+        depend on the machine's speed).
 
     Returns
     -------
@@ -175,7 +185,11 @@ def refine_path(
         return _unchanged(path, t_in, b, np.array([b[0]]), 0, None, opts)
 
     coding = _make_coding(geo, opts, robot_radius, evaluator, static_clearance)
-    best, best_cost, history, gen = _evolve(coding, evaluator, chord, rng, opts)
+    best, best_cost, history, gen = _evolve(coding, evaluator, chord, rng, opts, deadline)
+    if gen < 0:  # the deadline passed
+        logger.info("refine_path: the deadline passed after %d generations; input returned", -gen - 1)
+        out = _unchanged(path, t_in, b, history, -gen - 1, coding, opts)
+        return replace(out, out_of_time=True)
 
     if not (math.isfinite(best_cost) and best_cost < b[0] - 1e-12 * max(1.0, abs(best_cost))):
         if not math.isfinite(best_cost):
@@ -280,8 +294,11 @@ def _evolve(
     chord: float,
     rng: np.random.Generator,
     opts: GAOptions,
+    deadline: float | None = None,
 ) -> tuple[IntArray, float, FloatArray, int]:
-    """The generations: elitism, selection, crossover, mutation, smoothing, early stop.
+    """The generations: elitism, selection, crossover, mutation, smoothing, early stop;
+    past ``deadline`` (a :func:`time.perf_counter` time) they stop, ``gen`` then -1 - the
+    generations evolved.
 
     Returns
     -------
@@ -312,6 +329,8 @@ def _evolve(
         history.append(best_cost)
         if gen >= opts.generations or (patience and stall >= patience):
             break
+        if deadline is not None and time.perf_counter() > deadline:
+            return best, best_cost, np.asarray(history), -1 - gen
         parents = roulette_select(costs, rng, P - 1)
         kids = crossover(pop[parents], rng, opts.pc)
         kids = mutate(kids, rng, opts.pm, opts.levels)
@@ -441,3 +460,26 @@ def warm() -> None:
     rng = np.random.default_rng(0)
     for dtype in (np.int16, np.int64):
         mutate(crossover(rng.integers(-1, 5, (6, 4)).astype(dtype), rng, 1.0), rng, 0.5, 5)
+
+
+_warmed: list = []  # warm_if_cold ran in this process
+
+
+def warm_if_cold() -> bool:
+    """Compile the GA's kernels now (:func:`warm`), once per process, when numba's cache holds
+    none of them (:func:`gfuzzy.timespace.jit.numba_cached`): a fresh ``pip
+    install`` without ``make warm``. ``Planner.plan`` calls it before its clock starts with
+    ``refine``: a cold ``--refine --time-limit 10`` on office-polygons answered ``solved``
+    after 137 s, 136 of them compiling inside the GA, which no deadline stops. Whether it
+    compiled them."""
+    if _warmed:
+        return False
+    _warmed.append(True)
+    import os
+
+    from ..timespace.jit import numba_cached
+
+    if numba_cached("kernels", os.path.dirname(os.path.abspath(__file__))):
+        return False
+    warm()
+    return True

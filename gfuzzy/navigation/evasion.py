@@ -61,7 +61,9 @@ def evasion_scores(nav: Navigator, t: float, pose: FloatArray, obs: FloatArray, 
         # alike (no contact, the widest gap capped): their lower bound will do
         alike = max(EVASION_GAP, float(rate.max(initial=0.0)) * float(h.max(initial=0.0))) + 1e-9
         each = nav._clearance_along(pts, times, obs, exact_below=alike)  # (C, T, k)
-        between = ((each[:, :-1] + each[:, 1:] - rate[:, None, :] * h) / 2).min(axis=-1)  # (C, T - 1)
+        between = each[:, :-1] + each[:, 1:]  # in place, then halved after the minimum (exact: a power of 2)
+        between -= rate[:, None, :] * h
+        between = between.min(axis=-1) / 2  # (C, T - 1)
         gap = each.min(axis=-1)  # (C, T)
         later = gap[:, 1:]
         hit = (between <= 0) & (later <= gap[:, :1])

@@ -687,20 +687,21 @@ class Navigator(PathSpace, Prediction, SoftCost):
         evasive motion's scores cannot tell gaps above their threshold apart, and a
         footprint's exact gaps to 60 people over 50 candidates and 4 s cost 75-150 ms."""
         pos = obs[None, :, :2] + (times - times[0])[:, None, None] * obs[None, :, 2:4]  # (T, k, 2)
-        rel = pos - pts[..., None, :2]
         less = self.mover_clearance + unknown_growth(self._unknown, obs, times - times[0])  # (T, k)
-        if self.robot.shape == "disc":
-            d = np.hypot(rel[..., 0], rel[..., 1]) - self.robot.radius - obs[:, 4]
-        elif exact_below == math.inf:
-            d = mover_distance(self._pred_robot, pts[..., None, :], "disc", obs[:, 4], (0.0, 0.0), pos)
-        else:
-            d = np.hypot(rel[..., 0], rel[..., 1]) - self.robot.circumradius - obs[:, 4]
+        if exact_below == math.inf and self.robot.shape != "disc":
+            return mover_distance(self._pred_robot, pts[..., None, :], "disc", obs[:, 4], (0.0, 0.0), pos) - less
+        else:  # the centres' distance, in place: the evasions' (C, T, k) arrays are most of their cost
+            d = np.hypot(pos[..., 0] - pts[..., None, 0], pos[..., 1] - pts[..., None, 1])
+            d -= self.robot.radius if self.robot.shape == "disc" else self.robot.circumradius
+            d -= obs[:, 4]
+        if self.robot.shape != "disc":
             exact = d - less < exact_below
             if exact.any():
                 at = np.broadcast_to(pts[..., None, :], (*d.shape, pts.shape[-1]))[exact]
                 d[exact] = mover_distance(self._pred_robot, at, "disc", np.broadcast_to(obs[:, 4], d.shape)[exact],
                                           (0.0, 0.0), np.broadcast_to(pos, (*d.shape, 2))[exact])  # fmt: skip
-        return d - less
+        d -= less
+        return d
 
     def _direct(self, t: float, pose: FloatArray, obs: FloatArray) -> Trajectory | None:
         """Straight to the goal at full speed, if it is statically free and keeps clear of

@@ -335,9 +335,10 @@ def _accept(ctx: StageContext, traj: Trajectory, query_like, before: Trajectory,
     return True, ""
 
 
-def _run_ga(ctx: StageContext, traj: Trajectory, opts, funcs):
+def _run_ga(ctx: StageContext, traj: Trajectory, opts, funcs, deadline):
     """The GA on the corridor: the given options, or the paper's and then
-    ``GA_RETRY_KNOTS`` knots. Returns (GA result, options of the last run, seconds)."""
+    ``GA_RETRY_KNOTS`` knots, until ``deadline``. Returns (GA result, options of the last
+    run, seconds)."""
     from ..ga import GAOptions, refine_path
 
     robot = ctx.robot
@@ -354,8 +355,9 @@ def _run_ga(ctx: StageContext, traj: Trajectory, opts, funcs):
             ga_opts,
             seed=opts.seed,
             static_segment=static_segment,
+            deadline=deadline,
         )
-        if res.improved:
+        if res.improved or res.out_of_time:
             break
     return res, ga_opts, time.perf_counter() - t_ga
 
@@ -365,7 +367,7 @@ def _refine(ctx: StageContext, traj: Trajectory, query, opts, deadline) -> tuple
     if len(corridor) < 3:
         return traj, RefineReport(False, "the path is a straight segment already")
     funcs = _clearance_functions(ctx, corridor)
-    res, ga_opts, seconds = _run_ga(ctx, traj, opts, funcs)
+    res, ga_opts, seconds = _run_ga(ctx, traj, opts, funcs, deadline)
     before = {
         "length": res.length_before,
         "smoothness": res.smoothness_before,
@@ -373,6 +375,9 @@ def _refine(ctx: StageContext, traj: Trajectory, query, opts, deadline) -> tuple
         "duration": traj.duration,
     }
     report = RefineReport(False, "", ga_opts.n_knots, res.generations, seconds, before)
+    if res.out_of_time:
+        why = f"the planning budget ({opts.time_limit:g} s, --time-limit) ran out while the GA refined: the search's answer is kept"
+        return traj, replace(report, reason=why)
     if not res.improved:
         return traj, replace(report, reason="the GA found nothing better than the corridor")
     if ctx.robot.unicycle:  # straight segments through the via-points, turns in place

@@ -7,7 +7,7 @@ it, and its connected parts (the *regions*) say which places the robot can trave
 between. :mod:`gfuzzy.roadmap.roadmap` compares them with the roadmap's components and joins
 roadmap components that share a region (:func:`repair`); :mod:`gfuzzy.planner.planner` joins a
 start or a goal that sees no roadmap vertex, and explains a ``no_path`` by the regions
-(:func:`separation`).
+(:func:`gfuzzy.roadmap.narrowest.separation`).
 
 Shapely grows shapes with arcs cut into chords, which lie *inside* the true arcs: the
 obstacles are grown by an extra ``tolerance`` that covers the chords' sagitta, so the
@@ -32,12 +32,10 @@ from ..typed import FloatArray, IntArray
 __all__ = [
     "FreeSpace",
     "Repair",
-    "Separation",
     "free_space",
     "blocked_points",
     "repair",
     "link_pose",
-    "separation",
 ]
 
 log = logging.getLogger(__name__)
@@ -652,118 +650,3 @@ def link_pose(geometry: StaticGeometry, fs: FreeSpace, pose: FloatArray, vertice
         if chain is not None:
             return chain
     return None
-
-
-#: Separations are explained by bisection on the obstacles' growth only up to this many
-#: obstacles (each step recomputes the free space).
-SEPARATION_MAX_OBSTACLES = 400
-#: ... and maps of at most this many blocked rectangles in all (a larger map's free space
-#: takes seconds each time: a 90 x 60 m one 6 s of CPU, a dozen of them for the bisection).
-SEPARATION_MAX_RECTS = 5000
-
-
-@dataclass(frozen=True)
-class Separation:
-    """Why two poses cannot be joined: they lie in different free-space regions.
-
-    Attributes
-    ----------
-    start, goal : (2,) float
-        The two positions (a point in each region).
-    grown : float
-        The obstacles' growth: robot radius + clearance.
-    passes_below : float or None
-        A growth below which the planner joins them: the low end of the bisection's last
-        bracket (to 1e-4 m) less the repair paths' smallest margin (``DELTAS[-1]``, which a
-        path keeps from the free space's boundary on both sides), rounded down to 1e-4 m
-        (a 1 m door: below 0.4997; a disc of 0.4997 is solved there, 0.49975 not);
-        0 when even a point robot cannot pass;
-        None when not computed (a scene with many obstacles).
-    touching : float or None
-        The growth at which a disc touches both sides of the narrowest place, estimated as
-        the middle of that bracket plus the free space's ``tolerance`` (by which it grows the
-        obstacles more than asked): what "too narrow" is measured from.
-    narrowest : (2,) float or None
-        Where the two regions come closest: the middle of the shortest segment between
-        them, at a growth just above ``passes_below`` (the pinch point), else at ``grown``.
-    """
-
-    start: tuple
-    goal: tuple
-    grown: float
-    passes_below: float | None
-    narrowest: tuple | None
-    touching: float | None = None
-
-    def message(self) -> str:
-        msg = (
-            "start and goal lie in separate parts of the free space, so no way exists for this robot "
-            f"(obstacles grown by radius + clearance = {self.grown:g} m): the start's region around "
-            f"({self.start[0]:.3f}, {self.start[1]:.3f}), the goal's around ({self.goal[0]:.3f}, {self.goal[1]:.3f})"
-        )
-        if self.passes_below == 0.0:
-            return msg + "; they are sealed off from each other (the obstacles themselves, not grown, leave no way between them)"
-        if self.narrowest is not None:
-            msg += f"; the narrowest place between them is near ({self.narrowest[0]:.3f}, {self.narrowest[1]:.3f})"
-        if self.passes_below is not None:
-            msg += (
-                f", {2 * max(0.0, self.grown - (self.touching or self.passes_below)):.3f} m too narrow (radius + clearance "
-                f"would have to be below {self.passes_below:.4f} m)"
-            )
-        return msg
-
-
-def _joined(scene: Scene, grown: float, ends: FloatArray) -> tuple[bool, FreeSpace | None]:
-    fs = free_space(scene, grown)
-    if fs is None:
-        return False, None
-    rs, rg = fs.region_of(ends, slack=0.0).tolist()
-    return rs == rg and rs >= 0, fs
-
-
-def _narrowest(fs: FreeSpace, ends: FloatArray) -> tuple | None:
-    import shapely
-
-    rs, rg = fs.region_of(ends, slack=0.0).tolist()
-    if rs < 0 or rg < 0 or rs == rg:
-        return None
-    c = np.asarray(shapely.shortest_line(fs.regions[rs], fs.regions[rg]).coords)
-    return tuple(float(v) for v in 0.5 * (c[0] + c[1]))
-
-
-def separation(scene: Scene, fs: FreeSpace, start: FloatArray, goal: FloatArray) -> Separation | None:
-    """Where and by how much ``start`` and ``goal`` are kept apart (None: one region holds both).
-
-    The growth at which the two regions join is found by bisection (each step a free-space
-    computation), and the narrowest place is the shortest segment between the two regions
-    just above it.
-    """
-    ends = np.asarray([start[:2], goal[:2]], dtype=float)
-    rs, rg = fs.region_of(ends).tolist()
-    if rs == rg and rs >= 0:
-        return None
-    passes: float | None = None
-    touching: float | None = None
-    where = _narrowest(fs, ends)
-    rects = sum(len(ob.rects) for ob in scene.obstacles if hasattr(ob, "rects"))
-    if len(scene.obstacles) <= SEPARATION_MAX_OBSTACLES and rects <= SEPARATION_MAX_RECTS:
-        lo, hi = 0.0, fs.grown
-        ok, _ = _joined(scene, lo, ends)
-        if not ok:
-            passes = 0.0
-        else:
-            fs_hi = fs
-            while hi - lo > 1e-4:
-                mid = 0.5 * (lo + hi)
-                ok, f = _joined(scene, mid, ends)
-                if ok:
-                    lo = mid
-                else:
-                    hi, fs_hi = mid, f
-            # what the planner's paths can use, rounded down: "at most 0.4000" (the bracket
-            # plus the tolerance, rounded to the nearest) was said at a 0.8 m door where
-            # 0.39995 is not solved
-            passes = max(0.0, math.floor((lo - DELTAS[-1]) * 1e4) / 1e4)
-            touching = 0.5 * (lo + hi) + fs.tolerance
-            where = _narrowest(fs_hi, ends) or where
-    return Separation(tuple(ends[0].tolist()), tuple(ends[1].tolist()), fs.grown, passes, where, touching)

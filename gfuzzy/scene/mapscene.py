@@ -49,8 +49,8 @@ class MapScene:
 
 def _fmt(x: float) -> str:
     """12 significant digits: a map far from the origin (UTM coordinates, 5,678,123.25 m)
-    keeps its centimetres (6 digits wrote 5.67813e+06, ten metres off)."""
-    return f"{x:.12g}"
+    keeps its centimetres (6 digits wrote 5.67813e+06, ten metres off); no ``-0``."""
+    return f"{x + 0.0:.12g}"
 
 
 def _bounds(grid: MapObstacle) -> tuple[float, float, float, float]:

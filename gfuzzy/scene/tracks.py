@@ -22,6 +22,7 @@ from itertools import pairwise
 from pathlib import Path
 
 from ..errors import InputError, SceneError
+from ..poses import pose_words
 from ..settings import MAX_MAGNITUDE, MAX_RECORDED_TIME
 from .scene import NAME_RE, STATUSES, Scene
 from .trackfiles import ANNOTATION_PERIOD, Track, Tracks, _id_key, read_tracks
@@ -459,6 +460,16 @@ def _seen_once(n: int, where: str) -> str:
             "(someone standing still: a row at the first time and one at the last)")
 
 
+def robot_dof(static: Scene | None, robot_radius: float | None) -> int:
+    """The pose length of the scene's robot: the static scene's robot's, or that of the disc
+    of ``robot_radius`` that replaces its shape (keeping its kinematics: 3 for a unicycle)."""
+    if static is None:
+        return 2
+    if robot_radius is None:
+        return static.robot.dof
+    return 3 if static.robot.unicycle else 2
+
+
 def _robot_doc(options: TrackSceneOptions, static: Scene | None):
     """The ``robot:`` mapping (the static scene's, or a disc keeping its speed and
     clearances), its pose dimension, and its inradius."""
@@ -469,7 +480,7 @@ def _robot_doc(options: TrackSceneOptions, static: Scene | None):
     else:
         robot = {"disc": options.robot_radius if options.robot_radius is not None else 0.2}
         robot.update({k: v for k, v in base.items() if k not in ("disc", "box", "footprint")})
-        dof, inradius = 2, robot["disc"]
+        dof, inradius = robot_dof(static, options.robot_radius), robot["disc"]
     for key in ("vmax", "amax"):
         if getattr(options, key) is not None:
             robot[key] = getattr(options, key)
@@ -494,7 +505,7 @@ def _query_docs(start, goal, query_name, expect, dof, inradius, region, src) -> 
         start, goal = [float(v) for v in start], [float(v) for v in goal]
         for label, pose in (("start", start), ("goal", goal)):
             if len(pose) != dof:
-                raise InputError(f"{label}: expected {dof} numbers for this robot, got {len(pose)}")
+                raise InputError(f"{label}: expected {dof} numbers {pose_words(dof)}, got {len(pose)}")
             x, y = pose[:2]
             if not (
                 region[0] + inradius <= x <= region[2] - inradius

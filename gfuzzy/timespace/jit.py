@@ -36,7 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["KERNEL_MODULES", "cold", "kernel_dirs", "kernel_key", "loaded", "njit", "note_cold"]
+__all__ = ["KERNEL_MODULES", "cold", "kernel_dirs", "kernel_key", "loaded", "njit", "note_cold", "numba_cached"]
 
 log = logging.getLogger(__name__)
 
@@ -107,16 +107,28 @@ def loaded():
     return ext[0] if ext else None
 
 
+def numba_cached(stem: str, package_dir: str | os.PathLike) -> bool:
+    """Whether numba's on-disk cache holds kernels of module ``stem`` (``search_kernel``,
+    ``kernels``) whose source lies in ``package_dir``, where numba keeps them: with
+    ``NUMBA_CACHE_DIR``, its folder ``<folder name>_<sha1 of the folder's absolute path>``
+    (numba's ``UserProvidedCacheLocator``), so another package's module of that name in a
+    shared cache does not count; else the folder's ``__pycache__``. Numba's per-user fallback
+    folder for a read-only install is not looked at: there this may say False on a warm cache."""
+    folder = os.path.abspath(os.fspath(package_dir))
+    env = os.environ.get("NUMBA_CACHE_DIR")
+    if env:
+        where = Path(env) / f"{os.path.basename(folder)}_{hashlib.sha1(folder.encode()).hexdigest()}"
+    else:
+        where = Path(folder) / "__pycache__"
+    return where.is_dir() and next(where.glob(f"{stem}.*.nbi"), None) is not None
+
+
 def cold() -> bool:
     """True when the compiled search will be compiled now: no fresh precompiled extension,
-    and no numba cache of the search kernels where numba keeps it (``NUMBA_CACHE_DIR``, or
-    the package's ``__pycache__``). Numba's per-user fallback folder for a read-only
-    install is not looked at: there this may say True on a warm cache."""
+    and no numba cache of the search kernels (:func:`numba_cached`)."""
     if loaded() is not None:
         return False
-    env = os.environ.get("NUMBA_CACHE_DIR")
-    folders = [Path(env)] if env else [_PACKAGE / "__pycache__"]
-    return not any(next(f.rglob("search_kernel.*.nbi"), None) for f in folders if f.is_dir())
+    return not numba_cached("search_kernel", os.path.dirname(os.path.abspath(__file__)))
 
 
 _noted: list = []
