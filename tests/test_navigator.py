@@ -12,6 +12,7 @@ from conftest import ROOT, run_cli_process, unhurried
 
 import gfuzzy
 from gfuzzy.errors import InputError
+from gfuzzy.navigation.brisk import brisk_arrival
 from gfuzzy.navigation.navigator import Navigator, NavOptions
 from gfuzzy.navigation.navsim import min_separation, observe, simulate
 from gfuzzy.navigation.navtypes import NavMode
@@ -108,6 +109,87 @@ def test_the_plan_runs_at_full_speed_up_to_its_first_wait(open_square, monkeypat
     monkeypatch.setattr(Navigator, "_keeps_gaps", lambda *args: False)
     slow = Navigator(scene, rm, goal, fast).step(0.0, pose, far)
     assert slow.duration == pytest.approx(7.1)
+
+
+def _box_room():
+    """An empty 10 x 10 m room, a 0.6 x 0.4 m box robot (vmax 1), its 150-vertex roadmap."""
+    scene = parse_scene({"version": 1, "name": "box", "bounds": [-5.0, -5.0, 5.0, 5.0],
+                         "robot": {"box": [0.6, 0.4], "vmax": 1.0}})  # fmt: skip
+    return scene, gfuzzy.build_roadmap(scene, gfuzzy.RoadmapOptions(vertices=150, seed=3))
+
+
+@pytest.mark.parametrize("seen", [0, 1])
+@pytest.mark.parametrize(("shape", "full_speed"), [("disc", False), ("box", False), ("box", True)])
+def test_a_step_longer_than_the_period_does_not_creep_into_the_goal(open_square, seen, shape, full_speed):
+    # a search step of 0.4 s, the robot replanned every 0.25 s (an outside harness's
+    # setting): the last move into the goal took a whole step however short it was, so
+    # each call covered 5/8 of what was left and the robot crept in (the 7 m, planned in
+    # 7.2 s, reached at 10.25 s; 8 m took 19.5 s at a step of 1 s). Now that move runs at
+    # vmax, when it keeps the search's gaps (someone seen far away); a box's too, with
+    # full_speed on as well (that ran only the disc's brisk: the box crept, 11 s for 8 m)
+    scene, rm = open_square
+    goal, pose = (0.0, 4.0), np.array([0.0, -3.0])
+    if shape == "box":
+        scene, rm = _box_room()
+        goal, pose = (0.0, 4.0, 0.0), np.array([0.0, -3.0, 0.0])
+    obs = np.array([[4.0, 0.0, 0.0, 0.0, 0.3]])[:seen]
+    opts = NavOptions(dt=0.4, time_budget=5.0, budget_clock="cpu", full_speed=full_speed)
+    nav = Navigator(scene, rm, goal, opts)
+    t, first = 0.0, None
+    while not nav.reached and t < 20.0:
+        traj = nav.step(t, pose, obs)
+        first = traj.t_end if first is None else first
+        assert _speeds_ok(traj, 1.0)
+        t += 0.25
+        pose = traj.at(t)
+    assert nav.reached and t - 0.25 <= first + 0.25 + 1e-9  # the call that found it there, a period after
+
+
+def _arrival(nav: Navigator, rows, obs=None, since: float = 0.25) -> np.ndarray:
+    """brisk_arrival's answer (its rows) to the plan ``rows`` at their first time (nobody seen: ``obs`` None)."""
+    obs = np.zeros((0, 5)) if obs is None else obs
+    traj = gfuzzy.Trajectory(np.array(rows, float), nav.robot.circumradius)
+    keep = lambda: nav._inflation(traj.waypoints[0, 1:], obs)  # noqa: E731
+    return brisk_arrival(nav, float(rows[0][0]), traj.waypoints[0, 1:], traj, obs, keep, False, since).waypoints
+
+
+def test_the_last_move_into_the_goal_runs_at_full_speed_only_then(open_square, monkeypatch):
+    # brisk_arrival's guards, each on its own (the plans are made up, the robot the
+    # tests' disc): the sliver into the goal at vmax and nothing else of the plan ...
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (0.0, 4.0), NavOptions(dt=0.4))
+    plan = [[1.0, 0.0, 3.9], [1.4, 0.0, 4.0], [2.4, 0.0, 4.0]]
+    fast = _arrival(nav, plan)
+    np.testing.assert_allclose(fast[1, 0], 1.0 + 0.1 / nav.vplan)
+    np.testing.assert_array_equal(np.delete(fast, 1, axis=0), np.delete(np.array(plan), 1, axis=0))
+    np.testing.assert_array_equal(fast[:, 1:], np.array(plan)[:, 1:])
+    # ... not a short move that does not end at the goal ...
+    mid = [[1.0, 0.0, 0.0], [1.4, 0.0, 0.1], [2.4, 0.0, 1.1]]
+    np.testing.assert_array_equal(_arrival(nav, mid), mid)
+    # ... nor one that ends before the next call (a step of 0.1 s, calls every 0.25 s) ...
+    short = [[1.0, 0.0, 3.95], [1.1, 0.0, 4.0], [2.1, 0.0, 4.0]]
+    np.testing.assert_array_equal(_arrival(Navigator(scene, rm, (0.0, 4.0)), short), short)
+    # ... nor one that would not keep the search's gaps from someone seen
+    far = np.array([[4.0, 0.0, 0.0, 0.0, 0.3]])
+    assert _arrival(nav, plan, far)[1, 0] < 1.4
+    monkeypatch.setattr(Navigator, "_keeps_gaps", lambda *args: False)
+    np.testing.assert_array_equal(_arrival(nav, plan, far), plan)
+
+
+def test_the_last_move_into_the_goal_turns_within_the_speed_bound(open_square):
+    # a box turning a quarter while it moves 0.1 m into the goal: its time is the
+    # configuration metric's (the turn counts), not the 0.1 m's; a unicycle keeps its plan
+    box = Navigator(*_box_room(), (0.0, 4.0, math.pi / 2), NavOptions(dt=0.4))
+    plan = [[1.0, 0.0, 3.9, 0.0], [2.0, 0.0, 4.0, math.pi / 2], [3.0, 0.0, 4.0, math.pi / 2]]
+    fast = _arrival(box, plan)
+    assert 1.1 < fast[1, 0] < 2.0
+    assert _speeds_ok(gfuzzy.Trajectory(fast, box.robot.circumradius), box.vplan)
+    drive = parse_scene({"version": 1, "name": "drive", "bounds": [-5.0, -5.0, 5.0, 5.0],
+                         "robot": {"disc": 0.3, "vmax": 1.0, "kinematics": "unicycle", "wmax": 1.0}})  # fmt: skip
+    rm = gfuzzy.build_roadmap(drive, gfuzzy.RoadmapOptions(vertices=60, seed=3))
+    unicycle = Navigator(drive, rm, (0.0, 4.0, math.pi / 2), NavOptions(dt=0.4))
+    ahead = [[1.0, 0.0, 3.9, math.pi / 2], [1.4, 0.0, 4.0, math.pi / 2], [2.4, 0.0, 4.0, math.pi / 2]]
+    np.testing.assert_array_equal(_arrival(unicycle, ahead), ahead)
 
 
 def test_person_walking_straight_at_the_robot_is_dodged(open_square):
@@ -1065,3 +1147,15 @@ def test_the_goal_takes_what_step_takes_as_a_pose():
     assert gfuzzy.plan(scene, rm, (0.5, 1.0), (3.5, 1.0), t0=np.array(0.5)).trajectory.t0 == 0.5
     with pytest.raises(InputError, match=r"^t0: expected a finite number, got np.True_$"):
         gfuzzy.plan(scene, rm, (0.5, 1.0), (3.5, 1.0), t0=np.True_)
+
+
+def test_the_kept_gaps_are_computed_only_for_a_faster_motion(open_square, monkeypatch):
+    # brisk_arrival's cheap guards come first: a first move that does not end at the goal
+    # costs no kept inflation (it was computed at every PLAN and CLOSE call)
+    scene, rm = open_square
+    calls = []
+    kept = Navigator._kept_inflation
+    monkeypatch.setattr(Navigator, "_kept_inflation", lambda *args: calls.append(1) or kept(*args))
+    nav = Navigator(scene, rm, (0.0, 4.0), NavOptions(dt=0.4, time_budget=5.0, budget_clock="cpu"))
+    nav.step(0.0, np.array([0.0, -3.0]), np.array([[4.0, 0.0, 0.0, 0.0, 0.3]]))
+    assert nav.last.mode == "plan" and calls == []

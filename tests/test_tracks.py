@@ -189,6 +189,57 @@ def test_a_person_unseen_for_longer_than_max_gap_is_two_movers(tmp_path, caplog)
     assert "--max-gap inf" in out.read_text() and [m.name for m in load_scene(out).movers] == ["ped-d"]
 
 
+def test_a_person_seen_once_is_dropped_aloud(tmp_path, caplog):
+    # a user's file with one row for some people (a detector's single hit): they were
+    # dropped without a word, and a file of such rows only was "no pedestrian in the window"
+    walk = gfuzzy.Track("a", np.array([[0, 0, 0], [1, 1, 0]], float))
+    once = gfuzzy.Track("b", np.array([[0.5, 2, 2]], float))
+    caplog.set_level("WARNING", logger="gfuzzy.scene.tracks")
+    caplog.clear()
+    assert list(_movers(tracks_scene(gfuzzy.Tracks("mem", "csv", None, None, (walk, once))))) == ["ped-a"]
+    (msg,) = [r.getMessage() for r in caplog.records]
+    assert msg.startswith("ped-b is seen at one instant only in the window (t = 0.5 s): dropped")
+    csv = tmp_path / "once.csv"
+    csv.write_text("t,id,x,y\n0,a,1,1\n0,b,-1,1\n0.5,c,0,2\n")
+    run = run_cli_process("tracks", str(csv), "-o", str(tmp_path / "once.yaml"))
+    assert run.returncode == 2 and not (tmp_path / "once.yaml").exists()
+    assert run.stderr.strip() == (f"{csv}: 3 pedestrian(s) in the window 0 s .. 0.5 s, each seen at one instant only: "
+                                  "a mover needs two rows or more (someone standing still: a row at the first time "
+                                  "and one at the last)")
+
+
+def test_a_person_seen_once_once_rounded_is_dropped_aloud(tmp_path, caplog):
+    # two rows 0.4 ms apart are one row at 1 ms: a was dropped without a word (counted
+    # before rounding), and with b and c seen once too the error said nobody was inside
+    csv = tmp_path / "close.csv"
+    csv.write_text("t,id,x,y\n0,a,0,0\n0.0004,a,1,0\n0.5,b,2,2\n0.9,c,1,1\n")
+    caplog.set_level("WARNING", logger="gfuzzy.scene.tracks")
+    caplog.clear()
+    with pytest.raises(gfuzzy.errors.SceneError) as err:
+        tracks_scene(read_tracks(csv))
+    assert str(err.value).endswith("3 pedestrian(s) inside the region -0.5 -0.5 2.5 2.5 during the window, each seen at "
+                                   "one instant only: a mover needs two rows or more (someone standing still: a row "
+                                   "at the first time and one at the last)")
+    assert [r.getMessage().split(":")[0] for r in caplog.records] == [
+        f"ped-{p} is seen at one instant only in the window (t = {t} s)" for p, t in (("a", 0), ("b", 0.5), ("c", 0.9))]
+    run = run_cli_process("tracks", str(csv), "-o", str(tmp_path / "close.yaml"))
+    assert run.returncode == 2 and not (tmp_path / "close.yaml").exists()
+    assert run.stderr.strip().splitlines()[-1].startswith(f"{csv}: 3 pedestrian(s) inside the region")
+
+
+def test_the_warnings_say_the_recordings_time(caplog):
+    # with the window starting at 0.5 s, a row at 5 s was said to be at 4.5 s (the
+    # window's own time) by the seen-once and the --max-gap warnings
+    rows = np.array([[0, 0, 0], [1, 1, 0], [8, 8, 0], [9, 9, 0], [9.5, 9.5, 0]], float)
+    tracks = gfuzzy.Tracks("mem", "csv", None, None, (gfuzzy.Track("d", rows), gfuzzy.Track("b", np.array([[5.0, 2, 2]]))))
+    caplog.set_level("WARNING", logger="gfuzzy.scene.tracks")
+    caplog.clear()
+    assert list(_movers(tracks_scene(tracks, TrackSceneOptions(t_start=0.5)))) == ["ped-d", "ped-d-2"]
+    assert sorted(r.getMessage().split(":")[0] for r in caplog.records) == [
+        "ped-b is seen at one instant only in the window (t = 5 s)",
+        "ped-d unseen for 7 s from t = 1 s (more than 5 s)"]
+
+
 def test_scale_and_default_region(csv_file):
     made = tracks_scene(read_tracks(csv_file), TrackSceneOptions(scale=0.5))
     np.testing.assert_allclose(_movers(made)["ped-a"], [[0, 0, 0], [1, 1, 0], [2, 2, 0]])

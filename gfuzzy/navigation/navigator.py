@@ -29,6 +29,7 @@ is ``[t, *pose]`` and that meets the speed bound.
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 import time
@@ -50,7 +51,7 @@ from ..timespace.spacetime import IntervalStore, SearchResult
 from ..timespace.timespace import timed_rows
 from ..trajectory import Trajectory
 from ..typed import FloatArray
-from .brisk import brisk
+from .brisk import brisk, brisk_arrival
 from .drivenav import drive_evasion, kept_plan, rest_of, sooner_plan
 from .evasion import holonomic_evasion
 from .lookout import Lookout
@@ -447,7 +448,7 @@ class Navigator(PathSpace, Prediction, SoftCost):
         t = float(t)
         obs = observation_rows(observations)
         self._unknown = unknown_positions(obs, unknown)
-        self._t_last = t
+        since, self._t_last = t - self._t_last, t  # the time since the last call (inf at the first)
         self.replans += 1
         if self._lookout is not None:
             self._lookout.observe(t, pose)
@@ -468,8 +469,11 @@ class Navigator(PathSpace, Prediction, SoftCost):
             ghosts = False
         else:
             traj, mode, found, ghosts = self._tiers(t, pose, obs, infl, deadline)
-        if opts.full_speed and traj is not None and mode in (NavMode.PLAN, NavMode.CLOSE):
-            traj = brisk(self, t, pose, traj, obs, self._kept_inflation(pose, obs, infl, mode), ghosts)
+        if traj is not None and mode in (NavMode.PLAN, NavMode.CLOSE):  # at full speed: all of it, or into the goal
+            keep = functools.cache(lambda: self._kept_inflation(pose, obs, infl, mode))  # only when checked
+            if opts.full_speed:
+                traj = brisk(self, t, pose, traj, obs, keep, ghosts)
+            traj = brisk_arrival(self, t, pose, traj, obs, keep, ghosts, since)
         if traj is None and len(obs) and not found.out_of_time and self._clock() < deadline:
             # blocked by the margins (someone standing beside the goal, a narrow gap): try
             # once more with the people's discs as they are, plus the mover clearance only

@@ -442,13 +442,22 @@ def _window(tracks: Tracks, options: TrackSceneOptions):
         for tr in sorted(tracks.tracks, key=lambda tr: _id_key(tr.id))
     }
     duration = t_hi - t_lo
-    if not any(len(_clip_time(rows, 0.0, duration)) >= 2 for rows in rel.values()):
+    counts = [len(_clip_time(rows, 0.0, duration)) for rows in rel.values()]
+    if not any(n >= 2 for n in counts):
+        once = sum(n == 1 for n in counts)  # every row a different person's: say so, not "nobody"
         raise SceneError(
             src,
             "",
+            _seen_once(once, f"in the window {t_lo:g} s .. {t_hi:g} s") if once else
             f"no pedestrian in the window {t_lo:g} s .. {t_hi:g} s (the recording spans {first:g} .. {last:g} s)",
         )
     return rel, t_lo, t_hi
+
+
+def _seen_once(n: int, where: str) -> str:
+    """The error for a window (or region) whose ``n`` people are each seen at one instant only."""
+    return (f"{n} pedestrian(s) {where}, each seen at one instant only: a mover needs two rows or more "
+            "(someone standing still: a row at the first time and one at the last)")
 
 
 def robot_dof(static: Scene | None, robot_radius: float | None) -> int:
@@ -518,10 +527,11 @@ def _query_docs(start, goal, query_name, expect, dof, inradius, region, src) -> 
     return queries
 
 
-def _split_gaps(pid: str, rows, max_gap: float | None, own: list) -> list[list]:
+def _split_gaps(pid: str, rows, max_gap: float | None, own: list, t_lo: float) -> list[list]:
     """``rows`` cut where two consecutive rows are more than ``max_gap`` seconds apart (None:
     :data:`GAP_PERIODS` times the median time between the person's ``own`` rows, the whole
-    track's); each cut logged."""
+    track's); each cut logged at the recording's time (the rows' times are relative to the
+    window's start ``t_lo``)."""
     if max_gap is None:
         steps = [b[0] - a[0] for a, b in pairwise(own)]
         max_gap = GAP_PERIODS * statistics.median(steps) if steps else math.inf
@@ -529,30 +539,34 @@ def _split_gaps(pid: str, rows, max_gap: float | None, own: list) -> list[list]:
     for a, b in pairwise(rows):
         if b[0] - a[0] > max_gap:
             log.warning("ped-%s unseen for %g s from t = %g s (more than %g s): absent in between, the rows "
-                        "before and after are separate movers (--max-gap)", pid, b[0] - a[0], a[0], max_gap)
+                        "before and after are separate movers (--max-gap)", pid, b[0] - a[0], t_lo + a[0], max_gap)
             runs.append([])
         runs[-1].append(b)
     return runs
 
 
-def _movers(rel: dict, duration: float, region, options: TrackSceneOptions, src) -> list:
+def _movers(rel: dict, t_lo: float, duration: float, region, options: TrackSceneOptions, src) -> list:
     """Every person's runs inside the window and the region, as movers, in order of
-    appearance (the ``max_movers`` present longest when that is set)."""
+    appearance (the ``max_movers`` present longest when that is set). A person inside
+    whose every run is one row once rounded to 1 ms is dropped with a warning (at the
+    recording's time: ``rel``'s are relative to the window's start ``t_lo``)."""
     movers: list[_Mover] = []
+    once = 0
     for pid, own in rel.items():
         rows = _clip_time(own, 0.0, duration)
-        if len(rows) < 2:
-            continue
-        seen = _split_gaps(pid, rows, options.max_gap, own)
-        runs = (_round_rows(run) for part in seen for run in _clip_region(part, region))
-        for k, run in enumerate((run for run in runs if len(run) >= 2), start=1):  # numbered as kept
+        seen = _split_gaps(pid, rows, options.max_gap, own, t_lo) if rows else []
+        runs = [_round_rows(run) for part in seen for run in _clip_region(part, region)]
+        kept = [run for run in runs if len(run) >= 2]
+        if runs and not kept:  # a person seen once is not a motion: dropped, but never silently
+            once += 1
+            log.warning("ped-%s is seen at one instant only in the window (t = %g s): dropped (a mover needs two "
+                        "rows or more)", pid, t_lo + runs[0][0][0])
+        for k, run in enumerate(kept, start=1):  # numbered as kept
             movers.append(_Mover(f"ped-{pid}" if k == 1 else f"ped-{pid}-{k}", pid, run))
     if not movers:
-        raise SceneError(
-            src,
-            "",
-            f"no pedestrian inside the region {' '.join(f'{v:g}' for v in region)} during the window",
-        )
+        where = f"inside the region {' '.join(f'{v:g}' for v in region)}"
+        raise SceneError(src, "", _seen_once(once, f"{where} during the window") if once else
+                         f"no pedestrian {where} during the window")  # fmt: skip
     if options.max_movers is not None and len(movers) > options.max_movers:
         keep = sorted(movers, key=lambda m: (-m.duration, _id_key(m.pid), m.rows[0][0]))[
             : options.max_movers
@@ -632,7 +646,7 @@ def tracks_scene(
     region = tuple(float(v) for v in region)
     robot, dof, inradius = _robot_doc(options, static)
     queries = _query_docs(start, goal, query_name, expect, dof, inradius, region, src)
-    movers = _movers(rel, duration, region, options, src)
+    movers = _movers(rel, t_lo, duration, region, options, src)
     _warn_overlaps(queries, movers, inradius + options.radius)
     doc = {
         "version": 1,
