@@ -151,8 +151,8 @@ def refine_path(
         sample spacing allows).
     deadline : float or None
         A :func:`time.perf_counter` time: once past it the generations stop and the input is
-        returned, ``out_of_time`` set (never a partly evolved path: the answer does not
-        depend on the machine's speed).
+        returned, ``out_of_time`` set (never a partly evolved path: a refined answer is
+        the whole GA's, whatever the machine's speed).
 
     Returns
     -------
