@@ -76,7 +76,7 @@ def brisk_arrival(nav: Navigator, t: float, pose: FloatArray, traj: Trajectory, 
     search gives the sliver left a whole step of ``dt``. Replanned every period shorter
     than ``dt``, the robot covered only ``period / dt`` of what was left at each call and
     crept into the goal (in an empty room, ``dt`` 0.4 s and calls every 0.25 s: 8 m in
-    11.5 s, 19.5 s at ``dt`` 1, for plans of 8.4 and 9 s). With ``dt`` at most the period
+    11.0 s, 19.5 s at ``dt`` 1, for plans of 8.4 and 9 s). With ``dt`` at most the period
     the move ends before the next call: the plan is left as it is."""
     w, cr = traj.waypoints, nav.robot.circumradius
     if (nav.robot.unicycle or len(w) < 2 or w[1, 0] - t <= since + 1e-9
