@@ -71,6 +71,19 @@ BUNDLED_PARAMS = [
 ]
 
 
+def bundled_params(slow: tuple[str, ...] = (), names: bool = False) -> list:
+    """The bundled scenes as pytest parameters (paths, or with ``names`` their names), ids the
+    names, the scenes named in ``slow`` marked slow: a test run on every bundled scene keeps
+    its cheap scenes, one of each kind, in `make test` and runs the costly ones (seconds to
+    half a minute each) in `make slow` (``tools/run_slow.sh``)."""
+    unknown = set(slow) - {p.stem for p in BUNDLED_SCENES}
+    assert not unknown, f"no bundled scene {sorted(unknown)}"
+    return [
+        pytest.param(p.stem if names else p, id=p.stem, marks=[pytest.mark.slow] if p.stem in slow else [])
+        for p in BUNDLED_SCENES
+    ]
+
+
 @cache
 def bundled_setup(path: Path):
     scene = load_scene(path)

@@ -23,7 +23,9 @@ from gfuzzy.status import Status  # noqa: E402
 from tools.bench_unseen import KINDS, KINEMATICS, SCENARIOS, _outcome, main, make_case, run_case  # noqa: E402
 
 
-@pytest.mark.parametrize("scenario", list(SCENARIOS))
+@pytest.mark.parametrize(  # door-movers checks its witnesses among movers (25 s): `make slow`
+    "scenario", [pytest.param(s, marks=pytest.mark.slow) if s == "door-movers" else s for s in SCENARIOS]
+)
 def test_every_scenario_gives_loadable_scenes_with_valid_queries_and_checked_witnesses(scenario, tmp_path):
     for index in range(len(KINDS) * len(KINEMATICS)):  # every robot kind with every kinematics
         case = make_case(5, index, scenarios=(scenario,))

@@ -120,8 +120,12 @@ def test_a_navigator_docks_deep_in_the_alcove():
     assert check_trajectory(scene, res.trajectory.waypoints, scene.query("q")).valid
 
 
-@pytest.mark.parametrize("side", [0.0, 0.016], ids=["flush-left", "flush-right"])
-@pytest.mark.parametrize("into", [True, False], ids=["goal-deep", "start-deep"])
+@pytest.mark.parametrize(  # the start deep in the alcove, and the right wall: `make slow` (7-15 s each)
+    "side, into",
+    [pytest.param(0.0, True, id="flush-left-goal-deep"), pytest.param(0.016, False, id="flush-right-start-deep"),
+     pytest.param(0.016, True, id="flush-right-goal-deep", marks=pytest.mark.slow),
+     pytest.param(0.0, False, id="flush-left-start-deep", marks=pytest.mark.slow)],
+)  # fmt: skip
 def test_an_end_flush_with_a_side_wall_of_the_alcove_is_bridged(side, into):
     """8 mm per side, the cart against one side wall: after the 2 mm step from contact its
     clearance is still 0 (it slides along the wall), so the rays stopped at 4 mm and were

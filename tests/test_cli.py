@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import ROOT, run_cli_process
+from conftest import ROOT
 from helpers import run_main as _run
 from helpers import write_trajectory_file as _trajectory_file
 from shared_scenes import DOOR, LOOP
@@ -256,52 +256,69 @@ def test_check_says_what_it_cannot_verify_without_the_query(tmp_path, capsys):
     assert "'nope'" in err and "not checked" in err
 
 
-def test_cli_hold_and_check(tmp_path):
+def _in_process(capsys, monkeypatch, folder):
+    """``run(*args)`` -> (returncode, stdout, stderr) of ``gfuzzy ARGS`` in this process, run
+    from ``folder`` (a real process costs a second of imports a call; the program's own
+    process is tested in tests/test_scene.py's *_subprocess tests and tests/test_interrupt.py)."""
+    import types
+
+    monkeypatch.chdir(folder)
+
+    def run(*args):
+        rc, out, err = _run(capsys, *args)
+        return types.SimpleNamespace(returncode=rc, stdout=out, stderr=err)
+
+    return run
+
+
+def test_cli_hold_and_check(tmp_path, capsys, monkeypatch):
+    run = _in_process(capsys, monkeypatch, tmp_path)
     path = tmp_path / "loop.yaml"
     path.write_text(LOOP)
     out = tmp_path / "a.json"
-    r = run_cli_process("plan", path, "-n", "60", "--seed", "1", "-o", out, cwd=tmp_path)
+    r = run("plan", path, "-n", "60", "--seed", "1", "-o", out)
     assert r.returncode == 0, r.stderr
-    assert run_cli_process("check", path, out, cwd=tmp_path).returncode == 0
+    assert run("check", path, out).returncode == 0
     # the same start and goal as an ad-hoc query with --hold 2: it waits
-    r = run_cli_process("plan", path, "-n", "60", "--seed", "1", "--start", "1", "3", "--goal", "4", "3",
-                        "--hold", "2", "-o", out, cwd=tmp_path)  # fmt: skip
+    r = run("plan", path, "-n", "60", "--seed", "1", "--start", "1", "3", "--goal", "4", "3",
+                        "--hold", "2", "-o", out)  # fmt: skip
     assert r.returncode == 0, r.stderr
     wps = np.array(json.loads(out.read_text())["waypoints"])
     scene = load_scene(path)
     assert check_trajectory(scene, wps, scene.queries[0]).valid
-    assert run_cli_process("check", path, out, "--hold", "2", cwd=tmp_path).returncode == 0
+    assert run("check", path, out, "--hold", "2").returncode == 0
     # without the hold the ad-hoc answer arrives as early as it can, and parks in the cart's way
-    r = run_cli_process("plan", path, "-n", "60", "--seed", "1", "--start", "1", "3", "--goal", "4", "3",
-                        "-o", out, cwd=tmp_path)  # fmt: skip
+    r = run("plan", path, "-n", "60", "--seed", "1", "--start", "1", "3", "--goal", "4", "3",
+                        "-o", out)  # fmt: skip
     assert r.returncode == 0, r.stderr
-    assert run_cli_process("check", path, out, cwd=tmp_path).returncode == 0
-    bad = run_cli_process("check", path, out, "--hold", "2", cwd=tmp_path)
+    assert run("check", path, out).returncode == 0
+    bad = run("check", path, out, "--hold", "2")
     assert bad.returncode == 1 and "cart" in bad.stderr
-    bad = run_cli_process("plan", path, "--hold", "-1", cwd=tmp_path)
+    bad = run("plan", path, "--hold", "-1")
     assert bad.returncode == 2 and "--hold" in bad.stderr and len(bad.stderr.strip().splitlines()) == 1
 
 
-def test_cli_overrides_rebuild_the_roadmap_and_check_enforces_them(tmp_path):
+def test_cli_overrides_rebuild_the_roadmap_and_check_enforces_them(tmp_path, capsys, monkeypatch):
     """--clearance changes the roadmap (said on stderr, built with the saved options);
     check with the same overrides accepts the answer, with a larger one refuses it."""
+    run = _in_process(capsys, monkeypatch, tmp_path)
     path = tmp_path / "scenes" / "door.yaml"
     path.parent.mkdir()
     path.write_text(DOOR.replace(", clearance: 0.05", ""))
-    r = run_cli_process("roadmap", path, "-n", "80", "--seed", "2", cwd=tmp_path)
+    r = run("roadmap", path, "-n", "80", "--seed", "2")
     assert r.returncode == 0, r.stderr
     out = tmp_path / "a.json"
-    r = run_cli_process("plan", path, "--clearance", "0.05", "--mover-clearance", "0.1", "-o", out, cwd=tmp_path)
+    r = run("plan", path, "--clearance", "0.05", "--mover-clearance", "0.1", "-o", out)
     assert r.returncode == 0, r.stderr
     assert "robot.clearance=0.05" in r.stderr and "80 vertices, seed 2" in r.stderr
-    assert run_cli_process("check", path, out, "--clearance", "0.05", cwd=tmp_path).returncode == 0
-    bad = run_cli_process("check", path, out, "--clearance", "0.25", cwd=tmp_path)
+    assert run("check", path, out, "--clearance", "0.05").returncode == 0
+    bad = run("check", path, out, "--clearance", "0.25")
     assert bad.returncode == 1 and "robot.clearance=0.25" in bad.stderr
-    r = run_cli_process("regress", path, "--clearance", "0.05", cwd=tmp_path)
+    r = run("regress", path, "--clearance", "0.05")
     assert r.returncode == 0 and "valid" in r.stdout
     for cmd in ("plan", "regress", "check"):
         args = (path, out) if cmd == "check" else (path,)
-        bad = run_cli_process(cmd, *args, "--mover-clearance", "nan", cwd=tmp_path)
+        bad = run(cmd, *args, "--mover-clearance", "nan")
         assert bad.returncode == 2 and "--mover-clearance" in bad.stderr
         assert len(bad.stderr.strip().splitlines()) == 1
 

@@ -15,6 +15,8 @@ import pytest
 
 pytest.importorskip("pyrvo")
 
+from helpers import run_main  # noqa: E402
+
 from gfuzzy.errors import InputError  # noqa: E402
 from gfuzzy.navigation import crowd as C  # noqa: E402
 from gfuzzy.navigation.crowdsummary import summarize  # noqa: E402
@@ -151,8 +153,8 @@ def test_a_crowd_that_does_not_fit_is_refused_after_a_bounded_number_of_draws(sc
     # the draws are bounded, and the refusal says what fitted
     from gfuzzy.navigation import crowdlayout
 
-    monkeypatch.setattr(crowdlayout, "RESTART_EVERY", 20_001)
-    monkeypatch.setattr(crowdlayout, "DRAW_BUDGET", 60_000)
+    monkeypatch.setattr(crowdlayout, "RESTART_EVERY", 7_001)
+    monkeypatch.setattr(crowdlayout, "DRAW_BUDGET", 21_000)
     with pytest.raises(InputError, match=rf"cannot place {K} humans in the {scenario} scenario: .* 3 attempts ") as err:
         C.layout(C.CrowdSetting(scenario, humans=K), np.random.default_rng(1))
     best = int(re.search(r"placed at most (\d+)", str(err.value)).group(1))
@@ -334,7 +336,7 @@ TIMING = ("replan_p50_ms", "replan_p95_ms", "replan_max_ms")
 
 def test_crowd_command_end_to_end_same_seed_same_csv(tmp_path):
     a, b = tmp_path / "a.csv", tmp_path / "b.csv"
-    args = ["crowd", "--scenario", "square", "--humans", "3", "--episodes", "3", "--seed", "4",
+    args = ["crowd", "--scenario", "square", "--humans", "3", "--episodes", "2", "--seed", "4",
             "--policy", "orca", "social-force", "oracle"]  # fmt: skip
     p = _run(*args, "-o", str(a))
     assert p.returncode == 0, p.stderr
@@ -342,11 +344,11 @@ def test_crowd_command_end_to_end_same_seed_same_csv(tmp_path):
     q = _run(*args, "-o", str(b))
     assert q.returncode == 0
     ra, rb = _rows(a), _rows(b)
-    assert len(ra) == 9 and list(ra[0]) == list(C.CSV_COLUMNS)
+    assert len(ra) == 6 and list(ra[0]) == list(C.CSV_COLUMNS)
     strip = [{k: v for k, v in r.items() if k not in TIMING} for r in ra]
     assert strip == [{k: v for k, v in r.items() if k not in TIMING} for r in rb]
     c = tmp_path / "c.csv"
-    other = ["crowd", "--scenario", "square", "--humans", "3", "--episodes", "3", "--seed", "5", "--policy", "orca"]
+    other = ["crowd", "--scenario", "square", "--humans", "3", "--episodes", "2", "--seed", "5", "--policy", "orca"]
     assert _run(*other, "-o", str(c)).returncode == 0
     assert [r["min_separation"] for r in _rows(c)] != [r["min_separation"] for r in ra if r["policy"] == "orca"]
     # each row says the run it came from: its seed and how the robot sensed
@@ -387,15 +389,25 @@ def test_crowd_command_navigator_visible(tmp_path, workers):
     ["--soft-search", "--intrusion-cost", "1e308"],  # named NavOptions' intrusion_cost, not the flag
     ["--intrusion-cost", "3"],  # silently ignored without --soft-search
 ])  # fmt: skip
-def test_crowd_command_refuses_bad_arguments_in_one_line(tmp_path, flags):
+def test_crowd_command_refuses_bad_arguments_in_one_line(tmp_path, capsys, flags):
+    # in this process (a traceback would be an exception here); one real process below
     out = tmp_path / "x.csv"
-    p = _run("crowd", *flags, "--episodes" if "--episodes" not in flags else "--seed", "1", "-o", str(out))
-    assert p.returncode == 2, p.stdout + p.stderr
-    assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
+    rc, stdout, stderr = run_main(capsys, "crowd", *flags, "--episodes" if "--episodes" not in flags else "--seed", "1",
+                                  "-o", out)  # fmt: skip
+    assert rc == 2, stdout + stderr
+    assert len(stderr.strip().splitlines()) == 1 and "Traceback" not in stderr
     assert not out.exists()
     named = [f for f in flags if f in ("--fov", "--noise", "--intrusion-cost")]
     if named and "1e300" not in flags:  # named as the user typed it, as navigate does
-        assert p.stderr.startswith(f"gfuzzy crowd: {named[0]} ")
+        assert stderr.startswith(f"gfuzzy crowd: {named[0]} ")
+
+
+def test_crowd_command_refuses_bad_arguments_from_a_real_process(tmp_path):
+    out = tmp_path / "x.csv"
+    p = _run("crowd", "--noise", "1e300", "--episodes", "1", "-o", str(out))
+    assert p.returncode == 2, p.stdout + p.stderr
+    assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
+    assert not out.exists()
 
 
 def test_crowd_command_refuses_humans_that_do_not_fit_before_any_episode(tmp_path):

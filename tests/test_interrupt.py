@@ -389,6 +389,13 @@ def _entry_points() -> dict[str, list[str]]:
     return {"console script": ["-c", script], "python -m": ["-m", "gfuzzy"]}
 
 
+def _sigint_default() -> None:
+    """The child starts with SIGINT at its default, as from a terminal: a suite started in the
+    background of a shell without job control (``make test &`` in a script) passes SIGINT on
+    ignored, and Python then installs no handler of its own (``getsignal`` gives SIG_IGN)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 @pytest.mark.parametrize("cut_at", ["errors", "argparse", "numpy"])
 @pytest.mark.parametrize("entry", ["console script", "python -m"])
 def test_a_ctrl_c_while_gfuzzy_imports_is_one_line(tmp_path, entry, cut_at):
@@ -404,7 +411,7 @@ def test_a_ctrl_c_while_gfuzzy_imports_is_one_line(tmp_path, entry, cut_at):
     out = tmp_path / "x.json"
     run = subprocess.run(
         [sys.executable, *_entry_points()[entry], "plan", str(SCENE), "--roadmap", str(ROADMAP), "-o", str(out)],
-        cwd=ROOT, env=env, capture_output=True, text=True, timeout=120,
+        cwd=ROOT, env=env, capture_output=True, text=True, timeout=120, preexec_fn=_sigint_default,
     )  # fmt: skip
     _interrupted_once(run.returncode, run.stderr, out)
 

@@ -9,6 +9,7 @@ import time
 import numpy as np
 import pytest
 from conftest import ROOT, run_cli_process, unhurried
+from helpers import run_main
 
 import gfuzzy
 from gfuzzy.errors import InputError
@@ -366,11 +367,20 @@ def test_navigate_cli_on_a_pedestrian_replay(tmp_path, backend):
     [["--period", "0"], ["--period", "-1"], ["--sense", "0"], ["--max-time", "nan"], ["--query", "nope"],
      ["--path-space", "nan"], ["--personal-space", "-1"], ["--budget-clock", "gpu"]],
 )
-def test_navigate_bad_input(tmp_path, args):
+def test_navigate_bad_input(tmp_path, capsys, args):
+    # in this process (a traceback would be an exception here); one real process below
     out = tmp_path / "o.json"
-    p = run_cli_process("navigate", ROOT / "scenes" / "eth-crossing.yaml", *args, "-o", out)
+    rc, stdout, stderr = run_main(capsys, "navigate", ROOT / "scenes" / "eth-crossing.yaml", *args, "-o", out)
+    assert rc == 2, stdout + stderr
+    assert len(stderr.strip().splitlines()) == 1
+    assert not out.exists()
+
+
+def test_navigate_bad_input_from_a_real_process(tmp_path):
+    out = tmp_path / "o.json"
+    p = run_cli_process("navigate", ROOT / "scenes" / "eth-crossing.yaml", "--period", "0", "-o", out)
     assert p.returncode == 2
-    assert len(p.stderr.strip().splitlines()) == 1
+    assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
     assert not out.exists()
 
 
@@ -379,14 +389,14 @@ def test_navigate_bad_input(tmp_path, args):
     [["--soft-search", "--intrusion-cost", "-1"], ["--soft-search", "--intrusion-cost", "nan"],
      ["--soft-search", "--intrusion-cost", "1e308"], ["--intrusion-cost", "3"]],
 )
-def test_navigate_refuses_a_bad_intrusion_cost_by_its_flag(tmp_path, args):
+def test_navigate_refuses_a_bad_intrusion_cost_by_its_flag(tmp_path, capsys, args):
     """As ``gfuzzy crowd``: one line naming ``--intrusion-cost`` (not NavOptions' field),
     exit 2, no file; without ``--soft-search`` the flag would change nothing."""
     out = tmp_path / "o.json"
-    p = run_cli_process("navigate", ROOT / "scenes" / "eth-crossing.yaml", *args, "-o", out)
-    assert p.returncode == 2, p.stdout + p.stderr
-    assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
-    assert p.stderr.startswith("gfuzzy navigate: --intrusion-cost ")
+    rc, stdout, stderr = run_main(capsys, "navigate", ROOT / "scenes" / "eth-crossing.yaml", *args, "-o", out)
+    assert rc == 2, stdout + stderr
+    assert len(stderr.strip().splitlines()) == 1 and "Traceback" not in stderr
+    assert stderr.startswith("gfuzzy navigate: --intrusion-cost ")
     assert not out.exists()
 
 

@@ -79,20 +79,36 @@ def test_wheel_and_sdist_hold_every_module_and_data_file(dist):
         assert {f"gfuzzy/examples/{name}" for name in examples} <= set(zf.namelist())
 
 
-def test_installed_wheel_plans_refines_and_checks(dist, tmp_path):
-    (wheel,) = dist.glob("gfuzzy-*.whl")
-    venv = tmp_path / "venv"
+def _venv_with(wheel: Path, venv: Path, *, deps: bool) -> tuple[Path, dict]:
+    """A fresh virtualenv at ``venv`` with ``wheel`` installed (not editable); its bin folder
+    and the environment to run it in. ``deps=False`` installs the wheel alone and lets the
+    venv import the packages this test runs on (a ``.pth`` line naming their folders; the
+    editable gfuzzy among them is not imported: its own ``.pth`` files are not read there)."""
     subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, timeout=300)
     bindir = venv / ("Scripts" if os.name == "nt" else "bin")
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME")}
     env["MPLBACKEND"] = "Agg"
-    proc = subprocess.run(
-        [str(bindir / "python"), "-m", "pip", "install", "--quiet", str(wheel)],
-        capture_output=True, text=True, timeout=900, env=env,
-    )
-    assert proc.returncode == 0, proc.stderr[-3000:]
+    install = [str(bindir / "python"), "-m", "pip", "install", "--quiet", str(wheel)]
+    if not deps:
+        import site
+        import sysconfig
 
-    work = tmp_path / "elsewhere"  # no gfuzzy/ folder here: only the install can be imported
+        purelib = subprocess.run(
+            [str(bindir / "python"), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
+            capture_output=True, text=True, check=True, timeout=120,
+        ).stdout.strip()  # fmt: skip
+        ours = dict.fromkeys([sysconfig.get_paths()["purelib"], *site.getsitepackages()])
+        Path(purelib, "_test_env_packages.pth").write_text("\n".join(ours) + "\n")
+        install[4:4] = ["--no-deps"]
+    proc = subprocess.run(install, capture_output=True, text=True, timeout=900, env=env)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return bindir, env
+
+
+def _plans_refines_and_checks(bindir: Path, env: dict, venv: Path, work: Path, *, refine: bool) -> None:
+    """What a user of the installed package does first: ``gfuzzy examples``, then a plan of
+    the bundled building floor (the speed layer, with ``refine`` the GA too) and its check,
+    run from a folder where only the install can be imported."""
     work.mkdir()
     out = work / "answer.json"
 
@@ -115,13 +131,41 @@ def test_installed_wheel_plans_refines_and_checks(dist, tmp_path):
     assert (work / "ex" / "roadmaps" / "building-floor.json").is_file()
     assert (work / "ex" / "data" / "pedestrians" / "biwi_eth.txt").is_file()
 
-    # a fresh install has no precompiled kernels: its first query compiles them with numba,
-    # which counts against the planning budget (tens of seconds on a loaded machine)
-    planned = gfuzzy("plan", scene, "--refine", "--speed-layer", "--time-limit", "900", "-o", out)
+    # without precompiled kernels the first query compiles them with numba, before its
+    # planning clock (tens of seconds on a loaded machine): a long limit all the same
+    planned = gfuzzy("plan", scene, *(["--refine"] if refine else []), "--speed-layer", "--time-limit", "900", "-o", out)
     assert planned.returncode == 0, planned.stdout + planned.stderr
     answer = json.loads(out.read_text())
     assert answer["status"] == "solved" and len(answer["waypoints"]) > 2
     assert "speed_layer" in answer.get("stats", {}), sorted(answer)
+    assert ("refine" in answer.get("stats", {})) == refine, sorted(answer.get("stats", {}))
     checked = gfuzzy("check", scene, out)
     assert checked.returncode == 0, checked.stdout + checked.stderr
     assert "valid" in checked.stdout
+
+
+def test_installed_wheel_plans_and_checks(dist, tmp_path):
+    """The wheel alone, installed over this run's packages, with the precompiled search
+    kernels `make warm` built (``GFUZZY_KERNEL_DIR``; the installed sources are the same, so
+    is their key): seconds, where the cold install below takes minutes."""
+    (wheel,) = dist.glob("gfuzzy-*.whl")
+    venv = tmp_path / "venv"
+    bindir, env = _venv_with(wheel, venv, deps=False)
+    from gfuzzy.timespace import jit
+
+    for folder in jit.kernel_dirs():
+        if (folder / f"{jit.module_name()}.json").exists():
+            env["GFUZZY_KERNEL_DIR"] = str(folder)
+            break
+    _plans_refines_and_checks(bindir, env, venv, tmp_path / "elsewhere", refine=False)
+
+
+@pytest.mark.slow
+def test_a_cold_installed_wheel_plans_refines_and_checks(dist, tmp_path):
+    """A user's ``pip install gfuzzy-*.whl`` into an empty virtualenv: the dependencies
+    resolved from pyproject's ranges, no precompiled kernels, no numba cache (the search's
+    and the GA's kernels compiled by the first plan). Minutes: `make slow` runs it."""
+    (wheel,) = dist.glob("gfuzzy-*.whl")
+    venv = tmp_path / "venv"
+    bindir, env = _venv_with(wheel, venv, deps=True)
+    _plans_refines_and_checks(bindir, env, venv, tmp_path / "elsewhere", refine=True)

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 import yaml
 from conftest import run_cli_process
+from helpers import run_main
 
 pytest.importorskip("pyrvo")
 
@@ -101,7 +102,7 @@ def test_populate_between_given_waypoints():
         assert sum(near) >= 2
 
 
-def test_populate_refuses_bad_input(tmp_path):
+def test_populate_refuses_bad_input(tmp_path, capsys):
     scene = parse_scene(ROOM)
     with pytest.raises(InputError):
         populate(scene, PopulateOptions(people=2, waypoints=((5.0, 1.0), (8.0, 5.0))))  # inside the wall
@@ -117,12 +118,16 @@ def test_populate_refuses_bad_input(tmp_path):
                   ["--people", "2", "--seed", "-1"],
                   # a NaN waypoint reached the grid's lookup: a ValueError traceback, exit 1
                   ["--people", "2", "--waypoints", "1,1;nan,2"], ["--people", "2", "--waypoints", "1,1;2,inf"]):  # fmt: skip
-        p = _run("populate", str(src), *flags, "-o", str(out))
-        assert p.returncode == 2, flags
-        assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
+        # in this process (a traceback would be an exception here); a real process once, below
+        rc, _, err = run_main(capsys, "populate", src, *flags, "-o", out)
+        assert rc == 2, flags
+        assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
         assert not out.exists()
         if "--seed" in flags:  # named by the command (it came from deep in populate, unnamed)
-            assert p.stderr.startswith("gfuzzy populate: seed must be")
+            assert err.startswith("gfuzzy populate: seed must be")
+    p = _run("populate", str(src), "--people", "2", "--speed", "1e20", "-o", str(out))
+    assert p.returncode == 2 and len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
+    assert not out.exists()
 
 
 def test_too_long_a_walk_is_refused_in_seconds():

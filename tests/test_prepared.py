@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import bundled_params
 
 from gfuzzy.check.check import check_trajectory
 from gfuzzy.planner.planner import Planner, PlanOptions
@@ -69,7 +70,10 @@ def test_plan_from_with_other_movers_and_the_reference_backend():
 SCENES = sorted(p.stem for p in (ROOT / "scenes").glob("*.yaml"))
 
 
-@pytest.mark.parametrize("name", SCENES)
+# 4-11 s each on the drives and the depot map: `make slow`; tb3-arena-unicycle keeps a drive
+@pytest.mark.parametrize(
+    "name", bundled_params(slow=("drive-tight", "building-floor-unicycle", "depot", "footprint-office"), names=True)
+)
 def test_plan_from_matches_fresh_plans_on_every_bundled_query(name):
     """Every query of every bundled scene, from its start and from a pose in the middle of
     a roadmap edge near it: the same status, duration and roadmap distance as a fresh plan."""
@@ -291,7 +295,7 @@ def _query_poses(scene, planner):
         ("building-floor", 1.0, 3.0),  # most edges one step: connections onto single-step edges
         ("office-polygons", 1.05, 0.2),
         ("sealed-room", 1.0, 0.07),  # a part of the roadmap the goal cannot reach: inf
-        ("warehouse-mesh", 1.05, 0.07),
+        pytest.param("warehouse-mesh", 1.05, 0.07, marks=pytest.mark.slow),  # 8 s: `make slow`
     ],
 )
 def test_the_query_graph_equals_an_independent_build(name, stretch, dt):

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import yaml
 from conftest import ROOT
-from helpers import BUNDLED_PARAMS
+from helpers import BUNDLED_PARAMS, bundled_params
 from helpers import BUNDLED_SCENES as SCENES
 from helpers import bundled_answers as _answers
 from helpers import bundled_setup as _setup
@@ -139,7 +139,13 @@ def test_ga_and_speed_layer_keep_the_clearances():
     assert reference_violation(_doc(CROSSING, clearance=0.05, mover_clearance=0.2), res.trajectory.waypoints) == ""
 
 
-@pytest.mark.parametrize("path", BUNDLED_PARAMS)  # the large scenes: slow
+# the GA costs 8-22 s on the larger scenes: those run in `make slow`; the drive
+# (building-floor-unicycle), the replays and the small mover scenes stay in `make test`
+REFINE_SLOW = ("depot", "small-house", "tb3-arena", "tb3-arena-unicycle", "drive-tight", "footprint-office",
+               "building-floor", "office-polygons", "warehouse-mesh")  # fmt: skip
+
+
+@pytest.mark.parametrize("path", bundled_params(slow=REFINE_SLOW))
 def test_refined_answers_keep_the_guarantees(path):
     scene = _setup(path)[0]
     for (q, plain), (_, refined) in zip(_answers(path, False, False), _answers(path, True, False), strict=True):

@@ -463,7 +463,11 @@ def _depth_oracle(body, obstacle) -> float:
     return max(inside(body, obstacle), inside(obstacle, body))
 
 
-@pytest.mark.parametrize("robot", [ROBOTS[0], ROBOTS[1], {"footprint": SPIKE, "vmax": 0.5}], ids=["box", "L", "spike"])
+@pytest.mark.parametrize(  # the box and the spike (4-9 s each): `make slow`; the L keeps a concave body
+    "robot",
+    [pytest.param(ROBOTS[0], id="box", marks=pytest.mark.slow), pytest.param(ROBOTS[1], id="L"),
+     pytest.param({"footprint": SPIKE, "vmax": 0.5}, id="spike", marks=pytest.mark.slow)],
+)  # fmt: skip
 def test_check_and_the_planner_agree_with_a_depth_oracle_near_contact(robot):
     """Brute force, near-contact poses (a face, a corner, an obstacle's corner; 1e-12 to
     1e-6 m in or out): ``gfuzzy check`` calls a pose more than 2e-9 m deep (by an oracle
