@@ -164,7 +164,9 @@ class Case:
 
     def walls(self, free) -> None:
         """Everything within the bounds but ``free`` as polygon obstacles (holes split)."""
-        rest = shapely.box(*self.bounds).difference(free)
+        # free grown by 0.1 um: where its pieces meet along a line, their union can keep a
+        # crack of zero width, which would be a wall of zero thickness (a line the check blocks)
+        rest = shapely.box(*self.bounds).difference(free.buffer(1e-7, join_style="mitre"))
         for poly in getattr(rest, "geoms", [rest]):
             if poly.is_empty or poly.area < 1e-6:
                 continue
