@@ -70,7 +70,17 @@ from gfuzzy.collision.geometry import StaticGeometry  # noqa: E402
 from gfuzzy.planner.planner import Planner, query_problem  # noqa: E402
 from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap  # noqa: E402
 from gfuzzy.scene.scene import parse_scene  # noqa: E402
-from tools.bench_unseen import MARGIN, Body, Room, _door, _ends_valid, make_robot, polygon, unit  # noqa: E402
+from tools.bench_unseen import (  # noqa: E402
+    MARGIN,
+    Body,
+    Room,
+    _door,
+    _ends_valid,
+    left,
+    make_robot,
+    polygon,
+    unit,
+)
 from tools.drive_oracle import obstacle_geometry, solve  # noqa: E402
 
 BODIES = ("disc", "box", "cart", "offcentre", "u", "l", "t", "chevron")
@@ -239,8 +249,12 @@ def scenario_corridor(rng, body: Body):
         free = free.union(shapely.Point(bend).buffer(body.R + float(rng.uniform(0.01, 0.05))))
     case = Case(body, [0.0, 0.0, room.W, room.H])
     case.walls(free)
-    start = np.r_[bend - rng.uniform(body.R + 0.3, 2.0) * d1, h1]
-    goal = np.r_[bend + rng.uniform(body.R + 0.3, 2.0) * d2, h2 + (math.pi if rng.random() < 0.3 else 0.0)]
+    # the body's lateral middle on the corridor's centre line (facing back along the second
+    # leg, its left is the other side)
+    start = np.r_[bend - rng.uniform(body.R + 0.3, 2.0) * d1 - body.ymid * left(d1), h1]
+    back = rng.random() < 0.3
+    goal = np.r_[bend + rng.uniform(body.R + 0.3, 2.0) * d2 + (1 if back else -1) * body.ymid * left(d2),
+                 h2 + (math.pi if back else 0.0)]
     return case, start, goal
 
 
