@@ -157,6 +157,25 @@ def test_touching_discs_are_valid_and_overlapping_ones_are_not():
         assert np.all(geo.valid(poses) == ok), gap
 
 
+@pytest.mark.parametrize("base", [1e-15, 4e-15])
+def test_a_polygons_zero_width_spike_blocks_as_in_the_check(base):
+    """A polygon going up a line and back (a spike ``base`` wide: its triangle is flat) holds
+    that segment, and the check blocks there; the FCL geometry dropped the flat triangle and
+    let a disc through it (an unseen drive's answer the check refused,
+    tools/bench_unseen_drives.py). Both sides of the spike and the spike itself."""
+    from gfuzzy.check.check import check_trajectory
+
+    spike = [[0, 0], [2, 0], [2, 1], [1 + base, 1], [1, 3], [1, 1], [0, 1]]
+    scene = parse_scene({"version": 1, "name": "spike", "bounds": [-1, -1, 3, 4],
+                         "robot": {"disc": 0.2, "vmax": 1.0}, "obstacles": [{"polygon": spike}]})  # fmt: skip
+    geo = StaticGeometry(scene)
+    for x, ok in ((0.75, True), (0.85, False), (1.0, False), (1.15, False), (1.25, True)):
+        pose = np.array([x, 2.0])
+        assert check_trajectory(scene, np.array([[0.0, *pose], [1e-3, *pose]]), deepest=False).valid == ok, x
+        assert geo.is_valid(pose) == ok, x
+        assert (geo.clearance1(pose) >= 0) == ok, x
+
+
 def test_clearance_never_overestimates_near_a_disc():
     geo = _disc_world()
     for gap in (1e-1, 1e-2, 1e-3, 1e-4):

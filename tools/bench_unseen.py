@@ -298,14 +298,15 @@ def witness_for(scene, query, motion: Motion | None, body: Body, dof: int, waits
 # --------------------------------------------------------------------------- scenarios
 
 
-def _door(room: Room, blocked: bool):
-    """A wall across the room with a door; returns the door's centre, the wall's normal and
-    thickness (the wall's pieces are added to the room)."""
+def _door(room: Room, blocked: bool, slack=(0.01, 0.05)):
+    """A wall across the room with a door (``slack`` the range of its spare width per side);
+    returns the door's centre, the wall's normal and thickness (the wall's pieces are added
+    to the room)."""
     rng, body = room.rng, room.body
     phi = rng.uniform(-0.6, 0.6) + (math.pi / 2 if rng.random() < 0.5 else 0.0)
     n, u = unit(phi), left(unit(phi))
     c0 = np.array([room.W / 2, room.H / 2]) + rng.uniform(-0.3, 0.3, 2)
-    thick, slack = rng.uniform(0.05, 0.3), rng.uniform(0.01, 0.05)
+    thick, slack = rng.uniform(0.05, 0.3), rng.uniform(*slack)
     width = body.lateral + (-2 * slack if blocked else 2 * slack)
     s = rng.uniform(-1.0, 1.0)
     big = 2 * math.hypot(room.W, room.H)

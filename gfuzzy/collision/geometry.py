@@ -80,9 +80,30 @@ def _triangulate(poly: Polygon) -> list[FloatArray]:
             pts[1, 1] - pts[0, 1]
         )
         if abs(area2) < 1e-14:
+            out.extend(_sliver(pts))
             continue
         out.append(pts if area2 > 0 else pts[::-1])
     return out
+
+
+#: Half the width (m) of the thin wall put where a polygon is a line (a flat triangle of its
+#: triangulation): the checker's closed polygon blocks there, so the planner must too.
+_SLIVER = 1e-6
+
+
+def _sliver(pts: FloatArray) -> list[FloatArray]:
+    """A flat triangle (its corners on a line, as where a polygon goes out along a line and
+    back: the closed polygon holds that segment) as two counter-clockwise triangles of a
+    rectangle ``_SLIVER`` about its longest side; none when it is a point."""
+    pairs = [(0, 1), (1, 2), (0, 2)]
+    i, j = max(pairs, key=lambda ij: float(np.hypot(*(pts[ij[1]] - pts[ij[0]]))))
+    p, q = pts[i], pts[j]
+    length = float(np.hypot(*(q - p)))
+    if length < 1e-9:
+        return []
+    n = _SLIVER * np.array([p[1] - q[1], q[0] - p[0]]) / length  # to the left of p -> q
+    a, b, c, d = p - n, q - n, q + n, p + n
+    return [np.array([a, b, c]), np.array([a, c, d])]
 
 
 def _walls(rects: FloatArray) -> fcl.BVHModel:
