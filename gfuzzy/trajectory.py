@@ -20,10 +20,11 @@ import numpy as np
 from .atomic import write_atomic
 from .errors import InputError, SceneError
 from .poses import metric_distance, number_array, pose_at
+from .settings import MAX_MAGNITUDE
 from .status import Status
 from .typed import FloatArray
 
-__all__ = ["Trajectory", "load_trajectory", "TrajectoryFile", "executed_rows"]
+__all__ = ["Trajectory", "load_trajectory", "TrajectoryFile", "executed_rows", "replan_entries"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -319,3 +320,42 @@ def executed_rows(tf: TrajectoryFile, file: str) -> FloatArray | None:
     if tf.waypoints is not None or "executed" not in tf.extra:
         return None
     return _rows(tf.extra["executed"], file, "executed")
+
+
+def replan_entries(log, file: str) -> list[dict]:
+    """A navigate run's ``replan_log`` (the predictions ``render``'s GIF and ``export``'s
+    MCAP draw), read by its rules, sorted by ``t``: a list of mappings, each with ``t`` (a
+    finite number, at most ``MAX_MAGNITUDE`` in magnitude), ``predicted`` (rows of 5 finite
+    numbers ``[x, y, vx, vy, radius]``, radius >= 0) and ``plan`` (rows ``[t, x, y(, heading)]``
+    of one width, finite numbers); the last two may be missing or empty. ``file`` names
+    the file in errors.
+
+    Raises
+    ------
+    SceneError
+        Naming the entry and the number (``replan_log[3].predicted[1][2]``).
+    """
+    if not isinstance(log, list):
+        raise SceneError(file, "replan_log", f"expected a list of replans, got {type(log).__name__}")
+    for i, e in enumerate(log):
+        where = f"replan_log[{i}]"
+        if not isinstance(e, dict):
+            raise SceneError(file, where, "expected a mapping with t, predicted and plan")
+        t = e.get("t")
+        if isinstance(t, bool) or not isinstance(t, (int, float)) or not math.isfinite(t) or abs(t) > MAX_MAGNITUDE:
+            raise SceneError(file, f"{where}.t", f"expected a finite number of at most {MAX_MAGNITUDE:g} in magnitude, got {t!r}")
+        for key, widths in (("predicted", (5,)), ("plan", (3, 4))):
+            rows = e.get(key, [])
+            if not isinstance(rows, list):
+                raise SceneError(file, f"{where}.{key}", f"expected a list of rows, got {rows!r}")
+            for j, row in enumerate(rows):
+                want = widths if j == 0 or key == "predicted" else (len(rows[0]),)
+                if not isinstance(row, list) or len(row) not in want:
+                    n = " or ".join(map(str, want))
+                    raise SceneError(file, f"{where}.{key}[{j}]", f"expected a row of {n} numbers, got {row!r}")
+                for k, v in enumerate(row):
+                    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or abs(v) > MAX_MAGNITUDE:
+                        raise SceneError(file, f"{where}.{key}[{j}][{k}]", f"expected a finite number of at most {MAX_MAGNITUDE:g} in magnitude, got {v!r}")
+                if key == "predicted" and row[4] < 0:
+                    raise SceneError(file, f"{where}.{key}[{j}][4]", f"a radius must be >= 0, got {row[4]!r}")
+    return sorted(log, key=lambda e: float(e["t"]))
