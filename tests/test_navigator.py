@@ -1159,3 +1159,22 @@ def test_the_kept_gaps_are_computed_only_for_a_faster_motion(open_square, monkey
     nav = Navigator(scene, rm, (0.0, 4.0), NavOptions(dt=0.4, time_budget=5.0, budget_clock="cpu"))
     nav.step(0.0, np.array([0.0, -3.0]), np.array([[4.0, 0.0, 0.0, 0.0, 0.3]]))
     assert nav.last.mode == "plan" and calls == []
+
+
+def test_navigate_says_when_its_searches_ran_out_of_the_budget(tmp_path):
+    """A newcomer's differential drive (a 0.5 x 0.4 m box, wmax 0.3) on a SLAM map stood still
+    for 150 s, every one of 600 replans an evasive motion, and neither the line nor the file
+    said why: splicing its pose into the heading graph alone took longer than the 100 ms
+    budget (time budget spent before the search). The run now counts such replans
+    (`replans_out_of_time`) and says so when they are most of them. Here a budget of 0.1 ms
+    of CPU time runs out every time; 5 s never does on this 5 x 5 m scene."""
+    scene = ROOT / "scenes" / "sim-4s1m.yaml"
+    starved, ample = tmp_path / "starved.json", tmp_path / "ample.json"
+    p = run_cli_process("navigate", scene, "--time-budget", "0.0001", "--budget-clock", "cpu", "--max-time", "1",
+                        "-o", starved)  # fmt: skip
+    doc = json.loads(starved.read_text())
+    assert doc["replans_out_of_time"] == doc["replans"] == 4, doc["modes"]
+    assert "note: 4 of 4 replans ran out of --time-budget 0.0001 s" in p.stderr, p.stderr
+    p = run_cli_process("navigate", scene, "--time-budget", "5", "--budget-clock", "cpu", "--max-time", "1", "-o", ample)
+    doc = json.loads(ample.read_text())
+    assert doc["replans_out_of_time"] == 0 and "ran out of" not in p.stderr, p.stderr

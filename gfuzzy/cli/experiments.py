@@ -378,6 +378,7 @@ def cmd_navigate(args) -> int:
         "intrusion_ratio": round(res.social.intrusion_ratio, 6),
         "check": {"valid": report.valid, "reason": report.reason},
         "modes": res.modes,
+        "replans_out_of_time": res.out_of_time,
         "navigate": _run_settings(args, options, sensor.seed, sense),
         "replan_log": res.log,
     }
@@ -401,6 +402,10 @@ def cmd_navigate(args) -> int:
     gone = _after_the_movers(scene, float(wps[-1, 0]))
     if gone:
         _say(f"note: {gone}")
+    if res.out_of_time and 2 * res.out_of_time >= res.replans:  # the run lived on its fallbacks: say why
+        _say(f"note: {res.out_of_time} of {res.replans} replans ran out of --time-budget {options.time_budget:g} s "
+             f"before their search answered (the robot made fallback motions instead): give it more time "
+             f"(--time-budget), a smaller roadmap (-n), or, for a differential drive, a larger wmax")
     return EXIT_OK if (solved and report.valid) else EXIT_NO
 
 

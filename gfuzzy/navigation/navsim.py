@@ -62,6 +62,10 @@ class NavResult:
         Discomfort and intrusion counts over the run's periods.
     log : list of dict
         Some replans (every ``log_every``-th): time, pose, predicted discs, planned rows.
+    out_of_time : int
+        Calls whose search ran out of the navigator's ``time_budget`` before it answered
+        (:attr:`NavStep.out_of_time`): most of them means the budget is too small for this
+        roadmap and robot, and the robot lived on its fallbacks.
     """
 
     status: Status
@@ -72,6 +76,7 @@ class NavResult:
     min_separation: float = math.inf
     log: list = field(default_factory=list, compare=False)
     social: SocialMetrics = field(default_factory=lambda: SocialMetrics(0, 0, 0))
+    out_of_time: int = 0
 
     @property
     def reached(self) -> bool:
@@ -168,6 +173,7 @@ def simulate(
     modes: dict = {}
     kept: list = []
     status = Status.TIMEOUT
+    out_of_time = 0
     eyes = _Eyes(scene, sense, sensor, pose, goal)
     clock = BUDGET_CLOCKS[nav.options.budget_clock]  # replan times on the budget's own clock
     while True:
@@ -184,6 +190,7 @@ def simulate(
         check_interrupt()  # a Ctrl-C native code dropped during the replan stops the run here
         mode = str(nav.last.mode if nav.last is not None else NavMode.PLAN)
         modes[mode] = modes.get(mode, 0) + 1
+        out_of_time += bool(nav.last is not None and nav.last.out_of_time)
         if log_every and (len(seconds) - 1) % log_every == 0:
             kept.append(_log_entry(t, pose, mode, nav, traj))
         t_next = min(t + period, t_stop)
@@ -209,7 +216,7 @@ def simulate(
     executed = Trajectory(wps, cr)
     sep = min_separation(scene, wps)
     social = social_metrics(wps, cr, scene.movers, period)
-    return NavResult(status, executed, len(seconds), np.array(seconds), modes, sep, kept, social)
+    return NavResult(status, executed, len(seconds), np.array(seconds), modes, sep, kept, social, out_of_time)
 
 
 def _check_run(period: float, max_time: float) -> None:
