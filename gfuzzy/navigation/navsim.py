@@ -28,6 +28,7 @@ from ..trajectory import Trajectory
 from ..typed import FloatArray
 from .lookout import knowing_view
 from .navigator import BUDGET_CLOCKS, Navigator, NavMode, NavOptions
+from .navtypes import NavStep
 from .sensing import Sensor, SensorOptions
 from .socialmetrics import SocialMetrics, social_metrics
 
@@ -159,8 +160,7 @@ def simulate(
     NavResult
     """
     _check_run(period, max_time)
-    robot = scene.robot
-    cr = robot.circumradius
+    robot, cr = scene.robot, scene.robot.circumradius
     goal = np.asarray(goal, dtype=float).reshape(-1)
     pose = np.asarray(start, dtype=float).reshape(-1).copy()
     if navigator is None and sensor is not None:
@@ -172,8 +172,7 @@ def simulate(
     seconds: list = []
     modes: dict = {}
     kept: list = []
-    status = Status.TIMEOUT
-    out_of_time = 0
+    status, out_of_time = Status.TIMEOUT, 0  # out_of_time: calls whose search ran out of the budget
     eyes = _Eyes(scene, sense, sensor, pose, goal)
     clock = BUDGET_CLOCKS[nav.options.budget_clock]  # replan times on the budget's own clock
     while True:
@@ -188,9 +187,9 @@ def simulate(
         traj = nav.step(t, pose, obs, eyes.unknown())
         seconds.append(clock() - c0)
         check_interrupt()  # a Ctrl-C native code dropped during the replan stops the run here
-        mode = str(nav.last.mode if nav.last is not None else NavMode.PLAN)
+        last = nav.last or NavStep(NavMode.PLAN, 0.0)  # (step sets it at every call)
+        mode, out_of_time = str(last.mode), out_of_time + last.out_of_time
         modes[mode] = modes.get(mode, 0) + 1
-        out_of_time += bool(nav.last is not None and nav.last.out_of_time)
         if log_every and (len(seconds) - 1) % log_every == 0:
             kept.append(_log_entry(t, pose, mode, nav, traj))
         t_next = min(t + period, t_stop)
