@@ -11,6 +11,7 @@ import csv
 import io
 import json
 import math
+import numbers
 import os
 from dataclasses import dataclass, field, fields
 from pathlib import Path
@@ -335,27 +336,37 @@ def replan_entries(log, file: str) -> list[dict]:
     SceneError
         Naming the entry and the number (``replan_log[3].predicted[1][2]``).
     """
-    if not isinstance(log, list):
+    def seq(v) -> bool:  # as read from JSON, or built in Python (NavResult.log, numpy rows)
+        return isinstance(v, (list, tuple)) or (isinstance(v, np.ndarray) and v.ndim >= 1)
+
+    def short(v) -> str:
+        text = repr(v)
+        return text if len(text) <= 80 else text[:77] + "..."
+
+    def number(v) -> bool:
+        return isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_)) and math.isfinite(v) and abs(v) <= MAX_MAGNITUDE
+
+    if not seq(log):
         raise SceneError(file, "replan_log", f"expected a list of replans, got {type(log).__name__}")
     for i, e in enumerate(log):
         where = f"replan_log[{i}]"
         if not isinstance(e, dict):
             raise SceneError(file, where, "expected a mapping with t, predicted and plan")
         t = e.get("t")
-        if isinstance(t, bool) or not isinstance(t, (int, float)) or not math.isfinite(t) or abs(t) > MAX_MAGNITUDE:
-            raise SceneError(file, f"{where}.t", f"expected a finite number of at most {MAX_MAGNITUDE:g} in magnitude, got {t!r}")
+        if not number(t):
+            raise SceneError(file, f"{where}.t", f"expected a finite number of at most {MAX_MAGNITUDE:g} in magnitude, got {short(t)}")
         for key, widths in (("predicted", (5,)), ("plan", (3, 4))):
             rows = e.get(key, [])
-            if not isinstance(rows, list):
-                raise SceneError(file, f"{where}.{key}", f"expected a list of rows, got {rows!r}")
+            if not seq(rows):
+                raise SceneError(file, f"{where}.{key}", f"expected a list of rows, got {short(rows)}")
             for j, row in enumerate(rows):
                 want = widths if j == 0 or key == "predicted" else (len(rows[0]),)
-                if not isinstance(row, list) or len(row) not in want:
+                if not seq(row) or len(row) not in want:
                     n = " or ".join(map(str, want))
-                    raise SceneError(file, f"{where}.{key}[{j}]", f"expected a row of {n} numbers, got {row!r}")
+                    raise SceneError(file, f"{where}.{key}[{j}]", f"expected a row of {n} numbers, got {short(row)}")
                 for k, v in enumerate(row):
-                    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or abs(v) > MAX_MAGNITUDE:
-                        raise SceneError(file, f"{where}.{key}[{j}][{k}]", f"expected a finite number of at most {MAX_MAGNITUDE:g} in magnitude, got {v!r}")
+                    if not number(v):
+                        raise SceneError(file, f"{where}.{key}[{j}][{k}]", f"expected a finite number of at most {MAX_MAGNITUDE:g} in magnitude, got {short(v)}")
                 if key == "predicted" and row[4] < 0:
                     raise SceneError(file, f"{where}.{key}[{j}][4]", f"a radius must be >= 0, got {row[4]!r}")
     return sorted(log, key=lambda e: float(e["t"]))

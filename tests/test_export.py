@@ -984,3 +984,19 @@ def test_cli_export_of_an_invalid_trajectory_says_so(tmp_path, capsys):
     err = capsys.readouterr().err
     assert f"note: {bad}: invalid: " in err and "exported anyway" in err, err
     assert out.exists()
+
+
+def test_predictions_built_in_python_as_arrays_are_read(tmp_path):
+    """export_mcap's predictions may be numpy rows (a caller's own log, NavResult.log's
+    numbers), as before the replan log's rules; a 0-d array or a long string is named short."""
+    scene = load_scene(SCENES / "office-polygons.yaml")
+    rows = np.array([[0.0, 0.5, 0.5], [1.0, 1.5, 1.2]])
+    log = [{"t": np.float64(0.5), "predicted": np.array([[3.0, 2.0, 0.5, 0.0, 0.3]]), "plan": rows}]
+    report = export_mcap(scene, tmp_path / "a.mcap", rows, log, ExportOptions(step=0.5))
+    assert report.counts["/predictions"] == 1
+    for bad, needle in ((np.float64(1.0), "replan_log[0].predicted: expected a list of rows, got np.float64(1.0)"),
+                        ("x" * 500, "replan_log[0].predicted: expected a list of rows, got 'xxx")):
+        with pytest.raises(InputError) as err:
+            export_mcap(scene, tmp_path / "b.mcap", rows, [{"t": 0.0, "predicted": bad}])
+        assert needle in str(err.value) and len(str(err.value)) < 200, str(err.value)
+    assert not (tmp_path / "b.mcap").exists()
