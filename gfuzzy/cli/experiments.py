@@ -354,7 +354,8 @@ def cmd_navigate(args) -> int:
             tf.save(out)
         _say(f"{scene.name} {query.name}: no_path ({sealed})", sys.stdout)
         return EXIT_NO
-    slow = _beyond_max_time(rd, scene.robot.vmax, args.max_time)
+    straight = math.dist(query.start[:2], query.goal[:2])
+    slow = _beyond_max_time(rd, scene.robot.vmax, args.max_time, straight)
     if slow:  # said before the run: it will time out whatever the movers do
         _say(f"note: {slow}")
     res = simulate(
@@ -432,14 +433,19 @@ def _navigate_summary(res, report) -> str:
     )
 
 
-def _beyond_max_time(rd: float, vmax: float, max_time: float) -> str:
-    """Why a navigate run cannot arrive within ``--max-time``: the shortest roadmap route
-    ``rd`` alone takes longer at ``vmax`` (a 500 m hall timed out after the default 120 s
-    saying only "not reached"); "" when it can."""
+def _beyond_max_time(rd: float, vmax: float, max_time: float, straight: float) -> str:
+    """Why a navigate run is unlikely to arrive within ``--max-time``: the shortest roadmap
+    route ``rd`` takes longer at ``vmax`` (a 500 m hall timed out after the default 120 s
+    saying only "not reached"); "" when it does not. Only the ``straight`` line from start
+    to goal is a lower bound ("at least"): the robot may leave the roadmap (the direct
+    motion, a differential drive's fan, whose roadmap distance also counts its turns)."""
     fastest = rd / vmax
     if not math.isfinite(fastest) or fastest <= max_time:
         return ""
-    return (f"the shortest roadmap route ({rd:.1f} m) takes at least {fastest:.1f} s at vmax {vmax:g}, "
-            f"more than --max-time {max_time:g} s: give a larger --max-time")
+    if straight / vmax > max_time:
+        return (f"the goal is {straight:.1f} m away in a straight line: at least {straight / vmax:.1f} s at vmax "
+                f"{vmax:g}, more than --max-time {max_time:g} s: give a larger --max-time")
+    return (f"the shortest roadmap route ({rd:.1f} m) takes {fastest:.1f} s at vmax {vmax:g}, more than --max-time "
+            f"{max_time:g} s (only a shorter way off the roadmap can arrive in time): give a larger --max-time")
 
 
