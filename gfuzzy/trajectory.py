@@ -343,8 +343,8 @@ def replan_entries(log, file: str) -> list[dict]:
         text = repr(v)
         return text if len(text) <= 80 else text[:77] + "..."
 
-    def number(v) -> bool:
-        return isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_)) and math.isfinite(v) and abs(v) <= MAX_MAGNITUDE
+    def number(v) -> bool:  # (a JSON integer of 400 digits: abs() first, isfinite would overflow)
+        return isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_)) and abs(v) <= MAX_MAGNITUDE
 
     if not seq(log):
         raise SceneError(file, "replan_log", f"expected a list of replans, got {type(log).__name__}")

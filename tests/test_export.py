@@ -381,6 +381,8 @@ def test_cli_bad_trajectory_files(tmp_path, capsys):
         (lambda log: log[0]["predicted"][1].__setitem__(2, float("nan")), "replan_log[0].predicted[1][2]"),  # render drew it
         (lambda log: log[0]["predicted"][0].__setitem__(4, -0.3), "replan_log[0].predicted[0][4]"),  # a negative radius
         (lambda log: log[1].update(t=1e300), "replan_log[1].t"),  # export: an OverflowError traceback
+        (lambda log: log[1].update(t=10**400), "replan_log[1].t"),  # a JSON integer past a float: OverflowError
+        (lambda log: log[1].update(plan=[[0.0, 1.0, 1.0], [1.0, 1.0, 1.0, 0.0]]), "replan_log[1].plan[1]"),  # widths
         (lambda log: log[1].update(t="1.0"), "replan_log[1].t"),  # both: silently dropped
         (lambda log: log.__setitem__(2, 5), "replan_log[2]"),  # both: silently dropped
         (lambda log: log[1].update(plan=[[0.0, 1.0, 1.0], [1.0, True, 2.0]]), "replan_log[1].plan[1][1]"),

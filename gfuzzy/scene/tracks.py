@@ -582,17 +582,21 @@ def _movers(rel: dict, t_lo: float, duration: float, region, options: TrackScene
 
 
 def _warn_units(movers: list, src: str) -> None:
-    """Log when the people's mean speeds (each mover's path length over its duration) say
-    the file's units are not seconds and metres (``PLAUSIBLE_SPEEDS``)."""
-    speeds = sorted(
-        sum(math.hypot(b[1] - a[1], b[2] - a[2]) for a, b in pairwise(m.rows)) / m.duration for m in movers if m.duration > 0
-    )
+    """Log when the people's speeds say the file's units are not seconds and metres
+    (``PLAUSIBLE_SPEEDS``): too slow when every step of every person is (times in
+    milliseconds slow all of them a thousandfold; a queue, or a plaza of people standing
+    still with one walker, has brisk steps and is no alarm); too fast when the mean speeds'
+    median (each mover's path length over its duration) is."""
+    speeds, fast = [], 0.0
+    for m in movers:
+        if m.duration > 0:
+            speeds.append(sum(math.hypot(b[1] - a[1], b[2] - a[2]) for a, b in pairwise(m.rows)) / m.duration)
+            fast = max([fast] + [math.hypot(b[1] - a[1], b[2] - a[2]) / (b[0] - a[0]) for a, b in pairwise(m.rows) if b[0] > a[0]])
     if not speeds:
         return
-    fast = speeds[min(len(speeds) - 1, int(0.9 * len(speeds)))]  # the fastest tenth's slowest
     median = statistics.median(speeds)
     if fast < PLAUSIBLE_SPEEDS[0]:
-        log.warning("%s: the people walk at %.3g m/s at most (pedestrians walk 0.5-2 m/s): are the times in seconds? "
+        log.warning("%s: the people's steps are at most %.3g m/s (pedestrians walk 0.5-2 m/s): are the times in seconds? "
                     "(t in milliseconds: divide it by 1000; frame numbers: --format eth --fps)", src, fast)  # fmt: skip
     elif median > PLAUSIBLE_SPEEDS[1]:
         log.warning("%s: the people walk at a median %.3g m/s (pedestrians walk 0.5-2 m/s): are the positions in metres "
