@@ -11,6 +11,7 @@ import csv
 import io
 import json
 import math
+import numbers
 import os
 from dataclasses import dataclass, field, fields
 from pathlib import Path
@@ -20,10 +21,11 @@ import numpy as np
 from .atomic import write_atomic
 from .errors import InputError, SceneError
 from .poses import metric_distance, number_array, pose_at
+from .settings import MAX_MAGNITUDE
 from .status import Status
 from .typed import FloatArray
 
-__all__ = ["Trajectory", "load_trajectory", "TrajectoryFile", "executed_rows"]
+__all__ = ["Trajectory", "load_trajectory", "TrajectoryFile", "executed_rows", "replan_entries"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -319,3 +321,52 @@ def executed_rows(tf: TrajectoryFile, file: str) -> FloatArray | None:
     if tf.waypoints is not None or "executed" not in tf.extra:
         return None
     return _rows(tf.extra["executed"], file, "executed")
+
+
+def replan_entries(log, file: str) -> list[dict]:
+    """A navigate run's ``replan_log`` (the predictions ``render``'s GIF and ``export``'s
+    MCAP draw), read by its rules, sorted by ``t``: a list of mappings, each with ``t`` (a
+    finite number, at most ``MAX_MAGNITUDE`` in magnitude), ``predicted`` (rows of 5 finite
+    numbers ``[x, y, vx, vy, radius]``, radius >= 0) and ``plan`` (rows ``[t, x, y(, heading)]``
+    of one width, finite numbers); the last two may be missing or empty. ``file`` names
+    the file in errors.
+
+    Raises
+    ------
+    SceneError
+        Naming the entry and the number (``replan_log[3].predicted[1][2]``).
+    """
+    def seq(v) -> bool:  # as read from JSON, or built in Python (NavResult.log, numpy rows)
+        return isinstance(v, (list, tuple)) or (isinstance(v, np.ndarray) and v.ndim >= 1)
+
+    def short(v) -> str:
+        text = repr(v)
+        return text if len(text) <= 80 else text[:77] + "..."
+
+    def number(v) -> bool:  # (a JSON integer of 400 digits: abs() first, isfinite would overflow)
+        return isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_)) and abs(v) <= MAX_MAGNITUDE
+
+    if not seq(log):
+        raise SceneError(file, "replan_log", f"expected a list of replans, got {type(log).__name__}")
+    for i, e in enumerate(log):
+        where = f"replan_log[{i}]"
+        if not isinstance(e, dict):
+            raise SceneError(file, where, "expected a mapping with t, predicted and plan")
+        t = e.get("t")
+        if not number(t):
+            raise SceneError(file, f"{where}.t", f"expected a finite number of at most {MAX_MAGNITUDE:g} in magnitude, got {short(t)}")
+        for key, widths in (("predicted", (5,)), ("plan", (3, 4))):
+            rows = e.get(key, [])
+            if not seq(rows):
+                raise SceneError(file, f"{where}.{key}", f"expected a list of rows, got {short(rows)}")
+            for j, row in enumerate(rows):
+                want = widths if j == 0 or key == "predicted" else (len(rows[0]),)
+                if not seq(row) or len(row) not in want:
+                    n = " or ".join(map(str, want))
+                    raise SceneError(file, f"{where}.{key}[{j}]", f"expected a row of {n} numbers, got {short(row)}")
+                for k, v in enumerate(row):
+                    if not number(v):
+                        raise SceneError(file, f"{where}.{key}[{j}][{k}]", f"expected a finite number of at most {MAX_MAGNITUDE:g} in magnitude, got {short(v)}")
+                if key == "predicted" and row[4] < 0:
+                    raise SceneError(file, f"{where}.{key}[{j}][4]", f"a radius must be >= 0, got {row[4]!r}")
+    return sorted(log, key=lambda e: float(e["t"]))

@@ -388,6 +388,7 @@ def test_crowd_command_navigator_visible(tmp_path, workers):
     ["--soft-search", "--intrusion-cost", "-1"], ["--soft-search", "--intrusion-cost", "nan"],
     ["--soft-search", "--intrusion-cost", "1e308"],  # named NavOptions' intrusion_cost, not the flag
     ["--intrusion-cost", "3"],  # silently ignored without --soft-search
+    ["--scenario", "square", "--steady-goals"],  # silently ignored outside the arena
 ])  # fmt: skip
 def test_crowd_command_refuses_bad_arguments_in_one_line(tmp_path, capsys, flags):
     # in this process (a traceback would be an exception here); one real process below

@@ -372,6 +372,60 @@ def test_cli_bad_trajectory_files(tmp_path, capsys):
         ExportOptions(step=-1)
 
 
+
+@pytest.mark.parametrize(
+    "edit, place",
+    [
+        (lambda log: log[1].update(predicted="oops"), "replan_log[1].predicted"),  # render: a ValueError traceback
+        (lambda log: log[1].update(predicted=[[1.0, 2.0]]), "replan_log[1].predicted[0]"),  # render: a traceback
+        (lambda log: log[0]["predicted"][1].__setitem__(2, float("nan")), "replan_log[0].predicted[1][2]"),  # render drew it
+        (lambda log: log[0]["predicted"][0].__setitem__(4, -0.3), "replan_log[0].predicted[0][4]"),  # a negative radius
+        (lambda log: log[1].update(t=1e300), "replan_log[1].t"),  # export: an OverflowError traceback
+        (lambda log: log[1].update(t=10**400), "replan_log[1].t"),  # a JSON integer past a float: OverflowError
+        (lambda log: log[1].update(plan=[[0.0, 1.0, 1.0], [1.0, 1.0, 1.0, 0.0]]), "replan_log[1].plan[1]"),  # widths
+        (lambda log: log[1].update(t="1.0"), "replan_log[1].t"),  # both: silently dropped
+        (lambda log: log.__setitem__(2, 5), "replan_log[2]"),  # both: silently dropped
+        (lambda log: log[1].update(plan=[[0.0, 1.0, 1.0], [1.0, True, 2.0]]), "replan_log[1].plan[1][1]"),
+    ],
+)
+def test_cli_render_and_export_name_the_broken_replan_log_entry(tmp_path, capsys, edit, place):
+    """A navigate file's replan log (the predictions a GIF and an MCAP file draw) is read by one
+    set of rules: a broken entry is one line naming the file and the entry, exit 2, nothing
+    written; never a traceback, never an entry dropped without a word."""
+    doc = _navigate_doc(np.array([[0.0, 0.5, 0.5], [1.0, 1.5, 1.2], [2.0, 2.0, 1.5]]))
+    edit(doc["replan_log"])
+    nav = tmp_path / "nav.json"
+    nav.write_text(json.dumps(doc), encoding="utf-8")
+    scene = str(SCENES / "office-polygons.yaml")
+    for args in (["render", scene, str(nav), "-o", str(tmp_path / "o.gif")], ["export", scene, str(nav), "-o", str(tmp_path / "o.mcap")]):
+        rc = main(args)
+        err = capsys.readouterr().err
+        assert rc == 2 and err.startswith(f"{nav}: {place}:") and err.count("\n") == 1, (args[0], err)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["nav.json"]
+    doc["replan_log"] = 5
+    nav.write_text(json.dumps(doc), encoding="utf-8")
+    assert main(["export", scene, str(nav), "-o", str(tmp_path / "o.mcap")]) == 2
+    assert capsys.readouterr().err.startswith(f"{nav}: replan_log: expected a list")
+
+
+def test_mcap_times_beyond_its_nanoseconds_are_bad_input(tmp_path, capsys):
+    """MCAP log times are unsigned 64-bit nanoseconds (at most 1.8e10 s): a row or a replan
+    later than the 1e9 s gfuzzy's numbers stay within is refused in one line, not a
+    struct.error (rows) or OverflowError (a replan) traceback."""
+    scene = load_scene(SCENES / "office-polygons.yaml")
+    far = [[0.0, 0.5, 0.5], [2e10, 1.5, 1.2]]
+    with pytest.raises(InputError, match="at most 1e"):
+        export_mcap(scene, tmp_path / "far.mcap", far, options=ExportOptions(step=1e9))
+    doc = _navigate_doc(np.array([[0.0, 0.5, 0.5], [1.0, 1.5, 1.2]]))
+    doc.update(status="solved", waypoints=far)
+    nav = tmp_path / "nav.json"
+    nav.write_text(json.dumps(doc), encoding="utf-8")
+    rc = main(["export", str(SCENES / "office-polygons.yaml"), str(nav), "-o", str(tmp_path / "o.mcap"), "--step", "1e9"])
+    err = capsys.readouterr().err
+    assert rc == 2 and "at most 1e" in err and err.count("\n") == 1, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["nav.json"]
+
+
 # --------------------------------------------------------------------------- Nav2 maps
 
 
@@ -772,7 +826,12 @@ def test_cli_step_count_is_written_short(tmp_path, capsys):
     traj.write_text(json.dumps(doc), encoding="utf-8")
     assert main(["export", str(SCENES / "office-polygons.yaml"), str(traj), "-o", str(tmp_path / "o.mcap")]) == 2
     err = capsys.readouterr().err
-    assert "gives 1e+301 time steps" in err and len(err) < 300, err  # not a 300-digit count
+    assert "ends at t=1e+300" in err and len(err) < 300, err  # beyond MCAP's times, and not a 300-digit number
+    doc["waypoints"][1][0] = 1e9
+    traj.write_text(json.dumps(doc), encoding="utf-8")
+    assert main(["export", str(SCENES / "office-polygons.yaml"), str(traj), "-o", str(tmp_path / "o.mcap"), "--step", "1e-300"]) == 2
+    err = capsys.readouterr().err
+    assert "gives inf time steps" in err and len(err) < 300, err  # not a 310-digit count
     assert list(tmp_path.iterdir()) == [traj]
 
 
@@ -927,3 +986,19 @@ def test_cli_export_of_an_invalid_trajectory_says_so(tmp_path, capsys):
     err = capsys.readouterr().err
     assert f"note: {bad}: invalid: " in err and "exported anyway" in err, err
     assert out.exists()
+
+
+def test_predictions_built_in_python_as_arrays_are_read(tmp_path):
+    """export_mcap's predictions may be numpy rows (a caller's own log, NavResult.log's
+    numbers), as before the replan log's rules; a 0-d array or a long string is named short."""
+    scene = load_scene(SCENES / "office-polygons.yaml")
+    rows = np.array([[0.0, 0.5, 0.5], [1.0, 1.5, 1.2]])
+    log = [{"t": np.float64(0.5), "predicted": np.array([[3.0, 2.0, 0.5, 0.0, 0.3]]), "plan": rows}]
+    report = export_mcap(scene, tmp_path / "a.mcap", rows, log, ExportOptions(step=0.5))
+    assert report.counts["/predictions"] == 1
+    for bad, needle in ((np.float64(1.0), "replan_log[0].predicted: expected a list of rows, got np.float64(1.0)"),
+                        ("x" * 500, "replan_log[0].predicted: expected a list of rows, got 'xxx")):
+        with pytest.raises(InputError) as err:
+            export_mcap(scene, tmp_path / "b.mcap", rows, [{"t": 0.0, "predicted": bad}])
+        assert needle in str(err.value) and len(str(err.value)) < 200, str(err.value)
+    assert not (tmp_path / "b.mcap").exists()

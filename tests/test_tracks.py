@@ -686,3 +686,49 @@ def test_an_output_named_with_spaces_or_accents_names_the_scene_with_dashes(tmp_
     proc = run_cli_process("tracks", eth_file, "-o", out)
     assert proc.returncode == 0, proc.stderr
     assert load_scene(out).name == name
+
+
+def test_speeds_that_betray_the_wrong_units_are_logged(caplog):
+    """A detector's CSV with its times in milliseconds (`t` is seconds) made a scene of people
+    walking at 1.2 mm/s, without a word; positions in centimetres (no `--scale 0.01`), people
+    at 120 m/s. Either is logged, naming what to check; ordinary walkers are not."""
+    walkers = [np.array([[t, 1.2 * t + k, 0.5 * k] for t in np.arange(0, 6, 0.4)]) for k in range(6)]
+    standing = np.array([[0.0, 9.0, 9.0], [6.0, 9.0, 9.0]])
+
+    def warnings(scale_t=1.0, scale_xy=1.0):
+        tracks = [gfuzzy.Track(str(k), w * [scale_t, scale_xy, scale_xy]) for k, w in enumerate(walkers)]
+        tracks.append(gfuzzy.Track("s", standing * [scale_t, scale_xy, scale_xy]))
+        caplog.clear()
+        tracks_scene(gfuzzy.Tracks("walk.csv", "csv", None, None, tuple(tracks)))
+        return [r.getMessage() for r in caplog.records]
+
+    caplog.set_level("WARNING", logger="gfuzzy.scene.tracks")
+    assert warnings() == []
+    (msg,) = warnings(scale_t=1000.0)
+    assert msg.startswith("walk.csv: the people's steps are at most 0.0012 m/s") and "are the times in seconds" in msg, msg
+    (msg,) = warnings(scale_xy=100.0)
+    assert msg.startswith("walk.csv: the people walk at a median 120 m/s") and "--scale 0.01" in msg, msg
+
+
+def test_a_queue_or_a_plaza_of_people_standing_is_no_units_alarm(caplog):
+    """A review's cases of the slow-side warning on mean speeds: a queue (each person steps
+    0.4 m at 1 m/s every 30 s: 0.013 m/s on average) and twelve people standing with one
+    walker among them (the fastest tenth's slowest was a standing one: "0 m/s at most").
+    People's steps are what the units betray, not their mean speeds."""
+    caplog.set_level("WARNING", logger="gfuzzy.scene.tracks")
+
+    def queue(k):
+        rows, x = [], float(k)
+        for t in np.arange(0.0, 60.0, 0.1):
+            phase = t % 30.0
+            step = min(max(phase - 29.6, 0.0), 0.4)  # 0.4 m at 1 m/s, the last 0.4 s of each 30
+            rows.append([t, x + 0.4 * (t // 30.0) + step, 2.0])
+        return np.array(rows)
+
+    plaza = [np.array([[0.0, 1.0 + k, 5.0], [30.0, 1.0 + k, 5.0], [60.0, 1.0 + k, 5.0]]) for k in range(12)]
+    plaza.append(np.array([[t, 1.2 * t, 7.0] for t in np.arange(0.0, 10.0, 0.4)]))
+    for name, rows in (("queue.csv", [queue(k) for k in range(8)]), ("plaza.csv", plaza)):
+        caplog.clear()
+        tracks = tuple(gfuzzy.Track(str(k), r) for k, r in enumerate(rows))
+        tracks_scene(gfuzzy.Tracks(name, "csv", None, None, tracks))
+        assert [r.getMessage() for r in caplog.records] == [], name

@@ -98,6 +98,8 @@ def _setting(args):
     sense = math.inf if args.sense is None else args.sense
     if args.reverse and args.kinematics != "unicycle":
         raise BadInput("gfuzzy crowd: --reverse needs --kinematics unicycle")
+    if args.steady_goals and args.scenario != "arena":  # only the arena's humans change goals
+        raise BadInput(f"gfuzzy crowd: --steady-goals needs --scenario arena (the {args.scenario}'s humans never change goals)")
     try:
         sensor = SensorOptions(velocity="exact" if args.velocity == "true" else "estimated", noise=args.noise,
                                fov=args.fov, sense=sense, seed=args.seed)  # fmt: skip

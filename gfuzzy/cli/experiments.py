@@ -354,7 +354,8 @@ def cmd_navigate(args) -> int:
             tf.save(out)
         _say(f"{scene.name} {query.name}: no_path ({sealed})", sys.stdout)
         return EXIT_NO
-    slow = _beyond_max_time(rd, scene.robot.vmax, args.max_time)
+    straight = math.dist(query.start[:2], query.goal[:2])
+    slow = _beyond_max_time(rd, scene.robot.vmax, args.max_time, straight)
     if slow:  # said before the run: it will time out whatever the movers do
         _say(f"note: {slow}")
     res = simulate(
@@ -378,6 +379,7 @@ def cmd_navigate(args) -> int:
         "intrusion_ratio": round(res.social.intrusion_ratio, 6),
         "check": {"valid": report.valid, "reason": report.reason},
         "modes": res.modes,
+        "replans_out_of_time": res.out_of_time,
         "navigate": _run_settings(args, options, sensor.seed, sense),
         "replan_log": res.log,
     }
@@ -401,6 +403,10 @@ def cmd_navigate(args) -> int:
     gone = _after_the_movers(scene, float(wps[-1, 0]))
     if gone:
         _say(f"note: {gone}")
+    if res.out_of_time and 2 * res.out_of_time >= res.replans:  # the run lived on its fallbacks: say why
+        _say(f"note: {res.out_of_time} of {res.replans} replans ran out of --time-budget {options.time_budget:g} s "
+             f"before their search answered (the robot made fallback motions instead): give it more time "
+             f"(--time-budget), a smaller roadmap (-n), or, for a differential drive, a larger wmax")
     return EXIT_OK if (solved and report.valid) else EXIT_NO
 
 
@@ -427,14 +433,19 @@ def _navigate_summary(res, report) -> str:
     )
 
 
-def _beyond_max_time(rd: float, vmax: float, max_time: float) -> str:
-    """Why a navigate run cannot arrive within ``--max-time``: the shortest roadmap route
-    ``rd`` alone takes longer at ``vmax`` (a 500 m hall timed out after the default 120 s
-    saying only "not reached"); "" when it can."""
+def _beyond_max_time(rd: float, vmax: float, max_time: float, straight: float) -> str:
+    """Why a navigate run is unlikely to arrive within ``--max-time``: the shortest roadmap
+    route ``rd`` takes longer at ``vmax`` (a 500 m hall timed out after the default 120 s
+    saying only "not reached"); "" when it does not. Only the ``straight`` line from start
+    to goal is a lower bound ("at least"): the robot may leave the roadmap (the direct
+    motion, a differential drive's fan, whose roadmap distance also counts its turns)."""
     fastest = rd / vmax
     if not math.isfinite(fastest) or fastest <= max_time:
         return ""
-    return (f"the shortest roadmap route ({rd:.1f} m) takes at least {fastest:.1f} s at vmax {vmax:g}, "
-            f"more than --max-time {max_time:g} s: give a larger --max-time")
+    if straight / vmax > max_time:
+        return (f"the goal is {straight:.1f} m away in a straight line: at least {straight / vmax:.1f} s at vmax "
+                f"{vmax:g}, more than --max-time {max_time:g} s: give a larger --max-time")
+    return (f"the shortest roadmap route ({rd:.1f} m) takes {fastest:.1f} s at vmax {vmax:g}, more than --max-time "
+            f"{max_time:g} s (only a shorter way off the roadmap can arrive in time): give a larger --max-time")
 
 

@@ -356,8 +356,7 @@ def _start_on_mover(scene, query) -> str:
 def _navigate_extras(scene, tf, path) -> dict:
     """The ``executed`` rows (:func:`gfuzzy.trajectory.executed_rows`, of the robot's width)
     and ``replan_log`` of a ``gfuzzy navigate`` file (else {}), for render and export."""
-    from ..poses import as_number
-    from ..trajectory import executed_rows
+    from ..trajectory import executed_rows, replan_entries
 
     out = {}
     rows = executed_rows(tf, path)
@@ -365,8 +364,8 @@ def _navigate_extras(scene, tf, path) -> dict:
         _rows_fit(scene, rows, path, "executed")
         out["executed"] = rows
     log = tf.extra.get("replan_log")
-    if isinstance(log, list):
-        out["replan_log"] = [e for e in log if isinstance(e, dict) and as_number(e.get("t")) is not None]
+    if log is not None:
+        out["replan_log"] = replan_entries(log, path)
     return out
 
 

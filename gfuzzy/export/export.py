@@ -36,6 +36,7 @@ from ..atomic import write_atomic_with
 from ..errors import InputError, check_number
 from ..render.span import default_span
 from ..scene.scene import Box, Disc, Polygon, Scene
+from ..settings import MAX_MAGNITUDE
 from ..typed import FloatArray
 from .foxglove import SCHEMAS, color, pose, timestamp, vec3
 
@@ -333,20 +334,10 @@ def _prediction_update(entry: dict, t_ns: int, opts: ExportOptions) -> dict:
 
 
 def _valid_predictions(predictions) -> list:
-    out = []
-    for i, e in enumerate(predictions or []):
-        t = e.get("t") if isinstance(e, dict) else None
-        if isinstance(t, bool) or not isinstance(t, (int, float)) or not math.isfinite(t):
-            raise InputError(f"replan_log[{i}].t: expected a finite number, got {t!r}")
-        try:
-            pred = np.asarray(e.get("predicted", []), dtype=float).reshape(-1, 5)
-            plan = np.asarray(e.get("plan", []), dtype=float)
-        except (TypeError, ValueError):
-            raise InputError(f"replan_log[{i}]: predicted must be rows [x, y, vx, vy, radius] and plan rows [t, x, y, ...]") from None
-        if not (np.all(np.isfinite(pred)) and np.all(np.isfinite(plan))):
-            raise InputError(f"replan_log[{i}]: expected finite numbers")
-        out.append(e)
-    return sorted(out, key=lambda e: float(e["t"]))
+    """``predictions`` read as a navigate file's ``replan_log`` (:func:`gfuzzy.trajectory.replan_entries`)."""
+    from ..trajectory import replan_entries
+
+    return replan_entries(list(predictions or []), "predictions")
 
 
 # --------------------------------------------------------------------------- the file
@@ -363,6 +354,8 @@ def _check_rows(trajectory) -> FloatArray | None:
         raise InputError("trajectory: t must increase strictly")
     if rows[0, 0] < 0:
         raise InputError(f"trajectory starts at t={rows[0, 0]:g}: MCAP log times are nanoseconds from 0, so a trajectory must start at t >= 0")
+    if rows[-1, 0] > MAX_MAGNITUDE:  # MCAP log times are unsigned 64-bit nanoseconds: 1.8e10 s at most
+        raise InputError(f"trajectory ends at t={rows[-1, 0]:g}: an MCAP file's times must be at most {MAX_MAGNITUDE:g} s")
     return rows
 
 

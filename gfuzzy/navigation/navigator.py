@@ -515,7 +515,7 @@ class Navigator(PathSpace, Prediction, SoftCost):
                 traj, mode = looked, NavMode.LOOK
         t_end = self._clock()
         self._measure_tail(t_end - deadline)
-        self.last = NavStep(mode, t_end - t_begin, found.message, predicted, found.detailed)
+        self.last = NavStep(mode, t_end - t_begin, found.message, predicted, found.detailed, found.out_of_time)
         return traj
 
     def _measure_tail(self, over: float) -> None:

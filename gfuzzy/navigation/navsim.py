@@ -28,6 +28,7 @@ from ..trajectory import Trajectory
 from ..typed import FloatArray
 from .lookout import knowing_view
 from .navigator import BUDGET_CLOCKS, Navigator, NavMode, NavOptions
+from .navtypes import NavStep
 from .sensing import Sensor, SensorOptions
 from .socialmetrics import SocialMetrics, social_metrics
 
@@ -62,6 +63,10 @@ class NavResult:
         Discomfort and intrusion counts over the run's periods.
     log : list of dict
         Some replans (every ``log_every``-th): time, pose, predicted discs, planned rows.
+    out_of_time : int
+        Calls whose search ran out of the navigator's ``time_budget`` before it answered
+        (:attr:`NavStep.out_of_time`): most of them means the budget is too small for this
+        roadmap and robot, and the robot lived on its fallbacks.
     """
 
     status: Status
@@ -72,6 +77,7 @@ class NavResult:
     min_separation: float = math.inf
     log: list = field(default_factory=list, compare=False)
     social: SocialMetrics = field(default_factory=lambda: SocialMetrics(0, 0, 0))
+    out_of_time: int = 0
 
     @property
     def reached(self) -> bool:
@@ -154,8 +160,7 @@ def simulate(
     NavResult
     """
     _check_run(period, max_time)
-    robot = scene.robot
-    cr = robot.circumradius
+    robot, cr = scene.robot, scene.robot.circumradius
     goal = np.asarray(goal, dtype=float).reshape(-1)
     pose = np.asarray(start, dtype=float).reshape(-1).copy()
     if navigator is None and sensor is not None:
@@ -167,7 +172,7 @@ def simulate(
     seconds: list = []
     modes: dict = {}
     kept: list = []
-    status = Status.TIMEOUT
+    status, out_of_time = Status.TIMEOUT, 0  # out_of_time: calls whose search ran out of the budget
     eyes = _Eyes(scene, sense, sensor, pose, goal)
     clock = BUDGET_CLOCKS[nav.options.budget_clock]  # replan times on the budget's own clock
     while True:
@@ -182,7 +187,8 @@ def simulate(
         traj = nav.step(t, pose, obs, eyes.unknown())
         seconds.append(clock() - c0)
         check_interrupt()  # a Ctrl-C native code dropped during the replan stops the run here
-        mode = str(nav.last.mode if nav.last is not None else NavMode.PLAN)
+        last = nav.last or NavStep(NavMode.PLAN, 0.0)  # (step sets it at every call)
+        mode, out_of_time = str(last.mode), out_of_time + last.out_of_time
         modes[mode] = modes.get(mode, 0) + 1
         if log_every and (len(seconds) - 1) % log_every == 0:
             kept.append(_log_entry(t, pose, mode, nav, traj))
@@ -209,7 +215,7 @@ def simulate(
     executed = Trajectory(wps, cr)
     sep = min_separation(scene, wps)
     social = social_metrics(wps, cr, scene.movers, period)
-    return NavResult(status, executed, len(seconds), np.array(seconds), modes, sep, kept, social)
+    return NavResult(status, executed, len(seconds), np.array(seconds), modes, sep, kept, social, out_of_time)
 
 
 def _check_run(period: float, max_time: float) -> None:

@@ -75,6 +75,9 @@ class NavStep:
     detailed : int
         People predicted in detail for the search: those who can come within reach of
         where the robot can be before their prediction ends (the others cannot matter).
+    out_of_time : bool
+        The search ran out of ``time_budget`` before it answered (the answer is then a
+        fallback's: ``"direct"``, ``"previous"`` or ``"evasive"``).
     """
 
     mode: NavMode
@@ -82,6 +85,7 @@ class NavStep:
     message: str = ""
     predicted: FloatArray = field(default_factory=lambda: np.zeros((0, 5)), compare=False)
     detailed: int = 0
+    out_of_time: bool = False
 
 
 @dataclass(frozen=True)

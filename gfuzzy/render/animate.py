@@ -350,7 +350,9 @@ class _PredictionOverlay:
     """Dashed predicted discs and the dotted plan of the latest logged replan."""
 
     def __init__(self, ax, log: list, max_discs: int = 40):
-        self.log = sorted((e for e in log if isinstance(e, dict) and "t" in e), key=lambda e: e["t"])
+        from ..trajectory import replan_entries
+
+        self.log = replan_entries(list(log), "predictions")  # a SceneError (InputError) names a broken entry
         self.times = np.array([float(e["t"]) for e in self.log])
         self.discs = []
         for _ in range(max_discs):

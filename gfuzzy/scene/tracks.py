@@ -44,6 +44,10 @@ log = logging.getLogger(__name__)
 REGION_MARGIN = 0.5
 #: How many of the file's usual periods between a person's rows they may go unseen and stay one mover.
 GAP_PERIODS = 5
+#: Mean walking speeds (m/s) beyond which the units are likely wrong (people walk 0.5-2 m/s):
+#: the fastest tenth of the people slower than the first (times in milliseconds read as
+#: seconds), or the median faster than the second (positions in centimetres).
+PLAUSIBLE_SPEEDS = (0.02, 15.0)
 
 
 
@@ -577,6 +581,28 @@ def _movers(rel: dict, t_lo: float, duration: float, region, options: TrackScene
     return movers
 
 
+def _warn_units(movers: list, src: str) -> None:
+    """Log when the people's speeds say the file's units are not seconds and metres
+    (``PLAUSIBLE_SPEEDS``): too slow when every step of every person is (times in
+    milliseconds slow all of them a thousandfold; a queue, or a plaza of people standing
+    still with one walker, has brisk steps and is no alarm); too fast when the mean speeds'
+    median (each mover's path length over its duration) is."""
+    speeds, fast = [], 0.0
+    for m in movers:
+        if m.duration > 0:
+            speeds.append(sum(math.hypot(b[1] - a[1], b[2] - a[2]) for a, b in pairwise(m.rows)) / m.duration)
+            fast = max([fast] + [math.hypot(b[1] - a[1], b[2] - a[2]) / (b[0] - a[0]) for a, b in pairwise(m.rows) if b[0] > a[0]])
+    if not speeds:
+        return
+    median = statistics.median(speeds)
+    if fast < PLAUSIBLE_SPEEDS[0]:
+        log.warning("%s: the people's steps are at most %.3g m/s (pedestrians walk 0.5-2 m/s): are the times in seconds? "
+                    "(t in milliseconds: divide it by 1000; frame numbers: --format eth --fps)", src, fast)  # fmt: skip
+    elif median > PLAUSIBLE_SPEEDS[1]:
+        log.warning("%s: the people walk at a median %.3g m/s (pedestrians walk 0.5-2 m/s): are the positions in metres "
+                    "(centimetres: --scale 0.01) and the times in seconds?", src, median)  # fmt: skip
+
+
 def _warn_overlaps(queries: list, movers: list, distance: float) -> None:
     """Log a start or goal closer than ``distance`` to a person at t0 = 0."""
     for q in queries:
@@ -647,6 +673,7 @@ def tracks_scene(
     robot, dof, inradius = _robot_doc(options, static)
     queries = _query_docs(start, goal, query_name, expect, dof, inradius, region, src)
     movers = _movers(rel, t_lo, duration, region, options, src)
+    _warn_units(movers, src)
     _warn_overlaps(queries, movers, inradius + options.radius)
     doc = {
         "version": 1,
