@@ -1002,3 +1002,13 @@ def test_predictions_built_in_python_as_arrays_are_read(tmp_path):
             export_mcap(scene, tmp_path / "b.mcap", rows, [{"t": 0.0, "predicted": bad}])
         assert needle in str(err.value) and len(str(err.value)) < 200, str(err.value)
     assert not (tmp_path / "b.mcap").exists()
+
+
+def test_a_replan_log_out_of_order_is_read_in_time_order():
+    """The GIF and the MCAP file draw the predictions in time; a log written out of order
+    (a user's merge of two runs' logs) is read sorted by t (a review's surviving mutant
+    returned it as written)."""
+    from gfuzzy.trajectory import replan_entries
+
+    log = [{"t": t, "predicted": [[1.0, 2.0, 0.0, 0.0, 0.3]], "plan": [[t, 0.0, 0.0]]} for t in (2.0, 0.5, 1.0)]
+    assert [e["t"] for e in replan_entries(log, "nav.json")] == [0.5, 1.0, 2.0]

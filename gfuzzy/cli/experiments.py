@@ -443,7 +443,8 @@ def _beyond_max_time(rd: float, vmax: float, max_time: float, straight: float) -
     if not math.isfinite(fastest) or fastest <= max_time:
         return ""
     if straight / vmax > max_time:
-        return (f"the goal is {straight:.1f} m away in a straight line: at least {straight / vmax:.1f} s at vmax "
+        least = math.ceil(straight / vmax * 100.0) / 100.0  # rounded up: 3.004 s is "3.01", never "3.0"
+        return (f"the goal is {straight:.1f} m away in a straight line: at least {least:g} s at vmax "
                 f"{vmax:g}, more than --max-time {max_time:g} s: give a larger --max-time")
     return (f"the shortest roadmap route ({rd:.1f} m) takes {fastest:.1f} s at vmax {vmax:g}, more than --max-time "
             f"{max_time:g} s (only a shorter way off the roadmap can arrive in time): give a larger --max-time")

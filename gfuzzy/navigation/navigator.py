@@ -474,11 +474,12 @@ class Navigator(PathSpace, Prediction, SoftCost):
             if opts.full_speed:
                 traj = brisk(self, t, pose, traj, obs, keep, ghosts)
             traj = brisk_arrival(self, t, pose, traj, obs, keep, ghosts, since)
+        out_of_time = found.out_of_time
         if traj is None and len(obs) and not found.out_of_time and self._clock() < deadline:
             # blocked by the margins (someone standing beside the goal, a narrow gap): try
             # once more with the people's discs as they are, plus the mover clearance only
-            traj = self._relaxed(t, pose, obs, found, deadline)
-            mode = NavMode.RELAXED
+            relaxed = self._relaxed(t, pose, obs, found, deadline)
+            traj, mode, out_of_time = relaxed.trajectory, NavMode.RELAXED, relaxed.out_of_time
         if traj is None:
             traj = self._direct(t, pose, obs)
             mode = NavMode.DIRECT
@@ -515,7 +516,7 @@ class Navigator(PathSpace, Prediction, SoftCost):
                 traj, mode = looked, NavMode.LOOK
         t_end = self._clock()
         self._measure_tail(t_end - deadline)
-        self.last = NavStep(mode, t_end - t_begin, found.message, predicted, found.detailed, found.out_of_time)
+        self.last = NavStep(mode, t_end - t_begin, found.message, predicted, found.detailed, out_of_time)
         return traj
 
     def _measure_tail(self, over: float) -> None:

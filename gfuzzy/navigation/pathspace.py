@@ -319,10 +319,11 @@ class PathSpace:
         """The relaxed search (the people's discs as they are, plus the mover clearance):
         first still keeping off the way people are about to walk (the ghosts, which a robot
         in someone's way must leave in time: a person walking up behind the robot or at it
-        leaves no plan that keeps the personal space, but one that steps aside), then not."""
+        leaves no plan that keeps the personal space, but one that steps aside), then not.
+        What the last search found (its ``out_of_time`` counts in the call's)."""
         infl = self._inflation(pose, obs, relaxed=True)
         if self.options.path_space > 0:
             again = self._search(t, pose, *self._with_ghosts(pose, obs, infl), deadline, found)
             if again.trajectory is not None or again.out_of_time or self._clock() > deadline:
-                return again.trajectory
-        return self._search(t, pose, obs, infl, deadline, found).trajectory
+                return again
+        return self._search(t, pose, obs, infl, deadline, found)
