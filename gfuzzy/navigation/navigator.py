@@ -476,8 +476,7 @@ class Navigator(PathSpace, Prediction, SoftCost):
             traj = brisk_arrival(self, t, pose, traj, obs, keep, ghosts, since)
         out_of_time = found.out_of_time
         if traj is None and len(obs) and not found.out_of_time and self._clock() < deadline:
-            # blocked by the margins (someone standing beside the goal, a narrow gap): try
-            # once more with the people's discs as they are, plus the mover clearance only
+            # blocked by the margins (someone beside the goal, a narrow gap): the discs as they are + mover clearance
             relaxed = self._relaxed(t, pose, obs, found, deadline)
             traj, mode, out_of_time = relaxed.trajectory, NavMode.RELAXED, relaxed.out_of_time
         if traj is None:
