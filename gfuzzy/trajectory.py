@@ -13,6 +13,7 @@ import json
 import math
 import numbers
 import os
+import sys
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 
@@ -283,6 +284,19 @@ _CONTRACT_KEYS = frozenset(("version", "scene", "query", "status", "message", "d
                             "delay_factor", "planning_seconds", "waypoints"))
 
 
+def _finite_number(v, bound: float = sys.float_info.max) -> bool:
+    """Whether ``v`` is one real number (not a boolean) of at most ``bound`` in magnitude:
+    NaN and infinities are not, nor a JSON integer past a float's range (``abs`` first:
+    ``math.isfinite`` of a 400-digit integer raises OverflowError)."""
+    return isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_)) and abs(v) <= bound
+
+
+def _short(v) -> str:
+    """``repr(v)``, cut to 80 characters for an error message."""
+    text = repr(v)
+    return text if len(text) <= 80 else text[:77] + "..."
+
+
 def _rows(rows, file: str, key: str) -> FloatArray:
     """A file's ``key`` (``waypoints``, or a navigate run's ``executed``) as a float table,
     read by the contract's rules: a non-empty list of rows ``[t, x, y(, heading)]`` of one
@@ -297,8 +311,8 @@ def _rows(rows, file: str, key: str) -> FloatArray:
         if not isinstance(row, list) or len(row) != width:
             raise SceneError(file, f"{key}[{i}]", f"expected {width} numbers, as {key}[0] has")
         for j, v in enumerate(row):
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-                raise SceneError(file, f"{key}[{i}][{j}]", f"expected a finite number, got {v!r}")
+            if not _finite_number(v):
+                raise SceneError(file, f"{key}[{i}][{j}]", f"expected a finite number, got {_short(v)}")
     table = np.asarray(rows, dtype=float)
     back = np.nonzero(np.diff(table[:, 0]) <= 0)[0]
     if back.size:  # section 2: t strictly increasing; without it the rows are no trajectory
@@ -339,13 +353,6 @@ def replan_entries(log, file: str) -> list[dict]:
     def seq(v) -> bool:  # as read from JSON, or built in Python (NavResult.log, numpy rows)
         return isinstance(v, (list, tuple)) or (isinstance(v, np.ndarray) and v.ndim >= 1)
 
-    def short(v) -> str:
-        text = repr(v)
-        return text if len(text) <= 80 else text[:77] + "..."
-
-    def number(v) -> bool:  # (a JSON integer of 400 digits: abs() first, isfinite would overflow)
-        return isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_)) and abs(v) <= MAX_MAGNITUDE
-
     if not seq(log):
         raise SceneError(file, "replan_log", f"expected a list of replans, got {type(log).__name__}")
     for i, e in enumerate(log):
@@ -353,20 +360,20 @@ def replan_entries(log, file: str) -> list[dict]:
         if not isinstance(e, dict):
             raise SceneError(file, where, "expected a mapping with t, predicted and plan")
         t = e.get("t")
-        if not number(t):
-            raise SceneError(file, f"{where}.t", f"expected a finite number of at most {MAX_MAGNITUDE:g} in magnitude, got {short(t)}")
+        if not _finite_number(t, MAX_MAGNITUDE):
+            raise SceneError(file, f"{where}.t", f"expected a finite number of at most {MAX_MAGNITUDE:g} in magnitude, got {_short(t)}")
         for key, widths in (("predicted", (5,)), ("plan", (3, 4))):
             rows = e.get(key, [])
             if not seq(rows):
-                raise SceneError(file, f"{where}.{key}", f"expected a list of rows, got {short(rows)}")
+                raise SceneError(file, f"{where}.{key}", f"expected a list of rows, got {_short(rows)}")
             for j, row in enumerate(rows):
                 want = widths if j == 0 or key == "predicted" else (len(rows[0]),)
                 if not seq(row) or len(row) not in want:
                     n = " or ".join(map(str, want))
-                    raise SceneError(file, f"{where}.{key}[{j}]", f"expected a row of {n} numbers, got {short(row)}")
+                    raise SceneError(file, f"{where}.{key}[{j}]", f"expected a row of {n} numbers, got {_short(row)}")
                 for k, v in enumerate(row):
-                    if not number(v):
-                        raise SceneError(file, f"{where}.{key}[{j}][{k}]", f"expected a finite number of at most {MAX_MAGNITUDE:g} in magnitude, got {short(v)}")
+                    if not _finite_number(v, MAX_MAGNITUDE):
+                        raise SceneError(file, f"{where}.{key}[{j}][{k}]", f"expected a finite number of at most {MAX_MAGNITUDE:g} in magnitude, got {_short(v)}")
                 if key == "predicted" and row[4] < 0:
                     raise SceneError(file, f"{where}.{key}[{j}][4]", f"a radius must be >= 0, got {row[4]!r}")
     return sorted(log, key=lambda e: float(e["t"]))
