@@ -44,9 +44,9 @@ log = logging.getLogger(__name__)
 REGION_MARGIN = 0.5
 #: How many of the file's usual periods between a person's rows they may go unseen and stay one mover.
 GAP_PERIODS = 5
-#: Mean walking speeds (m/s) beyond which the units are likely wrong (people walk 0.5-2 m/s):
-#: the fastest tenth of the people slower than the first (times in milliseconds read as
-#: seconds), or the median faster than the second (positions in centimetres).
+#: Walking speeds (m/s) beyond which the units are likely wrong (people walk 0.5-2 m/s): no
+#: step of anyone faster than the first (times in milliseconds read as seconds), or the
+#: median of the people's mean speeds faster than the second (positions in centimetres).
 PLAUSIBLE_SPEEDS = (0.02, 15.0)
 
 
@@ -590,8 +590,9 @@ def _warn_units(movers: list, src: str) -> None:
     speeds, fast = [], 0.0
     for m in movers:
         if m.duration > 0:
-            speeds.append(sum(math.hypot(b[1] - a[1], b[2] - a[2]) for a, b in pairwise(m.rows)) / m.duration)
-            fast = max([fast] + [math.hypot(b[1] - a[1], b[2] - a[2]) / (b[0] - a[0]) for a, b in pairwise(m.rows) if b[0] > a[0]])
+            steps = [(math.hypot(b[1] - a[1], b[2] - a[2]), b[0] - a[0]) for a, b in pairwise(m.rows)]
+            speeds.append(sum(d for d, _ in steps) / m.duration)
+            fast = max([fast] + [d / dt for d, dt in steps if dt > 0])
     if not speeds:
         return
     median = statistics.median(speeds)
