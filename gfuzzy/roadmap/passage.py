@@ -1,25 +1,30 @@
 """Bridge samples put where a rigid robot fits: across a passage, on its middle line.
 
-The passage sampler's bridge test (:mod:`gfuzzy.roadmap.roadmap`) finds points inside narrow
-passages, each with a heading along the passage drawn from the bridge's direction. In a door
-with a few centimetres to spare that pose is almost never valid: the bridge's midpoint lies
-anywhere across the door, its heading is off by the bridge's random tilt, and a footprint
-whose reference point is not its body's middle (a cart pulled by its axle, an L) is placed
-with the reference point, not the body, in the door's middle. :func:`centre_bridge` measures
-the passage instead: the walls' faces on both sides (points where a ray leaves the free
-space, found by bisection), the heading along them, and the pose whose body's lateral middle
-lies on the passage's middle line.
+The passage sampler (:class:`PassageDraws`, handed to OMPL's PRM by
+:mod:`gfuzzy.roadmap.roadmap` through :func:`passage_sampler_type`) draws uniform samples
+and bridge-test samples. Its bridge test finds points inside narrow passages, each with a
+heading along the passage drawn from the bridge's direction. In a door with a few
+centimetres to spare that pose is almost never valid: the bridge's midpoint lies anywhere
+across the door, its heading is off by the bridge's random tilt, and a footprint whose
+reference point is not its body's middle (a cart pulled by its axle, an L) is placed with
+the reference point, not the body, in the door's middle. :func:`centre_bridge` measures the
+passage instead: the walls' faces on both sides (points where a ray leaves the free space,
+found by bisection), the heading along them, and the pose whose body's lateral middle lies
+on the passage's middle line.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
 
+from ..scene.maps import free_cell_draw
 from ..typed import FloatArray
+from .freespace import blocked_points
 
-__all__ = ["Chains", "centre_bridge", "lateral_middle"]
+__all__ = ["Chains", "PassageDraws", "centre_bridge", "lateral_middle", "passage_sampler_type"]
 
 #: Bisection steps of a ray's exit from the free space (2**-24 of a 64th of the reach).
 _BISECT = 24
@@ -209,3 +214,129 @@ class Chains:
             self.made.append(p)
             out += self._shifts(p)
         return out
+
+
+class PassageDraws:
+    """The draws of the passage sampler (see :class:`gfuzzy.roadmap.roadmap.RoadmapOptions`):
+    uniform + bridge-test samples; on a map mostly blocked, half the uniform ones in free
+    cells (when they are below ``free_cell_share`` of the bounds).
+
+    Plain Python (no OMPL object, no closure over one), so that a build's sampler dies
+    by reference counting with the build, without a garbage collection.
+    """
+
+    def __init__(self, geometry, rng: np.random.Generator, ratio: float, free_cell_share: float):
+        scene = geometry.scene
+        self.rng, self.ratio = rng, ratio
+        self.bounds = scene.bounds
+        self.box = scene.robot.space_dof == 3
+        self.sigma = max(scene.robot.circumradius, 1e-3)
+        self.valid = geometry.is_valid
+        self.blocked = blocked_points(scene)
+        self.in_free_cell = free_cell_draw(scene.obstacles, scene.bounds, rng, free_cell_share)
+        self.chains = Chains(self.valid, geometry.clearance1, self.blocked, scene.robot) if self.box else None
+        self.queue: list = []
+        self.bridges: list = []
+        self.dry = 0  # refills in a row that found no bridge
+
+    def _uniform(self):
+        rng = self.rng
+        xmin, ymin, xmax, ymax = self.bounds
+        if self.in_free_cell is not None and rng.random() < 0.5:  # a map mostly blocked
+            q = list(self.in_free_cell())
+        else:
+            q = [rng.uniform(xmin, xmax), rng.uniform(ymin, ymax)]
+        if self.box:
+            q.append(rng.uniform(-math.pi, math.pi))
+        return np.array(q)
+
+    def _refill(self):
+        # bridge test on points: both ends inside obstacles, the middle free
+        rng, blocked = self.rng, self.blocked
+        xmin, ymin, xmax, ymax = self.bounds
+        n = 4096
+        a = np.column_stack([rng.uniform(xmin, xmax, n), rng.uniform(ymin, ymax, n)])
+        b = a + rng.normal(0.0, self.sigma, (n, 2))
+        ok = blocked(a) & blocked(b)
+        mid = 0.5 * (a[ok] + b[ok])
+        free = ~blocked(mid)
+        a, b, mid = a[ok][free], b[ok][free], mid[free]
+        head = np.arctan2(b[:, 1] - a[:, 1], b[:, 0] - a[:, 0]) + 0.5 * math.pi
+        head = head + rng.normal(0.0, 0.1, len(head))
+        self.bridges = list(np.column_stack([mid, head]))
+
+    def _bridge(self):
+        for _ in range(64):
+            if not self.bridges:
+                if self.dry >= 3:  # no narrow passages to find: sample uniformly
+                    return None
+                self._refill()
+                if not self.bridges:
+                    self.dry += 1
+                    continue
+                self.dry = 0
+            m = self.bridges.pop()
+            if not self.box:
+                if self.valid(m[:2]):
+                    return m[:2]
+                continue
+            m[2] = (m[2] + math.pi) % (2 * math.pi) - math.pi
+            if self.chains.exhausted:  # centring keeps failing: the bridge as it is, shifted
+                poses = self.chains.plain(m)
+            else:
+                poses = self.chains.make(m)
+            if poses is not None:
+                self.queue += poses[:0:-1]  # popped from the end: the chain in order
+                return poses[0]
+        return None
+
+    def draw(self):
+        """The next milestone (a valid configuration), or None after 1000 tries."""
+        for _ in range(1000):
+            if self.rng.random() < self.ratio:  # a chain's samples count as bridge samples too
+                q = self.queue.pop() if self.queue else self._bridge()
+                if q is not None:
+                    return q
+            q = self._uniform()
+            if self.valid(q):
+                return q
+        return None
+
+
+@functools.cache
+def passage_sampler_type():
+    """OMPL's ``ValidStateSampler`` subclass handing out :class:`PassageDraws`' samples.
+
+    Every state it hands out becomes a PRM milestone; they are appended to ``record`` so
+    that milestones PRM leaves without an edge (and out of its planner data) are kept.
+
+    Made once per process: a class made per build is a reference cycle (a class always is)
+    holding the build's SpaceInformation through its methods' closures until a garbage
+    collection, which costs 0.1-0.2 s in a large heap.
+    """
+    from ompl import base as ob
+
+    class PassageSampler(ob.ValidStateSampler):
+        def __init__(self, si, draws: PassageDraws, record: list):
+            super().__init__(si)
+            self.draws = draws
+            self.record = record
+
+        def sample(self, state):
+            q = self.draws.draw()
+            if q is None:
+                return False
+            self.record.append(tuple(float(v) for v in q))
+            if self.draws.box:
+                state.setX(float(q[0]))
+                state.setY(float(q[1]))
+                state.setYaw(float(q[2]))
+            else:
+                state[0] = float(q[0])
+                state[1] = float(q[1])
+            return True
+
+        def sampleNear(self, state, near, distance):
+            return False
+
+    return PassageSampler

@@ -24,13 +24,11 @@ import numpy as np
 from ..atomic import write_atomic
 from ..collision.geometry import StaticGeometry, metric_distance
 from ..errors import InputError, LimitError, SceneError
-from ..scene.maps import free_cell_draw
 from ..scene.scene import Scene
 from ..settings import MAX_POINTS
 from ..typed import FloatArray, IntArray
-from .freespace import blocked_points as _blocked_points
 from .join import count_components, join_roadmap, repair_roadmap
-from .passage import Chains
+from .passage import PassageDraws, passage_sampler_type
 
 __all__ = [
     "RoadmapOptions",
@@ -413,108 +411,6 @@ def _seed_ompl(seed: int) -> None:
         ou.setLogLevel(level)
 
 
-def _make_passage_sampler(
-    ob, si, geometry: StaticGeometry, rng: np.random.Generator, ratio: float, record: list
-):
-    """A Python ``ValidStateSampler``: uniform + bridge-test samples (see RoadmapOptions).
-
-    Every state it hands out becomes a PRM milestone; they are appended to ``record`` so
-    that milestones PRM leaves without an edge (and out of its planner data) are kept.
-    """
-    scene = geometry.scene
-    xmin, ymin, xmax, ymax = scene.bounds
-    box = scene.robot.space_dof == 3
-    sigma = max(scene.robot.circumradius, 1e-3)
-    valid = geometry.is_valid
-    blocked = _blocked_points(scene)
-    in_free_cell = free_cell_draw(scene.obstacles, scene.bounds, rng, FREE_CELL_SHARE)
-    chains = Chains(valid, geometry.clearance1, blocked, scene.robot) if box else None
-
-    class PassageSampler(ob.ValidStateSampler):
-        def __init__(self):
-            super().__init__(si)
-            self.queue: list = []
-            self.bridges: list = []
-            self.dry = 0  # refills in a row that found no bridge
-
-        def _uniform(self):
-            if in_free_cell is not None and rng.random() < 0.5:  # a map mostly blocked
-                q = list(in_free_cell())
-            else:
-                q = [rng.uniform(xmin, xmax), rng.uniform(ymin, ymax)]
-            if box:
-                q.append(rng.uniform(-math.pi, math.pi))
-            return np.array(q)
-
-        def _refill(self):
-            # bridge test on points: both ends inside obstacles, the middle free
-            n = 4096
-            a = np.column_stack([rng.uniform(xmin, xmax, n), rng.uniform(ymin, ymax, n)])
-            b = a + rng.normal(0.0, sigma, (n, 2))
-            ok = blocked(a) & blocked(b)
-            mid = 0.5 * (a[ok] + b[ok])
-            free = ~blocked(mid)
-            a, b, mid = a[ok][free], b[ok][free], mid[free]
-            head = np.arctan2(b[:, 1] - a[:, 1], b[:, 0] - a[:, 0]) + 0.5 * math.pi
-            head = head + rng.normal(0.0, 0.1, len(head))
-            self.bridges = list(np.column_stack([mid, head]))
-
-        def _bridge(self):
-            for _ in range(64):
-                if not self.bridges:
-                    if self.dry >= 3:  # no narrow passages to find: sample uniformly
-                        return None
-                    self._refill()
-                    if not self.bridges:
-                        self.dry += 1
-                        continue
-                    self.dry = 0
-                m = self.bridges.pop()
-                if not box:
-                    if valid(m[:2]):
-                        return m[:2]
-                    continue
-                m[2] = (m[2] + math.pi) % (2 * math.pi) - math.pi
-                if chains.exhausted:  # centring keeps failing: the bridge as it is, shifted
-                    poses = chains.plain(m)
-                else:
-                    poses = chains.make(m)
-                if poses is not None:
-                    self.queue += poses[:0:-1]  # popped from the end: the chain in order
-                    return poses[0]
-            return None
-
-        def _draw(self):
-            for _ in range(1000):
-                if rng.random() < ratio:  # a chain's samples count as bridge samples too
-                    q = self.queue.pop() if self.queue else self._bridge()
-                    if q is not None:
-                        return q
-                q = self._uniform()
-                if valid(q):
-                    return q
-            return None
-
-        def sample(self, state):
-            q = self._draw()
-            if q is None:
-                return False
-            record.append(tuple(float(v) for v in q))
-            if box:
-                state.setX(float(q[0]))
-                state.setY(float(q[1]))
-                state.setYaw(float(q[2]))
-            else:
-                state[0] = float(q[0])
-                state[1] = float(q[1])
-            return True
-
-        def sampleNear(self, state, near, distance):
-            return False
-
-    return PassageSampler()
-
-
 class _Builder:
     """Holds the OMPL objects of one build; they die with it (no nanobind leak warnings)."""
 
@@ -555,7 +451,8 @@ class _Builder:
             rng = np.random.default_rng(options.seed)
 
             def alloc(si_):
-                smp = _make_passage_sampler(ob, si_, geometry, rng, options.bridge_ratio, self.sampled)
+                draws = PassageDraws(geometry, rng, options.bridge_ratio, FREE_CELL_SHARE)
+                smp = passage_sampler_type()(si_, draws, self.sampled)
                 self._samplers.append(smp)
                 return smp
 
@@ -570,9 +467,7 @@ class _Builder:
 
     def close(self) -> None:
         """Break the Python <-> OMPL reference cycle of the sampler allocator; give OMPL
-        back the log level it had."""
-        import gc
-
+        back the log level it had. The build's OMPL objects die here, by reference counting."""
         from ompl import util as ou
 
         ou.setLogLevel(self._log_level)
@@ -581,7 +476,6 @@ class _Builder:
             self._samplers.clear()
         self.prm.clear()
         self.prm = self.si = self.space = None
-        gc.collect()
 
     def grow(self, n: int, progress: Callable[[int, int], None] | None) -> None:
         """Grow to ``n`` milestones; raise SceneError if the free space is (nearly) empty.
