@@ -15,6 +15,7 @@ from .common import (
     EXIT_OK,
     BadInput,
     _apply_overrides,
+    _check_numbers,
     _check_sensor_flags,
     _load_scene,
     _out_path,
@@ -26,6 +27,7 @@ from .common import (
     _roadmap_reads,
     _say,
     _scene_reads,
+    _sense,
     _soft_options,
 )
 from .planning import _start_on_mover
@@ -275,21 +277,21 @@ def _sensor_options(args):
 
 
 def _navigate_options(args):
-    """``gfuzzy navigate``'s flags checked: the navigator's options, the sensor's, the range."""
-    from ..navigation.navigator import NavOptions
+    """``gfuzzy navigate``'s flags checked: the navigator's options, the sensor's, the range.
 
-    for flag, value in (("--period", args.period), ("--max-time", args.max_time), ("--time-budget", args.time_budget)):
-        if not (math.isfinite(value) and value > 0):
-            raise BadInput(f"gfuzzy navigate: {flag} must be a positive number, got {value:g}")
-    for flag, value in (("--personal-space", args.personal_space), ("--path-space", args.path_space)):
-        if not (math.isfinite(value) and value >= 0):
-            raise BadInput(f"gfuzzy navigate: {flag} must be a number >= 0, got {value:g}")
-    if args.log_every < 0:
-        raise BadInput(f"gfuzzy navigate: --log-every must be >= 0, got {args.log_every}")
-    sense = math.inf if args.sense is None else args.sense
-    if not sense > 0:
-        raise BadInput(f"gfuzzy navigate: --sense must be a positive number, got {sense:g}")
+    Every number by the one rule of ``check_number`` under its flag's name (positive or at
+    least zero, at most 1e9; ``--dt`` as ``plan`` names it, ``dt``), and the run one that can
+    finish (``navsim.check_run``)."""
+    from ..navigation.navigator import NavOptions
+    from ..navigation.navsim import check_run
+
+    _check_numbers("navigate", positive=(("--period", args.period), ("--max-time", args.max_time),
+                                         ("--time-budget", args.time_budget)),
+                   at_least_zero=(("--personal-space", args.personal_space), ("--path-space", args.path_space),
+                                  ("--log-every", args.log_every)))  # fmt: skip
+    sense = _sense("navigate", args.sense)
     try:
+        check_run(args.period, args.max_time, ("--period", "--max-time"))
         options = NavOptions(dt=args.dt, time_budget=args.time_budget, backend=args.backend,
                              budget_clock=args.budget_clock, personal_space=args.personal_space,
                              path_space=args.path_space, **_soft_options(args))  # fmt: skip

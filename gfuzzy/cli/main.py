@@ -210,6 +210,8 @@ def _add_map(sub) -> None:
                    help="unicycle: a differential drive (turns in place, straight moves; poses get a heading)")  # fmt: skip
     m.add_argument("--reverse", action="store_true",
                    help="unicycle: the robot may also drive backwards (default: forwards only)")  # fmt: skip
+    m.add_argument("--wmax", type=float, metavar="W",
+                   help="unicycle: bound on the turning rate, rad/s (default: the scene file's, vmax / r)")  # fmt: skip
     m.add_argument("--name", help="scene name (default: the output file's stem)")
     m.set_defaults(func=cmd_map)
 
