@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import ROOT, run_cli_process
+from helpers import run_main
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -245,6 +246,30 @@ def test_scale_and_default_region(csv_file):
     np.testing.assert_allclose(_movers(made)["ped-a"], [[0, 0, 0], [1, 1, 0], [2, 2, 0]])
     # the people's extent (x 0..2, y 0..1.5) plus 0.5 m, rounded out to 0.1 m
     assert made.region == (-0.5, -0.5, 2.5, 2.0)
+
+
+def test_offset_shifts_the_scaled_positions(tmp_path, csv_file, capsys):
+    # a detector's CSV in a frame whose origin is not the map's could not be shifted: the
+    # file had to be rewritten by hand
+    made = tracks_scene(read_tracks(csv_file), TrackSceneOptions(scale=0.5, offset=(-3.25, 7.5)))
+    np.testing.assert_allclose(_movers(made)["ped-a"], [[0, -3.25, 7.5], [1, -2.25, 7.5], [2, -1.25, 7.5]])
+    assert made.region == (-3.8, 7.0, -0.7, 9.5)  # the shifted extent (x -3.25..-1.25, y 7.5..9) + 0.5 m, rounded out
+    out = tmp_path / "shifted.yaml"
+    rc, stdout, err = run_main(capsys, "tracks", csv_file, "--scale", "0.5", "--offset", "-3.25", "7.5", "-o", out)
+    assert rc == 0, err
+    scene = load_scene(out)
+    (ped_a,) = [m for m in scene.movers if m.name == "ped-a"]
+    np.testing.assert_allclose(ped_a.trajectory[:, 1:], [[-3.25, 7.5], [-2.25, 7.5], [-1.25, 7.5]])
+    assert "--offset -3.25 7.5" in out.read_text().splitlines()[1]  # the command that made it, in the header
+    for flags, expect in [(["--offset", "1e300", "0"], "gfuzzy tracks: offset must be two finite numbers"),
+                          (["--offset", "0", "nan"], "gfuzzy tracks: offset must be two finite numbers"),
+                          (["--offset", "1"], "gfuzzy tracks: argument --offset: expected 2 arguments")]:  # fmt: skip
+        bad = tmp_path / "bad.yaml"
+        rc, stdout, err = run_main(capsys, "tracks", csv_file, *flags, "-o", bad)
+        assert rc == 2 and err.startswith(expect) and err.count("\n") == 1, err
+        assert not bad.exists()
+    with pytest.raises(InputError, match="offset must be two finite numbers"):
+        TrackSceneOptions(offset=(1.0,))
 
 
 def test_max_movers_keeps_those_present_longest(eth_file):

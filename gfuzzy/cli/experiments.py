@@ -43,7 +43,7 @@ def _tracks_command(args) -> str:
     parts = ["gfuzzy", "tracks", args.file]
     for flag, value in (("--format", None if args.format == "auto" else args.format), ("--fps", args.fps),
                         ("--t-start", args.t_start), ("--duration", args.duration), ("--region", args.region),
-                        ("--scale", None if args.scale == 1.0 else args.scale),
+                        ("--scale", None if args.scale == 1.0 else args.scale), ("--offset", args.offset),
                         ("--radius", None if args.radius == 0.25 else args.radius), ("--max-movers", args.max_movers),
                         ("--max-gap", args.max_gap),
                         ("--static", args.static), ("--name", args.name), ("--robot-radius", args.robot_radius),
@@ -70,6 +70,7 @@ def cmd_tracks(args) -> int:
             duration=args.duration,
             region=tuple(args.region) if args.region else None,
             scale=args.scale,
+            offset=tuple(args.offset) if args.offset else (0.0, 0.0),
             radius=args.radius,
             max_movers=args.max_movers,
             max_gap=args.max_gap,

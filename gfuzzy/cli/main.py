@@ -162,6 +162,8 @@ def _add_tracks(sub) -> None:
     k.add_argument("--region", type=float, nargs=4, metavar=("XMIN", "YMIN", "XMAX", "YMAX"),
                    help="scene bounds; tracks are clipped to it (default: --static's bounds, or the people's extent + 0.5 m)")  # fmt: skip
     k.add_argument("--scale", type=float, metavar="S", default=1.0, help="multiplies every x and y of the file (default 1)")
+    k.add_argument("--offset", type=float, nargs=2, metavar=("DX", "DY"),
+                   help="added to every x and y after --scale: where the file's origin lies in the scene (default 0 0)")  # fmt: skip
     k.add_argument("--radius", "--ped-radius", dest="radius", type=float, metavar="R", default=0.25, help="pedestrians' disc radius (default 0.25)")
     k.add_argument("--max-movers", type=int, metavar="N", help="keep the N people present longest")
     k.add_argument("--max-gap", type=float, metavar="S",

@@ -179,11 +179,14 @@ class TrackSceneOptions:
     duration : float or None
         Length of the window in seconds (None: up to the last time in the file).
     region : (4,) tuple or None
-        ``(xmin, ymin, xmax, ymax)`` after scaling: the scene's bounds; tracks are clipped
+        ``(xmin, ymin, xmax, ymax)`` after scaling and the offset: the scene's bounds; tracks are clipped
         to it. None: the static scene's bounds, or the people's extent in the window plus
         :data:`REGION_MARGIN`, rounded out to 0.1 m.
     scale : float
         Multiplies every x and y of the file (e.g. 0.01 for centimetres).
+    offset : (2,) tuple
+        ``(dx, dy)`` added to every x and y after ``scale``: where the file's origin lies in
+        the scene's frame (a detector's frame whose origin is not the map's).
     radius : float
         Radius of each person's disc mover, metres.
     max_movers : int or None
@@ -205,6 +208,7 @@ class TrackSceneOptions:
     duration: float | None = None
     region: tuple[float, float, float, float] | None = None
     scale: float = 1.0
+    offset: tuple[float, float] = (0.0, 0.0)
     radius: float = 0.25
     max_movers: int | None = None
     max_gap: float | None = None
@@ -225,6 +229,17 @@ class TrackSceneOptions:
             value = getattr(self, key)
             if value is not None and value <= 0:
                 raise InputError(f"{key} must be positive, got {value!r}")
+        try:
+            off = tuple(self.offset)
+        except TypeError:  # one number
+            off = (self.offset,)
+        if len(off) != 2 or not all(
+            isinstance(v, numbers.Real) and not isinstance(v, bool) and math.isfinite(v) and abs(v) <= MAX_MAGNITUDE
+            for v in off
+        ):
+            raise InputError(f"offset must be two finite numbers dx dy of at most {MAX_MAGNITUDE:g} in magnitude, "
+                             f"got {self.offset!r}")  # fmt: skip
+        object.__setattr__(self, "offset", tuple(float(v) for v in off))
         if self.max_movers is not None and self.max_movers < 0:
             raise InputError(f"max_movers must not be negative, got {self.max_movers!r}")
         gap = self.max_gap
@@ -423,7 +438,7 @@ def _default_region(tracks: list, t_lo: float, t_hi: float):
 
 
 def _window(tracks: Tracks, options: TrackSceneOptions):
-    """Each person's rows, scaled, with times relative to the window's start; the window."""
+    """Each person's rows, scaled and offset, with times relative to the window's start; the window."""
     src = tracks.source
     first, last = tracks.time_range
     t_lo = first if options.t_start is None else options.t_start
@@ -440,9 +455,9 @@ def _window(tracks: Tracks, options: TrackSceneOptions):
             "",
             f"the window {t_lo:g} s .. {t_hi:g} s is longer than {MAX_MAGNITUDE:g} s: give --t-start and --duration",
         )
-    scale = options.scale
+    scale, (dx, dy) = options.scale, options.offset
     rel = {
-        tr.id: [(t - t_lo, x * scale, y * scale) for t, x, y in tr.rows.tolist()]
+        tr.id: [(t - t_lo, x * scale + dx, y * scale + dy) for t, x, y in tr.rows.tolist()]
         for tr in sorted(tracks.tracks, key=lambda tr: _id_key(tr.id))
     }
     duration = t_hi - t_lo
