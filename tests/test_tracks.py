@@ -356,6 +356,40 @@ def test_a_differential_drive_from_a_static_scene_is_written_as_yaml(tmp_path, e
     assert load_scene(out).queries[0].start == (0.0, 0.0, 0.0)
 
 
+def test_tracks_writes_a_differential_drive_as_map_does(tmp_path, eth_file, capsys):
+    """`--kinematics`, `--reverse` and `--wmax`, as `gfuzzy map` takes them: a tracks scene's
+    robot could only be a holonomic disc, or --static's drive as it was."""
+    out = tmp_path / "drive.yaml"
+    argv = ["tracks", eth_file, "--kinematics", "unicycle", "--wmax", "0.5", "--reverse",
+            "--start", 0, 0, 0, "--goal", 5, 5, 1.57, "-o", out]  # fmt: skip
+    rc, _, err = run_main(capsys, *argv)
+    assert rc == 0, err
+    scene = load_scene(out)
+    assert (scene.robot.shape, scene.robot.kinematics, scene.robot.wmax, scene.robot.reverse) == (
+        "disc", "unicycle", 0.5, True)  # fmt: skip
+    assert scene.queries[0].start == (0.0, 0.0, 0.0)  # a differential drive's poses carry a heading
+    assert "--wmax 0.5" in out.read_text().splitlines()[1] and "--reverse" in out.read_text().splitlines()[1]
+    # a static differential drive made holonomic: its wmax and reverse go too, poses lose the heading
+    static = tmp_path / "robot.yaml"
+    static.write_text("version: 1\nname: robot\nbounds: [-1, -1, 12, 8]\nobstacles: []\nrobot:\n"
+                      "  disc: 0.2\n  kinematics: unicycle\n  wmax: 1.5\n  reverse: true\n  vmax: 1.0\n", encoding="utf-8")  # fmt: skip
+    rc, _, err = run_main(capsys, "tracks", eth_file, "--static", static, "--kinematics", "holonomic",
+                          "--start", 0, 0, "--goal", 5, 5, "-o", out)  # fmt: skip
+    assert rc == 0, err
+    robot = load_scene(out).robot
+    assert (robot.kinematics, robot.wmax, robot.reverse) == ("holonomic", None, False)
+    rc, _, err = run_main(capsys, "tracks", eth_file, "--static", static, "--wmax", "0.7", "-o", out)
+    assert rc == 0 and load_scene(out).robot.wmax == 0.7, err  # --static's drive, another turning rate
+    bad = tmp_path / "bad.yaml"
+    for flags, expect in [(["--wmax", "0.5"], "gfuzzy tracks: wmax (--wmax) needs a differential drive"),
+                          (["--reverse"], "gfuzzy tracks: reverse (--reverse) needs a differential drive"),
+                          (["--kinematics", "unicycle", "--wmax", "0"], "gfuzzy tracks: wmax must be positive"),
+                          (["--kinematics", "unicycle", "--wmax", "1e300"], "gfuzzy tracks: wmax must be at most 1e+09")]:  # fmt: skip
+        rc, _, err = run_main(capsys, "tracks", eth_file, *flags, "-o", bad)
+        assert rc == 2 and err.startswith(expect) and err.count("\n") == 1, err
+        assert not bad.exists()
+
+
 def test_a_smaller_disc_keeps_a_differential_drive_and_its_headings(tmp_path, eth_file):
     """`--robot-radius` on a unicycle scene makes a disc unicycle, whose poses carry a
     heading: the command took only [x, y] for its start and goal, and then refused the

@@ -47,11 +47,14 @@ def _tracks_command(args) -> str:
                         ("--radius", None if args.radius == 0.25 else args.radius), ("--max-movers", args.max_movers),
                         ("--max-gap", args.max_gap),
                         ("--static", args.static), ("--name", args.name), ("--robot-radius", args.robot_radius),
-                        ("--vmax", args.vmax), ("--amax", args.amax), ("--start", args.start), ("--goal", args.goal),
+                        ("--vmax", args.vmax), ("--amax", args.amax), ("--kinematics", args.kinematics),
+                        ("--wmax", args.wmax), ("--start", args.start), ("--goal", args.goal),
                         ("--query-name", None if args.query_name == "cross" else args.query_name),
                         ("--expect", args.expect), ("--max-duration", args.max_duration), ("-o", args.output)):  # fmt: skip
         if value is not None:
             parts += [flag, *(g(v) for v in (value if isinstance(value, list) else [value]))]
+    if args.reverse:
+        parts.insert(-2, "--reverse")  # before -o OUT
     return " ".join(shlex.quote(a) for a in parts)
 
 
@@ -78,11 +81,14 @@ def cmd_tracks(args) -> int:
             robot_radius=args.robot_radius,
             vmax=args.vmax,
             amax=args.amax,
+            kinematics=args.kinematics,
+            reverse=args.reverse,
+            wmax=args.wmax,
         )
         tracks = read_tracks(args.file, args.format, args.fps)
         if args.start is None and args.query_name != "cross":
             raise InputError("--query-name names the query of --start and --goal: give them too")
-        dof = robot_dof(static, args.robot_radius)
+        dof = robot_dof(static, args.robot_radius, args.kinematics)
         start = _pose(args.start, dof, "--start")
         goal = _pose(args.goal, dof, "--goal")
         expect = {}

@@ -174,6 +174,11 @@ def _add_tracks(sub) -> None:
     k.add_argument("--robot-radius", type=float, metavar="R", help="a disc robot of this radius (default 0.2, or --static's robot)")
     k.add_argument("--vmax", type=float, metavar="V", help="robot speed bound (default 1.5, or --static's)")
     k.add_argument("--amax", type=float, metavar="A", help="robot acceleration bound (default 3.0, or --static's)")
+    k.add_argument("--kinematics", choices=("holonomic", "unicycle"),
+                   help="the robot's drive (default: --static's, or holonomic); unicycle: a differential drive, "
+                        "poses get a heading")  # fmt: skip
+    k.add_argument("--reverse", action="store_true", help="unicycle: the robot may also drive backwards")
+    k.add_argument("--wmax", type=float, metavar="W", help="unicycle: bound on the turning rate, rad/s (default vmax / r)")
     k.add_argument("--start", nargs="+", metavar="X", help="a query from this pose at t0 = 0 (with --goal)")
     k.add_argument("--goal", nargs="+", metavar="X", help="the query's goal pose")
     k.add_argument("--query-name", metavar="NAME", default="cross", help="the query's name (default cross)")
