@@ -125,3 +125,35 @@ def test_populate_bounds_every_number_by_its_flag(tmp_path, capsys, flags, expec
     line = _refused(capsys, "populate", SCENE, "--people", "2", *flags, "-o", out)
     assert line == f"gfuzzy populate: {expect}"
     assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    ("argv", "expect"),
+    [
+        (["batch", SCENE, "--workers", "100000", "-o", "{tmp}/rows.csv"],
+         "gfuzzy batch: --workers must be at most 256 (local worker processes), got 100000"),
+        (["crowd", "--workers", "100000", "--episodes", "1", "-o", "{tmp}/rows.csv"],
+         "gfuzzy crowd: --workers must be between 0 and 256, got 100000"),
+    ],
+)  # fmt: skip
+def test_a_local_cluster_of_more_workers_than_a_machine_holds_is_refused_first(tmp_path, capsys, monkeypatch, argv,
+                                                                               expect):  # fmt: skip
+    # both set about starting 100000 worker processes (after building the roadmaps): here
+    # the cluster would fail the test, not the machine
+    from gfuzzy.runs import batch
+
+    def no_cluster(*args, **kwargs):
+        raise AssertionError("a local cluster was started")
+
+    monkeypatch.setattr(batch, "local_cluster", no_cluster)
+    line = _refused(capsys, *(str(a).format(tmp=tmp_path) for a in argv))
+    assert line == expect
+    assert not (tmp_path / "rows.csv").exists()
+
+
+def test_local_cluster_refuses_more_workers_before_starting_any():
+    from gfuzzy.runs.batch import MAX_LOCAL_WORKERS, local_cluster
+
+    with pytest.raises(InputError, match=f"workers must be between 1 and {MAX_LOCAL_WORKERS}, got 100000"):
+        with local_cluster(100_000):
+            pass

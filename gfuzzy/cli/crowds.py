@@ -77,14 +77,15 @@ def _setting(args):
     from ..navigation.crowd import MAX_EPISODES, CrowdSetting
     from ..navigation.navigator import NavOptions
     from ..navigation.sensing import SensorOptions
+    from ..runs.batch import MAX_LOCAL_WORKERS
 
     humans = args.humans if args.humans is not None else (20 if args.scenario == "arena" else 5)
     if humans < 0 or humans > 200:
         raise BadInput(f"gfuzzy crowd: --humans must be between 0 and 200, got {humans}")
     if not 1 <= args.episodes <= MAX_EPISODES:
         raise BadInput(f"gfuzzy crowd: --episodes must be between 1 and {MAX_EPISODES}, got {args.episodes}")
-    if args.workers < 0:
-        raise BadInput(f"gfuzzy crowd: --workers must be >= 0, got {args.workers}")
+    if not 0 <= args.workers <= MAX_LOCAL_WORKERS:  # 0: in this process
+        raise BadInput(f"gfuzzy crowd: --workers must be between 0 and {MAX_LOCAL_WORKERS}, got {args.workers}")
     if args.seed < 0:  # numpy refuses it deep in the first episode
         raise BadInput(f"gfuzzy crowd: --seed must be >= 0, got {args.seed}")
     _check_numbers("crowd", positive=(("--time-budget", args.time_budget), ("--dt", args.dt)),

@@ -186,10 +186,19 @@ def cmd_batch(args) -> int:
         interrupts_deferred,
         is_interrupt,
     )
-    from ..runs.batch import BatchOptions, BatchResult, quiet_dask_logs, write_table
+    from ..runs.batch import (
+        MAX_LOCAL_WORKERS,
+        BatchOptions,
+        BatchResult,
+        quiet_dask_logs,
+        write_table,
+    )
 
     if args.workers is not None and args.workers < 1:
         raise BadInput(f"gfuzzy batch: --workers must be at least 1 (local worker processes), got {args.workers}")
+    if args.workers is not None and args.workers > MAX_LOCAL_WORKERS:
+        raise BadInput(f"gfuzzy batch: --workers must be at most {MAX_LOCAL_WORKERS} (local worker processes), "
+                       f"got {args.workers}")  # fmt: skip
     scenes = [_apply_overrides(_load_scene(p), args) for p in args.scenes]  # all bad input first
     reads = tuple(r for sc in scenes for r in (*_scene_reads(sc), *_roadmap_reads(sc, args)))
     out = _out_path(args.output, (".csv",), reads, beside=(".parquet",))
