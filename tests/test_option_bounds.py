@@ -98,7 +98,13 @@ def test_check_run_is_the_one_bound_of_a_simulated_run():
         (["--episodes", "1000000000"], "--episodes must be between 1 and 10000, got 1000000000"),
     ],
 )
-def test_crowd_bounds_every_number_by_its_flag(tmp_path, capsys, flags, expect):
+def test_crowd_bounds_every_number_by_its_flag(tmp_path, capsys, monkeypatch, flags, expect):
+    from gfuzzy.navigation import crowd
+
+    def no_layout(*args, **kwargs):  # refused before any: the old code fails here, not after days
+        raise AssertionError("an episode's layout was drawn")
+
+    monkeypatch.setattr(crowd, "episode_layout", no_layout)
     out = tmp_path / "c.csv"
     line = _refused(capsys, "crowd", *flags, *(["--episodes", "1"] if "--episodes" not in flags else []), "-o", out)
     assert line == f"gfuzzy crowd: {expect}"

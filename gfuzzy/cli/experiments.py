@@ -366,7 +366,7 @@ def cmd_navigate(args) -> int:
     nav = Navigator(scene, roadmap, query.goal, knowing_view(options, sensor.fov) if sensor else options)
     rd = nav.roadmap_distance(np.asarray(query.start, dtype=float))
     sealed = "" if math.isfinite(rd) else _sealed_off(scene, query)
-    if sealed:  # no mover opens a way: replanning until --max-time (1e6 s: hours) changes nothing
+    if sealed:  # no mover opens a way: replanning until --max-time (up to 100000 replans: hours) changes nothing
         tf = TrajectoryFile(scene.name, query.name, Status.NO_PATH, sealed, None, None, None, 0.0)
         if out is not None:
             tf.save(out)

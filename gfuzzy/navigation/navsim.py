@@ -143,12 +143,11 @@ def simulate(
     roadmap : Roadmap
     start, goal : (d,) float
     t0 : float
-    period : float
-        Time between two observations and replans (s).
+    period, max_time : float
+        Time between two observations and replans (s); the run stops (``timeout``) max_time after
+        t0. A run that cannot finish is an InputError (:func:`check_run`).
     sense : float
         Range (m, robot-to-disc gap) within which movers are seen.
-    max_time : float
-        The run stops (``timeout``) this long after t0.
     options : NavOptions, optional
     log_every : int
         Keep every this-many-th replan in :attr:`NavResult.log` (0: none).
@@ -162,12 +161,6 @@ def simulate(
     Returns
     -------
     NavResult
-
-    Raises
-    ------
-    InputError
-        A run that cannot finish (:func:`check_run`): a period below :data:`MIN_PERIOD`,
-        more than ``settings.MAX_RUN_STEPS`` replans.
     """
     check_run(period, max_time)
     robot, cr = scene.robot, scene.robot.circumradius

@@ -195,6 +195,18 @@ def _kinematics_lines(kinematics: str, reverse: bool, wmax: float | None = None)
     return [drive + ", forwards only (reverse: true to back up)", *turn]
 
 
+def _check_drive(kinematics: str, reverse: bool, wmax: float | None) -> None:
+    """The drive's options of :func:`map_scene`, refused (InputError) by the flags' names."""
+    if kinematics not in ("holonomic", "unicycle"):
+        raise InputError(f"--kinematics: expected holonomic or unicycle, got {kinematics!r}")
+    if reverse and kinematics != "unicycle":  # as the scene file's own rule (and gfuzzy crowd's)
+        raise InputError("--reverse needs --kinematics unicycle (only a differential drive drives backwards)")
+    if wmax is not None:
+        if kinematics != "unicycle":  # the scene file's rule, as --reverse's
+            raise InputError("--wmax needs --kinematics unicycle (a turning-rate bound is a differential drive's)")
+        check_number("--wmax", wmax)
+
+
 def map_scene(
     map_yaml: str | os.PathLike,
     scene_path: str | os.PathLike,
@@ -227,12 +239,9 @@ def map_scene(
     kinematics : {"holonomic", "unicycle"}
         A differential drive gets ``kinematics: unicycle`` and poses with a heading (a disc
         included).
-    reverse : bool
-        The differential drive may also drive backwards (``reverse: true``); only with
-        ``kinematics="unicycle"``.
-    wmax : float, optional
-        The differential drive's bound on its turning rate (rad/s, ``wmax:``; default the
-        scene file's, vmax / r); only with ``kinematics="unicycle"``.
+    reverse, wmax : bool, float or None
+        The differential drive may also drive backwards (``reverse: true``); its bound on the
+        turning rate (rad/s; default the scene file's, vmax / r). Only with ``kinematics="unicycle"``.
 
     Notes
     -----
@@ -257,14 +266,7 @@ def map_scene(
             "write the scene beside the map or in a folder above it"
         )
     rel = Path(rel).as_posix()
-    if kinematics not in ("holonomic", "unicycle"):
-        raise InputError(f"--kinematics: expected holonomic or unicycle, got {kinematics!r}")
-    if reverse and kinematics != "unicycle":  # as the scene file's own rule (and gfuzzy crowd's)
-        raise InputError("--reverse needs --kinematics unicycle (only a differential drive drives backwards)")
-    if wmax is not None:
-        if kinematics != "unicycle":  # the scene file's rule, as --reverse's
-            raise InputError("--wmax needs --kinematics unicycle (a turning-rate bound is a differential drive's)")
-        check_number("--wmax", wmax)
+    _check_drive(kinematics, reverse, wmax)
     if name is not None and not NAME_RE.match(name):  # before the map is read, and as gfuzzy tracks says it
         raise InputError(f"name must be letters, digits, _ . - (got {name!r})")
     grid = load_map({"file": rel}, "map", str(map_yaml), folder)
