@@ -163,3 +163,18 @@ def test_local_cluster_refuses_more_workers_before_starting_any():
     with pytest.raises(InputError, match=f"workers must be between 1 and {MAX_LOCAL_WORKERS}, got 100000"):
         with local_cluster(100_000):
             pass
+
+
+def test_navigate_says_when_its_period_leaves_one_plan_for_the_whole_run(tmp_path, capsys):
+    # --period 200 with --max-time 120 (or --period 1e300) replanned once and drove that
+    # plan blind, into a mover here (exit 1, check INVALID), without a word on why
+    out = tmp_path / "o.json"
+    rc, _, err = run_main(capsys, "navigate", SCENE, "--roadmap", ROADMAP, "--budget-clock", "cpu", "--period", "10",
+                          "--max-time", "8", "-o", out)  # fmt: skip
+    assert rc == 1 and out.exists()
+    note = ("note: --period 10 s is not shorter than --max-time 8 s: the robot observes and plans once, at the start, "
+            "and follows that plan without looking again")  # fmt: skip
+    assert note in err.splitlines()
+    rc, _, err = run_main(capsys, "navigate", SCENE, "--roadmap", ROADMAP, "--budget-clock", "cpu", "--period", "7.9",
+                          "--max-time", "8", "-o", out)  # fmt: skip
+    assert "--period" not in err  # it looks again at 7.9 s

@@ -376,6 +376,9 @@ def cmd_navigate(args) -> int:
     slow = _beyond_max_time(rd, scene.robot.vmax, args.max_time, straight)
     if slow:  # said before the run: it will time out whatever the movers do
         _say(f"note: {slow}")
+    if args.period >= args.max_time:  # --period 1e300 ran one plan blind into a mover, saying nothing
+        _say(f"note: --period {args.period:g} s is not shorter than --max-time {args.max_time:g} s: the robot "
+             "observes and plans once, at the start, and follows that plan without looking again")  # fmt: skip
     res = simulate(
         scene, roadmap, query.start, query.goal, query.t0, args.period, sense, args.max_time,
         navigator=nav, log_every=args.log_every, sensor=sensor,
