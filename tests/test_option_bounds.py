@@ -124,11 +124,14 @@ def test_crowd_episodes_are_bounded_in_the_library_too():
         (["--duration", "1e300"], "--duration must be at most 1e+09, got 1e+300"),  # was "duration must ..."
         (["--speed", "1e20"], "--speed must be at most 1e+09, got 1e+20"),
         (["--radius", "nan"], "--radius must be a positive number, got nan"),
+        # PopulateOptions' own bounds, said of the flags (they were "people ...", "duration ...")
+        (["--people", "600"], "--people must be between 1 and 500, got 600"),
+        (["--duration", "1e6"], "--duration must be at most 25000 s (100000 steps of 0.25 s), got 1e+06"),
     ],
 )
 def test_populate_bounds_every_number_by_its_flag(tmp_path, capsys, flags, expect):
     out = tmp_path / "p.yaml"
-    line = _refused(capsys, "populate", SCENE, "--people", "2", *flags, "-o", out)
+    line = _refused(capsys, "populate", SCENE, *(["--people", "2"] if "--people" not in flags else []), *flags, "-o", out)
     assert line == f"gfuzzy populate: {expect}"
     assert not out.exists()
 

@@ -237,12 +237,13 @@ def _cut_note(asked: int, result) -> str:
 
 def _waypoints_named(message: str, exc: InputError, scene: str) -> str:
     """``message``, or, for an error about ``PopulateOptions.waypoints`` (``waypoints[2] ...``),
-    the same said of ``--waypoints`` (its point counted from 1) and the scene file."""
+    the same said of ``--waypoints`` (its point counted from 1) and the scene file; one about
+    ``people`` or ``duration`` said of their flags."""
     import re
 
     m = re.match(r"waypoints(?:\[(\d+)\])? (.*)", str(exc))
-    if m is None:
-        return message
+    if m is None:  # PopulateOptions' people and duration are the flags --people and --duration
+        return re.sub(r"^gfuzzy populate: (people|duration) ", r"gfuzzy populate: --\1 ", message)
     which = f" point {int(m[1]) + 1}" if m[1] is not None else ""
     return f"{scene}: --waypoints:{which} {m[2]}"
 
