@@ -7,7 +7,7 @@ navigator) can use them without importing the planner that runs it.
 from __future__ import annotations
 
 __all__ = ["SPEED_SAFETY", "MAX_POINTS", "MAX_MOVER_SAMPLES", "AMAX_PER_VMAX", "INTERVAL_BATCH_CELLS", "MAX_MAGNITUDE",
-           "MAX_RECORDED_TIME"]
+           "MAX_RECORDED_TIME", "MAX_RUN_STEPS"]
 
 #: Planning speed is vmax shrunk by this factor, so rounding never lifts a step above vmax.
 SPEED_SAFETY = 1.0 - 1e-9
@@ -30,3 +30,7 @@ MAX_MAGNITUDE = 1e9
 #: Largest time on a recording's own clock (``gfuzzy tracks``): Unix time in seconds or in
 #: milliseconds is rebased to the window's start, which must then be within MAX_MAGNITUDE.
 MAX_RECORDED_TIME = 1e13
+#: Largest number of steps of a simulated run: a navigation's replans (``max_time / period``,
+#: ``gfuzzy navigate``), a populated walk's ORCA steps (``duration / dt``, ``gfuzzy populate``).
+#: ``--period 1e-9`` asked for 1.2e11 replans: a run that never ended.
+MAX_RUN_STEPS = 100_000

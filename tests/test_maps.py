@@ -838,6 +838,27 @@ def test_gfuzzy_map_writes_a_differential_drive_that_reverses(tmp_path, capsys):
     assert not bad.exists()
 
 
+@pytest.mark.parametrize("reverse", [[], ["--reverse"]])
+def test_gfuzzy_map_writes_a_differential_drives_turning_rate(tmp_path, capsys, reverse):
+    # a newcomer's base turns at 0.4 rad/s: map had no --wmax, the bound was edited in by hand
+    for f in ("tb3_sandbox.yaml", "tb3_sandbox.pgm"):
+        shutil.copy(MAPS / f, tmp_path / f)
+    robot = load_scene(_map_to(tmp_path, "w.yaml", "--kinematics", "unicycle", "--wmax", "0.4", *reverse)).robot
+    assert robot.kinematics == "unicycle" and robot.wmax == 0.4 and robot.reverse == bool(reverse)
+    assert load_scene(_map_to(tmp_path, "d.yaml", "--kinematics", "unicycle")).robot.wmax is None  # the default
+    capsys.readouterr()
+    bad = tmp_path / "bad.yaml"
+    for flags, expect in [(["--wmax", "0.4"], "gfuzzy map: --wmax needs --kinematics unicycle"),  # as --reverse
+                          (["--kinematics", "unicycle", "--wmax", "0"], "gfuzzy map: --wmax must be a positive number"),
+                          (["--kinematics", "unicycle", "--wmax", "1e300"], "gfuzzy map: --wmax must be at most 1e+09"),
+                          (["--kinematics", "unicycle", "--wmax", "nan"], "gfuzzy map: --wmax must be a positive number"),
+                          (["--vmax", "1e300"], "gfuzzy map: --vmax must be at most 1e+09")]:  # fmt: skip
+        assert main(["map", str(tmp_path / "tb3_sandbox.yaml"), *flags, "-o", str(bad)]) == 2, flags
+        err = capsys.readouterr().err
+        assert err.startswith(expect) and err.count("\n") == 1 and "Traceback" not in err, err
+        assert not bad.exists()
+
+
 def _map_to(folder, name, *flags):
     """The scene ``gfuzzy map`` writes around the tb3 map in ``folder`` with ``flags``."""
     out = folder / name

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import ROOT, run_cli_process
+from helpers import run_main
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -247,6 +248,30 @@ def test_scale_and_default_region(csv_file):
     assert made.region == (-0.5, -0.5, 2.5, 2.0)
 
 
+def test_offset_shifts_the_scaled_positions(tmp_path, csv_file, capsys):
+    # a detector's CSV in a frame whose origin is not the map's could not be shifted: the
+    # file had to be rewritten by hand
+    made = tracks_scene(read_tracks(csv_file), TrackSceneOptions(scale=0.5, offset=(-3.25, 7.5)))
+    np.testing.assert_allclose(_movers(made)["ped-a"], [[0, -3.25, 7.5], [1, -2.25, 7.5], [2, -1.25, 7.5]])
+    assert made.region == (-3.8, 7.0, -0.7, 9.5)  # the shifted extent (x -3.25..-1.25, y 7.5..9) + 0.5 m, rounded out
+    out = tmp_path / "shifted.yaml"
+    rc, stdout, err = run_main(capsys, "tracks", csv_file, "--scale", "0.5", "--offset", "-3.25", "7.5", "-o", out)
+    assert rc == 0, err
+    scene = load_scene(out)
+    (ped_a,) = [m for m in scene.movers if m.name == "ped-a"]
+    np.testing.assert_allclose(ped_a.trajectory[:, 1:], [[-3.25, 7.5], [-2.25, 7.5], [-1.25, 7.5]])
+    assert "--offset -3.25 7.5" in out.read_text().splitlines()[1]  # the command that made it, in the header
+    for flags, expect in [(["--offset", "1e300", "0"], "gfuzzy tracks: offset must be two finite numbers"),
+                          (["--offset", "0", "nan"], "gfuzzy tracks: offset must be two finite numbers"),
+                          (["--offset", "1"], "gfuzzy tracks: argument --offset: expected 2 arguments")]:  # fmt: skip
+        bad = tmp_path / "bad.yaml"
+        rc, stdout, err = run_main(capsys, "tracks", csv_file, *flags, "-o", bad)
+        assert rc == 2 and err.startswith(expect) and err.count("\n") == 1, err
+        assert not bad.exists()
+    with pytest.raises(InputError, match="offset must be two finite numbers"):
+        TrackSceneOptions(offset=(1.0,))
+
+
 def test_max_movers_keeps_those_present_longest(eth_file):
     made = tracks_scene(
         read_tracks(eth_file), TrackSceneOptions(region=(-1, -1, 10, 10), max_movers=2)
@@ -329,6 +354,40 @@ def test_a_differential_drive_from_a_static_scene_is_written_as_yaml(tmp_path, e
     robot = load_scene(out).robot
     assert (robot.kinematics, robot.wmax, robot.reverse) == ("unicycle", 1.5, True)
     assert load_scene(out).queries[0].start == (0.0, 0.0, 0.0)
+
+
+def test_tracks_writes_a_differential_drive_as_map_does(tmp_path, eth_file, capsys):
+    """`--kinematics`, `--reverse` and `--wmax`, as `gfuzzy map` takes them: a tracks scene's
+    robot could only be a holonomic disc, or --static's drive as it was."""
+    out = tmp_path / "drive.yaml"
+    argv = ["tracks", eth_file, "--kinematics", "unicycle", "--wmax", "0.5", "--reverse",
+            "--start", 0, 0, 0, "--goal", 5, 5, 1.57, "-o", out]  # fmt: skip
+    rc, _, err = run_main(capsys, *argv)
+    assert rc == 0, err
+    scene = load_scene(out)
+    assert (scene.robot.shape, scene.robot.kinematics, scene.robot.wmax, scene.robot.reverse) == (
+        "disc", "unicycle", 0.5, True)  # fmt: skip
+    assert scene.queries[0].start == (0.0, 0.0, 0.0)  # a differential drive's poses carry a heading
+    assert "--wmax 0.5" in out.read_text().splitlines()[1] and "--reverse" in out.read_text().splitlines()[1]
+    # a static differential drive made holonomic: its wmax and reverse go too, poses lose the heading
+    static = tmp_path / "robot.yaml"
+    static.write_text("version: 1\nname: robot\nbounds: [-1, -1, 12, 8]\nobstacles: []\nrobot:\n"
+                      "  disc: 0.2\n  kinematics: unicycle\n  wmax: 1.5\n  reverse: true\n  vmax: 1.0\n", encoding="utf-8")  # fmt: skip
+    rc, _, err = run_main(capsys, "tracks", eth_file, "--static", static, "--kinematics", "holonomic",
+                          "--start", 0, 0, "--goal", 5, 5, "-o", out)  # fmt: skip
+    assert rc == 0, err
+    robot = load_scene(out).robot
+    assert (robot.kinematics, robot.wmax, robot.reverse) == ("holonomic", None, False)
+    rc, _, err = run_main(capsys, "tracks", eth_file, "--static", static, "--wmax", "0.7", "-o", out)
+    assert rc == 0 and load_scene(out).robot.wmax == 0.7, err  # --static's drive, another turning rate
+    bad = tmp_path / "bad.yaml"
+    for flags, expect in [(["--wmax", "0.5"], "gfuzzy tracks: wmax (--wmax) needs a differential drive"),
+                          (["--reverse"], "gfuzzy tracks: reverse (--reverse) needs a differential drive"),
+                          (["--kinematics", "unicycle", "--wmax", "0"], "gfuzzy tracks: wmax must be positive"),
+                          (["--kinematics", "unicycle", "--wmax", "1e300"], "gfuzzy tracks: wmax must be at most 1e+09")]:  # fmt: skip
+        rc, _, err = run_main(capsys, "tracks", eth_file, *flags, "-o", bad)
+        assert rc == 2 and err.startswith(expect) and err.count("\n") == 1, err
+        assert not bad.exists()
 
 
 def test_a_smaller_disc_keeps_a_differential_drive_and_its_headings(tmp_path, eth_file):

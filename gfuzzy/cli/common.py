@@ -64,15 +64,35 @@ def _soft_options(args) -> dict:
     return {"soft_search": True, "intrusion_cost": args.intrusion_cost}
 
 
+def _check_numbers(command: str, positive=(), at_least_zero=()) -> None:
+    """The numeric flags of ``command``, ``(flag, value)`` pairs, checked by the one rule of
+    :func:`gfuzzy.errors.check_number` under the flag's own name: a number above zero
+    (``positive``) or at least zero (``at_least_zero``), finite and at most
+    ``settings.MAX_MAGNITUDE`` in magnitude, as a scene file's numbers. Bad input
+    ``gfuzzy COMMAND: --flag must be ...`` (the library's options name their fields instead)."""
+    try:
+        for flag, value in positive:
+            check_number(flag, value)
+        for flag, value in at_least_zero:
+            check_number(flag, value, strict=False)
+    except InputError as exc:
+        raise BadInput(f"gfuzzy {command}: {exc}") from None
+
+
+def _sense(command: str, value) -> float:
+    """``--sense`` of ``navigate`` and ``crowd``: None (not given) or ``inf`` is an unlimited
+    range; else a positive number of at most ``settings.MAX_MAGNITUDE`` (bad input otherwise)."""
+    if value is None or value == math.inf:
+        return math.inf
+    _check_numbers(command, positive=(("--sense", value),))
+    return value
+
+
 def _check_sensor_flags(args) -> None:
     """``--noise`` and ``--fov`` of ``navigate`` and ``crowd``, refused by their flags' names
     (InputError)."""
-    for flag, value in (("--noise", args.noise), ("--fov", args.fov)):
-        if not math.isfinite(value):
-            raise InputError(f"{flag} must be a finite number, got {value:g}")
-    if args.noise < 0:
-        raise InputError(f"--noise must be >= 0, got {args.noise:g}")
-    if not 0 < args.fov <= 360:
+    check_number("--noise", args.noise, strict=False)
+    if not (math.isfinite(args.fov) and 0 < args.fov <= 360):
         raise InputError(f"--fov must be in (0, 360] degrees, got {args.fov:g}")
 
 

@@ -10,12 +10,14 @@ from ..errors import InputError
 from .common import (
     EXIT_OK,
     BadInput,
+    _check_numbers,
     _check_sensor_flags,
     _load_scene,
     _navigator_flags,
     _out_path,
     _say,
     _scene_reads,
+    _sense,
     _soft_options,
 )
 
@@ -72,30 +74,27 @@ def _progress_bar(label: str):
 
 
 def _setting(args):
-    from ..navigation.crowd import CrowdSetting
+    from ..navigation.crowd import MAX_EPISODES, CrowdSetting
     from ..navigation.navigator import NavOptions
     from ..navigation.sensing import SensorOptions
+    from ..runs.batch import MAX_LOCAL_WORKERS
 
     humans = args.humans if args.humans is not None else (20 if args.scenario == "arena" else 5)
     if humans < 0 or humans > 200:
         raise BadInput(f"gfuzzy crowd: --humans must be between 0 and 200, got {humans}")
-    if args.episodes < 1:
-        raise BadInput(f"gfuzzy crowd: --episodes must be >= 1, got {args.episodes}")
-    if args.workers < 0:
-        raise BadInput(f"gfuzzy crowd: --workers must be >= 0, got {args.workers}")
+    if not 1 <= args.episodes <= MAX_EPISODES:
+        raise BadInput(f"gfuzzy crowd: --episodes must be between 1 and {MAX_EPISODES}, got {args.episodes}")
+    if not 0 <= args.workers <= MAX_LOCAL_WORKERS:  # 0: in this process
+        raise BadInput(f"gfuzzy crowd: --workers must be between 0 and {MAX_LOCAL_WORKERS}, got {args.workers}")
     if args.seed < 0:  # numpy refuses it deep in the first episode
         raise BadInput(f"gfuzzy crowd: --seed must be >= 0, got {args.seed}")
+    _check_numbers("crowd", positive=(("--time-budget", args.time_budget), ("--dt", args.dt)),
+                   at_least_zero=(("--personal-space", args.personal_space), ("--path-space", args.path_space)))
     try:
         _check_sensor_flags(args)
     except InputError as exc:
         raise BadInput(f"gfuzzy crowd: {exc}") from None
-    for flag, value in (("--time-budget", args.time_budget), ("--personal-space", args.personal_space),
-                        ("--path-space", args.path_space)):  # fmt: skip
-        if not math.isfinite(value):
-            raise BadInput(f"gfuzzy crowd: {flag} must be a finite number, got {value:g}")
-    if not (math.isfinite(args.dt) and args.dt > 0):
-        raise BadInput(f"gfuzzy crowd: --dt must be a positive number, got {args.dt:g}")
-    sense = math.inf if args.sense is None else args.sense
+    sense = _sense("crowd", args.sense)
     if args.reverse and args.kinematics != "unicycle":
         raise BadInput("gfuzzy crowd: --reverse needs --kinematics unicycle")
     if args.steady_goals and args.scenario != "arena":  # only the arena's humans change goals
@@ -238,12 +237,13 @@ def _cut_note(asked: int, result) -> str:
 
 def _waypoints_named(message: str, exc: InputError, scene: str) -> str:
     """``message``, or, for an error about ``PopulateOptions.waypoints`` (``waypoints[2] ...``),
-    the same said of ``--waypoints`` (its point counted from 1) and the scene file."""
+    the same said of ``--waypoints`` (its point counted from 1) and the scene file; one about
+    ``people`` or ``duration`` said of their flags."""
     import re
 
     m = re.match(r"waypoints(?:\[(\d+)\])? (.*)", str(exc))
-    if m is None:
-        return message
+    if m is None:  # PopulateOptions' people and duration are the flags --people and --duration
+        return re.sub(r"^gfuzzy populate: (people|duration) ", r"gfuzzy populate: --\1 ", message)
     which = f" point {int(m[1]) + 1}" if m[1] is not None else ""
     return f"{scene}: --waypoints:{which} {m[2]}"
 
@@ -253,6 +253,8 @@ def cmd_populate(args) -> int:
     from ..navigation.populate import PopulateOptions, populate, write_scene
 
     scene = _load_scene(args.scene)
+    _check_numbers("populate", positive=(("--duration", args.duration), ("--radius", args.radius),
+                                         ("--speed", args.speed)))  # fmt: skip
     _need_pyrvo("populate")
     out = _out_path(args.output, (".yaml", ".yml"), _scene_reads(scene))
     waypoints = None

@@ -15,6 +15,7 @@ from .common import (
     EXIT_OK,
     BadInput,
     _apply_overrides,
+    _check_numbers,
     _check_sensor_flags,
     _load_scene,
     _out_path,
@@ -26,6 +27,7 @@ from .common import (
     _roadmap_reads,
     _say,
     _scene_reads,
+    _sense,
     _soft_options,
 )
 from .planning import _start_on_mover
@@ -41,15 +43,18 @@ def _tracks_command(args) -> str:
     parts = ["gfuzzy", "tracks", args.file]
     for flag, value in (("--format", None if args.format == "auto" else args.format), ("--fps", args.fps),
                         ("--t-start", args.t_start), ("--duration", args.duration), ("--region", args.region),
-                        ("--scale", None if args.scale == 1.0 else args.scale),
+                        ("--scale", None if args.scale == 1.0 else args.scale), ("--offset", args.offset),
                         ("--radius", None if args.radius == 0.25 else args.radius), ("--max-movers", args.max_movers),
                         ("--max-gap", args.max_gap),
                         ("--static", args.static), ("--name", args.name), ("--robot-radius", args.robot_radius),
-                        ("--vmax", args.vmax), ("--amax", args.amax), ("--start", args.start), ("--goal", args.goal),
+                        ("--vmax", args.vmax), ("--amax", args.amax), ("--kinematics", args.kinematics),
+                        ("--wmax", args.wmax), ("--start", args.start), ("--goal", args.goal),
                         ("--query-name", None if args.query_name == "cross" else args.query_name),
                         ("--expect", args.expect), ("--max-duration", args.max_duration), ("-o", args.output)):  # fmt: skip
         if value is not None:
             parts += [flag, *(g(v) for v in (value if isinstance(value, list) else [value]))]
+    if args.reverse:
+        parts.insert(-2, "--reverse")  # before -o OUT
     return " ".join(shlex.quote(a) for a in parts)
 
 
@@ -68,6 +73,7 @@ def cmd_tracks(args) -> int:
             duration=args.duration,
             region=tuple(args.region) if args.region else None,
             scale=args.scale,
+            offset=tuple(args.offset) if args.offset else (0.0, 0.0),
             radius=args.radius,
             max_movers=args.max_movers,
             max_gap=args.max_gap,
@@ -75,11 +81,14 @@ def cmd_tracks(args) -> int:
             robot_radius=args.robot_radius,
             vmax=args.vmax,
             amax=args.amax,
+            kinematics=args.kinematics,
+            reverse=args.reverse,
+            wmax=args.wmax,
         )
         tracks = read_tracks(args.file, args.format, args.fps)
         if args.start is None and args.query_name != "cross":
             raise InputError("--query-name names the query of --start and --goal: give them too")
-        dof = robot_dof(static, args.robot_radius)
+        dof = robot_dof(static, args.robot_radius, args.kinematics)
         start = _pose(args.start, dof, "--start")
         goal = _pose(args.goal, dof, "--goal")
         expect = {}
@@ -177,10 +186,19 @@ def cmd_batch(args) -> int:
         interrupts_deferred,
         is_interrupt,
     )
-    from ..runs.batch import BatchOptions, BatchResult, quiet_dask_logs, write_table
+    from ..runs.batch import (
+        MAX_LOCAL_WORKERS,
+        BatchOptions,
+        BatchResult,
+        quiet_dask_logs,
+        write_table,
+    )
 
     if args.workers is not None and args.workers < 1:
         raise BadInput(f"gfuzzy batch: --workers must be at least 1 (local worker processes), got {args.workers}")
+    if args.workers is not None and args.workers > MAX_LOCAL_WORKERS:
+        raise BadInput(f"gfuzzy batch: --workers must be at most {MAX_LOCAL_WORKERS} (local worker processes), "
+                       f"got {args.workers}")  # fmt: skip
     scenes = [_apply_overrides(_load_scene(p), args) for p in args.scenes]  # all bad input first
     reads = tuple(r for sc in scenes for r in (*_scene_reads(sc), *_roadmap_reads(sc, args)))
     out = _out_path(args.output, (".csv",), reads, beside=(".parquet",))
@@ -275,21 +293,21 @@ def _sensor_options(args):
 
 
 def _navigate_options(args):
-    """``gfuzzy navigate``'s flags checked: the navigator's options, the sensor's, the range."""
-    from ..navigation.navigator import NavOptions
+    """``gfuzzy navigate``'s flags checked: the navigator's options, the sensor's, the range.
 
-    for flag, value in (("--period", args.period), ("--max-time", args.max_time), ("--time-budget", args.time_budget)):
-        if not (math.isfinite(value) and value > 0):
-            raise BadInput(f"gfuzzy navigate: {flag} must be a positive number, got {value:g}")
-    for flag, value in (("--personal-space", args.personal_space), ("--path-space", args.path_space)):
-        if not (math.isfinite(value) and value >= 0):
-            raise BadInput(f"gfuzzy navigate: {flag} must be a number >= 0, got {value:g}")
-    if args.log_every < 0:
-        raise BadInput(f"gfuzzy navigate: --log-every must be >= 0, got {args.log_every}")
-    sense = math.inf if args.sense is None else args.sense
-    if not sense > 0:
-        raise BadInput(f"gfuzzy navigate: --sense must be a positive number, got {sense:g}")
+    Every number by the one rule of ``check_number`` under its flag's name (positive or at
+    least zero, at most 1e9; ``--dt`` as ``plan`` names it, ``dt``), and the run one that can
+    finish (``navsim.check_run``)."""
+    from ..navigation.navigator import NavOptions
+    from ..navigation.navsim import check_run
+
+    _check_numbers("navigate", positive=(("--period", args.period), ("--max-time", args.max_time),
+                                         ("--time-budget", args.time_budget)),
+                   at_least_zero=(("--personal-space", args.personal_space), ("--path-space", args.path_space),
+                                  ("--log-every", args.log_every)))  # fmt: skip
+    sense = _sense("navigate", args.sense)
     try:
+        check_run(args.period, args.max_time, ("--period", "--max-time"))
         options = NavOptions(dt=args.dt, time_budget=args.time_budget, backend=args.backend,
                              budget_clock=args.budget_clock, personal_space=args.personal_space,
                              path_space=args.path_space, **_soft_options(args))  # fmt: skip
@@ -348,7 +366,7 @@ def cmd_navigate(args) -> int:
     nav = Navigator(scene, roadmap, query.goal, knowing_view(options, sensor.fov) if sensor else options)
     rd = nav.roadmap_distance(np.asarray(query.start, dtype=float))
     sealed = "" if math.isfinite(rd) else _sealed_off(scene, query)
-    if sealed:  # no mover opens a way: replanning until --max-time (1e6 s: hours) changes nothing
+    if sealed:  # no mover opens a way: replanning until --max-time (up to 100000 replans: hours) changes nothing
         tf = TrajectoryFile(scene.name, query.name, Status.NO_PATH, sealed, None, None, None, 0.0)
         if out is not None:
             tf.save(out)
@@ -358,6 +376,9 @@ def cmd_navigate(args) -> int:
     slow = _beyond_max_time(rd, scene.robot.vmax, args.max_time, straight)
     if slow:  # said before the run: it will time out whatever the movers do
         _say(f"note: {slow}")
+    if args.period >= args.max_time:  # --period 1e300 ran one plan blind into a mover, saying nothing
+        _say(f"note: --period {args.period:g} s is not shorter than --max-time {args.max_time:g} s: the robot "
+             "observes and plans once, at the start, and follows that plan without looking again")  # fmt: skip
     res = simulate(
         scene, roadmap, query.start, query.goal, query.t0, args.period, sense, args.max_time,
         navigator=nav, log_every=args.log_every, sensor=sensor,

@@ -162,6 +162,8 @@ def _add_tracks(sub) -> None:
     k.add_argument("--region", type=float, nargs=4, metavar=("XMIN", "YMIN", "XMAX", "YMAX"),
                    help="scene bounds; tracks are clipped to it (default: --static's bounds, or the people's extent + 0.5 m)")  # fmt: skip
     k.add_argument("--scale", type=float, metavar="S", default=1.0, help="multiplies every x and y of the file (default 1)")
+    k.add_argument("--offset", type=float, nargs=2, metavar=("DX", "DY"),
+                   help="added to every x and y after --scale: where the file's origin lies in the scene (default 0 0)")  # fmt: skip
     k.add_argument("--radius", "--ped-radius", dest="radius", type=float, metavar="R", default=0.25, help="pedestrians' disc radius (default 0.25)")
     k.add_argument("--max-movers", type=int, metavar="N", help="keep the N people present longest")
     k.add_argument("--max-gap", type=float, metavar="S",
@@ -172,6 +174,11 @@ def _add_tracks(sub) -> None:
     k.add_argument("--robot-radius", type=float, metavar="R", help="a disc robot of this radius (default 0.2, or --static's robot)")
     k.add_argument("--vmax", type=float, metavar="V", help="robot speed bound (default 1.5, or --static's)")
     k.add_argument("--amax", type=float, metavar="A", help="robot acceleration bound (default 3.0, or --static's)")
+    k.add_argument("--kinematics", choices=("holonomic", "unicycle"),
+                   help="the robot's drive (default: --static's, or holonomic); unicycle: a differential drive, "
+                        "poses get a heading")  # fmt: skip
+    k.add_argument("--reverse", action="store_true", help="unicycle: the robot may also drive backwards")
+    k.add_argument("--wmax", type=float, metavar="W", help="unicycle: bound on the turning rate, rad/s (default vmax / r)")
     k.add_argument("--start", nargs="+", metavar="X", help="a query from this pose at t0 = 0 (with --goal)")
     k.add_argument("--goal", nargs="+", metavar="X", help="the query's goal pose")
     k.add_argument("--query-name", metavar="NAME", default="cross", help="the query's name (default cross)")
@@ -210,6 +217,8 @@ def _add_map(sub) -> None:
                    help="unicycle: a differential drive (turns in place, straight moves; poses get a heading)")  # fmt: skip
     m.add_argument("--reverse", action="store_true",
                    help="unicycle: the robot may also drive backwards (default: forwards only)")  # fmt: skip
+    m.add_argument("--wmax", type=float, metavar="W",
+                   help="unicycle: bound on the turning rate, rad/s (default: the scene file's, vmax / r)")  # fmt: skip
     m.add_argument("--name", help="scene name (default: the output file's stem)")
     m.set_defaults(func=cmd_map)
 

@@ -7,7 +7,7 @@ import shlex
 import sys
 
 from ..errors import InputError, SceneError
-from .common import EXIT_OK, BadInput, _out_path, _say
+from .common import EXIT_OK, BadInput, _check_numbers, _out_path, _say
 
 
 def cmd_map(args) -> int:
@@ -29,14 +29,14 @@ def cmd_map(args) -> int:
         poly = shapely.Polygon(footprint)
         if not shapely.LinearRing(footprint).is_simple or poly.area <= 1e-12:
             raise BadInput("--robot-footprint: not a simple polygon of positive area")
-    if args.vmax is not None and not (math.isfinite(args.vmax) and args.vmax > 0):
-        raise BadInput(f"--vmax must be a positive number, got {args.vmax}")
+    if args.vmax is not None:
+        _check_numbers("map", positive=(("--vmax", args.vmax),))
     command = "gfuzzy " + " ".join(shlex.quote(a) for a in sys.argv[1:]) if sys.argv[1:] else ""
     try:
         made = map_scene(
             args.map, out, robot_disc=args.robot_disc, robot_footprint=footprint,
             vmax=args.vmax or 0.5, name=args.name, command=command, kinematics=args.kinematics,
-            reverse=args.reverse,
+            reverse=args.reverse, wmax=args.wmax,
         )  # fmt: skip
     except SceneError:
         raise

@@ -46,8 +46,12 @@ from .socialmetrics import INTRUSION_HORIZON, SocialMetrics, social_metrics
 __all__ = [
     "CROWD", "ARENA", "SCENARIOS", "POLICIES", "CROWD_MODELS", "KINEMATICS", "CSV_COLUMNS", "Outcome",
     "CrowdSetting", "Layout", "Episode", "circle_crossing", "simulate_humans", "orca_robot",
-    "layout", "episode_layout", "crowd_scene", "crowd_roadmap", "run_episode", "episodes",
+    "layout", "episode_layout", "crowd_scene", "crowd_roadmap", "run_episode", "episodes", "MAX_EPISODES",
 ]  # fmt: skip
+
+#: Most episodes one run may ask for: every layout is drawn before the first episode (3-10 ms
+#: each) and each episode takes seconds; ``--episodes 1e9`` drew layouts for days, saying nothing.
+MAX_EPISODES = 10_000
 
 def _rvo():
     try:
@@ -666,7 +670,10 @@ def episodes(setting: CrowdSetting, roadmap, seed: int, count: int, policies, op
     """:func:`run_episode` for episodes ``0 .. count - 1``, in order: in this process
     (``client`` None) or one task each on a ``distributed.Client`` (the roadmap travels
     to every worker once; replan times are measured in the workers). ``progress(done,
-    total)`` is called as episodes finish."""
+    total)`` is called as episodes finish. ``count`` is at most :data:`MAX_EPISODES`
+    (:class:`InputError` otherwise)."""
+    if not 1 <= count <= MAX_EPISODES:
+        raise InputError(f"episodes must be between 1 and {MAX_EPISODES}, got {count}")
     if client is None:
         out = []
         for i in range(count):

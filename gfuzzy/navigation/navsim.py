@@ -19,9 +19,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..collision.geometry import metric_distance, mover_distance
-from ..errors import InputError, check_interrupt
+from ..errors import InputError, check_interrupt, check_number
 from ..roadmap.roadmap import Roadmap
 from ..scene.scene import Scene
+from ..settings import MAX_RUN_STEPS
 from ..status import Status
 from ..timespace.drive import settle_at
 from ..trajectory import Trajectory
@@ -32,12 +33,15 @@ from .navtypes import NavStep
 from .sensing import Sensor, SensorOptions
 from .socialmetrics import SocialMetrics, social_metrics
 
-__all__ = ["NavResult", "observe", "simulate", "min_separation"]
+__all__ = ["NavResult", "observe", "simulate", "min_separation", "check_run", "MIN_PERIOD"]
 
 log = logging.getLogger(__name__)
 
 #: Forward difference (s) for the movers' velocity: the velocity of the motion to come.
 VELOCITY_EPS = 1e-6
+#: Shortest period (s) between two replans: a thousand a second, far more than any navigator
+#: answers (its time budget is 0.1 s); below it the run's rows would be microseconds apart.
+MIN_PERIOD = 1e-3
 
 
 @dataclass(frozen=True)
@@ -139,12 +143,11 @@ def simulate(
     roadmap : Roadmap
     start, goal : (d,) float
     t0 : float
-    period : float
-        Time between two observations and replans (s).
+    period, max_time : float
+        Time between two observations and replans (s); the run stops (``timeout``) max_time after
+        t0. A run that cannot finish is an InputError (:func:`check_run`).
     sense : float
         Range (m, robot-to-disc gap) within which movers are seen.
-    max_time : float
-        The run stops (``timeout``) this long after t0.
     options : NavOptions, optional
     log_every : int
         Keep every this-many-th replan in :attr:`NavResult.log` (0: none).
@@ -159,7 +162,7 @@ def simulate(
     -------
     NavResult
     """
-    _check_run(period, max_time)
+    check_run(period, max_time)
     robot, cr = scene.robot, scene.robot.circumradius
     goal = np.asarray(goal, dtype=float).reshape(-1)
     pose = np.asarray(start, dtype=float).reshape(-1).copy()
@@ -218,11 +221,20 @@ def simulate(
     return NavResult(status, executed, len(seconds), np.array(seconds), modes, sep, kept, social, out_of_time)
 
 
-def _check_run(period: float, max_time: float) -> None:
-    if not (period > 0 and math.isfinite(period)):
-        raise InputError(f"period must be a positive number, got {period}")
-    if not max_time > 0:
-        raise InputError(f"max_time must be positive, got {max_time}")
+def check_run(period: float, max_time: float, names: tuple[str, str] = ("period", "max_time")) -> None:
+    """Refuse a run that cannot finish (:class:`InputError`, naming ``names``, the options'
+    names: ``gfuzzy navigate`` gives its flags): ``period`` and ``max_time`` positive numbers of
+    at most ``settings.MAX_MAGNITUDE`` (``check_number``), the period at least
+    :data:`MIN_PERIOD`, and at most ``settings.MAX_RUN_STEPS`` replans (``max_time / period``)."""
+    for name, value in zip(names, (period, max_time), strict=True):
+        check_number(name, value)
+    if period < MIN_PERIOD:
+        raise InputError(f"{names[0]} must be at least {MIN_PERIOD:g} s (a replan every millisecond), got {period:g}")
+    if max_time / period > MAX_RUN_STEPS:
+        raise InputError(
+            f"{names[1]} {max_time:g} s / {names[0]} {period:g} s is {max_time / period:.3g} replans, more than "
+            f"{MAX_RUN_STEPS:,} a run may make: give a larger {names[0]} or a smaller {names[1]}"
+        )
 
 
 def _log_entry(t: float, pose: FloatArray, mode: str, nav: Navigator, traj: Trajectory) -> dict:

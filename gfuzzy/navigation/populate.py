@@ -28,6 +28,7 @@ from ..errors import InputError, check_number
 from ..rng import create_rng
 from ..roadmap.freespace import obstacle_shape
 from ..scene.scene import Mover, Scene
+from ..settings import MAX_RUN_STEPS
 from ..typed import FloatArray
 
 __all__ = ["PopulateOptions", "Populated", "populate", "write_scene", "obstacle_union"]
@@ -78,8 +79,8 @@ class PopulateOptions:
             raise InputError(f"people must be between 1 and 500, got {self.people}")
         for name in ("duration", "radius", "speed", "dt"):
             check_number(name, getattr(self, name))  # positive, at most 1e9: ORCA's arithmetic overflows beyond
-        if self.duration / self.dt > 100_000:  # named in seconds: dt is no option of `gfuzzy populate`
-            raise InputError(f"duration must be at most {100_000 * self.dt:g} s (100000 steps of {self.dt:g} s), "
+        if self.duration / self.dt > MAX_RUN_STEPS:  # named in seconds: dt is no option of `gfuzzy populate`
+            raise InputError(f"duration must be at most {MAX_RUN_STEPS * self.dt:g} s ({MAX_RUN_STEPS} steps of {self.dt:g} s), "
                              f"got {self.duration:g}")
         create_rng(self.seed)  # a negative seed is refused here, before the walk
         if self.duration < self.dt:  # one sample is no walk: nobody would be written

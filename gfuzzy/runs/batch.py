@@ -58,6 +58,7 @@ __all__ = [
     "DASK_LOGGERS",
     "QueryAnswer",
     "local_cluster",
+    "MAX_LOCAL_WORKERS",
     "quiet_dask_logs",
     "run_batch",
     "trajectory_path",
@@ -68,6 +69,9 @@ log = logging.getLogger(__name__)
 
 #: Environment of the local workers: one BLAS/OpenMP thread each, so K workers use K cores.
 WORKER_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+#: Most worker processes of a local cluster (each holds the interpreter, numba and a
+#: planner: a few hundred MB): ``--workers 100000`` set about starting them all.
+MAX_LOCAL_WORKERS = 256
 #: A task may be on a dying worker this many times before the scheduler gives it up
 #: (Dask's default is 3). The local cluster gives up at once: :func:`run_batch` then runs
 #: the query again alone, which tells the culprit from innocent queries queued beside it.
@@ -265,8 +269,8 @@ def local_cluster(workers: int, quiet: bool = True) -> Iterator[object]:
     import dask
     from distributed import Client, LocalCluster
 
-    if workers < 1:
-        raise InputError(f"workers must be >= 1, got {workers}")
+    if not 1 <= workers <= MAX_LOCAL_WORKERS:
+        raise InputError(f"workers must be between 1 and {MAX_LOCAL_WORKERS}, got {workers}")
     env = dict(WORKER_ENV)
     if quiet:
         env["GFUZZY_BATCH_QUIET"] = "1"

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, check_number
 from ..typed import FloatArray
 from .maps import UNKNOWN, MapObstacle, load_map
 from .yamldoc import NAME_RE, leaves_folder, name_from_stem, plain_name
@@ -183,14 +183,28 @@ def _fits(grid: MapObstacle, bounds, fp, radius: float, kinematics: str) -> tupl
     return fits, f"a disc of radius {radius:.4g}"
 
 
-def _kinematics_lines(kinematics: str, reverse: bool) -> list[str]:
-    """The robot's ``kinematics`` and ``reverse`` lines of a map's scene (none for a holonomic robot)."""
+def _kinematics_lines(kinematics: str, reverse: bool, wmax: float | None = None) -> list[str]:
+    """The robot's ``kinematics``, ``wmax`` and ``reverse`` lines of a map's scene (none for a
+    holonomic robot)."""
     if kinematics != "unicycle":
         return []
     drive = "  kinematics: unicycle   # a differential drive: turns in place, straight moves"
+    turn = [] if wmax is None else [f"  wmax: {_fmt(wmax)}   # bound on its turning rate, rad/s"]
     if reverse:
-        return [drive, "  reverse: true   # it may also drive backwards"]
-    return [drive + ", forwards only (reverse: true to back up)"]
+        return [drive, *turn, "  reverse: true   # it may also drive backwards"]
+    return [drive + ", forwards only (reverse: true to back up)", *turn]
+
+
+def _check_drive(kinematics: str, reverse: bool, wmax: float | None) -> None:
+    """The drive's options of :func:`map_scene`, refused (InputError) by the flags' names."""
+    if kinematics not in ("holonomic", "unicycle"):
+        raise InputError(f"--kinematics: expected holonomic or unicycle, got {kinematics!r}")
+    if reverse and kinematics != "unicycle":  # as the scene file's own rule (and gfuzzy crowd's)
+        raise InputError("--reverse needs --kinematics unicycle (only a differential drive drives backwards)")
+    if wmax is not None:
+        if kinematics != "unicycle":  # the scene file's rule, as --reverse's
+            raise InputError("--wmax needs --kinematics unicycle (a turning-rate bound is a differential drive's)")
+        check_number("--wmax", wmax)
 
 
 def map_scene(
@@ -203,6 +217,7 @@ def map_scene(
     command: str = "",
     kinematics: str = "holonomic",
     reverse: bool = False,
+    wmax: float | None = None,
 ) -> MapScene:
     """Write-ready scene text around a map.
 
@@ -224,9 +239,9 @@ def map_scene(
     kinematics : {"holonomic", "unicycle"}
         A differential drive gets ``kinematics: unicycle`` and poses with a heading (a disc
         included).
-    reverse : bool
-        The differential drive may also drive backwards (``reverse: true``); only with
-        ``kinematics="unicycle"``.
+    reverse, wmax : bool, float or None
+        The differential drive may also drive backwards (``reverse: true``); its bound on the
+        turning rate (rad/s; default the scene file's, vmax / r). Only with ``kinematics="unicycle"``.
 
     Notes
     -----
@@ -251,10 +266,7 @@ def map_scene(
             "write the scene beside the map or in a folder above it"
         )
     rel = Path(rel).as_posix()
-    if kinematics not in ("holonomic", "unicycle"):
-        raise InputError(f"--kinematics: expected holonomic or unicycle, got {kinematics!r}")
-    if reverse and kinematics != "unicycle":  # as the scene file's own rule (and gfuzzy crowd's)
-        raise InputError("--reverse needs --kinematics unicycle (only a differential drive drives backwards)")
+    _check_drive(kinematics, reverse, wmax)
     if name is not None and not NAME_RE.match(name):  # before the map is read, and as gfuzzy tracks says it
         raise InputError(f"name must be letters, digits, _ . - (got {name!r})")
     grid = load_map({"file": rel}, "map", str(map_yaml), folder)
@@ -273,7 +285,7 @@ def map_scene(
         "robot:",
         robot_line,
         f"  vmax: {_fmt(vmax)}",
-        *_kinematics_lines(kinematics, reverse),
+        *_kinematics_lines(kinematics, reverse, wmax),
         "obstacles:",
         f"  - map: {{file: {plain_name(rel, flow=True)}, unknown: blocked}}"
         "   # unknown cells block; 'free' to let them not",

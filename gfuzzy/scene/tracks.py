@@ -179,11 +179,14 @@ class TrackSceneOptions:
     duration : float or None
         Length of the window in seconds (None: up to the last time in the file).
     region : (4,) tuple or None
-        ``(xmin, ymin, xmax, ymax)`` after scaling: the scene's bounds; tracks are clipped
+        ``(xmin, ymin, xmax, ymax)`` after scaling and the offset: the scene's bounds; tracks are clipped
         to it. None: the static scene's bounds, or the people's extent in the window plus
         :data:`REGION_MARGIN`, rounded out to 0.1 m.
     scale : float
         Multiplies every x and y of the file (e.g. 0.01 for centimetres).
+    offset : (2,) tuple
+        ``(dx, dy)`` added to every x and y after ``scale``: where the file's origin lies in
+        the scene's frame (a detector's frame whose origin is not the map's).
     radius : float
         Radius of each person's disc mover, metres.
     max_movers : int or None
@@ -199,12 +202,20 @@ class TrackSceneOptions:
         The scene's name.
     robot_radius, vmax, amax : float or None
         A disc robot; None: the static scene's robot, or 0.2 m, 1.5 m/s, 3.0 m/s².
+    kinematics : {None, "holonomic", "unicycle"}
+        The robot's drive (None: the static scene's robot's, or holonomic); ``holonomic``
+        drops a static differential drive's ``wmax`` and ``reverse``.
+    reverse : bool
+    wmax : float or None
+        A differential drive's ``reverse: true`` and turning-rate bound (rad/s); only for a
+        robot whose kinematics is unicycle (InputError otherwise, as in a scene file).
     """
 
     t_start: float | None = None
     duration: float | None = None
     region: tuple[float, float, float, float] | None = None
     scale: float = 1.0
+    offset: tuple[float, float] = (0.0, 0.0)
     radius: float = 0.25
     max_movers: int | None = None
     max_gap: float | None = None
@@ -212,19 +223,35 @@ class TrackSceneOptions:
     robot_radius: float | None = None
     vmax: float | None = None
     amax: float | None = None
+    kinematics: str | None = None
+    reverse: bool = False
+    wmax: float | None = None
 
     def __post_init__(self):
-        for key in ("t_start", "duration", "scale", "radius", "robot_radius", "vmax", "amax"):
+        if self.kinematics not in (None, "holonomic", "unicycle"):
+            raise InputError(f"kinematics must be holonomic or unicycle, got {self.kinematics!r}")
+        for key in ("t_start", "duration", "scale", "radius", "robot_radius", "vmax", "amax", "wmax"):
             value = getattr(self, key)
             if value is not None and not math.isfinite(value):
                 raise InputError(f"{key} must be finite, got {value!r}")
             bound = MAX_RECORDED_TIME if key == "t_start" else MAX_MAGNITUDE  # a recording's own clock
             if value is not None and abs(value) > bound:  # else refused as the written scene's number
                 raise InputError(f"{key} must be at most {bound:g} in magnitude, got {value:g}")
-        for key in ("duration", "scale", "radius", "robot_radius", "vmax", "amax"):
+        for key in ("duration", "scale", "radius", "robot_radius", "vmax", "amax", "wmax"):
             value = getattr(self, key)
             if value is not None and value <= 0:
                 raise InputError(f"{key} must be positive, got {value!r}")
+        try:
+            off = tuple(self.offset)
+        except TypeError:  # one number
+            off = (self.offset,)
+        if len(off) != 2 or not all(
+            isinstance(v, numbers.Real) and not isinstance(v, bool) and math.isfinite(v) and abs(v) <= MAX_MAGNITUDE
+            for v in off
+        ):
+            raise InputError(f"offset must be two finite numbers dx dy of at most {MAX_MAGNITUDE:g} in magnitude, "
+                             f"got {self.offset!r}")  # fmt: skip
+        object.__setattr__(self, "offset", tuple(float(v) for v in off))
         if self.max_movers is not None and self.max_movers < 0:
             raise InputError(f"max_movers must not be negative, got {self.max_movers!r}")
         gap = self.max_gap
@@ -423,7 +450,7 @@ def _default_region(tracks: list, t_lo: float, t_hi: float):
 
 
 def _window(tracks: Tracks, options: TrackSceneOptions):
-    """Each person's rows, scaled, with times relative to the window's start; the window."""
+    """Each person's rows, scaled and offset, with times relative to the window's start; the window."""
     src = tracks.source
     first, last = tracks.time_range
     t_lo = first if options.t_start is None else options.t_start
@@ -440,9 +467,9 @@ def _window(tracks: Tracks, options: TrackSceneOptions):
             "",
             f"the window {t_lo:g} s .. {t_hi:g} s is longer than {MAX_MAGNITUDE:g} s: give --t-start and --duration",
         )
-    scale = options.scale
+    scale, (dx, dy) = options.scale, options.offset
     rel = {
-        tr.id: [(t - t_lo, x * scale, y * scale) for t, x, y in tr.rows.tolist()]
+        tr.id: [(t - t_lo, x * scale + dx, y * scale + dy) for t, x, y in tr.rows.tolist()]
         for tr in sorted(tracks.tracks, key=lambda tr: _id_key(tr.id))
     }
     duration = t_hi - t_lo
@@ -464,36 +491,50 @@ def _seen_once(n: int, where: str) -> str:
             "(someone standing still: a row at the first time and one at the last)")
 
 
-def robot_dof(static: Scene | None, robot_radius: float | None) -> int:
-    """The pose length of the scene's robot: the static scene's robot's, or that of the disc
-    of ``robot_radius`` that replaces its shape (keeping its kinematics: 3 for a unicycle)."""
-    if static is None:
-        return 2
-    if robot_radius is None:
-        return static.robot.dof
-    return 3 if static.robot.unicycle else 2
+def robot_dof(static: Scene | None, robot_radius: float | None, kinematics: str | None = None) -> int:
+    """The pose length of the scene's robot: 3 for a box, a footprint or any unicycle, 2 for
+    a holonomic disc. Its shape: the static scene's robot's, or the disc of ``robot_radius``
+    that replaces it; its drive: ``kinematics``, or without it the static robot's."""
+    if kinematics is None:
+        unicycle = static is not None and static.robot.unicycle
+    else:
+        unicycle = kinematics == "unicycle"
+    disc = static is None or robot_radius is not None or static.robot.shape == "disc"
+    return 3 if unicycle or not disc else 2
 
 
 def _robot_doc(options: TrackSceneOptions, static: Scene | None):
     """The ``robot:`` mapping (the static scene's, or a disc keeping its speed and
-    clearances), its pose dimension, and its inradius."""
+    clearances, with the options' drive), its pose dimension, and its inradius."""
     base = dict(static.raw["robot"]) if static is not None else {"vmax": 1.5, "amax": 3.0}
     if static is not None and options.robot_radius is None:
-        robot = base
-        dof, inradius = static.robot.dof, static.robot.inradius
+        robot, inradius = base, static.robot.inradius
     else:
         robot = {"disc": options.robot_radius if options.robot_radius is not None else 0.2}
         robot.update({k: v for k, v in base.items() if k not in ("disc", "box", "footprint")})
-        dof, inradius = robot_dof(static, options.robot_radius), robot["disc"]
+        inradius = robot["disc"]
     for key in ("vmax", "amax"):
         if getattr(options, key) is not None:
             robot[key] = getattr(options, key)
+    if options.kinematics == "holonomic":  # a static differential drive made holonomic
+        for key in ("kinematics", "wmax", "reverse"):
+            robot.pop(key, None)
+    elif options.kinematics == "unicycle":
+        robot["kinematics"] = "unicycle"
+    if options.wmax is not None:
+        robot["wmax"] = options.wmax
+    if options.reverse:
+        robot["reverse"] = True
+    if robot.get("kinematics") != "unicycle":  # the scene file's rule: only a differential drive's
+        for key, flag in (("wmax", "--wmax"), ("reverse", "--reverse")):
+            if getattr(options, key):
+                raise InputError(f"{key} ({flag}) needs a differential drive: kinematics unicycle (--kinematics "
+                                 "unicycle, or a --static scene whose robot is one)")  # fmt: skip
     robot = {
         k: float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else v
         for k, v in robot.items()
     }
-
-    return robot, dof, inradius
+    return robot, robot_dof(static, options.robot_radius, options.kinematics), inradius
 
 
 def _query_docs(start, goal, query_name, expect, dof, inradius, region, src) -> list:
