@@ -163,9 +163,13 @@ def test_a_disc_gives_up_bridges_it_never_fits_through(monkeypatch):
     refills = []
     real = passage.PassageDraws._refill
     monkeypatch.setattr(passage.PassageDraws, "_refill", lambda self: refills.append(1) or real(self))
-    rm = build_roadmap(scene, RoadmapOptions(vertices=60, seed=1))
-    assert rm.info.components == 1
-    assert len(refills) <= 2 * passage.BARREN_DRAWS  # 178 before
+    counts = []
+    for n in (60, 120):
+        refills.clear()
+        rm = build_roadmap(scene, RoadmapOptions(vertices=n, seed=1))
+        assert rm.info.components == 1
+        counts.append(len(refills))
+    assert counts[1] == counts[0]  # none after the first draws (before: 178, then 350 and growing)
 
 
 def test_different_seed_different_roadmap(small):
