@@ -661,7 +661,7 @@ class Navigator(PathSpace, Prediction, SoftCost):
         return graph, s_id, h0
 
     def _exact_windows(self, graph) -> None:
-        """Give a unicycle's ``graph`` (spliced with the straight-line bound) its exact safety
+        """Give a unicycle's ``graph`` (spliced without them: 0 bounds every point) its exact safety
         windows: a Dijkstra from the pose that pays only where safety work is done."""
         spliced, later = self._windows
         if spliced is graph and later is not None:

@@ -131,7 +131,7 @@ class UnicycleGraph:
         lengths plus turns' ``|dh| vmax / turn_rate``); inf when not connected.
     exact_windows : callable or None
         A splice ``exact="later"``'s: the exact steps from the start to every point
-        (``graph.from_start`` holds the straight-line bound until then).
+        (``graph.from_start`` is None until then: 0 bounds them).
     """
 
     graph: SpaceTimeGraph
@@ -584,8 +584,9 @@ class UnicycleGoal:
 
         ``exact``: the steps from the start to every point by Dijkstra (a fresh plan's
         safety windows); otherwise the straight distance over a step's length, a cheaper
-        lower bound; ``"later"`` (the navigator's): that bound, and the Dijkstra in
-        ``UnicycleGraph.exact_windows`` for when safety work is done (nobody near: none).
+        lower bound; ``"later"`` (the navigator's): none (0 bounds every point), and the
+        Dijkstra in ``UnicycleGraph.exact_windows`` for when safety work is done (nobody
+        near: none).
         ``fan_options`` (:class:`gfuzzy.timespace.drive.Fan`): also the two-leg motions of :func:`gfuzzy.timespace.drive.fan` (the navigator's),
         as many of them as are certified before ``expired()`` (a callable; None: all).
         """
@@ -646,15 +647,15 @@ class UnicycleGoal:
         order = np.argsort(src, kind="stable")
         nbrs = np.concatenate([self.neighbors, dst[order]])
         indptr = np.concatenate([self.indptr, self.indptr[-1] + np.cumsum(np.bincount(src - N, minlength=total - N))])
-        later = None
+        later = from_start = None  # "later": no bound until it is asked for (0, a bound too, meanwhile)
         if exact is True:  # steps from the start: Dijkstra over the nodes (new ones renumbered after the kept)
             from_start = steps_from_start(self, A, B, k, p_of, j, x, total)
+        elif exact == "later":
+            def later():
+                return steps_from_start(self, A, B, k, p_of, j, x, total)
         else:
             from_start = np.floor(np.hypot(*(poses[:, :2] - start[:2]).T) / self.step_len - 1e-9)
             from_start = np.maximum(from_start, 0.0)
-            if exact == "later":
-                def later():
-                    return steps_from_start(self, A, B, k, p_of, j, x, total)
         groups = np.concatenate([self.groups, N + np.arange(x + 1), N + x + offs[1:]])
         graph = SpaceTimeGraph(poses, indptr, nbrs, heur, groups=groups, from_start=from_start)
         return UnicycleGraph(graph, s_id, self.g_id, rd, later)
