@@ -178,7 +178,7 @@ class IntervalStore:
         self._served: dict = {}
         if self.pool:
             grp = self._node_group
-            if not field_.movers and self.used == 0:
+            if not field_.movers and not (self.done_hi >= 0).any():  # nothing computed yet
                 self._fill_whole()
             self.cap = self.g_hi[grp]
             self.ready = np.where(self.done_hi[grp] >= self.cap, np.maximum(self.cnt, 0), -1)
