@@ -543,3 +543,82 @@ def test_the_evasions_gaps_are_the_centres_distance_less_both_radii_and_the_marg
     nav._unknown = np.zeros((0, 2))  # the growth is there: the gaps to the standing person differ by it
     np.testing.assert_allclose(nav._clearance_along(pts, times, obs)[:, :, 2] - got[:, :, 2], np.broadcast_to(np.minimum(tau, 1.0), (5, 41)),
                                rtol=0, atol=1e-12)
+
+
+def test_a_plan_among_nobody_near_skips_the_dijkstra_from_the_pose(open_floor, monkeypatch):
+    """The exact safety windows (a Dijkstra from the pose over the whole graph, 24 ms of CPU
+    a call on a house map) pay only for safety work: nobody seen, or nobody who can come
+    near, none; someone near, the Dijkstra, and the answers are those of the exact windows."""
+    from gfuzzy.timespace import unicycle, unipaths
+
+    sc, rm = open_floor
+    nav = Navigator(sc, rm, GOAL, NavOptions(time_budget=5.0))  # the goal's own Dijkstras first
+    exact = Navigator(sc, rm, GOAL, NavOptions(time_budget=5.0))
+    calls = []
+    real = unipaths.dijkstra
+
+    def spy(mat, index):
+        calls.append(index)
+        return real(mat, index)
+
+    monkeypatch.setattr(unipaths, "dijkstra", spy)
+    monkeypatch.setattr(unicycle, "dijkstra", spy)
+    far = np.array([[9.5, 0.5, 1.0, 0.0, 0.2]])  # seen, walking away out of reach
+    near = np.array([[5.0, 3.0, 0.0, 0.0, 0.3]])  # standing on the straight line
+    answers = [nav.step(0.0, START, np.zeros((0, 5))), nav.step(0.25, START, far)]
+    assert nav.last.mode == NavMode.PLAN and nav.last.detailed == 0 and calls == []
+    answers.append(nav.step(0.5, START, near))
+    assert nav.last.detailed == 1 and len(calls) == 1
+    splice = unicycle.UnicycleGoal.splice
+    monkeypatch.setattr(unicycle.UnicycleGoal, "splice", lambda self, planner, start, exact=True, **k:
+                        splice(self, planner, start, True, **k))  # fmt: skip
+    for got, (t, obs) in zip(answers, [(0.0, np.zeros((0, 5))), (0.25, far), (0.5, near)], strict=True):
+        np.testing.assert_array_equal(got.waypoints, exact.step(t, START, obs).waypoints)
+
+
+@pytest.fixture(scope="module")
+def walled_floor():
+    """The open floor with a wall from the bottom up to 1.5 m below the top, between the
+    start and the goal: the goal lies straight behind it."""
+    from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
+
+    doc = {
+        "version": 1, "name": "walled-floor", "bounds": [0, 0, 10, 6],
+        "robot": {"disc": 0.3, "vmax": 1.0, "kinematics": "unicycle", "wmax": 1.0},
+        "obstacles": [{"box": {"center": [5.0, 2.25], "size": [0.4, 4.5], "angle": 0.0}}],
+        "movers": [], "queries": [],
+    }  # fmt: skip
+    sc = parse_scene(doc, "<walled-floor>")
+    return sc, build_roadmap(sc, RoadmapOptions(vertices=150, seed=3))
+
+
+def _out_of_time(self, t, pose, *a, **k):
+    """A search that never has the time: the graph spliced, no plan."""
+    graph, s_id = self._splice(pose, t)
+    return _Searched(None, "time budget spent before the search", 0, True, graph, s_id)
+
+
+def test_a_drive_out_of_time_with_nobody_near_goes_on_along_its_route(walled_floor, monkeypatch):
+    """No plan ever in time and nobody about: the differential drive follows its static route
+    round the wall and arrives (mode route), every answer driven and checked. The evasive
+    motion, ranking its candidates by straight-line progress alone, drove up to the wall and
+    stood there for ever (a newcomer's box on a house map: still standing at t = 150 s)."""
+    monkeypatch.setattr(Navigator, "_search", _out_of_time)
+    sc, rm = walled_floor
+    start, goal = [2.0, 1.0, 0.0], [8.0, 1.0, 0.0]
+    res = simulate(sc, rm, start, goal, 0.0, 0.25, max_time=40.0)
+    assert res.reached, res.modes
+    assert "evasive" not in res.modes and res.modes["route"] > 10  # (direct and kept: the last metres)
+    assert check_trajectory(sc, res.trajectory.waypoints).valid
+
+
+def test_someone_near_leaves_a_drive_out_of_time_to_the_evasive_motion(walled_floor, monkeypatch):
+    """The route is not checked against people: someone who can come near within the
+    look-ahead leaves the answer to the evasive motion, which scores them."""
+    monkeypatch.setattr(Navigator, "_search", _out_of_time)
+    sc, rm = walled_floor
+    nav = Navigator(sc, rm, [8.0, 1.0, 0.0], NavOptions())
+    quiet = nav.step(0.0, [2.0, 1.0, 0.0], np.array([[9.5, 5.5, 0.0, 0.0, 0.3]]))  # far, standing
+    assert nav.last.mode == NavMode.ROUTE and quiet.t_end > 8.0
+    nav.step(0.25, quiet.at(0.25), np.array([[3.5, 1.0, -1.0, 0.0, 0.3]]))  # walking at it
+    assert nav.last.mode == NavMode.EVASIVE

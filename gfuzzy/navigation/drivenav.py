@@ -21,12 +21,13 @@ import numpy as np
 
 from ..poses import metric_distance, wrap_angle
 from ..timespace.drive import evasions
+from ..timespace.timespace import timed_rows
 from ..trajectory import Trajectory
 from ..typed import FloatArray
-from .evasion import TTC_POINTS, evasion_scores
+from .evasion import EVASION_GAP, TTC_POINTS, evasion_scores
 from .navtypes import MOTION_SAMPLE, sample_loss
 
-__all__ = ["kept_plan", "sooner_plan", "cut_rows", "rest_of", "drive_evasion", "sample_rows", "turn_under_way",
+__all__ = ["kept_plan", "sooner_plan", "cut_rows", "rest_of", "drive_evasion", "static_route", "sample_rows", "turn_under_way",
            "EVASION_SPEEDS", "EVASION_STOPS", "EVASION_COMMITMENT", "COMMITTED_TURN"]
 
 #: Speeds (fractions of the planning speed) of a differential drive's evasive candidates.
@@ -189,6 +190,37 @@ def drive_evasion(nav, t: float, pose: FloatArray, obs: FloatArray, under_way: T
         score = np.where(back, score - EVASION_COMMITMENT * TTC_POINTS, score)
     best = cands[int(np.argmax(score))]
     return Trajectory(best, nav.robot.circumradius)
+
+
+def static_route(nav, t: float, pose: FloatArray, obs: FloatArray, graph, s_id: int) -> Trajectory | None:
+    """A differential drive's way on when no fresh plan came in time and nobody is near: its
+    static route, the spliced ``graph``'s shortest way from ``s_id`` to the goal (down its
+    exact steps-to-goal heuristic, one step of ``NavOptions.dt`` a point), timed from ``t``.
+
+    Only when no one seen can come within ``EVASION_GAP`` of any place the robot can reach
+    over ``NavOptions.drive_lookahead`` (:meth:`Navigator._near`): there every evasive
+    candidate keeps clear, the evasion ranks them by straight-line progress alone, and
+    where the way to the goal leads round a wall it stood still for ever (a newcomer's
+    box on a house map, its search out of time: 600 evasive answers, still at t = 150 s).
+    None otherwise, or without a graph or a way down (the evasive motion answers).
+    """
+    if graph is None or s_id < 0 or len(nav._near(pose, obs, nav.options.drive_lookahead, EVASION_GAP)):
+        return None
+    h, indptr, nbrs = graph.heuristic, graph.indptr, graph.neighbors
+    if not math.isfinite(h[s_id]):
+        return None
+    nodes, v = [s_id], s_id
+    while v != nav._g_id:
+        nb = nbrs[indptr[v] : indptr[v + 1]]
+        down = nb[h[nb] <= h[v] - 1.0 + 1e-9]
+        if len(down) == 0 or len(nodes) > h[s_id]:
+            return None
+        v = int(down[0])
+        nodes.append(v)
+    rows, _ = timed_rows(nodes, list(range(len(nodes))), graph.poses, t, nav.options.dt)
+    rows[0, 1:] = pose
+    rows[-1, 1:] = nav.goal
+    return Trajectory(rows, nav.robot.circumradius)
 
 
 def turn_under_way(prev: Trajectory | None, t: float, pose: FloatArray) -> float:

@@ -52,7 +52,7 @@ from ..timespace.timespace import timed_rows
 from ..trajectory import Trajectory
 from ..typed import FloatArray
 from .brisk import brisk, brisk_arrival
-from .drivenav import drive_evasion, kept_plan, rest_of, sooner_plan
+from .drivenav import drive_evasion, kept_plan, rest_of, sooner_plan, static_route
 from .evasion import holonomic_evasion
 from .lookout import Lookout
 from .navinput import checked_pose, flat_pose, observation_rows
@@ -354,6 +354,7 @@ class Navigator(PathSpace, Prediction, SoftCost):
         self._nv = 0 if self.robot.unicycle else self._kept.s_id  # vertices "ahead" (a goal's bridge's too)
         self._exit = self._no_exit = None  # a bridge out of a dead end the robot stood in (_holonomic_splice)
         self._g_id = -1
+        self._windows = (None, None)  # (graph, its exact safety windows) of a unicycle's last splice
         self._fan = Fan() if self.robot.unicycle and opts.fan else None
 
     def _splice_ends(self, pose: FloatArray, ahead=(), fan_until: float = math.inf, deadline: float = math.inf):
@@ -365,7 +366,8 @@ class Navigator(PathSpace, Prediction, SoftCost):
             start[2] = wrap_angle(start[2])
         if self.robot.unicycle:
             expired = None if fan_until == math.inf else (lambda: self._clock() > fan_until)
-            qg = self._kept.kept.splice(self._planner, start, fan_options=self._fan, expired=expired)
+            qg = self._kept.kept.splice(self._planner, start, "later", fan_options=self._fan, expired=expired)
+            self._windows = (qg.graph, qg.exact_windows)  # the exact windows, when safety work is done
         else:
             qg = self._holonomic_splice(start, ahead, deadline)
         return qg.graph, qg.s_id, qg.g_id, qg.roadmap_distance
@@ -483,11 +485,11 @@ class Navigator(PathSpace, Prediction, SoftCost):
             traj = self._direct(t, pose, obs)
             mode = NavMode.DIRECT
         if traj is None:
-            traj = self._previous_if_clear(t, pose, obs)
-            mode = NavMode.PREVIOUS
+            traj, mode = self._previous_if_clear(t, pose, obs), NavMode.PREVIOUS
+            if traj is None and self.robot.unicycle:  # nobody near: on along the static route, not standing
+                traj, mode = static_route(self, t, pose, obs, found.graph, found.start), NavMode.ROUTE
             if traj is None:
-                traj = self._evasive(t, pose, obs)
-                mode = NavMode.EVASIVE
+                traj, mode = self._evasive(t, pose, obs), NavMode.EVASIVE
         else:
             if self.robot.unicycle:  # a unicycle's change of mind costs turns: keep the last plan if as good
                 kept = kept_plan(self, t, pose, obs, self._kept_inflation(pose, obs, infl, mode), traj,
@@ -610,7 +612,7 @@ class Navigator(PathSpace, Prediction, SoftCost):
             if isinstance(start, _Searched):
                 return start
             graph, s_id, h0 = start
-            store = IntervalStore(graph)
+            store = None
             search = search_function(opts.backend)
             slack = (opts.plan_slack + opts.prediction_horizon) / opts.dt
             detailed = 0
@@ -621,6 +623,10 @@ class Navigator(PathSpace, Prediction, SoftCost):
                 c0 = self._clock()
                 if c0 + detailed * self._person_seconds > deadline:  # the fallback answers
                     return _Searched(None, "time budget spent before the search", detailed, True, graph, s_id)
+                if store is None:  # a unicycle's exact windows only pay where someone is predicted
+                    if detailed:
+                        self._exact_windows(graph)
+                    store = IntervalStore(graph)
                 field_ = self._field(t, obs[keep], infl[keep], steps, deadline)
                 if detailed >= 10:  # a cautious running estimate: up at once, down by a fifth
                     took = (self._clock() - c0) / detailed
@@ -653,6 +659,13 @@ class Navigator(PathSpace, Prediction, SoftCost):
         if not math.isfinite(h0):
             return _Searched(None, "the goal is not reachable on the roadmap", graph=graph, start=s_id)
         return graph, s_id, h0
+
+    def _exact_windows(self, graph) -> None:
+        """Give a unicycle's ``graph`` (spliced without them: 0 bounds every point) its exact safety
+        windows: a Dijkstra from the pose that pays only where safety work is done."""
+        spliced, later = self._windows
+        if spliced is graph and later is not None:
+            graph.from_start, self._windows = later(), (None, None)
 
     def _answered(self, res: SearchResult, graph, s_id: int, t: float, pose: FloatArray, detailed: int) -> _Searched:
         """What a finished search found (this one's or the priced one's): its plan timed from

@@ -42,6 +42,7 @@ class NavMode(str, Enum):
     DIRECT = "direct"  # straight to the goal nearby, checked finely
     PREVIOUS = "previous"  # the last plan, still clear
     KEPT = "kept"  # a fresh search answered, but the last plan was as good (a unicycle's) or much sooner: kept
+    ROUTE = "route"  # a differential drive's static route: no plan in time, nobody near
     EVASIVE = "evasive"  # the statically free straight motion with the latest contact
     GOAL = "goal"  # already at the goal
     LOOK = "look"  # a short slow motion that turns a disc robot's view to a side it has not seen
@@ -61,7 +62,8 @@ class NavStep:
         space: it came sooner by more than ``personal_space_cost``, or the first found
         none), ``"relaxed"`` (a fresh search without the safety
         buffer, the personal space and the uncertainty), ``"direct"`` (straight to the goal nearby, checked
-        finely), ``"previous"`` (the last plan, still clear), ``"evasive"``, ``"goal"``,
+        finely), ``"previous"`` (the last plan, still clear), ``"route"`` (a differential
+        drive's static route when no plan came in time and nobody is near), ``"evasive"``, ``"goal"``,
         ``"kept"`` (a fresh search answered, and the last plan was kept: a differential
         drive's as safe and at most ``NavOptions.commitment`` seconds later, a disc's as safe
         as when it was made and arriving much sooner), ``"look"``
@@ -77,7 +79,7 @@ class NavStep:
         where the robot can be before their prediction ends (the others cannot matter).
     out_of_time : bool
         The search ran out of ``time_budget`` before it answered (the answer is then a
-        fallback's: ``"direct"``, ``"previous"`` or ``"evasive"``).
+        fallback's: ``"direct"``, ``"previous"``, ``"route"`` or ``"evasive"``).
     """
 
     mode: NavMode

@@ -93,6 +93,7 @@ class SoftCost:
         if isinstance(start, _Searched):
             return start
         graph, s_id, h0 = start
+        self._exact_windows(graph)
         priced, prices = self._priced_zones(pose, obs)
         stores = tuple(IntervalStore(graph) for _ in range(1 + len(priced)))
         slack = (opts.plan_slack + opts.prediction_horizon) / opts.dt

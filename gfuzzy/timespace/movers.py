@@ -23,7 +23,7 @@ from ..poses import interpolate_segment
 from ..scene.scene import Robot, Scene
 from ..typed import BoolArray, FloatArray, IntArray
 
-__all__ = ["MoverField", "CHUNK"]
+__all__ = ["MoverField", "CHUNK", "whole_windows"]
 
 #: Steps per chunk of the movers' broad phase.
 CHUNK = 8
@@ -46,6 +46,18 @@ def _uneven(tt: FloatArray, seg2: FloatArray, ptr: IntArray, gid: IntArray, size
     length = np.sqrt(seg2)
     place = (np.arange(len(tt)) - ptr[gid]) * (length / np.maximum(sizes - 1, 1))[gid]
     return np.maximum.reduceat(np.abs(tt * length[gid] - place), ptr[:-1]) > EVEN_TOL
+
+
+def whole_windows(ptr: IntArray, lo: IntArray, hi: IntArray):
+    """:meth:`MoverField.safe_intervals` of a field without movers: every point's window
+    ``lo..hi`` of its group is one interval (none when empty), as :func:`gfuzzy.timespace.movers_kernel.safe_runs`
+    finds in a table of safe steps, without the table."""
+    sizes = np.diff(ptr)
+    lo_n, hi_n = np.repeat(lo, sizes), np.repeat(hi, sizes)
+    some = lo_n <= hi_n
+    sp = np.zeros(len(lo_n) + 1, dtype=np.int64)
+    np.cumsum(some, out=sp[1:])
+    return lo_n[some], hi_n[some], sp
 
 
 class MoverField:
@@ -295,6 +307,8 @@ class MoverField:
         ptr = np.asarray(ptr, dtype=np.int64)
         lo = np.clip(np.asarray(lo, dtype=np.int64), 0, None)
         hi = np.minimum(np.asarray(hi, dtype=np.int64), self.steps)
+        if not self.movers:  # nobody: each point's whole window, without a table of its steps
+            return whole_windows(ptr, lo, hi)
         buf, row_off, lo_node = self._mark(poses, ptr, lo, hi)
         return safe_runs(buf, row_off, lo_node)
 

@@ -178,8 +178,21 @@ class IntervalStore:
         self._served: dict = {}
         if self.pool:
             grp = self._node_group
+            if not field_.movers and not (self.done_hi >= 0).any():  # nothing computed yet
+                self._fill_whole()
             self.cap = self.g_hi[grp]
             self.ready = np.where(self.done_hi[grp] >= self.cap, np.maximum(self.cnt, 0), -1)
+
+    def _fill_whole(self) -> None:
+        """A fresh pool for a field without movers, in one go: each point's one interval, its
+        group's whole window clipped to the horizon (what :meth:`_compute`'s batches find)."""
+        grp = self._node_group
+        self.s = np.maximum(self.g_lo, 0)[grp]
+        self.e = np.minimum(self.g_hi, self.H)[grp]
+        self.cnt = (self.s <= self.e).astype(np.int64)
+        self.off = np.arange(len(grp), dtype=np.int64)
+        self.used = len(grp)
+        np.maximum(self.done_hi, self.g_hi, out=self.done_hi)
 
     def _init_storage(self) -> None:
         n = len(self.graph.poses)
@@ -246,11 +259,14 @@ class IntervalStore:
     def _compute(self, g: int) -> None:
         ptr, field_ = self.ptr, self.field
         need = self.done_hi < self.g_hi
-        pending = np.nonzero(need & (self.f_lb <= self.f_lb[g] + BAND))[0]
-        pending = pending[np.argsort(self.f_lb[pending], kind="stable")]
-        budget = max(1, INTERVAL_BATCH_CELLS // (self.H + 1))  # points per batch (points x steps bools)
-        sizes = ptr[pending + 1] - ptr[pending]
-        pending = pending[np.cumsum(sizes) <= budget]
+        if not field_.movers:  # nobody: every window is one interval, no table: all in one batch
+            pending = np.nonzero(need)[0]
+        else:
+            pending = np.nonzero(need & (self.f_lb <= self.f_lb[g] + BAND))[0]
+            pending = pending[np.argsort(self.f_lb[pending], kind="stable")]
+            budget = max(1, INTERVAL_BATCH_CELLS // (self.H + 1))  # points per batch (points x steps bools)
+            sizes = ptr[pending + 1] - ptr[pending]
+            pending = pending[np.cumsum(sizes) <= budget]
         if not (pending == g).any():
             pending = np.append(pending, g)
         lo = np.maximum(self.g_lo[pending], self.done_hi[pending] + 1)
@@ -269,7 +285,13 @@ class IntervalStore:
             def compute(f, p, pt, a, b):
                 return _intervals_from_pairs(f, p, pt, a, b, H)
 
-        gs, ge, sp = _safe_intervals_shared(field_, self.graph.poses[nodes], sub_ptr, lo, hi, self._same[pending], compute)
+        if self.pool and not field_.movers:  # nobody: each point's whole window (clipped as safe_intervals does)
+            from .movers import whole_windows
+
+            gs, ge, sp = whole_windows(sub_ptr, np.maximum(lo, 0), np.minimum(hi, field_.steps))
+        else:
+            gs, ge, sp = _safe_intervals_shared(field_, self.graph.poses[nodes], sub_ptr, lo, hi, self._same[pending],
+                                                compute)  # fmt: skip
         self.done_hi[pending] = hi
         if self.pool:
             self._pool_merge(nodes, gs, ge, sp, lo_n)

@@ -42,7 +42,7 @@ from .drive import MERGE_HEADING, SAME_HEADING, _xy_pose, fan, lane_turn, pick_t
 from .roadgraph import vertex_clearances
 from .spacetime import SpaceTimeGraph
 from .unilanes import LANE_NEIGHBOURS, _brackets, _rings, _same_interval, lanes
-from .unipaths import dijkstra, matrix, new_to_goal, with_rows
+from .unipaths import dijkstra, matrix, new_to_goal, steps_from_start, with_rows
 
 __all__ = ["UnicycleGraph", "UnicycleGoal", "UnicyclePrepared", "prepare_goal", "build_graph", "lanes", "LANE_NEIGHBOURS", "SAME_HEADING"]
 
@@ -129,12 +129,16 @@ class UnicycleGraph:
     roadmap_distance : float
         Shortest static start-goal time on this graph times vmax (metres at vmax: lanes'
         lengths plus turns' ``|dh| vmax / turn_rate``); inf when not connected.
+    exact_windows : callable or None
+        A splice ``exact="later"``'s: the exact steps from the start to every point
+        (``graph.from_start`` is None until then: 0 bounds them).
     """
 
     graph: SpaceTimeGraph
     s_id: int
     g_id: int
     roadmap_distance: float
+    exact_windows: object = None
 
 
 def _base(roadmap, geometry, stretch: float, vmax: float, step_len: float, deadline: float = math.inf) -> _Base:
@@ -575,13 +579,15 @@ class UnicycleGoal:
     #: Whether the ends tilt where they cannot turn round (:meth:`_Extras.along`).
     tilts: bool = False
 
-    def splice(self, planner, start: FloatArray, exact: bool = True, fan_options=None, expired=None) -> UnicycleGraph:
+    def splice(self, planner, start: FloatArray, exact: bool | str = True, fan_options=None, expired=None) -> UnicycleGraph:
         """This graph with ``start`` (``[x, y, heading]``, heading wrapped) joined in.
 
         ``exact``: the steps from the start to every point by Dijkstra (a fresh plan's
         safety windows); otherwise the straight distance over a step's length, a cheaper
-        lower bound (the navigator's). ``fan_options`` (:class:`gfuzzy.timespace.drive.Fan`):
-        also the two-leg motions of :func:`gfuzzy.timespace.drive.fan` (the navigator's),
+        lower bound; ``"later"`` (the navigator's): none (0 bounds every point), and the
+        Dijkstra in ``UnicycleGraph.exact_windows`` for when safety work is done (nobody
+        near: none).
+        ``fan_options`` (:class:`gfuzzy.timespace.drive.Fan`): also the two-leg motions of :func:`gfuzzy.timespace.drive.fan` (the navigator's),
         as many of them as are certified before ``expired()`` (a callable; None: all).
         """
         geo, robot = planner.geometry, planner.robot
@@ -641,33 +647,18 @@ class UnicycleGoal:
         order = np.argsort(src, kind="stable")
         nbrs = np.concatenate([self.neighbors, dst[order]])
         indptr = np.concatenate([self.indptr, self.indptr[-1] + np.cumsum(np.bincount(src - N, minlength=total - N))])
-        if exact:  # steps from the start: Dijkstra over the nodes (new ones renumbered after the kept)
-            from scipy.sparse import csr_matrix
-
-            nn = self.nn
-            a_c, b_c = A - N + nn, np.where(B >= N, B - N + nn, B)
-            o = np.lexsort((k, b_c, a_c))  # by row; parallel pieces: the shortest first
-            first = np.ones(len(o), dtype=bool)
-            first[1:] = (a_c[o][1:] != a_c[o][:-1]) | (b_c[o][1:] != b_c[o][:-1])
-            o = o[first]
-            m = self.steps
-            rows = np.cumsum(np.bincount(a_c[o] - nn, minlength=x))
-            mat = csr_matrix((np.concatenate([m.data, np.maximum(k[o], 1e-300).astype(float)]),
-                              np.concatenate([m.indices, b_c[o]]), np.concatenate([m.indptr, m.indptr[-1] + rows])),
-                             shape=(nn + x, nn + x))  # fmt: skip
-            hop_s = np.rint(dijkstra(mat, nn))
-            from_start = np.empty(total)
-            from_start[:nn] = hop_s[:nn]
-            from_start[N : N + x] = hop_s[nn:]
-            from_start[self.nn : N] = hop_s[self.A[self.p_of]] + self.j
-            hs = np.concatenate([hop_s[:nn], np.zeros(N - nn), hop_s[nn:]])
-            from_start[N + x :] = hs[A[p_of]] + j
+        later = from_start = None  # "later": no bound until it is asked for (0, a bound too, meanwhile)
+        if exact is True:  # steps from the start: Dijkstra over the nodes (new ones renumbered after the kept)
+            from_start = steps_from_start(self, A, B, k, p_of, j, x, total)
+        elif exact == "later":
+            def later():
+                return steps_from_start(self, A, B, k, p_of, j, x, total)
         else:
             from_start = np.floor(np.hypot(*(poses[:, :2] - start[:2]).T) / self.step_len - 1e-9)
             from_start = np.maximum(from_start, 0.0)
         groups = np.concatenate([self.groups, N + np.arange(x + 1), N + x + offs[1:]])
         graph = SpaceTimeGraph(poses, indptr, nbrs, heur, groups=groups, from_start=from_start)
-        return UnicycleGraph(graph, s_id, self.g_id, rd)
+        return UnicycleGraph(graph, s_id, self.g_id, rd, later)
 
 
 @dataclass

@@ -7,7 +7,7 @@ import numpy as np
 
 from ..typed import FloatArray
 
-__all__ = ["matrix", "dijkstra", "with_rows", "new_to_goal"]
+__all__ = ["matrix", "dijkstra", "with_rows", "new_to_goal", "steps_from_start"]
 
 
 def matrix(A, B, w, n):
@@ -60,3 +60,32 @@ def with_rows(mat, A, B, w, n: int):
     indptr = m_indptr + np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=n))])
     return csr_matrix((np.insert(mat.data, at, extra.data), np.insert(mat.indices, at, extra.indices), indptr),
                       shape=(n, n))  # fmt: skip
+
+
+def steps_from_start(kept, A, B, k, p_of, j, x: int, total: int) -> FloatArray:
+    """(total,) steps from a spliced start to every point of its graph, by Dijkstra over the
+    nodes (the kept goal graph's ``kept``, a :class:`gfuzzy.timespace.unicycle.UnicycleGoal`,
+    and the start's x new nodes, renumbered after the kept ones): the exact lower bound of
+    the safety windows (:class:`gfuzzy.timespace.spacetime.IntervalStore`). The start's pieces
+    ``A -> B`` (k steps; ``p_of``, ``j``: its interior points' pieces and indices)."""
+    from scipy.sparse import csr_matrix
+
+    nn, N = kept.nn, len(kept.poses)
+    a_c, b_c = A - N + nn, np.where(B >= N, B - N + nn, B)
+    o = np.lexsort((k, b_c, a_c))  # by row; parallel pieces: the shortest first
+    first = np.ones(len(o), dtype=bool)
+    first[1:] = (a_c[o][1:] != a_c[o][:-1]) | (b_c[o][1:] != b_c[o][:-1])
+    o = o[first]
+    m = kept.steps
+    rows = np.cumsum(np.bincount(a_c[o] - nn, minlength=x))
+    mat = csr_matrix((np.concatenate([m.data, np.maximum(k[o], 1e-300).astype(float)]),
+                      np.concatenate([m.indices, b_c[o]]), np.concatenate([m.indptr, m.indptr[-1] + rows])),
+                     shape=(nn + x, nn + x))  # fmt: skip
+    hop_s = np.rint(dijkstra(mat, nn))
+    from_start = np.empty(total)
+    from_start[:nn] = hop_s[:nn]
+    from_start[N : N + x] = hop_s[nn:]
+    from_start[nn:N] = hop_s[kept.A[kept.p_of]] + kept.j
+    hs = np.concatenate([hop_s[:nn], np.zeros(N - nn), hop_s[nn:]])
+    from_start[N + x :] = hs[A[p_of]] + j
+    return from_start
