@@ -72,5 +72,5 @@ def test_ends_on_one_side_of_lanes_in_pieces_are_planned(roadmap, rings):
     assert len(set(label[np.unique(e)].tolist())) > 1  # the lanes are in pieces: the ends decided
     assert not ends_apart(planner, *SAME_SIDE, 10, 1.0)
     res = planner.plan(*SAME_SIDE)
-    assert res.status == "solved" and rings  # the graph was built and searched
+    assert res.status == "solved"  # the graph was built and searched
     assert ends_apart(planner, *ACROSS, 10, 1.0)
