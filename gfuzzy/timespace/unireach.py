@@ -44,27 +44,43 @@ class _Reach:
         self.clearance = None  # a disc's only (never asked here)
 
 
-class _Joins(_Extras):
-    """:class:`_Extras` that records the vertices an end joins instead of building copies."""
+class _Met(Exception):
+    """The end joined a component the other end joins: the ends may be joined."""
 
-    def __init__(self, base: _Reach, geometry, tilts: bool):
+
+class _Joins(_Extras):
+    """:class:`_Extras` that records the lanes' components an end joins instead of building
+    copies. A vertex of a component already reached is not tried (``known``): the loop then
+    tries as many vertices as the graph's own or more, so its components are a superset of
+    the graph's; reaching one of ``stop`` raises :class:`_Met`."""
+
+    def __init__(self, base: _Reach, geometry, tilts: bool, label: np.ndarray, stop: set):
         super().__init__(base, geometry, 1.0, 0, None, tilts)
-        self.joined: set = set()
+        self.label, self.stop, self.reached = label, stop, set()
+        self.known = lambda v: int(label[v]) in self.reached
 
     def copy_at(self, v: int, h: float, out: bool) -> int:
-        self.joined.add(int(v))
+        c = int(self.label[v])
+        if c in self.stop:
+            raise _Met
+        self.reached.add(c)
         return self.node(*self.base.vertex_xy[v], h)
 
 
-def _joined(base: _Reach, geometry, pose: FloatArray, connect_k: int, outward: bool, tilts: bool) -> set:
-    """The vertices the end at ``pose`` joins (``outward``: the start), as
-    :meth:`UnicycleGoal.splice` (a start) or :func:`prepare_goal` (a goal) joins it."""
-    ex = _Joins(base, geometry, tilts)
+def _reached(base: _Reach, geometry, pose: FloatArray, connect_k: int, outward: bool, tilts: bool,
+             label: np.ndarray, stop: set) -> set | None:  # fmt: skip
+    """The lanes' components the end at ``pose`` joins (``outward``: the start), as
+    :meth:`UnicycleGoal.splice` (a start) or :func:`prepare_goal` (a goal) joins it; None as
+    soon as it joins one of ``stop``."""
+    ex = _Joins(base, geometry, tilts, label, stop)
     node = ex.node(*pose)
     reverse = bool(geometry.robot.reverse)
-    ex.join(pose, node, connect_k, outward, reverse)
-    ex.along(pose, node, connect_k, outward, reverse)
-    return ex.joined
+    try:
+        ex.join(pose, node, connect_k, outward, reverse)
+        ex.along(pose, node, connect_k, outward, reverse)
+    except _Met:
+        return None
+    return ex.reached
 
 
 def ends_apart(planner, start: FloatArray, goal: FloatArray, connect_k: int, stretch: float,
@@ -100,8 +116,7 @@ def ends_apart(planner, start: FloatArray, goal: FloatArray, connect_k: int, str
             return False
     base = _Reach(ln.xy, with_copy, len(rm.vertices))
     for tilts in (False, True):  # the graph tilts its ends when it does not join them without
-        a = {int(label[v]) for v in _joined(base, geo, start, connect_k, True, tilts)}
-        b = {int(label[v]) for v in _joined(base, geo, goal, connect_k, False, tilts)}
-        if a & b:
+        reached = _reached(base, geo, goal, connect_k, False, tilts, label, set())
+        if _reached(base, geo, start, connect_k, True, tilts, label, reached) is None:
             return False
     return True
