@@ -87,3 +87,12 @@ def test_a_dumped_crop_reloads_with_its_map(tmp_path):
     scene = load_scene(path)
     assert scene.bounds == case["scene"].bounds and scene.static_hash == case["scene"].static_hash
     assert "-n 200 --seed 5" in path.read_text()
+
+
+def test_a_plan_budget_reaches_the_planner():
+    """``--time-limit``: each plan's budget (the planner's 60 s wall clock made a loaded
+    machine's hard cases timeouts)."""
+    from tools.bench_unseen_drives import plan_case
+
+    got = plan_case(make_case(1, 0, scenarios=("door",)), vertices=(12,), time_limit=1e-9)
+    assert got["gfuzzy"] == "unsolved" and got["status"] == "timeout"

@@ -546,3 +546,30 @@ def test_a_lane_passing_an_obstacle_beside_its_middle_is_judged_by_its_swept_bod
     robot = {"box": [0.6, 0.4], "vmax": 1.0, "kinematics": "unicycle", "clearance": keep}
     sc = parse_scene({"version": 1, "name": "k", "bounds": [0, 0, 6, 4], "robot": robot, "obstacles": [disc]})
     assert StaticGeometry(sc).motion_free([0.5, 1.0, 0.0], [3.5, 1.0, 0.0]) == (delta > 0)
+
+
+def test_a_convex_polygon_is_one_prism_and_measures_as_its_triangles():
+    """A strictly convex polygon is one FCL prism (its triangles' n - 2 cost a footprint
+    drive's thousands of distances five times as much); a dented one, or one with a corner on
+    a straight side, is still triangulated. Distances against shapely's either way."""
+    from gfuzzy.collision.geometry import static_objects
+
+    a = np.linspace(0.0, 2 * math.pi, 16, endpoint=False)
+    gon = np.c_[2.0 + 0.4 * np.cos(a), 2.0 + 0.4 * np.sin(a)].round(6).tolist()
+    side = [[0.5, 0.5], [1.0, 0.5], [1.5, 0.5], [1.5, 1.2], [0.5, 1.2]]  # (1.0, 0.5) on a side
+    doc = {"version": 1, "name": "gons", "bounds": [0, 0, 6, 4],
+           "robot": {"footprint": [[0.3, 0.0], [-0.2, 0.2], [-0.1, 0.0], [-0.2, -0.2]], "vmax": 1.0},
+           "obstacles": [{"polygon": gon}, {"polygon": side}, {"polygon": U_SHAPE}]}  # fmt: skip
+    scene = parse_scene(doc)
+    assert len(static_objects(scene)) == 1 + 3 + 6  # the 16-gon one (14 on main), the others triangulated
+    geo = StaticGeometry(scene)
+    world = shapely.union_all([shapely.Polygon(p) for p in (gon, side, U_SHAPE)])
+    robot = shapely.Polygon(doc["robot"]["footprint"])
+    rng = np.random.default_rng(3)
+    for pose in rng.uniform([0.5, 0.5, -math.pi], [5.5, 3.5, math.pi], (60, 3)):
+        body = shapely.affinity.translate(shapely.affinity.rotate(robot, pose[2], origin=(0, 0), use_radians=True), *pose[:2])
+        exact = body.distance(world)
+        if exact > 1e-3:
+            assert exact - 3e-4 <= geo.obstacle_clearance(pose) <= exact
+        elif body.intersection(world).area > 1e-8:
+            assert not geo.is_valid(pose)

@@ -67,7 +67,7 @@ sys.path.insert(0, str(ROOT))
 from gfuzzy.atomic import write_atomic  # noqa: E402
 from gfuzzy.check.check import check_trajectory  # noqa: E402
 from gfuzzy.collision.geometry import StaticGeometry  # noqa: E402
-from gfuzzy.planner.planner import Planner, query_problem  # noqa: E402
+from gfuzzy.planner.planner import Planner, PlanOptions, query_problem  # noqa: E402
 from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap  # noqa: E402
 from gfuzzy.scene.scene import parse_scene  # noqa: E402
 from tools.bench_unseen import (  # noqa: E402
@@ -433,8 +433,10 @@ def make_case(seed: int, index: int, bodies=BODIES, scenarios=tuple(SCENARIOS)) 
 # --------------------------------------------------------------------------- running
 
 
-def plan_case(case: dict, vertices=VERTICES, roadmap_seed: int | None = None) -> dict:
-    """gfuzzy on the case: each roadmap size in turn until a checked answer."""
+def plan_case(case: dict, vertices=VERTICES, roadmap_seed: int | None = None, time_limit: float | None = None) -> dict:
+    """gfuzzy on the case: each roadmap size in turn until a checked answer (``time_limit``:
+    each plan's budget, wall-clock seconds; None: the planner's default)."""
+    opts = PlanOptions() if time_limit is None else PlanOptions(time_limit=time_limit)
     scene, q = case["scene"], case["query"]
     seed = case["roadmap_seed"] if roadmap_seed is None else roadmap_seed
     out = {"gfuzzy": "", "vertices": "", "status": "", "message": "", "duration": "", "cpu_s": 0.0, "tries": []}
@@ -443,7 +445,7 @@ def plan_case(case: dict, vertices=VERTICES, roadmap_seed: int | None = None) ->
         rm = build_roadmap(scene, RoadmapOptions(vertices=n, seed=seed))
         build = time.process_time() - t
         t = time.process_time()
-        res = Planner(scene, rm).plan(q.start, q.goal, q.t0, hold=q.hold)
+        res = Planner(scene, rm).plan(q.start, q.goal, q.t0, opts, hold=q.hold)
         plan = time.process_time() - t
         out["cpu_s"] += build + plan
         out["status"], out["message"], out["vertices"] = res.status.value, res.message, n
@@ -458,12 +460,13 @@ def plan_case(case: dict, vertices=VERTICES, roadmap_seed: int | None = None) ->
     return out
 
 
-def run_case(case: dict, vertices=VERTICES, oracle: bool = True, roadmap_seed: int | None = None) -> dict:
+def run_case(case: dict, vertices=VERTICES, oracle: bool = True, roadmap_seed: int | None = None,
+             time_limit: float | None = None) -> dict:
     row = {k: case[k] for k in ("index", "body", "scenario", "reverse", "wmax", "mover")}
     row["wmax"] = round(row["wmax"], 3) if row["wmax"] != "" else ""
     row["roadmap_seed"] = case["roadmap_seed"] if roadmap_seed is None else roadmap_seed
     try:
-        got = plan_case(case, vertices, roadmap_seed)
+        got = plan_case(case, vertices, roadmap_seed, time_limit)
         row.update({k: got[k] for k in ("gfuzzy", "vertices", "status", "message", "duration")})
         row["gfuzzy_s"] = round(got["cpu_s"], 2)
         row["tries"] = "; ".join(got["tries"])
@@ -570,6 +573,10 @@ def main(argv=None) -> int:
     ap.add_argument("--scenarios", nargs="+", choices=list(SCENARIOS), default=list(SCENARIOS))
     ap.add_argument("--only", type=int, nargs="+", help="run only these case indices")
     ap.add_argument("--no-oracle", action="store_true", help="gfuzzy only")
+    ap.add_argument("--no-proof", action="store_true", help="build every drive's graph, as before the lanes' "
+                    "proof that its ends are apart (gfuzzy/timespace/unireach.py): its cost, paired")
+    ap.add_argument("--time-limit", type=float, help="each plan's budget, wall-clock seconds (default: the planner's 60; "
+                    "on a loaded machine a larger one keeps timeouts out of the table)")
     ap.add_argument("-o", "--output", help="CSV, one row per case (written atomically)")
     ap.add_argument("--dump", help="folder for the scene and commands of each case gfuzzy did not solve "
                     "(of every case with --only)")
@@ -578,6 +585,10 @@ def main(argv=None) -> int:
         print("bench_unseen_drives: --cases must be >= 1 and -n >= 2", file=sys.stderr)
         return 2
     indices = a.only if a.only else range(a.cases)
+    if a.no_proof:
+        import gfuzzy.timespace.unireach as unireach
+
+        unireach.ends_apart = lambda *args, **kwargs: False
     rows, t0 = [], time.perf_counter()
     for k, index in enumerate(indices, 1):
         try:
@@ -585,7 +596,7 @@ def main(argv=None) -> int:
         except Exception as exc:  # noqa: BLE001
             print(f"[{k}/{len(indices)}] case {index}: generator: {type(exc).__name__}: {exc}", file=sys.stderr, flush=True)
             continue
-        row = run_case(case, a.vertices, oracle=not a.no_oracle, roadmap_seed=a.roadmap_seed)
+        row = run_case(case, a.vertices, oracle=not a.no_oracle, roadmap_seed=a.roadmap_seed, time_limit=a.time_limit)
         rows.append(row)
         print(f"[{k}/{len(indices)}] case {index} {row['body']} {row['scenario']}{' rev' if row['reverse'] else ''}"
               f"{' mover' if row['mover'] else ''}: {row['outcome']} (gfuzzy {row['status']} at -n {row['vertices']}, "
@@ -599,7 +610,8 @@ def main(argv=None) -> int:
             dump(Path(a.dump), a.seed, case, row, a.vertices)
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     which = f"--only {' '.join(map(str, a.only))}" if a.only else f"--cases {a.cases}"
-    print(f"# tools/bench_unseen_drives.py {which} --seed {a.seed} -n {' '.join(map(str, a.vertices))}: {len(rows)} "
+    limit = ("" if a.time_limit is None else f" --time-limit {a.time_limit:g}") + (" --no-proof" if a.no_proof else "")
+    print(f"# tools/bench_unseen_drives.py {which} --seed {a.seed} -n {' '.join(map(str, a.vertices))}{limit}: {len(rows)} "
           f"cases in {time.perf_counter() - t0:.0f} s, load average {load:.2f}; times: CPU seconds")
     print(table(rows))
     print()

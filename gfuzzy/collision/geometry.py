@@ -151,9 +151,29 @@ def static_objects(scene: Scene) -> list[fcl.CollisionObject]:
             if len(ob.rects):
                 objs.append(fcl.CollisionObject(_walls(ob.rects), fcl.Transform()))
         else:
+            ring = _convex_ring(ob)
+            if ring is not None:
+                objs.append(fcl.CollisionObject(convex_prism(ring, _HEIGHT), fcl.Transform()))
+                continue
             for tri in _triangulate(ob):
                 objs.append(fcl.CollisionObject(_prism(tri), fcl.Transform()))
     return objs
+
+
+def _convex_ring(poly: Polygon) -> FloatArray | None:
+    """The polygon's ring, counter-clockwise, when it is strictly convex (no hole, no dent,
+    no corner on a straight side): one FCL prism instead of its n - 2 triangles' (a 16-gon's
+    distance costs a fifth: a footprint drive's rings and lanes among round obstacles ask
+    tens of thousands); None otherwise (triangulated)."""
+    if poly.holes or len(poly.points) < 3:
+        return None
+    shape = shapely.Polygon(np.asarray(poly.points, dtype=float))
+    if not shape.is_valid or shape.area <= 0.0:
+        return None
+    hull = shape.convex_hull
+    if len(hull.exterior.coords) - 1 != len(poly.points) or hull.area - shape.area > 1e-12 * max(1.0, hull.area):
+        return None
+    return np.asarray(shapely.geometry.polygon.orient(hull, 1.0).exterior.coords, dtype=float)[:-1]
 
 
 def _inner_point(robot: Robot) -> tuple[float, float]:

@@ -564,7 +564,7 @@ class Planner:
             if linked is not None:  # in the budget left
                 left = replace(opts, time_limit=max(deadline - time.perf_counter(), 1e-9))
                 return linked.plan(ends[0], ends[1], t0, left, hold=hold, _linked=True)
-            return answer(Status.NO_PATH, message, stats=PlanStats(nodes=len(graph.poses)))
+            return answer(Status.NO_PATH, message, stats=PlanStats(nodes=0 if graph is None else len(graph.poses)))
         max_steps = self._max_steps(opts, rd, t0, hold_steps)
         run = self._search_rounds(graph, s_id, g_id, start, t0, opts, hold_steps, max_steps, deadline)
         if run.problem:
@@ -601,10 +601,17 @@ class Planner:
         """(graph, start id, goal id, roadmap distance) of a query (:meth:`_query_graph`) from
         ``prepared`` or a goal prepared now; a differential drive's ends that cannot turn
         round tilt when the first graph does not join them (a disc turns round wherever it
-        stands: it never tilts). OutOfTime past ``deadline``."""
+        stands: it never tilts). A box or footprint drive's graph is not built when its lanes
+        prove that it cannot join the ends (:func:`gfuzzy.timespace.unireach.ends_apart`:
+        graph None, roadmap distance inf). OutOfTime past ``deadline``."""
+        robot = self.robot
+        if prepared is None and robot.unicycle and robot.shape != "disc":
+            from ..timespace.unireach import ends_apart
+
+            if ends_apart(self, start, goal, opts.connect_k, opts.stretch, deadline):
+                return None, -1, -1, math.inf
         kept = prepared if prepared is not None else self.prepare(goal, opts, _deadline=deadline)
         graph, s_id, g_id, rd = self._query_graph(start, kept)
-        robot = self.robot
         if not math.isfinite(rd) and robot.unicycle and robot.shape != "disc" and prepared is None:
             graph, s_id, g_id, rd = self._query_graph(start, self.prepare(goal, opts, _tilts=True, _deadline=deadline))
         return graph, s_id, g_id, rd

@@ -258,6 +258,7 @@ class _Extras:
         self.poses: list = []
         self.pieces: list = []  # (a, b, dh, length)
         self.kept: FloatArray | None = None  # the kept graph's poses, when splicing into one
+        self.known = None  # v -> whether join need not try v (unireach's: its component is reached)
 
     def node(self, x: float, y: float, h: float) -> int:
         self.poses.append((float(x), float(y), float(wrap_angle(h))))
@@ -413,6 +414,8 @@ class _Extras:
         for v in order[: 4 * max(connect_k, 1)].tolist():
             if tried >= connect_k and joined:
                 break
+            if self.known is not None and self.known(v):
+                continue
             tried += 1
             vx, vy = float(xy[v, 0]), float(xy[v, 1])
             c_v = None
