@@ -53,6 +53,7 @@ __all__ = [
 #: each) and each episode takes seconds; ``--episodes 1e9`` drew layouts for days, saying nothing.
 MAX_EPISODES = 10_000
 
+
 def _rvo():
     try:
         import pyrvo
