@@ -13,12 +13,13 @@ is exact, as measured against shapely (``tools/fcl_accuracy.py``, docs/planner.m
   of the two orders still 1.2e-4), and between an ``fcl.Box`` and a convex by up to 1.5e-3
   in both orders (a footprint 0.6 m from a box: 2 % of the poses within a centimetre).
 * Between convex prisms, and from a convex or a sphere to a mesh, it was exact (to 1e-15 in
-  15,000 random cases), and from a sphere to a box or a sphere FCL has closed forms.
+  15,000 random cases), between two ``fcl.Box`` to 5e-7 (21,000 cases, near-parallel ones
+  among them), and from a sphere to a box or a sphere FCL has closed forms.
 
-So for distances a box is a convex prism, a sphere (a disc robot, the circumscribed disc)
+So for distances a box is a convex prism (against a box robot, an ``fcl.Box``), a sphere (a disc robot, the circumscribed disc)
 meets the polygons and boxes as one flat mesh of their triangles at z = 0 (FCL's
-sphere-triangle distance, in closed form), and disc obstacles are measured by numpy in
-closed form, not by FCL.
+sphere-triangle distance, in closed form), and disc obstacles (spheres) meet a box or
+footprint robot as a flat mesh of its body (:func:`flat_mesh`), never its prisms.
 """
 
 from __future__ import annotations
@@ -35,7 +36,7 @@ from ..typed import FloatArray
 from .shapes import HEIGHT as _HEIGHT
 from .shapes import convex_prism
 
-__all__ = ["static_objects", "DistanceModel", "distance_model", "manager_of"]
+__all__ = ["static_objects", "DistanceModel", "distance_model", "flat_mesh", "manager_of"]
 
 
 def _yaw_transform(x: float, y: float, yaw: float = 0.0) -> fcl.Transform:
@@ -157,7 +158,7 @@ def _convex_ring(poly: Polygon) -> FloatArray | None:
     return np.asarray(shapely.geometry.polygon.orient(hull, 1.0).exterior.coords, dtype=float)[:-1]
 
 
-def _flat_mesh(rings: list[FloatArray]) -> fcl.BVHModel:
+def flat_mesh(rings: list[FloatArray]) -> fcl.BVHModel:
     """One FCL mesh of convex counter-clockwise rings (each (m, 2)) fanned into triangles at
     z = 0: a sphere at z = 0 meets it at the rings' planar distance, in closed form."""
     verts, tris = [], []
@@ -183,42 +184,53 @@ class DistanceModel:
         polygons as in :func:`static_objects`, boxes as convex prisms, maps' walls.
     flat : list of fcl.CollisionObject
         For a sphere (a disc robot, a circumscribed disc): the polygons' and boxes' convex
-        parts as one flat mesh, maps' walls.
+        parts as one flat mesh, the discs' spheres, maps' walls.
+    spheres : list of fcl.CollisionObject
+        The discs' spheres, for a box or footprint robot's flat mesh.
+    boxes : list of fcl.CollisionObject
+        The boxes as ``fcl.Box``, for a box robot's ``fcl.Box`` (the cost of main's).
+    polygons : list of fcl.CollisionObject
+        ``prisms`` but the boxes, for a box robot's prism.
     discs : (k, 3) float
-        The disc obstacles, ``x, y, radius``: measured in closed form.
+        The disc obstacles, ``x, y, radius`` (a swept hull's distance, in closed form).
     """
 
     prisms: list
     flat: list
+    spheres: list
+    boxes: list
+    polygons: list
     discs: FloatArray
 
 
 def distance_model(scene: Scene) -> DistanceModel:
     """The :class:`DistanceModel` of ``scene``'s static obstacles."""
-    prisms, rings, flat, discs = [], [], [], []
+    prisms, rings, flat, spheres, boxes, polygons, discs = [], [], [], [], [], [], []
     for ob in scene.obstacles:
         if isinstance(ob, Disc):
             discs.append((ob.center[0], ob.center[1], ob.radius))
+            spheres.append(fcl.CollisionObject(fcl.Sphere(ob.radius), _yaw_transform(*ob.center)))
+            flat.append(fcl.CollisionObject(fcl.Sphere(ob.radius), _yaw_transform(*ob.center)))
         elif isinstance(ob, Box):
             rings.append(np.asarray(ob.vertices(), dtype=float))
             prisms.append(fcl.CollisionObject(convex_prism(rings[-1], _HEIGHT), fcl.Transform()))
+            geom = fcl.Box(ob.size[0], ob.size[1], 2 * _HEIGHT)
+            boxes.append(fcl.CollisionObject(geom, _yaw_transform(ob.center[0], ob.center[1], ob.angle)))
         elif isinstance(ob, MapObstacle):
             if len(ob.rects):
                 walls = _walls(ob.rects)
-                prisms.append(fcl.CollisionObject(walls, fcl.Transform()))
-                flat.append(fcl.CollisionObject(walls, fcl.Transform()))
+                for objs in (prisms, polygons, flat):
+                    objs.append(fcl.CollisionObject(walls, fcl.Transform()))
         else:
             ring = _convex_ring(ob)
-            if ring is not None:
-                prisms.append(fcl.CollisionObject(convex_prism(ring, _HEIGHT), fcl.Transform()))
-                rings.append(ring)
-                continue
-            for tri in _triangulate(ob):
-                prisms.append(fcl.CollisionObject(_prism(tri), fcl.Transform()))
-                rings.append(tri)
+            parts = [ring] if ring is not None else _triangulate(ob)
+            for part in parts:
+                for objs in (prisms, polygons):
+                    objs.append(fcl.CollisionObject(convex_prism(part, _HEIGHT) if ring is not None else _prism(part), fcl.Transform()))
+            rings.extend(parts)
     if rings:
-        flat.append(fcl.CollisionObject(_flat_mesh(rings), fcl.Transform()))
-    return DistanceModel(prisms, flat, np.array(discs, dtype=float).reshape(-1, 3))
+        flat.append(fcl.CollisionObject(flat_mesh(rings), fcl.Transform()))
+    return DistanceModel(prisms, flat, spheres, boxes, polygons, np.array(discs, dtype=float).reshape(-1, 3))
 
 
 def manager_of(objects: list) -> fcl.DynamicAABBTreeCollisionManager:

@@ -22,7 +22,7 @@ from ..poses import metric_distance, wrap_angle
 from ..scene.scene import Box, Disc, MapObstacle, Polygon, Robot, Scene
 from ..typed import FloatArray
 from .exact import TOUCH_TOL, ExactBody, exact_measure
-from .fclmodel import distance_model, manager_of, static_objects
+from .fclmodel import distance_model, flat_mesh, manager_of, static_objects
 from .shapes import HEIGHT as _HEIGHT
 from .shapes import QUAD_EXACT, body_pieces, convex_prism, point_convex_distance, shape_of
 
@@ -134,18 +134,27 @@ class StaticGeometry:
         self.keep = float(scene.robot.clearance)  # distance kept from static obstacles
         self._objects = static_objects(scene)
         self._manager = manager_of(self._objects)  # collision tests
-        # distances (fclmodel): convex prisms meet prisms, spheres a flat mesh, discs numpy
+        # distances (fclmodel): convex prisms meet prisms, a sphere a flat mesh and spheres,
+        # the discs' spheres a box or footprint's flat mesh
         model = distance_model(scene)
-        self._prisms, self._flat = manager_of(model.prisms), manager_of(model.flat)
+        self._prisms, self._flat, self._spheres = (manager_of(m) for m in (model.prisms, model.flat, model.spheres))
         self._has = (bool(model.prisms), bool(model.flat))
         self._discs = model.discs
         self._robot_objs = [fcl.CollisionObject(g, fcl.Transform()) for g in robot_geometries(scene.robot)]
         self._robot_obj = self._robot_objs[0]
-        self._body = body_pieces(scene.robot)  # a box or footprint's pieces, for the discs
-        # the robot's objects for distances: its pieces' prisms (a box: not an fcl.Box) or sphere
-        self._dist_objs = self._robot_objs
-        if scene.robot.shape == "box":
-            self._dist_objs = [fcl.CollisionObject(convex_prism(self._body[0]), fcl.Transform())]
+        body = body_pieces(scene.robot)
+        # the robot's distance queries, (object, manager, any obstacle there): its sphere
+        # against the flat mesh, a footprint's prisms against the prisms, a box (an fcl.Box)
+        # against the boxes and its prism against the other prisms; a box or footprint's body
+        # as a flat mesh against the discs' spheres
+        if scene.robot.shape == "disc":
+            self._queries = [(self._robot_obj, self._flat, self._has[1])]
+        elif scene.robot.shape == "footprint":
+            self._queries = [(ob, self._prisms, self._has[0]) for ob in self._robot_objs]
+        else:
+            self._queries = [(self._robot_obj, manager_of(model.boxes), bool(model.boxes)),
+                             (fcl.CollisionObject(convex_prism(body[0]), fcl.Transform()), manager_of(model.polygons), bool(model.polygons))]  # fmt: skip
+        self._flat_body = fcl.CollisionObject(flat_mesh(body), fcl.Transform()) if body and model.spheres else None
         self._disc_obj = None  # the circumscribed disc (sweep_bound), made when first needed
         # a robot allowed to touch obstacles (robot.clearance 0): exact distances at contact
         self._exact = exact_measure(scene)
@@ -214,8 +223,10 @@ class StaticGeometry:
             )
             for ob in self._robot_objs:
                 ob.setTransform(tf)
-            if self._dist_objs is not self._robot_objs:
-                self._dist_objs[0].setTransform(tf)
+            if self.robot.shape == "box":
+                self._queries[1][0].setTransform(tf)
+            if self._flat_body is not None:
+                self._flat_body.setTransform(tf)
             self._placed = tf
         else:
             self._robot_obj.setTranslation(np.array([pose[0], pose[1], 0.0]))
@@ -298,26 +309,19 @@ class StaticGeometry:
 
     def _obstacle_distance(self, pose) -> float:
         """The distance from the robot at ``pose`` (placed: :meth:`_place`) to the nearest
-        static obstacle, exact away from contact (<= 0 in contact; FCL and closed forms)."""
-        sphere = self.robot.shape == "disc"
-        dist = min(self._fcl_distance(ob, sphere) for ob in self._dist_objs)  # a footprint: its pieces
-        if len(self._discs):
-            rel = self._discs[:, :2] - np.asarray(pose[:2], dtype=float)
-            if sphere:
-                return min(dist, float(np.min(np.hypot(rel[:, 0], rel[:, 1]) - self._discs[:, 2])) - self.robot.radius)
-            c, s = math.cos(pose[2]), math.sin(pose[2])
-            local = np.stack([c * rel[:, 0] + s * rel[:, 1], c * rel[:, 1] - s * rel[:, 0]], -1)
-            for piece in self._body:
-                dist = min(dist, float(np.min(point_convex_distance(local, piece) - self._discs[:, 2])))
+        static obstacle, exact away from contact (<= 0 in contact; see ``fclmodel``)."""
+        dist = min(self._fcl_distance(*query) for query in self._queries)
+        if self._flat_body is not None:  # a box or footprint among discs
+            dist = min(dist, self._fcl_distance(self._flat_body, self._spheres))
         return dist
 
-    def _fcl_distance(self, ob: fcl.CollisionObject, sphere: bool) -> float:
-        """FCL's distance from ``ob`` (placed), a sphere or a convex prism, to the static
-        obstacles but the discs (inf: none); <= 0 in contact."""
-        if not self._has[sphere]:
+    def _fcl_distance(self, ob: fcl.CollisionObject, manager, has: bool = True) -> float:
+        """FCL's distance from ``ob`` (placed) to the objects of ``manager`` (inf: ``has``
+        false, none); <= 0 in contact."""
+        if not has:
             return math.inf
         data = fcl.DistanceData(request=self._dreq)
-        (self._flat if sphere else self._prisms).distance(ob, data, fcl.defaultDistanceCallback)
+        manager.distance(ob, data, fcl.defaultDistanceCallback)
         self.calls += 1
         return data.result.min_distance
 
@@ -509,7 +513,7 @@ class StaticGeometry:
             w = piece @ rot.T
             hull = _hull(np.vstack([w, w + shift]))
             ob = fcl.CollisionObject(convex_prism(hull, 0.5 * _HEIGHT), tf)
-            d = self._fcl_distance(ob, False)
+            d = self._fcl_distance(ob, self._prisms, self._has[0])
             if len(self._discs):
                 rel = self._discs[:, :2] - np.array([float(a[0]), float(a[1])])  # the hull's frame
                 d = min(d, float(np.min(point_convex_distance(rel, hull) - self._discs[:, 2])))
@@ -575,10 +579,7 @@ class StaticGeometry:
         if self._disc_obj is None:
             self._disc_obj = fcl.CollisionObject(fcl.Sphere(self.r), fcl.Transform())
         self._disc_obj.setTranslation(np.array([x, y, 0.0]))
-        d = self._fcl_distance(self._disc_obj, True)
-        if len(self._discs):
-            d = min(d, float(np.min(np.hypot(self._discs[:, 0] - x, self._discs[:, 1] - y) - self._discs[:, 2])) - self.r)
-        d -= _DIST_MARGIN  # as obstacle_clearance's margin
+        d = self._fcl_distance(self._disc_obj, self._flat, self._has[1]) - _DIST_MARGIN  # as obstacle_clearance's
         return min(quick, d - self.keep) if d > _NEAR_CONTACT else -1.0
 
     def sweep_free(self, a, b, ca=None, cb=None, max_steps: int = 100_000) -> bool:
