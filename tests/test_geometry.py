@@ -595,7 +595,8 @@ def test_the_clearance_keeps_its_margin_where_gjk_overshot_a_box():
     """The reproducer and 300 poses within about a centimetre and 0.01 rad of it, where GJK
     from an ``fcl.Box`` to the footprint's convex pieces erred by up to 1.5e-3 m in both
     argument orders (tools/fcl_accuracy.py): boxes are convex prisms for distances now, and
-    the clearance is the exact distance less the margin."""
+    the clearance is the exact distance less the margin. The same with the box the robot
+    and the footprint's whole body an obstacle."""
     obstacles = [{"box": {"center": [2, 2], "size": [0.4, 1.2], "angle": 0.4}}, {"polygon": [[3.2, 0.4], [3.9, 0.6], [3.4, 1.3]]}]
     scene = parse_scene({"version": 1, "name": "gjk", "bounds": [-2, -2, 6, 6], "robot": {"footprint": GJK_FOOTPRINT, "vmax": 1.0},
                          "obstacles": obstacles})  # fmt: skip
@@ -606,13 +607,23 @@ def test_the_clearance_keeps_its_margin_where_gjk_overshot_a_box():
     poses = np.asarray(GJK_POSE) + np.random.default_rng(5).normal(0.0, 0.01, (300, 3))
     over = [(p, geo.obstacle_clearance(p) - (_footprint_body(GJK_FOOTPRINT, p).distance(world) - MARGIN)) for p in poses]
     assert max(e for _, e in over) <= 1e-9, max(over, key=lambda pe: pe[1])
+    # the same pair the other way round: the box the robot, the footprint's piece an obstacle
+    piece = np.asarray(shapely.geometry.polygon.orient(_footprint_body(GJK_FOOTPRINT, GJK_POSE)).exterior.coords)[:-1]
+    piece = [list(p) for p in np.round(piece, 9)]
+    scene = parse_scene({"version": 1, "name": "gjk", "bounds": [-2, -2, 6, 6], "robot": {"box": [0.4, 1.2], "vmax": 1.0},
+                         "obstacles": [{"polygon": piece}]})  # fmt: skip
+    geo = StaticGeometry(scene)
+    for p in np.array([2.0, 2.0, 0.4]) + np.random.default_rng(6).normal(0.0, 0.01, (300, 3)):
+        box = shapely.affinity.rotate(shapely.box(-0.2, -0.6, 0.2, 0.6), p[2], origin=(0, 0), use_radians=True)
+        exact = shapely.affinity.translate(box, *p[:2]).distance(shapely.Polygon(piece))
+        assert geo.obstacle_clearance(p) <= exact - MARGIN + 1e-9, (p, geo.obstacle_clearance(p) - exact + MARGIN)
 
 
 def test_a_sphere_and_a_convex_keep_the_margin_among_polygons_boxes_and_discs():
     """FCL's GJK between a sphere and a convex prism erred by up to 1.5e-3 m, either argument
     order: a disc robot near a convex polygon, a box and a disc obstacle, a footprint near
     them (and its circumscribed disc's sweep bound), 150 poses each at gaps from 1e-4 to
-    0.3 m, all keep the margin below shapely's exact distance (main: 1.4e-3 above it), or
+    0.3 m, all keep the margin below shapely's exact distance (main: 2.1e-4 above it), or
     within 2e-4 of contact are 0 (touching: the collision test decides there)."""
     gon = [[1.0, 0.0], [0.6, 0.8], [-0.3, 0.95], [-0.9, 0.4], [-0.85, -0.5], [0.0, -1.0], [0.7, -0.7]]
     box = {"box": {"center": [2.5, -2.0], "size": [0.8, 0.5], "angle": 0.3}}
