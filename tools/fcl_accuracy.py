@@ -1,6 +1,7 @@
 """FCL's robot-to-obstacle distance against an exact reference (shapely), per request variant.
 
-    python tools/fcl_accuracy.py [--cases 4000] [--seed 1] [--timing 300]
+    python tools/fcl_accuracy.py [--cases 4000] [--seed 1] [--timing 300] [--near-reproducer 2000]
+                                 [--robots disc box convex concave] [--obstacles disc box convex concave walls]
 
 Random cases: a robot (disc, box, convex footprint, non-convex footprint) at a pose whose
 exact distance to one obstacle (disc, rotated box, convex polygon: one prism, non-convex
@@ -37,16 +38,20 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 import time
+from pathlib import Path
 
 import fcl
 import numpy as np
 import shapely
 
-from gfuzzy.collision.fclmodel import _walls, static_objects
-from gfuzzy.collision.geometry import StaticGeometry, robot_geometries
-from gfuzzy.collision.shapes import shape_of
-from gfuzzy.scene.scene import parse_scene
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from gfuzzy.collision.fclmodel import _walls, static_objects  # noqa: E402
+from gfuzzy.collision.geometry import StaticGeometry, robot_geometries  # noqa: E402
+from gfuzzy.collision.shapes import shape_of  # noqa: E402
+from gfuzzy.scene.scene import parse_scene  # noqa: E402
 
 ROBOTS = ("disc", "box", "convex", "concave")
 OBSTACLES = ("disc", "box", "convex", "concave", "walls")

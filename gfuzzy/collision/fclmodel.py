@@ -16,10 +16,13 @@ is exact, as measured against shapely (``tools/fcl_accuracy.py``, docs/planner.m
   15,000 random cases), between two ``fcl.Box`` to 5e-7 (21,000 cases, near-parallel ones
   among them), and from a sphere to a box or a sphere FCL has closed forms.
 
-So for distances a box is a convex prism (against a box robot, an ``fcl.Box``), a sphere (a disc robot, the circumscribed disc)
-meets the polygons and boxes as one flat mesh of their triangles at z = 0 (FCL's
-sphere-triangle distance, in closed form), and disc obstacles (spheres) meet a box or
-footprint robot as a flat mesh of its body (:func:`flat_mesh`), never its prisms.
+(Likely why: in a planar query GJK's directions have z = 0, where a sphere's and a box's
+support points lie at z = 0 and a convex prism's at its first ring's z = -H; two prisms'
+differences, and two boxes', stay in one plane, the mixed pairs' do not.) So for distances
+a box is a convex prism (against a box robot's ``fcl.Box``, an ``fcl.Box``), a sphere (a
+disc robot, the circumscribed disc) meets the polygons and boxes as one flat mesh of their
+triangles at z = 0 and the discs as spheres (closed forms), and the discs' spheres meet a
+box or footprint robot as a flat mesh of its body (:func:`flat_mesh`), never its prisms.
 """
 
 from __future__ import annotations
