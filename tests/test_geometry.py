@@ -573,3 +573,89 @@ def test_a_convex_polygon_is_one_prism_and_measures_as_its_triangles():
             assert exact - 3e-4 <= geo.obstacle_clearance(pose) <= exact
         elif body.intersection(world).area > 1e-8:
             assert not geo.is_valid(pose)
+
+
+# --------------------------------------------------------------------------- FCL's distances exact
+
+#: Hypothesis's footprint and pose (test_shapes.py's validity test), 0.617 m from a box, where
+#: FCL's GJK from an ``fcl.Box`` put the box 1.18e-4 m farther than it is: more than the
+#: clearance's 1e-4 margin, so the clearance was above the exact distance.
+GJK_FOOTPRINT = [[0.23097, 0.095671], [0.268794, 0.421604], [-0.401701, 0.627942], [-0.46194, 0.191342],
+                 [-0.92388, -0.382683], [-0.382683, -0.92388], [0.382683, -0.92388], [0.92388, -0.382683]]  # fmt: skip
+GJK_POSE = (3.10898464, 2.71349682, 2.26967394)
+MARGIN = 1e-4  # geometry._DIST_MARGIN: subtracted from an exact distance, the clearance keeps it
+
+
+def _footprint_body(pts, pose):
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    return shapely.Polygon(np.asarray(pts) @ np.array([[c, s], [-s, c]]) + np.asarray(pose[:2]))
+
+
+def test_the_clearance_keeps_its_margin_where_gjk_overshot_a_box():
+    """The reproducer and 300 poses within about a centimetre and 0.01 rad of it, where GJK
+    from an ``fcl.Box`` to the footprint's convex pieces erred by up to 1.5e-3 m in both
+    argument orders (tools/fcl_accuracy.py): boxes are convex prisms for distances now, and
+    the clearance is the exact distance less the margin. The same with the box the robot
+    and the footprint's whole body an obstacle."""
+    obstacles = [{"box": {"center": [2, 2], "size": [0.4, 1.2], "angle": 0.4}}, {"polygon": [[3.2, 0.4], [3.9, 0.6], [3.4, 1.3]]}]
+    scene = parse_scene({"version": 1, "name": "gjk", "bounds": [-2, -2, 6, 6], "robot": {"footprint": GJK_FOOTPRINT, "vmax": 1.0},
+                         "obstacles": obstacles})  # fmt: skip
+    world = shapely.union_all([shapely.Polygon(scene.obstacles[0].vertices()), shapely.Polygon(scene.obstacles[1].points)])
+    geo = StaticGeometry(scene)
+    exact = _footprint_body(GJK_FOOTPRINT, GJK_POSE).distance(world)
+    assert geo.obstacle_clearance(GJK_POSE) == pytest.approx(exact - MARGIN, abs=1e-9)  # main: exact + 1.8e-5
+    poses = np.asarray(GJK_POSE) + np.random.default_rng(5).normal(0.0, 0.01, (300, 3))
+    over = [(p, geo.obstacle_clearance(p) - (_footprint_body(GJK_FOOTPRINT, p).distance(world) - MARGIN)) for p in poses]
+    assert max(e for _, e in over) <= 1e-9, max(over, key=lambda pe: pe[1])
+    # the same pair the other way round: the box the robot, the footprint's piece an obstacle
+    piece = np.asarray(shapely.geometry.polygon.orient(_footprint_body(GJK_FOOTPRINT, GJK_POSE)).exterior.coords)[:-1]
+    piece = [list(p) for p in np.round(piece, 9)]
+    scene = parse_scene({"version": 1, "name": "gjk", "bounds": [-2, -2, 6, 6], "robot": {"box": [0.4, 1.2], "vmax": 1.0},
+                         "obstacles": [{"polygon": piece}]})  # fmt: skip
+    geo = StaticGeometry(scene)
+    for p in np.array([2.0, 2.0, 0.4]) + np.random.default_rng(6).normal(0.0, 0.01, (300, 3)):
+        box = shapely.affinity.rotate(shapely.box(-0.2, -0.6, 0.2, 0.6), p[2], origin=(0, 0), use_radians=True)
+        exact = shapely.affinity.translate(box, *p[:2]).distance(shapely.Polygon(piece))
+        assert geo.obstacle_clearance(p) <= exact - MARGIN + 1e-9, (p, geo.obstacle_clearance(p) - exact + MARGIN)
+
+
+def test_a_sphere_and_a_convex_keep_the_margin_among_polygons_boxes_and_discs():
+    """FCL's GJK between a sphere and a convex prism erred by up to 1.5e-3 m, either argument
+    order: a disc robot near a convex polygon, a box and a disc obstacle, a footprint near
+    them (and its circumscribed disc's sweep bound), 150 poses each at gaps from 1e-4 to
+    0.3 m, all keep the margin below shapely's exact distance (main: 2.1e-4 above it), or
+    within 2e-4 of contact are 0 (touching: the collision test decides there)."""
+    gon = [[1.0, 0.0], [0.6, 0.8], [-0.3, 0.95], [-0.9, 0.4], [-0.85, -0.5], [0.0, -1.0], [0.7, -0.7]]
+    box = {"box": {"center": [2.5, -2.0], "size": [0.8, 0.5], "angle": 0.3}}
+    obstacles = [{"polygon": gon}, box, {"disc": {"center": [-2.5, 2.0], "radius": 0.4}}]
+    gaps = np.geomspace(1e-4, 0.3, 8)
+    rng = np.random.default_rng(0)
+    boxed = shapely.Polygon(parse_scene({"version": 1, "name": "b", "bounds": [-9, -9, 9, 9], "robot": {"disc": 0.1, "vmax": 1.0},
+                                         "obstacles": [box]}).obstacles[0].vertices())  # fmt: skip
+    world, centre = shapely.union_all([shapely.Polygon(gon), boxed]), shapely.Point(-2.5, 2.0)
+
+    def exact_disc(xy, r):  # the exact distance of a disc of radius r at xy
+        return min(world.distance(shapely.Point(xy)), centre.distance(shapely.Point(xy)) - 0.4) - r
+
+    for robot in ({"disc": 0.3}, {"footprint": GJK_FOOTPRINT}):
+        scene = parse_scene({"version": 1, "name": "s", "bounds": [-9, -9, 9, 9], "robot": {**robot, "vmax": 1.0}, "obstacles": obstacles})
+        geo = StaticGeometry(scene)
+        rings = [shape.buffer(geo.r + g, 16).exterior for shape in (shapely.Polygon(gon), boxed) for g in gaps]
+        over = []
+        for _ in range(150):
+            if rng.random() < 0.3:  # near the disc obstacle
+                a = rng.uniform(0, 2 * math.pi)
+                xy = np.array([-2.5, 2.0]) + (0.4 + geo.r + gaps[int(rng.integers(0, 8))]) * np.array([math.cos(a), math.sin(a)])
+            else:
+                ring = rings[int(rng.integers(0, len(rings)))]
+                xy = np.asarray(ring.interpolate(rng.uniform(0.0, ring.length)).coords[0])
+            if "disc" in robot:
+                over.append(geo.obstacle_clearance(xy) - max(exact_disc(xy, 0.3) - MARGIN, 0.0))
+                continue
+            pose = (*xy, rng.uniform(-math.pi, math.pi))
+            body = _footprint_body(GJK_FOOTPRINT, pose)
+            over.append(geo.obstacle_clearance(pose) - max(min(world.distance(body), body.distance(centre) - 0.4) - MARGIN, 0.0))
+            bound = geo.sweep_bound(*xy)  # the circumscribed disc
+            if bound > 0:
+                over.append(bound - (exact_disc(xy, geo.r) - MARGIN))
+        assert max(over) <= 1e-9, (robot, max(over))

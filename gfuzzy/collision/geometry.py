@@ -1,8 +1,8 @@
 """Collision geometry: FCL objects for the static scene and the robot, batched validity
 and clearance, certified straight motions, and vectorised robot-vs-mover distances.
 
-The world is planar: every 2-D shape becomes a tall prism (FCL cylinder, box or convex
-prism) so that a 3-D collision query answers the 2-D question.
+The world is planar (:mod:`gfuzzy.collision.fclmodel`: the FCL objects, for collision
+tests and, measured exactly, for distances).
 
 A *certified* motion is checked with a Lipschitz argument instead of sampling: along a
 straight motion in the contract's metric (euclidean xy + |heading change| * circumradius),
@@ -22,8 +22,9 @@ from ..poses import metric_distance, wrap_angle
 from ..scene.scene import Box, Disc, MapObstacle, Polygon, Robot, Scene
 from ..typed import FloatArray
 from .exact import TOUCH_TOL, ExactBody, exact_measure
+from .fclmodel import distance_model, flat_mesh, manager_of, static_objects
 from .shapes import HEIGHT as _HEIGHT
-from .shapes import QUAD_EXACT, body_pieces, convex_prism, shape_of
+from .shapes import QUAD_EXACT, body_pieces, convex_prism, point_convex_distance, shape_of
 
 __all__ = [
     "StaticGeometry",
@@ -35,15 +36,15 @@ __all__ = [
 
 _EPS_CERT_CLEARANCE = 1e-9  # clearance below which a motion is not certified (grazing)
 _NEAR_CONTACT = 1e-4  # distances below this are decided by a collision test (0 or -1)
-_DIST_MARGIN = 1e-4  # subtracted from FCL distances (GJK overestimates; see obstacle_clearance)
+_DIST_MARGIN = 1e-4  # subtracted from FCL distances (see obstacle_clearance)
 #: How far inside a box or footprint robot's outline its core lies (m): the core in an
 #: obstacle is a collision FCL's test does not miss, the body then far into it.
 _CORE_MARGIN = 1e-5
 #: A map's distance-transform bound above this (m) certifies a motion's step without FCL.
 _QUICK_CLEARANCE = 0.02
 #: A box or footprint's swept body (a translation) this far from the obstacles or more, by
-#: FCL's distance, certifies the translation in one query (ten times ``_DIST_MARGIN``: the
-#: swept hulls are longer than the body, GJK's error measured on them stays below 3e-5).
+#: exact distance (FCL's, gfuzzy.collision.fclmodel), certifies the translation in one query
+#: (ten times ``_DIST_MARGIN``).
 _SWEPT_MARGIN = 1e-3
 #: Steps of a box or footprint's translation traced before its swept body is asked (most
 #: motions are certified in fewer: the swept body costs about as much as 8 steps).
@@ -55,135 +56,12 @@ def _touching(d: float) -> float:
     return 0.0 if -TOUCH_TOL <= d < 0 else d
 
 
-def _yaw_transform(x: float, y: float, yaw: float = 0.0) -> fcl.Transform:
-    q = np.array([math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])
-    return fcl.Transform(q, np.array([x, y, 0.0]))
-
-
-def _prism(tri: FloatArray) -> fcl.Convex:
-    """A solid triangular prism (FCL convex) over a counter-clockwise triangle."""
-    h = _HEIGHT
-    verts = np.vstack([np.c_[tri, np.full(3, -h)], np.c_[tri, np.full(3, h)]])
-    faces = np.array([3, 0, 2, 1, 3, 3, 4, 5, 4, 0, 1, 4, 3, 4, 1, 2, 5, 4, 4, 2, 0, 3, 5])
-    return fcl.Convex(verts, 5, faces)
-
-
-def _triangulate(poly: Polygon) -> list[FloatArray]:
-    import shapely
-
-    shape = shapely.Polygon(poly.points, [h for h in poly.holes])
-    tris = shapely.constrained_delaunay_triangles(shape)
-    out = []
-    for t in shapely.get_parts(tris):
-        pts = np.asarray(t.exterior.coords)[:3]
-        area2 = (pts[1, 0] - pts[0, 0]) * (pts[2, 1] - pts[0, 1]) - (pts[2, 0] - pts[0, 0]) * (
-            pts[1, 1] - pts[0, 1]
-        )
-        if abs(area2) < 1e-14:
-            out.extend(_sliver(pts))
-            continue
-        out.append(pts if area2 > 0 else pts[::-1])
-    return out
-
-
-#: Half the width (m) of the thin wall put where a polygon is a line (a flat triangle of its
-#: triangulation): the checker's closed polygon blocks there, so the planner must too.
-_SLIVER = 1e-6
-
-
-def _sliver(pts: FloatArray) -> list[FloatArray]:
-    """A flat triangle (its corners on a line, as where a polygon goes out along a line and
-    back: the closed polygon holds that segment) as two counter-clockwise triangles of a
-    rectangle ``_SLIVER`` about its longest side; none when it is a point."""
-    pairs = [(0, 1), (1, 2), (0, 2)]
-    i, j = max(pairs, key=lambda ij: float(np.hypot(*(pts[ij[1]] - pts[ij[0]]))))
-    p, q = pts[i], pts[j]
-    length = float(np.hypot(*(q - p)))
-    if length < 1e-9:
-        return []
-    n = _SLIVER * np.array([p[1] - q[1], q[0] - p[0]]) / length  # to the left of p -> q
-    a, b, c, d = p - n, q - n, q + n, p + n
-    return [np.array([a, b, c]), np.array([a, c, d])]
-
-
-def _walls(rects: FloatArray) -> fcl.BVHModel:
-    """One FCL mesh of the side faces of the map's blocked rectangles, twice as tall as
-    the robot (so its top and bottom are never reached).
-
-    A single mesh keeps a query in FCL's C++ traversal (thousands of separate objects cost
-    a Python callback each). A mesh is only a surface: a robot wholly inside one
-    rectangle touches none of it, which :meth:`StaticGeometry._inside_map` catches.
-
-    Parameters
-    ----------
-    rects : (k, 4) float
-        ``[xmin, ymin, xmax, ymax]`` rows.
-    """
-    k = len(rects)
-    x0, y0, x1, y1 = (rects[:, i] for i in range(4))
-    corners = np.stack([np.stack([x0, y0], -1), np.stack([x1, y0], -1), np.stack([x1, y1], -1), np.stack([x0, y1], -1)], 1)
-    h = 2 * _HEIGHT
-    verts = np.concatenate([np.c_[corners.reshape(-1, 2), np.full(4 * k, -h)], np.c_[corners.reshape(-1, 2), np.full(4 * k, h)]])
-    base = (np.arange(k) * 4)[:, None]
-    lo, hi = base + np.arange(4), 4 * k + base + np.arange(4)
-    lo2, hi2 = base + (np.arange(4) + 1) % 4, 4 * k + base + (np.arange(4) + 1) % 4
-    tris = np.concatenate([np.stack([lo, lo2, hi2], -1), np.stack([lo, hi2, hi], -1)], 1).reshape(-1, 3)
-    model = fcl.BVHModel()
-    model.beginModel(len(tris), len(verts))
-    model.addSubModel(verts, tris.astype(np.int32))
-    model.endModel()
-    return model
-
-
-def static_objects(scene: Scene) -> list[fcl.CollisionObject]:
-    """FCL collision objects for every static obstacle of ``scene``."""
-    objs = []
-    for ob in scene.obstacles:
-        if isinstance(ob, Disc):
-            # a sphere at z = 0, not a cylinder: against spheres and tall prisms its distance
-            # is the planar one, and FCL computes sphere distances in closed form (its GJK
-            # distance to a cylinder overestimates small gaps)
-            objs.append(fcl.CollisionObject(fcl.Sphere(ob.radius), _yaw_transform(*ob.center)))
-        elif isinstance(ob, Box):
-            geom = fcl.Box(ob.size[0], ob.size[1], 2 * _HEIGHT)
-            objs.append(fcl.CollisionObject(geom, _yaw_transform(ob.center[0], ob.center[1], ob.angle)))
-        elif isinstance(ob, MapObstacle):
-            if len(ob.rects):
-                objs.append(fcl.CollisionObject(_walls(ob.rects), fcl.Transform()))
-        else:
-            ring = _convex_ring(ob)
-            if ring is not None:
-                objs.append(fcl.CollisionObject(convex_prism(ring, _HEIGHT), fcl.Transform()))
-                continue
-            for tri in _triangulate(ob):
-                objs.append(fcl.CollisionObject(_prism(tri), fcl.Transform()))
-    return objs
-
-
-def _convex_ring(poly: Polygon) -> FloatArray | None:
-    """The polygon's ring, counter-clockwise, when it is strictly convex (no hole, no dent,
-    no corner on a straight side): one FCL prism instead of its n - 2 triangles' (a 16-gon's
-    distance costs a fifth: a footprint drive's rings and lanes among round obstacles ask
-    tens of thousands); None otherwise (triangulated)."""
-    if poly.holes or len(poly.points) < 3:
-        return None
-    shape = shapely.Polygon(np.asarray(poly.points, dtype=float))
-    if not shape.is_valid or shape.area <= 0.0:
-        return None
-    hull = shape.convex_hull
-    if len(hull.exterior.coords) - 1 != len(poly.points) or hull.area - shape.area > 1e-12 * max(1.0, hull.area):
-        return None
-    return np.asarray(shapely.geometry.polygon.orient(hull, 1.0).exterior.coords, dtype=float)[:-1]
-
-
 def _inner_point(robot: Robot) -> tuple[float, float]:
     """A point inside the robot's body, in its frame: its reference point, or for a
     footprint that may not hold it, an interior point of the polygon."""
     footprint = getattr(robot, "footprint", None)
     if footprint is None or len(footprint) == 0:
         return (0.0, 0.0)
-    import shapely
-
     poly = shapely.Polygon(np.asarray(footprint, dtype=float))
     if poly.contains(shapely.Point(0.0, 0.0)):
         return (0.0, 0.0)
@@ -255,12 +133,28 @@ class StaticGeometry:
         self.r = scene.robot.circumradius
         self.keep = float(scene.robot.clearance)  # distance kept from static obstacles
         self._objects = static_objects(scene)
-        self._manager = fcl.DynamicAABBTreeCollisionManager()
-        if self._objects:
-            self._manager.registerObjects(self._objects)
-        self._manager.setup()
+        self._manager = manager_of(self._objects)  # collision tests
+        # distances (fclmodel): convex prisms meet prisms, a sphere a flat mesh and spheres,
+        # the discs' spheres a box or footprint's flat mesh
+        model = distance_model(scene)
+        self._prisms, self._flat, self._spheres = (manager_of(m) for m in (model.prisms, model.flat, model.spheres))
+        self._has = (bool(model.prisms), bool(model.flat))
+        self._discs = model.discs
         self._robot_objs = [fcl.CollisionObject(g, fcl.Transform()) for g in robot_geometries(scene.robot)]
         self._robot_obj = self._robot_objs[0]
+        body = body_pieces(scene.robot)
+        # the robot's distance queries, (object, manager, any obstacle there): its sphere
+        # against the flat mesh, a footprint's prisms against the prisms, a box (an fcl.Box)
+        # against the boxes and its prism against the other prisms; a box or footprint's body
+        # as a flat mesh against the discs' spheres
+        if scene.robot.shape == "disc":
+            self._queries = [(self._robot_obj, self._flat, self._has[1])]
+        elif scene.robot.shape == "footprint":
+            self._queries = [(ob, self._prisms, self._has[0]) for ob in self._robot_objs]
+        else:
+            self._queries = [(self._robot_obj, manager_of(model.boxes), bool(model.boxes)),
+                             (fcl.CollisionObject(convex_prism(body[0]), fcl.Transform()), manager_of(model.polygons), bool(model.polygons))]  # fmt: skip
+        self._flat_body = fcl.CollisionObject(flat_mesh(body), fcl.Transform()) if body and model.spheres else None
         self._disc_obj = None  # the circumscribed disc (sweep_bound), made when first needed
         # a robot allowed to touch obstacles (robot.clearance 0): exact distances at contact
         self._exact = exact_measure(scene)
@@ -329,6 +223,10 @@ class StaticGeometry:
             )
             for ob in self._robot_objs:
                 ob.setTransform(tf)
+            if self.robot.shape == "box":
+                self._queries[1][0].setTransform(tf)
+            if self._flat_body is not None:
+                self._flat_body.setTransform(tf)
             self._placed = tf
         else:
             self._robot_obj.setTranslation(np.array([pose[0], pose[1], 0.0]))
@@ -393,16 +291,10 @@ class StaticGeometry:
         if self._grids and self._inside_map(pose):
             return -1.0
         self._place(pose)
-        dist = math.inf
-        for ob in self._robot_objs:  # a footprint: the nearest of its convex pieces
-            data = fcl.DistanceData(request=self._dreq)
-            self._manager.distance(ob, data, fcl.defaultDistanceCallback)
-            self.calls += 1
-            dist = min(dist, data.result.min_distance)
-        # FCL's GJK distances to convex prisms overestimate by up to ~3e-5 (measured):
-        # subtract a margin so that the clearance stays a lower bound; at contact the
-        # distance is unreliable altogether, so the collision test decides (0 or -1)
-        d = dist - _DIST_MARGIN
+        # the distances are exact (fclmodel: measured to 1e-15 against shapely); the margin
+        # keeps the clearance a lower bound all the same; at contact the distance is
+        # unreliable, so the collision test decides (0 or -1)
+        d = self._obstacle_distance(pose) - _DIST_MARGIN
         if d <= _NEAR_CONTACT:
             if self._exact is not None:
                 # a robot allowed to touch is measured exactly at contact (gfuzzy.collision.
@@ -414,6 +306,24 @@ class StaticGeometry:
                 return 0.0 if self._exact.gap(pose, pose) >= -TOUCH_TOL else -1.0
             return -1.0 if self._collides() else 0.0
         return d
+
+    def _obstacle_distance(self, pose) -> float:
+        """The distance from the robot at ``pose`` (placed: :meth:`_place`) to the nearest
+        static obstacle, exact away from contact (<= 0 in contact; see ``fclmodel``)."""
+        dist = min(self._fcl_distance(*query) for query in self._queries)
+        if self._flat_body is not None:  # a box or footprint among discs
+            dist = min(dist, self._fcl_distance(self._flat_body, self._spheres))
+        return dist
+
+    def _fcl_distance(self, ob: fcl.CollisionObject, manager, has: bool = True) -> float:
+        """FCL's distance from ``ob`` (placed) to the objects of ``manager`` (inf: ``has``
+        false, none); <= 0 in contact."""
+        if not has:
+            return math.inf
+        data = fcl.DistanceData(request=self._dreq)
+        manager.distance(ob, data, fcl.defaultDistanceCallback)
+        self.calls += 1
+        return data.result.min_distance
 
     def _map_bound(self, pose) -> float:
         """A lower bound of the robot's distance to the maps' blocked cells (-inf off a map).
@@ -550,8 +460,8 @@ class StaticGeometry:
         ends, exactly. FCL's distance from those hulls to the obstacles, when at least
         ``robot.clearance + _SWEPT_MARGIN``, certifies the whole translation in one query per
         piece (sphere tracing along a wall a centimetre away takes a hundred per metre); a
-        distance below ``robot.clearance`` (GJK's distances overestimate: the true one is
-        below too), or with touching allowed the pieces' cores' hulls in an obstacle,
+        distance below ``robot.clearance`` (exact, ``fclmodel``: the true one is below
+        too), or with touching allowed the pieces' cores' hulls in an obstacle,
         refuses it (tracing towards a wall at a grazing angle takes thousands of steps).
         With touching allowed, a translation nearer than the margin is measured exactly
         (:meth:`gfuzzy.collision.exact.ExactBody.gap`, as ``gfuzzy check`` measures it)
@@ -601,11 +511,12 @@ class StaticGeometry:
         out = math.inf
         for piece in pieces:
             w = piece @ rot.T
-            ob = fcl.CollisionObject(convex_prism(_hull(np.vstack([w, w + shift])), 0.5 * _HEIGHT), tf)
-            data = fcl.DistanceData(request=self._dreq)
-            self._manager.distance(ob, data, fcl.defaultDistanceCallback)
-            self.calls += 1
-            d = data.result.min_distance
+            hull = _hull(np.vstack([w, w + shift]))
+            ob = fcl.CollisionObject(convex_prism(hull, 0.5 * _HEIGHT), tf)
+            d = self._fcl_distance(ob, self._prisms, self._has[0])
+            if len(self._discs):
+                rel = self._discs[:, :2] - np.array([float(a[0]), float(a[1])])  # the hull's frame
+                d = min(d, float(np.min(point_convex_distance(rel, hull) - self._discs[:, 2])))
             if d < self.keep + _SWEPT_MARGIN:
                 data = fcl.CollisionData(request=self._creq)
                 self._manager.collide(ob, data, fcl.defaultCollisionCallback)
@@ -668,10 +579,7 @@ class StaticGeometry:
         if self._disc_obj is None:
             self._disc_obj = fcl.CollisionObject(fcl.Sphere(self.r), fcl.Transform())
         self._disc_obj.setTranslation(np.array([x, y, 0.0]))
-        data = fcl.DistanceData(request=self._dreq)
-        self._manager.distance(self._disc_obj, data, fcl.defaultDistanceCallback)
-        self.calls += 1
-        d = data.result.min_distance - _DIST_MARGIN  # as obstacle_clearance's margin
+        d = self._fcl_distance(self._disc_obj, self._flat, self._has[1]) - _DIST_MARGIN  # as obstacle_clearance's
         return min(quick, d - self.keep) if d > _NEAR_CONTACT else -1.0
 
     def sweep_free(self, a, b, ca=None, cb=None, max_steps: int = 100_000) -> bool:
