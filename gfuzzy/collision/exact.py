@@ -2,10 +2,11 @@
 obstacle by a rounding is measured with shapely (and discs in closed form), so that the
 planner's "touching" is what ``gfuzzy check`` tolerates and never more.
 
-FCL's collision test misses penetrations of up to ~3e-7 m and its distances overestimate
-small gaps; :class:`gfuzzy.collision.geometry.StaticGeometry` asks these measures when
-FCL's distance puts the robot within ``_NEAR_CONTACT + _DIST_MARGIN`` of an obstacle and
-FCL's collision test of the body's core (deep collisions) finds it in none.
+FCL's collision test misses penetrations of up to ~3e-7 m and at contact its distances
+are roundings (elsewhere they are exact: :mod:`gfuzzy.collision.fclmodel`);
+:class:`gfuzzy.collision.geometry.StaticGeometry` asks these measures when FCL's distance
+puts the robot within ``_NEAR_CONTACT + _DIST_MARGIN`` of an obstacle and FCL's collision
+test of the body's core (deep collisions) finds it in none.
 """
 
 from __future__ import annotations
