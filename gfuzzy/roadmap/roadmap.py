@@ -411,6 +411,21 @@ def _seed_ompl(seed: int) -> None:
         ou.setLogLevel(level)
 
 
+def _check_extent(scene: Scene, options: RoadmapOptions) -> None:
+    """Raise SceneError for bounds too small for OMPL: its edge-checking step, the bounds'
+    diagonal times ``options.resolution``, must exceed the float epsilon (else its set-up
+    throws a RuntimeError; bounds of 1e-20 m, or a map of resolution 1e-300)."""
+    xmin, ymin, xmax, ymax = scene.bounds
+    diagonal = math.hypot(xmax - xmin, ymax - ymin)
+    if not diagonal * options.resolution > np.finfo(float).eps:
+        raise SceneError(
+            scene.source,
+            "bounds",
+            f"bounds {xmax - xmin:g} x {ymax - ymin:g} are too small for a roadmap (OMPL checks edges in steps "
+            f"of {options.resolution:g} of the diagonal, which must exceed {np.finfo(float).eps:.3g})",
+        )
+
+
 class _Builder:
     """Holds the OMPL objects of one build; they die with it (no nanobind leak warnings)."""
 
@@ -418,6 +433,8 @@ class _Builder:
         from ompl import base as ob
         from ompl import geometric as og
         from ompl import util as ou
+
+        _check_extent(scene, options)
 
         # OMPL's log level is process-wide: quieter while we build, restored by close()
         self._log_level = ou.getLogLevel()
