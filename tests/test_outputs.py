@@ -82,6 +82,24 @@ def test_no_command_overwrites_a_file_its_scene_reads(world, capsys, argv, victi
     assert _files(world) == before  # nothing written, nothing replaced
 
 
+@pytest.mark.parametrize(
+    "argv, folder",
+    [
+        (["export", "s.yaml", "--map", "out.yaml"], "out.pgm"),
+        (["batch", "s.yaml", "--workers", "1", "-o", "out.csv"], "out.parquet"),
+        (["plan", "s.yaml", "-o", "out.csv"], "out.json"),
+    ],
+)
+def test_a_file_written_beside_an_output_that_is_a_folder_is_refused_first(world, capsys, argv, folder):
+    # found once the work was done: export named its temporary file ('.out.x1y2.pgm: Is a
+    # directory'), batch had written the CSV and not its Parquet, plan said 'out.json: Is a directory'
+    (world / folder).mkdir()
+    before = _files(world)
+    rc, _, err = _run(capsys, *argv)
+    assert rc == 2 and err == f"{argv[-1]}: {folder}, written with it, is a folder, not a file\n", err
+    assert _files(world) == before
+
+
 def test_batch_refuses_a_trajectory_file_that_is_a_scene(tmp_path, capsys, monkeypatch):
     # --trajectories DIR writes DIR/<scene>-<query>.json: here the scene file itself
     monkeypatch.chdir(tmp_path)
