@@ -113,6 +113,26 @@ def test_batch_refuses_a_trajectory_file_that_is_a_scene(tmp_path, capsys, monke
     assert scene.read_bytes() == before and not (tmp_path / "r.csv").exists()
 
 
+def test_batch_refuses_trajectory_files_that_are_folders_or_shared(tmp_path, capsys, monkeypatch):
+    # found once every query had run: the table was lost ('out/a-b-c.json: Is a directory'),
+    # or one answer silently replaced the other (scene a-b query c, scene a query b-c)
+    monkeypatch.chdir(tmp_path)
+    for scene, query in (("a-b", "c"), ("a", "b-c")):
+        (tmp_path / f"{scene}.json").write_text(
+            f'{{"version": 1, "name": "{scene}", "bounds": [0, 0, 4, 2], "robot": {{"disc": 0.2, "vmax": 1}},'
+            f' "queries": [{{"name": "{query}", "start": [0.5, 1], "goal": [3.5, 1]}}]}}'
+        )
+    (tmp_path / "out" / "a-b-c.json").mkdir(parents=True)
+    argv = ("batch", "a-b.json", "--workers", "1", "-o", "r.csv", "--trajectories", "out")
+    rc, _, err = _run(capsys, *argv)
+    assert (rc, err) == (2, "--trajectories out: out/a-b-c.json is a folder, not a file\n")
+    (tmp_path / "out" / "a-b-c.json").rmdir()
+    rc, _, err = _run(capsys, *argv[:2], "a.json", *argv[2:])
+    assert rc == 2 and err == ("--trajectories out: out/a-b-c.json would hold the answers of both scene 'a-b' "
+                               "query 'c' and scene 'a' query 'b-c'\n"), err  # fmt: skip
+    assert sorted(p.name for p in tmp_path.rglob("*")) == ["a-b.json", "a.json", "out"]
+
+
 def test_scene_reads_names_every_file_a_scene_reads(world):
     mesh = world / "shelves.stl"
     mesh.write_bytes((ROOT / "scenes" / "meshes" / "shelves.stl").read_bytes())
