@@ -23,7 +23,7 @@ import numpy as np
 
 from ..atomic import write_atomic
 from ..collision.geometry import StaticGeometry, metric_distance
-from ..errors import InputError, LimitError, SceneError
+from ..errors import InputError, LimitError, SceneError, not_utf8
 from ..scene.scene import Scene
 from ..settings import MAX_POINTS
 from ..typed import FloatArray, IntArray
@@ -307,10 +307,13 @@ def load_roadmap(path: str | os.PathLike, scene: Scene | None = None) -> Roadmap
     """
     file = str(path)
     try:
-        doc = json.loads(Path(path).read_text(encoding="utf-8"))
+        data = Path(path).read_bytes()
+        doc = json.loads(data.decode("utf-8-sig"))  # a BOM (a Windows editor's) is read past
     except OSError as exc:
         raise SceneError(file, "", f"cannot read: {exc.strerror or exc}") from None
-    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+    except UnicodeDecodeError as exc:
+        raise SceneError(file, "", f"not a roadmap file ({not_utf8(data, exc)})") from None
+    except (json.JSONDecodeError, RecursionError) as exc:
         raise SceneError(file, "", f"not a roadmap file (invalid JSON: {' '.join(str(exc).split())[:80]})") from None
     if not isinstance(doc, dict) or doc.get("format") != FORMAT:
         raise SceneError(file, "format", "not a gfuzzy roadmap file")
