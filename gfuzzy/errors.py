@@ -70,6 +70,15 @@ class SceneError(InputError):
         super().__init__(f"{where}: {self.message}")
 
 
+def not_utf8(data: bytes, exc: UnicodeDecodeError) -> str:
+    """The message for bytes that are not UTF-8: where, as a line and column a user can go
+    to, e.g. ``not UTF-8 text (line 2, column 10: byte 0xe9)``."""
+    at = exc.start
+    line = data.count(b"\n", 0, at) + 1
+    column = at - (data.rfind(b"\n", 0, at) + 1) + 1  # in bytes: the line is not text
+    return f"not UTF-8 text (line {line}, column {column}: byte 0x{data[at]:02x})"
+
+
 def check_number(name: str, value, low: float = 0.0, *, strict: bool = True, finite: bool = True) -> None:
     """The one validation of a numeric option (``PlanOptions``, ``NavOptions``, ...).
 

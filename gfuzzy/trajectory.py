@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from .atomic import write_atomic
-from .errors import InputError, SceneError
+from .errors import InputError, SceneError, not_utf8
 from .poses import metric_distance, number_array, pose_at
 from .settings import MAX_MAGNITUDE
 from .status import Status
@@ -232,11 +232,12 @@ def load_trajectory(path: str | os.PathLike) -> TrajectoryFile:
     """
     file = str(path)
     try:
-        text = Path(path).read_text(encoding="utf-8")
+        data = Path(path).read_bytes()
+        text = data.decode("utf-8-sig")  # a BOM (a Windows editor's) is read past, as in a scene
     except OSError as exc:
         raise SceneError(file, "", f"cannot read: {exc.strerror or exc}") from None
     except UnicodeDecodeError as exc:
-        raise SceneError(file, "", f"invalid JSON: {exc}") from None
+        raise SceneError(file, "", not_utf8(data, exc)) from None
     try:
         doc = json.loads(text)
     except (json.JSONDecodeError, RecursionError) as exc:  # RecursionError: arrays nested past Python's stack

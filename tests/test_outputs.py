@@ -82,6 +82,24 @@ def test_no_command_overwrites_a_file_its_scene_reads(world, capsys, argv, victi
     assert _files(world) == before  # nothing written, nothing replaced
 
 
+@pytest.mark.parametrize(
+    "argv, folder",
+    [
+        (["export", "s.yaml", "--map", "out.yaml"], "out.pgm"),
+        (["batch", "s.yaml", "--workers", "1", "-o", "out.csv"], "out.parquet"),
+        (["plan", "s.yaml", "-o", "out.csv"], "out.json"),
+    ],
+)
+def test_a_file_written_beside_an_output_that_is_a_folder_is_refused_first(world, capsys, argv, folder):
+    # found once the work was done: export named its temporary file ('.out.x1y2.pgm: Is a
+    # directory'), batch had written the CSV and not its Parquet, plan said 'out.json: Is a directory'
+    (world / folder).mkdir()
+    before = _files(world)
+    rc, _, err = _run(capsys, *argv)
+    assert rc == 2 and err == f"{argv[-1]}: {folder}, written with it, is a folder, not a file\n", err
+    assert _files(world) == before
+
+
 def test_batch_refuses_a_trajectory_file_that_is_a_scene(tmp_path, capsys, monkeypatch):
     # --trajectories DIR writes DIR/<scene>-<query>.json: here the scene file itself
     monkeypatch.chdir(tmp_path)
@@ -93,6 +111,26 @@ def test_batch_refuses_a_trajectory_file_that_is_a_scene(tmp_path, capsys, monke
     rc, _, err = _run(capsys, "batch", str(scene), "--workers", "1", "-o", "r.csv", "--trajectories", "out")
     assert rc == 2 and err.count("\n") == 1 and "would overwrite" in err and "the scene" in err, err
     assert scene.read_bytes() == before and not (tmp_path / "r.csv").exists()
+
+
+def test_batch_refuses_trajectory_files_that_are_folders_or_shared(tmp_path, capsys, monkeypatch):
+    # found once every query had run: the table was lost ('out/a-b-c.json: Is a directory'),
+    # or one answer silently replaced the other (scene a-b query c, scene a query b-c)
+    monkeypatch.chdir(tmp_path)
+    for scene, query in (("a-b", "c"), ("a", "b-c")):
+        (tmp_path / f"{scene}.json").write_text(
+            f'{{"version": 1, "name": "{scene}", "bounds": [0, 0, 4, 2], "robot": {{"disc": 0.2, "vmax": 1}},'
+            f' "queries": [{{"name": "{query}", "start": [0.5, 1], "goal": [3.5, 1]}}]}}'
+        )
+    (tmp_path / "out" / "a-b-c.json").mkdir(parents=True)
+    argv = ("batch", "a-b.json", "--workers", "1", "-o", "r.csv", "--trajectories", "out")
+    rc, _, err = _run(capsys, *argv)
+    assert (rc, err) == (2, "--trajectories out: out/a-b-c.json is a folder, not a file\n")
+    (tmp_path / "out" / "a-b-c.json").rmdir()
+    rc, _, err = _run(capsys, *argv[:2], "a.json", *argv[2:])
+    assert rc == 2 and err == ("--trajectories out: out/a-b-c.json would hold the answers of both scene 'a-b' "
+                               "query 'c' and scene 'a' query 'b-c'\n"), err  # fmt: skip
+    assert sorted(p.name for p in tmp_path.rglob("*")) == ["a-b.json", "a.json", "out"]
 
 
 def test_scene_reads_names_every_file_a_scene_reads(world):

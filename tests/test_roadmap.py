@@ -315,6 +315,15 @@ def test_roadmap_of_another_scene_is_bad_input(small, tmp_path):
         load_roadmap(other, scene)
 
 
+@pytest.mark.parametrize("kind", ["disc", "box"])
+def test_bounds_too_small_for_ompl_are_bad_input(kind):
+    # OMPL's set-up threw a RuntimeError, a traceback from `gfuzzy roadmap`, for bounds whose
+    # diagonal times the resolution is below the float epsilon (`gfuzzy map` of a resolution 1e-300)
+    doc = {"version": 1, "name": "tiny", "bounds": [0, 0, 1e-20, 1e-20], "robot": ROBOTS[kind]}
+    with pytest.raises(SceneError, match=r"^tiny.yaml: bounds: bounds 1e-20 x 1e-20 are too small for a roadmap"):
+        build_roadmap(parse_scene(doc, file="tiny.yaml"), RoadmapOptions(vertices=5))
+
+
 @pytest.mark.parametrize(
     "edit",
     [

@@ -152,6 +152,20 @@ def test_region_cuts_tracks_and_a_return_is_a_second_mover(csv_file):
     np.testing.assert_allclose(movers["ped-c-2"], [[1.25, 1.5, 0], [1.5, 1, 0]])
 
 
+def test_a_part_skips_the_name_another_persons_id_gives():
+    # 1 lost for 7 s is two movers; its second is not 'ped-1-2' when someone's id is '1-2'
+    # (the scene had two movers of that name: `gfuzzy tracks` refused its own output, exit 2)
+    rows = np.array([[0, 0, 0], [1, 1, 0], [8, 8, 0], [9, 9, 0]], float)
+    other = np.array([[0, 5, 5], [1, 5, 6]], float)
+    tracks = gfuzzy.Tracks("mem", "csv", None, None, (gfuzzy.Track("1", rows), gfuzzy.Track("1-2", other)))
+    made = tracks_scene(tracks, TrackSceneOptions(max_gap=2.0))
+    movers = _movers(made)
+    assert sorted(movers) == ["ped-1", "ped-1-2", "ped-1-3"]
+    np.testing.assert_allclose(movers["ped-1-2"], other)
+    np.testing.assert_allclose(movers["ped-1-3"], rows[2:])
+    assert [m.name for m in parse_scene(made.doc, file="mem").movers] == list(movers)
+
+
 def test_a_person_unseen_for_longer_than_max_gap_is_two_movers(tmp_path, caplog):
     # a tracker lost d from 1 s to 8 s: one mover walked a straight line through the gap (a
     # phantom where nobody was seen); the rows before and after are two movers, absent between

@@ -77,6 +77,27 @@ def test_arrays_nested_past_pythons_stack_are_invalid_json(tmp_path, capsys, com
     assert list(tmp_path.iterdir()) == [path]
 
 
+def test_a_bom_is_read_past_and_bytes_not_utf8_are_named(tmp_path):
+    # a scene or a tracks file with a BOM (Windows editors write one) loaded; a trajectory or
+    # a roadmap JSON with one was bad input ('invalid JSON: Unexpected UTF-8 BOM'), and a
+    # stray byte said "'utf-8' codec can't decode byte 0xe9 in position 42" instead of where
+    from gfuzzy.roadmap.roadmap import load_roadmap, roadmap_digest
+
+    doc = {"version": 1, "status": "solved", "scene": "s", "query": "q", "waypoints": [[0, 0, 0], [1, 1, 0]]}
+    path = tmp_path / "bom.json"
+    path.write_bytes(b"\xef\xbb\xbf" + json.dumps(doc).encode())
+    np.testing.assert_array_equal(load_trajectory(path).waypoints, doc["waypoints"])
+    path.write_bytes(json.dumps(doc).replace('"q"', '"caf\xe9"', 1).encode("latin-1"))
+    with pytest.raises(SceneError, match=r"bom.json: not UTF-8 text \(line 1, column \d+: byte 0xe9\)$"):
+        load_trajectory(path)
+    saved = ROOT / "roadmaps" / "sim-4s1m.json"
+    path.write_bytes(b"\xef\xbb\xbf" + saved.read_bytes())
+    assert roadmap_digest(load_roadmap(path)) == roadmap_digest(load_roadmap(saved))
+    path.write_bytes(b"\xff" + saved.read_bytes())
+    with pytest.raises(SceneError, match=r"bom.json: not a roadmap file \(not UTF-8 text \(line 1, column 1: byte 0xff\)\)$"):
+        load_roadmap(path)
+
+
 def test_trajectories_with_other_waypoints_are_not_equal():
     a = Trajectory(np.array([[0.0, 0.0, 0.0], [1.0, 1.0, 0.0]]), circumradius=0.3)
     same = Trajectory(a.waypoints.copy(), circumradius=0.3)

@@ -309,6 +309,9 @@ def _out_path(path, allowed, reads=(), beside=()):
         raise BadInput(f"{path}: folder {parent} does not exist")
     if Path(path).is_dir():
         raise BadInput(f"{path}: is a folder, not a file")
+    for other in (Path(path).with_suffix(s) for s in beside):  # found only once the work was done
+        if other.is_dir():
+            raise BadInput(f"{path}: {other}, written with it, is a folder, not a file")
     if not os.access(parent, os.W_OK | os.X_OK):
         raise BadInput(f"{path}: folder {parent} is not writable")
     _probe_write(path, parent)

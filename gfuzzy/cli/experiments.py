@@ -145,13 +145,22 @@ def _writable_folder(path: Path, flag: str) -> None:
 
 
 def _trajectories_read(folder, scenes, reads) -> None:
-    """Bad input when a trajectory file ``batch --trajectories`` would write is a file it reads."""
+    """Bad input when a trajectory file ``batch --trajectories`` would write is a file it reads,
+    or a folder (found only once every query had run: the whole table lost), or the file of
+    two queries (scene ``a-b`` query ``c``, scene ``a`` query ``b-c``: one answer lost)."""
     from ..runs.batch import trajectory_path
 
+    seen: dict = {}
     for sc in scenes:
         for q in sc.queries:
             path = trajectory_path(folder, sc.name, q.name)
             _refuse_overwrite(path, [path], reads)
+            if Path(path).is_dir():
+                raise BadInput(f"--trajectories {folder}: {path} is a folder, not a file")
+            if path in seen:
+                raise BadInput(f"--trajectories {folder}: {path} would hold the answers of both "
+                               f"{seen[path]} and scene {sc.name!r} query {q.name!r}")  # fmt: skip
+            seen[path] = f"scene {sc.name!r} query {q.name!r}"
 
 
 def _connect(address: str, timeout: float):

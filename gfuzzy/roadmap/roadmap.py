@@ -23,7 +23,7 @@ import numpy as np
 
 from ..atomic import write_atomic
 from ..collision.geometry import StaticGeometry, metric_distance
-from ..errors import InputError, LimitError, SceneError
+from ..errors import InputError, LimitError, SceneError, not_utf8
 from ..scene.scene import Scene
 from ..settings import MAX_POINTS
 from ..typed import FloatArray, IntArray
@@ -307,10 +307,13 @@ def load_roadmap(path: str | os.PathLike, scene: Scene | None = None) -> Roadmap
     """
     file = str(path)
     try:
-        doc = json.loads(Path(path).read_text(encoding="utf-8"))
+        data = Path(path).read_bytes()
+        doc = json.loads(data.decode("utf-8-sig"))  # a BOM (a Windows editor's) is read past
     except OSError as exc:
         raise SceneError(file, "", f"cannot read: {exc.strerror or exc}") from None
-    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+    except UnicodeDecodeError as exc:
+        raise SceneError(file, "", f"not a roadmap file ({not_utf8(data, exc)})") from None
+    except (json.JSONDecodeError, RecursionError) as exc:
         raise SceneError(file, "", f"not a roadmap file (invalid JSON: {' '.join(str(exc).split())[:80]})") from None
     if not isinstance(doc, dict) or doc.get("format") != FORMAT:
         raise SceneError(file, "format", "not a gfuzzy roadmap file")
@@ -411,6 +414,21 @@ def _seed_ompl(seed: int) -> None:
         ou.setLogLevel(level)
 
 
+def _check_extent(scene: Scene, options: RoadmapOptions) -> None:
+    """Raise SceneError for bounds too small for OMPL: its edge-checking step, the bounds'
+    diagonal times ``options.resolution``, must exceed the float epsilon (else its set-up
+    throws a RuntimeError; bounds of 1e-20 m, or a map of resolution 1e-300)."""
+    xmin, ymin, xmax, ymax = scene.bounds
+    diagonal = math.hypot(xmax - xmin, ymax - ymin)
+    if not diagonal * options.resolution > np.finfo(float).eps:
+        raise SceneError(
+            scene.source,
+            "bounds",
+            f"bounds {xmax - xmin:g} x {ymax - ymin:g} are too small for a roadmap (OMPL checks edges in steps "
+            f"of {options.resolution:g} of the diagonal, which must exceed {np.finfo(float).eps:.3g})",
+        )
+
+
 class _Builder:
     """Holds the OMPL objects of one build; they die with it (no nanobind leak warnings)."""
 
@@ -418,6 +436,8 @@ class _Builder:
         from ompl import base as ob
         from ompl import geometric as og
         from ompl import util as ou
+
+        _check_extent(scene, options)
 
         # OMPL's log level is process-wide: quieter while we build, restored by close()
         self._log_level = ou.getLogLevel()

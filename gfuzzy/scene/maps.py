@@ -41,9 +41,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import SceneError
+from ..errors import SceneError, not_utf8
 from ..typed import FloatArray
-from .yamldoc import _V, _inside, _join, _kind, _load_yaml, not_utf8
+from .yamldoc import _V, _inside, _join, _kind, _load_yaml
 
 __all__ = [
     "MAP_MODES",

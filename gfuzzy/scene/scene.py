@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, SceneError
+from ..errors import InputError, SceneError, not_utf8
 from ..poses import as_number, pose_words
 from ..status import Status
 from ..typed import FloatArray
@@ -28,7 +28,7 @@ from . import yamldoc
 from .maps import MapObstacle, load_map
 from .meshes import mesh_footprint
 from .sanity import warn_beyond_maps, warn_units
-from .yamldoc import _V, MAX_MAGNITUDE, NAME_RE, _join, _kind, _load_yaml, _one_key, not_utf8
+from .yamldoc import _V, MAX_MAGNITUDE, NAME_RE, _join, _kind, _load_yaml, _one_key
 
 log = logging.getLogger(__name__)
 

@@ -30,10 +30,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError, SceneError
+from ..errors import InputError, SceneError, not_utf8
 from ..settings import MAX_MAGNITUDE, MAX_RECORDED_TIME
 from ..typed import FloatArray
-from .yamldoc import not_utf8
 
 __all__ = ["ANNOTATION_PERIOD", "FORMATS", "Track", "Tracks", "read_tracks"]
 

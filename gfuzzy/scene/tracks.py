@@ -597,6 +597,7 @@ def _movers(rel: dict, t_lo: float, duration: float, region, options: TrackScene
     recording's time: ``rel``'s are relative to the window's start ``t_lo``)."""
     movers: list[_Mover] = []
     once = 0
+    taken = {f"ped-{pid}" for pid in rel}  # each person's own name (a part's 'ped-<id>-<k>' is no other's)
     for pid, own in rel.items():
         rows = _clip_time(own, 0.0, duration)
         seen = _split_gaps(pid, rows, options.max_gap, own, t_lo) if rows else []
@@ -606,8 +607,13 @@ def _movers(rel: dict, t_lo: float, duration: float, region, options: TrackScene
             once += 1
             log.warning("ped-%s is seen at one instant only in the window (t = %g s): dropped (a mover needs two "
                         "rows or more)", pid, t_lo + runs[0][0][0])
-        for k, run in enumerate(kept, start=1):  # numbered as kept
-            movers.append(_Mover(f"ped-{pid}" if k == 1 else f"ped-{pid}-{k}", pid, run))
+        k = 1
+        for i, run in enumerate(kept):  # numbered as kept, past another person's name (id '4-2': 4's is 4-3)
+            if i:
+                k += 1
+                while f"ped-{pid}-{k}" in taken:
+                    k += 1
+            movers.append(_Mover(f"ped-{pid}-{k}" if i else f"ped-{pid}", pid, run))
     if not movers:
         where = f"inside the region {' '.join(f'{v:g}' for v in region)}"
         raise SceneError(src, "", _seen_once(once, f"{where} during the window") if once else

@@ -123,15 +123,6 @@ def _load_yaml(text: str, file: str) -> Any:
             loader.dispose()
 
 
-def not_utf8(data: bytes, exc: UnicodeDecodeError) -> str:
-    """The message for bytes that are not UTF-8: where, as a line and column a user can go
-    to, e.g. ``not UTF-8 text (line 2, column 10: byte 0xe9)``."""
-    at = exc.start
-    line = data.count(b"\n", 0, at) + 1
-    column = at - (data.rfind(b"\n", 0, at) + 1) + 1  # in bytes: the line is not text
-    return f"not UTF-8 text (line {line}, column {column}: byte 0x{data[at]:02x})"
-
-
 #: How deep a scene document may nest (a scene needs a handful of levels): one built in code
 #: that nests deeper, or contains itself, is refused here, not with a RecursionError.
 MAX_DEPTH = 100
