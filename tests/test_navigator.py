@@ -417,7 +417,7 @@ def test_navigate_takes_the_navigator_options_crowd_takes(monkeypatch, tmp_path)
     monkeypatch.setattr(navigator.Navigator, "__init__", spy)
     out = tmp_path / "eth.json"
     args = ["navigate", str(ROOT / "scenes" / "eth-crossing.yaml"), "--budget-clock", "cpu",
-            "--personal-space", "0.3", "--path-space", "0", "--max-time", "2", "-o", str(out)]  # fmt: skip
+            "--personal-space", "0.3", "--path-space", "0", "--max-time", "0.5", "-o", str(out)]  # fmt: skip
     assert main(args) in (0, 1)
     assert out.exists()
     assert main([*args[:-2], "--soft-search", "--intrusion-cost", "4", "-o", str(tmp_path / "soft.json")]) in (0, 1)
