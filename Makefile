@@ -16,10 +16,11 @@ $(VENV): $(STAMP)
 
 # compiles the search kernels once (numba's on-disk cache) and builds them ahead of time
 # (gfuzzy.timespace.precompile: an extension module loaded in ~1 ms instead of numba's 0.3-0.9 s),
-# so no query pays for either
+# so no query pays for either; and numba's GA kernels and the navigator's priced search
+# (soft_kernel, numba only: ~10 s to compile, paid by the first --soft-search run or test worker)
 warm: $(STAMP)
 	$(BIN)/python -m gfuzzy.timespace.precompile || echo "precompiled kernels not built (no C compiler?): numba's are used"
-	$(BIN)/python -c 'import gfuzzy.ga.refine as r; r.warm()'
+	$(BIN)/python -c 'import gfuzzy.ga.refine as r; r.warm(); import gfuzzy.timespace.soft_kernel as s; s.warm()'
 
 demo: warm
 	$(BIN)/python tools/demo.py

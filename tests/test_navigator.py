@@ -417,7 +417,7 @@ def test_navigate_takes_the_navigator_options_crowd_takes(monkeypatch, tmp_path)
     monkeypatch.setattr(navigator.Navigator, "__init__", spy)
     out = tmp_path / "eth.json"
     args = ["navigate", str(ROOT / "scenes" / "eth-crossing.yaml"), "--budget-clock", "cpu",
-            "--personal-space", "0.3", "--path-space", "0", "--max-time", "2", "-o", str(out)]  # fmt: skip
+            "--personal-space", "0.3", "--path-space", "0", "--max-time", "0.5", "-o", str(out)]  # fmt: skip
     assert main(args) in (0, 1)
     assert out.exists()
     assert main([*args[:-2], "--soft-search", "--intrusion-cost", "4", "-o", str(tmp_path / "soft.json")]) in (0, 1)
@@ -633,8 +633,9 @@ def test_prediction_field_matches_a_chain_of_slice_movers(robot, relaxed):
 
 def test_people_who_cannot_come_within_reach_are_left_out(open_square):
     scene, rm = open_square
-    # the ring below is laid out for the inflation without the personal space
-    nav = Navigator(scene, rm, (0.0, 4.0), NavOptions(backend="reference", personal_space=0.0))
+    # the ring below is laid out for the inflation without the personal space; the compiled
+    # fields answer the 5900 poses below as the reference ones do (0.2 s, not 6.6)
+    nav = Navigator(scene, rm, (0.0, 4.0), NavOptions(backend="compiled", personal_space=0.0))
     pose = np.array([0.0, -4.0])
     rng = np.random.default_rng(3)
     # people walking straight away from the robot, at 1 m/s from 0.9 to 2.05 m (the robot,

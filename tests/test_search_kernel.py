@@ -397,6 +397,25 @@ def test_warm_leaves_nothing_to_compile():
     assert out.stdout.strip().splitlines()[-1] == "[]"
 
 
+def test_make_warm_warms_every_kernel_module_the_extension_leaves_to_numba():
+    """`make warm` compiles (into numba's on-disk cache) every module of ``@njit`` kernels
+    that the precompiled extension leaves out (``jit.KERNEL_MODULES``): the GA's and the
+    priced search's. Before, ``soft_kernel`` was left out, and the first ``--soft-search``
+    run (or the first test worker) of a fresh checkout compiled it, ~10 s."""
+    from gfuzzy.timespace.jit import KERNEL_MODULES
+
+    make = (ROOT / "Makefile").read_text(encoding="utf-8")
+    recipe = make.split("\nwarm:", 1)[1].split("\n\n", 1)[0]
+    numba_only = sorted(
+        p.relative_to(ROOT).with_suffix("").as_posix().replace("/", ".")
+        for p in (ROOT / "gfuzzy").rglob("*.py")
+        if "@njit" in p.read_text(encoding="utf-8") and p.stem not in KERNEL_MODULES
+    )
+    assert numba_only == ["gfuzzy.ga.kernels", "gfuzzy.timespace.soft_kernel"]
+    assert "import gfuzzy.ga.refine as r; r.warm()" in recipe  # refine.warm runs the GA's kernels
+    assert "import gfuzzy.timespace.soft_kernel as s; s.warm()" in recipe
+
+
 @pytest.mark.parametrize("pool", [False, True])
 def test_interval_store_unchanged_when_the_field_raises(pool, tmp_path):
     """A field that raises inside a batch (a navigator's deadline) leaves the store as it

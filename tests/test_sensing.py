@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import run_main
 
 import gfuzzy
 from gfuzzy.errors import InputError
@@ -265,9 +266,18 @@ def test_navigate_with_a_narrow_noisy_view_stays_valid(tmp_path):
 
 @pytest.mark.parametrize("flags", [["--noise", "-1"], ["--fov", "0"], ["--fov", "361"], ["--noise", "nan"],
                                    ["--velocity", "future"]])  # fmt: skip
-def test_navigate_refuses_bad_sensor_flags_in_one_line(tmp_path, flags):
+def test_navigate_refuses_bad_sensor_flags_in_one_line(tmp_path, capsys, flags):
+    # in this process (a traceback would be an exception here); one real process below
     out = tmp_path / "x.json"
-    p = _run("navigate", "scenes/zara-crowd.yaml", *flags, "-o", str(out))
+    rc, stdout, stderr = run_main(capsys, "navigate", ROOT / "scenes" / "zara-crowd.yaml", *flags, "-o", out)
+    assert rc == 2, stdout + stderr
+    assert len(stderr.strip().splitlines()) == 1 and "Traceback" not in stderr
+    assert not out.exists()
+
+
+def test_navigate_refuses_a_bad_sensor_flag_from_a_real_process(tmp_path):
+    out = tmp_path / "x.json"
+    p = _run("navigate", "scenes/zara-crowd.yaml", "--noise", "nan", "-o", str(out))
     assert p.returncode == 2
     assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
     assert not out.exists()
@@ -335,18 +345,25 @@ def test_noisy_first_sightings_give_the_least_squares_velocity():
 
 def test_velocity_sigma_matches_the_spread_of_the_estimates():
     """velocity_sigma is the estimates' standard deviation (Monte Carlo over 1000 walks),
-    after 3 sightings and at the steady state (20 sightings)."""
+    after 3 sightings and at the steady state (20 sightings). The walks are 100 people 10 m
+    apart in each of 10 trackers (each detection its own track's: a track's filter is its
+    own), not 1000 trackers of one person: 0.4 s, not 4.5."""
     rng = np.random.default_rng(7)
+    lane = 10.0 * np.arange(100)
     for n in (3, 20):
-        est, sig = [], None
-        for _ in range(1000):
+        est, sig = [], []
+        for _ in range(10):
             tr = Tracker(noise=0.05)
             for k in range(n):
                 t = 0.25 * k
-                out = tr.update(t, [[t + rng.normal(0, 0.05), rng.normal(0, 0.05), 0.3]])
-            est.append(out[0, 2:4])
-            sig = tr.velocity_sigma()[0]
-        est = np.array(est)
+                seen = np.column_stack([t + rng.normal(0, 0.05, 100), lane + rng.normal(0, 0.05, 100), np.full(100, 0.3)])
+                out = tr.update(t, seen)
+            assert len(out) == 100 and np.all(np.abs(out[:, 1] - lane) < 1.0)  # one track per person, in order
+            est.append(out[:, 2:4])
+            sig.append(tr.velocity_sigma())
+        est, sig = np.concatenate(est), np.concatenate(sig)
+        assert np.ptp(sig) == 0.0
+        sig = sig[0]
         np.testing.assert_allclose(est.mean(axis=0), [1.0, 0.0], atol=4 * sig / math.sqrt(1000) + 1e-3)
         np.testing.assert_allclose(est.std(axis=0), [sig, sig], rtol=0.08)
 

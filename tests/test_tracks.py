@@ -479,18 +479,21 @@ def test_static_mesh_paths_follow_the_new_file(tmp_path, csv_file):
         ("long.csv", "t,id,x,y\n0,a,0,0\n1e12,a,1,0\n", "long.csv: the window 0 s .. 1e+12 s is longer than 1e+09 s"),
     ],
 )  # fmt: skip
-def test_bad_files_are_one_line_and_exit_2(tmp_path, name, text, where):
+def test_bad_files_are_one_line_and_exit_2(tmp_path, capsys, monkeypatch, name, text, where):
+    # in this process (a traceback would be an exception here): a process each cost 0.4 s;
+    # real processes refuse a file in test_unreadable_file_and_bad_output_name
     path = tmp_path / name
     path.write_text(text, encoding="utf-8")
     out = tmp_path / "out.yaml"
-    proc = run_cli_process("tracks", path, "-o", out, cwd=tmp_path)
-    assert proc.returncode == 2
-    assert proc.stderr.count("\n") == 1 and "Traceback" not in proc.stderr
-    assert proc.stderr.startswith(str(path)) and where.split(": ", 1)[1] in proc.stderr, proc.stderr
+    monkeypatch.chdir(tmp_path)
+    rc, stdout, stderr = run_main(capsys, "tracks", path, "-o", out)
+    assert rc == 2
+    assert stderr.count("\n") == 1 and "Traceback" not in stderr
+    assert stderr.startswith(str(path)) and where.split(": ", 1)[1] in stderr, stderr
     # and no wrong hint: a header "t,x,y" is no line of numbers
     hint = "this first line holds numbers"
-    assert (hint in proc.stderr) == (hint in where), proc.stderr
-    assert not out.exists() and proc.stdout == ""
+    assert (hint in stderr) == (hint in where), stderr
+    assert not out.exists() and stdout == ""
 
 
 @pytest.mark.parametrize(
@@ -518,11 +521,13 @@ def test_bad_files_are_one_line_and_exit_2(tmp_path, name, text, where):
         (["--query-name", "across"], "gfuzzy tracks: --query-name names the query of --start and --goal"),
     ],
 )
-def test_bad_requests_are_one_line_and_exit_2(tmp_path, eth_file, args, message):
+def test_bad_requests_are_one_line_and_exit_2(tmp_path, capsys, monkeypatch, eth_file, args, message):
+    # in this process, as the bad files above
     out = tmp_path / "out.yaml"
-    proc = run_cli_process("tracks", eth_file, *args, "-o", out, cwd=tmp_path)
-    assert proc.returncode == 2, proc.stderr
-    assert proc.stderr.count("\n") == 1 and message in proc.stderr, proc.stderr
+    monkeypatch.chdir(tmp_path)
+    rc, stdout, stderr = run_main(capsys, "tracks", eth_file, *args, "-o", out)
+    assert rc == 2, stderr
+    assert stderr.count("\n") == 1 and message in stderr, stderr
     assert not out.exists()
 
 

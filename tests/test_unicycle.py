@@ -741,18 +741,32 @@ def _lfoot_scene():
     return parse_scene(doc(robot, obstacles=walls, bounds=(0, 0, 7, 4)))
 
 
+@pytest.fixture(scope="module")
+def lfoot_roadmap():
+    """``lfoot_roadmap(seed)``: the scene ``lfoot`` and its roadmap of that seed, built once
+    for the module (the door and the corner tests plan on the same one: 6 s each)."""
+    from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
+
+    built = {}
+
+    def get(seed):
+        if seed not in built:
+            sc = _lfoot_scene()
+            built[seed] = sc, build_roadmap(sc, RoadmapOptions(seed=seed))
+        return built[seed]
+
+    return get
+
+
 @pytest.mark.parametrize("seed", [1, pytest.param(2, marks=pytest.mark.slow)])  # roadmap seed 2: `make slow`
-def test_an_l_footprint_drives_through_a_door_with_2_5_cm_per_side(seed):
+def test_an_l_footprint_drives_through_a_door_with_2_5_cm_per_side(seed, lfoot_roadmap):
     """An L footprint (an arm on its left) as a differential drive without reverse, through
     a 0.75 door in a 0.3 wall (2.5 cm per side when it crosses square to the wall): it needs
     lanes on the door's middle line *facing east*, reaching places beyond the wall where it
     turns round. The roadmap's chains cross the door both ways for a footprint that is not
     the same body turned by pi (``gfuzzy.roadmap.passage.Chains``); before, the door was
     missed on seeds 1 and 2 (the unseen scene ``lfoot``, issue 18's review)."""
-    from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
-
-    sc = _lfoot_scene()
-    rm = build_roadmap(sc, RoadmapOptions(seed=seed))
+    sc, rm = lfoot_roadmap(seed)
     res = Planner(sc, rm).plan([1.0, 1.0, 0.0], [5.5, 3.0, math.pi], 0.0, PlanOptions())
     assert res.solved, res.message
     rep = check_trajectory(sc, res.trajectory.waypoints)
@@ -760,17 +774,14 @@ def test_an_l_footprint_drives_through_a_door_with_2_5_cm_per_side(seed):
 
 
 @pytest.mark.parametrize("seed", [1, pytest.param(2, marks=pytest.mark.slow)])  # roadmap seed 2: `make slow`
-def test_an_l_footprint_works_its_arm_into_an_l_obstacles_corner(seed):
+def test_an_l_footprint_works_its_arm_into_an_l_obstacles_corner(seed, lfoot_roadmap):
     """The L footprint parked in the inner corner of the L obstacle, its arm 5 cm from the
     obstacle's upright, heading north: it arrives heading about 318 degrees and turns 132
     degrees in place, nearly all of the 136.6 its walls leave it there (an independent
     brute force found that way; a witness passes ``gfuzzy check``). The goal's tilts took
     3/4 of the free turn and never reached that heading: ``no_path`` on seeds 1-3 (the
     unseen scene ``lfoot``, query ``into-the-l``); 0.99 of it (``TILT_SHARES``) finds it."""
-    from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
-
-    sc = _lfoot_scene()
-    rm = build_roadmap(sc, RoadmapOptions(seed=seed))
+    sc, rm = lfoot_roadmap(seed)
     res = Planner(sc, rm).plan([1.0, 1.0, 0.0], [5.85, 1.75, math.pi / 2], 0.0, PlanOptions())
     assert res.solved, res.message
     rep = check_trajectory(sc, res.trajectory.waypoints)
