@@ -17,10 +17,14 @@ $(VENV): $(STAMP)
 # compiles the search kernels once (numba's on-disk cache) and builds them ahead of time
 # (gfuzzy.timespace.precompile: an extension module loaded in ~1 ms instead of numba's 0.3-0.9 s),
 # so no query pays for either; and numba's GA kernels and the navigator's priced search
-# (soft_kernel, numba only: ~10 s to compile, paid by the first --soft-search run or test worker)
+# (soft_kernel, numba only: ~10 s to compile, paid by the first --soft-search run or test worker).
+# The GA's kernels share nothing with the search's, so they compile on the other core while
+# the search's are built (about 2 minutes); soft_kernel calls the search's, so it comes after
 warm: $(STAMP)
-	$(BIN)/python -m gfuzzy.timespace.precompile || echo "precompiled kernels not built (no C compiler?): numba's are used"
-	$(BIN)/python -c 'import gfuzzy.ga.refine as r; r.warm(); import gfuzzy.timespace.soft_kernel as s; s.warm()'
+	$(BIN)/python -c 'import gfuzzy.ga.refine as r; r.warm()' & ga=$$!; \
+	$(BIN)/python -m gfuzzy.timespace.precompile || echo "precompiled kernels not built (no C compiler?): numba's are used"; \
+	wait $$ga
+	$(BIN)/python -c 'import gfuzzy.timespace.soft_kernel as s; s.warm()'
 
 demo: warm
 	$(BIN)/python tools/demo.py

@@ -414,6 +414,10 @@ def test_make_warm_warms_every_kernel_module_the_extension_leaves_to_numba():
     assert numba_only == ["gfuzzy.ga.kernels", "gfuzzy.timespace.soft_kernel"]
     assert "import gfuzzy.ga.refine as r; r.warm()" in recipe  # refine.warm runs the GA's kernels
     assert "import gfuzzy.timespace.soft_kernel as s; s.warm()" in recipe
+    # the GA's compile runs beside the precompile (another core); warm fails if it fails
+    assert "r.warm()' & ga=$$!" in recipe and "wait $$ga" in recipe
+    # soft_kernel runs the search's kernels: after the precompile has built them
+    assert recipe.index("soft_kernel") > recipe.index("gfuzzy.timespace.precompile")
 
 
 @pytest.mark.parametrize("pool", [False, True])
