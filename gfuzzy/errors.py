@@ -15,7 +15,7 @@ families, and only these, into one line on stderr and exit status 2; any other e
 is a bug and shows its traceback.
 
 Ctrl-C on the command line is the fourth kind: one line, exit 130, nothing half-written,
-whenever it comes (the section at the end of this module).
+whenever it comes (the section at the end of this module); a SIGTERM the same, exit 143.
 """
 
 from __future__ import annotations
@@ -119,7 +119,8 @@ def check_number(name: str, value, low: float = 0.0, *, strict: bool = True, fin
 # Without :func:`interrupt_handling` (the library used from Python) nothing here changes anything:
 # :func:`check_interrupt` never raises and :func:`is_interrupt` knows only the exception chain.
 
-#: Exit status of an interrupted command (128 + SIGINT, as a shell reports it).
+#: Exit status of an interrupted command (128 + SIGINT, as a shell reports it); a SIGTERM
+#: (``kill``, ``timeout``, a container stopping) is handled as a Ctrl-C is, and exits 143.
 EXIT_INTERRUPTED = 130
 
 
@@ -128,12 +129,15 @@ class _State:
     pending = False  # a SIGINT came and was not handled yet
     defer = 0  # depth of interrupts_deferred() sections
     aftermath = False  # the command that ended (restore=False) was interrupted: its noise stays quiet
+    signum = signal.SIGINT  # the signal that interrupted it (SIGINT or SIGTERM)
 
 
 _state = _State()
 
 
 def _on_sigint(signum, frame) -> None:
+    if not _state.pending:  # the first signal names the interruption
+        _state.signum = signum
     _state.pending = True
     if not _state.defer:
         raise KeyboardInterrupt
@@ -195,16 +199,23 @@ def interrupts_deferred(raise_after: bool = True) -> Iterator[None]:
         check_interrupt()
 
 
+def interrupted_status() -> int:
+    """The exit status of the interrupted command: 128 + the signal, as a shell reports it
+    (:data:`EXIT_INTERRUPTED`, 130, for a Ctrl-C; 143 for a SIGTERM)."""
+    return 128 + int(_state.signum)
+
+
 def say_interrupted() -> int:
-    """The command line's last word on a Ctrl-C: the one line ``interrupted`` on stderr.
+    """The command line's last word on a Ctrl-C: the one line ``interrupted`` on stderr
+    (``terminated`` after a SIGTERM).
 
     Said whole (a second Ctrl-C meanwhile, a terminal's repeat, adds nothing under
-    :func:`interrupt_handling`); returns :data:`EXIT_INTERRUPTED`.
+    :func:`interrupt_handling`); returns :func:`interrupted_status`.
     """
     with interrupts_deferred(raise_after=False):
-        sys.stderr.write("interrupted\n")
+        sys.stderr.write("terminated\n" if _state.signum == signal.SIGTERM else "interrupted\n")
         sys.stderr.flush()
-    return EXIT_INTERRUPTED
+    return interrupted_status()
 
 
 def _quiet_unraisable(previous):
@@ -242,18 +253,22 @@ def interrupt_handling(restore: bool = True) -> Iterator[None]:
     if _state.active or threading.current_thread() is not threading.main_thread():
         yield
         return
-    saved = (signal.getsignal(signal.SIGINT), sys.unraisablehook, sys.excepthook)
+    saved = (signal.getsignal(signal.SIGINT), sys.unraisablehook, sys.excepthook, signal.getsignal(signal.SIGTERM))
     signal.signal(signal.SIGINT, _on_sigint)
+    signal.signal(signal.SIGTERM, _on_sigint)  # a SIGTERM stops the command as a Ctrl-C does
     sys.unraisablehook = _quiet_unraisable(getattr(saved[1], "_gfuzzy_outer", saved[1]))
     sys.excepthook = _quiet_excepthook(getattr(saved[2], "_gfuzzy_outer", saved[2]))
     _state.active, _state.pending, _state.defer, _state.aftermath = True, False, 0, False
+    _state.signum = signal.SIGINT
     try:
         yield
     finally:
         if restore:
             signal.signal(signal.SIGINT, saved[0])
+            signal.signal(signal.SIGTERM, saved[3])
             sys.unraisablehook, sys.excepthook = saved[1], saved[2]
         else:  # the command is over; Python's finalisation keeps an ignored signal ignored
             signal.signal(signal.SIGINT, signal.SIG_IGN)
+            signal.signal(signal.SIGTERM, signal.SIG_IGN)
             _state.aftermath = _state.pending
         _state.active, _state.pending, _state.defer = False, False, 0

@@ -124,10 +124,43 @@ def test_a_ctrl_c_while_bad_input_is_said_adds_no_second_line(tmp_path, capsys, 
 
 
 def test_the_handling_is_the_callers_again_after_main(tmp_path, capsys):
-    before = signal.getsignal(signal.SIGINT)
+    before = signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)
     run_main(capsys, "check", SCENE, tmp_path / "missing.json")
-    assert signal.getsignal(signal.SIGINT) is before
+    assert (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)) == before
     assert not interrupt_pending()
+
+
+def test_a_sigterm_stops_the_command_as_a_ctrl_c_does_with_its_own_line_and_status(tmp_path, capsys, monkeypatch):
+    # a SIGTERM (kill, timeout, a scheduler) killed the process where it stood: an atomic
+    # write's temporary stayed beside the output; now: one line, 143, no file, no temporary
+    def step(self, *args, **kwargs):
+        signal.getsignal(signal.SIGTERM)(signal.SIGTERM, None)
+
+    monkeypatch.setattr(Navigator, "step", step)
+    out = tmp_path / "nav.json"
+    rc, _, err = _navigate(capsys, out)
+    assert (rc, err.strip()) == (143, "terminated"), (rc, err)
+    assert not out.exists() and not list(tmp_path.iterdir())
+    # the next command starts afresh: a Ctrl-C is "interrupted", 130 again
+    monkeypatch.setattr(Navigator, "step", lambda self, *a, **k: _ctrl_c())
+    _interrupted_once(*_navigate(capsys, out)[::2], out)
+
+
+def test_a_real_sigterm_during_a_roadmap_build_is_one_line(tmp_path):
+    """The signal itself, sent to a real process while OMPL builds: no traceback, exit 143,
+    neither the roadmap nor a temporary written."""
+    import subprocess
+    import time
+
+    out = tmp_path / "rm.json"
+    proc = subprocess.Popen([sys.executable, "-m", "gfuzzy", "roadmap", str(SCENE), "-n", "200000", "-o", str(out)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path)  # fmt: skip
+    time.sleep(4.0)  # past the imports (a SIGTERM before main takes over kills it, writing nothing)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 143, err[-2000:]
+    assert err.strip().splitlines()[-1] == "terminated" and "Traceback" not in err, err[-2000:]
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_is_interrupt_follows_the_exception_chain():

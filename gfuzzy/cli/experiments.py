@@ -181,7 +181,8 @@ def _connect(address: str, timeout: float):
 
 
 def cmd_batch(args) -> int:
-    """Every query of every scene on Dask; exit 0 all ran, 1 any error row, 130 interrupted.
+    """Every query of every scene on Dask; exit 0 all ran, 1 any error row, 130 interrupted
+    (143 after a SIGTERM).
 
     Ctrl-C once the scenes are read (building a roadmap, starting the cluster, between or
     after the queries) writes the rows finished so far, perhaps none, and says so.
@@ -189,9 +190,9 @@ def cmd_batch(args) -> int:
     import time
 
     from ..errors import (
-        EXIT_INTERRUPTED,
         check_interrupt,
         interrupt_pending,
+        interrupted_status,
         interrupts_deferred,
         is_interrupt,
     )
@@ -241,7 +242,7 @@ def cmd_batch(args) -> int:
                 f"interrupted: wrote the {len(result.rows)} finished of {result.total} queries "
                 f"to {', '.join(map(str, written))}"
             )
-            return EXIT_INTERRUPTED
+            return interrupted_status()
     check_interrupt()  # one that came as the section ended
     _report_batch(result, where, time.perf_counter() - t, written)
     return EXIT_NO if result.errors else EXIT_OK

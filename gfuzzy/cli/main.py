@@ -238,8 +238,9 @@ def _parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit status.
 
-    Ctrl-C at any moment prints one line, ``interrupted``, and returns 130, leaving no file
-    half-written (``batch`` writes the rows it finished): see the Ctrl-C section of
+    Ctrl-C at any moment prints one line, ``interrupted``, and returns 130 (a SIGTERM:
+    ``terminated``, 143), leaving no file half-written (``batch`` writes the rows it
+    finished): see the Ctrl-C section of
     :mod:`gfuzzy.errors`. With ``argv`` None (the process's own command line), a Ctrl-C after
     the command is over is ignored: the process exits with the command's status.
     """
