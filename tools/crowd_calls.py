@@ -98,7 +98,8 @@ def _summary(doc: dict, names=None) -> str:
     ok = [e["time"] for e in eps if e["outcome"] == "success"]
     sec = np.array([c["seconds"] for c in calls]) * 1000
     modes = collections.Counter(c["mode"] for c in calls)
-    return (f"n {len(eps)}, success {len(ok) / len(eps):.3f}, time {np.mean(ok):.2f} s, replan CPU p50 / p95 "
+    mean = f"{np.mean(ok):.2f}" if ok else "-"
+    return (f"n {len(eps)}, success {len(ok) / len(eps):.3f}, time {mean} s, replan CPU p50 / p95 "
             f"{np.percentile(sec, 50):.1f} / {np.percentile(sec, 95):.1f} ms, evasive {modes['evasive']} of {len(calls)}"
             f" ({sum(c['out_of_time'] for c in calls if c['mode'] == 'evasive')} out of time)")  # fmt: skip
 
