@@ -549,20 +549,19 @@ def test_a_plan_among_nobody_near_skips_the_dijkstra_from_the_pose(open_floor, m
     """The exact safety windows (a Dijkstra from the pose over the whole graph, 24 ms of CPU
     a call on a house map) pay only for safety work: nobody seen, or nobody who can come
     near, none; someone near, the Dijkstra, and the answers are those of the exact windows."""
-    from gfuzzy.timespace import unicycle, unipaths
+    from gfuzzy.timespace import graph_kernel, unicycle
 
     sc, rm = open_floor
     nav = Navigator(sc, rm, GOAL, NavOptions(time_budget=5.0))  # the goal's own Dijkstras first
     exact = Navigator(sc, rm, GOAL, NavOptions(time_budget=5.0))
     calls = []
-    real = unipaths.dijkstra
+    real = graph_kernel.fewest_steps  # the pose's Dijkstra (unipaths.steps_from_start)
 
-    def spy(mat, index):
-        calls.append(index)
-        return real(mat, index)
+    def spy(indptr, indices, steps, source):
+        calls.append(source)
+        return real(indptr, indices, steps, source)
 
-    monkeypatch.setattr(unipaths, "dijkstra", spy)
-    monkeypatch.setattr(unicycle, "dijkstra", spy)
+    monkeypatch.setattr(graph_kernel, "fewest_steps", spy)
     far = np.array([[9.5, 0.5, 1.0, 0.0, 0.2]])  # seen, walking away out of reach
     near = np.array([[5.0, 3.0, 0.0, 0.0, 0.3]])  # standing on the straight line
     answers = [nav.step(0.0, START, np.zeros((0, 5))), nav.step(0.25, START, far)]

@@ -72,3 +72,27 @@ def test_shortest_paths_uses_the_kernel_only_when_precompiled(monkeypatch):
         assert calls == [] and np.array_equal(out, [[0.0, 1.0]])
     else:
         assert len(calls) == 1 and np.array_equal(out, [[0.0, 0.0]])
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_fewest_steps_equals_scipy_rounded(seed):
+    """The bucket queue of whole-step weights (`bucket_steps`, the unicycle's safety windows'
+    Dijkstra) and `fewest_steps` on either path give scipy's Dijkstra rounded, zero-step
+    pieces (stored as 1e-300) and unreachable vertices included."""
+    import gfuzzy.timespace.graph_kernel as gk
+
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(1, 80))
+    m = int(rng.integers(0, 4 * n))
+    a, b = rng.integers(0, n, size=(2, m))
+    w = rng.choice([0, 0, 1, 1, 2, 3, 7, int(rng.integers(1, 120))], size=m)
+    order = np.argsort(a, kind="stable")
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(np.bincount(a, minlength=n), out=indptr[1:])
+    indices, steps = b[order].astype(np.int64), w[order].astype(np.int64)
+    src = int(rng.integers(0, n))
+    ref = scipy_dijkstra(csr_matrix((np.maximum(steps, 1e-300), indices, indptr), shape=(n, n)), directed=True, indices=src)
+    ref = np.rint(np.where(ref < 1e-200, 0.0, ref))
+    got = gk.bucket_steps(indptr, indices, steps, src, int(steps.max()) if m else 0)
+    assert np.array_equal(got, ref)
+    assert np.array_equal(gk.fewest_steps(indptr, indices, steps, src), ref)

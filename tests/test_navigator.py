@@ -1213,3 +1213,23 @@ def test_a_relaxed_search_that_ran_out_of_the_budget_counts_as_out_of_time(open_
         monkeypatch.setattr(nav, "_relaxed", lambda *a, ran_out=ran_out: _Searched(None, "relaxed", out_of_time=ran_out))
         nav.step(0.0, np.array([0.0, -4.0]), np.array([[0.0, 0.0, 0.0, 0.0, 0.3]]))
         assert nav.last.out_of_time is ran_out
+
+
+def test_a_slow_measurement_of_the_predictions_does_not_stop_every_later_search(open_square):
+    """The cost per person of setting up the predictions is measured only when a search runs;
+    a call that refuses to search for want of it lowers the estimate (`PERSON_DECAY`), so the
+    searches run again a few calls later. Before, one slow measurement (a stall of a loaded
+    machine) left every later call of a crowd episode evasive ("time budget spent before the
+    search", 26 calls in a row)."""
+    scene, rm = open_square
+    nav = Navigator(scene, rm, (0.0, 4.0), unhurried())
+    nav._person_seconds = 10.0  # as if one set-up had stalled: 10 s a person, the budget 5 s
+    person = np.array([[2.0, 0.0, 0.0, 0.0, 0.3]])  # standing aside, within reach
+    messages = []
+    for k in range(8):
+        nav.step(0.25 * k, np.array([0.0, -4.0]), person)
+        messages.append(nav.last.message)
+        if nav.last.mode == NavMode.PLAN:
+            break
+    assert messages[0] == "time budget spent before the search"
+    assert nav.last.mode == NavMode.PLAN and len(messages) < 8

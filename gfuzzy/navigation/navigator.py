@@ -621,7 +621,7 @@ class Navigator(PathSpace, Prediction, SoftCost):
                 keep = self._relevant(pose, obs, infl, steps * opts.dt)
                 detailed = int(keep.sum())
                 c0 = self._clock()
-                if c0 + detailed * self._person_seconds > deadline:  # the fallback answers
+                if not self._affords(c0, detailed, deadline):  # the fallback answers
                     return _Searched(None, "time budget spent before the search", detailed, True, graph, s_id)
                 if store is None:  # a unicycle's exact windows only pay where someone is predicted
                     if detailed:

@@ -19,10 +19,13 @@ from .swerve import swerve_rates
 from .timedfield import _TimedField
 from .unknown import unknown_growth
 
-__all__ = ["Prediction", "REACH_SAMPLES"]
+__all__ = ["Prediction", "REACH_SAMPLES", "PERSON_DECAY"]
 
 #: Samples of the look-ahead in the test of who may come within reach (:meth:`Prediction._may_reach`).
 REACH_SAMPLES = 48
+#: A call that does not run its search for want of the predictions' set-up time lowers the
+#: navigator's estimate of it per person by this factor (:meth:`Prediction._affords`).
+PERSON_DECAY = 0.8
 
 
 class Prediction:
@@ -118,6 +121,17 @@ class Prediction:
             return obs
         reach = obs[:, 4] + self.robot.circumradius + self.mover_clearance + gap + 1e-6
         return obs[self._may_reach(pose, obs[:, :2], obs[:, 2:4], math.inf, look, reach)]
+
+    def _affords(self, now: float, detailed: int, deadline: float) -> bool:
+        """Whether the predictions of ``detailed`` people can be set up from ``now`` before
+        ``deadline``, at the navigator's measured cost per person (``_person_seconds``).
+        When not, that estimate is lowered by ``PERSON_DECAY``: it is measured only when a
+        search runs, so one slow measurement (a stall of the machine) used to keep every
+        later search of the run from running (a whole crowd episode of evasive answers)."""
+        if now + detailed * self._person_seconds <= deadline:
+            return True
+        self._person_seconds *= PERSON_DECAY
+        return False
 
     def _field(self, t: float, obs: FloatArray, infl: FloatArray, steps: int, deadline: float = math.inf) -> MoverField:
         """The predicted people on the search's time grid: one trajectory mover per person.

@@ -104,7 +104,7 @@ class SoftCost:
                 hk = self._relevant(pose, obs, bare, steps * opts.dt)
                 keep = [self._relevant(pose, o, i, steps * opts.dt) for o, i in priced]
                 detailed = int(hk.sum() + sum(k.sum() for k in keep))
-                if self._clock() + detailed * self._person_seconds > deadline:
+                if not self._affords(self._clock(), detailed, deadline):
                     return _Searched(None, "time budget spent before the search", detailed, True, graph, s_id)
                 hard = self._field(t, obs[hk], bare[hk], steps, deadline)
                 stores[0].set_horizon(hard, pool=True)

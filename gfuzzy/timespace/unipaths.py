@@ -68,7 +68,7 @@ def steps_from_start(kept, A, B, k, p_of, j, x: int, total: int) -> FloatArray:
     and the start's x new nodes, renumbered after the kept ones): the exact lower bound of
     the safety windows (:class:`gfuzzy.timespace.spacetime.IntervalStore`). The start's pieces
     ``A -> B`` (k steps; ``p_of``, ``j``: its interior points' pieces and indices)."""
-    from scipy.sparse import csr_matrix
+    from .graph_kernel import fewest_steps
 
     nn, N = kept.nn, len(kept.poses)
     a_c, b_c = A - N + nn, np.where(B >= N, B - N + nn, B)
@@ -78,10 +78,9 @@ def steps_from_start(kept, A, B, k, p_of, j, x: int, total: int) -> FloatArray:
     o = o[first]
     m = kept.steps
     rows = np.cumsum(np.bincount(a_c[o] - nn, minlength=x))
-    mat = csr_matrix((np.concatenate([m.data, np.maximum(k[o], 1e-300).astype(float)]),
-                      np.concatenate([m.indices, b_c[o]]), np.concatenate([m.indptr, m.indptr[-1] + rows])),
-                     shape=(nn + x, nn + x))  # fmt: skip
-    hop_s = np.rint(dijkstra(mat, nn))
+    # whole steps (a zero-step piece is stored as 1e-300): a bucket queue, or scipy's Dijkstra rounded
+    hop_s = fewest_steps(np.concatenate([m.indptr, m.indptr[-1] + rows]), np.concatenate([m.indices, b_c[o]]),
+                         np.concatenate([np.rint(m.data), k[o]]).astype(np.int64), nn)  # fmt: skip
     from_start = np.empty(total)
     from_start[:nn] = hop_s[:nn]
     from_start[N : N + x] = hop_s[nn:]
