@@ -56,6 +56,8 @@ PAIRS = 4
 REACH = 2.5
 #: A pair is tried only where the roadmap joins it within this many times its distance.
 DETOUR = 3.0
+#: Vertices where the body turns freely that a chain may start or end at, per end.
+ENDS = 3
 #: Headings a chain may start at from a vertex where the body turns freely, off the
 #: direction towards the other end's vertex (rad).
 FAN = (-0.2, -0.1, 0.0, 0.1, 0.2)
@@ -335,8 +337,8 @@ def _chains(geo, roadmap, pieces: tuple, xy: FloatArray, deadline: float) -> Cha
 
 
 def _ends(geo, xy, cands, near: int, own: int, span: float, roomy: dict) -> list:
-    """The vertices of ``cands`` a chain may start or end at: ``own`` and those within
-    ``REACH`` spans of vertex ``near`` where the body turns freely
+    """The vertices of ``cands`` a chain may start or end at: ``own`` and the ``ENDS``
+    nearest vertex ``near`` within ``REACH`` spans of it where the body turns freely
     (:meth:`StaticGeometry.sweep_bound`: a lattice pose rarely lines up with a vertex in a
     tight spot, and a vertex there has copies at few headings), else ``own`` and those
     within a span of it."""
@@ -344,7 +346,7 @@ def _ends(geo, xy, cands, near: int, own: int, span: float, roomy: dict) -> list
     for w in far:
         if w not in roomy:
             roomy[w] = geo.sweep_bound(float(xy[w, 0]), float(xy[w, 1])) > 0
-    out = [w for w in far if roomy[w] and w != own]
+    out = sorted((w for w in far if roomy[w] and w != own), key=lambda w: math.hypot(*(xy[w] - xy[near])))[:ENDS]
     return [own, *out] if out else cands[np.hypot(*(xy[cands] - xy[own]).T) <= span].tolist()
 
 
