@@ -51,6 +51,9 @@ TURN_COST = 1.0
 FACING = 0.3
 #: A* expansions per attempt between two vertices.
 EXPANSIONS = 1500
+#: Pairs tried per repair in all (an unsolvable query pays for them: on a map's crop an
+#: attempt that finds nothing costs up to a minute of CPU).
+ATTEMPTS = 6
 #: Closest vertex pairs tried per piece (in the plane, at most ``REACH`` spans apart).
 PAIRS = 4
 REACH = 2.5
@@ -117,13 +120,15 @@ def _finish(geo, node, target, reverse: bool):
     return None
 
 
-def drive_chain(geo, sources: list, targets: list, reverse: bool, budget: int = EXPANSIONS, guide=None):
+def drive_chain(geo, sources: list, targets: list, reverse: bool, budget: int = EXPANSIONS, guide=None,
+                deadline: float = math.inf):  # fmt: skip
     """A certified small-step drive from one of ``sources`` ((x, y, h)) to one of
     ``targets`` ((x, y, h)): (source index, target index, moves), moves ``("T", dh)`` (a
     turn in place) and ``("D", s)`` (a straight drive of s m along the heading, backwards
     when negative); None within ``budget`` expansions. ``guide``: (points (k, 2), metres
     left from each): a polyline to a target (the roadmap's way, :func:`_guide`) whose
-    length from a pose's nearest point is the heuristic; else the nearest target's distance."""
+    length from a pose's nearest point is the heuristic; else the nearest target's distance.
+    :class:`gfuzzy.timespace.unilanes.OutOfTime` past ``deadline``."""
     tx = np.array([t[:2] for t in targets], dtype=float)
     near = max(3.0 * STEP, 2.0 * float(geo.robot.circumradius))  # where a straight drive onto a target is tried
     gp, left = guide if guide is not None else (tx, np.zeros(len(tx)))
@@ -142,7 +147,9 @@ def drive_chain(geo, sources: list, targets: list, reverse: bool, budget: int = 
         heapq.heappush(heap, (WEIGHT * h_cost(*p[:2]), 0.0, p))
     moves = [("D", STEP)] + ([("D", -STEP)] if reverse else []) + [("T", TURN), ("T", -TURN)]
     r = float(geo.robot.circumradius)
-    for _ in range(budget):
+    for n in range(budget):
+        if n % 64 == 0:
+            on_time(deadline)
         if not heap:
             return None
         _, g, p = heapq.heappop(heap)
@@ -308,6 +315,7 @@ def _chains(geo, roadmap, pieces: tuple, xy: FloatArray, deadline: float) -> Cha
     reverse, span = bool(geo.robot.reverse), 2.0 * float(geo.robot.circumradius)
     out = _Builder(len(xy))
     roomy: dict = {}
+    attempts = 0
     for c in big:
         mine = np.array(sorted(verts[c]))
         other = np.array(sorted({v for d in big if find(d) != find(c) for v in verts[d]}))
@@ -329,8 +337,10 @@ def _chains(geo, roadmap, pieces: tuple, xy: FloatArray, deadline: float) -> Cha
             if guide is None:
                 continue
             tried += 1
-            on_time(deadline)
-            if _join(geo, out, (poses, vertex, roomy), cu, cv, reverse, xy, guide):
+            attempts += 1
+            if attempts > ATTEMPTS:
+                return out.chains() if out.edges else None
+            if _join(geo, out, (poses, vertex, roomy), cu, cv, reverse, xy, guide, deadline):
                 parent[find(c)] = find(label[cv[0]])
                 break
     return out.chains() if out.edges else None
@@ -369,7 +379,8 @@ def _sources(copies: list, poses, vertex, roomy: dict, towards, reverse: bool) -
     return out
 
 
-def _join(geo, out: _Builder, pieces: tuple, one: list, two: list, reverse: bool, xy, guide) -> bool:
+def _join(geo, out: _Builder, pieces: tuple, one: list, two: list, reverse: bool, xy, guide,
+          deadline: float = math.inf) -> bool:  # fmt: skip
     """A chain from a copy of ``one`` to a copy of ``two`` (copy ids; ``pieces``: the
     copies' poses, their vertices and which vertices are roomy) along ``guide``
     (:func:`_guide`), and without ``reverse`` one back too (the body facing either way);
@@ -378,7 +389,7 @@ def _join(geo, out: _Builder, pieces: tuple, one: list, two: list, reverse: bool
     back = (guide[0][::-1].copy(), guide[1][-1] - guide[1][::-1])
     for a, b, gd in ((one, two, guide), (two, one, back)) if not reverse else ((one, two, guide),):
         src = _sources(a, poses, vertex, roomy, xy[int(vertex[b[0]])] if gd is back else gd[0][-1], reverse)
-        got = drive_chain(geo, [p for _, _, p in src], [poses[k] for k in b], reverse, guide=gd)
+        got = drive_chain(geo, [p for _, _, p in src], [poses[k] for k in b], reverse, guide=gd, deadline=deadline)
         if got is None:
             return False
         k, dh, _ = src[got[0]]
