@@ -6,11 +6,12 @@ whose crossbar sweeps wide when it turns) the way through is a chain of turns of
 hundredth of a radian every few centimetres, at places no roadmap vertex is; the graph
 then falls into pieces that lie a few centimetres apart (the unseen drives, seed 2 case 6:
 the start's and the goal's pieces 0.1 m apart in the middle of the gap, the roadmap itself
-one piece). :func:`drive_graph` joins such pieces, query-independently, by
+one piece; not yet solved by this: ``docs/benchmarks.md``). :func:`drive_graph` joins such pieces, query-independently, by
 :func:`drive_chain`: a weighted A* over small moves (drive ``STEP`` m forwards, backwards
 with ``robot.reverse``, turn ``TURN`` rad in place), each certified
 (:meth:`StaticGeometry.motion_free`, :func:`gfuzzy.timespace.drive.turn_free`), from the
-copies of one piece at a vertex to a copy of another piece at a vertex nearby, its last
+copies of one piece near a vertex to a copy of another piece near a vertex close by, along
+the roadmap's own way between them (its heuristic), its last
 move a turn, a straight drive onto that vertex and a turn there. The chain becomes lanes
 between new points (one where each straight run ends) and explicit turns at them
 (:class:`Chains`; the points get no turning ring). The planner asks for it only when the
@@ -42,10 +43,10 @@ TURN = 0.01
 #: The A*'s cells in the plane, in drive steps (a pose in a visited cell at a visited
 #: heading is not expanded).
 KEY = 0.5
-#: The A*'s heuristic weight (the distance to the nearest target, in the plane).
+#: The A*'s heuristic weight (the length of the roadmap's way left, :func:`_guide`).
 WEIGHT = 2.0
-#: A turn step's cost in the A*, in circumradii per radian (the contract's metric counts one:
-#: the search then turns through every heading at a place before it drives on).
+#: A turn step's cost in the A*, in circumradii per radian (the contract's metric; 4 made
+#: the box of tests/test_unirepair.py explore its room rather than turn along the curve).
 TURN_COST = 1.0
 #: How far off a lattice pose's heading a target may lie for a straight drive onto it (rad).
 FACING = 0.3
