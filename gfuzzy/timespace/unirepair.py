@@ -30,10 +30,10 @@ import numpy as np
 from ..poses import wrap_angle
 from ..settings import SPEED_SAFETY
 from ..typed import FloatArray
+from . import unireach
 from .drive import turn_free
 from .unicycle import _base
 from .unilanes import lanes, on_time
-from .unireach import ends_apart
 
 __all__ = ["Chains", "drive_chain", "drive_graph", "STEP", "TURN", "EXPANSIONS", "PAIRS", "MIN_PIECE"]
 
@@ -443,12 +443,13 @@ def drive_graph(planner, start, goal, opts, deadline: float = math.inf) -> tuple
     step_len = planner.robot.vmax * SPEED_SAFETY * opts.dt
     args = (start, goal, opts.connect_k, opts.stretch, deadline)
     extra = False
-    if ends_apart(planner, *args):
+    if unireach.ends_apart(planner, *args):
         extra = _extra(planner, opts.stretch, step_len, deadline)
-        if extra is None or ends_apart(planner, *args, extra=extra):
+        if extra is None or unireach.ends_apart(planner, *args, extra=extra):
             return None, -1, -1, math.inf
     graph = lambda tilts: planner._query_graph(  # noqa: E731
-        start, planner.prepare(goal, opts, tilts, deadline, _repaired(planner, opts.stretch, step_len, deadline, extra)))
+        start, planner.prepare(goal, opts, _tilts=tilts, _deadline=deadline,
+                               _base=_repaired(planner, opts.stretch, step_len, deadline, extra) if extra else None))
     got = graph(bool(extra))
     if not math.isfinite(got[3]) and not extra:
         got = graph(True)
