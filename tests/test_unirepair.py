@@ -54,7 +54,9 @@ def test_a_drive_rounds_a_curved_gap_by_small_turns(arc):
     chain of 2 cm drives and 0.01 rad turns, and the answer passes the check."""
     sc, rm = arc
     start, goal = [R, -0.6, H], [-0.6, R, math.pi]
-    res = Planner(sc, rm).plan(start, goal, 0.0, PlanOptions(time_limit=1e6))
+    off = Planner(sc, arc_roadmap(sc)).plan(start, goal, 0.0, PlanOptions(time_limit=1e6))
+    assert off.status.value == "no_path"  # the default (no --drive-repair): as before, at once
+    res = Planner(sc, rm).plan(start, goal, 0.0, PlanOptions(time_limit=1e6, drive_repair=True))
     assert res.solved, res.message
     rep = check_trajectory(sc, res.trajectory.waypoints)
     assert rep.valid, rep.reason
@@ -69,9 +71,9 @@ def test_the_repair_is_kept_on_the_roadmap_and_changes_no_solved_answer(arc):
     before it): one inside the room before the gap."""
     sc, rm = arc
     rm2 = arc_roadmap(sc)
-    res = Planner(sc, rm2).plan([R, -0.6, H], [R, -1.0, H], 0.0, PlanOptions(time_limit=1e6))
+    res = Planner(sc, rm2).plan([R, -0.6, H], [R, -1.0, H], 0.0, PlanOptions(time_limit=1e6, drive_repair=True))
     assert res.solved, res.message
     assert not any(k[0] in ("unicycle-chains", "unicycle-repaired") for k in rm2._derived)
-    res = Planner(sc, rm).plan([R, -0.6, H], [-0.6, R, math.pi], 0.0, PlanOptions(time_limit=1e6))
+    res = Planner(sc, rm).plan([R, -0.6, H], [-0.6, R, math.pi], 0.0, PlanOptions(time_limit=1e6, drive_repair=True))
     assert res.solved
     assert any(k[0] == "unicycle-chains" for k in rm._derived)

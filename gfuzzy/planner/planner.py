@@ -101,6 +101,11 @@ class PlanOptions:
         numba); ``"reference"`` runs the pure-Python definition
         (:func:`gfuzzy.timespace.timespace.sipp`). Both give the same answers. The stages'
         timing of a refined or speed-limited path (:mod:`gfuzzy.planner.retime`) uses the same.
+    drive_repair : bool
+        A box or footprint differential drive whose graph leaves the query's ends apart has
+        its pieces joined by small-step manoeuvres (:mod:`gfuzzy.timespace.unirepair`): it
+        finds ways round tight bends that turns at vertices miss, at a cost of up to minutes
+        of search where no way exists (so off by default; ``--drive-repair``).
     """
 
     dt: float = 0.07
@@ -116,6 +121,7 @@ class PlanOptions:
     weight: float = 1.0
     stretch: float = 1.05
     backend: str = "compiled"
+    drive_repair: bool = False
 
     def __post_init__(self):
         check_number("dt", self.dt)

@@ -437,13 +437,16 @@ def _repaired(planner, stretch: float, step_len: float, deadline: float, extra):
 def drive_graph(planner, start, goal, opts, deadline: float = math.inf) -> tuple:
     """(graph, start id, goal id, roadmap distance) of a fresh box or footprint drive's
     query. Where its lanes prove the ends apart (:func:`gfuzzy.timespace.unireach.ends_apart`)
-    the lanes' pieces are joined by chains first (no ring built): still apart, None and inf.
-    Else its graph; where that does not join the ends, with its ends' tilts; then with
+    None and inf, unless ``opts.drive_repair``: then the lanes' pieces are joined by chains
+    first (no ring built), and only if still apart None and inf. Else its graph; where that
+    does not join the ends, with its ends' tilts; then, with ``opts.drive_repair``, with
     chains joining that graph's pieces (the ends tilting). OutOfTime past ``deadline``."""
     step_len = planner.robot.vmax * SPEED_SAFETY * opts.dt
     args = (start, goal, opts.connect_k, opts.stretch, deadline)
     extra = False
     if unireach.ends_apart(planner, *args):
+        if not opts.drive_repair:
+            return None, -1, -1, math.inf
         extra = _extra(planner, opts.stretch, step_len, deadline)
         if extra is None or unireach.ends_apart(planner, *args, extra=extra):
             return None, -1, -1, math.inf
@@ -453,7 +456,7 @@ def drive_graph(planner, start, goal, opts, deadline: float = math.inf) -> tuple
     got = graph(bool(extra))
     if not math.isfinite(got[3]) and not extra:
         got = graph(True)
-    if not math.isfinite(got[3]):
+    if not math.isfinite(got[3]) and opts.drive_repair:
         more = _extra(planner, opts.stretch, step_len, deadline, extra)
         if more is not None:
             extra = more
