@@ -77,3 +77,14 @@ def test_the_repair_is_kept_on_the_roadmap_and_changes_no_solved_answer(arc):
     res = Planner(sc, rm).plan([R, -0.6, H], [-0.6, R, math.pi], 0.0, PlanOptions(time_limit=1e6, drive_repair=True))
     assert res.solved
     assert any(k[0] == "unicycle-chains" for k in rm._derived)
+
+
+@pytest.mark.parametrize("command", ["plan", "regress", "batch"])
+def test_the_command_line_asks_for_the_repair(command):
+    """``--drive-repair`` reaches ``PlanOptions.drive_repair`` (off without it)."""
+    from gfuzzy.cli.common import _plan_options
+    from gfuzzy.cli.main import _parser
+
+    words = {"plan": ["plan", "s.yaml"], "regress": ["regress", "s.yaml"], "batch": ["batch", "s.yaml", "-o", "x.csv"]}
+    assert _plan_options(_parser().parse_args([*words[command], "--drive-repair"])).drive_repair
+    assert not _plan_options(_parser().parse_args(words[command])).drive_repair
