@@ -433,10 +433,13 @@ def make_case(seed: int, index: int, bodies=BODIES, scenarios=tuple(SCENARIOS)) 
 # --------------------------------------------------------------------------- running
 
 
-def plan_case(case: dict, vertices=VERTICES, roadmap_seed: int | None = None, time_limit: float | None = None) -> dict:
+def plan_case(case: dict, vertices=VERTICES, roadmap_seed: int | None = None, time_limit: float | None = None,
+              drive_repair: bool = False) -> dict:  # fmt: skip
     """gfuzzy on the case: each roadmap size in turn until a checked answer (``time_limit``:
-    each plan's budget, wall-clock seconds; None: the planner's default)."""
-    opts = PlanOptions() if time_limit is None else PlanOptions(time_limit=time_limit)
+    each plan's budget, wall-clock seconds; None: the planner's default; ``drive_repair``:
+    ``PlanOptions.drive_repair``)."""
+    opts = PlanOptions(drive_repair=drive_repair) if time_limit is None else PlanOptions(time_limit=time_limit,
+                                                                                          drive_repair=drive_repair)
     scene, q = case["scene"], case["query"]
     seed = case["roadmap_seed"] if roadmap_seed is None else roadmap_seed
     out = {"gfuzzy": "", "vertices": "", "status": "", "message": "", "duration": "", "cpu_s": 0.0, "tries": []}
@@ -461,12 +464,12 @@ def plan_case(case: dict, vertices=VERTICES, roadmap_seed: int | None = None, ti
 
 
 def run_case(case: dict, vertices=VERTICES, oracle: bool = True, roadmap_seed: int | None = None,
-             time_limit: float | None = None) -> dict:
+             time_limit: float | None = None, drive_repair: bool = False) -> dict:
     row = {k: case[k] for k in ("index", "body", "scenario", "reverse", "wmax", "mover")}
     row["wmax"] = round(row["wmax"], 3) if row["wmax"] != "" else ""
     row["roadmap_seed"] = case["roadmap_seed"] if roadmap_seed is None else roadmap_seed
     try:
-        got = plan_case(case, vertices, roadmap_seed, time_limit)
+        got = plan_case(case, vertices, roadmap_seed, time_limit, drive_repair)
         row.update({k: got[k] for k in ("gfuzzy", "vertices", "status", "message", "duration")})
         row["gfuzzy_s"] = round(got["cpu_s"], 2)
         row["tries"] = "; ".join(got["tries"])
@@ -577,6 +580,8 @@ def main(argv=None) -> int:
                     "proof that its ends are apart (gfuzzy/timespace/unireach.py): its cost, paired")
     ap.add_argument("--time-limit", type=float, help="each plan's budget, wall-clock seconds (default: the planner's 60; "
                     "on a loaded machine a larger one keeps timeouts out of the table)")
+    ap.add_argument("--drive-repair", action="store_true", help="plan with PlanOptions.drive_repair (gfuzzy plan "
+                    "--drive-repair: a drive's pieces joined by small steps)")
     ap.add_argument("-o", "--output", help="CSV, one row per case (written atomically)")
     ap.add_argument("--dump", help="folder for the scene and commands of each case gfuzzy did not solve "
                     "(of every case with --only)")
@@ -596,7 +601,8 @@ def main(argv=None) -> int:
         except Exception as exc:  # noqa: BLE001
             print(f"[{k}/{len(indices)}] case {index}: generator: {type(exc).__name__}: {exc}", file=sys.stderr, flush=True)
             continue
-        row = run_case(case, a.vertices, oracle=not a.no_oracle, roadmap_seed=a.roadmap_seed, time_limit=a.time_limit)
+        row = run_case(case, a.vertices, oracle=not a.no_oracle, roadmap_seed=a.roadmap_seed, time_limit=a.time_limit,
+                       drive_repair=a.drive_repair)  # fmt: skip
         rows.append(row)
         print(f"[{k}/{len(indices)}] case {index} {row['body']} {row['scenario']}{' rev' if row['reverse'] else ''}"
               f"{' mover' if row['mover'] else ''}: {row['outcome']} (gfuzzy {row['status']} at -n {row['vertices']}, "
@@ -611,6 +617,7 @@ def main(argv=None) -> int:
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     which = f"--only {' '.join(map(str, a.only))}" if a.only else f"--cases {a.cases}"
     limit = ("" if a.time_limit is None else f" --time-limit {a.time_limit:g}") + (" --no-proof" if a.no_proof else "")
+    limit += " --drive-repair" if a.drive_repair else ""
     print(f"# tools/bench_unseen_drives.py {which} --seed {a.seed} -n {' '.join(map(str, a.vertices))}{limit}: {len(rows)} "
           f"cases in {time.perf_counter() - t0:.0f} s, load average {load:.2f}; times: CPU seconds")
     print(table(rows))

@@ -101,6 +101,11 @@ class PlanOptions:
         numba); ``"reference"`` runs the pure-Python definition
         (:func:`gfuzzy.timespace.timespace.sipp`). Both give the same answers. The stages'
         timing of a refined or speed-limited path (:mod:`gfuzzy.planner.retime`) uses the same.
+    drive_repair : bool
+        A box or footprint differential drive whose graph leaves the query's ends apart has
+        its pieces joined by small-step manoeuvres (:mod:`gfuzzy.timespace.unirepair`): it
+        finds ways round tight bends that turns at vertices miss, at a cost of up to minutes
+        of search where no way exists (so off by default; ``--drive-repair``).
     """
 
     dt: float = 0.07
@@ -116,6 +121,7 @@ class PlanOptions:
     weight: float = 1.0
     stretch: float = 1.05
     backend: str = "compiled"
+    drive_repair: bool = False
 
     def __post_init__(self):
         check_number("dt", self.dt)
@@ -429,7 +435,8 @@ class Planner:
         return qg.graph, qg.s_id, qg.g_id, qg.roadmap_distance
 
     # ---------------------------------------------------------------- query
-    def prepare(self, goal, options: PlanOptions | None = None, _tilts: bool = False, _deadline: float = math.inf):
+    def prepare(self, goal, options: PlanOptions | None = None, _tilts: bool = False, _deadline: float = math.inf,
+                _base=None):  # fmt: skip
         """Keep what replanning to ``goal`` reuses: the goal's connections and the static
         distances to the goal (:mod:`gfuzzy.planner.prepared`; the spanner's cut is kept on
         the roadmap). A fresh :meth:`plan` prepares its goal so too, then splices its start in.
@@ -463,7 +470,7 @@ class Planner:
             wrapped = goal.copy()
             wrapped[2] = wrap_angle(wrapped[2])
             kept = prepare_unicycle(self, wrapped, opts.dt, self.robot.vmax * SPEED_SAFETY, opts.connect_k, opts.stretch,
-                                    _tilts, _deadline)  # fmt: skip
+                                    _tilts, _deadline, _base)  # fmt: skip
             return UnicyclePrepared(goal, opts, kept)
         return prepare_goal(self, goal, opts, deadline=_deadline)
 
@@ -599,22 +606,14 @@ class Planner:
 
     def _graph(self, start, goal, opts: PlanOptions, prepared, deadline: float) -> tuple:
         """(graph, start id, goal id, roadmap distance) of a query (:meth:`_query_graph`) from
-        ``prepared`` or a goal prepared now; a differential drive's ends that cannot turn
-        round tilt when the first graph does not join them (a disc turns round wherever it
-        stands: it never tilts). A box or footprint drive's graph is not built when its lanes
-        prove that it cannot join the ends (:func:`gfuzzy.timespace.unireach.ends_apart`:
-        graph None, roadmap distance inf). OutOfTime past ``deadline``."""
-        robot = self.robot
-        if prepared is None and robot.unicycle and robot.shape != "disc":
-            from ..timespace.unireach import ends_apart
+        ``prepared`` or a goal prepared now; a fresh box or footprint drive's by
+        :func:`gfuzzy.timespace.unirepair.drive_graph` (its lanes' proof that the ends are
+        apart, its ends' tilts, the repair of its pieces). OutOfTime past ``deadline``."""
+        if prepared is None and self.robot.unicycle and self.robot.shape != "disc":
+            from ..timespace.unirepair import drive_graph
 
-            if ends_apart(self, start, goal, opts.connect_k, opts.stretch, deadline):
-                return None, -1, -1, math.inf
-        kept = prepared if prepared is not None else self.prepare(goal, opts, _deadline=deadline)
-        graph, s_id, g_id, rd = self._query_graph(start, kept)
-        if not math.isfinite(rd) and robot.unicycle and robot.shape != "disc" and prepared is None:
-            graph, s_id, g_id, rd = self._query_graph(start, self.prepare(goal, opts, _tilts=True, _deadline=deadline))
-        return graph, s_id, g_id, rd
+            return drive_graph(self, start, goal, opts, deadline)
+        return self._query_graph(start, prepared if prepared is not None else self.prepare(goal, opts, _deadline=deadline))
 
     def _staged(self, result: PlanResult, query: Query, opts: PlanOptions, t_begin: float) -> PlanResult:
         """``result`` after the GA refinement and/or the speed layer (:mod:`gfuzzy.planner.stages`)."""

@@ -41,7 +41,7 @@ from ..typed import FloatArray, IntArray
 from .drive import MERGE_HEADING, SAME_HEADING, _xy_pose, fan, lane_turn, pick_turn, turn_free
 from .roadgraph import vertex_clearances
 from .spacetime import SpaceTimeGraph
-from .unilanes import LANE_NEIGHBOURS, _brackets, _rings, _same_interval, lanes
+from .unilanes import LANE_NEIGHBOURS, _brackets, _rings, _same_interval, chain_turns, lanes
 from .unipaths import dijkstra, matrix, new_to_goal, steps_from_start, with_rows
 
 __all__ = ["UnicycleGraph", "UnicycleGoal", "UnicyclePrepared", "prepare_goal", "build_graph", "lanes", "LANE_NEIGHBOURS", "SAME_HEADING"]
@@ -141,24 +141,29 @@ class UnicycleGraph:
     exact_windows: object = None
 
 
-def _base(roadmap, geometry, stretch: float, vmax: float, step_len: float, deadline: float = math.inf) -> _Base:
+def _base(roadmap, geometry, stretch: float, vmax: float, step_len: float, deadline: float = math.inf,
+          extra=None) -> _Base:  # fmt: skip
     """The copies, lanes and turns of the roadmap, cached per (robot, stretch); OutOfTime
-    past ``deadline`` (:func:`gfuzzy.timespace.unilanes.on_time`)."""
+    past ``deadline`` (:func:`gfuzzy.timespace.unilanes.on_time`). ``extra``: a repair's
+    :class:`gfuzzy.timespace.unirepair.Chains` added (not cached: the repair keeps it)."""
     robot = geometry.robot
     rate = robot.turn_rate
     key = ("unicycle-base", geometry.scene.static_hash, float(geometry.keep), float(stretch), robot.shape,
            robot.size, bool(robot.reverse), float(rate), float(vmax), float(step_len))  # fmt: skip
-    hit = roadmap._derived.get(key)
+    hit = roadmap._derived.get(key) if extra is None else None
     if hit is not None:
         return hit
     ln = lanes(roadmap, geometry, stretch, deadline)
-    xy, e = ln.xy, ln.edges
+    xy, e, lane_ok, ringless = ln.xy, ln.edges, ln.ok, None
+    if extra is not None:
+        ringless = len(xy)
+        xy, e, lane_ok = np.vstack([xy, extra.xy]), np.vstack([e, extra.edges]), np.vstack([lane_ok, extra.ok])
     h_uv = np.arctan2(xy[e[:, 1], 1] - xy[e[:, 0], 1], xy[e[:, 1], 0] - xy[e[:, 0], 0])
     h_vu = wrap_angle(h_uv + math.pi)
     # copies: (vertex, heading) at both ends of every certified lane
     cv, ch = [], []
     for col, h in ((0, h_uv), (1, h_vu)):
-        m = ln.ok[:, col]
+        m = lane_ok[:, col]
         cv += [e[m, 0], e[m, 1]]
         ch += [h[m], h[m]]
     cv = np.concatenate(cv) if cv else np.zeros(0, dtype=np.int64)
@@ -183,7 +188,7 @@ def _base(roadmap, geometry, stretch: float, vmax: float, step_len: float, deadl
     pa, pb, pdh, plen = [], [], [], []
     lens = np.hypot(*(xy[e[:, 1]] - xy[e[:, 0]]).T)
     for col, h in ((0, h_uv), (1, h_vu)):
-        m = ln.ok[:, col]
+        m = lane_ok[:, col]
         tail, head = (e[m, 0], e[m, 1]) if col == 0 else (e[m, 1], e[m, 0])
         ct, chd = copy_id(tail, h[m]), copy_id(head, h[m])
         pa.append(ct)
@@ -201,7 +206,10 @@ def _base(roadmap, geometry, stretch: float, vmax: float, step_len: float, deadl
     scale = vmax / rate
     n_ring = int(split_counts(np.array([2 * math.pi * scale]), step_len)[0])
     _too_many(n_ring)  # one ring past the bound: refused before any is made
-    ring_ptr, ring_v, ring_h, ring_ok, ta, tb, tdh = _rings(geometry, xy, cv, ch, n_ring, deadline)
+    memo = roadmap._derived.setdefault(("unicycle-ring-free",) + key[1:6] + (n_ring,), {})
+    ring_ptr, ring_v, ring_h, ring_ok, ta, tb, tdh = _rings(geometry, xy, cv, ch, n_ring, deadline, ringless, memo)
+    if extra is not None:
+        chain_turns(extra.turns, copy_id, ch, ta, tb, tdh)
     tdh = np.asarray(tdh, dtype=float)
     return_ = _Base(
         poses=np.column_stack([xy[cv], ch]) if len(cv) else np.zeros((0, 3)),
@@ -218,7 +226,8 @@ def _base(roadmap, geometry, stretch: float, vmax: float, step_len: float, deadl
         clearance=vertex_clearances(roadmap, geometry) if robot.shape == "disc" else None,
         roadmap_vertices=len(roadmap.vertices),
     )
-    roadmap._derived[key] = return_
+    if extra is None:
+        roadmap._derived[key] = return_
     return return_
 
 
@@ -705,8 +714,8 @@ def _base_cut(base: _Base, step_len: float) -> _BaseCut:
     return cut
 
 
-def prepare_goal(planner, goal: FloatArray, dt: float, vplan: float, connect_k: int = 10,
-                 stretch: float = 1.0, tilts: bool = False, deadline: float = math.inf) -> UnicycleGoal:  # fmt: skip
+def prepare_goal(planner, goal: FloatArray, dt: float, vplan: float, connect_k: int = 10, stretch: float = 1.0,
+                 tilts: bool = False, deadline: float = math.inf, base: _Base | None = None) -> UnicycleGoal:  # fmt: skip
     """The kept graph of ``goal`` (``[x, y, heading]``, heading wrapped): the base's copies,
     lanes and rings cut into steps (cached on the roadmap) with the goal joined in, and the
     static steps and metres to the goal.
@@ -717,7 +726,7 @@ def prepare_goal(planner, goal: FloatArray, dt: float, vplan: float, connect_k: 
     """
     geo, robot, rm = planner.geometry, planner.robot, planner.roadmap
     step_len = vplan * dt
-    base = _base(rm, geo, stretch, robot.vmax, step_len, deadline)
+    base = base if base is not None else _base(rm, geo, stretch, robot.vmax, step_len, deadline)
     cut = _base_cut(base, step_len)
     scale = robot.vmax / robot.turn_rate
     nn0 = len(cut.nodes)

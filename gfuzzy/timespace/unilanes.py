@@ -236,10 +236,13 @@ def _brackets(h: float, r0: int, n_ring: int, step_h: float) -> list:
     return [(r0 + i, below), (r0 + (i + 1) % n_ring, above)]
 
 
-def _rings(geometry, xy: FloatArray, cv: IntArray, ch: FloatArray, n_ring: int, deadline: float = math.inf):
+def _rings(geometry, xy: FloatArray, cv: IntArray, ch: FloatArray, n_ring: int, deadline: float = math.inf,
+           ringless_from: int | None = None, memo: dict | None = None):  # fmt: skip
     """The turning rings of the vertices with copies (see :class:`_Base`) and the turns
     joining them and the copies (ring points as ``-(1 + i)``); :class:`OutOfTime` past
-    ``deadline``.
+    ``deadline``. Points from ``ringless_from`` on get none (a repair's chain points,
+    :mod:`gfuzzy.timespace.unirepair`, which bring their own turns); ``memo``: each
+    vertex's free ring points and arcs by position, kept for the next call.
 
     Returns
     -------
@@ -251,6 +254,8 @@ def _rings(geometry, xy: FloatArray, cv: IntArray, ch: FloatArray, n_ring: int, 
     step_h = 2 * math.pi / n_ring
     bounds = np.searchsorted(cv, np.arange(len(xy) + 1))
     has = np.diff(bounds) > 0
+    if ringless_from is not None:
+        has[ringless_from:] = False
     ring_ptr = np.full(len(xy), -1, dtype=np.int64)
     ring_ptr[has] = np.arange(int(has.sum())) * n_ring
     grid = -math.pi + step_h * np.arange(n_ring)
@@ -267,7 +272,12 @@ def _rings(geometry, xy: FloatArray, cv: IntArray, ch: FloatArray, n_ring: int, 
         swept = disc or geometry.sweep_bound(x, y) > 0
         arcs = np.ones(n_ring, dtype=bool)  # arc i -> i + 1 free
         if not swept:
-            ring_ok[r0 : r0 + n_ring], arcs = _ring_free(geometry, x, y, grid, step_h)
+            got = memo.get((x, y)) if memo is not None else None
+            if got is None:
+                got = _ring_free(geometry, x, y, grid, step_h)
+                if memo is not None:
+                    memo[(x, y)] = got
+            ring_ok[r0 : r0 + n_ring], arcs = got[0], got[1].copy()
         for i in range(n_ring):
             j = (i + 1) % n_ring
             if arcs[i]:
@@ -286,6 +296,19 @@ def _rings(geometry, xy: FloatArray, cv: IntArray, ch: FloatArray, n_ring: int, 
                 tb += [d, c]
                 tdh += [arc, -arc]
     return ring_ptr, ring_v, ring_h, ring_ok, ta, tb, tdh
+
+
+def chain_turns(turns: FloatArray, copy_id, ch: FloatArray, ta: list, tb: list, tdh: list) -> None:
+    """Append a repair's certified turns (rows: point, heading from, signed change;
+    :mod:`gfuzzy.timespace.unirepair`) to ``ta``, ``tb``, ``tdh`` both ways, between the
+    copies ``copy_id(point, heading)`` (headings ``ch``), the change fitted to the copies'
+    own headings."""
+    for p, h, dh in turns.tolist():
+        c, d = copy_id(int(p), h), copy_id(int(p), h + dh)
+        dh += float(((ch[d] - ch[c] - dh) + math.pi) % (2 * math.pi) - math.pi)
+        ta += [c, d]
+        tb += [d, c]
+        tdh += [dh, -dh]
 
 
 def _ring_free(geometry, x: float, y: float, grid: FloatArray, step_h: float):

@@ -84,11 +84,12 @@ def _reached(base: _Reach, geometry, pose: FloatArray, connect_k: int, outward: 
 
 
 def ends_apart(planner, start: FloatArray, goal: FloatArray, connect_k: int, stretch: float,
-               deadline: float = math.inf) -> bool:  # fmt: skip
+               deadline: float = math.inf, extra=None) -> bool:  # fmt: skip
     """True when the drive's graph of ``planner`` cannot join ``start`` and ``goal``
     (``[x, y, heading]``), proven from its lanes (see the module docstring); False when it
     may (then the graph is built and searched as before). Only a box or footprint drive
     is asked (a disc's rings cost nothing: every heading is free where the disc is).
+    ``extra``: a repair's chains' lanes added (:class:`gfuzzy.timespace.unirepair.Chains`).
     :class:`gfuzzy.timespace.unilanes.OutOfTime` past ``deadline`` while the lanes are built."""
     geo, robot, rm = planner.geometry, planner.robot, planner.roadmap
     if robot.shape == "disc":
@@ -97,13 +98,13 @@ def ends_apart(planner, start: FloatArray, goal: FloatArray, connect_k: int, str
     goal = np.array(goal, dtype=float)
     start[2], goal[2] = wrap_angle(start[2]), wrap_angle(goal[2])
     ln = lanes(rm, geo, stretch, deadline)
-    n = len(ln.xy)
+    xy, e = (ln.xy, ln.edges) if extra is None else (np.vstack([ln.xy, extra.xy]), np.vstack([ln.edges, extra.edges]))
+    n = len(xy)
     with_copy = np.zeros(n, dtype=bool)
-    with_copy[ln.edges.reshape(-1)] = True
+    with_copy[e.reshape(-1)] = True
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
-    e = ln.edges
     graph = coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n)) if len(e) else coo_matrix((n, n))
     _, label = connected_components(graph, directed=False)
     if len(set(label[with_copy].tolist())) == 1:
@@ -114,7 +115,7 @@ def ends_apart(planner, start: FloatArray, goal: FloatArray, connect_k: int, str
     for back in (False, True) if robot.reverse else (False,):
         if _drive(geo, robot, sx, sy, gx, gy, back) is not None:
             return False
-    base = _Reach(ln.xy, with_copy, len(rm.vertices))
+    base = _Reach(xy, with_copy, len(rm.vertices))
     for tilts in (False, True):  # the graph tilts its ends when it does not join them without
         reached = _reached(base, geo, goal, connect_k, False, tilts, label, set())
         if _reached(base, geo, start, connect_k, True, tilts, label, reached) is None:

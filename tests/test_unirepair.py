@@ -1,0 +1,90 @@
+"""A box drive's way through a curved gap with half a centimetre per side: a chain of small
+turns no roadmap vertex offers, found by the repair (:mod:`gfuzzy.timespace.unirepair`)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from gfuzzy.check.check import check_trajectory
+from gfuzzy.planner.planner import Planner, PlanOptions
+from gfuzzy.roadmap.roadmap import Roadmap
+from gfuzzy.scene.scene import parse_scene
+
+R = 0.6  # the gap's middle line: a quarter circle round the origin
+H = math.pi / 2
+
+
+def arc_scene():
+    """A 0.6 x 0.2 box drive (reverse) round a post through a quarter-circle gap as wide as
+    the band it sweeps driving tangent to the circle plus 1 cm; a room before it (below the
+    x axis) and one after it (left of the y axis), the rest blocked."""
+    rin, rout = R - 0.1 - 0.005, math.hypot(R + 0.1, 0.3) + 0.005
+    t = np.linspace(0.0, math.pi / 2, 48)
+    outer = [[float(rout * math.cos(a)), float(rout * math.sin(a))] for a in t] + [[0.0, 1.5], [1.5, 1.5], [1.5, 0.0]]
+    return parse_scene({
+        "version": 1, "name": "arc-gap", "bounds": [-1.5, -1.5, 1.5, 1.5],
+        "robot": {"box": [0.6, 0.2], "vmax": 0.5, "kinematics": "unicycle", "reverse": True},
+        "obstacles": [{"disc": {"center": [0.0, 0.0], "radius": rin}}, {"polygon": outer},
+                      {"box": {"center": [-0.75, -0.75], "size": [1.5, 1.5]}}],
+    })  # fmt: skip
+
+
+def arc_roadmap(sc):
+    """Three vertices in each room, one at each mouth of the gap, and one in its middle
+    (the roadmap's holonomic way round): no lane at a held heading passes the gap."""
+    m = R / math.sqrt(2.0)
+    v = np.array([[R, 0.0, H], [R, -0.6, H], [R, -1.0, H], [0.0, R, math.pi], [-0.6, R, math.pi],
+                  [-1.0, R, math.pi], [m, m, 3 * math.pi / 4]])  # fmt: skip
+    e = np.array([[0, 1], [1, 2], [0, 2], [3, 4], [4, 5], [3, 5], [0, 6], [6, 3]])
+    return Roadmap(v, e, np.hypot(*(v[e[:, 1], :2] - v[e[:, 0], :2]).T), sc.name, sc.static_hash, sc.robot.circumradius)
+
+
+@pytest.fixture(scope="module")
+def arc():
+    sc = arc_scene()
+    return sc, arc_roadmap(sc)
+
+
+def test_a_drive_rounds_a_curved_gap_by_small_turns(arc):
+    """Main answers ``no_path`` (its lanes prove the ends apart: no straight lane passes
+    the gap, and turns happen only at vertices); the repair joins the rooms' pieces by a
+    chain of 2 cm drives and 0.01 rad turns, and the answer passes the check."""
+    sc, rm = arc
+    start, goal = [R, -0.6, H], [-0.6, R, math.pi]
+    off = Planner(sc, arc_roadmap(sc)).plan(start, goal, 0.0, PlanOptions(time_limit=1e6))
+    assert off.status.value == "no_path"  # the default (no --drive-repair): as before, at once
+    res = Planner(sc, rm).plan(start, goal, 0.0, PlanOptions(time_limit=1e6, drive_repair=True))
+    assert res.solved, res.message
+    rep = check_trajectory(sc, res.trajectory.waypoints)
+    assert rep.valid, rep.reason
+    wp = res.trajectory.waypoints
+    angles = np.arctan2(wp[:, 2], wp[:, 1])
+    assert angles.min() < 0.0 and angles.max() > math.pi / 2  # round the post, not elsewhere
+    assert np.all(np.hypot(wp[:, 1], wp[:, 2]) > R - 0.1)  # (the post's edge)
+
+
+def test_the_repair_is_kept_on_the_roadmap_and_changes_no_solved_answer(arc):
+    """A query the graph joins without it never builds the repair (the same answer as
+    before it): one inside the room before the gap."""
+    sc, rm = arc
+    rm2 = arc_roadmap(sc)
+    res = Planner(sc, rm2).plan([R, -0.6, H], [R, -1.0, H], 0.0, PlanOptions(time_limit=1e6, drive_repair=True))
+    assert res.solved, res.message
+    assert not any(k[0] in ("unicycle-chains", "unicycle-repaired") for k in rm2._derived)
+    res = Planner(sc, rm).plan([R, -0.6, H], [-0.6, R, math.pi], 0.0, PlanOptions(time_limit=1e6, drive_repair=True))
+    assert res.solved
+    assert any(k[0] == "unicycle-chains" for k in rm._derived)
+
+
+@pytest.mark.parametrize("command", ["plan", "regress", "batch"])
+def test_the_command_line_asks_for_the_repair(command):
+    """``--drive-repair`` reaches ``PlanOptions.drive_repair`` (off without it)."""
+    from gfuzzy.cli.common import _plan_options
+    from gfuzzy.cli.main import _parser
+
+    words = {"plan": ["plan", "s.yaml"], "regress": ["regress", "s.yaml"], "batch": ["batch", "s.yaml", "-o", "x.csv"]}
+    assert _plan_options(_parser().parse_args([*words[command], "--drive-repair"])).drive_repair
+    assert not _plan_options(_parser().parse_args(words[command])).drive_repair
