@@ -450,6 +450,8 @@ def _timed_out_file(path, executed, scene="line"):
         # a JSON integer past a float's range: an OverflowError traceback (check, render, export)
         ([[0, 1, 2.5], [10**400, 1.5, 2.5]], "executed[1][0]: expected a finite number, got 1000000"),
         ([[0, 1, 2.5], [0, 1.5, 2.5]], "executed[1][0]: t=0.0 does not increase"),
+        # beyond a scene's bound: shapely's two-line overflow warning, then a verdict (check, render)
+        ([[0, 1, 2.5], [1, 1e300, 2.5]], "executed[1][1]: number too large (1e+300; at most 1e+09 in magnitude)"),
         # rows of a box robot ("there is no trajectory to check")
         ([[0, 1, 2.5, 0], [1, 1.5, 2.5, 0]], "executed: rows of 4 numbers, but scene 'line' expects [t, x, y] for this disc robot"),
     ],
