@@ -566,6 +566,8 @@ def test_the_building_floor_roadmap_joins_its_rooms(seed):
         ("disc", {"options": {"vertices": 3, "resolution": [0.05]}}, "options.resolution: must be a number"),
         ("disc", {"options": {"vertices": 3, "bridge_ratio": 7}}, "options.bridge_ratio: must be in [0, 1]"),
         ("disc", {"circumradius": "x"}, "circumradius: expected a positive finite number, got 'x'"),
+        # numpy's wording under no key: "malformed roadmap: setting an array element with a sequence"
+        ("disc", {"vertices": [[0.5, 0.5], [1.0]]}, "vertices: expected rows of 2 or 3 finite numbers"),
         ("box", {"circumradius": 5.0}, "circumradius"),
         ("box", {"vertices": "2d"}, "vertices"),
     ],

@@ -337,12 +337,15 @@ def load_roadmap(path: str | os.PathLike, scene: Scene | None = None) -> Roadmap
     for key in ("vertices", "edges", "lengths", "options", "scene", "scene_hash", "circumradius"):
         if key not in doc:
             raise SceneError(file, key, "missing required key")
-    try:
-        vertices = np.asarray(doc["vertices"], dtype=float)
-        raw_edges = np.asarray(doc["edges"])
-        lengths = np.asarray(doc["lengths"], dtype=float)
-    except (KeyError, TypeError, ValueError, OverflowError) as exc:
-        raise SceneError(file, "", f"malformed roadmap: {' '.join(str(exc).split())[:80]}") from None
+    arrays = {}
+    for key, dtype, want in (("vertices", float, "expected rows of 2 or 3 finite numbers"),
+                             ("edges", None, "expected pairs of whole vertex indices"),
+                             ("lengths", float, "expected one finite, non-negative length per edge")):  # fmt: skip
+        try:  # numpy's wording ("setting an array element with a sequence ...") named no key
+            arrays[key] = np.asarray(doc[key], dtype=dtype)
+        except (TypeError, ValueError, OverflowError):
+            raise SceneError(file, key, want) from None
+    vertices, raw_edges, lengths = arrays["vertices"], arrays["edges"], arrays["lengths"]
     opts = _options_from(file, doc["options"])
     circumradius = doc["circumradius"]  # float() of a string "2" read it; of "x", Python's wording
     if isinstance(circumradius, bool) or not isinstance(circumradius, numbers.Real) or not (
