@@ -301,8 +301,8 @@ def _short(v) -> str:
 def _rows(rows, file: str, key: str) -> FloatArray:
     """A file's ``key`` (``waypoints``, or a navigate run's ``executed``) as a float table,
     read by the contract's rules: a non-empty list of rows ``[t, x, y(, heading)]`` of one
-    width, finite numbers (no strings or booleans), t strictly increasing; else a SceneError
-    naming the row."""
+    width, finite numbers (no strings or booleans), the pose's at most ``MAX_MAGNITUDE`` in
+    magnitude (as a scene's), t strictly increasing; else a SceneError naming the row."""
     if not isinstance(rows, list) or not rows:
         raise SceneError(file, key, "expected a non-empty list of rows [t, x, y] or [t, x, y, heading]")
     width = len(rows[0]) if isinstance(rows[0], list) else -1
@@ -314,6 +314,8 @@ def _rows(rows, file: str, key: str) -> FloatArray:
         for j, v in enumerate(row):
             if not _finite_number(v):
                 raise SceneError(file, f"{key}[{i}][{j}]", f"expected a finite number, got {_short(v)}")
+            if j and abs(v) > MAX_MAGNITUDE:  # a pose as a scene's numbers; t may pass it (a plan from t0 = 1e9)
+                raise SceneError(file, f"{key}[{i}][{j}]", f"number too large ({_short(v)}; at most {MAX_MAGNITUDE:g} in magnitude)")
     table = np.asarray(rows, dtype=float)
     back = np.nonzero(np.diff(table[:, 0]) <= 0)[0]
     if back.size:  # section 2: t strictly increasing; without it the rows are no trajectory

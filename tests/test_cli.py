@@ -450,6 +450,8 @@ def _timed_out_file(path, executed, scene="line"):
         # a JSON integer past a float's range: an OverflowError traceback (check, render, export)
         ([[0, 1, 2.5], [10**400, 1.5, 2.5]], "executed[1][0]: expected a finite number, got 1000000"),
         ([[0, 1, 2.5], [0, 1.5, 2.5]], "executed[1][0]: t=0.0 does not increase"),
+        # beyond a scene's bound: shapely's two-line overflow warning, then a verdict (check, render)
+        ([[0, 1, 2.5], [1, 1e300, 2.5]], "executed[1][1]: number too large (1e+300; at most 1e+09 in magnitude)"),
         # rows of a box robot ("there is no trajectory to check")
         ([[0, 1, 2.5, 0], [1, 1.5, 2.5, 0]], "executed: rows of 4 numbers, but scene 'line' expects [t, x, y] for this disc robot"),
     ],
@@ -477,3 +479,17 @@ def test_check_of_a_timed_out_run_says_what_is_wrong_with_its_motion(line_scene,
     rc, _, err = _run(capsys, "check", line_scene, nav)
     assert rc == 1 and err.splitlines()[0] == f"note: {nav} was planned for scene 'elsewhere', checking against 'line'"
     assert "the motion it executed (1 row, t 0 to 0) is valid" in err.splitlines()[1], err
+
+
+def test_render_and_export_note_a_duration_the_rows_disagree_with_as_check_says_it(line_scene, tmp_path, capsys):
+    # check said "duration is 5.0 but the rows span 1.0"; render and export drew it silently
+    path = _trajectory_file(tmp_path / "t.json", [[0, 1, 2.5], [1, 1.5, 2.5]])
+    doc = json.loads(path.read_text())
+    path.write_text(json.dumps({**doc, "duration": 5.0}))
+    said = f"{path}: duration is 5.0 but the rows span 1.0"
+    rc, _, err = _run(capsys, "check", line_scene, path)
+    assert rc == 1 and err.splitlines()[-1] == said, err
+    rc, _, err = _run(capsys, "render", line_scene, path, "--no-roadmap", "-o", tmp_path / "t.png")
+    assert rc == 0 and err == f"note: {said} (`gfuzzy check` exits 1); drawing it anyway\n", err
+    rc, _, err = _run(capsys, "export", line_scene, path, "-o", tmp_path / "t.mcap")
+    assert rc == 0 and err == f"note: {said} (`gfuzzy check` exits 1); exported anyway\n", err

@@ -607,6 +607,17 @@ def test_gfuzzy_map_says_when_the_robot_fits_nowhere(tmp_path, capsys):
     assert not load_scene(out).queries
 
 
+@pytest.mark.parametrize("resolution, origin", [(5e8, (0.0, 0.0, 0.0)), (0.5, (-1e9, 999999999.0, 0.0))])
+def test_gfuzzy_map_of_a_map_reaching_past_a_scenes_bound_names_the_map(tmp_path, capsys, resolution, origin):
+    # it said "s.yaml: bounds[2]: number too large": a place in the output file it had not written
+    m = write_map(tmp_path, np.full((4, 6), 254), resolution=resolution, origin=origin)
+    out = tmp_path / "s.yaml"
+    assert main(["map", str(m), "--robot-disc", "0.1", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith(f"{m}: resolution: the map's far corner ("), err
+    assert "lies beyond 1e+09 in magnitude" in err and not out.exists()
+
+
 @pytest.mark.parametrize("stem", ["12", "null", "1e3"])
 def test_gfuzzy_map_of_a_scene_named_like_a_number(tmp_path, capsys, stem):
     # `-o 12.yaml` wrote "name: 12", which reads as a number: refused as it was written

@@ -526,6 +526,32 @@ def test_navigate_into_a_sealed_room_is_no_path_at_once(tmp_path):
     assert "waypoints" not in doc and "replans" not in doc
 
 
+BOX_BEHIND_A_DOOR = """
+version: 1
+name: boxdoor
+bounds: [0, 0, 10, 6]
+robot: {box: [0.8, 0.6], vmax: 1.0}
+obstacles:
+  - box: {center: [5, 1.355], size: [0.2, 2.71]}
+  - box: {center: [5, 4.645], size: [0.2, 2.71]}
+queries:
+  - {name: q, start: [1, 3, 0], goal: [9, 3, 0]}
+"""
+
+
+def test_navigate_of_a_box_robot_the_roadmap_does_not_join_is_no_path_at_once(tmp_path, capsys):
+    # a 0.58 m door, a box 0.6 m across: plan said no_path at once, navigate replanned until
+    # --max-time (120 s by default) and said timeout; it now asks the planner's own test
+    scene = tmp_path / "boxdoor.yaml"
+    scene.write_text(BOX_BEHIND_A_DOOR)
+    out = tmp_path / "nav.json"
+    rc, stdout, err = run_main(capsys, "navigate", scene, "-n", "40", "--budget-clock", "cpu", "--max-time", "5", "-o", out)
+    assert rc == 1 and stdout == "boxdoor q: no_path (start and goal are not connected on the roadmap (sealed off, " \
+        "or the roadmap missed a passage: more vertices, -n, may find it))\n", (stdout, err)
+    doc = json.loads(out.read_text())
+    assert doc["status"] == "no_path" and doc["message"] in stdout and "replans" not in doc
+
+
 def test_navigate_start_on_a_person_is_an_invalid_query(tmp_path, tmp_scene):
     scene = tmp_scene(
         """

@@ -377,7 +377,8 @@ def test_waypoints_may_start_with_a_minus_and_their_errors_name_the_option(tmp_p
     assert rc == 0 and out.is_file(), err
     out.unlink()
     for wps, what in (("-1.5,3.0;5,1", "point 2 (5, 1) is not free"), ("-1e3,3;8,5", "point 1 (-1000, 3) lies outside"),
-                      ("-1.5,nan;8,5", "point 1 must be two finite numbers")):  # fmt: skip
+                      ("-1.5,nan;8,5", "point 1 must be two finite numbers"),
+                      ("-1.5,3;8,1e300", "point 2 must be two finite numbers of at most 1e+09")):  # fmt: skip
         rc, _, err = run_main(capsys, "populate", str(src), "--people", "2", "--waypoints", wps, "-o", str(out))
         assert rc == 2 and err.count("\n") == 1, err
         assert err.startswith(f"{src}: --waypoints: {what}"), err

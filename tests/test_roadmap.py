@@ -559,8 +559,15 @@ def test_the_building_floor_roadmap_joins_its_rooms(seed):
     [
         ("disc", {"options": "x"}, "options"),
         ("disc", {"options": {"vertices": 3, "colour": "red"}}, "options.colour"),
-        ("disc", {"options": {"vertices": 3, "seed": -1}}, "options"),
+        ("disc", {"options": {"vertices": 3, "seed": -1}}, "options.seed"),
         ("disc", {"circumradius": -1.0}, "circumradius"),
+        # Python's wording: "'<' not supported between instances of 'str' and 'int'", "could not convert"
+        ("disc", {"options": {"vertices": "x"}}, "options.vertices: must be a whole number, got 'x'"),
+        ("disc", {"options": {"vertices": 3, "resolution": [0.05]}}, "options.resolution: must be a number"),
+        ("disc", {"options": {"vertices": 3, "bridge_ratio": 7}}, "options.bridge_ratio: must be in [0, 1]"),
+        ("disc", {"circumradius": "x"}, "circumradius: expected a positive finite number, got 'x'"),
+        # numpy's wording under no key: "malformed roadmap: setting an array element with a sequence"
+        ("disc", {"vertices": [[0.5, 0.5], [1.0]]}, "vertices: expected rows of 2 or 3 finite numbers"),
         ("box", {"circumradius": 5.0}, "circumradius"),
         ("box", {"vertices": "2d"}, "vertices"),
     ],
@@ -577,7 +584,7 @@ def test_a_broken_roadmap_names_the_key_that_is_wrong(small, tmp_path, kind, cha
     bad.write_text(json.dumps(doc))
     with pytest.raises(SceneError) as info:
         load_roadmap(bad, scene)
-    assert str(info.value).startswith(f"{bad}: {place}: "), str(info.value)
+    assert str(info.value).startswith(f"{bad}: {place}" + ("" if ":" in place else ": ")), str(info.value)
     assert "RoadmapOptions" not in str(info.value)
 
 

@@ -286,6 +286,15 @@ def test_offset_shifts_the_scaled_positions(tmp_path, csv_file, capsys):
         TrackSceneOptions(offset=(1.0,))
 
 
+@pytest.mark.parametrize("n", ["0", "-1"])
+def test_max_movers_below_one_is_refused(tmp_path, csv_file, capsys, n):
+    # 0 wrote a scene with no movers at all
+    out = tmp_path / "o.yaml"
+    rc, _, err = run_main(capsys, "tracks", csv_file, "--max-movers", n, "-o", out)
+    assert rc == 2 and err == f"gfuzzy tracks: max_movers must be at least 1, got {n}\n", err
+    assert not out.exists()
+
+
 def test_max_movers_keeps_those_present_longest(eth_file):
     made = tracks_scene(
         read_tracks(eth_file), TrackSceneOptions(region=(-1, -1, 10, 10), max_movers=2)

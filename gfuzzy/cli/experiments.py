@@ -112,19 +112,20 @@ def cmd_tracks(args) -> int:
     return EXIT_OK
 
 
-def _sealed_off(scene, query) -> str:
-    """Why no way joins the query's start and goal among the static obstacles (a disc robot's
-    free space holds them in separate regions: ``plan``'s no_path message), or ""."""
+def _sealed_off(scene, roadmap, query) -> str:
+    """Why no way joins the query's start and goal on the roadmap among the static obstacles,
+    as ``plan`` says it (its no_path message: a disc robot's free space holds them in separate
+    regions; another robot's roadmap does not join them, nor does a bridge to it), or ""."""
     import numpy as np
 
-    from ..roadmap.freespace import free_space
-    from ..roadmap.narrowest import separation
+    from ..planner.planner import Planner, PlanOptions
+    from ..poses import wrap_angle
 
-    fs = free_space(scene)
-    if fs is None:  # not a disc robot: the roadmap's gap proves nothing
-        return ""
-    sep = separation(scene, fs, np.asarray(query.start, dtype=float), np.asarray(query.goal, dtype=float))
-    return "" if sep is None else sep.message()
+    start, goal = np.array(query.start, dtype=float), np.array(query.goal, dtype=float)
+    if len(start) == 3:  # as plan wraps them before it asks
+        start[2], goal[2] = wrap_angle(start[2]), wrap_angle(goal[2])
+    linked, message = Planner(scene, roadmap).through_free_space(start, goal, PlanOptions().connect_k)
+    return "" if linked is not None else message
 
 
 def _writable_folder(path: Path, flag: str) -> None:
@@ -375,7 +376,7 @@ def cmd_navigate(args) -> int:
     roadmap = _roadmap_for(scene, args)
     nav = Navigator(scene, roadmap, query.goal, knowing_view(options, sensor.fov) if sensor else options)
     rd = nav.roadmap_distance(np.asarray(query.start, dtype=float))
-    sealed = "" if math.isfinite(rd) else _sealed_off(scene, query)
+    sealed = "" if math.isfinite(rd) else _sealed_off(scene, roadmap, query)
     if sealed:  # no mover opens a way: replanning until --max-time (up to 100000 replans: hours) changes nothing
         tf = TrajectoryFile(scene.name, query.name, Status.NO_PATH, sealed, None, None, None, 0.0)
         if out is not None:

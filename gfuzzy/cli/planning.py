@@ -225,11 +225,9 @@ def cmd_check(args) -> int:
         base = query or Query("adhoc", tuple(w[0, 1:]), tuple(w[-1, 1:]), float(w[0, 0]))
         query = replace(base, hold=_hold(args, base.hold))
     rep = check_trajectory(scene, tf.waypoints, query)
-    if rep.valid and tf.duration is not None:
-        actual = float(tf.waypoints[-1, 0] - tf.waypoints[0, 0])
-        if abs(actual - tf.duration) > 1e-6:
-            _say(f"{args.trajectory}: duration is {tf.duration!r} but the rows span {actual!r}")
-            return EXIT_NO
+    if rep.valid and (wrong := _duration_disagrees(tf)):
+        _say(f"{args.trajectory}: {wrong}")
+        return EXIT_NO
     if not rep.valid:
         _say(f"{args.trajectory}: invalid: {rep.reason}")
         return EXIT_NO
@@ -240,6 +238,15 @@ def cmd_check(args) -> int:
         sys.stdout,
     )
     return EXIT_OK
+
+
+def _duration_disagrees(tf) -> str:
+    """What `check` says of a solved file whose ``duration`` is not the span of its rows
+    (render and export note it), or ""."""
+    if tf.duration is None or tf.waypoints is None:
+        return ""
+    actual = float(tf.waypoints[-1, 0] - tf.waypoints[0, 0])
+    return f"duration is {tf.duration!r} but the rows span {actual!r}" if abs(actual - tf.duration) > 1e-6 else ""
 
 
 def _executed_verdict(scene, tf, path) -> str:
@@ -284,12 +291,15 @@ def _query_of(scene, tf):
 
 def _violation(scene, tf, path, anyway="drawing it anyway"):
     """(time, reason) of a drawn or exported trajectory's first violation of the guarantees,
-    told on stderr (render and export go on, `check` exits 1 on it); None when it is valid."""
+    told on stderr (render and export go on, `check` exits 1 on it); None when it is valid
+    (a ``duration`` that disagrees with its rows then noted, as `check` says it)."""
     from ..check.check import check_trajectory
 
     query = _query_of(scene, tf)
     rep = check_trajectory(scene, tf.waypoints, query)
     if rep.valid:
+        if wrong := _duration_disagrees(tf):  # as `check` says it (it said nothing here)
+            _say(f"note: {path}: {wrong} (`gfuzzy check` exits 1); {anyway}")
         return None
     _say(f"note: {path}: invalid: {rep.reason} (`gfuzzy check` exits 1); {anyway}")
     return None if rep.time is None else (rep.time, rep.reason)

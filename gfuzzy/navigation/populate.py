@@ -28,7 +28,7 @@ from ..errors import InputError, check_number
 from ..rng import create_rng
 from ..roadmap.freespace import obstacle_shape
 from ..scene.scene import Mover, Scene
-from ..settings import MAX_RUN_STEPS
+from ..settings import MAX_MAGNITUDE, MAX_RUN_STEPS
 from ..typed import FloatArray
 
 __all__ = ["PopulateOptions", "Populated", "populate", "write_scene", "obstacle_union"]
@@ -88,8 +88,9 @@ class PopulateOptions:
         if self.waypoints is not None and len(self.waypoints) < 2:
             raise InputError(f"waypoints must be at least two points, got {len(self.waypoints)}")
         for i, p in enumerate(self.waypoints or ()):  # a NaN used to reach the grid's lookup
-            if len(p) != 2 or not all(isinstance(v, numbers.Real) and math.isfinite(v) for v in p):
-                raise InputError(f"waypoints[{i}] must be two finite numbers, got {tuple(p)}")
+            if len(p) != 2 or not all(isinstance(v, numbers.Real) and math.isfinite(v) and abs(v) <= MAX_MAGNITUDE for v in p):
+                raise InputError(f"waypoints[{i}] must be two finite numbers of at most {MAX_MAGNITUDE:g} in magnitude, "
+                                 f"got {tuple(p)}")
 
 
 @dataclass(frozen=True)

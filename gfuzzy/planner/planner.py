@@ -334,7 +334,7 @@ class Planner:
 
     def _not_joined(self, start, goal, prepared: bool, linked: bool, k: int, deadline: float) -> tuple[Planner | None, str]:
         """The roadmap does not join start and goal: a planner to try again (see
-        :meth:`_through_free_space`), or None and the ``no_path`` message."""
+        :meth:`through_free_space`), or None and the ``no_path`` message."""
         if linked:
             return None, (
                 "start and goal share a region of the free space, but no certified path through "
@@ -343,9 +343,9 @@ class Planner:
             )  # fmt: skip
         if prepared:  # a kept goal graph (replanning) is not extended
             return None, "start and goal are not connected on the roadmap (sealed off, or the roadmap is too sparse)"
-        return self._through_free_space(start, goal, k, deadline)
+        return self.through_free_space(start, goal, k, deadline)
 
-    def _through_free_space(self, start, goal, k: int, deadline: float = math.inf) -> tuple[Planner | None, str]:
+    def through_free_space(self, start, goal, k: int, deadline: float = math.inf) -> tuple[Planner | None, str]:
         """When the roadmap does not join ``start`` and ``goal``: a planner on the roadmap
         extended through the free space, or None and the reason no way exists.
 

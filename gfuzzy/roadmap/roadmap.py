@@ -13,7 +13,9 @@ import hashlib
 import json
 import logging
 import math
+import numbers
 import os
+import sys
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field, fields
@@ -90,6 +92,17 @@ class RoadmapOptions:
     join: bool = True
 
     def __post_init__(self):
+        for name in ("vertices", "neighbors"):  # a file's "x" met `<` (Python's wording), 2.5 a range()
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+                raise InputError(f"{name} must be a whole number, got {value!r}")
+        for name in ("resolution", "bridge_ratio"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, numbers.Real):  # its range is checked below
+                raise InputError(f"{name} must be a number, got {value!r}")
+        for name in ("repair", "join"):
+            if not isinstance(getattr(self, name), (bool, np.bool_)):
+                raise InputError(f"{name} must be true or false, got {getattr(self, name)!r}")
         if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)) or not 0 <= self.seed < 2**31:
             raise InputError(f"seed must be a whole number from 0 to {2**31 - 1}, got {self.seed!r}")
         if self.vertices < 1:
@@ -103,6 +116,8 @@ class RoadmapOptions:
             raise InputError(f"neighbors must be >= 1, got {self.neighbors}")
         if not 0 < self.resolution <= 0.5:
             raise InputError(f"resolution must be in (0, 0.5], got {self.resolution}")
+        if not 0 <= self.bridge_ratio <= 1:  # a share of the samples
+            raise InputError(f"bridge_ratio must be in [0, 1], got {self.bridge_ratio}")
         if self.sampler not in ("uniform", "passage"):
             raise InputError(f"sampler must be 'uniform' or 'passage', got {self.sampler!r}")
 
@@ -322,16 +337,22 @@ def load_roadmap(path: str | os.PathLike, scene: Scene | None = None) -> Roadmap
     for key in ("vertices", "edges", "lengths", "options", "scene", "scene_hash", "circumradius"):
         if key not in doc:
             raise SceneError(file, key, "missing required key")
-    try:
-        vertices = np.asarray(doc["vertices"], dtype=float)
-        raw_edges = np.asarray(doc["edges"])
-        lengths = np.asarray(doc["lengths"], dtype=float)
-        circumradius = float(doc["circumradius"])
-    except (KeyError, TypeError, ValueError, OverflowError) as exc:
-        raise SceneError(file, "", f"malformed roadmap: {' '.join(str(exc).split())[:80]}") from None
+    arrays = {}
+    for key, dtype, want in (("vertices", float, "expected rows of 2 or 3 finite numbers"),
+                             ("edges", None, "expected pairs of whole vertex indices"),
+                             ("lengths", float, "expected one finite, non-negative length per edge")):  # fmt: skip
+        try:  # numpy's wording ("setting an array element with a sequence ...") named no key
+            arrays[key] = np.asarray(doc[key], dtype=dtype)
+        except (TypeError, ValueError, OverflowError):
+            raise SceneError(file, key, want) from None
+    vertices, raw_edges, lengths = arrays["vertices"], arrays["edges"], arrays["lengths"]
     opts = _options_from(file, doc["options"])
-    if not (math.isfinite(circumradius) and circumradius > 0):
-        raise SceneError(file, "circumradius", f"expected a positive finite number, got {circumradius}")
+    circumradius = doc["circumradius"]  # float() of a string "2" read it; of "x", Python's wording
+    if isinstance(circumradius, bool) or not isinstance(circumradius, numbers.Real) or not (
+        0 < circumradius <= sys.float_info.max  # NaN and inf fail it, a 400-digit integer too
+    ):
+        raise SceneError(file, "circumradius", f"expected a positive finite number, got {circumradius!r}")
+    circumradius = float(circumradius)
     if vertices.ndim != 2 or vertices.shape[1] not in (2, 3) or not np.all(np.isfinite(vertices)):
         raise SceneError(file, "vertices", "expected rows of 2 or 3 finite numbers")
     if raw_edges.size == 0:
@@ -383,7 +404,11 @@ def _options_from(file: str, raw) -> RoadmapOptions:
     try:
         return RoadmapOptions(**{"repair": False, "join": False, **raw})
     except (TypeError, ValueError) as exc:
-        raise SceneError(file, "options", " ".join(str(exc).split())[:120]) from None
+        text = " ".join(str(exc).split())[:120]
+        field_name, _, rest = text.partition(" ")  # "vertices must be ...": options.vertices: must be ...
+        if field_name in known:
+            raise SceneError(file, f"options.{field_name}", rest) from None
+        raise SceneError(file, "options", text) from None
 
 
 def default_roadmap_path(scene: Scene, folder: str | os.PathLike = "roadmaps") -> Path:

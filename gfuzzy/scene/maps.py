@@ -43,7 +43,7 @@ import numpy as np
 
 from ..errors import SceneError, not_utf8
 from ..typed import FloatArray
-from .yamldoc import _V, _inside, _join, _kind, _load_yaml
+from .yamldoc import _V, MAX_MAGNITUDE, _inside, _join, _kind, _load_yaml
 
 __all__ = [
     "MAP_MODES",
@@ -591,11 +591,13 @@ def load_map(spec, place: str, scene_file: str, folder: str | os.PathLike) -> Ma
     blocked = blocked_cells(values, unknown == "free")
     rects = blocked_rectangles(blocked, info.resolution, info.origin)
     h, w = values.shape
-    if not all(
-        math.isfinite(c)
-        for c in (info.origin[0] + w * info.resolution, info.origin[1] + h * info.resolution)
-    ):
-        v.fail(fplace, "the map's extent is not finite")
+    far = (info.origin[0] + w * info.resolution, info.origin[1] + h * info.resolution)
+    if not all(math.isfinite(c) and abs(c) <= MAX_MAGNITUDE for c in far):  # a scene's bounds: else the
+        # error named the bounds of a scene `gfuzzy map` had not written (its output file)
+        raise SceneError(
+            str(path), "resolution", f"the map's far corner ({far[0]:g}, {far[1]:g}) = origin + {w} x {h} cells x "
+            f"{info.resolution:g} m lies beyond {MAX_MAGNITUDE:g} in magnitude (a scene's bound)"
+        )
     digest = hashlib.sha256(ydata + b"\0" + idata).hexdigest()
     return MapObstacle(spec["file"], path, info, unknown == "free", values, blocked, rects, digest)
 

@@ -252,8 +252,8 @@ class TrackSceneOptions:
             raise InputError(f"offset must be two finite numbers dx dy of at most {MAX_MAGNITUDE:g} in magnitude, "
                              f"got {self.offset!r}")  # fmt: skip
         object.__setattr__(self, "offset", tuple(float(v) for v in off))
-        if self.max_movers is not None and self.max_movers < 0:
-            raise InputError(f"max_movers must not be negative, got {self.max_movers!r}")
+        if self.max_movers is not None and self.max_movers < 1:  # 0 wrote a scene without the recording's people
+            raise InputError(f"max_movers must be at least 1, got {self.max_movers!r}")
         gap = self.max_gap
         if gap is not None and (isinstance(gap, bool) or not (isinstance(gap, numbers.Real) and gap > 0)):
             raise InputError(f"max_gap must be positive (inf: never cut), got {self.max_gap!r}")
