@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 import shapely
 import yaml
-from conftest import run_cli_process
+from helpers import run_main
 from shapely import affinity
 
 from gfuzzy.check.check import check_trajectory
@@ -145,7 +145,8 @@ def test_join_spends_at_most_its_budget():
     assert j.added_vertices == j.added_edges == 0 and len(j.edges) == len(plain.edges)
 
 
-def test_old_files_load_without_the_join_and_the_cli_reports_it(tmp_path):
+def test_old_files_load_without_the_join_and_the_cli_reports_it(tmp_path, capsys):
+    # the command in process: ``gfuzzy roadmap``'s own process is tested in test_scene
     scene = parse_scene(door_doc())
     rm = build_roadmap(scene, RoadmapOptions(vertices=30, seed=6, sampler="uniform"))
     out = tmp_path / "rm.json"
@@ -157,13 +158,13 @@ def test_old_files_load_without_the_join_and_the_cli_reports_it(tmp_path):
     assert load_roadmap(out, scene).options.join is False  # as built before the join
     path = tmp_path / "sealed.yaml"
     path.write_text(yaml.safe_dump(sealed_doc()), encoding="utf-8")
-    p = run_cli_process("roadmap", path, "-n", "40", "--seed", "2", "-o", out)
-    assert p.returncode == 0, p.stderr
+    rc, stdout, stderr = run_main(capsys, "roadmap", path, "-n", "40", "--seed", "2", "-o", out)
+    assert rc == 0, stderr
     said = "component join: 2 -> 2 component(s), 0 vertices beyond -n 40 (0 of 400 collision checks; "
-    assert said + "1 proven apart: the robot's inscribed disc cannot get out; " in p.stdout
+    assert said + "1 proven apart: the robot's inscribed disc cannot get out; " in stdout
     assert json.loads(out.read_text())["info"]["join"]["components_after"] == 2
-    p = run_cli_process("roadmap", path, "-n", "40", "--seed", "2", "--no-join", "-o", out)
-    assert p.returncode == 0 and "component join" not in p.stdout
+    rc, stdout, _ = run_main(capsys, "roadmap", path, "-n", "40", "--seed", "2", "--no-join", "-o", out)
+    assert rc == 0 and "component join" not in stdout
     doc = json.loads(out.read_text())
     assert doc["options"]["join"] is False and "join" not in doc["info"]
 
@@ -278,7 +279,7 @@ def test_join_takes_a_differential_drive_through_a_door_along_its_heading_only()
         _plan_and_check(scene, rm, start, goal)
 
 
-@pytest.mark.parametrize("seed", [1, 2, 3])
+@pytest.mark.parametrize("seed", [1])  # (seeds 2 and 3 failed on the same old code as 1: 3 s each)
 def test_join_takes_a_differential_drive_exactly_as_wide_as_the_door_through_it(seed):
     """The U as a differential drive through a 0.9 door: 0.9 wide across its heading, it
     crosses only centred and along the door's axis, touching both jambs. The doors step left

@@ -13,7 +13,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from conftest import ROOT, run_cli_process
+from conftest import ROOT, run_python
+from helpers import run_main
 from helpers import scene_doc as _doc
 from helpers import scene_of as _scene
 from reference import brute_force_steps, contract_metric, reference_violation
@@ -241,20 +242,21 @@ def test_trajectory_file_formats(open_scene, tmp_path):
     assert np.allclose(traj.at(traj.t_end + 5), traj.poses[-1])
 
 
-def test_api_and_cli_agree(open_scene, tmp_path):
+def test_api_and_cli_agree(open_scene, tmp_path, capsys):
+    # in process: the commands' own process is tested in test_cli (plan, check)
     scene, rm = open_scene
     rm_path = tmp_path / "rm.json"
     rm.save(rm_path)
     out = tmp_path / "out.json"
-    proc = run_cli_process("plan", scene.source, "--roadmap", rm_path, "-o", out)
-    assert proc.returncode == 0, proc.stderr
+    rc, _, err = run_main(capsys, "plan", scene.source, "--roadmap", rm_path, "-o", out)
+    assert rc == 0, err
     doc = json.loads(out.read_text())
     q = scene.queries[0]
     res = plan(scene, rm, q.start, q.goal, q.t0)
     assert doc["status"] == res.status.value
     assert np.allclose(np.asarray(doc["waypoints"]), res.trajectory.waypoints)
-    chk = run_cli_process("check", scene.source, out)
-    assert chk.returncode == 0, chk.stderr
+    rc, _, err = run_main(capsys, "check", scene.source, out)
+    assert rc == 0, err
 
 
 def test_box_robot_heading_and_metric(tmp_path):
@@ -331,17 +333,30 @@ queries:
 """
 
 
-def test_robot_that_fits_nowhere_is_reported_not_hung(tmp_path):
+# ``gfuzzy roadmap`` in a real process (a hang is a timeout, not a stuck suite) whose growth
+# gives up after 2000 fruitless checks, not 200 000 (4 s of FCL): the same stall rule
+GIVE_UP_SOONER = """
+import sys
+import gfuzzy.roadmap.roadmap as roadmap
+roadmap.STALL_CHECKS = 2000
+from gfuzzy.__main__ import run
+sys.argv[0] = "gfuzzy"
+sys.exit(run())
+"""
+
+
+def test_robot_that_fits_nowhere_is_reported_not_hung(tmp_path, capsys):
     p = tmp_path / "nofit.yaml"
     p.write_text(NOFIT)
     out = tmp_path / "rm.json"
-    proc = run_cli_process("roadmap", p, "-o", out, timeout=60)
+    proc = run_python(GIVE_UP_SOONER, "roadmap", p, "-o", out, timeout=60)
     assert proc.returncode == 2
     assert proc.stderr.count("\n") == 1 and "robot" in proc.stderr and str(p) in proc.stderr
+    assert int(re.search(r"after (\d+) collision checks", proc.stderr)[1]) < 10_000  # (the rule above)
     assert not out.exists()
     ans = tmp_path / "a.json"
-    proc = run_cli_process("plan", p, "-o", ans, timeout=60)
-    assert proc.returncode == 1
+    rc, _, _ = run_main(capsys, "plan", p, "-o", ans)
+    assert rc == 1
     assert json.loads(ans.read_text())["status"] == "invalid_query"
 
 
@@ -386,15 +401,15 @@ def test_roadmap_distance_agrees_with_networkx(open_scene):
     assert res.roadmap_distance >= float(np.hypot(*(rm.vertices[b] - rm.vertices[a]))) - 1e-9
 
 
-def test_a_time_step_far_too_fine_is_refused_not_swallowed(corridor, tmp_path):
+def test_a_time_step_far_too_fine_is_refused_not_swallowed(corridor, tmp_path, capsys):
     scene, rm = corridor
     q = scene.queries[0]
     with pytest.raises(ValueError, match="larger dt"):
         plan(scene, rm, q.start, q.goal, 0.0, PlanOptions(dt=1e-5))
     rm_path = tmp_path / "rm.json"
     rm.save(rm_path)
-    proc = run_cli_process("plan", scene.source, "--roadmap", rm_path, "--dt", "1e-5", "-o", tmp_path / "a.json")
-    assert proc.returncode == 2 and "larger dt" in proc.stderr and "Traceback" not in proc.stderr
+    rc, _, err = run_main(capsys, "plan", scene.source, "--roadmap", rm_path, "--dt", "1e-5", "-o", tmp_path / "a.json")
+    assert rc == 2 and "larger dt" in err and err.count("\n") == 1  # one line, no traceback
     assert not (tmp_path / "a.json").exists()
 
 
@@ -735,7 +750,7 @@ def test_door_blocked_for_250_s_is_solved_by_default(blocked):
     assert check_trajectory(scene, res.trajectory.waypoints, q).valid
 
 
-def test_no_path_from_the_horizon_says_so(blocked, tmp_path):
+def test_no_path_from_the_horizon_says_so(blocked, tmp_path, capsys):
     scene, rm = blocked
     q = scene.queries[0]
     res = plan(scene, rm, q.start, q.goal, options=PlanOptions(horizon=100.0))
@@ -743,16 +758,16 @@ def test_no_path_from_the_horizon_says_so(blocked, tmp_path):
     assert "horizon" in res.message and "--horizon" in res.message
     path = tmp_path / "blocked.yaml"
     path.write_text(BLOCKED)
-    r = run_cli_process("plan", path, "-n", "60", "--seed", "2", "--horizon", "100", cwd=tmp_path)
-    assert r.returncode == 1 and "--horizon" in r.stdout
+    rc, stdout, _ = run_main(capsys, "plan", path, "-n", "60", "--seed", "2", "--horizon", "100", "-o", tmp_path / "a.json")
+    assert rc == 1 and "--horizon" in stdout
 
 
-def test_a_negative_ga_seed_is_refused_where_the_options_are_made():
+def test_a_negative_ga_seed_is_refused_where_the_options_are_made(capsys):
     with pytest.raises(InputError, match=r"seed \(the GA's, --ga-seed\) must be a whole number >= 0"):
         PlanOptions(seed=-1)
-    r = run_cli_process("plan", ROOT / "scenes" / "building-floor.yaml", "--refine", "--ga-seed", "-1")
-    assert r.returncode == 2 and r.stderr.startswith("gfuzzy plan: seed (the GA's")
-    assert len(r.stderr.strip().splitlines()) == 1
+    rc, _, err = run_main(capsys, "plan", ROOT / "scenes" / "building-floor.yaml", "--refine", "--ga-seed", "-1")
+    assert rc == 2 and err.startswith("gfuzzy plan: seed (the GA's")
+    assert len(err.strip().splitlines()) == 1
 
 
 def test_an_infinite_horizon_grows_until_the_search_is_not_cut(blocked):

@@ -65,11 +65,18 @@ def _run(*args):
     return subprocess.run([sys.executable, "-m", "gfuzzy", *args], capture_output=True, text=True, cwd=ROOT)
 
 
-def test_populate_writes_a_scene_that_loads_and_whose_people_avoid_the_walls(tmp_path):
+def _main(capsys, *args):
+    """``gfuzzy ARGS`` in process, answered as :func:`_run` answers (the command's own
+    process: ``_run`` where the tests below use it)."""
+    rc, out, err = run_main(capsys, *args)
+    return subprocess.CompletedProcess(args, rc, out, err)
+
+
+def test_populate_writes_a_scene_that_loads_and_whose_people_avoid_the_walls(tmp_path, capsys):
     src = tmp_path / "room.yaml"
     src.write_text(yaml.safe_dump(ROOM))
     out = tmp_path / "room-people.yaml"
-    p = _run("populate", str(src), "--people", "8", "--seed", "2", "--duration", "40", "-o", str(out))
+    p = _main(capsys, "populate", str(src), "--people", "8", "--seed", "2", "--duration", "40", "-o", str(out))
     assert p.returncode == 0, p.stderr
     scene = gfuzzy.load_scene(out)
     assert len(scene.movers) == 8
@@ -84,7 +91,7 @@ def test_populate_writes_a_scene_that_loads_and_whose_people_avoid_the_walls(tmp
     # nobody starts on the query's start
     starts = np.array([m["trajectory"][0][1:] for m in doc["movers"]])
     assert np.hypot(*(starts - [1.0, 1.0]).T).min() >= 1.0
-    # same seed, same file
+    # same seed, same file (and in another process)
     again = tmp_path / "again.yaml"
     assert _run("populate", str(src), "--people", "8", "--seed", "2", "--duration", "40", "-o", str(again)).returncode == 0
     assert again.read_text() == out.read_text()
@@ -125,7 +132,7 @@ def test_populate_refuses_bad_input(tmp_path, capsys):
         assert not out.exists()
         if "--seed" in flags:  # named by the command (it came from deep in populate, unnamed)
             assert err.startswith("gfuzzy populate: seed must be")
-    p = _run("populate", str(src), "--people", "2", "--speed", "1e20", "-o", str(out))
+    p = _main(capsys, "populate", str(src), "--people", "2", "--speed", "1e20", "-o", str(out))
     assert p.returncode == 2 and len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
     assert not out.exists()
 
@@ -177,7 +184,7 @@ def test_random_free_points_are_clear_of_the_obstacles_on_a_coarse_grid():
     assert gaps.min() >= 0.3
 
 
-def test_the_readme_populate_example_runs_and_a_full_room_says_why(tmp_path):
+def test_the_readme_populate_example_runs_and_a_full_room_says_why(tmp_path, capsys):
     # the README's example asked building-floor for 15 people of radius 0.3: its 0.6 m doors
     # keep them in one room, which holds about 12; it exited 2 with no hint why
     line = next(x for x in (ROOT / "README.md").read_text(encoding="utf-8").splitlines() if x.startswith("gfuzzy populate "))
@@ -187,17 +194,17 @@ def test_the_readme_populate_example_runs_and_a_full_room_says_why(tmp_path):
     assert p.returncode == 0, p.stderr
     assert load_scene(tmp_path / argv[argv.index("-o") + 1]).movers
     out = tmp_path / "busy.yaml"
-    p = _run("populate", str(ROOT / "scenes" / "building-floor.yaml"), "--people", "15", "--seed", "1", "-o", str(out))
+    p = _main(capsys, "populate", str(ROOT / "scenes" / "building-floor.yaml"), "--people", "15", "--seed", "1", "-o", str(out))
     assert p.returncode == 2 and len(p.stderr.strip().splitlines()) == 1
     assert "largest free region" in p.stderr and "gap narrower than 0.70 m" in p.stderr
     assert not out.exists()
 
 
-def test_the_command_says_how_many_people_stop_short(tmp_path):
+def test_the_command_says_how_many_people_stop_short(tmp_path, capsys):
     # at 100 m/s ORCA takes every person into an obstacle within seconds: each walk is cut
     # there (the mover disappears), and the command said "3 people walking for 60 s"
     out = tmp_path / "p.yaml"
-    p = _run("populate", "scenes/sim-4s1m.yaml", "--people", "3", "--speed", "100", "-o", str(out))
+    p = _main(capsys, "populate", str(ROOT / "scenes" / "sim-4s1m.yaml"), "--people", "3", "--speed", "100", "-o", str(out))
     assert p.returncode == 0, p.stderr
     assert "3 people walking for 60 s" in p.stdout and "3 of them stop short" in p.stdout
 
@@ -214,12 +221,12 @@ def test_the_command_tells_people_left_out_from_people_cut_short():
     assert _cut_note(3, Populated(movers=(1, 2, 3), cut=0)) == ""
 
 
-def test_a_scene_named_like_a_number_keeps_its_name(tmp_path):
+def test_a_scene_named_like_a_number_keeps_its_name(tmp_path, capsys):
     # yaml.safe_dump wrote the name "1e3" plain, which reads back as 1000.0
     src = tmp_path / "n.yaml"
     src.write_text(yaml.safe_dump(dict(ROOM, name="NAME"), sort_keys=False).replace("name: NAME", 'name: "1e3"', 1))
     out = tmp_path / "o.yaml"
-    p = _run("populate", str(src), "--people", "2", "-o", str(out))
+    p = _main(capsys, "populate", str(src), "--people", "2", "-o", str(out))
     assert p.returncode == 0, p.stderr
     assert load_scene(out).name == "1e3"
 

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 import shapely
 from conftest import run_cli_process
+from helpers import run_main
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -213,15 +214,15 @@ def test_mover_distances_against_shapely(fp):
     counts = {"apart": 0, "overlap": 0}
     for i in range(n):
         body = _body(fp, poses[i])
-        disc = shapely.Point(xy[i]).buffer(rad[i], quad_segs=512)
         box = shapely.box(*(xy[i] - size[i] / 2), *(xy[i] + size[i] / 2))
-        for d, other, exact in ((d_disc[i], disc, False), (d_box[i], box, True)):
-            oracle = body.distance(other)
+        # the disc: the body's distance from its centre less its radius (exact: no polygon)
+        disc_gap = body.distance(shapely.Point(xy[i])) - rad[i]
+        for d, oracle, overlap in ((d_disc[i], disc_gap, disc_gap < -1e-6), (d_box[i], body.distance(box), None)):
             if oracle > 1e-6:
                 counts["apart"] += 1
                 assert d > 0
-                assert d == pytest.approx(oracle, abs=1e-12 if exact else 1e-5)
-            elif body.intersection(other).area > 1e-9:
+                assert d == pytest.approx(oracle, abs=1e-12)
+            elif overlap if overlap is not None else body.intersection(box).area > 1e-9:
                 counts["overlap"] += 1
                 assert d <= 0
         assert d_gap[i] <= d_box[i] + 1e-12 and (d_gap[i] > 0) == (d_box[i] > 0)  # a lower bound, same sign
@@ -350,7 +351,7 @@ DOCK = {
 @pytest.fixture(scope="module")
 def dock():
     scene = _scene({"footprint": U}, DOCK["obstacles"], DOCK["movers"], DOCK["queries"])
-    return scene, build_roadmap(scene, RoadmapOptions(vertices=300, seed=1))
+    return scene, build_roadmap(scene, RoadmapOptions(vertices=120, seed=1))
 
 
 def test_u_docks_round_a_post_only_with_its_exact_shape(dock):
@@ -435,8 +436,8 @@ def test_footprint_equal_to_a_box_gives_the_box_answers():
     np.testing.assert_array_equal(cb < 0, cf < 0)
     np.testing.assert_allclose(cf, cb, atol=2e-4)  # FCL's box against its convex prism
     q = box.queries[0]
-    rb = Planner(box, build_roadmap(box, RoadmapOptions(vertices=150, seed=3))).plan(q.start, q.goal)
-    rf = Planner(fp, build_roadmap(fp, RoadmapOptions(vertices=150, seed=3))).plan(q.start, q.goal)
+    rb = Planner(box, build_roadmap(box, RoadmapOptions(vertices=50, seed=3))).plan(q.start, q.goal)
+    rf = Planner(fp, build_roadmap(fp, RoadmapOptions(vertices=50, seed=3))).plan(q.start, q.goal)
     assert rb.status == rf.status == Status.SOLVED
     assert rf.duration == pytest.approx(rb.duration, abs=1e-9)
 
@@ -462,14 +463,15 @@ def test_navigator_drives_a_footprint_robot_among_people():
     assert report.valid, report.reason
 
 
-def test_navigate_cli_with_a_footprint_robot(tmp_path):
+def test_navigate_cli_with_a_footprint_robot(tmp_path, capsys):
+    # in process: navigate's and check's own processes are tested in test_navigator
     out = tmp_path / "nav.json"
     scene = ROOT / "scenes" / "footprint-office.yaml"
-    p = run_cli_process("navigate", scene, "--query", "late-to-ne", "-o", out, cwd=ROOT)
-    assert p.returncode == 0, p.stdout + p.stderr
+    rc, stdout, stderr = run_main(capsys, "navigate", scene, "--query", "late-to-ne", "-o", out)
+    assert rc == 0, stdout + stderr
     doc = json.loads(out.read_text())
     assert doc["status"] == "solved" and len(doc["waypoints"][0]) == 4
-    assert run_cli_process("check", scene, out, cwd=ROOT).returncode == 0
+    assert run_main(capsys, "check", scene, out)[0] == 0
 
 
 def test_render_draws_the_footprint_and_its_heading(tmp_path):

@@ -224,7 +224,7 @@ def test_a_holonomic_end_touching_the_bounds_in_a_corner_is_bridged_to_the_roadm
     from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
 
     scene = _scene(robot)
-    rm = build_roadmap(scene, RoadmapOptions(vertices=100, seed=1))
+    rm = build_roadmap(scene, RoadmapOptions(vertices=40, seed=1))
     c = scene.robot.corners(np.array([[0.0, 0.0, 0.0]]))[0]
     corner = np.array([round(7.0 - c[:, 0].max(), 6), round(5.0 - c[:, 1].max(), 6), 0.0])  # top right
     assert StaticGeometry(scene).bounds_clearance(corner[None])[0] == 0.0
@@ -489,7 +489,7 @@ def test_check_and_the_planner_agree_with_a_depth_oracle_near_contact(robot):
     walls_xy = shapely.get_coordinates(shapely.segmentize(walls.boundary, 1e-4))
     rng = np.random.default_rng(5)
     deep = shallow = 0
-    for pose, _ in _near_contact(scene, rng, 240):
+    for pose, _ in _near_contact(scene, rng, 120):  # (the oracle: 15 ms a pose)
         if geo._bounds_clearance1(pose) < 0:
             continue
         body = shapely.Polygon(scene.robot.corners(pose[None])[0])
