@@ -228,8 +228,9 @@ def distance_model(scene: Scene) -> DistanceModel:
             ring = _convex_ring(ob)
             parts = [ring] if ring is not None else _triangulate(ob)
             for part in parts:
+                geom = convex_prism(part, _HEIGHT) if ring is not None else _prism(part)  # one geometry, two objects
                 for objs in (prisms, polygons):
-                    objs.append(fcl.CollisionObject(convex_prism(part, _HEIGHT) if ring is not None else _prism(part), fcl.Transform()))
+                    objs.append(fcl.CollisionObject(geom, fcl.Transform()))
             rings.extend(parts)
     if rings:
         flat.append(fcl.CollisionObject(flat_mesh(rings), fcl.Transform()))
