@@ -24,8 +24,8 @@ from ..typed import BoolArray, FloatArray, IntArray
 if TYPE_CHECKING:
     from .movers import MoverField
 
-__all__ = ["SpaceTimeGraph", "QueryGraph", "SearchResult", "IntervalStore", "SplitEdges", "split_edges", "leading_fractions",
-           "BAND"]
+__all__ = ["SpaceTimeGraph", "QueryGraph", "SearchResult", "IntervalStore", "StoreLayout", "store_layout", "SplitEdges",
+           "split_edges", "leading_fractions", "BAND"]
 
 #: Safety is computed for every group whose static lower bound on f lies within this many
 #: steps of the group the search asks for: the A* order will want them soon.
