@@ -121,3 +121,32 @@ def test_first_motion_examines_only_the_people_within_reach(monkeypatch):
         answers[got] += 1
     assert answers[True] > 30 and answers[False] > 30
     assert filtered < examined / 5
+
+
+def test_straight_movers_are_sampled_as_the_loop_samples_them(monkeypatch):
+    """People walking straight from one row to the next (a navigator's predictions, some
+    appearing late or vanishing early, some standing) sampled at once: the field's samples,
+    presence, margins and boxes are the loop's to the bit."""
+    from dataclasses import replace
+
+    import gfuzzy.timespace.movers as movers_mod
+    from gfuzzy.scene.scene import Mover
+
+    rng = np.random.default_rng(5)
+    rows = []
+    for i in range(9):
+        t0 = 0.3 + rng.uniform(-1.0, 2.0)
+        a, b = rng.uniform(0.0, 4.0, 2), rng.uniform(0.0, 4.0, 2) if i % 4 else None
+        rows.append(np.array([[t0, *a], [t0 + rng.uniform(0.05, 6.0), *(a if b is None else b)]]))
+    times = 0.3 + 0.1 * np.arange(71)  # the field's times: one appears, one vanishes half a step off a sample
+    rows[0][:, 0] += times[5] + 0.05 - rows[0][0, 0]
+    rows[1][:, 0] += times[40] - 0.05 - rows[1][1, 0]
+    scene = _scene(PERSON)
+    scene = replace(scene, movers=tuple(Mover(f"p{i}", "disc", 0.3, (0.0, 0.0), trajectory=r) for i, r in enumerate(rows)))
+    fast = MoverField(scene, 0.3, 0.1, 70, 1.0)
+    monkeypatch.setattr(movers_mod, "_straight_samples", lambda *a: None)
+    loop = MoverField(scene, 0.3, 0.1, 70, 1.0)
+    for name in ("xy", "present", "margin", "bbox"):
+        x, y = getattr(fast, name), getattr(loop, name)
+        assert x.dtype == y.dtype and x.shape == y.shape and np.array_equal(x, y), name
+    assert not fast.present.all() and fast.present.any()

@@ -4,6 +4,7 @@
     python tools/crowd_calls.py record big.json --episodes 0 3 --time-budget 5   # every search finishes
     python tools/crowd_calls.py classify calls.json [--oracle]
     python tools/crowd_calls.py compare before.json after.json
+    python tools/crowd_calls.py record p.json --episodes 0 4 --time-budget 5 --profile 40   # where a call's CPU goes
 
 ``record`` runs ``gfuzzy crowd --scenario circle --kinematics unicycle --policy navigator
 --budget-clock cpu``'s episodes (``crowd.run_episode``) and wraps :meth:`gfuzzy.Navigator.step`
@@ -20,16 +21,21 @@ and whether any plan had answered; ``--oracle`` also runs ``gfuzzy.plan`` told t
 ``compare`` (two records of the same episodes, e.g. the code before and after a change run
 side by side): the answers' hashes that agree call by call (the same to the bit when every
 search finished, ``--time-budget 5``), the CPU per call, the evasive answers, success and
-time on the episodes both finish. A tool, not the library's API.
+time on the episodes both finish. ``--profile N`` runs :mod:`cProfile` over the calls only (not the
+simulation) and prints the N costliest functions by their own time and by their time inclusive,
+per call. A tool, not the library's API.
 """
 
 from __future__ import annotations
 
 import argparse
 import collections
+import cProfile
 import hashlib
 import json
+import pstats
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -48,7 +54,7 @@ def _setting(humans: int, seed: int) -> C.CrowdSetting:
     return C.CrowdSetting(humans=humans, kinematics="unicycle", sensor=SensorOptions(seed=seed))
 
 
-def record(out: str, humans: int, seed: int, first: int, stop: int, budget: float) -> None:
+def record(out: str, humans: int, seed: int, first: int, stop: int, budget: float, profile: int = 0) -> None:
     setting = _setting(humans, seed)
     rm = C.crowd_roadmap(setting)
     calls: list = []
@@ -56,8 +62,14 @@ def record(out: str, humans: int, seed: int, first: int, stop: int, budget: floa
     current = [first]
     step = Navigator.step
 
+    prof = cProfile.Profile(time.process_time) if profile else None
+
     def recorded(self, t, pose, obs, *args, **kwargs):
+        if prof is not None:
+            prof.enable()
         traj = step(self, t, pose, obs, *args, **kwargs)
+        if prof is not None:
+            prof.disable()
         last = self.last
         calls.append({"episode": current[0], "t": float(t), "pose": [float(v) for v in pose], "mode": str(last.mode),
                       "message": last.message, "out_of_time": bool(last.out_of_time), "detailed": int(last.detailed),
@@ -82,6 +94,17 @@ def record(out: str, humans: int, seed: int, first: int, stop: int, budget: floa
     finally:
         Navigator.step = step
     save()
+    if prof is not None:
+        _print_profile(prof, profile, len(calls))
+
+
+def _print_profile(prof, n: int, calls: int) -> None:
+    stats = pstats.Stats(prof)
+    rows = [(tt, ct, nc, f"{Path(f).name}:{line}({name})") for (f, line, name), (_, nc, tt, ct, _) in stats.stats.items()]
+    for key, label in ((0, "own"), (1, "inclusive")):
+        print(f"--- {calls} calls: the {n} costliest functions by {label} time (ms of CPU per call; calls per call)")
+        for tt, ct, nc, where in sorted(rows, key=lambda r: -r[key])[:n]:
+            print(f"{tt / calls * 1000:8.2f} {ct / calls * 1000:8.2f} {nc / calls:9.1f}  {where}")
 
 
 def _load(path: str) -> dict:
@@ -164,6 +187,7 @@ def main(argv=None) -> int:
     r.add_argument("--seed", type=int, default=1)
     r.add_argument("--episodes", type=int, nargs=2, default=(0, 40), metavar=("FIRST", "STOP"))
     r.add_argument("--time-budget", type=float, default=0.1)
+    r.add_argument("--profile", type=int, default=0, metavar="N")
     c = sub.add_parser("classify")
     c.add_argument("record")
     c.add_argument("--oracle", action="store_true")
@@ -172,7 +196,7 @@ def main(argv=None) -> int:
     p.add_argument("after")
     args = ap.parse_args(argv)
     if args.cmd == "record":
-        record(args.out, args.humans, args.seed, *args.episodes, args.time_budget)
+        record(args.out, args.humans, args.seed, *args.episodes, args.time_budget, args.profile)
     elif args.cmd == "classify":
         classify(args.record, args.oracle)
     else:

@@ -11,7 +11,6 @@ return a :class:`SearchResult`.
 from __future__ import annotations
 
 import copy
-from bisect import bisect_right
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -25,8 +24,8 @@ from ..typed import BoolArray, FloatArray, IntArray
 if TYPE_CHECKING:
     from .movers import MoverField
 
-__all__ = ["SpaceTimeGraph", "QueryGraph", "SearchResult", "IntervalStore", "SplitEdges", "split_edges", "leading_fractions",
-           "BAND"]
+__all__ = ["SpaceTimeGraph", "QueryGraph", "SearchResult", "IntervalStore", "StoreLayout", "store_layout", "SplitEdges",
+           "split_edges", "leading_fractions", "BAND"]
 
 #: Safety is computed for every group whose static lower bound on f lies within this many
 #: steps of the group the search asks for: the A* order will want them soon.
@@ -64,6 +63,10 @@ class SpaceTimeGraph:
     can_wait: BoolArray | None = None
     groups: IntArray | None = None
     from_start: FloatArray | None = None
+    #: A graph whose first nodes this one's are (their poses, heuristic and groups the same:
+    #: a goal's kept graph spliced with a start), or None; its groups' static set-up for an
+    #: :class:`IntervalStore` is then computed once and kept with it (:func:`store_layout`).
+    kept: object = field(default=None, compare=False, repr=False)
 
 
 @dataclass(frozen=True)
@@ -135,28 +138,11 @@ class IntervalStore:
 
     def __init__(self, graph: SpaceTimeGraph):
         self.graph = graph
-        n = len(graph.poses)
-        h = graph.heuristic
-        # groups whose safety is computed together: each edge's points, every other node alone
-        first = int(graph.groups[0]) if graph.groups is not None else n
-        ptr = np.arange(first + 1, dtype=np.int64)
-        if graph.groups is not None:
-            ptr = np.sort(np.concatenate([ptr, np.asarray(graph.groups, dtype=np.int64)]))
-            ptr = ptr[np.r_[True, ptr[1:] != ptr[:-1]]]  # np.unique, which imports numpy.ma (~20 ms)
-        ptr = ptr[ptr <= n]
-        if ptr[-1] != n:
-            ptr = np.append(ptr, n)
-        self.ptr = ptr
-        self._ptr_l = ptr.tolist()
-        fs = graph.from_start if graph.from_start is not None else np.zeros(n)
-        fs = np.where(np.isfinite(fs), fs, 0.0)
-        self.g_lo = np.maximum(0, np.floor(np.minimum.reduceat(fs, ptr[:-1]) + 1e-9)).astype(np.int64)
-        hmin = np.minimum.reduceat(h, ptr[:-1])
-        self._finite = np.isfinite(hmin)
-        self._hfloor = np.floor(np.where(self._finite, hmin, 0) + 1e-9).astype(np.int64)
-        self.f_lb = np.minimum.reduceat(fs + h, ptr[:-1])
-        self.done_hi = np.full(len(ptr) - 1, -1, dtype=np.int64)  # last step computed
-        self._same = _same_position_groups(graph.poses, ptr)
+        lay = store_layout(graph)
+        self.ptr, self._finite, self._hfloor, self._same = lay.ptr, lay.finite, lay.hfloor, lay.same
+        self._layout = lay
+        self.g_lo, self.f_lb = _windows_of(graph, lay)
+        self.done_hi = np.full(len(self.ptr) - 1, -1, dtype=np.int64)  # last step computed
         self.pool: bool | None = None  # the storage, fixed by the first set_horizon
         self.field = None
         self.H = -1
@@ -166,6 +152,11 @@ class IntervalStore:
         pool of arrays (``pool``) or from lists; a store keeps the storage it started with."""
         if field_.steps < self.H:
             raise ValueError("the horizon of an IntervalStore only grows")
+        if self.pool and pool and field_ is self.field and field_.steps == self.H:
+            # the same field again (a navigator's goal test, then its search): the pool's
+            # ready counts are kept up to date batch by batch (_pool_merge), nothing changed
+            self._served = {}
+            return
         if self.pool is None:
             self.pool = bool(pool)
             self._init_storage()
@@ -174,14 +165,18 @@ class IntervalStore:
         self.field = field_
         self.H = field_.steps
         self.g_hi = np.where(self._finite, self.H - self._hfloor, -1).astype(np.int64)
-        self._g_hi_l = self.g_hi.tolist()
         self._served: dict = {}
         if self.pool:
             grp = self._node_group
-            if not field_.movers and not (self.done_hi >= 0).any():  # nothing computed yet
+            fresh = not (self.done_hi >= 0).any()  # nothing computed yet
+            if fresh and not field_.movers:
                 self._fill_whole()
+                fresh = False
             self.cap = self.g_hi[grp]
-            self.ready = np.where(self.done_hi[grp] >= self.cap, np.maximum(self.cnt, 0), -1)
+            if fresh:  # every done_hi -1 and every count -1: ready (0 intervals) only where the window is empty
+                self.ready = np.where(self.cap <= -1, 0, -1).astype(np.int64)
+            else:
+                self.ready = np.where(self.done_hi[grp] >= self.cap, np.maximum(self.cnt, 0), -1)
 
     def _fill_whole(self) -> None:
         """A fresh pool for a field without movers, in one go: each point's one interval, its
@@ -197,7 +192,7 @@ class IntervalStore:
     def _init_storage(self) -> None:
         n = len(self.graph.poses)
         if self.pool:
-            self._node_group = np.repeat(np.arange(len(self.ptr) - 1), np.diff(self.ptr))
+            self._node_group = self._layout.node_group
             self.off = np.zeros(n, dtype=np.int64)
             self.cnt = np.full(n, -1, dtype=np.int64)  # -1: never computed
             self.s = np.empty(4096, dtype=np.int64)
@@ -210,12 +205,12 @@ class IntervalStore:
             self._older: dict = {}  # node -> (starts, ends) from computations before the latest
 
     def group_of(self, node: int) -> int:
-        return bisect_right(self._ptr_l, node) - 1
+        return int(self._layout.node_group[node])
 
     def ensure(self, node: int) -> None:
         """Compute ``node``'s intervals up to the current horizon (with a batch of others)."""
         g = self.group_of(node)
-        if self.done_hi[g] < self._g_hi_l[g]:
+        if self.done_hi[g] < self.g_hi[g]:
             self._compute(g)
 
     def get(self, node: int) -> tuple:
@@ -225,7 +220,7 @@ class IntervalStore:
         if iv is not None:
             return iv
         g = self.group_of(node)
-        cap = self._g_hi_l[g]
+        cap = int(self.g_hi[g])
         if self.done_hi[g] < cap:
             self._compute(g)
         if self.pool:
@@ -317,6 +312,88 @@ class IntervalStore:
                 setattr(self, name, grown)
         self.used = merge_runs(self.s, self.e, self.off, self.cnt, self.used, nodes, gs, ge, sp, lo_n)
         self.ready[nodes] = self.cnt[nodes]
+
+
+@dataclass(frozen=True)
+class StoreLayout:
+    """A graph's groups for an :class:`IntervalStore` (what does not change with the search):
+    the group pointers ``ptr`` (each edge's points, every other node alone), each point's
+    group, each group's smallest heuristic (``finite``; its floor ``hfloor`` in steps) and
+    whether its points share one position (:func:`_same_position_groups`)."""
+
+    ptr: IntArray
+    node_group: IntArray
+    finite: BoolArray
+    hfloor: IntArray
+    same: BoolArray
+
+
+def _group_pointers(groups, first: int, n: int, start: int = 0) -> IntArray:
+    """Sorted distinct ``arange(start, first + 1)`` and ``groups`` from ``start`` up to
+    ``n``, ending with ``n``."""
+    ptr = np.arange(start, first + 1, dtype=np.int64)
+    if groups is not None:
+        groups = np.asarray(groups, dtype=np.int64)
+        ptr = np.sort(np.concatenate([ptr, groups[groups >= start] if start else groups]))
+        ptr = ptr[np.r_[True, ptr[1:] != ptr[:-1]]]  # np.unique, which imports numpy.ma (~20 ms)
+    ptr = ptr[ptr <= n]
+    if ptr[-1] != n:
+        ptr = np.append(ptr, n)
+    return ptr
+
+
+def _layout_of(poses, heuristic, ptr, g0: int = 0) -> tuple:
+    """(node_group, finite, hfloor, same) of the groups ``ptr`` (numbered from ``g0``)."""
+    node_group = np.repeat(np.arange(g0, g0 + len(ptr) - 1, dtype=np.int64), np.diff(ptr))
+    hmin = np.minimum.reduceat(heuristic, ptr[:-1] - ptr[0]) if len(ptr) > 1 else np.zeros(0)
+    finite = np.isfinite(hmin)
+    hfloor = np.floor(np.where(finite, hmin, 0) + 1e-9).astype(np.int64)
+    return node_group, finite, hfloor, _same_position_groups(poses, ptr - ptr[0])
+
+
+def store_layout(graph) -> StoreLayout:
+    """The :class:`StoreLayout` of ``graph`` (anything with ``poses``, ``heuristic`` and
+    ``groups``), kept with it while those stay the same arrays. A graph spliced from a kept
+    one (``graph.kept``) computes only its own nodes' groups: the kept graph's are the
+    same and kept with it (a differential drive's navigator splices its pose into a goal's
+    graph of 95,000 points every call, and searches it once or twice)."""
+    src = (graph.poses, graph.heuristic, graph.groups)
+    hit = getattr(graph, "_store_layout", None)
+    if hit is not None and all(a is b for a, b in zip(hit[0], src, strict=True)):
+        return hit[1]
+    n = len(graph.poses)
+    first = int(graph.groups[0]) if graph.groups is not None else n
+    kept = getattr(graph, "kept", None)
+    m = 0 if kept is None else len(kept.poses)
+    own = 0 if kept is None or kept.groups is None else len(kept.groups)  # the kept graph's groups come first
+    if own and first < m < n and own < len(graph.groups) and int(graph.groups[own]) == m:
+        head = store_layout(kept)
+        tail = _group_pointers(graph.groups[own:], m, n, start=m)  # the groups from m on, m first
+        ptr = np.concatenate([head.ptr, tail[1:]])
+        parts = _layout_of(graph.poses[m:], graph.heuristic[m:], tail, len(head.ptr) - 1)
+        lay = StoreLayout(ptr, *(np.concatenate([a, b]) for a, b in
+                                 zip((head.node_group, head.finite, head.hfloor, head.same), parts, strict=True)))  # fmt: skip
+    else:
+        ptr = _group_pointers(graph.groups, first, n)
+        lay = StoreLayout(ptr, *_layout_of(graph.poses, graph.heuristic, ptr))
+    object.__setattr__(graph, "_store_layout", (src, lay))
+    return lay
+
+
+def _windows_of(graph, lay: StoreLayout) -> tuple[IntArray, FloatArray]:
+    """(g_lo, f_lb) per group: the first step a group's points can be reached (from
+    ``graph.from_start``, 0 without it) and the static lower bound on f; kept with the graph
+    while its ``from_start`` and heuristic stay the same arrays (a navigator's second search)."""
+    hit = getattr(graph, "_store_windows", None)
+    if hit is not None and hit[0] is graph.from_start and hit[1] is graph.heuristic and hit[2] is lay:
+        return hit[3]
+    ptr, h = lay.ptr, graph.heuristic
+    fs = graph.from_start if graph.from_start is not None else np.zeros(len(graph.poses))
+    fs = np.where(np.isfinite(fs), fs, 0.0)
+    g_lo = np.maximum(0, np.floor(np.minimum.reduceat(fs, ptr[:-1]) + 1e-9)).astype(np.int64)
+    out = (g_lo, np.minimum.reduceat(fs + h, ptr[:-1]))
+    object.__setattr__(graph, "_store_windows", (graph.from_start, graph.heuristic, lay, out))
+    return out
 
 
 def _same_position_groups(poses, ptr) -> BoolArray:

@@ -669,7 +669,7 @@ class UnicycleGoal:
             from_start = np.floor(np.hypot(*(poses[:, :2] - start[:2]).T) / self.step_len - 1e-9)
             from_start = np.maximum(from_start, 0.0)
         groups = np.concatenate([self.groups, N + np.arange(x + 1), N + x + offs[1:]])
-        graph = SpaceTimeGraph(poses, indptr, nbrs, heur, groups=groups, from_start=from_start)
+        graph = SpaceTimeGraph(poses, indptr, nbrs, heur, groups=groups, from_start=from_start, kept=self)
         return UnicycleGraph(graph, s_id, self.g_id, rd, later)
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..typed import FloatArray
+from ..typed import FloatArray, IntArray
 
 __all__ = ["matrix", "dijkstra", "with_rows", "new_to_goal", "steps_from_start"]
 
@@ -77,14 +77,26 @@ def steps_from_start(kept, A, B, k, p_of, j, x: int, total: int) -> FloatArray:
     first[1:] = (a_c[o][1:] != a_c[o][:-1]) | (b_c[o][1:] != b_c[o][:-1])
     o = o[first]
     m = kept.steps
+    whole, piece_of = _kept_steps(kept)
     rows = np.cumsum(np.bincount(a_c[o] - nn, minlength=x))
     # whole steps (a zero-step piece is stored as 1e-300): a bucket queue, or scipy's Dijkstra rounded
     hop_s = fewest_steps(np.concatenate([m.indptr, m.indptr[-1] + rows]), np.concatenate([m.indices, b_c[o]]),
-                         np.concatenate([np.rint(m.data), k[o]]).astype(np.int64), nn)  # fmt: skip
+                         np.concatenate([whole, k[o].astype(np.int64)]), nn)  # fmt: skip
     from_start = np.empty(total)
     from_start[:nn] = hop_s[:nn]
     from_start[N : N + x] = hop_s[nn:]
-    from_start[nn:N] = hop_s[kept.A[kept.p_of]] + kept.j
+    from_start[nn:N] = hop_s[piece_of] + kept.j
     hs = np.concatenate([hop_s[:nn], np.zeros(N - nn), hop_s[nn:]])
     from_start[N + x :] = hs[A[p_of]] + j
     return from_start
+
+
+def _kept_steps(kept) -> tuple[IntArray, IntArray]:
+    """(the kept graph's node-level steps as whole numbers, each kept interior point's piece's
+    first node), computed once per kept graph (a navigator's every call asks for them)."""
+    hit = getattr(kept, "_whole_steps", None)
+    if hit is not None and hit[0] is kept.steps:
+        return hit[1], hit[2]
+    whole, piece_of = np.rint(kept.steps.data).astype(np.int64), kept.A[kept.p_of]
+    kept._whole_steps = (kept.steps, whole, piece_of)
+    return whole, piece_of
