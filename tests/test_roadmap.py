@@ -259,6 +259,27 @@ def test_info_is_typed_and_plain_json_in_the_file(small, tmp_path):
     assert again.info.to_dict()["repaired_vertices"] == 7 and again.info.components == rm.info.components
 
 
+@pytest.mark.parametrize("key", ["scene", "scene_hash"])
+def test_a_name_given_as_a_list_is_bad_input_and_an_odd_info_value_is_kept_as_it_is(small, tmp_path, key):
+    # str() read `"scene": ["small-disc"]` as the name "['small-disc']" (a roadmap loaded
+    # without its scene kept it), and an info string given as a list as "[1]"
+    _, scene, rm = small["disc"]
+    path = tmp_path / "rm.json"
+    rm.save(path)
+    doc = json.loads(path.read_text())
+    doc[key] = [doc[key]]
+    doc["info"]["ompl_version"] = [1]
+    doc["info"]["components"] = True
+    path.write_text(json.dumps(doc))
+    with pytest.raises(SceneError, match=rf"rm.json: {key}: expected a string, got a list$"):
+        load_roadmap(path)
+    doc[key] = doc[key][0]
+    path.write_text(json.dumps(doc))
+    info = load_roadmap(path, scene).info
+    assert info.ompl_version == "" and info.components == 0
+    assert info.extra == {"ompl_version": [1], "components": True}
+
+
 # --------------------------------------------------------------------------- files
 
 

@@ -27,6 +27,7 @@ from ..atomic import write_atomic
 from ..collision.geometry import StaticGeometry, metric_distance
 from ..errors import InputError, LimitError, SceneError, not_utf8
 from ..scene.scene import Scene
+from ..scene.yamldoc import _kind
 from ..settings import MAX_POINTS
 from ..typed import FloatArray, IntArray
 from .join import count_components, join_roadmap, repair_roadmap
@@ -177,11 +178,22 @@ class RoadmapInfo:
         types = {f.name: casts[f.type] for f in fields(cls) if f.name != "extra"}
         kwargs, extra = {}, {}
         for key, value in doc.items():
-            try:
-                kwargs[key] = types[key](value)
-            except (KeyError, TypeError, ValueError):  # another version's key, or odd: kept
+            cast = types.get(key)
+            if cast is not None and _of_type(value, cast):
+                kwargs[key] = cast(value)
+            else:  # another version's key, or odd (a list where a string belongs): kept as it is
                 extra[key] = value
         return cls(**kwargs, extra=extra)
+
+
+def _of_type(value, cast) -> bool:
+    """Whether a roadmap file's ``info`` value is of its field's type as JSON gives it (an
+    integer is a float too; a boolean is no number): ``str([1])`` read a list as ``"[1]"``."""
+    if cast is float:
+        return isinstance(value, numbers.Real) and not isinstance(value, bool)
+    if cast is int:
+        return isinstance(value, numbers.Integral) and not isinstance(value, bool)
+    return isinstance(value, cast)
 
 
 @dataclass
@@ -371,8 +383,8 @@ def load_roadmap(path: str | os.PathLike, scene: Scene | None = None) -> Roadmap
         vertices,
         edges,
         lengths,
-        str(doc["scene"]),
-        str(doc["scene_hash"]),
+        _text(file, doc, "scene"),
+        _text(file, doc, "scene_hash"),
         circumradius,
         opts,
         RoadmapInfo.from_dict(doc.get("info", {})),
@@ -390,6 +402,15 @@ def load_roadmap(path: str | os.PathLike, scene: Scene | None = None) -> Roadmap
         if bad.size:
             raise SceneError(file, f"lengths[{int(bad[0])}]", "does not match the distance between its vertices")
     return rm
+
+
+def _text(file: str, doc: dict, key: str) -> str:
+    """A roadmap file's string ``doc[key]``; anything else is bad input naming the key (``str``
+    read a list ``[1]`` as the name ``"[1]"``)."""
+    value = doc[key]
+    if not isinstance(value, str):
+        raise SceneError(file, key, f"expected a string, got {_kind(value)}")
+    return value
 
 
 def _options_from(file: str, raw) -> RoadmapOptions:
