@@ -47,6 +47,9 @@ log = logging.getLogger(__name__)
 FORMAT = "gfuzzy-roadmap"
 #: Validity checks without a new milestone after which the free space counts as empty.
 STALL_CHECKS = 200_000
+#: Validity checks without a new milestone after which the robot's inscribed disc is asked
+#: whether it has room anywhere (no room: the robot fits nowhere, said at once).
+PROOF_CHECKS = 1_000
 FORMAT_VERSION = 1
 FREE_CELL_SHARE = 0.5  # maps' free cells below this share of the bounds: half the samples drawn in them
 
@@ -530,6 +533,7 @@ class _Builder:
         prm.setProblemDefinition(ob.ProblemDefinition(si))
         prm.setup()
         self.prm = prm
+        self.no_room: str | None = None  # why the robot fits nowhere ("": not proved), once asked
 
     def close(self) -> None:
         """Break the Python <-> OMPL reference cycle of the sampler allocator; give OMPL
@@ -547,7 +551,9 @@ class _Builder:
         """Grow to ``n`` milestones; raise SceneError if the free space is (nearly) empty.
 
         PRM samples until it finds a valid state, for ever if there is none, so growth also
-        stops after ``STALL_CHECKS`` validity checks without a new milestone.
+        stops after ``STALL_CHECKS`` validity checks without a new milestone, and after
+        ``PROOF_CHECKS`` when the robot's inscribed disc has no room anywhere
+        (:func:`_no_room`: a robot that fits nowhere took 200,000 checks to say so).
         """
         from ompl import base as ob
 
@@ -564,10 +570,14 @@ class _Builder:
                 seen[0], seen[1] = count, geometry.checks
             elif geometry.checks - seen[1] > STALL_CHECKS:
                 return True
-            return count >= n
+            elif geometry.checks - seen[1] > PROOF_CHECKS and self.no_room is None:
+                self.no_room = _no_room(geometry.scene) if count == 0 else ""
+            return count >= n or bool(self.no_room)  # asked again (OMPL's two loops): the same answer
 
         prm.growRoadmapPtc(ob.PlannerTerminationCondition(done))
         count = prm.milestoneCount()
+        if count == 0 and self.no_room:
+            raise SceneError(geometry.scene.source, "robot", f"the robot fits nowhere: {self.no_room}")
         if count < n:
             raise SceneError(
                 geometry.scene.source,
@@ -605,6 +615,21 @@ class _Builder:
                     have.add(arr.tobytes())
                     verts.append(tuple(arr.tolist()))
         return np.array(verts, dtype=float).reshape(len(verts), 3 if self.box else 2), e
+
+
+def _no_room(scene: Scene) -> str:
+    """Why the robot fits nowhere, when its inscribed disc has no room anywhere in the bounds
+    among the obstacles (grown by the clearance), else ``""``
+    (:func:`~gfuzzy.roadmap.freespace.inscribed_free_space`: a proof, not a guess)."""
+    from .freespace import SEPARATION_MARGIN, inscribed_free_space
+
+    got = inscribed_free_space(scene)
+    if got is None or got[1].regions:
+        return ""
+    radius = got[1].grown - scene.robot.clearance + SEPARATION_MARGIN
+    keep = f" {scene.robot.clearance:g} m from the obstacles" if scene.robot.clearance > 0 else ""
+    bounds = ", ".join(f"{v:g}" for v in scene.bounds)
+    return f"the disc inside its body (radius {radius:.3f} m) has room nowhere{keep} within the bounds [{bounds}]"
 
 
 def build_roadmap(
