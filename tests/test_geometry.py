@@ -659,3 +659,48 @@ def test_a_sphere_and_a_convex_keep_the_margin_among_polygons_boxes_and_discs():
             if bound > 0:
                 over.append(bound - (exact_disc(xy, geo.r) - MARGIN))
         assert max(over) <= 1e-9, (robot, max(over))
+
+
+def test_each_polygon_and_map_is_made_once_for_the_collision_and_the_distance_model(monkeypatch):
+    """``StaticGeometry`` triangulated every polygon and meshed every map's walls twice, once
+    for its collision objects and once for its distance model (``fclmodel.static_model``
+    makes both in one pass)."""
+    from conftest import ROOT
+
+    from gfuzzy.collision import fclmodel
+    from gfuzzy.scene.scene import load_scene
+
+    made = {"_triangulate": 0, "_walls": 0}
+
+    def counting(name):
+        f = getattr(fclmodel, name)
+
+        def counted(*args):
+            made[name] += 1
+            return f(*args)
+
+        return counted
+
+    for name in made:
+        monkeypatch.setattr(fclmodel, name, counting(name))
+    doc = {"version": 1, "name": "once", "bounds": [0, 0, 6, 4], "robot": ROBOTS["box"],
+           "obstacles": [{"polygon": U_SHAPE}, {"polygon": [list(p) for p in L_SHAPE.exterior.coords[:-1]]}]}  # fmt: skip
+    geo = StaticGeometry(parse_scene(doc))
+    assert made == {"_triangulate": 2, "_walls": 0}
+    assert not geo.is_valid([3.75, 0.7, 0.0]) and geo.is_valid([1.5, 1.5, 0.0])
+    StaticGeometry(load_scene(ROOT / "scenes" / "tb3-arena.yaml"))  # one map
+    assert made == {"_triangulate": 2, "_walls": 1}
+
+
+def test_a_free_query_after_a_colliding_one_is_free():
+    """The FCL data objects are made once and reset before each query: a collision or a
+    contact left in them would make every later pose collide, a distance found would bound
+    every later one."""
+    scene = parse_scene({"version": 1, "name": "reuse", "bounds": [0, 0, 6, 4], "robot": ROBOTS["box"],
+                         "obstacles": [{"polygon": U_SHAPE}, {"box": {"center": [1.0, 3.0], "size": [0.5, 0.5]}}]})  # fmt: skip
+    geo = StaticGeometry(scene)
+    for _ in range(2):
+        assert not geo.is_valid([3.2, 1.2, 0.0])  # in the U's left arm
+        assert geo.is_valid([1.5, 1.0, 0.0])
+        near, far = geo.obstacle_clearance([2.3, 1.0, 0.0]), geo.obstacle_clearance([1.0, 1.0, 0.5])
+        assert near == pytest.approx(3.0 - 2.3 - 0.4, abs=1e-3) and far > near + 0.2
