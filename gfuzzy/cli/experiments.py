@@ -8,7 +8,7 @@ import math
 import sys
 from pathlib import Path
 
-from ..errors import InputError, SceneError
+from ..errors import InputError, SceneError, TimeStepError
 from ..status import Status
 from .common import (
     EXIT_NO,
@@ -374,7 +374,10 @@ def cmd_navigate(args) -> int:
         _say(f"{scene.name} {query.name}: invalid_query ({problem})", sys.stdout)
         return EXIT_NO
     roadmap = _roadmap_for(scene, args)
-    nav = Navigator(scene, roadmap, query.goal, knowing_view(options, sensor.fov) if sensor else options)
+    try:
+        nav = Navigator(scene, roadmap, query.goal, knowing_view(options, sensor.fov) if sensor else options)
+    except TimeStepError as exc:  # the option's fault, said as regress and plan say it
+        raise BadInput(f"gfuzzy navigate: --dt {args.dt:g}: {exc}") from None
     rd = nav.roadmap_distance(np.asarray(query.start, dtype=float))
     sealed = "" if math.isfinite(rd) else _sealed_off(scene, roadmap, query)
     if sealed:  # no mover opens a way: replanning until --max-time (up to 100000 replans: hours) changes nothing
