@@ -346,10 +346,11 @@ def test_bounds_too_small_for_ompl_are_bad_input(kind):
 
 
 @pytest.mark.parametrize("robot", [{"box": [0.8, 0.504]}, {"footprint": [[0, -0.26], [0.6, -0.26], [0.6, 0.26], [0, 0.26]]},
-                                   {"disc": 0.26}])  # fmt: skip
+                                   {"disc": 0.26}, {"disc": 20.0}])  # fmt: skip
 def test_a_robot_that_fits_nowhere_is_told_so_at_once(robot):
     # a slot 0.5 high: every robot below is wider than it whichever way it turns (the
-    # footprint about a reference point on its edge). The build
+    # footprint about a reference point on its edge; the disc of 20 m, whose free space's
+    # chords lie deeper than 2 mm, with a margin of its size). The build
     # gave up after 200,000 collision checks (the box: 300,000 checks, 7-20 s); the disc inside
     # the body having no room anywhere says so after about a thousand
     from gfuzzy.collision.geometry import StaticGeometry
@@ -358,7 +359,7 @@ def test_a_robot_that_fits_nowhere_is_told_so_at_once(robot):
     scene = parse_scene(doc, file="slot.yaml")
     geometry = StaticGeometry(scene)
     with pytest.raises(SceneError, match=r"^slot.yaml: robot: the robot fits nowhere: the disc inside its body "
-                                         r"\(radius 0.2\d\d m\) has room nowhere within the bounds \[0, 0, 3, 0.5\]$"):  # fmt: skip
+                                         r"\(radius \d+\.\d\d\d m\) has room nowhere within the bounds \[0, 0, 3, 0.5\]$"):  # fmt: skip
         build_roadmap(scene, RoadmapOptions(vertices=20), geometry=geometry)
     assert geometry.checks < 5_000
 

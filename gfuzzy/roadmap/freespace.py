@@ -224,10 +224,11 @@ def inscribed_disc(robot) -> tuple[FloatArray, float]:
     return np.array([c.x, c.y]), float(body.exterior.distance(c))
 
 
-def inscribed_free_space(scene: Scene) -> tuple[FloatArray, FreeSpace] | None:
+def inscribed_free_space(scene: Scene, margin: float = SEPARATION_MARGIN) -> tuple[FloatArray, FreeSpace] | None:
     """The free space of the robot's inscribed disc (:func:`inscribed_disc`, shrunk by
-    ``SEPARATION_MARGIN``) and the disc's centre in the robot's frame; None where it proves
-    nothing (a disc smaller than the margin, obstacles without an exact shape).
+    ``margin``) and the disc's centre in the robot's frame; None where it proves nothing (a
+    disc smaller than the margin, obstacles without an exact shape, shapely's chords deeper
+    than the margin: a large disc's).
 
     The disc lies inside the body, so wherever the robot is free its disc is free too, in
     this free space: it holds the true free space of the disc (the margin covers shapely's
@@ -238,12 +239,12 @@ def inscribed_free_space(scene: Scene) -> tuple[FloatArray, FreeSpace] | None:
 
     robot = scene.robot
     centre, radius = inscribed_disc(robot)
-    r = radius - SEPARATION_MARGIN
+    r = radius - margin
     if r <= 0:
         return None
     disc = SimpleNamespace(shape="disc", radius=r, clearance=robot.clearance)
     fs = free_space(SimpleNamespace(robot=disc, bounds=scene.bounds, obstacles=scene.obstacles))
-    if fs is None or fs.tolerance >= SEPARATION_MARGIN:
+    if fs is None or fs.tolerance >= margin:
         return None
     return centre, fs
 
