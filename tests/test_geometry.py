@@ -552,7 +552,7 @@ def test_a_convex_polygon_is_one_prism_and_measures_as_its_triangles():
     """A strictly convex polygon is one FCL prism (its triangles' n - 2 cost a footprint
     drive's thousands of distances five times as much); a dented one, or one with a corner on
     a straight side, is still triangulated. Distances against shapely's either way."""
-    from gfuzzy.collision.geometry import static_objects
+    from gfuzzy.collision.fclmodel import static_objects
 
     a = np.linspace(0.0, 2 * math.pi, 16, endpoint=False)
     gon = np.c_[2.0 + 0.4 * np.cos(a), 2.0 + 0.4 * np.sin(a)].round(6).tolist()
