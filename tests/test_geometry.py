@@ -704,3 +704,22 @@ def test_a_free_query_after_a_colliding_one_is_free():
         assert geo.is_valid([1.5, 1.0, 0.0])
         near, far = geo.obstacle_clearance([2.3, 1.0, 0.0]), geo.obstacle_clearance([1.0, 1.0, 0.5])
         assert near == pytest.approx(3.0 - 2.3 - 0.4, abs=1e-3) and far > near + 0.2
+
+
+def test_the_managers_callbacks_are_python_functions(monkeypatch):
+    """python-fcl's managers ask ``inspect.isroutine`` of their callback on every query: of
+    its Cython ``defaultDistanceCallback`` about 6 us (as long as the rest of a 20-object
+    query's Python), of a Python function a fraction. The geometry hands them Python
+    functions calling the defaults (the answers are the defaults')."""
+    import inspect
+
+    import fcl.fcl
+
+    asked = []
+    real = inspect.isroutine
+    monkeypatch.setattr(fcl.fcl.inspect, "isroutine", lambda f: asked.append(f) or real(f))
+    scene = parse_scene({"version": 1, "name": "cb", "bounds": [0, 0, 6, 4], "robot": ROBOTS["box"],
+                         "obstacles": [{"polygon": U_SHAPE}]})  # fmt: skip
+    geo = StaticGeometry(scene)
+    assert not geo.is_valid([3.2, 1.2, 0.0]) and geo.obstacle_clearance([1.5, 1.0, 0.0]) > 0.5
+    assert asked and all(inspect.isfunction(f) for f in asked), asked
