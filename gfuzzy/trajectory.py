@@ -256,21 +256,29 @@ def load_trajectory(path: str | os.PathLike) -> TrajectoryFile:
             raise SceneError(file, key, "missing required key")
     if doc["version"] != 1:
         raise SceneError(file, "version", f"unsupported version {doc['version']!r}")
-    if doc["status"] not in {s.value for s in Status}:
+    if not isinstance(doc["status"], str) or doc["status"] not in {s.value for s in Status}:
         raise SceneError(file, "status", f"unknown status {doc['status']!r}")
     wps = None
     if doc["status"] == Status.SOLVED:
         wps = _rows(doc.get("waypoints"), file, "waypoints")
 
-    def num(key):
+    def num(key):  # null (NaN or inf written) or absent: None; a list or a string is bad input
         v = doc.get(key)
-        return float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else None
+        if v is not None and not (_finite_number(v) or isinstance(v, float)):  # NaN, inf: as before
+            raise SceneError(file, key, f"expected a number, got {_short(v)}")
+        return None if v is None else float(v)
+
+    def text(key):  # str() read a list [1] as the name "[1]"; null is as absent
+        v = doc.get(key)
+        if v is not None and not isinstance(v, str):
+            raise SceneError(file, key, f"expected a string, got {_short(v)}")
+        return v or ""
 
     return TrajectoryFile(
-        scene=str(doc.get("scene", "")),
-        query=str(doc.get("query", "")),
+        scene=text("scene"),
+        query=text("query"),
         status=doc["status"],
-        message=str(doc.get("message", "")),
+        message=text("message"),
         duration=num("duration"),
         roadmap_distance=num("roadmap_distance"),
         delay_factor=num("delay_factor"),

@@ -433,6 +433,16 @@ def test_a_step_of_1e_308_is_refused_as_too_fine_in_one_line(tmp_path, capsys, m
     assert not list(tmp_path.iterdir())
 
 
+@pytest.mark.parametrize("command", ["plan", "navigate"])
+def test_a_time_step_too_fine_names_the_option_as_regress_does(capsys, monkeypatch, command):
+    # plan said "gfuzzy plan: the time step is too fine ..." and navigate only "the time step
+    # is too fine ...", naming neither the command nor --dt (regress: "gfuzzy regress: --dt ...")
+    monkeypatch.chdir(ROOT)
+    rc, _, err = _run(capsys, command, "scenes/sim-4s1m.yaml", "--dt", "1e-9")
+    assert rc == 2 and err.count("\n") == 1, err
+    assert err.startswith(f"gfuzzy {command}: --dt 1e-09: the time step is too fine for this roadmap"), err
+
+
 def _timed_out_file(path, executed, scene="line"):
     """A navigate run that did not arrive: no waypoints, its motion under ``executed``."""
     doc = json.loads(_trajectory_file(path, None, scene=scene, query="up", status="timeout").read_text())

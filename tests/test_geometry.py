@@ -552,7 +552,7 @@ def test_a_convex_polygon_is_one_prism_and_measures_as_its_triangles():
     """A strictly convex polygon is one FCL prism (its triangles' n - 2 cost a footprint
     drive's thousands of distances five times as much); a dented one, or one with a corner on
     a straight side, is still triangulated. Distances against shapely's either way."""
-    from gfuzzy.collision.geometry import static_objects
+    from gfuzzy.collision.fclmodel import static_objects
 
     a = np.linspace(0.0, 2 * math.pi, 16, endpoint=False)
     gon = np.c_[2.0 + 0.4 * np.cos(a), 2.0 + 0.4 * np.sin(a)].round(6).tolist()
@@ -659,3 +659,67 @@ def test_a_sphere_and_a_convex_keep_the_margin_among_polygons_boxes_and_discs():
             if bound > 0:
                 over.append(bound - (exact_disc(xy, geo.r) - MARGIN))
         assert max(over) <= 1e-9, (robot, max(over))
+
+
+def test_each_polygon_and_map_is_made_once_for_the_collision_and_the_distance_model(monkeypatch):
+    """``StaticGeometry`` triangulated every polygon and meshed every map's walls twice, once
+    for its collision objects and once for its distance model (``fclmodel.static_model``
+    makes both in one pass)."""
+    from conftest import ROOT
+
+    from gfuzzy.collision import fclmodel
+    from gfuzzy.scene.scene import load_scene
+
+    made = {"_triangulate": 0, "_walls": 0}
+
+    def counting(name):
+        f = getattr(fclmodel, name)
+
+        def counted(*args):
+            made[name] += 1
+            return f(*args)
+
+        return counted
+
+    for name in made:
+        monkeypatch.setattr(fclmodel, name, counting(name))
+    doc = {"version": 1, "name": "once", "bounds": [0, 0, 6, 4], "robot": ROBOTS["box"],
+           "obstacles": [{"polygon": U_SHAPE}, {"polygon": [list(p) for p in L_SHAPE.exterior.coords[:-1]]}]}  # fmt: skip
+    geo = StaticGeometry(parse_scene(doc))
+    assert made == {"_triangulate": 2, "_walls": 0}
+    assert not geo.is_valid([3.75, 0.7, 0.0]) and geo.is_valid([1.5, 1.5, 0.0])
+    StaticGeometry(load_scene(ROOT / "scenes" / "tb3-arena.yaml"))  # one map
+    assert made == {"_triangulate": 2, "_walls": 1}
+
+
+def test_a_free_query_after_a_colliding_one_is_free():
+    """The FCL data objects are made once and reset before each query: a collision or a
+    contact left in them would make every later pose collide, a distance found would bound
+    every later one."""
+    scene = parse_scene({"version": 1, "name": "reuse", "bounds": [0, 0, 6, 4], "robot": ROBOTS["box"],
+                         "obstacles": [{"polygon": U_SHAPE}, {"box": {"center": [1.0, 3.0], "size": [0.5, 0.5]}}]})  # fmt: skip
+    geo = StaticGeometry(scene)
+    for _ in range(2):
+        assert not geo.is_valid([3.2, 1.2, 0.0])  # in the U's left arm
+        assert geo.is_valid([1.5, 1.0, 0.0])
+        near, far = geo.obstacle_clearance([2.3, 1.0, 0.0]), geo.obstacle_clearance([1.0, 1.0, 0.5])
+        assert near == pytest.approx(3.0 - 2.3 - 0.4, abs=1e-3) and far > near + 0.2
+
+
+def test_the_managers_callbacks_are_python_functions(monkeypatch):
+    """python-fcl's managers ask ``inspect.isroutine`` of their callback on every query: of
+    its Cython ``defaultDistanceCallback`` about 6 us (as long as the rest of a 20-object
+    query's Python), of a Python function a fraction. The geometry hands them Python
+    functions calling the defaults (the answers are the defaults')."""
+    import inspect
+
+    import fcl.fcl
+
+    asked = []
+    real = inspect.isroutine
+    monkeypatch.setattr(fcl.fcl.inspect, "isroutine", lambda f: asked.append(f) or real(f))
+    scene = parse_scene({"version": 1, "name": "cb", "bounds": [0, 0, 6, 4], "robot": ROBOTS["box"],
+                         "obstacles": [{"polygon": U_SHAPE}]})  # fmt: skip
+    geo = StaticGeometry(scene)
+    assert not geo.is_valid([3.2, 1.2, 0.0]) and geo.obstacle_clearance([1.5, 1.0, 0.0]) > 0.5
+    assert asked and all(inspect.isfunction(f) for f in asked), asked

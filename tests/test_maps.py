@@ -386,7 +386,8 @@ def _good(tmp_path, **kw):
 @pytest.mark.parametrize(
     "edit, expect",
     [
-        (lambda d: (d / "m.yaml").unlink(), "obstacles[0].map.file"),
+        (lambda d: (d / "m.yaml").unlink(), "obstacles[0].map.file: cannot read map 'm.yaml': no such file"),
+        (lambda d: ((d / "m.yaml").unlink(), (d / "m.yaml").mkdir()), "map.file: cannot read map 'm.yaml': a folder, not a file"),
         (lambda d: (d / "m.png").unlink(), "m.png"),
         (lambda d: (d / "m.png").write_bytes((d / "m.png").read_bytes()[:40]), "m.png"),
         (lambda d: (d / "m.png").write_text("not an image"), "not an image"),

@@ -369,6 +369,25 @@ def test_a_file_named_like_dot_dot_stays_in_the_folder(tmp_path):
     assert not (tmp_path / "sub" / "people.yaml").exists()
 
 
+def test_an_output_folder_without_the_scenes_files_is_refused_before_the_people_walk(tmp_path, capsys, monkeypatch):
+    # the folder was refused by write_scene, after the walk (about 4 s on the mesh warehouse)
+    from gfuzzy.navigation import populate as P
+
+    doc, _ = _wall_map(tmp_path)
+    (tmp_path / "room.yaml").write_text(yaml.safe_dump(doc))
+    (tmp_path / "sub").mkdir()
+
+    def walked(*args, **kwargs):
+        raise AssertionError("the people walked before the output was checked")
+
+    monkeypatch.setattr(P, "populate", walked)
+    out = tmp_path / "sub" / "people.yaml"
+    rc, _, err = run_main(capsys, "populate", tmp_path / "room.yaml", "--people", "2", "-o", out)
+    assert rc == 2 and err == (f"{out}: the scene refers to room-map.yaml, which would lie outside the new file's "
+                               f"folder: write it in {tmp_path} or a folder above room-map.yaml\n")  # fmt: skip
+    assert list((tmp_path / "sub").iterdir()) == []
+
+
 def test_waypoints_may_start_with_a_minus_and_their_errors_name_the_option(tmp_path, capsys):
     # --waypoints "-1.5,3.0;..." (a map with a negative origin): argparse took the value for
     # an option, "expected one argument"; a waypoint in a wall named neither --waypoints nor

@@ -259,6 +259,27 @@ def test_info_is_typed_and_plain_json_in_the_file(small, tmp_path):
     assert again.info.to_dict()["repaired_vertices"] == 7 and again.info.components == rm.info.components
 
 
+@pytest.mark.parametrize("key", ["scene", "scene_hash"])
+def test_a_name_given_as_a_list_is_bad_input_and_an_odd_info_value_is_kept_as_it_is(small, tmp_path, key):
+    # str() read `"scene": ["small-disc"]` as the name "['small-disc']" (a roadmap loaded
+    # without its scene kept it), and an info string given as a list as "[1]"
+    _, scene, rm = small["disc"]
+    path = tmp_path / "rm.json"
+    rm.save(path)
+    doc = json.loads(path.read_text())
+    doc[key] = [doc[key]]
+    doc["info"]["ompl_version"] = [1]
+    doc["info"]["components"] = True
+    path.write_text(json.dumps(doc))
+    with pytest.raises(SceneError, match=rf"rm.json: {key}: expected a string, got a list$"):
+        load_roadmap(path)
+    doc[key] = doc[key][0]
+    path.write_text(json.dumps(doc))
+    info = load_roadmap(path, scene).info
+    assert info.ompl_version == "" and info.components == 0
+    assert info.extra == {"ompl_version": [1], "components": True}
+
+
 # --------------------------------------------------------------------------- files
 
 
@@ -322,6 +343,35 @@ def test_bounds_too_small_for_ompl_are_bad_input(kind):
     doc = {"version": 1, "name": "tiny", "bounds": [0, 0, 1e-20, 1e-20], "robot": ROBOTS[kind]}
     with pytest.raises(SceneError, match=r"^tiny.yaml: bounds: bounds 1e-20 x 1e-20 are too small for a roadmap"):
         build_roadmap(parse_scene(doc, file="tiny.yaml"), RoadmapOptions(vertices=5))
+
+
+@pytest.mark.parametrize("robot", [{"box": [0.8, 0.504]}, {"footprint": [[0, -0.26], [0.6, -0.26], [0.6, 0.26], [0, 0.26]]},
+                                   {"disc": 0.26}, {"disc": 20.0}])  # fmt: skip
+def test_a_robot_that_fits_nowhere_is_told_so_at_once(robot):
+    # a slot 0.5 high: every robot below is wider than it whichever way it turns (the
+    # footprint about a reference point on its edge; the disc of 20 m, whose free space's
+    # chords lie deeper than 2 mm, with a margin of its size). The build
+    # gave up after 200,000 collision checks (the box: 300,000 checks, 7-20 s); the disc inside
+    # the body having no room anywhere says so after about a thousand
+    from gfuzzy.collision.geometry import StaticGeometry
+
+    doc = {"version": 1, "name": "slot", "bounds": [0, 0, 3, 0.5], "robot": {**robot, "vmax": 1.0}}
+    scene = parse_scene(doc, file="slot.yaml")
+    geometry = StaticGeometry(scene)
+    with pytest.raises(SceneError, match=r"^slot.yaml: robot: the robot fits nowhere: the disc inside its body "
+                                         r"\(radius \d+\.\d\d\d m\) has room nowhere within the bounds \[0, 0, 3, 0.5\]$"):  # fmt: skip
+        build_roadmap(scene, RoadmapOptions(vertices=20), geometry=geometry)
+    assert geometry.checks < 5_000
+
+
+@pytest.mark.parametrize("width", [0.496, 0.5])
+def test_a_robot_that_fits_in_a_slot_with_millimetres_to_spare_is_not_said_to_fit_nowhere(width):
+    # the proof's disc is shrunk by 2 mm: a box as wide as the slot (touching both walls, which
+    # is valid) still has room; a test of the proof itself, not of the sampler finding it
+    doc = {"version": 1, "name": "slot", "bounds": [0, 0, 3, 0.5], "robot": {"box": [0.8, width], "vmax": 1.0}}
+    assert roadmap_module._no_room(parse_scene(doc, file="slot.yaml")) == ""
+    doc["robot"]["box"] = [0.8, width + 0.01]
+    assert roadmap_module._no_room(parse_scene(doc, file="slot.yaml")).startswith("the disc inside its body")
 
 
 @pytest.mark.parametrize(

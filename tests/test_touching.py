@@ -354,8 +354,12 @@ def test_a_needle_7e_4_m_into_a_wall_reads_7e_4(rows, certain):
     assert check_trajectory(_walls({"footprint": SPIKE, "vmax": 0.5}), np.array(rows), deepest=False).valid is False
 
 
-def test_a_box_proven_touching_is_not_measured_and_the_verdicts_are_the_same():
-    """A box (or its swept hull) whose core, the body less a band 0.3e-9 m wide, misses the
+HEX = [[0.3, 0.0], [0.15, 0.2], [-0.15, 0.2], [-0.3, 0.0], [-0.15, -0.2], [0.15, -0.2]]  # flat top at 0.2
+
+
+@pytest.mark.parametrize("robot", [BOX, {"footprint": HEX, "vmax": 0.5}], ids=["box", "convex-footprint"])
+def test_a_box_proven_touching_is_not_measured_and_the_verdicts_are_the_same(robot):
+    """A box or a convex footprint (or its swept hull) whose core, the body less a band 0.3e-9 m wide, misses the
     obstacles overlaps them at most 1e-9 deep: ``overlap_depth(convex=True)`` reads 0 for
     it without measuring (a slide along 100 abutting boxes 1e-12 m in: 10.4 s -> 0.7 s,
     tools/bench_check.py). Brute force near contact (poses and short slides 1e-12 to 1e-6
@@ -367,7 +371,7 @@ def test_a_box_proven_touching_is_not_measured_and_the_verdicts_are_the_same():
     from gfuzzy.check.depth import overlap_depth
 
     tol = 1e-9
-    scene = _scene(BOX)
+    scene = _scene(robot)
     world = _World(scene, tol)
     rng = np.random.default_rng(7)
     poses = np.array([pose for pose, _ in _near_contact(scene, rng, 400)])
@@ -414,11 +418,12 @@ def _abutting_slide(robot, into: float, boxes: int = 20):
 
 
 @pytest.mark.parametrize("into", [0.0, 1e-12])
-def test_the_check_proves_a_box_touching_and_measures_a_footprint(into, monkeypatch):
-    """``gfuzzy check`` takes the core's proof for a box (its poses and swept hulls), and
-    never for a footprint, even one of the same outline (concave ones could hide a spike in
-    the band); both verdicts are valid. Two boxes (one seam, 36 rows) prove it as 20 did:
-    the footprint's swept hulls, all measured, took 9 s of the 20 boxes' 12 s of CPU."""
+def test_the_check_proves_a_convex_body_touching_and_measures_a_concave_footprint(into, monkeypatch):
+    """``gfuzzy check`` takes the core's proof for a box and a convex footprint (their poses
+    and swept hulls: convex, the proof's premise), never for a concave footprint (it could
+    hide a spike in the band); every verdict is valid. Two boxes (one seam, 36 rows) prove it
+    as 20 did: before, a footprint of the box's outline was measured too (its swept hulls
+    took 9 s of the 20 boxes' 12 s of CPU; a box 0.7 s)."""
     import gfuzzy.check.depth as depth
 
     proofs = []
@@ -430,7 +435,9 @@ def test_the_check_proves_a_box_touching_and_measures_a_footprint(into, monkeypa
 
     monkeypatch.setattr(depth, "_within_tol", spy)
     outline = [[0.3, 0.2], [-0.3, 0.2], [-0.3, -0.2], [0.3, -0.2]]
-    for robot, proven in (({"box": [0.6, 0.4], "vmax": 0.5}, True), ({"footprint": outline, "vmax": 0.5}, False)):
+    dented = [[0.3, 0.2], [0.0, 0.15], [-0.3, 0.2], [-0.3, -0.2], [0.3, -0.2]]  # its bottom on the boxes
+    for robot, proven in (({"box": [0.6, 0.4], "vmax": 0.5}, True), ({"footprint": outline, "vmax": 0.5}, True),
+                          ({"footprint": outline[::-1], "vmax": 0.5}, True), ({"footprint": dented, "vmax": 0.5}, False)):  # fmt: skip
         proofs.clear()
         scene, rows = _abutting_slide(robot, into, boxes=2)
         rep = check_trajectory(scene, rows)

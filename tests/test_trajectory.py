@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -61,6 +62,32 @@ def test_bad_file_names_the_place(tmp_path):
     with pytest.raises(SceneError) as exc:
         load_trajectory(p)
     assert str(p) in str(exc.value)
+
+
+@pytest.mark.parametrize(("key", "value", "says"), [
+    ("query", [1], "query: expected a string, got [1]"),
+    ("scene", {"a": 1}, "scene: expected a string, got {'a': 1}"),
+    ("message", 3, "message: expected a string, got 3"),
+    ("status", [1], "status: unknown status [1]"),
+    ("duration", [4.0], "duration: expected a number, got [4.0]"),
+    ("planning_seconds", "0.1", "planning_seconds: expected a number, got '0.1'"),
+])
+def test_a_name_or_number_of_another_type_is_bad_input(tmp_path, capsys, key, value, says):
+    # str() read `"query": [1]` as the query "[1]" (check: 'names query '[1]', which scene ...
+    # does not have', exit 0); a list status was a TypeError traceback; a list duration was
+    # read as none
+    doc = {"version": 1, "status": "solved", "scene": "sim-4s1m", "query": "q", "duration": 1.0,
+           "waypoints": [[0, 0, 0], [1, 1, 0]], key: value}
+    path = tmp_path / "t.json"
+    path.write_text(json.dumps(doc))
+    with pytest.raises(SceneError, match=rf"t.json: {re.escape(says)}$"):
+        load_trajectory(path)
+    assert main(["check", str(ROOT / "scenes" / "sim-4s1m.yaml"), str(path)]) == 2
+    assert capsys.readouterr().err == f"{path}: {says}\n"
+    if key != "status":
+        doc[key] = None  # null: as absent (NaN or inf are written so)
+        path.write_text(json.dumps(doc))
+        assert getattr(load_trajectory(path), key) in ("", None, 0.0)
 
 
 @pytest.mark.parametrize("command", ["check", "render", "export"])

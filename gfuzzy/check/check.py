@@ -29,7 +29,7 @@ import shapely
 from ..poses import row_words
 from ..scene.scene import Box, Disc, MapObstacle, Query, Scene
 from ..typed import FloatArray
-from .depth import Edges, overlap_depth
+from .depth import Edges, convex_outline, overlap_depth
 from .reach import near_movers, one_period_end
 
 __all__ = ["CheckReport", "check_trajectory"]
@@ -120,8 +120,8 @@ class _World:
         self._static_edges: Edges | None = None
         if self.static is not None:
             shapely.prepare(self.static)
-        # the body's outline about the reference point: a box's corners or the footprint
-        # (a concave one is swept as the union of its triangles' swept hulls: exact)
+        # the body's outline about the reference point: a box's corners or the footprint (a
+        # concave one swept as the union of its triangles' swept hulls, a convex one as a box)
         self.local = self.triangles = None
         if self.robot.shape == "box":
             hl, hw = 0.5 * self.robot.size[0], 0.5 * self.robot.size[1]
@@ -131,11 +131,13 @@ class _World:
             outline = shapely.Polygon(self.local)
             if not outline.is_valid:
                 raise ValueError("the robot's footprint is not a simple polygon")
-            tris = shapely.get_parts(shapely.constrained_delaunay_triangles(outline))
-            self.triangles = [np.asarray(t.exterior.coords)[:3] for t in tris]
-        # a box and its swept hulls are convex: an overlap by a rounding is proven without
-        # measuring it (depth.overlap_depth)
-        self.convex = self.robot.shape == "box"
+            if not convex_outline(self.local):
+                tris = shapely.get_parts(shapely.constrained_delaunay_triangles(outline))
+                self.triangles = [np.asarray(t.exterior.coords)[:3] for t in tris]
+        # a box, a convex footprint and their swept hulls are convex: an overlap by a rounding
+        # is proven without measuring it (depth.overlap_depth; a concave body could hide a
+        # spike in the band the proof leaves unexamined, and is measured)
+        self.convex = self.local is not None and self.triangles is None
         # overlaps deeper than tol: left at the first point found deeper (the verdict's
         # need), or measured to within this fraction of their depth (the deepest's report)
         self.relative: float | None = None

@@ -10,7 +10,7 @@ import shapely
 
 from ..typed import FloatArray
 
-__all__ = ["Edges", "overlap_depth"]
+__all__ = ["Edges", "convex_outline", "overlap_depth"]
 
 
 class Edges:
@@ -143,6 +143,17 @@ def _within_tol(bodies, others, tol: float) -> np.ndarray:
     core = shapely.buffer(bodies, -_CORE_BAND * tol, join_style="mitre")
     near = shapely.hausdorff_distance(bodies, core) <= 0.45 * tol  # NaN (an empty core): False
     return near & ~shapely.intersects(core, others)
+
+
+def convex_outline(points: FloatArray) -> bool:
+    """Whether a simple polygon's outline (either way round) turns one way only at every
+    vertex (a straight one, as at a point on a side, either way): a convex body, which
+    :func:`_within_tol` may prove touching (the body is convex: the proof's premise; a
+    concave body could hide a spike in the band it leaves unexamined)."""
+    edges = np.roll(points, -1, axis=0) - points
+    nxt = np.roll(edges, -1, axis=0)
+    turns = edges[:, 0] * nxt[:, 1] - edges[:, 1] * nxt[:, 0]
+    return bool(np.all(turns >= 0.0) or np.all(turns <= 0.0))
 
 
 def overlap_depth(bodies, others, tol: float, other_edges: Edges | None = None, convex: bool = False,

@@ -250,13 +250,14 @@ def _waypoints_named(message: str, exc: InputError, scene: str) -> str:
 
 def cmd_populate(args) -> int:
     """Write a copy of the scene with ``--people`` walking people as trajectory movers."""
-    from ..navigation.populate import PopulateOptions, populate, write_scene
+    from ..navigation.populate import PopulateOptions, populate, scene_copy, write_scene
 
     scene = _load_scene(args.scene)
     _check_numbers("populate", positive=(("--duration", args.duration), ("--radius", args.radius),
                                          ("--speed", args.speed)))  # fmt: skip
     _need_pyrvo("populate")
     out = _out_path(args.output, (".yaml", ".yml"), _scene_reads(scene))
+    copy = scene_copy(args.scene, out)  # a folder that does not hold the scene's files: before the work
     waypoints = None
     if args.waypoints:
         try:
@@ -274,7 +275,7 @@ def cmd_populate(args) -> int:
         result = populate(scene, opts)
     except InputError as exc:  # a point outside the bounds or not free; no room for them all
         raise BadInput(_waypoints_named(f"gfuzzy populate: {exc}", exc, args.scene)) from None
-    write_scene(args.scene, result, out)
+    write_scene(args.scene, result, out, copy)
     _say(f"{out}: {len(result.movers)} people walking for {args.duration:g} s added to {scene.name}"
          f"{_cut_note(args.people, result)}", sys.stdout)  # fmt: skip
     return EXIT_OK

@@ -8,7 +8,7 @@ import math
 import sys
 from pathlib import Path
 
-from ..errors import InputError, SceneError
+from ..errors import InputError, SceneError, TimeStepError
 from ..status import Status
 from .common import (
     EXIT_NO,
@@ -341,6 +341,18 @@ def _run_settings(args, options, seed: int, sense: float) -> dict:
     }  # fmt: skip
 
 
+def _navigate_query(scene, name: str | None):
+    """The query ``--query`` names, or the scene's first."""
+    if name:
+        try:
+            return scene.query(name)
+        except KeyError as exc:
+            raise BadInput(f"{scene.source}: queries: {exc.args[0]}") from None
+    if not scene.queries:
+        raise BadInput(f"{scene.source}: queries: the scene has no queries to navigate")
+    return scene.queries[0]
+
+
 def cmd_navigate(args) -> int:
     """Drive the robot among the scene's movers without knowing their future (section 5)."""
     import numpy as np
@@ -355,15 +367,7 @@ def cmd_navigate(args) -> int:
 
     scene = _apply_overrides(_load_scene(args.scene), args)
     options, sensor, sense = _navigate_options(args)
-    if args.query:
-        try:
-            query = scene.query(args.query)
-        except KeyError as exc:
-            raise BadInput(f"{scene.source}: queries: {exc.args[0]}") from None
-    elif scene.queries:
-        query = scene.queries[0]
-    else:
-        raise BadInput(f"{scene.source}: queries: the scene has no queries to navigate")
+    query = _navigate_query(scene, args.query)
     reads = (*_scene_reads(scene), *_roadmap_reads(scene, args))
     out = _out_path(args.output, (".json",), reads) if args.output else None
     problem = query_problem(StaticGeometry(scene), query.start, query.goal) or _start_on_mover(scene, query)
@@ -374,7 +378,10 @@ def cmd_navigate(args) -> int:
         _say(f"{scene.name} {query.name}: invalid_query ({problem})", sys.stdout)
         return EXIT_NO
     roadmap = _roadmap_for(scene, args)
-    nav = Navigator(scene, roadmap, query.goal, knowing_view(options, sensor.fov) if sensor else options)
+    try:
+        nav = Navigator(scene, roadmap, query.goal, knowing_view(options, sensor.fov) if sensor else options)
+    except TimeStepError as exc:  # the option's fault, said as regress and plan say it
+        raise BadInput(f"gfuzzy navigate: --dt {args.dt:g}: {exc}") from None
     rd = nav.roadmap_distance(np.asarray(query.start, dtype=float))
     sealed = "" if math.isfinite(rd) else _sealed_off(scene, roadmap, query)
     if sealed:  # no mover opens a way: replanning until --max-time (up to 100000 replans: hours) changes nothing

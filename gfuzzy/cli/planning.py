@@ -135,7 +135,9 @@ def cmd_plan(args) -> int:
         roadmap = _roadmap_for(scene, args)
         try:
             result = Planner(scene, roadmap).plan(query.start, query.goal, query.t0, options, hold=query.hold)
-        except LimitError as exc:  # a request beyond the memory bounds (dt far too fine)
+        except TimeStepError as exc:  # the option's fault, said as regress says it
+            raise BadInput(f"gfuzzy plan: --dt {options.dt:g}: {exc}") from None
+        except LimitError as exc:  # a request beyond the memory bounds (a hold of 1e6 s)
             raise BadInput(f"gfuzzy plan: {exc}") from None
     tf = result.to_file(scene.name, query.name)
     if out is not None:

@@ -39,7 +39,7 @@ from ..typed import FloatArray
 from .shapes import HEIGHT as _HEIGHT
 from .shapes import convex_prism
 
-__all__ = ["static_objects", "DistanceModel", "distance_model", "flat_mesh", "manager_of"]
+__all__ = ["static_objects", "DistanceModel", "distance_model", "static_model", "flat_mesh", "manager_of"]
 
 
 def _yaw_transform(x: float, y: float, yaw: float = 0.0) -> fcl.Transform:
@@ -121,28 +121,8 @@ def _walls(rects: FloatArray) -> fcl.BVHModel:
 
 
 def static_objects(scene: Scene) -> list[fcl.CollisionObject]:
-    """FCL collision objects for every static obstacle of ``scene``."""
-    objs = []
-    for ob in scene.obstacles:
-        if isinstance(ob, Disc):
-            # a sphere at z = 0, not a cylinder: against spheres and tall prisms its distance
-            # is the planar one, and FCL computes sphere distances in closed form (its GJK
-            # distance to a cylinder overestimates small gaps)
-            objs.append(fcl.CollisionObject(fcl.Sphere(ob.radius), _yaw_transform(*ob.center)))
-        elif isinstance(ob, Box):
-            geom = fcl.Box(ob.size[0], ob.size[1], 2 * _HEIGHT)
-            objs.append(fcl.CollisionObject(geom, _yaw_transform(ob.center[0], ob.center[1], ob.angle)))
-        elif isinstance(ob, MapObstacle):
-            if len(ob.rects):
-                objs.append(fcl.CollisionObject(_walls(ob.rects), fcl.Transform()))
-        else:
-            ring = _convex_ring(ob)
-            if ring is not None:
-                objs.append(fcl.CollisionObject(convex_prism(ring, _HEIGHT), fcl.Transform()))
-                continue
-            for tri in _triangulate(ob):
-                objs.append(fcl.CollisionObject(_prism(tri), fcl.Transform()))
-    return objs
+    """FCL collision objects for every static obstacle of ``scene`` (:func:`static_model`'s)."""
+    return static_model(scene)[0]
 
 
 def _convex_ring(poly: Polygon) -> FloatArray | None:
@@ -207,34 +187,50 @@ class DistanceModel:
 
 
 def distance_model(scene: Scene) -> DistanceModel:
-    """The :class:`DistanceModel` of ``scene``'s static obstacles."""
-    prisms, rings, flat, spheres, boxes, polygons, discs = [], [], [], [], [], [], []
+    """The :class:`DistanceModel` of ``scene``'s static obstacles (:func:`static_model`'s)."""
+    return static_model(scene)[1]
+
+
+def static_model(scene: Scene) -> tuple[list[fcl.CollisionObject], DistanceModel]:
+    """The FCL collision objects of every static obstacle of ``scene`` (for collision tests)
+    and its :class:`DistanceModel`, made in one pass: each polygon triangulated once, each
+    map's walls meshed once, each geometry shared by the objects that hold it.
+
+    For collision tests a disc is a sphere at z = 0, not a cylinder (against spheres and
+    tall prisms its distance is the planar one, and FCL computes sphere distances in closed
+    form: its GJK distance to a cylinder overestimates small gaps); a box an ``fcl.Box``; a
+    polygon its convex prism, or its triangles' prisms; a map its walls.
+    """
+    objects, prisms, rings, flat, spheres, boxes, polygons, discs = [], [], [], [], [], [], [], []
     for ob in scene.obstacles:
         if isinstance(ob, Disc):
             discs.append((ob.center[0], ob.center[1], ob.radius))
-            spheres.append(fcl.CollisionObject(fcl.Sphere(ob.radius), _yaw_transform(*ob.center)))
-            flat.append(fcl.CollisionObject(fcl.Sphere(ob.radius), _yaw_transform(*ob.center)))
+            sphere = fcl.Sphere(ob.radius)
+            for objs in (objects, spheres, flat):
+                objs.append(fcl.CollisionObject(sphere, _yaw_transform(*ob.center)))
         elif isinstance(ob, Box):
             rings.append(np.asarray(ob.vertices(), dtype=float))
             prisms.append(fcl.CollisionObject(convex_prism(rings[-1], _HEIGHT), fcl.Transform()))
             geom = fcl.Box(ob.size[0], ob.size[1], 2 * _HEIGHT)
-            boxes.append(fcl.CollisionObject(geom, _yaw_transform(ob.center[0], ob.center[1], ob.angle)))
+            for objs in (objects, boxes):
+                objs.append(fcl.CollisionObject(geom, _yaw_transform(ob.center[0], ob.center[1], ob.angle)))
         elif isinstance(ob, MapObstacle):
             if len(ob.rects):
                 walls = _walls(ob.rects)
-                for objs in (prisms, polygons, flat):
+                for objs in (objects, prisms, polygons, flat):
                     objs.append(fcl.CollisionObject(walls, fcl.Transform()))
         else:
             ring = _convex_ring(ob)
             parts = [ring] if ring is not None else _triangulate(ob)
             for part in parts:
-                geom = convex_prism(part, _HEIGHT) if ring is not None else _prism(part)  # one geometry, two objects
-                for objs in (prisms, polygons):
+                geom = convex_prism(part, _HEIGHT) if ring is not None else _prism(part)  # one geometry, three objects
+                for objs in (objects, prisms, polygons):
                     objs.append(fcl.CollisionObject(geom, fcl.Transform()))
             rings.extend(parts)
     if rings:
         flat.append(fcl.CollisionObject(flat_mesh(rings), fcl.Transform()))
-    return DistanceModel(prisms, flat, spheres, boxes, polygons, np.array(discs, dtype=float).reshape(-1, 3))
+    model = DistanceModel(prisms, flat, spheres, boxes, polygons, np.array(discs, dtype=float).reshape(-1, 3))
+    return objects, model
 
 
 def manager_of(objects: list) -> fcl.DynamicAABBTreeCollisionManager:

@@ -318,7 +318,7 @@ class DiscShape:
 
     def fcl_geometries(self) -> list:
         # a sphere at z = 0, not a cylinder: against spheres and tall prisms its distance
-        # is the planar one, in closed form (see gfuzzy.collision.geometry.static_objects)
+        # is the planar one, in closed form (see gfuzzy.collision.fclmodel.static_model)
         return [fcl.Sphere(self.radius)]
 
     def outline(self, poses: FloatArray, n: int = 48) -> FloatArray:

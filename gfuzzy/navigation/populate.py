@@ -450,22 +450,19 @@ def _movers(scene: Scene, o: PopulateOptions, track: FloatArray, union) -> tuple
     return movers, cut
 
 
-def write_scene(source: str | os.PathLike, result: Populated, out: str | os.PathLike) -> None:
-    """Write a copy of the scene file ``source`` with ``result``'s movers added, atomically.
-
-    The copy keeps the source's every key; relative ``file`` paths of its obstacles
-    (meshes, maps) are rewritten so that they still point at the same files from ``out``'s
-    folder (which must then hold them: a scene's files lie in its folder).
+def scene_copy(source: str | os.PathLike, out: str | os.PathLike) -> dict:
+    """The scene file ``source`` as a document to write at ``out``: relative ``file`` paths of
+    its obstacles (meshes, maps) rewritten so that they still point at the same files from
+    ``out``'s folder (which must then hold them: a scene's files lie in its folder). Cheap:
+    ``gfuzzy populate`` asks before it walks the people (it said so after seconds of work).
 
     Raises
     ------
     InputError
         ``out``'s folder does not hold a file the scene refers to.
     """
-
-    from ..atomic import write_atomic
     from ..scene.yamldoc import _load_yaml as load_yaml
-    from ..scene.yamldoc import dump_yaml, leaves_folder
+    from ..scene.yamldoc import leaves_folder
 
     src = Path(source)
     doc = load_yaml(src.read_text(), str(src))
@@ -484,6 +481,24 @@ def write_scene(source: str | os.PathLike, result: Populated, out: str | os.Path
                                     f"folder: write it in {here} or a folder above {f}"
                                 )
                             spec[key] = rel
+    return doc
+
+
+def write_scene(source: str | os.PathLike, result: Populated, out: str | os.PathLike, doc: dict | None = None) -> None:
+    """Write a copy of the scene file ``source`` with ``result``'s movers added, atomically:
+    ``doc``, :func:`scene_copy`'s document (made here when not given), its every key kept.
+
+    Raises
+    ------
+    InputError
+        ``out``'s folder does not hold a file the scene refers to.
+    """
+
+    from ..atomic import write_atomic
+    from ..scene.yamldoc import dump_yaml
+
+    src = Path(source)
+    doc = scene_copy(source, out) if doc is None else dict(doc)
     movers = list(doc.get("movers") or [])
     for m in result.movers:
         movers.append({"name": m.name, "disc": float(m.radius),

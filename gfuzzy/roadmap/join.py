@@ -35,7 +35,7 @@ import numpy as np
 from ..collision.exact import TOUCH_TOL
 from ..collision.geometry import StaticGeometry, metric_distance
 from ..typed import FloatArray, IntArray
-from .freespace import TOUCHING, blocked_points
+from .freespace import TOUCHING, blocked_points, inscribed_free_space
 from .passage import centre_bridge, lateral_middle
 
 __all__ = ["Join", "join_components", "count_components", "component_labels"]
@@ -748,47 +748,19 @@ def _door_middle(body: FloatArray, heading: float, axis: float) -> tuple[float, 
     return float(mt * along[0] + mu * across[0]), float(mt * along[1] + mu * across[1])
 
 
-#: Metres the robot's inscribed disc is shrunk by before its free space proves pieces apart:
-#: more than shapely's chord tolerance, so the computed free space holds the true one.
-SEPARATION_MARGIN = 2e-3
-
-
-def _inscribed(robot) -> tuple[FloatArray, float]:
-    """A disc inside the robot's body: its centre in the robot's frame and its radius (a
-    box's inscribed disc; a footprint's largest, found by ``polylabel`` to 0.1 mm)."""
-    if robot.shape != "footprint":
-        return np.zeros(2), robot.inradius
-    import shapely
-    from shapely.ops import polylabel
-
-    body = shapely.Polygon(robot.footprint)
-    c = polylabel(body, 1e-4)
-    return np.array([c.x, c.y]), float(body.exterior.distance(c))
-
-
 def _disc_regions(scene, vertices: FloatArray) -> IntArray | None:
-    """The region of each vertex's inscribed disc (:func:`_inscribed`) in that disc's free
+    """The region of each vertex's inscribed disc (:func:`~gfuzzy.roadmap.freespace.inscribed_disc`) in that disc's free
     space, or None where it cannot prove anything.
 
     The disc lies inside the body, so wherever the robot moves the disc moves free too: two
-    vertices whose discs lie in different regions are never joined by any motion. The disc
-    is shrunk by ``SEPARATION_MARGIN`` (the computed free space, with shapely's chords, then
-    holds the true one); None for a disc smaller than that, obstacles without an exact
-    shape, or a vertex whose disc is found in no region.
+    vertices whose discs lie in different regions are never joined by any motion
+    (:func:`~gfuzzy.roadmap.freespace.inscribed_free_space`: a free space that holds the
+    true one); None where it proves nothing, or for a vertex whose disc is found in no region.
     """
-    from types import SimpleNamespace
-
-    from .freespace import free_space
-
-    robot = scene.robot
-    centre, radius = _inscribed(robot)
-    r = radius - SEPARATION_MARGIN
-    if r <= 0:
+    got = inscribed_free_space(scene)
+    if got is None:
         return None
-    disc = SimpleNamespace(shape="disc", radius=r, clearance=robot.clearance)
-    fs = free_space(SimpleNamespace(robot=disc, bounds=scene.bounds, obstacles=scene.obstacles))
-    if fs is None or fs.tolerance >= SEPARATION_MARGIN:
-        return None
+    centre, fs = got
     v = np.asarray(vertices, dtype=float)
     cos, sin = np.cos(v[:, 2]), np.sin(v[:, 2])
     xy = v[:, :2] + np.column_stack([cos * centre[0] - sin * centre[1], sin * centre[0] + cos * centre[1]])

@@ -133,6 +133,8 @@ def _along_faces(blocked, m: FloatArray, heading: float, reach: float) -> float 
 #: fits, the bridge test found nothing in 4596 refills and cost 80 % of the build (tb3-arena);
 #: a disc's real passages are found by the free-space repair as well (docs/planner.md).
 BARREN_DRAWS = 16
+#: Validity checks after which a draw that found nothing hands back (:meth:`PassageDraws.draw`).
+DRAW_CHECKS = 500
 #: Bridge samples in a row that make no new chain (each one centred in vain) after which the
 #: sampler stops centring: bridges are then taken as they come (:meth:`Chains.plain`).
 MAX_MISSES = 256
@@ -238,6 +240,7 @@ class PassageDraws:
         self.sigma = max(scene.robot.circumradius, 1e-3)
         self.disc_radius = scene.robot.circumradius  # (when a disc)
         self.valid = geometry.is_valid
+        self.geometry = geometry
         self.blocked = blocked_points(scene)
         self.in_free_cell = free_cell_draw(scene.obstacles, scene.bounds, rng, free_cell_share)
         self.chains = Chains(self.valid, geometry.clearance1, self.blocked, scene.robot) if self.box else None
@@ -309,8 +312,15 @@ class PassageDraws:
         return None
 
     def draw(self):
-        """The next milestone (a valid configuration), or None after 1000 tries."""
+        """The next milestone (a valid configuration), or None after 1000 tries or
+        ``DRAW_CHECKS`` validity checks (OMPL asks its termination condition between
+        draws: a box's 1000 tries in a space with no room took 30,000 checks, 2-3 s).
+        None changes nothing but when the caller may stop: the next draw goes on where
+        this one stopped (the same generator, the same queues)."""
+        checks = self.geometry.checks
         for _ in range(1000):
+            if self.geometry.checks - checks > DRAW_CHECKS:
+                return None
             if self.rng.random() < self.ratio:  # a chain's samples count as bridge samples too
                 q = self.queue.pop() if self.queue else self._bridge()
                 if q is not None:

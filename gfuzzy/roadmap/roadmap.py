@@ -27,6 +27,7 @@ from ..atomic import write_atomic
 from ..collision.geometry import StaticGeometry, metric_distance
 from ..errors import InputError, LimitError, SceneError, not_utf8
 from ..scene.scene import Scene
+from ..scene.yamldoc import _kind
 from ..settings import MAX_POINTS
 from ..typed import FloatArray, IntArray
 from .join import count_components, join_roadmap, repair_roadmap
@@ -46,6 +47,9 @@ log = logging.getLogger(__name__)
 FORMAT = "gfuzzy-roadmap"
 #: Validity checks without a new milestone after which the free space counts as empty.
 STALL_CHECKS = 200_000
+#: Validity checks without a new milestone after which the robot's inscribed disc is asked
+#: whether it has room anywhere (no room: the robot fits nowhere, said at once).
+PROOF_CHECKS = 1_000
 FORMAT_VERSION = 1
 FREE_CELL_SHARE = 0.5  # maps' free cells below this share of the bounds: half the samples drawn in them
 
@@ -177,11 +181,22 @@ class RoadmapInfo:
         types = {f.name: casts[f.type] for f in fields(cls) if f.name != "extra"}
         kwargs, extra = {}, {}
         for key, value in doc.items():
-            try:
-                kwargs[key] = types[key](value)
-            except (KeyError, TypeError, ValueError):  # another version's key, or odd: kept
+            cast = types.get(key)
+            if cast is not None and _of_type(value, cast):
+                kwargs[key] = cast(value)
+            else:  # another version's key, or odd (a list where a string belongs): kept as it is
                 extra[key] = value
         return cls(**kwargs, extra=extra)
+
+
+def _of_type(value, cast) -> bool:
+    """Whether a roadmap file's ``info`` value is of its field's type as JSON gives it (an
+    integer is a float too; a boolean is no number): ``str([1])`` read a list as ``"[1]"``."""
+    if cast is float:
+        return isinstance(value, numbers.Real) and not isinstance(value, bool)
+    if cast is int:
+        return isinstance(value, numbers.Integral) and not isinstance(value, bool)
+    return isinstance(value, cast)
 
 
 @dataclass
@@ -371,8 +386,8 @@ def load_roadmap(path: str | os.PathLike, scene: Scene | None = None) -> Roadmap
         vertices,
         edges,
         lengths,
-        str(doc["scene"]),
-        str(doc["scene_hash"]),
+        _text(file, doc, "scene"),
+        _text(file, doc, "scene_hash"),
         circumradius,
         opts,
         RoadmapInfo.from_dict(doc.get("info", {})),
@@ -390,6 +405,15 @@ def load_roadmap(path: str | os.PathLike, scene: Scene | None = None) -> Roadmap
         if bad.size:
             raise SceneError(file, f"lengths[{int(bad[0])}]", "does not match the distance between its vertices")
     return rm
+
+
+def _text(file: str, doc: dict, key: str) -> str:
+    """A roadmap file's string ``doc[key]``; anything else is bad input naming the key (``str``
+    read a list ``[1]`` as the name ``"[1]"``)."""
+    value = doc[key]
+    if not isinstance(value, str):
+        raise SceneError(file, key, f"expected a string, got {_kind(value)}")
+    return value
 
 
 def _options_from(file: str, raw) -> RoadmapOptions:
@@ -509,6 +533,7 @@ class _Builder:
         prm.setProblemDefinition(ob.ProblemDefinition(si))
         prm.setup()
         self.prm = prm
+        self.no_room: str | None = None  # why the robot fits nowhere ("": not proved), once asked
 
     def close(self) -> None:
         """Break the Python <-> OMPL reference cycle of the sampler allocator; give OMPL
@@ -526,7 +551,9 @@ class _Builder:
         """Grow to ``n`` milestones; raise SceneError if the free space is (nearly) empty.
 
         PRM samples until it finds a valid state, for ever if there is none, so growth also
-        stops after ``STALL_CHECKS`` validity checks without a new milestone.
+        stops after ``STALL_CHECKS`` validity checks without a new milestone, and after
+        ``PROOF_CHECKS`` when the robot's inscribed disc has no room anywhere
+        (:func:`_no_room`: a robot that fits nowhere took 200,000 checks to say so).
         """
         from ompl import base as ob
 
@@ -543,10 +570,14 @@ class _Builder:
                 seen[0], seen[1] = count, geometry.checks
             elif geometry.checks - seen[1] > STALL_CHECKS:
                 return True
-            return count >= n
+            elif geometry.checks - seen[1] > PROOF_CHECKS and self.no_room is None:
+                self.no_room = _no_room(geometry.scene) if count == 0 else ""
+            return count >= n or bool(self.no_room)  # asked again (OMPL's two loops): the same answer
 
         prm.growRoadmapPtc(ob.PlannerTerminationCondition(done))
         count = prm.milestoneCount()
+        if count == 0 and self.no_room:
+            raise SceneError(geometry.scene.source, "robot", f"the robot fits nowhere: {self.no_room}")
         if count < n:
             raise SceneError(
                 geometry.scene.source,
@@ -584,6 +615,23 @@ class _Builder:
                     have.add(arr.tobytes())
                     verts.append(tuple(arr.tolist()))
         return np.array(verts, dtype=float).reshape(len(verts), 3 if self.box else 2), e
+
+
+def _no_room(scene: Scene) -> str:
+    """Why the robot fits nowhere, when its inscribed disc has no room anywhere in the bounds
+    among the obstacles (grown by the clearance), else ``""``
+    (:func:`~gfuzzy.roadmap.freespace.inscribed_free_space`: a proof, not a guess)."""
+    from .freespace import SEPARATION_MARGIN, inscribed_disc, inscribed_free_space
+
+    # a margin past shapely's chords (7.5e-5 of the radius grown): a metre-wide robot's 2 mm
+    margin = max(SEPARATION_MARGIN, 1e-3 * inscribed_disc(scene.robot)[1])
+    got = inscribed_free_space(scene, margin)
+    if got is None or got[1].regions:
+        return ""
+    radius = got[1].grown - scene.robot.clearance + margin
+    keep = f" {scene.robot.clearance:g} m from the obstacles" if scene.robot.clearance > 0 else ""
+    bounds = ", ".join(f"{v:g}" for v in scene.bounds)
+    return f"the disc inside its body (radius {radius:.3f} m) has room nowhere{keep} within the bounds [{bounds}]"
 
 
 def build_roadmap(

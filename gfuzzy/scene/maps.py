@@ -578,8 +578,8 @@ def load_map(spec, place: str, scene_file: str, folder: str | os.PathLike) -> Ma
         path.relative_to(folder)
     except ValueError:
         v.fail(fplace, f"map path {spec['file']!r} leaves the scene file's folder")
-    if not path.is_file():
-        v.fail(fplace, f"cannot read map {spec['file']!r}: no such file")
+    if not path.is_file():  # a folder was 'no such file'
+        v.fail(fplace, f"cannot read map {spec['file']!r}: {'a folder, not a file' if path.is_dir() else 'no such file'}")
     unknown = spec.get("unknown", "blocked")
     if unknown not in ("blocked", "free"):
         v.fail(_join(place, "unknown"), f"expected blocked or free, got {unknown!r}")
