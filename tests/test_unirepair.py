@@ -12,6 +12,7 @@ from gfuzzy.check.check import check_trajectory
 from gfuzzy.planner.planner import Planner, PlanOptions
 from gfuzzy.roadmap.roadmap import Roadmap
 from gfuzzy.scene.scene import parse_scene
+from gfuzzy.timespace import unirepair
 
 R = 0.6  # the gap's middle line: a quarter circle round the origin
 H = math.pi / 2
@@ -48,15 +49,21 @@ def arc():
     return sc, arc_roadmap(sc)
 
 
-def test_a_drive_rounds_a_curved_gap_by_small_turns(arc):
-    """Main answers ``no_path`` (its lanes prove the ends apart: no straight lane passes
-    the gap, and turns happen only at vertices); the repair joins the rooms' pieces by a
-    chain of 2 cm drives and 0.01 rad turns, and the answer passes the check."""
+def test_a_drive_rounds_a_curved_gap_by_small_turns(arc, monkeypatch):
+    """Without the repair ``no_path`` (its lanes prove the ends apart: no straight lane
+    passes the gap, and turns happen only at vertices); the repair, on by default (off
+    by default before session 38: this fails there), joins the rooms' pieces by a chain of
+    2 cm drives and 0.01 rad turns, and the answer passes the check. Its A*'s moves are
+    certified from clearances kept per pose (a drive or turn whose ends' clearances add up
+    to its length needs no further query), a target's turns from the arc traced once: the
+    chains ask 21,843 FCL queries, 29,361 before session 38 (each move traced afresh, each
+    finishing turn and drive onto every target copy too)."""
     sc, rm = arc
     start, goal = [R, -0.6, H], [-0.6, R, math.pi]
-    off = Planner(sc, arc_roadmap(sc)).plan(start, goal, 0.0, PlanOptions(time_limit=1e6))
-    assert off.status.value == "no_path"  # the default (no --drive-repair): as before, at once
-    res = Planner(sc, rm).plan(start, goal, 0.0, PlanOptions(time_limit=1e6, drive_repair=True))
+    off = Planner(sc, arc_roadmap(sc)).plan(start, goal, 0.0, PlanOptions(time_limit=1e6, drive_repair=False))
+    assert off.status.value == "no_path"  # --no-drive-repair: as before, at once
+    res, calls, _ = _chain_calls(sc, rm, monkeypatch)
+    assert 0 < calls < 25_000
     assert res.solved, res.message
     rep = check_trajectory(sc, res.trajectory.waypoints)
     assert rep.valid, rep.reason
@@ -80,11 +87,50 @@ def test_the_repair_is_kept_on_the_roadmap_and_changes_no_solved_answer(arc):
 
 
 @pytest.mark.parametrize("command", ["plan", "regress", "batch"])
-def test_the_command_line_asks_for_the_repair(command):
-    """``--drive-repair`` reaches ``PlanOptions.drive_repair`` (off without it)."""
+def test_the_command_line_turns_the_repair_off(command):
+    """The repair is on by default; ``--no-drive-repair`` reaches ``PlanOptions.drive_repair``
+    (and ``--drive-repair``, the flag before session 38, still parses)."""
     from gfuzzy.cli.common import _plan_options
     from gfuzzy.cli.main import _parser
 
     words = {"plan": ["plan", "s.yaml"], "regress": ["regress", "s.yaml"], "batch": ["batch", "s.yaml", "-o", "x.csv"]}
     assert _plan_options(_parser().parse_args([*words[command], "--drive-repair"])).drive_repair
-    assert not _plan_options(_parser().parse_args(words[command])).drive_repair
+    assert _plan_options(_parser().parse_args(words[command])).drive_repair
+    assert PlanOptions().drive_repair
+    assert not _plan_options(_parser().parse_args([*words[command], "--no-drive-repair"])).drive_repair
+
+
+def _chain_calls(sc, rm, monkeypatch) -> tuple:
+    """(answer, FCL queries asked inside :func:`unirepair.drive_chain`, A* expansions) of the
+    arc's query on roadmap ``rm`` (the default options)."""
+    seen = {"calls": 0, "certs": []}
+    chain, cert = unirepair.drive_chain, unirepair._Cert
+
+    def counted(geo, *args, **kwargs):
+        c0 = geo.calls
+        try:
+            return chain(geo, *args, **kwargs)
+        finally:
+            seen["calls"] += geo.calls - c0
+
+    class Kept(cert):
+        def __init__(self, geo):
+            super().__init__(geo)
+            seen["certs"].append(self)
+
+    monkeypatch.setattr(unirepair, "drive_chain", counted)
+    monkeypatch.setattr(unirepair, "_Cert", Kept)
+    res = Planner(sc, rm).plan([R, -0.6, H], [-0.6, R, math.pi], 0.0, PlanOptions(time_limit=1e6))
+    return res, seen["calls"], sum(unirepair.TOTAL - c.budget for c in seen["certs"])
+
+
+def test_the_repair_stops_at_its_total_of_expansions(arc, monkeypatch):
+    """Where no way is found the repair's attempts stop at ``TOTAL`` expansions in all (an
+    unsolvable query pays at most that): with a total of 200 the arc is not rounded,
+    ``no_path``, every expansion of the 200 spent (before session 38: 6 attempts of up to
+    1500 expansions each; this fails there, no ``_Cert``)."""
+    monkeypatch.setattr(unirepair, "TOTAL", 200)
+    sc = arc[0]
+    res, _, spent = _chain_calls(sc, arc_roadmap(sc), monkeypatch)
+    assert res.status.value == "no_path"
+    assert spent == 200

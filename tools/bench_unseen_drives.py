@@ -434,7 +434,7 @@ def make_case(seed: int, index: int, bodies=BODIES, scenarios=tuple(SCENARIOS)) 
 
 
 def plan_case(case: dict, vertices=VERTICES, roadmap_seed: int | None = None, time_limit: float | None = None,
-              drive_repair: bool = False) -> dict:  # fmt: skip
+              drive_repair: bool = True) -> dict:  # fmt: skip
     """gfuzzy on the case: each roadmap size in turn until a checked answer (``time_limit``:
     each plan's budget, wall-clock seconds; None: the planner's default; ``drive_repair``:
     ``PlanOptions.drive_repair``)."""
@@ -464,7 +464,7 @@ def plan_case(case: dict, vertices=VERTICES, roadmap_seed: int | None = None, ti
 
 
 def run_case(case: dict, vertices=VERTICES, oracle: bool = True, roadmap_seed: int | None = None,
-             time_limit: float | None = None, drive_repair: bool = False) -> dict:
+             time_limit: float | None = None, drive_repair: bool = True) -> dict:
     row = {k: case[k] for k in ("index", "body", "scenario", "reverse", "wmax", "mover")}
     row["wmax"] = round(row["wmax"], 3) if row["wmax"] != "" else ""
     row["roadmap_seed"] = case["roadmap_seed"] if roadmap_seed is None else roadmap_seed
@@ -580,8 +580,9 @@ def main(argv=None) -> int:
                     "proof that its ends are apart (gfuzzy/timespace/unireach.py): its cost, paired")
     ap.add_argument("--time-limit", type=float, help="each plan's budget, wall-clock seconds (default: the planner's 60; "
                     "on a loaded machine a larger one keeps timeouts out of the table)")
-    ap.add_argument("--drive-repair", action="store_true", help="plan with PlanOptions.drive_repair (gfuzzy plan "
-                    "--drive-repair: a drive's pieces joined by small steps)")
+    ap.add_argument("--drive-repair", action=argparse.BooleanOptionalAction, default=True,
+                    help="PlanOptions.drive_repair (default on, as gfuzzy plan's; --no-drive-repair: off, "
+                         "the planner before session 38)")
     ap.add_argument("-o", "--output", help="CSV, one row per case (written atomically)")
     ap.add_argument("--dump", help="folder for the scene and commands of each case gfuzzy did not solve "
                     "(of every case with --only)")
@@ -617,7 +618,7 @@ def main(argv=None) -> int:
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     which = f"--only {' '.join(map(str, a.only))}" if a.only else f"--cases {a.cases}"
     limit = ("" if a.time_limit is None else f" --time-limit {a.time_limit:g}") + (" --no-proof" if a.no_proof else "")
-    limit += " --drive-repair" if a.drive_repair else ""
+    limit += "" if a.drive_repair else " --no-drive-repair"
     print(f"# tools/bench_unseen_drives.py {which} --seed {a.seed} -n {' '.join(map(str, a.vertices))}{limit}: {len(rows)} "
           f"cases in {time.perf_counter() - t0:.0f} s, load average {load:.2f}; times: CPU seconds")
     print(table(rows))

@@ -263,7 +263,7 @@ def _plan_options(args):
             stretch=args.stretch,
             seed=args.ga_seed,
             backend=getattr(args, "backend", "compiled"),
-            drive_repair=getattr(args, "drive_repair", False),
+            drive_repair=getattr(args, "drive_repair", True),
         )
     except ValueError as exc:  # PlanOptions' checks (named after the command: plan shares these flags with regress)
         raise BadInput(f"gfuzzy {getattr(args, 'command', None) or 'plan'}: {exc}") from None

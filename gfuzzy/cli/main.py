@@ -36,9 +36,10 @@ def _plan_flags(q, single=True):
     q.add_argument("--ga-seed", type=int, default=0, help="seed of the GA refinement (default 0)")
     q.add_argument("--stretch", type=float, default=1.05,
                    help="search the roadmap's spanner of this stretch (default 1.05; 1 = the whole roadmap)")  # fmt: skip
-    q.add_argument("--drive-repair", action="store_true",
+    q.add_argument("--drive-repair", action=argparse.BooleanOptionalAction, default=True,
                    help="a box or footprint differential drive whose graph leaves start and goal apart: try to join its "
-                        "pieces by small-step manoeuvres (slow: minutes where no way exists; docs/planner.md)")  # fmt: skip
+                        "pieces by small-step manoeuvres (default on; --no-drive-repair: answer no_path at once; "
+                        "docs/planner.md)")  # fmt: skip
     q.add_argument("--backend", choices=("compiled", "reference"), default="compiled",
                    help="search implementation: compiled (numba, default) or the pure-Python reference; same answers")  # fmt: skip
     _clearance_flags(q)

@@ -104,8 +104,9 @@ class PlanOptions:
     drive_repair : bool
         A box or footprint differential drive whose graph leaves the query's ends apart has
         its pieces joined by small-step manoeuvres (:mod:`gfuzzy.timespace.unirepair`): it
-        finds ways round tight bends that turns at vertices miss, at a cost of up to minutes
-        of search where no way exists (so off by default; ``--drive-repair``).
+        finds ways round tight bends that turns at vertices miss, at a bounded cost where no
+        way exists (``unirepair.TOTAL`` expansions; on by default, ``--no-drive-repair``
+        turns it off).
     """
 
     dt: float = 0.07
@@ -121,7 +122,7 @@ class PlanOptions:
     weight: float = 1.0
     stretch: float = 1.05
     backend: str = "compiled"
-    drive_repair: bool = False
+    drive_repair: bool = True
 
     def __post_init__(self):
         check_number("dt", self.dt)

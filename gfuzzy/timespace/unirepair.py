@@ -16,7 +16,9 @@ move a turn, a straight drive onto that vertex and a turn there. The chain becom
 between new points (one where each straight run ends) and explicit turns at them
 (:class:`Chains`; the points get no turning ring). The planner asks for it only when the
 query's graph does not join its ends, so every query the graph solved is answered as
-before.
+before. On by default (``PlanOptions.drive_repair``): each certificate is asked once
+(:class:`_Cert`) and a repair's attempts share ``TOTAL`` expansions, so a query with no
+way pays a bounded few seconds for it.
 """
 
 from __future__ import annotations
@@ -31,11 +33,10 @@ from ..poses import wrap_angle
 from ..settings import SPEED_SAFETY
 from ..typed import FloatArray
 from . import unireach
-from .drive import turn_free
 from .unicycle import _base
 from .unilanes import lanes, on_time
 
-__all__ = ["Chains", "drive_chain", "drive_graph", "STEP", "TURN", "EXPANSIONS", "PAIRS", "MIN_PIECE"]
+__all__ = ["Chains", "drive_chain", "drive_graph", "STEP", "TURN", "EXPANSIONS", "TOTAL", "PAIRS", "MIN_PIECE"]
 
 #: The manoeuvres' drive step (m) and turn step (rad).
 STEP = 0.02
@@ -52,6 +53,9 @@ TURN_COST = 1.0
 FACING = 0.3
 #: A* expansions per attempt between two vertices.
 EXPANSIONS = 1500
+#: A* expansions per repair in all (an unsolvable query pays for them: on the box
+#: corridor of ``docs/benchmarks.md`` about a millisecond each, on a map's crop a few).
+TOTAL = 4000
 #: Pairs tried per repair in all (an unsolvable query pays for them: on a map's crop an
 #: attempt that finds nothing costs up to a minute of CPU).
 ATTEMPTS = 6
@@ -67,6 +71,10 @@ ENDS = 3
 FAN = (-0.2, -0.1, 0.0, 0.1, 0.2)
 #: Pieces with fewer vertices are not joined (a stray copy or two in a tight spot).
 MIN_PIECE = 3
+#: Clearance queries tracing one side of a target's free turns before it counts as blocked.
+ARC_STEPS = 200
+#: A clearance below this certifies nothing (as :mod:`gfuzzy.collision.geometry`'s tracing).
+_EPS = 1e-9
 
 
 @dataclass
@@ -89,10 +97,6 @@ class Chains:
     turns: FloatArray
 
 
-def _turn_ok(geo, x, y, h, dh) -> bool:
-    return abs(dh) <= 1e-12 or turn_free(geo, x, y, h, dh)
-
-
 def _facing(p, t, near: float, reverse: bool, roomy: bool = False) -> bool:
     """Whether target ``t`` lies within ``near`` of lattice pose ``p`` and within ``FACING``
     of its heading (or behind it, with ``reverse``), or within three steps or ``roomy``."""
@@ -105,7 +109,82 @@ def _facing(p, t, near: float, reverse: bool, roomy: bool = False) -> bool:
     return d <= 3.0 * STEP or off <= FACING or (reverse and math.pi - off <= FACING)
 
 
-def _finish(geo, node, target, reverse: bool):
+class _Cert:
+    """The chains' certificates, each clearance asked once (:meth:`StaticGeometry.motion_free`
+    given both ends' clearances certifies a small move with no further query when they
+    add up to its length: two certified stretches meet, ``motion_clearance``'s argument).
+
+    A pose's clearance: the maps' distance-transform bound of the circumscribed disc
+    (:meth:`StaticGeometry.disc_bound`, no FCL query) where it exceeds a drive step, else
+    :meth:`StaticGeometry.clearance1`; both lower bounds. A target's turns: the arc of
+    headings certified free on each side of its heading, traced lazily as far as asked."""
+
+    def __init__(self, geo):
+        self.geo, self.r = geo, float(geo.robot.circumradius)
+        self.clear: dict = {}
+        self.disc: dict = {}
+        self.room: dict = {}
+        self.arcs: dict = {}
+        self.moves: dict = {}
+        self.budget = TOTAL  # A* expansions left to the repair's attempts
+
+    def c(self, p) -> float:
+        got = self.clear.get(p)
+        if got is None:
+            d = self.disc.get(p[:2])
+            if d is None:
+                d = self.disc[p[:2]] = self.geo.disc_bound(p[0], p[1])
+            got = self.clear[p] = d if d > STEP else self.geo.clearance1(list(p))
+        return got
+
+    def roomy(self, x: float, y: float) -> bool:
+        """Whether every turn in place at (x, y) is free (:meth:`StaticGeometry.sweep_bound`)."""
+        got = self.room.get((x, y))
+        if got is None:
+            got = self.room[(x, y)] = self.geo.sweep_bound(x, y) > 0
+        return got
+
+    def move(self, p, q) -> bool:
+        """Whether the straight motion p -> q (a drive, or a turn of at most pi / 2) is certified (kept)."""
+        got = self.moves.get((p, q))
+        if got is None:
+            ca = self.c(p)
+            total = math.hypot(q[0] - p[0], q[1] - p[1]) + abs(float(wrap_angle(q[2] - p[2]))) * self.r
+            if ca > total + _EPS:  # p's clearance alone certifies it (no pose moves farther than total)
+                got = True
+            else:
+                cb = self.c(q) if ca >= 0 else -1.0
+                got = bool(cb >= 0 and self.geo.motion_free(list(p), list(q), ca=ca, cb=cb))
+            self.moves[(p, q)] = got
+        return got
+
+    def turn(self, p, dh: float) -> bool:
+        """Whether turning in place from pose ``p`` by ``dh`` (|dh| <= pi / 2) is certified."""
+        if abs(dh) <= 1e-12 or self.roomy(p[0], p[1]):
+            return self.c(p) >= 0
+        return self.move(p, (p[0], p[1], float(wrap_angle(p[2] + dh))))
+
+    def arc(self, p, dh: float) -> bool:
+        """Whether turning in place from pose ``p`` by ``dh`` (any size) is certified: the
+        arc free on that side of ``p``, traced by clearance (sphere tracing, each step
+        certified by the clearance at its start) and kept."""
+        if abs(dh) <= 1e-12 or self.roomy(p[0], p[1]):
+            return self.c(p) >= 0
+        side = 1.0 if dh > 0 else -1.0
+        done, blocked = self.arcs.get((p, side), (0.0, False))
+        steps = 0
+        while done < abs(dh) and not blocked:
+            c = self.geo.clearance1([p[0], p[1], float(wrap_angle(p[2] + side * done))])
+            steps += 1
+            if c < _EPS or steps > ARC_STEPS:
+                blocked = True
+            else:
+                done += c / self.r
+        self.arcs[(p, side)] = (done, blocked)
+        return done >= abs(dh)
+
+
+def _finish(cert: _Cert, node, target, reverse: bool):
     """Moves from lattice pose ``node`` onto ``target`` (x, y, h): turn, straight, turn."""
     x, y, h = node
     tx, ty, th = target
@@ -113,32 +192,32 @@ def _finish(geo, node, target, reverse: bool):
     if d <= 1e-9:  # (the chain must end on the vertex itself)
         return None
     for back in (False, True) if reverse else (False,):
-        hc = math.atan2(ty - y, tx - x) + (math.pi if back else 0.0)
+        hc = float(wrap_angle(math.atan2(ty - y, tx - x) + (math.pi if back else 0.0)))
         a, b = float(wrap_angle(hc - h)), float(wrap_angle(th - hc))
-        if (_turn_ok(geo, x, y, h, a) and geo.motion_free([x, y, hc], [tx, ty, hc])
-                and _turn_ok(geo, tx, ty, hc, b)):  # fmt: skip
+        if cert.arc(target, -b) and cert.move((x, y, hc), (tx, ty, hc)) and cert.arc(node, a):
             return [("T", a), ("D", d * (-1.0 if back else 1.0)), ("T", b)]
     return None
 
 
-def drive_chain(geo, sources: list, targets: list, reverse: bool, budget: int = EXPANSIONS, guide=None,
-                deadline: float = math.inf):  # fmt: skip
+def drive_chain(geo, sources: list, targets: list, reverse: bool, budget: int | None = None, guide=None,
+                deadline: float = math.inf, cert: _Cert | None = None):  # fmt: skip
     """A certified small-step drive from one of ``sources`` ((x, y, h)) to one of
     ``targets`` ((x, y, h)): (source index, target index, moves), moves ``("T", dh)`` (a
     turn in place) and ``("D", s)`` (a straight drive of s m along the heading, backwards
-    when negative); None within ``budget`` expansions. ``guide``: (points (k, 2), metres
+    when negative); None within ``budget`` expansions (default ``EXPANSIONS``). ``guide``: (points (k, 2), metres
     left from each): a polyline to a target (the roadmap's way, :func:`_guide`) whose
     length from a pose's nearest point is the heuristic; else the nearest target's distance.
+    ``cert``: the certificates kept so far (:class:`_Cert`, shared by a repair's attempts).
     :class:`gfuzzy.timespace.unilanes.OutOfTime` past ``deadline``."""
+    cert = _Cert(geo) if cert is None else cert
+    budget = EXPANSIONS if budget is None else budget
+    targets = [(float(t[0]), float(t[1]), float(t[2])) for t in targets]
     tx = np.array([t[:2] for t in targets], dtype=float)
     near = max(3.0 * STEP, 2.0 * float(geo.robot.circumradius))  # where a straight drive onto a target is tried
     gp, left = guide if guide is not None else (tx, np.zeros(len(tx)))
 
     def h_cost(x, y):
         return float(np.min(np.hypot(gp[:, 0] - x, gp[:, 1] - y) + left))
-
-    def t_dist(x, y):
-        return float(np.min(np.hypot(tx[:, 0] - x, tx[:, 1] - y)))
 
     key = lambda p: (round(p[0] / (KEY * STEP)), round(p[1] / (KEY * STEP)), round(p[2] / (0.5 * TURN)))  # noqa: E731
     heap, parent, seen = [], {}, set()
@@ -151,16 +230,19 @@ def drive_chain(geo, sources: list, targets: list, reverse: bool, budget: int = 
     for n in range(budget):
         if n % 64 == 0:
             on_time(deadline)
-        if not heap:
+        if not heap or cert.budget <= 0:
             return None
+        cert.budget -= 1
         _, g, p = heapq.heappop(heap)
         if key(p) in seen:
             continue
         seen.add(key(p))
-        if t_dist(*p[:2]) <= near:
-            roomy = geo.sweep_bound(p[0], p[1]) > 0  # any turn free: every target near is tried
-            for j, t in enumerate(targets):
-                if _facing(p, t, near, reverse, roomy) and (fin := _finish(geo, p, t, reverse)) is not None:
+        dist = np.hypot(tx[:, 0] - p[0], tx[:, 1] - p[1])
+        if dist.min() <= near:
+            roomy = cert.roomy(p[0], p[1])  # any turn free: every target near is tried
+            for j in np.argsort(dist, kind="stable").tolist():
+                t = targets[j]
+                if _facing(p, t, near, reverse, roomy) and (fin := _finish(cert, p, t, reverse)) is not None:
                     path = list(fin)
                     q = p
                     while parent[q][0] is not None:
@@ -171,13 +253,13 @@ def drive_chain(geo, sources: list, targets: list, reverse: bool, budget: int = 
         for kind, s in moves:
             if kind == "D":
                 c = (x + s * math.cos(h), y + s * math.sin(h), h)
-                ok = key(c) not in seen and geo.motion_free([x, y, h], list(c))
+                ok = key(c) not in seen and c not in parent and cert.move(p, c)
                 cost = abs(s)
             else:
                 c = (x, y, float(wrap_angle(h + s)))
-                ok = key(c) not in seen and turn_free(geo, x, y, h, s)
+                ok = key(c) not in seen and c not in parent and cert.turn(p, s)
                 cost = abs(s) * r * TURN_COST
-            if ok and c not in parent:
+            if ok:
                 parent[c] = (p, (kind, s), None)
                 heapq.heappush(heap, (g + cost + WEIGHT * h_cost(*c[:2]), g + cost, c))
     return None
@@ -316,6 +398,7 @@ def _chains(geo, roadmap, pieces: tuple, xy: FloatArray, deadline: float) -> Cha
     reverse, span = bool(geo.robot.reverse), 2.0 * float(geo.robot.circumradius)
     out = _Builder(len(xy))
     roomy: dict = {}
+    cert = _Cert(geo)
     attempts = 0
     for c in big:
         mine = np.array(sorted(verts[c]))
@@ -332,16 +415,15 @@ def _chains(geo, roadmap, pieces: tuple, xy: FloatArray, deadline: float) -> Cha
             cu = [k for w in _ends(geo, xy, mine, v, u, span, roomy) for k in at[w] if find(label[k]) == find(c)]
             cv = [k for w in _ends(geo, xy, other, u, v, span, roomy) for k in at[w]
                   if find(label[k]) != find(c) and label[k] in big_set]  # fmt: skip
-            ends = sorted({int(vertex[k]) for k in cv})
-            ends = [w for w in ends if roomy.get(w)] or ends  # a tight vertex lures the A* into a corner
-            guide = _guide(roadmap, u, ends, float(dist[i, j])) if cu and cv else None
-            if guide is None:
+            guides = [_guide(roadmap, a, _roomy_first(vertex, to, roomy), float(dist[i, j])) if cu and cv else None
+                      for a, to in ((u, cv), (v, cu))]  # fmt: skip
+            if guides[0] is None:
                 continue
             tried += 1
             attempts += 1
-            if attempts > ATTEMPTS:
+            if attempts > ATTEMPTS or cert.budget <= 0:
                 return out.chains() if out.edges else None
-            if _join(geo, out, (poses, vertex, roomy), cu, cv, reverse, xy, guide, deadline):
+            if _join(geo, out, (poses, vertex, roomy, cert), cu, cv, reverse, xy, guides, deadline):
                 parent[find(c)] = find(label[cv[0]])
                 break
     return out.chains() if out.edges else None
@@ -380,24 +462,38 @@ def _sources(copies: list, poses, vertex, roomy: dict, towards, reverse: bool) -
     return out
 
 
-def _join(geo, out: _Builder, pieces: tuple, one: list, two: list, reverse: bool, xy, guide,
+def _roomy_first(vertex, copies: list, roomy: dict) -> list:
+    """The vertices of ``copies`` where the body turns freely, else all of them (a tight
+    vertex lures the A* into a corner it cannot turn in)."""
+    ends = sorted({int(vertex[k]) for k in copies})
+    return [w for w in ends if roomy.get(w)] or ends
+
+
+def _join(geo, out: _Builder, pieces: tuple, one: list, two: list, reverse: bool, xy, guides,
           deadline: float = math.inf) -> bool:  # fmt: skip
     """A chain from a copy of ``one`` to a copy of ``two`` (copy ids; ``pieces``: the
-    copies' poses, their vertices and which vertices are roomy) along ``guide``
-    (:func:`_guide`), and without ``reverse`` one back too (the body facing either way);
+    copies' poses, their vertices, which vertices are roomy and the :class:`_Cert`) along
+    ``guides[0]`` (:func:`_guide`: the roadmap's way from ``one``'s vertex to those of
+    ``two`` where the body turns freely), and one from ``two`` to ``one`` along
+    ``guides[1]``: with ``reverse`` either (a chain is driven both ways; the second is
+    searched only when the first is not found), else both (the body facing either way);
     added to ``out`` when found."""
-    poses, vertex, roomy = pieces
-    back = (guide[0][::-1].copy(), guide[1][-1] - guide[1][::-1])
-    for a, b, gd in ((one, two, guide), (two, one, back)) if not reverse else ((one, two, guide),):
-        src = _sources(a, poses, vertex, roomy, xy[int(vertex[b[0]])] if gd is back else gd[0][-1], reverse)
-        got = drive_chain(geo, [p for _, _, p in src], [poses[k] for k in b], reverse, guide=gd, deadline=deadline)
-        if got is None:
-            return False
-        k, dh, _ = src[got[0]]
-        u, v = int(vertex[k]), int(vertex[b[got[1]]])
-        if not out.add(geo, u, poses[k], [("T", dh), *got[2]], v, xy[v]):
-            return False
-    return True
+    poses, vertex, roomy, cert = pieces
+    found = 0
+    for a, b, gd in ((one, two, guides[0]), (two, one, guides[1])):
+        if gd is None:
+            continue
+        src = _sources(a, poses, vertex, roomy, gd[0][-1], reverse)
+        got = drive_chain(geo, [p for _, _, p in src], [poses[k] for k in b], reverse, guide=gd, deadline=deadline,
+                          cert=cert)  # fmt: skip
+        if got is not None:
+            k, dh, _ = src[got[0]]
+            u, v = int(vertex[k]), int(vertex[b[got[1]]])
+            if out.add(geo, u, poses[k], [("T", dh), *got[2]], v, xy[v]):
+                found += 1
+        if found if reverse else found == 0:
+            break
+    return found == (1 if reverse else 2)
 
 
 def _extra(planner, stretch: float, step_len: float, deadline: float, first=None):
