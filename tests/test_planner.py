@@ -345,14 +345,24 @@ sys.exit(run())
 """
 
 
-def test_robot_that_fits_nowhere_is_reported_not_hung(tmp_path, capsys):
+def test_robot_that_fits_nowhere_is_reported_not_hung(tmp_path, capsys, monkeypatch):
     p = tmp_path / "nofit.yaml"
     p.write_text(NOFIT)
     out = tmp_path / "rm.json"
     proc = run_python(GIVE_UP_SOONER, "roadmap", p, "-o", out, timeout=60)
     assert proc.returncode == 2
     assert proc.stderr.count("\n") == 1 and "robot" in proc.stderr and str(p) in proc.stderr
-    assert int(re.search(r"after (\d+) collision checks", proc.stderr)[1]) < 10_000  # (the rule above)
+    assert "the robot fits nowhere: the disc inside its body" in proc.stderr  # proved, before the stall rule
+    assert not out.exists()
+    # a body whose inscribed disc has room but which fits nowhere (7.5 m long in 5 x 5): the stall rule
+    long = tmp_path / "long.yaml"
+    long.write_text(NOFIT.replace("{disc: 3.0,", "{box: [7.5, 0.2],").replace("2.5, 2.5]", "2.5, 2.5, 0]"))
+    import gfuzzy.roadmap.roadmap as roadmap
+
+    monkeypatch.setattr(roadmap, "STALL_CHECKS", 2000)
+    rc, _, err = run_main(capsys, "roadmap", long, "-o", out)
+    assert rc == 2 and err.count("\n") == 1 and str(long) in err
+    assert int(re.search(r"after (\d+) collision checks", err)[1]) < 10_000  # (the rule above)
     assert not out.exists()
     ans = tmp_path / "a.json"
     rc, _, _ = run_main(capsys, "plan", p, "-o", ans)
