@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 import subprocess
 import sys
 from collections import deque
@@ -382,6 +383,7 @@ person = parse_scene({"version": 1, "name": "p", "bounds": [0, 0, 6, 6], "robot"
                       "movers": [{"name": "ped", "disc": 0.3, "trajectory": [[0, 0.0, 1.0], [4.6, 5.98, 1.0]]}]})
 rm = build_roadmap(person, RoadmapOptions(vertices=40, seed=1))
 assert plan(person, rm, [2.6, 1.586], [2.6, 5.0], 2.0).solved  # a start the margin refuses: first motions
+assert len(kernels) >= 5, kernels  # numba's dispatchers watched (not the extension's functions)
 print(sorted(f.py_func.__name__ for f in kernels if set(f.overloads) != before[f]))
 """
 
@@ -389,9 +391,13 @@ print(sorted(f.py_func.__name__ for f in kernels if set(f.overloads) != before[f
 def test_warm_leaves_nothing_to_compile():
     """After `make warm` (search_kernel.warm) a process compiles no kernel in the user's way:
     plans among box movers, a crowd, a box robot and a start beside a walking person add no
-    compiled signature to any kernel (a fresh process: the kernels load only by warm)."""
+    compiled signature to any kernel (a fresh process: the kernels load only by warm). On
+    numba's kernels (``GFUZZY_PRECOMPILED=0``, the path of a machine without a C compiler):
+    with the precompiled extension loaded the kernels are no dispatchers, and the probe
+    watched none (it printed ``[]`` whatever happened)."""
+    env = {**os.environ, "GFUZZY_PRECOMPILED": "0"}
     out = subprocess.run(
-        [sys.executable, "-c", WARM_PROBE, str(ROOT)], capture_output=True, text=True, cwd=ROOT, timeout=300
+        [sys.executable, "-c", WARM_PROBE, str(ROOT)], capture_output=True, text=True, cwd=ROOT, timeout=300, env=env
     )
     assert out.returncode == 0, out.stderr[-2000:]
     assert out.stdout.strip().splitlines()[-1] == "[]"
