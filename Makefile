@@ -31,9 +31,10 @@ demo: warm
 
 # the suite on every core (pytest-xdist; TEST_WORKERS=0 runs it in this one process); `warm`
 # has built the kernels before the workers start. --dist worksteal: an idle worker takes tests
-# from the other's queue, so a long file no longer leaves a core idle at the end (the same
-# fresh clone, two idle cores: 385 s of pytest against 488-507 s with --dist loadfile, which
-# kept each file on one worker); tests/conftest.py puts the tests marked long first
+# from the other's queue, so a long file does not leave a core idle at the end (two idle
+# cores: 385 s of pytest in a clone already run once, against 507 s with --dist loadfile,
+# which kept each file on one worker; in a fresh clone 486 s against 488 s: no worse, the
+# gain not shown there); tests/conftest.py puts the tests marked long first
 TEST_WORKERS ?= auto
 test: warm
 	$(BIN)/ruff check gfuzzy tests tools
