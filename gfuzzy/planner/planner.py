@@ -355,7 +355,7 @@ class Planner:
 
         A disc robot's start and goal are linked through the free space (:meth:`_linked`).
         """
-        from ..roadmap.narrowest import separation
+        from ..roadmap.narrowest import not_joined, separation
         from .bridge import bridged_planner
         from .hemmed import hemmed_note
 
@@ -367,10 +367,7 @@ class Planner:
             hemmed = [n for n in (hemmed_note(self.geometry, start, "start"), hemmed_note(self.geometry, goal, "goal")) if n]
             if hemmed:  # more vertices cannot help: say what holds the end
                 return None, f"start and goal are not connected on the roadmap: {'; '.join(hemmed)}"
-            return None, (
-                "start and goal are not connected on the roadmap (sealed off, or the roadmap missed "
-                "a passage: more vertices, -n, may find it)"
-            )
+            return None, not_joined(self.scene, start, goal)
         sep = separation(self.scene, fs, start, goal)
         if sep is not None:
             return None, sep.message()
