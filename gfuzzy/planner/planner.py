@@ -33,7 +33,7 @@ from ..timespace.timespace import timed_rows
 from ..timespace.unilanes import OutOfTime
 from ..trajectory import Trajectory, TrajectoryFile
 from ..typed import FloatArray
-from .queries import check_pose, query_problem
+from .queries import check_pose, goal_taken, query_problem
 
 if TYPE_CHECKING:  # the stages' modules load only when a stage runs
     from ..fuzzy.fuzzy import RuleBase
@@ -585,7 +585,7 @@ class Planner:
             hold=hold if hold_steps else None,
         )
         if res.status == Status.NO_PATH and res.horizon_hit:
-            res.message = (
+            res.message = goal_taken(self.scene, goal, t0 + horizon) or (
                 f"no safe trajectory within the planning horizon of {horizon:g} s"
                 + (f" (+ the hold of {hold:g} s)" if hold_steps else "")
                 + "; the horizon cut the search: a longer one (--horizon, PlanOptions.horizon) may find one"
