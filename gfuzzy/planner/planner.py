@@ -29,11 +29,11 @@ from ..timespace.backends import BACKENDS, compile_if_cold, search_function
 from ..timespace.movers import MoverField
 from ..timespace.roadgraph import connect
 from ..timespace.spacetime import IntervalStore, SearchResult
-from ..timespace.timespace import timed_rows
+from ..timespace.timespace import NO_FIRST_MOTION, timed_rows
 from ..timespace.unilanes import OutOfTime
 from ..trajectory import Trajectory, TrajectoryFile
 from ..typed import FloatArray
-from .queries import check_pose, goal_taken, query_problem
+from .queries import check_pose, first_motion_hint, goal_taken, query_problem
 
 if TYPE_CHECKING:  # the stages' modules load only when a stage runs
     from ..fuzzy.fuzzy import RuleBase
@@ -575,6 +575,8 @@ class Planner:
         if run.problem:
             return answer(Status.INVALID_QUERY, run.problem, rd=rd)
         res, horizon = run.result, run.horizon
+        if res.message == NO_FIRST_MOTION:
+            res.message += first_motion_hint(robot, opts.dt)
         stats = PlanStats(
             expansions=run.expansions,
             states=res.states,

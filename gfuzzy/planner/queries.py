@@ -16,7 +16,7 @@ from ..poses import number_array, pose_words
 from ..settings import MAX_MAGNITUDE
 from ..typed import FloatArray
 
-__all__ = ["check_pose", "query_problem", "goal_taken"]
+__all__ = ["check_pose", "query_problem", "goal_taken", "first_motion_hint"]
 
 
 def check_pose(pose, dof: int, label: str, robot=None) -> FloatArray:
@@ -85,3 +85,19 @@ def goal_taken(scene, goal, searched_to: float) -> str:
             return (f"the goal is taken for ever from t={rest:.3g} s: mover {mv.name!r} comes to rest there "
                     f"({'mode once' if mv.speed > 0 else 'speed 0'}), so no horizon finds a trajectory")  # fmt: skip
     return ""
+
+
+def first_motion_hint(robot, dt: float) -> str:
+    """What a search that found no first motion adds when the time step is long for the
+    robot (half a step, ``vmax * dt / 2``, beyond its circumradius), or "".
+
+    The movers are kept ``(vmax + their speed) * dt / 2`` farther off, for the motion between
+    two samples: a robot of 200 m/s at dt 0.07 kept every mover 7 m off, and in a 5 m room
+    "the start is too close to a mover at t0" was said of a start metres from any mover;
+    dt 0.001 solves it.
+    """
+    step = robot.vmax * dt
+    if step / 2 <= robot.circumradius:
+        return ""
+    return (f"; a step of {dt:g} s moves this robot up to {step:.3g} m, and the movers are kept "
+            f"{step / 2:.3g} m farther off for it: a smaller --dt (PlanOptions.dt) may find one")  # fmt: skip
