@@ -67,3 +67,4 @@ def test_a_robot_fast_for_the_time_step_is_told_a_smaller_dt_may_help():
     # half a step within the robot's body: the margin is not the news
     assert first_motion_hint(parse_scene({**doc, "robot": {"disc": 0.2, "vmax": 1.0}}).robot, 0.07) == ""
     assert first_motion_hint(scene.robot, 0.002) == ""  # 0.4 m a step: half of it is the radius
+    assert first_motion_hint(scene.robot, 0.07, "the goal is not reachable on the roadmap") == ""

@@ -29,7 +29,7 @@ from ..timespace.backends import BACKENDS, compile_if_cold, search_function
 from ..timespace.movers import MoverField
 from ..timespace.roadgraph import connect
 from ..timespace.spacetime import IntervalStore, SearchResult
-from ..timespace.timespace import NO_FIRST_MOTION, timed_rows
+from ..timespace.timespace import timed_rows
 from ..timespace.unilanes import OutOfTime
 from ..trajectory import Trajectory, TrajectoryFile
 from ..typed import FloatArray
@@ -575,8 +575,7 @@ class Planner:
         if run.problem:
             return answer(Status.INVALID_QUERY, run.problem, rd=rd)
         res, horizon = run.result, run.horizon
-        if res.message == NO_FIRST_MOTION:
-            res.message += first_motion_hint(robot, opts.dt)
+        res.message += first_motion_hint(robot, opts.dt, res.message)
         stats = PlanStats(
             expansions=run.expansions,
             states=res.states,

@@ -14,6 +14,7 @@ from ..collision.geometry import StaticGeometry, mover_distance
 from ..errors import InputError
 from ..poses import number_array, pose_words
 from ..settings import MAX_MAGNITUDE
+from ..timespace.timespace import NO_FIRST_MOTION
 from ..typed import FloatArray
 
 __all__ = ["check_pose", "query_problem", "goal_taken", "first_motion_hint"]
@@ -87,9 +88,10 @@ def goal_taken(scene, goal, searched_to: float) -> str:
     return ""
 
 
-def first_motion_hint(robot, dt: float) -> str:
-    """What a search that found no first motion adds when the time step is long for the
-    robot (half a step, ``vmax * dt / 2``, beyond its circumradius), or "".
+def first_motion_hint(robot, dt: float, message: str = NO_FIRST_MOTION) -> str:
+    """What a search's ``message`` gains when it found no first motion (``NO_FIRST_MOTION``)
+    and the time step is long for the robot (half a step, ``vmax * dt / 2``, beyond its
+    circumradius), or "".
 
     The movers are kept ``(vmax + their speed) * dt / 2`` farther off, for the motion between
     two samples: a robot of 200 m/s at dt 0.07 kept every mover 7 m off, and in a 5 m room
@@ -97,7 +99,7 @@ def first_motion_hint(robot, dt: float) -> str:
     dt 0.001 solves it.
     """
     step = robot.vmax * dt
-    if step / 2 <= robot.circumradius:
+    if message != NO_FIRST_MOTION or step / 2 <= robot.circumradius:
         return ""
     return (f"; a step of {dt:g} s moves this robot up to {step:.3g} m, and the movers are kept "
             f"{step / 2:.3g} m farther off for it: a smaller --dt (PlanOptions.dt) may find one")  # fmt: skip
