@@ -14,8 +14,14 @@ EXAMPLES = ("scenes", "roadmaps", "data")
 
 class BuildWithExamples(build_py):
     def run(self):
+        editable = getattr(self, "editable_mode", False)
+        if not editable:
+            # `pip install .` and `pip wheel .` build in ./build, and a file an earlier build
+            # put there stayed in every later wheel: a module since moved or deleted, a scene
+            # since removed from scenes/ (found by s39-newuser): the package is built afresh
+            shutil.rmtree(Path(self.build_lib) / "gfuzzy", ignore_errors=True)
         super().run()
-        if getattr(self, "editable_mode", False):
+        if editable:
             return
         here = Path(__file__).resolve().parent
         target = Path(self.build_lib) / "gfuzzy" / "examples"

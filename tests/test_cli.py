@@ -491,6 +491,16 @@ def test_check_of_a_timed_out_run_says_what_is_wrong_with_its_motion(line_scene,
     assert "the motion it executed (1 row, t 0 to 0) is valid" in err.splitlines()[1], err
 
 
+@pytest.mark.parametrize("duration", ["NaN", "Infinity"])
+def test_check_refuses_a_duration_that_is_no_number(line_scene, tmp_path, capsys, duration):
+    # a hand-edited "duration": NaN (Python's json reads it) passed check as valid (found by s39-newuser)
+    path = _trajectory_file(tmp_path / "t.json", [[0, 1, 2.5], [1, 1.5, 2.5]])
+    doc = json.loads(path.read_text())
+    path.write_text(json.dumps({**doc, "duration": 0.0}).replace('"duration": 0.0', f'"duration": {duration}'))
+    rc, _, err = _run(capsys, "check", line_scene, path)
+    assert rc == 1 and err.splitlines()[-1] == f"{path}: duration is {float(duration)!r} but the rows span 1.0", err
+
+
 def test_render_and_export_note_a_duration_the_rows_disagree_with_as_check_says_it(line_scene, tmp_path, capsys):
     # check said "duration is 5.0 but the rows span 1.0"; render and export drew it silently
     path = _trajectory_file(tmp_path / "t.json", [[0, 1, 2.5], [1, 1.5, 2.5]])

@@ -455,3 +455,30 @@ def test_the_door_bound_in_the_message_is_rounded_down_and_holds():
     fits = parse_scene(door_doc(1.0, radius=bound - 1e-5, clearance=0.0))
     ok = Planner(fits, build_roadmap(fits, RoadmapOptions(vertices=60, seed=1))).plan([1.0, 1.0], [5.0, 3.0])
     assert ok.status == "solved", ok.message
+
+
+# ------------------------------------------- a box or footprint robot the roadmap does not join
+
+
+def _two_rooms(robot: dict) -> dict:
+    """Two rooms joined by a door 1.0 m wide (y 2.5 .. 3.5) in a wall at x = 5."""
+    return {"version": 1, "name": "two-rooms", "bounds": [0, 0, 10, 6], "robot": {**robot, "vmax": 1.0},
+            "obstacles": [{"box": {"center": [5, 1.25], "size": [0.2, 2.5]}},
+                          {"box": {"center": [5, 4.75], "size": [0.2, 2.5]}}]}  # fmt: skip
+
+
+def test_not_joined_proves_a_robot_wider_than_the_door_cannot_pass():
+    # the message said "more vertices, -n, may find it" of a robot whose inscribed disc
+    # (radius 0.6) cannot pass a 1.0 m door (found by s39-newuser): a proof now; the disc
+    # of this footprint lies 1.1 m ahead of its origin, so the start's (heading pi) is in
+    # the left room though its origin is in the right one's reach if not turned
+    from gfuzzy.roadmap.narrowest import not_joined
+
+    box = parse_scene(_two_rooms({"footprint": [[0.5, -0.6], [1.7, -0.6], [1.7, 0.6], [0.5, 0.6]]}))
+    msg = not_joined(box, [4.6, 3.0, math.pi], [6.0, 3.0, 0.0])
+    assert msg.startswith("start and goal lie in separate parts of the free space of the disc inside the robot's "
+                          "body (radius 0.600 m, clearance 0 m), so no way exists for this robot; the start's part "
+                          "comes nearest another near (5.000, 3.000)"), msg  # fmt: skip
+    # a thin box's disc (radius 0.2) passes the door: nothing proved, more vertices may help
+    thin = parse_scene(_two_rooms({"box": [1.6, 0.4]}))
+    assert "more vertices, -n, may find it" in not_joined(thin, [2.0, 3.0, 0.0], [8.0, 3.0, 0.0])

@@ -414,6 +414,25 @@ def test_bad_map_files_give_one_line(tmp_path, capsys, edit, expect):
     _bad(tmp_path, capsys, expect)
 
 
+@pytest.mark.parametrize("command", ["plan", "render"])
+def test_a_resolution_below_the_floats_spacing_is_bad_input(tmp_path, capsys, command):
+    # resolution 1e-300 at origin -10: the map's extent, the scene's bounds, had zero width
+    # (-10 + 2 x 1e-300 == -10) and render raised ZeroDivisionError (found by s39-newuser)
+    _good(tmp_path, resolution=1e-300, origin=(-10.0, -10.0, 0.0))
+    out = tmp_path / ("out.json" if command == "plan" else "out.png")
+    assert main([command, str(tmp_path / "s.yaml"), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err == (f"{tmp_path / 'm.yaml'}: resolution: 1e-300 m is too small: floats are 1.77636e-15 m apart at "
+                   "the map's coordinates (origin (-10, -10)), so its cells would have no size\n")
+    assert not out.exists()
+
+
+def test_a_resolution_just_above_the_floats_spacing_loads(tmp_path):
+    _good(tmp_path, resolution=1e-12, origin=(-10.0, -10.0, 0.0))
+    scene = load_scene(tmp_path / "s.yaml")
+    assert scene.bounds[0] < scene.bounds[2] and scene.bounds[1] < scene.bounds[3]
+
+
 def test_an_absolute_image_path_inside_the_folder_is_read_as_nav2_reads_it(tmp_path, capsys):
     # map YAML files often name their image by an absolute path (Nav2 takes it as written):
     # it was refused ("must be relative") even when the image lay beside the scene

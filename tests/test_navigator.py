@@ -546,8 +546,10 @@ def test_navigate_of_a_box_robot_the_roadmap_does_not_join_is_no_path_at_once(tm
     scene.write_text(BOX_BEHIND_A_DOOR)
     out = tmp_path / "nav.json"
     rc, stdout, err = run_main(capsys, "navigate", scene, "-n", "40", "--budget-clock", "cpu", "--max-time", "5", "-o", out)
-    assert rc == 1 and stdout == "boxdoor q: no_path (start and goal are not connected on the roadmap (sealed off, " \
-        "or the roadmap missed a passage: more vertices, -n, may find it))\n", (stdout, err)
+    # the disc inside the box (radius 0.3) proves it: no "more vertices may find it" (s39-newuser)
+    assert rc == 1 and stdout == "boxdoor q: no_path (start and goal lie in separate parts of the free space of " \
+        "the disc inside the robot's body (radius 0.300 m, clearance 0 m), so no way exists for this robot; the " \
+        "start's part comes nearest another near (5.000, 3.000))\n", (stdout, err)
     doc = json.loads(out.read_text())
     assert doc["status"] == "no_path" and doc["message"] in stdout and "replans" not in doc
 

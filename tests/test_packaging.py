@@ -169,3 +169,30 @@ def test_a_cold_installed_wheel_plans_refines_and_checks(dist, tmp_path):
     venv = tmp_path / "venv"
     bindir, env = _venv_with(wheel, venv, deps=True)
     _plans_refines_and_checks(bindir, env, venv, tmp_path / "elsewhere", refine=True)
+
+
+def test_a_build_drops_what_an_earlier_build_left(tmp_path, monkeypatch):
+    """`pip install .` and `pip wheel .` build in the repository's ``build/``: a module or an
+    example scene an earlier build copied there went into every later wheel after it was
+    moved or deleted from the source (found by s39-newuser). setup.py's build step, run
+    in-process into a build folder holding such leftovers (seconds: no wheel is made)."""
+    import setuptools
+    from setuptools.dist import Distribution
+
+    kept: dict = {}
+    monkeypatch.setattr(setuptools, "setup", lambda **kw: kept.update(kw))
+    exec(compile((ROOT / "setup.py").read_text(), str(ROOT / "setup.py"), "exec"), {"__file__": str(ROOT / "setup.py")})
+    lib = tmp_path / "lib"
+    for stale in ("gfuzzy/moved_away.py", "gfuzzy/examples/scenes/deleted.yaml"):
+        (lib / stale).parent.mkdir(parents=True, exist_ok=True)
+        (lib / stale).write_text("left by an earlier build\n")
+    monkeypatch.chdir(ROOT)  # build_py reads the package from the current folder; it writes only to lib
+    dist = Distribution({"name": "gfuzzy", "packages": ["gfuzzy"]})
+    dist.script_name = "setup.py"
+    cmd = kept["cmdclass"]["build_py"](dist)
+    cmd.build_lib = str(lib)
+    cmd.ensure_finalized()
+    cmd.run()
+    assert (lib / "gfuzzy" / "__init__.py").is_file() and (lib / "gfuzzy/examples/scenes/building-floor.yaml").is_file()
+    assert not (lib / "gfuzzy" / "moved_away.py").exists()
+    assert not (lib / "gfuzzy/examples/scenes/deleted.yaml").exists()

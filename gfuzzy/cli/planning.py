@@ -248,7 +248,8 @@ def _duration_disagrees(tf) -> str:
     if tf.duration is None or tf.waypoints is None:
         return ""
     actual = float(tf.waypoints[-1, 0] - tf.waypoints[0, 0])
-    return f"duration is {tf.duration!r} but the rows span {actual!r}" if abs(actual - tf.duration) > 1e-6 else ""
+    # "not <=": a NaN duration (JSON's NaN, read as written) disagrees too; it passed as valid
+    return f"duration is {tf.duration!r} but the rows span {actual!r}" if not abs(actual - tf.duration) <= 1e-6 else ""
 
 
 def _executed_verdict(scene, tf, path) -> str:

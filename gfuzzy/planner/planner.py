@@ -33,7 +33,7 @@ from ..timespace.timespace import timed_rows
 from ..timespace.unilanes import OutOfTime
 from ..trajectory import Trajectory, TrajectoryFile
 from ..typed import FloatArray
-from .queries import check_pose, query_problem
+from .queries import check_pose, first_motion_hint, goal_taken, query_problem
 
 if TYPE_CHECKING:  # the stages' modules load only when a stage runs
     from ..fuzzy.fuzzy import RuleBase
@@ -355,7 +355,7 @@ class Planner:
 
         A disc robot's start and goal are linked through the free space (:meth:`_linked`).
         """
-        from ..roadmap.narrowest import separation
+        from ..roadmap.narrowest import not_joined, separation
         from .bridge import bridged_planner
         from .hemmed import hemmed_note
 
@@ -367,10 +367,7 @@ class Planner:
             hemmed = [n for n in (hemmed_note(self.geometry, start, "start"), hemmed_note(self.geometry, goal, "goal")) if n]
             if hemmed:  # more vertices cannot help: say what holds the end
                 return None, f"start and goal are not connected on the roadmap: {'; '.join(hemmed)}"
-            return None, (
-                "start and goal are not connected on the roadmap (sealed off, or the roadmap missed "
-                "a passage: more vertices, -n, may find it)"
-            )
+            return None, not_joined(self.scene, start, goal)
         sep = separation(self.scene, fs, start, goal)
         if sep is not None:
             return None, sep.message()
@@ -578,6 +575,7 @@ class Planner:
         if run.problem:
             return answer(Status.INVALID_QUERY, run.problem, rd=rd)
         res, horizon = run.result, run.horizon
+        res.message += first_motion_hint(robot, opts.dt, res.message)
         stats = PlanStats(
             expansions=run.expansions,
             states=res.states,
@@ -588,7 +586,7 @@ class Planner:
             hold=hold if hold_steps else None,
         )
         if res.status == Status.NO_PATH and res.horizon_hit:
-            res.message = (
+            res.message = goal_taken(self.scene, goal, t0 + horizon) or (
                 f"no safe trajectory within the planning horizon of {horizon:g} s"
                 + (f" (+ the hold of {hold:g} s)" if hold_steps else "")
                 + "; the horizon cut the search: a longer one (--horizon, PlanOptions.horizon) may find one"

@@ -11,9 +11,9 @@ import numpy as np
 
 from ..scene.scene import Scene
 from ..typed import FloatArray
-from .freespace import DELTAS, FreeSpace, free_space
+from .freespace import DELTAS, FreeSpace, free_space, inscribed_disc, inscribed_free_space
 
-__all__ = ["Separation", "separation", "SEPARATION_MAX_OBSTACLES", "SEPARATION_MAX_RECTS"]
+__all__ = ["Separation", "separation", "not_joined", "SEPARATION_MAX_OBSTACLES", "SEPARATION_MAX_RECTS"]
 
 #: Separations are explained by bisection on the obstacles' growth only up to this many
 #: obstacles (each step recomputes the free space).
@@ -157,3 +157,34 @@ def separation(scene: Scene, fs: FreeSpace, start: FloatArray, goal: FloatArray)
             touching = 0.5 * (lo + hi) + fs.tolerance
             where = _narrowest(fs_hi, ends, fs_lo) or where
     return Separation(tuple(ends[0].tolist()), tuple(ends[1].tolist()), fs.grown, passes, where, touching)
+
+
+def not_joined(scene: Scene, start, goal) -> str:
+    """The ``no_path`` message of a box or footprint robot whose roadmap does not join
+    ``start`` and ``goal`` (poses ``[x, y, heading]``): a proof that no way exists when the
+    disc inside its body (:func:`~gfuzzy.roadmap.freespace.inscribed_free_space`) finds them
+    in separate regions (a robot wider than every door: more vertices cannot help, and the
+    message said they might), else the roadmap may have missed a passage."""
+    got = inscribed_free_space(scene)
+    if got is not None:
+        centre, fs = got
+        poses = np.asarray([start, goal], dtype=float)
+        cos, sin = np.cos(poses[:, 2]), np.sin(poses[:, 2])
+        ends = poses[:, :2] + np.column_stack([cos * centre[0] - sin * centre[1], sin * centre[0] + cos * centre[1]])
+        rs, rg = fs.region_of(ends, slack=0.0).tolist()
+        if rs >= 0 and rg >= 0 and rs != rg:
+            import shapely
+
+            # where the start's part comes nearest another (its narrowest way out: the shortest
+            # segment straight to the goal's part named the middle of a room between two doors)
+            rest = shapely.union_all([reg for k, reg in enumerate(fs.regions) if k != rs])
+            c = np.asarray(shapely.shortest_line(fs.regions[rs], rest).coords)
+            where = 0.5 * (c[0] + c[1])
+            near = f"; the start's part comes nearest another near ({where[0]:.3f}, {where[1]:.3f})"
+            return (
+                f"start and goal lie in separate parts of the free space of the disc inside the robot's body "
+                f"(radius {inscribed_disc(scene.robot)[1]:.3f} m, clearance {scene.robot.clearance:g} m), so no way "
+                f"exists for this robot{near}"
+            )
+    return ("start and goal are not connected on the roadmap (sealed off, or the roadmap missed "
+            "a passage: more vertices, -n, may find it)")  # fmt: skip

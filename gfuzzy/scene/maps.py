@@ -598,6 +598,14 @@ def load_map(spec, place: str, scene_file: str, folder: str | os.PathLike) -> Ma
             str(path), "resolution", f"the map's far corner ({far[0]:g}, {far[1]:g}) = origin + {w} x {h} cells x "
             f"{info.resolution:g} m lies beyond {MAX_MAGNITUDE:g} in magnitude (a scene's bound)"
         )
+    # cells narrower than a float's spacing at the map's coordinates have no size: their edges
+    # coincide (resolution 1e-300 at origin -10 made bounds of zero width, and a traceback)
+    spacing = float(np.spacing(max(abs(c) for c in (*info.origin, *far))))
+    if not info.resolution > spacing:
+        raise SceneError(
+            str(path), "resolution", f"{info.resolution:g} m is too small: floats are {spacing:g} m apart at the "
+            f"map's coordinates (origin ({info.origin[0]:g}, {info.origin[1]:g})), so its cells would have no size"
+        )
     digest = hashlib.sha256(ydata + b"\0" + idata).hexdigest()
     return MapObstacle(spec["file"], path, info, unknown == "free", values, blocked, rects, digest)
 
