@@ -204,8 +204,8 @@ def _base(roadmap, geometry, stretch: float, vmax: float, step_len: float, deadl
     pdh = np.zeros(len(pa))
     # turns: a ring of headings per vertex, on a grid one turning step apart (see _Base)
     scale = vmax / rate
-    n_ring = int(split_counts(np.array([2 * math.pi * scale]), step_len)[0])
-    _too_many(n_ring)  # one ring past the bound: refused before any is made
+    n_ring = ring_points(vmax, rate, step_len)  # one ring past the bound: refused before any is made
+    _too_many(len(np.unique(cv if ringless is None else cv[cv < ringless])) * n_ring)  # and all before they are
     memo = roadmap._derived.setdefault(("unicycle-ring-free",) + key[1:6] + (n_ring,), {})
     ring_ptr, ring_v, ring_h, ring_ok, ta, tb, tdh = _rings(geometry, xy, cv, ch, n_ring, deadline, ringless, memo)
     if extra is not None:
@@ -523,6 +523,14 @@ def _cut_pieces(nodes: FloatArray, A: IntArray, B: IntArray, DH: FloatArray, L: 
     src = np.concatenate([np.where(is_first, A[p_of], ids - 1), ids[is_last], A[n_int == 0]])
     dst = np.concatenate([ids, B[p_of][is_last], B[n_int == 0]])
     return k, offs, p_of, j, inner, src, dst
+
+
+def ring_points(vmax: float, rate: float, step_len: float) -> int:
+    """The points of one turning ring (a full turn in place at ``rate`` rad/s, cut into steps of
+    ``step_len`` at ``vmax``): TimeStepError past ``settings.MAX_POINTS``, for every query alike."""
+    n_ring = int(split_counts(np.array([2 * math.pi * vmax / rate]), step_len)[0])
+    _too_many(n_ring)
+    return n_ring
 
 
 def _too_many(total: int):
