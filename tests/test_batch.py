@@ -659,12 +659,13 @@ def test_cli_connects_to_the_scheduler_before_any_roadmap(tmp_path, capsys, monk
     events: list = []
     monkeypatch.setattr(distributed, "Client", _RecordingClient(events, reachable))
     monkeypatch.setattr(experiments, "_roadmap_for", lambda sc, args: events.append("roadmap"))
+    monkeypatch.setattr(batch, "check_time_steps", lambda pairs, options: events.append("dt"))
     monkeypatch.setattr(batch, "run_batch", lambda client, pairs, *a, **k: events.append("run") or BatchResult([], 0))
     code = main(["batch", str(ROOT / "scenes" / "sim-4s1m.yaml"), "--scheduler", "tcp://10.255.255.1:8786",
                  "-o", str(tmp_path / "rows.csv")])  # fmt: skip
     err = capsys.readouterr().err.strip()
     if reachable:
-        assert code == 0 and events == ["connect", "roadmap", "run", "close"], (events, err)
+        assert code == 0 and events == ["connect", "roadmap", "dt", "run", "close"], (events, err)
     else:
         assert code == 2 and events == ["connect"], events
         assert err.startswith("--scheduler tcp://10.255.255.1:8786: cannot connect") and len(err.splitlines()) == 1
