@@ -39,7 +39,6 @@ from ..atomic import write_atomic, write_atomic_with
 from ..errors import (
     InputError,
     LimitError,
-    TimeStepError,
     check_interrupt,
     clear_interrupt,
     interrupts_deferred,
@@ -417,13 +416,10 @@ def check_time_steps(scenes: Sequence[tuple[Scene, Roadmap]], options: PlanOptio
     TimeStepError
         Naming the scene file, as :func:`gfuzzy.runs.regress.regress_scene` does.
     """
-    from ..planner.prepared import check_time_step
+    from .regress import check_scene_time_step
 
     for scene, roadmap in scenes:
-        try:
-            check_time_step(scene.robot, roadmap, options)
-        except TimeStepError as exc:
-            raise TimeStepError(f"{scene.source}: {exc}") from None
+        check_scene_time_step(scene, roadmap, options)
 
 
 def run_batch(
