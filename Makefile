@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test slow lint clean bench warm experiments
+.PHONY: demo test slow lint clean bench warm experiments roadmaps
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -43,6 +43,11 @@ test: warm
 # the slow tests (@pytest.mark.slow, left out of `make test`): experiments over every bundled scene
 slow: warm
 	PYTHON=$(BIN)/python tools/run_slow.sh
+
+# the bundled roadmaps (roadmaps/*.json) rebuilt with this code from the options each stores
+# (tools/bundled_roadmaps.py; --check only compares); then `gfuzzy regress scenes/*.yaml`
+roadmaps: $(STAMP)
+	$(BIN)/python tools/bundled_roadmaps.py
 
 lint: $(STAMP)
 	$(BIN)/ruff check gfuzzy tests tools

@@ -538,6 +538,18 @@ def test_cli_bad_arguments(tmp_path, capsys, extra, message):
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("scene, dt", [("sim-4s1m", "1e-9"), ("tb3-arena-unicycle", "1e-7")])
+def test_cli_a_time_step_too_fine_is_refused_once_before_any_query(tmp_path, capsys, scene, dt):
+    # it was one error row per query (a worker's TimeStepError) and exit 1, after the cluster
+    # started; plan, regress and navigate name --dt in one line and exit 2
+    path = ROOT / "scenes" / f"{scene}.yaml"
+    code = main(["batch", str(path), "--dt", dt, "--workers", "1", "-o", str(tmp_path / "rows.csv")])
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert err.startswith(f"gfuzzy batch: --dt {float(dt):g}: {path}: the time step is too fine for this roadmap"), err
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_cli_bad_scene_names_file_and_place(tmp_path, capsys):
     bad = ROOT / "tests" / "bad_scenes" / "bad_mode.yaml"
     out = tmp_path / "rows.csv"
@@ -647,12 +659,13 @@ def test_cli_connects_to_the_scheduler_before_any_roadmap(tmp_path, capsys, monk
     events: list = []
     monkeypatch.setattr(distributed, "Client", _RecordingClient(events, reachable))
     monkeypatch.setattr(experiments, "_roadmap_for", lambda sc, args: events.append("roadmap"))
+    monkeypatch.setattr(batch, "check_time_steps", lambda pairs, options: events.append("dt"))
     monkeypatch.setattr(batch, "run_batch", lambda client, pairs, *a, **k: events.append("run") or BatchResult([], 0))
     code = main(["batch", str(ROOT / "scenes" / "sim-4s1m.yaml"), "--scheduler", "tcp://10.255.255.1:8786",
                  "-o", str(tmp_path / "rows.csv")])  # fmt: skip
     err = capsys.readouterr().err.strip()
     if reachable:
-        assert code == 0 and events == ["connect", "roadmap", "run", "close"], (events, err)
+        assert code == 0 and events == ["connect", "roadmap", "dt", "run", "close"], (events, err)
     else:
         assert code == 2 and events == ["connect"], events
         assert err.startswith("--scheduler tcp://10.255.255.1:8786: cannot connect") and len(err.splitlines()) == 1

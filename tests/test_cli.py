@@ -443,6 +443,24 @@ def test_a_time_step_too_fine_names_the_option_as_regress_does(capsys, monkeypat
     assert err.startswith(f"gfuzzy {command}: --dt 1e-09: the time step is too fine for this roadmap"), err
 
 
+def test_regress_refuses_a_time_step_too_fine_before_its_table(capsys, monkeypatch):
+    # the table's header went to stdout first, then the one-line error: bad input prints
+    # nothing else (as _check_roadmap_flags already ensured for the roadmap flags)
+    monkeypatch.chdir(ROOT)
+    rc, out, err = _run(capsys, "regress", "scenes/sim-4s1m.yaml", "scenes/sealed-room.yaml", "--dt", "1e-6")
+    assert rc == 2 and out == "" and err.count("\n") == 1, (out, err)
+    assert err.startswith("gfuzzy regress: --dt 1e-06: scenes/sim-4s1m.yaml: the time step is too fine"), err
+
+
+def test_a_differential_drive_whose_rings_are_too_many_is_refused_before_they_are_made(capsys, monkeypatch):
+    # each ring alone fits (31,000 points at dt 1e-4), the 200 vertices' rings do not: they
+    # were certified one by one until the planning budget ran out (timeout, exit 1, 60 s)
+    monkeypatch.chdir(ROOT)
+    rc, _, err = _run(capsys, "plan", "scenes/building-floor-unicycle.yaml", "--dt", "1e-4", "--time-limit", "5")
+    assert rc == 2 and err.count("\n") == 1, err
+    assert err.startswith("gfuzzy plan: --dt 0.0001: the time step is too fine for this roadmap"), err
+
+
 def _timed_out_file(path, executed, scene="line"):
     """A navigate run that did not arrive: no waypoints, its motion under ``executed``."""
     doc = json.loads(_trajectory_file(path, None, scene=scene, query="up", status="timeout").read_text())

@@ -11,7 +11,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from gfuzzy.check.check import _unicycle_problem, check_trajectory
+from gfuzzy.check.check import check_trajectory
+from gfuzzy.check.rows import unicycle_problem as _unicycle_problem
 from gfuzzy.navigation.crowdpolicies import piece_of
 from gfuzzy.navigation.drivenav import drive_evasion
 from gfuzzy.navigation.navigator import Navigator, NavMode, NavOptions, _Searched

@@ -847,6 +847,7 @@ BEYOND_A_SCHEMA = {
     "footprint_bowtie": "self-intersection",
     "footprint_collinear": "area",
     "footprint_nan": "NaN passes every numeric keyword",
+    "footprint_tiny": "a polygon's span compares items",
     "inverted_bounds": "xmin < xmax compares two items",
     "mesh_escape": "a relative path that leaves the folder",
     "mesh_garbage": "the file's contents",

@@ -709,6 +709,24 @@ def test_gfuzzy_map_refuses_a_map_outside_the_folder(tmp_path, capsys):
     assert not (tmp_path / "a" / "s.yaml").exists()
 
 
+@pytest.mark.parametrize(
+    "value, message",
+    [
+        ("1e10", "number too large (1e+10; at most 1e+09 in magnitude)"),  # was blamed on s.yaml: robot.footprint[1][0]
+        ("1e300", "number too large (1e+300"),  # the same, after a RuntimeWarning of shapely's
+        ("1e-300", "polygon is degenerate: too small (it spans 1e-300 m"),  # was "not a simple polygon of positive area"
+    ],
+)
+def test_gfuzzy_map_checks_the_footprint_as_a_scene_does_naming_the_option(tmp_path, capsys, value, message):
+    write_map(tmp_path, [[254, 254], [254, 254]])
+    out = tmp_path / "s.yaml"
+    argv = ["map", str(tmp_path / "m.yaml"), "--robot-footprint", "0", "0", value, "0", "0", value, "-o", str(out)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith(f"--robot-footprint: {message}"), err
+    assert not out.exists()
+
+
 def test_gfuzzy_map_blames_a_bad_name_on_the_option(tmp_path, capsys):
     # it was the written scene's `name:` (s.yaml: name: ...), a key the user never wrote
     write_map(tmp_path, [[254, 254], [254, 254]])

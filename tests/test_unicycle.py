@@ -365,7 +365,8 @@ def test_a_query_end_joins_only_the_roadmaps_vertices_not_turn_points():
     to roadmap vertices only. Turn points among an end's nearest took the place of the
     vertices that lead on (unseen rooms seed 3 case 8: the same answer, its plan 0.28 ->
     15.7 s of CPU with the end joined to them)."""
-    from gfuzzy.timespace.unicycle import _base, _Extras
+    from gfuzzy.timespace.unicycle import _base
+    from gfuzzy.timespace.uniends import _Extras
 
     sc, rm = door_lanes_scene()
     planner = Planner(sc, rm)
@@ -493,7 +494,7 @@ def test_the_navigator_drives_a_unicycle_by_the_rule(crossing):
     pose = np.array([1.5, 2.0, 0.7])
     crowd = np.array([[1.9, 2.0, -0.8, 0.0, 0.3], [1.5, 2.6, 0.0, -0.8, 0.3]])  # about to hit it
     evasive = nav._evasive(0.0, pose, crowd)
-    from gfuzzy.check.check import _unicycle_problem
+    from gfuzzy.check.rows import unicycle_problem as _unicycle_problem
 
     assert len(evasive.waypoints) >= 2 and _unicycle_problem(sc.robot, evasive.waypoints) is None
     direct = nav._direct(0.0, np.array([4.5, 2.0, 2.0]), np.zeros((0, 5)))
@@ -1095,6 +1096,7 @@ def test_a_disc_drives_ends_join_on_the_vertex_clearances_every_query_shares(mon
     from pathlib import Path
 
     import gfuzzy.timespace.unicycle as uni
+    import gfuzzy.timespace.uniends as ends
     from gfuzzy.roadmap.roadmap import load_roadmap
     from gfuzzy.scene.scene import load_scene
     from gfuzzy.timespace.roadgraph import vertex_clearances
@@ -1117,6 +1119,7 @@ def test_a_disc_drives_ends_join_on_the_vertex_clearances_every_query_shares(mon
         return real(geo, robot, ax, ay, bx, by, back, ca, cb)
 
     monkeypatch.setattr(uni, "_drive", drive)
+    monkeypatch.setattr(ends, "_drive", drive)  # the ends' joins (uniends) drive too
     planner.plan(second.start, second.goal, second.t0)
     at = {(float(x), float(y)): i for i, (x, y) in enumerate(roadmap.vertices[:, :2])}
     read = [(at[xy], c) for xy, c in seen if xy in at]

@@ -26,11 +26,11 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 
-from ..poses import row_words
 from ..scene.scene import Box, Disc, MapObstacle, Query, Scene
 from ..typed import FloatArray
 from .depth import Edges, convex_outline, overlap_depth
 from .reach import near_movers, one_period_end
+from .rows import rows_problem, wrap
 
 __all__ = ["CheckReport", "check_trajectory"]
 
@@ -86,10 +86,6 @@ def _grid_region(grid: MapObstacle):
         return shapely.Polygon()
     boxes = shapely.box(ox + starts * res, oy + (h - 1 - rows) * res, ox + stops * res, oy + (h - rows) * res)
     return shapely.union_all(boxes)
-
-
-def _wrap(a):
-    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
 
 
 class _World:
@@ -393,16 +389,6 @@ def _segment_point_distance(a: FloatArray, b: FloatArray, c) -> FloatArray:
     return np.hypot(*(a + t[:, None] * ab - c).T)
 
 
-def _pose_equal(a, b, tol=1e-6) -> bool:
-    a, b = np.asarray(a, float), np.asarray(b, float)
-    if a.shape != b.shape:
-        return False
-    diff = b - a
-    if a.size == 3:
-        diff[2] = _wrap(diff[2])
-    return bool(np.all(np.abs(diff) <= tol))
-
-
 def check_trajectory(
     scene: Scene,
     waypoints: FloatArray,
@@ -442,84 +428,14 @@ def check_trajectory(
     """
     robot = scene.robot
     w = np.asarray(waypoints, dtype=float)
-    problem = _rows_problem(robot, w, query)
+    problem = rows_problem(robot, w, query)
     if problem is not None:
-        return problem
+        return CheckReport(False, problem[0], time=problem[1])
     if query is not None:
         hold = float(getattr(query, "hold", 0.0) or 0.0)
         if hold > 0:  # the robot parks at the goal: the rows end with a wait of `hold`
             w = np.vstack([w, np.r_[w[-1, 0] + hold, w[-1, 1:]]])
     return _Checker(scene, w, tol, min_interval, exact_below).run(max_evaluations, deepest)
-
-
-def _rows_problem(robot, w: FloatArray, query) -> CheckReport | None:
-    """The rows' shape, finiteness, increasing times, and the query's ends (None: fine)."""
-    if w.ndim != 2 or w.shape[1] != robot.dof + 1 or len(w) == 0:
-        return CheckReport(False, f"waypoints must be rows of {row_words(robot.dof, robot)}")
-    if not np.all(np.isfinite(w)):
-        return CheckReport(False, "waypoints contain a non-finite number")
-    t = w[:, 0]
-    dt = np.diff(t)
-    if np.any(dt <= 0):
-        i = int(np.nonzero(dt <= 0)[0][0]) + 1
-        return CheckReport(False, f"t does not increase strictly at row {i} (t={float(t[i])!r})", time=float(t[i]))
-    if getattr(robot, "kinematics", "holonomic") == "unicycle":
-        bad = _unicycle_problem(robot, w)
-        if bad is not None:
-            return bad
-    if query is not None:
-        if abs(t[0] - query.t0) > 1e-6:
-            return CheckReport(False, f"first row is at t={float(t[0])!r}, the query departs at t0={query.t0!r}", time=float(t[0]))
-        if not _pose_equal(w[0, 1:], query.start):
-            return CheckReport(False, f"first row {w[0, 1:].tolist()} is not the start {list(query.start)}", time=float(t[0]))
-        if not _pose_equal(w[-1, 1:], query.goal):
-            return CheckReport(False, f"last row {w[-1, 1:].tolist()} is not the goal {list(query.goal)}", time=float(t[-1]))
-    return None
-
-
-#: A unicycle's rows: a turn in place keeps x and y within this (m); a straight move keeps
-#: its heading within this (rad). The lateral bound is the contract's 1e-6 m.
-UNICYCLE_XY_TOL = 1e-9
-UNICYCLE_HEADING_TOL = 1e-9
-UNICYCLE_LATERAL_TOL = 1e-6
-
-
-def _unicycle_problem(robot, w: FloatArray, tol: float = 1e-6) -> CheckReport | None:
-    """The first pair of rows that is not a wait, a turn in place within ``wmax`` or a
-    straight move along the heading (forward unless ``robot.reverse``), or None.
-
-    Measured here from the rows alone (CONTRACT section 6), sharing nothing with the planner.
-    """
-    t, x, y, h = w[:, 0], w[:, 1], w[:, 2], w[:, 3]
-    dt = np.diff(t)
-    dx, dy = np.diff(x), np.diff(y)
-    dh = _wrap(np.diff(h))
-    if robot.shape == "footprint":  # its farthest vertex from the reference point
-        r = max(math.hypot(px, py) for px, py in robot.footprint)
-    else:
-        r = robot.radius if robot.shape == "disc" else 0.5 * math.hypot(*robot.size)
-    wmax = robot.wmax if robot.wmax is not None else robot.vmax / r
-    still = (np.abs(dx) <= UNICYCLE_XY_TOL) & (np.abs(dy) <= UNICYCLE_XY_TOL)
-    turning = np.abs(dh) > UNICYCLE_HEADING_TOL
-    c, sn = np.cos(h[:-1]), np.sin(h[:-1])
-    lateral = np.abs(-sn * dx + c * dy)
-    along = c * dx + sn * dy
-    for i in range(len(dt)):
-        when = f"between t={float(t[i])!r} and t={float(t[i + 1])!r}"
-        if still[i]:
-            if turning[i] and abs(dh[i]) / dt[i] > wmax * (1 + tol):
-                rate = abs(dh[i]) / dt[i]
-                return CheckReport(False, f"turns at {rate:.9g} rad/s, faster than wmax {wmax:g}, {when}", time=float(t[i]))
-            continue
-        if turning[i]:
-            return CheckReport(False, f"turns while moving (a unicycle turns only in place) {when}", time=float(t[i]))
-        if lateral[i] > UNICYCLE_LATERAL_TOL:
-            return CheckReport(
-                False, f"slides sideways by {lateral[i]:.3g} m (a unicycle moves along its heading) {when}", time=float(t[i])
-            )
-        if along[i] < 0 and not robot.reverse:
-            return CheckReport(False, f"drives backwards (robot.reverse is false) {when}", time=float(t[i]))
-    return None
 
 
 #: The deepest overlap of a trajectory found invalid is searched to within this fraction of
@@ -567,7 +483,7 @@ class _Checker:
         p, robot = self.p, self.robot
         seg = np.hypot(*np.diff(p[:, :2], axis=0).T)
         if robot.dof == 3:
-            seg = seg + np.abs(_wrap(np.diff(p[:, 2]))) * robot.circumradius
+            seg = seg + np.abs(wrap(np.diff(p[:, 2]))) * robot.circumradius
         self.speed = seg / self.dt if len(self.dt) else np.zeros(0)
         self.vmax_seen = float(self.speed.max(initial=0.0))
         self.first: list = [math.inf, "", None]  # time, reason and overlap (depth, name) of the earliest violation
@@ -609,7 +525,7 @@ class _Checker:
         f = (times - t[seg_idx]) / dt[seg_idx]
         delta = p[seg_idx + 1] - p[seg_idx]
         if self.robot.dof == 3:
-            delta[:, 2] = _wrap(delta[:, 2])
+            delta[:, 2] = wrap(delta[:, 2])
         return p[seg_idx] + f[:, None] * delta
 
     def report(self, note: str = "") -> CheckReport:
@@ -677,7 +593,7 @@ class _Checker:
             return CheckReport(True, "", float(d[0]), 0.0, 1)
         a_t, b_t, a_d, b_d, a_s = self._initial_intervals()
         vm = max((mv.max_speed for mv in self.scene.movers), default=0.0)
-        turn = np.abs(_wrap(np.diff(p[:, 2]))) if robot.dof == 3 else np.zeros(len(dt))
+        turn = np.abs(wrap(np.diff(p[:, 2]))) if robot.dof == 3 else np.zeros(len(dt))
         body = self.speed  # the fastest point of the body, per segment
         if robot.dof == 3 and robot.shape == "disc":  # a disc's turn in place moves none of it
             body = np.hypot(*np.diff(p[:, :2], axis=0).T) / dt

@@ -258,13 +258,17 @@ def _batch_result(args, scenes, options, ran: list) -> None:
     """
     import time
 
-    from ..runs.batch import closed_whole, local_cluster, run_batch
+    from ..runs.batch import check_time_steps, closed_whole, local_cluster, run_batch
 
     with contextlib.ExitStack() as stack:
         if args.scheduler:  # connected, or refused, before any roadmap is built or loaded
             client = stack.enter_context(closed_whole(_connect(args.scheduler, args.connect_timeout)))
             where = f"the cluster at {args.scheduler}"
         pairs = [(sc, _roadmap_for(sc, args)) for sc in scenes]  # once per scene, in the client
+        try:  # a dt too fine for a roadmap fails every query alike: said once, before any runs
+            check_time_steps(pairs, options.plan)
+        except TimeStepError as exc:  # the option's fault, said as plan, regress and navigate say it
+            raise BadInput(f"gfuzzy batch: --dt {options.plan.dt:g}: {exc}") from None
         t = time.perf_counter()
         if not args.scheduler:
             workers = args.workers or 2

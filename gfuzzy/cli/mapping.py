@@ -7,7 +7,7 @@ import shlex
 import sys
 
 from ..errors import InputError, SceneError
-from .common import EXIT_OK, BadInput, _check_numbers, _out_path, _say
+from .common import EXIT_OK, BadInput, _check_numbers, _not_too_large, _out_path, _say
 
 
 def cmd_map(args) -> int:
@@ -23,12 +23,9 @@ def cmd_map(args) -> int:
             raise BadInput("--robot-footprint: expected x y pairs of at least 3 points")
         if not all(math.isfinite(v) for v in vals):
             raise BadInput("--robot-footprint: numbers must be finite")
+        _not_too_large(vals, "--robot-footprint")  # 1e10 was blamed on the scene not yet written
         footprint = [vals[i : i + 2] for i in range(0, len(vals), 2)]
-        import shapely
-
-        poly = shapely.Polygon(footprint)
-        if not shapely.LinearRing(footprint).is_simple or poly.area <= 1e-12:
-            raise BadInput("--robot-footprint: not a simple polygon of positive area")
+        _check_footprint(footprint)
     if args.vmax is not None:
         _check_numbers("map", positive=(("--vmax", args.vmax),))
     command = "gfuzzy " + " ".join(shlex.quote(a) for a in sys.argv[1:]) if sys.argv[1:] else ""
@@ -56,6 +53,20 @@ def cmd_map(args) -> int:
             "(a smaller robot?)"
         )
     return EXIT_OK
+
+
+def _check_footprint(footprint) -> None:
+    """``--robot-footprint`` checked as a scene file's ``robot.footprint`` is (the scene's own
+    polygon rule, its words: too small, collinear, self-intersecting), blamed on the option."""
+    import numpy as np
+
+    from ..scene.scene import _check_polygon
+    from ..scene.yamldoc import _V
+
+    try:
+        _check_polygon(_V("--robot-footprint"), np.asarray(footprint, dtype=float), "")
+    except SceneError as exc:
+        raise BadInput(f"--robot-footprint: {exc.message}") from None
 
 
 def _map_image(path):

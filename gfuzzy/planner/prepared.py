@@ -70,11 +70,31 @@ from ..timespace.roadgraph import (
     check_points,
     roadmap_metres,
     spanner_split,
+    split_points,
 )
 from ..timespace.spacetime import QueryGraph, SpaceTimeGraph, split_edges
 from ..typed import FloatArray, IntArray
 
-__all__ = ["PreparedGoal", "QueryGraph", "prepare_goal", "split_edges"]
+__all__ = ["PreparedGoal", "QueryGraph", "check_time_step", "prepare_goal", "split_edges"]
+
+
+def check_time_step(robot, roadmap, options) -> None:
+    """Refuse ``options.dt`` as too fine for ``roadmap`` whatever the query, before any graph is
+    built: the count a plan refuses first (a holonomic robot's spanner cut, a differential
+    drive's turning ring; a finer dt past the other bounds still fails the query itself).
+
+    Raises
+    ------
+    TimeStepError
+        When the count exceeds ``settings.MAX_POINTS``.
+    """
+    step_len = robot.vmax * SPEED_SAFETY * options.dt
+    if robot.unicycle:
+        from ..timespace.unicycle import ring_points
+
+        ring_points(robot.vmax, robot.turn_rate, step_len)
+    else:
+        check_points(split_points(roadmap, step_len, options.stretch))
 
 
 @dataclass

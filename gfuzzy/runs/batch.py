@@ -53,6 +53,7 @@ __all__ = [
     "BatchRow",
     "BatchResult",
     "COLUMNS",
+    "check_time_steps",
     "close_whole",
     "closed_whole",
     "DASK_LOGGERS",
@@ -405,6 +406,22 @@ def _quiet_logs(quiet: bool):
             logging.getLogger(n).setLevel(level)
 
 
+def check_time_steps(scenes: Sequence[tuple[Scene, Roadmap]], options: PlanOptions) -> None:
+    """Refuse a ``dt`` too fine for a scene's roadmap once, in the client, before any query
+    runs (:func:`gfuzzy.planner.prepared.check_time_step`): every query of the scene would
+    fail alike, as one ``error`` row each.
+
+    Raises
+    ------
+    TimeStepError
+        Naming the scene file, as :func:`gfuzzy.runs.regress.regress_scene` does.
+    """
+    from .regress import check_scene_time_step
+
+    for scene, roadmap in scenes:
+        check_scene_time_step(scene, roadmap, options)
+
+
 def run_batch(
     client,
     scenes: Sequence[tuple[Scene, Roadmap]],
@@ -432,6 +449,12 @@ def run_batch(
     before : callable(scene_name, query_name), optional
         Run inside each task before planning (fault injection in tests; must be picklable).
 
+    Raises
+    ------
+    TimeStepError
+        ``options.plan.dt`` too fine for a scene's roadmap (:func:`check_time_steps`), before
+        any query is submitted.
+
     Returns
     -------
     BatchResult
@@ -439,6 +462,7 @@ def run_batch(
         the client as rows arrive; an error row removes a stale file of that query.
     """
     options = options or BatchOptions()
+    check_time_steps(scenes, options.plan)
     folder = Path(options.trajectories) if options.trajectories else None
     if folder is not None:
         folder.mkdir(parents=True, exist_ok=True)

@@ -13,7 +13,7 @@ from ..planner.planner import Planner, PlanOptions
 from ..scene.scene import Query, Scene
 from ..status import Status
 
-__all__ = ["RegressionRow", "regress_scene", "run_regression"]
+__all__ = ["RegressionRow", "check_scene_time_step", "regress_scene", "run_regression"]
 
 
 @dataclass(frozen=True)
@@ -48,6 +48,18 @@ def _expectation_problems(query: Query, status: str, duration, delay) -> list[st
     return out
 
 
+def check_scene_time_step(scene: Scene, roadmap, options: PlanOptions | None) -> None:
+    """Refuse a ``dt`` too fine for ``scene``'s roadmap before any of its queries runs
+    (:func:`gfuzzy.planner.prepared.check_time_step`): a :class:`~gfuzzy.errors.TimeStepError`
+    naming the scene file, as one of its queries would."""
+    from ..planner.prepared import check_time_step
+
+    try:
+        check_time_step(scene.robot, roadmap, options or PlanOptions())
+    except TimeStepError as exc:
+        raise TimeStepError(f"{scene.source}: {exc}") from None
+
+
 def regress_scene(scene: Scene, roadmap, options: PlanOptions | None = None) -> list[RegressionRow]:
     """Answer and check every query of ``scene``.
 
@@ -56,6 +68,7 @@ def regress_scene(scene: Scene, roadmap, options: PlanOptions | None = None) -> 
     query, names the scene file only). A solved answer must pass :func:`gfuzzy.check.check.check_trajectory` (with the query's
     start, goal and t0), and every answer must meet the query's ``expect`` block.
     """
+    check_scene_time_step(scene, roadmap, options)
     planner = Planner(scene, roadmap)
     rows = []
     for i, q in enumerate(scene.queries):
@@ -111,20 +124,33 @@ def run_regression(
     out: TextIO,
 ) -> bool:
     """Run every scene, print one row per query to ``out``; True when all met. A scene
-    without queries gets one line saying so, and no roadmap (``roadmap_for`` is not asked)."""
-    out.write(HEADER + "\n")
+    without queries gets one line saying so, and no roadmap (``roadmap_for`` is not asked).
+    The header comes once the first scene's ``dt`` is known to fit its roadmap: a ``dt`` too
+    fine prints nothing before its error (:func:`check_scene_time_step`)."""
+    header = [HEADER]
+
+    def say(line: str) -> None:
+        if header:
+            out.write(header.pop() + "\n")
+        out.write(line + "\n")
+
     all_ok = True
     n = failed = 0
     for scene in scenes:
         if not scene.queries:
-            out.write(f"{scene.name:<22} (no queries: nothing answered, no roadmap built or loaded)\n")
+            say(f"{scene.name:<22} (no queries: nothing answered, no roadmap built or loaded)")
             continue
-        for row in regress_scene(scene, roadmap_for(scene), options):
-            out.write(format_row(row) + "\n")
+        roadmap = roadmap_for(scene)
+        check_scene_time_step(scene, roadmap, options)
+        if header:  # the first scene's dt fits: the table starts now, before its queries run
+            out.write(header.pop() + "\n")
+            out.flush()
+        for row in regress_scene(scene, roadmap, options):
+            say(format_row(row))
             out.flush()
             n += 1
             if not row.ok:
                 failed += 1
                 all_ok = False
-    out.write(f"{n - failed} of {n} queries met their expectations\n")
+    say(f"{n - failed} of {n} queries met their expectations")
     return all_ok

@@ -454,11 +454,19 @@ class Scene:
         return replace(self, robot=robot, raw=raw, static_hash=_static_hash(base, robot.clearance))
 
 
+#: The least span (metres, along x or y) of a polygon: one spanning less has an area below
+#: the 1e-12 m² a polygon needs, and is refused as too small before its shape is examined.
+MIN_POLYGON_SPAN = 1e-6
+
+
 def _check_polygon(v: _V, pts: FloatArray, place: str) -> FloatArray:
     import shapely
 
     if len(pts) < 3:
         v.fail(place, f"a polygon needs at least 3 points, got {len(pts)}")
+    extent = float(np.ptp(pts, axis=0).max())
+    if extent <= MIN_POLYGON_SPAN:  # below the area's bound whatever its shape: GEOS saw 1e-300 m cross itself
+        v.fail(place, f"polygon is degenerate: too small (it spans {extent:g} m; more than {MIN_POLYGON_SPAN:g} m needed)")
     if np.allclose(pts[0], pts[-1]) and len(pts) > 3:
         pts = pts[:-1]
     # a refused ring whose points lie on one line folds back on itself: say so, not that it

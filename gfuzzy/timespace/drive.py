@@ -325,7 +325,7 @@ def fan(ex, geometry, start, s_id: int, goal, g_id: int, options: Fan, expired=N
     to the goal's heading (when that lane and both turns are free). A differential drive
     among people detours with few turns: the roadmap's lanes zigzag, each vertex a turn.
 
-    ``ex`` is the query's :class:`gfuzzy.timespace.unicycle._Extras` (``node``, ``turn``,
+    ``ex`` is the query's :class:`gfuzzy.timespace.uniends._Extras` (``node``, ``turn``,
     ``lane``): the pieces go into it. ``expired`` (a callable, optional): once it returns
     True no further heading or point is tried (the offsets are in order of preference,
     straight ahead first); among walls each heading's static checks cost milliseconds. A

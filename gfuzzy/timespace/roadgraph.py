@@ -43,6 +43,7 @@ __all__ = [
     "vertex_clearances",
     "connect",
     "check_points",
+    "split_points",
     "MAX_SPLITS",
 ]
 
@@ -309,6 +310,15 @@ class Spliced:
     neighbors: IntArray
 
 
+def split_points(roadmap, step_len: float, stretch: float) -> int:
+    """The points of the roadmap's ``stretch`` spanner cut into steps of at most ``step_len``
+    (its vertices, a query's two ends, its edges' inner points), counted without cutting:
+    every holonomic query's graph holds them, so :func:`check_points` refusing them refuses
+    the time step for every query alike."""
+    keep = roadmap.spanner(stretch)
+    return len(roadmap.vertices) + 2 + int((split_counts(roadmap.lengths[keep], step_len) - 1).sum())
+
+
 def spanner_split(roadmap, step_len: float, stretch: float) -> SplitSpanner:
     """The roadmap's ``stretch`` spanner cut into steps of at most ``step_len``, cached.
 
@@ -327,7 +337,7 @@ def spanner_split(roadmap, step_len: float, stretch: float) -> SplitSpanner:
     n = nv + 2
     keep = roadmap.spanner(stretch)
     edges, lengths = roadmap.edges[keep], roadmap.lengths[keep]
-    check_points(n + int((split_counts(lengths, step_len) - 1).sum()))
+    check_points(split_points(roadmap, step_len, stretch))
     verts = np.vstack([roadmap.vertices, np.zeros((2, roadmap.vertices.shape[1]))])
     cut = split_edges(verts, edges, lengths, step_len, n)
     k, offs, inner, a, b, j, src, dst = cut.k, cut.offs, cut.inner, cut.a, cut.b, cut.j, cut.src, cut.dst

@@ -27,7 +27,7 @@ import numpy as np
 
 from ..poses import wrap_angle
 from ..typed import FloatArray
-from .unicycle import _drive, _Extras
+from .uniends import _drive, _Extras
 from .unilanes import lanes
 
 __all__ = ["ends_apart"]
