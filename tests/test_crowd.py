@@ -413,7 +413,7 @@ def test_crowd_command_refuses_bad_arguments_from_a_real_process(tmp_path):
     assert not out.exists()
 
 
-def test_crowd_command_refuses_humans_that_do_not_fit_before_any_episode(tmp_path, capsys):
+def test_crowd_command_refuses_humans_that_do_not_fit_before_any_episode(tmp_path, capsys, caplog):
     # every episode's layout is drawn first: the refusal names the episode and what fitted
     # (in this process: the real process's one line is test_crowd_command_refuses_bad_arguments_from_a_real_process's)
     out = tmp_path / "x.csv"
@@ -427,6 +427,7 @@ def test_crowd_command_refuses_humans_that_do_not_fit_before_any_episode(tmp_pat
     assert p.returncode == 2, p.stdout + p.stderr
     assert p.stderr.startswith("gfuzzy crowd: episode 1: cannot place 25 humans") and p.stdout == ""
     assert not out.exists()
+    assert [r.getMessage() for r in caplog.records if r.levelno >= 30] == []  # a real process's stderr: one line
 
 
 def test_crowd_command_takes_the_navigators_full_speed_option():

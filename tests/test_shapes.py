@@ -168,13 +168,14 @@ def test_bad_footprints_name_the_place(robot, message):
         _scene(robot)
 
 
-def test_bad_footprint_on_the_command_line_is_one_line(tmp_path, capsys):
+def test_bad_footprint_on_the_command_line_is_one_line(tmp_path, capsys, caplog):
     f = tmp_path / "bad.yaml"
     f.write_text("version: 1\nname: bad\nbounds: [0, 0, 4, 3]\nrobot: {footprint: [[0, 0], [1, 1], [1, 0], [0, 1]], vmax: 1}\n")
     p = main_completed(capsys, "roadmap", f, "-o", tmp_path / "rm.json")
     assert p.returncode == 2
     assert p.stderr.strip().count("\n") == 0 and "robot.footprint" in p.stderr and "Traceback" not in p.stderr
     assert not (tmp_path / "rm.json").exists()
+    assert [r.getMessage() for r in caplog.records if r.levelno >= 30] == []  # a real process's stderr: one line
 
 
 # --------------------------------------------------------------------------- pieces and distances
