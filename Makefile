@@ -19,10 +19,13 @@ $(VENV): $(STAMP)
 # so no query pays for either; and numba's GA kernels and the navigator's priced search
 # (soft_kernel, numba only: ~10 s to compile, paid by the first --soft-search run or test worker).
 # The GA's kernels share nothing with the search's, so they compile on the other core while
-# the search's are built (about 2 minutes); soft_kernel calls the search's, so it comes after
+# the search's are built (about 2 minutes); soft_kernel calls the search's (movers_kernel), so
+# it compiles once numba has compiled those: --beside runs its warm in a second process during
+# the ahead-of-time compile (the other core, idle then), and the line after it only loads
+# what that cached (or compiles it, when the build failed)
 warm: $(STAMP)
 	$(BIN)/python -c 'import gfuzzy.ga.refine as r; r.warm()' & ga=$$!; \
-	$(BIN)/python -m gfuzzy.timespace.precompile || echo "precompiled kernels not built (no C compiler?): numba's are used"; \
+	$(BIN)/python -m gfuzzy.timespace.precompile --beside gfuzzy.timespace.soft_kernel || echo "precompiled kernels not built (no C compiler?): numba's are used"; \
 	wait $$ga
 	$(BIN)/python -c 'import gfuzzy.timespace.soft_kernel as s; s.warm()'
 

@@ -7,6 +7,7 @@ robot overrides, and the bundled scenes with their roadmaps and answers (cached 
 from __future__ import annotations
 
 import json
+import subprocess
 from functools import cache
 from pathlib import Path
 
@@ -26,6 +27,15 @@ def run_main(capsys, *args):
     rc = main([str(a) for a in args])
     out, err = capsys.readouterr()
     return rc, out, err
+
+
+def main_completed(capsys, *args) -> subprocess.CompletedProcess:
+    """``gfuzzy ARGS`` in-process, answered as ``conftest.run_cli_process`` answers (exit
+    status, stdout, stderr): a real process costs a second of imports a call, for tests
+    whose subject is the command, not its process. Logged warnings are not in its stderr
+    (pytest's handlers take them): a test of them reads ``caplog`` or keeps a real process."""
+    rc, out, err = run_main(capsys, *args)
+    return subprocess.CompletedProcess([str(a) for a in args], rc, out, err)
 
 
 def write_trajectory_file(path, waypoints, scene="line", query="", status="solved"):

@@ -15,7 +15,7 @@ import pytest
 
 pytest.importorskip("pyrvo")
 
-from helpers import run_main  # noqa: E402
+from helpers import main_completed, run_main  # noqa: E402
 
 from gfuzzy.errors import InputError  # noqa: E402
 from gfuzzy.navigation import crowd as C  # noqa: E402
@@ -334,22 +334,24 @@ def _rows(path):
 TIMING = ("replan_p50_ms", "replan_p95_ms", "replan_max_ms")
 
 
-def test_crowd_command_end_to_end_same_seed_same_csv(tmp_path):
+def test_crowd_command_end_to_end_same_seed_same_csv(tmp_path, capsys):
+    # the same seed in a real process and in this one (another process, imports a second
+    # apart); the other seed in this one too (a real process costs a second of imports)
     a, b = tmp_path / "a.csv", tmp_path / "b.csv"
     args = ["crowd", "--scenario", "square", "--humans", "3", "--episodes", "2", "--seed", "4",
             "--policy", "orca", "social-force", "oracle"]  # fmt: skip
     p = _run(*args, "-o", str(a))
     assert p.returncode == 0, p.stderr
     assert "square, 3 humans" in p.stdout and "social-force" in p.stdout
-    q = _run(*args, "-o", str(b))
-    assert q.returncode == 0
+    q = main_completed(capsys, *args, "-o", str(b))
+    assert q.returncode == 0 and q.stdout.splitlines()[0] == p.stdout.splitlines()[0], q.stdout + q.stderr
     ra, rb = _rows(a), _rows(b)
     assert len(ra) == 6 and list(ra[0]) == list(C.CSV_COLUMNS)
     strip = [{k: v for k, v in r.items() if k not in TIMING} for r in ra]
     assert strip == [{k: v for k, v in r.items() if k not in TIMING} for r in rb]
     c = tmp_path / "c.csv"
     other = ["crowd", "--scenario", "square", "--humans", "3", "--episodes", "2", "--seed", "5", "--policy", "orca"]
-    assert _run(*other, "-o", str(c)).returncode == 0
+    assert main_completed(capsys, *other, "-o", str(c)).returncode == 0
     assert [r["min_separation"] for r in _rows(c)] != [r["min_separation"] for r in ra if r["policy"] == "orca"]
     # each row says the run it came from: its seed and how the robot sensed
     assert {(r["seed"], r["velocity"], r["noise"], r["fov"], r["sense"]) for r in ra} == {("4", "estimated", "0.0", "360.0", "")}
@@ -367,10 +369,10 @@ def test_a_row_names_the_sensing_and_the_arena_range():
 
 
 @pytest.mark.parametrize("workers", [pytest.param(["--workers", "2"], marks=pytest.mark.slow), []])
-def test_crowd_command_navigator_visible(tmp_path, workers):
+def test_crowd_command_navigator_visible(tmp_path, workers, capsys):
     out = tmp_path / "n.csv"
-    p = _run("crowd", "--humans", "3", "--visible", "--episodes", "2", "--policy", "navigator", "orca",
-             *workers, "-o", str(out))  # fmt: skip
+    p = main_completed(capsys, "crowd", "--humans", "3", "--visible", "--episodes", "2", "--policy", "navigator",
+                       "orca", *workers, "-o", str(out))  # fmt: skip
     assert p.returncode == 0, p.stderr
     rows = _rows(out)
     assert [(r["policy"], r["episode"]) for r in rows] == [("navigator", "0"), ("orca", "0"), ("navigator", "1"), ("orca", "1")]
@@ -411,19 +413,21 @@ def test_crowd_command_refuses_bad_arguments_from_a_real_process(tmp_path):
     assert not out.exists()
 
 
-def test_crowd_command_refuses_humans_that_do_not_fit_before_any_episode(tmp_path):
+def test_crowd_command_refuses_humans_that_do_not_fit_before_any_episode(tmp_path, capsys, caplog):
     # every episode's layout is drawn first: the refusal names the episode and what fitted
+    # (in this process: the real process's one line is test_crowd_command_refuses_bad_arguments_from_a_real_process's)
     out = tmp_path / "x.csv"
-    p = _run("crowd", "--humans", "30", "--episodes", "3", "--policy", "orca", "-o", str(out))
+    p = main_completed(capsys, "crowd", "--humans", "30", "--episodes", "3", "--policy", "orca", "-o", str(out))
     assert p.returncode == 2, p.stdout + p.stderr
     assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
     assert "episode 0: cannot place 30 humans in the circle scenario" in p.stderr and "placed at most" in p.stderr
     assert not out.exists() and p.stdout == ""
     # 25 humans fit in episode 0 of --seed 4 but not in episode 1: refused before episode 0 runs
-    p = _run("crowd", "--humans", "25", "--seed", "4", "--episodes", "2", "--policy", "orca", "-o", str(out))
+    p = main_completed(capsys, "crowd", "--humans", "25", "--seed", "4", "--episodes", "2", "--policy", "orca", "-o", str(out))
     assert p.returncode == 2, p.stdout + p.stderr
     assert p.stderr.startswith("gfuzzy crowd: episode 1: cannot place 25 humans") and p.stdout == ""
     assert not out.exists()
+    assert [r.getMessage() for r in caplog.records if r.levelno >= 30] == []  # a real process's stderr: one line
 
 
 def test_crowd_command_takes_the_navigators_full_speed_option():

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 import shapely
 import yaml
-from conftest import run_cli_process
+from helpers import main_completed
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
@@ -124,17 +124,17 @@ def test_no_repair_is_the_old_behaviour_and_the_query_still_joins():
     assert res.stats.roadmap_vertices > len(plain)
 
 
-def test_cli_roadmap_says_what_the_repair_added(tmp_path):
+def test_cli_roadmap_says_what_the_repair_added(tmp_path, capsys):
     path = tmp_path / "door.yaml"
     path.write_text(yaml.safe_dump(door_doc(0.74)), encoding="utf-8")
     out = tmp_path / "rm.json"
-    p = run_cli_process("roadmap", path, "-n", "30", "--seed", "3", "-o", out)
+    p = main_completed(capsys, "roadmap", path, "-n", "30", "--seed", "3", "-o", out)
     assert p.returncode == 0, p.stderr
     said = re.search(r"free-space repair: PRM missed 1 passage\(s\); (\d+) vertices beyond -n 30 join them", p.stdout)
     assert said, p.stdout
     doc = json.loads(out.read_text())
     assert len(doc["vertices"]) == 30 + int(said[1]) > 30 and doc["options"]["repair"] is True
-    p = run_cli_process("roadmap", path, "-n", "30", "--seed", "3", "--no-repair", "-o", out)
+    p = main_completed(capsys, "roadmap", path, "-n", "30", "--seed", "3", "--no-repair", "-o", out)
     assert p.returncode == 0 and "free-space repair" not in p.stdout
     doc = json.loads(out.read_text())
     assert len(doc["vertices"]) == 30 and doc["options"]["repair"] is False and doc["info"]["components"] == 2

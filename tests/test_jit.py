@@ -342,3 +342,69 @@ def test_plan_compiles_the_ga_of_a_cold_install_before_its_clock(monkeypatch, tm
     _cache_of(cache, refine.__file__, "kernels.mutation_apply-39.py311.nbi")
     planner.plan(q.start, q.goal, q.t0, options=P.PlanOptions(refine=True))
     assert compiles == [0.0, 1000.0]  # numba's cache holds them
+
+
+@pytest.mark.filterwarnings("ignore:The 'pycc' module is pending deprecation")
+def test_precompile_warms_modules_beside_its_ahead_of_time_compile(monkeypatch, tmp_path):
+    """`make warm` runs soft_kernel's warm beside the ahead-of-time compile (``precompile
+    --beside``): its process starts once numba has compiled the search kernels (whose cache
+    it loads), on numba's kernels, before the extension's compile, and the build waits
+    for it. numba's warm-ups, the compiler and the process are stood in for here."""
+    import numba.pycc
+
+    from gfuzzy.timespace import graph_kernel, precompile, search_kernel
+
+    events = []
+
+    class CC:  # numba.pycc.CC: writes an empty "extension"
+        def __init__(self, name):
+            self.name = name
+
+        def export(self, *args):
+            return lambda func: func
+
+        def compile(self):
+            events.append("compile")
+            Path(self.output_dir, f"{self.name}.so").write_bytes(b"")
+
+    class Popen:
+        def __init__(self, args, env):
+            events.append(("start", args[3:], env["GFUZZY_PRECOMPILED"]))
+            self.args, self.returncode = args, 0
+
+        def wait(self):
+            events.append("wait")
+            return 0
+
+    monkeypatch.setattr(jit, "BUILDING", False)
+    monkeypatch.setattr(jit, "_state", {})
+    monkeypatch.setattr(jit, "loaded", lambda: None)
+    monkeypatch.setattr(numba.pycc, "CC", CC)
+    monkeypatch.setattr(precompile.subprocess, "Popen", Popen)
+    monkeypatch.setattr(search_kernel, "warm", lambda: events.append("numba"))
+    monkeypatch.setattr(graph_kernel, "warm", lambda: events.append("numba"))
+    built = precompile._build_here(tmp_path, "", ["gfuzzy.timespace.soft_kernel"])
+    assert built.parent == tmp_path and (tmp_path / f"{jit.module_name()}.json").exists()
+    assert events == ["numba", "numba", ("start", ["gfuzzy.timespace.soft_kernel"], "0"), "compile", "wait"]
+    events.clear()
+    precompile._build_here(tmp_path, "")  # without --beside: no second process
+    assert events == ["numba", "numba", "compile"]
+
+
+def test_a_module_warmed_beside_the_build_runs_in_its_own_process(tmp_path, caplog, monkeypatch):
+    """The second process imports each module and calls its ``warm()``, on numba's kernels;
+    one that fails is a warning, not a failed build (`make warm` warms it again after)."""
+    from gfuzzy.timespace import precompile
+
+    (tmp_path / "warm_ok.py").write_text(
+        "import os, pathlib\ndef warm():\n"
+        f"    pathlib.Path({str(tmp_path)!r}, 'ok').write_text(os.environ['GFUZZY_PRECOMPILED'])\n"
+    )
+    (tmp_path / "warm_bad.py").write_text("def warm():\n    raise SystemExit(3)\n")
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join(filter(None, [str(tmp_path), os.environ.get("PYTHONPATH")])))
+    monkeypatch.setenv("GFUZZY_PRECOMPILED", "1")
+    precompile._finish_beside(precompile._start_beside(["warm_ok"]))
+    assert (tmp_path / "ok").read_text() == "0" and caplog.records == []
+    caplog.set_level("WARNING", logger=precompile.__name__)
+    precompile._finish_beside(precompile._start_beside(["warm_bad"]))
+    assert [r.getMessage() for r in caplog.records] == ["warming warm_bad beside the build failed (exit status 3)"]

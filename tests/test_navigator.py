@@ -9,7 +9,7 @@ import time
 import numpy as np
 import pytest
 from conftest import ROOT, run_cli_process, unhurried
-from helpers import run_main
+from helpers import main_completed, run_main
 
 import gfuzzy
 from gfuzzy.errors import InputError
@@ -344,10 +344,10 @@ def test_min_separation_exact_matches_sampling():
 
 
 @pytest.mark.parametrize("backend", ["compiled", "reference"])
-def test_navigate_cli_on_a_pedestrian_replay(tmp_path, backend):
+def test_navigate_cli_on_a_pedestrian_replay(tmp_path, backend, capsys):
     out = tmp_path / "eth.json"
     scene = ROOT / "scenes" / "eth-crossing.yaml"
-    p = run_cli_process("navigate", scene, "--backend", backend, "-o", out)
+    p = main_completed(capsys, "navigate", scene, "--backend", backend, "-o", out)
     assert p.returncode == 0, p.stdout + p.stderr
     doc = json.loads(out.read_text())
     assert doc["status"] == "solved"
@@ -355,7 +355,7 @@ def test_navigate_cli_on_a_pedestrian_replay(tmp_path, backend):
         assert key in doc
     assert doc["replans"] >= 1 and doc["min_separation"] >= 0
     assert doc["waypoints"][0][1:] == [7.0, 0.6] and doc["waypoints"][-1][1:] == [7.0, 9.4]
-    c = run_cli_process("check", scene, out)
+    c = main_completed(capsys, "check", scene, out)
     assert c.returncode == 0, c.stderr
     # and a checker that shares no code with the navigator agrees
     s = gfuzzy.load_scene(scene)
@@ -473,10 +473,10 @@ def test_render_shows_the_predictions(tmp_path):
     assert np.any(np.asarray(a.convert("RGB")) != np.asarray(b.convert("RGB")))
 
 
-def test_navigate_timeout_still_writes_the_executed_motion(tmp_path):
+def test_navigate_timeout_still_writes_the_executed_motion(tmp_path, capsys):
     out = tmp_path / "open.json"  # the open room, 5.3 s away
-    p = run_cli_process(
-        "navigate", ROOT / "scenes" / "sealed-room.yaml", "--query", "into-open-room", "--max-time", "3", "-o", out
+    p = main_completed(
+        capsys, "navigate", ROOT / "scenes" / "sealed-room.yaml", "--query", "into-open-room", "--max-time", "3", "-o", out
     )
     assert p.returncode == 1, p.stdout + p.stderr
     doc = json.loads(out.read_text())
@@ -490,7 +490,7 @@ def test_navigate_timeout_still_writes_the_executed_motion(tmp_path):
     why = "the goal is 3.8 m away in a straight line: at least 3.84 s at vmax 1, more than --max-time 3 s"
     assert f"({why}: give a larger --max-time)" in doc["message"] and f"note: {why}" in p.stderr
     # `check` said only "there is no trajectory to check" of the motion render and export show
-    c = run_cli_process("check", ROOT / "scenes" / "sealed-room.yaml", out)
+    c = main_completed(capsys, "check", ROOT / "scenes" / "sealed-room.yaml", out)
     assert c.returncode == 1 and c.stderr.startswith(
         f"{out}: status is timeout: the goal was not reached, no answer to check; "
         f"the motion it executed ({len(rows)} rows, t 0 to 3) is valid (min clearance"
@@ -513,12 +513,12 @@ def test_the_too_long_route_note_is_for_a_route_longer_than_max_time_only():
     assert "at least 3.05 s at vmax 1, more than --max-time 3 s" in _beyond_max_time(4.0, 1.0, 3.0, 3.041)
 
 
-def test_navigate_into_a_sealed_room_is_no_path_at_once(tmp_path):
+def test_navigate_into_a_sealed_room_is_no_path_at_once(tmp_path, capsys):
     # it replanned until --max-time (with 1e6: for hours) and said only "timeout": no mover
     # can open a way the free space does not have, as plan says
     out = tmp_path / "sealed.json"
-    p = run_cli_process(
-        "navigate", ROOT / "scenes" / "sealed-room.yaml", "--query", "into-sealed-room", "--max-time", "30", "-o", out
+    p = main_completed(
+        capsys, "navigate", ROOT / "scenes" / "sealed-room.yaml", "--query", "into-sealed-room", "--max-time", "30", "-o", out
     )
     assert p.returncode == 1, p.stdout + p.stderr
     doc = json.loads(out.read_text())
@@ -554,7 +554,7 @@ def test_navigate_of_a_box_robot_the_roadmap_does_not_join_is_no_path_at_once(tm
     assert doc["status"] == "no_path" and doc["message"] in stdout and "replans" not in doc
 
 
-def test_navigate_start_on_a_person_is_an_invalid_query(tmp_path, tmp_scene):
+def test_navigate_start_on_a_person_is_an_invalid_query(tmp_path, tmp_scene, capsys):
     scene = tmp_scene(
         """
         version: 1
@@ -569,7 +569,7 @@ def test_navigate_start_on_a_person_is_an_invalid_query(tmp_path, tmp_scene):
         """
     )
     out = tmp_path / "o.json"
-    p = run_cli_process("navigate", scene, "-n", "60", "-o", out)
+    p = main_completed(capsys, "navigate", scene, "-n", "60", "-o", out)
     assert p.returncode == 1
     doc = json.loads(out.read_text())
     assert doc["status"] == "invalid_query" and "'p'" in doc["message"]
@@ -1208,7 +1208,7 @@ def test_the_kept_gaps_are_computed_only_for_a_faster_motion(open_square, monkey
     assert nav.last.mode == "plan" and calls == []
 
 
-def test_navigate_says_when_its_searches_ran_out_of_the_budget(tmp_path):
+def test_navigate_says_when_its_searches_ran_out_of_the_budget(tmp_path, capsys):
     """A newcomer's differential drive (a 0.5 x 0.4 m box, wmax 0.3) on a SLAM map stood still
     for 150 s, every one of 600 replans an evasive motion, and neither the line nor the file
     said why: splicing its pose into the heading graph alone took longer than the 100 ms
@@ -1217,12 +1217,13 @@ def test_navigate_says_when_its_searches_ran_out_of_the_budget(tmp_path):
     of CPU time runs out every time; 5 s never does on this 5 x 5 m scene."""
     scene = ROOT / "scenes" / "sim-4s1m.yaml"
     starved, ample = tmp_path / "starved.json", tmp_path / "ample.json"
-    p = run_cli_process("navigate", scene, "--time-budget", "0.0001", "--budget-clock", "cpu", "--max-time", "1",
-                        "-o", starved)  # fmt: skip
+    p = main_completed(capsys, "navigate", scene, "--time-budget", "0.0001", "--budget-clock", "cpu",
+                       "--max-time", "1", "-o", starved)  # fmt: skip
     doc = json.loads(starved.read_text())
     assert doc["replans_out_of_time"] == doc["replans"] == 4, doc["modes"]
     assert "note: 4 of 4 replans ran out of --time-budget 0.0001 s" in p.stderr, p.stderr
-    p = run_cli_process("navigate", scene, "--time-budget", "5", "--budget-clock", "cpu", "--max-time", "1", "-o", ample)
+    p = main_completed(capsys, "navigate", scene, "--time-budget", "5", "--budget-clock", "cpu", "--max-time", "1",
+                       "-o", ample)  # fmt: skip
     doc = json.loads(ample.read_text())
     assert doc["replans_out_of_time"] == 0 and "ran out of" not in p.stderr, p.stderr
 

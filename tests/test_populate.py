@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import yaml
 from conftest import run_cli_process
-from helpers import run_main
+from helpers import main_completed, run_main
 
 pytest.importorskip("pyrvo")
 
@@ -65,11 +65,7 @@ def _run(*args):
     return subprocess.run([sys.executable, "-m", "gfuzzy", *args], capture_output=True, text=True, cwd=ROOT)
 
 
-def _main(capsys, *args):
-    """``gfuzzy ARGS`` in process, answered as :func:`_run` answers (the command's own
-    process: ``_run`` where the tests below use it)."""
-    rc, out, err = run_main(capsys, *args)
-    return subprocess.CompletedProcess(args, rc, out, err)
+_main = main_completed  # answered as :func:`_run` answers (the command's own process: ``_run`` where the tests below use it)
 
 
 def test_populate_writes_a_scene_that_loads_and_whose_people_avoid_the_walls(tmp_path, capsys):

@@ -422,8 +422,10 @@ def test_make_warm_warms_every_kernel_module_the_extension_leaves_to_numba():
     assert "import gfuzzy.timespace.soft_kernel as s; s.warm()" in recipe
     # the GA's compile runs beside the precompile (another core); warm fails if it fails
     assert "r.warm()' & ga=$$!" in recipe and "wait $$ga" in recipe
-    # soft_kernel runs the search's kernels: after the precompile has built them
-    assert recipe.index("soft_kernel") > recipe.index("gfuzzy.timespace.precompile")
+    # soft_kernel runs the search's kernels: beside the precompile's ahead-of-time compile, once
+    # numba has compiled them (--beside), and after it (loading that cache, or compiling)
+    assert "gfuzzy.timespace.precompile --beside gfuzzy.timespace.soft_kernel " in recipe
+    assert recipe.rindex("soft_kernel") > recipe.index("gfuzzy.timespace.precompile")
 
 
 @pytest.mark.parametrize("pool", [False, True])

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import run_main
+from helpers import main_completed, run_main
 
 import gfuzzy
 from gfuzzy.errors import InputError
@@ -240,22 +240,24 @@ def _run(*args):
 
 
 @pytest.mark.parametrize("name", ["zara-crowd", "eth-crossing"])
-def test_pedestrian_replays_with_estimated_velocities_reach_the_goal_and_check(tmp_path, name):
+def test_pedestrian_replays_with_estimated_velocities_reach_the_goal_and_check(tmp_path, name, capsys, monkeypatch):
+    monkeypatch.chdir(ROOT)  # the scenes named as a user in the repository names them
     out = tmp_path / f"{name}.json"
-    p = _run("navigate", f"scenes/{name}.yaml", "-o", str(out))
+    p = main_completed(capsys, "navigate", f"scenes/{name}.yaml", "-o", str(out))
     assert p.returncode == 0, p.stdout + p.stderr
     doc = json.loads(out.read_text())
     assert doc["status"] == "solved"
     assert doc["navigate"]["velocity"] == "estimated"
     assert 0.0 <= doc["discomfort_frequency"] <= 1.0 and 0.0 <= doc["intrusion_ratio"] <= 1.0
-    c = _run("check", f"scenes/{name}.yaml", str(out))
+    c = main_completed(capsys, "check", f"scenes/{name}.yaml", str(out))
     assert c.returncode == 0, c.stdout + c.stderr
 
 
-def test_navigate_with_a_narrow_noisy_view_stays_valid(tmp_path):
+def test_navigate_with_a_narrow_noisy_view_stays_valid(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(ROOT)  # the scenes named as a user in the repository names them
     out = tmp_path / "z.json"
-    p = _run("navigate", "scenes/zara-crowd.yaml", "--noise", "0.05", "--fov", "180", "--occlusion",
-             "--seed", "3", "-o", str(out))  # fmt: skip
+    p = main_completed(capsys, "navigate", "scenes/zara-crowd.yaml", "--noise", "0.05", "--fov", "180",
+                       "--occlusion", "--seed", "3", "-o", str(out))  # fmt: skip
     assert p.returncode in (0, 1), p.stderr
     doc = json.loads(out.read_text())
     assert doc["navigate"]["noise"] == 0.05 and doc["navigate"]["fov"] == 180.0 and doc["navigate"]["occlusion"]
@@ -383,26 +385,28 @@ def test_an_unseen_noisy_track_grows_with_its_velocity_uncertainty():
     assert clean.update(1.0, np.zeros((0, 3)))[0, 4] == pytest.approx(0.3 + 0.2 * 0.5)
 
 
-def test_navigate_budget_on_cpu_time(tmp_path):
+def test_navigate_budget_on_cpu_time(tmp_path, capsys, monkeypatch):
     """`gfuzzy navigate --budget-clock cpu` (as `gfuzzy crowd` has) puts the replan budget on
     CPU time, so that a run does not depend on the machine's load; it was missing."""
+    monkeypatch.chdir(ROOT)  # the scenes named as a user in the repository names them
     out = tmp_path / "z.json"
-    p = _run("navigate", "scenes/zara-crowd.yaml", "--budget-clock", "cpu", "-o", str(out))
+    p = main_completed(capsys, "navigate", "scenes/zara-crowd.yaml", "--budget-clock", "cpu", "-o", str(out))
     assert p.returncode == 0, p.stdout + p.stderr
     assert json.loads(out.read_text())["navigate"]["budget_clock"] == "cpu"
-    p = _run("navigate", "scenes/zara-crowd.yaml", "--budget-clock", "sundial", "-o", str(out))
+    p = main_completed(capsys, "navigate", "scenes/zara-crowd.yaml", "--budget-clock", "sundial", "-o", str(out))
     assert p.returncode == 2 and len(p.stderr.strip().splitlines()) == 1
 
 
-def test_navigate_file_says_how_the_navigator_searched(tmp_path):
+def test_navigate_file_says_how_the_navigator_searched(tmp_path, capsys, monkeypatch):
     """A run with ``--soft-search`` and one without wrote the same ``navigate`` settings: the
     file did not say that people's space had been priced, nor the search's step, budget or
     backend; every setting that changes the run is there now."""
+    monkeypatch.chdir(ROOT)  # the scenes named as a user in the repository names them
     docs = {}
     for name, flags in (("tiers", ()), ("priced", ("--soft-search", "--intrusion-cost", "3", "--dt", "0.2"))):
         out = tmp_path / f"{name}.json"
-        p = _run("navigate", "scenes/zara-crowd.yaml", "--budget-clock", "cpu", "--time-budget", "0.08",
-                 *flags, "-o", str(out))  # fmt: skip
+        p = main_completed(capsys, "navigate", "scenes/zara-crowd.yaml", "--budget-clock", "cpu",
+                           "--time-budget", "0.08", *flags, "-o", str(out))  # fmt: skip
         assert p.returncode in (0, 1), p.stdout + p.stderr
         docs[name] = json.loads(out.read_text())["navigate"]
     assert docs["tiers"]["soft_search"] is False and docs["tiers"]["intrusion_cost"] is None

@@ -14,8 +14,7 @@ import math
 import numpy as np
 import pytest
 import shapely
-from conftest import run_cli_process
-from helpers import run_main
+from helpers import main_completed, run_main
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -169,13 +168,14 @@ def test_bad_footprints_name_the_place(robot, message):
         _scene(robot)
 
 
-def test_bad_footprint_on_the_command_line_is_one_line(tmp_path):
+def test_bad_footprint_on_the_command_line_is_one_line(tmp_path, capsys, caplog):
     f = tmp_path / "bad.yaml"
     f.write_text("version: 1\nname: bad\nbounds: [0, 0, 4, 3]\nrobot: {footprint: [[0, 0], [1, 1], [1, 0], [0, 1]], vmax: 1}\n")
-    p = run_cli_process("roadmap", f, "-o", tmp_path / "rm.json")
+    p = main_completed(capsys, "roadmap", f, "-o", tmp_path / "rm.json")
     assert p.returncode == 2
     assert p.stderr.strip().count("\n") == 0 and "robot.footprint" in p.stderr and "Traceback" not in p.stderr
     assert not (tmp_path / "rm.json").exists()
+    assert [r.getMessage() for r in caplog.records if r.levelno >= 30] == []  # a real process's stderr: one line
 
 
 # --------------------------------------------------------------------------- pieces and distances
@@ -445,8 +445,9 @@ def test_footprint_equal_to_a_box_gives_the_box_answers():
 @pytest.mark.parametrize(
     "flags", [[], pytest.param(["--refine", "--speed-layer"], marks=pytest.mark.slow)], ids=["search", "stages"]
 )
-def test_bundled_footprint_scene_meets_its_expectations(flags):
-    p = run_cli_process("regress", ROOT / "scenes" / "footprint-office.yaml", *flags, cwd=ROOT)
+def test_bundled_footprint_scene_meets_its_expectations(flags, capsys, monkeypatch):
+    monkeypatch.chdir(ROOT)
+    p = main_completed(capsys, "regress", ROOT / "scenes" / "footprint-office.yaml", *flags)
     assert p.returncode == 0, p.stdout + p.stderr
     assert "3 of 3 queries met their expectations" in p.stdout
 

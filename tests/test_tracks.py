@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import ROOT, run_cli_process
-from helpers import run_main
+from helpers import main_completed, run_main
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -166,7 +166,7 @@ def test_a_part_skips_the_name_another_persons_id_gives():
     assert [m.name for m in parse_scene(made.doc, file="mem").movers] == list(movers)
 
 
-def test_a_person_unseen_for_longer_than_max_gap_is_two_movers(tmp_path, caplog):
+def test_a_person_unseen_for_longer_than_max_gap_is_two_movers(tmp_path, caplog, capsys):
     # a tracker lost d from 1 s to 8 s: one mover walked a straight line through the gap (a
     # phantom where nobody was seen); the rows before and after are two movers, absent between
     rows = np.array([[0, 0, 0], [1, 1, 0], [8, 8, 0], [9, 9, 0], [9.5, 9.5, 0]], float)
@@ -199,7 +199,7 @@ def test_a_person_unseen_for_longer_than_max_gap_is_two_movers(tmp_path, caplog)
     csv = tmp_path / "lost.csv"
     csv.write_text("t,id,x,y\n" + "".join(f"{t:g},d,{x:g},{y:g}\n" for t, x, y in rows))
     out = tmp_path / "lost.yaml"
-    run = run_cli_process("tracks", str(csv), "-o", str(out), "--max-gap", "inf")
+    run = main_completed(capsys, "tracks", str(csv), "-o", str(out), "--max-gap", "inf")
     assert run.returncode == 0, run.stderr
     assert "--max-gap inf" in out.read_text() and [m.name for m in load_scene(out).movers] == ["ped-d"]
 
@@ -223,7 +223,7 @@ def test_a_person_seen_once_is_dropped_aloud(tmp_path, caplog):
                                   "and one at the last)")
 
 
-def test_a_person_seen_once_once_rounded_is_dropped_aloud(tmp_path, caplog):
+def test_a_person_seen_once_once_rounded_is_dropped_aloud(tmp_path, caplog, capsys):
     # two rows 0.4 ms apart are one row at 1 ms: a was dropped without a word (counted
     # before rounding), and with b and c seen once too the error said nobody was inside
     csv = tmp_path / "close.csv"
@@ -237,7 +237,7 @@ def test_a_person_seen_once_once_rounded_is_dropped_aloud(tmp_path, caplog):
                                    "at the first time and one at the last)")
     assert [r.getMessage().split(":")[0] for r in caplog.records] == [
         f"ped-{p} is seen at one instant only in the window (t = {t} s)" for p, t in (("a", 0), ("b", 0.5), ("c", 0.9))]
-    run = run_cli_process("tracks", str(csv), "-o", str(tmp_path / "close.yaml"))
+    run = main_completed(capsys, "tracks", str(csv), "-o", str(tmp_path / "close.yaml"))
     assert run.returncode == 2 and not (tmp_path / "close.yaml").exists()
     assert run.stderr.strip().splitlines()[-1].startswith(f"{csv}: 3 pedestrian(s) inside the region")
 
@@ -324,10 +324,10 @@ def test_python_api_round_trip_plans(tmp_path, csv_file):
 # ------------------------------------------------------------------------- the command
 
 
-def test_command_writes_a_scene_that_loads_and_plans(tmp_path, eth_file):
+def test_command_writes_a_scene_that_loads_and_plans(tmp_path, eth_file, capsys):
     out = tmp_path / "scene.yaml"
-    proc = run_cli_process(
-        "tracks", eth_file, "--region", -1, -1, 10, 10, "--start", 0, 9, "--goal", 9, 9,
+    proc = main_completed(
+        capsys, "tracks", eth_file, "--region", -1, -1, 10, 10, "--start", 0, 9, "--goal", 9, 9,
         "--expect", "solved", "-o", out,
     )  # fmt: skip
     assert proc.returncode == 0, proc.stderr
@@ -335,21 +335,21 @@ def test_command_writes_a_scene_that_loads_and_plans(tmp_path, eth_file):
     assert scene.name == "scene" and len(scene.movers) == 3
     assert scene.queries[0].expect.status == "solved"
     assert out.read_text().splitlines()[1].startswith("#   gfuzzy tracks ")
-    proc = run_cli_process("regress", out, "-n", 60)
+    proc = main_completed(capsys, "regress", out, "-n", 60)
     assert proc.returncode == 0, proc.stdout + proc.stderr
 
 
-def test_command_takes_obstacles_and_robot_from_a_static_scene(tmp_path, eth_file):
+def test_command_takes_obstacles_and_robot_from_a_static_scene(tmp_path, eth_file, capsys):
     out = tmp_path / "office-people.yaml"
     static = ROOT / "scenes" / "office-polygons.yaml"
-    proc = run_cli_process("tracks", eth_file, "--static", static, "-o", out)
+    proc = main_completed(capsys, "tracks", eth_file, "--static", static, "-o", out)
     assert proc.returncode == 0, proc.stderr
     scene, office = load_scene(out), load_scene(static)
     assert scene.bounds == office.bounds and scene.robot == office.robot
     assert scene.static_hash == office.static_hash and len(scene.movers) == 3
     assert scene.queries == ()
     # a smaller disc robot in the same office keeps the office robot's speed bounds
-    proc = run_cli_process("tracks", eth_file, "--static", static, "--robot-radius", 0.1, "-o", out)
+    proc = main_completed(capsys, "tracks", eth_file, "--static", static, "--robot-radius", 0.1, "-o", out)
     assert proc.returncode == 0, proc.stderr
     robot = load_scene(out).robot
     assert (robot.shape, robot.radius, robot.vmax, robot.amax) == (
@@ -360,7 +360,7 @@ def test_command_takes_obstacles_and_robot_from_a_static_scene(tmp_path, eth_fil
     )
 
 
-def test_a_differential_drive_from_a_static_scene_is_written_as_yaml(tmp_path, eth_file):
+def test_a_differential_drive_from_a_static_scene_is_written_as_yaml(tmp_path, eth_file, capsys):
     """A robot with `kinematics: unicycle` (a string-valued key): the scene was written
     with the scalar's document-end marker (`kinematics: unicycle` then `...`), and
     `gfuzzy tracks` refused its own output ("invalid YAML")."""
@@ -372,7 +372,7 @@ def test_a_differential_drive_from_a_static_scene_is_written_as_yaml(tmp_path, e
         encoding="utf-8",
     )
     out = tmp_path / "drive.yaml"
-    proc = run_cli_process("tracks", eth_file, "--static", static, "--start", 0, 0, 0, "--goal", 5, 5, 1.57, "-o", out)
+    proc = main_completed(capsys, "tracks", eth_file, "--static", static, "--start", 0, 0, 0, "--goal", 5, 5, 1.57, "-o", out)
     assert proc.returncode == 0, proc.stderr
     robot = load_scene(out).robot
     assert (robot.kinematics, robot.wmax, robot.reverse) == ("unicycle", 1.5, True)
@@ -413,19 +413,19 @@ def test_tracks_writes_a_differential_drive_as_map_does(tmp_path, eth_file, caps
         assert not bad.exists()
 
 
-def test_a_smaller_disc_keeps_a_differential_drive_and_its_headings(tmp_path, eth_file):
+def test_a_smaller_disc_keeps_a_differential_drive_and_its_headings(tmp_path, eth_file, capsys):
     """`--robot-radius` on a unicycle scene makes a disc unicycle, whose poses carry a
     heading: the command took only [x, y] for its start and goal, and then refused the
     scene it had written (its start had no heading)."""
     static = ROOT / "scenes" / "building-floor-unicycle.yaml"
     out = tmp_path / "small-drive.yaml"
     args = ("--static", static, "--robot-radius", 0.2, "--start", 1, 1, 0, "--goal", 7, 1, 0, "-o", out)
-    proc = run_cli_process("tracks", eth_file, *args)
+    proc = main_completed(capsys, "tracks", eth_file, *args)
     assert proc.returncode == 0, proc.stderr
     scene = load_scene(out)
     assert (scene.robot.shape, scene.robot.kinematics, scene.robot.dof) == ("disc", "unicycle", 3)
     assert scene.queries[0].start == (1.0, 1.0, 0.0)
-    proc = run_cli_process("tracks", eth_file, *args[:4], "--start", 1, 1, "--goal", 7, 1, "-o", out)
+    proc = main_completed(capsys, "tracks", eth_file, *args[:4], "--start", 1, 1, "--goal", 7, 1, "-o", out)
     assert proc.returncode == 2 and "--start: expected 3 numbers (x y heading)" in proc.stderr
     with pytest.raises(InputError, match=r"start: expected 3 numbers \[x, y, heading\]"):
         tracks_scene(
@@ -434,13 +434,13 @@ def test_a_smaller_disc_keeps_a_differential_drive_and_its_headings(tmp_path, et
         )  # fmt: skip
 
 
-def test_static_mesh_paths_follow_the_new_file(tmp_path, csv_file):
+def test_static_mesh_paths_follow_the_new_file(tmp_path, csv_file, capsys):
     folder = tmp_path / "warehouse"
     shutil.copytree(ROOT / "scenes" / "meshes", folder / "meshes")
     shutil.copy(ROOT / "scenes" / "warehouse-mesh.yaml", folder / "warehouse-mesh.yaml")
     out = tmp_path / "people.yaml"  # one folder up: the mesh is now warehouse/meshes/...
-    proc = run_cli_process(
-        "tracks", csv_file, "--static", folder / "warehouse-mesh.yaml", "--scale", 2,
+    proc = main_completed(
+        capsys, "tracks", csv_file, "--static", folder / "warehouse-mesh.yaml", "--scale", 2,
         "--start", 0.6, 0.6, 0, "--goal", 11.4, 0.6, 0, "-o", out,
     )  # fmt: skip
     assert proc.returncode == 0, proc.stderr
@@ -450,8 +450,8 @@ def test_static_mesh_paths_follow_the_new_file(tmp_path, csv_file):
     # written into a folder the mesh is not inside: refused, nothing written
     deeper = folder / "sub" / "people.yaml"
     deeper.parent.mkdir()
-    proc = run_cli_process(
-        "tracks", csv_file, "--static", folder / "warehouse-mesh.yaml", "-o", deeper
+    proc = main_completed(
+        capsys, "tracks", csv_file, "--static", folder / "warehouse-mesh.yaml", "-o", deeper
     )
     assert proc.returncode == 2 and "obstacles[0].mesh.file" in proc.stderr
     assert not deeper.exists()
@@ -541,28 +541,28 @@ def test_bad_requests_are_one_line_and_exit_2(tmp_path, capsys, monkeypatch, eth
 
 
 @pytest.mark.parametrize("stem", ["12", "true", "1e3"])
-def test_a_scene_named_like_a_number_reads_back(tmp_path, eth_file, stem):
+def test_a_scene_named_like_a_number_reads_back(tmp_path, eth_file, stem, capsys):
     # the name (the output's stem) and a query name were written plain: 12, True, 1000.0 on
     # reading, and the scene was refused as it was written ("name: expected a non-empty string")
     out = tmp_path / f"{stem}.yaml"
-    proc = run_cli_process("tracks", eth_file, "--start", 1, 1, "--goal", 2, 2, "--query-name", "2e1", "-o", out)
+    proc = main_completed(capsys, "tracks", eth_file, "--start", 1, 1, "--goal", 2, 2, "--query-name", "2e1", "-o", out)
     assert proc.returncode == 0, proc.stderr
     scene = load_scene(out)
     assert scene.name == stem and scene.queries[0].name == "2e1"
 
 
-def test_unreadable_file_and_bad_output_name(tmp_path, eth_file):
-    proc = run_cli_process("tracks", tmp_path / "missing.txt", "-o", tmp_path / "a.yaml")
+def test_unreadable_file_and_bad_output_name(tmp_path, eth_file, capsys):
+    proc = main_completed(capsys, "tracks", tmp_path / "missing.txt", "-o", tmp_path / "a.yaml")
     assert proc.returncode == 2 and "missing.txt: cannot read" in proc.stderr
-    proc = run_cli_process("tracks", eth_file, "-o", tmp_path / "a.json")
+    proc = main_completed(capsys, "tracks", eth_file, "-o", tmp_path / "a.json")
     assert proc.returncode == 2 and "a.json: output must end in .yaml or .yml" in proc.stderr
 
 
-def test_a_failed_run_keeps_the_old_scene(tmp_path, eth_file):
+def test_a_failed_run_keeps_the_old_scene(tmp_path, eth_file, capsys):
     out = tmp_path / "scene.yaml"
-    assert run_cli_process("tracks", eth_file, "-o", out).returncode == 0
+    assert main_completed(capsys, "tracks", eth_file, "-o", out).returncode == 0
     before = out.read_bytes()
-    proc = run_cli_process("tracks", eth_file, "--t-start", 99, "-o", out)
+    proc = main_completed(capsys, "tracks", eth_file, "--t-start", 99, "-o", out)
     assert proc.returncode == 2 and out.read_bytes() == before
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []  # no temporary left
 
@@ -571,7 +571,7 @@ def test_a_failed_run_keeps_the_old_scene(tmp_path, eth_file):
 
 
 @pytest.mark.parametrize("name", ["eth-crossing", "zara-crowd"])
-def test_bundled_pedestrian_scenes_are_made_again_from_the_excerpts(tmp_path, name):
+def test_bundled_pedestrian_scenes_are_made_again_from_the_excerpts(tmp_path, name, capsys, monkeypatch):
     """Line 2 of each pedestrian scene is the command that made it; run it again."""
     path = ROOT / "scenes" / f"{name}.yaml"
     text = path.read_text(encoding="utf-8")
@@ -580,7 +580,8 @@ def test_bundled_pedestrian_scenes_are_made_again_from_the_excerpts(tmp_path, na
     out = tmp_path / f"{name}.yaml"
     i = argv.index("-o")
     argv[i + 1 : i + 2] = [str(out)]
-    proc = run_cli_process(*argv[1:], cwd=ROOT)
+    monkeypatch.chdir(ROOT)  # the command names its input relative to the repository
+    proc = main_completed(capsys, *argv[1:])
     assert proc.returncode == 0, proc.stderr
     again = out.read_text(encoding="utf-8").replace(shlex.quote(str(out)), f"scenes/{name}.yaml")
     assert again == text
@@ -727,7 +728,7 @@ def test_people_who_come_and_go_are_only_there_while_recorded(tmp_path):
     assert not present[0] and present[1]
 
 
-def test_unix_time_stamps_are_rebased_to_the_window(tmp_path):
+def test_unix_time_stamps_are_rebased_to_the_window(tmp_path, capsys, monkeypatch):
     """Tracks exported from a ROS bag carry Unix times (about 1.7e9 s): the scene's times
     start at the window's start, so they load as they did before numbers beyond 1e9 were
     refused (a review found `gfuzzy tracks` refusing them)."""
@@ -736,12 +737,13 @@ def test_unix_time_stamps_are_rebased_to_the_window(tmp_path):
     path = tmp_path / "bag.csv"
     path.write_text("\n".join(rows) + "\n", encoding="utf-8")
     out = tmp_path / "bag.yaml"
-    p = run_cli_process("tracks", path, "-o", out, "--region", 0, 0, 7, 3, cwd=tmp_path)
+    monkeypatch.chdir(tmp_path)
+    p = main_completed(capsys, "tracks", path, "-o", out, "--region", 0, 0, 7, 3)
     assert p.returncode == 0, p.stderr
     scene = load_scene(out)
     assert len(scene.movers) == 2
     assert all(m.trajectory[0, 0] == 0.0 and m.trajectory[-1, 0] == pytest.approx(2.9) for m in scene.movers)
-    p = run_cli_process("tracks", path, "-o", tmp_path / "w.yaml", "--t-start", t0 + 1, "--duration", 1, cwd=tmp_path)
+    p = main_completed(capsys, "tracks", path, "-o", tmp_path / "w.yaml", "--t-start", t0 + 1, "--duration", 1)
     assert p.returncode == 0, p.stderr
     assert load_scene(tmp_path / "w.yaml").movers[0].trajectory[-1, 0] == pytest.approx(1.0)
 
@@ -766,11 +768,11 @@ def test_a_mesh_folder_named_like_dot_dot_stays_in_the_folder(tmp_path):
 
 
 @pytest.mark.parametrize("stem, name", [("my walk", "my-walk"), ("gang ü #2", "gang-2"), ("über", "ber"), ("ü", "tracks")])
-def test_an_output_named_with_spaces_or_accents_names_the_scene_with_dashes(tmp_path, eth_file, stem, name):
+def test_an_output_named_with_spaces_or_accents_names_the_scene_with_dashes(tmp_path, eth_file, stem, name, capsys):
     # the default name is the output's stem: `-o "my walk.yaml"` was refused, exit 2,
     # "name must be letters, digits, _ . - (got 'my walk')", a name the user never gave
     out = tmp_path / f"{stem}.yaml"
-    proc = run_cli_process("tracks", eth_file, "-o", out)
+    proc = main_completed(capsys, "tracks", eth_file, "-o", out)
     assert proc.returncode == 0, proc.stderr
     assert load_scene(out).name == name
 

@@ -50,8 +50,27 @@ def _signature(sig) -> list[list]:
     return out
 
 
-def _build_here(folder: Path, target_cpu: str = "") -> Path:
-    """Build in this process, whose kernel modules must not be imported yet."""
+def _start_beside(modules: list[str]) -> subprocess.Popen | None:
+    """``import M; M.warm()`` for each of ``modules``, in one second process started now
+    (numba's kernels: ``GFUZZY_PRECOMPILED=0`` as here), or None without modules."""
+    if not modules:
+        return None
+    code = "import importlib, sys\nfor m in sys.argv[1:]:\n    importlib.import_module(m).warm()\n"
+    env = dict(os.environ, GFUZZY_PRECOMPILED="0")
+    return subprocess.Popen([sys.executable, "-c", code, *modules], env=env)
+
+
+def _finish_beside(proc: subprocess.Popen | None) -> None:
+    """Wait for :func:`_start_beside`'s process; a failure is logged, not raised (the
+    build's own result stands; `make warm` warms those modules again after it)."""
+    if proc is not None and proc.wait() != 0:
+        log.warning("warming %s beside the build failed (exit status %d)", " ".join(proc.args[3:]), proc.returncode)
+
+
+def _build_here(folder: Path, target_cpu: str = "", beside: list[str] | None = None) -> Path:
+    """Build in this process, whose kernel modules must not be imported yet. ``beside``:
+    modules whose ``warm()`` runs in a second process while the ahead-of-time compile runs
+    here (after numba's compile of the search kernels, whose on-disk cache they load)."""
     if any(f"{__package__}.{m}" in sys.modules for m in jit.KERNEL_MODULES) and jit.loaded() is not None:
         raise RuntimeError("the kernel modules are already loaded from an extension: build in a fresh process")
     jit.BUILDING = True
@@ -63,6 +82,15 @@ def _build_here(folder: Path, target_cpu: str = "") -> Path:
 
     search_kernel.warm()  # numba compiles (or loads from its cache) every kernel the drivers call
     graph_kernel.warm()
+    side = _start_beside(beside or [])
+    try:
+        return _compile_ahead(folder, target_cpu, CC, CPUDispatcher)
+    finally:
+        _finish_beside(side)
+
+
+def _compile_ahead(folder: Path, target_cpu: str, CC, CPUDispatcher) -> Path:
+    """The extension of every kernel numba compiled with one signature, written to ``folder``."""
     key = jit.kernel_key()
     name = jit.module_name(key)
     cc = CC(name)
@@ -128,9 +156,11 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m gfuzzy.timespace.precompile", description=__doc__.split("\n\n")[0])
     parser.add_argument("--dir", type=Path, default=None, help="output folder (default: see gfuzzy.timespace.jit)")
     parser.add_argument("--cpu", default="", help="LLVM target CPU ('' generic, 'host' this machine)")
+    parser.add_argument("--beside", nargs="+", default=[], metavar="MODULE",
+                        help="modules whose warm() runs in a second process during the ahead-of-time compile")  # fmt: skip
     args = parser.parse_args(argv)
     os.environ["GFUZZY_PRECOMPILED"] = "0"
-    path = _build_here(args.dir or jit.kernel_dirs()[0], args.cpu)
+    path = _build_here(args.dir or jit.kernel_dirs()[0], args.cpu, args.beside)
     sys.stdout.write(f"{path}\n")
     return 0
 
