@@ -21,7 +21,7 @@ from shared_scenes import CROSSING
 from gfuzzy.check.check import check_trajectory
 from gfuzzy.collision.geometry import StaticGeometry
 from gfuzzy.planner.planner import Planner, PlanOptions, plan
-from gfuzzy.planner.stages import RefineReport, SpeedReport, StageContext, apply_stages
+from gfuzzy.planner.stages import GA_FEASIBLE_KNOTS, RefineReport, SpeedReport, StageContext, apply_stages
 from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
 from gfuzzy.scene.scene import Query, parse_scene
 from gfuzzy.trajectory import Trajectory
@@ -175,6 +175,19 @@ def test_refinement_applies_on_most_queries():
                 boxes += r.refine_report.applied and scene.robot.shape == "box"
     assert applied >= 0.75 * solved
     assert boxes >= 1  # box robots too, through 0.6 m doors
+
+
+def test_a_corridor_hugging_walls_is_refined_with_more_knots():
+    """office-polygons' sw-to-ne on its bundled roadmap passes 5 mm from a wall: the chords
+    of 12 and of 24 knots cut into the walls, no individual was feasible, and `--refine`
+    said "the GA found nothing better than the corridor" of a path turning 6.2 rad; 48
+    knots follow its corners and halve the turning."""
+    path = ROOT / "scenes" / "office-polygons.yaml"
+    ((q, r),) = [(q, r) for q, r in _answers(path, True, False) if q.name == "sw-to-ne"]
+    rep = r.refine_report
+    assert rep.applied and rep.knots == GA_FEASIBLE_KNOTS, rep.reason
+    assert rep.after["smoothness"] < 0.6 * rep.before["smoothness"]
+    assert check_trajectory(_setup(path)[0], r.trajectory.waypoints, q).valid
 
 
 def test_refinement_is_reproducible():

@@ -41,7 +41,7 @@ if TYPE_CHECKING:
     from ..fuzzy.rules import RuleBase
     from ..ga import GAOptions
 
-__all__ = ["StageContext", "RefineReport", "SpeedReport", "apply_stages", "GA_RETRY_KNOTS", "HEADING_STEP"]
+__all__ = ["StageContext", "RefineReport", "SpeedReport", "apply_stages", "GA_RETRY_KNOTS", "GA_FEASIBLE_KNOTS", "HEADING_STEP"]
 
 log = logging.getLogger(__name__)
 
@@ -49,6 +49,10 @@ log = logging.getLogger(__name__)
 #: this many: on a long winding corridor the chords between 12 knots cut through walls and
 #: no individual is feasible. (An explicit ``PlanOptions.ga`` runs once, as given.)
 GA_RETRY_KNOTS = 24
+#: ... and, when neither try found any feasible individual, once more with this many: a
+#: corridor that hugs walls by millimetres (office-polygons' sw-to-ne on its roadmap, 5 mm)
+#: is cut into them by the chords of 12 and 24 knots alike; 48 follow its corners.
+GA_FEASIBLE_KNOTS = 48
 #: Spacing (metres) of the corridor samples a box robot's headings are looked up in.
 HEADING_STEP = 0.02
 
@@ -336,16 +340,20 @@ def _accept(ctx: StageContext, traj: Trajectory, query_like, before: Trajectory,
 
 
 def _run_ga(ctx: StageContext, traj: Trajectory, opts, funcs, deadline):
-    """The GA on the corridor: the given options, or the paper's and then
-    ``GA_RETRY_KNOTS`` knots, until ``deadline``. Returns (GA result, options of the last
-    run, seconds)."""
+    """The GA on the corridor: the given options, or the paper's, then ``GA_RETRY_KNOTS``
+    knots, then (if no try found a feasible individual) ``GA_FEASIBLE_KNOTS``, until
+    ``deadline``. Returns (GA result, options of the last run, seconds)."""
     from ..ga import GAOptions, refine_path
 
     robot = ctx.robot
     _, static_clearance, static_segment, mover_clearance = funcs
     t_ga = time.perf_counter()
-    tries = [opts.ga] if opts.ga is not None else [GAOptions(), GAOptions(n_knots=GA_RETRY_KNOTS)]
-    for ga_opts in tries:
+    knots = (GAOptions().n_knots, GA_RETRY_KNOTS, GA_FEASIBLE_KNOTS)
+    tries = [opts.ga] if opts.ga is not None else [GAOptions(n_knots=k) for k in knots]
+    res = None
+    for i, ga_opts in enumerate(tries):
+        if i == 2 and np.isfinite(res.fitness_history).any():
+            break  # the 24 knots found feasible paths, none better: more knots are not tried
         res = refine_path(
             traj.poses[:, :2],
             traj.times,
