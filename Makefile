@@ -37,11 +37,12 @@ demo: warm
 # from the other's queue, so a long file does not leave a core idle at the end (two idle
 # cores: 385 s of pytest in a clone already run once, against 507 s with --dist loadfile,
 # which kept each file on one worker; in a fresh clone 486 s against 488 s: no worse, the
-# gain not shown there); tests/conftest.py puts the tests marked long first
+# gain not shown there); tests/conftest.py puts the tests marked long first; the 25 slowest
+# tests are listed at the end (where the suite's time goes, for the next cut)
 TEST_WORKERS ?= auto
 test: warm
 	$(BIN)/ruff check gfuzzy tests tools
-	$(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist worksteal
+	$(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist worksteal --durations=25
 
 # the slow tests (@pytest.mark.slow, left out of `make test`): experiments over every bundled scene
 slow: warm

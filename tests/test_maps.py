@@ -727,6 +727,16 @@ def test_gfuzzy_map_checks_the_footprint_as_a_scene_does_naming_the_option(tmp_p
     assert not out.exists()
 
 
+def test_gfuzzy_map_given_a_scene_file_says_so(tmp_path, capsys):
+    # a scene handed where the map belongs said only "image: missing required key" (s39-newuser)
+    (tmp_path / "hall.yaml").write_text("version: 1\nname: hall\nbounds: [0, 0, 5, 5]\nrobot: {disc: 0.2}\n")
+    out = tmp_path / "s.yaml"
+    assert main(["map", str(tmp_path / "hall.yaml"), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith(f"{tmp_path / 'hall.yaml'}: image: missing required key")
+    assert "this is a gfuzzy scene file, not a ROS/Nav2 map YAML" in err and not out.exists()
+
+
 def test_gfuzzy_map_blames_a_bad_name_on_the_option(tmp_path, capsys):
     # it was the written scene's `name:` (s.yaml: name: ...), a key the user never wrote
     write_map(tmp_path, [[254, 254], [254, 254]])

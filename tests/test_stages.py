@@ -21,7 +21,13 @@ from shared_scenes import CROSSING
 from gfuzzy.check.check import check_trajectory
 from gfuzzy.collision.geometry import StaticGeometry
 from gfuzzy.planner.planner import Planner, PlanOptions, plan
-from gfuzzy.planner.stages import GA_FEASIBLE_KNOTS, RefineReport, SpeedReport, StageContext, apply_stages
+from gfuzzy.planner.stages import (
+    GA_FEASIBLE_KNOTS,
+    RefineReport,
+    SpeedReport,
+    StageContext,
+    apply_stages,
+)
 from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
 from gfuzzy.scene.scene import Query, parse_scene
 from gfuzzy.trajectory import Trajectory

@@ -258,7 +258,10 @@ def read_map_yaml(
         v.fail("top level", f"expected a mapping, got {_kind(doc)}{_image_hint(data)}")
     for key in ("image", "resolution", "origin", "negate", "occupied_thresh", "free_thresh"):
         if key not in doc:
-            v.fail(key, "missing required key")
+            # a gfuzzy scene handed where a map belongs said only "image: missing required key"
+            scene = {"robot", "bounds", "queries"} & set(doc) and "image" not in doc
+            v.fail(key, "missing required key" + (": this is a gfuzzy scene file, not a ROS/Nav2 map YAML "
+                                                 "(image, resolution, origin, ...)" if scene else ""))  # fmt: skip
     folder = path.resolve().parent
     root = Path(root).resolve() if root is not None else folder
     image = _inside(v, folder, doc["image"], "image", "image", absolute=True)
