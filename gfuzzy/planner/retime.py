@@ -213,7 +213,7 @@ def retime_profile(
     amax: float,
     horizon: float,
     deadline: float = math.inf,
-    max_rounds: int = 10,
+    max_rounds: int = 5,
     hold: float = 0.0,
     backend: str = "compiled",
 ) -> ProfileRetime:
@@ -223,8 +223,7 @@ def retime_profile(
     it, a search that may wait anywhere finds where to stop; the profile is computed again
     with the robot at rest at those points (so it brakes and accelerates within ``amax``),
     and the search runs once more, waiting only there (:func:`next_stops`: a wait found near a
-    stop moves it). Up to ``max_rounds`` rounds (the stops of the bundled sealed-room's
-    into-open-room settle in the sixth).
+    stop moves it). Up to ``max_rounds`` rounds.
 
     Parameters
     ----------
