@@ -117,3 +117,32 @@ def test_a_profile_chain_near_rest_is_judged_point_by_point():
     res = planner.plan(q.start, q.goal, q.t0, PlanOptions(speed_layer=True, seed=3), hold=q.hold)
     assert "independent check" not in res.speed_report.reason, res.speed_report.reason
     assert check_trajectory(scene, res.trajectory.waypoints, q).valid
+
+
+def test_stops_the_merge_would_undo_become_stops_of_their_own():
+    """sim-6s1m's south-north (refined): the free search waited at 1.83 and 1.89 m, merged
+    into one stop at 1.89; braking there failed, and the next free search waited at 1.868,
+    which the merge moved back onto 1.89: the same stops, and the speed layer gave up
+    ("no safe trajectory within the planning horizon") on a timing the search had shown."""
+    from gfuzzy.planner.retime import next_stops
+
+    assert next_stops([], [0.0, 1.83, 1.89]) == [1.89]  # one stop per place, as before
+    assert next_stops([1.89], [1.868]) == [1.868, 1.89]  # not [1.89] again
+    assert next_stops([1.89], [1.89]) == [1.89]  # nothing new: the rounds end
+    assert next_stops([1.0], [3.0]) == [1.0, 3.0]
+
+
+def test_a_profile_stops_at_two_stops_with_no_sample_between():
+    """Two stops 10 cm apart inside one interval of the profile: the interval between them
+    had zero speed at both ends, and the chain's profile_times raised ValueError ("an interval
+    has zero speed at both ends"), which ended the speed layer's rounds."""
+    from gfuzzy.fuzzy.profile import profile_times
+    from gfuzzy.planner.retime import stopped_profile
+
+    s_m, v_m = np.array([0.0, 1.0, 2.0]), np.array([0.0, 1.0, 0.0])
+    s, v = stopped_profile(s_m, v_m, [0.5, 0.6], amax=2.0)
+    assert v[np.isin(s, [0.5, 0.6])].tolist() == [0.0, 0.0]
+    t = profile_times(s, v)
+    assert np.all(np.isfinite(t)) and np.all(np.diff(t) > 0)
+    assert np.all(np.abs(np.diff(v**2)) <= 2 * 2.0 * np.diff(s) + 1e-9)  # within amax
+    assert stopped_profile(s_m, v_m, [], 2.0) == (s_m, v_m)

@@ -23,7 +23,7 @@ from ..timespace.timespace import MoverField, SpaceTimeGraph, timed_rows
 from ..trajectory import Trajectory
 from ..typed import FloatArray
 
-__all__ = ["chain_points", "retime_path", "retime_profile", "RetimeResult"]
+__all__ = ["chain_points", "retime_path", "retime_profile", "RetimeResult", "next_stops", "stopped_profile"]
 
 #: Nodes per group of the chain whose safety is computed together.
 GROUP = 16
@@ -222,8 +222,8 @@ def retime_profile(
     Round 1 drives the profile with no stop but a wait at the start. If the movers block
     it, a search that may wait anywhere finds where to stop; the profile is computed again
     with the robot at rest at those points (so it brakes and accelerates within ``amax``),
-    and the search runs once more, waiting only there (a wait found near a stop moves it).
-    Up to ``max_rounds`` rounds.
+    and the search runs once more, waiting only there (:func:`next_stops`: a wait found near a
+    stop moves it). Up to ``max_rounds`` rounds.
 
     Parameters
     ----------
@@ -245,12 +245,7 @@ def retime_profile(
     stops: list[float] = []
     message = ""
     for _ in range(max_rounds):
-        prof_s, prof_v = s_m, v_m
-        if stops:
-            prof_s = np.unique(np.concatenate([s_m, stops]))
-            cap = np.interp(prof_s, s_m, v_m)
-            cap[np.isin(prof_s, stops)] = 0.0
-            prof_v = limit_acceleration(prof_s, cap, amax)
+        prof_s, prof_v = stopped_profile(s_m, v_m, stops, amax)
         try:
             poses, s, corners, times = _chain_from_profile(path, cum_m, prof_s, prof_v, dt)
         except ValueError as exc:  # a stretch the profile never crosses
@@ -276,20 +271,49 @@ def retime_profile(
         if free.status is not Status.SOLVED or not free.waits:
             message = free.message or message
             break
-        merged = list(stops)
-        for w in free.waits:  # one stop per place: a wait near a stop moves that stop there
-            if w <= 1e-9:
-                continue
-            near = [i for i, x in enumerate(merged) if abs(w - x) <= STOP_MERGE]
-            if near:
-                merged[near[0]] = max(merged[near[0]], w)
-            else:
-                merged.append(w)
-        merged = sorted(merged)
+        merged = next_stops(stops, free.waits)
         if merged == stops:
             break
         stops = merged
     return ProfileRetime(Status.NO_PATH, None, message or "no safe timing found", profile_duration=duration)
+
+
+def stopped_profile(s_m: FloatArray, v_m: FloatArray, stops: list, amax: float) -> tuple[FloatArray, FloatArray]:
+    """The speed profile (s_m, v_m) brought to rest at each arc length of ``stops``, within
+    ``amax``. Two places of rest (the stops, and the profile's own: its ends) with no sample
+    between made an interval with zero speed at both ends, which no profile crosses: a sample
+    is added midway (only there, so the profiles that had one are as they were)."""
+    if not stops:
+        return s_m, v_m
+    rests = np.unique(np.concatenate([np.asarray(stops, dtype=float), s_m[v_m <= 0.0]]))
+    prof_s = np.unique(np.concatenate([s_m, stops]))
+    a, b = rests[:-1], rests[1:]
+    bare = np.searchsorted(prof_s, b, side="left") - np.searchsorted(prof_s, a, side="right") == 0
+    prof_s = np.unique(np.concatenate([prof_s, 0.5 * (a[bare] + b[bare])]))
+    cap = np.interp(prof_s, s_m, v_m)
+    cap[np.isin(prof_s, stops)] = 0.0
+    return prof_s, limit_acceleration(prof_s, cap, amax)
+
+
+def next_stops(stops: list, waits: list) -> list:
+    """The stops of :func:`retime_profile`'s next round: ``stops`` with the waits of a search
+    that could wait anywhere. One stop per place: a wait within :data:`STOP_MERGE` of a stop
+    moves that stop there. When that gives the same stops again (the search waited short of
+    a stop moved past its waits), each place the search waited at becomes a stop of its own,
+    rather than giving up on a timing the search showed to exist."""
+    merged = list(stops)
+    for w in waits:
+        if w <= 1e-9:
+            continue
+        near = [i for i, x in enumerate(merged) if abs(w - x) <= STOP_MERGE]
+        if near:
+            merged[near[0]] = max(merged[near[0]], w)
+        else:
+            merged.append(w)
+    merged = sorted(merged)
+    if merged == sorted(stops):
+        merged = sorted(set(stops) | {w for w in waits if w > 1e-9})
+    return merged
 
 
 def _search_chain(
