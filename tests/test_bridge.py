@@ -200,7 +200,9 @@ def test_a_navigator_starting_deep_in_a_tilted_alcove_drives_out(seed, monkeypat
     res = simulate(scene, rm, TILTED_DEEP, out, 0.0, 0.25, max_time=20.0, options=NavOptions(budget_clock="cpu"))
     assert res.reached, res.status
     assert check_trajectory(scene, res.trajectory.waypoints, scene.query("q")).valid
-    assert 1 <= len(bridged) <= 2, len(bridged)  # the bridge is kept (a second try: a period's time ran out)
+    # the bridge is kept, not made again every period (80 periods in 20 s); a try whose period's
+    # time ran out is tried again: 1-2 on an idle machine, 5 once in a loaded suite run
+    assert 1 <= len(bridged) <= 8, len(bridged)
 
 
 def test_a_bridged_copy_keeps_the_spanner_the_greedy_test_gives_on_it():
