@@ -522,9 +522,7 @@ def settle_time(scene: Scene, t0: float = 0.0) -> float:
         if mv.trajectory is not None:
             settle = max(settle, float(mv.trajectory[-1, 0]) - t0)
         elif mv.mode == "once":
-            if mv.speed > 0:
-                length = float(mv._cumlen[-1])
-                settle = max(settle, (length - mv.offset) / mv.speed - t0)
+            settle = max(settle, mv.rest_time - t0)  # -inf (nothing) for speed 0
         elif math.isfinite(mv.period):
             period = max(period, mv.period)
     return max(settle, 0.0) + period

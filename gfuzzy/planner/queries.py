@@ -78,9 +78,9 @@ def goal_taken(scene, goal, searched_to: float) -> str:
     pose = np.asarray(goal, dtype=float)[None]
     keep = scene.robot.mover_clearance
     for mv in scene.movers:
-        if mv.trajectory is not None or not (mv.mode == "once" or mv.speed == 0):
+        if mv.rest_time == math.inf:  # it keeps moving, or leaves
             continue
-        rest = max((float(mv._cumlen[-1]) - mv.offset) / mv.speed, 0.0) if mv.speed > 0 else 0.0
+        rest = max(mv.rest_time, 0.0)
         xy = mv.state(np.array([rest]))[0]
         if rest <= searched_to and float(mover_distance(scene.robot, pose, mv.shape, mv.radius, mv.size, xy)[0]) < keep - TOUCH_TOL:
             return (f"the goal is taken for ever from t={rest:.3g} s: mover {mv.name!r} comes to rest there "

@@ -279,6 +279,14 @@ class Mover:
         return (length if self.mode == "loop" else 2 * length) / self.speed
 
     @property
+    def rest_time(self) -> float:
+        """Time from which the mover stands still for ever: a ``once`` mover at its path's end,
+        -inf for speed 0, inf for one that keeps moving or a trajectory mover (it leaves)."""
+        if self.trajectory is not None or (self.mode != "once" and self.speed > 0):
+            return math.inf
+        return (float(self._cumlen[-1]) - self.offset) / self.speed if self.speed > 0 else -math.inf
+
+    @property
     def _polyline(self) -> FloatArray:
         pts = self.path
         if self.mode == "loop" and np.any(pts[0] != pts[-1]):
