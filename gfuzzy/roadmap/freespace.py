@@ -35,6 +35,7 @@ __all__ = [
     "free_space",
     "inscribed_disc",
     "inscribed_free_space",
+    "disc_centres",
     "blocked_points",
     "repair",
     "link_pose",
@@ -224,11 +225,12 @@ def inscribed_disc(robot) -> tuple[FloatArray, float]:
     return np.array([c.x, c.y]), float(body.exterior.distance(c))
 
 
-def inscribed_free_space(scene: Scene, margin: float = SEPARATION_MARGIN) -> tuple[FloatArray, FreeSpace] | None:
+def inscribed_free_space(scene: Scene, margin: float | None = None) -> tuple[FloatArray, FreeSpace] | None:
     """The free space of the robot's inscribed disc (:func:`inscribed_disc`, shrunk by
-    ``margin``) and the disc's centre in the robot's frame; None where it proves nothing (a
-    disc smaller than the margin, obstacles without an exact shape, shapely's chords deeper
-    than the margin: a large disc's).
+    ``margin``; default :data:`SEPARATION_MARGIN` or 1e-3 of the radius, the larger: past
+    shapely's chords, 7.5e-5 of the radius grown) and the disc's centre in the robot's frame;
+    None where it proves nothing (a disc smaller than the margin, obstacles without an exact
+    shape, shapely's chords deeper than the margin).
 
     The disc lies inside the body, so wherever the robot is free its disc is free too, in
     this free space: it holds the true free space of the disc (the margin covers shapely's
@@ -239,6 +241,8 @@ def inscribed_free_space(scene: Scene, margin: float = SEPARATION_MARGIN) -> tup
 
     robot = scene.robot
     centre, radius = inscribed_disc(robot)
+    if margin is None:
+        margin = max(SEPARATION_MARGIN, 1e-3 * radius)
     r = radius - margin
     if r <= 0:
         return None
@@ -247,6 +251,14 @@ def inscribed_free_space(scene: Scene, margin: float = SEPARATION_MARGIN) -> tup
     if fs is None or fs.tolerance >= margin:
         return None
     return centre, fs
+
+
+def disc_centres(centre: FloatArray, poses) -> FloatArray:
+    """(n, 2): where a point ``centre`` of the robot's frame (its inscribed disc's, from
+    :func:`inscribed_free_space`) lies at each pose ``[x, y, heading]``."""
+    v = np.atleast_2d(np.asarray(poses, dtype=float))
+    cos, sin = np.cos(v[:, 2]), np.sin(v[:, 2])
+    return v[:, :2] + np.column_stack([cos * centre[0] - sin * centre[1], sin * centre[0] + cos * centre[1]])
 
 
 def _free_of(inner, shapes: list, rects: FloatArray, grow: float, overlap: float):

@@ -35,7 +35,7 @@ import numpy as np
 from ..collision.exact import TOUCH_TOL
 from ..collision.geometry import StaticGeometry, metric_distance
 from ..typed import FloatArray, IntArray
-from .freespace import TOUCHING, blocked_points, inscribed_free_space
+from .freespace import TOUCHING, blocked_points, disc_centres, inscribed_free_space
 from .passage import centre_bridge, lateral_middle
 
 __all__ = ["Join", "join_components", "count_components", "component_labels"]
@@ -761,8 +761,5 @@ def _disc_regions(scene, vertices: FloatArray) -> IntArray | None:
     if got is None:
         return None
     centre, fs = got
-    v = np.asarray(vertices, dtype=float)
-    cos, sin = np.cos(v[:, 2]), np.sin(v[:, 2])
-    xy = v[:, :2] + np.column_stack([cos * centre[0] - sin * centre[1], sin * centre[0] + cos * centre[1]])
-    region = fs.region_of(xy)
+    region = fs.region_of(disc_centres(centre, vertices))
     return None if (region < 0).any() else region

@@ -11,7 +11,14 @@ import numpy as np
 
 from ..scene.scene import Scene
 from ..typed import FloatArray
-from .freespace import DELTAS, FreeSpace, free_space, inscribed_disc, inscribed_free_space
+from .freespace import (
+    DELTAS,
+    FreeSpace,
+    disc_centres,
+    free_space,
+    inscribed_disc,
+    inscribed_free_space,
+)
 
 __all__ = ["Separation", "separation", "not_joined", "SEPARATION_MAX_OBSTACLES", "SEPARATION_MAX_RECTS"]
 
@@ -168,10 +175,7 @@ def not_joined(scene: Scene, start, goal) -> str:
     got = inscribed_free_space(scene)
     if got is not None:
         centre, fs = got
-        poses = np.asarray([start, goal], dtype=float)
-        cos, sin = np.cos(poses[:, 2]), np.sin(poses[:, 2])
-        ends = poses[:, :2] + np.column_stack([cos * centre[0] - sin * centre[1], sin * centre[0] + cos * centre[1]])
-        rs, rg = fs.region_of(ends, slack=0.0).tolist()
+        rs, rg = fs.region_of(disc_centres(centre, [start, goal]), slack=0.0).tolist()
         if rs >= 0 and rg >= 0 and rs != rg:
             import shapely
 

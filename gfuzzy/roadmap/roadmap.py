@@ -621,14 +621,12 @@ def _no_room(scene: Scene) -> str:
     """Why the robot fits nowhere, when its inscribed disc has no room anywhere in the bounds
     among the obstacles (grown by the clearance), else ``""``
     (:func:`~gfuzzy.roadmap.freespace.inscribed_free_space`: a proof, not a guess)."""
-    from .freespace import SEPARATION_MARGIN, inscribed_disc, inscribed_free_space
+    from .freespace import inscribed_disc, inscribed_free_space
 
-    # a margin past shapely's chords (7.5e-5 of the radius grown): a metre-wide robot's 2 mm
-    margin = max(SEPARATION_MARGIN, 1e-3 * inscribed_disc(scene.robot)[1])
-    got = inscribed_free_space(scene, margin)
+    got = inscribed_free_space(scene)
     if got is None or got[1].regions:
         return ""
-    radius = got[1].grown - scene.robot.clearance + margin
+    radius = inscribed_disc(scene.robot)[1]
     keep = f" {scene.robot.clearance:g} m from the obstacles" if scene.robot.clearance > 0 else ""
     bounds = ", ".join(f"{v:g}" for v in scene.bounds)
     return f"the disc inside its body (radius {radius:.3f} m) has room nowhere{keep} within the bounds [{bounds}]"
