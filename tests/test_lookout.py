@@ -138,3 +138,44 @@ def test_someone_seen_once_on_the_blind_side_counts_as_walking():
     walking, and their side is looked at after ``look_after`` as a walker's."""
     standing = np.array([[-0.5, -2.0, 0.0, 0.0, 0.3]])
     assert _first_look_behind(standing, unknown=standing[:, :2]) == pytest.approx(1.5)
+
+
+@pytest.fixture(scope="module")
+def open_square_box():
+    """The open square with a holonomic box robot (SE(2)): its view is about its heading."""
+    from gfuzzy.roadmap.roadmap import RoadmapOptions, build_roadmap
+    from gfuzzy.scene.scene import parse_scene
+
+    scene = parse_scene({
+        "version": 1, "name": "open-square-box", "bounds": [-5.0, -5.0, 5.0, 5.0],
+        "robot": {"box": [0.4, 0.3], "vmax": 1.0}, "obstacles": [], "movers": [],
+        "queries": [{"name": "q", "start": [0.0, -4.0, 0.0], "goal": [0.0, 4.0, 0.0]}],
+    })  # fmt: skip
+    return scene, build_roadmap(scene, RoadmapOptions(vertices=60, seed=3))
+
+
+def test_a_box_robot_turns_to_see_where_it_drives_before_driving_blind(open_square_box):
+    """A holonomic box facing east with a 90-degree view, its goal north: its plans take the
+    roadmap's headings, and it drove north with its view east, blind (the populated small
+    house: 76 % of its motion outside the view). It first turns in place until the way north
+    is a sector inside its view, then drives; a way it sees needs no turn."""
+    scene, rm = open_square_box
+    nav = Navigator(scene, rm, (0.0, 4.0, 0.0), unhurried(fov=90.0))
+    pose = np.array([0.0, -4.0, 0.0])
+    traj = nav.step(0.0, pose, np.zeros((0, 5)))
+    assert nav.last.mode == NavMode.LOOK
+    end = traj.waypoints[-1, 1:]
+    assert np.allclose(end[:2], pose[:2])  # a turn in place
+    assert math.degrees(end[2]) == pytest.approx(90.0 - 45.0 + 10.0)  # north a sector inside the view's edge
+    assert np.all(traj.speeds() <= scene.robot.vmax * (1 + 1e-9))
+    t = float(traj.waypoints[1, 0])
+    traj = nav.step(t, end, np.zeros((0, 5)))
+    assert nav.last.mode == NavMode.PLAN  # the way north was just seen: on to the goal
+    assert traj.at(t + 1.0)[1] > end[1] + 0.3
+
+
+def test_a_box_robot_that_sees_its_way_does_not_turn(open_square_box):
+    scene, rm = open_square_box
+    nav = Navigator(scene, rm, (0.0, 4.0, 0.0), unhurried(fov=90.0))
+    nav.step(0.0, np.array([0.0, -4.0, math.pi / 2]), np.zeros((0, 5)))
+    assert nav.last.mode == NavMode.PLAN
