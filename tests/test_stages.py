@@ -352,3 +352,29 @@ def test_a_refined_drive_path_keeps_the_turning_rate():
     assert res.refine_report.applied, res.refine_report.reason
     rep = check_trajectory(scene, res.trajectory.waypoints, q)
     assert rep.valid, rep.reason
+
+
+def test_a_drive_that_may_reverse_backs_out_where_it_cannot_turn():
+    """drive-tight's back-out: the cart is parked nose against the bounds (touching them) in a
+    0.44 m arm and backs out. The GA's segment model drove every straight forwards (a turn
+    round in the arm: not free) and could not leave a pose touching the bounds, so no
+    individual was feasible and --refine said 'nothing better than the corridor'; the path
+    through its via-points drove forwards too. With ``reverse`` a straight may be driven
+    backwards, and a motion from a touching pose is certified as the roadmap certifies it."""
+    from gfuzzy.planner.stages import _clearance_functions
+    from gfuzzy.planner.straighten import drive_path
+
+    from gfuzzy.scene.scene import load_scene
+
+    scene = load_scene(ROOT / "scenes" / "drive-tight.yaml")
+    geometry = StaticGeometry(scene)
+    start = np.array([5.3, 5.375, np.pi / 2])
+    corridor = np.array([start, [5.3, 4.0, np.pi / 2]])
+    static_segment = _clearance_functions(StageContext(scene, geometry), corridor)[2]
+    # the search's lane is off the arm's axis by 1e-12 m, as its answers are
+    bound, clearance = static_segment(start[None, :2], np.array([[5.3 - 1e-12, 4.7]]))
+    assert bound[0] == 0.0 and clearance[0] >= 0.0
+    path = drive_path(geometry, start, np.array([[5.3, 4.7]]), np.array([5.3, 4.0, np.pi / 2]), reverse=True,
+                      prefer=lambda xy: np.pi / 2)  # fmt: skip
+    assert path is not None and np.all(path[:, 2] == np.pi / 2)  # straight back, never turned
+    assert drive_path(geometry, start, np.array([[5.3, 4.7]]), np.array([5.3, 4.0, np.pi / 2])) is None  # forwards: no
