@@ -21,7 +21,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..poses import wrap_angle
 from ..trajectory import Trajectory
 from ..typed import FloatArray
 from . import sensing
@@ -66,11 +65,10 @@ class Lookout:
         Before the robot first moves, its view is centred on the direction to the goal.
     """
 
-    def __init__(self, fov: float, look_after: float, goal: FloatArray, heading_view: bool = False):
+    def __init__(self, fov: float, look_after: float, goal: FloatArray):
         self.half = math.radians(fov) / 2
         self.look_after = look_after
         self.goal = np.asarray(goal, dtype=float)[:2]
-        self.heading_view = heading_view  # a box or footprint (SE(2)): the view is about its heading
         self.heading = 0.0
         self.centres = (np.arange(SECTORS) + 0.5) * (2 * math.pi / SECTORS)
         self.looked = np.full(SECTORS, -math.inf)  # when each direction was last in view
@@ -85,9 +83,7 @@ class Lookout:
         robot's displacement since the last call, or the last view when it stood."""
         xy = np.asarray(pose, dtype=float)[:2]
         d = xy - self.pose if self.pose is not None else self.goal - xy
-        if self.heading_view:
-            self.heading = float(pose[2])
-        elif math.hypot(*d) > 1e-9:
+        if math.hypot(*d) > 1e-9:
             self.heading = math.atan2(d[1], d[0])
         self.pose = xy.copy()
         self.looked[self._in_view(self.heading)] = t
@@ -139,53 +135,19 @@ class Lookout:
         step = np.array([math.cos(ang), math.sin(ang)]) * (LOOK_SPEED * nav.vplan * LOOK_TIME)
         end = pose.copy()
         end[:2] += step
-        return _clear_look(nav, t, pose, obs, end, LOOK_TIME)
-
-    def face(self, nav: Navigator, t: float, pose: FloatArray, obs: FloatArray, planned: Trajectory) -> Trajectory | None:
-        """A box or footprint robot's look (its view about its heading, ``heading_view``):
-        when ``planned`` drives it, over the next ``LOOK_CHECK`` seconds, toward a side that
-        is :meth:`stale` and outside its view, a turn in place that brings that side a
-        sector inside the view's edge (at the turning rate ``vplan / circumradius``), then
-        standing; None when the plan drives where the robot sees or has seen lately, or the
-        turn is not clear. A holonomic SE(2) robot's plans take the roadmap's headings,
-        not its direction of motion: without it the robot drove blind (on a populated
-        small house with a 90-degree view, 76 % of its motion; docs/navigator.md)."""
-        d = planned.at(t + LOOK_CHECK)[:2] - pose[:2]
-        if math.hypot(*d) < LOOK_SPEED * nav.vplan * LOOK_TIME:
-            return None  # (nearly) standing: it drives into nothing
-        way = math.atan2(d[1], d[0])
-        off = (way - float(pose[2]) + math.pi) % (2 * math.pi) - math.pi
-        inside = self.half - 2 * math.pi / SECTORS  # a sector inside the view's edge
-        if abs(off) <= inside:
-            return None  # it sees where it goes
-        stale = self.stale(t, pose, obs, float(nav.vplan), nav._unknown)
-        if not stale[int((way % (2 * math.pi)) // (2 * math.pi / SECTORS)) % SECTORS]:
-            return None  # seen lately, nobody walking toward it from there unseen for long
-        turn = math.copysign(abs(off) - max(inside, 0.0), off)
-        end = pose.copy()
-        end[2] = wrap_angle(float(pose[2]) + turn)
-        return _clear_look(nav, t, pose, obs, end, abs(turn) * nav.robot.circumradius / nav.vplan)
-
-
-def _clear_look(nav: Navigator, t: float, pose: FloatArray, obs: FloatArray, end: FloatArray,
-                seconds: float) -> Trajectory | None:  # fmt: skip
-    """The look from ``pose`` to ``end`` in ``seconds``, then standing until
-    ``max(LOOK_CHECK, cover)`` (at least a step after the look), or None when it leaves
-    the bounds, is not certified free of the static obstacles or comes near anyone seen
-    walking on."""
-    if nav.geometry.bounds_clearance(end[None])[0] < 0 or not nav.geometry.motion_free(pose, end):
-        return None
-    rows = np.array([[t, *pose], [t + seconds, *end], [t + max(LOOK_CHECK, nav.options.cover, seconds + LOOK_TIME), *end]])
-    traj = Trajectory(rows, nav.robot.circumradius)
-    span = traj.t_end - t  # the look and the standing after it, all of it checked
-    near = nav._near(pose, obs, span, nav.options.safety_buffer + 0.5)
-    if len(near):
-        times = t + np.arange(0.0, span + 1e-9, MOTION_SAMPLE)
-        pts = traj.at(times)[None]
-        gap = nav._clearance_along(pts, times, near)
-        if gap.min() <= nav.options.safety_buffer + nav._sample_gap(near):
+        if nav.geometry.bounds_clearance(end[None])[0] < 0 or not nav.geometry.motion_free(pose, end):
             return None
-    return traj
+        rows = np.array([[t, *pose], [t + LOOK_TIME, *end], [t + max(LOOK_CHECK, nav.options.cover), *end]])
+        traj = Trajectory(rows, nav.robot.circumradius)
+        span = traj.t_end - t  # the look and the standing after it, all of it checked
+        near = nav._near(pose, obs, span, nav.options.safety_buffer + 0.5)
+        if len(near):
+            times = t + np.arange(0.0, span + 1e-9, MOTION_SAMPLE)
+            pts = traj.at(times)[None]
+            gap = nav._clearance_along(pts, times, near)
+            if gap.min() <= nav.options.safety_buffer + nav._sample_gap(near):
+                return None
+        return traj
 
 
 def knowing_view(options, fov: float):

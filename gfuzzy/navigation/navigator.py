@@ -151,9 +151,7 @@ class Navigator(PathSpace, Prediction, SoftCost):
         self._tail_seconds = 0.0  # from the search's deadline to the answer, measured (decaying maximum)
         self._walls = WallCheck(scene)
         disc = robot.shape == "disc" and robot.dof == 2  # its view follows its motion
-        turns = robot.dof == 3 and not robot.unicycle  # a holonomic box or footprint: its view is about its heading
-        self._lookout = Lookout(opts.fov, opts.look_after, goal, heading_view=turns) if opts.fov < 360 and (
-            disc or turns) else None  # fmt: skip
+        self._lookout = Lookout(opts.fov, opts.look_after, goal) if opts.fov < 360 and disc else None
         self._unknown = np.zeros((0, 2))  # where the people of unknown velocity stand (this call)
         self._build_base()
         if opts.backend == "compiled":  # load the compiled kernels now, not inside a step's budget
@@ -341,8 +339,7 @@ class Navigator(PathSpace, Prediction, SoftCost):
             self._previous = None
         self._evading = traj if mode == NavMode.EVASIVE and self.robot.unicycle else None
         if self._lookout is not None and mode in LOOK_OVER:  # never instead of a fallback
-            look = self._lookout.face if self._lookout.heading_view else self._lookout.look
-            looked = look(self, t, pose, obs, traj)
+            looked = self._lookout.look(self, t, pose, obs, traj)
             if looked is not None:
                 traj, mode = looked, NavMode.LOOK
         t_end = self._clock()
