@@ -378,3 +378,25 @@ def test_a_drive_that_may_reverse_backs_out_where_it_cannot_turn():
                       prefer=lambda xy: np.pi / 2)  # fmt: skip
     assert path is not None and np.all(path[:, 2] == np.pi / 2)  # straight back, never turned
     assert drive_path(geometry, start, np.array([[5.3, 4.7]]), np.array([5.3, 4.0, np.pi / 2])) is None  # forwards: no
+
+
+def test_a_mover_bound_that_refuses_the_search_answer_is_left_to_the_retiming(hall):
+    """building-floor-unicycle: the GA's mover bound (the box at the corridor's heading)
+    put the search's own answer 0.038 m inside mover A, so no individual near it was
+    feasible with 12, 24 or 48 knots and --refine said 'nothing better than the corridor'.
+    A bound that refuses the answer the exact search accepted cannot guide the GA: it then
+    refines against the walls alone, and the re-timing decides among the movers."""
+    from gfuzzy.planner.stages import _clearance_functions, _run_ga
+
+    _, scene, rm = hall
+    q = scene.queries[0]
+    base = _searched(scene, rm, q)
+    ctx = StageContext(scene, StaticGeometry(scene))
+    funcs = _clearance_functions(ctx, base.trajectory.poses)
+
+    def refusing(xy, t):  # 1 cm inside a mover wherever asked, the search's answer included
+        return np.full(len(np.atleast_2d(xy)), -0.01)
+
+    res, _, _ = _run_ga(ctx, base.trajectory, PlanOptions(refine=True, seed=2), funcs[:3] + (refusing,),
+                        time.perf_counter() + 60)  # fmt: skip
+    assert res.improved and res.length_after < res.length_before

@@ -374,6 +374,15 @@ def _run_ga(ctx: StageContext, traj: Trajectory, opts, funcs, deadline):
     knots = (GAOptions().n_knots, GA_RETRY_KNOTS, GA_FEASIBLE_KNOTS)
     tries = [opts.ga] if opts.ga is not None else [GAOptions(n_knots=k) for k in knots]
     res = None
+    movers = mover_clearance if ctx.scene.movers else None
+    if movers is not None and float(np.min(movers(traj.poses[:, :2], traj.times))) < 0:
+        # the GA's mover bound (the robot's disc, or its box at the corridor's heading) refuses
+        # the search's own answer, which the exact search accepted: near it no individual is
+        # feasible (building-floor-unicycle: 'nothing better' after 12, 24 and 48 knots). The
+        # GA then refines against the static obstacles alone, and the movers are left to the
+        # re-timing of the refined path (exact, with waits), which _refine keeps only if
+        # checked and not much slower
+        movers = None
     for i, ga_opts in enumerate(tries):
         if i == 2 and np.isfinite(res.fitness_history).any():
             break  # the 24 knots found feasible paths, none better: more knots are not tried
@@ -382,7 +391,7 @@ def _run_ga(ctx: StageContext, traj: Trajectory, opts, funcs, deadline):
             traj.times,
             robot.circumradius if robot.dof == 3 else robot.radius,
             static_clearance,
-            mover_clearance if ctx.scene.movers else None,
+            movers,
             ga_opts,
             seed=opts.seed,
             static_segment=static_segment,
