@@ -363,7 +363,6 @@ def test_a_drive_that_may_reverse_backs_out_where_it_cannot_turn():
     backwards, and a motion from a touching pose is certified as the roadmap certifies it."""
     from gfuzzy.planner.stages import _clearance_functions
     from gfuzzy.planner.straighten import drive_path
-
     from gfuzzy.scene.scene import load_scene
 
     scene = load_scene(ROOT / "scenes" / "drive-tight.yaml")
@@ -400,3 +399,25 @@ def test_a_mover_bound_that_refuses_the_search_answer_is_left_to_the_retiming(ha
     res, _, _ = _run_ga(ctx, base.trajectory, PlanOptions(refine=True, seed=2), funcs[:3] + (refusing,),
                         time.perf_counter() + 60)  # fmt: skip
     assert res.improved and res.length_after < res.length_before
+
+
+def test_a_ga_without_a_feasible_individual_says_so(hall, monkeypatch):
+    """depot's dock-to-east (8 mm from a rack): no individual of 12, 24 or 48 knots was
+    feasible, and the report said 'the GA found nothing better than the corridor' as if
+    the GA had weighed paths and kept the search's; it says that none was feasible."""
+    from gfuzzy.planner import stages
+
+    real = stages._clearance_functions
+
+    def walled(ctx, corridor):  # every segment refused: no individual can be feasible
+        poses_of, static_clearance, _, mover_clearance = real(ctx, corridor)
+        return poses_of, static_clearance, lambda a, b: (np.full(len(a), -1.0), np.full(len(a), -1.0)), mover_clearance
+
+    monkeypatch.setattr(stages, "_clearance_functions", walled)
+    _, scene, rm = hall
+    q = scene.queries[0]
+    base = _searched(scene, rm, q)
+    out = apply_stages(StageContext(scene, StaticGeometry(scene)), base.trajectory, _query(q),
+                       PlanOptions(refine=True, seed=2), time.perf_counter() + 60)  # fmt: skip
+    r = out.refine_report
+    assert not r.applied and r.reason.startswith("the GA found no feasible path near the corridor (up to 48 knots")

@@ -418,6 +418,10 @@ def _refine(ctx: StageContext, traj: Trajectory, query, opts, deadline) -> tuple
     if res.out_of_time:
         why = f"the planning budget ({opts.time_limit:g} s, --time-limit) ran out while the GA refined: the search's answer is kept"
         return traj, replace(report, reason=why)
+    if not res.improved and not np.isfinite(res.fitness_history).any():
+        why = (f"the GA found no feasible path near the corridor (up to {ga_opts.n_knots} knots: every individual "
+               "came within the clearance of a wall or a mover, or cut a corner the corridor rounds)")
+        return traj, replace(report, reason=why)
     if not res.improved:
         return traj, replace(report, reason="the GA found nothing better than the corridor")
     if ctx.robot.unicycle:  # straight segments through the via-points, turns in place
