@@ -860,6 +860,7 @@ BEYOND_A_SCHEMA = {
     "polygon_collinear": "area",
     "trajectory_backward": "increasing times compare items",
     "trajectory_equal_time": "increasing times compare items",
+    "trajectory_jump": "a speed divides two items",
 }
 
 

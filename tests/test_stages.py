@@ -116,6 +116,19 @@ def test_a_straight_answer_is_left_to_the_search(hall):
     np.testing.assert_array_equal(out.trajectory.waypoints, wps)
 
 
+def test_a_straight_answer_through_several_points_is_left_to_the_search(hall):
+    """zara-crowd's cross-flow waits and walks one straight line: the GA ran 48 knots for 2.9 s
+    and said 'the GA found nothing better than the corridor'; a straight corridor is said
+    to be straight, whatever its points and waits, and the GA is not run."""
+    _, scene, rm = hall
+    ctx = StageContext(scene, StaticGeometry(scene))
+    wps = np.array([[0.0, 5.5, 0.5], [0.5, 5.5, 1.0], [1.5, 5.5, 1.0], [2.0, 5.5, 1.5], [2.5, 5.5, 2.0]])
+    query = Query("q", tuple(wps[0, 1:]), tuple(wps[-1, 1:]), 0.0)
+    out = apply_stages(ctx, Trajectory(wps, scene.robot.radius), query, PlanOptions(refine=True), time.perf_counter() + 60)
+    assert out.refine_report == RefineReport(False, "the path is a straight segment already")
+    np.testing.assert_array_equal(out.trajectory.waypoints, wps)
+
+
 def test_start_is_goal_has_nothing_to_slow():
     scene = parse_scene(yaml.safe_load(HALL))
     ctx = StageContext(scene, StaticGeometry(scene))
@@ -339,3 +352,72 @@ def test_a_refined_drive_path_keeps_the_turning_rate():
     assert res.refine_report.applied, res.refine_report.reason
     rep = check_trajectory(scene, res.trajectory.waypoints, q)
     assert rep.valid, rep.reason
+
+
+def test_a_drive_that_may_reverse_backs_out_where_it_cannot_turn():
+    """drive-tight's back-out: the cart is parked nose against the bounds (touching them) in a
+    0.44 m arm and backs out. The GA's segment model drove every straight forwards (a turn
+    round in the arm: not free) and could not leave a pose touching the bounds, so no
+    individual was feasible and --refine said 'nothing better than the corridor'; the path
+    through its via-points drove forwards too. With ``reverse`` a straight may be driven
+    backwards, and a motion from a touching pose is certified as the roadmap certifies it."""
+    from gfuzzy.planner.stages import _clearance_functions
+    from gfuzzy.planner.straighten import drive_path
+    from gfuzzy.scene.scene import load_scene
+
+    scene = load_scene(ROOT / "scenes" / "drive-tight.yaml")
+    geometry = StaticGeometry(scene)
+    start = np.array([5.3, 5.375, np.pi / 2])
+    corridor = np.array([start, [5.3, 4.0, np.pi / 2]])
+    static_segment = _clearance_functions(StageContext(scene, geometry), corridor)[2]
+    # the search's lane is off the arm's axis by 1e-12 m, as its answers are
+    bound, clearance = static_segment(start[None, :2], np.array([[5.3 - 1e-12, 4.7]]))
+    assert bound[0] == 0.0 and clearance[0] >= 0.0
+    path = drive_path(geometry, start, np.array([[5.3, 4.7]]), np.array([5.3, 4.0, np.pi / 2]), reverse=True,
+                      prefer=lambda xy: np.pi / 2)  # fmt: skip
+    assert path is not None and np.all(path[:, 2] == np.pi / 2)  # straight back, never turned
+    assert drive_path(geometry, start, np.array([[5.3, 4.7]]), np.array([5.3, 4.0, np.pi / 2])) is None  # forwards: no
+
+
+def test_a_mover_bound_that_refuses_the_search_answer_is_left_to_the_retiming(hall):
+    """building-floor-unicycle: the GA's mover bound (the box at the corridor's heading)
+    put the search's own answer 0.038 m inside mover A, so no individual near it was
+    feasible with 12, 24 or 48 knots and --refine said 'nothing better than the corridor'.
+    A bound that refuses the answer the exact search accepted cannot guide the GA: it then
+    refines against the walls alone, and the re-timing decides among the movers."""
+    from gfuzzy.planner.stages import _clearance_functions, _run_ga
+
+    _, scene, rm = hall
+    q = scene.queries[0]
+    base = _searched(scene, rm, q)
+    ctx = StageContext(scene, StaticGeometry(scene))
+    funcs = _clearance_functions(ctx, base.trajectory.poses)
+
+    def refusing(xy, t):  # 1 cm inside a mover wherever asked, the search's answer included
+        return np.full(len(np.atleast_2d(xy)), -0.01)
+
+    res, _, _ = _run_ga(ctx, base.trajectory, PlanOptions(refine=True, seed=2), funcs[:3] + (refusing,),
+                        time.perf_counter() + 60)  # fmt: skip
+    assert res.improved and res.length_after < res.length_before
+
+
+def test_a_ga_without_a_feasible_individual_says_so(hall, monkeypatch):
+    """depot's dock-to-east (8 mm from a rack): no individual of 12, 24 or 48 knots was
+    feasible, and the report said 'the GA found nothing better than the corridor' as if
+    the GA had weighed paths and kept the search's; it says that none was feasible."""
+    from gfuzzy.planner import stages
+
+    real = stages._clearance_functions
+
+    def walled(ctx, corridor):  # every segment refused: no individual can be feasible
+        poses_of, static_clearance, _, mover_clearance = real(ctx, corridor)
+        return poses_of, static_clearance, lambda a, b: (np.full(len(a), -1.0), np.full(len(a), -1.0)), mover_clearance
+
+    monkeypatch.setattr(stages, "_clearance_functions", walled)
+    _, scene, rm = hall
+    q = scene.queries[0]
+    base = _searched(scene, rm, q)
+    out = apply_stages(StageContext(scene, StaticGeometry(scene)), base.trajectory, _query(q),
+                       PlanOptions(refine=True, seed=2), time.perf_counter() + 60)  # fmt: skip
+    r = out.refine_report
+    assert not r.applied and r.reason.startswith("the GA found no feasible path near the corridor (up to 48 knots")

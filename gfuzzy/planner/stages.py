@@ -27,10 +27,11 @@ import numpy as np
 
 from ..check.check import check_trajectory
 from ..collision.geometry import StaticGeometry, mover_distance
-from ..poses import interpolate_segment
+from ..poses import interpolate_segment, wrap_angle
 from ..scene.scene import Query, Robot, Scene
 from ..settings import AMAX_PER_VMAX
 from ..status import Status
+from ..timespace.drive import SAME_HEADING
 from ..trajectory import Trajectory
 from ..typed import FloatArray
 from .driveblend import BlendRetime, retime_blend
@@ -178,6 +179,14 @@ def _dedupe(poses: FloatArray) -> FloatArray:
     return poses[keep]
 
 
+def _straight(xy: FloatArray) -> bool:
+    """Whether the polyline ``xy`` (n, 2) runs straight from its first point to its last
+    (its length is the chord's, to 1e-9 of it): the GA moves via-points off that line and
+    shortens nothing (zara-crowd's cross-flow: 48 knots, 2.9 s, 'nothing better')."""
+    length = float(np.hypot(*np.diff(xy, axis=0).T).sum())
+    return length <= float(np.hypot(*(xy[-1] - xy[0]))) * (1 + 1e-9)
+
+
 def _heading_lookup(corridor: FloatArray):
     """Heading of the corridor pose nearest to each point (box robots keep the
     corridor's headings, which fit its doors)."""
@@ -232,7 +241,8 @@ def _clearance_functions(ctx: StageContext, corridor: FloatArray):
         k = len(a)
         ends = poses_of(np.concatenate([a, b])).tolist()  # one heading lookup for both ends
         if drive:
-            mn = np.array([_drive_segment(geometry, p, q, pose_clearance) for p, q in zip(ends[:k], ends[k:], strict=True)])
+            mn = np.array([_drive_segment(geometry, p, q, pose_clearance, robot.reverse)
+                           for p, q in zip(ends[:k], ends[k:], strict=True)])  # fmt: skip
         else:
             mn = np.array([_traced(geometry, p, q, pose_clearance) for p, q in zip(ends[:k], ends[k:], strict=True)])
         return np.where(mn >= 0, 0.0, -1.0), mn
@@ -298,34 +308,47 @@ class _StateTable:
 def _traced(geometry: StaticGeometry, p: list, q: list, pose_clearance) -> float:
     """``geometry.motion_clearance(p, q)`` with the end clearances from ``pose_clearance``
     (the same values ``motion_clearance`` would compute: ``clearance1`` of the same poses),
-    asked only where it would ask them: ``q``'s not when ``p`` collides, nor when p == q."""
+    asked only where it would ask them: ``q``'s not when ``p`` collides, nor when p == q.
+    A motion from or to a pose touching the bounds (clearance 0), which the tracing cannot
+    leave, is certified as the roadmap certifies it (``motion_free``: clearance 0)."""
     ca = pose_clearance(p)
     if ca < 0:
         return -1.0
     cb = None if p == q else pose_clearance(q)
-    return geometry.motion_clearance(p, q, ca=ca, cb=cb)
+    clear = geometry.motion_clearance(p, q, ca=ca, cb=cb)
+    if clear < 0 and min(ca, pose_clearance(q)) == 0.0 and geometry.motion_free(p, q, ca=ca, cb=cb):
+        return 0.0  # an end touching the bounds, which the tracing cannot leave (drive-tight's back-out)
+    return clear
 
 
-def _drive_segment(geometry: StaticGeometry, p: list, q: list, pose_clearance) -> float:
+def _drive_segment(geometry: StaticGeometry, p: list, q: list, pose_clearance, reverse: bool = False) -> float:
     """A differential drive's segment p -> q (poses at the corridor's headings): the straight
     at its own heading, and the turns in place at both ends between the corridor's heading
-    and the segment's; the smallest clearance, -1 when one is not certified free.
+    and the segment's; the smallest clearance, -1 when one is not certified free. With
+    ``reverse`` the straight may be driven backwards (at the heading opposite to its
+    direction): the better of the two (drive-tight's back-out: forwards, the cart parked
+    nose against the bounds turned round in a 0.44 m arm, and no individual was feasible).
 
     At a via-point the robot turns from the heading of the segment before to that of the
     segment after; that arc lies within the two arcs from each to the corridor's heading
     there, which the two segments certify: the GA's objective then agrees with what the
     refined path's certification (turns in place included) asks of it.
     """
-    h = math.atan2(q[1] - p[1], q[0] - p[0])
     if p[:2] == q[:2]:
         return _traced(geometry, p, p, pose_clearance)
-    a, b = [p[0], p[1], h], [q[0], q[1], h]
-    clear = _traced(geometry, a, b, pose_clearance)
-    for end, turned in ((p, a), (q, b)):
-        if clear < 0:
-            break
-        clear = min(clear, _traced(geometry, end, turned, pose_clearance))
-    return clear
+    ahead = math.atan2(q[1] - p[1], q[0] - p[0])
+    best = -1.0
+    for h in (ahead, float(wrap_angle(ahead + math.pi))) if reverse else (ahead,):
+        if abs(float(wrap_angle(h - p[2]))) <= SAME_HEADING:
+            h = p[2]  # no turn, as drive_path's pick_turn (a search's lane is off its axis by 1e-12 m)
+        a, b = [p[0], p[1], h], [q[0], q[1], h]
+        clear = _traced(geometry, a, b, pose_clearance)
+        for end, turned in ((p, a), (q, b)):
+            if clear < 0:
+                break
+            clear = min(clear, _traced(geometry, end, turned, pose_clearance))
+        best = max(best, clear)
+    return best
 
 
 def _accept(ctx: StageContext, traj: Trajectory, query_like, before: Trajectory, max_slowdown: float):
@@ -351,6 +374,15 @@ def _run_ga(ctx: StageContext, traj: Trajectory, opts, funcs, deadline):
     knots = (GAOptions().n_knots, GA_RETRY_KNOTS, GA_FEASIBLE_KNOTS)
     tries = [opts.ga] if opts.ga is not None else [GAOptions(n_knots=k) for k in knots]
     res = None
+    movers = mover_clearance if ctx.scene.movers else None
+    if movers is not None and float(np.min(movers(traj.poses[:, :2], traj.times))) < 0:
+        # the GA's mover bound (the robot's disc, or its box at the corridor's heading) refuses
+        # the search's own answer, which the exact search accepted: near it no individual is
+        # feasible (building-floor-unicycle: 'nothing better' after 12, 24 and 48 knots). The
+        # GA then refines against the static obstacles alone, and the movers are left to the
+        # re-timing of the refined path (exact, with waits), which _refine keeps only if
+        # checked and not much slower
+        movers = None
     for i, ga_opts in enumerate(tries):
         if i == 2 and np.isfinite(res.fitness_history).any():
             break  # the 24 knots found feasible paths, none better: more knots are not tried
@@ -359,7 +391,7 @@ def _run_ga(ctx: StageContext, traj: Trajectory, opts, funcs, deadline):
             traj.times,
             robot.circumradius if robot.dof == 3 else robot.radius,
             static_clearance,
-            mover_clearance if ctx.scene.movers else None,
+            movers,
             ga_opts,
             seed=opts.seed,
             static_segment=static_segment,
@@ -372,7 +404,7 @@ def _run_ga(ctx: StageContext, traj: Trajectory, opts, funcs, deadline):
 
 def _refine(ctx: StageContext, traj: Trajectory, query, opts, deadline) -> tuple[Trajectory, RefineReport]:
     corridor = _dedupe(traj.poses)
-    if len(corridor) < 3:
+    if len(corridor) < 3 or _straight(corridor[:, :2]):
         return traj, RefineReport(False, "the path is a straight segment already")
     funcs = _clearance_functions(ctx, corridor)
     res, ga_opts, seconds = _run_ga(ctx, traj, opts, funcs, deadline)
@@ -386,12 +418,17 @@ def _refine(ctx: StageContext, traj: Trajectory, query, opts, deadline) -> tuple
     if res.out_of_time:
         why = f"the planning budget ({opts.time_limit:g} s, --time-limit) ran out while the GA refined: the search's answer is kept"
         return traj, replace(report, reason=why)
+    if not res.improved and not np.isfinite(res.fitness_history).any():
+        why = (f"the GA found no feasible path near the corridor (up to {ga_opts.n_knots} knots: every individual "
+               "came within the clearance of a wall or a mover, or cut a corner the corridor rounds)")
+        return traj, replace(report, reason=why)
     if not res.improved:
         return traj, replace(report, reason="the GA found nothing better than the corridor")
     if ctx.robot.unicycle:  # straight segments through the via-points, turns in place
         from .straighten import drive_path
 
-        path = drive_path(ctx.geometry, traj.poses[0], res.path[1:-1], traj.poses[-1])
+        path = drive_path(ctx.geometry, traj.poses[0], res.path[1:-1], traj.poses[-1], ctx.robot.reverse,
+                          lambda xy: funcs[0](xy)[0, 2])  # the corridor's heading: backwards where it backed
         if path is None:
             return traj, replace(report, reason="a refined turn in place could not be certified free of static obstacles")
     else:

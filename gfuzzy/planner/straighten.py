@@ -126,9 +126,14 @@ def straighten(geometry, path: FloatArray, look_ahead: int = LOOK_AHEAD) -> Floa
     return straight if straight is not None and len(corners(straight)) < len(pts) else path
 
 
-def drive_path(geometry, start: FloatArray, via: FloatArray, goal: FloatArray) -> FloatArray | None:
+def drive_path(geometry, start: FloatArray, via: FloatArray, goal: FloatArray, reverse: bool = False,
+               prefer=None) -> FloatArray | None:  # fmt: skip
     """A differential drive's path through via-points: straight moves joined by turns in
     place, each turn along the shorter arc when its sweep is free, else the longer one.
+    With ``reverse`` (the robot may drive backwards) each straight is driven forwards or
+    backwards: the one whose heading is nearer ``prefer(xy)`` at its start (a callable
+    giving a heading, e.g. the corridor's the GA refined: backwards where the search
+    backed), else the one needing the smaller turn; the other when that turn is not free.
 
     Parameters
     ----------
@@ -148,7 +153,12 @@ def drive_path(geometry, start: FloatArray, via: FloatArray, goal: FloatArray) -
     out = [np.asarray(start, dtype=float)]
     h = float(start[2])
     for a, b in zip(pts[:-1], pts[1:], strict=True):
-        dh = pick_turn(geometry, float(a[0]), float(a[1]), h, math.atan2(b[1] - a[1], b[0] - a[0]))
+        ahead = math.atan2(b[1] - a[1], b[0] - a[0])
+        ways = [ahead, float(wrap_angle(ahead + math.pi))] if reverse else [ahead]
+        near = h if prefer is None else float(prefer(a))
+        ways.sort(key=lambda hn: abs(float(wrap_angle(hn - near))))
+        turns = (pick_turn(geometry, float(a[0]), float(a[1]), h, hn) for hn in ways)
+        dh = next((d for d in turns if d is not None), None)
         if dh is None:
             return None
         if dh:

@@ -619,14 +619,7 @@ def _parse_mover(v: _V, md, place: str, names: set) -> Mover:
         mshape, mrad = "box", 0.0
         msize = v.vector(md["box"], _join(place, "box"), 2, positive=True)
     if timed:
-        tr = v.points(md["trajectory"], _join(place, "trajectory"), 3, min_rows=1)
-        bad = np.nonzero(np.diff(tr[:, 0]) <= 0)[0]
-        if bad.size:
-            j = int(bad[0]) + 1
-            v.fail(
-                f"{place}.trajectory[{j}][0]",
-                f"time {tr[j, 0]:g} does not increase (previous row has {tr[j - 1, 0]:g})",
-            )
+        tr = v.timed_rows(md["trajectory"], _join(place, "trajectory"), mname)
         return Mover(mname, mshape, mrad, msize, trajectory=tr)
     else:
         path = v.points(md["path"], _join(place, "path"), 2, min_rows=2)

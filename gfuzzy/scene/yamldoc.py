@@ -244,6 +244,31 @@ class _V:
         rows = [self.vector(v, f"{place}[{i}]", width) for i, v in enumerate(value)]
         return np.array(rows, dtype=float).reshape(-1, width)
 
+    def timed_rows(self, value, place, mover: str):
+        """A mover's ``[t, x, y]`` rows (at least one): t strictly increasing, and no faster
+        from row to row than ``MAX_MAGNITUDE`` m/s, the bound of every number in a scene (a
+        path mover's ``speed`` included). Rows closer in time than that (1e-300 s apart, say)
+        are a jump, not a motion: the planner's bound on where a mover is within a time step
+        (its speed times half a step) would cover the whole scene, and a query would be
+        answered as if the mover stood next to the start."""
+        tr = self.points(value, place, 3, min_rows=1)
+        gap = np.diff(tr[:, 0])
+        bad = np.nonzero(gap <= 0)[0]
+        if bad.size:
+            j = int(bad[0]) + 1
+            self.fail(f"{place}[{j}][0]", f"time {tr[j, 0]:g} does not increase (previous row has {tr[j - 1, 0]:g})")
+        moved = np.hypot(*np.diff(tr[:, 1:], axis=0).T)
+        with np.errstate(over="ignore"):
+            fast = np.nonzero(moved > MAX_MAGNITUDE * gap)[0]
+        if fast.size:
+            j = int(fast[0]) + 1
+            self.fail(
+                f"{place}[{j}]",
+                f"mover {mover!r} moves {moved[j - 1]:g} m in {gap[j - 1]:g} s from the previous row (t={float(tr[j - 1, 0])!r} "
+                f"to {float(tr[j, 0])!r}): faster than {MAX_MAGNITUDE:g} m/s, a jump rather than a motion (rows too close in time?)",
+            )
+        return tr
+
     def name(self, value, place, pattern=None):
         if not isinstance(value, str) or not value.strip():
             hint = "; quote a name that reads as a number or a boolean (name: '2e3')" if isinstance(
