@@ -13,12 +13,12 @@ PERSON = np.array([[2.0, 0.0, 0.0, 0.0, 0.3]])  # standing aside, within the rob
 
 
 def _spied(nav: Navigator) -> list:
-    """The look-ahead (prediction horizon, plan slack) of every field the searches build."""
+    """The effort (path space, plan slack, prediction horizon) of every field the searches build."""
     seen = []
     field = nav._field
 
     def spy(*args, **kwargs):
-        seen.append((nav.options.prediction_horizon, nav.options.plan_slack))
+        seen.append((nav.options.path_space, nav.options.plan_slack, nav.options.prediction_horizon))
         return field(*args, **kwargs)
 
     nav._field = spy
@@ -36,32 +36,34 @@ def _clocked(nav: Navigator, tick: list) -> None:
     nav._clock = clock
 
 
-def test_a_call_out_of_time_halves_the_next_searches_look_ahead_until_calls_have_room(open_square):
+def test_a_call_out_of_time_cuts_the_next_searches_effort_until_calls_have_room(open_square):
     """On a slow computer the searches ran out of the budget call after call and the evasive
-    motion answered (20 people: half the calls). After a call whose searches ran out of time
-    the next search predicts the people over half the horizon with half the slack (the
-    safety work, most of a call, shrinks with both) and plans; after ``RECOVER`` calls that
-    finished with room the full look-ahead returns. The old code searched the full look-ahead
-    again (and ran out again)."""
+    motion answered (20 people: a call in two or three). After a call whose searches ran out
+    of time the next searches drop the path space (one search without the ghosts), after a
+    second also half the plan slack, the people predicted as before; after ``RECOVER``
+    calls that finished with room one level of effort returns. The old code searched with
+    full effort again (and ran out again)."""
     scene, rm = open_square
     nav = Navigator(scene, rm, (0.0, 4.0), NavOptions(time_budget=0.1))
-    seen, tick = _spied(nav), [0.05]  # every reading of the clock 50 ms later: the first call runs out
+    seen, tick = _spied(nav), [0.05]  # every reading of the clock 50 ms later: the calls run out
     _clocked(nav, tick)
-    nav.step(0.0, np.array([0.0, -4.0]), PERSON)
-    assert nav.last.out_of_time and nav.last.mode == "evasive"
+    for k in range(2):
+        nav.step(0.25 * k, np.array([0.0, -4.0]), PERSON)
+        assert nav.last.out_of_time and nav.last.mode == "evasive"
     tick[0] = 1e-6  # from now on the calls have room
-    horizons = []
-    for k in range(1, RECOVER + 3):
+    efforts = []
+    for k in range(2, 2 * RECOVER + 4):
         del seen[:]
         nav.step(0.25 * k, np.array([0.0, -4.0]), PERSON)
         assert not nav.last.out_of_time and nav.last.mode in ("plan", "close")
-        horizons.append(seen[0])
-        assert nav.options.prediction_horizon == 5.0  # the fallbacks and checks keep the full options
-    assert horizons[:RECOVER] == [(2.5, 4.0)] * RECOVER
-    assert horizons[RECOVER:] == [(5.0, 8.0)] * 2
+        efforts.append(seen[0])
+        assert (nav.options.path_space, nav.options.plan_slack) == (1.25, 8.0)  # the checks keep the full options
+    assert efforts[:RECOVER] == [(0.0, 4.0, 5.0)] * RECOVER
+    assert efforts[RECOVER : 2 * RECOVER] == [(0.0, 8.0, 5.0)] * RECOVER
+    assert efforts[2 * RECOVER :] == [(1.25, 8.0, 5.0)] * 2
 
 
-def test_without_effort_levels_every_search_has_the_full_look_ahead(open_square):
+def test_without_effort_levels_every_search_has_full_effort(open_square):
     scene, rm = open_square
     nav = Navigator(scene, rm, (0.0, 4.0), NavOptions(time_budget=0.1, effort_levels=0))
     seen, tick = _spied(nav), [0.05]
@@ -70,7 +72,7 @@ def test_without_effort_levels_every_search_has_the_full_look_ahead(open_square)
     assert nav.last.out_of_time
     tick[0] = 1e-6
     nav.step(0.25, np.array([0.0, -4.0]), PERSON)
-    assert seen[-1] == (5.0, 8.0)
+    assert seen[-1] == (1.25, 8.0, 5.0)
 
 
 def test_a_return_to_full_effort_that_runs_out_again_waits_twice_as_long():

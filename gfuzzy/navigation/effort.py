@@ -1,18 +1,24 @@
 """The searches' effort, adapted to how much of the time budget the calls need (issues 18, 19).
 
 On a slow or busy computer the navigator's searches may not fit ``time_budget``: among 20
-people on a machine three times slower than the one the defaults were tuned on, half the
-calls ran out of time and the evasive motion answered, call after call (an episode of
-them ends when someone walks into a robot that never had a plan). Most of a search's cost
-is the safety of the predicted people, which grows with how far ahead they are predicted
-(their presence, and the search's window of waiting and detour). So after a call whose
-searches ran out of time the next calls search with less look-ahead, and they return to
-the full look-ahead once calls finish with room to spare:
+people on a machine three times slower than the one the defaults were tuned on, a call in
+two or three ran out of time and the evasive motion answered (an episode of them ends when
+someone walks into a robot that never had a plan). Most of a search's cost is the safety
+of what it predicts; the first search also keeps off the people's ways (the path space's
+ghosts: a disc ahead of every walker, :mod:`.pathspace`), a social cost that is not the
+people's safety. So after a call whose searches ran out of time the next calls do less,
+and they return to full effort once calls finish with room to spare:
 
 * level 0: the options as given;
-* level ``i``: the searches' look-ahead (``prediction_horizon``, ``stationary_hold``,
-  ``plan_slack`` and ``social_horizon``) scaled by ``SCALE ** i`` (the horizon never below
-  one step), up to ``NavOptions.effort_levels`` (0 turns this off).
+* level 1: no path space (``path_space`` 0: the first search without the ghosts, the
+  people predicted as before);
+* level ``i`` > 1: also ``plan_slack`` (the waiting and detour a search allows) scaled by
+  ``SCALE ** (i - 1)``;
+
+up to ``NavOptions.effort_levels`` (0 turns this off). The people's predictions (their
+horizon, inflation and hold) are never cut: a search that looks less far ahead was
+measured and dropped, it led a holonomic robot into the crossing's centre where no plan
+was left (docs/navigator-experiments.md, *When the budget binds*).
 
 Only the searches see the reduced options (:meth:`Effort.searching`); the predictions'
 inflation, the checks of a plan kept or run at full speed and the fallbacks keep the full
@@ -32,10 +38,10 @@ from dataclasses import replace
 
 from .navoptions import NavOptions
 
-#: Each level scales the searches' look-ahead by this factor.
+#: Each level beyond the first scales the searches' ``plan_slack`` by this factor.
 SCALE = 0.5
-#: A call whose searches took at most this share of their time had room: at the next
-#: level up (twice the look-ahead) they would likely still fit.
+#: A call whose searches took at most this share of their time had room: with one level
+#: more effort they would likely still fit.
 ROOM = 0.5
 #: Calls with room in a row before one level more effort; each failed return doubles it,
 #: up to ``BACKOFF`` times.
@@ -43,13 +49,10 @@ RECOVER, BACKOFF = 4, 8
 
 
 def reduced(options: NavOptions, level: int) -> NavOptions:
-    """``options`` with the searches' look-ahead scaled by ``SCALE ** level``."""
+    """``options`` for the searches at effort ``level`` (0: as given)."""
     if level == 0:
         return options
-    f = SCALE**level
-    horizon = max(options.prediction_horizon * f, options.dt)
-    return replace(options, prediction_horizon=horizon, stationary_hold=options.stationary_hold * f,
-                   plan_slack=options.plan_slack * f, social_horizon=options.social_horizon * f)  # fmt: skip
+    return replace(options, path_space=0.0, plan_slack=options.plan_slack * SCALE ** (level - 1))
 
 
 class Effort:

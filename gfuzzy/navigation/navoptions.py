@@ -130,9 +130,10 @@ class NavOptions:
         With ``soft_search``: when set, seconds of arrival one second inside someone's
         personal space is worth, priced apart from their way (a step in both pays both).
     effort_levels : int
-        How many times the searches' look-ahead may be halved after calls whose searches
-        ran out of ``time_budget`` (:mod:`gfuzzy.navigation.effort`; restored once calls
-        finish with room to spare). 0: the full look-ahead always.
+        How far the searches' effort may be cut after calls whose searches ran out of
+        ``time_budget`` (:mod:`gfuzzy.navigation.effort`: 1, the path space dropped; each
+        further level, ``plan_slack`` halved; restored once calls finish with room to
+        spare). 0: full effort always.
     """
 
     dt: float = 0.1
@@ -167,7 +168,7 @@ class NavOptions:
     soft_search: bool = False
     intrusion_cost: float = 2.0
     discomfort_cost: float | None = None
-    effort_levels: int = 1
+    effort_levels: int = 2
 
     def __post_init__(self):
         if self.budget_clock not in BUDGET_CLOCKS:

@@ -270,8 +270,6 @@ class PathSpace:
             return obs, infl
         ghosts, g_infl = self._path_ghosts(pose, obs)
         always = np.column_stack([obs, np.zeros(len(obs)), np.full(len(obs), math.inf)])
-        # a ghost's inflation is the same in every slice: as many as the people's (a search of less effort has fewer)
-        g_infl = np.broadcast_to(g_infl[:, :1], (len(g_infl), infl.shape[1]))
         return np.vstack([always, ghosts]), np.vstack([infl, g_infl])
 
     def _tiers(self, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray, deadline: float):
