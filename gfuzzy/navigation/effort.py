@@ -18,7 +18,7 @@ and they return to full effort once calls finish with room to spare:
 up to ``NavOptions.effort_levels`` (0 turns this off). The people's predictions (their
 horizon, inflation and hold) are never cut: a search that looks less far ahead was
 measured and dropped, it led a holonomic robot into the crossing's centre where no plan
-was left (docs/navigator-experiments.md, *When the budget binds*).
+was left (docs/navigator-experiments.md, *When the budget binds: the searches' effort cut*).
 
 Only the searches see the reduced options (:meth:`Effort.searching`); the predictions'
 inflation, the checks of a plan kept or run at full speed and the fallbacks keep the full

@@ -295,12 +295,7 @@ class Navigator(PathSpace, Prediction, SoftCost):
         if len(obs):
             predicted[:, 4] = obs[:, 4] + infl[:, 0]
         soft = opts.soft_search and len(obs) > 0 and (opts.path_space > 0 or opts.personal_space > 0)
-        with self._effort.searching(self):  # less look-ahead after calls that ran out of time
-            if soft:  # one priced search: its plan keeps the buffer and the uncertainty only
-                traj, mode, found, infl = self._priced(t, pose, obs, deadline)
-                ghosts = False
-            else:
-                traj, mode, found, ghosts = self._tiers(t, pose, obs, infl, deadline)
+        traj, mode, found, infl, ghosts = self._searches(t, pose, obs, infl, deadline, soft)
         if traj is not None and mode in (NavMode.PLAN, NavMode.CLOSE):  # at full speed: all of it, or into the goal
             keep = functools.cache(lambda: self._kept_inflation(pose, obs, infl, mode))  # only when checked
             if opts.full_speed:
@@ -351,6 +346,16 @@ class Navigator(PathSpace, Prediction, SoftCost):
         self._measure_tail(t_end - deadline)
         self.last = NavStep(mode, t_end - t_begin, found.message, predicted, found.detailed, out_of_time)
         return traj
+
+    def _searches(self, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray, deadline: float, soft: bool):
+        """(plan, mode, search, inflation, ghosts kept) of the priced search (``soft``) or the
+        tiers, at the effort the calls' pressure on the budget leaves them (:mod:`.effort`)."""
+        with self._effort.searching(self):
+            if soft:  # one priced search: its plan keeps the buffer and the uncertainty only
+                traj, mode, found, infl = self._priced(t, pose, obs, deadline)
+                return traj, mode, found, infl, False
+            traj, mode, found, ghosts = self._tiers(t, pose, obs, infl, deadline)
+            return traj, mode, found, infl, ghosts
 
     def _measure_tail(self, over: float) -> None:
         """Keep the time a call went on past the search's deadline (``over``), to reserve it:
