@@ -5,12 +5,14 @@
     python tools/crowd_calls.py classify calls.json [--oracle]
     python tools/crowd_calls.py compare before.json after.json
     python tools/crowd_calls.py record p.json --episodes 0 4 --time-budget 5 --profile 40   # where a call's CPU goes
+    python tools/crowd_calls.py record h.json --kinematics holonomic --humans 20 --episodes 0 40   # a disc robot
 
 ``record`` runs ``gfuzzy crowd --scenario circle --kinematics unicycle --policy navigator
 --budget-clock cpu``'s episodes (``crowd.run_episode``) and wraps :meth:`gfuzzy.Navigator.step`
 to keep, per call: the time, the pose, the answer's mode, its message (why no plan), whether
 the searches ran out of time, the people predicted in detail, the call's CPU seconds (the
-budget's clock) and a hash of the answer's rows. The file is written (atomically) every ten
+budget's clock), the searches' effort level (:mod:`gfuzzy.navigation.effort`; 0 for a
+navigator without it) and a hash of the answer's rows. The file is written (atomically) every ten
 episodes, so a run stopped early keeps what it did.
 
 ``classify``: success, time, replan CPU p50 / p95, the answers by mode, the evasive ones by
