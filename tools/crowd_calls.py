@@ -5,12 +5,14 @@
     python tools/crowd_calls.py classify calls.json [--oracle]
     python tools/crowd_calls.py compare before.json after.json
     python tools/crowd_calls.py record p.json --episodes 0 4 --time-budget 5 --profile 40   # where a call's CPU goes
+    python tools/crowd_calls.py record h.json --kinematics holonomic --humans 20 --episodes 0 40   # a disc robot
 
 ``record`` runs ``gfuzzy crowd --scenario circle --kinematics unicycle --policy navigator
 --budget-clock cpu``'s episodes (``crowd.run_episode``) and wraps :meth:`gfuzzy.Navigator.step`
 to keep, per call: the time, the pose, the answer's mode, its message (why no plan), whether
 the searches ran out of time, the people predicted in detail, the call's CPU seconds (the
-budget's clock) and a hash of the answer's rows. The file is written (atomically) every ten
+budget's clock), the searches' effort level (:mod:`gfuzzy.navigation.effort`; 0 for a
+navigator without it) and a hash of the answer's rows. The file is written (atomically) every ten
 episodes, so a run stopped early keeps what it did.
 
 ``classify``: success, time, replan CPU p50 / p95, the answers by mode, the evasive ones by
@@ -50,12 +52,13 @@ from gfuzzy.navigation.sensing import SensorOptions  # noqa: E402
 PLANS = ("plan", "close", "kept", "relaxed")
 
 
-def _setting(humans: int, seed: int) -> C.CrowdSetting:
-    return C.CrowdSetting(humans=humans, kinematics="unicycle", sensor=SensorOptions(seed=seed))
+def _setting(humans: int, seed: int, kinematics: str = "unicycle") -> C.CrowdSetting:
+    return C.CrowdSetting(humans=humans, kinematics=kinematics, sensor=SensorOptions(seed=seed))
 
 
-def record(out: str, humans: int, seed: int, first: int, stop: int, budget: float, profile: int = 0) -> None:
-    setting = _setting(humans, seed)
+def record(out: str, humans: int, seed: int, first: int, stop: int, budget: float, profile: int = 0,
+           kinematics: str = "unicycle") -> None:  # fmt: skip
+    setting = _setting(humans, seed, kinematics)
     rm = C.crowd_roadmap(setting)
     calls: list = []
     episodes: list = []
@@ -73,12 +76,13 @@ def record(out: str, humans: int, seed: int, first: int, stop: int, budget: floa
         last = self.last
         calls.append({"episode": current[0], "t": float(t), "pose": [float(v) for v in pose], "mode": str(last.mode),
                       "message": last.message, "out_of_time": bool(last.out_of_time), "detailed": int(last.detailed),
-                      "seconds": float(last.seconds),
+                      "seconds": float(last.seconds), "effort": getattr(getattr(self, "_effort", None), "level", 0),
                       "hash": hashlib.sha1(np.ascontiguousarray(traj.waypoints).tobytes()).hexdigest()[:16]})  # fmt: skip
         return traj
 
     def save():
-        doc = {"humans": humans, "seed": seed, "time_budget": budget, "episodes": episodes, "calls": calls}
+        doc = {"humans": humans, "seed": seed, "kinematics": kinematics, "time_budget": budget, "episodes": episodes,
+               "calls": calls}  # fmt: skip
         write_atomic(out, json.dumps(doc))
 
     Navigator.step = recorded
@@ -145,10 +149,11 @@ def classify(path: str, oracle: bool) -> None:
         print(f"episode {e['episode']}: {e['outcome']} at {cs[-1]['t'] + 0.25:.2f} s, smallest gap {e['min_separation']:.3f} m;"
               f" plans answered {len(planned)} of {len(cs)} calls, the last at {planned[-1]['t'] if planned else None}")  # fmt: skip
         for c in cs[-8:]:
-            print(f"   {c['t']:6.2f} s {c['mode']:8s} {c['seconds'] * 1000:5.1f} ms  {c['message'][:70]}")
+            print(f"   {c['t']:6.2f} s {c['mode']:8s} {c['seconds'] * 1000:5.1f} ms  effort {c.get('effort', 0)}"
+                  f"  {c['message'][:60]}")  # fmt: skip
         if oracle:
             if rm is None:
-                setting = _setting(doc["humans"], doc["seed"])
+                setting = _setting(doc["humans"], doc["seed"], doc.get("kinematics", "unicycle"))
                 rm = C.crowd_roadmap(setting)
             for dt in (None, 0.03):
                 o = C.run_episode(setting, rm, doc["seed"], e["episode"], ["oracle"], oracle_dt=dt)[0]
@@ -188,6 +193,7 @@ def main(argv=None) -> int:
     r.add_argument("--episodes", type=int, nargs=2, default=(0, 40), metavar=("FIRST", "STOP"))
     r.add_argument("--time-budget", type=float, default=0.1)
     r.add_argument("--profile", type=int, default=0, metavar="N")
+    r.add_argument("--kinematics", choices=("unicycle", "holonomic"), default="unicycle")
     c = sub.add_parser("classify")
     c.add_argument("record")
     c.add_argument("--oracle", action="store_true")
@@ -196,7 +202,7 @@ def main(argv=None) -> int:
     p.add_argument("after")
     args = ap.parse_args(argv)
     if args.cmd == "record":
-        record(args.out, args.humans, args.seed, *args.episodes, args.time_budget, args.profile)
+        record(args.out, args.humans, args.seed, *args.episodes, args.time_budget, args.profile, args.kinematics)
     elif args.cmd == "classify":
         classify(args.record, args.oracle)
     else:

@@ -52,6 +52,7 @@ from ..trajectory import Trajectory
 from ..typed import FloatArray
 from .brisk import brisk, brisk_arrival
 from .drivenav import drive_evasion, kept_plan, rest_of, sooner_plan, static_route
+from .effort import Effort
 from .evasion import holonomic_evasion
 from .lookout import Lookout
 from .navinput import checked_pose, flat_pose, observation_rows
@@ -149,6 +150,7 @@ class Navigator(PathSpace, Prediction, SoftCost):
         self._clock = BUDGET_CLOCKS[opts.budget_clock]  # the budget's clock (a test may replace it)
         self._person_seconds = PERSON_SECONDS  # the predictions' set-up per person, measured
         self._tail_seconds = 0.0  # from the search's deadline to the answer, measured (decaying maximum)
+        self._effort = Effort(opts)  # the searches' look-ahead, from the calls' pressure on the budget
         self._walls = WallCheck(scene)
         disc = robot.shape == "disc" and robot.dof == 2  # its view follows its motion
         self._lookout = Lookout(opts.fov, opts.look_after, goal) if opts.fov < 360 and disc else None
@@ -293,11 +295,7 @@ class Navigator(PathSpace, Prediction, SoftCost):
         if len(obs):
             predicted[:, 4] = obs[:, 4] + infl[:, 0]
         soft = opts.soft_search and len(obs) > 0 and (opts.path_space > 0 or opts.personal_space > 0)
-        if soft:  # one priced search: its plan keeps the buffer and the uncertainty only
-            traj, mode, found, infl = self._priced(t, pose, obs, deadline)
-            ghosts = False
-        else:
-            traj, mode, found, ghosts = self._tiers(t, pose, obs, infl, deadline)
+        traj, mode, found, infl, ghosts = self._searches(t, pose, obs, infl, deadline, soft)
         if traj is not None and mode in (NavMode.PLAN, NavMode.CLOSE):  # at full speed: all of it, or into the goal
             keep = functools.cache(lambda: self._kept_inflation(pose, obs, infl, mode))  # only when checked
             if opts.full_speed:
@@ -306,8 +304,10 @@ class Navigator(PathSpace, Prediction, SoftCost):
         out_of_time = found.out_of_time
         if traj is None and len(obs) and not found.out_of_time and self._clock() < deadline:
             # blocked by the margins (someone beside the goal, a narrow gap): the discs as they are + mover clearance
-            relaxed = self._relaxed(t, pose, obs, found, deadline)
+            with self._effort.searching(self):
+                relaxed = self._relaxed(t, pose, obs, found, deadline)
             traj, mode, out_of_time = relaxed.trajectory, NavMode.RELAXED, relaxed.out_of_time
+        self._effort.record(out_of_time, self._clock() - t_begin, deadline - t_begin)
         if traj is None:
             traj = self._direct(t, pose, obs)
             mode = NavMode.DIRECT
@@ -346,6 +346,16 @@ class Navigator(PathSpace, Prediction, SoftCost):
         self._measure_tail(t_end - deadline)
         self.last = NavStep(mode, t_end - t_begin, found.message, predicted, found.detailed, out_of_time)
         return traj
+
+    def _searches(self, t: float, pose: FloatArray, obs: FloatArray, infl: FloatArray, deadline: float, soft: bool):
+        """(plan, mode, search, inflation, ghosts kept) of the priced search (``soft``) or the
+        tiers, at the effort the calls' pressure on the budget leaves them (:mod:`.effort`)."""
+        with self._effort.searching(self):
+            if soft:  # one priced search: its plan keeps the buffer and the uncertainty only
+                traj, mode, found, infl = self._priced(t, pose, obs, deadline)
+                return traj, mode, found, infl, False
+            traj, mode, found, ghosts = self._tiers(t, pose, obs, infl, deadline)
+            return traj, mode, found, infl, ghosts
 
     def _measure_tail(self, over: float) -> None:
         """Keep the time a call went on past the search's deadline (``over``), to reserve it:

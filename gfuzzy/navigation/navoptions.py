@@ -129,6 +129,11 @@ class NavOptions:
     discomfort_cost : float or None
         With ``soft_search``: when set, seconds of arrival one second inside someone's
         personal space is worth, priced apart from their way (a step in both pays both).
+    effort_levels : int
+        How far the searches' effort may be cut after calls whose searches ran out of
+        ``time_budget`` (:mod:`gfuzzy.navigation.effort`: 1, the path space dropped; each
+        further level, ``plan_slack`` halved; restored once calls finish with room to
+        spare). 0: full effort always.
     """
 
     dt: float = 0.1
@@ -163,6 +168,7 @@ class NavOptions:
     soft_search: bool = False
     intrusion_cost: float = 2.0
     discomfort_cost: float | None = None
+    effort_levels: int = 2
 
     def __post_init__(self):
         if self.budget_clock not in BUDGET_CLOCKS:
@@ -178,6 +184,8 @@ class NavOptions:
             check_number(name, getattr(self, name), strict=False)
         if self.discomfort_cost is not None:
             check_number("discomfort_cost", self.discomfort_cost, strict=False)
+        if not isinstance(self.effort_levels, int) or isinstance(self.effort_levels, bool) or self.effort_levels < 0:
+            raise InputError(f"effort_levels must be a whole number >= 0, got {self.effort_levels!r}")
         if self.connect_k < 1 or self.evasion_headings < 4:
             raise InputError("connect_k must be >= 1 and evasion_headings >= 4")
         check_number("stretch", self.stretch, 1.0, strict=False)
