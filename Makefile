@@ -49,9 +49,10 @@ demo: warm
 # which kept each file on one worker; in a fresh clone 486 s against 488 s: no worse, the
 # gain not shown there); tests/conftest.py puts the tests marked long first; the 25 slowest
 # tests are listed at the end (where the suite's time goes, for the next cut)
-# The collection beside `make warm` (its second core is idle while numba compiles the
-# search kernels) writes the bytecode of the modules the workers import and of the test
-# modules with their asserts rewritten: each worker's collection then takes 7 s, not 23 s.
+# The collection beside `make warm` (which leaves a core idle for part of its time) writes
+# the bytecode of the modules the workers import and of the test modules with their asserts
+# rewritten: each worker's collection then takes 7 s, not 23 s. (`make -n test` runs `warm`
+# and the collection: a line that calls $(MAKE) runs under -n.)
 TEST_WORKERS ?= auto
 test: $(STAMP)
 	$(BIN)/python -m pytest -q --collect-only -p no:cacheprovider >/dev/null 2>&1 & c=$$!; \

@@ -104,14 +104,20 @@ def test_a_return_to_full_effort_that_runs_out_again_waits_twice_as_long():
     for _ in range(RECOVER):
         effort.record(False, *room)
     assert effort.level == 0
-    for _ in range(10):  # the backoff is bounded
-        effort.record(True, 0.1, 0.075)
-        for _ in range(RECOVER * BACKOFF):
+    waits = []  # the backoff is bounded: each return runs out of time at once
+    effort.record(True, 0.1, 0.075)
+    for _ in range(8):
+        calls = 0
+        while effort.level == 1:
             effort.record(False, *room)
-        assert effort.level < 2
+            calls += 1
+        waits.append(calls)
+        effort.record(True, 0.1, 0.075)  # back at full effort, out of time again
+    # the first wait is already doubled (the return to level 0 above ran out at once): 8, 16, 32, 32, ...
+    assert waits == [2 * RECOVER, 4 * RECOVER] + [RECOVER * BACKOFF] * 6
 
 
-@pytest.mark.parametrize("levels", [-1, 1.5, True])
+@pytest.mark.parametrize("levels", [-1, 1.5, True, 9])
 def test_a_bad_effort_levels_is_refused(levels):
     with pytest.raises(InputError, match="effort_levels"):
         NavOptions(effort_levels=levels)

@@ -396,9 +396,34 @@ def test_a_mover_bound_that_refuses_the_search_answer_is_left_to_the_retiming(ha
     def refusing(xy, t):  # 1 cm inside a mover wherever asked, the search's answer included
         return np.full(len(np.atleast_2d(xy)), -0.01)
 
-    res, _, _ = _run_ga(ctx, base.trajectory, PlanOptions(refine=True, seed=2), funcs[:3] + (refusing,),
+    res, _, _, _ = _run_ga(ctx, base.trajectory, PlanOptions(refine=True, seed=2), funcs[:3] + (refusing,),
                         time.perf_counter() + 60)  # fmt: skip
     assert res.improved and res.length_after < res.length_before
+
+
+def test_feasible_individuals_of_any_try_count_not_only_the_last(hall, monkeypatch):
+    """The 12 knots found feasible paths (none better), the 24 none: the GA did weigh paths,
+    so the third try (48 knots, for corridors where no try was feasible) is not run and the
+    report is 'nothing better', not 'no feasible path' (both looked at the last try only)."""
+    import types
+
+    import gfuzzy.ga
+    from gfuzzy.planner.stages import GA_RETRY_KNOTS, _clearance_functions, _run_ga
+
+    knots = []
+
+    def stub(*args, **kwargs):  # the GA itself is not what this test is about
+        knots.append(args[5].n_knots)  # (path, times, radius, static, movers, options)
+        history = np.array([1.0, 1.0]) if len(knots) == 1 else np.array([np.inf, np.inf])
+        return types.SimpleNamespace(improved=False, out_of_time=False, fitness_history=history)
+
+    monkeypatch.setattr(gfuzzy.ga, "refine_path", stub)
+    _, scene, rm = hall
+    base = _searched(scene, rm, scene.queries[0])
+    ctx = StageContext(scene, StaticGeometry(scene))
+    funcs = _clearance_functions(ctx, base.trajectory.poses)
+    *_, feasible = _run_ga(ctx, base.trajectory, PlanOptions(refine=True, seed=2), funcs, time.perf_counter() + 60)
+    assert feasible and knots[1:] == [GA_RETRY_KNOTS]
 
 
 def test_a_ga_without_a_feasible_individual_says_so(hall, monkeypatch):

@@ -70,13 +70,14 @@ def record(out: str, humans: int, seed: int, first: int, stop: int, budget: floa
     def recorded(self, t, pose, obs, *args, **kwargs):
         if prof is not None:
             prof.enable()
+        effort = getattr(getattr(self, "_effort", None), "level", 0)  # the level this call's searches run at
         traj = step(self, t, pose, obs, *args, **kwargs)
         if prof is not None:
             prof.disable()
         last = self.last
         calls.append({"episode": current[0], "t": float(t), "pose": [float(v) for v in pose], "mode": str(last.mode),
                       "message": last.message, "out_of_time": bool(last.out_of_time), "detailed": int(last.detailed),
-                      "seconds": float(last.seconds), "effort": getattr(getattr(self, "_effort", None), "level", 0),
+                      "seconds": float(last.seconds), "effort": effort,
                       "hash": hashlib.sha1(np.ascontiguousarray(traj.waypoints).tobytes()).hexdigest()[:16]})  # fmt: skip
         return traj
 

@@ -150,7 +150,7 @@ class Navigator(PathSpace, Prediction, SoftCost):
         self._clock = BUDGET_CLOCKS[opts.budget_clock]  # the budget's clock (a test may replace it)
         self._person_seconds = PERSON_SECONDS  # the predictions' set-up per person, measured
         self._tail_seconds = 0.0  # from the search's deadline to the answer, measured (decaying maximum)
-        self._effort = Effort(opts)  # the searches' look-ahead, from the calls' pressure on the budget
+        self._effort = Effort(opts)  # the searches' effort (path space, slack), from the calls' pressure on the budget
         self._walls = WallCheck(scene)
         disc = robot.shape == "disc" and robot.dof == 2  # its view follows its motion
         self._lookout = Lookout(opts.fov, opts.look_after, goal) if opts.fov < 360 and disc else None

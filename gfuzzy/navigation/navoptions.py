@@ -133,7 +133,7 @@ class NavOptions:
         How far the searches' effort may be cut after calls whose searches ran out of
         ``time_budget`` (:mod:`gfuzzy.navigation.effort`: 1, the path space dropped; each
         further level, ``plan_slack`` halved; restored once calls finish with room to
-        spare). 0: full effort always.
+        spare). 0: full effort always; at most 8 (``plan_slack`` / 128).
     """
 
     dt: float = 0.1
@@ -184,8 +184,8 @@ class NavOptions:
             check_number(name, getattr(self, name), strict=False)
         if self.discomfort_cost is not None:
             check_number("discomfort_cost", self.discomfort_cost, strict=False)
-        if not isinstance(self.effort_levels, int) or isinstance(self.effort_levels, bool) or self.effort_levels < 0:
-            raise InputError(f"effort_levels must be a whole number >= 0, got {self.effort_levels!r}")
+        if not isinstance(self.effort_levels, int) or isinstance(self.effort_levels, bool) or not 0 <= self.effort_levels <= 8:
+            raise InputError(f"effort_levels must be a whole number from 0 to 8, got {self.effort_levels!r}")
         if self.connect_k < 1 or self.evasion_headings < 4:
             raise InputError("connect_k must be >= 1 and evasion_headings >= 4")
         check_number("stretch", self.stretch, 1.0, strict=False)

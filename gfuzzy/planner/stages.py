@@ -365,7 +365,8 @@ def _accept(ctx: StageContext, traj: Trajectory, query_like, before: Trajectory,
 def _run_ga(ctx: StageContext, traj: Trajectory, opts, funcs, deadline):
     """The GA on the corridor: the given options, or the paper's, then ``GA_RETRY_KNOTS``
     knots, then (if no try found a feasible individual) ``GA_FEASIBLE_KNOTS``, until
-    ``deadline``. Returns (GA result, options of the last run, seconds)."""
+    ``deadline``. Returns (GA result, options of the last run, seconds, whether any try had
+    a feasible individual)."""
     from ..ga import GAOptions, refine_path
 
     robot = ctx.robot
@@ -383,9 +384,10 @@ def _run_ga(ctx: StageContext, traj: Trajectory, opts, funcs, deadline):
         # re-timing of the refined path (exact, with waits), which _refine keeps only if
         # checked and not much slower
         movers = None
+    feasible = False  # whether any try had a feasible individual
     for i, ga_opts in enumerate(tries):
-        if i == 2 and np.isfinite(res.fitness_history).any():
-            break  # the 24 knots found feasible paths, none better: more knots are not tried
+        if i == 2 and feasible:
+            break  # an earlier try found feasible paths, none better: more knots are not tried
         res = refine_path(
             traj.poses[:, :2],
             traj.times,
@@ -397,9 +399,10 @@ def _run_ga(ctx: StageContext, traj: Trajectory, opts, funcs, deadline):
             static_segment=static_segment,
             deadline=deadline,
         )
+        feasible = feasible or bool(np.isfinite(res.fitness_history).any())
         if res.improved or res.out_of_time:
             break
-    return res, ga_opts, time.perf_counter() - t_ga
+    return res, ga_opts, time.perf_counter() - t_ga, feasible
 
 
 def _refine(ctx: StageContext, traj: Trajectory, query, opts, deadline) -> tuple[Trajectory, RefineReport]:
@@ -407,7 +410,7 @@ def _refine(ctx: StageContext, traj: Trajectory, query, opts, deadline) -> tuple
     if len(corridor) < 3 or _straight(corridor[:, :2]):
         return traj, RefineReport(False, "the path is a straight segment already")
     funcs = _clearance_functions(ctx, corridor)
-    res, ga_opts, seconds = _run_ga(ctx, traj, opts, funcs, deadline)
+    res, ga_opts, seconds, feasible = _run_ga(ctx, traj, opts, funcs, deadline)
     before = {
         "length": res.length_before,
         "smoothness": res.smoothness_before,
@@ -418,7 +421,7 @@ def _refine(ctx: StageContext, traj: Trajectory, query, opts, deadline) -> tuple
     if res.out_of_time:
         why = f"the planning budget ({opts.time_limit:g} s, --time-limit) ran out while the GA refined: the search's answer is kept"
         return traj, replace(report, reason=why)
-    if not res.improved and not np.isfinite(res.fitness_history).any():
+    if not res.improved and not feasible:  # no try had a feasible individual
         why = (f"the GA found no feasible path near the corridor (up to {ga_opts.n_knots} knots: every individual "
                "came within the clearance of a wall or a mover, or cut a corner the corridor rounds)")
         return traj, replace(report, reason=why)
