@@ -27,7 +27,7 @@ import numpy as np
 
 from ..check.check import check_trajectory
 from ..collision.geometry import StaticGeometry, mover_distance
-from ..poses import interpolate_segment, wrap_angle
+from ..poses import interpolate_segment, path_length_xy, wrap_angle
 from ..scene.scene import Query, Robot, Scene
 from ..settings import AMAX_PER_VMAX
 from ..status import Status
@@ -183,8 +183,7 @@ def _straight(xy: FloatArray) -> bool:
     """Whether the polyline ``xy`` (n, 2) runs straight from its first point to its last
     (its length is the chord's, to 1e-9 of it): the GA moves via-points off that line and
     shortens nothing (zara-crowd's cross-flow: 48 knots, 2.9 s, 'nothing better')."""
-    length = float(np.hypot(*np.diff(xy, axis=0).T).sum())
-    return length <= float(np.hypot(*(xy[-1] - xy[0]))) * (1 + 1e-9)
+    return path_length_xy(xy) <= float(np.hypot(*(xy[-1] - xy[0]))) * (1 + 1e-9)
 
 
 def _heading_lookup(corridor: FloatArray):
