@@ -768,9 +768,9 @@ def test_the_field_answers_in_pieces_and_stops_at_the_deadline(open_square):
     if hasattr(whole, "safe_intervals"):  # a store that asks for intervals (compiled kernel)
         for x, y in zip(timed.safe_intervals(pts, ptr, lo, hi), whole.safe_intervals(pts, ptr, lo, hi), strict=True):
             np.testing.assert_array_equal(x, y)
-    ticks = iter([0.0, 0.0, 5.0, 5.0])  # the deadline passes after the first piece
+    ticks = iter([0.0, 0.01, 5.0, 5.0])  # the deadline passes after the second piece
     late = nav._field(0.0, obs, infl, 80, deadline=1.0)
-    late.clock = lambda: next(ticks)
+    late.clock, late.pace = (lambda: next(ticks)), None  # a piece of 10 ms: the pieces stay as they are
     with pytest.raises(_OutOfTime):
         late.unsafe_pairs(pts, ptr, lo, hi)
 
@@ -791,15 +791,56 @@ def test_the_field_cuts_its_pieces_by_the_steps_asked_too(open_square):
     whole.__class__ = gfuzzy.timespace.movers.MoverField
     timed = nav._field(0.0, obs, infl, steps)
     asked = []
-    timed.clock = lambda: asked.append(1) or 0.0
+    timed.clock, timed.pace = (lambda: asked.append(1) or 0.01 * len(asked)), None  # each piece 10 ms
     assert set(zip(*timed.unsafe_pairs(pts, ptr, lo, hi), strict=True)) == set(
         zip(*whole.unsafe_pairs(pts, ptr, lo, hi), strict=True))
     assert len(asked) >= 3  # the clock looked at before each piece
     ticks = iter([0.0, 5.0, 5.0])  # the deadline passes during the first piece
     late = nav._field(0.0, obs, infl, steps, deadline=1.0)
-    late.clock = lambda: next(ticks)
+    late.clock, late.pace = (lambda: next(ticks)), None
     with pytest.raises(_OutOfTime):
         late.unsafe_pairs(pts, ptr, lo, hi)
+
+
+def test_the_fields_pieces_grow_to_a_few_ms_and_keep_the_deadline(open_square, monkeypatch):
+    """Once a piece has been timed, the next ones are as many of the fixed bounds as take
+    about ``PIECE_SECONDS`` (each piece costs Python beyond the kernels), never fewer than
+    one; the deadline is still looked at between two, and a batch runs past it by about a
+    piece at most. The clock here ticks with the work done: 10 ns per (point, person, step)."""
+    from gfuzzy.navigation import timedfield as T
+
+    monkeypatch.setattr(T, "PIECE_STEP_WORK", 100_000)  # a fixed piece: 1 ms on this clock
+    nav, obs, infl, graph = _field_case(open_square, 5)
+    steps, n = 400, 1000  # 2,000,000 triples: 20 fixed pieces
+    pts = np.resize(graph.poses, (n, graph.poses.shape[1]))
+    ptr = np.arange(n + 1)
+    lo, hi = np.zeros(n, dtype=np.int64), np.full(n, steps - 1, dtype=np.int64)
+    whole = nav._field(0.0, obs, infl, steps)
+    whole.__class__ = gfuzzy.timespace.movers.MoverField
+    want = set(zip(*whole.unsafe_pairs(pts, ptr, lo, hi), strict=True))
+    now, pieces = [0.0], []
+    plain = gfuzzy.timespace.movers.MoverField.unsafe_pairs
+
+    def worked(self, p, sub, a, b):  # each piece advances the clock by its work
+        triples = int((np.diff(sub) * (np.asarray(b) - np.asarray(a) + 1)).sum()) * len(self.movers)
+        pieces.append(triples)
+        now[0] += 1e-8 * triples
+        return plain(self, p, sub, a, b)
+
+    monkeypatch.setattr(gfuzzy.timespace.movers.MoverField, "unsafe_pairs", worked)
+    timed = nav._field(0.0, obs, infl, steps)
+    timed.clock, timed.pace = (lambda: now[0]), None
+    assert set(zip(*timed.unsafe_pairs(pts, ptr, lo, hi), strict=True)) == want
+    assert sum(pieces) == 2_000_000 and len(pieces) <= 8  # fixed pieces: 20
+    assert pieces[0] <= 100_000 and max(pieces) <= T.PIECE_SECONDS / 1e-8 * 1.01  # about 4 ms each
+    assert timed.pace.unit == pytest.approx(1e-3, rel=0.02)
+    pieces.clear()
+    late = nav._field(0.0, obs, infl, steps, deadline=0.0065)
+    now[0] = 0.0
+    late.clock, late.pace = (lambda: now[0]), timed.pace  # measured already: 4 ms pieces from the start
+    with pytest.raises(T._OutOfTime):
+        late.unsafe_pairs(pts, ptr, lo, hi)
+    assert len(pieces) == 2 and now[0] <= 0.0065 + T.PIECE_SECONDS * 1.01  # 8 ms: out after the second
 
 
 def test_a_search_out_of_time_inside_a_batch_falls_back(open_square):

@@ -59,9 +59,9 @@ from .navinput import checked_pose, flat_pose, observation_rows
 from .navoptions import BUDGET_CLOCKS, NavOptions
 from .navtypes import GOAL_TAKEN, MOTION_SAMPLE, NavMode, NavStep, _Searched, sample_loss
 from .pathspace import STILL_SPEED, PathSpace, WallCheck  # noqa: F401 (STILL_SPEED: kept importable here)
-from .prediction import REACH_SAMPLES, Prediction  # noqa: F401 (REACH_SAMPLES: kept importable here)
+from .prediction import REACH_SAMPLES, Prediction, prior_store  # noqa: F401 (REACH_SAMPLES: kept importable here)
 from .softcost import SoftCost
-from .timedfield import PAIR_SECONDS, PIECE_WORK, _OutOfTime, _TimedField  # noqa: F401 (PIECE_WORK, PAIR_SECONDS: kept importable here)
+from .timedfield import PAIR_SECONDS, PIECE_WORK, Pace, _OutOfTime, _TimedField  # noqa: F401 (PIECE_WORK, PAIR_SECONDS: kept importable here)
 from .unknown import unknown_growth, unknown_positions
 
 __all__ = ["NavMode", "NavOptions", "NavStep", "Navigator"]
@@ -150,6 +150,7 @@ class Navigator(PathSpace, Prediction, SoftCost):
         self._clock = BUDGET_CLOCKS[opts.budget_clock]  # the budget's clock (a test may replace it)
         self._person_seconds = PERSON_SECONDS  # the predictions' set-up per person, measured
         self._tail_seconds = 0.0  # from the search's deadline to the answer, measured (decaying maximum)
+        self._pace = Pace()  # the time of a piece of the predictions' safety work, measured (timedfield)
         self._effort = Effort(opts)  # the searches' effort (path space, slack), from the calls' pressure on the budget
         self._walls = WallCheck(scene)
         disc = robot.shape == "disc" and robot.dof == 2  # its view follows its motion
@@ -449,7 +450,7 @@ class Navigator(PathSpace, Prediction, SoftCost):
             if isinstance(start, _Searched):
                 return start
             graph, s_id, h0 = start
-            store = None
+            store, safety = None, None
             search = search_function(opts.backend)
             slack = (opts.plan_slack + opts.prediction_horizon) / opts.dt
             detailed = 0
@@ -465,6 +466,9 @@ class Navigator(PathSpace, Prediction, SoftCost):
                         self._exact_windows(graph)
                     store = IntervalStore(graph)
                 field_ = self._field(t, obs[keep], infl[keep], steps, deadline)
+                earlier = before.safety if before is not None and before.graph is graph else None
+                store.prior = prior_store(earlier, obs, infl, keep)  # the earlier search's safe points, if they hold here
+                safety = (store, obs, infl, keep)
                 if detailed >= 10:  # a cautious running estimate: up at once, down by a fifth
                     took = (self._clock() - c0) / detailed
                     self._person_seconds = max(took, 0.8 * self._person_seconds + 0.2 * took)
@@ -476,11 +480,12 @@ class Navigator(PathSpace, Prediction, SoftCost):
                     break
                 slack *= 2.0
         except _OutOfTime:
-            return _Searched(None, "time budget spent on the predicted people's safety", detailed, True, graph, s_id)
+            return _Searched(None, "time budget spent on the predicted people's safety", detailed, True, graph, s_id,
+                             safety=safety)  # fmt: skip
         except (InputError, LimitError) as exc:  # a request the search refuses: the fallback answers
             log.warning("navigator search refused at t=%g: %s", t, exc)
             return _Searched(None, f"search refused: {exc}")
-        return self._answered(res, graph, s_id, t, pose, detailed)
+        return replace(self._answered(res, graph, s_id, t, pose, detailed), safety=safety)
 
     def _search_start(self, pose: FloatArray, t: float, deadline: float, before: _Searched | None = None):
         """(graph, start id, the start's heuristic in steps) for a search from ``pose`` (the

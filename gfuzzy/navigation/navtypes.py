@@ -102,3 +102,6 @@ class _Searched:
     graph: SpaceTimeGraph | None = None
     start: int = -1
     ahead: list = field(default_factory=list)
+    #: (interval store, people rows, inflation, relevant mask) of the search's last field, for
+    #: a later search from the same pose whose field is no more cautious (:func:`~gfuzzy.navigation.prediction.prior_store`)
+    safety: tuple | None = field(default=None, compare=False, repr=False)

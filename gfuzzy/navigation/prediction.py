@@ -19,13 +19,35 @@ from .swerve import swerve_rates
 from .timedfield import _TimedField
 from .unknown import unknown_growth
 
-__all__ = ["Prediction", "REACH_SAMPLES", "PERSON_DECAY"]
+__all__ = ["Prediction", "REACH_SAMPLES", "PERSON_DECAY", "prior_store"]
 
 #: Samples of the look-ahead in the test of who may come within reach (:meth:`Prediction._may_reach`).
 REACH_SAMPLES = 48
 #: A call that does not run its search for want of the predictions' set-up time lowers the
 #: navigator's estimate of it per person by this factor (:meth:`Prediction._affords`).
 PERSON_DECAY = 0.8
+
+
+def prior_store(safety: tuple | None, obs: FloatArray, infl: FloatArray, keep: BoolArray):
+    """The interval store of an earlier search's field (``safety``: its store, people rows,
+    inflation and relevant mask, :class:`~gfuzzy.navigation.navtypes._Searched`) when that
+    field is at least as cautious as the one of ``obs[keep]`` inflated by ``infl``: the same
+    people (``obs`` its first rows; a row without the columns ``appear``, ``vanish`` is the
+    earlier row present from 0 to inf: the plain search after the one with the ghosts), each
+    inflated at least as much at every slice, every one kept here kept there. Every step
+    safe there is then safe here (the personal space, the ghosts only add to what is kept;
+    up to the rounding of the margins' sums). Otherwise None (:attr:`IntervalStore.prior`)."""
+    if safety is None:
+        return None
+    store, obs0, infl0, keep0 = safety
+    k = len(obs)
+    if not (store.pool and k <= len(obs0) and infl.shape[1:] == infl0.shape[1:] and obs.shape[1] <= obs0.shape[1]):
+        return None
+    head = obs0[:k]
+    if obs.shape[1] < obs0.shape[1] and not ((head[:, 5] == 0.0).all() and np.isposinf(head[:, 6]).all()):
+        return None
+    same = np.array_equal(head[:, : obs.shape[1]], obs) and bool((infl <= infl0[:k]).all())
+    return store if same and not (keep & ~keep0[:k]).any() else None
 
 
 class Prediction:
@@ -168,6 +190,7 @@ class Prediction:
         # step's; then each step gets its own (the robot's clearance is in the radii: keep 0)
         field_ = _TimedField(scene, t, opts.dt, steps, self.vplan, clearance=extra)
         field_.deadline, field_.clock = deadline, self._clock
+        field_.pace = self._pace  # the pieces' measured time, kept from call to call
         field_.keep = 0.0
         field_.margin += infl[:, s_of] - first[:, None] - extra
         field_.compiled = opts.backend == "compiled"

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..timespace.movers import MoverField
 
-__all__ = ["PIECE_WORK", "PIECE_STEP_WORK", "PAIR_SECONDS"]
+__all__ = ["PIECE_WORK", "PIECE_STEP_WORK", "PAIR_SECONDS", "PIECE_SECONDS", "PIECE_MAX_SCALE", "Pace"]
 
 #: The predictions' field answers the search's safety questions in pieces of about this
 #: many (point, person) pairs (at least 64 points), looking at the clock between two
@@ -30,6 +30,37 @@ PIECE_STEP_WORK = 1_000_000
 #: Seconds the search's interval store takes per unsafe (point, step) pair it is given
 #: (it sorts them; 20-70 ns measured here), kept free before the deadline.
 PAIR_SECONDS = 60e-9
+#: Once the time of a piece has been measured (:class:`Pace`), a piece is as many of the
+#: bounds above (``PIECE_WORK`` pairs, ``PIECE_STEP_WORK`` triples) as take about this long,
+#: never fewer than one: each piece costs about 0.5 ms of Python beyond the kernels, and a
+#: store's batch of 50,000 points among 13 people took 27-35 ms in 26 pieces, 15-18 ms in
+#: one (session 38). A batch then runs past its deadline by about this much at most.
+PIECE_SECONDS = 0.004
+#: ... and never more than this many of them (a clock that does not move measures nothing).
+PIECE_MAX_SCALE = 64.0
+
+
+class Pace:
+    """The measured time of one piece's worth of safety work (``PIECE_WORK`` pairs or
+    ``PIECE_STEP_WORK`` triples, whichever bounds the piece), shared by the fields of one
+    navigator: cautious, as the navigator's other estimates (up at once, down by a fifth
+    per measurement). ``None`` until a piece of at least that much work was measured."""
+
+    def __init__(self) -> None:
+        self.unit: float | None = None
+
+    def scale(self) -> float:
+        """How many of the fixed bounds the next piece may be: about ``PIECE_SECONDS``."""
+        if self.unit is None:
+            return 1.0
+        return min(PIECE_MAX_SCALE, max(1.0, PIECE_SECONDS / max(self.unit, 1e-12)))
+
+    def measure(self, seconds: float, units: float) -> None:
+        """A piece of ``units`` times the fixed bounds took ``seconds`` (only whole pieces,
+        cut by the bounds, are measured: a batch's last piece may be mostly the fixed cost
+        of a piece)."""
+        took = max(seconds, 0.0) / max(units, 1e-9)
+        self.unit = took if self.unit is None else max(took, 0.8 * self.unit + 0.2 * took)
 
 
 class _OutOfTime(Exception):
@@ -38,8 +69,8 @@ class _OutOfTime(Exception):
 
 class _TimedField(MoverField):
     """The predictions' field, answering the search's safety questions in pieces of about
-    ``PIECE_WORK`` (point, person) pairs, raising :class:`_OutOfTime` between two pieces
-    once ``deadline`` (on ``clock``) has passed. The search looks at its deadline only
+    ``PIECE_WORK`` (point, person) pairs (more once their time is measured: :class:`Pace`),
+    raising :class:`_OutOfTime` between two pieces once ``deadline`` (on ``clock``) has passed. The search looks at its deadline only
     between expansions, and the interval store asks for the safety of thousands of points
     at once (among 100 people one such batch took 60-140 ms here). The groups are
     independent: the pieces' answers put together are the whole batch's.
@@ -47,6 +78,7 @@ class _TimedField(MoverField):
 
     deadline: float = math.inf
     clock = staticmethod(time.perf_counter)
+    pace: Pace | None = None  # the navigator's (shared by its fields); a field's own otherwise
 
     def unsafe_pairs(self, poses, ptr, lo, hi):
         nodes, steps = [np.zeros(0, dtype=np.int64)], [np.zeros(0, dtype=np.int64)]
@@ -79,21 +111,31 @@ class _TimedField(MoverField):
 
     def _pieces(self, ptr, lo, hi, after):
         """(point pointers, group pointers from 0, lo, hi) of consecutive groups, while
-        the clock plus ``after()`` (seconds the caller still needs) is before the deadline."""
+        the clock plus ``after()`` (seconds the caller still needs) is before the deadline.
+        A piece is ``Pace.scale()`` times the fixed bounds; the clock read before each
+        piece times the piece before it."""
         ptr = np.asarray(ptr, dtype=np.int64)
         g = len(ptr) - 1
         lo = np.broadcast_to(np.asarray(lo, dtype=np.int64), (g,))
         hi = np.broadcast_to(np.asarray(hi, dtype=np.int64), (g,))
+        if self.pace is None:
+            self.pace = Pace()
         people = max(len(self.movers), 1)
         size = max(64, PIECE_WORK // people)
         # (point, person, step) triples of the groups before each group: the pieces' second bound
         work = np.concatenate([[0], np.cumsum(np.diff(ptr) * np.maximum(hi - lo + 1, 1))]) * people
-        a = 0
+        a, began, units = 0, None, 0.0
         while a < g:
-            if self.clock() + after() > self.deadline:
+            now = self.clock()
+            if began is not None:
+                self.pace.measure(now - began, units)
+            if now + after() > self.deadline:
                 raise _OutOfTime
-            b = int(np.searchsorted(ptr, ptr[a] + size, side="right")) - 1
-            b = min(b, int(np.searchsorted(work, work[a] + PIECE_STEP_WORK, side="right")) - 1)
+            f = self.pace.scale()
+            b = int(np.searchsorted(ptr, ptr[a] + int(size * f), side="right")) - 1
+            b = min(b, int(np.searchsorted(work, work[a] + int(PIECE_STEP_WORK * f), side="right")) - 1)
             b = min(g, max(a + 1, b))
+            units = max((ptr[b] - ptr[a]) / size, (work[b] - work[a]) / PIECE_STEP_WORK)
+            began = now
             yield ptr[a : b + 1], ptr[a : b + 1] - ptr[a], lo[a:b], hi[a:b]
             a = b

@@ -146,6 +146,12 @@ class IntervalStore:
         self.pool: bool | None = None  # the storage, fixed by the first set_horizon
         self.field = None
         self.H = -1
+        #: A pool store of the same graph whose field is at least as cautious as this one's
+        #: (every step safe there is safe here: the same people, each kept at least as far),
+        #: or None; a group whose points it found safe all through this batch's window is
+        #: not computed again (a navigator's search without the personal space after the one
+        #: with it). The caller vouches for the fields; set it per field (it may change).
+        self.prior: IntervalStore | None = None
 
     def set_horizon(self, field_: MoverField, pool: bool = False) -> None:
         """Serve intervals for ``field_``'s horizon (never shorter than before), from the
@@ -284,6 +290,8 @@ class IntervalStore:
             from .movers import whole_windows
 
             gs, ge, sp = whole_windows(sub_ptr, np.maximum(lo, 0), np.minimum(hi, field_.steps))
+        elif self.pool and self.prior is not None:
+            gs, ge, sp, nodes, lo_n = self._after_prior(pending, nodes, sizes, lo, hi, compute)
         else:
             gs, ge, sp = _safe_intervals_shared(field_, self.graph.poses[nodes], sub_ptr, lo, hi, self._same[pending],
                                                 compute)  # fmt: skip
@@ -296,6 +304,35 @@ class IntervalStore:
         self._batches.append((gs.tolist(), sp.tolist(), ge.tolist(), lo_n.tolist()))
         self._where[nodes] = len(self._batches) - 1
         self._local[nodes] = np.arange(len(nodes))
+
+    def _after_prior(self, pending, nodes, sizes, lo, hi, compute):
+        """A batch's (starts, ends, sp, nodes, first steps) with :attr:`prior`: the groups
+        whose every point it found safe all through the window (clipped as
+        :meth:`MoverField.safe_intervals` clips) get that window as their one interval; the
+        others are computed. The computed groups' points come first."""
+        from .movers import whole_windows
+
+        prior, steps = self.prior, self.field.steps
+        lo_c, hi_c = np.maximum(lo, 0), np.minimum(hi, steps)
+        gid = np.repeat(np.arange(len(pending)), sizes)
+        cnt = prior.cnt[nodes]
+        at = np.where(cnt == 1, prior.off[nodes], 0)
+        whole = (cnt == 1) & (prior.s[at] <= lo_c[gid]) & (prior.e[at] >= hi_c[gid])
+        known = (np.bincount(gid, weights=~whole, minlength=len(pending)) == 0) | (lo_c > hi_c)
+        if not known.any():
+            sub_ptr = np.concatenate([[0], np.cumsum(sizes)])
+            gs, ge, sp = _safe_intervals_shared(self.field, self.graph.poses[nodes], sub_ptr, lo, hi,
+                                                self._same[pending], compute)  # fmt: skip
+            return gs, ge, sp, nodes, np.repeat(lo, sizes)
+        todo = ~known
+        pts = todo[gid]
+        ga, ea, spa = _safe_intervals_shared(self.field, self.graph.poses[nodes[pts]],
+                                             np.concatenate([[0], np.cumsum(sizes[todo])]), lo[todo], hi[todo],
+                                             self._same[pending[todo]], compute)  # fmt: skip
+        gb, eb, spb = whole_windows(np.concatenate([[0], np.cumsum(sizes[known])]), lo_c[known], hi_c[known])
+        sp = np.concatenate([spa, spb[1:] + spa[-1]])
+        first = np.concatenate([np.repeat(lo[todo], sizes[todo]), np.repeat(lo[known], sizes[known])])
+        return np.concatenate([ga, gb]), np.concatenate([ea, eb]), sp, np.concatenate([nodes[pts], nodes[~pts]]), first
 
     def _pool_merge(self, nodes, gs, ge, sp, lo_n) -> None:
         """Append a batch to the pool; a node computed before (a window grown with the
