@@ -86,3 +86,38 @@ def test_the_ready_counts_are_the_ones_computed_afresh(spliced, steps):
     for node in range(len(g.poses)):
         a, b = store.get(node), other.get(node)
         assert (list(a[0]), list(a[1]), a[2]) == (list(b[0]), list(b[1]), b[2])
+
+
+def test_a_store_after_a_more_cautious_one_skips_its_safe_groups(spliced):
+    """A store given a ``prior`` (a store of the same graph for a field at least as cautious:
+    here 0.3 m more kept from the walker) computes only the groups it did not find safe all
+    through the window; every point's intervals are the ones a store computes afresh."""
+    sc, _, graphs = spliced
+    g = graphs[0]
+    cautious = MoverField(sc, 0.0, 0.1, 60, 1.0, clearance=sc.robot.mover_clearance + 0.3)
+    cautious.compiled = True
+    prior = IntervalStore(g)
+    prior.set_horizon(cautious, pool=True)
+    for node in range(len(g.poses)):
+        prior.get(node)
+    asked = {}
+
+    def counted(name, store):
+        f = _field(sc, 60)
+        plain = f.safe_intervals
+
+        def safe_intervals(poses, ptr, lo, hi):
+            asked[name] = asked.get(name, 0) + len(poses)
+            return plain(poses, ptr, lo, hi)
+
+        f.safe_intervals = safe_intervals
+        store.set_horizon(f, pool=True)
+        return store
+
+    after, afresh = IntervalStore(g), IntervalStore(g)
+    after.prior = prior
+    counted("after", after), counted("afresh", afresh)
+    for node in range(len(g.poses) - 1, -1, -1):  # from the goal's side: several batches
+        a, b = after.get(node), afresh.get(node)
+        assert (list(a[0]), list(a[1]), a[2]) == (list(b[0]), list(b[1]), b[2]), node
+    assert 0 < asked["after"] < 0.8 * asked["afresh"], asked  # the groups safe all through: not again
