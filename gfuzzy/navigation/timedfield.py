@@ -70,10 +70,11 @@ class _OutOfTime(Exception):
 class _TimedField(MoverField):
     """The predictions' field, answering the search's safety questions in pieces of about
     ``PIECE_WORK`` (point, person) pairs (more once their time is measured: :class:`Pace`),
-    raising :class:`_OutOfTime` between two pieces once ``deadline`` (on ``clock``) has passed. The search looks at its deadline only
-    between expansions, and the interval store asks for the safety of thousands of points
-    at once (among 100 people one such batch took 60-140 ms here). The groups are
-    independent: the pieces' answers put together are the whole batch's.
+    raising :class:`_OutOfTime` between two pieces once ``deadline`` (on ``clock``) has
+    passed. The search looks at its deadline only between expansions, and the interval
+    store asks for the safety of thousands of points at once (among 100 people one such
+    batch took 60-140 ms here). The groups are independent: the pieces' answers put
+    together are the whole batch's.
     """
 
     deadline: float = math.inf
