@@ -99,6 +99,20 @@ def test_regress_checks_its_arguments_before_printing(line_scene, capsys):
     assert len(err.strip().splitlines()) == 1 and "vert" in err
 
 
+@pytest.mark.parametrize(
+    ("args", "prog"),
+    [(("navigate", "s.yaml", "--start", 1, 2, 0), "gfuzzy navigate"), (("plan", "s.yaml", "extra"), "gfuzzy plan"),
+     (("--bogus",), "gfuzzy")],
+)
+def test_an_unknown_argument_names_the_command_whose_help_lists_the_options(capsys, args, prog):
+    """`gfuzzy navigate --start ...` (navigate takes --query only) said `gfuzzy: unrecognized
+    arguments ... (see gfuzzy --help)`, whose help lists the commands, not navigate's options."""
+    rc, out, err = _run(capsys, *args)
+    assert rc == 2 and out == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"{prog}: unrecognized arguments: "), err
+    assert lines[0].endswith(f"(see {prog} --help)"), err
+
 def test_the_cli_calls_a_malformed_pose_bad_input(line_scene, capsys):
     rc, out, err = _run(capsys, "plan", line_scene, "--start", 1, 2.5, 0, "--goal", 9, 2.5)
     assert rc == 2 and out == "" and len(err.strip().splitlines()) == 1

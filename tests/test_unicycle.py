@@ -590,6 +590,21 @@ def test_a_start_touching_the_bounds_drives_off(robot, start, goal):
     assert rep.valid, rep.reason
 
 
+@pytest.mark.parametrize("robot", [{"disc": 0.2}, {"box": [0.5, 0.25]}])
+def test_a_query_whose_start_is_its_goal_stays(robot):
+    """Start = goal: one step's stay, as a holonomic robot's answer (before: a turn of 0 was no
+    piece of the graph, and the search drove out to the roadmap and back round a loop; 2.80 s
+    on tb3-arena-unicycle, 8.61 s for a T footprint on the same map; here no_path or a drive
+    to the far vertices and back)."""
+    sc = parse_scene(doc(dict(robot, vmax=1.0, kinematics="unicycle")))
+    pose = [2.0, 2.0, 0.3]
+    res = Planner(sc, _far_roadmap(sc)).plan(pose, pose, 0.0, PlanOptions(dt=0.1))
+    assert res.solved, res.message
+    w = res.trajectory.waypoints
+    assert res.trajectory.duration <= 0.1 + 1e-9 and np.allclose(w[:, 1:], pose), w
+    assert check_trajectory(sc, w).valid
+
+
 def test_check_decides_a_disc_turning_in_place_against_a_wall(disc_scene):
     """A disc touching the bounds while it turns in place keeps its clearance of 0 the
     whole turn: its body does not move, so the check decides it (before: 'could not

@@ -265,8 +265,12 @@ def _run(argv: list[str] | None) -> int:
     """Parse ``argv`` and run its command; bad input is one line and :data:`EXIT_BAD`."""
     parser = _parser()
     try:
-        args = parser.parse_args(argv)
-        if not getattr(args, "command", None):
+        args, extra = parser.parse_known_args(argv)
+        command = getattr(args, "command", None)
+        if extra:  # name the command whose --help lists its options, not gfuzzy's
+            prog = f"{parser.prog} {command}" if command else parser.prog
+            raise BadInput(f"{prog}: unrecognized arguments: {' '.join(extra)} (see {prog} --help)")
+        if not command:
             parser.print_help(sys.stderr)
             return EXIT_BAD
         return args.func(args)

@@ -378,7 +378,9 @@ class UnicycleGoal:
         gx, gy, gh = (float(v) for v in self.goal)
         if math.hypot(gx - sx, gy - sy) <= 1e-9:  # the same place: a turn in place
             dh = pick_turn(geo, sx, sy, sh, gh)
-            if dh is not None:
+            if dh == 0.0:  # the start is the goal: one step's stay (a turn of 0 is no piece, and
+                ex.lane(s_id, self.g_id)  # the answer drove round a loop back to the start)
+            elif dh is not None:
                 ex.turn(s_id, self.g_id, dh)
         else:
             for back in (False, True) if robot.reverse else (False,):
