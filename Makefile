@@ -15,14 +15,10 @@ unexport PYTHONDONTWRITEBYTECODE
 
 # --no-compile: pip compiles every .py file it installs to bytecode (6,500 files: 80 of the
 # 110-145 s of a fresh install on the busy 2-core machine); Python writes the bytecode of the
-# modules imported instead (above), a tenth of them.
-# --without-pip: the virtualenv's own pip is installed by $(PYTHON)'s pip (`--python`, pip >=
-# 22.3), the newest at once and not byte-compiled: `venv`'s ensurepip installed an old pip,
-# compiling it (12 s of CPU, 69 s on the busy machine), and the next line replaced it. Where
-# $(PYTHON) has no such pip, ensurepip as before.
+# modules imported instead (above), a tenth of them
 $(STAMP): pyproject.toml
-	$(PYTHON) -m venv --without-pip $(VENV)
-	$(PYTHON) -m pip --python $(BIN)/python install --quiet --no-compile --upgrade pip || { $(BIN)/python -m ensurepip --default-pip && $(BIN)/python -m pip install --quiet --no-compile --upgrade pip; }
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --no-compile --upgrade pip
 	$(BIN)/python -m pip install --quiet --no-compile -e '.[test]'
 	touch $(STAMP)
 
