@@ -403,9 +403,11 @@ def test_navigate_file_says_how_the_navigator_searched(tmp_path, capsys, monkeyp
     backend; every setting that changes the run is there now."""
     monkeypatch.chdir(ROOT)  # the scenes named as a user in the repository names them
     docs = {}
+    # the first 2 s of the crossing: the file's settings are written whether or not the goal
+    # was reached (the whole crossing cost 7 s a run, for the same settings)
     for name, flags in (("tiers", ()), ("priced", ("--soft-search", "--intrusion-cost", "3", "--dt", "0.2"))):
         out = tmp_path / f"{name}.json"
-        p = main_completed(capsys, "navigate", "scenes/zara-crowd.yaml", "--budget-clock", "cpu",
+        p = main_completed(capsys, "navigate", "scenes/zara-crowd.yaml", "--budget-clock", "cpu", "--max-time", "2",
                            "--time-budget", "0.08", *flags, "-o", str(out))  # fmt: skip
         assert p.returncode in (0, 1), p.stdout + p.stderr
         docs[name] = json.loads(out.read_text())["navigate"]
@@ -413,6 +415,7 @@ def test_navigate_file_says_how_the_navigator_searched(tmp_path, capsys, monkeyp
     assert docs["priced"]["soft_search"] is True and docs["priced"]["intrusion_cost"] == 3.0
     assert docs["tiers"]["dt"] == 0.1 and docs["priced"]["dt"] == 0.2
     assert docs["priced"]["time_budget"] == 0.08 and docs["priced"]["backend"] == "compiled"
+    assert docs["tiers"]["max_time"] == docs["priced"]["max_time"] == 2.0
 
 
 def test_replan_times_are_on_the_budget_clock(monkeypatch):

@@ -2,6 +2,7 @@
 
     python tools/bench_populated.py [SCENE] [--people 10] [--seeds 1 2 3 4] [--vertices 400]
                                     [--sensing exact estimated noise fov noise-fov noise-fov-occlusion]
+                                    [--max-time 120]
 
 For each seed, ``gfuzzy populate``'s walking people (ORCA among the static obstacles, at 1
 m/s, who ignore the robot) are added to SCENE (default: the bundled small house, a SLAM map
@@ -53,6 +54,7 @@ def main() -> int:
     ap.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3, 4])
     ap.add_argument("--vertices", type=int, default=400)
     ap.add_argument("--sensing", nargs="+", choices=list(SENSING), default=list(SENSING))
+    ap.add_argument("--max-time", type=float, default=120.0, help="a run gives up this long after t0 (s)")
     args = ap.parse_args()
     base = load_scene(args.scene)
     if not base.queries:
@@ -69,7 +71,8 @@ def main() -> int:
         for q in scene.queries:
             for name in args.sensing:
                 sensor = SensorOptions(seed=1, **SENSING[name])
-                run = simulate(scene, roadmap, q.start, q.goal, options=NavOptions(budget_clock="cpu"), sensor=sensor)
+                run = simulate(scene, roadmap, q.start, q.goal, max_time=args.max_time,
+                               options=NavOptions(budget_clock="cpu"), sensor=sensor)
                 rep = check_trajectory(scene, run.trajectory.waypoints)
                 valid[name][0] += bool(rep.valid)
                 valid[name][1] += 1
