@@ -54,7 +54,7 @@ _BUILT: dict = {}
 
 def _roadmap(scene, seed):
     """A copy of the 100-vertex roadmap of ``scene``'s static part (built once per process)."""
-    key = (scene.static_hash, seed)
+    key = (scene.static_hash, scene.robot.unicycle, seed)  # the hash leaves the kinematics out
     if key not in _BUILT:
         _BUILT[key] = build_roadmap(scene, RoadmapOptions(vertices=100, seed=seed))
     return copy.deepcopy(_BUILT[key])

@@ -102,7 +102,7 @@ def test_regress_checks_its_arguments_before_printing(line_scene, capsys):
 @pytest.mark.parametrize(
     ("args", "prog"),
     [(("navigate", "s.yaml", "--start", 1, 2, 0), "gfuzzy navigate"), (("plan", "s.yaml", "extra"), "gfuzzy plan"),
-     (("--bogus",), "gfuzzy")],
+     (("--bogus",), "gfuzzy"), (("--bogus", "plan", "s.yaml"), "gfuzzy")],
 )
 def test_an_unknown_argument_names_the_command_whose_help_lists_the_options(capsys, args, prog):
     """`gfuzzy navigate --start ...` (navigate takes --query only) said `gfuzzy: unrecognized

@@ -840,7 +840,40 @@ def test_the_fields_pieces_grow_to_a_few_ms_and_keep_the_deadline(open_square, m
     late.clock, late.pace = (lambda: now[0]), timed.pace  # measured already: 4 ms pieces from the start
     with pytest.raises(T._OutOfTime):
         late.unsafe_pairs(pts, ptr, lo, hi)
-    assert len(pieces) == 2 and now[0] <= 0.0065 + T.PIECE_SECONDS * 1.01  # 8 ms: out after the second
+    assert len(pieces) >= 3 and now[0] <= 0.0065 + 1e-3 * 1.01  # grown 1, 2, 3.5 ms: out one fixed piece late
+
+
+def test_a_pace_timed_on_cheap_pieces_sends_no_large_piece_among_the_people(open_square, monkeypatch):
+    """A batch of points far from everyone times the pieces cheap (0.1 ms a fixed piece), a
+    later batch among the people costs 100 times more per triple: its first piece is one
+    fixed piece (10 ms here), so it runs past a deadline by about that, not by the 40 fixed
+    pieces the cheap pace allows (400 ms)."""
+    from gfuzzy.navigation import timedfield as T
+
+    monkeypatch.setattr(T, "PIECE_STEP_WORK", 50_000)
+    nav, obs, infl, graph = _field_case(open_square, 5)
+    steps, n = 400, 500
+    pts = np.resize(graph.poses, (n, graph.poses.shape[1]))
+    ptr = np.arange(n + 1)
+    lo, hi = np.zeros(n, dtype=np.int64), np.full(n, steps - 1, dtype=np.int64)
+    now, cost = [0.0], [2e-9]
+    plain = gfuzzy.timespace.movers.MoverField.unsafe_pairs
+
+    def worked(self, p, sub, a, b):
+        now[0] += cost[0] * int((np.diff(sub) * (np.asarray(b) - np.asarray(a) + 1)).sum()) * len(self.movers)
+        return plain(self, p, sub, a, b)
+
+    monkeypatch.setattr(gfuzzy.timespace.movers.MoverField, "unsafe_pairs", worked)
+    cheap = nav._field(0.0, obs, infl, steps)
+    cheap.clock, cheap.pace = (lambda: now[0]), None
+    cheap.unsafe_pairs(pts, ptr, lo, hi)
+    assert cheap.pace.scale() > 30  # 4 ms / 0.1 ms
+    cost[0], now[0] = 2e-7, 0.0
+    dense = nav._field(0.0, obs, infl, steps, deadline=1e-4)
+    dense.clock, dense.pace = (lambda: now[0]), cheap.pace
+    with pytest.raises(T._OutOfTime):
+        dense.unsafe_pairs(pts, ptr, lo, hi)
+    assert now[0] <= 1e-4 + 0.010 * 1.01
 
 
 def test_a_search_out_of_time_inside_a_batch_falls_back(open_square):
@@ -1307,26 +1340,35 @@ def test_a_slow_measurement_of_the_predictions_does_not_stop_every_later_search(
 
 def test_the_close_search_starts_from_the_first_searchs_safe_points(open_square, monkeypatch):
     """The search without the personal space takes the first search's store as its prior
-    (every point the first found safe all through is safe without the personal space) and
-    answers the same rows, to the bit, as with every point computed again."""
+    (every point the first found safe all through is safe without the personal space),
+    computes fewer points' safety, and answers the same rows, to the bit, as with every
+    point computed again."""
     import gfuzzy.navigation.navigator as N
+    import gfuzzy.timespace.spacetime as S
 
     scene, rm = open_square
     people = _standing_row([-2.16, -0.72, 0.72, 2.16])
     start = np.array([0.0, -4.0])
-    given, real = [], N.prior_store
+    given, real, computed, shared = [], N.prior_store, [0], S._safe_intervals_shared
 
     def spied(*args):
         given.append(real(*args))
         return given[-1]
 
+    def counted(field_, poses, *args):  # the points whose safety is computed
+        computed[0] += len(poses)
+        return shared(field_, poses, *args)
+
+    monkeypatch.setattr(S, "_safe_intervals_shared", counted)
     monkeypatch.setattr(N, "prior_store", spied)
     nav = Navigator(scene, rm, (0.0, 4.0), NavOptions(time_budget=5.0))
     traj = nav.step(0.0, start, people)
     assert nav.last.mode == "close" and given[0] is None and any(g is not None for g in given[1:])
+    with_prior, computed[0] = computed[0], 0
     monkeypatch.setattr(N, "prior_store", lambda *args: None)
     again = Navigator(scene, rm, (0.0, 4.0), NavOptions(time_budget=5.0)).step(0.0, start, people)
     assert np.array_equal(traj.waypoints, again.waypoints)
+    assert with_prior < computed[0]  # some groups skipped
 
 
 def test_an_earlier_search_vouches_only_for_a_field_no_more_cautious():

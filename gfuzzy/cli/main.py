@@ -267,8 +267,11 @@ def _run(argv: list[str] | None) -> int:
     try:
         args, extra = parser.parse_known_args(argv)
         command = getattr(args, "command", None)
-        if extra:  # name the command whose --help lists its options, not gfuzzy's
-            prog = f"{parser.prog} {command}" if command else parser.prog
+        if extra:  # name the command whose --help lists its options (gfuzzy's for one before it)
+            tokens = list(sys.argv[1:] if argv is None else argv)
+            at = tokens.index(command) if command in tokens else len(tokens)
+            ours = command and not any(t in tokens[:at] for t in extra)
+            prog = f"{parser.prog} {command}" if ours else parser.prog
             raise BadInput(f"{prog}: unrecognized arguments: {' '.join(extra)} (see {prog} --help)")
         if not command:
             parser.print_help(sys.stderr)

@@ -34,7 +34,11 @@ PAIR_SECONDS = 60e-9
 #: bounds above (``PIECE_WORK`` pairs, ``PIECE_STEP_WORK`` triples) as take about this long,
 #: never fewer than one: each piece costs about 0.5 ms of Python beyond the kernels, and a
 #: store's batch of 50,000 points among 13 people took 27-35 ms in 26 pieces, 15-18 ms in
-#: one (session 38). A batch then runs past its deadline by about this much at most.
+#: one (session 38). A piece is meant to take about this long, but people closer to the
+#: points cost more per triple than those the pace was timed on: a batch's first piece is
+#: one of the fixed bounds, each next one at most twice the last, none meant to outlast the
+#: time left (:meth:`_TimedField._pieces`), so a batch runs past its deadline by about one
+#: fixed piece, or by a piece timed on a cheaper part of the batch.
 PIECE_SECONDS = 0.004
 #: ... and never more than this many of them (a clock that does not move measures nothing).
 PIECE_MAX_SCALE = 64.0
@@ -113,8 +117,9 @@ class _TimedField(MoverField):
     def _pieces(self, ptr, lo, hi, after):
         """(point pointers, group pointers from 0, lo, hi) of consecutive groups, while
         the clock plus ``after()`` (seconds the caller still needs) is before the deadline.
-        A piece is ``Pace.scale()`` times the fixed bounds; the clock read before each
-        piece times the piece before it."""
+        A piece is ``Pace.scale()`` times the fixed bounds, but a batch's first is one, each
+        next at most twice the last, none meant to outlast the time left; the clock read
+        before each piece times the piece before it."""
         ptr = np.asarray(ptr, dtype=np.int64)
         g = len(ptr) - 1
         lo = np.broadcast_to(np.asarray(lo, dtype=np.int64), (g,))
@@ -125,14 +130,20 @@ class _TimedField(MoverField):
         size = max(64, PIECE_WORK // people)
         # (point, person, step) triples of the groups before each group: the pieces' second bound
         work = np.concatenate([[0], np.cumsum(np.diff(ptr) * np.maximum(hi - lo + 1, 1))]) * people
-        a, began, units = 0, None, 0.0
+        a, began, units, f = 0, None, 0.0, 0.5
         while a < g:
             now = self.clock()
             if began is not None:
                 self.pace.measure(now - began, units)
             if now + after() > self.deadline:
                 raise _OutOfTime
-            f = self.pace.scale()
+            # a batch's first piece is one fixed piece, each next one at most twice the last: a
+            # pace learnt on cheap pieces (points far from everyone) never sends a whole large
+            # piece among the people; and no piece is meant to take longer than the time left
+            f = min(self.pace.scale(), 2.0 * f)
+            if self.pace.unit is not None and math.isfinite(self.deadline):
+                f = min(f, (self.deadline - now - after()) / max(self.pace.unit, 1e-12))
+            f = max(f, 1.0)
             b = int(np.searchsorted(ptr, ptr[a] + int(size * f), side="right")) - 1
             b = min(b, int(np.searchsorted(work, work[a] + int(PIECE_STEP_WORK * f), side="right")) - 1)
             b = min(g, max(a + 1, b))
