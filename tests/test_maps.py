@@ -797,7 +797,9 @@ def test_gfuzzy_map_finds_room_for_an_off_centre_cart(tmp_path, capsys):
     assert geo.is_valid(q.start) and geo.is_valid(q.goal)
     assert np.hypot(q.goal[0] - q.start[0], q.goal[1] - q.start[1]) > 1.0
     traj = tmp_path / "t.json"
-    assert main(["plan", str(out), "-o", str(traj)]) == 0
+    # -n 100: the cart crosses as on the default 200 vertices (both answers 3.43 s long), and
+    # the roadmap of its footprint costs half as much
+    assert main(["plan", str(out), "-n", "100", "-o", str(traj)]) == 0
     assert main(["check", str(out), str(traj)]) == 0
 
 

@@ -181,8 +181,9 @@ def test_the_docs_python_imports_resolve():
         }
     )
     assert len(lines) >= 3, lines
-    proc = run_python("\n".join(lines), cwd=ROOT)
-    assert proc.returncode == 0, proc.stderr
+    # in process: an import resolves here as in a fresh one (`from P import M` imports a
+    # submodule M it does not find as an attribute); a process cost 2 s of imports
+    exec(compile("\n".join(lines), "<docs' imports>", "exec"), {})
 
 
 _MODULES_AS_ATTRIBUTES = """

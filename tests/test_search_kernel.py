@@ -264,21 +264,26 @@ def test_reference_path_never_imports_numba():
     assert out.stdout.split() == ["solved", "False", "solved", "True"]
 
 
-def test_cli_backend_flag(tmp_path):
-    """`gfuzzy plan --backend reference` and the default write the same trajectory."""
+def test_cli_backend_flag(tmp_path, capsys, monkeypatch):
+    """`gfuzzy plan --backend reference` and the default write the same trajectory. The
+    default in a real process; the reference and a bad backend in process (a real process
+    costs a second of imports: the flag is the subject, not the process)."""
     import json
 
     from conftest import run_cli_process
+    from helpers import main_completed
 
+    monkeypatch.chdir(ROOT)
     rows = {}
     for backend in ("compiled", "reference"):
         out = tmp_path / f"{backend}.json"
-        res = run_cli_process("plan", "scenes/wait-corridor.yaml", "--backend", backend, "-o", out, cwd=ROOT)
+        argv = ("plan", "scenes/wait-corridor.yaml", "--backend", backend, "-o", out)
+        res = run_cli_process(*argv, cwd=ROOT) if backend == "compiled" else main_completed(capsys, *argv)
         assert res.returncode == 0, res.stderr
         doc = json.loads(out.read_text())
         rows[backend] = (doc["status"], doc["duration"], doc["waypoints"])
     assert rows["compiled"] == rows["reference"]
-    bad = run_cli_process("plan", "scenes/wait-corridor.yaml", "--backend", "fortran", cwd=ROOT)
+    bad = main_completed(capsys, "plan", "scenes/wait-corridor.yaml", "--backend", "fortran")
     assert bad.returncode == 2 and "backend" in bad.stderr
 
 

@@ -204,7 +204,7 @@ def test_a_person_unseen_for_longer_than_max_gap_is_two_movers(tmp_path, caplog,
     assert "--max-gap inf" in out.read_text() and [m.name for m in load_scene(out).movers] == ["ped-d"]
 
 
-def test_a_person_seen_once_is_dropped_aloud(tmp_path, caplog):
+def test_a_person_seen_once_is_dropped_aloud(tmp_path, caplog, capsys):
     # a user's file with one row for some people (a detector's single hit): they were
     # dropped without a word, and a file of such rows only was "no pedestrian in the window"
     walk = gfuzzy.Track("a", np.array([[0, 0, 0], [1, 1, 0]], float))
@@ -216,7 +216,7 @@ def test_a_person_seen_once_is_dropped_aloud(tmp_path, caplog):
     assert msg.startswith("ped-b is seen at one instant only in the window (t = 0.5 s): dropped")
     csv = tmp_path / "once.csv"
     csv.write_text("t,id,x,y\n0,a,1,1\n0,b,-1,1\n0.5,c,0,2\n")
-    run = run_cli_process("tracks", str(csv), "-o", str(tmp_path / "once.yaml"))
+    run = main_completed(capsys, "tracks", str(csv), "-o", str(tmp_path / "once.yaml"))  # its process: _make
     assert run.returncode == 2 and not (tmp_path / "once.yaml").exists()
     assert run.stderr.strip() == (f"{csv}: 3 pedestrian(s) in the window 0 s .. 0.5 s, each seen at one instant only: "
                                   "a mover needs two rows or more (someone standing still: a row at the first time "
@@ -665,9 +665,11 @@ def test_eth_written_tracks_read_back(tmp_path_factory, people, first):
 DATA = ROOT / "data" / "pedestrians"
 
 
-def _make(tmp_path: Path, data: str, *args) -> Path:
+def _make(tmp_path: Path, data: str, *args, capsys=None) -> Path:
+    """``gfuzzy tracks DATA ARGS -o OUT`` in a real process, or with ``capsys`` in process."""
     out = tmp_path / f"{Path(data).stem}.yaml"
-    proc = run_cli_process("tracks", DATA / data, *args, "-o", out)
+    argv = ("tracks", DATA / data, *args, "-o", out)
+    proc = main_completed(capsys, *argv) if capsys is not None else run_cli_process(*argv)
     assert proc.returncode == 0, proc.stderr
     return out
 
@@ -715,9 +717,9 @@ def test_stepping_onto_a_person_is_an_invalid_query(students):
     assert person.name in res.message
 
 
-def test_people_who_come_and_go_are_only_there_while_recorded(tmp_path):
+def test_people_who_come_and_go_are_only_there_while_recorded(tmp_path, capsys):
     path = _make(
-        tmp_path, "biwi_hotel.txt", "--t-start", 50, "--duration", 30, "--start", 0, 0, "--goal", 1, 1,
+        tmp_path, "biwi_hotel.txt", "--t-start", 50, "--duration", 30, "--start", 0, 0, "--goal", 1, 1, capsys=capsys,
     )  # fmt: skip
     scene = load_scene(path)
     ranges = np.array([m.time_range for m in scene.movers])
