@@ -18,7 +18,7 @@ R = 0.6  # the gap's middle line: a quarter circle round the origin
 H = math.pi / 2
 
 
-def arc_scene():
+def arc_scene(reverse: bool = True):
     """A 0.6 x 0.2 box drive (reverse) round a post through a quarter-circle gap as wide as
     the band it sweeps driving tangent to the circle plus 1 cm; a room before it (below the
     x axis) and one after it (left of the y axis), the rest blocked."""
@@ -27,19 +27,20 @@ def arc_scene():
     outer = [[float(rout * math.cos(a)), float(rout * math.sin(a))] for a in t] + [[0.0, 1.5], [1.5, 1.5], [1.5, 0.0]]
     return parse_scene({
         "version": 1, "name": "arc-gap", "bounds": [-1.5, -1.5, 1.5, 1.5],
-        "robot": {"box": [0.6, 0.2], "vmax": 0.5, "kinematics": "unicycle", "reverse": True},
+        "robot": {"box": [0.6, 0.2], "vmax": 0.5, "kinematics": "unicycle", "reverse": reverse},
         "obstacles": [{"disc": {"center": [0.0, 0.0], "radius": rin}}, {"polygon": outer},
                       {"box": {"center": [-0.75, -0.75], "size": [1.5, 1.5]}}],
     })  # fmt: skip
 
 
-def arc_roadmap(sc):
+def arc_roadmap(sc, cut: bool = False):
     """Three vertices in each room, one at each mouth of the gap, and one in its middle
-    (the roadmap's holonomic way round): no lane at a held heading passes the gap."""
+    (the roadmap's holonomic way round): no lane at a held heading passes the gap. ``cut``:
+    no edge into the middle one (the roadmap leaves the rooms apart)."""
     m = R / math.sqrt(2.0)
     v = np.array([[R, 0.0, H], [R, -0.6, H], [R, -1.0, H], [0.0, R, math.pi], [-0.6, R, math.pi],
                   [-1.0, R, math.pi], [m, m, 3 * math.pi / 4]])  # fmt: skip
-    e = np.array([[0, 1], [1, 2], [0, 2], [3, 4], [4, 5], [3, 5], [0, 6], [6, 3]])
+    e = np.array([[0, 1], [1, 2], [0, 2], [3, 4], [4, 5], [3, 5], [0, 6], [6, 3]])[: 6 if cut else 8]
     return Roadmap(v, e, np.hypot(*(v[e[:, 1], :2] - v[e[:, 0], :2]).T), sc.name, sc.static_hash, sc.robot.circumradius)
 
 
@@ -100,6 +101,27 @@ def test_the_command_line_turns_the_repair_off(command):
     assert not _plan_options(_parser().parse_args([*words[command], "--no-drive-repair"])).drive_repair
 
 
+@pytest.mark.parametrize("reverse", [True, False])
+def test_the_message_says_the_roadmap_joins_the_ends_the_drive_cannot(reverse):
+    """The arc's roadmap joins the rooms (its vertex in the gap); the drive without the
+    repair has no way: the ``no_path`` message says the roadmap joins them and names what
+    may help (before: "not connected on the roadmap (sealed off, or the roadmap missed a
+    passage ...)", untrue). Backing up is named only for a robot that may not; cut the
+    roadmap's way through the gap and the roadmap's own message comes back."""
+    sc = arc_scene(reverse)
+    no = PlanOptions(time_limit=1e6, drive_repair=False)
+    res = Planner(sc, arc_roadmap(sc)).plan([R, -0.6, H], [-0.6, R, math.pi], 0.0, no)
+    assert res.status.value == "no_path"
+    assert res.message.startswith("start and goal are joined on the roadmap, but the differential drive"), res.message
+    assert "\n" not in res.message and "more vertices (-n)" in res.message and "drop --no-drive-repair" in res.message
+    assert ("robot.reverse: true" in res.message) is (not reverse)
+    planner = Planner(sc, arc_roadmap(sc))  # a kept goal (replanning) says the same
+    kept = planner.plan_from(planner.prepare([-0.6, R, math.pi], no), [R, -0.6, H])
+    assert kept.status.value == "no_path" and kept.message == res.message, kept.message
+    res = Planner(sc, arc_roadmap(sc, cut=True)).plan([R, -0.6, H], [-0.6, R, math.pi], 0.0, no)
+    assert res.status.value == "no_path" and "not connected on the roadmap" in res.message, res.message
+
+
 def _chain_calls(sc, rm, monkeypatch) -> tuple:
     """(answer, FCL queries asked inside :func:`unirepair.drive_chain`, A* expansions) of the
     arc's query on roadmap ``rm`` (the default options)."""
@@ -134,3 +156,4 @@ def test_the_repair_stops_at_its_total_of_expansions(arc, monkeypatch):
     res, _, spent = _chain_calls(sc, arc_roadmap(sc), monkeypatch)
     assert res.status.value == "no_path"
     assert spent == 200
+    assert "the drive repair found no chain of small turns" in res.message, res.message

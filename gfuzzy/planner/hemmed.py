@@ -7,6 +7,10 @@ roadmap cannot join the end, however many vertices it has, and "more vertices ma
 it" is the wrong advice. :func:`hemmed_note` measures such an end (the turn in place it
 has either way, the straight it may drive) for the ``no_path`` message, so the user sees
 that the pose, not the roadmap, is the problem.
+
+Likewise a drive's graph may leave start and goal apart where the SE(2) roadmap joins them
+(the body slides and turns along the roadmap's edges; the drive turns only at vertices):
+:func:`drive_split_note` says so, not "the roadmap missed a passage".
 """
 
 from __future__ import annotations
@@ -93,3 +97,47 @@ def hemmed_note(geometry, pose, end: str) -> str:
     elif back >= STRAIGHT:
         way += f" ({other} would be free: robot.reverse: true allows it)"
     return f"the {end} is hemmed in: it {turns} and {way}"
+
+
+def _reached_components(geometry, roadmap, pose) -> set:
+    """The roadmap components of the :data:`~gfuzzy.planner.bridge.TRIES` vertices nearest
+    ``pose`` that a certified motion of the body (heading interpolated, as the roadmap's
+    edges) reaches from it."""
+    import numpy as np
+
+    from ..collision.geometry import metric_distance
+    from .bridge import TRIES, components
+
+    V = np.asarray(roadmap.vertices, dtype=float)
+    p = np.asarray(pose, dtype=float)[:3]
+    if not len(V) or V.shape[1] != 3:  # (a hand-made roadmap of positions only: not asked)
+        return set()
+    label = components(roadmap)
+    c = geometry.clearance1(p)
+    near = np.argsort(metric_distance(V, p[None, :], geometry.r), kind="stable")[:TRIES].tolist()
+    return {int(label[i]) for i in near if geometry.motion_free(p, V[i], ca=c)}
+
+
+def drive_split_note(geometry, roadmap, start, goal, repair: bool) -> str:
+    """The ``no_path`` message of a box or footprint drive whose graph leaves ``start`` and
+    ``goal`` apart although the SE(2) roadmap joins them (each reaches, by a certified
+    motion, one of its nearest vertices, and these lie in one component), or "" when the
+    roadmap does not join them (the roadmap's own message then). The drive turns only at
+    the roadmap's vertices (and where the drive repair adds turns, ``repair``): the
+    roadmap's way may hold no turn it can make; more vertices may give one, and so may
+    backing up (``robot.reverse``) or the drive repair when they are off."""
+    robot = geometry.robot
+    if not robot.unicycle or robot.shape == "disc":
+        return ""
+    if not _reached_components(geometry, roadmap, start) & _reached_components(geometry, roadmap, goal):
+        return ""
+    helps = ["more vertices (-n) may give it the turns it needs"]
+    if not robot.reverse:
+        helps.append("so may backing up (robot.reverse: true)")
+    if not repair:
+        helps.append("so may the drive repair (drop --no-drive-repair)")
+    chains = " and the drive repair found no chain of small turns between its pieces" if repair else ""
+    return (
+        "start and goal are joined on the roadmap, but the differential drive found no way along it: "
+        f"it turns in place only at the roadmap's vertices{chains}; " + "; ".join(helps)
+    )

@@ -80,9 +80,13 @@ class Planner:
             self._fs.append(free_space(self.scene))
         return self._fs[0]
 
-    def _not_joined(self, start, goal, prepared: bool, linked: bool, k: int, deadline: float) -> tuple[Planner | None, str]:
-        """The roadmap does not join start and goal: a planner to try again (see
-        :meth:`through_free_space`), or None and the ``no_path`` message."""
+    def _not_joined(self, start, goal, prepared: bool, linked: bool, opts: PlanOptions, deadline: float) -> tuple[Planner | None, str]:
+        """The query's graph does not join start and goal: a planner to try again (see
+        :meth:`through_free_space`), or None and the ``no_path`` message (a box or footprint
+        drive's says when the roadmap joins them and only the drive's graph does not,
+        :func:`gfuzzy.planner.hemmed.drive_split_note`)."""
+        from .hemmed import drive_split_note
+
         if linked:
             return None, (
                 "start and goal share a region of the free space, but no certified path through "
@@ -90,21 +94,24 @@ class Planner:
                 "start and goal were bridged to the roadmap, but no certified path joins them on it"
             )  # fmt: skip
         if prepared:  # a kept goal graph (replanning) is not extended
-            return None, "start and goal are not connected on the roadmap (sealed off, or the roadmap is too sparse)"
-        return self.through_free_space(start, goal, k, deadline)
+            return None, drive_split_note(self.geometry, self.roadmap, start, goal, opts.drive_repair) or (
+                "start and goal are not connected on the roadmap (sealed off, or the roadmap is too sparse)")
+        return self.through_free_space(start, goal, opts.connect_k, deadline, opts.drive_repair)
 
-    def through_free_space(self, start, goal, k: int, deadline: float = math.inf) -> tuple[Planner | None, str]:
+    def through_free_space(self, start, goal, k: int, deadline: float = math.inf, repair: bool = True) -> tuple[Planner | None, str]:
         """When the roadmap does not join ``start`` and ``goal``: a planner on the roadmap
         extended through the free space, or None and the reason no way exists.
 
         Other holonomic robots (no free space computed) bridge the end the roadmap does not
-        reach to it (:mod:`gfuzzy.planner.bridge`; ``k``: the query's ``connect_k``).
+        reach to it (:mod:`gfuzzy.planner.bridge`; ``k``: the query's ``connect_k``). A box or
+        footprint drive's message names an end that is hemmed in, else says whether the
+        roadmap joins the ends (its graph did not: ``repair``, whether the drive repair ran).
 
         A disc robot's start and goal are linked through the free space (:meth:`_linked`).
         """
         from ..roadmap.narrowest import not_joined, separation
         from .bridge import bridged_planner
-        from .hemmed import hemmed_note
+        from .hemmed import drive_split_note, hemmed_note
 
         fs = self._free_space()
         bridged = bridged_planner(self, [start, goal], k, deadline) if fs is None and not self.robot.unicycle else None
@@ -114,6 +121,9 @@ class Planner:
             hemmed = [n for n in (hemmed_note(self.geometry, start, "start"), hemmed_note(self.geometry, goal, "goal")) if n]
             if hemmed:  # more vertices cannot help: say what holds the end
                 return None, f"start and goal are not connected on the roadmap: {'; '.join(hemmed)}"
+            split = drive_split_note(self.geometry, self.roadmap, start, goal, repair)
+            if split:
+                return None, split
             return None, not_joined(self.scene, start, goal)
         sep = separation(self.scene, fs, start, goal)
         if sep is not None:
@@ -312,7 +322,7 @@ class Planner:
         except OutOfTime:
             return answer(Status.TIMEOUT, _late(opts.time_limit, "building the search graph"))
         if not math.isfinite(rd):
-            linked, message = self._not_joined(start, goal, _prepared is not None, _linked, opts.connect_k, deadline)
+            linked, message = self._not_joined(start, goal, _prepared is not None, _linked, opts, deadline)
             if linked is not None:  # in the budget left
                 left = replace(opts, time_limit=max(deadline - time.perf_counter(), 1e-9))
                 return linked.plan(ends[0], ends[1], t0, left, hold=hold, _linked=True)
