@@ -26,6 +26,7 @@ sys.path.insert(0, str(ROOT))
 
 from gfuzzy.collision.geometry import mover_distance  # noqa: E402
 from gfuzzy.navigation.sensing import Sensor, SensorOptions  # noqa: E402
+from gfuzzy.poses import wrap_angle  # noqa: E402
 from gfuzzy.scene.scene import load_scene  # noqa: E402
 from gfuzzy.trajectory import Trajectory, load_trajectory  # noqa: E402
 
@@ -44,7 +45,7 @@ def contacts(scene, waypoints, fov: float = 360.0, occlusion: bool = False) -> t
     vel = (p1[:, :2] - p0[:, :2]) / WINDOW
     moving = np.hypot(vel[:, 0], vel[:, 1]) > 0.1
     heading = p0[:, 2] if p0.shape[1] == 3 else np.arctan2(vel[:, 1], vel[:, 0])
-    off = np.abs((np.arctan2(vel[:, 1], vel[:, 0]) - heading + math.pi) % (2 * math.pi) - math.pi)
+    off = np.abs(wrap_angle(np.arctan2(vel[:, 1], vel[:, 0]) - heading))
     blind = float((moving & (off > math.radians(fov) / 2)).sum() / max(moving.sum(), 1))
     sensor = Sensor(scene, SensorOptions(fov=fov, occlusion=occlusion))
     found = []

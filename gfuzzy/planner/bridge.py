@@ -37,6 +37,7 @@ from __future__ import annotations
 import logging
 import math
 import time
+from collections.abc import Iterator
 from dataclasses import replace
 
 import numpy as np
@@ -45,7 +46,7 @@ from ..collision.geometry import StaticGeometry, metric_distance
 from ..roadmap.join import component_labels
 from ..typed import FloatArray, IntArray
 
-__all__ = ["bridge", "bridged_roadmap", "bridged_planner", "with_chains", "extended", "components", "RAYS", "REACH", "STUCK", "MAX_POSES", "TRIES"]
+__all__ = ["bridge", "bridged_roadmap", "bridged_planner", "with_chains", "extended", "components", "reached", "RAYS", "REACH", "STUCK", "MAX_POSES", "TRIES"]
 
 log = logging.getLogger(__name__)
 
@@ -106,15 +107,20 @@ def _ray(geometry: StaticGeometry, pose: FloatArray, d: FloatArray, reach: float
     return t
 
 
-def _link(geometry: StaticGeometry, roadmap, pose: FloatArray, targets: IntArray) -> int | None:
-    """The first of the ``TRIES`` nearest ``targets`` vertices a certified motion from ``pose`` reaches."""
+def reached(geometry: StaticGeometry, roadmap, pose: FloatArray, targets: IntArray) -> Iterator[int]:
+    """Those of the ``TRIES`` nearest ``targets`` vertices a certified motion from ``pose``
+    reaches, nearest first (each motion certified when asked for)."""
     V = roadmap.vertices[targets]
     d = metric_distance(V, pose[None, :], geometry.r)
     c = geometry.clearance1(pose)
     for i in np.argsort(d, kind="stable")[:TRIES].tolist():
         if geometry.motion_free(pose, V[i], ca=c):
-            return int(targets[i])
-    return None
+            yield int(targets[i])
+
+
+def _link(geometry: StaticGeometry, roadmap, pose: FloatArray, targets: IntArray) -> int | None:
+    """The first of the ``TRIES`` nearest ``targets`` vertices a certified motion from ``pose`` reaches."""
+    return next(reached(geometry, roadmap, pose, targets), None)
 
 
 def bridge(

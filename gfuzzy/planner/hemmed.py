@@ -105,17 +105,14 @@ def _reached_components(geometry, roadmap, pose) -> set:
     edges) reaches from it."""
     import numpy as np
 
-    from ..collision.geometry import metric_distance
-    from .bridge import TRIES, components
+    from .bridge import components, reached
 
     V = np.asarray(roadmap.vertices, dtype=float)
-    p = np.asarray(pose, dtype=float)[:3]
     if not len(V) or V.shape[1] != 3:  # (a hand-made roadmap of positions only: not asked)
         return set()
     label = components(roadmap)
-    c = geometry.clearance1(p)
-    near = np.argsort(metric_distance(V, p[None, :], geometry.r), kind="stable")[:TRIES].tolist()
-    return {int(label[i]) for i in near if geometry.motion_free(p, V[i], ca=c)}
+    p = np.asarray(pose, dtype=float)[:3]
+    return {int(label[i]) for i in reached(geometry, roadmap, p, np.arange(len(V)))}
 
 
 def drive_split_note(geometry, roadmap, start, goal, repair: bool) -> str:
