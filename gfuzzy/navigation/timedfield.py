@@ -135,14 +135,15 @@ class _TimedField(MoverField):
             now = self.clock()
             if began is not None:
                 self.pace.measure(now - began, units)
-            if now + after() > self.deadline:
+            need = after()
+            if now + need > self.deadline:
                 raise _OutOfTime
             # a batch's first piece is one fixed piece, each next one at most twice the last: a
             # pace learnt on cheap pieces (points far from everyone) never sends a whole large
             # piece among the people; and no piece is meant to take longer than the time left
             f = min(self.pace.scale(), 2.0 * f)
             if self.pace.unit is not None and math.isfinite(self.deadline):
-                f = min(f, (self.deadline - now - after()) / max(self.pace.unit, 1e-12))
+                f = min(f, (self.deadline - now - need) / max(self.pace.unit, 1e-12))
             f = max(f, 1.0)
             b = int(np.searchsorted(ptr, ptr[a] + int(size * f), side="right")) - 1
             b = min(b, int(np.searchsorted(work, work[a] + int(PIECE_STEP_WORK * f), side="right")) - 1)
